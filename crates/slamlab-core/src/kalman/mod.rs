@@ -1,0 +1,205 @@
+//! Kalman-family SLAM on a landmark map (thesis `000` Sec. 3.2-3.3).
+//!
+//! The state is `M = [x, y, θ, L¹x, L¹y, …]` (thesis Eq. 3.1) with landmarks in
+//! order of discovery. Every estimator here exposes its phases separately
+//! (predict, then one update per observed landmark) so the app can step through
+//! them, and a read-only view for drawing.
+
+mod ekf_slam;
+
+pub use ekf_slam::EkfSlam;
+
+use crate::geometry::Pose2;
+use crate::motion::{Control, MotionModel};
+use crate::range_bearing::{MeasurementError, RangeBearing};
+use nalgebra::{DMatrix, DVector, Matrix2, Matrix3, Vector2};
+use serde::{Deserialize, Serialize};
+use thiserror::Error;
+
+/// The noise a landmark SLAM filter assumes.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+pub struct FilterNoise {
+    /// Standard deviation of the executed forward speed, m/s (thesis `q[0]`).
+    pub v_std: f64,
+    /// Standard deviation of the executed turn rate, rad/s (thesis `q[1]`).
+    pub w_std: f64,
+    /// Standard deviation of the range measurement, metres (thesis `v[0]`).
+    pub range_std: f64,
+    /// Standard deviation of the bearing measurement, radians (thesis `v[1]`).
+    pub bearing_std: f64,
+}
+
+impl FilterNoise {
+    /// The control noise covariance `diag(σ_v², σ_w²)`.
+    pub fn control_covariance(&self) -> Matrix2<f64> {
+        Matrix2::new(self.v_std.powi(2), 0.0, 0.0, self.w_std.powi(2))
+    }
+
+    /// The measurement noise covariance `V = diag(σ_r², σ_b²)`.
+    pub fn measurement_covariance(&self) -> Matrix2<f64> {
+        Matrix2::new(self.range_std.powi(2), 0.0, 0.0, self.bearing_std.powi(2))
+    }
+
+    /// Checks that every standard deviation is finite and positive.
+    pub fn validate(&self) -> Result<(), FilterError> {
+        for (name, value) in
+            [("v_std", self.v_std), ("w_std", self.w_std), ("range_std", self.range_std), ("bearing_std", self.bearing_std)]
+        {
+            if !(value.is_finite() && value > 0.0) {
+                return Err(FilterError::InvalidParameter { name, value });
+            }
+        }
+        Ok(())
+    }
+}
+
+/// Everything a landmark SLAM filter is configured with.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+pub struct FilterConfig {
+    /// The motion model the filter predicts with.
+    pub motion_model: MotionModel,
+    /// The noise it assumes.
+    pub noise: FilterNoise,
+}
+
+/// Why a filter phase could not run. The filter's state is unchanged after any error.
+#[derive(Clone, Debug, PartialEq, Error)]
+pub enum FilterError {
+    /// A parameter is NaN, infinite or out of its range.
+    #[error("parameter {name} = {value} is not allowed (it must be finite and positive)")]
+    InvalidParameter {
+        /// The parameter's name.
+        name: &'static str,
+        /// The rejected value.
+        value: f64,
+    },
+    /// A control or time step is NaN or infinite.
+    #[error("control (v = {v}, w = {w}) or time step dt = {dt} is not finite")]
+    InvalidControl {
+        /// Forward speed.
+        v: f64,
+        /// Turn rate.
+        w: f64,
+        /// Time step.
+        dt: f64,
+    },
+    /// The measurement model could not be evaluated.
+    #[error("landmark {id}: {source}")]
+    Measurement {
+        /// The landmark's id.
+        id: usize,
+        /// What went wrong.
+        source: MeasurementError,
+    },
+    /// A matrix that must be positive definite is not.
+    #[error("{what} is not positive definite; the update was skipped")]
+    NotPositiveDefinite {
+        /// Which matrix.
+        what: &'static str,
+    },
+}
+
+/// What a prediction did.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct PredictReport {
+    /// The control the filter used.
+    pub control: Control,
+    /// The robot's covariance determinant before and after, a measure of how much
+    /// the uncertainty ellipse grew.
+    pub robot_det_before: f64,
+    /// See `robot_det_before`.
+    pub robot_det_after: f64,
+}
+
+/// What one landmark update did.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum UpdateReport {
+    /// The landmark was new: it was added to the state from this measurement.
+    Initialized {
+        /// The landmark's id.
+        id: usize,
+        /// Where it was placed.
+        position: Vector2<f64>,
+    },
+    /// The landmark was known: the state was corrected.
+    Corrected {
+        /// The landmark's id.
+        id: usize,
+        /// The innovation `z - h(M)`, `[range m, bearing rad]`, bearing wrapped.
+        innovation: Vector2<f64>,
+        /// The innovation covariance `S`.
+        innovation_covariance: Matrix2<f64>,
+        /// The normalized innovation squared `νᵀ S⁻¹ ν` (2 degrees of freedom).
+        nis: f64,
+        /// The Frobenius norm of the Kalman gain's robot rows (3x2), a measure of how
+        /// strongly this measurement moves the robot.
+        robot_gain_norm: f64,
+        /// The Frobenius norm of the whole Kalman gain.
+        gain_norm: f64,
+    },
+}
+
+/// One landmark's estimate, for drawing and metrics.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct LandmarkEstimate {
+    /// The landmark's id (the sensor's data association).
+    pub id: usize,
+    /// Estimated position, metres.
+    pub mean: Vector2<f64>,
+    /// Its 2x2 covariance.
+    pub covariance: Matrix2<f64>,
+}
+
+/// A SLAM filter over robot pose and landmark positions, phase by phase.
+pub trait LandmarkSlam {
+    /// A short name ("ekf", "ukf").
+    fn name(&self) -> &'static str;
+    /// Prediction: moves the robot by `control` for `dt` seconds and grows its uncertainty.
+    fn predict(&mut self, control: &Control, dt: f64) -> Result<PredictReport, FilterError>;
+    /// Update with one measurement of landmark `id`; initializes it when new.
+    fn update(&mut self, id: usize, z: &RangeBearing) -> Result<UpdateReport, FilterError>;
+    /// The full state mean `M`.
+    fn mean(&self) -> &DVector<f64>;
+    /// The full state covariance `P`.
+    fn covariance(&self) -> &DMatrix<f64>;
+    /// Landmark ids in state order (order of discovery).
+    fn landmark_ids(&self) -> &[usize];
+
+    /// The estimated robot pose.
+    fn robot_pose(&self) -> Pose2 {
+        let m = self.mean();
+        Pose2::new(m[0], m[1], m[2])
+    }
+    /// The robot's 3x3 covariance block.
+    fn robot_covariance(&self) -> Matrix3<f64> {
+        self.covariance().fixed_view::<3, 3>(0, 0).into_owned()
+    }
+    /// Every landmark's estimate, in state order.
+    fn landmarks(&self) -> Vec<LandmarkEstimate> {
+        let (m, p) = (self.mean(), self.covariance());
+        self.landmark_ids()
+            .iter()
+            .enumerate()
+            .map(|(slot, &id)| {
+                let j = 3 + 2 * slot;
+                LandmarkEstimate {
+                    id,
+                    mean: Vector2::new(m[j], m[j + 1]),
+                    covariance: p.fixed_view::<2, 2>(j, j).into_owned(),
+                }
+            })
+            .collect()
+    }
+}
+
+/// Makes `p` exactly symmetric by averaging it with its transpose.
+pub(crate) fn symmetrize(p: &mut DMatrix<f64>) {
+    let n = p.nrows();
+    for i in 0..n {
+        for j in (i + 1)..n {
+            let v = 0.5 * (p[(i, j)] + p[(j, i)]);
+            p[(i, j)] = v;
+            p[(j, i)] = v;
+        }
+    }
+}

@@ -1,0 +1,20 @@
+//! # slamlab-core
+//!
+//! The models and estimators behind SLAM Lab. Everything here is pure and
+//! deterministic: no UI, no file or network I/O, no clock and no global random
+//! number generator. Estimators see only controls and measurements, never the
+//! simulator's ground truth.
+//!
+//! Conventions follow ROS REP-103: x forward, y left, angles counter-clockwise,
+//! metres and radians. A range-bearing measurement is ordered `[range, bearing]`
+//! as in the thesis (`000`, Eq. 3.37); the slides use `[bearing, range]`.
+
+pub mod geometry;
+pub mod kalman;
+pub mod motion;
+pub mod range_bearing;
+pub mod stats;
+
+pub use geometry::{CovarianceEllipse, Pose2, wrap_angle};
+pub use motion::{Control, MotionModel};
+pub use range_bearing::RangeBearing;

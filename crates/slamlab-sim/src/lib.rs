@@ -1,0 +1,1 @@
+//! SLAM Lab simulation (in progress).
