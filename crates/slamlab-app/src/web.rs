@@ -1,0 +1,1 @@
+//! Browser entry point (written by the web build work).
