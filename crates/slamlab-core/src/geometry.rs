@@ -13,7 +13,11 @@ pub fn wrap_angle(angle: f64) -> f64 {
     }
     let wrapped = (angle + PI).rem_euclid(2.0 * PI) - PI;
     // rem_euclid maps +π to -π; the convention here keeps +π.
-    if wrapped <= -PI { wrapped + 2.0 * PI } else { wrapped }
+    if wrapped <= -PI {
+        wrapped + 2.0 * PI
+    } else {
+        wrapped
+    }
 }
 
 /// A rigid transform in the plane (an element of SE(2)): translation `(x, y)` in
@@ -32,11 +36,19 @@ pub struct Pose2 {
 
 impl Pose2 {
     /// The identity transform.
-    pub const IDENTITY: Self = Self { x: 0.0, y: 0.0, theta: 0.0 };
+    pub const IDENTITY: Self = Self {
+        x: 0.0,
+        y: 0.0,
+        theta: 0.0,
+    };
 
     /// A pose with its heading wrapped to (-π, π].
     pub fn new(x: f64, y: f64, theta: f64) -> Self {
-        Self { x, y, theta: wrap_angle(theta) }
+        Self {
+            x,
+            y,
+            theta: wrap_angle(theta),
+        }
     }
 
     /// Builds a pose from a vector `[x, y, theta]`.
@@ -69,7 +81,11 @@ impl Pose2 {
     /// The inverse transform, so that `p.compose(&p.inverse())` is the identity.
     pub fn inverse(&self) -> Pose2 {
         let (s, c) = self.theta.sin_cos();
-        Pose2::new(-c * self.x - s * self.y, s * self.x - c * self.y, -self.theta)
+        Pose2::new(
+            -c * self.x - s * self.y,
+            s * self.x - c * self.y,
+            -self.theta,
+        )
     }
 
     /// The relative transform from `self` to `other`: `self⁻¹ ∘ other`.
@@ -127,7 +143,12 @@ impl CovarianceEllipse {
         let minor = (mean - radius).max(0.0);
         let angle = 0.5 * (2.0 * b).atan2(a - d);
         let k = chi2.max(0.0);
-        Self { center, semi_major: (k * major).sqrt(), semi_minor: (k * minor).sqrt(), angle }
+        Self {
+            center,
+            semi_major: (k * major).sqrt(),
+            semi_minor: (k * minor).sqrt(),
+            angle,
+        }
     }
 
     /// `count` points along the ellipse, for drawing.
@@ -179,7 +200,10 @@ mod tests {
             let a = 0.1 * k as f64 * PI;
             let w = wrap_angle(a);
             assert!(w > -PI && w <= PI, "{a} -> {w}");
-            assert!(((a - w) / (2.0 * PI)).fract().abs() < 1e-9 || ((a - w) / (2.0 * PI)).fract().abs() > 1.0 - 1e-9);
+            assert!(
+                ((a - w) / (2.0 * PI)).fract().abs() < 1e-9
+                    || ((a - w) / (2.0 * PI)).fract().abs() > 1.0 - 1e-9
+            );
         }
     }
 
@@ -245,10 +269,18 @@ mod tests {
 
     #[test]
     fn degenerate_covariance_gives_a_point() {
-        let e = CovarianceEllipse::from_covariance(Vector2::new(1.0, 1.0), &Matrix2::zeros(), CHI2_2DOF_95);
+        let e = CovarianceEllipse::from_covariance(
+            Vector2::new(1.0, 1.0),
+            &Matrix2::zeros(),
+            CHI2_2DOF_95,
+        );
         assert_eq!(e.semi_major, 0.0);
         assert_eq!(e.semi_minor, 0.0);
-        let e = CovarianceEllipse::from_covariance(Vector2::zeros(), &Matrix2::new(1.0, 0.0, 0.0, -1e-18), 1.0);
+        let e = CovarianceEllipse::from_covariance(
+            Vector2::zeros(),
+            &Matrix2::new(1.0, 0.0, 0.0, -1e-18),
+            1.0,
+        );
         assert!(e.semi_minor == 0.0 && (e.semi_major - 1.0).abs() < 1e-12);
     }
 }

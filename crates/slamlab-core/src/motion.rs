@@ -25,8 +25,10 @@ impl Control {
     ///
     /// A non-positive or non-finite wheel base gives `None`.
     pub fn from_wheel_speeds(v_l: f64, v_r: f64, wheel_base: f64) -> Option<Self> {
-        (wheel_base.is_finite() && wheel_base > 0.0)
-            .then(|| Self { v: 0.5 * (v_l + v_r), w: (v_r - v_l) / wheel_base })
+        (wheel_base.is_finite() && wheel_base > 0.0).then(|| Self {
+            v: 0.5 * (v_l + v_r),
+            w: (v_r - v_l) / wheel_base,
+        })
     }
 
     /// The wheel speeds `(v_l, v_r)` that produce this command.
@@ -124,7 +126,11 @@ impl MotionModel {
         let rot = Matrix2::new(c, -s, s, c);
         let dist = control.v * dt;
         let delta = rot * Vector2::new(a, b) * dist;
-        let new_pose = Pose2::new(pose.x + delta[0], pose.y + delta[1], wrap_angle(pose.theta + phi));
+        let new_pose = Pose2::new(
+            pose.x + delta[0],
+            pose.y + delta[1],
+            wrap_angle(pose.theta + phi),
+        );
 
         // ∂[Δx, Δy]/∂θ = R'(θ)[A, B] v Δt = [-Δy, Δx].
         let jacobian_pose = Matrix3::new(1.0, 0.0, -delta[1], 0.0, 1.0, delta[0], 0.0, 0.0, 1.0);
@@ -132,7 +138,11 @@ impl MotionModel {
         let d_dv = rot * Vector2::new(a, b) * dt;
         let d_dw = rot * Vector2::new(da, db) * (dist * dt);
         let jacobian_control = Matrix3x2::new(d_dv[0], d_dw[0], d_dv[1], d_dw[1], 0.0, dt);
-        MotionStep { pose: new_pose, jacobian_pose, jacobian_control }
+        MotionStep {
+            pose: new_pose,
+            jacobian_pose,
+            jacobian_control,
+        }
     }
 }
 
@@ -143,7 +153,11 @@ mod tests {
     use std::f64::consts::PI;
 
     fn poses() -> Vec<Pose2> {
-        vec![Pose2::new(0.0, 0.0, 0.0), Pose2::new(1.5, -2.0, 2.8), Pose2::new(-4.0, 3.0, -1.2)]
+        vec![
+            Pose2::new(0.0, 0.0, 0.0),
+            Pose2::new(1.5, -2.0, 2.8),
+            Pose2::new(-4.0, 3.0, -1.2),
+        ]
     }
 
     fn controls() -> Vec<Control> {
@@ -171,7 +185,10 @@ mod tests {
                 let th = pose.theta;
                 let x = pose.x - r * th.sin() + r * (th + u.w * dt).sin();
                 let y = pose.y + r * th.cos() - r * (th + u.w * dt).cos();
-                assert!((p.x - x).abs() < 1e-12 && (p.y - y).abs() < 1e-12, "{pose:?} {u:?}");
+                assert!(
+                    (p.x - x).abs() < 1e-12 && (p.y - y).abs() < 1e-12,
+                    "{pose:?} {u:?}"
+                );
                 assert!(wrap_angle(p.theta - (th + u.w * dt)).abs() < 1e-12);
             }
         }
@@ -184,8 +201,16 @@ mod tests {
         let arc = MotionModel::ExactArc.predict(&pose, &Control::new(1.3, 0.0), 0.5);
         assert!(pose_difference(&arc, &straight).norm() < 1e-15);
         // Continuity across the series/closed-form switch.
-        let below = MotionModel::ExactArc.predict(&pose, &Control::new(1.3, 0.999 * SMALL_ANGLE / 0.5), 0.5);
-        let above = MotionModel::ExactArc.predict(&pose, &Control::new(1.3, 1.001 * SMALL_ANGLE / 0.5), 0.5);
+        let below = MotionModel::ExactArc.predict(
+            &pose,
+            &Control::new(1.3, 0.999 * SMALL_ANGLE / 0.5),
+            0.5,
+        );
+        let above = MotionModel::ExactArc.predict(
+            &pose,
+            &Control::new(1.3, 1.001 * SMALL_ANGLE / 0.5),
+            0.5,
+        );
         assert!(pose_difference(&below, &above).norm() < 1e-6);
     }
 
@@ -196,7 +221,10 @@ mod tests {
         for _ in 0..200 {
             pose = MotionModel::ExactArc.predict(&pose, &Control::new(1.0, PI / 10.0), 0.1);
         }
-        assert!(pose_difference(&pose, &Pose2::IDENTITY).norm() < 1e-9, "{pose:?}");
+        assert!(
+            pose_difference(&pose, &Pose2::IDENTITY).norm() < 1e-9,
+            "{pose:?}"
+        );
     }
 
     #[test]
@@ -213,11 +241,30 @@ mod tests {
                         plus[k] += h;
                         minus[k] -= h;
                         // Build poses without wrapping the perturbed heading twice.
-                        let fp = model.predict(&Pose2 { x: plus[0], y: plus[1], theta: plus[2] }, &u, dt);
-                        let fm = model.predict(&Pose2 { x: minus[0], y: minus[1], theta: minus[2] }, &u, dt);
+                        let fp = model.predict(
+                            &Pose2 {
+                                x: plus[0],
+                                y: plus[1],
+                                theta: plus[2],
+                            },
+                            &u,
+                            dt,
+                        );
+                        let fm = model.predict(
+                            &Pose2 {
+                                x: minus[0],
+                                y: minus[1],
+                                theta: minus[2],
+                            },
+                            &u,
+                            dt,
+                        );
                         let numeric = pose_difference(&fp, &fm) / (2.0 * h);
                         let analytic = step.jacobian_pose.column(k);
-                        assert!((numeric - analytic).norm() < 1e-7, "{model:?} {pose:?} {u:?} col {k}");
+                        assert!(
+                            (numeric - analytic).norm() < 1e-7,
+                            "{model:?} {pose:?} {u:?} col {k}"
+                        );
                     }
                     for k in 0..2 {
                         let mut plus = u;
@@ -229,10 +276,15 @@ mod tests {
                             plus.w += h;
                             minus.w -= h;
                         }
-                        let numeric =
-                            pose_difference(&model.predict(&pose, &plus, dt), &model.predict(&pose, &minus, dt)) / (2.0 * h);
+                        let numeric = pose_difference(
+                            &model.predict(&pose, &plus, dt),
+                            &model.predict(&pose, &minus, dt),
+                        ) / (2.0 * h);
                         let analytic = step.jacobian_control.column(k);
-                        assert!((numeric - analytic).norm() < 1e-7, "{model:?} {pose:?} {u:?} control col {k}");
+                        assert!(
+                            (numeric - analytic).norm() < 1e-7,
+                            "{model:?} {pose:?} {u:?} control col {k}"
+                        );
                     }
                 }
             }
@@ -254,9 +306,16 @@ mod tests {
         let pose = Pose2::new(0.0, 0.0, 0.3);
         let u = Control::new(1.0, 1.0);
         for dt in [1e-2, 1e-3] {
-            let d = pose_difference(&MotionModel::ExactArc.predict(&pose, &u, dt), &MotionModel::Euler.predict(&pose, &u, dt));
+            let d = pose_difference(
+                &MotionModel::ExactArc.predict(&pose, &u, dt),
+                &MotionModel::Euler.predict(&pose, &u, dt),
+            );
             // The difference is O(dt²): v w dt² / 2 in the lateral direction.
-            assert!((d.norm() - 0.5 * dt * dt).abs() < 0.1 * dt * dt, "dt {dt}: {}", d.norm());
+            assert!(
+                (d.norm() - 0.5 * dt * dt).abs() < 0.1 * dt * dt,
+                "dt {dt}: {}",
+                d.norm()
+            );
         }
     }
 }

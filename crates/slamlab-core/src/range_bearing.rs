@@ -25,7 +25,10 @@ pub struct RangeBearing {
 impl RangeBearing {
     /// A measurement with its bearing wrapped.
     pub fn new(range: f64, bearing: f64) -> Self {
-        Self { range, bearing: wrap_angle(bearing) }
+        Self {
+            range,
+            bearing: wrap_angle(bearing),
+        }
     }
 
     /// As a vector `[range, bearing]`.
@@ -35,7 +38,10 @@ impl RangeBearing {
 
     /// `self - other` with the bearing difference wrapped: the innovation.
     pub fn difference(&self, other: &RangeBearing) -> Vector2<f64> {
-        Vector2::new(self.range - other.range, wrap_angle(self.bearing - other.bearing))
+        Vector2::new(
+            self.range - other.range,
+            wrap_angle(self.bearing - other.bearing),
+        )
     }
 
     /// True when both components are finite.
@@ -48,7 +54,9 @@ impl RangeBearing {
 #[derive(Clone, Copy, Debug, PartialEq, Error)]
 pub enum MeasurementError {
     /// The landmark is closer than [`MIN_RANGE`] to the robot.
-    #[error("landmark is {range:.2e} m from the robot, too close for a bearing (minimum {MIN_RANGE} m)")]
+    #[error(
+        "landmark is {range:.2e} m from the robot, too close for a bearing (minimum {MIN_RANGE} m)"
+    )]
     TooClose {
         /// The distance, metres.
         range: f64,
@@ -85,7 +93,11 @@ pub fn predict(pose: &Pose2, landmark: &Vector2<f64>) -> Result<Prediction, Meas
     // The thesis prints (L_x^i y - y_t) in Eq. 3.38/3.39; it is (L_y^i - y_t).
     let jacobian_landmark = Matrix2::new(dx / r, dy / r, -dy / q, dx / q);
     let jacobian_pose = Matrix2x3::new(-dx / r, -dy / r, 0.0, dy / q, -dx / q, -1.0);
-    Ok(Prediction { measurement, jacobian_pose, jacobian_landmark })
+    Ok(Prediction {
+        measurement,
+        jacobian_pose,
+        jacobian_landmark,
+    })
 }
 
 /// A landmark placed from one measurement, with the Jacobians of the inverse
@@ -110,7 +122,11 @@ pub fn inverse(pose: &Pose2, z: &RangeBearing) -> Result<InverseObservation, Mea
     let landmark = Vector2::new(pose.x + z.range * c, pose.y + z.range * s);
     let jacobian_pose = Matrix2x3::new(1.0, 0.0, -z.range * s, 0.0, 1.0, z.range * c);
     let jacobian_measurement = Matrix2::new(c, -z.range * s, s, z.range * c);
-    Ok(InverseObservation { landmark, jacobian_pose, jacobian_measurement })
+    Ok(InverseObservation {
+        landmark,
+        jacobian_pose,
+        jacobian_measurement,
+    })
 }
 
 /// What the sensor can see and how noisy it is.
@@ -169,10 +185,29 @@ mod tests {
                 let mut minus = pose.to_vector();
                 plus[k] += h;
                 minus[k] -= h;
-                let zp = predict(&Pose2 { x: plus[0], y: plus[1], theta: plus[2] }, &lm).unwrap_or_else(|e| panic!("{e}"));
-                let zm = predict(&Pose2 { x: minus[0], y: minus[1], theta: minus[2] }, &lm).unwrap_or_else(|e| panic!("{e}"));
+                let zp = predict(
+                    &Pose2 {
+                        x: plus[0],
+                        y: plus[1],
+                        theta: plus[2],
+                    },
+                    &lm,
+                )
+                .unwrap_or_else(|e| panic!("{e}"));
+                let zm = predict(
+                    &Pose2 {
+                        x: minus[0],
+                        y: minus[1],
+                        theta: minus[2],
+                    },
+                    &lm,
+                )
+                .unwrap_or_else(|e| panic!("{e}"));
                 let numeric = zp.measurement.difference(&zm.measurement) / (2.0 * h);
-                assert!((numeric - p.jacobian_pose.column(k)).norm() < 1e-6, "{pose:?} {lm:?} col {k}");
+                assert!(
+                    (numeric - p.jacobian_pose.column(k)).norm() < 1e-6,
+                    "{pose:?} {lm:?} col {k}"
+                );
             }
             for k in 0..2 {
                 let mut plus = lm;
@@ -182,7 +217,10 @@ mod tests {
                 let zp = predict(&pose, &plus).unwrap_or_else(|e| panic!("{e}"));
                 let zm = predict(&pose, &minus).unwrap_or_else(|e| panic!("{e}"));
                 let numeric = zp.measurement.difference(&zm.measurement) / (2.0 * h);
-                assert!((numeric - p.jacobian_landmark.column(k)).norm() < 1e-6, "{pose:?} {lm:?} lm col {k}");
+                assert!(
+                    (numeric - p.jacobian_landmark.column(k)).norm() < 1e-6,
+                    "{pose:?} {lm:?} lm col {k}"
+                );
             }
             // The landmark columns are the negatives of the robot's position columns.
             assert!((p.jacobian_landmark + p.jacobian_pose.fixed_columns::<2>(0)).norm() < 1e-15);
@@ -193,16 +231,37 @@ mod tests {
     fn inverse_jacobians_match_central_differences() {
         let h = 1e-6;
         for (pose, lm) in cases() {
-            let z = predict(&pose, &lm).unwrap_or_else(|e| panic!("{e}")).measurement;
+            let z = predict(&pose, &lm)
+                .unwrap_or_else(|e| panic!("{e}"))
+                .measurement;
             let g = inverse(&pose, &z).unwrap_or_else(|e| panic!("{e}"));
-            assert!((g.landmark - lm).norm() < 1e-12, "inverse of the observation recovers the landmark");
+            assert!(
+                (g.landmark - lm).norm() < 1e-12,
+                "inverse of the observation recovers the landmark"
+            );
             for k in 0..3 {
                 let mut plus = pose.to_vector();
                 let mut minus = pose.to_vector();
                 plus[k] += h;
                 minus[k] -= h;
-                let gp = inverse(&Pose2 { x: plus[0], y: plus[1], theta: plus[2] }, &z).unwrap_or_else(|e| panic!("{e}"));
-                let gm = inverse(&Pose2 { x: minus[0], y: minus[1], theta: minus[2] }, &z).unwrap_or_else(|e| panic!("{e}"));
+                let gp = inverse(
+                    &Pose2 {
+                        x: plus[0],
+                        y: plus[1],
+                        theta: plus[2],
+                    },
+                    &z,
+                )
+                .unwrap_or_else(|e| panic!("{e}"));
+                let gm = inverse(
+                    &Pose2 {
+                        x: minus[0],
+                        y: minus[1],
+                        theta: minus[2],
+                    },
+                    &z,
+                )
+                .unwrap_or_else(|e| panic!("{e}"));
                 let numeric = (gp.landmark - gm.landmark) / (2.0 * h);
                 assert!((numeric - g.jacobian_pose.column(k)).norm() < 1e-7);
             }
@@ -212,8 +271,22 @@ mod tests {
                 let mut minus = zv;
                 plus[k] += h;
                 minus[k] -= h;
-                let gp = inverse(&pose, &RangeBearing { range: plus[0], bearing: plus[1] }).unwrap_or_else(|e| panic!("{e}"));
-                let gm = inverse(&pose, &RangeBearing { range: minus[0], bearing: minus[1] }).unwrap_or_else(|e| panic!("{e}"));
+                let gp = inverse(
+                    &pose,
+                    &RangeBearing {
+                        range: plus[0],
+                        bearing: plus[1],
+                    },
+                )
+                .unwrap_or_else(|e| panic!("{e}"));
+                let gm = inverse(
+                    &pose,
+                    &RangeBearing {
+                        range: minus[0],
+                        bearing: minus[1],
+                    },
+                )
+                .unwrap_or_else(|e| panic!("{e}"));
                 let numeric = (gp.landmark - gm.landmark) / (2.0 * h);
                 assert!((numeric - g.jacobian_measurement.column(k)).norm() < 1e-7);
             }
@@ -231,14 +304,34 @@ mod tests {
     #[test]
     fn a_landmark_on_the_robot_is_an_error_not_a_nan() {
         let pose = Pose2::new(1.0, 1.0, 0.0);
-        assert!(matches!(predict(&pose, &Vector2::new(1.0, 1.0)), Err(MeasurementError::TooClose { .. })));
-        assert!(matches!(predict(&pose, &Vector2::new(f64::NAN, 1.0)), Err(MeasurementError::NotFinite)));
-        assert!(matches!(inverse(&pose, &RangeBearing { range: f64::INFINITY, bearing: 0.0 }), Err(MeasurementError::NotFinite)));
+        assert!(matches!(
+            predict(&pose, &Vector2::new(1.0, 1.0)),
+            Err(MeasurementError::TooClose { .. })
+        ));
+        assert!(matches!(
+            predict(&pose, &Vector2::new(f64::NAN, 1.0)),
+            Err(MeasurementError::NotFinite)
+        ));
+        assert!(matches!(
+            inverse(
+                &pose,
+                &RangeBearing {
+                    range: f64::INFINITY,
+                    bearing: 0.0
+                }
+            ),
+            Err(MeasurementError::NotFinite)
+        ));
     }
 
     #[test]
     fn field_of_view_and_range_limit_what_is_seen() {
-        let sensor = RangeBearingSensor { fov: std::f64::consts::FRAC_PI_2, max_range: 5.0, range_std: 0.1, bearing_std: 0.1 };
+        let sensor = RangeBearingSensor {
+            fov: std::f64::consts::FRAC_PI_2,
+            max_range: 5.0,
+            range_std: 0.1,
+            bearing_std: 0.1,
+        };
         let pose = Pose2::new(0.0, 0.0, 0.0);
         assert!(sensor.sees(&pose, &Vector2::new(3.0, 0.0)));
         assert!(sensor.sees(&pose, &Vector2::new(3.0, 2.9)));

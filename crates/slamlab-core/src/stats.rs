@@ -116,7 +116,10 @@ pub fn chi2_quantile(p: f64, dof: f64) -> f64 {
 /// with `runs · dof` degrees of freedom (Bar-Shalom et al., Sec. 5.4.2).
 pub fn chi2_band_95(dof: f64, runs: usize) -> (f64, f64) {
     let n = runs.max(1) as f64;
-    (chi2_quantile(0.025, dof * n) / n, chi2_quantile(0.975, dof * n) / n)
+    (
+        chi2_quantile(0.025, dof * n) / n,
+        chi2_quantile(0.975, dof * n) / n,
+    )
 }
 
 /// The normalized (estimation or innovation) squared error `eᵀ P⁻¹ e`.

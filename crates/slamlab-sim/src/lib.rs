@@ -1,1 +1,18 @@
-//! SLAM Lab simulation (in progress).
+//! # slamlab-sim
+//!
+//! The world SLAM Lab's estimators run in: ground truth, noise injection, the
+//! range-bearing sensor, controllers, scenarios, metrics and experiments.
+//!
+//! Only this crate holds the truth. Estimators from `slamlab-core` receive the
+//! commanded controls and the noisy measurements; metrics compare their output
+//! with the truth afterwards.
+
+pub mod metrics;
+pub mod noise;
+pub mod params;
+pub mod scenario;
+pub mod session;
+pub mod world;
+
+pub use scenario::{ControllerKind, EstimatorKind, LandmarkScenario};
+pub use session::{LandmarkSession, Phase};

@@ -33,7 +33,10 @@ impl EkfSlam {
     pub fn new(config: FilterConfig, start: Pose2) -> Result<Self, FilterError> {
         config.noise.validate()?;
         if !start.is_finite() {
-            return Err(FilterError::InvalidParameter { name: "start pose", value: f64::NAN });
+            return Err(FilterError::InvalidParameter {
+                name: "start pose",
+                value: f64::NAN,
+            });
         }
         Ok(Self {
             config,
@@ -50,12 +53,18 @@ impl EkfSlam {
     }
 
     /// The Kalman update for landmark `slot` with measurement `z`.
-    fn correct(&mut self, id: usize, slot: usize, z: &RangeBearing) -> Result<UpdateReport, FilterError> {
+    fn correct(
+        &mut self,
+        id: usize,
+        slot: usize,
+        z: &RangeBearing,
+    ) -> Result<UpdateReport, FilterError> {
         let n = self.mean.len();
         let j = 3 + 2 * slot;
         let pose = self.robot_pose();
         let landmark = self.mean.fixed_rows::<2>(j).into_owned();
-        let pred = range_bearing::predict(&pose, &landmark).map_err(|source| FilterError::Measurement { id, source })?;
+        let pred = range_bearing::predict(&pose, &landmark)
+            .map_err(|source| FilterError::Measurement { id, source })?;
         let innovation = z.difference(&pred.measurement);
 
         // H has non-zero columns only at the robot (0..3) and the landmark (j..j+2):
@@ -69,14 +78,18 @@ impl EkfSlam {
         let m_l = m.fixed_view::<2, 2>(j, 0).into_owned();
         let s = h_r * m_r + h_l * m_l + self.config.noise.measurement_covariance();
         let s = 0.5 * (s + s.transpose());
-        let s_chol = s.cholesky().ok_or(FilterError::NotPositiveDefinite { what: "innovation covariance S" })?;
+        let s_chol = s.cholesky().ok_or(FilterError::NotPositiveDefinite {
+            what: "innovation covariance S",
+        })?;
         let s_inv = s_chol.inverse();
         let gain = &m * s_inv;
         let nis = innovation.dot(&(s_inv * innovation));
 
         let correction = &gain * innovation;
         if !correction.iter().all(|v| v.is_finite()) {
-            return Err(FilterError::NotPositiveDefinite { what: "innovation covariance S" });
+            return Err(FilterError::NotPositiveDefinite {
+                what: "innovation covariance S",
+            });
         }
         self.mean += correction;
         self.mean[2] = crate::geometry::wrap_angle(self.mean[2]);
@@ -111,25 +124,35 @@ impl EkfSlam {
             });
         }
         let pose = self.robot_pose();
-        let g = range_bearing::inverse(&pose, z).map_err(|source| FilterError::Measurement { id, source })?;
+        let g = range_bearing::inverse(&pose, z)
+            .map_err(|source| FilterError::Measurement { id, source })?;
         let n = self.mean.len();
         let p_rr: Matrix3<f64> = self.covariance.fixed_view::<3, 3>(0, 0).into_owned();
         let p_ll = g.jacobian_pose * p_rr * g.jacobian_pose.transpose()
-            + g.jacobian_measurement * self.config.noise.measurement_covariance() * g.jacobian_measurement.transpose();
+            + g.jacobian_measurement
+                * self.config.noise.measurement_covariance()
+                * g.jacobian_measurement.transpose();
         // P_LM = G_R P_RM: the new landmark's correlation with everything known so far.
         let p_lm = g.jacobian_pose * self.covariance.rows(0, 3);
 
         let mut covariance = self.covariance.clone().resize(n + 2, n + 2, 0.0);
         covariance.view_mut((n, 0), (2, n)).copy_from(&p_lm);
-        covariance.view_mut((0, n), (n, 2)).copy_from(&p_lm.transpose());
-        covariance.fixed_view_mut::<2, 2>(n, n).copy_from(&(0.5 * (p_ll + p_ll.transpose())));
+        covariance
+            .view_mut((0, n), (n, 2))
+            .copy_from(&p_lm.transpose());
+        covariance
+            .fixed_view_mut::<2, 2>(n, n)
+            .copy_from(&(0.5 * (p_ll + p_ll.transpose())));
         self.covariance = covariance;
         self.mean = self.mean.clone().resize_vertically(n + 2, 0.0);
         self.mean[n] = g.landmark[0];
         self.mean[n + 1] = g.landmark[1];
         self.slot_of.insert(id, self.landmark_ids.len());
         self.landmark_ids.push(id);
-        Ok(UpdateReport::Initialized { id, position: g.landmark })
+        Ok(UpdateReport::Initialized {
+            id,
+            position: g.landmark,
+        })
     }
 }
 
@@ -140,10 +163,17 @@ impl LandmarkSlam for EkfSlam {
 
     fn predict(&mut self, control: &Control, dt: f64) -> Result<PredictReport, FilterError> {
         if !control.is_finite() || !dt.is_finite() || dt < 0.0 {
-            return Err(FilterError::InvalidControl { v: control.v, w: control.w, dt });
+            return Err(FilterError::InvalidControl {
+                v: control.v,
+                w: control.w,
+                dt,
+            });
         }
         let robot_det_before = self.robot_covariance().determinant();
-        let step = self.config.motion_model.step(&self.robot_pose(), control, dt);
+        let step = self
+            .config
+            .motion_model
+            .step(&self.robot_pose(), control, dt);
         let f = step.jacobian_pose;
         let g = step.jacobian_control;
         self.mean[0] = step.pose.x;
@@ -151,21 +181,40 @@ impl LandmarkSlam for EkfSlam {
         self.mean[2] = step.pose.theta;
 
         let p_rr: Matrix3<f64> = self.covariance.fixed_view::<3, 3>(0, 0).into_owned();
-        let q = g * self.config.noise.control_covariance() * g.transpose();
+        // A robot commanded to stop does not move: the control noise is on the
+        // executed wheel speeds of a moving robot (the simulator does the same).
+        let q = if *control == Control::default() {
+            Matrix3::zeros()
+        } else {
+            g * self.config.noise.control_covariance() * g.transpose()
+        };
         let new_rr = f * p_rr * f.transpose() + q;
-        self.covariance.fixed_view_mut::<3, 3>(0, 0).copy_from(&(0.5 * (new_rr + new_rr.transpose())));
+        self.covariance
+            .fixed_view_mut::<3, 3>(0, 0)
+            .copy_from(&(0.5 * (new_rr + new_rr.transpose())));
         let n = self.mean.len();
         if n > 3 {
             let new_rl = f * self.covariance.view((0, 3), (3, n - 3));
-            self.covariance.view_mut((0, 3), (3, n - 3)).copy_from(&new_rl);
-            self.covariance.view_mut((3, 0), (n - 3, 3)).copy_from(&new_rl.transpose());
+            self.covariance
+                .view_mut((0, 3), (3, n - 3))
+                .copy_from(&new_rl);
+            self.covariance
+                .view_mut((3, 0), (n - 3, 3))
+                .copy_from(&new_rl.transpose());
         }
-        Ok(PredictReport { control: *control, robot_det_before, robot_det_after: self.robot_covariance().determinant() })
+        Ok(PredictReport {
+            control: *control,
+            robot_det_before,
+            robot_det_after: self.robot_covariance().determinant(),
+        })
     }
 
     fn update(&mut self, id: usize, z: &RangeBearing) -> Result<UpdateReport, FilterError> {
         if !z.is_finite() {
-            return Err(FilterError::Measurement { id, source: range_bearing::MeasurementError::NotFinite });
+            return Err(FilterError::Measurement {
+                id,
+                source: range_bearing::MeasurementError::NotFinite,
+            });
         }
         match self.slot_of.get(&id) {
             Some(&slot) => self.correct(id, slot, z),
@@ -196,7 +245,12 @@ mod tests {
     fn config() -> FilterConfig {
         FilterConfig {
             motion_model: MotionModel::ExactArc,
-            noise: FilterNoise { v_std: 0.1, w_std: 0.1, range_std: 0.2, bearing_std: 0.05 },
+            noise: FilterNoise {
+                v_std: 0.1,
+                w_std: 0.1,
+                range_std: 0.2,
+                bearing_std: 0.05,
+            },
         }
     }
 
@@ -204,22 +258,29 @@ mod tests {
     fn starts_certain_and_prediction_grows_only_the_robot_block() {
         let mut ekf = EkfSlam::new(config(), Pose2::IDENTITY).unwrap_or_else(|e| panic!("{e}"));
         assert_eq!(ekf.robot_covariance(), Matrix3::zeros());
-        let z = range_bearing::predict(&Pose2::IDENTITY, &Vector2::new(3.0, 1.0)).map(|p| p.measurement);
+        let z = range_bearing::predict(&Pose2::IDENTITY, &Vector2::new(3.0, 1.0))
+            .map(|p| p.measurement);
         let z = z.unwrap_or_else(|e| panic!("{e}"));
         ekf.update(7, &z).unwrap_or_else(|e| panic!("{e}"));
         // With a certain robot the landmark's covariance is G_z V G_zᵀ and uncorrelated.
         assert!(ekf.covariance().view((0, 3), (3, 2)).norm() < 1e-15);
         let before_ll = ekf.covariance().fixed_view::<2, 2>(3, 3).into_owned();
-        ekf.predict(&Control::new(1.0, 0.2), 0.1).unwrap_or_else(|e| panic!("{e}"));
+        ekf.predict(&Control::new(1.0, 0.2), 0.1)
+            .unwrap_or_else(|e| panic!("{e}"));
         assert!(ekf.robot_covariance().determinant() > 0.0 || ekf.robot_covariance().trace() > 0.0);
-        assert_eq!(ekf.covariance().fixed_view::<2, 2>(3, 3).into_owned(), before_ll);
+        assert_eq!(
+            ekf.covariance().fixed_view::<2, 2>(3, 3).into_owned(),
+            before_ll
+        );
     }
 
     #[test]
     fn landmark_initialization_matches_the_jacobian_formula() {
-        let mut ekf = EkfSlam::new(config(), Pose2::new(1.0, 2.0, 0.5)).unwrap_or_else(|e| panic!("{e}"));
+        let mut ekf =
+            EkfSlam::new(config(), Pose2::new(1.0, 2.0, 0.5)).unwrap_or_else(|e| panic!("{e}"));
         for _ in 0..5 {
-            ekf.predict(&Control::new(1.0, 0.3), 0.1).unwrap_or_else(|e| panic!("{e}"));
+            ekf.predict(&Control::new(1.0, 0.3), 0.1)
+                .unwrap_or_else(|e| panic!("{e}"));
         }
         let z = RangeBearing::new(4.0, 0.3);
         let pose = ekf.robot_pose();
@@ -227,7 +288,9 @@ mod tests {
         ekf.update(3, &z).unwrap_or_else(|e| panic!("{e}"));
         let g = range_bearing::inverse(&pose, &z).unwrap_or_else(|e| panic!("{e}"));
         let expected_ll = g.jacobian_pose * p_rr * g.jacobian_pose.transpose()
-            + g.jacobian_measurement * config().noise.measurement_covariance() * g.jacobian_measurement.transpose();
+            + g.jacobian_measurement
+                * config().noise.measurement_covariance()
+                * g.jacobian_measurement.transpose();
         let lm = ekf.landmarks()[0];
         assert_eq!(lm.id, 3);
         assert!((lm.mean - g.landmark).norm() < 1e-12);
@@ -239,10 +302,20 @@ mod tests {
     #[test]
     fn a_measurement_on_the_robot_is_rejected_without_changing_the_state() {
         let mut ekf = EkfSlam::new(config(), Pose2::IDENTITY).unwrap_or_else(|e| panic!("{e}"));
-        ekf.predict(&Control::new(1.0, 0.3), 0.1).unwrap_or_else(|e| panic!("{e}"));
+        ekf.predict(&Control::new(1.0, 0.3), 0.1)
+            .unwrap_or_else(|e| panic!("{e}"));
         let before = ekf.clone();
         assert!(ekf.update(1, &RangeBearing::new(0.0, 0.0)).is_err());
-        assert!(ekf.update(1, &RangeBearing { range: f64::NAN, bearing: 0.0 }).is_err());
+        assert!(
+            ekf.update(
+                1,
+                &RangeBearing {
+                    range: f64::NAN,
+                    bearing: 0.0
+                }
+            )
+            .is_err()
+        );
         assert!(ekf.predict(&Control::new(f64::INFINITY, 0.0), 0.1).is_err());
         assert_eq!(before.mean(), ekf.mean());
         assert_eq!(before.covariance(), ekf.covariance());

@@ -42,9 +42,12 @@ impl FilterNoise {
 
     /// Checks that every standard deviation is finite and positive.
     pub fn validate(&self) -> Result<(), FilterError> {
-        for (name, value) in
-            [("v_std", self.v_std), ("w_std", self.w_std), ("range_std", self.range_std), ("bearing_std", self.bearing_std)]
-        {
+        for (name, value) in [
+            ("v_std", self.v_std),
+            ("w_std", self.w_std),
+            ("range_std", self.range_std),
+            ("bearing_std", self.bearing_std),
+        ] {
             if !(value.is_finite() && value > 0.0) {
                 return Err(FilterError::InvalidParameter { name, value });
             }

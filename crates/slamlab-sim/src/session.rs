@@ -1,0 +1,553 @@
+//! A running landmark-SLAM lesson: the true world, the estimators, and time
+//! advanced one phase or one tick at a time.
+//!
+//! One tick is: the controller gives a command; the true robot moves with that
+//! command plus noise; the sensor measures the landmarks in view, with noise;
+//! then every estimator runs its phases on the same command and measurements:
+//! first `predict`, then one `update` per observed landmark, in id order.
+
+use crate::noise::{Stream, gaussian, stream_rng};
+use crate::params::{self, ParamIssue};
+use crate::scenario::{EstimatorKind, LandmarkScenario};
+use crate::world::LandmarkWorld;
+use nalgebra::{DMatrix, DVector, Vector2};
+use rand_chacha::ChaCha8Rng;
+use slamlab_core::kalman::{EkfSlam, LandmarkSlam, PredictReport, UpdateReport};
+use slamlab_core::range_bearing::{self, RangeBearing, RangeBearingSensor};
+use slamlab_core::stats::normalized_squared_error;
+use slamlab_core::{Control, MotionModel, Pose2, wrap_angle};
+use std::collections::VecDeque;
+
+/// One step of an estimator within a tick.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Phase {
+    /// Motion prediction with the tick's command.
+    Predict,
+    /// Update with the measurement of one landmark.
+    Update {
+        /// The landmark's id.
+        id: usize,
+        /// Position of this update within the tick, from 1.
+        index: usize,
+        /// Number of updates in the tick.
+        count: usize,
+    },
+}
+
+impl Phase {
+    /// The phase's name as shown on screen, e.g. "update landmark 7 (2 of 5)".
+    pub fn label(&self) -> String {
+        match self {
+            Phase::Predict => "predict".to_owned(),
+            Phase::Update { id, index, count } => {
+                format!("update landmark {id} ({index} of {count})")
+            }
+        }
+    }
+}
+
+/// A measurement made this tick, with the truth behind it (for drawing only).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Observation {
+    /// The landmark's id.
+    pub id: usize,
+    /// What the sensor reported.
+    pub measurement: RangeBearing,
+    /// Where the measurement puts the landmark, seen from the true robot pose.
+    pub measured_point: Vector2<f64>,
+}
+
+/// Errors and uncertainty of one estimator after one tick.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct TickMetrics {
+    /// Tick number, from 1.
+    pub tick: u64,
+    /// Simulated time, seconds.
+    pub time: f64,
+    /// True minus estimated robot pose: `[x m, y m, θ rad]`, heading wrapped.
+    pub error: [f64; 3],
+    /// The filter's standard deviations of `[x, y, θ]`.
+    pub sigma: [f64; 3],
+    /// Robot position error `‖(e_x, e_y)‖`, metres.
+    pub position_error: f64,
+    /// The filter's 2-sigma bound on that error: `2 √(σ_x² + σ_y²)`, metres.
+    pub position_bound_2sigma: f64,
+    /// Robot-pose NEES `eᵀ P_RR⁻¹ e` (3 degrees of freedom); `None` while `P_RR` is singular.
+    pub nees: Option<f64>,
+    /// RMS position error over the landmarks initialized so far, metres.
+    pub landmark_rmse: Option<f64>,
+    /// Landmarks in the state.
+    pub landmarks_initialized: usize,
+}
+
+/// One update's normalized innovation squared (2 degrees of freedom).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct NisSample {
+    /// Tick of the update.
+    pub tick: u64,
+    /// The landmark.
+    pub id: usize,
+    /// `νᵀ S⁻¹ ν`.
+    pub nis: f64,
+}
+
+/// One estimator and its history in a session.
+#[derive(Debug)]
+pub struct FilterRun {
+    /// Which estimator this is.
+    pub kind: EstimatorKind,
+    filter: Box<dyn LandmarkSlamDebug>,
+    /// The estimated robot pose after every completed tick, starting with the start pose.
+    pub path: Vec<Pose2>,
+    /// Metrics after every completed tick.
+    pub history: Vec<TickMetrics>,
+    /// NIS of every correcting update.
+    pub nis: Vec<NisSample>,
+    /// The latest prediction.
+    pub last_predict: Option<PredictReport>,
+    /// The latest landmark update.
+    pub last_update: Option<UpdateReport>,
+    /// The latest error, if the latest phase failed (the state is then unchanged).
+    pub last_error: Option<String>,
+}
+
+/// `LandmarkSlam` plus `Debug`, so sessions can be printed.
+pub trait LandmarkSlamDebug: LandmarkSlam + std::fmt::Debug {}
+impl<T: LandmarkSlam + std::fmt::Debug> LandmarkSlamDebug for T {}
+
+impl FilterRun {
+    /// The estimator's read-only view.
+    pub fn filter(&self) -> &dyn LandmarkSlam {
+        &*self.filter
+    }
+
+    /// Metrics after the latest completed tick.
+    pub fn latest(&self) -> Option<&TickMetrics> {
+        self.history.last()
+    }
+}
+
+/// A landmark-SLAM run in progress.
+#[derive(Debug)]
+pub struct LandmarkSession {
+    scenario: LandmarkScenario,
+    world: LandmarkWorld,
+    sensor: RangeBearingSensor,
+    control_rng: ChaCha8Rng,
+    measurement_rng: ChaCha8Rng,
+    truth: Pose2,
+    truth_path: Vec<Pose2>,
+    dead_reckoning: Pose2,
+    dead_reckoning_path: Vec<Pose2>,
+    tick: u64,
+    teleop: Control,
+    command: Control,
+    observations: Vec<Observation>,
+    pending: VecDeque<Phase>,
+    last_phase: Option<Phase>,
+    filters: Vec<FilterRun>,
+    notices: Vec<String>,
+}
+
+impl LandmarkSession {
+    /// Starts a session. The scenario is checked first; whatever had to be changed
+    /// is listed in [`notices`](Self::notices).
+    pub fn new(mut scenario: LandmarkScenario) -> Self {
+        let mut notices: Vec<String> = params::sanitize(&mut scenario)
+            .iter()
+            .map(ParamIssue::to_string)
+            .collect();
+        let world = LandmarkWorld::generate(
+            scenario.layout,
+            scenario.landmarks,
+            scenario.world_size,
+            scenario.circle_radius(),
+            scenario.seed,
+        );
+        let start = scenario.start_pose();
+        let mut filters = Vec::new();
+        for &kind in &scenario.estimators {
+            let built: Result<Box<dyn LandmarkSlamDebug>, _> = match kind {
+                EstimatorKind::Ekf => {
+                    EkfSlam::new(scenario.filter_config(), start).map(|f| Box::new(f) as _)
+                }
+            };
+            match built {
+                Ok(filter) => filters.push(FilterRun {
+                    kind,
+                    filter,
+                    path: vec![start],
+                    history: Vec::new(),
+                    nis: Vec::new(),
+                    last_predict: None,
+                    last_update: None,
+                    last_error: None,
+                }),
+                Err(e) => notices.push(format!("{} could not start: {e}", kind.name())),
+            }
+        }
+        if world
+            .landmarks
+            .iter()
+            .any(|l| (l.position - start.translation()).norm() < range_bearing::MIN_RANGE)
+        {
+            notices.push("a landmark sits on the robot's start position; it is not measured while the robot is on it".to_owned());
+        }
+        Self {
+            sensor: scenario.sensor(),
+            control_rng: stream_rng(scenario.seed, Stream::Control),
+            measurement_rng: stream_rng(scenario.seed, Stream::Measurement),
+            truth: start,
+            truth_path: vec![start],
+            dead_reckoning: start,
+            dead_reckoning_path: vec![start],
+            tick: 0,
+            teleop: Control::default(),
+            command: Control::default(),
+            observations: Vec::new(),
+            pending: VecDeque::new(),
+            last_phase: None,
+            filters,
+            notices,
+            world,
+            scenario,
+        }
+    }
+
+    /// The scenario as it runs (after checking).
+    pub fn scenario(&self) -> &LandmarkScenario {
+        &self.scenario
+    }
+
+    /// The true world.
+    pub fn world(&self) -> &LandmarkWorld {
+        &self.world
+    }
+
+    /// The simulated sensor.
+    pub fn sensor(&self) -> &RangeBearingSensor {
+        &self.sensor
+    }
+
+    /// The true robot pose.
+    pub fn truth(&self) -> Pose2 {
+        self.truth
+    }
+
+    /// The true path, one pose per tick.
+    pub fn truth_path(&self) -> &[Pose2] {
+        &self.truth_path
+    }
+
+    /// Where the robot would think it is from the commands alone (no measurements).
+    pub fn dead_reckoning(&self) -> Pose2 {
+        self.dead_reckoning
+    }
+
+    /// The dead-reckoning path, one pose per tick.
+    pub fn dead_reckoning_path(&self) -> &[Pose2] {
+        &self.dead_reckoning_path
+    }
+
+    /// Ticks started so far.
+    pub fn tick(&self) -> u64 {
+        self.tick
+    }
+
+    /// Simulated time of the latest tick, seconds.
+    pub fn time(&self) -> f64 {
+        self.tick as f64 * self.scenario.dt
+    }
+
+    /// The command of the current tick.
+    pub fn command(&self) -> Control {
+        self.command
+    }
+
+    /// The measurements of the current tick.
+    pub fn observations(&self) -> &[Observation] {
+        &self.observations
+    }
+
+    /// The estimators.
+    pub fn filters(&self) -> &[FilterRun] {
+        &self.filters
+    }
+
+    /// Messages for the user: parameters that were changed, estimators that could not start.
+    pub fn notices(&self) -> &[String] {
+        &self.notices
+    }
+
+    /// The phase that ran last.
+    pub fn last_phase(&self) -> Option<Phase> {
+        self.last_phase
+    }
+
+    /// The phase that runs next, if the current tick is not finished.
+    pub fn next_phase(&self) -> Option<Phase> {
+        self.pending.front().copied()
+    }
+
+    /// True between the first and the last phase of a tick.
+    pub fn is_mid_tick(&self) -> bool {
+        !self.pending.is_empty()
+    }
+
+    /// Sets the command used by manual driving (keyboard, on-screen buttons).
+    /// Non-finite values are ignored.
+    pub fn set_teleop(&mut self, control: Control) {
+        if control.is_finite() {
+            self.teleop = control;
+        }
+    }
+
+    /// The manual-driving command.
+    pub fn teleop(&self) -> Control {
+        self.teleop
+    }
+
+    /// Runs the next phase (starting a new tick when the last one is finished) and
+    /// returns it.
+    pub fn step_phase(&mut self) -> Phase {
+        if self.pending.is_empty() {
+            self.begin_tick();
+        }
+        let phase = self.pending.pop_front().unwrap_or(Phase::Predict);
+        self.run_phase(phase);
+        if self.pending.is_empty() {
+            self.end_tick();
+        }
+        phase
+    }
+
+    /// Finishes the current tick, or runs a whole new one.
+    pub fn step_tick(&mut self) {
+        loop {
+            self.step_phase();
+            if self.pending.is_empty() {
+                break;
+            }
+        }
+    }
+
+    /// Runs `count` whole ticks.
+    pub fn run_ticks(&mut self, count: u64) {
+        for _ in 0..count {
+            self.step_tick();
+        }
+    }
+
+    fn begin_tick(&mut self) {
+        self.tick += 1;
+        let dt = self.scenario.dt;
+        self.command = self.scenario.scripted_control().unwrap_or(self.teleop);
+        // Noise is on the executed wheel speeds of a moving robot; a robot told to
+        // stop stays put (and the estimators add no process noise for it).
+        let executed = if self.command == Control::default() {
+            self.command
+        } else {
+            Control::new(
+                self.command.v + gaussian(&mut self.control_rng, self.scenario.v_std),
+                self.command.w + gaussian(&mut self.control_rng, self.scenario.w_std),
+            )
+        };
+        self.truth = MotionModel::ExactArc.predict(&self.truth, &executed, dt);
+        self.dead_reckoning = self
+            .scenario
+            .motion
+            .predict(&self.dead_reckoning, &self.command, dt);
+
+        self.observations.clear();
+        for landmark in &self.world.landmarks {
+            if !self.sensor.sees(&self.truth, &landmark.position) {
+                continue;
+            }
+            let Ok(exact) = range_bearing::predict(&self.truth, &landmark.position) else {
+                // The landmark is under the robot: no bearing to measure.
+                continue;
+            };
+            let measurement = RangeBearing::new(
+                exact.measurement.range
+                    + gaussian(&mut self.measurement_rng, self.sensor.range_std),
+                exact.measurement.bearing
+                    + gaussian(&mut self.measurement_rng, self.sensor.bearing_std),
+            );
+            let angle = self.truth.theta + measurement.bearing;
+            let measured_point = self.truth.translation()
+                + measurement.range * Vector2::new(angle.cos(), angle.sin());
+            self.observations.push(Observation {
+                id: landmark.id,
+                measurement,
+                measured_point,
+            });
+        }
+        let count = self.observations.len();
+        self.pending.push_back(Phase::Predict);
+        for (i, o) in self.observations.iter().enumerate() {
+            self.pending.push_back(Phase::Update {
+                id: o.id,
+                index: i + 1,
+                count,
+            });
+        }
+    }
+
+    fn run_phase(&mut self, phase: Phase) {
+        let dt = self.scenario.dt;
+        for run in &mut self.filters {
+            let result = match phase {
+                Phase::Predict => run
+                    .filter
+                    .predict(&self.command, dt)
+                    .map(|r| run.last_predict = Some(r)),
+                Phase::Update { id, index, .. } => {
+                    let z = self.observations[index - 1].measurement;
+                    run.filter.update(id, &z).map(|r| {
+                        if let UpdateReport::Corrected { nis, .. } = r {
+                            run.nis.push(NisSample {
+                                tick: self.tick,
+                                id,
+                                nis,
+                            });
+                        }
+                        run.last_update = Some(r);
+                    })
+                }
+            };
+            run.last_error = result.err().map(|e| format!("{}: {e}", run.kind.name()));
+        }
+        self.last_phase = Some(phase);
+    }
+
+    fn end_tick(&mut self) {
+        self.truth_path.push(self.truth);
+        self.dead_reckoning_path.push(self.dead_reckoning);
+        let time = self.time();
+        for run in &mut self.filters {
+            let metrics = tick_metrics(self.tick, time, &self.truth, &self.world, run.filter());
+            run.path.push(run.filter.robot_pose());
+            run.history.push(metrics);
+        }
+    }
+}
+
+/// Compares an estimator's state with the truth.
+pub fn tick_metrics(
+    tick: u64,
+    time: f64,
+    truth: &Pose2,
+    world: &LandmarkWorld,
+    filter: &dyn LandmarkSlam,
+) -> TickMetrics {
+    let estimate = filter.robot_pose();
+    let error = [
+        truth.x - estimate.x,
+        truth.y - estimate.y,
+        wrap_angle(truth.theta - estimate.theta),
+    ];
+    let p = filter.robot_covariance();
+    let sigma = [
+        p[(0, 0)].max(0.0).sqrt(),
+        p[(1, 1)].max(0.0).sqrt(),
+        p[(2, 2)].max(0.0).sqrt(),
+    ];
+    let nees = normalized_squared_error(
+        &DVector::from_column_slice(&error),
+        &DMatrix::from_iterator(3, 3, p.iter().copied()),
+    );
+    let landmarks = filter.landmarks();
+    let squared: Vec<f64> = landmarks
+        .iter()
+        .filter_map(|l| {
+            world
+                .landmark(l.id)
+                .map(|t| (t.position - l.mean).norm_squared())
+        })
+        .collect();
+    let landmark_rmse =
+        (!squared.is_empty()).then(|| (squared.iter().sum::<f64>() / squared.len() as f64).sqrt());
+    TickMetrics {
+        tick,
+        time,
+        error,
+        sigma,
+        position_error: (error[0] * error[0] + error[1] * error[1]).sqrt(),
+        position_bound_2sigma: 2.0 * (p[(0, 0)] + p[(1, 1)]).max(0.0).sqrt(),
+        nees,
+        landmark_rmse,
+        landmarks_initialized: landmarks.len(),
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn phases_follow_predict_then_each_update() {
+        let mut s = LandmarkSession::new(LandmarkScenario::default());
+        let first = s.step_phase();
+        assert_eq!(first, Phase::Predict);
+        let n = s.observations().len();
+        assert!(n > 0, "the teaching layout is in view at the start");
+        for k in 1..=n {
+            match s.step_phase() {
+                Phase::Update { index, count, .. } => assert_eq!((index, count), (k, n)),
+                Phase::Predict => panic!("expected update {k}"),
+            }
+        }
+        assert!(!s.is_mid_tick());
+        assert_eq!(s.filters()[0].history.len(), 1);
+        assert_eq!(s.truth_path().len(), 2);
+    }
+
+    #[test]
+    fn same_seed_same_run_and_the_estimator_does_not_change_the_world() {
+        let mut a = LandmarkSession::new(LandmarkScenario {
+            seed: 4,
+            ..Default::default()
+        });
+        let mut b = LandmarkSession::new(LandmarkScenario {
+            seed: 4,
+            ..Default::default()
+        });
+        a.run_ticks(50);
+        b.run_ticks(50);
+        assert_eq!(a.truth(), b.truth());
+        assert_eq!(
+            a.filters()[0].filter().mean(),
+            b.filters()[0].filter().mean()
+        );
+        let mut c = LandmarkSession::new(LandmarkScenario {
+            seed: 4,
+            estimators: vec![],
+            ..Default::default()
+        });
+        c.run_ticks(50);
+        assert_eq!(
+            a.truth(),
+            c.truth(),
+            "the world does not depend on the estimators"
+        );
+    }
+
+    #[test]
+    fn a_stopped_manual_robot_stays_put() {
+        let mut s = LandmarkSession::new(LandmarkScenario {
+            controller: crate::scenario::ControllerKind::Manual,
+            ..Default::default()
+        });
+        let start = s.truth();
+        s.run_ticks(10);
+        assert_eq!(s.truth(), start);
+        s.set_teleop(Control::new(0.5, 0.0));
+        s.set_teleop(Control::new(f64::NAN, 0.0));
+        s.run_ticks(10);
+        assert!(
+            (s.truth().x - start.x - 0.5).abs() < 0.5,
+            "moved about 0.5 m: {:?}",
+            s.truth()
+        );
+    }
+}
