@@ -1,1 +1,230 @@
-//! Browser entry point (written by the web build work).
+//! Browser entry point (wasm32 only).
+//!
+//! `web/index.html` loads the wasm-bindgen output (`pkg/slamlab_app.js`) and calls its
+//! `init()`, which runs [`start`]. `start`:
+//!
+//! 1. creates the eframe [`eframe::WebRunner`] (which installs eframe's panic hook) and
+//!    wraps that hook so that a panic also shows a red banner (`#panic`) in the page:
+//!    a panic stops the egui app for good, and the user must see why;
+//! 2. pipes `log` messages to the browser console ([`eframe::WebLogger`]);
+//! 3. reads the page's query string (`?lesson=landmark-slam&seed=7&embed=1`) and starts
+//!    [`SlamLabApp`] on `<canvas id="the_canvas_id">`;
+//! 4. writes `running` or `error: ...` into `#status` (`panicked` after a panic).
+//!
+//! The browser tests (`web/tests/`) read the app's state through
+//! [`slamlab_test_state`], [`slamlab_panicked`] and [`slamlab_panic_message`], and check
+//! the panic banner with [`slamlab_debug_panic`]. The page puts these exports on
+//! `window.slamlab`, so they can also be called from the browser's developer console.
+
+use std::cell::RefCell;
+
+use wasm_bindgen::JsCast as _;
+use wasm_bindgen::prelude::*;
+
+use crate::SlamLabApp;
+
+/// The id of the `<canvas>` in `web/index.html` that egui paints into.
+const CANVAS_ID: &str = "the_canvas_id";
+
+thread_local! {
+    /// The running app, kept so that the exported test functions can reach it.
+    static RUNNER: RefCell<Option<eframe::WebRunner>> = const { RefCell::new(None) };
+}
+
+/// Runs once when the wasm module is instantiated (wasm-bindgen's `start`).
+#[wasm_bindgen(start)]
+pub fn start() {
+    // The runner installs eframe's panic hook (console.error with the call stack, and it
+    // remembers the panic so the runner stops touching the poisoned app). Ours wraps it.
+    let runner = eframe::WebRunner::new();
+    install_panic_banner();
+
+    // This fails only if a logger is already installed, and then that one is used.
+    let _already_set = eframe::WebLogger::init(log::LevelFilter::Info);
+
+    RUNNER.with(|cell| *cell.borrow_mut() = Some(runner.clone()));
+    set_status("starting", "starting");
+    wasm_bindgen_futures::spawn_local(async move {
+        match start_app(&runner).await {
+            Ok(()) => set_status("running", "running"),
+            Err(message) => {
+                log::error!("SLAM Lab could not start: {message}");
+                set_status(&format!("error: {message}"), "error");
+            }
+        }
+    });
+}
+
+/// Finds the canvas, reads the query string and starts the eframe runner.
+async fn start_app(runner: &eframe::WebRunner) -> Result<(), String> {
+    let window = web_sys::window().ok_or("no window object")?;
+    let document = window.document().ok_or("no document")?;
+    let search = window
+        .location()
+        .search()
+        .map_err(|err| js_to_string(&err))?;
+    let query = search.strip_prefix('?').unwrap_or(&search).to_owned();
+    let canvas = document
+        .get_element_by_id(CANVAS_ID)
+        .ok_or_else(|| format!("the page has no <canvas id=\"{CANVAS_ID}\">"))?
+        .dyn_into::<web_sys::HtmlCanvasElement>()
+        .map_err(|_| format!("#{CANVAS_ID} is not a <canvas>"))?;
+    runner
+        .start(
+            canvas,
+            eframe::WebOptions::default(),
+            Box::new(move |cc| {
+                Ok(Box::new(WebApp {
+                    inner: SlamLabApp::new(cc, &query),
+                }))
+            }),
+        )
+        .await
+        .map_err(|err| js_to_string(&err))
+}
+
+/// The app's state as one line of JSON (`SlamLabApp::test_state_json`), or
+/// `{"error":"..."}` when the app is not running (not started yet, or panicked).
+#[wasm_bindgen]
+pub fn slamlab_test_state() -> String {
+    RUNNER.with(|cell| {
+        let runner = cell.borrow();
+        let Some(runner) = runner.as_ref() else {
+            return r#"{"error":"not started"}"#.to_owned();
+        };
+        if runner.has_panicked() {
+            return r#"{"error":"panicked"}"#.to_owned();
+        }
+        // `None` until the app is created, and while egui is painting a frame.
+        match runner.app_mut::<WebApp>() {
+            Some(app) => app.inner.test_state_json(),
+            None => r#"{"error":"not running"}"#.to_owned(),
+        }
+    })
+}
+
+/// Has the app panicked (and therefore stopped)?
+#[wasm_bindgen]
+pub fn slamlab_panicked() -> bool {
+    RUNNER.with(|cell| {
+        cell.borrow()
+            .as_ref()
+            .is_some_and(eframe::WebRunner::has_panicked)
+    })
+}
+
+/// The panic message, if the app has panicked.
+#[wasm_bindgen]
+pub fn slamlab_panic_message() -> Option<String> {
+    RUNNER.with(|cell| {
+        let runner = cell.borrow();
+        runner
+            .as_ref()?
+            .panic_summary()
+            .map(|summary| summary.message())
+    })
+}
+
+/// Panics on purpose, with `message`: the browser tests use it to check that a panic is
+/// shown in the page (the `#panic` banner) and stops the app cleanly.
+#[wasm_bindgen]
+#[expect(clippy::panic, reason = "the point of this function is to panic")]
+pub fn slamlab_debug_panic(message: &str) {
+    panic!("{message}");
+}
+
+/// Wraps the current panic hook (eframe's) so that a panic is also shown in the page.
+fn install_panic_banner() {
+    let previous_hook = std::panic::take_hook();
+    std::panic::set_hook(Box::new(move |info| {
+        previous_hook(info);
+        let message = info.to_string();
+        log::error!("SLAM Lab stopped after a panic: {message}");
+        show_panic_banner(&message);
+        set_status("panicked", "panicked");
+    }));
+}
+
+/// Shows the panic in the `#panic` element of the page (or in an alert if there is none).
+fn show_panic_banner(message: &str) {
+    let Some(window) = web_sys::window() else {
+        return;
+    };
+    let text = format!(
+        "SLAM Lab stopped because of an internal error:\n\n{message}\n\n\
+         Reload the page to start again. If it happens again, please report it \
+         together with the page address."
+    );
+    let banner = window
+        .document()
+        .and_then(|document| document.get_element_by_id("panic"))
+        .and_then(|element| element.dyn_into::<web_sys::HtmlElement>().ok());
+    match banner {
+        Some(banner) => {
+            banner.set_inner_text(&text);
+            banner.set_hidden(false);
+        }
+        None => {
+            let _ignored = window.alert_with_message(&text);
+        }
+    }
+}
+
+/// Writes `text` into `#status` and `state` into its `data-state` attribute (the page's
+/// CSS hides the status line once it is `running`).
+fn set_status(text: &str, state: &str) {
+    let status = web_sys::window()
+        .and_then(|window| window.document())
+        .and_then(|document| document.get_element_by_id("status"))
+        .and_then(|element| element.dyn_into::<web_sys::HtmlElement>().ok());
+    if let Some(status) = status {
+        status.set_inner_text(text);
+        let _ignored = status.set_attribute("data-state", state);
+    }
+}
+
+/// A JavaScript error as text.
+fn js_to_string(value: &JsValue) -> String {
+    value.as_string().unwrap_or_else(|| format!("{value:?}"))
+}
+
+/// Wraps [`SlamLabApp`] so that [`eframe::WebRunner::app_mut`] can reach it: eframe needs
+/// `App::as_any_mut` for that, and the wrapper provides it. Every other `App` method is
+/// passed through, so the app behaves exactly as it does natively.
+struct WebApp {
+    inner: SlamLabApp,
+}
+
+impl eframe::App for WebApp {
+    fn logic(&mut self, ctx: &egui::Context, frame: &mut eframe::Frame) {
+        self.inner.logic(ctx, frame);
+    }
+
+    fn ui(&mut self, ui: &mut egui::Ui, frame: &mut eframe::Frame) {
+        self.inner.ui(ui, frame);
+    }
+
+    fn as_any_mut(&mut self) -> Option<&mut dyn std::any::Any> {
+        Some(&mut *self)
+    }
+
+    fn save(&mut self, storage: &mut dyn eframe::Storage) {
+        self.inner.save(storage);
+    }
+
+    fn auto_save_interval(&self) -> std::time::Duration {
+        self.inner.auto_save_interval()
+    }
+
+    fn clear_color(&self, visuals: &egui::Visuals) -> [f32; 4] {
+        self.inner.clear_color(visuals)
+    }
+
+    fn persist_egui_memory(&self) -> bool {
+        self.inner.persist_egui_memory()
+    }
+
+    fn raw_input_hook(&mut self, ctx: &egui::Context, raw_input: &mut egui::RawInput) {
+        self.inner.raw_input_hook(ctx, raw_input);
+    }
+}
