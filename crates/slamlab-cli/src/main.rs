@@ -1,1 +1,246 @@
-fn main() {}
+//! `slamlab`: SLAM Lab's scenarios and experiments without a window.
+//!
+//! ```text
+//! slamlab run landmark-slam --estimator ekf --steps 200 --seed 1 --json
+//! slamlab params
+//! ```
+//!
+//! Scenario flags have the same names as the lesson's URL parameters, so
+//! `slamlab run landmark-slam --seed 7 --landmarks 30` and
+//! `index.html?lesson=landmark-slam&seed=7&landmarks=30` are the same run.
+
+use anyhow::{Context, Result, bail};
+use clap::{Arg, ArgAction, ArgMatches, Command};
+use slamlab_sim::LandmarkScenario;
+use slamlab_sim::metrics::{RunSummary, run_headless};
+use slamlab_sim::params::{self, PARAMS, ParamKind};
+use std::io::Write;
+
+/// Lessons the CLI can run.
+const LESSONS: &[&str] = &["landmark-slam"];
+
+fn scenario_args() -> Vec<Arg> {
+    PARAMS
+        .iter()
+        .map(|p| {
+            let range = match p.kind {
+                ParamKind::Number { min, max } => format!(" [{min} .. {max}]"),
+                ParamKind::Count { min, max } => format!(" [{min} .. {max}]"),
+                ParamKind::Choice(c) => format!(" [{}]", c.join(", ")),
+            };
+            let default = params::get(&LandmarkScenario::default(), p.name).unwrap_or_default();
+            let unit = if p.unit.is_empty() {
+                String::new()
+            } else {
+                format!(", {}", p.unit)
+            };
+            Arg::new(p.name)
+                .long(p.name)
+                .value_name("VALUE")
+                .help(format!("{}{unit}{range}; default {default}", p.help))
+                .allow_hyphen_values(true)
+        })
+        .collect()
+}
+
+fn cli() -> Command {
+    Command::new("slamlab")
+        .about(
+            "SLAM Lab: run the lessons' scenarios and reproduce the sources' experiments headless",
+        )
+        .version(env!("CARGO_PKG_VERSION"))
+        .subcommand_required(true)
+        .arg_required_else_help(true)
+        .subcommand(
+            Command::new("run")
+                .about("Run a lesson's scenario and print its metrics")
+                .arg(
+                    Arg::new("lesson")
+                        .required(true)
+                        .value_parser(LESSONS.to_vec())
+                        .help("the lesson id"),
+                )
+                .arg(
+                    Arg::new("steps")
+                        .long("steps")
+                        .value_parser(clap::value_parser!(u64).range(0..=1_000_000))
+                        .default_value("200")
+                        .help("number of simulation ticks"),
+                )
+                .arg(
+                    Arg::new("json")
+                        .long("json")
+                        .action(ArgAction::SetTrue)
+                        .help("print one JSON object"),
+                )
+                .args(scenario_args()),
+        )
+        .subcommand(
+            Command::new("params")
+                .about("List the scenario parameters with their units, ranges and defaults"),
+        )
+}
+
+/// Builds the scenario from the parameter flags; refuses values it cannot read,
+/// and warns (on stderr) about values it had to clamp.
+fn scenario_from(matches: &ArgMatches) -> Result<LandmarkScenario> {
+    let mut scenario = LandmarkScenario::default();
+    for p in PARAMS {
+        if let Some(value) = matches.get_one::<String>(p.name) {
+            match params::set(&mut scenario, p.name, value) {
+                None => {}
+                Some(issue @ params::ParamIssue::Clamped { .. }) => eprintln!("warning: {issue}"),
+                Some(issue) => bail!("--{}: {issue}", p.name),
+            }
+        }
+    }
+    Ok(scenario)
+}
+
+fn print_summary(out: &mut impl Write, summary: &RunSummary) -> Result<()> {
+    writeln!(
+        out,
+        "SLAM Lab: {} — {} ticks ({:.1} s simulated), seed {}",
+        summary.lesson, summary.steps, summary.duration_s, summary.seed
+    )?;
+    writeln!(out)?;
+    writeln!(out, "parameters:")?;
+    for (k, v) in &summary.parameters {
+        let unit = params::spec(k).map_or("", |p| p.unit);
+        let text = v.as_str().map_or_else(|| v.to_string(), str::to_owned);
+        writeln!(out, "  {k:<16} {text} {unit}")?;
+    }
+    for note in &summary.notices {
+        writeln!(out, "note: {note}")?;
+    }
+    writeln!(out)?;
+    let fmt = |v: Option<f64>| v.map_or_else(|| "-".to_owned(), |v| format!("{v:.4}"));
+    writeln!(
+        out,
+        "{:<8} {:>14} {:>14} {:>16} {:>10} {:>10} {:>10}",
+        "filter",
+        "robot RMSE m",
+        "final error m",
+        "landmark RMSE m",
+        "NEES mean",
+        "NIS mean",
+        "landmarks"
+    )?;
+    for f in &summary.filters {
+        writeln!(
+            out,
+            "{:<8} {:>14.4} {:>14.4} {:>16} {:>10} {:>10} {:>10}",
+            f.name,
+            f.robot_rmse,
+            f.robot_error_final,
+            fmt(f.landmark_rmse),
+            fmt(f.nees_mean),
+            fmt(f.nis_mean),
+            f.landmarks_initialized
+        )?;
+    }
+    writeln!(out)?;
+    writeln!(
+        out,
+        "NEES is the robot-pose normalized estimation error squared (3 dof, expected 3); NIS per update (2 dof, expected 2)."
+    )?;
+    Ok(())
+}
+
+fn run(matches: &ArgMatches) -> Result<()> {
+    let steps = matches.get_one::<u64>("steps").copied().unwrap_or(200);
+    let scenario = scenario_from(matches)?;
+    let (_, summary) = run_headless(scenario, steps);
+    let mut out = std::io::stdout().lock();
+    if matches.get_flag("json") {
+        let first = summary.filters.first();
+        let mut value = serde_json::to_value(&summary).context("serializing the summary")?;
+        if let Some(obj) = value.as_object_mut() {
+            // The first estimator's headline numbers at the top level.
+            obj.insert("estimator".into(), first.map(|f| f.name.clone()).into());
+            obj.insert("robot_rmse".into(), first.map(|f| f.robot_rmse).into());
+            obj.insert(
+                "landmark_rmse".into(),
+                first.and_then(|f| f.landmark_rmse).into(),
+            );
+            obj.insert("nees_mean".into(), first.and_then(|f| f.nees_mean).into());
+        }
+        serde_json::to_writer(&mut out, &value).context("writing JSON")?;
+        writeln!(out)?;
+    } else {
+        print_summary(&mut out, &summary)?;
+    }
+    Ok(())
+}
+
+fn list_params() -> Result<()> {
+    let mut out = std::io::stdout().lock();
+    let defaults = LandmarkScenario::default();
+    writeln!(
+        out,
+        "{:<16} {:<8} {:<22} {:<12} meaning",
+        "name", "unit", "range", "default"
+    )?;
+    for p in PARAMS {
+        let range = match p.kind {
+            ParamKind::Number { min, max } => format!("{min} .. {max}"),
+            ParamKind::Count { min, max } => format!("{min} .. {max}"),
+            ParamKind::Choice(c) => c.join(" | "),
+        };
+        let default = params::get(&defaults, p.name).unwrap_or_default();
+        writeln!(
+            out,
+            "{:<16} {:<8} {:<22} {:<12} {}",
+            p.name, p.unit, range, default, p.help
+        )?;
+    }
+    Ok(())
+}
+
+fn main() -> Result<()> {
+    let matches = cli().get_matches();
+    match matches.subcommand() {
+        Some(("run", m)) => run(m),
+        Some(("params", _)) => list_params(),
+        _ => Ok(()),
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn the_command_line_is_well_formed() {
+        cli().debug_assert();
+    }
+
+    #[test]
+    fn flags_use_the_url_parameter_names() {
+        let m = cli().try_get_matches_from([
+            "slamlab",
+            "run",
+            "landmark-slam",
+            "--landmarks",
+            "7",
+            "--fov-deg",
+            "90",
+            "--w-deg",
+            "-10",
+        ]);
+        let m = m.unwrap_or_else(|e| panic!("{e}"));
+        let Some(("run", sub)) = m.subcommand() else {
+            panic!("no run")
+        };
+        let s = scenario_from(sub).unwrap_or_else(|e| panic!("{e}"));
+        assert_eq!(s.landmarks, 7);
+        assert!((s.fov.to_degrees() - 90.0).abs() < 1e-9);
+        let m =
+            cli().try_get_matches_from(["slamlab", "run", "landmark-slam", "--range-std", "nan"]);
+        let m = m.unwrap_or_else(|e| panic!("{e}"));
+        let Some(("run", sub)) = m.subcommand() else {
+            panic!("no run")
+        };
+        assert!(scenario_from(sub).is_err());
+    }
+}

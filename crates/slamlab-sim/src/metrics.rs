@@ -74,6 +74,7 @@ pub fn parameters_json(scenario: &LandmarkScenario) -> serde_json::Map<String, s
         .map(|(k, v)| {
             let value = match (k, v.parse::<f64>()) {
                 ("seed", _) => scenario.seed.into(),
+                ("landmarks", _) => scenario.landmarks.into(),
                 (_, Ok(n)) if n.is_finite() => {
                     serde_json::Number::from_f64(n).map_or(serde_json::Value::String(v), Into::into)
                 }

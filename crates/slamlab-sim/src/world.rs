@@ -61,7 +61,7 @@ impl LandmarkWorld {
         let limit = (half - margin).max(0.0);
         let landmarks = match layout {
             LandmarkLayout::Teaching => {
-                let inner = (0.5 * ring_radius).min(limit);
+                let inner = (0.7 * ring_radius).min(limit);
                 let outer = (1.55 * ring_radius).min(limit);
                 (0..count)
                     .map(|i| {
