@@ -1,0 +1,157 @@
+//! The `slamlab` binary as a user runs it.
+
+use std::process::Command;
+
+fn slamlab(args: &[&str]) -> (bool, String, String) {
+    let out = Command::new(env!("CARGO_BIN_EXE_slamlab"))
+        .args(args)
+        .output();
+    let out = out.unwrap_or_else(|e| panic!("running slamlab: {e}"));
+    (
+        out.status.success(),
+        String::from_utf8_lossy(&out.stdout).into_owned(),
+        String::from_utf8_lossy(&out.stderr).into_owned(),
+    )
+}
+
+fn run_json(args: &[&str]) -> serde_json::Value {
+    let (ok, stdout, stderr) = slamlab(args);
+    assert!(ok, "slamlab {args:?} failed: {stderr}");
+    assert_eq!(stdout.lines().count(), 1, "one JSON object on one line");
+    serde_json::from_str(&stdout).unwrap_or_else(|e| panic!("not JSON ({e}): {stdout}"))
+}
+
+const RUN: &[&str] = &[
+    "run",
+    "landmark-slam",
+    "--estimator",
+    "ekf",
+    "--steps",
+    "200",
+    "--seed",
+    "1",
+    "--json",
+];
+
+#[test]
+fn run_prints_the_documented_fields_all_finite() {
+    let v = run_json(RUN);
+    assert_eq!(v["steps"], 200);
+    assert_eq!(v["seed"], 1);
+    assert_eq!(v["estimator"], "ekf");
+    for key in ["robot_rmse", "landmark_rmse", "nees_mean"] {
+        let x = v[key].as_f64().unwrap_or(f64::NAN);
+        assert!(x.is_finite() && x >= 0.0, "{key} = {}", v[key]);
+    }
+    // A lap of the teaching world keeps EKF-SLAM's errors at decimetres.
+    assert!(v["robot_rmse"].as_f64().unwrap_or(f64::NAN) < 1.0);
+    assert!(v["landmark_rmse"].as_f64().unwrap_or(f64::NAN) < 1.0);
+    let p = &v["parameters"];
+    for key in [
+        "dt",
+        "world-size",
+        "landmarks",
+        "v-std",
+        "w-std-deg",
+        "range-std",
+        "bearing-std-deg",
+        "fov-deg",
+        "max-range",
+        "seed",
+    ] {
+        assert!(!p[key].is_null(), "parameter {key} missing from {p}");
+    }
+    assert_eq!(p["dt"], 0.1);
+    assert_eq!(p["world-size"], 16.0);
+    assert_eq!(v["filters"][0]["name"], "ekf");
+}
+
+#[test]
+fn same_seed_same_numbers_other_seed_other_numbers() {
+    let a = run_json(RUN);
+    let b = run_json(RUN);
+    assert_eq!(a, b);
+    let c = run_json(&[
+        "run",
+        "landmark-slam",
+        "--steps",
+        "200",
+        "--seed",
+        "2",
+        "--json",
+    ]);
+    assert_ne!(a["robot_rmse"], c["robot_rmse"]);
+}
+
+#[test]
+fn scenario_flags_change_the_run() {
+    let v = run_json(&[
+        "run",
+        "landmark-slam",
+        "--steps",
+        "50",
+        "--landmarks",
+        "5",
+        "--fov-deg",
+        "360",
+        "--json",
+    ]);
+    assert_eq!(v["parameters"]["landmarks"], 5);
+    assert!(
+        v["filters"][0]["landmarks_initialized"]
+            .as_u64()
+            .unwrap_or(99)
+            <= 5
+    );
+    let none = run_json(&[
+        "run",
+        "landmark-slam",
+        "--steps",
+        "50",
+        "--landmarks",
+        "0",
+        "--json",
+    ]);
+    assert!(
+        none["landmark_rmse"].is_null(),
+        "no landmarks, no landmark error"
+    );
+    assert!(none["robot_rmse"].as_f64().unwrap_or(f64::NAN).is_finite());
+}
+
+#[test]
+fn bad_values_are_refused_or_clamped_with_a_message() {
+    let (ok, _, stderr) = slamlab(&["run", "landmark-slam", "--range-std", "NaN", "--json"]);
+    assert!(!ok);
+    assert!(stderr.contains("range-std"), "{stderr}");
+    let (ok, stdout, stderr) = slamlab(&[
+        "run",
+        "landmark-slam",
+        "--range-std",
+        "0",
+        "--steps",
+        "20",
+        "--json",
+    ]);
+    assert!(ok, "{stderr}");
+    assert!(stderr.contains("out of range"), "{stderr}");
+    assert!(stdout.contains("\"range-std\":0.001"), "{stdout}");
+    let (ok, _, stderr) = slamlab(&["run", "no-such-lesson"]);
+    assert!(!ok && stderr.contains("no-such-lesson"), "{stderr}");
+}
+
+#[test]
+fn readable_summary_names_every_parameter() {
+    let (ok, stdout, _) = slamlab(&["run", "landmark-slam", "--steps", "20"]);
+    assert!(ok);
+    for word in [
+        "parameters:",
+        "dt",
+        "0.1 s",
+        "world-size",
+        "robot RMSE",
+        "NEES",
+    ] {
+        assert!(stdout.contains(word), "missing {word} in\n{stdout}");
+    }
+}
