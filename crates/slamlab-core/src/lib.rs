@@ -11,6 +11,7 @@
 
 pub mod geometry;
 pub mod kalman;
+pub mod linalg;
 pub mod motion;
 pub mod range_bearing;
 pub mod stats;

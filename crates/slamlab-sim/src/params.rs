@@ -350,7 +350,15 @@ pub fn set(scenario: &mut LandmarkScenario, name: &str, value: &str) -> Option<P
                         .collect();
                     match parsed {
                         Some(mut list) if !list.is_empty() => {
-                            list.dedup();
+                            let mut seen = Vec::new();
+                            list.retain(|e| {
+                                if seen.contains(e) {
+                                    false
+                                } else {
+                                    seen.push(*e);
+                                    true
+                                }
+                            });
                             scenario.estimators = list;
                         }
                         _ => {
@@ -378,6 +386,9 @@ fn apply_number(scenario: &mut LandmarkScenario, name: &str, v: f64) {
         "fov-deg" => scenario.fov = v.to_radians(),
         "max-range" => scenario.max_range = v,
         "wheel-base" => scenario.wheel_base = v,
+        "ukf-alpha" => scenario.ukf.alpha = v,
+        "ukf-beta" => scenario.ukf.beta = v,
+        "ukf-kappa" => scenario.ukf.kappa = v,
         "v" | "w-deg" => {
             let (mut cv, mut cw) = match scenario.controller {
                 ControllerKind::Circle { v, w } => (v, w),

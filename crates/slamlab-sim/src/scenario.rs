@@ -3,7 +3,7 @@
 
 use crate::world::LandmarkLayout;
 use serde::{Deserialize, Serialize};
-use slamlab_core::kalman::{FilterConfig, FilterNoise};
+use slamlab_core::kalman::{FilterConfig, FilterNoise, UnscentedParams};
 use slamlab_core::range_bearing::RangeBearingSensor;
 use slamlab_core::{Control, MotionModel, Pose2};
 use std::f64::consts::PI;
@@ -15,16 +15,19 @@ pub enum EstimatorKind {
     /// EKF-SLAM (thesis Sec. 3.2).
     #[default]
     Ekf,
+    /// UKF-SLAM (thesis Sec. 3.3).
+    Ukf,
 }
 
 impl EstimatorKind {
     /// Every estimator, in menu order.
-    pub const ALL: [EstimatorKind; 1] = [EstimatorKind::Ekf];
+    pub const ALL: [EstimatorKind; 2] = [EstimatorKind::Ekf, EstimatorKind::Ukf];
 
     /// The name used in URLs, on the command line and in JSON.
     pub fn name(&self) -> &'static str {
         match self {
             EstimatorKind::Ekf => "ekf",
+            EstimatorKind::Ukf => "ukf",
         }
     }
 
@@ -98,6 +101,8 @@ pub struct LandmarkScenario {
     pub controller: ControllerKind,
     /// Which estimators run, side by side on the same data.
     pub estimators: Vec<EstimatorKind>,
+    /// Sigma-point parameters of UKF-SLAM.
+    pub ukf: UnscentedParams,
 }
 
 impl Default for LandmarkScenario {
@@ -118,6 +123,7 @@ impl Default for LandmarkScenario {
             wheel_base: 0.5,
             controller: ControllerKind::default(),
             estimators: vec![EstimatorKind::Ekf],
+            ukf: UnscentedParams::default(),
         }
     }
 }

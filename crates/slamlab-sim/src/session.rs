@@ -12,7 +12,7 @@ use crate::scenario::{EstimatorKind, LandmarkScenario};
 use crate::world::LandmarkWorld;
 use nalgebra::{DMatrix, DVector, Vector2};
 use rand_chacha::ChaCha8Rng;
-use slamlab_core::kalman::{EkfSlam, LandmarkSlam, PredictReport, UpdateReport};
+use slamlab_core::kalman::{EkfSlam, LandmarkSlam, PredictReport, UkfSlam, UpdateReport};
 use slamlab_core::range_bearing::{self, RangeBearing, RangeBearingSensor};
 use slamlab_core::stats::normalized_squared_error;
 use slamlab_core::{Control, MotionModel, Pose2, wrap_angle};
@@ -171,6 +171,8 @@ impl LandmarkSession {
                 EstimatorKind::Ekf => {
                     EkfSlam::new(scenario.filter_config(), start).map(|f| Box::new(f) as _)
                 }
+                EstimatorKind::Ukf => UkfSlam::new(scenario.filter_config(), scenario.ukf, start)
+                    .map(|f| Box::new(f) as _),
             };
             match built {
                 Ok(filter) => filters.push(FilterRun {
@@ -183,7 +185,10 @@ impl LandmarkSession {
                     last_update: None,
                     last_error: None,
                 }),
-                Err(e) => notices.push(format!("{} could not start: {e}", kind.name())),
+                Err(e) => notices.push(format!(
+                    "{} could not start: {e}; change the parameter and reset",
+                    kind.name()
+                )),
             }
         }
         if world
@@ -530,6 +535,69 @@ mod tests {
             c.truth(),
             "the world does not depend on the estimators"
         );
+    }
+
+    #[test]
+    fn one_phase_advances_every_filter_on_the_same_data() {
+        let scenario = LandmarkScenario {
+            estimators: vec![EstimatorKind::Ekf, EstimatorKind::Ukf],
+            ..Default::default()
+        };
+        let mut s = LandmarkSession::new(scenario);
+        assert_eq!(s.filters().len(), 2);
+        let before: Vec<_> = s
+            .filters()
+            .iter()
+            .map(|f| f.filter().robot_covariance())
+            .collect();
+        assert_eq!(s.step_phase(), Phase::Predict);
+        for (f, b) in s.filters().iter().zip(&before) {
+            assert_ne!(
+                f.filter().robot_covariance(),
+                *b,
+                "{} did not predict",
+                f.kind.name()
+            );
+            assert!(f.last_predict.is_some());
+        }
+        s.step_phase();
+        for f in s.filters() {
+            assert_eq!(
+                f.filter().landmark_ids().len(),
+                1,
+                "{} initialized the first landmark",
+                f.kind.name()
+            );
+        }
+        // The world is the same with one filter or two.
+        let mut ekf_only = LandmarkSession::new(LandmarkScenario::default());
+        s.run_ticks(30);
+        ekf_only.run_ticks(30);
+        assert_eq!(s.truth(), ekf_only.truth());
+        assert_eq!(
+            s.filters()[0].filter().mean(),
+            ekf_only.filters()[0].filter().mean()
+        );
+    }
+
+    #[test]
+    fn impossible_ukf_parameters_leave_a_notice_and_the_ekf_running() {
+        let mut scenario = LandmarkScenario {
+            estimators: vec![EstimatorKind::Ekf, EstimatorKind::Ukf],
+            ..Default::default()
+        };
+        scenario.ukf.alpha = 0.5;
+        scenario.ukf.kappa = -9.0;
+        let mut s = LandmarkSession::new(scenario);
+        assert_eq!(s.filters().len(), 1);
+        assert!(
+            s.notices()
+                .iter()
+                .any(|n| n.contains("ukf could not start")),
+            "{:?}",
+            s.notices()
+        );
+        s.run_ticks(5);
     }
 
     #[test]

@@ -6,8 +6,12 @@
 //! them, and a read-only view for drawing.
 
 mod ekf_slam;
+mod ukf_slam;
+pub mod unscented;
 
 pub use ekf_slam::EkfSlam;
+pub use ukf_slam::UkfSlam;
+pub use unscented::UnscentedParams;
 
 use crate::geometry::Pose2;
 use crate::motion::{Control, MotionModel};
@@ -167,6 +171,11 @@ pub trait LandmarkSlam {
     fn covariance(&self) -> &DMatrix<f64>;
     /// Landmark ids in state order (order of discovery).
     fn landmark_ids(&self) -> &[usize];
+
+    /// The robot's sigma points (centre first), for filters that use them; empty otherwise.
+    fn robot_sigma_points(&self) -> Vec<Pose2> {
+        Vec::new()
+    }
 
     /// The estimated robot pose.
     fn robot_pose(&self) -> Pose2 {

@@ -1,0 +1,422 @@
+//! UKF-SLAM (thesis `000` Sec. 3.3, with the errata in the seeds' README).
+
+use super::unscented::{UnscentedParams, sigma_points, unscented_transform};
+use super::{FilterConfig, FilterError, LandmarkSlam, PredictReport, UpdateReport, symmetrize};
+use crate::geometry::{Pose2, wrap_angle};
+use crate::linalg::psd_cholesky;
+use crate::motion::Control;
+use crate::range_bearing::{self, MeasurementError, RangeBearing};
+use nalgebra::{DMatrix, DVector, Matrix2, Vector2};
+use std::collections::HashMap;
+
+/// UKF-SLAM with known data association.
+///
+/// * Prediction (Eq. 3.26-3.30): sigma points over the robot and the control
+///   noise together (the augmented form), so the control noise is propagated
+///   once; the thesis's Eq. 3.28 adds it twice. The robot-landmark cross terms
+///   come from the same sigma points (Eq. 3.29); `P_LL` is unchanged (Eq. 3.30).
+/// * New landmark (Eq. 3.21-3.25): the inverse observation model through sigma
+///   points over the robot and the measurement noise; the cross-covariance uses
+///   the covariance weights `Wᶜ` (Eq. 3.24 prints `Wᵐ`).
+/// * Update (Sec. 3.3.3): sigma points over the robot and the measured landmark;
+///   bearing averaged on the circle and differenced with wrapping; gain
+///   `K = P_My P_yy⁻¹` and `P = P̄ − K P_yy Kᵀ` (the thesis prints `P_yM P_yyᵀ`
+///   and `+`), followed by symmetrization.
+#[derive(Clone, Debug)]
+pub struct UkfSlam {
+    config: FilterConfig,
+    params: UnscentedParams,
+    mean: DVector<f64>,
+    covariance: DMatrix<f64>,
+    landmark_ids: Vec<usize>,
+    slot_of: HashMap<usize, usize>,
+}
+
+fn pose_of(a: &DVector<f64>) -> Pose2 {
+    Pose2 {
+        x: a[0],
+        y: a[1],
+        theta: a[2],
+    }
+}
+
+impl UkfSlam {
+    /// A filter whose robot starts at `start` with zero covariance (thesis Eq. 3.5).
+    pub fn new(
+        config: FilterConfig,
+        params: UnscentedParams,
+        start: Pose2,
+    ) -> Result<Self, FilterError> {
+        config.noise.validate()?;
+        // Check every dimension the filter uses: 3 for drawing, 5 for its phases.
+        params.weights(3)?;
+        params.weights(5)?;
+        if !start.is_finite() {
+            return Err(FilterError::InvalidParameter {
+                name: "start pose",
+                value: f64::NAN,
+            });
+        }
+        Ok(Self {
+            config,
+            params,
+            mean: DVector::from_column_slice(&[start.x, start.y, start.theta]),
+            covariance: DMatrix::zeros(3, 3),
+            landmark_ids: Vec::new(),
+            slot_of: HashMap::new(),
+        })
+    }
+
+    /// The unscented-transform parameters.
+    pub fn params(&self) -> &UnscentedParams {
+        &self.params
+    }
+
+    fn initialize(&mut self, id: usize, z: &RangeBearing) -> Result<UpdateReport, FilterError> {
+        if z.range < range_bearing::MIN_RANGE {
+            return Err(FilterError::Measurement {
+                id,
+                source: MeasurementError::TooClose { range: z.range },
+            });
+        }
+        let n = self.mean.len();
+        let mut mean_a = DVector::zeros(5);
+        mean_a.rows_mut(0, 3).copy_from(&self.mean.rows(0, 3));
+        let mut p_aa = DMatrix::zeros(5, 5);
+        p_aa.view_mut((0, 0), (3, 3))
+            .copy_from(&self.covariance.view((0, 0), (3, 3)));
+        p_aa.view_mut((3, 3), (2, 2))
+            .copy_from(&self.config.noise.measurement_covariance());
+        let mut p_oa = DMatrix::zeros(n, 5);
+        p_oa.view_mut((0, 0), (n, 3))
+            .copy_from(&self.covariance.columns(0, 3));
+        let out = unscented_transform(&self.params, &mean_a, &p_aa, &p_oa, &[], |a| {
+            let zi = RangeBearing {
+                range: z.range + a[3],
+                bearing: z.bearing + a[4],
+            };
+            match range_bearing::inverse(&pose_of(a), &zi) {
+                Ok(g) => DVector::from_column_slice(g.landmark.as_slice()),
+                Err(_) => DVector::from_element(2, f64::NAN),
+            }
+        })?;
+        if !out
+            .mean
+            .iter()
+            .chain(out.covariance.iter())
+            .all(|v| v.is_finite())
+        {
+            return Err(FilterError::Measurement {
+                id,
+                source: MeasurementError::NotFinite,
+            });
+        }
+        let mut covariance = self.covariance.clone().resize(n + 2, n + 2, 0.0);
+        covariance
+            .view_mut((0, n), (n, 2))
+            .copy_from(&out.cross_other);
+        covariance
+            .view_mut((n, 0), (2, n))
+            .copy_from(&out.cross_other.transpose());
+        covariance
+            .view_mut((n, n), (2, 2))
+            .copy_from(&out.covariance);
+        self.covariance = covariance;
+        self.mean = self.mean.clone().resize_vertically(n + 2, 0.0);
+        self.mean[n] = out.mean[0];
+        self.mean[n + 1] = out.mean[1];
+        self.slot_of.insert(id, self.landmark_ids.len());
+        self.landmark_ids.push(id);
+        Ok(UpdateReport::Initialized {
+            id,
+            position: Vector2::new(out.mean[0], out.mean[1]),
+        })
+    }
+
+    fn correct(
+        &mut self,
+        id: usize,
+        slot: usize,
+        z: &RangeBearing,
+    ) -> Result<UpdateReport, FilterError> {
+        let n = self.mean.len();
+        let j = 3 + 2 * slot;
+        let active = [0, 1, 2, j, j + 1];
+        let mean_a = DVector::from_iterator(5, active.iter().map(|&i| self.mean[i]));
+        let p_aa = DMatrix::from_fn(5, 5, |r, c| self.covariance[(active[r], active[c])]);
+        let p_oa = DMatrix::from_fn(n, 5, |r, c| self.covariance[(r, active[c])]);
+        // The mean itself must be measurable.
+        range_bearing::predict(&pose_of(&mean_a), &Vector2::new(mean_a[3], mean_a[4]))
+            .map_err(|source| FilterError::Measurement { id, source })?;
+        let out = unscented_transform(&self.params, &mean_a, &p_aa, &p_oa, &[1], |a| {
+            match range_bearing::predict(&pose_of(a), &Vector2::new(a[3], a[4])) {
+                Ok(p) => DVector::from_column_slice(p.measurement.to_vector().as_slice()),
+                Err(_) => DVector::from_element(2, f64::NAN),
+            }
+        })?;
+        if !out.covariance.iter().all(|v| v.is_finite()) {
+            return Err(FilterError::Measurement {
+                id,
+                source: MeasurementError::TooClose { range: 0.0 },
+            });
+        }
+        let s: Matrix2<f64> = Matrix2::from_iterator(out.covariance.iter().copied())
+            + self.config.noise.measurement_covariance();
+        let s_chol = s.cholesky().ok_or(FilterError::NotPositiveDefinite {
+            what: "innovation covariance P_yy",
+        })?;
+        let s_inv = s_chol.inverse();
+        let predicted = RangeBearing {
+            range: out.mean[0],
+            bearing: out.mean[1],
+        };
+        let innovation = z.difference(&predicted);
+        let gain = &out.cross_other * s_inv;
+        let correction = &gain * innovation;
+        if !correction.iter().all(|v| v.is_finite()) {
+            return Err(FilterError::NotPositiveDefinite {
+                what: "innovation covariance P_yy",
+            });
+        }
+        let mut covariance = &self.covariance - &gain * s * gain.transpose();
+        symmetrize(&mut covariance);
+        if (0..n).any(|i| !(covariance[(i, i)] >= -1e-12)) {
+            return Err(FilterError::NotPositiveDefinite {
+                what: "updated covariance",
+            });
+        }
+        self.covariance = covariance;
+        self.mean += correction;
+        self.mean[2] = wrap_angle(self.mean[2]);
+        Ok(UpdateReport::Corrected {
+            id,
+            innovation,
+            innovation_covariance: s,
+            nis: innovation.dot(&(s_inv * innovation)),
+            robot_gain_norm: gain.rows(0, 3).norm(),
+            gain_norm: gain.norm(),
+        })
+    }
+}
+
+impl LandmarkSlam for UkfSlam {
+    fn name(&self) -> &'static str {
+        "ukf"
+    }
+
+    fn predict(&mut self, control: &Control, dt: f64) -> Result<PredictReport, FilterError> {
+        if !control.is_finite() || !dt.is_finite() || dt < 0.0 {
+            return Err(FilterError::InvalidControl {
+                v: control.v,
+                w: control.w,
+                dt,
+            });
+        }
+        let robot_det_before = self.robot_covariance().determinant();
+        let n = self.mean.len();
+        let mut mean_a = DVector::zeros(5);
+        mean_a.rows_mut(0, 3).copy_from(&self.mean.rows(0, 3));
+        let mut p_aa = DMatrix::zeros(5, 5);
+        p_aa.view_mut((0, 0), (3, 3))
+            .copy_from(&self.covariance.view((0, 0), (3, 3)));
+        // A robot commanded to stop does not move (as in EKF-SLAM and the simulator).
+        if *control != Control::default() {
+            p_aa.view_mut((3, 3), (2, 2))
+                .copy_from(&self.config.noise.control_covariance());
+        }
+        let mut p_oa = DMatrix::zeros(n - 3, 5);
+        p_oa.view_mut((0, 0), (n - 3, 3))
+            .copy_from(&self.covariance.view((3, 0), (n - 3, 3)));
+        let model = self.config.motion_model;
+        let out = unscented_transform(&self.params, &mean_a, &p_aa, &p_oa, &[2], |a| {
+            let u = Control::new(control.v + a[3], control.w + a[4]);
+            model
+                .predict(&pose_of(a), &u, dt)
+                .to_vector()
+                .as_slice()
+                .iter()
+                .copied()
+                .collect::<Vec<_>>()
+                .into()
+        })?;
+        if !out
+            .mean
+            .iter()
+            .chain(out.covariance.iter())
+            .all(|v| v.is_finite())
+        {
+            return Err(FilterError::NotPositiveDefinite {
+                what: "predicted robot covariance",
+            });
+        }
+        self.mean.rows_mut(0, 3).copy_from(&out.mean);
+        self.mean[2] = wrap_angle(self.mean[2]);
+        self.covariance
+            .view_mut((0, 0), (3, 3))
+            .copy_from(&out.covariance);
+        if n > 3 {
+            self.covariance
+                .view_mut((3, 0), (n - 3, 3))
+                .copy_from(&out.cross_other);
+            self.covariance
+                .view_mut((0, 3), (3, n - 3))
+                .copy_from(&out.cross_other.transpose());
+        }
+        Ok(PredictReport {
+            control: *control,
+            robot_det_before,
+            robot_det_after: self.robot_covariance().determinant(),
+        })
+    }
+
+    fn update(&mut self, id: usize, z: &RangeBearing) -> Result<UpdateReport, FilterError> {
+        if !z.is_finite() {
+            return Err(FilterError::Measurement {
+                id,
+                source: MeasurementError::NotFinite,
+            });
+        }
+        match self.slot_of.get(&id) {
+            Some(&slot) => self.correct(id, slot, z),
+            None => self.initialize(id, z),
+        }
+    }
+
+    fn mean(&self) -> &DVector<f64> {
+        &self.mean
+    }
+
+    fn covariance(&self) -> &DMatrix<f64> {
+        &self.covariance
+    }
+
+    fn landmark_ids(&self) -> &[usize] {
+        &self.landmark_ids
+    }
+
+    fn robot_sigma_points(&self) -> Vec<Pose2> {
+        let Ok(w) = self.params.weights(3) else {
+            return Vec::new();
+        };
+        let Ok(l) = psd_cholesky(&self.covariance.view((0, 0), (3, 3)).into_owned()) else {
+            return Vec::new();
+        };
+        sigma_points(&self.mean.rows(0, 3).into_owned(), &l, w.spread)
+            .iter()
+            .map(|v| Pose2::new(v[0], v[1], v[2]))
+            .collect()
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::kalman::{EkfSlam, FilterNoise};
+    use crate::motion::MotionModel;
+
+    fn config() -> FilterConfig {
+        FilterConfig {
+            motion_model: MotionModel::ExactArc,
+            noise: FilterNoise {
+                v_std: 0.1,
+                w_std: 0.05,
+                range_std: 0.2,
+                bearing_std: 0.02,
+            },
+        }
+    }
+
+    #[test]
+    fn agrees_with_the_ekf_when_the_models_are_nearly_linear() {
+        // Small noise: the unscented and linearized filters must nearly coincide.
+        let start = Pose2::new(0.0, 0.0, 0.3);
+        let mut ekf = EkfSlam::new(config(), start).unwrap_or_else(|e| panic!("{e}"));
+        let mut ukf = UkfSlam::new(config(), UnscentedParams::default(), start)
+            .unwrap_or_else(|e| panic!("{e}"));
+        let landmarks = [
+            Vector2::new(3.0, 1.0),
+            Vector2::new(2.0, -2.0),
+            Vector2::new(5.0, 3.0),
+        ];
+        let mut truth = start;
+        for _ in 0..20 {
+            let u = Control::new(1.0, 0.2);
+            truth = MotionModel::ExactArc.predict(&truth, &u, 0.1);
+            ekf.predict(&u, 0.1).unwrap_or_else(|e| panic!("{e}"));
+            ukf.predict(&u, 0.1).unwrap_or_else(|e| panic!("{e}"));
+            for (id, l) in landmarks.iter().enumerate() {
+                let z = range_bearing::predict(&truth, l)
+                    .map(|p| p.measurement)
+                    .unwrap_or_else(|e| panic!("{e}"));
+                ekf.update(id, &z).unwrap_or_else(|e| panic!("{e}"));
+                ukf.update(id, &z).unwrap_or_else(|e| panic!("{e}"));
+            }
+        }
+        let dm = (ekf.mean() - ukf.mean()).norm();
+        let dp = (ekf.covariance() - ukf.covariance()).norm() / ekf.covariance().norm();
+        assert!(dm < 1e-3, "means differ by {dm}");
+        assert!(dp < 0.05, "covariances differ by {dp} (relative)");
+    }
+
+    #[test]
+    fn landmark_initialization_is_the_unscented_image_of_robot_and_noise() {
+        // With a certain robot, the landmark covariance is the UT of the noise alone:
+        // close to G_z V G_zᵀ for small bearing noise.
+        let mut ukf = UkfSlam::new(config(), UnscentedParams::default(), Pose2::IDENTITY)
+            .unwrap_or_else(|e| panic!("{e}"));
+        let z = RangeBearing::new(4.0, 0.5);
+        ukf.update(0, &z).unwrap_or_else(|e| panic!("{e}"));
+        let g = range_bearing::inverse(&Pose2::IDENTITY, &z).unwrap_or_else(|e| panic!("{e}"));
+        let lin = g.jacobian_measurement
+            * config().noise.measurement_covariance()
+            * g.jacobian_measurement.transpose();
+        let lm = ukf.landmarks()[0];
+        assert!((lm.covariance - lin).norm() / lin.norm() < 0.01);
+        assert!(ukf.covariance().view((0, 3), (3, 2)).norm() < 1e-15);
+    }
+
+    #[test]
+    fn extreme_parameters_and_bad_measurements_are_errors() {
+        let bad = UnscentedParams {
+            alpha: 0.1,
+            beta: 2.0,
+            kappa: -5.0,
+        };
+        assert!(UkfSlam::new(config(), bad, Pose2::IDENTITY).is_err());
+        let mut ukf = UkfSlam::new(config(), UnscentedParams::default(), Pose2::IDENTITY)
+            .unwrap_or_else(|e| panic!("{e}"));
+        assert!(ukf.update(0, &RangeBearing::new(0.0, 0.0)).is_err());
+        ukf.update(1, &RangeBearing::new(2.0, 0.0))
+            .unwrap_or_else(|e| panic!("{e}"));
+        let before = ukf.clone();
+        // A measurement of landmark 1 taken from on top of it: the mean is not measurable.
+        ukf.mean[0] = 2.0;
+        let mut moved = ukf.clone();
+        assert!(moved.update(1, &RangeBearing::new(0.5, 0.0)).is_err());
+        assert_eq!(moved.covariance(), ukf.covariance());
+        assert_eq!(before.landmark_ids(), ukf.landmark_ids());
+    }
+
+    #[test]
+    fn sigma_points_of_the_robot_have_its_covariance() {
+        let mut ukf = UkfSlam::new(config(), UnscentedParams::default(), Pose2::IDENTITY)
+            .unwrap_or_else(|e| panic!("{e}"));
+        for _ in 0..5 {
+            ukf.predict(&Control::new(1.0, 0.4), 0.1)
+                .unwrap_or_else(|e| panic!("{e}"));
+        }
+        let pts = ukf.robot_sigma_points();
+        assert_eq!(pts.len(), 7);
+        let w = UnscentedParams::default()
+            .weights(3)
+            .unwrap_or_else(|e| panic!("{e}"));
+        let c = ukf.robot_pose().to_vector();
+        let mut cov = nalgebra::Matrix3::zeros();
+        for (i, p) in pts.iter().enumerate() {
+            let mut d = p.to_vector() - c;
+            d[2] = wrap_angle(d[2]);
+            cov += d * d.transpose() * if i == 0 { 0.0 } else { w.other };
+        }
+        assert!((cov - ukf.robot_covariance()).norm() < 1e-12);
+    }
+}
