@@ -2,6 +2,7 @@
 //!
 //! ```text
 //! slamlab run landmark-slam --estimator ekf --steps 200 --seed 1 --json
+//! slamlab experiment ekf-vs-ukf --noise-scale 2 --trials 50 --seed 1 --json --csv out/
 //! slamlab params
 //! ```
 //!
@@ -12,9 +13,10 @@
 use anyhow::{Context, Result, bail};
 use clap::{Arg, ArgAction, ArgMatches, Command};
 use slamlab_sim::LandmarkScenario;
+use slamlab_sim::experiments;
 use slamlab_sim::metrics::{RunSummary, run_headless};
 use slamlab_sim::params::{self, PARAMS, ParamKind};
-use std::io::Write;
+use std::io::{IsTerminal, Write};
 
 /// Lessons the CLI can run.
 const LESSONS: &[&str] = &["landmark-slam"];
@@ -74,6 +76,34 @@ fn cli() -> Command {
                         .help("print one JSON object"),
                 )
                 .args(scenario_args()),
+        )
+        .subcommand(
+            Command::new("experiment")
+                .about("Reproduce a source's experiment (ekf-vs-ukf: thesis 000 Sec. 3.4.3, Experiments 1 and 2)")
+                .arg(Arg::new("name").required(true).value_parser(["ekf-vs-ukf"]).help("the experiment"))
+                .arg(
+                    Arg::new("noise-scale")
+                        .long("noise-scale")
+                        .value_parser(clap::value_parser!(f64))
+                        .default_value("1")
+                        .help("control-noise multiplier: 1 is Experiment 1, 2 is Experiment 2 (0 .. 20]"),
+                )
+                .arg(
+                    Arg::new("trials")
+                        .long("trials")
+                        .value_parser(clap::value_parser!(u64).range(1..=100_000))
+                        .default_value("50")
+                        .help("Monte Carlo trials; trial i uses seed + i"),
+                )
+                .arg(Arg::new("seed").long("seed").value_parser(clap::value_parser!(u64)).default_value("1").help("first trial's seed"))
+                .arg(Arg::new("json").long("json").action(ArgAction::SetTrue).help("print one JSON object"))
+                .arg(
+                    Arg::new("csv")
+                        .long("csv")
+                        .value_name("DIR")
+                        .value_parser(clap::value_parser!(std::path::PathBuf))
+                        .help("write the per-step error series (thesis Fig. 3.4 / 3.6) as CSV into DIR"),
+                ),
         )
         .subcommand(
             Command::new("params")
@@ -197,10 +227,114 @@ fn list_params() -> Result<()> {
     Ok(())
 }
 
+/// Draws a progress bar on stderr: redrawn in place on a terminal, a line every
+/// tenth of the way otherwise (logs).
+fn progress_bar(label: &'static str) -> impl FnMut(usize, usize) {
+    let terminal = std::io::stderr().is_terminal();
+    move |done, total| {
+        let mut err = std::io::stderr().lock();
+        if terminal {
+            let width = 30;
+            let filled = width * done / total.max(1);
+            let _ = write!(
+                err,
+                "\r{label} [{}{}] {done}/{total} trials",
+                "=".repeat(filled),
+                " ".repeat(width - filled)
+            );
+            if done == total {
+                let _ = writeln!(err);
+            }
+        } else if done == total || (done * 10 / total.max(1)) != ((done - 1) * 10 / total.max(1)) {
+            let _ = writeln!(err, "{label}: {done}/{total} trials");
+        }
+    }
+}
+
+fn experiment(matches: &ArgMatches) -> Result<()> {
+    let noise_scale = matches
+        .get_one::<f64>("noise-scale")
+        .copied()
+        .unwrap_or(1.0);
+    if !(noise_scale.is_finite() && (0.0..=20.0).contains(&noise_scale)) {
+        bail!("--noise-scale {noise_scale}: expected a number between 0 and 20");
+    }
+    if noise_scale == 0.0 {
+        bail!(
+            "--noise-scale 0 would give the filters zero control noise; use a small positive value"
+        );
+    }
+    let trials = matches.get_one::<u64>("trials").copied().unwrap_or(50) as usize;
+    let seed = matches.get_one::<u64>("seed").copied().unwrap_or(1);
+    let result = experiments::ekf_vs_ukf(noise_scale, trials, seed, progress_bar("ekf-vs-ukf"));
+    if let Some(dir) = matches.get_one::<std::path::PathBuf>("csv") {
+        std::fs::create_dir_all(dir).with_context(|| format!("creating {}", dir.display()))?;
+        let path = dir.join(format!(
+            "ekf-vs-ukf-noise{noise_scale}-seed{seed}-trials{trials}.csv"
+        ));
+        let dt = experiments::ekf_vs_ukf_scenario(noise_scale, seed).dt;
+        std::fs::write(&path, experiments::series_csv(&result, dt))
+            .with_context(|| format!("writing {}", path.display()))?;
+        eprintln!("wrote {}", path.display());
+    }
+    let mut out = std::io::stdout().lock();
+    if matches.get_flag("json") {
+        serde_json::to_writer(&mut out, &result).context("writing JSON")?;
+        writeln!(out)?;
+        return Ok(());
+    }
+    writeln!(
+        out,
+        "SLAM Lab experiment ekf-vs-ukf (thesis 000 Sec. 3.4.3), control noise x{noise_scale}, {trials} trials from seed {seed}"
+    )?;
+    writeln!(out)?;
+    writeln!(out, "parameters:")?;
+    for (k, v) in &result.parameters {
+        let text = v.as_str().map_or_else(|| v.to_string(), str::to_owned);
+        let unit = params::spec(k).map_or("", |p| p.unit);
+        writeln!(out, "  {k:<32} {text} {unit}")?;
+    }
+    writeln!(out)?;
+    writeln!(
+        out,
+        "{:<6} {:>20} {:>20} {:>20} {:>20} {:>10} {:>9}",
+        "filter",
+        "robot MSE m²",
+        "landmark MSE m²",
+        "final robot m²",
+        "final landmark m²",
+        "NEES",
+        "diverged"
+    )?;
+    for f in &result.filters {
+        let pm = |m: f64, s: f64| format!("{m:.4} ± {s:.4}");
+        writeln!(
+            out,
+            "{:<6} {:>20} {:>20} {:>20} {:>20} {:>10.3} {:>9} {:>14.3}",
+            f.name,
+            pm(f.robot_mse, f.robot_mse_std),
+            pm(f.landmark_mse, f.landmark_mse_std),
+            pm(f.robot_mse_final, f.robot_mse_final_std),
+            pm(f.landmark_mse_final, f.landmark_mse_final_std),
+            f.nees_mean,
+            f.diverged,
+            f.robot_error_final_max
+        )?;
+    }
+    writeln!(out)?;
+    writeln!(
+        out,
+        "MSE: mean over trials of the time-averaged squared position error (± std across trials). Diverged: final robot error > {} m.",
+        experiments::DIVERGED_ERROR
+    )?;
+    Ok(())
+}
+
 fn main() -> Result<()> {
     let matches = cli().get_matches();
     match matches.subcommand() {
         Some(("run", m)) => run(m),
+        Some(("experiment", m)) => experiment(m),
         Some(("params", _)) => list_params(),
         _ => Ok(()),
     }

@@ -155,3 +155,57 @@ fn readable_summary_names_every_parameter() {
         assert!(stdout.contains(word), "missing {word} in\n{stdout}");
     }
 }
+
+#[test]
+fn experiment_prints_the_documented_json_and_csv() {
+    let dir = std::env::temp_dir().join(format!("slamlab-cli-test-{}", std::process::id()));
+    let dir_arg = dir.to_string_lossy().into_owned();
+    let v = run_json(&[
+        "experiment",
+        "ekf-vs-ukf",
+        "--noise-scale",
+        "2",
+        "--trials",
+        "4",
+        "--seed",
+        "1",
+        "--json",
+        "--csv",
+        &dir_arg,
+    ]);
+    assert_eq!(v["experiment"], "ekf-vs-ukf");
+    assert_eq!(v["parameters"]["noise-scale"], 2.0);
+    assert_eq!(v["parameters"]["range-std"], 2.0);
+    let filters = v["filters"].as_array().cloned().unwrap_or_default();
+    assert_eq!(
+        filters
+            .iter()
+            .map(|f| f["name"].as_str().unwrap_or(""))
+            .collect::<Vec<_>>(),
+        ["ekf", "ukf"]
+    );
+    for f in &filters {
+        for key in [
+            "robot_mse",
+            "landmark_mse",
+            "robot_mse_final",
+            "landmark_mse_final",
+            "robot_mse_std",
+            "landmark_mse_std",
+            "nees_mean",
+        ] {
+            assert!(
+                f[key].as_f64().is_some_and(f64::is_finite),
+                "{key} = {}",
+                f[key]
+            );
+        }
+        assert!(f["diverged"].as_u64().is_some());
+    }
+    let csv = std::fs::read_to_string(dir.join("ekf-vs-ukf-noise2-seed1-trials4.csv"))
+        .unwrap_or_default();
+    assert_eq!(csv.lines().count(), 201, "header + 200 steps");
+    let _ = std::fs::remove_dir_all(&dir);
+    let (ok, _, stderr) = slamlab(&["experiment", "ekf-vs-ukf", "--noise-scale", "NaN"]);
+    assert!(!ok && stderr.contains("noise-scale"), "{stderr}");
+}

@@ -124,14 +124,17 @@ pub fn chi2_band_95(dof: f64, runs: usize) -> (f64, f64) {
 
 /// The normalized (estimation or innovation) squared error `eᵀ P⁻¹ e`.
 ///
-/// Returns `None` when `P` is not positive definite or numerically singular
-/// (smallest eigenvalue below `1e-10` times the largest): the robot's covariance
-/// is zero at the start of a run and has rank 2 after the first prediction, and a
-/// NEES against such a matrix measures round-off, not the filter.
+/// Returns `None` when `P` is not positive definite or is nearly singular
+/// (smallest eigenvalue below `1e-6` times the largest). The robot's covariance is
+/// zero at the start of a run and has rank 2 after the first prediction (three
+/// states, two noise inputs); the unscented transform's curvature leaves a third
+/// eigenvalue of 1e-11..1e-10 relative, and a NEES against it measures that
+/// sliver, not the filter. Full-rank robot covariances in SLAM Lab's runs have
+/// ratios of 2.5e-3 and above.
 pub fn normalized_squared_error(error: &DVector<f64>, covariance: &DMatrix<f64>) -> Option<f64> {
     let eigenvalues = covariance.clone().symmetric_eigenvalues();
     let (min, max) = (eigenvalues.min(), eigenvalues.max());
-    if !(max > 0.0 && min > 1e-10 * max) {
+    if !(max > 0.0 && min > 1e-6 * max) {
         return None;
     }
     let chol = covariance.clone().cholesky()?;
@@ -183,7 +186,7 @@ mod tests {
         assert!((normalized_squared_error(&e, &p).unwrap_or(f64::NAN) - 2.0).abs() < 1e-12);
         assert!(normalized_squared_error(&e, &DMatrix::zeros(2, 2)).is_none());
         // Rank deficient up to round-off: undefined, not huge.
-        let nearly = DMatrix::from_row_slice(2, 2, &[1.0, 0.0, 0.0, 1e-14]);
+        let nearly = DMatrix::from_row_slice(2, 2, &[1.0, 0.0, 0.0, 1e-8]);
         assert!(normalized_squared_error(&e, &nearly).is_none());
     }
 }
