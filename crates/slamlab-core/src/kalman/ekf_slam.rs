@@ -95,12 +95,15 @@ impl EkfSlam {
         self.mean[2] = crate::geometry::wrap_angle(self.mean[2]);
 
         // Joseph form (I - KH) P (I - KH)ᵀ + K V Kᵀ, expanded with M = P Hᵀ so that
-        // it costs O(n²): P - K Mᵀ - M Kᵀ + K S Kᵀ.
+        // it costs O(n²) and needs no n x n temporary: P - K Mᵀ - M Kᵀ + (K S) Kᵀ,
+        // as six in-place rank-1 updates.
         let k_s = &gain * s;
-        let km = &gain * m.transpose();
-        self.covariance -= &km;
-        self.covariance -= km.transpose();
-        self.covariance += &k_s * gain.transpose();
+        for c in 0..2 {
+            let (k, mc, ksc) = (gain.column(c), m.column(c), k_s.column(c));
+            self.covariance.ger(-1.0, &k, &mc, 1.0);
+            self.covariance.ger(-1.0, &mc, &k, 1.0);
+            self.covariance.ger(1.0, &ksc, &k, 1.0);
+        }
         symmetrize(&mut self.covariance);
         debug_assert_eq!(self.covariance.nrows(), n);
 

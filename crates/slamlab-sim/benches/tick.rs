@@ -1,0 +1,60 @@
+//! One simulation tick (truth, sensor, and every phase of the estimator) with a
+//! full map: `cargo bench -p slamlab-sim --bench tick`.
+//!
+//! Targets (README, "Speed"): EKF-SLAM with 100 landmarks ≤ 1 ms; UKF-SLAM with
+//! 50 landmarks ≤ 5 ms.
+
+use slamlab_sim::world::LandmarkLayout;
+use slamlab_sim::{EstimatorKind, LandmarkScenario, LandmarkSession};
+
+fn main() {
+    divan::main();
+}
+
+/// A session after 200 ticks (one lap) of warm-up, so the map is built: the
+/// lesson's sensor (120°, 4 m; about 6 landmarks in view at 100 landmarks), or a
+/// stress sensor that sees all around to 6 m (about 40 in view).
+fn warmed_up(estimator: EstimatorKind, landmarks: usize, stress: bool) -> LandmarkSession {
+    let lesson = LandmarkScenario {
+        landmarks,
+        layout: LandmarkLayout::Random,
+        estimators: vec![estimator],
+        ..Default::default()
+    };
+    let scenario = if stress {
+        LandmarkScenario {
+            fov: std::f64::consts::TAU,
+            max_range: 6.0,
+            ..lesson
+        }
+    } else {
+        lesson
+    };
+    let mut session = LandmarkSession::new(scenario);
+    session.run_ticks(200);
+    session
+}
+
+#[divan::bench(args = [20, 50, 100])]
+fn ekf_tick_lesson_sensor(bencher: divan::Bencher, landmarks: usize) {
+    let mut session = warmed_up(EstimatorKind::Ekf, landmarks, false);
+    bencher.bench_local(|| session.step_tick());
+}
+
+#[divan::bench(args = [20, 50, 100])]
+fn ukf_tick_lesson_sensor(bencher: divan::Bencher, landmarks: usize) {
+    let mut session = warmed_up(EstimatorKind::Ukf, landmarks, false);
+    bencher.bench_local(|| session.step_tick());
+}
+
+#[divan::bench(args = [50, 100])]
+fn ekf_tick_all_around_sensor(bencher: divan::Bencher, landmarks: usize) {
+    let mut session = warmed_up(EstimatorKind::Ekf, landmarks, true);
+    bencher.bench_local(|| session.step_tick());
+}
+
+#[divan::bench(args = [50, 100])]
+fn ukf_tick_all_around_sensor(bencher: divan::Bencher, landmarks: usize) {
+    let mut session = warmed_up(EstimatorKind::Ukf, landmarks, true);
+    bencher.bench_local(|| session.step_tick());
+}
