@@ -1,5 +1,7 @@
 //! The `slamlab` binary as a user runs it.
 
+#![allow(clippy::panic, clippy::unwrap_used, clippy::expect_used)] // a failing test stops
+
 use std::process::Command;
 
 fn slamlab(args: &[&str]) -> (bool, String, String) {

@@ -297,8 +297,7 @@ pub fn set(scenario: &mut LandmarkScenario, name: &str, value: &str) -> Option<P
             };
             let used = v.clamp(min, max);
             apply_number(scenario, name, used);
-            // Compare as text so that values within printing precision are not "clamped".
-            (used != v).then(|| ParamIssue::Clamped {
+            (!(min..=max).contains(&v)).then(|| ParamIssue::Clamped {
                 name: name.to_owned(),
                 value: value.to_owned(),
                 used: format!("{} {}", format_number(used), spec.unit)

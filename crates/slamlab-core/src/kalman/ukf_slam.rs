@@ -230,14 +230,8 @@ impl LandmarkSlam for UkfSlam {
         let model = self.config.motion_model;
         let out = unscented_transform(&self.params, &mean_a, &p_aa, &p_oa, &[2], |a| {
             let u = Control::new(control.v + a[3], control.w + a[4]);
-            model
-                .predict(&pose_of(a), &u, dt)
-                .to_vector()
-                .as_slice()
-                .iter()
-                .copied()
-                .collect::<Vec<_>>()
-                .into()
+            let p = model.predict(&pose_of(a), &u, dt);
+            DVector::from_column_slice(&[p.x, p.y, p.theta])
         })?;
         if !out
             .mean
