@@ -1,11 +1,11 @@
 //! EKF-SLAM (thesis `000` Sec. 3.2 and 3.4.1; slides `001` "EKF-SLAM").
 
+use super::state::{SlamState, check_measurement};
 use super::{FilterConfig, FilterError, LandmarkSlam, PredictReport, UpdateReport, symmetrize};
 use crate::geometry::Pose2;
 use crate::motion::Control;
 use crate::range_bearing::{self, RangeBearing};
 use nalgebra::{DMatrix, DVector, Matrix2, Matrix2x3, Matrix3};
-use std::collections::HashMap;
 
 /// EKF-SLAM with known data association.
 ///
@@ -22,29 +22,14 @@ use std::collections::HashMap;
 #[derive(Clone, Debug)]
 pub struct EkfSlam {
     config: FilterConfig,
-    mean: DVector<f64>,
-    covariance: DMatrix<f64>,
-    landmark_ids: Vec<usize>,
-    slot_of: HashMap<usize, usize>,
+    state: SlamState,
 }
 
 impl EkfSlam {
     /// A filter whose robot starts at `start` with zero covariance (thesis Eq. 3.5).
     pub fn new(config: FilterConfig, start: Pose2) -> Result<Self, FilterError> {
-        config.noise.validate()?;
-        if !start.is_finite() {
-            return Err(FilterError::InvalidParameter {
-                name: "start pose",
-                value: f64::NAN,
-            });
-        }
-        Ok(Self {
-            config,
-            mean: DVector::from_column_slice(&[start.x, start.y, start.theta]),
-            covariance: DMatrix::zeros(3, 3),
-            landmark_ids: Vec::new(),
-            slot_of: HashMap::new(),
-        })
+        let state = SlamState::new(&config, start)?;
+        Ok(Self { config, state })
     }
 
     /// The configuration it runs with.
@@ -59,10 +44,10 @@ impl EkfSlam {
         slot: usize,
         z: &RangeBearing,
     ) -> Result<UpdateReport, FilterError> {
-        let n = self.mean.len();
+        let n = self.state.mean.len();
         let j = 3 + 2 * slot;
         let pose = self.robot_pose();
-        let landmark = self.mean.fixed_rows::<2>(j).into_owned();
+        let landmark = self.state.mean.fixed_rows::<2>(j).into_owned();
         let pred = range_bearing::predict(&pose, &landmark)
             .map_err(|source| FilterError::Measurement { id, source })?;
         let innovation = z.difference(&pred.measurement);
@@ -71,8 +56,8 @@ impl EkfSlam {
         // M = P Hᵀ (n x 2) costs O(n), S = H P Hᵀ + V costs O(1).
         let h_r: Matrix2x3<f64> = pred.jacobian_pose;
         let h_l: Matrix2<f64> = pred.jacobian_landmark;
-        let p_cols_r = self.covariance.columns(0, 3);
-        let p_cols_l = self.covariance.columns(j, 2);
+        let p_cols_r = self.state.covariance.columns(0, 3);
+        let p_cols_l = self.state.covariance.columns(j, 2);
         let m = p_cols_r * h_r.transpose() + p_cols_l * h_l.transpose();
         let m_r = m.fixed_view::<3, 2>(0, 0).into_owned();
         let m_l = m.fixed_view::<2, 2>(j, 0).into_owned();
@@ -91,8 +76,8 @@ impl EkfSlam {
                 what: "innovation covariance S",
             });
         }
-        self.mean += correction;
-        self.mean[2] = crate::geometry::wrap_angle(self.mean[2]);
+        self.state.mean += correction;
+        self.state.mean[2] = crate::geometry::wrap_angle(self.state.mean[2]);
 
         // Joseph form (I - KH) P (I - KH)ᵀ + K V Kᵀ, expanded with M = P Hᵀ so that
         // it costs O(n²) and needs no n x n temporary: P - K Mᵀ - M Kᵀ + (K S) Kᵀ,
@@ -100,12 +85,12 @@ impl EkfSlam {
         let k_s = &gain * s;
         for c in 0..2 {
             let (k, mc, ksc) = (gain.column(c), m.column(c), k_s.column(c));
-            self.covariance.ger(-1.0, &k, &mc, 1.0);
-            self.covariance.ger(-1.0, &mc, &k, 1.0);
-            self.covariance.ger(1.0, &ksc, &k, 1.0);
+            self.state.covariance.ger(-1.0, &k, &mc, 1.0);
+            self.state.covariance.ger(-1.0, &mc, &k, 1.0);
+            self.state.covariance.ger(1.0, &ksc, &k, 1.0);
         }
-        symmetrize(&mut self.covariance);
-        debug_assert_eq!(self.covariance.nrows(), n);
+        symmetrize(&mut self.state.covariance);
+        debug_assert_eq!(self.state.covariance.nrows(), n);
 
         let robot_gain_norm = gain.rows(0, 3).norm();
         Ok(UpdateReport::Corrected {
@@ -120,38 +105,19 @@ impl EkfSlam {
 
     /// Adds landmark `id` from its first measurement (thesis Eq. 3.8-3.16).
     fn initialize(&mut self, id: usize, z: &RangeBearing) -> Result<UpdateReport, FilterError> {
-        if z.range < range_bearing::MIN_RANGE {
-            return Err(FilterError::Measurement {
-                id,
-                source: range_bearing::MeasurementError::TooClose { range: z.range },
-            });
-        }
         let pose = self.robot_pose();
         let g = range_bearing::inverse(&pose, z)
             .map_err(|source| FilterError::Measurement { id, source })?;
-        let n = self.mean.len();
-        let p_rr: Matrix3<f64> = self.covariance.fixed_view::<3, 3>(0, 0).into_owned();
+        let p_rr: Matrix3<f64> = self.state.covariance.fixed_view::<3, 3>(0, 0).into_owned();
         let p_ll = g.jacobian_pose * p_rr * g.jacobian_pose.transpose()
             + g.jacobian_measurement
                 * self.config.noise.measurement_covariance()
                 * g.jacobian_measurement.transpose();
         // P_LM = G_R P_RM: the new landmark's correlation with everything known so far.
-        let p_lm = g.jacobian_pose * self.covariance.rows(0, 3);
+        let p_lm = g.jacobian_pose * self.state.covariance.rows(0, 3);
 
-        let mut covariance = self.covariance.clone().resize(n + 2, n + 2, 0.0);
-        covariance.view_mut((n, 0), (2, n)).copy_from(&p_lm);
-        covariance
-            .view_mut((0, n), (n, 2))
-            .copy_from(&p_lm.transpose());
-        covariance
-            .fixed_view_mut::<2, 2>(n, n)
-            .copy_from(&(0.5 * (p_ll + p_ll.transpose())));
-        self.covariance = covariance;
-        self.mean = self.mean.clone().resize_vertically(n + 2, 0.0);
-        self.mean[n] = g.landmark[0];
-        self.mean[n + 1] = g.landmark[1];
-        self.slot_of.insert(id, self.landmark_ids.len());
-        self.landmark_ids.push(id);
+        self.state
+            .push_landmark(id, g.landmark, &p_lm.transpose(), &p_ll);
         Ok(UpdateReport::Initialized {
             id,
             position: g.landmark,
@@ -179,11 +145,11 @@ impl LandmarkSlam for EkfSlam {
             .step(&self.robot_pose(), control, dt);
         let f = step.jacobian_pose;
         let g = step.jacobian_control;
-        self.mean[0] = step.pose.x;
-        self.mean[1] = step.pose.y;
-        self.mean[2] = step.pose.theta;
+        self.state.mean[0] = step.pose.x;
+        self.state.mean[1] = step.pose.y;
+        self.state.mean[2] = step.pose.theta;
 
-        let p_rr: Matrix3<f64> = self.covariance.fixed_view::<3, 3>(0, 0).into_owned();
+        let p_rr: Matrix3<f64> = self.state.covariance.fixed_view::<3, 3>(0, 0).into_owned();
         // A robot commanded to stop does not move: the control noise is on the
         // executed wheel speeds of a moving robot (the simulator does the same).
         let q = if *control == Control::default() {
@@ -192,16 +158,19 @@ impl LandmarkSlam for EkfSlam {
             g * self.config.noise.control_covariance() * g.transpose()
         };
         let new_rr = f * p_rr * f.transpose() + q;
-        self.covariance
+        self.state
+            .covariance
             .fixed_view_mut::<3, 3>(0, 0)
             .copy_from(&(0.5 * (new_rr + new_rr.transpose())));
-        let n = self.mean.len();
+        let n = self.state.mean.len();
         if n > 3 {
-            let new_rl = f * self.covariance.view((0, 3), (3, n - 3));
-            self.covariance
+            let new_rl = f * self.state.covariance.view((0, 3), (3, n - 3));
+            self.state
+                .covariance
                 .view_mut((0, 3), (3, n - 3))
                 .copy_from(&new_rl);
-            self.covariance
+            self.state
+                .covariance
                 .view_mut((3, 0), (n - 3, 3))
                 .copy_from(&new_rl.transpose());
         }
@@ -213,28 +182,24 @@ impl LandmarkSlam for EkfSlam {
     }
 
     fn update(&mut self, id: usize, z: &RangeBearing) -> Result<UpdateReport, FilterError> {
-        if !z.is_finite() {
-            return Err(FilterError::Measurement {
-                id,
-                source: range_bearing::MeasurementError::NotFinite,
-            });
-        }
-        match self.slot_of.get(&id) {
-            Some(&slot) => self.correct(id, slot, z),
+        let slot = self.state.slot(id);
+        check_measurement(id, z, slot.is_none())?;
+        match slot {
+            Some(slot) => self.correct(id, slot, z),
             None => self.initialize(id, z),
         }
     }
 
     fn mean(&self) -> &DVector<f64> {
-        &self.mean
+        &self.state.mean
     }
 
     fn covariance(&self) -> &DMatrix<f64> {
-        &self.covariance
+        &self.state.covariance
     }
 
     fn landmark_ids(&self) -> &[usize] {
-        &self.landmark_ids
+        self.state.landmark_ids()
     }
 }
 

@@ -1,5 +1,6 @@
 //! UKF-SLAM (thesis `000` Sec. 3.3, with the errata in the seeds' README).
 
+use super::state::{SlamState, check_measurement};
 use super::unscented::{UnscentedParams, sigma_points, unscented_transform};
 use super::{FilterConfig, FilterError, LandmarkSlam, PredictReport, UpdateReport, symmetrize};
 use crate::geometry::{Pose2, wrap_angle};
@@ -7,7 +8,6 @@ use crate::linalg::psd_cholesky;
 use crate::motion::Control;
 use crate::range_bearing::{self, MeasurementError, RangeBearing};
 use nalgebra::{DMatrix, DVector, Matrix2, Vector2};
-use std::collections::HashMap;
 
 /// UKF-SLAM with known data association.
 ///
@@ -26,10 +26,7 @@ use std::collections::HashMap;
 pub struct UkfSlam {
     config: FilterConfig,
     params: UnscentedParams,
-    mean: DVector<f64>,
-    covariance: DMatrix<f64>,
-    landmark_ids: Vec<usize>,
-    slot_of: HashMap<usize, usize>,
+    state: SlamState,
 }
 
 fn pose_of(a: &DVector<f64>) -> Pose2 {
@@ -47,24 +44,28 @@ impl UkfSlam {
         params: UnscentedParams,
         start: Pose2,
     ) -> Result<Self, FilterError> {
-        config.noise.validate()?;
+        let state = SlamState::new(&config, start)?;
         // Check every dimension the filter uses: 3 for drawing, 5 for its phases.
         params.weights(3)?;
         params.weights(5)?;
-        if !start.is_finite() {
-            return Err(FilterError::InvalidParameter {
-                name: "start pose",
-                value: f64::NAN,
-            });
-        }
         Ok(Self {
             config,
             params,
-            mean: DVector::from_column_slice(&[start.x, start.y, start.theta]),
-            covariance: DMatrix::zeros(3, 3),
-            landmark_ids: Vec::new(),
-            slot_of: HashMap::new(),
+            state,
         })
+    }
+
+    /// The robot's mean and covariance extended by two independent noise
+    /// components with covariance `noise` (zero mean): the augmented state the
+    /// prediction and the landmark initialization draw sigma points from.
+    fn robot_with_noise(&self, noise: &Matrix2<f64>) -> (DVector<f64>, DMatrix<f64>) {
+        let mut mean = DVector::zeros(5);
+        mean.rows_mut(0, 3).copy_from(&self.state.mean.rows(0, 3));
+        let mut cov = DMatrix::zeros(5, 5);
+        cov.view_mut((0, 0), (3, 3))
+            .copy_from(&self.state.covariance.view((0, 0), (3, 3)));
+        cov.view_mut((3, 3), (2, 2)).copy_from(noise);
+        (mean, cov)
     }
 
     /// The unscented-transform parameters.
@@ -73,23 +74,11 @@ impl UkfSlam {
     }
 
     fn initialize(&mut self, id: usize, z: &RangeBearing) -> Result<UpdateReport, FilterError> {
-        if z.range < range_bearing::MIN_RANGE {
-            return Err(FilterError::Measurement {
-                id,
-                source: MeasurementError::TooClose { range: z.range },
-            });
-        }
-        let n = self.mean.len();
-        let mut mean_a = DVector::zeros(5);
-        mean_a.rows_mut(0, 3).copy_from(&self.mean.rows(0, 3));
-        let mut p_aa = DMatrix::zeros(5, 5);
-        p_aa.view_mut((0, 0), (3, 3))
-            .copy_from(&self.covariance.view((0, 0), (3, 3)));
-        p_aa.view_mut((3, 3), (2, 2))
-            .copy_from(&self.config.noise.measurement_covariance());
+        let n = self.state.len();
+        let (mean_a, p_aa) = self.robot_with_noise(&self.config.noise.measurement_covariance());
         let mut p_oa = DMatrix::zeros(n, 5);
         p_oa.view_mut((0, 0), (n, 3))
-            .copy_from(&self.covariance.columns(0, 3));
+            .copy_from(&self.state.covariance.columns(0, 3));
         let out = unscented_transform(&self.params, &mean_a, &p_aa, &p_oa, &[], |a| {
             let zi = RangeBearing {
                 range: z.range + a[3],
@@ -111,26 +100,15 @@ impl UkfSlam {
                 source: MeasurementError::NotFinite,
             });
         }
-        let mut covariance = self.covariance.clone().resize(n + 2, n + 2, 0.0);
-        covariance
-            .view_mut((0, n), (n, 2))
-            .copy_from(&out.cross_other);
-        covariance
-            .view_mut((n, 0), (2, n))
-            .copy_from(&out.cross_other.transpose());
-        covariance
-            .view_mut((n, n), (2, 2))
-            .copy_from(&out.covariance);
-        self.covariance = covariance;
-        self.mean = self.mean.clone().resize_vertically(n + 2, 0.0);
-        self.mean[n] = out.mean[0];
-        self.mean[n + 1] = out.mean[1];
-        self.slot_of.insert(id, self.landmark_ids.len());
-        self.landmark_ids.push(id);
-        Ok(UpdateReport::Initialized {
+        let position = Vector2::new(out.mean[0], out.mean[1]);
+        let covariance = Matrix2::from_iterator(out.covariance.iter().copied());
+        self.state.push_landmark(
             id,
-            position: Vector2::new(out.mean[0], out.mean[1]),
-        })
+            position,
+            &out.cross_other.fixed_columns::<2>(0).into_owned(),
+            &covariance,
+        );
+        Ok(UpdateReport::Initialized { id, position })
     }
 
     fn correct(
@@ -139,12 +117,12 @@ impl UkfSlam {
         slot: usize,
         z: &RangeBearing,
     ) -> Result<UpdateReport, FilterError> {
-        let n = self.mean.len();
+        let n = self.state.mean.len();
         let j = 3 + 2 * slot;
         let active = [0, 1, 2, j, j + 1];
-        let mean_a = DVector::from_iterator(5, active.iter().map(|&i| self.mean[i]));
-        let p_aa = DMatrix::from_fn(5, 5, |r, c| self.covariance[(active[r], active[c])]);
-        let p_oa = DMatrix::from_fn(n, 5, |r, c| self.covariance[(r, active[c])]);
+        let mean_a = DVector::from_iterator(5, active.iter().map(|&i| self.state.mean[i]));
+        let p_aa = DMatrix::from_fn(5, 5, |r, c| self.state.covariance[(active[r], active[c])]);
+        let p_oa = DMatrix::from_fn(n, 5, |r, c| self.state.covariance[(r, active[c])]);
         // The mean itself must be measurable.
         range_bearing::predict(&pose_of(&mean_a), &Vector2::new(mean_a[3], mean_a[4]))
             .map_err(|source| FilterError::Measurement { id, source })?;
@@ -178,16 +156,16 @@ impl UkfSlam {
                 what: "innovation covariance P_yy",
             });
         }
-        let mut covariance = &self.covariance - &gain * s * gain.transpose();
+        let mut covariance = &self.state.covariance - &gain * s * gain.transpose();
         symmetrize(&mut covariance);
         if (0..n).any(|i| !(covariance[(i, i)] >= -1e-12)) {
             return Err(FilterError::NotPositiveDefinite {
                 what: "updated covariance",
             });
         }
-        self.covariance = covariance;
-        self.mean += correction;
-        self.mean[2] = wrap_angle(self.mean[2]);
+        self.state.covariance = covariance;
+        self.state.mean += correction;
+        self.state.mean[2] = wrap_angle(self.state.mean[2]);
         Ok(UpdateReport::Corrected {
             id,
             innovation,
@@ -213,20 +191,17 @@ impl LandmarkSlam for UkfSlam {
             });
         }
         let robot_det_before = self.robot_covariance().determinant();
-        let n = self.mean.len();
-        let mut mean_a = DVector::zeros(5);
-        mean_a.rows_mut(0, 3).copy_from(&self.mean.rows(0, 3));
-        let mut p_aa = DMatrix::zeros(5, 5);
-        p_aa.view_mut((0, 0), (3, 3))
-            .copy_from(&self.covariance.view((0, 0), (3, 3)));
+        let n = self.state.len();
         // A robot commanded to stop does not move (as in EKF-SLAM and the simulator).
-        if *control != Control::default() {
-            p_aa.view_mut((3, 3), (2, 2))
-                .copy_from(&self.config.noise.control_covariance());
-        }
+        let control_noise = if *control == Control::default() {
+            Matrix2::zeros()
+        } else {
+            self.config.noise.control_covariance()
+        };
+        let (mean_a, p_aa) = self.robot_with_noise(&control_noise);
         let mut p_oa = DMatrix::zeros(n - 3, 5);
         p_oa.view_mut((0, 0), (n - 3, 3))
-            .copy_from(&self.covariance.view((3, 0), (n - 3, 3)));
+            .copy_from(&self.state.covariance.view((3, 0), (n - 3, 3)));
         let model = self.config.motion_model;
         let out = unscented_transform(&self.params, &mean_a, &p_aa, &p_oa, &[2], |a| {
             let u = Control::new(control.v + a[3], control.w + a[4]);
@@ -243,16 +218,19 @@ impl LandmarkSlam for UkfSlam {
                 what: "predicted robot covariance",
             });
         }
-        self.mean.rows_mut(0, 3).copy_from(&out.mean);
-        self.mean[2] = wrap_angle(self.mean[2]);
-        self.covariance
+        self.state.mean.rows_mut(0, 3).copy_from(&out.mean);
+        self.state.mean[2] = wrap_angle(self.state.mean[2]);
+        self.state
+            .covariance
             .view_mut((0, 0), (3, 3))
             .copy_from(&out.covariance);
         if n > 3 {
-            self.covariance
+            self.state
+                .covariance
                 .view_mut((3, 0), (n - 3, 3))
                 .copy_from(&out.cross_other);
-            self.covariance
+            self.state
+                .covariance
                 .view_mut((0, 3), (3, n - 3))
                 .copy_from(&out.cross_other.transpose());
         }
@@ -264,38 +242,34 @@ impl LandmarkSlam for UkfSlam {
     }
 
     fn update(&mut self, id: usize, z: &RangeBearing) -> Result<UpdateReport, FilterError> {
-        if !z.is_finite() {
-            return Err(FilterError::Measurement {
-                id,
-                source: MeasurementError::NotFinite,
-            });
-        }
-        match self.slot_of.get(&id) {
-            Some(&slot) => self.correct(id, slot, z),
+        let slot = self.state.slot(id);
+        check_measurement(id, z, slot.is_none())?;
+        match slot {
+            Some(slot) => self.correct(id, slot, z),
             None => self.initialize(id, z),
         }
     }
 
     fn mean(&self) -> &DVector<f64> {
-        &self.mean
+        &self.state.mean
     }
 
     fn covariance(&self) -> &DMatrix<f64> {
-        &self.covariance
+        &self.state.covariance
     }
 
     fn landmark_ids(&self) -> &[usize] {
-        &self.landmark_ids
+        self.state.landmark_ids()
     }
 
     fn robot_sigma_points(&self) -> Vec<Pose2> {
         let Ok(w) = self.params.weights(3) else {
             return Vec::new();
         };
-        let Ok(l) = psd_cholesky(&self.covariance.view((0, 0), (3, 3)).into_owned()) else {
+        let Ok(l) = psd_cholesky(&self.state.covariance.view((0, 0), (3, 3)).into_owned()) else {
             return Vec::new();
         };
-        sigma_points(&self.mean.rows(0, 3).into_owned(), &l, w.spread)
+        sigma_points(&self.state.mean.rows(0, 3).into_owned(), &l, w.spread)
             .iter()
             .map(|v| Pose2::new(v[0], v[1], v[2]))
             .collect()
@@ -384,7 +358,7 @@ mod tests {
             .unwrap_or_else(|e| panic!("{e}"));
         let before = ukf.clone();
         // A measurement of landmark 1 taken from on top of it: the mean is not measurable.
-        ukf.mean[0] = 2.0;
+        ukf.state.mean[0] = 2.0;
         let mut moved = ukf.clone();
         assert!(moved.update(1, &RangeBearing::new(0.5, 0.0)).is_err());
         assert_eq!(moved.covariance(), ukf.covariance());
