@@ -1,43 +1,464 @@
-//! SLAM Lab's egui front end (placeholder while the lesson is built).
+//! SLAM Lab's egui front end, for the browser (wasm32) and the desktop.
+//!
+//! The app paints and wires; it owns no estimation logic. A lesson (today:
+//! [`landmark_slam`]) owns a simulation session from `slamlab-sim` and draws it. The
+//! shell around the lessons is the same everywhere: the lesson menu, the time bar
+//! (run, pause, speed, step phase, step tick, reset), the notice bar, the theme, and
+//! the URL: `?lesson=landmark-slam&seed=7&embed=1&landmarks=30`.
+
+pub mod landmark_slam;
+pub mod lessons;
+pub mod palette;
+pub mod query;
+pub mod time_control;
 
 #[cfg(target_arch = "wasm32")]
 mod web;
 
+use landmark_slam::{LandmarkSlamLesson, PanelVisibility, ViewOptions};
+use serde::{Deserialize, Serialize};
+use slamlab_sim::params;
+use std::collections::BTreeSet;
+use time_control::{TimeAction, TimeControl};
+
+/// The eframe storage key of [`Settings`].
+const SETTINGS_KEY: &str = "slamlab_settings";
+
+/// What SLAM Lab remembers between visits (eframe storage: a file natively, local
+/// storage in the browser). Parameters given in the URL always win over these.
+#[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
+#[serde(default)]
+pub struct Settings {
+    /// `Some(true)` dark, `Some(false)` light, `None` follow the system.
+    pub dark_mode: Option<bool>,
+    /// Which panels are open (full layout only).
+    pub panels: PanelVisibility,
+    /// Map layers and the heatmap window.
+    pub view: ViewOptions,
+    /// Speed of the clock.
+    pub time: TimeControl,
+    /// The user's last parameters that differ from the defaults, used when the URL
+    /// gives none.
+    pub last_params: Vec<(String, String)>,
+}
+
+/// The lesson on screen. New lessons add a variant (and an entry in
+/// [`lessons::LESSONS`]).
+#[derive(Debug)]
+pub enum ActiveLesson {
+    /// `landmark-slam`.
+    LandmarkSlam(Box<LandmarkSlamLesson>),
+}
+
 /// The SLAM Lab application.
-#[derive(Debug, Default)]
+#[derive(Debug)]
 pub struct SlamLabApp {
     /// The page's query string, e.g. `lesson=landmark-slam&seed=7`.
     pub query: String,
     /// Frames drawn so far.
     pub frames: u64,
+    lesson_id: &'static str,
+    lesson: ActiveLesson,
+    embed: bool,
+    panels: PanelVisibility,
+    app_notices: Vec<String>,
+    dismissed: BTreeSet<String>,
+    dark_mode: Option<bool>,
+    theme_applied: bool,
 }
 
 impl SlamLabApp {
-    /// Creates the app from the page's query string (without the leading `?`).
-    pub fn new(_cc: &eframe::CreationContext<'_>, query: &str) -> Self {
-        Self::from_query(query)
+    /// Creates the app from the page's query string (without the leading `?`), with
+    /// the settings eframe stored last time.
+    pub fn new(cc: &eframe::CreationContext<'_>, query: &str) -> Self {
+        let settings: Option<Settings> = cc
+            .storage
+            .and_then(|storage| eframe::get_value(storage, SETTINGS_KEY));
+        let app = Self::with_settings(query, settings);
+        app.apply_theme(&cc.egui_ctx);
+        app
     }
 
-    /// Creates the app without an eframe context (tests).
+    /// Creates the app without an eframe context or stored settings (tests).
     pub fn from_query(query: &str) -> Self {
-        Self { query: query.trim_start_matches('?').to_owned(), frames: 0 }
+        Self::with_settings(query, None)
+    }
+
+    /// Creates the app from a query string and optional stored settings. The URL's
+    /// parameters win: stored parameters are used only when the URL gives none (and
+    /// never in embed mode, so that a lecture page always shows the same run).
+    pub fn with_settings(query: &str, settings: Option<Settings>) -> Self {
+        let parsed = query::Query::parse(query);
+        let mut notices: Vec<String> = parsed.issues.clone();
+        let lesson_info = match parsed.lesson.as_deref() {
+            None => lessons::default_lesson(),
+            Some(id) => lessons::find(id).unwrap_or_else(|| {
+                let default = lessons::default_lesson();
+                notices.push(format!(
+                    "unknown lesson '{id}'; opening \"{}\" instead",
+                    default.title
+                ));
+                default
+            }),
+        };
+        let settings_given = settings.is_some();
+        let settings = settings.unwrap_or_default();
+        let mut scenario = landmark_slam::default_scenario();
+        if parsed.pairs.is_empty() && !parsed.embed {
+            let stored = settings
+                .last_params
+                .iter()
+                .map(|(k, v)| (k.as_str(), v.as_str()));
+            // Stored values were valid when saved; anything stale is dropped quietly.
+            let _ignored = params::apply_pairs(&mut scenario, stored, &query::APP_KEYS);
+        }
+        let pairs = parsed.pairs.iter().map(|(k, v)| (k.as_str(), v.as_str()));
+        let issues = params::apply_pairs(&mut scenario, pairs, &query::APP_KEYS);
+        notices.extend(issues.iter().map(|issue| format!("link: {issue}")));
+
+        let mut lesson = LandmarkSlamLesson::new(scenario);
+        if settings_given {
+            lesson.view = settings.view.clone();
+            lesson.time.speed_tps = settings.time.speed_tps;
+            lesson.time.max_speed = settings.time.max_speed;
+        }
+        let panels = if parsed.embed {
+            PanelVisibility::embedded()
+        } else {
+            settings.panels
+        };
+        Self {
+            query: query.trim_start_matches('?').to_owned(),
+            frames: 0,
+            lesson_id: lesson_info.id,
+            lesson: ActiveLesson::LandmarkSlam(Box::new(lesson)),
+            embed: parsed.embed,
+            panels,
+            app_notices: notices,
+            dismissed: BTreeSet::new(),
+            dark_mode: settings.dark_mode,
+            theme_applied: false,
+        }
+    }
+
+    /// The landmark-SLAM lesson, if it is the one open.
+    pub fn landmark_lesson(&self) -> Option<&LandmarkSlamLesson> {
+        match &self.lesson {
+            ActiveLesson::LandmarkSlam(lesson) => Some(lesson),
+        }
+    }
+
+    /// The landmark-SLAM lesson, mutably (tests drive it through the same methods
+    /// as the widgets).
+    pub fn landmark_lesson_mut(&mut self) -> Option<&mut LandmarkSlamLesson> {
+        match &mut self.lesson {
+            ActiveLesson::LandmarkSlam(lesson) => Some(lesson),
+        }
+    }
+
+    /// The running landmark-SLAM session, read only.
+    pub fn session(&self) -> Option<&slamlab_sim::LandmarkSession> {
+        self.landmark_lesson().map(LandmarkSlamLesson::session)
+    }
+
+    /// The open lesson's id.
+    pub fn lesson_id(&self) -> &'static str {
+        self.lesson_id
+    }
+
+    /// Is the compact embed layout on?
+    pub fn is_embedded(&self) -> bool {
+        self.embed
+    }
+
+    /// Which panels are open.
+    pub fn panels(&self) -> PanelVisibility {
+        self.panels
+    }
+
+    /// Every notice not dismissed: problems with the link, what the simulation had to
+    /// change, and the latest filter errors.
+    pub fn notices(&self) -> Vec<String> {
+        let mut all = self.app_notices.clone();
+        match &self.lesson {
+            ActiveLesson::LandmarkSlam(lesson) => all.extend(lesson.notices()),
+        }
+        all.retain(|n| !self.dismissed.contains(n));
+        all.dedup();
+        all
+    }
+
+    /// Is the clock running?
+    pub fn is_running(&self) -> bool {
+        match &self.lesson {
+            ActiveLesson::LandmarkSlam(lesson) => lesson.time.running,
+        }
+    }
+
+    /// The settings to store.
+    pub fn settings(&self) -> Settings {
+        match &self.lesson {
+            ActiveLesson::LandmarkSlam(lesson) => Settings {
+                dark_mode: self.dark_mode,
+                panels: if self.embed {
+                    PanelVisibility::default()
+                } else {
+                    self.panels
+                },
+                view: lesson.view.clone(),
+                time: lesson.time.clone(),
+                last_params: if self.embed {
+                    Vec::new()
+                } else {
+                    lesson.pending_pairs()
+                },
+            },
+        }
     }
 
     /// A one-line JSON summary of the app's state for browser tests.
     pub fn test_state_json(&self) -> String {
-        format!("{{\"frames\":{}}}", self.frames)
+        let (tick, time, phase, seed, filters) = match &self.lesson {
+            ActiveLesson::LandmarkSlam(lesson) => {
+                let session = lesson.session();
+                (
+                    session.tick(),
+                    session.time(),
+                    session.last_phase().map(|p| p.label()).unwrap_or_default(),
+                    session.scenario().seed,
+                    session
+                        .filters()
+                        .iter()
+                        .map(|run| run.kind.name())
+                        .collect::<Vec<_>>(),
+                )
+            }
+        };
+        serde_json::json!({
+            "frames": self.frames,
+            "tick": tick,
+            "time": time,
+            "phase": phase,
+            "running": self.is_running(),
+            "lesson": self.lesson_id,
+            "embed": self.embed,
+            "seed": seed,
+            "filters": filters,
+            "notices": self.notices().len(),
+        })
+        .to_string()
+    }
+
+    fn apply_theme(&self, ctx: &egui::Context) {
+        match self.dark_mode {
+            Some(true) => ctx.set_theme(egui::Theme::Dark),
+            Some(false) => ctx.set_theme(egui::Theme::Light),
+            None => {}
+        }
+    }
+
+    /// Runs one of the time bar's actions.
+    pub fn apply_time_action(&mut self, action: TimeAction) {
+        match &mut self.lesson {
+            ActiveLesson::LandmarkSlam(lesson) => {
+                if action == TimeAction::Reset {
+                    self.dismissed.clear();
+                }
+                lesson.apply_time_action(action);
+            }
+        }
     }
 
     /// Draws the whole app.
     pub fn app_ui(&mut self, ui: &mut egui::Ui) {
         self.frames += 1;
-        ui.heading("SLAM Lab");
-        ui.label(format!("query: {}", self.query));
+        if !self.theme_applied {
+            self.apply_theme(ui.ctx());
+            self.theme_applied = true;
+        }
+        let ctx = ui.ctx().clone();
+
+        // Input first: shortcuts, drive keys, then the clock.
+        for action in time_control::shortcut_actions(&ctx) {
+            self.apply_time_action(action);
+        }
+        let dt = f64::from(ctx.input(|i| i.stable_dt));
+        match &mut self.lesson {
+            ActiveLesson::LandmarkSlam(lesson) => {
+                lesson.read_drive_keys(&ctx);
+                lesson.advance(dt);
+            }
+        }
+
+        egui::Panel::top("slamlab_menu").show(ui, |ui| self.menu_bar_ui(ui));
+        egui::Panel::top("slamlab_time_bar").show(ui, |ui| {
+            let actions = match &mut self.lesson {
+                ActiveLesson::LandmarkSlam(lesson) => {
+                    let info = lesson.time_info();
+                    time_control::time_bar_ui(ui, &mut lesson.time, &info, self.embed)
+                }
+            };
+            for action in actions {
+                self.apply_time_action(action);
+            }
+        });
+        let notices = self.notices();
+        if !notices.is_empty() {
+            egui::Panel::top("slamlab_notices").show(ui, |ui| self.notice_bar_ui(ui, &notices));
+        }
+        match &mut self.lesson {
+            ActiveLesson::LandmarkSlam(lesson) => {
+                lesson.panels_ui(ui, &mut self.panels, self.embed);
+                if lesson.wants_repaint() {
+                    ctx.request_repaint();
+                }
+            }
+        }
+    }
+
+    fn menu_bar_ui(&mut self, ui: &mut egui::Ui) {
+        let title = lessons::find(self.lesson_id).map_or("", |l| l.title);
+        ui.horizontal_wrapped(|ui| {
+            ui.label(egui::RichText::new("SLAM Lab").strong());
+            ui.menu_button("Lessons", |ui| {
+                for info in lessons::LESSONS {
+                    let selected = info.id == self.lesson_id;
+                    let response = ui
+                        .selectable_label(selected, info.title)
+                        .on_hover_text(info.summary);
+                    if response.clicked() {
+                        if !selected {
+                            self.switch_lesson(info.id);
+                        }
+                        ui.close();
+                    }
+                    ui.label(egui::RichText::new(info.summary).small().weak());
+                }
+            });
+            ui.menu_button("View", |ui| {
+                ui.checkbox(&mut self.panels.parameters, "Parameters panel");
+                ui.checkbox(&mut self.panels.explanation, "Explanation panel");
+                ui.checkbox(&mut self.panels.plots, "Plots");
+                match &mut self.lesson {
+                    ActiveLesson::LandmarkSlam(lesson) => {
+                        ui.checkbox(&mut lesson.view.legend, "Map legend");
+                        ui.checkbox(&mut lesson.view.heatmap, "Covariance heatmap");
+                    }
+                }
+            });
+            ui.separator();
+            ui.label(egui::RichText::new(title).strong());
+            ui.with_layout(egui::Layout::right_to_left(egui::Align::Center), |ui| {
+                let dark = ui.visuals().dark_mode;
+                let label = if dark { "Light theme" } else { "Dark theme" };
+                if ui
+                    .button(label)
+                    .on_hover_text("Switch between the light and the dark theme")
+                    .clicked()
+                {
+                    self.dark_mode = Some(!dark);
+                    self.apply_theme(ui.ctx());
+                }
+                if self.embed {
+                    ui.toggle_value(&mut self.panels.explanation, "Explain");
+                    ui.toggle_value(&mut self.panels.parameters, "Parameters");
+                } else {
+                    ui.label(
+                        egui::RichText::new("Space run/pause · . phase · n tick · r reset")
+                            .small()
+                            .weak(),
+                    );
+                }
+            });
+        });
+    }
+
+    fn switch_lesson(&mut self, id: &str) {
+        if let Some(info) = lessons::find(id) {
+            self.lesson_id = info.id;
+            // One lesson today: switching means starting it afresh.
+            self.lesson = ActiveLesson::LandmarkSlam(Box::new(LandmarkSlamLesson::new(
+                landmark_slam::default_scenario(),
+            )));
+        }
+    }
+
+    fn notice_bar_ui(&mut self, ui: &mut egui::Ui, notices: &[String]) {
+        let mut dismiss: Vec<String> = Vec::new();
+        egui::Frame::new()
+            .stroke(egui::Stroke::new(1.5, palette::VERMILLION))
+            .inner_margin(6.0)
+            .corner_radius(4.0)
+            .show(ui, |ui| {
+                ui.set_width(ui.available_width());
+                ui.horizontal(|ui| {
+                    ui.label(
+                        egui::RichText::new(format!("Notices ({})", notices.len()))
+                            .strong()
+                            .color(palette::VERMILLION),
+                    );
+                    if notices.len() > 1 && ui.small_button("Dismiss all").clicked() {
+                        dismiss.extend(notices.iter().cloned());
+                    }
+                });
+                for notice in notices.iter().take(8) {
+                    ui.horizontal_wrapped(|ui| {
+                        if ui
+                            .small_button("Dismiss")
+                            .on_hover_text("Hide this notice")
+                            .clicked()
+                        {
+                            dismiss.push(notice.clone());
+                        }
+                        ui.label(notice);
+                    });
+                }
+                if notices.len() > 8 {
+                    ui.label(format!("… and {} more", notices.len() - 8));
+                }
+            });
+        self.dismissed.extend(dismiss);
     }
 }
 
 impl eframe::App for SlamLabApp {
     fn ui(&mut self, ui: &mut egui::Ui, _frame: &mut eframe::Frame) {
-        egui::CentralPanel::default().show_inside(ui, |ui| self.app_ui(ui));
+        self.app_ui(ui);
+    }
+
+    fn save(&mut self, storage: &mut dyn eframe::Storage) {
+        eframe::set_value(storage, SETTINGS_KEY, &self.settings());
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn stored_parameters_apply_only_without_url_parameters() {
+        let settings = Settings {
+            last_params: vec![("landmarks".to_owned(), "33".to_owned())],
+            ..Default::default()
+        };
+        let app = SlamLabApp::with_settings("lesson=landmark-slam", Some(settings.clone()));
+        assert_eq!(app.session().map(|s| s.scenario().landmarks), Some(33));
+        let app = SlamLabApp::with_settings("lesson=landmark-slam&seed=4", Some(settings.clone()));
+        assert_eq!(app.session().map(|s| s.scenario().landmarks), Some(20));
+        let app = SlamLabApp::with_settings("embed=1", Some(settings));
+        assert_eq!(app.session().map(|s| s.scenario().landmarks), Some(20));
+    }
+
+    #[test]
+    fn settings_round_trip() {
+        let app = SlamLabApp::from_query("landmarks=12");
+        let settings = app.settings();
+        assert_eq!(
+            settings.last_params,
+            vec![("landmarks".to_owned(), "12".to_owned())]
+        );
+        let text = serde_json::to_string(&settings).unwrap_or_default();
+        let back: Settings = serde_json::from_str(&text).unwrap_or_default();
+        assert_eq!(back, settings);
     }
 }

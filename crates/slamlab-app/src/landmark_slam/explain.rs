@@ -1,0 +1,248 @@
+//! The explanation panel: what the current phase does, with the thesis equations,
+//! and its live numbers (innovation, NIS, gain, state size), per filter.
+
+use crate::palette;
+use slamlab_core::kalman::UpdateReport;
+use slamlab_core::stats::chi2_quantile;
+use slamlab_sim::session::FilterRun;
+use slamlab_sim::{LandmarkSession, Phase};
+
+/// What a phase does, in two or three sentences, for an estimator family.
+fn phase_text(kind: &str, phase: Option<Phase>, report: Option<&UpdateReport>) -> String {
+    let ukf = kind == "ukf";
+    match (phase, report) {
+        (None, _) => "Nothing has run yet. The robot starts at a known pose with zero \
+            uncertainty and an empty map (thesis Eq. 3.5). Press Step phase (.) to run the \
+            first prediction, or Run (Space)."
+            .to_owned(),
+        (Some(Phase::Predict), _) if ukf => "Predict (thesis Eq. 3.26-3.30): sigma points \
+            of the robot pose are moved through the motion model with the command (v, w), \
+            and their weighted spread, plus the control noise, is the new robot covariance. \
+            Landmarks do not move, so only the robot block and the robot-landmark cross terms \
+            change: the robot's ellipse grows."
+            .to_owned(),
+        (Some(Phase::Predict), _) => "Predict (thesis Eq. 3.17-3.19 with the motion \
+            Jacobians of Eq. 3.34-3.35): the robot's mean moves by the command (v, w) for one \
+            time step. Only the robot block P_RR and the robot-landmark cross terms P_RL \
+            change (P_RR = F P_RR F^T + G Q G^T, P_RL = F P_RL); the motion noise makes the \
+            robot's ellipse grow, and the landmarks stay where they were."
+            .to_owned(),
+        (Some(Phase::Update { id, .. }), Some(UpdateReport::Initialized { .. })) if ukf => {
+            format!(
+                "New landmark {id} (thesis Eq. 3.21-3.25): the first measurement of landmark \
+                 {id} is pushed through the inverse observation model with sigma points of \
+                 the robot pose and the measurement noise; their spread gives its covariance \
+                 and its correlation with the robot. The state grows by two numbers."
+            )
+        }
+        (Some(Phase::Update { id, .. }), Some(UpdateReport::Initialized { .. })) => format!(
+            "New landmark {id} (inverse observation model, thesis Eq. 3.8-3.16): landmark {id} \
+             is seen for the first time, so it is placed at the robot pose plus the measured \
+             range and bearing. Its covariance combines the robot's uncertainty and the \
+             measurement noise and is correlated with the robot; the state grows by two numbers."
+        ),
+        (Some(Phase::Update { id, .. }), _) if ukf => format!(
+            "Update with landmark {id} (thesis Eq. 3.31-3.32, corrected per the errata: \
+             K = P_My P_yy^-1 and P = P̄ − K P_yy K^T): sigma points of the state are pushed \
+             through the measurement model; the innovation z − ȳ, weighted by K, corrects the \
+             robot and every landmark correlated with it. The robot's and landmarks' ellipses shrink."
+        ),
+        (Some(Phase::Update { id, .. }), _) => format!(
+            "Update with landmark {id} (thesis Eq. 3.18-3.20, with H from Eq. 3.37-3.39 as \
+             corrected in the errata): the predicted range and bearing of landmark {id} are \
+             compared with the measurement. The innovation, weighted by the Kalman gain K, \
+             corrects the robot and, through the correlations, every landmark; the robot's and \
+             the landmarks' ellipses shrink."
+        ),
+    }
+}
+
+/// The explanation panel.
+pub fn explanation_ui(ui: &mut egui::Ui, session: &LandmarkSession) {
+    ui.heading("What happens now");
+    let phase = session.last_phase();
+    let phase_label = phase.map_or_else(|| "none yet".to_owned(), |p| p.label());
+    ui.label(format!(
+        "Tick {}, t = {:.1} s",
+        session.tick(),
+        session.time()
+    ));
+    ui.label(egui::RichText::new(format!("Last phase: {phase_label}")).strong());
+    let next = session
+        .next_phase()
+        .map_or_else(|| "predict (new tick)".to_owned(), |p| p.label());
+    ui.label(format!("Next phase: {next}"));
+    if let Some(Phase::Update { id, .. }) = phase {
+        ui.label(
+            egui::RichText::new(format!("Landmark {id} is ringed in vermillion on the map."))
+                .color(palette::VERMILLION),
+        );
+    }
+    if session.filters().is_empty() {
+        ui.colored_label(palette::VERMILLION, "No estimator is running.");
+    }
+    for run in session.filters() {
+        ui.add_space(6.0);
+        filter_ui(ui, run, phase);
+    }
+    ui.add_space(8.0);
+    ui.separator();
+    consistency_ui(ui);
+}
+
+fn filter_ui(ui: &mut egui::Ui, run: &FilterRun, phase: Option<Phase>) {
+    let name = run.kind.name();
+    let color = palette::estimator_color(name);
+    let filter = run.filter();
+    let report = match phase {
+        Some(Phase::Update { .. }) => run.last_update.as_ref(),
+        _ => None,
+    };
+    egui::Frame::group(ui.style())
+        .stroke(egui::Stroke::new(1.5, color))
+        .show(ui, |ui| {
+            ui.set_width(ui.available_width());
+            ui.label(
+                egui::RichText::new(format!("{}-SLAM", name.to_uppercase()))
+                    .strong()
+                    .color(color),
+            );
+            ui.label(phase_text(name, phase, report));
+            if let Some(error) = &run.last_error {
+                ui.colored_label(palette::VERMILLION, format!("This phase failed: {error}"));
+            }
+            let n = filter.landmark_ids().len();
+            egui::Grid::new(("live_numbers", name))
+                .num_columns(2)
+                .striped(true)
+                .show(ui, |ui| {
+                    row(ui, "landmarks in the state", n.to_string());
+                    row(
+                        ui,
+                        "state dimension",
+                        format!("{} = 3 + 2·{n}", filter.mean().len()),
+                    );
+                    match (phase, &run.last_predict, report) {
+                        (Some(Phase::Predict), Some(predict), _) => {
+                            row(
+                                ui,
+                                "command (v, w)",
+                                format!(
+                                    "{:.2} m/s, {:.3} rad/s",
+                                    predict.control.v, predict.control.w
+                                ),
+                            );
+                            let growth = if predict.robot_det_before > 0.0 {
+                                format!(
+                                    "×{:.3}",
+                                    (predict.robot_det_after / predict.robot_det_before).sqrt()
+                                )
+                            } else {
+                                "from zero".to_owned()
+                            };
+                            row(
+                                ui,
+                                "robot uncertainty volume √det P_RR",
+                                format!(
+                                    "{:.3e} to {:.3e} ({growth})",
+                                    predict.robot_det_before.max(0.0).sqrt(),
+                                    predict.robot_det_after.max(0.0).sqrt()
+                                ),
+                            );
+                        }
+                        (_, _, Some(UpdateReport::Initialized { id, position })) => {
+                            row(
+                                ui,
+                                "placed",
+                                format!(
+                                    "landmark {id} at ({:.2}, {:.2}) m",
+                                    position[0], position[1]
+                                ),
+                            );
+                        }
+                        (
+                            _,
+                            _,
+                            Some(UpdateReport::Corrected {
+                                innovation,
+                                innovation_covariance,
+                                nis,
+                                robot_gain_norm,
+                                gain_norm,
+                                ..
+                            }),
+                        ) => {
+                            row(ui, "innovation, range", format!("{:+.3} m", innovation[0]));
+                            row(
+                                ui,
+                                "innovation, bearing",
+                                format!(
+                                    "{:+.4} rad ({:+.2}°)",
+                                    innovation[1],
+                                    innovation[1].to_degrees()
+                                ),
+                            );
+                            row(
+                                ui,
+                                "√S (range, bearing)",
+                                format!(
+                                    "{:.3} m, {:.2}°",
+                                    innovation_covariance[(0, 0)].max(0.0).sqrt(),
+                                    innovation_covariance[(1, 1)].max(0.0).sqrt().to_degrees()
+                                ),
+                            );
+                            let (lo, hi) = (chi2_quantile(0.025, 2.0), chi2_quantile(0.975, 2.0));
+                            let verdict = if *nis > hi {
+                                "above the band"
+                            } else if *nis < lo {
+                                "below the band"
+                            } else {
+                                "inside the band"
+                            };
+                            row(
+                                ui,
+                                "NIS ν^T S^-1 ν (2 dof)",
+                                format!("{nis:.2} ({verdict} {lo:.2}..{hi:.2})"),
+                            );
+                            row(ui, "gain |K|, robot rows", format!("{robot_gain_norm:.3}"));
+                            row(ui, "gain |K|, whole state", format!("{gain_norm:.3}"));
+                        }
+                        _ => {}
+                    }
+                    if let Some(m) = run.latest() {
+                        row(
+                            ui,
+                            "robot position error",
+                            format!(
+                                "{:.3} m (2σ bound {:.3} m)",
+                                m.position_error, m.position_bound_2sigma
+                            ),
+                        );
+                        if let Some(nees) = m.nees {
+                            row(ui, "robot NEES (3 dof)", format!("{nees:.2}"));
+                        }
+                        if let Some(rmse) = m.landmark_rmse {
+                            row(ui, "landmark RMS error", format!("{rmse:.3} m"));
+                        }
+                    }
+                });
+        });
+}
+
+fn row(ui: &mut egui::Ui, name: &str, value: String) {
+    ui.label(name);
+    ui.label(value);
+    ui.end_row();
+}
+
+fn consistency_ui(ui: &mut egui::Ui) {
+    ui.label(egui::RichText::new("Reading NEES and NIS").strong());
+    ui.label(
+        "NEES (robot pose, 3 dof) and NIS (each update, 2 dof) compare the real error with \
+         the error the filter believes it has. A consistent filter stays inside the 95% \
+         chi-square band most of the time (about 1 sample in 20 outside). Above the band the \
+         filter is overconfident: its ellipses are too small for its real errors, as \
+         linearization makes EKF-SLAM over long runs. Below the band it is conservative: it \
+         claims more uncertainty than it has.",
+    );
+}

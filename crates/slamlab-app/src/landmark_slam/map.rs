@@ -1,0 +1,1135 @@
+//! The map: the true world and every filter's estimate, in metres, with pan, zoom,
+//! follow, a legend and hover tooltips.
+//!
+//! Drawing order, back to front: grid, world outline, sensor field of view, paths,
+//! landmarks and their ellipses, observation rays, robots, legend, tooltip.
+
+use super::ViewOptions;
+use super::drive::{self, DriveState};
+use crate::palette;
+use egui::{Color32, Pos2, Rect, Sense, Shape, Stroke, pos2, vec2};
+use nalgebra::{Matrix2, Vector2};
+use slamlab_core::Pose2;
+use slamlab_core::geometry::{CHI2_2DOF_95, CovarianceEllipse};
+use slamlab_sim::{LandmarkSession, Phase};
+use std::f64::consts::PI;
+
+/// Smallest and largest zoom, pixels per metre.
+const SCALE_RANGE: (f32, f32) = (0.05, 5000.0);
+/// How close (pixels) the pointer must be to an item for its tooltip.
+const HOVER_RADIUS: f32 = 12.0;
+/// Longest path drawn, in points; longer paths are thinned evenly.
+const MAX_PATH_POINTS: usize = 4000;
+/// Radius of the heading-uncertainty wedge, pixels.
+const WEDGE_RADIUS: f32 = 34.0;
+
+/// Where the map looks: its centre (metres) and zoom (pixels per metre).
+#[derive(Clone, Debug, PartialEq)]
+pub struct MapView {
+    center: [f64; 2],
+    scale: f32,
+    fitted: bool,
+}
+
+impl Default for MapView {
+    fn default() -> Self {
+        Self {
+            center: [0.0, 0.0],
+            scale: 30.0,
+            fitted: false,
+        }
+    }
+}
+
+impl MapView {
+    /// Fits the world into the map on the next frame.
+    pub fn refit(&mut self) {
+        self.fitted = false;
+    }
+
+    fn fit(&mut self, rect: Rect, world_size: f64) {
+        let side = (world_size.max(1.0) * 1.08) as f32;
+        let scale = (rect.width().min(rect.height()) / side).max(SCALE_RANGE.0);
+        self.center = [0.0, 0.0];
+        self.scale = scale.clamp(SCALE_RANGE.0, SCALE_RANGE.1);
+        self.fitted = true;
+    }
+
+    fn zoom_about(&mut self, rect: Rect, factor: f32, anchor: Pos2) {
+        if !(factor.is_finite() && factor > 0.0) {
+            return;
+        }
+        let before = self.transform(rect);
+        let world = before.world_of(anchor);
+        self.scale = (self.scale * factor).clamp(SCALE_RANGE.0, SCALE_RANGE.1);
+        let offset = anchor - rect.center();
+        self.center = [
+            world[0] - f64::from(offset.x / self.scale),
+            world[1] + f64::from(offset.y / self.scale),
+        ];
+    }
+
+    fn transform(&self, rect: Rect) -> MapTransform {
+        MapTransform {
+            rect,
+            center: self.center,
+            scale: self.scale,
+        }
+    }
+}
+
+/// World (metres, y up) to screen (points, y down).
+#[derive(Clone, Copy, Debug)]
+struct MapTransform {
+    rect: Rect,
+    center: [f64; 2],
+    scale: f32,
+}
+
+impl MapTransform {
+    fn xy(&self, x: f64, y: f64) -> Pos2 {
+        let c = self.rect.center();
+        pos2(
+            c.x + ((x - self.center[0]) as f32) * self.scale,
+            c.y - ((y - self.center[1]) as f32) * self.scale,
+        )
+    }
+
+    fn v(&self, v: &Vector2<f64>) -> Pos2 {
+        self.xy(v[0], v[1])
+    }
+
+    fn pose(&self, p: &Pose2) -> Pos2 {
+        self.xy(p.x, p.y)
+    }
+
+    fn world_of(&self, p: Pos2) -> [f64; 2] {
+        let c = self.rect.center();
+        [
+            self.center[0] + f64::from((p.x - c.x) / self.scale),
+            self.center[1] - f64::from((p.y - c.y) / self.scale),
+        ]
+    }
+
+    /// Metres visible: `(x_min, x_max, y_min, y_max)`.
+    fn visible(&self) -> (f64, f64, f64, f64) {
+        let a = self.world_of(self.rect.left_bottom());
+        let b = self.world_of(self.rect.right_top());
+        (a[0], b[0], a[1], b[1])
+    }
+}
+
+/// The direction on screen of a world angle (y flips).
+fn screen_dir(angle: f64) -> egui::Vec2 {
+    vec2(angle.cos() as f32, -(angle.sin() as f32))
+}
+
+fn finite(p: Pos2) -> bool {
+    p.x.is_finite() && p.y.is_finite()
+}
+
+/// Everything the map draws in one colour scheme.
+struct Colors {
+    truth: Color32,
+    background: Color32,
+    weak_text: Color32,
+    grid: Color32,
+}
+
+impl Colors {
+    fn of(ui: &egui::Ui) -> Self {
+        let dark = ui.visuals().dark_mode;
+        Self {
+            truth: palette::truth_color(dark),
+            background: ui.visuals().extreme_bg_color,
+            weak_text: ui.visuals().weak_text_color(),
+            grid: if dark {
+                Color32::from_gray(55)
+            } else {
+                Color32::from_gray(218)
+            },
+        }
+    }
+}
+
+/// The map toolbar, the map itself, its legend, tooltips and (when driving by
+/// hand) the drive pad.
+pub fn map_ui(
+    ui: &mut egui::Ui,
+    session: &LandmarkSession,
+    view: &mut MapView,
+    opts: &mut ViewOptions,
+    drive: &mut DriveState,
+) {
+    toolbar_ui(ui, view, opts, session);
+    let size = ui.available_size().max(vec2(120.0, 120.0));
+    let (rect, response) = ui.allocate_exact_size(size, Sense::click_and_drag());
+    response.widget_info(|| egui::WidgetInfo::labeled(egui::Role::Canvas, true, "Map"));
+    if !view.fitted {
+        view.fit(rect, session.world().size);
+    }
+    apply_zoom_request(ui, view, rect);
+
+    // Pan by dragging, zoom by scrolling or pinching around the pointer.
+    if response.dragged() {
+        let d = response.drag_delta();
+        view.center[0] -= f64::from(d.x / view.scale);
+        view.center[1] += f64::from(d.y / view.scale);
+        opts.follow_robot = false;
+    }
+    if response.hovered() {
+        let (scroll, zoom) = ui.input(|i| (i.smooth_scroll_delta.y, i.zoom_delta()));
+        let factor = (scroll * 0.0025).exp() * zoom;
+        if (factor - 1.0).abs() > 1e-4 {
+            let anchor = response.hover_pos().unwrap_or(rect.center());
+            view.zoom_about(rect, factor, anchor);
+        }
+    }
+    if opts.follow_robot {
+        let truth = session.truth();
+        if truth.is_finite() {
+            view.center = [truth.x, truth.y];
+        }
+    }
+
+    let t = view.transform(rect);
+    let colors = Colors::of(ui);
+    let painter = ui.painter_at(rect);
+    painter.rect_filled(rect, 4.0, colors.background);
+    draw_grid(&painter, &t, &colors);
+    draw_world(&painter, &t, session, opts, &colors);
+    let sigma_points_shown = draw_filters(&painter, &t, session, opts, &colors);
+    draw_truth_robot(
+        &painter,
+        &t,
+        session.truth(),
+        colors.truth,
+        colors.background,
+    );
+    draw_scale_and_axes(&painter, &t, &colors);
+    if opts.legend {
+        draw_legend(&painter, rect, session, &colors, opts, sigma_points_shown);
+    }
+    if let Some(pointer) = response.hover_pos()
+        && !response.dragged()
+        && let Some(text) = hover_text(&t, session, pointer)
+    {
+        response.on_hover_ui_at_pointer(|ui| {
+            ui.label(text);
+        });
+    }
+    if matches!(
+        session.scenario().controller,
+        slamlab_sim::ControllerKind::Manual
+    ) {
+        drive::drive_pad_ui(ui, rect, drive);
+    } else {
+        drive.pad = None;
+    }
+}
+
+/// Zoom buttons act on the map rect, which is only known after the toolbar; the
+/// toolbar leaves the request in egui's temporary memory and this applies it.
+fn apply_zoom_request(ui: &egui::Ui, view: &mut MapView, rect: Rect) {
+    let request: Option<f32> = ui.data_mut(|d| d.remove_temp(zoom_request_id()));
+    if let Some(factor) = request {
+        view.zoom_about(rect, factor, rect.center());
+    }
+}
+
+fn zoom_request_id() -> egui::Id {
+    egui::Id::unique("slamlab_map_zoom_request")
+}
+
+fn toolbar_ui(
+    ui: &mut egui::Ui,
+    view: &mut MapView,
+    opts: &mut ViewOptions,
+    session: &LandmarkSession,
+) {
+    let id = zoom_request_id();
+    ui.horizontal_wrapped(|ui| {
+        ui.label("Map:");
+        if ui
+            .button("−")
+            .on_hover_text("Zoom out (or scroll / pinch on the map)")
+            .clicked()
+        {
+            ui.data_mut(|d| d.insert_temp(id, 1.0_f32 / 1.25));
+        }
+        if ui
+            .button("+")
+            .on_hover_text("Zoom in (or scroll / pinch on the map)")
+            .clicked()
+        {
+            ui.data_mut(|d| d.insert_temp(id, 1.25_f32));
+        }
+        if ui
+            .button("Fit world")
+            .on_hover_text("Show the whole world square")
+            .clicked()
+        {
+            view.refit();
+            opts.follow_robot = false;
+        }
+        ui.checkbox(&mut opts.follow_robot, "Follow robot")
+            .on_hover_text("Keep the true robot in the middle of the map");
+        ui.separator();
+        ui.checkbox(&mut opts.legend, "Legend");
+        ui.checkbox(&mut opts.fov, "Field of view")
+            .on_hover_text("The sensor's field of view and range, from the true robot");
+        ui.checkbox(&mut opts.rays, "Observations")
+            .on_hover_text("This tick's measurements as rays from the true robot");
+        ui.checkbox(&mut opts.ids, "Ids");
+        ui.checkbox(&mut opts.error_lines, "Errors")
+            .on_hover_text("A thin line from each estimated landmark to its true position");
+        let has_sigma_points = session
+            .filters()
+            .iter()
+            .any(|run| !super::robot_sigma_points(run.filter()).is_empty());
+        ui.add_enabled(
+            has_sigma_points,
+            egui::Checkbox::new(&mut opts.sigma_points, "Sigma points"),
+        )
+        .on_hover_text("The UKF's sigma points of the robot pose")
+        .on_disabled_hover_text("Only sigma-point filters (UKF) have sigma points");
+        ui.separator();
+        ui.toggle_value(&mut opts.heatmap, "Covariance heatmap")
+            .on_hover_text("Every filter's covariance as a correlation matrix");
+    });
+}
+
+fn nice_step(min_step: f64) -> f64 {
+    if !(min_step.is_finite() && min_step > 0.0) {
+        return 1.0;
+    }
+    let power = 10_f64.powf(min_step.log10().floor());
+    for m in [1.0, 2.0, 5.0, 10.0] {
+        if m * power >= min_step {
+            return m * power;
+        }
+    }
+    10.0 * power
+}
+
+fn format_metres(value: f64, step: f64) -> String {
+    let decimals = (-step.log10().floor()).max(0.0) as usize;
+    let value = if value.abs() < step * 1e-6 {
+        0.0
+    } else {
+        value
+    };
+    format!("{value:.decimals$}")
+}
+
+fn draw_grid(painter: &egui::Painter, t: &MapTransform, colors: &Colors) {
+    let step = nice_step(f64::from(70.0 / t.scale));
+    let (x0, x1, y0, y1) = t.visible();
+    let stroke = Stroke::new(1.0, colors.grid);
+    let font = egui::FontId::proportional(10.5);
+    let mut x = (x0 / step).ceil() * step;
+    let mut count = 0;
+    while x <= x1 && count < 400 {
+        let p = t.xy(x, 0.0);
+        painter.vline(p.x, t.rect.y_range(), stroke);
+        painter.text(
+            pos2(p.x + 2.0, t.rect.bottom() - 2.0),
+            egui::Align2::LEFT_BOTTOM,
+            format_metres(x, step),
+            font.clone(),
+            colors.weak_text,
+        );
+        x += step;
+        count += 1;
+    }
+    let mut y = (y0 / step).ceil() * step;
+    count = 0;
+    while y <= y1 && count < 400 {
+        let p = t.xy(0.0, y);
+        painter.hline(t.rect.x_range(), p.y, stroke);
+        painter.text(
+            pos2(t.rect.left() + 2.0, p.y - 1.0),
+            egui::Align2::LEFT_BOTTOM,
+            format_metres(y, step),
+            font.clone(),
+            colors.weak_text,
+        );
+        y += step;
+        count += 1;
+    }
+}
+
+fn draw_scale_and_axes(painter: &egui::Painter, t: &MapTransform, colors: &Colors) {
+    let step = nice_step(f64::from(70.0 / t.scale));
+    let font = egui::FontId::proportional(12.0);
+    // Axis names.
+    painter.text(
+        t.rect.right_bottom() + vec2(-6.0, -16.0),
+        egui::Align2::RIGHT_BOTTOM,
+        "x (m)",
+        font.clone(),
+        colors.weak_text,
+    );
+    painter.text(
+        t.rect.left_top() + vec2(6.0, 4.0),
+        egui::Align2::LEFT_TOP,
+        "y (m)",
+        font.clone(),
+        colors.weak_text,
+    );
+    // Scale bar, bottom left above the x labels.
+    let length = (step as f32) * t.scale;
+    let start = t.rect.left_bottom() + vec2(40.0, -24.0);
+    let end = start + vec2(length, 0.0);
+    let stroke = Stroke::new(2.0, colors.truth);
+    painter.line_segment([start, end], stroke);
+    painter.line_segment([start - vec2(0.0, 4.0), start + vec2(0.0, 4.0)], stroke);
+    painter.line_segment([end - vec2(0.0, 4.0), end + vec2(0.0, 4.0)], stroke);
+    painter.text(
+        pos2((start.x + end.x) / 2.0, start.y - 4.0),
+        egui::Align2::CENTER_BOTTOM,
+        format!("{} m", format_metres(step, step)),
+        font,
+        colors.truth,
+    );
+}
+
+/// Points of a path on screen, thinned to at most [`MAX_PATH_POINTS`], with `last`
+/// appended (the current pose mid-tick).
+fn path_points(t: &MapTransform, poses: &[Pose2], last: Option<Pose2>) -> Vec<Pos2> {
+    let stride = poses.len() / MAX_PATH_POINTS + 1;
+    let mut points: Vec<Pos2> = poses
+        .iter()
+        .enumerate()
+        .filter(|(i, _)| i % stride == 0 || *i + 1 == poses.len())
+        .map(|(_, p)| t.pose(p))
+        .filter(|p| finite(*p))
+        .collect();
+    if let Some(last) = last {
+        let p = t.pose(&last);
+        if finite(p) {
+            points.push(p);
+        }
+    }
+    points
+}
+
+/// A filled fan (wedge) from `center` over `rim` points, plus its outline.
+fn fan(center: Pos2, rim: &[Pos2], fill: Color32, outline: Stroke) -> Vec<Shape> {
+    let mut mesh = egui::Mesh::default();
+    mesh.colored_vertex(center, fill);
+    for p in rim {
+        mesh.colored_vertex(*p, fill);
+    }
+    for i in 1..rim.len() as u32 {
+        mesh.add_triangle(0, i, i + 1);
+    }
+    let mut outline_points = Vec::with_capacity(rim.len() + 2);
+    outline_points.push(center);
+    outline_points.extend_from_slice(rim);
+    outline_points.push(center);
+    vec![Shape::mesh(mesh), Shape::line(outline_points, outline)]
+}
+
+/// Points on a circular arc around `center` (screen), radius in points, world angles.
+fn arc(center: Pos2, radius: f32, from: f64, to: f64) -> Vec<Pos2> {
+    let span = (to - from).abs();
+    let n = ((span / (2.0 * PI) * 96.0).ceil() as usize).clamp(2, 96);
+    (0..=n)
+        .map(|i| {
+            let a = from + (to - from) * i as f64 / n as f64;
+            center + radius * screen_dir(a)
+        })
+        .collect()
+}
+
+/// The 95% ellipse of a 2x2 covariance as a filled, outlined polygon. Returns nothing
+/// for non-finite or absurdly large ellipses.
+fn ellipse_shapes(
+    t: &MapTransform,
+    center: &Vector2<f64>,
+    covariance: &Matrix2<f64>,
+    color: Color32,
+    fill_alpha: f32,
+    width: f32,
+    dashed: bool,
+) -> Vec<Shape> {
+    let e = CovarianceEllipse::from_covariance(*center, covariance, CHI2_2DOF_95);
+    if !(e.semi_major.is_finite() && e.semi_minor.is_finite() && e.angle.is_finite()) {
+        return Vec::new();
+    }
+    if (e.semi_major as f32) * t.scale > 1.0e6 {
+        return Vec::new();
+    }
+    let points: Vec<Pos2> = e.boundary(48).iter().map(|p| t.v(p)).collect();
+    if points.iter().any(|p| !finite(*p)) {
+        return Vec::new();
+    }
+    let mut shapes = vec![Shape::convex_polygon(
+        points.clone(),
+        palette::faded(color, fill_alpha),
+        Stroke::NONE,
+    )];
+    if dashed {
+        let mut closed = points;
+        if let Some(first) = closed.first().copied() {
+            closed.push(first);
+        }
+        shapes.extend(Shape::dashed_line(
+            &closed,
+            Stroke::new(width + 0.4, color),
+            6.0,
+            4.0,
+        ));
+    } else {
+        shapes.push(Shape::closed_line(points, Stroke::new(width, color)));
+    }
+    shapes
+}
+
+fn cross(painter: &egui::Painter, p: Pos2, r: f32, stroke: Stroke) {
+    painter.line_segment([p - vec2(r, r), p + vec2(r, r)], stroke);
+    painter.line_segment([p - vec2(r, -r), p + vec2(r, -r)], stroke);
+}
+
+/// The landmark id updated by the latest phase, if that was an update.
+fn updated_landmark(session: &LandmarkSession) -> Option<usize> {
+    match session.last_phase() {
+        Some(Phase::Update { id, .. }) => Some(id),
+        _ => None,
+    }
+}
+
+fn draw_world(
+    painter: &egui::Painter,
+    t: &MapTransform,
+    session: &LandmarkSession,
+    opts: &ViewOptions,
+    colors: &Colors,
+) {
+    // World square.
+    let half = session.world().size / 2.0;
+    let a = t.xy(-half, -half);
+    let b = t.xy(half, half);
+    if finite(a) && finite(b) {
+        painter.rect_stroke(
+            Rect::from_two_pos(a, b),
+            0.0,
+            Stroke::new(1.5, palette::faded(colors.truth, 0.55)),
+            egui::StrokeKind::Middle,
+        );
+    }
+    let truth = session.truth();
+    let robot = t.pose(&truth);
+    // Sensor field of view.
+    if opts.fov && finite(robot) {
+        let sensor = session.sensor();
+        let radius = (sensor.max_range as f32) * t.scale;
+        let fill = palette::faded(colors.truth, 0.06);
+        let outline = Stroke::new(1.0, palette::faded(colors.truth, 0.25));
+        if radius.is_finite() && radius < 1.0e6 {
+            if sensor.fov >= 2.0 * PI - 1e-9 {
+                painter.circle(robot, radius, fill, outline);
+            } else {
+                let half_fov = sensor.fov / 2.0;
+                let rim = arc(
+                    robot,
+                    radius,
+                    truth.theta - half_fov,
+                    truth.theta + half_fov,
+                );
+                painter.extend(fan(robot, &rim, fill, outline));
+            }
+        }
+    }
+    // Paths: dead reckoning (grey dashed), then truth.
+    let dr = path_points(
+        t,
+        session.dead_reckoning_path(),
+        Some(session.dead_reckoning()),
+    );
+    if dr.len() >= 2 {
+        painter.extend(Shape::dashed_line(
+            &dr,
+            Stroke::new(1.5, palette::DEAD_RECKONING),
+            7.0,
+            5.0,
+        ));
+    }
+    let dr_pose = t.pose(&session.dead_reckoning());
+    if finite(dr_pose) {
+        painter.circle_stroke(dr_pose, 4.0, Stroke::new(1.5, palette::DEAD_RECKONING));
+    }
+    let truth_path = path_points(t, session.truth_path(), Some(truth));
+    if truth_path.len() >= 2 {
+        painter.add(Shape::line(
+            truth_path,
+            Stroke::new(1.5, palette::faded(colors.truth, 0.8)),
+        ));
+    }
+    // True landmarks.
+    let highlight = updated_landmark(session);
+    let show_ids = opts.ids && session.world().landmarks.len() <= 150;
+    for landmark in &session.world().landmarks {
+        let p = t.v(&landmark.position);
+        if !finite(p) || !t.rect.expand(20.0).contains(p) {
+            continue;
+        }
+        cross(painter, p, 4.5, Stroke::new(1.8, colors.truth));
+        if show_ids {
+            painter.text(
+                p + vec2(6.0, -5.0),
+                egui::Align2::LEFT_BOTTOM,
+                landmark.id.to_string(),
+                egui::FontId::proportional(10.5),
+                colors.weak_text,
+            );
+        }
+        if highlight == Some(landmark.id) {
+            painter.circle_stroke(p, 10.0, Stroke::new(2.5, palette::VERMILLION));
+        }
+    }
+    // This tick's observations.
+    if opts.rays && finite(robot) {
+        for o in session.observations() {
+            let end = t.v(&o.measured_point);
+            if !finite(end) {
+                continue;
+            }
+            let (stroke, radius) = if highlight == Some(o.id) {
+                (Stroke::new(2.2, palette::VERMILLION), 3.5)
+            } else {
+                (Stroke::new(0.8, palette::faded(colors.truth, 0.45)), 2.5)
+            };
+            painter.line_segment([robot, end], stroke);
+            painter.circle_stroke(end, radius, stroke);
+        }
+    }
+}
+
+/// Draws every filter's landmarks, path and robot. Returns whether sigma points were drawn.
+fn draw_filters(
+    painter: &egui::Painter,
+    t: &MapTransform,
+    session: &LandmarkSession,
+    opts: &ViewOptions,
+    colors: &Colors,
+) -> bool {
+    let highlight = updated_landmark(session);
+    let mut drew_sigma_points = false;
+    for (index, run) in session.filters().iter().enumerate() {
+        // Filters after the first are drawn over it: dashed outlines, hollow robot,
+        // so that both stay visible where they agree.
+        let secondary = index > 0;
+        let color = palette::estimator_color(run.kind.name());
+        let filter = run.filter();
+        // Landmarks: 95% ellipse, mean, optional line to the truth.
+        for estimate in filter.landmarks() {
+            let p = t.v(&estimate.mean);
+            if !finite(p) {
+                continue;
+            }
+            painter.extend(ellipse_shapes(
+                t,
+                &estimate.mean,
+                &estimate.covariance,
+                color,
+                0.10,
+                1.2,
+                secondary,
+            ));
+            painter.circle_filled(p, 2.8, color);
+            if opts.error_lines
+                && let Some(truth) = session.world().landmark(estimate.id)
+            {
+                let q = t.v(&truth.position);
+                if finite(q) {
+                    painter.line_segment([p, q], Stroke::new(1.0, palette::faded(color, 0.7)));
+                }
+            }
+            if highlight == Some(estimate.id) {
+                painter.circle_stroke(p, 7.0, Stroke::new(2.0, palette::VERMILLION));
+            }
+        }
+        // Estimated path.
+        let path = path_points(t, &run.path, Some(filter.robot_pose()));
+        if path.len() >= 2 {
+            if secondary {
+                painter.extend(Shape::dashed_line(&path, Stroke::new(1.8, color), 8.0, 5.0));
+            } else {
+                painter.add(Shape::line(path, Stroke::new(1.6, color)));
+            }
+        }
+        // Robot: 95% position ellipse, ±2σθ heading wedge, triangle.
+        let pose = filter.robot_pose();
+        let p = t.pose(&pose);
+        if !finite(p) {
+            continue;
+        }
+        let cov = filter.robot_covariance();
+        let position_cov = Matrix2::new(cov[(0, 0)], cov[(0, 1)], cov[(1, 0)], cov[(1, 1)]);
+        painter.extend(ellipse_shapes(
+            t,
+            &pose.translation(),
+            &position_cov,
+            color,
+            0.14,
+            2.0,
+            secondary,
+        ));
+        let sigma_theta = cov[(2, 2)].max(0.0).sqrt();
+        if sigma_theta.is_finite() {
+            let half = (2.0 * sigma_theta).min(PI);
+            let rim = arc(p, WEDGE_RADIUS, pose.theta - half, pose.theta + half);
+            painter.extend(fan(
+                p,
+                &rim,
+                palette::faded(color, 0.22),
+                Stroke::new(1.0, palette::faded(color, 0.8)),
+            ));
+        }
+        if opts.sigma_points {
+            for sigma in super::robot_sigma_points(filter) {
+                let s = t.pose(&sigma);
+                if finite(s) {
+                    painter.circle_filled(s, 2.2, color);
+                    drew_sigma_points = true;
+                }
+            }
+        }
+        draw_estimated_robot(painter, p, pose.theta, color, colors.background, secondary);
+    }
+    drew_sigma_points
+}
+
+fn draw_estimated_robot(
+    painter: &egui::Painter,
+    p: Pos2,
+    theta: f64,
+    color: Color32,
+    outline: Color32,
+    hollow: bool,
+) {
+    let forward = screen_dir(theta);
+    let left = vec2(forward.y, -forward.x);
+    let points = vec![
+        p + 12.0 * forward,
+        p - 7.0 * forward + 6.5 * left,
+        p - 7.0 * forward - 6.5 * left,
+    ];
+    if hollow {
+        painter.add(Shape::closed_line(points, Stroke::new(2.2, color)));
+    } else {
+        painter.add(Shape::convex_polygon(
+            points,
+            color,
+            Stroke::new(1.2, outline),
+        ));
+    }
+}
+
+fn draw_truth_robot(
+    painter: &egui::Painter,
+    t: &MapTransform,
+    truth: Pose2,
+    color: Color32,
+    background: Color32,
+) {
+    let p = t.pose(&truth);
+    if !finite(p) {
+        return;
+    }
+    painter.circle(
+        p,
+        8.0,
+        palette::faded(background, 0.6),
+        Stroke::new(2.2, color),
+    );
+    painter.line_segment(
+        [p, p + 15.0 * screen_dir(truth.theta)],
+        Stroke::new(2.2, color),
+    );
+}
+
+/// An axis-aligned ellipse outline for the legend, solid or dashed.
+fn legend_ellipse(
+    painter: &egui::Painter,
+    c: Pos2,
+    radius: egui::Vec2,
+    stroke: Stroke,
+    dashed: bool,
+) {
+    if dashed {
+        let points: Vec<Pos2> = (0..=40)
+            .map(|i| {
+                let a = 2.0 * std::f32::consts::PI * i as f32 / 40.0;
+                c + vec2(radius.x * a.cos(), radius.y * a.sin())
+            })
+            .collect();
+        painter.extend(Shape::dashed_line(&points, stroke, 4.0, 3.0));
+    } else {
+        painter.add(Shape::ellipse_stroke(c, radius, stroke));
+    }
+}
+
+/// A legend symbol.
+#[derive(Clone, Copy)]
+enum Symbol {
+    TruthRobot,
+    Line { dashed: bool },
+    EstimatedRobot { secondary: bool },
+    TrueLandmark,
+    EstimatedLandmark { secondary: bool },
+    Ray,
+    FieldOfView,
+    Highlight,
+    SigmaPoints,
+}
+
+fn draw_symbol(
+    painter: &egui::Painter,
+    rect: Rect,
+    symbol: Symbol,
+    color: Color32,
+    background: Color32,
+) {
+    let c = rect.center();
+    match symbol {
+        Symbol::TruthRobot => {
+            painter.circle(c, 6.0, Color32::TRANSPARENT, Stroke::new(2.0, color));
+            painter.line_segment([c, c + vec2(11.0, 0.0)], Stroke::new(2.0, color));
+        }
+        Symbol::Line { dashed } => {
+            let a = rect.left_center();
+            let b = rect.right_center();
+            if dashed {
+                painter.extend(Shape::dashed_line(
+                    &[a, b],
+                    Stroke::new(1.6, color),
+                    5.0,
+                    3.0,
+                ));
+            } else {
+                painter.line_segment([a, b], Stroke::new(1.8, color));
+            }
+        }
+        Symbol::EstimatedRobot { secondary } => {
+            painter.add(Shape::ellipse_filled(
+                c,
+                vec2(11.0, 7.0),
+                palette::faded(color, 0.2),
+            ));
+            legend_ellipse(
+                painter,
+                c,
+                vec2(11.0, 7.0),
+                Stroke::new(1.5, color),
+                secondary,
+            );
+            draw_estimated_robot(painter, c, 0.0, color, background, secondary);
+        }
+        Symbol::TrueLandmark => cross(painter, c, 4.5, Stroke::new(1.8, color)),
+        Symbol::EstimatedLandmark { secondary } => {
+            painter.add(Shape::ellipse_filled(
+                c,
+                vec2(9.0, 5.5),
+                palette::faded(color, 0.15),
+            ));
+            legend_ellipse(
+                painter,
+                c,
+                vec2(9.0, 5.5),
+                Stroke::new(1.2, color),
+                secondary,
+            );
+            painter.circle_filled(c, 2.8, color);
+        }
+        Symbol::Ray => {
+            painter.line_segment(
+                [rect.left_center(), rect.right_center()],
+                Stroke::new(0.9, color),
+            );
+            painter.circle_stroke(
+                rect.right_center() - vec2(3.0, 0.0),
+                2.5,
+                Stroke::new(0.9, color),
+            );
+        }
+        Symbol::FieldOfView => {
+            let rim = arc(rect.left_center(), rect.width(), -0.45, 0.45);
+            painter.extend(fan(
+                rect.left_center(),
+                &rim,
+                palette::faded(color, 0.12),
+                Stroke::new(1.0, palette::faded(color, 0.4)),
+            ));
+        }
+        Symbol::Highlight => {
+            painter.circle_stroke(c, 6.5, Stroke::new(2.2, palette::VERMILLION));
+        }
+        Symbol::SigmaPoints => {
+            for dx in [-7.0, 0.0, 7.0] {
+                painter.circle_filled(c + vec2(dx, 0.0), 2.2, color);
+            }
+        }
+    }
+}
+
+fn filter_label(name: &str) -> String {
+    name.to_uppercase()
+}
+
+fn draw_legend(
+    painter: &egui::Painter,
+    map_rect: Rect,
+    session: &LandmarkSession,
+    colors: &Colors,
+    opts: &ViewOptions,
+    sigma_points_shown: bool,
+) {
+    let mut entries: Vec<(Symbol, Color32, String)> = vec![
+        (
+            Symbol::TruthRobot,
+            colors.truth,
+            "true robot and heading".to_owned(),
+        ),
+        (
+            Symbol::Line { dashed: false },
+            colors.truth,
+            "true path".to_owned(),
+        ),
+        (
+            Symbol::Line { dashed: true },
+            palette::DEAD_RECKONING,
+            "dead reckoning (commands only)".to_owned(),
+        ),
+        (
+            Symbol::TrueLandmark,
+            colors.truth,
+            "true landmark (id)".to_owned(),
+        ),
+    ];
+    for (index, run) in session.filters().iter().enumerate() {
+        let secondary = index > 0;
+        let color = palette::estimator_color(run.kind.name());
+        let name = filter_label(run.kind.name());
+        entries.push((
+            Symbol::EstimatedRobot { secondary },
+            color,
+            format!("{name} robot: 95% ellipse, ±2σθ wedge"),
+        ));
+        entries.push((
+            Symbol::Line { dashed: secondary },
+            color,
+            format!("{name} path"),
+        ));
+        entries.push((
+            Symbol::EstimatedLandmark { secondary },
+            color,
+            format!("{name} landmark, 95% ellipse"),
+        ));
+        if sigma_points_shown && !super::robot_sigma_points(run.filter()).is_empty() {
+            entries.push((Symbol::SigmaPoints, color, format!("{name} sigma points")));
+        }
+    }
+    if opts.rays {
+        entries.push((
+            Symbol::Ray,
+            palette::faded(colors.truth, 0.6),
+            "observation (measured point)".to_owned(),
+        ));
+    }
+    if opts.fov {
+        entries.push((
+            Symbol::FieldOfView,
+            colors.truth,
+            "sensor field of view and range".to_owned(),
+        ));
+    }
+    entries.push((
+        Symbol::Highlight,
+        palette::VERMILLION,
+        "landmark of the current update".to_owned(),
+    ));
+
+    let font = egui::FontId::proportional(12.0);
+    let row_height = 18.0;
+    let symbol_width = 26.0;
+    let text_width = entries
+        .iter()
+        .map(|(_, _, text)| {
+            painter
+                .layout_no_wrap(text.clone(), font.clone(), colors.truth)
+                .size()
+                .x
+        })
+        .fold(0.0_f32, f32::max);
+    let size = vec2(
+        symbol_width + 8.0 + text_width + 16.0,
+        row_height * entries.len() as f32 + 12.0,
+    );
+    let rect = Rect::from_min_size(map_rect.left_top() + vec2(48.0, 26.0), size);
+    painter.rect(
+        rect,
+        5.0,
+        palette::faded(colors.background, 0.9),
+        Stroke::new(1.0, colors.grid),
+        egui::StrokeKind::Inside,
+    );
+    for (i, (symbol, color, text)) in entries.iter().enumerate() {
+        let top = rect.top() + 6.0 + row_height * i as f32;
+        let symbol_rect = Rect::from_min_size(
+            pos2(rect.left() + 8.0, top + 2.0),
+            vec2(symbol_width, row_height - 4.0),
+        );
+        draw_symbol(painter, symbol_rect, *symbol, *color, colors.background);
+        painter.text(
+            pos2(symbol_rect.right() + 8.0, top + row_height / 2.0),
+            egui::Align2::LEFT_CENTER,
+            text,
+            font.clone(),
+            if matches!(symbol, Symbol::Highlight) {
+                palette::VERMILLION
+            } else {
+                colors.truth
+            },
+        );
+    }
+}
+
+fn format_xy(v: &Vector2<f64>) -> String {
+    format!("({:.2}, {:.2}) m", v[0], v[1])
+}
+
+/// The tooltip text for what is under the pointer: a landmark (true and estimated),
+/// the true robot or an estimated robot.
+fn hover_text(t: &MapTransform, session: &LandmarkSession, pointer: Pos2) -> Option<String> {
+    let near = |p: Pos2| finite(p) && p.distance(pointer) <= HOVER_RADIUS;
+    // Robots first: they sit on top.
+    let truth = session.truth();
+    if near(t.pose(&truth)) {
+        let mut text = format!(
+            "True robot\nx = {:.2} m, y = {:.2} m, θ = {:.3} rad ({:.1}°)",
+            truth.x,
+            truth.y,
+            truth.theta,
+            truth.theta.to_degrees()
+        );
+        for run in session.filters() {
+            let pose = run.filter().robot_pose();
+            let cov = run.filter().robot_covariance();
+            text.push_str(&format!(
+                "\n{}: ({:.2}, {:.2}) m, θ = {:.3} rad; σx = {:.3} m, σy = {:.3} m, σθ = {:.2}°",
+                filter_label(run.kind.name()),
+                pose.x,
+                pose.y,
+                pose.theta,
+                cov[(0, 0)].max(0.0).sqrt(),
+                cov[(1, 1)].max(0.0).sqrt(),
+                cov[(2, 2)].max(0.0).sqrt().to_degrees()
+            ));
+        }
+        return Some(text);
+    }
+    for run in session.filters() {
+        let pose = run.filter().robot_pose();
+        if near(t.pose(&pose)) {
+            let cov = run.filter().robot_covariance();
+            let error = ((truth.x - pose.x).powi(2) + (truth.y - pose.y).powi(2)).sqrt();
+            return Some(format!(
+                "{} estimate of the robot\nx = {:.2} m, y = {:.2} m, θ = {:.3} rad ({:.1}°)\nσx = {:.3} m, σy = {:.3} m, σθ = {:.3} rad ({:.2}°)\nposition error {:.3} m",
+                filter_label(run.kind.name()),
+                pose.x,
+                pose.y,
+                pose.theta,
+                pose.theta.to_degrees(),
+                cov[(0, 0)].max(0.0).sqrt(),
+                cov[(1, 1)].max(0.0).sqrt(),
+                cov[(2, 2)].max(0.0).sqrt(),
+                cov[(2, 2)].max(0.0).sqrt().to_degrees(),
+                error
+            ));
+        }
+    }
+    // Landmarks: nearest true landmark or estimate.
+    let mut best: Option<(f32, usize)> = None;
+    let mut consider = |p: Pos2, id: usize| {
+        if near(p) {
+            let d = p.distance(pointer);
+            if best.is_none_or(|(bd, _)| d < bd) {
+                best = Some((d, id));
+            }
+        }
+    };
+    for landmark in &session.world().landmarks {
+        consider(t.v(&landmark.position), landmark.id);
+    }
+    for run in session.filters() {
+        for estimate in run.filter().landmarks() {
+            consider(t.v(&estimate.mean), estimate.id);
+        }
+    }
+    let (_, id) = best?;
+    let truth_position = session.world().landmark(id).map(|l| l.position);
+    let mut text = format!("Landmark {id}");
+    if let Some(p) = truth_position {
+        text.push_str(&format!("\ntrue position {}", format_xy(&p)));
+    }
+    for run in session.filters() {
+        let name = filter_label(run.kind.name());
+        match run.filter().landmarks().into_iter().find(|l| l.id == id) {
+            Some(estimate) => {
+                text.push_str(&format!(
+                    "\n{name}: {}, σx = {:.3} m, σy = {:.3} m",
+                    format_xy(&estimate.mean),
+                    estimate.covariance[(0, 0)].max(0.0).sqrt(),
+                    estimate.covariance[(1, 1)].max(0.0).sqrt()
+                ));
+                if let Some(p) = truth_position {
+                    text.push_str(&format!(", error {:.3} m", (p - estimate.mean).norm()));
+                }
+            }
+            None => text.push_str(&format!("\n{name}: not seen yet")),
+        }
+    }
+    if session.observations().iter().any(|o| o.id == id) {
+        text.push_str("\nmeasured this tick");
+    }
+    Some(text)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn nice_steps() {
+        assert!((nice_step(0.7) - 1.0).abs() < 1e-12);
+        assert!((nice_step(1.2) - 2.0).abs() < 1e-12);
+        assert!((nice_step(3.0) - 5.0).abs() < 1e-12);
+        assert!((nice_step(7.0) - 10.0).abs() < 1e-12);
+        assert!((nice_step(0.03) - 0.05).abs() < 1e-12);
+        assert!((nice_step(f64::NAN) - 1.0).abs() < 1e-12);
+        assert_eq!(format_metres(-4.0, 2.0), "-4");
+        assert_eq!(format_metres(0.5, 0.5), "0.5");
+    }
+
+    #[test]
+    fn transform_round_trips_and_zoom_keeps_the_anchor() {
+        let rect = Rect::from_min_size(pos2(10.0, 20.0), vec2(400.0, 300.0));
+        let mut view = MapView::default();
+        view.fit(rect, 16.0);
+        let t = view.transform(rect);
+        let p = t.xy(3.0, -2.0);
+        let w = t.world_of(p);
+        assert!((w[0] - 3.0).abs() < 1e-4 && (w[1] + 2.0).abs() < 1e-4);
+        assert!(t.xy(0.0, 1.0).y < t.xy(0.0, 0.0).y, "y points up");
+        let anchor = pos2(100.0, 80.0);
+        let before = t.world_of(anchor);
+        view.zoom_about(rect, 2.0, anchor);
+        let after = view.transform(rect).world_of(anchor);
+        assert!((before[0] - after[0]).abs() < 1e-3 && (before[1] - after[1]).abs() < 1e-3);
+        view.zoom_about(rect, f32::NAN, anchor);
+        assert!(view.scale.is_finite());
+    }
+}

@@ -1,0 +1,477 @@
+//! The `landmark-slam` lesson: EKF-SLAM (and UKF-SLAM once it exists) on the same
+//! landmark world, stepped phase by phase.
+//!
+//! The lesson owns a [`LandmarkSession`] (the truth, the sensor and the filters) and
+//! paints it; every number it shows comes from the session. Parameters are edited
+//! on a copy of the scenario and take effect on reset.
+
+pub mod drive;
+mod explain;
+mod heatmap;
+mod map;
+mod params_panel;
+mod plots;
+
+use crate::time_control::{FRAME_BUDGET_MS, TicksDue, TimeAction, TimeControl, TimeInfo};
+use serde::{Deserialize, Serialize};
+use slamlab_core::Pose2;
+use slamlab_core::kalman::LandmarkSlam;
+use slamlab_sim::params::{self, ParamIssue};
+use slamlab_sim::scenario::ControllerKind;
+use slamlab_sim::{LandmarkScenario, LandmarkSession};
+use std::collections::BTreeMap;
+
+/// The lesson's id in URLs and the menu.
+pub const LESSON_ID: &str = "landmark-slam";
+
+/// What the map and the panels show; saved with the user's settings.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(default)]
+pub struct ViewOptions {
+    /// The legend box on the map.
+    pub legend: bool,
+    /// The sensor's field of view as a faint wedge.
+    pub fov: bool,
+    /// This tick's observations as rays from the true robot.
+    pub rays: bool,
+    /// A thin line from each estimated landmark to its true position.
+    pub error_lines: bool,
+    /// Landmark ids beside the true landmarks.
+    pub ids: bool,
+    /// UKF sigma points of the robot (when a filter has them).
+    pub sigma_points: bool,
+    /// Keep the true robot in the middle of the map.
+    pub follow_robot: bool,
+    /// The covariance heatmap window.
+    pub heatmap: bool,
+}
+
+impl Default for ViewOptions {
+    fn default() -> Self {
+        Self {
+            legend: true,
+            fov: true,
+            rays: true,
+            error_lines: false,
+            ids: true,
+            sigma_points: true,
+            follow_robot: false,
+            heatmap: false,
+        }
+    }
+}
+
+/// Which side panels are open.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(default)]
+pub struct PanelVisibility {
+    /// The parameter panel (left).
+    pub parameters: bool,
+    /// The explanation panel (right).
+    pub explanation: bool,
+    /// The plots (bottom).
+    pub plots: bool,
+}
+
+impl Default for PanelVisibility {
+    fn default() -> Self {
+        Self {
+            parameters: true,
+            explanation: true,
+            plots: true,
+        }
+    }
+}
+
+impl PanelVisibility {
+    /// The embed layout: map, plots and the time bar; the side panels closed.
+    pub fn embedded() -> Self {
+        Self {
+            parameters: false,
+            explanation: false,
+            plots: true,
+        }
+    }
+}
+
+/// The robot's sigma points if the filter is sigma-point based (UKF), else none.
+pub fn robot_sigma_points(filter: &dyn LandmarkSlam) -> Vec<Pose2> {
+    filter.robot_sigma_points()
+}
+
+/// The lesson's starting scenario: the simulator's defaults with every estimator
+/// running side by side ("EKF vs UKF").
+pub fn default_scenario() -> LandmarkScenario {
+    LandmarkScenario {
+        estimators: slamlab_sim::EstimatorKind::ALL.to_vec(),
+        ..Default::default()
+    }
+}
+
+/// The landmark-SLAM lesson.
+#[derive(Debug)]
+pub struct LandmarkSlamLesson {
+    session: LandmarkSession,
+    pending: LandmarkScenario,
+    pending_issues: BTreeMap<String, String>,
+    /// The lesson's clock.
+    pub time: TimeControl,
+    /// What the map shows.
+    pub view: ViewOptions,
+    /// Manual driving.
+    pub drive: drive::DriveState,
+    map_view: map::MapView,
+    heatmap: heatmap::HeatmapState,
+    /// Bumped whenever the session changes, so caches know when to refresh.
+    version: u64,
+}
+
+impl LandmarkSlamLesson {
+    /// Starts the lesson on `scenario` (already checked by [`params`]).
+    pub fn new(scenario: LandmarkScenario) -> Self {
+        let session = LandmarkSession::new(scenario);
+        let pending = session.scenario().clone();
+        Self {
+            session,
+            pending,
+            pending_issues: BTreeMap::new(),
+            time: TimeControl::default(),
+            view: ViewOptions::default(),
+            drive: drive::DriveState::default(),
+            map_view: map::MapView::default(),
+            heatmap: heatmap::HeatmapState::default(),
+            version: 0,
+        }
+    }
+
+    /// The running session (truth, sensor, filters).
+    pub fn session(&self) -> &LandmarkSession {
+        &self.session
+    }
+
+    /// The scenario being edited in the parameter panel (applied on reset).
+    pub fn pending(&self) -> &LandmarkScenario {
+        &self.pending
+    }
+
+    /// Sets one parameter of the pending scenario from text, exactly as the
+    /// parameter panel's widgets do. The issue, if any, is shown beside the parameter.
+    pub fn set_param(&mut self, name: &str, value: &str) -> Option<ParamIssue> {
+        let issue = params::set(&mut self.pending, name, value);
+        match &issue {
+            Some(issue) => {
+                self.pending_issues
+                    .insert(name.to_owned(), issue.to_string());
+            }
+            None => {
+                self.pending_issues.remove(name);
+            }
+        }
+        issue
+    }
+
+    /// The message about the last value typed for `name`, if it had a problem.
+    pub fn param_issue(&self, name: &str) -> Option<&str> {
+        self.pending_issues.get(name).map(String::as_str)
+    }
+
+    /// Do the panel's parameters differ from the running ones?
+    pub fn params_changed(&self) -> bool {
+        params::to_pairs(&self.pending) != params::to_pairs(self.session.scenario())
+    }
+
+    /// Starts over with the pending parameters (same seed: same world and noise).
+    pub fn reset(&mut self) {
+        self.session = LandmarkSession::new(self.pending.clone());
+        self.pending = self.session.scenario().clone();
+        self.time.apply(TimeAction::Reset);
+        self.drive.stop();
+        self.map_view.refit();
+        self.version += 1;
+    }
+
+    /// Switches between the scripted circle and manual driving. The run restarts
+    /// (the session fixes its controller at the start); other pending edits stay pending.
+    pub fn set_manual_driving(&mut self, manual: bool) {
+        let value = if manual { "manual" } else { "circle" };
+        let mut scenario = self.session.scenario().clone();
+        let _issue = params::set(&mut scenario, "controller", value);
+        let _issue = params::set(&mut self.pending, "controller", value);
+        self.session = LandmarkSession::new(scenario);
+        self.time.apply(TimeAction::Reset);
+        self.drive.stop();
+        self.version += 1;
+    }
+
+    /// Is the robot driven by hand?
+    pub fn is_manual(&self) -> bool {
+        matches!(self.session.scenario().controller, ControllerKind::Manual)
+    }
+
+    /// Runs one phase.
+    pub fn step_phase(&mut self) {
+        self.apply_drive_command();
+        self.session.step_phase();
+        self.version += 1;
+    }
+
+    /// Finishes the tick, or runs a whole one.
+    pub fn step_tick(&mut self) {
+        self.apply_drive_command();
+        self.session.step_tick();
+        self.version += 1;
+    }
+
+    /// Can the run go back one phase quickly? Going back replays the run from the
+    /// start, so very long or very large runs are not offered it.
+    pub fn can_step_back(&self) -> bool {
+        let state = 3 + 2 * self.session.world().landmarks.len() as u64;
+        let cost = self
+            .session
+            .phases_run()
+            .saturating_mul(state.saturating_mul(state));
+        self.session.phases_run() > 0 && cost <= 2_000_000_000
+    }
+
+    /// Does what a time-bar button or shortcut asks.
+    pub fn apply_time_action(&mut self, action: TimeAction) {
+        match action {
+            TimeAction::ToggleRun => self.time.apply(action),
+            TimeAction::StepPhase => {
+                self.time.apply(action);
+                self.step_phase();
+            }
+            TimeAction::StepTick => {
+                self.time.apply(action);
+                self.step_tick();
+            }
+            TimeAction::StepBack => {
+                self.time.apply(action);
+                if self.can_step_back() && self.session.step_back() {
+                    self.version += 1;
+                }
+            }
+            TimeAction::Reset => self.reset(),
+        }
+    }
+
+    /// Runs the ticks the clock owes after `dt` seconds of real time, phase by phase,
+    /// within the frame budget (so that even 500 landmarks keep the page responsive).
+    pub fn advance(&mut self, dt: f64) {
+        let due = self.time.ticks_due(dt);
+        if due == TicksDue::Count(0) {
+            return;
+        }
+        self.apply_drive_command();
+        let start = web_time::Instant::now();
+        let mut done = 0_u64;
+        loop {
+            match due {
+                TicksDue::Count(n) if done >= n => break,
+                _ => {}
+            }
+            if start.elapsed().as_millis() >= FRAME_BUDGET_MS {
+                break;
+            }
+            self.session.step_phase();
+            if !self.session.is_mid_tick() {
+                done += 1;
+            }
+        }
+        self.version += 1;
+        self.time.ticks_done(done);
+    }
+
+    /// Gives the session the manual-driving command.
+    fn apply_drive_command(&mut self) {
+        self.session.set_teleop(self.drive.command());
+    }
+
+    /// The time bar's view of the clock.
+    pub fn time_info(&self) -> TimeInfo {
+        TimeInfo {
+            tick: self.session.tick(),
+            time_s: self.session.time(),
+            last_phase: self.session.last_phase().map(|p| p.label()),
+            next_phase: self.next_phase_label(),
+            can_step_back: self.can_step_back(),
+        }
+    }
+
+    /// The phase a "Step phase" runs next: the pending one, or the next tick's predict.
+    pub fn next_phase_label(&self) -> String {
+        match self.session.next_phase() {
+            Some(phase) => phase.label(),
+            None => "predict (new tick)".to_owned(),
+        }
+    }
+
+    /// Things the user should know: what the session had to change, and the errors
+    /// of the latest phase.
+    pub fn notices(&self) -> Vec<String> {
+        let mut notices: Vec<String> = self.session.notices().to_vec();
+        notices.extend(
+            self.session
+                .filters()
+                .iter()
+                .filter_map(|run| run.last_error.clone()),
+        );
+        notices
+    }
+
+    /// `key=value` pairs that reproduce the running setup: the seed and every
+    /// parameter that differs from its default.
+    pub fn share_pairs(&self) -> Vec<(String, String)> {
+        let defaults = params::to_pairs(&LandmarkScenario::default());
+        params::to_pairs(self.session.scenario())
+            .into_iter()
+            .filter(|(name, value)| {
+                *name == "seed" || !defaults.iter().any(|(n, v)| n == name && v == value)
+            })
+            .map(|(name, value)| (name.to_owned(), value))
+            .collect()
+    }
+
+    /// Pairs of the pending scenario that differ from the lesson's defaults, for saving.
+    pub fn pending_pairs(&self) -> Vec<(String, String)> {
+        let defaults = params::to_pairs(&default_scenario());
+        params::to_pairs(&self.pending)
+            .into_iter()
+            .filter(|(name, value)| !defaults.iter().any(|(n, v)| n == name && v == value))
+            .map(|(name, value)| (name.to_owned(), value))
+            .collect()
+    }
+
+    /// Does anything need another frame soon (running, a drive key held)?
+    pub fn wants_repaint(&self) -> bool {
+        self.time.running || self.drive.is_active()
+    }
+
+    /// Reads the drive keys (arrows, WASD) while driving by hand. Starting to drive
+    /// starts the clock.
+    pub fn read_drive_keys(&mut self, ctx: &egui::Context) {
+        if !self.is_manual() {
+            self.drive.keys = None;
+            return;
+        }
+        self.drive.keys = drive::keyboard_command(ctx);
+        let active = self.drive.is_active();
+        if active && !self.drive.was_active && !self.time.running {
+            self.time.apply(TimeAction::ToggleRun);
+        }
+        self.drive.was_active = active;
+    }
+
+    /// The lesson's panels: parameters (left), explanation (right), plots (bottom)
+    /// and the map (centre), plus the heatmap window.
+    pub fn panels_ui(&mut self, ui: &mut egui::Ui, panels: &mut PanelVisibility, compact: bool) {
+        let plot_height = if compact { 170.0 } else { 230.0 };
+        egui::Panel::bottom("landmark_plots")
+            .resizable(true)
+            .default_size(plot_height)
+            .min_size(120.0)
+            .show_collapsible(ui, &mut panels.plots, |ui| {
+                plots::plots_ui(ui, &self.session);
+            });
+        egui::Panel::left("landmark_parameters")
+            .resizable(true)
+            .default_size(300.0)
+            .min_size(220.0)
+            .show_collapsible(ui, &mut panels.parameters, |ui| {
+                egui::ScrollArea::vertical()
+                    .id_salt("parameters_scroll")
+                    .show(ui, |ui| self.parameters_ui(ui));
+            });
+        egui::Panel::right("landmark_explanation")
+            .resizable(true)
+            .default_size(330.0)
+            .min_size(220.0)
+            .show_collapsible(ui, &mut panels.explanation, |ui| {
+                egui::ScrollArea::vertical()
+                    .id_salt("explanation_scroll")
+                    .show(ui, |ui| explain::explanation_ui(ui, &self.session));
+            });
+        egui::CentralPanel::default().show(ui, |ui| {
+            map::map_ui(
+                ui,
+                &self.session,
+                &mut self.map_view,
+                &mut self.view,
+                &mut self.drive,
+            );
+        });
+        if self.view.heatmap {
+            let mut open = true;
+            egui::Window::new("Covariance as correlations")
+                .open(&mut open)
+                .default_size([460.0, 520.0])
+                .resizable(true)
+                .show(ui.ctx(), |ui| {
+                    heatmap::heatmap_ui(ui, &self.session, &mut self.heatmap, self.version);
+                });
+            self.view.heatmap = open;
+        }
+    }
+
+    fn parameters_ui(&mut self, ui: &mut egui::Ui) {
+        let manual_before = self.is_manual();
+        let mut manual = manual_before;
+        drive::drive_panel_ui(
+            ui,
+            &mut self.drive,
+            &mut manual,
+            self.session.scenario().wheel_base,
+        );
+        if manual != manual_before {
+            self.set_manual_driving(manual);
+        }
+        ui.separator();
+        if params_panel::parameters_ui(ui, self) {
+            self.reset();
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn share_pairs_hold_the_seed_and_the_changes() {
+        let mut scenario = LandmarkScenario::default();
+        let _ = params::set(&mut scenario, "seed", "7");
+        let _ = params::set(&mut scenario, "landmarks", "30");
+        let lesson = LandmarkSlamLesson::new(scenario);
+        assert_eq!(
+            lesson.share_pairs(),
+            vec![
+                ("seed".to_owned(), "7".to_owned()),
+                ("landmarks".to_owned(), "30".to_owned())
+            ]
+        );
+    }
+
+    #[test]
+    fn edits_wait_for_reset() {
+        let mut lesson = LandmarkSlamLesson::new(LandmarkScenario::default());
+        assert!(!lesson.params_changed());
+        assert!(lesson.set_param("landmarks", "5").is_none());
+        assert!(lesson.params_changed());
+        assert_eq!(lesson.session().world().landmarks.len(), 20);
+        assert!(lesson.set_param("landmarks", "9999").is_some());
+        assert!(lesson.param_issue("landmarks").is_some());
+        lesson.reset();
+        assert!(!lesson.params_changed());
+        assert_eq!(lesson.session().world().landmarks.len(), 500);
+    }
+
+    #[test]
+    fn advancing_runs_whole_ticks() {
+        let mut lesson = LandmarkSlamLesson::new(LandmarkScenario::default());
+        lesson.time.speed_tps = 10.0;
+        lesson.apply_time_action(TimeAction::ToggleRun);
+        lesson.advance(0.2);
+        assert_eq!(lesson.session().tick(), 2);
+        assert!(!lesson.session().is_mid_tick());
+    }
+}

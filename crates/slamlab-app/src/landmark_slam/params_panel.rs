@@ -1,0 +1,305 @@
+//! The parameter panel. Every widget edits the pending scenario through
+//! [`LandmarkSlamLesson::set_param`] with the parameter's URL name, so the panel, the
+//! URL and the command line share one vocabulary and one validation.
+
+use super::{LESSON_ID, LandmarkSlamLesson};
+use crate::{palette, query};
+use slamlab_sim::EstimatorKind;
+use slamlab_sim::params::{self, ParamKind};
+use slamlab_sim::scenario::ControllerKind;
+
+/// The parameter's current pending value as a number.
+fn pending_number(lesson: &LandmarkSlamLesson, name: &str) -> Option<f64> {
+    params::get(&lesson.pending, name).and_then(|v| v.parse::<f64>().ok())
+}
+
+/// Does the pending value differ from the running one?
+fn differs(lesson: &LandmarkSlamLesson, name: &str) -> bool {
+    params::get(&lesson.pending, name) != params::get(lesson.session.scenario(), name)
+}
+
+fn changed_marker_ui(ui: &mut egui::Ui, lesson: &LandmarkSlamLesson, name: &str) {
+    if differs(lesson, name) {
+        ui.label(egui::RichText::new("•").color(palette::ORANGE))
+            .on_hover_text("Changed: press \"Apply & reset\" to use it");
+    }
+}
+
+fn issue_ui(ui: &mut egui::Ui, lesson: &LandmarkSlamLesson, name: &str) {
+    if let Some(issue) = lesson.param_issue(name) {
+        ui.colored_label(palette::VERMILLION, issue);
+    }
+}
+
+/// A slider for a real-valued parameter over its allowed range.
+fn number_ui(ui: &mut egui::Ui, lesson: &mut LandmarkSlamLesson, name: &str, label: &str) {
+    let Some(spec) = params::spec(name) else {
+        return;
+    };
+    let ParamKind::Number { min, max } = spec.kind else {
+        return;
+    };
+    let Some(mut value) = pending_number(lesson, name) else {
+        return;
+    };
+    ui.horizontal(|ui| {
+        let logarithmic = min > 0.0 && max / min >= 100.0;
+        let suffix = if spec.unit.is_empty() {
+            String::new()
+        } else {
+            format!(" {}", spec.unit)
+        };
+        let response = ui
+            .add(
+                egui::Slider::new(&mut value, min..=max)
+                    .logarithmic(logarithmic)
+                    .suffix(suffix)
+                    .text(label),
+            )
+            .on_hover_text(format!("{} ({name})", spec.help));
+        if response.changed() {
+            let _issue = lesson.set_param(name, &format!("{value}"));
+        }
+        changed_marker_ui(ui, lesson, name);
+    });
+    issue_ui(ui, lesson, name);
+}
+
+/// One of a list of words, as radio buttons.
+fn choice_ui(
+    ui: &mut egui::Ui,
+    lesson: &mut LandmarkSlamLesson,
+    name: &str,
+    label: &str,
+    options: &[(&str, &str)],
+) {
+    let current = params::get(&lesson.pending, name).unwrap_or_default();
+    ui.horizontal_wrapped(|ui| {
+        ui.label(label);
+        for (value, text) in options {
+            if ui.radio(current == *value, *text).clicked() {
+                let _issue = lesson.set_param(name, value);
+            }
+        }
+        changed_marker_ui(ui, lesson, name);
+    });
+    issue_ui(ui, lesson, name);
+}
+
+fn seed_ui(ui: &mut egui::Ui, lesson: &mut LandmarkSlamLesson) {
+    let mut seed = lesson.pending.seed;
+    ui.horizontal(|ui| {
+        let label = ui.label("seed");
+        let response = ui
+            .add(egui::DragValue::new(&mut seed).speed(1.0))
+            .labelled_by(label.id)
+            .on_hover_text("The seed of every random stream: the same seed replays the same run");
+        if response.changed() {
+            let _issue = lesson.set_param("seed", &seed.to_string());
+        }
+        if ui
+            .button("Next seed")
+            .on_hover_text("Another world (random layout) and other noise")
+            .clicked()
+        {
+            let _issue = lesson.set_param("seed", &seed.wrapping_add(1).to_string());
+        }
+        changed_marker_ui(ui, lesson, "seed");
+    });
+    issue_ui(ui, lesson, "seed");
+}
+
+fn landmarks_ui(ui: &mut egui::Ui, lesson: &mut LandmarkSlamLesson) {
+    let (min, max) = match params::spec("landmarks").map(|s| s.kind) {
+        Some(ParamKind::Count { min, max }) => (min, max),
+        _ => (0, 500),
+    };
+    let mut count = lesson.pending.landmarks as u64;
+    ui.horizontal(|ui| {
+        let response = ui
+            .add(egui::Slider::new(&mut count, min..=max).text("landmarks"))
+            .on_hover_text("Number of landmarks (landmarks)");
+        if response.changed() {
+            let _issue = lesson.set_param("landmarks", &count.to_string());
+        }
+        changed_marker_ui(ui, lesson, "landmarks");
+    });
+    issue_ui(ui, lesson, "landmarks");
+}
+
+fn estimators_ui(ui: &mut egui::Ui, lesson: &mut LandmarkSlamLesson) {
+    ui.horizontal_wrapped(|ui| {
+        ui.label("estimators");
+        let mut chosen: Vec<EstimatorKind> = lesson.pending.estimators.clone();
+        let mut changed = false;
+        for kind in EstimatorKind::ALL {
+            let mut on = chosen.contains(&kind);
+            let text = egui::RichText::new(kind.name().to_uppercase())
+                .color(palette::estimator_color(kind.name()));
+            if ui.checkbox(&mut on, text).changed() {
+                changed = true;
+                if on {
+                    chosen.push(kind);
+                } else {
+                    chosen.retain(|k| *k != kind);
+                }
+            }
+        }
+        if changed {
+            if chosen.is_empty() {
+                lesson.pending_issues.insert(
+                    "estimator".to_owned(),
+                    "at least one estimator must run".to_owned(),
+                );
+            } else {
+                // Keep menu order, whatever the click order.
+                let list: Vec<&str> = EstimatorKind::ALL
+                    .iter()
+                    .filter(|k| chosen.contains(k))
+                    .map(|k| k.name())
+                    .collect();
+                let _issue = lesson.set_param("estimator", &list.join(","));
+            }
+        }
+        changed_marker_ui(ui, lesson, "estimator");
+    });
+    issue_ui(ui, lesson, "estimator");
+}
+
+fn group_ui(ui: &mut egui::Ui, title: &str, add: impl FnOnce(&mut egui::Ui)) {
+    egui::CollapsingHeader::new(egui::RichText::new(title).strong())
+        .default_open(true)
+        .show(ui, add);
+}
+
+/// The parameter panel. Returns true when "Apply & reset" was pressed.
+pub fn parameters_ui(ui: &mut egui::Ui, lesson: &mut LandmarkSlamLesson) -> bool {
+    let mut apply = false;
+    ui.heading("Parameters");
+    ui.label("Changes apply when the run is reset.");
+    ui.horizontal(|ui| {
+        if ui
+            .button("Apply & reset")
+            .on_hover_text("Start over with these parameters (r)")
+            .clicked()
+        {
+            apply = true;
+        }
+        if ui
+            .button("Defaults")
+            .on_hover_text("Put every parameter back to its default (apply to use them)")
+            .clicked()
+        {
+            let controller = lesson.pending.controller;
+            lesson.pending = slamlab_sim::LandmarkScenario {
+                controller,
+                ..super::default_scenario()
+            };
+            lesson.pending_issues.clear();
+        }
+    });
+    if lesson.params_changed() {
+        ui.colored_label(palette::ORANGE, "• changed: reset to apply");
+    }
+    ui.add_space(4.0);
+
+    group_ui(ui, "Noise (the filters assume the same)", |ui| {
+        number_ui(ui, lesson, "v-std", "forward speed σ_v");
+        number_ui(ui, lesson, "w-std-deg", "turn rate σ_w");
+        number_ui(ui, lesson, "range-std", "range σ_r");
+        number_ui(ui, lesson, "bearing-std-deg", "bearing σ_b");
+    });
+    group_ui(ui, "Sensor", |ui| {
+        number_ui(ui, lesson, "fov-deg", "field of view");
+        number_ui(ui, lesson, "max-range", "maximum range");
+    });
+    group_ui(ui, "World", |ui| {
+        landmarks_ui(ui, lesson);
+        choice_ui(
+            ui,
+            lesson,
+            "layout",
+            "layout",
+            &[("teaching", "teaching rings"), ("random", "random")],
+        );
+        number_ui(ui, lesson, "world-size", "world side");
+    });
+    group_ui(ui, "Motion", |ui| {
+        choice_ui(
+            ui,
+            lesson,
+            "motion",
+            "filter model",
+            &[
+                ("exact-arc", "exact arc (Eq. 2.70)"),
+                ("euler", "Euler (slides)"),
+            ],
+        );
+        number_ui(ui, lesson, "dt", "time step Δt");
+        ui.label(
+            egui::RichText::new(
+                "The thesis gives no Δt; 0.1 s makes its 200 iterations one lap of the circle.",
+            )
+            .small(),
+        );
+        number_ui(ui, lesson, "wheel-base", "wheel base D");
+        if matches!(lesson.pending.controller, ControllerKind::Circle { .. }) {
+            number_ui(ui, lesson, "v", "circle speed v");
+            number_ui(ui, lesson, "w-deg", "circle turn rate w");
+        }
+    });
+    group_ui(ui, "Run", |ui| {
+        seed_ui(ui, lesson);
+        estimators_ui(ui, lesson);
+    });
+    if ["ukf-alpha", "ukf-beta", "ukf-kappa"]
+        .iter()
+        .any(|name| params::spec(name).is_some())
+    {
+        group_ui(ui, "UKF sigma points", |ui| {
+            number_ui(ui, lesson, "ukf-alpha", "spread α");
+            number_ui(ui, lesson, "ukf-beta", "prior β");
+            number_ui(ui, lesson, "ukf-kappa", "κ");
+        });
+    }
+    ui.add_space(6.0);
+    share_ui(ui, lesson);
+    apply
+}
+
+/// The link that reproduces the running setup, for instructors to share or embed.
+fn share_ui(ui: &mut egui::Ui, lesson: &LandmarkSlamLesson) {
+    let id = egui::Id::unique("slamlab_share_embed");
+    let mut embed: bool = ui.data(|d| d.get_temp(id)).unwrap_or(false);
+    ui.label(egui::RichText::new("Share this setup").strong())
+        .on_hover_text("The query string that reproduces the running setup: the lesson, the seed and every parameter that is not at its default");
+    let link = format!("?{}", query::build(LESSON_ID, &lesson.share_pairs(), embed));
+    ui.horizontal(|ui| {
+        if ui
+            .button("Copy link")
+            .on_hover_text("Copy the query string")
+            .clicked()
+        {
+            ui.ctx().copy_text(link.clone());
+        }
+        ui.checkbox(&mut embed, "for embedding (embed=1)");
+    });
+    let mut shown: &str = &link;
+    ui.add(
+        egui::TextEdit::multiline(&mut shown)
+            .desired_rows(2)
+            .desired_width(f32::INFINITY)
+            .code_editor()
+            .interactive(true)
+            .hint_text("share link"),
+    );
+    if lesson.params_changed() {
+        ui.label(
+            egui::RichText::new(
+                "The link describes the running setup; reset to include your changes.",
+            )
+            .small(),
+        );
+    }
+    ui.data_mut(|d| d.insert_temp(id, embed));
+}

@@ -1,0 +1,232 @@
+//! The plots under the map: robot position error with the filter's 2σ bound,
+//! landmark RMS error, robot-pose NEES and per-update NIS with their 95% bands.
+
+use crate::palette;
+use egui_plot::{HLine, Legend, Line, LineStyle, Plot, PlotPoints, Points, Span};
+use slamlab_core::stats::chi2_quantile;
+use slamlab_sim::LandmarkSession;
+
+/// Longest series drawn, in points; longer ones are thinned evenly.
+const MAX_POINTS: usize = 3000;
+
+/// Thins `points` evenly to at most [`MAX_POINTS`], keeping the last one.
+fn thin(points: Vec<[f64; 2]>) -> Vec<[f64; 2]> {
+    let points: Vec<[f64; 2]> = points
+        .into_iter()
+        .filter(|p| p[0].is_finite() && p[1].is_finite())
+        .collect();
+    let stride = points.len() / MAX_POINTS + 1;
+    if stride == 1 {
+        return points;
+    }
+    let last = points.len().saturating_sub(1);
+    points
+        .into_iter()
+        .enumerate()
+        .filter(|(i, _)| i % stride == 0 || *i == last)
+        .map(|(_, p)| p)
+        .collect()
+}
+
+/// The 95% two-sided chi-square band of one sample with `dof` degrees of freedom.
+pub fn band_95(dof: f64) -> (f64, f64) {
+    (chi2_quantile(0.025, dof), chi2_quantile(0.975, dof))
+}
+
+/// A y range that shows the band and most samples; extreme spikes are cut off.
+fn consistency_y_max(values: impl Iterator<Item = f64>, band_hi: f64) -> f64 {
+    let max = values.filter(|v| v.is_finite()).fold(0.0_f64, f64::max);
+    (band_hi * 1.6).max((max * 1.1).min(band_hi * 20.0))
+}
+
+/// The 95% band: a shaded span (no label of its own) and its two edges, which carry
+/// the legend entry.
+fn band_ui(plot_ui: &mut egui_plot::PlotUi<'_>, lo: f64, hi: f64) {
+    plot_ui.add(
+        Span::new("", lo..=hi)
+            .axis(egui_plot::Axis::Y)
+            .fill(palette::faded(palette::GREEN, 0.16)),
+    );
+    let name = format!("95% band {lo:.2}..{hi:.2}");
+    for edge in [lo, hi] {
+        plot_ui.hline(
+            HLine::new(name.clone(), edge)
+                .color(palette::GREEN)
+                .style(LineStyle::dashed_dense())
+                .width(1.0),
+        );
+    }
+}
+
+fn title_ui(ui: &mut egui::Ui, title: &str, hover: &str) {
+    ui.label(egui::RichText::new(title).strong())
+        .on_hover_text(hover);
+}
+
+fn plot<'a>(id: &str, x_label: &str, y_label: &str, height: f32) -> Plot<'a> {
+    Plot::new(id)
+        .height(height)
+        .x_axis_label(x_label.to_owned())
+        .y_axis_label(y_label.to_owned())
+        .legend(
+            Legend::default()
+                .position(egui_plot::Corner::LeftTop)
+                .text_style(egui::TextStyle::Small)
+                .background_alpha(0.55),
+        )
+        .link_axis(egui::Id::unique("slamlab_time_axis"), [true, false])
+        .include_x(0.0)
+        .include_y(0.0)
+        .allow_scroll(false)
+}
+
+/// The four plots side by side.
+pub fn plots_ui(ui: &mut egui::Ui, session: &LandmarkSession) {
+    let height = (ui.available_height() - 26.0).max(80.0);
+    let dt = session.scenario().dt;
+    ui.columns(4, |columns| {
+        // 1. Robot position error and the 2σ bound.
+        let ui = &mut columns[0];
+        title_ui(
+            ui,
+            "Robot position error",
+            "|true − estimated position| and the filter's own 2σ bound 2√(σx² + σy²)",
+        );
+        plot("plot_robot_error", "time (s)", "error (m)", height).show(ui, |plot_ui| {
+            for run in session.filters() {
+                let color = palette::estimator_color(run.kind.name());
+                let name = run.kind.name().to_uppercase();
+                let error = thin(run.history.iter().map(|m| [m.time, m.position_error]).collect());
+                let bound = thin(
+                    run.history
+                        .iter()
+                        .map(|m| [m.time, m.position_bound_2sigma])
+                        .collect(),
+                );
+                plot_ui.line(Line::new(format!("{name} error"), PlotPoints::new(error)).color(color).width(1.6));
+                plot_ui.line(
+                    Line::new(format!("{name} 2σ bound"), PlotPoints::new(bound))
+                        .color(color)
+                        .style(LineStyle::dashed_dense())
+                        .width(1.2),
+                );
+            }
+        });
+
+        // 2. Landmark RMS error.
+        let ui = &mut columns[1];
+        title_ui(
+            ui,
+            "Mean landmark error",
+            "Root mean square position error over the landmarks in each filter's state",
+        );
+        plot("plot_landmark_rmse", "time (s)", "RMS error (m)", height).show(ui, |plot_ui| {
+            for run in session.filters() {
+                let color = palette::estimator_color(run.kind.name());
+                let points = thin(
+                    run.history
+                        .iter()
+                        .filter_map(|m| m.landmark_rmse.map(|r| [m.time, r]))
+                        .collect(),
+                );
+                plot_ui.line(
+                    Line::new(format!("{} landmarks", run.kind.name().to_uppercase()), PlotPoints::new(points))
+                        .color(color)
+                        .width(1.6),
+                );
+            }
+        });
+
+        // 3. Robot-pose NEES with the 3-dof band.
+        let ui = &mut columns[2];
+        let (lo, hi) = band_95(3.0);
+        title_ui(
+            ui,
+            "Robot pose NEES (3 dof)",
+            "e^T P_RR^-1 e of the robot pose each tick. Above the band: overconfident; below: conservative.",
+        );
+        let y_max = consistency_y_max(
+            session
+                .filters()
+                .iter()
+                .flat_map(|run| run.history.iter().filter_map(|m| m.nees)),
+            hi,
+        );
+        plot("plot_nees", "time (s)", "NEES", height)
+            .default_y_bounds(0.0, y_max)
+            .show(ui, |plot_ui| {
+                band_ui(plot_ui, lo, hi);
+                for run in session.filters() {
+                    let color = palette::estimator_color(run.kind.name());
+                    let points = thin(
+                        run.history
+                            .iter()
+                            .filter_map(|m| m.nees.map(|n| [m.time, n]))
+                            .collect(),
+                    );
+                    plot_ui.line(
+                        Line::new(format!("{} NEES", run.kind.name().to_uppercase()), PlotPoints::new(points))
+                            .color(color)
+                            .width(1.4),
+                    );
+                }
+            });
+
+        // 4. NIS of every update with the 2-dof band.
+        let ui = &mut columns[3];
+        let (lo, hi) = band_95(2.0);
+        title_ui(
+            ui,
+            "Update NIS (2 dof)",
+            "ν^T S^-1 ν of every landmark update. Above the band: the innovations are larger than the filter expects.",
+        );
+        let y_max = consistency_y_max(
+            session
+                .filters()
+                .iter()
+                .flat_map(|run| run.nis.iter().map(|s| s.nis)),
+            hi,
+        );
+        plot("plot_nis", "time (s)", "NIS", height)
+            .default_y_bounds(0.0, y_max)
+            .show(ui, |plot_ui| {
+                band_ui(plot_ui, lo, hi);
+                for run in session.filters() {
+                    let color = palette::estimator_color(run.kind.name());
+                    let points = thin(
+                        run.nis
+                            .iter()
+                            .map(|s| [s.tick as f64 * dt, s.nis])
+                            .collect(),
+                    );
+                    plot_ui.points(
+                        Points::new(format!("{} NIS", run.kind.name().to_uppercase()), PlotPoints::new(points))
+                            .color(color)
+                            .radius(1.8),
+                    );
+                }
+            });
+    });
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn thinning_keeps_the_ends_and_bounds_the_count() {
+        let points: Vec<[f64; 2]> = (0..10_000).map(|i| [i as f64, 0.0]).collect();
+        let thinned = thin(points);
+        assert!(thinned.len() <= MAX_POINTS + 1);
+        assert_eq!(thinned.first().map(|p| p[0]), Some(0.0));
+        assert_eq!(thinned.last().map(|p| p[0]), Some(9999.0));
+    }
+
+    #[test]
+    fn bands_and_y_range() {
+        let (lo, hi) = band_95(3.0);
+        assert!((lo - 0.2158).abs() < 1e-3 && (hi - 9.348).abs() < 1e-3);
+        assert!((consistency_y_max(std::iter::empty(), 9.0) - 14.4).abs() < 1e-9);
+        assert!((consistency_y_max([1e9, f64::NAN].into_iter(), 9.0) - 180.0).abs() < 1e-9);
+    }
+}

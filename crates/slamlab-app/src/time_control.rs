@@ -1,0 +1,271 @@
+//! Time control, the same in every lesson: run/pause, speed, step one phase, step
+//! one tick, reset; keyboard Space, `.`, `n`, `r`.
+
+use serde::{Deserialize, Serialize};
+
+/// Slowest and fastest selectable speed, ticks per second.
+pub const SPEED_RANGE: std::ops::RangeInclusive<f64> = 1.0..=200.0;
+
+/// How long one frame may spend simulating, milliseconds. Past this the simulation
+/// falls behind real time instead of freezing the page.
+pub const FRAME_BUDGET_MS: u128 = 25;
+
+/// What the user asked the clock to do this frame.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum TimeAction {
+    /// Run or pause.
+    ToggleRun,
+    /// Run one phase (predict, one landmark update, ...).
+    StepPhase,
+    /// Finish the current tick, or run a whole new one.
+    StepTick,
+    /// Go back one phase (the lesson replays the run up to the phase before).
+    StepBack,
+    /// Start over with the current parameters.
+    Reset,
+}
+
+/// The running state and speed of a lesson's clock.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(default)]
+pub struct TimeControl {
+    /// Is the simulation running?
+    #[serde(skip)]
+    pub running: bool,
+    /// Speed while running, ticks per second.
+    pub speed_tps: f64,
+    /// Run as fast as the frame budget allows.
+    pub max_speed: bool,
+    /// Fractional ticks owed by the clock.
+    #[serde(skip)]
+    accumulator: f64,
+}
+
+impl Default for TimeControl {
+    fn default() -> Self {
+        Self {
+            running: false,
+            speed_tps: 10.0,
+            max_speed: false,
+            accumulator: 0.0,
+        }
+    }
+}
+
+/// How many ticks a frame should run.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum TicksDue {
+    /// This many whole ticks.
+    Count(u64),
+    /// As many as fit in the frame budget.
+    AsManyAsPossible,
+}
+
+impl TimeControl {
+    /// Advances the clock by `dt` seconds of real time and says how many ticks are due.
+    /// Nothing is due while paused. `dt` is clamped to 0.25 s so that a stalled frame
+    /// does not cause a burst.
+    pub fn ticks_due(&mut self, dt: f64) -> TicksDue {
+        if !self.running {
+            self.accumulator = 0.0;
+            return TicksDue::Count(0);
+        }
+        if self.max_speed {
+            return TicksDue::AsManyAsPossible;
+        }
+        let dt = if dt.is_finite() {
+            dt.clamp(0.0, 0.25)
+        } else {
+            0.0
+        };
+        let speed = if self.speed_tps.is_finite() {
+            self.speed_tps
+                .clamp(*SPEED_RANGE.start(), *SPEED_RANGE.end())
+        } else {
+            10.0
+        };
+        self.accumulator += dt * speed;
+        let whole = self.accumulator.floor().max(0.0);
+        TicksDue::Count(whole as u64)
+    }
+
+    /// Records that `done` ticks ran this frame. A backlog (the simulation was slower
+    /// than asked) is dropped, so the clock never tries to catch up in a burst.
+    pub fn ticks_done(&mut self, done: u64) {
+        self.accumulator = (self.accumulator - done as f64).clamp(0.0, 1.0);
+    }
+
+    /// Applies one action's effect on the clock itself (the lesson does the stepping).
+    /// Stepping pauses, so the student sees exactly the one step.
+    pub fn apply(&mut self, action: TimeAction) {
+        match action {
+            TimeAction::ToggleRun => self.running = !self.running,
+            TimeAction::StepPhase
+            | TimeAction::StepTick
+            | TimeAction::StepBack
+            | TimeAction::Reset => {
+                self.running = false;
+            }
+        }
+        self.accumulator = 0.0;
+    }
+}
+
+/// What the time bar shows about the lesson's clock.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct TimeInfo {
+    /// Ticks started so far.
+    pub tick: u64,
+    /// Simulated time, seconds.
+    pub time_s: f64,
+    /// The phase that ran last ("predict", "update landmark 7 (2 of 5)").
+    pub last_phase: Option<String>,
+    /// The phase a "Step phase" runs next.
+    pub next_phase: String,
+    /// Can the lesson go back one phase now (and cheaply enough)?
+    pub can_step_back: bool,
+}
+
+/// Reads the keyboard shortcuts (Space, `.`, `,`, `n`, `r`) unless a text field has the
+/// keyboard focus. The keys are consumed so that a focused button does not also react.
+pub fn shortcut_actions(ctx: &egui::Context) -> Vec<TimeAction> {
+    if ctx.text_edit_focused() {
+        return Vec::new();
+    }
+    let keys = [
+        (egui::Key::Space, TimeAction::ToggleRun),
+        (egui::Key::Period, TimeAction::StepPhase),
+        (egui::Key::Comma, TimeAction::StepBack),
+        (egui::Key::N, TimeAction::StepTick),
+        (egui::Key::R, TimeAction::Reset),
+    ];
+    let mut actions = Vec::new();
+    ctx.input_mut(|input| {
+        for (key, action) in keys {
+            // Space toggles once per press; the step keys repeat while held.
+            let repeats_count = key != egui::Key::Space;
+            let presses = input
+                .events
+                .iter()
+                .filter(|event| {
+                    matches!(event, egui::Event::Key { key: k, pressed: true, repeat, modifiers, .. }
+                        if *k == key && (repeats_count || !*repeat) && modifiers.is_none())
+                })
+                .count();
+            // Consume even the repeats, so that a focused button does not react too.
+            let _consumed = input.consume_key(egui::Modifiers::NONE, key);
+            actions.extend(std::iter::repeat_n(action, presses));
+        }
+    });
+    actions
+}
+
+/// The time bar: Run/Pause, Step phase (naming the next phase), Step tick, Reset,
+/// speed, tick and simulated time. Returns what was clicked.
+pub fn time_bar_ui(
+    ui: &mut egui::Ui,
+    time: &mut TimeControl,
+    info: &TimeInfo,
+    compact: bool,
+) -> Vec<TimeAction> {
+    let mut actions = Vec::new();
+    ui.horizontal_wrapped(|ui| {
+        let run_label = if time.running { "Pause" } else { "Run" };
+        if ui
+            .add(egui::Button::new(run_label).min_size(egui::vec2(56.0, 0.0)))
+            .on_hover_text("Run or pause the simulation (Space)")
+            .clicked()
+        {
+            actions.push(TimeAction::ToggleRun);
+        }
+        if ui
+            .add_enabled(info.can_step_back, egui::Button::new("Step back"))
+            .on_hover_text("Go back one phase (,)")
+            .on_disabled_hover_text(
+                "Nothing to go back to, or the run is too long to replay quickly",
+            )
+            .clicked()
+        {
+            actions.push(TimeAction::StepBack);
+        }
+        if ui
+            .button("Step phase")
+            .on_hover_text(
+                "Run one phase of the filters: the prediction, or one landmark update (.)",
+            )
+            .clicked()
+        {
+            actions.push(TimeAction::StepPhase);
+        }
+        ui.label(egui::RichText::new(format!("Next phase: {}", info.next_phase)).strong())
+            .on_hover_text("What \"Step phase\" runs next");
+        if ui
+            .button("Step tick")
+            .on_hover_text(
+                "Finish the current tick, or run one whole tick: predict, then every update (n)",
+            )
+            .clicked()
+        {
+            actions.push(TimeAction::StepTick);
+        }
+        if ui
+            .button("Reset")
+            .on_hover_text("Start over with the parameters in the panel (r)")
+            .clicked()
+        {
+            actions.push(TimeAction::Reset);
+        }
+        ui.separator();
+        ui.add_enabled(
+            !time.max_speed,
+            egui::Slider::new(&mut time.speed_tps, SPEED_RANGE)
+                .logarithmic(true)
+                .integer()
+                .suffix(" ticks/s")
+                .text("Speed"),
+        )
+        .on_hover_text("Simulation speed while running, ticks per second");
+        ui.checkbox(&mut time.max_speed, "max")
+            .on_hover_text("Run as fast as this computer can");
+        ui.separator();
+        ui.label(format!("tick {}   t = {:.1} s", info.tick, info.time_s))
+            .on_hover_text("Ticks run so far and the simulated time");
+        if !compact {
+            let last = info.last_phase.as_deref().unwrap_or("none yet");
+            ui.label(format!("Last phase: {last}"))
+                .on_hover_text("The phase shown on the map and in the explanation");
+        }
+    });
+    actions
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn clock_owes_ticks_at_the_set_speed_and_drops_backlogs() {
+        let mut t = TimeControl {
+            speed_tps: 20.0,
+            ..Default::default()
+        };
+        assert_eq!(t.ticks_due(0.1), TicksDue::Count(0), "paused");
+        t.apply(TimeAction::ToggleRun);
+        assert_eq!(t.ticks_due(0.1), TicksDue::Count(2));
+        t.ticks_done(2);
+        assert_eq!(t.ticks_due(0.05), TicksDue::Count(1));
+        t.ticks_done(0);
+        assert_eq!(t.ticks_due(0.0), TicksDue::Count(1), "one tick still owed");
+        t.ticks_done(0);
+        assert_eq!(t.ticks_due(f64::NAN), TicksDue::Count(1));
+        assert_eq!(
+            t.ticks_due(100.0),
+            TicksDue::Count(6),
+            "dt is clamped to 0.25 s"
+        );
+        t.max_speed = true;
+        assert_eq!(t.ticks_due(0.01), TicksDue::AsManyAsPossible);
+        t.apply(TimeAction::StepPhase);
+        assert!(!t.running, "stepping pauses");
+    }
+}
