@@ -224,7 +224,7 @@ pub fn drive_panel_ui(
 /// The on-screen drive pad, bottom right of `rect`: press and hold (mouse or touch).
 /// Sets `drive.pad` to the button held now.
 pub fn drive_pad_ui(ui: &mut egui::Ui, rect: egui::Rect, drive: &mut DriveState) {
-    let size = egui::vec2(58.0, 34.0);
+    let size = egui::vec2(70.0, 34.0);
     let gap = 4.0;
     let origin = rect.right_bottom()
         - egui::vec2(

@@ -142,9 +142,9 @@ fn filter_ui(ui: &mut egui::Ui, run: &FilterRun, phase: Option<Phase>) {
                             };
                             row(
                                 ui,
-                                "robot uncertainty volume √det P_RR",
+                                "√det P_RR (robot)",
                                 format!(
-                                    "{:.3e} to {:.3e} ({growth})",
+                                    "{:.2e} to {:.2e} ({growth})",
                                     predict.robot_det_before.max(0.0).sqrt(),
                                     predict.robot_det_after.max(0.0).sqrt()
                                 ),
@@ -193,17 +193,13 @@ fn filter_ui(ui: &mut egui::Ui, run: &FilterRun, phase: Option<Phase>) {
                             );
                             let (lo, hi) = (chi2_quantile(0.025, 2.0), chi2_quantile(0.975, 2.0));
                             let verdict = if *nis > hi {
-                                "above the band"
+                                format!("above {hi:.2}")
                             } else if *nis < lo {
-                                "below the band"
+                                format!("below {lo:.2}")
                             } else {
-                                "inside the band"
+                                format!("in {lo:.2}..{hi:.2}")
                             };
-                            row(
-                                ui,
-                                "NIS ν^T S^-1 ν (2 dof)",
-                                format!("{nis:.2} ({verdict} {lo:.2}..{hi:.2})"),
-                            );
+                            row(ui, "NIS ν^T S^-1 ν (2 dof)", format!("{nis:.2}, {verdict}"));
                             row(ui, "gain |K|, robot rows", format!("{robot_gain_norm:.3}"));
                             row(ui, "gain |K|, whole state", format!("{gain_norm:.3}"));
                         }
@@ -213,10 +209,12 @@ fn filter_ui(ui: &mut egui::Ui, run: &FilterRun, phase: Option<Phase>) {
                         row(
                             ui,
                             "robot position error",
-                            format!(
-                                "{:.3} m (2σ bound {:.3} m)",
-                                m.position_error, m.position_bound_2sigma
-                            ),
+                            format!("{:.3} m", m.position_error),
+                        );
+                        row(
+                            ui,
+                            "its 2σ bound",
+                            format!("{:.3} m", m.position_bound_2sigma),
                         );
                         if let Some(nees) = m.nees {
                             row(ui, "robot NEES (3 dof)", format!("{nees:.2}"));

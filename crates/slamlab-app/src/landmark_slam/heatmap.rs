@@ -182,53 +182,86 @@ pub fn heatmap_ui(
             );
         }
     }
-    // Labels: every entry when there is room, else the blocks.
+    // Labels: every entry when there is room, else one per landmark, else the blocks.
     let font = egui::FontId::proportional(10.0);
-    if cell >= 14.0 {
+    let row_label = |i: usize, text: &str| {
+        let y = rect.min.y + (i as f32 + 0.5) * cell;
+        painter.text(
+            pos2(rect.min.x - 3.0, y),
+            egui::Align2::RIGHT_CENTER,
+            text,
+            font.clone(),
+            text_color,
+        );
+    };
+    let column_label = |i: usize, text: &str| {
+        let x = rect.min.x + (i as f32 + 0.5) * cell;
+        painter.text(
+            pos2(x, rect.min.y - 3.0),
+            egui::Align2::CENTER_BOTTOM,
+            text,
+            font.clone(),
+            text_color,
+        );
+    };
+    if cell >= 12.0 {
         for i in 0..n {
-            let name = state_name(i, ids);
-            let center = rect.min.y + (i as f32 + 0.5) * cell;
+            row_label(i, &state_name(i, ids));
+        }
+    } else if 2.0 * cell >= 12.0 {
+        for (k, id) in ids.iter().enumerate() {
+            let y = rect.min.y + (3.0 + 2.0 * k as f32 + 1.0) * cell;
             painter.text(
-                pos2(rect.min.x - 3.0, center),
+                pos2(rect.min.x - 3.0, y),
                 egui::Align2::RIGHT_CENTER,
-                &name,
-                font.clone(),
-                text_color,
-            );
-            let x = rect.min.x + (i as f32 + 0.5) * cell;
-            painter.text(
-                pos2(x, rect.min.y - 3.0),
-                egui::Align2::CENTER_BOTTOM,
-                &name,
+                format!("L{id}"),
                 font.clone(),
                 text_color,
             );
         }
-    } else {
-        painter.text(
-            pos2(rect.min.x - 3.0, rect.min.y + 1.5 * cell),
-            egui::Align2::RIGHT_CENTER,
-            "robot",
-            font.clone(),
-            text_color,
-        );
-        painter.text(
-            pos2(rect.min.x + 1.5 * cell, rect.min.y - 3.0),
-            egui::Align2::CENTER_BOTTOM,
-            "robot",
-            font.clone(),
-            text_color,
-        );
+    }
+    if cell >= 30.0 {
+        for i in 0..n {
+            column_label(i, &state_name(i, ids));
+        }
+    } else if cell >= 10.0 {
+        for (i, name) in ["x", "y", "θ"].iter().enumerate() {
+            column_label(i, name);
+        }
+        for (k, id) in ids.iter().enumerate() {
+            let x = rect.min.x + (3.0 + 2.0 * k as f32 + 1.0) * cell;
+            painter.text(
+                pos2(x, rect.min.y - 3.0),
+                egui::Align2::CENTER_BOTTOM,
+                format!("L{id}"),
+                font.clone(),
+                text_color,
+            );
+        }
+    }
+    if cell < 12.0 && 2.0 * cell < 12.0 {
+        row_label(1, "robot");
         if n > 3 {
             painter.text(
-                pos2(rect.min.x - 3.0, rect.center().y),
+                pos2(
+                    rect.min.x - 3.0,
+                    rect.min.y + (3.0 + (n as f32 - 3.0) / 2.0) * cell,
+                ),
                 egui::Align2::RIGHT_CENTER,
                 "land-\nmarks",
                 font.clone(),
                 text_color,
             );
+        }
+    }
+    if cell < 10.0 {
+        column_label(1, "robot");
+        if n > 3 {
             painter.text(
-                pos2(rect.center().x, rect.min.y - 3.0),
+                pos2(
+                    rect.min.x + (3.0 + (n as f32 - 3.0) / 2.0) * cell,
+                    rect.min.y - 3.0,
+                ),
                 egui::Align2::CENTER_BOTTOM,
                 "landmarks",
                 font.clone(),

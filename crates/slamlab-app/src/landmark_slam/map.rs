@@ -29,6 +29,13 @@ pub struct MapView {
     center: [f64; 2],
     scale: f32,
     fitted: bool,
+    /// Width kept free for the legend at the map's left edge when fitting, points.
+    legend_space: f32,
+    /// The map's size at the last fit; the fit follows size changes until the user
+    /// pans or zooms.
+    fitted_size: egui::Vec2,
+    /// Has the user panned or zoomed since the last fit?
+    adjusted: bool,
 }
 
 impl Default for MapView {
@@ -37,6 +44,9 @@ impl Default for MapView {
             center: [0.0, 0.0],
             scale: 30.0,
             fitted: false,
+            legend_space: 300.0,
+            fitted_size: egui::Vec2::ZERO,
+            adjusted: false,
         }
     }
 }
@@ -47,18 +57,38 @@ impl MapView {
         self.fitted = false;
     }
 
-    fn fit(&mut self, rect: Rect, world_size: f64) {
-        let side = (world_size.max(1.0) * 1.08) as f32;
-        let scale = (rect.width().min(rect.height()) / side).max(SCALE_RANGE.0);
-        self.center = [0.0, 0.0];
-        self.scale = scale.clamp(SCALE_RANGE.0, SCALE_RANGE.1);
+    /// Fits the world square into `rect`, beside the legend when there is room:
+    /// smaller (down to 75%) and shifted right rather than under the legend.
+    fn fit(&mut self, rect: Rect, world_size: f64, legend_space: f32) {
+        let side = if world_size.is_finite() {
+            (world_size.max(1.0) * 1.08) as f32
+        } else {
+            16.0
+        };
+        let full = rect.width().min(rect.height()) / side;
+        let beside = (rect.width() - legend_space).min(rect.height()) / side;
+        let scale = if legend_space > 0.0 {
+            beside.max(0.75 * full).min(full)
+        } else {
+            full
+        };
+        let scale = scale.clamp(SCALE_RANGE.0, SCALE_RANGE.1);
+        let half_px = 0.5 * side * scale;
+        let slack = (0.5 * rect.width() - half_px).max(0.0);
+        let wanted = legend_space - (0.5 * rect.width() - half_px);
+        let shift = wanted.clamp(0.0, slack);
+        self.center = [-f64::from(shift / scale), 0.0];
+        self.scale = scale;
         self.fitted = true;
+        self.fitted_size = rect.size();
+        self.adjusted = false;
     }
 
     fn zoom_about(&mut self, rect: Rect, factor: f32, anchor: Pos2) {
         if !(factor.is_finite() && factor > 0.0) {
             return;
         }
+        self.adjusted = true;
         let before = self.transform(rect);
         let world = before.world_of(anchor);
         self.scale = (self.scale * factor).clamp(SCALE_RANGE.0, SCALE_RANGE.1);
@@ -165,8 +195,10 @@ pub fn map_ui(
     let size = ui.available_size().max(vec2(120.0, 120.0));
     let (rect, response) = ui.allocate_exact_size(size, Sense::click_and_drag());
     response.widget_info(|| egui::WidgetInfo::labeled(egui::Role::Canvas, true, "Map"));
-    if !view.fitted {
-        view.fit(rect, session.world().size);
+    let resized = (rect.size() - view.fitted_size).length() > 1.0;
+    if !view.fitted || (resized && !view.adjusted) {
+        let legend_space = if opts.legend { view.legend_space } else { 0.0 };
+        view.fit(rect, session.world().size, legend_space);
     }
     apply_zoom_request(ui, view, rect);
 
@@ -175,6 +207,7 @@ pub fn map_ui(
         let d = response.drag_delta();
         view.center[0] -= f64::from(d.x / view.scale);
         view.center[1] += f64::from(d.y / view.scale);
+        view.adjusted = true;
         opts.follow_robot = false;
     }
     if response.hovered() {
@@ -208,7 +241,8 @@ pub fn map_ui(
     );
     draw_scale_and_axes(&painter, &t, &colors);
     if opts.legend {
-        draw_legend(&painter, rect, session, &colors, opts, sigma_points_shown);
+        let legend = draw_legend(&painter, rect, session, &colors, opts, sigma_points_shown);
+        view.legend_space = legend.right() - rect.left() + 8.0;
     }
     if let Some(pointer) = response.hover_pos()
         && !response.dragged()
@@ -886,7 +920,7 @@ fn draw_legend(
     colors: &Colors,
     opts: &ViewOptions,
     sigma_points_shown: bool,
-) {
+) -> Rect {
     let mut entries: Vec<(Symbol, Color32, String)> = vec![
         (
             Symbol::TruthRobot,
@@ -995,6 +1029,7 @@ fn draw_legend(
             },
         );
     }
+    rect
 }
 
 fn format_xy(v: &Vector2<f64>) -> String {
@@ -1118,7 +1153,7 @@ mod tests {
     fn transform_round_trips_and_zoom_keeps_the_anchor() {
         let rect = Rect::from_min_size(pos2(10.0, 20.0), vec2(400.0, 300.0));
         let mut view = MapView::default();
-        view.fit(rect, 16.0);
+        view.fit(rect, 16.0, 0.0);
         let t = view.transform(rect);
         let p = t.xy(3.0, -2.0);
         let w = t.world_of(p);

@@ -377,6 +377,7 @@ impl LandmarkSlamLesson {
             .resizable(true)
             .default_size(300.0)
             .min_size(220.0)
+            .max_size(480.0)
             .show_collapsible(ui, &mut panels.parameters, |ui| {
                 egui::ScrollArea::vertical()
                     .id_salt("parameters_scroll")
@@ -386,6 +387,7 @@ impl LandmarkSlamLesson {
             .resizable(true)
             .default_size(330.0)
             .min_size(220.0)
+            .max_size(520.0)
             .show_collapsible(ui, &mut panels.explanation, |ui| {
                 egui::ScrollArea::vertical()
                     .id_salt("explanation_scroll")
@@ -404,7 +406,8 @@ impl LandmarkSlamLesson {
             let mut open = true;
             egui::Window::new("Covariance as correlations")
                 .open(&mut open)
-                .default_size([460.0, 520.0])
+                .default_size([600.0, 700.0])
+                .default_pos(ui.ctx().content_rect().center() - egui::vec2(300.0, 360.0))
                 .resizable(true)
                 .show(ui.ctx(), |ui| {
                     heatmap::heatmap_ui(ui, &self.session, &mut self.heatmap, self.version);

@@ -76,6 +76,7 @@ fn plot<'a>(id: &str, x_label: &str, y_label: &str, height: f32) -> Plot<'a> {
         )
         .link_axis(egui::Id::unique("slamlab_time_axis"), [true, false])
         .include_x(0.0)
+        .include_x(1.0)
         .include_y(0.0)
         .allow_scroll(false)
 }
