@@ -65,6 +65,9 @@ pub struct SlamLabApp {
     dismissed: BTreeSet<String>,
     dark_mode: Option<bool>,
     theme_applied: bool,
+    /// The settings loaded at start; an embedded page saves these back unchanged
+    /// (except the theme), so a lecture figure never rewrites the student's own setup.
+    loaded_settings: Settings,
 }
 
 impl SlamLabApp {
@@ -122,6 +125,11 @@ impl SlamLabApp {
             lesson.time.speed_tps = settings.time.speed_tps;
             lesson.time.max_speed = settings.time.max_speed;
         }
+        if parsed.embed {
+            // A lecture figure is small: the map gets the room, and the legend is one
+            // click away (every element also has a tooltip).
+            lesson.view.legend = false;
+        }
         let panels = if parsed.embed {
             PanelVisibility::embedded()
         } else {
@@ -138,6 +146,7 @@ impl SlamLabApp {
             dismissed: BTreeSet::new(),
             dark_mode: settings.dark_mode,
             theme_applied: false,
+            loaded_settings: settings,
         }
     }
 
@@ -197,21 +206,19 @@ impl SlamLabApp {
 
     /// The settings to store.
     pub fn settings(&self) -> Settings {
+        if self.embed {
+            return Settings {
+                dark_mode: self.dark_mode,
+                ..self.loaded_settings.clone()
+            };
+        }
         match &self.lesson {
             ActiveLesson::LandmarkSlam(lesson) => Settings {
                 dark_mode: self.dark_mode,
-                panels: if self.embed {
-                    PanelVisibility::default()
-                } else {
-                    self.panels
-                },
+                panels: self.panels,
                 view: lesson.view.clone(),
                 time: lesson.time.clone(),
-                last_params: if self.embed {
-                    Vec::new()
-                } else {
-                    lesson.pending_pairs()
-                },
+                last_params: lesson.pending_pairs(),
             },
         }
     }
@@ -447,6 +454,17 @@ mod tests {
         assert_eq!(app.session().map(|s| s.scenario().landmarks), Some(20));
         let app = SlamLabApp::with_settings("embed=1", Some(settings));
         assert_eq!(app.session().map(|s| s.scenario().landmarks), Some(20));
+    }
+
+    #[test]
+    fn an_embedded_page_saves_the_settings_it_found() {
+        let stored = Settings {
+            last_params: vec![("landmarks".to_owned(), "33".to_owned())],
+            ..Default::default()
+        };
+        let app = SlamLabApp::with_settings("embed=1&landmarks=5", Some(stored.clone()));
+        assert!(!app.landmark_lesson().is_some_and(|l| l.view.legend));
+        assert_eq!(app.settings(), stored);
     }
 
     #[test]

@@ -283,7 +283,7 @@ fn count_pixels(rgba: &[u8], target: [u8; 3], tolerance: i32) -> usize {
 }
 
 /// Renders the lesson after 60 ticks, stopped on an update, and checks what a student
-/// needs is drawn: the EKF's blue estimate and ellipses, the vermillion highlight of the
+/// needs is drawn: the EKF's blue and the UKF's orange estimates and ellipses, the vermillion highlight of the
 /// landmark being updated, the truth in the theme's truth colour. The PNG is stored under
 /// `tests/snapshots/` (refresh with `UPDATE_SNAPSHOTS=1`); comparing it with the stored one
 /// is strict only with `SLAMLAB_STRICT_SNAPSHOTS=1`, because font rasterization differs
@@ -321,7 +321,9 @@ fn rendered_lesson(query: &str, theme: egui::Theme, name: &str) {
     let blue = count_pixels(image.as_raw(), [0x00, 0x72, 0xB2], 40);
     let vermillion = count_pixels(image.as_raw(), [0xD5, 0x5E, 0x00], 40);
     let truth_pixels = count_pixels(image.as_raw(), truth, 30);
-    assert!(blue > 400, "{name}: EKF-blue pixels {blue}");
+    let orange = count_pixels(image.as_raw(), [0xE6, 0x9F, 0x00], 40);
+    assert!(blue > 200, "{name}: EKF-blue pixels {blue}");
+    assert!(orange > 200, "{name}: UKF-orange pixels {orange}");
     assert!(vermillion > 30, "{name}: vermillion pixels {vermillion}");
     assert!(
         truth_pixels > 400,

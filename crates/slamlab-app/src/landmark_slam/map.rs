@@ -986,8 +986,10 @@ fn draw_legend(
         "landmark of the current update".to_owned(),
     ));
 
-    let font = egui::FontId::proportional(12.0);
-    let row_height = 18.0;
+    // Small maps (an embedded lecture figure) get a smaller legend.
+    let compact = map_rect.height() < 420.0;
+    let font = egui::FontId::proportional(if compact { 10.5 } else { 12.0 });
+    let row_height = if compact { 14.0 } else { 18.0 };
     let symbol_width = 26.0;
     let text_width = entries
         .iter()

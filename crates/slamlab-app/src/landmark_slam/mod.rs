@@ -365,7 +365,7 @@ impl LandmarkSlamLesson {
     /// The lesson's panels: parameters (left), explanation (right), plots (bottom)
     /// and the map (centre), plus the heatmap window.
     pub fn panels_ui(&mut self, ui: &mut egui::Ui, panels: &mut PanelVisibility, compact: bool) {
-        let plot_height = if compact { 170.0 } else { 230.0 };
+        let plot_height = if compact { 150.0 } else { 230.0 };
         egui::Panel::bottom("landmark_plots")
             .resizable(true)
             .default_size(plot_height)
