@@ -58,7 +58,7 @@ impl MapView {
     }
 
     /// Fits the world square into `rect`, beside the legend when there is room:
-    /// smaller (down to 75%) and shifted right rather than under the legend.
+    /// smaller (down to 85%) and shifted right rather than under the legend.
     fn fit(&mut self, rect: Rect, world_size: f64, legend_space: f32) {
         let side = if world_size.is_finite() {
             (world_size.max(1.0) * 1.08) as f32
@@ -68,7 +68,7 @@ impl MapView {
         let full = rect.width().min(rect.height()) / side;
         let beside = (rect.width() - legend_space).min(rect.height()) / side;
         let scale = if legend_space > 0.0 {
-            beside.max(0.75 * full).min(full)
+            beside.max(0.85 * full).min(full)
         } else {
             full
         };

@@ -372,6 +372,8 @@ impl LandmarkSlamLesson {
             .min_size(120.0)
             .show_collapsible(ui, &mut panels.plots, |ui| {
                 plots::plots_ui(ui, &self.session);
+                // Fill the panel to its bottom edge, whatever the plots used.
+                ui.expand_to_include_rect(ui.max_rect());
             });
         egui::Panel::left("landmark_parameters")
             .resizable(true)
