@@ -36,6 +36,8 @@ pub struct MapView {
     fitted_size: egui::Vec2,
     /// Has the user panned or zoomed since the last fit?
     adjusted: bool,
+    /// The legend's corner: 0 top left, 1 top right, 2 bottom left, 3 bottom right.
+    legend_corner: usize,
 }
 
 impl Default for MapView {
@@ -47,6 +49,7 @@ impl Default for MapView {
             legend_space: 300.0,
             fitted_size: egui::Vec2::ZERO,
             adjusted: false,
+            legend_corner: 0,
         }
     }
 }
@@ -241,8 +244,23 @@ pub fn map_ui(
     );
     draw_scale_and_axes(&painter, &t, &colors);
     if opts.legend {
-        let legend = draw_legend(&painter, rect, session, &colors, opts, sigma_points_shown);
-        view.legend_space = legend.right() - rect.left() + 8.0;
+        let placement = LegendPlacement {
+            transform: &t,
+            preferred: view.legend_corner,
+            avoid_bottom_right: is_manual(session),
+        };
+        let (legend, corner) = draw_legend(
+            &painter,
+            &placement,
+            session,
+            &colors,
+            opts,
+            sigma_points_shown,
+        );
+        view.legend_corner = corner;
+        if corner == 0 {
+            view.legend_space = legend.right() - rect.left() + 8.0;
+        }
     }
     if let Some(pointer) = response.hover_pos()
         && !response.dragged()
@@ -913,14 +931,83 @@ fn filter_label(name: &str) -> String {
     name.to_uppercase()
 }
 
+/// Where the legend may go: the corner it had, and what it must not cover.
+struct LegendPlacement<'a> {
+    transform: &'a MapTransform,
+    preferred: usize,
+    avoid_bottom_right: bool,
+}
+
+fn is_manual(session: &LandmarkSession) -> bool {
+    matches!(
+        session.scenario().controller,
+        slamlab_sim::ControllerKind::Manual
+    )
+}
+
+/// Picks the legend's corner: the one covering the fewest robots (heavily weighted)
+/// and landmarks, keeping the current corner on ties so the legend does not jump.
+fn legend_corner(
+    placement: &LegendPlacement<'_>,
+    session: &LandmarkSession,
+    size: egui::Vec2,
+) -> (usize, Rect) {
+    let t = placement.transform;
+    let map = t.rect;
+    let corners = [
+        Rect::from_min_size(map.left_top() + vec2(48.0, 26.0), size),
+        Rect::from_min_size(map.right_top() + vec2(-size.x - 10.0, 26.0), size),
+        Rect::from_min_size(map.left_bottom() + vec2(48.0, -size.y - 48.0), size),
+        Rect::from_min_size(
+            map.right_bottom() + vec2(-size.x - 10.0, -size.y - 30.0),
+            size,
+        ),
+    ];
+    let mut robots: Vec<Pos2> = vec![t.pose(&session.truth())];
+    robots.extend(
+        session
+            .filters()
+            .iter()
+            .map(|run| t.pose(&run.filter().robot_pose())),
+    );
+    let score = |rect: &Rect| {
+        let area = rect.expand(12.0);
+        let robots_inside = robots.iter().filter(|p| area.contains(**p)).count();
+        let landmarks_inside = session
+            .world()
+            .landmarks
+            .iter()
+            .filter(|l| area.contains(t.v(&l.position)))
+            .count();
+        100 * robots_inside + landmarks_inside
+    };
+    let allowed =
+        |k: usize| !(k == 3 && placement.avoid_bottom_right) && map.contains_rect(corners[k]);
+    let preferred = placement.preferred.min(3);
+    let mut best = (preferred, score(&corners[preferred]));
+    if !allowed(preferred) {
+        best = (0, score(&corners[0]));
+    }
+    for (k, rect) in corners.iter().enumerate() {
+        if allowed(k) {
+            let value = score(rect);
+            if value < best.1 {
+                best = (k, value);
+            }
+        }
+    }
+    (best.0, corners[best.0])
+}
+
 fn draw_legend(
     painter: &egui::Painter,
-    map_rect: Rect,
+    placement: &LegendPlacement<'_>,
     session: &LandmarkSession,
     colors: &Colors,
     opts: &ViewOptions,
     sigma_points_shown: bool,
-) -> Rect {
+) -> (Rect, usize) {
+    let map_rect = placement.transform.rect;
     let mut entries: Vec<(Symbol, Color32, String)> = vec![
         (
             Symbol::TruthRobot,
@@ -1004,7 +1091,7 @@ fn draw_legend(
         symbol_width + 8.0 + text_width + 16.0,
         row_height * entries.len() as f32 + 12.0,
     );
-    let rect = Rect::from_min_size(map_rect.left_top() + vec2(48.0, 26.0), size);
+    let (corner, rect) = legend_corner(placement, session, size);
     painter.rect(
         rect,
         5.0,
@@ -1031,7 +1118,7 @@ fn draw_legend(
             },
         );
     }
-    rect
+    (rect, corner)
 }
 
 fn format_xy(v: &Vector2<f64>) -> String {
@@ -1168,5 +1255,37 @@ mod tests {
         assert!((before[0] - after[0]).abs() < 1e-3 && (before[1] - after[1]).abs() < 1e-3);
         view.zoom_about(rect, f32::NAN, anchor);
         assert!(view.scale.is_finite());
+    }
+
+    #[test]
+    fn the_legend_moves_off_the_robot() {
+        let session = LandmarkSession::new(super::super::default_scenario());
+        let rect = Rect::from_min_size(pos2(0.0, 0.0), vec2(800.0, 600.0));
+        let mut view = MapView::default();
+        let size = vec2(200.0, 150.0);
+        // Away from everything: the top-left corner stays.
+        view.center = [1000.0, 1000.0];
+        let placement = LegendPlacement {
+            transform: &view.transform(rect),
+            preferred: 0,
+            avoid_bottom_right: false,
+        };
+        assert_eq!(legend_corner(&placement, &session, size).0, 0);
+        // The true robot under the top-left legend: it moves.
+        view.center = [0.0, 0.0];
+        let under = view.transform(rect).world_of(pos2(150.0, 100.0));
+        let truth = session.truth();
+        view.center = [truth.x - under[0], truth.y - under[1]];
+        let t = view.transform(rect);
+        assert!(t.pose(&truth).distance(pos2(150.0, 100.0)) < 1.0);
+        let placement = LegendPlacement {
+            transform: &t,
+            preferred: 0,
+            avoid_bottom_right: true,
+        };
+        let (corner, legend) = legend_corner(&placement, &session, size);
+        assert_ne!(corner, 0);
+        assert_ne!(corner, 3, "the drive pad's corner is avoided");
+        assert!(!legend.contains(t.pose(&truth)));
     }
 }
