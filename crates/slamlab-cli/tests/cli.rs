@@ -211,3 +211,44 @@ fn experiment_prints_the_documented_json_and_csv() {
     let (ok, _, stderr) = slamlab(&["experiment", "ekf-vs-ukf", "--noise-scale", "NaN"]);
     assert!(!ok && stderr.contains("noise-scale"), "{stderr}");
 }
+
+#[test]
+fn both_estimators_run_side_by_side_from_the_command_line() {
+    let v = run_json(&[
+        "run",
+        "landmark-slam",
+        "--estimator",
+        "ekf,ukf",
+        "--steps",
+        "100",
+        "--ukf-alpha",
+        "0.8",
+        "--json",
+    ]);
+    let names: Vec<&str> = v["filters"]
+        .as_array()
+        .map(|a| a.iter().filter_map(|f| f["name"].as_str()).collect())
+        .unwrap_or_default();
+    assert_eq!(names, ["ekf", "ukf"]);
+    assert_eq!(v["parameters"]["ukf-alpha"], 0.8);
+    for f in v["filters"].as_array().into_iter().flatten() {
+        assert!(
+            f["robot_rmse"]
+                .as_f64()
+                .is_some_and(|x| x.is_finite() && x < 1.0),
+            "{f}"
+        );
+    }
+    let (ok, _, stderr) = slamlab(&[
+        "run",
+        "landmark-slam",
+        "--estimator",
+        "ukf",
+        "--ukf-alpha",
+        "0.1",
+        "--ukf-kappa",
+        "-9",
+        "--json",
+    ]);
+    assert!(ok, "{stderr}");
+}

@@ -146,8 +146,23 @@ pub const PARAMS: &[ParamSpec] = &[
         name: "estimator",
         unit: "",
         help: "estimators to run, comma separated",
-        kind: ParamKind::Choice(&["ekf"]),
+        kind: ParamKind::Choice(&["ekf", "ukf"]),
     },
+    number("ukf-alpha", "", "UKF sigma-point spread alpha", 1e-3, 2.0),
+    number(
+        "ukf-beta",
+        "",
+        "UKF prior-knowledge beta (2 for Gaussians)",
+        -10.0,
+        10.0,
+    ),
+    number(
+        "ukf-kappa",
+        "",
+        "UKF secondary scaling kappa (alpha^2 (k + kappa) must exceed 0)",
+        -10.0,
+        10.0,
+    ),
 ];
 
 /// Looks a parameter up by name.
@@ -254,6 +269,9 @@ pub fn get(scenario: &LandmarkScenario, name: &str) -> Option<String> {
             .map(|e| e.name())
             .collect::<Vec<_>>()
             .join(","),
+        "ukf-alpha" => format_number(scenario.ukf.alpha),
+        "ukf-beta" => format_number(scenario.ukf.beta),
+        "ukf-kappa" => format_number(scenario.ukf.kappa),
         _ => return None,
     })
 }
@@ -447,6 +465,7 @@ pub fn sanitize(scenario: &mut LandmarkScenario) -> Vec<ParamIssue> {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::scenario::EstimatorKind;
 
     #[test]
     fn round_trip_through_text() {
@@ -469,6 +488,32 @@ mod tests {
         assert_eq!(to_pairs(&copy), to_pairs(&s));
         assert_eq!(copy.seed, 99);
         assert_eq!(copy.landmarks, 33);
+    }
+
+    #[test]
+    fn estimators_and_ukf_parameters_are_named_parameters() {
+        let mut s = LandmarkScenario::default();
+        assert_eq!(set(&mut s, "estimator", "ekf,ukf,ekf"), None);
+        assert_eq!(s.estimators, vec![EstimatorKind::Ekf, EstimatorKind::Ukf]);
+        assert_eq!(get(&s, "estimator").as_deref(), Some("ekf,ukf"));
+        for (k, v) in [("ukf-alpha", "0.5"), ("ukf-beta", "0"), ("ukf-kappa", "3")] {
+            assert_eq!(set(&mut s, k, v), None, "{k}");
+            assert_eq!(get(&s, k).as_deref(), Some(v), "{k}");
+        }
+        assert!((s.ukf.alpha - 0.5).abs() < 1e-15 && (s.ukf.kappa - 3.0).abs() < 1e-15);
+        assert!(matches!(
+            set(&mut s, "estimator", "ekf,pf"),
+            Some(ParamIssue::Unreadable { .. })
+        ));
+        assert_eq!(s.estimators, vec![EstimatorKind::Ekf, EstimatorKind::Ukf]);
+        // Every parameter in the table can be read back.
+        for p in PARAMS {
+            assert!(
+                get(&LandmarkScenario::default(), p.name).is_some(),
+                "{}",
+                p.name
+            );
+        }
     }
 
     #[test]
