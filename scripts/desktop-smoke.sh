@@ -2,7 +2,7 @@
 # Smoke test of the native (desktop) SLAM Lab app, without a screen or a GPU:
 # builds it, runs it on a virtual X server (Xvfb) with Mesa's software renderer, takes
 # screenshots and checks that the window really shows something, presses the run key and
-# checks that the app is still alive. Screenshots and the app's log go to
+# checks that the picture changes, then the stepping keys, and that the app is still alive. Screenshots and the app's log go to
 # target/desktop-smoke/. The last line is "N passed, M failed".
 #
 #   scripts/desktop-smoke.sh
@@ -40,7 +40,7 @@ die() {
 	finish
 }
 
-for tool in Xvfb import convert xdotool; do
+for tool in Xvfb import convert compare xdotool; do
 	command -v "$tool" >/dev/null || die "$tool is missing: run scripts/install-deps.sh --desktop"
 done
 
@@ -147,13 +147,32 @@ else
 	fail "the window stayed blank or the app exited (${report:-no screenshot}; see $out_dir/app.log)"
 fi
 
-# --- 6. Press Space (run) and the stepping keys; the app must survive them.
+# --- 6. Click into the window (keyboard focus) and press Space (run): after two seconds
+# the picture must have changed. xdotool without --window sends real (XTEST) input to the
+# focused window; events sent to a window directly are flagged as synthetic and ignored.
+xdotool windowfocus "$window" 2>/dev/null || true
 xdotool mousemove --window "$window" 640 400 click 1 2>/dev/null || true
-xdotool key --window "$window" space 2>/dev/null || true
-sleep 2
-xdotool key --window "$window" space n period r 2>/dev/null || true
 sleep 1
-import -window root "$out_dir/screen-2-after-keys.png" 2>>"$out_dir/import.log" || true
+import -window "$window" "$out_dir/window-2-before-run.png" 2>>"$out_dir/import.log" || true
+xdotool key space 2>/dev/null || true
+sleep 3
+import -window root "$out_dir/screen-3-running.png" 2>>"$out_dir/import.log" || true
+import -window "$window" "$out_dir/window-3-running.png" 2>>"$out_dir/import.log" || true
+# Pixels that differ by more than 6 % between the two screenshots (ImageMagick prints the
+# count on stderr, and exits 1 when the images differ).
+changed=$(compare -metric AE -fuzz 6% "$out_dir/window-2-before-run.png" "$out_dir/window-3-running.png" \
+	"$out_dir/diff-run.png" 2>&1 >/dev/null || true)
+changed=${changed%% *}
+if [[ "$changed" =~ ^[0-9.e+]+$ ]] && awk -v c="$changed" 'BEGIN { exit !(c >= 500) }'; then
+	pass "Space runs the simulation: $changed pixels changed in 3 s"
+else
+	fail "the window did not change after Space (changed pixels: ${changed:-?}; see $out_dir/window-3-running.png)"
+fi
+
+# --- 7. Pause, step a tick, step a phase, reset: the app must survive them.
+xdotool key space n period r 2>/dev/null || true
+sleep 1
+import -window root "$out_dir/screen-4-after-keys.png" 2>>"$out_dir/import.log" || true
 if kill -0 "$app_pid" 2>/dev/null && ! grep -q 'panicked' "$out_dir/app.log"; then
 	pass "the app is still running after Space, n, . and r"
 else
