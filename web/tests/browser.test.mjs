@@ -391,6 +391,14 @@ async function main() {
           } while (Date.now() < deadline);
           assertNotBlank(stats, `iframe ${i + 1}`);
           await assertNoPanic(frame);
+          // The iframe's query string reaches the app.
+          const params = new URL(frame.url()).searchParams;
+          const state = await testState(frame);
+          if ("seed" in state) assert(String(state.seed) === params.get("seed"), `iframe ${i + 1}: seed ${state.seed}, URL says ${params.get("seed")}`);
+          if ("embed" in state) assert(state.embed === true, `iframe ${i + 1} is not in embed mode: ${JSON.stringify(state)}`);
+          if ("filters" in state && params.has("estimator")) {
+            assert(state.filters.join(",") === params.get("estimator"), `iframe ${i + 1}: filters ${state.filters}, URL says ${params.get("estimator")}`);
+          }
           notes.push(`iframe ${i + 1} (${frame.url().split("?")[1]}): ${describe(stats)}`);
         }
         await lecture.screenshot({ path: path.join(outDir, "lecture.png"), fullPage: true });
