@@ -1,6 +1,6 @@
 //! EKF-SLAM (thesis `000` Sec. 3.2 and 3.4.1; slides `001` "EKF-SLAM").
 
-use super::state::{SlamState, check_measurement};
+use super::state::{SlamState, check_control, check_measurement};
 use super::{FilterConfig, FilterError, LandmarkSlam, PredictReport, UpdateReport, symmetrize};
 use crate::geometry::Pose2;
 use crate::motion::Control;
@@ -131,13 +131,7 @@ impl LandmarkSlam for EkfSlam {
     }
 
     fn predict(&mut self, control: &Control, dt: f64) -> Result<PredictReport, FilterError> {
-        if !control.is_finite() || !dt.is_finite() || dt < 0.0 {
-            return Err(FilterError::InvalidControl {
-                v: control.v,
-                w: control.w,
-                dt,
-            });
-        }
+        check_control(control, dt)?;
         let robot_det_before = self.robot_covariance().determinant();
         let step = self
             .config
@@ -162,18 +156,13 @@ impl LandmarkSlam for EkfSlam {
             .covariance
             .fixed_view_mut::<3, 3>(0, 0)
             .copy_from(&(0.5 * (new_rr + new_rr.transpose())));
-        let n = self.state.mean.len();
-        if n > 3 {
-            let new_rl = f * self.state.covariance.view((0, 3), (3, n - 3));
-            self.state
-                .covariance
-                .view_mut((0, 3), (3, n - 3))
-                .copy_from(&new_rl);
-            self.state
-                .covariance
-                .view_mut((3, 0), (n - 3, 3))
-                .copy_from(&new_rl.transpose());
-        }
+        // P_RL ← F P_RL: the landmarks stay put, their correlation with the robot moves with it.
+        let p_lr = self
+            .state
+            .covariance
+            .view((3, 0), (self.state.len() - 3, 3))
+            * f.transpose();
+        self.state.set_landmark_robot_covariance(&p_lr);
         Ok(PredictReport {
             control: *control,
             robot_det_before,

@@ -2,8 +2,9 @@
 
 use super::{FilterConfig, FilterError};
 use crate::geometry::Pose2;
+use crate::motion::Control;
 use crate::range_bearing::{MIN_RANGE, MeasurementError, RangeBearing};
-use nalgebra::{DMatrix, DVector, Matrix2, MatrixXx2, Vector2};
+use nalgebra::{DMatrix, DVector, Matrix2, MatrixXx2, MatrixXx3, Vector2};
 use std::collections::HashMap;
 
 /// `M = [x, y, θ, L¹x, L¹y, …]`, its covariance `P`, and which landmark id sits in
@@ -75,6 +76,32 @@ impl SlamState {
         self.slot_of.insert(id, self.landmark_ids.len());
         self.landmark_ids.push(id);
     }
+}
+
+impl SlamState {
+    /// Sets the landmark-robot cross-covariance `P_LR` (`(n − 3) x 3`) and its
+    /// transpose `P_RL`, as a prediction leaves them.
+    pub(crate) fn set_landmark_robot_covariance(&mut self, p_lr: &MatrixXx3<f64>) {
+        let m = self.len() - 3;
+        if m > 0 {
+            self.covariance.view_mut((3, 0), (m, 3)).copy_from(p_lr);
+            self.covariance
+                .view_mut((0, 3), (3, m))
+                .copy_from(&p_lr.transpose());
+        }
+    }
+}
+
+/// Checks a control and time step before a prediction.
+pub(crate) fn check_control(control: &Control, dt: f64) -> Result<(), FilterError> {
+    if !control.is_finite() || !dt.is_finite() || dt < 0.0 {
+        return Err(FilterError::InvalidControl {
+            v: control.v,
+            w: control.w,
+            dt,
+        });
+    }
+    Ok(())
 }
 
 /// Checks a measurement before it is used: finite, and for a first sighting far

@@ -1,6 +1,6 @@
 //! UKF-SLAM (thesis `000` Sec. 3.3, with the errata in the seeds' README).
 
-use super::state::{SlamState, check_measurement};
+use super::state::{SlamState, check_control, check_measurement};
 use super::unscented::{UnscentedParams, sigma_points, unscented_transform};
 use super::{FilterConfig, FilterError, LandmarkSlam, PredictReport, UpdateReport, symmetrize};
 use crate::geometry::{Pose2, wrap_angle};
@@ -89,12 +89,7 @@ impl UkfSlam {
                 Err(_) => DVector::from_element(2, f64::NAN),
             }
         })?;
-        if !out
-            .mean
-            .iter()
-            .chain(out.covariance.iter())
-            .all(|v| v.is_finite())
-        {
+        if !out.is_finite() {
             return Err(FilterError::Measurement {
                 id,
                 source: MeasurementError::NotFinite,
@@ -183,13 +178,7 @@ impl LandmarkSlam for UkfSlam {
     }
 
     fn predict(&mut self, control: &Control, dt: f64) -> Result<PredictReport, FilterError> {
-        if !control.is_finite() || !dt.is_finite() || dt < 0.0 {
-            return Err(FilterError::InvalidControl {
-                v: control.v,
-                w: control.w,
-                dt,
-            });
-        }
+        check_control(control, dt)?;
         let robot_det_before = self.robot_covariance().determinant();
         let n = self.state.len();
         // A robot commanded to stop does not move (as in EKF-SLAM and the simulator).
@@ -208,12 +197,7 @@ impl LandmarkSlam for UkfSlam {
             let p = model.predict(&pose_of(a), &u, dt);
             DVector::from_column_slice(&[p.x, p.y, p.theta])
         })?;
-        if !out
-            .mean
-            .iter()
-            .chain(out.covariance.iter())
-            .all(|v| v.is_finite())
-        {
+        if !out.is_finite() {
             return Err(FilterError::NotPositiveDefinite {
                 what: "predicted robot covariance",
             });
@@ -224,16 +208,8 @@ impl LandmarkSlam for UkfSlam {
             .covariance
             .view_mut((0, 0), (3, 3))
             .copy_from(&out.covariance);
-        if n > 3 {
-            self.state
-                .covariance
-                .view_mut((3, 0), (n - 3, 3))
-                .copy_from(&out.cross_other);
-            self.state
-                .covariance
-                .view_mut((0, 3), (3, n - 3))
-                .copy_from(&out.cross_other.transpose());
-        }
+        self.state
+            .set_landmark_robot_covariance(&out.cross_other.fixed_columns::<3>(0).into_owned());
         Ok(PredictReport {
             control: *control,
             robot_det_before,

@@ -103,6 +103,17 @@ pub struct UnscentedOutput {
     pub sigma_outputs: Vec<DVector<f64>>,
 }
 
+impl UnscentedOutput {
+    /// True when the output mean and covariance are finite (a sigma point the
+    /// model could not evaluate makes them NaN).
+    pub fn is_finite(&self) -> bool {
+        self.mean
+            .iter()
+            .chain(self.covariance.iter())
+            .all(|v| v.is_finite())
+    }
+}
+
 /// `y - mean` with the components listed in `angles` wrapped to (-π, π].
 fn difference(y: &DVector<f64>, mean: &DVector<f64>, angles: &[usize]) -> DVector<f64> {
     let mut d = y - mean;
