@@ -13,7 +13,7 @@ pub const PURPLE: Color32 = Color32::from_rgb(0xCC, 0x79, 0xA7);
 pub const GREEN: Color32 = Color32::from_rgb(0x00, 0x9E, 0x73);
 /// Okabe-Ito vermillion: errors and things to notice (the landmark being updated).
 pub const VERMILLION: Color32 = Color32::from_rgb(0xD5, 0x5E, 0x00);
-/// Okabe-Ito sky blue.
+/// Okabe-Ito sky blue: the first-estimates Jacobian EKF (a lighter EKF blue).
 pub const SKY_BLUE: Color32 = Color32::from_rgb(0x56, 0xB4, 0xE9);
 /// Dead reckoning: grey (drawn dashed).
 pub const DEAD_RECKONING: Color32 = Color32::from_rgb(0x8C, 0x8C, 0x8C);
@@ -23,6 +23,7 @@ pub fn estimator_color(name: &str) -> Color32 {
     match name {
         "ekf" => BLUE,
         "ukf" => ORANGE,
+        "fej-ekf" => SKY_BLUE,
         "fastslam" | "mcl" | "amcl" | "pf" => PURPLE,
         "acmcl" => GREEN,
         _ => PURPLE,

@@ -289,12 +289,12 @@ fn count_pixels(rgba: &[u8], target: [u8; 3], tolerance: i32) -> usize {
 /// is strict only with `SLAMLAB_STRICT_SNAPSHOTS=1`, because font rasterization differs
 /// between GPU backends.
 fn rendered_lesson(query: &str, theme: egui::Theme, name: &str) {
-    let query = query.to_owned();
+    let owned = query.to_owned();
     let mut h = Harness::builder()
         .with_size(SIZE)
         .with_max_steps(40)
         .with_theme(theme)
-        .build_eframe(move |cc| SlamLabApp::new(cc, &query));
+        .build_eframe(move |cc| SlamLabApp::new(cc, &owned));
     h.run();
     if let Some(lesson) = h.state_mut().landmark_lesson_mut() {
         for _ in 0..60 {
@@ -323,6 +323,10 @@ fn rendered_lesson(query: &str, theme: egui::Theme, name: &str) {
     let truth_pixels = count_pixels(image.as_raw(), truth, 30);
     let orange = count_pixels(image.as_raw(), [0xE6, 0x9F, 0x00], 40);
     assert!(blue > 200, "{name}: EKF-blue pixels {blue}");
+    if query.contains("fej-ekf") {
+        let sky_blue = count_pixels(image.as_raw(), [0x56, 0xB4, 0xE9], 40);
+        assert!(sky_blue > 200, "{name}: FEJ-EKF sky-blue pixels {sky_blue}");
+    }
     assert!(orange > 200, "{name}: UKF-orange pixels {orange}");
     assert!(vermillion > 30, "{name}: vermillion pixels {vermillion}");
     assert!(
@@ -363,4 +367,41 @@ fn rendered_embed_layout() {
         egui::Theme::Light,
         "landmark_slam_embed",
     );
+}
+
+#[test]
+fn rendered_lesson_with_the_fej_ekf() {
+    rendered_lesson(
+        "lesson=landmark-slam&seed=7&estimator=ekf,ukf,fej-ekf",
+        egui::Theme::Light,
+        "landmark_slam_fej",
+    );
+}
+
+#[test]
+fn the_fej_ekf_joins_from_its_checkbox_and_explains_itself() {
+    let mut h = harness("lesson=landmark-slam&seed=7");
+    h.run();
+    let names = |h: &Harness<'_, SlamLabApp>| -> Vec<&'static str> {
+        session(h).filters().iter().map(|r| r.kind.name()).collect()
+    };
+    assert_eq!(names(&h), ["ekf", "ukf"]);
+    // The parameter panel scrolls: bring each control into view, as a user would.
+    for label in ["FEJ-EKF", "Apply & reset"] {
+        h.get_by_label(label).scroll_to_me();
+        h.run();
+        h.get_by_label(label).click();
+        h.run();
+    }
+    assert_eq!(names(&h), ["ekf", "ukf", "fej-ekf"]);
+    // Predict, then the first update: every filter ran both phases.
+    for _ in 0..2 {
+        h.get_by_label("Step phase").click();
+        h.run();
+    }
+    for run in session(&h).filters() {
+        assert_eq!(run.filter().mean().len(), 5, "{}", run.kind.name());
+    }
+    assert!(label_visible(&h, "FEJ-EKF-SLAM"));
+    assert!(label_visible(&h, "FEJ-EKF: H is evaluated"));
 }

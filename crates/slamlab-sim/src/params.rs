@@ -146,7 +146,7 @@ pub const PARAMS: &[ParamSpec] = &[
         name: "estimator",
         unit: "",
         help: "estimators to run, comma separated",
-        kind: ParamKind::Choice(&["ekf", "ukf"]),
+        kind: ParamKind::Choice(&["ekf", "ukf", "fej-ekf"]),
     },
     number("ukf-alpha", "", "UKF sigma-point spread alpha", 1e-3, 2.0),
     number(
@@ -496,6 +496,9 @@ mod tests {
         assert_eq!(set(&mut s, "estimator", "ekf,ukf,ekf"), None);
         assert_eq!(s.estimators, vec![EstimatorKind::Ekf, EstimatorKind::Ukf]);
         assert_eq!(get(&s, "estimator").as_deref(), Some("ekf,ukf"));
+        assert_eq!(set(&mut s, "estimator", "fej-ekf"), None);
+        assert_eq!(s.estimators, vec![EstimatorKind::FejEkf]);
+        assert_eq!(set(&mut s, "estimator", "ekf,ukf"), None);
         for (k, v) in [("ukf-alpha", "0.5"), ("ukf-beta", "0"), ("ukf-kappa", "3")] {
             assert_eq!(set(&mut s, k, v), None, "{k}");
             assert_eq!(get(&s, k).as_deref(), Some(v), "{k}");

@@ -17,17 +17,25 @@ pub enum EstimatorKind {
     Ekf,
     /// UKF-SLAM (thesis Sec. 3.3).
     Ukf,
+    /// EKF-SLAM with first-estimates Jacobians (Huang, Mourikis and Roumeliotis
+    /// 2008), which keeps the EKF consistent over long runs.
+    FejEkf,
 }
 
 impl EstimatorKind {
     /// Every estimator, in menu order.
-    pub const ALL: [EstimatorKind; 2] = [EstimatorKind::Ekf, EstimatorKind::Ukf];
+    pub const ALL: [EstimatorKind; 3] = [
+        EstimatorKind::Ekf,
+        EstimatorKind::Ukf,
+        EstimatorKind::FejEkf,
+    ];
 
     /// The name used in URLs, on the command line and in JSON.
     pub fn name(&self) -> &'static str {
         match self {
             EstimatorKind::Ekf => "ekf",
             EstimatorKind::Ukf => "ukf",
+            EstimatorKind::FejEkf => "fej-ekf",
         }
     }
 

@@ -12,7 +12,9 @@ use crate::scenario::{EstimatorKind, LandmarkScenario};
 use crate::world::LandmarkWorld;
 use nalgebra::{DMatrix, DVector, Vector2};
 use rand_chacha::ChaCha8Rng;
-use slamlab_core::kalman::{EkfSlam, LandmarkSlam, PredictReport, UkfSlam, UpdateReport};
+use slamlab_core::kalman::{
+    EkfSlam, LandmarkSlam, Linearization, PredictReport, UkfSlam, UpdateReport,
+};
 use slamlab_core::range_bearing::{self, RangeBearing, RangeBearingSensor};
 use slamlab_core::stats::normalized_squared_error;
 use slamlab_core::{Control, MotionModel, Pose2, wrap_angle};
@@ -176,6 +178,12 @@ impl LandmarkSession {
                 }
                 EstimatorKind::Ukf => UkfSlam::new(scenario.filter_config(), scenario.ukf, start)
                     .map(|f| Box::new(f) as _),
+                EstimatorKind::FejEkf => EkfSlam::with_linearization(
+                    scenario.filter_config(),
+                    start,
+                    Linearization::FirstEstimates,
+                )
+                .map(|f| Box::new(f) as _),
             };
             match built {
                 Ok(filter) => filters.push(FilterRun {

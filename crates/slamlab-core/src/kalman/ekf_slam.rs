@@ -5,7 +5,31 @@ use super::{FilterConfig, FilterError, LandmarkSlam, PredictReport, UpdateReport
 use crate::geometry::Pose2;
 use crate::motion::Control;
 use crate::range_bearing::{self, RangeBearing};
-use nalgebra::{DMatrix, DVector, Matrix2, Matrix2x3, Matrix3};
+use nalgebra::{DMatrix, DVector, Matrix2, Matrix2x3, Matrix3, Vector2};
+use serde::{Deserialize, Serialize};
+
+/// Where the EKF evaluates its Jacobians.
+///
+/// The textbook EKF linearizes at the latest estimate. Each landmark update then
+/// uses a slightly different robot heading, and together they give the filter
+/// information about the absolute heading that the range-bearing measurements do
+/// not contain (the global position and heading of a SLAM map are unobservable).
+/// Over a long run the EKF grows overconfident: its NEES leaves the consistency band
+/// (Bailey et al. 2006; Huang, Mourikis and Roumeliotis 2008).
+///
+/// The first-estimates Jacobian (FEJ) EKF (Huang, Mourikis and Roumeliotis 2008)
+/// evaluates every Jacobian at the first estimate of each state: the robot pose as
+/// predicted for this tick, before any update, and each landmark where it was first
+/// initialized. The residuals still use the latest estimate. With these Jacobians
+/// the linearized system keeps the three unobservable directions of the true one.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
+pub enum Linearization {
+    /// Jacobians at the latest estimate (thesis Sec. 3.2, the slides).
+    #[default]
+    LatestEstimate,
+    /// First-estimates Jacobians (FEJ-EKF).
+    FirstEstimates,
+}
 
 /// EKF-SLAM with known data association.
 ///
@@ -23,18 +47,39 @@ use nalgebra::{DMatrix, DVector, Matrix2, Matrix2x3, Matrix3};
 pub struct EkfSlam {
     config: FilterConfig,
     state: SlamState,
+    linearization: Linearization,
+    /// The robot pose as predicted for the current tick, before its updates
+    /// (`x̂_{k|k-1}`); the robot start at tick 0. Used by [`Linearization::FirstEstimates`].
+    robot_prior: Pose2,
+    /// Each landmark's position when it was initialized, in slot order.
+    first_estimates: Vec<Vector2<f64>>,
 }
 
 impl EkfSlam {
     /// A filter whose robot starts at `start` with zero covariance (thesis Eq. 3.5).
     pub fn new(config: FilterConfig, start: Pose2) -> Result<Self, FilterError> {
-        let state = SlamState::new(&config, start)?;
-        Ok(Self { config, state })
+        Self::with_linearization(config, start, Linearization::LatestEstimate)
     }
 
-    /// The configuration it runs with.
-    pub fn config(&self) -> &FilterConfig {
-        &self.config
+    /// A filter that evaluates its Jacobians as `linearization` says.
+    pub fn with_linearization(
+        config: FilterConfig,
+        start: Pose2,
+        linearization: Linearization,
+    ) -> Result<Self, FilterError> {
+        let state = SlamState::new(&config, start)?;
+        Ok(Self {
+            config,
+            state,
+            linearization,
+            robot_prior: start,
+            first_estimates: Vec::new(),
+        })
+    }
+
+    /// Where this filter evaluates its Jacobians.
+    pub fn linearization(&self) -> Linearization {
+        self.linearization
     }
 
     /// The Kalman update for landmark `slot` with measurement `z`.
@@ -51,11 +96,19 @@ impl EkfSlam {
         let pred = range_bearing::predict(&pose, &landmark)
             .map_err(|source| FilterError::Measurement { id, source })?;
         let innovation = z.difference(&pred.measurement);
+        let (h_r, h_l) = match self.linearization {
+            Linearization::LatestEstimate => (pred.jacobian_pose, pred.jacobian_landmark),
+            Linearization::FirstEstimates => {
+                let first_landmark = self.first_estimates.get(slot).copied().unwrap_or(landmark);
+                let first = range_bearing::predict(&self.robot_prior, &first_landmark)
+                    .map_err(|source| FilterError::Measurement { id, source })?;
+                (first.jacobian_pose, first.jacobian_landmark)
+            }
+        };
 
         // H has non-zero columns only at the robot (0..3) and the landmark (j..j+2):
         // M = P Hᵀ (n x 2) costs O(n), S = H P Hᵀ + V costs O(1).
-        let h_r: Matrix2x3<f64> = pred.jacobian_pose;
-        let h_l: Matrix2<f64> = pred.jacobian_landmark;
+        let (h_r, h_l): (Matrix2x3<f64>, Matrix2<f64>) = (h_r, h_l);
         let p_cols_r = self.state.covariance.columns(0, 3);
         let p_cols_l = self.state.covariance.columns(j, 2);
         let m = p_cols_r * h_r.transpose() + p_cols_l * h_l.transpose();
@@ -108,16 +161,33 @@ impl EkfSlam {
         let pose = self.robot_pose();
         let g = range_bearing::inverse(&pose, z)
             .map_err(|source| FilterError::Measurement { id, source })?;
+        // ∂g/∂R = [I | J (L - p)] with J the 90° rotation; FEJ evaluates it at the
+        // robot pose predicted for this tick (the landmark's first estimate is this one).
+        let g_r = match self.linearization {
+            Linearization::LatestEstimate => g.jacobian_pose,
+            Linearization::FirstEstimates => {
+                let p = self.robot_prior;
+                Matrix2x3::new(
+                    1.0,
+                    0.0,
+                    -(g.landmark[1] - p.y),
+                    0.0,
+                    1.0,
+                    g.landmark[0] - p.x,
+                )
+            }
+        };
         let p_rr: Matrix3<f64> = self.state.covariance.fixed_view::<3, 3>(0, 0).into_owned();
-        let p_ll = g.jacobian_pose * p_rr * g.jacobian_pose.transpose()
+        let p_ll = g_r * p_rr * g_r.transpose()
             + g.jacobian_measurement
                 * self.config.noise.measurement_covariance()
                 * g.jacobian_measurement.transpose();
         // P_LM = G_R P_RM: the new landmark's correlation with everything known so far.
-        let p_lm = g.jacobian_pose * self.state.covariance.rows(0, 3);
+        let p_lm = g_r * self.state.covariance.rows(0, 3);
 
         self.state
             .push_landmark(id, g.landmark, &p_lm.transpose(), &p_ll);
+        self.first_estimates.push(g.landmark);
         Ok(UpdateReport::Initialized {
             id,
             position: g.landmark,
@@ -127,7 +197,10 @@ impl EkfSlam {
 
 impl LandmarkSlam for EkfSlam {
     fn name(&self) -> &'static str {
-        "ekf"
+        match self.linearization {
+            Linearization::LatestEstimate => "ekf",
+            Linearization::FirstEstimates => "fej-ekf",
+        }
     }
 
     fn predict(&mut self, control: &Control, dt: f64) -> Result<PredictReport, FilterError> {
@@ -137,8 +210,15 @@ impl LandmarkSlam for EkfSlam {
             .config
             .motion_model
             .step(&self.robot_pose(), control, dt);
-        let f = step.jacobian_pose;
+        let mut f = step.jacobian_pose;
         let g = step.jacobian_control;
+        if self.linearization == Linearization::FirstEstimates {
+            // ∂f/∂θ = J (p' - p) for both motion models; FEJ takes the displacement
+            // from the previous *predicted* position, so the products of F over
+            // time telescope as they do for the true system.
+            f[(0, 2)] = -(step.pose.y - self.robot_prior.y);
+            f[(1, 2)] = step.pose.x - self.robot_prior.x;
+        }
         self.state.mean[0] = step.pose.x;
         self.state.mean[1] = step.pose.y;
         self.state.mean[2] = step.pose.theta;
@@ -163,6 +243,7 @@ impl LandmarkSlam for EkfSlam {
             .view((3, 0), (self.state.len() - 3, 3))
             * f.transpose();
         self.state.set_landmark_robot_covariance(&p_lr);
+        self.robot_prior = step.pose;
         Ok(PredictReport {
             control: *control,
             robot_det_before,
@@ -277,6 +358,147 @@ mod tests {
         assert_eq!(before.mean(), ekf.mean());
         assert_eq!(before.covariance(), ekf.covariance());
         assert!(ekf.landmark_ids().is_empty());
+    }
+
+    /// Drives both linearizations with the same commands and measurements.
+    fn drive(ekf: &mut EkfSlam, ticks: usize, corrections: bool) {
+        let truth_landmarks = [Vector2::new(3.0, 1.0), Vector2::new(1.0, 3.5)];
+        let mut truth = Pose2::IDENTITY;
+        let control = Control::new(1.0, 0.3);
+        for tick in 0..ticks {
+            ekf.predict(&control, 0.1).unwrap_or_else(|e| panic!("{e}"));
+            truth = MotionModel::ExactArc.step(&truth, &control, 0.1).pose;
+            for (id, lm) in truth_landmarks.iter().enumerate() {
+                if !corrections && ekf.state.slot(id).is_some() {
+                    continue;
+                }
+                let exact = range_bearing::predict(&truth, lm).unwrap_or_else(|e| panic!("{e}"));
+                // A fixed, deterministic "noise" so that corrections move the estimate.
+                let wobble = 0.05 * ((tick * 7 + id * 3) as f64).sin();
+                let z = RangeBearing::new(
+                    exact.measurement.range + wobble,
+                    exact.measurement.bearing - 0.5 * wobble,
+                );
+                ekf.update(id, &z).unwrap_or_else(|e| panic!("{e}"));
+            }
+        }
+    }
+
+    #[test]
+    fn first_estimates_equal_the_latest_until_an_update_moves_the_estimate() {
+        // With landmarks initialized but never corrected, the first estimates are
+        // the latest ones, so both linearizations must agree to rounding.
+        let mut ekf = EkfSlam::new(config(), Pose2::IDENTITY).unwrap_or_else(|e| panic!("{e}"));
+        let mut fej =
+            EkfSlam::with_linearization(config(), Pose2::IDENTITY, Linearization::FirstEstimates)
+                .unwrap_or_else(|e| panic!("{e}"));
+        assert_eq!((ekf.name(), fej.name()), ("ekf", "fej-ekf"));
+        drive(&mut ekf, 8, false);
+        drive(&mut fej, 8, false);
+        assert!((ekf.mean() - fej.mean()).norm() < 1e-12);
+        assert!((ekf.covariance() - fej.covariance()).norm() < 1e-12);
+
+        // With corrections the Jacobians differ, and so do the covariances.
+        let mut ekf = EkfSlam::new(config(), Pose2::IDENTITY).unwrap_or_else(|e| panic!("{e}"));
+        let mut fej =
+            EkfSlam::with_linearization(config(), Pose2::IDENTITY, Linearization::FirstEstimates)
+                .unwrap_or_else(|e| panic!("{e}"));
+        drive(&mut ekf, 30, true);
+        drive(&mut fej, 30, true);
+        let diff = (ekf.covariance() - fej.covariance()).norm();
+        assert!(diff > 1e-6, "covariances differ by {diff}");
+        let eig = nalgebra::SymmetricEigen::new(fej.covariance().clone());
+        assert!(eig.eigenvalues.min() > -1e-12, "{}", eig.eigenvalues);
+    }
+
+    #[test]
+    fn first_estimates_jacobians_learn_nothing_about_the_global_heading() {
+        // Rotating the whole map (robot and landmarks) about the origin changes no
+        // range or bearing: the direction N = [-p_y, p_x, 1, -L1_y, L1_x, ...] is
+        // unobservable. Give the filter uncertainty only along N (at its
+        // linearization points), then predict and update: a filter whose Jacobians
+        // respect the unobservable direction keeps that uncertainty, exactly.
+        let mut fej =
+            EkfSlam::with_linearization(config(), Pose2::IDENTITY, Linearization::FirstEstimates)
+                .unwrap_or_else(|e| panic!("{e}"));
+        drive(&mut fej, 10, true);
+        let moved = (fej.robot_prior.translation() - fej.robot_pose().translation()).norm();
+        let landmark_moved =
+            (fej.first_estimates[0] - fej.state.mean.fixed_rows::<2>(3).into_owned()).norm();
+        assert!(
+            moved > 1e-4 && landmark_moved > 1e-4,
+            "{moved} {landmark_moved}"
+        );
+
+        let rotation = |p: Vector2<f64>, landmarks: &[Vector2<f64>]| {
+            let mut n = DVector::zeros(3 + 2 * landmarks.len());
+            n[0] = -p[1];
+            n[1] = p[0];
+            n[2] = 1.0;
+            for (slot, l) in landmarks.iter().enumerate() {
+                n[3 + 2 * slot] = -l[1];
+                n[4 + 2 * slot] = l[0];
+            }
+            n
+        };
+        let first = fej.first_estimates.clone();
+        let n_before = rotation(fej.robot_prior.translation(), &first);
+        fej.state.covariance = 0.01 * &n_before * n_before.transpose();
+
+        // A stopped robot adds no process noise; the measurements are exactly what
+        // the filter predicts, so only the covariance can change.
+        fej.predict(&Control::default(), 0.1)
+            .unwrap_or_else(|e| panic!("{e}"));
+        let pose = fej.robot_pose();
+        for id in 0..2 {
+            let j = 3 + 2 * fej
+                .state
+                .slot(id)
+                .unwrap_or_else(|| panic!("landmark {id}"));
+            let l = fej.state.mean.fixed_rows::<2>(j).into_owned();
+            let z = range_bearing::predict(&pose, &l).unwrap_or_else(|e| panic!("{e}"));
+            let report = fej
+                .update(id, &z.measurement)
+                .unwrap_or_else(|e| panic!("{e}"));
+            let UpdateReport::Corrected { gain_norm, .. } = report else {
+                panic!("landmark {id} was known");
+            };
+            assert!(gain_norm < 1e-10, "landmark {id}: gain {gain_norm}");
+        }
+        let n_after = rotation(fej.robot_prior.translation(), &first);
+        let expected = 0.01 * &n_after * n_after.transpose();
+        let diff = (fej.covariance() - &expected).norm();
+        assert!(
+            diff < 1e-12,
+            "covariance moved off the rotation direction by {diff}"
+        );
+
+        // The textbook EKF linearizes at the latest estimates, which the updates
+        // have moved: with the same covariance it gains heading information it
+        // cannot have. Each such update gains little (here 4e-5 of the variance);
+        // over hundreds of updates it adds up to the overconfidence of EKF-SLAM.
+        let mut ekf = EkfSlam::new(config(), Pose2::IDENTITY).unwrap_or_else(|e| panic!("{e}"));
+        drive(&mut ekf, 10, true);
+        ekf.state.covariance = 0.01 * &n_before * n_before.transpose();
+        ekf.predict(&Control::default(), 0.1)
+            .unwrap_or_else(|e| panic!("{e}"));
+        let heading_before = ekf.robot_covariance()[(2, 2)];
+        let pose = ekf.robot_pose();
+        for id in 0..2 {
+            let j = 3 + 2 * ekf
+                .state
+                .slot(id)
+                .unwrap_or_else(|| panic!("landmark {id}"));
+            let l = ekf.state.mean.fixed_rows::<2>(j).into_owned();
+            let z = range_bearing::predict(&pose, &l).unwrap_or_else(|e| panic!("{e}"));
+            ekf.update(id, &z.measurement)
+                .unwrap_or_else(|e| panic!("{e}"));
+        }
+        let heading_after = ekf.robot_covariance()[(2, 2)];
+        assert!(
+            heading_before - heading_after > 1e-5 * heading_before,
+            "textbook EKF heading variance {heading_before} -> {heading_after}"
+        );
     }
 
     #[test]

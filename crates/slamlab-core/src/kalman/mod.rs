@@ -10,7 +10,7 @@ mod state;
 mod ukf_slam;
 pub mod unscented;
 
-pub use ekf_slam::EkfSlam;
+pub use ekf_slam::{EkfSlam, Linearization};
 pub use ukf_slam::UkfSlam;
 pub use unscented::UnscentedParams;
 
