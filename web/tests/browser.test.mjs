@@ -30,6 +30,7 @@ const LESSON = "lesson=landmark-slam&seed=7";
 const VIEWPORT = { width: 1280, height: 800 };
 const START_TIMEOUT_MS = 90_000; // loading and compiling ~10 MB of wasm on a slow CI machine
 const RUN_WAIT_MS = 2_000; // how long the simulation runs after Space
+const LOAD_RUN_MS = 6_000; // how long the 50-landmark run is timed
 // A drawn canvas has text, lines and shapes: many colours, and a visible share of pixels
 // that differ from the background. A blank or cleared canvas has one colour.
 const MIN_DISTINCT_COLOURS = 16;
@@ -409,6 +410,48 @@ async function main() {
       }
     });
 
+    // --- The heaviest lesson setting the issues name: 50 landmarks, EKF and UKF side by
+    // side. Its frame timing (the app's CPU time per frame, the simulation's share, the
+    // frame rate) is recorded in metrics.json, never asserted: wall-clock numbers
+    // belong in the README's benchmark table, not in a pass/fail test.
+    await check("50 landmarks with EKF and UKF: runs, draws and reports its frame timing", async () => {
+      const url = "index.html?lesson=landmark-slam&seed=1&landmarks=50&estimator=ekf,ukf";
+      const { context, page: p, log } = await openPage(browser, baseUrl, url, "50 landmarks");
+      try {
+        await waitRunning(p);
+        const { stats } = await waitNotBlank(p, "lm50-1-start.png");
+        assertNotBlank(stats, "lm50-1-start.png");
+        await p.mouse.click(VIEWPORT.width / 2, VIEWPORT.height / 2);
+        const s0 = await testState(p);
+        await p.keyboard.press("Space");
+        await waitState(p, (s) => s.tick > s0.tick, "the first tick after Space");
+        const startedAt = Date.now();
+        await sleep(LOAD_RUN_MS);
+        const s1 = await testState(p);
+        const seconds = (Date.now() - startedAt) / 1000;
+        await screenshot(p, "lm50-2-running.png");
+        await assertNoPanic(p);
+        const t = s1.frame_timing;
+        assert(t && t.frames > 0, `no frame timing in the state: ${JSON.stringify(s1)}`);
+        assert(Number.isFinite(t.cpu_ms_median), `eframe gave no CPU time: ${JSON.stringify(t)}`);
+        assert(s1.filters.join(",") === "ekf,ukf", `filters ${s1.filters}`);
+        assert(s1.tick > s0.tick, "the simulation did not advance");
+        metrics.lm50_frame_cpu_ms_median = t.cpu_ms_median;
+        metrics.lm50_frame_cpu_ms_p95 = t.cpu_ms_p95;
+        metrics.lm50_sim_ms_median = t.sim_ms_median;
+        metrics.lm50_sim_ms_p95 = t.sim_ms_p95;
+        metrics.lm50_frames_per_second = Number((1000 / t.interval_ms_median).toFixed(1));
+        metrics.lm50_ticks_per_second = Number(((s1.tick - s0.tick) / seconds).toFixed(1));
+        assert(log.problems.length === 0, log.problems.join("; "));
+        return (
+          `tick ${s0.tick} -> ${s1.tick} in ${seconds.toFixed(1)} s; frame CPU median ${t.cpu_ms_median?.toFixed(2)} ms ` +
+          `(p95 ${t.cpu_ms_p95?.toFixed(2)}), simulation ${t.sim_ms_median.toFixed(2)} ms, ${metrics.lm50_frames_per_second} frames/s`
+        );
+      } finally {
+        await context.close();
+      }
+    });
+
     // --- A panic must be visible: the red banner, #status "panicked", and the app stops.
     await check("a panic shows the red #panic banner and stops the app", async () => {
       const { context, page: p, log } = await openPage(browser, baseUrl, `index.html?${LESSON}`, "panic (deliberate)");
@@ -460,7 +503,9 @@ async function main() {
   await writeFile(path.join(outDir, "result.json"), `${JSON.stringify({ results, metrics, pages: pageLogs }, null, 2)}\n`);
   console.log(
     `metrics: time to "running" ${metrics.status_running_ms ?? "?"} ms, to first drawn frame ${metrics.ttff_ms ?? "?"} ms; ` +
-      `wasm ${metrics.wasm_bytes} bytes (${metrics.wasm_gzip_bytes} gzip -9)`,
+      `wasm ${metrics.wasm_bytes} bytes (${metrics.wasm_gzip_bytes} gzip -9); ` +
+      `50 landmarks, EKF+UKF: frame CPU median ${metrics.lm50_frame_cpu_ms_median ?? "?"} ms, ` +
+      `simulation ${metrics.lm50_sim_ms_median ?? "?"} ms, ${metrics.lm50_frames_per_second ?? "?"} frames/s`,
   );
   console.log(`screenshots, metrics.json and result.json: ${outDir}`);
   const failed = results.filter((r) => !r.ok).length;

@@ -6,6 +6,7 @@
 //! (run, pause, speed, step phase, step tick, reset), the notice bar, the theme, and
 //! the URL: `?lesson=landmark-slam&seed=7&embed=1&landmarks=30`.
 
+pub mod frame_stats;
 pub mod landmark_slam;
 pub mod lessons;
 pub mod palette;
@@ -57,6 +58,10 @@ pub struct SlamLabApp {
     pub query: String,
     /// Frames drawn so far.
     pub frames: u64,
+    frame_stats: frame_stats::FrameStats,
+    /// eframe's CPU time of the previous frame, milliseconds (none in tests).
+    last_cpu_ms: Option<f32>,
+    show_frame_timing: bool,
     lesson_id: &'static str,
     lesson: ActiveLesson,
     embed: bool,
@@ -138,6 +143,9 @@ impl SlamLabApp {
         Self {
             query: query.trim_start_matches('?').to_owned(),
             frames: 0,
+            frame_stats: frame_stats::FrameStats::default(),
+            last_cpu_ms: None,
+            show_frame_timing: false,
             lesson_id: lesson_info.id,
             lesson: ActiveLesson::LandmarkSlam(Box::new(lesson)),
             embed: parsed.embed,
@@ -252,6 +260,7 @@ impl SlamLabApp {
             "seed": seed,
             "filters": filters,
             "notices": self.notices().len(),
+            "frame_timing": self.frame_stats.summary(),
         })
         .to_string()
     }
@@ -290,12 +299,17 @@ impl SlamLabApp {
             self.apply_time_action(action);
         }
         let dt = f64::from(ctx.input(|i| i.stable_dt));
+        let sim_start = web_time::Instant::now();
         match &mut self.lesson {
             ActiveLesson::LandmarkSlam(lesson) => {
                 lesson.read_drive_keys(&ctx);
                 lesson.advance(dt);
             }
         }
+        let sim_ms = sim_start.elapsed().as_secs_f32() * 1000.0;
+        let interval_ms = ctx.input(|i| i.unstable_dt) * 1000.0;
+        self.frame_stats
+            .record(self.last_cpu_ms, sim_ms, interval_ms);
 
         egui::Panel::top("slamlab_menu").show(ui, |ui| self.menu_bar_ui(ui));
         egui::Panel::top("slamlab_time_bar").show(ui, |ui| {
@@ -346,6 +360,10 @@ impl SlamLabApp {
                 ui.checkbox(&mut self.panels.parameters, "Parameters panel");
                 ui.checkbox(&mut self.panels.explanation, "Explanation panel");
                 ui.checkbox(&mut self.panels.plots, "Plots");
+                ui.checkbox(&mut self.show_frame_timing, "Frame timing")
+                    .on_hover_text(
+                        "How long each frame takes: the app's CPU time and the frame rate",
+                    );
                 match &mut self.lesson {
                     ActiveLesson::LandmarkSlam(lesson) => {
                         ui.checkbox(&mut lesson.view.legend, "Map legend");
@@ -365,6 +383,13 @@ impl SlamLabApp {
                 {
                     self.dark_mode = Some(!dark);
                     self.apply_theme(ui.ctx());
+                }
+                if self.show_frame_timing {
+                    ui.label(
+                        egui::RichText::new(self.frame_stats.label())
+                            .small()
+                            .monospace(),
+                    );
                 }
                 if self.embed {
                     ui.toggle_value(&mut self.panels.explanation, "Explain");
@@ -429,7 +454,8 @@ impl SlamLabApp {
 }
 
 impl eframe::App for SlamLabApp {
-    fn ui(&mut self, ui: &mut egui::Ui, _frame: &mut eframe::Frame) {
+    fn ui(&mut self, ui: &mut egui::Ui, frame: &mut eframe::Frame) {
+        self.last_cpu_ms = frame.info().cpu_usage.map(|s| s * 1000.0);
         self.app_ui(ui);
     }
 

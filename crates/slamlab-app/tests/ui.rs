@@ -270,6 +270,43 @@ fn the_forward_key_drives_the_robot_in_manual_mode() {
     assert_eq!(session(&h).truth(), stopped);
 }
 
+#[test]
+fn taking_the_wheel_mid_run_keeps_the_run() {
+    let mut h = harness("lesson=landmark-slam&seed=2");
+    h.run();
+    for _ in 0..20 {
+        h.get_by_label("Step tick").click();
+        h.run();
+    }
+    let landmarks = session(&h).filters()[0].filter().landmark_ids().len();
+    assert_eq!(session(&h).tick(), 20);
+    assert!(landmarks > 0);
+    h.get_by_label("Manual").click();
+    h.run();
+    assert!(h.state().landmark_lesson().is_some_and(|l| l.is_manual()));
+    assert_eq!(session(&h).tick(), 20, "the run was not restarted");
+    assert!(
+        !h.state()
+            .landmark_lesson()
+            .is_some_and(|l| l.params_changed()),
+        "switching driver is not a pending parameter change"
+    );
+    // The robot waits for the student: a tick without input leaves it where it is.
+    let before = session(&h).truth();
+    h.get_by_label("Step tick").click();
+    h.run();
+    assert_eq!(session(&h).truth(), before);
+    assert_eq!(session(&h).tick(), 21);
+    assert!(session(&h).filters()[0].filter().landmark_ids().len() >= landmarks);
+    // Back to the circle: it drives on from here.
+    h.get_by_label("Scripted circle").click();
+    h.run();
+    h.get_by_label("Step tick").click();
+    h.run();
+    assert_ne!(session(&h).truth(), before);
+    assert_eq!(session(&h).tick(), 22);
+}
+
 /// Pixels within `tolerance` (sum of absolute channel differences) of `target`.
 fn count_pixels(rgba: &[u8], target: [u8; 3], tolerance: i32) -> usize {
     rgba.chunks_exact(4)

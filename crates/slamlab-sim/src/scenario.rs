@@ -5,7 +5,7 @@ use crate::world::LandmarkLayout;
 use serde::{Deserialize, Serialize};
 use slamlab_core::kalman::{FilterConfig, FilterNoise, UnscentedParams};
 use slamlab_core::range_bearing::RangeBearingSensor;
-use slamlab_core::{Control, MotionModel, Pose2};
+use slamlab_core::{MotionModel, Pose2};
 use std::f64::consts::PI;
 
 /// Which estimators run.
@@ -178,14 +178,6 @@ impl LandmarkScenario {
                 range_std: self.range_std,
                 bearing_std: self.bearing_std,
             },
-        }
-    }
-
-    /// The command the scripted controller gives (`None` for manual driving).
-    pub fn scripted_control(&self) -> Option<Control> {
-        match self.controller {
-            ControllerKind::Circle { v, w } => Some(Control::new(v, w)),
-            ControllerKind::Manual => None,
         }
     }
 }

@@ -8,7 +8,7 @@
 
 use crate::noise::{Stream, gaussian, stream_rng};
 use crate::params::{self, ParamIssue};
-use crate::scenario::{EstimatorKind, LandmarkScenario};
+use crate::scenario::{ControllerKind, EstimatorKind, LandmarkScenario};
 use crate::world::LandmarkWorld;
 use nalgebra::{DMatrix, DVector, Vector2};
 use rand_chacha::ChaCha8Rng;
@@ -142,7 +142,11 @@ pub struct LandmarkSession {
     dead_reckoning: Pose2,
     dead_reckoning_path: Vec<Pose2>,
     tick: u64,
+    /// Who drives now; starts as the scenario's controller and can be switched mid-run.
+    controller: ControllerKind,
     teleop: Control,
+    /// A replay's command for the next tick, overriding the controller.
+    replayed_command: Option<Control>,
     command: Control,
     observations: Vec<Observation>,
     pending: VecDeque<Phase>,
@@ -218,7 +222,9 @@ impl LandmarkSession {
             dead_reckoning: start,
             dead_reckoning_path: vec![start],
             tick: 0,
+            controller: scenario.controller,
             teleop: Control::default(),
+            replayed_command: None,
             command: Control::default(),
             observations: Vec::new(),
             pending: VecDeque::new(),
@@ -320,6 +326,24 @@ impl LandmarkSession {
         }
     }
 
+    /// Who drives the robot now.
+    pub fn controller(&self) -> ControllerKind {
+        self.controller
+    }
+
+    /// Hands the robot to `controller` from the next tick on. Nothing else changes:
+    /// the world, the filters and the noise streams carry on, and
+    /// [`step_back`](Self::step_back) still replays exactly (it replays the commands).
+    /// A circle without finite speeds is ignored.
+    pub fn set_controller(&mut self, controller: ControllerKind) {
+        if let ControllerKind::Circle { v, w } = controller
+            && !(v.is_finite() && w.is_finite())
+        {
+            return;
+        }
+        self.controller = controller;
+    }
+
     /// The manual-driving command.
     pub fn teleop(&self) -> Control {
         self.teleop
@@ -358,11 +382,12 @@ impl LandmarkSession {
         let mut replay = LandmarkSession::new(self.scenario.clone());
         while replay.phases_run < target {
             if replay.pending.is_empty() {
-                let tick = replay.commands.len();
-                replay.teleop = self.commands.get(tick).copied().unwrap_or(self.teleop);
+                replay.replayed_command = self.commands.get(replay.commands.len()).copied();
             }
             replay.step_phase();
         }
+        replay.replayed_command = None;
+        replay.controller = self.controller;
         replay.teleop = self.teleop;
         replay.notices = std::mem::take(&mut self.notices);
         *self = replay;
@@ -389,7 +414,11 @@ impl LandmarkSession {
     fn begin_tick(&mut self) {
         self.tick += 1;
         let dt = self.scenario.dt;
-        self.command = self.scenario.scripted_control().unwrap_or(self.teleop);
+        self.command = match (self.replayed_command.take(), self.controller) {
+            (Some(command), _) => command,
+            (None, ControllerKind::Circle { v, w }) => Control::new(v, w),
+            (None, ControllerKind::Manual) => self.teleop,
+        };
         self.commands.push(self.command);
         // Noise is on the executed wheel speeds of a moving robot; a robot told to
         // stop stays put (and the estimators add no process noise for it).
@@ -532,6 +561,7 @@ pub fn tick_metrics(
 #[cfg(test)]
 mod tests {
     use super::*;
+    use std::f64::consts::PI;
 
     #[test]
     fn phases_follow_predict_then_each_update() {
@@ -642,6 +672,67 @@ mod tests {
             s.notices()
         );
         s.run_ticks(5);
+    }
+
+    #[test]
+    fn taking_the_wheel_mid_run_keeps_the_run_and_step_back_replays_it() {
+        let scenario = LandmarkScenario {
+            estimators: vec![EstimatorKind::Ekf],
+            ..Default::default()
+        };
+        let mut s = LandmarkSession::new(scenario.clone());
+        s.run_ticks(30);
+        let landmarks = s.filters()[0].filter().landmark_ids().len();
+        assert!(landmarks > 0);
+        s.set_controller(ControllerKind::Manual);
+        s.set_teleop(Control::new(0.4, -0.5));
+        s.run_ticks(10);
+        assert_eq!(s.tick(), 40, "the run goes on");
+        assert_eq!(s.command(), Control::new(0.4, -0.5));
+        assert!(s.filters()[0].filter().landmark_ids().len() >= landmarks);
+        // Back to the circle: the scripted command again.
+        s.set_controller(scenario.controller);
+        s.run_ticks(5);
+        assert_eq!(s.command(), Control::new(1.0, PI / 10.0));
+        // Stepping back across the switches replays the commands exactly.
+        let snapshot = |s: &LandmarkSession| {
+            (
+                s.tick(),
+                s.truth(),
+                s.filters()[0].filter().mean().clone(),
+                s.filters()[0].filter().covariance().clone(),
+            )
+        };
+        let mut straight = LandmarkSession::new(scenario);
+        straight.run_ticks(30);
+        straight.set_controller(ControllerKind::Manual);
+        straight.set_teleop(Control::new(0.4, -0.5));
+        straight.run_ticks(10);
+        while s.tick() > 40 {
+            assert!(s.step_back());
+        }
+        assert!(!s.is_mid_tick());
+        assert_eq!(snapshot(&s), snapshot(&straight));
+        assert_eq!(
+            s.controller(),
+            ControllerKind::Circle {
+                v: 1.0,
+                w: PI / 10.0
+            },
+            "stepping back keeps today's driver"
+        );
+        // A circle without finite speeds is refused.
+        s.set_controller(ControllerKind::Circle {
+            v: f64::NAN,
+            w: 0.0,
+        });
+        assert_eq!(
+            s.controller(),
+            ControllerKind::Circle {
+                v: 1.0,
+                w: PI / 10.0
+            }
+        );
     }
 
     #[test]

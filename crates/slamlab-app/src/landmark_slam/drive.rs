@@ -138,9 +138,10 @@ pub fn drive_panel_ui(
     ui.heading("Driving");
     ui.horizontal(|ui| {
         ui.radio_value(manual, false, "Scripted circle")
-            .on_hover_text("Thesis Experiment 1: v = 1 m/s, w = π/10 rad/s (restarts the run)");
+            .on_hover_text("Thesis Experiment 1: v = 1 m/s, w = π/10 rad/s, from the next tick on");
         ui.radio_value(manual, true, "Manual").on_hover_text(
-            "Drive with the arrow keys / WASD or the pad on the map (restarts the run)",
+            "Take the wheel from the next tick on: the run, the map and the filters go on. \
+             Drive with the arrow keys / WASD or the pad on the map",
         );
     });
     if !*manual {

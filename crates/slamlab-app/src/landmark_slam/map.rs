@@ -270,10 +270,7 @@ pub fn map_ui(
             ui.label(text);
         });
     }
-    if matches!(
-        session.scenario().controller,
-        slamlab_sim::ControllerKind::Manual
-    ) {
+    if matches!(session.controller(), slamlab_sim::ControllerKind::Manual) {
         drive::drive_pad_ui(ui, rect, drive);
     } else {
         drive.pad = None;
@@ -939,10 +936,7 @@ struct LegendPlacement<'a> {
 }
 
 fn is_manual(session: &LandmarkSession) -> bool {
-    matches!(
-        session.scenario().controller,
-        slamlab_sim::ControllerKind::Manual
-    )
+    matches!(session.controller(), slamlab_sim::ControllerKind::Manual)
 }
 
 /// Picks the legend's corner: the one covering the fewest robots (heavily weighted)

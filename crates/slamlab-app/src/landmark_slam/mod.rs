@@ -180,7 +180,10 @@ impl LandmarkSlamLesson {
 
     /// Do the panel's parameters differ from the running ones?
     pub fn params_changed(&self) -> bool {
-        params::to_pairs(&self.pending) != params::to_pairs(self.session.scenario())
+        // Who drives is switched live, not by a reset.
+        let mut running = self.session.scenario().clone();
+        running.controller = self.session.controller();
+        params::to_pairs(&self.pending) != params::to_pairs(&running)
     }
 
     /// Starts over with the pending parameters (same seed: same world and noise).
@@ -193,22 +196,30 @@ impl LandmarkSlamLesson {
         self.version += 1;
     }
 
-    /// Switches between the scripted circle and manual driving. The run restarts
-    /// (the session fixes its controller at the start); other pending edits stay pending.
+    /// Switches between the scripted circle and manual driving from the next tick
+    /// on. The run goes on (map, filters, plots); a reset keeps the choice. Taking
+    /// the wheel starts with the robot stopped; giving it back resumes the circle's
+    /// speeds.
     pub fn set_manual_driving(&mut self, manual: bool) {
         let value = if manual { "manual" } else { "circle" };
-        let mut scenario = self.session.scenario().clone();
-        let _issue = params::set(&mut scenario, "controller", value);
         let _issue = params::set(&mut self.pending, "controller", value);
-        self.session = LandmarkSession::new(scenario);
-        self.time.apply(TimeAction::Reset);
+        let controller = if manual {
+            ControllerKind::Manual
+        } else {
+            match (self.session.scenario().controller, self.pending.controller) {
+                (circle @ ControllerKind::Circle { .. }, _) => circle,
+                (_, pending) => pending,
+            }
+        };
         self.drive.stop();
+        self.session.set_teleop(self.drive.command());
+        self.session.set_controller(controller);
         self.version += 1;
     }
 
     /// Is the robot driven by hand?
     pub fn is_manual(&self) -> bool {
-        matches!(self.session.scenario().controller, ControllerKind::Manual)
+        matches!(self.session.controller(), ControllerKind::Manual)
     }
 
     /// Runs one phase.
