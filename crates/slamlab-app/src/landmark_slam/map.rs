@@ -510,7 +510,11 @@ fn ellipse_shapes(
     if (e.semi_major as f32) * t.scale > 1.0e6 {
         return Vec::new();
     }
-    let points: Vec<Pos2> = e.boundary(48).iter().map(|p| t.v(p)).collect();
+    // About one vertex per 4 screen points of perimeter: a small ellipse needs few,
+    // and a lesson with 50 landmarks and two filters draws over a hundred of them.
+    let perimeter = std::f32::consts::TAU * (e.semi_major as f32) * t.scale;
+    let segments = ((perimeter / 4.0).ceil() as usize).clamp(12, 64);
+    let points: Vec<Pos2> = e.boundary(segments).iter().map(|p| t.v(p)).collect();
     if points.iter().any(|p| !finite(*p)) {
         return Vec::new();
     }
