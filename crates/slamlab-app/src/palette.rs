@@ -15,6 +15,8 @@ pub const GREEN: Color32 = Color32::from_rgb(0x00, 0x9E, 0x73);
 pub const VERMILLION: Color32 = Color32::from_rgb(0xD5, 0x5E, 0x00);
 /// Okabe-Ito sky blue: the first-estimates Jacobian EKF (a lighter EKF blue).
 pub const SKY_BLUE: Color32 = Color32::from_rgb(0x56, 0xB4, 0xE9);
+/// Okabe-Ito yellow: the ideal EKF (linearized at the truth), reachable by URL only.
+pub const YELLOW: Color32 = Color32::from_rgb(0xF0, 0xE4, 0x42);
 /// Dead reckoning: grey (drawn dashed).
 pub const DEAD_RECKONING: Color32 = Color32::from_rgb(0x8C, 0x8C, 0x8C);
 
@@ -24,6 +26,7 @@ pub fn estimator_color(name: &str) -> Color32 {
         "ekf" => BLUE,
         "ukf" => ORANGE,
         "fej-ekf" => SKY_BLUE,
+        "ideal-ekf" => YELLOW,
         "fastslam" | "mcl" | "amcl" | "pf" => PURPLE,
         "acmcl" => GREEN,
         _ => PURPLE,

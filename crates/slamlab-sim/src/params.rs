@@ -146,7 +146,7 @@ pub const PARAMS: &[ParamSpec] = &[
         name: "estimator",
         unit: "",
         help: "estimators to run, comma separated",
-        kind: ParamKind::Choice(&["ekf", "ukf", "fej-ekf"]),
+        kind: ParamKind::Choice(&["ekf", "ukf", "fej-ekf", "ideal-ekf"]),
     },
     number("ukf-alpha", "", "UKF sigma-point spread alpha", 1e-3, 2.0),
     number(

@@ -20,11 +20,23 @@ pub enum EstimatorKind {
     /// EKF-SLAM with first-estimates Jacobians (Huang, Mourikis and Roumeliotis
     /// 2008), which keeps the EKF consistent over long runs.
     FejEkf,
+    /// EKF-SLAM linearized at the true state: impossible outside a simulator, the
+    /// yardstick for consistency (Huang, Mourikis and Roumeliotis 2008). Command
+    /// line and URL only; the lesson's menu does not offer it.
+    IdealEkf,
 }
 
 impl EstimatorKind {
     /// Every estimator, in menu order.
-    pub const ALL: [EstimatorKind; 3] = [
+    pub const ALL: [EstimatorKind; 4] = [
+        EstimatorKind::Ekf,
+        EstimatorKind::Ukf,
+        EstimatorKind::FejEkf,
+        EstimatorKind::IdealEkf,
+    ];
+
+    /// The estimators a student can pick in the lesson.
+    pub const LESSON: [EstimatorKind; 3] = [
         EstimatorKind::Ekf,
         EstimatorKind::Ukf,
         EstimatorKind::FejEkf,
@@ -36,6 +48,7 @@ impl EstimatorKind {
             EstimatorKind::Ekf => "ekf",
             EstimatorKind::Ukf => "ukf",
             EstimatorKind::FejEkf => "fej-ekf",
+            EstimatorKind::IdealEkf => "ideal-ekf",
         }
     }
 

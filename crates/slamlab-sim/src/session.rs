@@ -188,6 +188,12 @@ impl LandmarkSession {
                     Linearization::FirstEstimates,
                 )
                 .map(|f| Box::new(f) as _),
+                EstimatorKind::IdealEkf => EkfSlam::with_linearization(
+                    scenario.filter_config(),
+                    start,
+                    Linearization::TrueState,
+                )
+                .map(|f| Box::new(f) as _),
             };
             match built {
                 Ok(filter) => filters.push(FilterRun {
@@ -430,7 +436,15 @@ impl LandmarkSession {
                 self.command.w + gaussian(&mut self.control_rng, self.scenario.w_std),
             )
         };
+        let robot_before = self.truth;
         self.truth = MotionModel::ExactArc.predict(&self.truth, &executed, dt);
+        for run in &mut self.filters {
+            run.filter.observe_truth(
+                robot_before,
+                self.truth,
+                &mut self.world.landmarks.iter().map(|l| (l.id, l.position)),
+            );
+        }
         self.dead_reckoning = self
             .scenario
             .motion

@@ -10,6 +10,13 @@ use slamlab_sim::{LandmarkSession, Phase};
 /// What a phase does, in two or three sentences, for an estimator family.
 fn phase_text(kind: &str, phase: Option<Phase>, report: Option<&UpdateReport>) -> String {
     let text = textbook_phase_text(kind, phase, report);
+    if kind == "ideal-ekf" && phase.is_some() {
+        return text
+            + " Ideal EKF: every Jacobian is taken at the true state, which only a \
+               simulator knows. It is the yardstick: with exact linearization points its \
+               NEES stays in the band, so whatever the other EKFs show beyond it comes \
+               from where they linearize.";
+    }
     if kind != "fej-ekf" {
         return text;
     }

@@ -132,7 +132,7 @@ fn estimators_ui(ui: &mut egui::Ui, lesson: &mut LandmarkSlamLesson) {
         ui.label("estimators");
         let mut chosen: Vec<EstimatorKind> = lesson.pending.estimators.clone();
         let mut changed = false;
-        for kind in EstimatorKind::ALL {
+        for kind in EstimatorKind::LESSON {
             let mut on = chosen.contains(&kind);
             let text = egui::RichText::new(kind.name().to_uppercase())
                 .color(palette::estimator_color(kind.name()));

@@ -63,6 +63,25 @@ fn title_ui(ui: &mut egui::Ui, title: &str, hover: &str) {
         .on_hover_text(hover);
 }
 
+/// Grid steps for the time axis, `[minor, labelled, major]`, on a 1-2-5 sequence:
+/// `base_step` is the value 8 screen points span (egui_plot's finest grid), and tick
+/// labels need about 60 points (the x axis's minimum label spacing). The default
+/// powers-of-ten grid labels only 0 on a narrow plot of a short run.
+fn time_axis_steps(base_step: f64) -> [f64; 3] {
+    let wanted = base_step.abs() * 60.0 / 8.0;
+    if !(wanted.is_finite() && wanted > 0.0) {
+        return [1.0, 2.0, 10.0];
+    }
+    let decade = 10_f64.powf(wanted.log10().floor());
+    let (label, minor, major) = match wanted / decade {
+        m if m <= 1.0 => (1.0, 0.5, 10.0),
+        m if m <= 2.0 => (2.0, 1.0, 10.0),
+        m if m <= 5.0 => (5.0, 1.0, 10.0),
+        _ => (10.0, 5.0, 100.0),
+    };
+    [minor * decade, label * decade, major * decade]
+}
+
 fn plot<'a>(id: &str, x_label: &str, y_label: &str, height: f32) -> Plot<'a> {
     Plot::new(id)
         .height(height)
@@ -75,6 +94,9 @@ fn plot<'a>(id: &str, x_label: &str, y_label: &str, height: f32) -> Plot<'a> {
                 .background_alpha(0.55),
         )
         .link_axis(egui::Id::unique("slamlab_time_axis"), [true, false])
+        .x_grid_spacer(egui_plot::uniform_grid_spacer(|input| {
+            time_axis_steps(input.base_step_size)
+        }))
         .include_x(0.0)
         .include_x(1.0)
         .include_y(0.0)
@@ -221,6 +243,34 @@ mod tests {
         assert!(thinned.len() <= MAX_POINTS + 1);
         assert_eq!(thinned.first().map(|p| p[0]), Some(0.0));
         assert_eq!(thinned.last().map(|p| p[0]), Some(9999.0));
+    }
+
+    #[test]
+    fn time_axis_labels_land_60_points_or_more_apart_on_nested_steps() {
+        // 45 points per second (a 6 s run on a 280-point plot): base step 8/45 s.
+        assert_eq!(time_axis_steps(8.0 / 45.0), [1.0, 2.0, 10.0]);
+        // A 200 s run on the same plot: 1.4 points per second.
+        let [minor, label, major] = time_axis_steps(8.0 / 1.4);
+        assert_eq!([minor, label, major], [10.0, 50.0, 100.0]);
+        for base in [1e-3, 0.013, 0.17, 0.5, 2.2, 7.0, 31.0, 640.0] {
+            let [minor, label, major] = time_axis_steps(base);
+            let label_points = label / base * 8.0;
+            assert!(label_points >= 60.0 - 1e-9, "{base}: {label_points}");
+            assert!(
+                label_points < 60.0 * 2.6,
+                "{base}: labels {label_points} apart"
+            );
+            for (fine, coarse) in [(minor, label), (label, major)] {
+                let ratio = coarse / fine;
+                assert!(
+                    (ratio - ratio.round()).abs() < 1e-9,
+                    "{base}: {fine} vs {coarse}"
+                );
+            }
+        }
+        for bad in [0.0, f64::NAN, f64::INFINITY] {
+            assert_eq!(time_axis_steps(bad), [1.0, 2.0, 10.0]);
+        }
     }
 
     #[test]

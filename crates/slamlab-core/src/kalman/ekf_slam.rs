@@ -7,6 +7,7 @@ use crate::motion::Control;
 use crate::range_bearing::{self, RangeBearing};
 use nalgebra::{DMatrix, DVector, Matrix2, Matrix2x3, Matrix3, Vector2};
 use serde::{Deserialize, Serialize};
+use std::collections::HashMap;
 
 /// Where the EKF evaluates its Jacobians.
 ///
@@ -22,6 +23,12 @@ use serde::{Deserialize, Serialize};
 /// predicted for this tick, before any update, and each landmark where it was first
 /// initialized. The residuals still use the latest estimate. With these Jacobians
 /// the linearized system keeps the three unobservable directions of the true one.
+///
+/// The ideal EKF evaluates them at the true state, which only a simulator knows
+/// (it is given through [`LandmarkSlam::observe_truth`]). It is the yardstick of
+/// Huang et al.: its linearization is exact, so any inconsistency it shows comes
+/// from the noise models or the nonlinearity of the innovation, not from where the
+/// Jacobians were taken.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
 pub enum Linearization {
     /// Jacobians at the latest estimate (thesis Sec. 3.2, the slides).
@@ -29,6 +36,16 @@ pub enum Linearization {
     LatestEstimate,
     /// First-estimates Jacobians (FEJ-EKF).
     FirstEstimates,
+    /// Jacobians at the true state (the ideal EKF; simulation only).
+    TrueState,
+}
+
+/// The true state, as far as the ideal EKF needs it.
+#[derive(Clone, Debug, Default)]
+struct Truth {
+    robot_before: Pose2,
+    robot: Pose2,
+    landmarks: HashMap<usize, Vector2<f64>>,
 }
 
 /// EKF-SLAM with known data association.
@@ -53,6 +70,8 @@ pub struct EkfSlam {
     robot_prior: Pose2,
     /// Each landmark's position when it was initialized, in slot order.
     first_estimates: Vec<Vector2<f64>>,
+    /// The true state, for [`Linearization::TrueState`]; `None` until it is given.
+    truth: Option<Truth>,
 }
 
 impl EkfSlam {
@@ -74,7 +93,34 @@ impl EkfSlam {
             linearization,
             robot_prior: start,
             first_estimates: Vec::new(),
+            truth: None,
         })
+    }
+
+    /// Where the Jacobians of landmark `id` are evaluated when they are not at the
+    /// latest estimate: the robot pose and the landmark position. `current` is the
+    /// landmark's latest estimate (or, for a new landmark, its first).
+    fn linearization_point(
+        &self,
+        id: usize,
+        slot: Option<usize>,
+        current: Vector2<f64>,
+    ) -> (Pose2, Vector2<f64>) {
+        let truth = self
+            .truth
+            .as_ref()
+            .filter(|_| self.linearization == Linearization::TrueState);
+        match truth {
+            Some(truth) => (
+                truth.robot,
+                truth.landmarks.get(&id).copied().unwrap_or(current),
+            ),
+            None => (
+                self.robot_prior,
+                slot.and_then(|s| self.first_estimates.get(s).copied())
+                    .unwrap_or(current),
+            ),
+        }
     }
 
     /// Where this filter evaluates its Jacobians.
@@ -98,9 +144,9 @@ impl EkfSlam {
         let innovation = z.difference(&pred.measurement);
         let (h_r, h_l) = match self.linearization {
             Linearization::LatestEstimate => (pred.jacobian_pose, pred.jacobian_landmark),
-            Linearization::FirstEstimates => {
-                let first_landmark = self.first_estimates.get(slot).copied().unwrap_or(landmark);
-                let first = range_bearing::predict(&self.robot_prior, &first_landmark)
+            Linearization::FirstEstimates | Linearization::TrueState => {
+                let (at_pose, at_landmark) = self.linearization_point(id, Some(slot), landmark);
+                let first = range_bearing::predict(&at_pose, &at_landmark)
                     .map_err(|source| FilterError::Measurement { id, source })?;
                 (first.jacobian_pose, first.jacobian_landmark)
             }
@@ -165,16 +211,9 @@ impl EkfSlam {
         // robot pose predicted for this tick (the landmark's first estimate is this one).
         let g_r = match self.linearization {
             Linearization::LatestEstimate => g.jacobian_pose,
-            Linearization::FirstEstimates => {
-                let p = self.robot_prior;
-                Matrix2x3::new(
-                    1.0,
-                    0.0,
-                    -(g.landmark[1] - p.y),
-                    0.0,
-                    1.0,
-                    g.landmark[0] - p.x,
-                )
+            Linearization::FirstEstimates | Linearization::TrueState => {
+                let (p, l) = self.linearization_point(id, None, g.landmark);
+                Matrix2x3::new(1.0, 0.0, -(l[1] - p.y), 0.0, 1.0, l[0] - p.x)
             }
         };
         let p_rr: Matrix3<f64> = self.state.covariance.fixed_view::<3, 3>(0, 0).into_owned();
@@ -200,6 +239,24 @@ impl LandmarkSlam for EkfSlam {
         match self.linearization {
             Linearization::LatestEstimate => "ekf",
             Linearization::FirstEstimates => "fej-ekf",
+            Linearization::TrueState => "ideal-ekf",
+        }
+    }
+
+    fn observe_truth(
+        &mut self,
+        robot_before: Pose2,
+        robot: Pose2,
+        landmarks: &mut dyn Iterator<Item = (usize, Vector2<f64>)>,
+    ) {
+        if self.linearization != Linearization::TrueState {
+            return;
+        }
+        let truth = self.truth.get_or_insert_with(Truth::default);
+        truth.robot_before = robot_before;
+        truth.robot = robot;
+        if truth.landmarks.is_empty() {
+            truth.landmarks.extend(landmarks);
         }
     }
 
@@ -212,12 +269,17 @@ impl LandmarkSlam for EkfSlam {
             .step(&self.robot_pose(), control, dt);
         let mut f = step.jacobian_pose;
         let g = step.jacobian_control;
-        if self.linearization == Linearization::FirstEstimates {
-            // ∂f/∂θ = J (p' - p) for both motion models; FEJ takes the displacement
-            // from the previous *predicted* position, so the products of F over
-            // time telescope as they do for the true system.
-            f[(0, 2)] = -(step.pose.y - self.robot_prior.y);
-            f[(1, 2)] = step.pose.x - self.robot_prior.x;
+        // ∂f/∂θ = J (p' - p) for both motion models. FEJ takes the displacement
+        // from the previous *predicted* position, so that the products of F over time
+        // telescope as they do for the true system; the ideal EKF takes the true move.
+        let displacement = match (self.linearization, &self.truth) {
+            (Linearization::LatestEstimate, _) => None,
+            (Linearization::TrueState, Some(truth)) => Some((truth.robot_before, truth.robot)),
+            _ => Some((self.robot_prior, step.pose)),
+        };
+        if let Some((from, to)) = displacement {
+            f[(0, 2)] = -(to.y - from.y);
+            f[(1, 2)] = to.x - from.x;
         }
         self.state.mean[0] = step.pose.x;
         self.state.mean[1] = step.pose.y;
@@ -499,6 +561,62 @@ mod tests {
             heading_before - heading_after > 1e-5 * heading_before,
             "textbook EKF heading variance {heading_before} -> {heading_after}"
         );
+    }
+
+    #[test]
+    fn the_ideal_ekf_is_the_textbook_ekf_when_the_estimate_is_the_truth() {
+        // Exact commands and measurements keep the estimate on the truth (every
+        // innovation is zero), so Jacobians at the truth and at the estimate agree.
+        let landmarks = [(4, Vector2::new(3.0, 1.0)), (9, Vector2::new(1.0, 3.5))];
+        let run = |linearization: Linearization, wobble: f64| {
+            let mut ekf = EkfSlam::with_linearization(config(), Pose2::IDENTITY, linearization)
+                .unwrap_or_else(|e| panic!("{e}"));
+            let mut truth = Pose2::IDENTITY;
+            let control = Control::new(1.0, 0.3);
+            for tick in 0..20 {
+                let before = truth;
+                truth = MotionModel::ExactArc.step(&truth, &control, 0.1).pose;
+                ekf.observe_truth(before, truth, &mut landmarks.iter().copied());
+                ekf.predict(&control, 0.1).unwrap_or_else(|e| panic!("{e}"));
+                for (id, lm) in landmarks {
+                    let exact = range_bearing::predict(&truth, &lm)
+                        .unwrap_or_else(|e| panic!("{e}"))
+                        .measurement;
+                    let noise = wobble * ((tick * 5 + id) as f64).sin();
+                    let z = RangeBearing::new(exact.range + noise, exact.bearing - noise);
+                    ekf.update(id, &z).unwrap_or_else(|e| panic!("{e}"));
+                }
+            }
+            ekf
+        };
+        let (textbook, ideal) = (
+            run(Linearization::LatestEstimate, 0.0),
+            run(Linearization::TrueState, 0.0),
+        );
+        assert_eq!(ideal.name(), "ideal-ekf");
+        assert!((textbook.covariance() - ideal.covariance()).norm() < 1e-12);
+        assert!((textbook.mean() - ideal.mean()).norm() < 1e-12);
+        // With noisy measurements the estimate leaves the truth and the two differ.
+        let (textbook, ideal) = (
+            run(Linearization::LatestEstimate, 0.05),
+            run(Linearization::TrueState, 0.05),
+        );
+        assert!((textbook.covariance() - ideal.covariance()).norm() > 1e-6);
+        // Other linearizations ignore the truth they are offered.
+        let mut fej = run(Linearization::FirstEstimates, 0.05);
+        let before = fej.clone();
+        fej.observe_truth(
+            Pose2::new(9.0, 9.0, 1.0),
+            Pose2::new(9.0, 9.0, 1.0),
+            &mut landmarks.iter().copied(),
+        );
+        fej.predict(&Control::new(1.0, 0.3), 0.1)
+            .unwrap_or_else(|e| panic!("{e}"));
+        let mut reference = before;
+        reference
+            .predict(&Control::new(1.0, 0.3), 0.1)
+            .unwrap_or_else(|e| panic!("{e}"));
+        assert_eq!(fej.covariance(), reference.covariance());
     }
 
     #[test]
