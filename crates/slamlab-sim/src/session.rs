@@ -113,11 +113,60 @@ pub struct FilterRun {
     pub last_error: Option<String>,
 }
 
-/// `LandmarkSlam` plus `Debug`, so sessions can be printed.
-pub trait LandmarkSlamDebug: LandmarkSlam + std::fmt::Debug {}
-impl<T: LandmarkSlam + std::fmt::Debug> LandmarkSlamDebug for T {}
+/// `LandmarkSlam` plus `Debug` and cloning, so sessions can be printed and
+/// checkpointed.
+pub trait LandmarkSlamDebug: LandmarkSlam + std::fmt::Debug {
+    /// A boxed copy.
+    fn clone_box(&self) -> Box<dyn LandmarkSlamDebug>;
+}
+impl<T: LandmarkSlam + std::fmt::Debug + Clone + 'static> LandmarkSlamDebug for T {
+    fn clone_box(&self) -> Box<dyn LandmarkSlamDebug> {
+        Box::new(self.clone())
+    }
+}
+
+/// Ticks between two checkpoints.
+const CHECKPOINT_EVERY: u64 = 50;
+/// At most this many checkpoints are kept...
+const MAX_CHECKPOINTS: usize = 20;
+/// ...and they hold at most about this many bytes of filter state.
+const CHECKPOINT_BUDGET_BYTES: usize = 64 << 20;
+
+/// The session at the end of a tick, so that stepping back replays from here
+/// rather than from the start. It keeps everything but the records that only grow
+/// (paths, metrics, commands), of which it notes the lengths.
+#[derive(Debug)]
+struct Checkpoint {
+    /// A copy with empty records and no checkpoints of its own.
+    state: Box<LandmarkSession>,
+    records: RecordLengths,
+}
+
+/// The lengths of a session's growing records.
+#[derive(Clone, Debug, PartialEq)]
+struct RecordLengths {
+    truth_path: usize,
+    dead_reckoning_path: usize,
+    commands: usize,
+    /// Per filter: path, history, NIS samples.
+    filters: Vec<(usize, usize, usize)>,
+}
 
 impl FilterRun {
+    /// A copy of everything but the records (path, history, NIS).
+    fn without_records(&self) -> FilterRun {
+        FilterRun {
+            kind: self.kind,
+            filter: self.filter.clone_box(),
+            path: Vec::new(),
+            history: Vec::new(),
+            nis: Vec::new(),
+            last_predict: self.last_predict,
+            last_update: self.last_update,
+            last_error: self.last_error.clone(),
+        }
+    }
+
     /// The estimator's read-only view.
     pub fn filter(&self) -> &dyn LandmarkSlam {
         &*self.filter
@@ -156,6 +205,8 @@ pub struct LandmarkSession {
     /// The command of every tick started so far: with the seed, all a replay needs.
     commands: Vec<Control>,
     phases_run: u64,
+    /// Checkpoints every [`CHECKPOINT_EVERY`] ticks, oldest first.
+    checkpoints: VecDeque<Checkpoint>,
 }
 
 impl LandmarkSession {
@@ -241,7 +292,79 @@ impl LandmarkSession {
             scenario,
             commands: Vec::new(),
             phases_run: 0,
+            checkpoints: VecDeque::new(),
         }
+    }
+
+    /// A copy of the session without its growing records and checkpoints.
+    fn without_records(&self) -> LandmarkSession {
+        LandmarkSession {
+            scenario: self.scenario.clone(),
+            world: self.world.clone(),
+            sensor: self.sensor,
+            control_rng: self.control_rng.clone(),
+            measurement_rng: self.measurement_rng.clone(),
+            truth: self.truth,
+            truth_path: Vec::new(),
+            dead_reckoning: self.dead_reckoning,
+            dead_reckoning_path: Vec::new(),
+            tick: self.tick,
+            controller: self.controller,
+            teleop: self.teleop,
+            replayed_command: self.replayed_command,
+            command: self.command,
+            observations: self.observations.clone(),
+            pending: self.pending.clone(),
+            last_phase: self.last_phase,
+            filters: self
+                .filters
+                .iter()
+                .map(FilterRun::without_records)
+                .collect(),
+            notices: Vec::new(),
+            commands: Vec::new(),
+            phases_run: self.phases_run,
+            checkpoints: VecDeque::new(),
+        }
+    }
+
+    fn record_lengths(&self) -> RecordLengths {
+        RecordLengths {
+            truth_path: self.truth_path.len(),
+            dead_reckoning_path: self.dead_reckoning_path.len(),
+            commands: self.commands.len(),
+            filters: self
+                .filters
+                .iter()
+                .map(|r| (r.path.len(), r.history.len(), r.nis.len()))
+                .collect(),
+        }
+    }
+
+    /// How many checkpoints fit the memory budget with this state size.
+    fn checkpoint_capacity(&self) -> usize {
+        let bytes_per_checkpoint: usize = self
+            .filters
+            .iter()
+            .map(|r| r.filter.mean().len().pow(2) * std::mem::size_of::<f64>())
+            .sum::<usize>()
+            .max(1);
+        (CHECKPOINT_BUDGET_BYTES / bytes_per_checkpoint).clamp(2, MAX_CHECKPOINTS)
+    }
+
+    /// The phases a [`step_back`](Self::step_back) would replay now: from the latest
+    /// checkpoint before the previous phase, or from the start.
+    pub fn step_back_replay_length(&self) -> u64 {
+        let Some(target) = self.phases_run.checked_sub(1) else {
+            return 0;
+        };
+        let from = self
+            .checkpoints
+            .iter()
+            .rev()
+            .find(|c| c.state.phases_run <= target)
+            .map_or(0, |c| c.state.phases_run);
+        target - from
     }
 
     /// The scenario as it runs (after checking).
@@ -379,13 +502,40 @@ impl LandmarkSession {
     /// last phase ran. Returns `false` at the start.
     ///
     /// The run is deterministic given the scenario (with its seed) and the tick
-    /// commands, so this replays from the start; it costs as much as the run so
-    /// far (a few milliseconds per hundred ticks of the lesson).
+    /// commands, so this replays them from the latest checkpoint before that phase
+    /// (one every 50 ticks, the latest 20 or as many as 64 MB hold), or from the start.
     pub fn step_back(&mut self) -> bool {
         let Some(target) = self.phases_run.checked_sub(1) else {
             return false;
         };
-        let mut replay = LandmarkSession::new(self.scenario.clone());
+        let checkpoint = self
+            .checkpoints
+            .iter()
+            .rev()
+            .find(|c| c.state.phases_run <= target);
+        let mut replay = match checkpoint {
+            Some(checkpoint) => {
+                let mut replay = checkpoint.state.without_records();
+                let lengths = &checkpoint.records;
+                replay.truth_path = self.truth_path[..lengths.truth_path].to_vec();
+                replay.dead_reckoning_path =
+                    self.dead_reckoning_path[..lengths.dead_reckoning_path].to_vec();
+                replay.commands = self.commands[..lengths.commands].to_vec();
+                for (run, (from, &(path, history, nis))) in replay
+                    .filters
+                    .iter_mut()
+                    .zip(self.filters.iter().zip(&lengths.filters))
+                {
+                    run.path = from.path[..path].to_vec();
+                    run.history = from.history[..history].to_vec();
+                    run.nis = from.nis[..nis].to_vec();
+                }
+                replay
+            }
+            None => LandmarkSession::new(self.scenario.clone()),
+        };
+        replay.checkpoints = std::mem::take(&mut self.checkpoints);
+        replay.checkpoints.retain(|c| c.state.phases_run <= target);
         while replay.phases_run < target {
             if replay.pending.is_empty() {
                 replay.replayed_command = self.commands.get(replay.commands.len()).copied();
@@ -520,6 +670,21 @@ impl LandmarkSession {
             let metrics = tick_metrics(self.tick, time, &self.truth, &self.world, run.filter());
             run.path.push(run.filter.robot_pose());
             run.history.push(metrics);
+        }
+        if self.tick.is_multiple_of(CHECKPOINT_EVERY)
+            && self
+                .checkpoints
+                .back()
+                .is_none_or(|c| c.state.phases_run < self.phases_run)
+        {
+            let capacity = self.checkpoint_capacity();
+            while self.checkpoints.len() >= capacity {
+                self.checkpoints.pop_front();
+            }
+            self.checkpoints.push_back(Checkpoint {
+                state: Box::new(self.without_records()),
+                records: self.record_lengths(),
+            });
         }
     }
 }
@@ -686,6 +851,65 @@ mod tests {
             s.notices()
         );
         s.run_ticks(5);
+    }
+
+    #[test]
+    fn checkpoints_make_stepping_back_cheap_and_exact() {
+        let scenario = LandmarkScenario {
+            estimators: vec![EstimatorKind::Ekf, EstimatorKind::Ukf],
+            ..Default::default()
+        };
+        let snapshot = |s: &LandmarkSession| {
+            (
+                (s.tick(), s.phases_run(), s.next_phase(), s.truth()),
+                s.truth_path().to_vec(),
+                s.filters()
+                    .iter()
+                    .map(|r| {
+                        (
+                            r.filter().mean().clone(),
+                            r.filter().covariance().clone(),
+                            r.history.clone(),
+                            r.nis.clone(),
+                            r.path.clone(),
+                        )
+                    })
+                    .collect::<Vec<_>>(),
+            )
+        };
+        let mut s = LandmarkSession::new(scenario.clone());
+        s.run_ticks(130);
+        s.step_phase();
+        let phases = s.phases_run();
+        // The latest checkpoint is at tick 100: a step back replays about 30 ticks.
+        let replay = s.step_back_replay_length();
+        assert!(replay > 0 && replay < phases / 3, "{replay} of {phases}");
+        // Step back across the checkpoints at ticks 100 and 50, checking the state
+        // against a straight run at three points.
+        let targets = [phases - 1, phases * 2 / 3, phases / 4];
+        for &target in &targets {
+            while s.phases_run() > target {
+                assert!(s.step_back());
+            }
+            let mut straight = LandmarkSession::new(scenario.clone());
+            while straight.phases_run() < target {
+                straight.step_phase();
+            }
+            assert_eq!(snapshot(&s), snapshot(&straight), "at phase {target}");
+        }
+        assert!(
+            s.tick() < 100,
+            "went back past a checkpoint: tick {}",
+            s.tick()
+        );
+        // And forward again from there, exactly as the straight run goes.
+        s.run_ticks(60);
+        let mut straight = LandmarkSession::new(scenario);
+        while straight.phases_run() < targets[2] {
+            straight.step_phase();
+        }
+        straight.run_ticks(60);
+        assert_eq!(snapshot(&s), snapshot(&straight));
     }
 
     #[test]

@@ -237,12 +237,14 @@ impl LandmarkSlamLesson {
     }
 
     /// Can the run go back one phase quickly? Going back replays the run from the
-    /// start, so very long or very large runs are not offered it.
+    /// session's latest checkpoint before it (usually at most 50 ticks); a replay
+    /// that would freeze the page (huge maps, or far behind the oldest checkpoint)
+    /// is not offered.
     pub fn can_step_back(&self) -> bool {
         let state = 3 + 2 * self.session.world().landmarks.len() as u64;
         let cost = self
             .session
-            .phases_run()
+            .step_back_replay_length()
             .saturating_mul(state.saturating_mul(state));
         self.session.phases_run() > 0 && cost <= 2_000_000_000
     }
