@@ -473,6 +473,23 @@ mod tests {
         assert!(eig.eigenvalues.min() > -1e-12, "{}", eig.eigenvalues);
     }
 
+    /// Updates every landmark in the state with exactly the measurement the filter
+    /// predicts for it (a zero innovation), returning the reports.
+    fn update_with_predicted_measurements(ekf: &mut EkfSlam) -> Vec<(usize, UpdateReport)> {
+        let pose = ekf.robot_pose();
+        let landmarks = ekf.landmarks();
+        landmarks
+            .iter()
+            .map(|l| {
+                let z = range_bearing::predict(&pose, &l.mean).unwrap_or_else(|e| panic!("{e}"));
+                let report = ekf
+                    .update(l.id, &z.measurement)
+                    .unwrap_or_else(|e| panic!("{e}"));
+                (l.id, report)
+            })
+            .collect()
+    }
+
     #[test]
     fn first_estimates_jacobians_learn_nothing_about_the_global_heading() {
         // Rotating the whole map (robot and landmarks) about the origin changes no
@@ -511,17 +528,7 @@ mod tests {
         // the filter predicts, so only the covariance can change.
         fej.predict(&Control::default(), 0.1)
             .unwrap_or_else(|e| panic!("{e}"));
-        let pose = fej.robot_pose();
-        for id in 0..2 {
-            let j = 3 + 2 * fej
-                .state
-                .slot(id)
-                .unwrap_or_else(|| panic!("landmark {id}"));
-            let l = fej.state.mean.fixed_rows::<2>(j).into_owned();
-            let z = range_bearing::predict(&pose, &l).unwrap_or_else(|e| panic!("{e}"));
-            let report = fej
-                .update(id, &z.measurement)
-                .unwrap_or_else(|e| panic!("{e}"));
+        for (id, report) in update_with_predicted_measurements(&mut fej) {
             let UpdateReport::Corrected { gain_norm, .. } = report else {
                 panic!("landmark {id} was known");
             };
@@ -545,17 +552,7 @@ mod tests {
         ekf.predict(&Control::default(), 0.1)
             .unwrap_or_else(|e| panic!("{e}"));
         let heading_before = ekf.robot_covariance()[(2, 2)];
-        let pose = ekf.robot_pose();
-        for id in 0..2 {
-            let j = 3 + 2 * ekf
-                .state
-                .slot(id)
-                .unwrap_or_else(|| panic!("landmark {id}"));
-            let l = ekf.state.mean.fixed_rows::<2>(j).into_owned();
-            let z = range_bearing::predict(&pose, &l).unwrap_or_else(|e| panic!("{e}"));
-            ekf.update(id, &z.measurement)
-                .unwrap_or_else(|e| panic!("{e}"));
-        }
+        update_with_predicted_measurements(&mut ekf);
         let heading_after = ekf.robot_covariance()[(2, 2)];
         assert!(
             heading_before - heading_after > 1e-5 * heading_before,
