@@ -442,3 +442,30 @@ fn the_fej_ekf_joins_from_its_checkbox_and_explains_itself() {
     assert!(label_visible(&h, "FEJ-EKF-SLAM"));
     assert!(label_visible(&h, "FEJ-EKF: H is evaluated"));
 }
+
+#[test]
+fn a_preset_opens_the_thesis_experiment_with_the_same_seed() {
+    let mut h = harness("lesson=landmark-slam&seed=7");
+    h.run();
+    h.get_by_label("preset").click();
+    h.run();
+    h.get_by_label("Thesis Experiment 2 (doubled control noise)")
+        .click();
+    h.run();
+    let s = session(&h).scenario();
+    assert_eq!(s.seed, 7, "the seed stays");
+    assert_eq!(
+        s,
+        &slamlab_sim::experiments::ekf_vs_ukf_scenario(2.0, 7),
+        "the run is the CLI's Experiment 2 trial"
+    );
+    assert_eq!(session(&h).tick(), 0, "the run restarted");
+    assert!(
+        !h.state()
+            .landmark_lesson()
+            .is_some_and(|l| l.params_changed())
+    );
+    // The URL form gives the same run.
+    let from_url = SlamLabApp::from_query("lesson=landmark-slam&seed=7&preset=thesis-exp2");
+    assert_eq!(from_url.session().map(|s| s.scenario()), Some(s));
+}

@@ -30,7 +30,8 @@ fn scenario_args() -> Vec<Arg> {
                 ParamKind::Count { min, max } => format!(" [{min} .. {max}]"),
                 ParamKind::Choice(c) => format!(" [{}]", c.join(", ")),
             };
-            let default = params::get(&LandmarkScenario::default(), p.name).unwrap_or_default();
+            let default = params::get(&LandmarkScenario::default(), p.name)
+                .unwrap_or_else(|| "none".to_owned());
             let unit = if p.unit.is_empty() {
                 String::new()
             } else {
@@ -217,7 +218,7 @@ fn list_params() -> Result<()> {
             ParamKind::Count { min, max } => format!("{min} .. {max}"),
             ParamKind::Choice(c) => c.join(" | "),
         };
-        let default = params::get(&defaults, p.name).unwrap_or_default();
+        let default = params::get(&defaults, p.name).unwrap_or_else(|| "none".to_owned());
         writeln!(
             out,
             "{:<16} {:<8} {:<22} {:<12} {}",

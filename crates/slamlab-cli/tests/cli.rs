@@ -252,3 +252,37 @@ fn both_estimators_run_side_by_side_from_the_command_line() {
     ]);
     assert!(ok, "{stderr}");
 }
+
+#[test]
+fn a_preset_sets_the_scenario_and_flags_apply_on_top() {
+    let v = run_json(&[
+        "run",
+        "landmark-slam",
+        "--landmarks",
+        "10",
+        "--preset",
+        "thesis-exp2",
+        "--seed",
+        "3",
+        "--steps",
+        "20",
+        "--json",
+    ]);
+    let p = &v["parameters"];
+    assert_eq!(p["v-std"], 0.2, "{p}");
+    assert_eq!(p["range-std"], 2.0, "{p}");
+    assert_eq!(p["fov-deg"], 360.0, "{p}");
+    assert_eq!(p["landmarks"], 10, "a flag beside the preset wins: {p}");
+    assert_eq!(v["seed"], 3);
+    let names: Vec<&str> = v["filters"]
+        .as_array()
+        .map(|a| a.iter().filter_map(|f| f["name"].as_str()).collect())
+        .unwrap_or_default();
+    assert_eq!(names, ["ekf", "ukf"]);
+    let (ok, _, stderr) = slamlab(&["run", "landmark-slam", "--preset", "exp9"]);
+    assert!(!ok);
+    assert!(
+        stderr.contains("--preset") && stderr.contains("thesis-exp1"),
+        "{stderr}"
+    );
+}

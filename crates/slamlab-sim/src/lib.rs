@@ -11,6 +11,7 @@ pub mod experiments;
 pub mod metrics;
 pub mod noise;
 pub mod params;
+pub mod presets;
 pub mod scenario;
 pub mod session;
 pub mod world;

@@ -60,8 +60,15 @@ const fn number(
     }
 }
 
-/// Every landmark-scenario parameter.
+/// Every landmark-scenario parameter. `preset` comes first: it sets all the others
+/// (but the seed), and whatever else is given applies on top of it.
 pub const PARAMS: &[ParamSpec] = &[
+    ParamSpec {
+        name: "preset",
+        unit: "",
+        help: "start from a named scenario (see the README); other parameters apply on top",
+        kind: ParamKind::Choice(crate::presets::PRESET_IDS),
+    },
     ParamSpec {
         name: "seed",
         unit: "",
@@ -293,7 +300,8 @@ pub fn set(scenario: &mut LandmarkScenario, name: &str, value: &str) -> Option<P
         });
     };
     let value = value.trim();
-    let kept = get(scenario, name).unwrap_or_default();
+    // A preset is not a value the scenario holds: a bad one keeps the parameters.
+    let kept = get(scenario, name).unwrap_or_else(|| "the current parameters".to_owned());
     let unreadable = |expected: String| {
         Some(ParamIssue::Unreadable {
             name: name.to_owned(),
@@ -341,6 +349,10 @@ pub fn set(scenario: &mut LandmarkScenario, name: &str, value: &str) -> Option<P
         ParamKind::Choice(choices) => {
             let expected = format!("one of {}", choices.join(", "));
             match name {
+                "preset" => match crate::presets::scenario(value, scenario.seed) {
+                    Some(preset) => *scenario = preset,
+                    None => return unreadable(expected),
+                },
                 "layout" => match value {
                     "teaching" => scenario.layout = LandmarkLayout::Teaching,
                     "random" => scenario.layout = LandmarkLayout::Random,
@@ -422,16 +434,22 @@ fn apply_number(scenario: &mut LandmarkScenario, name: &str, v: f64) {
     }
 }
 
-/// Applies `key=value` pairs in order; pairs whose key is in `skip` belong to
-/// someone else (the app's `lesson` and `embed`) and are passed over.
+/// Applies `key=value` pairs, a `preset` first and then the others in order; pairs
+/// whose key is in `skip` belong to someone else (the app's `lesson` and `embed`)
+/// and are passed over.
 pub fn apply_pairs<'a>(
     scenario: &mut LandmarkScenario,
     pairs: impl IntoIterator<Item = (&'a str, &'a str)>,
     skip: &[&str],
 ) -> Vec<ParamIssue> {
-    pairs
+    let (presets, others): (Vec<_>, Vec<_>) = pairs
         .into_iter()
         .filter(|(k, _)| !skip.contains(k))
+        .partition(|(k, _)| *k == "preset");
+    // A preset first, so that the parameters beside it apply on top, in any order.
+    presets
+        .into_iter()
+        .chain(others)
         .filter_map(|(k, v)| set(scenario, k, v))
         .collect()
 }
@@ -491,6 +509,37 @@ mod tests {
     }
 
     #[test]
+    fn a_preset_applies_first_keeps_the_seed_and_rejects_unknown_names() {
+        let mut s = LandmarkScenario::default();
+        let issues = apply_pairs(
+            &mut s,
+            [("range-std", "1"), ("seed", "5"), ("preset", "thesis-exp2")],
+            &[],
+        );
+        assert!(issues.is_empty(), "{issues:?}");
+        assert_eq!(s.seed, 5);
+        assert!(
+            (s.range_std - 1.0).abs() < 1e-12,
+            "given beside the preset, it wins"
+        );
+        assert!((s.v_std - 0.2).abs() < 1e-12 && (s.world_size - 20.0).abs() < 1e-12);
+        assert_eq!(get(&s, "preset"), None, "a preset is not a parameter value");
+        assert!(to_pairs(&s).iter().all(|(k, _)| *k != "preset"));
+        let before = s.clone();
+        let issue = set(&mut s, "preset", "thesis-exp9");
+        assert!(
+            matches!(issue, Some(ParamIssue::Unreadable { .. })),
+            "{issue:?}"
+        );
+        assert_eq!(s, before);
+        let text = issue.map(|i| i.to_string()).unwrap_or_default();
+        assert!(
+            text.contains("thesis-exp1") && text.contains("using the current parameters"),
+            "{text}"
+        );
+    }
+
+    #[test]
     fn estimators_and_ukf_parameters_are_named_parameters() {
         let mut s = LandmarkScenario::default();
         assert_eq!(set(&mut s, "estimator", "ekf,ukf,ekf"), None);
@@ -509,8 +558,8 @@ mod tests {
             Some(ParamIssue::Unreadable { .. })
         ));
         assert_eq!(s.estimators, vec![EstimatorKind::Ekf, EstimatorKind::Ukf]);
-        // Every parameter in the table can be read back.
-        for p in PARAMS {
+        // Every parameter in the table but the preset can be read back.
+        for p in PARAMS.iter().filter(|p| p.name != "preset") {
             assert!(
                 get(&LandmarkScenario::default(), p.name).is_some(),
                 "{}",

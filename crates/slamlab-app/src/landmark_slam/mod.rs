@@ -99,16 +99,11 @@ pub fn robot_sigma_points(filter: &dyn LandmarkSlam) -> Vec<Pose2> {
     filter.robot_sigma_points()
 }
 
-/// The lesson's starting scenario: the simulator's defaults with EKF-SLAM and
-/// UKF-SLAM side by side (the FEJ-EKF is one checkbox away).
+/// The lesson's starting scenario, the `lesson` preset: the simulator's defaults
+/// with EKF-SLAM and UKF-SLAM side by side (the FEJ-EKF is one checkbox away).
 pub fn default_scenario() -> LandmarkScenario {
-    LandmarkScenario {
-        estimators: vec![
-            slamlab_sim::EstimatorKind::Ekf,
-            slamlab_sim::EstimatorKind::Ukf,
-        ],
-        ..Default::default()
-    }
+    let seed = LandmarkScenario::default().seed;
+    slamlab_sim::presets::scenario("lesson", seed).unwrap_or_default()
 }
 
 /// The landmark-SLAM lesson.
@@ -194,6 +189,13 @@ impl LandmarkSlamLesson {
         self.drive.stop();
         self.map_view.refit();
         self.version += 1;
+    }
+
+    /// Opens preset `id` with the panel's seed and restarts the run with it.
+    pub fn open_preset(&mut self, id: &str) {
+        if self.set_param("preset", id).is_none() {
+            self.reset();
+        }
     }
 
     /// Switches between the scripted circle and manual driving from the next tick

@@ -166,6 +166,36 @@ fn estimators_ui(ui: &mut egui::Ui, lesson: &mut LandmarkSlamLesson) {
     issue_ui(ui, lesson, "estimator");
 }
 
+/// The presets menu: a source's experiment or a key comparison, opened at once
+/// (with the panel's seed).
+fn preset_ui(ui: &mut egui::Ui, lesson: &mut LandmarkSlamLesson) {
+    let mut chosen = None;
+    ui.horizontal(|ui| {
+        egui::ComboBox::new("landmark_preset", "preset")
+            .selected_text("open a preset…")
+            .width(ui.available_width() - 60.0)
+            .show_ui(ui, |ui| {
+                for preset in slamlab_sim::presets::PRESETS {
+                    if ui
+                        .selectable_label(false, preset.title)
+                        .on_hover_text(preset.summary)
+                        .clicked()
+                    {
+                        chosen = Some(preset.id);
+                    }
+                }
+            })
+            .response
+            .on_hover_text("Open a thesis experiment or a key comparison; the seed stays");
+    });
+    if let Some(id) = chosen {
+        lesson.open_preset(id);
+    }
+    if let Some(issue) = lesson.param_issue("preset") {
+        ui.colored_label(palette::VERMILLION, issue);
+    }
+}
+
 fn group_ui(ui: &mut egui::Ui, title: &str, add: impl FnOnce(&mut egui::Ui)) {
     egui::CollapsingHeader::new(egui::RichText::new(title).strong())
         .default_open(true)
@@ -201,6 +231,7 @@ pub fn parameters_ui(ui: &mut egui::Ui, lesson: &mut LandmarkSlamLesson) -> bool
     if lesson.params_changed() {
         ui.colored_label(palette::ORANGE, "• changed: reset to apply");
     }
+    preset_ui(ui, lesson);
     ui.add_space(4.0);
 
     group_ui(ui, "Noise (the filters assume the same)", |ui| {
