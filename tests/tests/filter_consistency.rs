@@ -4,62 +4,64 @@
 
 use nalgebra::SymmetricEigen;
 use slamlab_core::stats::chi2_band_95;
-use slamlab_sim::metrics::run_headless;
+use slamlab_sim::consistency::{ConsistencyStudy, FilterConsistency};
 use slamlab_sim::{EstimatorKind, LandmarkScenario, LandmarkSession};
 
-const RUNS: u64 = 50;
+const RUNS: usize = 50;
 const STEPS: u64 = 200;
 
-/// The robot-pose NEES averaged over `RUNS` seeded runs, tick by tick, and the
-/// mean of those averages over the run.
-fn average_nees(scenario: &LandmarkScenario) -> (Vec<f64>, f64) {
-    average_nees_of(scenario, 0)
-}
-
-fn average_nees_of(scenario: &LandmarkScenario, filter: usize) -> (Vec<f64>, f64) {
-    let mut sums = vec![0.0; STEPS as usize];
-    for seed in 1..=RUNS {
-        let (session, _) = run_headless(
-            LandmarkScenario {
-                seed,
-                ..scenario.clone()
-            },
-            STEPS,
-        );
-        for (k, m) in session.filters()[filter].history.iter().enumerate() {
-            // P_RR is singular only at the very start, before the first prediction.
-            sums[k] += m.nees.unwrap_or(f64::NAN);
-        }
-    }
-    let per_tick: Vec<f64> = sums.iter().map(|s| s / RUNS as f64).collect();
-    let defined: Vec<f64> = per_tick.iter().copied().filter(|v| v.is_finite()).collect();
-    assert!(
-        defined.len() as u64 >= STEPS - 2,
-        "NEES defined on {} of {STEPS} ticks",
-        defined.len()
+/// Every estimator's consistency over `RUNS` seeded runs (seeds 1-50) of `steps` ticks.
+fn study(scenario: &LandmarkScenario, steps: u64) -> Vec<FilterConsistency> {
+    let mut study = ConsistencyStudy::new(
+        LandmarkScenario {
+            seed: 1,
+            ..scenario.clone()
+        },
+        RUNS,
+        steps,
     );
-    let mean = defined.iter().sum::<f64>() / defined.len() as f64;
-    (per_tick, mean)
+    study.run_to_end(|_, _| {});
+    let result = study.result();
+    assert_eq!(result.trials_done, RUNS);
+    for f in &result.filters {
+        // P_RR is singular only at the very start, before the first prediction.
+        let defined = study
+            .average_nees()
+            .iter()
+            .find(|(name, _)| *name == f.name)
+            .map_or(0, |(_, series)| series.iter().flatten().count());
+        assert!(
+            defined as u64 >= steps - 1,
+            "{}: NEES defined on {defined} of {steps} ticks",
+            f.name
+        );
+    }
+    result.filters
 }
 
-/// Mean of the per-tick averages over ticks `from..to` (1-based, inclusive of `from`).
-fn window_mean(per_tick: &[f64], from: usize, to: usize) -> f64 {
-    let w: Vec<f64> = per_tick[from - 1..to]
+/// Per estimator: the whole-lap, first-quarter and last-quarter average NEES of one lap.
+fn lap_nees(scenario: &LandmarkScenario) -> Vec<(f64, f64, f64)> {
+    let get = |v: Option<f64>| v.unwrap_or(f64::NAN);
+    study(scenario, STEPS)
         .iter()
-        .copied()
-        .filter(|v| v.is_finite())
-        .collect();
-    w.iter().sum::<f64>() / w.len() as f64
+        .map(|f| {
+            (
+                get(f.nees_mean),
+                get(f.nees_first_quarter),
+                get(f.nees_last_quarter),
+            )
+        })
+        .collect()
 }
 
 #[test]
 fn prediction_alone_is_consistent_over_a_whole_lap() {
     // No landmarks: only the motion model and its process noise G Q_u Gᵀ are tested.
-    let (_, mean) = average_nees(&LandmarkScenario {
+    let (mean, _, _) = lap_nees(&LandmarkScenario {
         landmarks: 0,
         ..Default::default()
-    });
-    let (lo, hi) = chi2_band_95(3.0, RUNS as usize);
+    })[0];
+    let (lo, hi) = chi2_band_95(3.0, RUNS);
     println!("dead-reckoning NEES {mean:.3}, band [{lo:.3}, {hi:.3}]");
     assert!(
         (lo..=hi).contains(&mean),
@@ -69,10 +71,24 @@ fn prediction_alone_is_consistent_over_a_whole_lap() {
 
 #[test]
 fn ekf_slam_at_nominal_noise_is_consistent_early_and_mildly_overconfident_over_a_lap() {
-    let (per_tick, mean) = average_nees(&LandmarkScenario::default());
-    let (lo, hi) = chi2_band_95(3.0, RUNS as usize);
-    let first_5s = window_mean(&per_tick, 2, 50);
-    let last_5s = window_mean(&per_tick, 151, 200);
+    let filters = study(&LandmarkScenario::default(), STEPS);
+    let ekf = &filters[0];
+    let (mean, first_5s, last_5s) = (
+        ekf.nees_mean.unwrap_or(f64::NAN),
+        ekf.nees_first_quarter.unwrap_or(f64::NAN),
+        ekf.nees_last_quarter.unwrap_or(f64::NAN),
+    );
+    let (lo, hi) = chi2_band_95(3.0, RUNS);
+    // The innovations look honest all along: the mean NIS of every update lies in
+    // its (narrow) band. NIS cannot see the overconfidence, which is in directions
+    // that range and bearing do not measure (the map's position and orientation).
+    let nis = ekf.nis_mean.unwrap_or(f64::NAN);
+    let [nis_lo, nis_hi] = ekf.nis_band;
+    println!(
+        "mean NIS {nis:.4} over {} updates, band [{nis_lo:.4}, {nis_hi:.4}]",
+        ekf.nis_updates
+    );
+    assert!((nis_lo..=nis_hi).contains(&nis), "mean NIS {nis}");
     println!(
         "average NEES: first 5 s {first_5s:.3}, whole lap {mean:.3}, last 5 s {last_5s:.3}; band [{lo:.3}, {hi:.3}]"
     );
@@ -101,11 +117,9 @@ fn fej_ekf_slam_at_nominal_noise_is_consistent_over_a_whole_lap() {
         estimators: vec![EstimatorKind::Ekf, EstimatorKind::FejEkf],
         ..Default::default()
     };
-    let (ekf_per_tick, ekf) = average_nees_of(&scenario, 0);
-    let (fej_per_tick, fej) = average_nees_of(&scenario, 1);
-    let (lo, hi) = chi2_band_95(3.0, RUNS as usize);
-    let ekf_last = window_mean(&ekf_per_tick, 151, 200);
-    let fej_last = window_mean(&fej_per_tick, 151, 200);
+    let nees = lap_nees(&scenario);
+    let ((ekf, _, ekf_last), (fej, _, fej_last)) = (nees[0], nees[1]);
+    let (lo, hi) = chi2_band_95(3.0, RUNS);
     println!(
         "whole lap: EKF {ekf:.3}, FEJ-EKF {fej:.3}; last 5 s: EKF {ekf_last:.3}, FEJ-EKF {fej_last:.3}; band [{lo:.3}, {hi:.3}]"
     );
@@ -120,33 +134,6 @@ fn fej_ekf_slam_at_nominal_noise_is_consistent_over_a_whole_lap() {
     );
 }
 
-/// The NEES averaged over every defined tick of `runs` seeded runs of `steps` ticks.
-fn run_average_nees(scenario: &LandmarkScenario, filter: usize, steps: u64) -> f64 {
-    let (mut sum, mut count) = (0.0, 0_usize);
-    for seed in 1..=RUNS {
-        let (session, _) = run_headless(
-            LandmarkScenario {
-                seed,
-                ..scenario.clone()
-            },
-            steps,
-        );
-        for nees in session.filters()[filter]
-            .history
-            .iter()
-            .filter_map(|m| m.nees)
-        {
-            sum += nees;
-            count += 1;
-        }
-    }
-    assert!(
-        count as u64 >= RUNS * (steps - 2),
-        "NEES defined {count} times"
-    );
-    sum / count as f64
-}
-
 #[test]
 fn the_ideal_ekf_is_consistent_over_one_and_three_laps() {
     // Linearized at the true state (only a simulator can), with the same noise
@@ -157,10 +144,11 @@ fn the_ideal_ekf_is_consistent_over_one_and_three_laps() {
         estimators: vec![EstimatorKind::Ekf, EstimatorKind::IdealEkf],
         ..Default::default()
     };
-    let (lo, hi) = chi2_band_95(3.0, RUNS as usize);
+    let (lo, hi) = chi2_band_95(3.0, RUNS);
     for (laps, steps) in [(1, STEPS), (3, 3 * STEPS)] {
-        let ekf = run_average_nees(&scenario, 0, steps);
-        let ideal = run_average_nees(&scenario, 1, steps);
+        let filters = study(&scenario, steps);
+        let ekf = filters[0].nees_mean.unwrap_or(f64::NAN);
+        let ideal = filters[1].nees_mean.unwrap_or(f64::NAN);
         println!("{laps} lap(s): EKF {ekf:.3}, ideal EKF {ideal:.3}; band [{lo:.3}, {hi:.3}]");
         // Measured (seeds 1-50): ideal 3.27 over one lap and 3.25 over three; EKF 4.13, 4.49.
         assert!(
@@ -176,11 +164,11 @@ fn a_precise_range_sensor_with_coarse_bearing_makes_ekf_slam_overconfident() {
     // 0.1 m range and 10° bearing: the true measurement likelihood is a thin
     // crescent that the linearization cannot follow. This is the inconsistency the
     // lesson lets students find; the test pins that it is real and large.
-    let (_, mean) = average_nees(&LandmarkScenario {
+    let (mean, _, _) = lap_nees(&LandmarkScenario {
         range_std: 0.1,
         ..Default::default()
-    });
-    let (_, hi) = chi2_band_95(3.0, RUNS as usize);
+    })[0];
+    let (_, hi) = chi2_band_95(3.0, RUNS);
     println!("average NEES with range std 0.1 m: {mean:.2}");
     assert!(
         mean > 2.0 * hi,
@@ -272,9 +260,8 @@ fn both() -> LandmarkScenario {
 
 #[test]
 fn ukf_slam_at_nominal_noise_is_consistent_early_and_like_the_ekf_over_a_lap() {
-    let (per_tick, mean) = average_nees_of(&both(), 1);
-    let (lo, hi) = chi2_band_95(3.0, RUNS as usize);
-    let first_5s = window_mean(&per_tick, 2, 50);
+    let (mean, first_5s, _) = lap_nees(&both())[1];
+    let (lo, hi) = chi2_band_95(3.0, RUNS);
     println!(
         "UKF average NEES: first 5 s {first_5s:.3}, whole lap {mean:.3}; band [{lo:.3}, {hi:.3}]"
     );
@@ -292,8 +279,8 @@ fn ukf_slam_is_less_overconfident_than_ekf_slam_with_a_precise_range_sensor() {
         range_std: 0.1,
         ..both()
     };
-    let (_, ekf) = average_nees_of(&scenario, 0);
-    let (_, ukf) = average_nees_of(&scenario, 1);
+    let nees = lap_nees(&scenario);
+    let ((ekf, _, _), (ukf, _, _)) = (nees[0], nees[1]);
     println!("range std 0.1 m: EKF NEES {ekf:.2}, UKF NEES {ukf:.2}");
     // Measured: EKF 12.3, UKF 7.8. Both are overconfident; the UKF clearly less.
     assert!(ukf < 0.8 * ekf, "UKF {ukf} vs EKF {ekf}");

@@ -3,6 +3,7 @@
 //! ```text
 //! slamlab run landmark-slam --estimator ekf --steps 200 --seed 1 --json
 //! slamlab experiment ekf-vs-ukf --noise-scale 2 --trials 50 --seed 1 --json --csv out/
+//! slamlab experiment consistency --estimator ekf,ukf,fej-ekf --trials 50 --steps 200
 //! slamlab params
 //! ```
 //!
@@ -13,6 +14,7 @@
 use anyhow::{Context, Result, bail};
 use clap::{Arg, ArgAction, ArgMatches, Command};
 use slamlab_sim::LandmarkScenario;
+use slamlab_sim::consistency::ConsistencyStudy;
 use slamlab_sim::experiments;
 use slamlab_sim::metrics::{RunSummary, run_headless};
 use slamlab_sim::params::{self, PARAMS, ParamKind};
@@ -20,6 +22,9 @@ use std::io::{IsTerminal, Write};
 
 /// Lessons the CLI can run.
 const LESSONS: &[&str] = &["landmark-slam"];
+
+/// Experiments the CLI can run.
+const EXPERIMENTS: &[&str] = &["ekf-vs-ukf", "consistency"];
 
 fn scenario_args() -> Vec<Arg> {
     PARAMS
@@ -80,14 +85,19 @@ fn cli() -> Command {
         )
         .subcommand(
             Command::new("experiment")
-                .about("Reproduce a source's experiment (ekf-vs-ukf: thesis 000 Sec. 3.4.3, Experiments 1 and 2)")
-                .arg(Arg::new("name").required(true).value_parser(["ekf-vs-ukf"]).help("the experiment"))
+                .about("Reproduce an experiment: ekf-vs-ukf (thesis 000 Sec. 3.4.3, Experiments 1 and 2) or consistency (average NEES over many seeded runs of any scenario)")
+                .arg(
+                    Arg::new("name")
+                        .required(true)
+                        .value_parser(EXPERIMENTS.to_vec())
+                        .help("the experiment"),
+                )
                 .arg(
                     Arg::new("noise-scale")
                         .long("noise-scale")
                         .value_parser(clap::value_parser!(f64))
                         .default_value("1")
-                        .help("control-noise multiplier: 1 is Experiment 1, 2 is Experiment 2 (0 .. 20]"),
+                        .help("ekf-vs-ukf: control-noise multiplier, 1 is Experiment 1, 2 is Experiment 2 (0 .. 20]"),
                 )
                 .arg(
                     Arg::new("trials")
@@ -96,15 +106,23 @@ fn cli() -> Command {
                         .default_value("50")
                         .help("Monte Carlo trials; trial i uses seed + i"),
                 )
-                .arg(Arg::new("seed").long("seed").value_parser(clap::value_parser!(u64)).default_value("1").help("first trial's seed"))
+                .arg(
+                    Arg::new("steps")
+                        .long("steps")
+                        .value_parser(clap::value_parser!(u64).range(1..=1_000_000))
+                        .default_value("200")
+                        .help("consistency: ticks per trial (200 ticks of 0.1 s are one lap of the circle)"),
+                )
                 .arg(Arg::new("json").long("json").action(ArgAction::SetTrue).help("print one JSON object"))
                 .arg(
                     Arg::new("csv")
                         .long("csv")
                         .value_name("DIR")
                         .value_parser(clap::value_parser!(std::path::PathBuf))
-                        .help("write the per-step error series (thesis Fig. 3.4 / 3.6) as CSV into DIR"),
-                ),
+                        .help("write the per-step series as CSV into DIR (ekf-vs-ukf: errors, thesis Fig. 3.4 / 3.6; consistency: average NEES and its band)"),
+                )
+                .next_help_heading("Scenario (the same names as `run`; ekf-vs-ukf takes only --seed)")
+                .args(scenario_args()),
         )
         .subcommand(
             Command::new("params")
@@ -253,6 +271,132 @@ fn progress_bar(label: &'static str) -> impl FnMut(usize, usize) {
 }
 
 fn experiment(matches: &ArgMatches) -> Result<()> {
+    let name = matches
+        .get_one::<String>("name")
+        .map_or("ekf-vs-ukf", String::as_str);
+    let given = |id: &str| matches.value_source(id) == Some(clap::parser::ValueSource::CommandLine);
+    if name == "consistency" {
+        if given("noise-scale") {
+            bail!(
+                "--noise-scale belongs to ekf-vs-ukf; for consistency, set --v-std and --w-std-deg"
+            );
+        }
+        return consistency(matches);
+    }
+    // The thesis's experiments fix their scenario: only the seed may be chosen.
+    if let Some(p) = PARAMS.iter().find(|p| p.name != "seed" && given(p.name)) {
+        bail!(
+            "--{} sets a scenario parameter; ekf-vs-ukf runs the thesis's fixed scenario (only --seed, --trials, --noise-scale). Use `slamlab experiment consistency` for your own scenario.",
+            p.name
+        );
+    }
+    if given("steps") {
+        bail!(
+            "--steps belongs to consistency; ekf-vs-ukf runs the thesis's {} iterations",
+            experiments::STEPS
+        );
+    }
+    let seed = scenario_from(matches)?.seed;
+    ekf_vs_ukf(matches, seed)
+}
+
+/// Prints the parameters block of an experiment's readable output.
+fn print_parameters(
+    out: &mut impl Write,
+    parameters: &serde_json::Map<String, serde_json::Value>,
+) -> Result<()> {
+    writeln!(out, "parameters:")?;
+    for (k, v) in parameters {
+        let text = v.as_str().map_or_else(|| v.to_string(), str::to_owned);
+        let unit = params::spec(k).map_or("", |p| p.unit);
+        writeln!(out, "  {k:<32} {text} {unit}")?;
+    }
+    Ok(())
+}
+
+fn consistency(matches: &ArgMatches) -> Result<()> {
+    let scenario = scenario_from(matches)?;
+    let trials = matches.get_one::<u64>("trials").copied().unwrap_or(50) as usize;
+    let steps = matches.get_one::<u64>("steps").copied().unwrap_or(200);
+    if matches!(scenario.controller, slamlab_sim::ControllerKind::Manual) {
+        bail!("--controller manual has nobody to drive headless; use the circle (--v, --w-deg)");
+    }
+    let mut study = ConsistencyStudy::new(scenario.clone(), trials, steps);
+    study.run_to_end(progress_bar("consistency"));
+    let result = study.result();
+    if let Some(dir) = matches.get_one::<std::path::PathBuf>("csv") {
+        std::fs::create_dir_all(dir).with_context(|| format!("creating {}", dir.display()))?;
+        let estimators: Vec<&str> = scenario.estimators.iter().map(|e| e.name()).collect();
+        let path = dir.join(format!(
+            "consistency-{}-seed{}-trials{trials}-steps{steps}.csv",
+            estimators.join("-"),
+            scenario.seed
+        ));
+        std::fs::write(&path, study.series_csv())
+            .with_context(|| format!("writing {}", path.display()))?;
+        eprintln!("wrote {}", path.display());
+    }
+    let mut out = std::io::stdout().lock();
+    if matches.get_flag("json") {
+        serde_json::to_writer(&mut out, &result).context("writing JSON")?;
+        writeln!(out)?;
+        return Ok(());
+    }
+    let [lo, hi] = result.nees_band;
+    writeln!(
+        out,
+        "SLAM Lab experiment consistency: {trials} trials of {steps} ticks ({:.1} s) from seed {}",
+        steps as f64 * scenario.dt,
+        scenario.seed
+    )?;
+    writeln!(out)?;
+    print_parameters(&mut out, &result.parameters)?;
+    writeln!(out)?;
+    let fmt = |v: Option<f64>| v.map_or_else(|| "-".to_owned(), |v| format!("{v:.3}"));
+    writeln!(
+        out,
+        "{:<10} {:>10} {:>14} {:>13} {:>13} {:>13} {:>9} {:>9}",
+        "filter",
+        "NEES",
+        "first quarter",
+        "last quarter",
+        "ticks in band",
+        "above band",
+        "NIS",
+        "diverged"
+    )?;
+    for f in &result.filters {
+        writeln!(
+            out,
+            "{:<10} {:>10} {:>14} {:>13} {:>12.0}% {:>12.0}% {:>9} {:>9}",
+            f.name,
+            fmt(f.nees_mean),
+            fmt(f.nees_first_quarter),
+            fmt(f.nees_last_quarter),
+            100.0 * f.ticks_in_band,
+            100.0 * f.ticks_above_band,
+            fmt(f.nis_mean),
+            f.diverged
+        )?;
+    }
+    writeln!(out)?;
+    writeln!(
+        out,
+        "NEES: the robot-pose NEES averaged over the {trials} trials at each tick, then over the ticks (or a quarter of them)."
+    )?;
+    writeln!(
+        out,
+        "A consistent filter's average lies in [{lo:.3}, {hi:.3}] at 95% of the ticks (3 dof); above the band it is overconfident."
+    )?;
+    writeln!(
+        out,
+        "NIS: mean over every landmark update (2 dof: expected 2). Diverged: final robot error > {} m (kept in the averages).",
+        experiments::DIVERGED_ERROR
+    )?;
+    Ok(())
+}
+
+fn ekf_vs_ukf(matches: &ArgMatches, seed: u64) -> Result<()> {
     let noise_scale = matches
         .get_one::<f64>("noise-scale")
         .copied()
@@ -266,7 +410,6 @@ fn experiment(matches: &ArgMatches) -> Result<()> {
         );
     }
     let trials = matches.get_one::<u64>("trials").copied().unwrap_or(50) as usize;
-    let seed = matches.get_one::<u64>("seed").copied().unwrap_or(1);
     let result = experiments::ekf_vs_ukf(noise_scale, trials, seed, progress_bar("ekf-vs-ukf"));
     if let Some(dir) = matches.get_one::<std::path::PathBuf>("csv") {
         std::fs::create_dir_all(dir).with_context(|| format!("creating {}", dir.display()))?;
@@ -289,12 +432,7 @@ fn experiment(matches: &ArgMatches) -> Result<()> {
         "SLAM Lab experiment ekf-vs-ukf (thesis 000 Sec. 3.4.3), control noise x{noise_scale}, {trials} trials from seed {seed}"
     )?;
     writeln!(out)?;
-    writeln!(out, "parameters:")?;
-    for (k, v) in &result.parameters {
-        let text = v.as_str().map_or_else(|| v.to_string(), str::to_owned);
-        let unit = params::spec(k).map_or("", |p| p.unit);
-        writeln!(out, "  {k:<32} {text} {unit}")?;
-    }
+    print_parameters(&mut out, &result.parameters)?;
     writeln!(out)?;
     writeln!(
         out,

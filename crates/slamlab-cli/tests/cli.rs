@@ -286,3 +286,91 @@ fn a_preset_sets_the_scenario_and_flags_apply_on_top() {
         "{stderr}"
     );
 }
+
+#[test]
+fn consistency_experiment_averages_nees_over_seeded_trials() {
+    let dir = std::env::temp_dir().join(format!("slamlab-cli-consistency-{}", std::process::id()));
+    let dir_arg = dir.to_string_lossy().into_owned();
+    let args = [
+        "experiment",
+        "consistency",
+        "--estimator",
+        "ekf,fej-ekf",
+        "--trials",
+        "6",
+        "--steps",
+        "80",
+        "--seed",
+        "3",
+        "--json",
+        "--csv",
+        &dir_arg,
+    ];
+    let v = run_json(&args);
+    assert_eq!(v["experiment"], "consistency");
+    assert_eq!(v["trials_done"], 6);
+    assert_eq!(v["parameters"]["trials"], 6);
+    assert_eq!(v["parameters"]["steps"], 80);
+    assert_eq!(v["parameters"]["seed"], 3);
+    // The band of the average of 6 runs of a 3-dof statistic: chi2(18) quantiles / 6.
+    let band = v["nees_band"].as_array().cloned().unwrap_or_default();
+    let lo = band[0].as_f64().unwrap_or(f64::NAN);
+    let hi = band[1].as_f64().unwrap_or(f64::NAN);
+    assert!((lo - 8.230_746 / 6.0).abs() < 1e-5, "{lo}");
+    assert!((hi - 31.526_38 / 6.0).abs() < 1e-5, "{hi}");
+    let filters = v["filters"].as_array().cloned().unwrap_or_default();
+    assert_eq!(filters.len(), 2);
+    assert_eq!(filters[0]["name"], "ekf");
+    assert_eq!(filters[1]["name"], "fej-ekf");
+    // The whole-run average NEES is the mean of the trials' per-tick NEES: the
+    // `run` command's own nees_mean, averaged over seeds 3..8 (every trial has
+    // NEES on ticks 2..80).
+    let mut expected = 0.0;
+    for seed in 3..9 {
+        let run = run_json(&[
+            "run",
+            "landmark-slam",
+            "--estimator",
+            "ekf",
+            "--steps",
+            "80",
+            "--seed",
+            &seed.to_string(),
+            "--json",
+        ]);
+        expected += run["nees_mean"].as_f64().unwrap_or(f64::NAN) / 6.0;
+    }
+    let got = filters[0]["nees_mean"].as_f64().unwrap_or(f64::NAN);
+    assert!((got - expected).abs() < 1e-9, "{got} vs {expected}");
+    for f in &filters {
+        let in_band = f["ticks_in_band"].as_f64().unwrap_or(f64::NAN);
+        assert!((0.0..=1.0).contains(&in_band), "{in_band}");
+        assert!(f["nis_mean"].as_f64().is_some_and(|n| n > 0.0 && n < 10.0));
+        assert_eq!(f["diverged"], 0);
+    }
+    let csv =
+        std::fs::read_to_string(dir.join("consistency-ekf-fej-ekf-seed3-trials6-steps80.csv"))
+            .unwrap_or_default();
+    let lines: Vec<&str> = csv.lines().collect();
+    assert_eq!(lines.len(), 81, "header + 80 ticks");
+    assert_eq!(
+        lines[0],
+        "step,time_s,band_lo,band_hi,ekf_nees,fej-ekf_nees"
+    );
+    let _ = std::fs::remove_dir_all(&dir);
+    // Same seed, same numbers.
+    assert_eq!(run_json(&args[..args.len() - 2]), v);
+
+    // Flags that do not belong to the experiment are refused with the reason.
+    let (ok, _, stderr) = slamlab(&["experiment", "ekf-vs-ukf", "--landmarks", "5"]);
+    assert!(
+        !ok && stderr.contains("--landmarks") && stderr.contains("consistency"),
+        "{stderr}"
+    );
+    let (ok, _, stderr) = slamlab(&["experiment", "consistency", "--noise-scale", "2"]);
+    assert!(!ok && stderr.contains("--noise-scale"), "{stderr}");
+    let (ok, _, stderr) = slamlab(&["experiment", "consistency", "--controller", "manual"]);
+    assert!(!ok && stderr.contains("manual"), "{stderr}");
+    let (ok, _, stderr) = slamlab(&["experiment", "consistency", "--range-std", "NaN"]);
+    assert!(!ok && stderr.contains("range-std"), "{stderr}");
+}

@@ -473,6 +473,11 @@ impl LandmarkSession {
         self.controller = controller;
     }
 
+    /// The command of every tick started so far, in order.
+    pub fn commands(&self) -> &[Control] {
+        &self.commands
+    }
+
     /// The manual-driving command.
     pub fn teleop(&self) -> Control {
         self.teleop
