@@ -7,6 +7,7 @@
 //   - clicks the canvas and presses Space (run) and the stepping keys, and checks that the
 //     simulation advances (slamlab_test_state()) and the picture changes;
 //   - opens the embed URL, a malformed URL and the lecture page with its two iframes;
+//   - opens the "Many runs" window from the URL and checks its averages against native ones;
 //   - fails on any console error, uncaught exception, failed request or Rust panic.
 // Screenshots, metrics.json (time to first frame, wasm size) and result.json go to
 // web/test-output/. The last line is "N passed, M failed"; the exit code is 1 on failure.
@@ -447,6 +448,37 @@ async function main() {
           `tick ${s0.tick} -> ${s1.tick} in ${seconds.toFixed(1)} s; frame CPU median ${t.cpu_ms_median?.toFixed(2)} ms ` +
           `(p95 ${t.cpu_ms_p95?.toFixed(2)}), simulation ${t.sim_ms_median.toFixed(2)} ms, ${metrics.lm50_frames_per_second} frames/s`
         );
+      } finally {
+        await context.close();
+      }
+    });
+
+    // --- "Many runs" opened by the URL: 20 runs of one lap each, EKF and FEJ-EKF, in
+    // the browser's wasm. The averages must be the native ones (same seed, same numbers):
+    //   slamlab experiment consistency --preset lesson --estimator ekf,fej-ekf --seed 7 --trials 20 --json
+    await check("many-runs=20 averages the NEES over 20 runs, with the native numbers", async () => {
+      const url = "index.html?lesson=landmark-slam&seed=7&estimator=ekf,fej-ekf&many-runs=20";
+      const NATIVE = { ekf: 3.9292620356909795, "fej-ekf": 3.278394232063159 };
+      const { context, page: p, log } = await openPage(browser, baseUrl, url, "many runs");
+      try {
+        await waitRunning(p);
+        const startedAt = Date.now();
+        const s = await waitState(p, (st) => st.many_runs && st.many_runs.done === 20 && !st.many_runs.running, "20 runs", 120_000);
+        metrics.many_runs_20_laps_ms = Date.now() - startedAt;
+        await sleep(300);
+        const { stats } = await waitNotBlank(p, "many-runs.png");
+        assertNotBlank(stats, "many-runs.png");
+        await assertNoPanic(p);
+        const notes = [];
+        for (const [name, native] of Object.entries(NATIVE)) {
+          const got = s.many_runs.nees[name];
+          const diff = Math.abs(got - native) / native;
+          assert(diff < 1e-9, `${name}: average NEES ${got} in the browser, ${native} natively`);
+          notes.push(`${name} ${got} (relative difference ${diff.toExponential(1)})`);
+        }
+        assert(s.tick === 0, `the run on the map moved: tick ${s.tick}`);
+        assert(log.problems.length === 0, log.problems.join("; "));
+        return `${notes.join(", ")}; done after ${metrics.many_runs_20_laps_ms} ms`;
       } finally {
         await context.close();
       }

@@ -130,6 +130,9 @@ impl SlamLabApp {
             lesson.time.speed_tps = settings.time.speed_tps;
             lesson.time.max_speed = settings.time.max_speed;
         }
+        if let Some(trials) = parsed.many_runs {
+            lesson.start_many_runs(trials);
+        }
         if parsed.embed {
             // A lecture figure is small: the map gets the room, and the legend is one
             // click away (every element also has a tooltip).
@@ -233,6 +236,15 @@ impl SlamLabApp {
 
     /// A one-line JSON summary of the app's state for browser tests.
     pub fn test_state_json(&self) -> String {
+        let many_runs = match &self.lesson {
+            ActiveLesson::LandmarkSlam(lesson) => lesson.many_runs.result().map(|r| {
+                serde_json::json!({
+                    "done": r.trials_done,
+                    "running": lesson.many_runs.is_running(),
+                    "nees": r.filters.iter().map(|f| (f.name.clone(), f.nees_mean)).collect::<std::collections::BTreeMap<_, _>>(),
+                })
+            }),
+        };
         let (tick, time, phase, seed, filters) = match &self.lesson {
             ActiveLesson::LandmarkSlam(lesson) => {
                 let session = lesson.session();
@@ -260,6 +272,7 @@ impl SlamLabApp {
             "seed": seed,
             "filters": filters,
             "notices": self.notices().len(),
+            "many_runs": many_runs,
             "frame_timing": self.frame_stats.summary(),
         })
         .to_string()
@@ -368,6 +381,7 @@ impl SlamLabApp {
                     ActiveLesson::LandmarkSlam(lesson) => {
                         ui.checkbox(&mut lesson.view.legend, "Map legend");
                         ui.checkbox(&mut lesson.view.heatmap, "Covariance heatmap");
+                        ui.checkbox(&mut lesson.view.many_runs, "Many runs (average NEES)");
                     }
                 }
             });

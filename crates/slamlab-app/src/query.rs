@@ -1,6 +1,6 @@
 //! The page's query string: `?lesson=landmark-slam&seed=7&embed=1&landmarks=30`.
 //!
-//! The app reads `lesson` and `embed` itself; every other pair belongs to the lesson,
+//! The app reads `lesson`, `embed` and `many-runs` itself; every other pair belongs to the lesson,
 //! whose parameters use the same names as the command line. Nothing here panics:
 //! malformed text becomes a notice and the default is used.
 
@@ -11,6 +11,8 @@ pub struct Query {
     pub lesson: Option<String>,
     /// `embed=1` (or `true`, `yes`, empty): the compact layout for lecture pages.
     pub embed: bool,
+    /// `many-runs=50`: open the "Many runs" window and start that many runs.
+    pub many_runs: Option<usize>,
     /// Every other `key=value` pair, decoded, in order.
     pub pairs: Vec<(String, String)>,
     /// Problems with the app's own keys (`embed=maybe`), worded for the user.
@@ -18,7 +20,10 @@ pub struct Query {
 }
 
 /// The keys the app reads itself; lessons never see them.
-pub const APP_KEYS: [&str; 2] = ["lesson", "embed"];
+pub const APP_KEYS: [&str; 3] = ["lesson", "embed", "many-runs"];
+
+/// The range of `many-runs=`.
+pub const MANY_RUNS_RANGE: std::ops::RangeInclusive<usize> = 5..=500;
 
 impl Query {
     /// Parses a query string, with or without the leading `?`.
@@ -36,6 +41,23 @@ impl Query {
                     "0" | "false" | "no" | "off" => parsed.embed = false,
                     other => parsed.issues.push(format!(
                         "embed = '{other}' is not 1 or 0; the full layout is used"
+                    )),
+                },
+                "many-runs" => match value.parse::<usize>() {
+                    Ok(n) if MANY_RUNS_RANGE.contains(&n) => parsed.many_runs = Some(n),
+                    Ok(n) => {
+                        let clamped = n.clamp(*MANY_RUNS_RANGE.start(), *MANY_RUNS_RANGE.end());
+                        parsed.issues.push(format!(
+                            "many-runs = {n} is outside {}..{}; {clamped} runs are used",
+                            MANY_RUNS_RANGE.start(),
+                            MANY_RUNS_RANGE.end()
+                        ));
+                        parsed.many_runs = Some(clamped);
+                    }
+                    Err(_) => parsed.issues.push(format!(
+                        "many-runs = '{value}' is not a whole number of runs ({}..{}); the window stays closed",
+                        MANY_RUNS_RANGE.start(),
+                        MANY_RUNS_RANGE.end()
                     )),
                 },
                 _ => parsed.pairs.push((key, value)),
@@ -140,6 +162,26 @@ mod tests {
         assert_eq!(percent_decode("%4"), "%4");
         assert_eq!(percent_decode("%41"), "A");
         assert_eq!(percent_decode("%FF"), "\u{FFFD}");
+    }
+
+    #[test]
+    fn many_runs_is_read_clamped_or_refused() {
+        assert_eq!(Query::parse("many-runs=50").many_runs, Some(50));
+        let q = Query::parse("many-runs=1");
+        assert_eq!(q.many_runs, Some(5));
+        assert!(q.issues[0].contains("5 runs are used"), "{:?}", q.issues);
+        assert_eq!(Query::parse("many-runs=99999").many_runs, Some(500));
+        for bad in [
+            "many-runs=abc",
+            "many-runs=-3",
+            "many-runs=",
+            "many-runs=NaN",
+        ] {
+            let q = Query::parse(bad);
+            assert_eq!(q.many_runs, None, "{bad}");
+            assert_eq!(q.issues.len(), 1, "{bad}");
+            assert!(q.pairs.is_empty(), "{bad}: not a lesson parameter");
+        }
     }
 
     #[test]

@@ -469,3 +469,77 @@ fn a_preset_opens_the_thesis_experiment_with_the_same_seed() {
     let from_url = SlamLabApp::from_query("lesson=landmark-slam&seed=7&preset=thesis-exp2");
     assert_eq!(from_url.session().map(|s| s.scenario()), Some(s));
 }
+
+#[test]
+fn many_runs_averages_each_filters_nees_over_seeded_runs() {
+    let mut h = harness("lesson=landmark-slam&seed=7&estimator=ekf,fej-ekf");
+    h.run();
+    h.get_by_label("Many runs").click();
+    h.run();
+    assert!(label_visible(&h, "Press Run"), "the window opens idle");
+    if let Some(lesson) = h.state_mut().landmark_lesson_mut() {
+        lesson.many_runs.trials = 8;
+    }
+    h.run();
+    h.get_by_label("Run 8 runs").click();
+    h.step();
+    let running = |h: &Harness<'_, SlamLabApp>| {
+        h.state()
+            .landmark_lesson()
+            .is_some_and(|l| l.many_runs.is_running())
+    };
+    // The runs go on frame by frame (a slice of the work each), the map stays live.
+    assert!(running(&h), "Run starts the runs");
+    let mut frames = 0;
+    while running(&h) && frames < 2000 {
+        h.step();
+        frames += 1;
+    }
+    assert!(!running(&h), "8 runs finish");
+    assert!(frames > 1, "the work is spread over frames: {frames}");
+    h.run();
+    assert_eq!(session(&h).tick(), 0, "the run on the map did not move");
+    let result = h
+        .state()
+        .landmark_lesson()
+        .and_then(|l| l.many_runs.result())
+        .unwrap_or_else(|| panic!("a result"));
+    // The same numbers as the study itself: one lap, seeds 7..15.
+    let mut direct =
+        slamlab_sim::consistency::ConsistencyStudy::new(session(&h).scenario().clone(), 8, 200);
+    direct.run_to_end(|_, _| {});
+    assert_eq!(result, direct.result());
+    assert_eq!(result.filters[0].name, "ekf");
+    assert_eq!(result.filters[1].name, "fej-ekf");
+    assert!(label_visible(&h, "Over 8 runs the band is"));
+    assert!(label_visible(&h, "8 of 8 runs"));
+    let fej_nees = result.filters[1].nees_mean.unwrap_or(f64::NAN);
+    assert!(
+        label_visible(&h, &format!("{fej_nees:.2}")),
+        "FEJ-EKF's average {fej_nees:.2} shown"
+    );
+
+    // A lecture page can open the window running: many-runs=N in the URL.
+    let from_url = SlamLabApp::from_query("lesson=landmark-slam&seed=3&many-runs=5");
+    let lesson = from_url.landmark_lesson();
+    assert!(lesson.is_some_and(|l| l.view.many_runs && l.many_runs.is_running()));
+    assert_eq!(lesson.map(|l| l.many_runs.trials), Some(5));
+    assert!(from_url.notices().is_empty(), "{:?}", from_url.notices());
+
+    // After a reset with other parameters, the window says its runs are stale.
+    if let Some(lesson) = h.state_mut().landmark_lesson_mut() {
+        let _ = lesson.set_param("landmarks", "10");
+        lesson.reset();
+    }
+    h.run();
+    assert!(label_visible(&h, "from before the last reset"));
+
+    if let Ok(image) = h.render() {
+        let options = egui_kittest::SnapshotOptions::new().threshold(2.0);
+        if let Err(err) =
+            egui_kittest::try_image_snapshot_options(&image, "landmark_slam_many_runs", &options)
+        {
+            eprintln!("landmark_slam_many_runs: snapshot differs (not strict): {err}");
+        }
+    }
+}

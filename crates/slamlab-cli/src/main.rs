@@ -352,7 +352,12 @@ fn consistency(matches: &ArgMatches) -> Result<()> {
     writeln!(out)?;
     print_parameters(&mut out, &result.parameters)?;
     writeln!(out)?;
-    let fmt = |v: Option<f64>| v.map_or_else(|| "-".to_owned(), |v| format!("{v:.3}"));
+    // Diverged runs can make averages astronomically large: those go in e-notation.
+    let fmt = |v: Option<f64>| match v {
+        None => "-".to_owned(),
+        Some(v) if v.abs() >= 1e5 => format!("{v:.3e}"),
+        Some(v) => format!("{v:.3}"),
+    };
     writeln!(
         out,
         "{:<10} {:>10} {:>14} {:>13} {:>13} {:>13} {:>9} {:>9}",

@@ -257,10 +257,7 @@ impl ConsistencyStudy {
             format!("seed + trial index (0..{})", self.trials).into(),
         );
         if self.is_replay() {
-            parameters.insert(
-                "controller".into(),
-                "replay of a recorded manual drive".into(),
-            );
+            parameters.insert("controller".into(), "replay of recorded commands".into());
         }
         parameters.insert(
             "diverged-if-final-error-above-m".into(),

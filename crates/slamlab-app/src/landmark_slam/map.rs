@@ -345,6 +345,8 @@ fn toolbar_ui(
         ui.separator();
         ui.toggle_value(&mut opts.heatmap, "Covariance heatmap")
             .on_hover_text("Every filter's covariance as a correlation matrix");
+        ui.toggle_value(&mut opts.many_runs, "Many runs")
+            .on_hover_text("This scenario run again with many seeds: each filter's NEES averaged over the runs, against the band of a consistent filter");
     });
 }
 

@@ -8,6 +8,7 @@
 pub mod drive;
 mod explain;
 mod heatmap;
+pub mod many_runs;
 mod map;
 mod params_panel;
 mod plots;
@@ -44,6 +45,8 @@ pub struct ViewOptions {
     pub follow_robot: bool,
     /// The covariance heatmap window.
     pub heatmap: bool,
+    /// The "Many runs" window: average NEES over seeded runs.
+    pub many_runs: bool,
 }
 
 impl Default for ViewOptions {
@@ -57,6 +60,7 @@ impl Default for ViewOptions {
             sigma_points: true,
             follow_robot: false,
             heatmap: false,
+            many_runs: false,
         }
     }
 }
@@ -120,6 +124,8 @@ pub struct LandmarkSlamLesson {
     pub drive: drive::DriveState,
     map_view: map::MapView,
     heatmap: heatmap::HeatmapState,
+    /// The "Many runs" window's study.
+    pub many_runs: many_runs::ManyRunsState,
     /// Bumped whenever the session changes, so caches know when to refresh.
     version: u64,
 }
@@ -138,6 +144,7 @@ impl LandmarkSlamLesson {
             drive: drive::DriveState::default(),
             map_view: map::MapView::default(),
             heatmap: heatmap::HeatmapState::default(),
+            many_runs: many_runs::ManyRunsState::default(),
             version: 0,
         }
     }
@@ -217,6 +224,13 @@ impl LandmarkSlamLesson {
         self.session.set_teleop(self.drive.command());
         self.session.set_controller(controller);
         self.version += 1;
+    }
+
+    /// Opens the "Many runs" window and starts `trials` runs of the current scenario.
+    pub fn start_many_runs(&mut self, trials: usize) {
+        self.view.many_runs = true;
+        self.many_runs.trials = trials;
+        self.many_runs.start(&self.session);
     }
 
     /// Is the robot driven by hand?
@@ -360,9 +374,12 @@ impl LandmarkSlamLesson {
             .collect()
     }
 
-    /// Does anything need another frame soon (running, a drive key held)?
+    /// Does anything need another frame soon (running, a drive key held, the
+    /// "Many runs" window at work)?
     pub fn wants_repaint(&self) -> bool {
-        self.time.running || self.drive.is_active()
+        self.time.running
+            || self.drive.is_active()
+            || (self.view.many_runs && self.many_runs.is_running())
     }
 
     /// Reads the drive keys (arrows, WASD) while driving by hand. Starting to drive
@@ -433,6 +450,18 @@ impl LandmarkSlamLesson {
                     heatmap::heatmap_ui(ui, &self.session, &mut self.heatmap, self.version);
                 });
             self.view.heatmap = open;
+        }
+        if self.view.many_runs {
+            let mut open = true;
+            egui::Window::new("Consistency over many runs")
+                .open(&mut open)
+                .default_size([640.0, 560.0])
+                .default_pos(ui.ctx().content_rect().center() - egui::vec2(320.0, 300.0))
+                .resizable(true)
+                .show(ui.ctx(), |ui| {
+                    many_runs::many_runs_ui(ui, &mut self.many_runs, &self.session);
+                });
+            self.view.many_runs = open;
         }
     }
 

@@ -10,7 +10,7 @@ use slamlab_sim::LandmarkSession;
 const MAX_POINTS: usize = 3000;
 
 /// Thins `points` evenly to at most [`MAX_POINTS`], keeping the last one.
-fn thin(points: Vec<[f64; 2]>) -> Vec<[f64; 2]> {
+pub(super) fn thin(points: Vec<[f64; 2]>) -> Vec<[f64; 2]> {
     let points: Vec<[f64; 2]> = points
         .into_iter()
         .filter(|p| p[0].is_finite() && p[1].is_finite())
@@ -41,7 +41,7 @@ fn consistency_y_max(values: impl Iterator<Item = f64>, band_hi: f64) -> f64 {
 
 /// The 95% band: a shaded span (no label of its own) and its two edges, which carry
 /// the legend entry.
-fn band_ui(plot_ui: &mut egui_plot::PlotUi<'_>, lo: f64, hi: f64) {
+pub(super) fn band_ui(plot_ui: &mut egui_plot::PlotUi<'_>, lo: f64, hi: f64) {
     plot_ui.add(
         Span::new("", lo..=hi)
             .axis(egui_plot::Axis::Y)
@@ -67,7 +67,7 @@ fn title_ui(ui: &mut egui::Ui, title: &str, hover: &str) {
 /// `base_step` is the value 8 screen points span (egui_plot's finest grid), and tick
 /// labels need about 60 points (the x axis's minimum label spacing). The default
 /// powers-of-ten grid labels only 0 on a narrow plot of a short run.
-fn time_axis_steps(base_step: f64) -> [f64; 3] {
+pub(super) fn time_axis_steps(base_step: f64) -> [f64; 3] {
     let wanted = base_step.abs() * 60.0 / 8.0;
     if !(wanted.is_finite() && wanted > 0.0) {
         return [1.0, 2.0, 10.0];

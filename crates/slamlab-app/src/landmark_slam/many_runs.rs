@@ -1,0 +1,435 @@
+//! The "Many runs" window: the lesson's scenario run again with many seeds, and
+//! each filter's robot-pose NEES averaged tick by tick against the narrow band of
+//! a consistent filter's average (slamlab-sim's [`ConsistencyStudy`]).
+//!
+//! One run's NEES plot cannot show whether a filter is honest: a consistent
+//! filter's NEES scatters over [0.22, 9.35]. Averaged over 50 runs with other
+//! noise, it must stay in [2.36, 3.72]; the window shows where each filter leaves it.
+
+use super::plots::{band_ui, thin, time_axis_steps};
+use crate::palette;
+use egui_plot::{Legend, Line, Plot, PlotPoints};
+use slamlab_sim::consistency::{ConsistencyResult, ConsistencyStudy};
+use slamlab_sim::params;
+use slamlab_sim::{ControllerKind, LandmarkScenario, LandmarkSession};
+use std::f64::consts::PI;
+
+/// The most time one frame spends on the runs, milliseconds.
+const FRAME_BUDGET_MS: u128 = 12;
+/// Ticks run between two looks at the clock.
+const TICKS_PER_SLICE: u64 = 5;
+/// Longest run offered, ticks (500 s at the default time step).
+const MAX_STEPS: u64 = 5_000;
+
+/// How long each run is.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum RunLength {
+    /// One lap of the scripted circle.
+    OneLap,
+    /// As long as the run on the map, replaying its commands (a manual drive too).
+    ThisRun,
+}
+
+/// The window's settings and the study in progress.
+#[derive(Debug)]
+pub struct ManyRunsState {
+    /// How many runs the next study has.
+    pub trials: usize,
+    /// How long each run is.
+    pub length: RunLength,
+    study: Option<ConsistencyStudy>,
+    /// Is the study being advanced (not stopped)?
+    running: bool,
+    /// The parameters of the run the study was started from.
+    started_for: Vec<(&'static str, String)>,
+    /// Why the last start did not happen, for the user.
+    message: Option<String>,
+}
+
+impl Default for ManyRunsState {
+    fn default() -> Self {
+        Self {
+            trials: 50,
+            length: RunLength::OneLap,
+            study: None,
+            running: false,
+            started_for: Vec::new(),
+            message: None,
+        }
+    }
+}
+
+/// The session's scenario with the controller that drives now (a student may have
+/// taken the wheel, or handed it back, since the start).
+fn scenario_now(session: &LandmarkSession) -> LandmarkScenario {
+    LandmarkScenario {
+        controller: session.controller(),
+        ..session.scenario().clone()
+    }
+}
+
+/// Ticks in one lap of the scenario's circle, if it drives one.
+fn lap_ticks(scenario: &LandmarkScenario) -> Option<u64> {
+    match scenario.controller {
+        ControllerKind::Circle { w, .. } if w.abs() > 1e-9 => {
+            let ticks = (2.0 * PI / w.abs() / scenario.dt).round();
+            (ticks.is_finite() && ticks >= 1.0).then(|| (ticks as u64).min(MAX_STEPS))
+        }
+        _ => None,
+    }
+}
+
+impl ManyRunsState {
+    /// Starts a study of the session's scenario: `trials` runs from the session's
+    /// seed on, each one lap of the circle or a replay of the session's commands.
+    pub fn start(&mut self, session: &LandmarkSession) {
+        self.message = None;
+        let scenario = scenario_now(session);
+        let trials = self.trials.clamp(1, 1000);
+        let study = match (self.length, lap_ticks(&scenario)) {
+            (RunLength::OneLap, Some(steps)) => ConsistencyStudy::new(scenario, trials, steps),
+            (RunLength::OneLap, _) => {
+                self.message = Some(
+                    "One lap needs the scripted circle; choose \"this run\" to replay your drive."
+                        .to_owned(),
+                );
+                return;
+            }
+            (RunLength::ThisRun, _) => {
+                let commands = session.commands();
+                if commands.is_empty() {
+                    self.message =
+                        Some("This run has no ticks yet: run or drive first.".to_owned());
+                    return;
+                }
+                let steps = commands.len().min(MAX_STEPS as usize);
+                ConsistencyStudy::replaying(scenario, trials, commands[..steps].to_vec())
+            }
+        };
+        self.started_for = params::to_pairs(session.scenario());
+        self.study = Some(study);
+        self.running = true;
+    }
+
+    /// Stops advancing the study (its results so far stay).
+    pub fn stop(&mut self) {
+        self.running = false;
+    }
+
+    /// Is a study being advanced?
+    pub fn is_running(&self) -> bool {
+        self.running && self.study.as_ref().is_some_and(|s| !s.is_done())
+    }
+
+    /// The study's results so far.
+    pub fn result(&self) -> Option<ConsistencyResult> {
+        self.study.as_ref().map(ConsistencyStudy::result)
+    }
+
+    /// Advances the study for at most `budget_ms` milliseconds.
+    pub fn advance(&mut self, budget_ms: u128) {
+        if !self.is_running() {
+            return;
+        }
+        let Some(study) = self.study.as_mut() else {
+            return;
+        };
+        let start = web_time::Instant::now();
+        while !study.advance(TICKS_PER_SLICE) && start.elapsed().as_millis() < budget_ms {}
+        if study.is_done() {
+            self.running = false;
+        }
+    }
+}
+
+/// The window's contents.
+pub fn many_runs_ui(ui: &mut egui::Ui, state: &mut ManyRunsState, session: &LandmarkSession) {
+    state.advance(FRAME_BUDGET_MS);
+    if state.is_running() {
+        ui.ctx().request_repaint();
+    }
+    ui.label(
+        "One run's NEES jumps about: a consistent filter's lies anywhere in [0.22, 9.35] \
+         95% of the time. Run the same world and drive again with other noise, average \
+         the NEES tick by tick, and the average of a consistent filter must stay in a \
+         narrow band around 3 (for 50 runs, [2.36, 3.72]). Above it, the filter is \
+         overconfident; below it, too cautious.",
+    );
+    ui.add_space(4.0);
+    let lap = lap_ticks(&scenario_now(session));
+    let dt = session.scenario().dt;
+    ui.horizontal_wrapped(|ui| {
+        ui.label("runs");
+        ui.add(
+            egui::DragValue::new(&mut state.trials)
+                .range(5..=500)
+                .speed(1.0),
+        )
+        .on_hover_text("Run i uses the seed of the run on the map plus i");
+        ui.separator();
+        ui.label("each");
+        let lap_label = match lap {
+            Some(ticks) => format!("one lap ({:.1} s)", ticks as f64 * dt),
+            None => "one lap (circle only)".to_owned(),
+        };
+        ui.add_enabled_ui(lap.is_some(), |ui| {
+            ui.radio_value(&mut state.length, RunLength::OneLap, lap_label);
+        });
+        ui.radio_value(
+            &mut state.length,
+            RunLength::ThisRun,
+            format!("as long as this run ({:.1} s)", session.time()),
+        )
+        .on_hover_text("Replays this run's commands (a drive by hand too) with each run's noise");
+    });
+    if lap.is_none() && state.length == RunLength::OneLap {
+        state.length = RunLength::ThisRun;
+    }
+    ui.horizontal(|ui| {
+        let label = format!("Run {} runs", state.trials);
+        if ui
+            .button(label)
+            .on_hover_text("The parameters and estimators of the run on the map")
+            .clicked()
+        {
+            state.start(session);
+        }
+        if state.is_running() && ui.button("Stop").clicked() {
+            state.stop();
+        }
+        if let Some(study) = &state.study {
+            let done = study.trials_done();
+            let total = study.trials().max(1);
+            ui.add(
+                egui::ProgressBar::new(done as f32 / total as f32)
+                    .desired_width(180.0)
+                    .text(format!("{done} of {total} runs")),
+            );
+        }
+    });
+    if let Some(message) = &state.message {
+        ui.colored_label(palette::VERMILLION, message);
+    }
+    let Some(study) = &state.study else {
+        ui.weak("Press Run: the runs take a few seconds.");
+        return;
+    };
+    if state.started_for != params::to_pairs(session.scenario()) {
+        ui.colored_label(
+            palette::VERMILLION,
+            "These runs used the parameters from before the last reset; run again for the current ones.",
+        );
+    }
+    if study.trials_done() == 0 {
+        ui.weak("The first run is on its way.");
+        return;
+    }
+    let result = study.result();
+    average_nees_plot_ui(ui, study, &result);
+    summary_ui(ui, &result);
+}
+
+fn average_nees_plot_ui(ui: &mut egui::Ui, study: &ConsistencyStudy, result: &ConsistencyResult) {
+    let [lo, hi] = result.nees_band;
+    let dt = study.scenario().dt;
+    let average = study.average_nees();
+    Plot::new("many_runs_nees")
+        .height(220.0)
+        .x_axis_label("time (s)")
+        .y_axis_label("average NEES")
+        .legend(
+            Legend::default()
+                .position(egui_plot::Corner::LeftTop)
+                .text_style(egui::TextStyle::Small)
+                .background_alpha(0.55),
+        )
+        .x_grid_spacer(egui_plot::uniform_grid_spacer(|input| {
+            time_axis_steps(input.base_step_size)
+        }))
+        .include_x(0.0)
+        // Fitted to the data and the band every frame: the average settles as runs come in.
+        .include_y(0.0)
+        .include_y(hi * 1.3)
+        .auto_bounds(egui::Vec2b::new(true, true))
+        .allow_scroll(false)
+        .show(ui, |plot_ui| {
+            band_ui(plot_ui, lo, hi);
+            for (name, series) in &average {
+                let points = thin(
+                    series
+                        .iter()
+                        .enumerate()
+                        .filter_map(|(k, v)| v.map(|v| [(k + 1) as f64 * dt, v]))
+                        .collect(),
+                );
+                plot_ui.line(
+                    Line::new(
+                        format!("{} average NEES", name.to_uppercase()),
+                        PlotPoints::new(points),
+                    )
+                    .color(palette::estimator_color(name))
+                    .width(1.8),
+                );
+            }
+        });
+}
+
+/// What a filter's numbers say, in words.
+pub fn verdict(in_band: f64, above: f64) -> &'static str {
+    let below = (1.0 - in_band - above).max(0.0);
+    if in_band >= 0.9 {
+        "consistent"
+    } else if above >= 0.5 {
+        "overconfident most of the time"
+    } else if above >= 0.15 {
+        "overconfident at times"
+    } else if below >= 0.15 {
+        "too cautious at times"
+    } else {
+        "about consistent"
+    }
+}
+
+fn summary_ui(ui: &mut egui::Ui, result: &ConsistencyResult) {
+    let [lo, hi] = result.nees_band;
+    ui.label(format!(
+        "Over {} runs the band is [{lo:.2}, {hi:.2}]; a consistent filter's average stays in it at about 95% of the ticks.",
+        result.trials_done
+    ));
+    let fmt = |v: Option<f64>| v.map_or_else(|| "–".to_owned(), |v| format!("{v:.2}"));
+    egui::Grid::new("many_runs_summary")
+        .num_columns(7)
+        .striped(true)
+        .show(ui, |ui| {
+            for heading in [
+                "filter",
+                "average NEES",
+                "first quarter",
+                "last quarter",
+                "ticks in band",
+                "mean NIS",
+                "",
+            ] {
+                ui.label(egui::RichText::new(heading).strong());
+            }
+            ui.end_row();
+            for f in &result.filters {
+                ui.colored_label(palette::estimator_color(&f.name), f.name.to_uppercase());
+                ui.label(fmt(f.nees_mean));
+                ui.label(fmt(f.nees_first_quarter));
+                ui.label(fmt(f.nees_last_quarter));
+                ui.label(format!("{:.0}%", 100.0 * f.ticks_in_band));
+                ui.label(fmt(f.nis_mean))
+                    .on_hover_text("Mean NIS of every landmark update (2 dof: expected 2)");
+                let mut text = verdict(f.ticks_in_band, f.ticks_above_band).to_owned();
+                if f.diverged > 0 {
+                    text.push_str(&format!(", {} diverged", f.diverged));
+                }
+                ui.label(text);
+                ui.end_row();
+            }
+        });
+    let honest_innovations_overconfident_pose = result.filters.iter().any(|f| {
+        f.ticks_above_band >= 0.15 && f.nis_mean.is_some_and(|nis| (nis - 2.0).abs() < 0.1)
+    });
+    if honest_innovations_overconfident_pose {
+        ui.add_space(4.0);
+        ui.weak(
+            "Mean NIS near 2 with the NEES above the band: the innovations look honest, yet \
+             the pose is overconfident. The spurious confidence lies where range and bearing \
+             cannot look: where the whole map sits and how it is turned.",
+        );
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use slamlab_sim::EstimatorKind;
+
+    #[test]
+    fn one_lap_of_the_default_circle_is_200_ticks() {
+        assert_eq!(lap_ticks(&LandmarkScenario::default()), Some(200));
+        let manual = LandmarkScenario {
+            controller: ControllerKind::Manual,
+            ..Default::default()
+        };
+        assert_eq!(lap_ticks(&manual), None);
+        let slow = LandmarkScenario {
+            controller: ControllerKind::Circle { v: 1.0, w: 1e-6 },
+            ..Default::default()
+        };
+        assert_eq!(lap_ticks(&slow), Some(MAX_STEPS));
+    }
+
+    #[test]
+    fn the_window_runs_the_study_of_the_session_in_slices() {
+        let scenario = LandmarkScenario {
+            seed: 9,
+            estimators: vec![EstimatorKind::Ekf, EstimatorKind::Ukf],
+            ..Default::default()
+        };
+        let mut session = LandmarkSession::new(scenario.clone());
+        session.run_ticks(30);
+        let mut state = ManyRunsState {
+            trials: 5,
+            length: RunLength::ThisRun,
+            ..Default::default()
+        };
+        state.start(&session);
+        assert!(state.is_running());
+        let mut frames = 0;
+        while state.is_running() {
+            state.advance(0);
+            frames += 1;
+        }
+        assert!(
+            frames >= 30,
+            "a zero budget still runs a slice a frame: {frames}"
+        );
+        let mut direct = ConsistencyStudy::new(scenario, 5, 30);
+        direct.run_to_end(|_, _| {});
+        assert_eq!(
+            state.result(),
+            Some(direct.result()).map(|mut r| {
+                r.parameters
+                    .insert("controller".into(), "replay of recorded commands".into());
+                r
+            })
+        );
+    }
+
+    #[test]
+    fn one_lap_needs_the_circle_and_a_replay_needs_ticks() {
+        let mut state = ManyRunsState::default();
+        let manual = LandmarkSession::new(LandmarkScenario {
+            controller: ControllerKind::Manual,
+            ..Default::default()
+        });
+        state.start(&manual);
+        assert!(state.message.is_some() && state.result().is_none());
+        state.length = RunLength::ThisRun;
+        state.start(&manual);
+        assert!(
+            state
+                .message
+                .as_deref()
+                .is_some_and(|m| m.contains("no ticks"))
+        );
+        let circle = LandmarkSession::new(LandmarkScenario::default());
+        state.length = RunLength::OneLap;
+        state.start(&circle);
+        assert!(state.message.is_none() && state.is_running());
+        state.stop();
+        assert!(!state.is_running());
+    }
+
+    #[test]
+    fn verdicts() {
+        assert_eq!(verdict(0.97, 0.02), "consistent");
+        assert_eq!(verdict(0.34, 0.66), "overconfident most of the time");
+        assert_eq!(verdict(0.77, 0.23), "overconfident at times");
+        assert_eq!(verdict(0.7, 0.0), "too cautious at times");
+        assert_eq!(verdict(0.88, 0.06), "about consistent");
+    }
+}
