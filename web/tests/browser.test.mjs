@@ -373,12 +373,12 @@ async function main() {
     );
 
     // --- The lecture page with two embedded apps.
-    await check("lecture.html: both embedded apps run and draw", async () => {
+    await check("lecture.html: the three embedded apps run and draw", async () => {
       const { context, page: lecture, log } = await openPage(browser, baseUrl, "lecture.html", "lecture");
       try {
         const iframes = lecture.locator("iframe.slamlab");
         const count = await iframes.count();
-        assert(count === 2, `expected 2 iframes, found ${count}`);
+        assert(count === 3, `expected 3 iframes, found ${count}`);
         const notes = [];
         for (let i = 0; i < count; i++) {
           const frame = await (await iframes.nth(i).elementHandle()).contentFrame();
@@ -400,6 +400,12 @@ async function main() {
           if ("embed" in state) assert(state.embed === true, `iframe ${i + 1} is not in embed mode: ${JSON.stringify(state)}`);
           if ("filters" in state && params.has("estimator")) {
             assert(state.filters.join(",") === params.get("estimator"), `iframe ${i + 1}: filters ${state.filters}, URL says ${params.get("estimator")}`);
+          }
+          if (params.has("many-runs")) {
+            const runs = Number(params.get("many-runs"));
+            const done = await waitState(frame, (st) => st.many_runs && st.many_runs.done === runs, `${runs} runs in iframe ${i + 1}`, 120_000);
+            await screenshot(iframes.nth(i), `lecture-iframe-${i + 1}.png`);
+            notes.push(`iframe ${i + 1}: ${runs} runs, average NEES ${JSON.stringify(done.many_runs.nees)}`);
           }
           notes.push(`iframe ${i + 1} (${frame.url().split("?")[1]}): ${describe(stats)}`);
         }

@@ -17,7 +17,7 @@ use slamlab_sim::LandmarkScenario;
 use slamlab_sim::consistency::ConsistencyStudy;
 use slamlab_sim::experiments;
 use slamlab_sim::metrics::{RunSummary, run_headless};
-use slamlab_sim::params::{self, PARAMS, ParamKind};
+use slamlab_sim::params::{self, PARAMS};
 use std::io::{IsTerminal, Write};
 
 /// Lessons the CLI can run.
@@ -30,11 +30,7 @@ fn scenario_args() -> Vec<Arg> {
     PARAMS
         .iter()
         .map(|p| {
-            let range = match p.kind {
-                ParamKind::Number { min, max } => format!(" [{min} .. {max}]"),
-                ParamKind::Count { min, max } => format!(" [{min} .. {max}]"),
-                ParamKind::Choice(c) => format!(" [{}]", c.join(", ")),
-            };
+            let range = format!(" [{}]", p.kind.range_text(", "));
             let default = params::get(&LandmarkScenario::default(), p.name)
                 .unwrap_or_else(|| "none".to_owned());
             let unit = if p.unit.is_empty() {
@@ -139,6 +135,9 @@ fn scenario_from(matches: &ArgMatches) -> Result<LandmarkScenario> {
             match params::set(&mut scenario, p.name, value) {
                 None => {}
                 Some(issue @ params::ParamIssue::Clamped { .. }) => eprintln!("warning: {issue}"),
+                Some(params::ParamIssue::Unreadable {
+                    value, expected, ..
+                }) => bail!("--{} '{value}' is not {expected}", p.name),
                 Some(issue) => bail!("--{}: {issue}", p.name),
             }
         }
@@ -231,11 +230,7 @@ fn list_params() -> Result<()> {
         "name", "unit", "range", "default"
     )?;
     for p in PARAMS {
-        let range = match p.kind {
-            ParamKind::Number { min, max } => format!("{min} .. {max}"),
-            ParamKind::Count { min, max } => format!("{min} .. {max}"),
-            ParamKind::Choice(c) => c.join(" | "),
-        };
+        let range = p.kind.range_text(" | ");
         let default = params::get(&defaults, p.name).unwrap_or_else(|| "none".to_owned());
         writeln!(
             out,
@@ -474,13 +469,30 @@ fn ekf_vs_ukf(matches: &ArgMatches, seed: u64) -> Result<()> {
     Ok(())
 }
 
-fn main() -> Result<()> {
+fn main() -> std::process::ExitCode {
     let matches = cli().get_matches();
-    match matches.subcommand() {
+    let result = match matches.subcommand() {
         Some(("run", m)) => run(m),
         Some(("experiment", m)) => experiment(m),
         Some(("params", _)) => list_params(),
         _ => Ok(()),
+    };
+    match result {
+        Ok(()) => std::process::ExitCode::SUCCESS,
+        // The reader went away (`slamlab params | head`): nothing more to say.
+        Err(e)
+            if e.chain().any(|cause| {
+                cause
+                    .downcast_ref::<std::io::Error>()
+                    .is_some_and(|io| io.kind() == std::io::ErrorKind::BrokenPipe)
+            }) =>
+        {
+            std::process::ExitCode::SUCCESS
+        }
+        Err(e) => {
+            eprintln!("error: {e:#}");
+            std::process::ExitCode::FAILURE
+        }
     }
 }
 

@@ -126,6 +126,14 @@ fn bad_values_are_refused_or_clamped_with_a_message() {
     let (ok, _, stderr) = slamlab(&["run", "landmark-slam", "--range-std", "NaN", "--json"]);
     assert!(!ok);
     assert!(stderr.contains("range-std"), "{stderr}");
+    // A refused value says what was expected, in one line, and nothing about a
+    // default that is not used.
+    let (ok, _, stderr) = slamlab(&["run", "landmark-slam", "--seed", "abc"]);
+    assert!(!ok);
+    assert_eq!(
+        stderr.trim(),
+        "error: --seed 'abc' is not a whole number (0 or more)"
+    );
     let (ok, stdout, stderr) = slamlab(&[
         "run",
         "landmark-slam",

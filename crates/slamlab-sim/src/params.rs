@@ -32,6 +32,19 @@ pub enum ParamKind {
     Choice(&'static [&'static str]),
 }
 
+impl ParamKind {
+    /// The allowed values as a reader wants them: "0 .. 500", "0 or more" (for a
+    /// seed, whose largest value nobody types), or the words joined by `separator`.
+    pub fn range_text(&self, separator: &str) -> String {
+        match *self {
+            ParamKind::Number { min, max } => format!("{min} .. {max}"),
+            ParamKind::Count { min, max: u64::MAX } => format!("{min} or more"),
+            ParamKind::Count { min, max } => format!("{min} .. {max}"),
+            ParamKind::Choice(words) => words.join(separator),
+        }
+    }
+}
+
 /// One named parameter.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct ParamSpec {
@@ -333,7 +346,8 @@ pub fn set(scenario: &mut LandmarkScenario, name: &str, value: &str) -> Option<P
         }
         ParamKind::Count { min, max } => {
             let Ok(v) = value.parse::<u64>() else {
-                return unreadable(format!("a whole number between {min} and {max}"));
+                let range = spec.kind.range_text(", ");
+                return unreadable(format!("a whole number ({range})"));
             };
             let used = v.clamp(min, max);
             match name {

@@ -453,13 +453,24 @@ impl LandmarkSlamLesson {
         }
         if self.view.many_runs {
             let mut open = true;
+            // As large as it needs, as small as a lecture page's iframe.
+            let screen = ui.ctx().content_rect();
+            let size = egui::vec2(
+                640.0_f32.min(screen.width() - 16.0),
+                560.0_f32.min(screen.height() - 40.0),
+            );
             egui::Window::new("Consistency over many runs")
                 .open(&mut open)
-                .default_size([640.0, 560.0])
-                .default_pos(ui.ctx().content_rect().center() - egui::vec2(320.0, 300.0))
+                .default_size(size)
+                .default_pos(screen.center() - 0.5 * size)
+                .constrain(true)
                 .resizable(true)
                 .show(ui.ctx(), |ui| {
-                    many_runs::many_runs_ui(ui, &mut self.many_runs, &self.session);
+                    egui::ScrollArea::vertical()
+                        .id_salt("many_runs_scroll")
+                        .show(ui, |ui| {
+                            many_runs::many_runs_ui(ui, &mut self.many_runs, &self.session);
+                        });
                 });
             self.view.many_runs = open;
         }
