@@ -295,6 +295,36 @@ fn experiment(matches: &ArgMatches) -> Result<()> {
     ekf_vs_ukf(matches, seed)
 }
 
+/// With `--csv DIR`: writes `contents()` to `DIR/file_name` (creating DIR) and says so on stderr.
+fn write_csv(
+    matches: &ArgMatches,
+    file_name: &str,
+    contents: impl FnOnce() -> String,
+) -> Result<()> {
+    let Some(dir) = matches.get_one::<std::path::PathBuf>("csv") else {
+        return Ok(());
+    };
+    std::fs::create_dir_all(dir).with_context(|| format!("creating {}", dir.display()))?;
+    let path = dir.join(file_name);
+    std::fs::write(&path, contents()).with_context(|| format!("writing {}", path.display()))?;
+    eprintln!("wrote {}", path.display());
+    Ok(())
+}
+
+/// With `--json`: prints `value` as one line of JSON and returns `true`.
+fn print_json_if_asked(
+    matches: &ArgMatches,
+    out: &mut impl Write,
+    value: &impl serde::Serialize,
+) -> Result<bool> {
+    if !matches.get_flag("json") {
+        return Ok(false);
+    }
+    serde_json::to_writer(&mut *out, value).context("writing JSON")?;
+    writeln!(out)?;
+    Ok(true)
+}
+
 /// Prints the parameters block of an experiment's readable output.
 fn print_parameters(
     out: &mut impl Write,
@@ -319,22 +349,18 @@ fn consistency(matches: &ArgMatches) -> Result<()> {
     let mut study = ConsistencyStudy::new(scenario.clone(), trials, steps);
     study.run_to_end(progress_bar("consistency"));
     let result = study.result();
-    if let Some(dir) = matches.get_one::<std::path::PathBuf>("csv") {
-        std::fs::create_dir_all(dir).with_context(|| format!("creating {}", dir.display()))?;
-        let estimators: Vec<&str> = scenario.estimators.iter().map(|e| e.name()).collect();
-        let path = dir.join(format!(
+    let estimators: Vec<&str> = scenario.estimators.iter().map(|e| e.name()).collect();
+    write_csv(
+        matches,
+        &format!(
             "consistency-{}-seed{}-trials{trials}-steps{steps}.csv",
             estimators.join("-"),
             scenario.seed
-        ));
-        std::fs::write(&path, study.series_csv())
-            .with_context(|| format!("writing {}", path.display()))?;
-        eprintln!("wrote {}", path.display());
-    }
+        ),
+        || study.series_csv(),
+    )?;
     let mut out = std::io::stdout().lock();
-    if matches.get_flag("json") {
-        serde_json::to_writer(&mut out, &result).context("writing JSON")?;
-        writeln!(out)?;
+    if print_json_if_asked(matches, &mut out, &result)? {
         return Ok(());
     }
     let [lo, hi] = result.nees_band;
@@ -411,20 +437,16 @@ fn ekf_vs_ukf(matches: &ArgMatches, seed: u64) -> Result<()> {
     }
     let trials = matches.get_one::<u64>("trials").copied().unwrap_or(50) as usize;
     let result = experiments::ekf_vs_ukf(noise_scale, trials, seed, progress_bar("ekf-vs-ukf"));
-    if let Some(dir) = matches.get_one::<std::path::PathBuf>("csv") {
-        std::fs::create_dir_all(dir).with_context(|| format!("creating {}", dir.display()))?;
-        let path = dir.join(format!(
-            "ekf-vs-ukf-noise{noise_scale}-seed{seed}-trials{trials}.csv"
-        ));
-        let dt = experiments::ekf_vs_ukf_scenario(noise_scale, seed).dt;
-        std::fs::write(&path, experiments::series_csv(&result, dt))
-            .with_context(|| format!("writing {}", path.display()))?;
-        eprintln!("wrote {}", path.display());
-    }
+    write_csv(
+        matches,
+        &format!("ekf-vs-ukf-noise{noise_scale}-seed{seed}-trials{trials}.csv"),
+        || {
+            let dt = experiments::ekf_vs_ukf_scenario(noise_scale, seed).dt;
+            experiments::series_csv(&result, dt)
+        },
+    )?;
     let mut out = std::io::stdout().lock();
-    if matches.get_flag("json") {
-        serde_json::to_writer(&mut out, &result).context("writing JSON")?;
-        writeln!(out)?;
+    if print_json_if_asked(matches, &mut out, &result)? {
         return Ok(());
     }
     writeln!(
