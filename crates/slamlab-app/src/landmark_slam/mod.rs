@@ -364,6 +364,16 @@ impl LandmarkSlamLesson {
             .collect()
     }
 
+    /// The query string (without `?`) that opens this setup: the lesson, the share
+    /// pairs, `many-runs=N` while the "Many runs" window is open, and `embed=1` if asked.
+    pub fn share_query(&self, embed: bool) -> String {
+        let mut pairs = self.share_pairs();
+        if self.view.many_runs {
+            pairs.push(("many-runs".to_owned(), self.many_runs.trials.to_string()));
+        }
+        crate::query::build(LESSON_ID, &pairs, embed)
+    }
+
     /// Pairs of the pending scenario that differ from the lesson's defaults, for saving.
     pub fn pending_pairs(&self) -> Vec<(String, String)> {
         let defaults = params::to_pairs(&default_scenario());
@@ -512,6 +522,19 @@ mod tests {
                 ("landmarks".to_owned(), "30".to_owned())
             ]
         );
+    }
+
+    #[test]
+    fn the_share_link_opens_many_runs_when_its_window_is_open() {
+        let mut lesson = LandmarkSlamLesson::new(LandmarkScenario::default());
+        assert_eq!(lesson.share_query(false), "lesson=landmark-slam&seed=1");
+        lesson.view.many_runs = true;
+        lesson.many_runs.trials = 80;
+        let link = lesson.share_query(true);
+        assert_eq!(link, "lesson=landmark-slam&seed=1&many-runs=80&embed=1");
+        let opened = crate::SlamLabApp::from_query(&link);
+        let reopened = opened.landmark_lesson();
+        assert!(reopened.is_some_and(|l| l.view.many_runs && l.many_runs.trials == 80));
     }
 
     #[test]

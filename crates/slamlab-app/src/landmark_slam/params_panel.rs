@@ -2,8 +2,8 @@
 //! [`LandmarkSlamLesson::set_param`] with the parameter's URL name, so the panel, the
 //! URL and the command line share one vocabulary and one validation.
 
-use super::{LESSON_ID, LandmarkSlamLesson};
-use crate::{palette, query};
+use super::LandmarkSlamLesson;
+use crate::palette;
 use slamlab_sim::EstimatorKind;
 use slamlab_sim::params::{self, ParamKind};
 use slamlab_sim::scenario::ControllerKind;
@@ -303,8 +303,8 @@ fn share_ui(ui: &mut egui::Ui, lesson: &LandmarkSlamLesson) {
     let id = egui::Id::unique("slamlab_share_embed");
     let mut embed: bool = ui.data(|d| d.get_temp(id)).unwrap_or(false);
     ui.label(egui::RichText::new("Share this setup").strong())
-        .on_hover_text("The query string that reproduces the running setup: the lesson, the seed and every parameter that is not at its default");
-    let link = format!("?{}", query::build(LESSON_ID, &lesson.share_pairs(), embed));
+        .on_hover_text("The query string that reproduces the running setup: the lesson, the seed, every parameter that is not at its default, and the Many runs window when it is open");
+    let link = format!("?{}", lesson.share_query(embed));
     ui.horizontal(|ui| {
         if ui
             .button("Copy link")
