@@ -14,7 +14,7 @@
 //! line and the tests run it to the end.
 
 use crate::experiments::DIVERGED_ERROR;
-use crate::scenario::{ControllerKind, LandmarkScenario};
+use crate::scenario::{ControllerKind, EstimatorKind, LandmarkScenario};
 use crate::session::LandmarkSession;
 use serde::Serialize;
 use slamlab_core::Control;
@@ -28,7 +28,7 @@ const NIS_DOF: f64 = 2.0;
 /// One estimator's running sums.
 #[derive(Clone, Debug)]
 struct FilterSums {
-    name: String,
+    kind: EstimatorKind,
     /// Per tick: the sum of the NEES over the trials where it is defined, and how many.
     nees: Vec<(f64, u32)>,
     nis_sum: f64,
@@ -59,8 +59,8 @@ impl ConsistencyStudy {
         let filters = template
             .estimators
             .iter()
-            .map(|kind| FilterSums {
-                name: kind.name().to_owned(),
+            .map(|&kind| FilterSums {
+                kind,
                 nees: vec![(0.0, 0); steps_len],
                 nis_sum: 0.0,
                 nis_count: 0,
@@ -136,7 +136,12 @@ impl ConsistencyStudy {
     }
 
     fn add_trial(&mut self, session: &LandmarkSession) {
-        for (sums, run) in self.filters.iter_mut().zip(session.filters()) {
+        // By kind, not position: an estimator that could not start (impossible UKF
+        // parameters) is missing from the session, and the others must not shift.
+        for run in session.filters() {
+            let Some(sums) = self.filters.iter_mut().find(|f| f.kind == run.kind) else {
+                continue;
+            };
             for (slot, metrics) in sums.nees.iter_mut().zip(&run.history) {
                 if let Some(nees) = metrics.nees {
                     slot.0 += nees;
@@ -201,7 +206,7 @@ impl ConsistencyStudy {
                     .iter()
                     .map(|&(sum, n)| (n > 0).then(|| sum / f64::from(n)))
                     .collect();
-                (f.name.clone(), series)
+                (f.kind.name().to_owned(), series)
             })
             .collect()
     }
@@ -236,7 +241,7 @@ impl ConsistencyStudy {
                 };
                 let nis_band = chi2_band_95(NIS_DOF, sums.nis_count.max(1));
                 FilterConsistency {
-                    name: sums.name.clone(),
+                    name: sums.kind.name().to_owned(),
                     nees_mean: mean_of(0..steps),
                     nees_first_quarter: mean_of(0..quarter),
                     nees_last_quarter: mean_of(steps.saturating_sub(quarter)..steps),
@@ -343,7 +348,6 @@ pub struct ConsistencyResult {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::EstimatorKind;
     use crate::metrics::run_headless;
 
     #[test]
@@ -440,6 +444,38 @@ mod tests {
             expected / 2.0
         );
         assert!(study.result().parameters.contains_key("controller"));
+    }
+
+    #[test]
+    fn an_estimator_that_cannot_start_leaves_the_others_in_place() {
+        // κ = -9 puts n + λ = α²(n + κ) below zero: the UKF refuses to start.
+        let mut scenario = LandmarkScenario {
+            estimators: vec![EstimatorKind::Ukf, EstimatorKind::Ekf],
+            ..Default::default()
+        };
+        scenario.ukf.alpha = 0.5;
+        scenario.ukf.kappa = -9.0;
+        let session = LandmarkSession::new(scenario.clone());
+        assert_eq!(session.filters().len(), 1, "{:?}", session.notices());
+        let mut study = ConsistencyStudy::new(scenario.clone(), 2, 10);
+        study.run_to_end(|_, _| {});
+        let result = study.result();
+        assert_eq!(result.filters[0].name, "ukf");
+        assert_eq!(result.filters[0].nees_mean, None);
+        assert_eq!(result.filters[0].nis_updates, 0);
+        let ekf_only = {
+            let mut s = ConsistencyStudy::new(
+                LandmarkScenario {
+                    estimators: vec![EstimatorKind::Ekf],
+                    ..scenario
+                },
+                2,
+                10,
+            );
+            s.run_to_end(|_, _| {});
+            s.result()
+        };
+        assert_eq!(result.filters[1], ekf_only.filters[0]);
     }
 
     #[test]

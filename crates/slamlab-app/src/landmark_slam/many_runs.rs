@@ -8,6 +8,7 @@
 
 use super::plots::{band_ui, thin, time_axis_steps};
 use crate::palette;
+use crate::query::MANY_RUNS_RANGE;
 use egui_plot::{Legend, Line, Plot, PlotPoints};
 use slamlab_sim::consistency::{ConsistencyResult, ConsistencyStudy};
 use slamlab_sim::params;
@@ -16,8 +17,8 @@ use std::f64::consts::PI;
 
 /// The most time one frame spends on the runs, milliseconds.
 const FRAME_BUDGET_MS: u128 = 12;
-/// Ticks run between two looks at the clock.
-const TICKS_PER_SLICE: u64 = 5;
+/// Ticks run between two looks at the clock (one: a tick of a huge map is slow).
+const TICKS_PER_SLICE: u64 = 1;
 /// Longest run offered, ticks (500 s at the default time step).
 const MAX_STEPS: u64 = 5_000;
 
@@ -85,7 +86,9 @@ impl ManyRunsState {
     pub fn start(&mut self, session: &LandmarkSession) {
         self.message = None;
         let scenario = scenario_now(session);
-        let trials = self.trials.clamp(1, 1000);
+        let trials = self
+            .trials
+            .clamp(*MANY_RUNS_RANGE.start(), *MANY_RUNS_RANGE.end());
         let study = match (self.length, lap_ticks(&scenario)) {
             (RunLength::OneLap, Some(steps)) => ConsistencyStudy::new(scenario, trials, steps),
             (RunLength::OneLap, _) => {
@@ -162,7 +165,7 @@ pub fn many_runs_ui(ui: &mut egui::Ui, state: &mut ManyRunsState, session: &Land
         ui.label("runs");
         ui.add(
             egui::DragValue::new(&mut state.trials)
-                .range(5..=500)
+                .range(MANY_RUNS_RANGE)
                 .speed(1.0),
         )
         .on_hover_text("Run i uses the seed of the run on the map plus i");
@@ -178,7 +181,10 @@ pub fn many_runs_ui(ui: &mut egui::Ui, state: &mut ManyRunsState, session: &Land
         ui.radio_value(
             &mut state.length,
             RunLength::ThisRun,
-            format!("as long as this run ({:.1} s)", session.time()),
+            format!(
+                "as long as this run ({:.1} s)",
+                session.commands().len().min(MAX_STEPS as usize) as f64 * dt
+            ),
         )
         .on_hover_text("Replays this run's commands (a drive by hand too) with each run's noise");
     });
