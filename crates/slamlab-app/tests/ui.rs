@@ -532,7 +532,10 @@ fn many_runs_averages_each_filters_nees_over_seeded_runs() {
         lesson.reset();
     }
     h.run();
-    assert!(label_visible(&h, "from before the last reset"));
+    assert!(label_visible(
+        &h,
+        "other parameters than the run on the map"
+    ));
 
     if let Ok(image) = h.render() {
         let options = egui_kittest::SnapshotOptions::new().threshold(2.0);
@@ -542,4 +545,49 @@ fn many_runs_averages_each_filters_nees_over_seeded_runs() {
             eprintln!("landmark_slam_many_runs: snapshot differs (not strict): {err}");
         }
     }
+}
+
+#[test]
+fn the_sensor_reach_changes_live_from_the_panel_and_the_rest_waits_for_reset() {
+    let mut h = harness("lesson=landmark-slam&seed=7");
+    h.run();
+    for _ in 0..5 {
+        h.get_by_label("Step tick").click();
+        h.run();
+    }
+    let fov = |h: &Harness<'_, SlamLabApp>| session(h).sensor().fov.to_degrees();
+    assert!((fov(&h) - 120.0).abs() < 1e-9);
+    // What the field-of-view slider does when moved to 360°, then a noise slider.
+    if let Some(lesson) = h.state_mut().landmark_lesson_mut() {
+        assert!(lesson.set_param_live("fov-deg", "360").is_none());
+        assert!(lesson.set_param_live("range-std", "0.2").is_none());
+    }
+    h.run();
+    h.get_by_label("Step tick").click();
+    h.run();
+    assert_eq!(session(&h).tick(), 6, "the run went on");
+    assert!(
+        (fov(&h) - 360.0).abs() < 1e-9,
+        "the sensor sees all around now"
+    );
+    assert_eq!(
+        session(&h).sensor().range_std,
+        0.5,
+        "noise waits for a reset"
+    );
+    let lesson = h.state().landmark_lesson();
+    assert!(
+        lesson.is_some_and(|l| l.params_changed()),
+        "the noise change is pending"
+    );
+    let link = lesson.map(|l| l.share_query(false)).unwrap_or_default();
+    assert!(link.contains("fov-deg=360"), "{link}");
+    assert!(!link.contains("range-std"), "{link}");
+    assert!(label_visible(&h, "changed: reset to apply"));
+    // A reset keeps both.
+    h.get_by_label("Reset").click();
+    h.run();
+    assert_eq!(session(&h).tick(), 0);
+    assert!((fov(&h) - 360.0).abs() < 1e-9);
+    assert_eq!(session(&h).sensor().range_std, 0.2);
 }

@@ -125,6 +125,15 @@ impl<T: LandmarkSlam + std::fmt::Debug + Clone + 'static> LandmarkSlamDebug for 
     }
 }
 
+/// A change of the sensor's field of view and range made while the run goes on,
+/// in effect from tick `from_tick` (the measurements of earlier ticks stay).
+#[derive(Clone, Copy, Debug, PartialEq)]
+struct SensorChange {
+    from_tick: u64,
+    fov: f64,
+    max_range: f64,
+}
+
 /// Ticks between two checkpoints.
 const CHECKPOINT_EVERY: u64 = 50;
 /// At most this many checkpoints are kept...
@@ -202,8 +211,11 @@ pub struct LandmarkSession {
     last_phase: Option<Phase>,
     filters: Vec<FilterRun>,
     notices: Vec<String>,
-    /// The command of every tick started so far: with the seed, all a replay needs.
+    /// The command of every tick started so far: with the seed and the sensor
+    /// changes, all a replay needs.
     commands: Vec<Control>,
+    /// Live changes of the sensor's reach, in tick order.
+    sensor_changes: Vec<SensorChange>,
     phases_run: u64,
     /// Checkpoints every [`CHECKPOINT_EVERY`] ticks, oldest first.
     checkpoints: VecDeque<Checkpoint>,
@@ -291,6 +303,7 @@ impl LandmarkSession {
             world,
             scenario,
             commands: Vec::new(),
+            sensor_changes: Vec::new(),
             phases_run: 0,
             checkpoints: VecDeque::new(),
         }
@@ -323,6 +336,7 @@ impl LandmarkSession {
                 .collect(),
             notices: Vec::new(),
             commands: Vec::new(),
+            sensor_changes: Vec::new(),
             phases_run: self.phases_run,
             checkpoints: VecDeque::new(),
         }
@@ -473,6 +487,47 @@ impl LandmarkSession {
         self.controller = controller;
     }
 
+    /// Changes the sensor's field of view (radians) and maximum range (metres) from
+    /// the next tick on, while the run goes on: neither enters the filters, which
+    /// only see the measurements. Values outside the parameters' ranges are
+    /// clamped; non-finite ones change nothing. A change made after stepping back
+    /// replaces the recorded changes that came later.
+    pub fn set_sensor_reach(&mut self, fov: f64, max_range: f64) {
+        if !(fov.is_finite() && max_range.is_finite()) {
+            return;
+        }
+        let mut checked = self.scenario_now();
+        checked.fov = fov;
+        checked.max_range = max_range;
+        let _clamped = params::sanitize(&mut checked);
+        let from_tick = self.tick + 1;
+        self.sensor_changes.retain(|c| c.from_tick < from_tick);
+        self.sensor_changes.push(SensorChange {
+            from_tick,
+            fov: checked.fov,
+            max_range: checked.max_range,
+        });
+    }
+
+    /// The scenario as it stands now: the one the run started with, with the
+    /// controller that drives now and the sensor's reach of the next tick.
+    pub fn scenario_now(&self) -> LandmarkScenario {
+        let (fov, max_range) = self
+            .sensor_changes
+            .iter()
+            .rev()
+            .find(|c| c.from_tick <= self.tick + 1)
+            .map_or((self.sensor.fov, self.sensor.max_range), |c| {
+                (c.fov, c.max_range)
+            });
+        LandmarkScenario {
+            controller: self.controller,
+            fov,
+            max_range,
+            ..self.scenario.clone()
+        }
+    }
+
     /// The command of every tick started so far, in order.
     pub fn commands(&self) -> &[Control] {
         &self.commands
@@ -539,6 +594,8 @@ impl LandmarkSession {
             }
             None => LandmarkSession::new(self.scenario.clone()),
         };
+        // Every change, the later ones too: stepping forward again replays them.
+        replay.sensor_changes = self.sensor_changes.clone();
         replay.checkpoints = std::mem::take(&mut self.checkpoints);
         replay.checkpoints.retain(|c| c.state.phases_run <= target);
         while replay.phases_run < target {
@@ -574,6 +631,14 @@ impl LandmarkSession {
 
     fn begin_tick(&mut self) {
         self.tick += 1;
+        if let Some(change) = self
+            .sensor_changes
+            .iter()
+            .find(|c| c.from_tick == self.tick)
+        {
+            self.sensor.fov = change.fov;
+            self.sensor.max_range = change.max_range;
+        }
         let dt = self.scenario.dt;
         self.command = match (self.replayed_command.take(), self.controller) {
             (Some(command), _) => command,
@@ -976,6 +1041,71 @@ mod tests {
                 w: PI / 10.0
             }
         );
+    }
+
+    #[test]
+    fn the_sensor_reach_changes_from_the_next_tick_and_replays_exactly() {
+        let mut s = LandmarkSession::new(LandmarkScenario {
+            seed: 5,
+            ..Default::default()
+        });
+        let reach = |s: &LandmarkSession| (s.sensor().fov, s.sensor().max_range);
+        let start = reach(&s);
+        s.run_ticks(10);
+        s.set_sensor_reach(2.0 * PI, 8.0);
+        assert_eq!(
+            reach(&s),
+            start,
+            "this tick's measurements are already taken"
+        );
+        assert_eq!(
+            (s.scenario_now().fov, s.scenario_now().max_range),
+            (2.0 * PI, 8.0)
+        );
+        assert_eq!(
+            s.scenario().fov,
+            start.0,
+            "the run's scenario is where it started"
+        );
+        s.step_tick();
+        assert_eq!(reach(&s), (2.0 * PI, 8.0));
+        let truth = s.truth();
+        let in_reach = s
+            .world()
+            .landmarks
+            .iter()
+            .filter(|l| (l.position - truth.translation()).norm() <= 8.0)
+            .count();
+        assert_eq!(s.observations().len(), in_reach, "all around, to 8 m");
+        s.run_ticks(19);
+        let at_30 = s.filters()[0].filter().mean().clone();
+
+        // Back to tick 8, before the change: the old reach. Forward again: the change
+        // replays at tick 11 and the run is the same to the last bit.
+        while s.tick() > 8 || s.is_mid_tick() {
+            assert!(s.step_back());
+        }
+        assert_eq!(reach(&s), start);
+        s.run_ticks(22);
+        assert_eq!(s.tick(), 30);
+        assert_eq!(s.filters()[0].filter().mean(), &at_30);
+
+        // Rewound and changed again: the new change replaces the later one.
+        while s.tick() > 8 || s.is_mid_tick() {
+            assert!(s.step_back());
+        }
+        s.set_sensor_reach(1.0, 3.0);
+        s.run_ticks(12);
+        assert_eq!(reach(&s), (1.0, 3.0));
+
+        // Out-of-range values are clamped to the parameters' ranges; NaN changes nothing.
+        s.set_sensor_reach(0.0, 1e9);
+        s.step_tick();
+        assert!((s.sensor().fov - 1_f64.to_radians()).abs() < 1e-12);
+        assert_eq!(s.sensor().max_range, 100.0);
+        s.set_sensor_reach(f64::NAN, 5.0);
+        s.step_tick();
+        assert_eq!(s.sensor().max_range, 100.0);
     }
 
     #[test]

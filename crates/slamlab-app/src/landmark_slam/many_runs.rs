@@ -60,15 +60,6 @@ impl Default for ManyRunsState {
     }
 }
 
-/// The session's scenario with the controller that drives now (a student may have
-/// taken the wheel, or handed it back, since the start).
-fn scenario_now(session: &LandmarkSession) -> LandmarkScenario {
-    LandmarkScenario {
-        controller: session.controller(),
-        ..session.scenario().clone()
-    }
-}
-
 /// Ticks in one lap of the scenario's circle, if it drives one.
 fn lap_ticks(scenario: &LandmarkScenario) -> Option<u64> {
     match scenario.controller {
@@ -81,11 +72,12 @@ fn lap_ticks(scenario: &LandmarkScenario) -> Option<u64> {
 }
 
 impl ManyRunsState {
-    /// Starts a study of the session's scenario: `trials` runs from the session's
-    /// seed on, each one lap of the circle or a replay of the session's commands.
+    /// Starts a study of the session's scenario as it stands now (the controller that
+    /// drives and the sensor's reach now): `trials` runs from the session's seed on,
+    /// each one lap of the circle or a replay of the session's commands.
     pub fn start(&mut self, session: &LandmarkSession) {
         self.message = None;
-        let scenario = scenario_now(session);
+        let scenario = session.scenario_now();
         let trials = self
             .trials
             .clamp(*MANY_RUNS_RANGE.start(), *MANY_RUNS_RANGE.end());
@@ -109,7 +101,7 @@ impl ManyRunsState {
                 ConsistencyStudy::replaying(scenario, trials, commands[..steps].to_vec())
             }
         };
-        self.started_for = params::to_pairs(session.scenario());
+        self.started_for = params::to_pairs(&session.scenario_now());
         self.study = Some(study);
         self.running = true;
     }
@@ -159,7 +151,7 @@ pub fn many_runs_ui(ui: &mut egui::Ui, state: &mut ManyRunsState, session: &Land
          overconfident; below it, too cautious.",
     );
     ui.add_space(4.0);
-    let lap = lap_ticks(&scenario_now(session));
+    let lap = lap_ticks(&session.scenario_now());
     let dt = session.scenario().dt;
     ui.horizontal_wrapped(|ui| {
         ui.label("runs");
@@ -220,10 +212,10 @@ pub fn many_runs_ui(ui: &mut egui::Ui, state: &mut ManyRunsState, session: &Land
         ui.weak("Press Run: the runs take a few seconds.");
         return;
     };
-    if state.started_for != params::to_pairs(session.scenario()) {
+    if state.started_for != params::to_pairs(&session.scenario_now()) {
         ui.colored_label(
             palette::VERMILLION,
-            "These runs used the parameters from before the last reset; run again for the current ones.",
+            "These runs used other parameters than the run on the map now; run again for the current ones.",
         );
     }
     if study.trials_done() == 0 {

@@ -3,7 +3,8 @@
 //!
 //! The lesson owns a [`LandmarkSession`] (the truth, the sensor and the filters) and
 //! paints it; every number it shows comes from the session. Parameters are edited
-//! on a copy of the scenario and take effect on reset.
+//! on a copy of the scenario and take effect on reset, except the sensor's field of
+//! view and range, which change the running session from the next tick.
 
 pub mod drive;
 mod explain;
@@ -24,6 +25,10 @@ use std::collections::BTreeMap;
 
 /// The lesson's id in URLs and the menu.
 pub const LESSON_ID: &str = "landmark-slam";
+
+/// Parameters that change the running session at once (from the next tick): the
+/// sensor's reach. The filters never see it, only the measurements it lets through.
+pub const LIVE_PARAMS: [&str; 2] = ["fov-deg", "max-range"];
 
 /// What the map and the panels show; saved with the user's settings.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
@@ -180,12 +185,22 @@ impl LandmarkSlamLesson {
         self.pending_issues.get(name).map(String::as_str)
     }
 
-    /// Do the panel's parameters differ from the running ones?
+    /// Do the panel's parameters differ from the running ones? Who drives and the
+    /// sensor's reach change live, the rest on reset.
     pub fn params_changed(&self) -> bool {
-        // Who drives is switched live, not by a reset.
-        let mut running = self.session.scenario().clone();
-        running.controller = self.session.controller();
-        params::to_pairs(&self.pending) != params::to_pairs(&running)
+        params::to_pairs(&self.pending) != params::to_pairs(&self.session.scenario_now())
+    }
+
+    /// Sets a parameter from the panel and, if it is one that changes live (the
+    /// sensor's field of view and range), hands it to the running session at once.
+    pub fn set_param_live(&mut self, name: &str, value: &str) -> Option<ParamIssue> {
+        let issue = self.set_param(name, value);
+        if LIVE_PARAMS.contains(&name) {
+            self.session
+                .set_sensor_reach(self.pending.fov, self.pending.max_range);
+            self.version += 1;
+        }
+        issue
     }
 
     /// Starts over with the pending parameters (same seed: same world and noise).
@@ -355,7 +370,7 @@ impl LandmarkSlamLesson {
     /// parameter that differs from its default.
     pub fn share_pairs(&self) -> Vec<(String, String)> {
         let defaults = params::to_pairs(&LandmarkScenario::default());
-        params::to_pairs(self.session.scenario())
+        params::to_pairs(&self.session.scenario_now())
             .into_iter()
             .filter(|(name, value)| {
                 *name == "seed" || !defaults.iter().any(|(n, v)| n == name && v == value)

@@ -15,7 +15,7 @@ fn pending_number(lesson: &LandmarkSlamLesson, name: &str) -> Option<f64> {
 
 /// Does the pending value differ from the running one?
 fn differs(lesson: &LandmarkSlamLesson, name: &str) -> bool {
-    params::get(&lesson.pending, name) != params::get(lesson.session.scenario(), name)
+    params::get(&lesson.pending, name) != params::get(&lesson.session.scenario_now(), name)
 }
 
 fn changed_marker_ui(ui: &mut egui::Ui, lesson: &LandmarkSlamLesson, name: &str) {
@@ -58,7 +58,7 @@ fn number_ui(ui: &mut egui::Ui, lesson: &mut LandmarkSlamLesson, name: &str, lab
             )
             .on_hover_text(format!("{} ({name})", spec.help));
         if response.changed() {
-            let _issue = lesson.set_param(name, &format!("{value}"));
+            let _issue = lesson.set_param_live(name, &format!("{value}"));
         }
         changed_marker_ui(ui, lesson, name);
     });
@@ -206,7 +206,7 @@ fn group_ui(ui: &mut egui::Ui, title: &str, add: impl FnOnce(&mut egui::Ui)) {
 pub fn parameters_ui(ui: &mut egui::Ui, lesson: &mut LandmarkSlamLesson) -> bool {
     let mut apply = false;
     ui.heading("Parameters");
-    ui.label("Changes apply when the run is reset.");
+    ui.label("Changes apply when the run is reset; the sensor's reach changes at once.");
     ui.horizontal(|ui| {
         if ui
             .button("Apply & reset")
@@ -240,7 +240,7 @@ pub fn parameters_ui(ui: &mut egui::Ui, lesson: &mut LandmarkSlamLesson) -> bool
         number_ui(ui, lesson, "range-std", "range σ_r");
         number_ui(ui, lesson, "bearing-std-deg", "bearing σ_b");
     });
-    group_ui(ui, "Sensor", |ui| {
+    group_ui(ui, "Sensor (live: from the next tick)", |ui| {
         number_ui(ui, lesson, "fov-deg", "field of view");
         number_ui(ui, lesson, "max-range", "maximum range");
     });
