@@ -329,16 +329,20 @@ mod tests {
         assert!(UkfSlam::new(config(), bad, Pose2::IDENTITY).is_err());
         let mut ukf = UkfSlam::new(config(), UnscentedParams::default(), Pose2::IDENTITY)
             .unwrap_or_else(|e| panic!("{e}"));
+        // A first sighting at range 0 has no bearing: refused, nothing added.
         assert!(ukf.update(0, &RangeBearing::new(0.0, 0.0)).is_err());
+        assert!(ukf.landmark_ids().is_empty());
+        assert_eq!(ukf.mean().len(), 3);
         ukf.update(1, &RangeBearing::new(2.0, 0.0))
             .unwrap_or_else(|e| panic!("{e}"));
-        let before = ukf.clone();
         // A measurement of landmark 1 taken from on top of it: the mean is not measurable.
         ukf.state.mean[0] = 2.0;
         let mut moved = ukf.clone();
         assert!(moved.update(1, &RangeBearing::new(0.5, 0.0)).is_err());
+        // The refused update leaves the state exactly as it was.
+        assert_eq!(moved.mean(), ukf.mean());
         assert_eq!(moved.covariance(), ukf.covariance());
-        assert_eq!(before.landmark_ids(), ukf.landmark_ids());
+        assert_eq!(moved.landmark_ids(), &[1]);
     }
 
     #[test]
