@@ -443,7 +443,10 @@ mod tests {
             "{got} vs {}",
             expected / 2.0
         );
-        assert!(study.result().parameters.contains_key("controller"));
+        assert_eq!(
+            study.result().parameters["controller"],
+            "replay of recorded commands"
+        );
     }
 
     #[test]
