@@ -272,6 +272,6 @@ fn consistency_ui(ui: &mut egui::Ui) {
          claims more uncertainty than it has. One run is a noisy witness: \"Many runs\" (map \
          toolbar) averages the NEES over 50 runs with other noise, where the band is narrow. \
          Tick FEJ-EKF among the estimators to run the same EKF with first-estimates \
-         Jacobians: over a lap its average NEES stays in the band.",
+         Jacobians: its average NEES over a lap lies inside the band.",
     );
 }
