@@ -16,9 +16,9 @@ pub struct LessonInfo {
 /// Every lesson, in menu order. The first is the default.
 pub const LESSONS: &[LessonInfo] = &[LessonInfo {
     id: "landmark-slam",
-    title: "Landmark SLAM: EKF vs UKF",
-    summary: "A robot drives among landmarks; Kalman-filter SLAM estimates its pose and the map, \
-              with 95% ellipses, NEES/NIS consistency plots and the covariance heatmap.",
+    title: "Landmark SLAM",
+    summary: "A robot drives among landmarks; EKF-SLAM and UKF-SLAM estimate its pose and the \
+              map, with 95% ellipses, NEES/NIS consistency plots and the covariance heatmap.",
 }];
 
 /// The lesson that opens when none (or an unknown one) is asked for.

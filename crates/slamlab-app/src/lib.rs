@@ -351,7 +351,13 @@ impl SlamLabApp {
     }
 
     fn menu_bar_ui(&mut self, ui: &mut egui::Ui) {
-        let title = lessons::find(self.lesson_id).map_or("", |l| l.title);
+        let lesson_title = lessons::find(self.lesson_id).map_or("", |l| l.title);
+        let title = match &self.lesson {
+            ActiveLesson::LandmarkSlam(lesson) => match lesson.filters_title() {
+                filters if filters.is_empty() => lesson_title.to_owned(),
+                filters => format!("{lesson_title}: {filters}"),
+            },
+        };
         ui.horizontal_wrapped(|ui| {
             ui.label(egui::RichText::new("SLAM Lab").strong());
             ui.menu_button("Lessons", |ui| {

@@ -423,6 +423,7 @@ fn the_fej_ekf_joins_from_its_checkbox_and_explains_itself() {
         session(h).filters().iter().map(|r| r.kind.name()).collect()
     };
     assert_eq!(names(&h), ["ekf", "ukf"]);
+    assert!(label_visible(&h, "Landmark SLAM: EKF vs UKF"));
     // The parameter panel scrolls: bring each control into view, as a user would.
     for label in ["FEJ-EKF", "Apply & reset"] {
         h.get_by_label(label).scroll_to_me();
@@ -431,6 +432,9 @@ fn the_fej_ekf_joins_from_its_checkbox_and_explains_itself() {
         h.run();
     }
     assert_eq!(names(&h), ["ekf", "ukf", "fej-ekf"]);
+    // The top bar names the filters that run now.
+    assert!(label_visible(&h, "Landmark SLAM: EKF, UKF and FEJ-EKF"));
+    assert!(!label_visible(&h, "EKF vs UKF"));
     // Predict, then the first update: every filter ran both phases.
     for _ in 0..2 {
         h.get_by_label("Step phase").click();

@@ -6,10 +6,10 @@
 //! filter's NEES scatters over [0.22, 9.35]. Averaged over 50 runs with other
 //! noise, it must stay in [2.36, 3.72]; the window shows where each filter leaves it.
 
-use super::plots::{band_ui, thin, time_axis_steps};
+use super::plots::{band_ui, thin, time_plot};
 use crate::palette;
 use crate::query::MANY_RUNS_RANGE;
-use egui_plot::{Legend, Line, Plot, PlotPoints};
+use egui_plot::{Line, PlotPoints};
 use slamlab_sim::consistency::{ConsistencyResult, ConsistencyStudy};
 use slamlab_sim::params;
 use slamlab_sim::{ControllerKind, LandmarkScenario, LandmarkSession};
@@ -231,25 +231,11 @@ fn average_nees_plot_ui(ui: &mut egui::Ui, study: &ConsistencyStudy, result: &Co
     let [lo, hi] = result.nees_band;
     let dt = study.scenario().dt;
     let average = study.average_nees();
-    Plot::new("many_runs_nees")
-        .height(220.0)
-        .x_axis_label("time (s)")
-        .y_axis_label("average NEES")
-        .legend(
-            Legend::default()
-                .position(egui_plot::Corner::LeftTop)
-                .text_style(egui::TextStyle::Small)
-                .background_alpha(0.55),
-        )
-        .x_grid_spacer(egui_plot::uniform_grid_spacer(|input| {
-            time_axis_steps(input.base_step_size)
-        }))
-        .include_x(0.0)
+    time_plot("many_runs_nees", "average NEES", 220.0)
         // Fitted to the data and the band every frame: the average settles as runs come in.
         .include_y(0.0)
         .include_y(hi * 1.3)
         .auto_bounds(egui::Vec2b::new(true, true))
-        .allow_scroll(false)
         .show(ui, |plot_ui| {
             band_ui(plot_ui, lo, hi);
             for (name, series) in &average {

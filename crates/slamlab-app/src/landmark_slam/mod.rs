@@ -159,6 +159,22 @@ impl LandmarkSlamLesson {
         &self.session
     }
 
+    /// The filters running, for the top bar: "EKF", "EKF vs UKF", "EKF, UKF and FEJ-EKF".
+    pub fn filters_title(&self) -> String {
+        let names: Vec<String> = self
+            .session
+            .filters()
+            .iter()
+            .map(|run| run.kind.name().to_uppercase())
+            .collect();
+        match names.as_slice() {
+            [] => String::new(),
+            [one] => one.clone(),
+            [a, b] => format!("{a} vs {b}"),
+            [init @ .., last] => format!("{} and {last}", init.join(", ")),
+        }
+    }
+
     /// The scenario being edited in the parameter panel (applied on reset).
     pub fn pending(&self) -> &LandmarkScenario {
         &self.pending

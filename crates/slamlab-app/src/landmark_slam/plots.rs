@@ -82,10 +82,24 @@ pub(super) fn time_axis_steps(base_step: f64) -> [f64; 3] {
     [minor * decade, label * decade, major * decade]
 }
 
-fn plot<'a>(id: &str, x_label: &str, y_label: &str, height: f32) -> Plot<'a> {
+/// The label of a time-axis grid mark: as many decimals as its step needs (a 0.5 s
+/// mark reads "1.5", not "2"), and none before the run starts.
+pub(super) fn time_axis_label(mark: egui_plot::GridMark) -> String {
+    if !(mark.value.is_finite() && mark.step_size.is_finite() && mark.step_size > 0.0)
+        || mark.value < -1e-9
+    {
+        return String::new();
+    }
+    let decimals = (-mark.step_size.log10() - 1e-9).ceil().clamp(0.0, 6.0) as usize;
+    format!("{:.*}", decimals, mark.value.max(0.0))
+}
+
+/// A plot over time: the time axis with its 1-2-5 grid and labels, and the legend in
+/// the top left corner.
+pub(super) fn time_plot<'a>(id: &str, y_label: &str, height: f32) -> Plot<'a> {
     Plot::new(id)
         .height(height)
-        .x_axis_label(x_label.to_owned())
+        .x_axis_label("time (s)")
         .y_axis_label(y_label.to_owned())
         .legend(
             Legend::default()
@@ -93,14 +107,20 @@ fn plot<'a>(id: &str, x_label: &str, y_label: &str, height: f32) -> Plot<'a> {
                 .text_style(egui::TextStyle::Small)
                 .background_alpha(0.55),
         )
-        .link_axis(egui::Id::unique("slamlab_time_axis"), [true, false])
         .x_grid_spacer(egui_plot::uniform_grid_spacer(|input| {
             time_axis_steps(input.base_step_size)
         }))
+        .x_axis_formatter(|mark, _range| time_axis_label(mark))
         .include_x(0.0)
+        .allow_scroll(false)
+}
+
+/// The plots under the map share their time axis and always show the first second.
+fn plot<'a>(id: &str, y_label: &str, height: f32) -> Plot<'a> {
+    time_plot(id, y_label, height)
+        .link_axis(egui::Id::unique("slamlab_time_axis"), [true, false])
         .include_x(1.0)
         .include_y(0.0)
-        .allow_scroll(false)
 }
 
 /// The four plots side by side.
@@ -115,7 +135,7 @@ pub fn plots_ui(ui: &mut egui::Ui, session: &LandmarkSession) {
             "Robot position error",
             "|true − estimated position| and the filter's own 2σ bound 2√(σx² + σy²)",
         );
-        plot("plot_robot_error", "time (s)", "error (m)", height).show(ui, |plot_ui| {
+        plot("plot_robot_error", "error (m)", height).show(ui, |plot_ui| {
             for run in session.filters() {
                 let color = palette::estimator_color(run.kind.name());
                 let name = run.kind.name().to_uppercase();
@@ -143,7 +163,7 @@ pub fn plots_ui(ui: &mut egui::Ui, session: &LandmarkSession) {
             "Mean landmark error",
             "Root mean square position error over the landmarks in each filter's state",
         );
-        plot("plot_landmark_rmse", "time (s)", "RMS error (m)", height).show(ui, |plot_ui| {
+        plot("plot_landmark_rmse", "RMS error (m)", height).show(ui, |plot_ui| {
             for run in session.filters() {
                 let color = palette::estimator_color(run.kind.name());
                 let points = thin(
@@ -175,7 +195,7 @@ pub fn plots_ui(ui: &mut egui::Ui, session: &LandmarkSession) {
                 .flat_map(|run| run.history.iter().filter_map(|m| m.nees)),
             hi,
         );
-        plot("plot_nees", "time (s)", "NEES", height)
+        plot("plot_nees", "NEES", height)
             .default_y_bounds(0.0, y_max)
             .show(ui, |plot_ui| {
                 band_ui(plot_ui, lo, hi);
@@ -210,7 +230,7 @@ pub fn plots_ui(ui: &mut egui::Ui, session: &LandmarkSession) {
                 .flat_map(|run| run.nis.iter().map(|s| s.nis)),
             hi,
         );
-        plot("plot_nis", "time (s)", "NIS", height)
+        plot("plot_nis", "NIS", height)
             .default_y_bounds(0.0, y_max)
             .show(ui, |plot_ui| {
                 band_ui(plot_ui, lo, hi);
@@ -271,6 +291,23 @@ mod tests {
         for bad in [0.0, f64::NAN, f64::INFINITY] {
             assert_eq!(time_axis_steps(bad), [1.0, 2.0, 10.0]);
         }
+    }
+
+    #[test]
+    fn time_labels_carry_the_decimals_of_their_step_and_start_at_zero() {
+        let label = |value, step_size| time_axis_label(egui_plot::GridMark { value, step_size });
+        assert_eq!(label(0.5, 0.5), "0.5");
+        assert_eq!(label(1.5, 0.5), "1.5");
+        assert_eq!(label(2.0, 0.5), "2.0");
+        assert_eq!(label(2.0, 1.0), "2");
+        assert_eq!(label(20.0, 10.0), "20");
+        assert_eq!(label(0.25, 0.05), "0.25");
+        assert_eq!(label(0.3, 0.1), "0.3");
+        assert_eq!(label(0.0, 1.0), "0");
+        assert_eq!(label(-1e-12, 1.0), "0");
+        assert_eq!(label(-1.0, 1.0), "");
+        assert_eq!(label(f64::NAN, 1.0), "");
+        assert_eq!(label(1.0, 0.0), "");
     }
 
     #[test]
