@@ -561,12 +561,25 @@ fn the_sensor_reach_changes_live_from_the_panel_and_the_rest_waits_for_reset() {
     }
     let fov = |h: &Harness<'_, SlamLabApp>| session(h).sensor().fov.to_degrees();
     assert!((fov(&h) - 120.0).abs() < 1e-9);
+    let before = h.render().ok();
     // What the field-of-view slider does when moved to 360°, then a noise slider.
     if let Some(lesson) = h.state_mut().landmark_lesson_mut() {
         assert!(lesson.set_param_live("fov-deg", "360").is_none());
         assert!(lesson.set_param_live("range-std", "0.2").is_none());
     }
     h.run();
+    // The map shows the coming reach at once (a dashed circle), before the tick that
+    // uses it.
+    assert!((fov(&h) - 120.0).abs() < 1e-9, "this tick keeps its reach");
+    if let (Some(before), Ok(after)) = (before, h.render()) {
+        let changed = before
+            .as_raw()
+            .chunks(4)
+            .zip(after.as_raw().chunks(4))
+            .filter(|(a, b)| a.iter().zip(b.iter()).any(|(x, y)| x.abs_diff(*y) > 24))
+            .count();
+        assert!(changed > 300, "pixels changed on the map: {changed}");
+    }
     h.get_by_label("Step tick").click();
     h.run();
     assert_eq!(session(&h).tick(), 6, "the run went on");

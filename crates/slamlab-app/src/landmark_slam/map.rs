@@ -482,6 +482,38 @@ fn fan(center: Pos2, rim: &[Pos2], fill: Color32, outline: Stroke) -> Vec<Shape>
     vec![Shape::mesh(mesh), Shape::line(outline_points, outline)]
 }
 
+/// The field of view and range set for the next tick, when they differ from this
+/// tick's.
+fn coming_reach(session: &LandmarkSession) -> Option<(f64, f64)> {
+    let coming = session.scenario_now();
+    let sensor = session.sensor();
+    let reach = (coming.fov, coming.max_range);
+    (reach != (sensor.fov, sensor.max_range)).then_some(reach)
+}
+
+/// The outline of a sensor's reach from the robot at `robot` (screen) heading `theta`:
+/// robot, rim, robot for a wedge; the closed rim for a full circle. None when it cannot
+/// be drawn (non-finite, or far too large).
+fn reach_outline(
+    t: &MapTransform,
+    robot: Pos2,
+    theta: f64,
+    fov: f64,
+    max_range: f64,
+) -> Option<Vec<Pos2>> {
+    let radius = (max_range as f32) * t.scale;
+    if !(radius.is_finite() && radius < 1.0e6 && fov.is_finite() && theta.is_finite()) {
+        return None;
+    }
+    if fov >= 2.0 * PI - 1e-9 {
+        return Some(arc(robot, radius, theta - PI, theta + PI));
+    }
+    let mut points = vec![robot];
+    points.extend(arc(robot, radius, theta - fov / 2.0, theta + fov / 2.0));
+    points.push(robot);
+    Some(points)
+}
+
 /// Points on a circular arc around `center` (screen), radius in points, world angles.
 fn arc(center: Pos2, radius: f32, from: f64, to: f64) -> Vec<Pos2> {
     let span = (to - from).abs();
@@ -576,25 +608,29 @@ fn draw_world(
     }
     let truth = session.truth();
     let robot = t.pose(&truth);
-    // Sensor field of view.
+    // Sensor field of view: the reach of this tick, filled, and a reach changed from
+    // the panel, which applies from the next tick, as a dashed outline.
     if opts.fov && finite(robot) {
         let sensor = session.sensor();
-        let radius = (sensor.max_range as f32) * t.scale;
         let fill = palette::faded(colors.truth, 0.06);
         let outline = Stroke::new(1.0, palette::faded(colors.truth, 0.25));
-        if radius.is_finite() && radius < 1.0e6 {
+        if let Some(rim) = reach_outline(t, robot, truth.theta, sensor.fov, sensor.max_range) {
             if sensor.fov >= 2.0 * PI - 1e-9 {
+                let radius = (sensor.max_range as f32) * t.scale;
                 painter.circle(robot, radius, fill, outline);
             } else {
-                let half_fov = sensor.fov / 2.0;
-                let rim = arc(
-                    robot,
-                    radius,
-                    truth.theta - half_fov,
-                    truth.theta + half_fov,
-                );
-                painter.extend(fan(robot, &rim, fill, outline));
+                painter.extend(fan(robot, &rim[1..rim.len() - 1], fill, outline));
             }
+        }
+        if let Some((fov, max_range)) = coming_reach(session)
+            && let Some(next) = reach_outline(t, robot, truth.theta, fov, max_range)
+        {
+            painter.extend(Shape::dashed_line(
+                &next,
+                Stroke::new(1.4, palette::faded(colors.truth, 0.6)),
+                6.0,
+                4.0,
+            ));
         }
     }
     // Paths: dead reckoning (grey dashed), then truth.
@@ -1066,6 +1102,13 @@ fn draw_legend(
             colors.truth,
             "sensor field of view and range".to_owned(),
         ));
+        if coming_reach(session).is_some() {
+            entries.push((
+                Symbol::Line { dashed: true },
+                palette::faded(colors.truth, 0.6),
+                "sensor reach from the next tick".to_owned(),
+            ));
+        }
     }
     entries.push((
         Symbol::Highlight,
