@@ -125,7 +125,9 @@ impl SlamLabApp {
         notices.extend(issues.iter().map(|issue| format!("link: {issue}")));
 
         let mut lesson = LandmarkSlamLesson::new(scenario);
-        if settings_given {
+        // A lecture figure looks the same for every student: the view a student left
+        // in the full app (an open heatmap, say) stays there.
+        if settings_given && !parsed.embed {
             lesson.view = settings.view.clone();
             lesson.time.speed_tps = settings.time.speed_tps;
             lesson.time.max_speed = settings.time.max_speed;
@@ -508,9 +510,19 @@ mod tests {
             last_params: vec![("landmarks".to_owned(), "33".to_owned())],
             ..Default::default()
         };
+        let mut stored = stored;
+        stored.view.heatmap = true;
+        stored.view.follow_robot = true;
         let app = SlamLabApp::with_settings("embed=1&landmarks=5", Some(stored.clone()));
-        assert!(!app.landmark_lesson().is_some_and(|l| l.view.legend));
+        let view = app.landmark_lesson().map(|l| l.view.clone());
+        assert!(
+            view.is_some_and(|v| !v.legend && !v.heatmap && !v.follow_robot),
+            "an embedded figure does not take the stored view"
+        );
         assert_eq!(app.settings(), stored);
+        // The full app does.
+        let app = SlamLabApp::with_settings("", Some(stored.clone()));
+        assert!(app.landmark_lesson().is_some_and(|l| l.view.heatmap));
     }
 
     #[test]

@@ -115,6 +115,16 @@ pub fn default_scenario() -> LandmarkScenario {
     slamlab_sim::presets::scenario("lesson", seed).unwrap_or_default()
 }
 
+/// The parameters of `scenario` that differ from the lesson's start, in table order.
+fn changed_pairs(scenario: &LandmarkScenario) -> Vec<(String, String)> {
+    let defaults = params::to_pairs(&default_scenario());
+    params::to_pairs(scenario)
+        .into_iter()
+        .filter(|(name, value)| !defaults.iter().any(|(n, v)| n == name && v == value))
+        .map(|(name, value)| (name.to_owned(), value))
+        .collect()
+}
+
 /// The landmark-SLAM lesson.
 #[derive(Debug)]
 pub struct LandmarkSlamLesson {
@@ -383,16 +393,16 @@ impl LandmarkSlamLesson {
     }
 
     /// `key=value` pairs that reproduce the running setup: the seed and every
-    /// parameter that differs from its default.
+    /// parameter that differs from the lesson's start (which a link opens on).
     pub fn share_pairs(&self) -> Vec<(String, String)> {
-        let defaults = params::to_pairs(&LandmarkScenario::default());
-        params::to_pairs(&self.session.scenario_now())
-            .into_iter()
-            .filter(|(name, value)| {
-                *name == "seed" || !defaults.iter().any(|(n, v)| n == name && v == value)
-            })
-            .map(|(name, value)| (name.to_owned(), value))
-            .collect()
+        let mut pairs = changed_pairs(&self.session.scenario_now());
+        if !pairs.iter().any(|(name, _)| name == "seed") {
+            pairs.insert(
+                0,
+                ("seed".to_owned(), self.session.scenario().seed.to_string()),
+            );
+        }
+        pairs
     }
 
     /// The query string (without `?`) that opens this setup: the lesson, the share
@@ -407,12 +417,7 @@ impl LandmarkSlamLesson {
 
     /// Pairs of the pending scenario that differ from the lesson's defaults, for saving.
     pub fn pending_pairs(&self) -> Vec<(String, String)> {
-        let defaults = params::to_pairs(&default_scenario());
-        params::to_pairs(&self.pending)
-            .into_iter()
-            .filter(|(name, value)| !defaults.iter().any(|(n, v)| n == name && v == value))
-            .map(|(name, value)| (name.to_owned(), value))
-            .collect()
+        changed_pairs(&self.pending)
     }
 
     /// Does anything need another frame soon (running, a drive key held, the
@@ -542,7 +547,7 @@ mod tests {
 
     #[test]
     fn share_pairs_hold_the_seed_and_the_changes() {
-        let mut scenario = LandmarkScenario::default();
+        let mut scenario = default_scenario();
         let _ = params::set(&mut scenario, "seed", "7");
         let _ = params::set(&mut scenario, "landmarks", "30");
         let lesson = LandmarkSlamLesson::new(scenario);
@@ -556,8 +561,41 @@ mod tests {
     }
 
     #[test]
+    fn a_shared_link_reopens_the_same_setup() {
+        let setups: [&[(&str, &str)]; 4] = [
+            &[],
+            &[("estimator", "ekf")],
+            &[
+                ("estimator", "ekf,fej-ekf"),
+                ("seed", "3"),
+                ("range-std", "0.1"),
+            ],
+            &[("preset", "thesis-exp2"), ("landmarks", "35")],
+        ];
+        for setup in setups {
+            let mut scenario = default_scenario();
+            let issues = params::apply_pairs(&mut scenario, setup.iter().copied(), &[]);
+            assert!(issues.is_empty(), "{setup:?}: {issues:?}");
+            let mut lesson = LandmarkSlamLesson::new(scenario);
+            lesson.step_tick();
+            // A live change of the sensor's reach is part of the setup too.
+            assert!(lesson.set_param_live("fov-deg", "200").is_none());
+            let link = lesson.share_query(true);
+            let reopened = crate::SlamLabApp::from_query(&link);
+            let pairs = reopened
+                .landmark_lesson()
+                .map(|l| params::to_pairs(&l.session().scenario_now()));
+            assert_eq!(
+                pairs,
+                Some(params::to_pairs(&lesson.session().scenario_now())),
+                "{setup:?} shared as {link}"
+            );
+        }
+    }
+
+    #[test]
     fn the_share_link_opens_many_runs_when_its_window_is_open() {
-        let mut lesson = LandmarkSlamLesson::new(LandmarkScenario::default());
+        let mut lesson = LandmarkSlamLesson::new(default_scenario());
         assert_eq!(lesson.share_query(false), "lesson=landmark-slam&seed=1");
         lesson.view.many_runs = true;
         lesson.many_runs.trials = 80;
