@@ -6,7 +6,7 @@
 //     at screenshots to check that the canvas is really drawn (not blank);
 //   - clicks the canvas and presses Space (run) and the stepping keys, and checks that the
 //     simulation advances (slamlab_test_state()) and the picture changes;
-//   - opens the embed URL, a malformed URL and the lecture page with its two iframes;
+//   - opens the embed URL, a malformed URL and the lecture page with its three iframes;
 //   - opens the "Many runs" window from the URL and checks its averages against native ones;
 //   - fails on any console error, uncaught exception, failed request or Rust panic.
 // Screenshots, metrics.json (time to first frame, wasm size) and result.json go to
@@ -381,9 +381,10 @@ async function main() {
         assert(count === 3, `expected 3 iframes, found ${count}`);
         const notes = [];
         for (let i = 0; i < count; i++) {
+          // The page loads its figures lazily: bring each into view, as a reader would.
+          await iframes.nth(i).scrollIntoViewIfNeeded();
           const frame = await (await iframes.nth(i).elementHandle()).contentFrame();
           await waitRunning(frame);
-          await iframes.nth(i).scrollIntoViewIfNeeded();
           let stats = null;
           const deadline = Date.now() + 30_000;
           do {

@@ -18,7 +18,8 @@ pub enum EstimatorKind {
     /// UKF-SLAM (thesis Sec. 3.3).
     Ukf,
     /// EKF-SLAM with first-estimates Jacobians (Huang, Mourikis and Roumeliotis
-    /// 2008), which keeps the EKF consistent over long runs.
+    /// 2008), which removes most of the EKF's spurious confidence about the map's
+    /// absolute position and heading.
     FejEkf,
     /// EKF-SLAM linearized at the true state: impossible outside a simulator, the
     /// yardstick for consistency (Huang, Mourikis and Roumeliotis 2008). Command

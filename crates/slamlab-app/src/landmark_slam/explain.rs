@@ -29,7 +29,8 @@ fn phase_text(kind: &str, phase: Option<Phase>, report: Option<&UpdateReport>) -
             " FEJ-EKF: H is evaluated at this tick's predicted robot pose and at the landmark's \
              first estimate, not at the latest ones (the residual still uses the latest). The \
              filter then learns nothing about the map's absolute position and heading, which \
-             range and bearing cannot tell it, and it stays consistent over long runs."
+             range and bearing cannot tell it, and over a lap its average NEES stays near \
+             the band where the plain EKF's climbs above it."
         }
         None => "",
     };
@@ -44,8 +45,9 @@ fn textbook_phase_text(kind: &str, phase: Option<Phase>, report: Option<&UpdateR
             first prediction, or Run (Space)."
             .to_owned(),
         (Some(Phase::Predict), _) if ukf => "Predict (thesis Eq. 3.26-3.30): sigma points \
-            of the robot pose are moved through the motion model with the command (v, w), \
-            and their weighted spread, plus the control noise, is the new robot covariance. \
+            of the robot pose and of the control noise (augmented, so the noise is carried \
+            through the motion model once, correcting Eq. 3.28) are moved through the motion \
+            model with the command (v, w); their weighted spread is the new robot covariance. \
             Landmarks do not move, so only the robot block and the robot-landmark cross terms \
             change: the robot's ellipse grows."
             .to_owned(),

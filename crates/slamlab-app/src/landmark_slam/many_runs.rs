@@ -4,7 +4,8 @@
 //!
 //! One run's NEES plot cannot show whether a filter is honest: a consistent
 //! filter's NEES scatters over [0.22, 9.35]. Averaged over 50 runs with other
-//! noise, it must stay in [2.36, 3.72]; the window shows where each filter leaves it.
+//! noise, it lies in [2.36, 3.72] at about 95% of the ticks; the window shows where
+//! each filter leaves it.
 
 use super::plots::{band_ui, thin, time_plot};
 use crate::palette;
@@ -146,9 +147,9 @@ pub fn many_runs_ui(ui: &mut egui::Ui, state: &mut ManyRunsState, session: &Land
     ui.label(
         "One run's NEES jumps about: a consistent filter's lies anywhere in [0.22, 9.35] \
          95% of the time. Run the same world and drive again with other noise, average \
-         the NEES tick by tick, and the average of a consistent filter must stay in a \
-         narrow band around 3 (for 50 runs, [2.36, 3.72]). Above it, the filter is \
-         overconfident; below it, too cautious.",
+         the NEES tick by tick, and the average of a consistent filter stays in a \
+         narrow band around 3 (for 50 runs, [2.36, 3.72]) at about 95% of the ticks. \
+         Above it, the filter is overconfident; below it, too cautious.",
     );
     ui.add_space(4.0);
     let lap = lap_ticks(&session.scenario_now());
