@@ -226,29 +226,29 @@ fn covariance_stays_symmetric_positive_semidefinite_over_ten_thousand_steps() {
     let mut session = LandmarkSession::new(LandmarkScenario {
         seed: 11,
         landmarks: 30,
+        estimators: vec![EstimatorKind::Ekf, EstimatorKind::Ukf, EstimatorKind::FejEkf],
         ..Default::default()
     });
     for block in 0..100 {
         session.run_ticks(100);
-        let filter = session.filters()[0].filter();
-        let p = filter.covariance().clone();
-        assert_eq!(
-            p,
-            p.transpose(),
-            "asymmetric after {} ticks",
-            (block + 1) * 100
-        );
-        let eig = SymmetricEigen::new(p.clone());
-        let min = eig.eigenvalues.min();
-        let scale = p.trace().max(1.0);
-        assert!(
-            min >= -1e-12 * scale,
-            "min eigenvalue {min} after {} ticks",
-            (block + 1) * 100
-        );
-        assert!(filter.mean().iter().all(|v| v.is_finite()));
+        let ticks = (block + 1) * 100;
+        for run in session.filters() {
+            let name = run.kind.name();
+            assert_eq!(run.last_error, None, "{name} after {ticks} ticks");
+            let p = run.filter().covariance().clone();
+            assert_eq!(p, p.transpose(), "{name}: asymmetric after {ticks} ticks");
+            let eig = SymmetricEigen::new(p.clone());
+            let min = eig.eigenvalues.min();
+            let scale = p.trace().max(1.0);
+            assert!(
+                min >= -1e-12 * scale,
+                "{name}: min eigenvalue {min} after {ticks} ticks"
+            );
+            assert!(run.filter().mean().iter().all(|v| v.is_finite()), "{name}");
+        }
     }
     assert_eq!(session.tick(), 10_000);
+    assert_eq!(session.filters().len(), 3);
 }
 
 fn both() -> LandmarkScenario {

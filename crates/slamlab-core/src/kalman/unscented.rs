@@ -10,7 +10,7 @@
 
 use super::FilterError;
 use crate::geometry::wrap_angle;
-use crate::linalg::psd_cholesky;
+use crate::linalg::{psd_cholesky, psd_cross_factor};
 use nalgebra::{DMatrix, DVector};
 use serde::{Deserialize, Serialize};
 
@@ -156,18 +156,10 @@ pub fn unscented_transform(
     let l_aa = psd_cholesky(&symmetric).map_err(|_| FilterError::NotPositiveDefinite {
         what: "covariance for the sigma points",
     })?;
-    // L_oa = P_oa L_aa⁻ᵀ, column by column; a zero pivot leaves its column zero.
-    let mut l_oa = DMatrix::<f64>::zeros(p_oa.nrows(), k);
-    for j in 0..k {
-        let pivot = l_aa[(j, j)];
-        if pivot > 0.0 {
-            let mut col = p_oa.column(j).into_owned();
-            for t in 0..j {
-                col -= l_oa.column(t) * l_aa[(j, t)];
-            }
-            l_oa.set_column(j, &(col / pivot));
-        }
-    }
+    // The other states follow the sigma points through their cross-covariance.
+    let l_oa = psd_cross_factor(&l_aa, p_oa).map_err(|_| FilterError::NotPositiveDefinite {
+        what: "covariance for the sigma points (cross terms beside a zero variance)",
+    })?;
 
     let outputs: Vec<DVector<f64>> = sigma_points(mean_a, &l_aa, w.spread)
         .iter()
