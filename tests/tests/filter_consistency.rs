@@ -226,7 +226,11 @@ fn covariance_stays_symmetric_positive_semidefinite_over_ten_thousand_steps() {
     let mut session = LandmarkSession::new(LandmarkScenario {
         seed: 11,
         landmarks: 30,
-        estimators: vec![EstimatorKind::Ekf, EstimatorKind::Ukf, EstimatorKind::FejEkf],
+        estimators: vec![
+            EstimatorKind::Ekf,
+            EstimatorKind::Ukf,
+            EstimatorKind::FejEkf,
+        ],
         ..Default::default()
     });
     for block in 0..100 {

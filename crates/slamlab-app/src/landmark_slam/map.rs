@@ -340,7 +340,7 @@ fn toolbar_ui(
             has_sigma_points,
             egui::Checkbox::new(&mut opts.sigma_points, "Sigma points"),
         )
-        .on_hover_text("The UKF's sigma points of the robot pose")
+        .on_hover_text("The UKF's sigma points of the robot pose, as its next prediction spreads them")
         .on_disabled_hover_text("Only sigma-point filters (UKF) have sigma points");
         ui.separator();
         ui.toggle_value(&mut opts.heatmap, "Covariance heatmap")

@@ -283,16 +283,11 @@ pub fn parameters_ui(ui: &mut egui::Ui, lesson: &mut LandmarkSlamLesson) -> bool
         seed_ui(ui, lesson);
         estimators_ui(ui, lesson);
     });
-    if ["ukf-alpha", "ukf-beta", "ukf-kappa"]
-        .iter()
-        .any(|name| params::spec(name).is_some())
-    {
-        group_ui(ui, "UKF sigma points", |ui| {
-            number_ui(ui, lesson, "ukf-alpha", "spread α");
-            number_ui(ui, lesson, "ukf-beta", "prior β");
-            number_ui(ui, lesson, "ukf-kappa", "κ");
-        });
-    }
+    group_ui(ui, "UKF sigma points", |ui| {
+        number_ui(ui, lesson, "ukf-alpha", "spread α");
+        number_ui(ui, lesson, "ukf-beta", "prior β");
+        number_ui(ui, lesson, "ukf-kappa", "κ");
+    });
     ui.add_space(6.0);
     share_ui(ui, lesson);
     apply

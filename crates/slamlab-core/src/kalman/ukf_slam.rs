@@ -238,8 +238,12 @@ impl LandmarkSlam for UkfSlam {
         self.state.landmark_ids()
     }
 
+    /// The robot part of the sigma points the next prediction uses: the pose
+    /// augmented with the two control-noise components, so the spread is that of
+    /// 5 dimensions. The four points along the noise directions share the mean's
+    /// pose and are not repeated: 7 points.
     fn robot_sigma_points(&self) -> Vec<Pose2> {
-        let Ok(w) = self.params.weights(3) else {
+        let Ok(w) = self.params.weights(5) else {
             return Vec::new();
         };
         let Ok(l) = psd_cholesky(&self.state.covariance.view((0, 0), (3, 3)).into_owned()) else {
@@ -355,8 +359,9 @@ mod tests {
         }
         let pts = ukf.robot_sigma_points();
         assert_eq!(pts.len(), 7);
+        // Weighted as in the prediction (pose and control noise, 5 dimensions).
         let w = UnscentedParams::default()
-            .weights(3)
+            .weights(5)
             .unwrap_or_else(|e| panic!("{e}"));
         let c = ukf.robot_pose().to_vector();
         let mut cov = nalgebra::Matrix3::zeros();
