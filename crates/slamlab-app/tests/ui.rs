@@ -9,7 +9,7 @@ use egui_kittest::Harness;
 use egui_kittest::kittest::Queryable as _;
 use slamlab_app::SlamLabApp;
 use slamlab_sim::Phase;
-use slamlab_sim::params::{self, PARAMS, ParamKind};
+use slamlab_sim::params::{self, PARAMS, ParamIssue, ParamKind};
 
 const SIZE: egui::Vec2 = egui::vec2(1400.0, 900.0);
 
@@ -140,7 +140,14 @@ fn the_lesson_survives_extreme_parameters() {
                     (ParamKind::Choice(choices), _) => choices[choices.len() - 1].to_owned(),
                 };
                 let issue = lesson.set_param(spec.name, &value);
-                assert!(issue.is_none(), "{} = {value}: {issue:?}", spec.name);
+                // The last controller is manual, which has no circle speeds to set.
+                let circle_speed_by_hand = matches!(spec.name, "v" | "w-deg")
+                    && matches!(issue, Some(ParamIssue::Ignored { .. }));
+                assert!(
+                    issue.is_none() || circle_speed_by_hand,
+                    "{} = {value}: {issue:?}",
+                    spec.name
+                );
             }
             assert!(lesson.params_changed());
         }

@@ -13,11 +13,11 @@
 
 use anyhow::{Context, Result, bail};
 use clap::{Arg, ArgAction, ArgMatches, Command};
-use slamlab_sim::LandmarkScenario;
 use slamlab_sim::consistency::ConsistencyStudy;
 use slamlab_sim::experiments;
 use slamlab_sim::metrics::{RunSummary, run_headless};
 use slamlab_sim::params::{self, PARAMS};
+use slamlab_sim::{LandmarkScenario, LandmarkSession};
 use std::io::{IsTerminal, Write};
 
 /// Lessons the CLI can run.
@@ -145,6 +145,23 @@ fn scenario_from(matches: &ArgMatches) -> Result<LandmarkScenario> {
     Ok(scenario)
 }
 
+/// Refuses a scenario that cannot run headless as asked: a hand-driven robot (nobody
+/// drives it here), or an estimator that cannot start (its message says why, e.g.
+/// UKF parameters with λ + n ≤ 0).
+fn check_runnable(scenario: &LandmarkScenario) -> Result<()> {
+    if matches!(scenario.controller, slamlab_sim::ControllerKind::Manual) {
+        bail!("--controller manual has nobody to drive headless; use the circle (--v, --w-deg)");
+    }
+    let session = LandmarkSession::new(scenario.clone());
+    if session.filters().len() < scenario.estimators.len() {
+        bail!(
+            "not every estimator could start: {}",
+            session.notices().join("; ")
+        );
+    }
+    Ok(())
+}
+
 fn print_summary(out: &mut impl Write, summary: &RunSummary) -> Result<()> {
     writeln!(
         out,
@@ -198,6 +215,7 @@ fn print_summary(out: &mut impl Write, summary: &RunSummary) -> Result<()> {
 fn run(matches: &ArgMatches) -> Result<()> {
     let steps = matches.get_one::<u64>("steps").copied().unwrap_or(200);
     let scenario = scenario_from(matches)?;
+    check_runnable(&scenario)?;
     let (_, summary) = run_headless(scenario, steps);
     let mut out = std::io::stdout().lock();
     if matches.get_flag("json") {
@@ -343,9 +361,7 @@ fn consistency(matches: &ArgMatches) -> Result<()> {
     let scenario = scenario_from(matches)?;
     let trials = matches.get_one::<u64>("trials").copied().unwrap_or(50) as usize;
     let steps = matches.get_one::<u64>("steps").copied().unwrap_or(200);
-    if matches!(scenario.controller, slamlab_sim::ControllerKind::Manual) {
-        bail!("--controller manual has nobody to drive headless; use the circle (--v, --w-deg)");
-    }
+    check_runnable(&scenario)?;
     let mut study = ConsistencyStudy::new(scenario.clone(), trials, steps);
     study.run_to_end(progress_bar("consistency"));
     let result = study.result();
@@ -458,14 +474,15 @@ fn ekf_vs_ukf(matches: &ArgMatches, seed: u64) -> Result<()> {
     writeln!(out)?;
     writeln!(
         out,
-        "{:<6} {:>20} {:>20} {:>20} {:>20} {:>10} {:>9}",
+        "{:<6} {:>20} {:>20} {:>20} {:>20} {:>10} {:>9} {:>14}",
         "filter",
         "robot MSE m²",
         "landmark MSE m²",
         "final robot m²",
         "final landmark m²",
         "NEES",
-        "diverged"
+        "diverged",
+        "worst final m"
     )?;
     for f in &result.filters {
         let pm = |m: f64, s: f64| format!("{m:.4} ± {s:.4}");
@@ -485,7 +502,7 @@ fn ekf_vs_ukf(matches: &ArgMatches, seed: u64) -> Result<()> {
     writeln!(out)?;
     writeln!(
         out,
-        "MSE: mean over trials of the time-averaged squared position error (± std across trials). Diverged: final robot error > {} m.",
+        "MSE: mean over trials of the time-averaged squared position error (± std across trials). Diverged: final robot error > {} m; worst final: the largest final robot error of any trial.",
         experiments::DIVERGED_ERROR
     )?;
     Ok(())

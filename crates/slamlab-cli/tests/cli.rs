@@ -258,7 +258,7 @@ fn both_estimators_run_side_by_side_from_the_command_line() {
         "-9",
         "--json",
     ]);
-    assert!(ok, "{stderr}");
+    assert!(!ok && stderr.contains("ukf could not start"), "{stderr}");
 }
 
 #[test]
@@ -381,4 +381,31 @@ fn consistency_experiment_averages_nees_over_seeded_trials() {
     assert!(!ok && stderr.contains("manual"), "{stderr}");
     let (ok, _, stderr) = slamlab(&["experiment", "consistency", "--range-std", "NaN"]);
     assert!(!ok && stderr.contains("range-std"), "{stderr}");
+}
+
+#[test]
+fn a_run_that_cannot_go_as_asked_is_refused_with_the_reason() {
+    // λ + n ≤ 0: the UKF cannot start, and no result pretends it ran.
+    for command in [
+        &["run", "landmark-slam", "--json"][..],
+        &["experiment", "consistency", "--trials", "2", "--json"][..],
+    ] {
+        let args: Vec<&str> = command
+            .iter()
+            .copied()
+            .chain(["--estimator", "ekf,ukf", "--ukf-kappa", "-10"])
+            .collect();
+        let (ok, stdout, stderr) = slamlab(&args);
+        assert!(!ok, "{args:?} succeeded: {stdout}");
+        assert!(stdout.is_empty(), "{args:?}: {stdout}");
+        assert!(
+            stderr.contains("ukf could not start") && stderr.contains("kappa"),
+            "{args:?}: {stderr}"
+        );
+    }
+    // Nobody drives a hand-driven robot headless, and its circle speed means nothing.
+    let (ok, _, stderr) = slamlab(&["run", "landmark-slam", "--controller", "manual"]);
+    assert!(!ok && stderr.contains("nobody to drive"), "{stderr}");
+    let (ok, _, stderr) = slamlab(&["run", "landmark-slam", "--controller", "manual", "--v", "2"]);
+    assert!(!ok && stderr.contains("v was ignored"), "{stderr}");
 }

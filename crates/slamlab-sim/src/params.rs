@@ -209,6 +209,14 @@ pub enum ParamIssue {
         /// The value kept.
         kept: String,
     },
+    /// The value has no effect in this scenario (the circle's speeds while the
+    /// robot is driven by hand); nothing changed.
+    Ignored {
+        /// The parameter.
+        name: String,
+        /// Why it has no effect.
+        reason: &'static str,
+    },
     /// The value was outside its range and was clamped.
     Clamped {
         /// The parameter.
@@ -237,6 +245,7 @@ impl fmt::Display for ParamIssue {
             ParamIssue::Clamped { name, value, used } => {
                 write!(f, "{name} = {value} is out of range; using {used}")
             }
+            ParamIssue::Ignored { name, reason } => write!(f, "{name} was ignored: {reason}"),
         }
     }
 }
@@ -251,14 +260,13 @@ fn format_number(v: f64) -> String {
     }
 }
 
-/// The current value of a parameter, as text in its URL/CLI unit.
+/// The current value of a parameter, as text in its URL/CLI unit. None for a
+/// preset (not a value the scenario holds) and for the circle's speeds while the
+/// robot is driven by hand.
 pub fn get(scenario: &LandmarkScenario, name: &str) -> Option<String> {
-    let (circle_v, circle_w) = match scenario.controller {
-        ControllerKind::Circle { v, w } => (v, w),
-        ControllerKind::Manual => match LandmarkScenario::default().controller {
-            ControllerKind::Circle { v, w } => (v, w),
-            ControllerKind::Manual => (0.0, 0.0),
-        },
+    let circle = match scenario.controller {
+        ControllerKind::Circle { v, w } => Some((v, w)),
+        ControllerKind::Manual => None,
     };
     Some(match name {
         "seed" => scenario.seed.to_string(),
@@ -281,8 +289,8 @@ pub fn get(scenario: &LandmarkScenario, name: &str) -> Option<String> {
             ControllerKind::Circle { .. } => "circle".to_owned(),
             ControllerKind::Manual => "manual".to_owned(),
         },
-        "v" => format_number(circle_v),
-        "w-deg" => format_number(circle_w.to_degrees()),
+        "v" => format_number(circle?.0),
+        "w-deg" => format_number(circle?.1.to_degrees()),
         "estimator" => scenario
             .estimators
             .iter()
@@ -334,6 +342,15 @@ pub fn set(scenario: &mut LandmarkScenario, name: &str, value: &str) -> Option<P
                     spec.unit
                 ));
             };
+            if matches!(name, "v" | "w-deg")
+                && matches!(scenario.controller, ControllerKind::Manual)
+            {
+                return Some(ParamIssue::Ignored {
+                    name: name.to_owned(),
+                    reason: "the scripted circle's speeds do nothing while the robot is \
+                             driven by hand (controller=manual)",
+                });
+            }
             let used = v.clamp(min, max);
             apply_number(scenario, name, used);
             (!(min..=max).contains(&v)).then(|| ParamIssue::Clamped {
@@ -433,9 +450,13 @@ fn apply_number(scenario: &mut LandmarkScenario, name: &str, v: f64) {
         "ukf-beta" => scenario.ukf.beta = v,
         "ukf-kappa" => scenario.ukf.kappa = v,
         "v" | "w-deg" => {
-            let (mut cv, mut cw) = match scenario.controller {
-                ControllerKind::Circle { v, w } => (v, w),
-                ControllerKind::Manual => return,
+            // Under manual driving `set` refuses these before they get here.
+            let ControllerKind::Circle {
+                v: mut cv,
+                w: mut cw,
+            } = scenario.controller
+            else {
+                return;
             };
             if name == "v" {
                 cv = v;
@@ -456,14 +477,19 @@ pub fn apply_pairs<'a>(
     pairs: impl IntoIterator<Item = (&'a str, &'a str)>,
     skip: &[&str],
 ) -> Vec<ParamIssue> {
-    let (presets, others): (Vec<_>, Vec<_>) = pairs
+    let mut pairs: Vec<(&str, &str)> = pairs
         .into_iter()
         .filter(|(k, _)| !skip.contains(k))
-        .partition(|(k, _)| *k == "preset");
-    // A preset first, so that the parameters beside it apply on top, in any order.
-    presets
+        .collect();
+    // A preset first, so that the parameters beside it apply on top, and who drives
+    // next, so that the circle's speeds meet the same controller in any order.
+    pairs.sort_by_key(|(k, _)| match *k {
+        "preset" => 0,
+        "controller" => 1,
+        _ => 2,
+    });
+    pairs
         .into_iter()
-        .chain(others)
         .filter_map(|(k, v)| set(scenario, k, v))
         .collect()
 }
@@ -520,6 +546,39 @@ mod tests {
         assert_eq!(to_pairs(&copy), to_pairs(&s));
         assert_eq!(copy.seed, 99);
         assert_eq!(copy.landmarks, 33);
+    }
+
+    #[test]
+    fn the_circle_speeds_are_refused_while_driving_by_hand_in_any_order() {
+        for pairs in [
+            [("controller", "manual"), ("v", "2")],
+            [("v", "2"), ("controller", "manual")],
+        ] {
+            let mut s = LandmarkScenario::default();
+            let issues = apply_pairs(&mut s, pairs, &[]);
+            assert_eq!(s.controller, ControllerKind::Manual, "{pairs:?}");
+            assert!(
+                matches!(issues.as_slice(), [ParamIssue::Ignored { name, .. }] if name == "v"),
+                "{pairs:?}: {issues:?}"
+            );
+            // A hand-driven scenario has no circle speeds to report or restore.
+            assert_eq!(get(&s, "v"), None);
+            let mut copy = LandmarkScenario::default();
+            assert!(
+                apply_pairs(
+                    &mut copy,
+                    to_pairs(&s).iter().map(|(k, v)| (*k, v.as_str())),
+                    &[]
+                )
+                .is_empty()
+            );
+            assert_eq!(to_pairs(&copy), to_pairs(&s));
+            assert!(sanitize(&mut s).is_empty());
+        }
+        // With the circle they apply as usual.
+        let mut s = LandmarkScenario::default();
+        assert!(apply_pairs(&mut s, [("v", "2"), ("controller", "circle")], &[]).is_empty());
+        assert_eq!(get(&s, "v").as_deref(), Some("2"));
     }
 
     #[test]
