@@ -171,8 +171,8 @@ impl EkfSlam {
 
         let correction = &gain * innovation;
         if !correction.iter().all(|v| v.is_finite()) {
-            return Err(FilterError::NotPositiveDefinite {
-                what: "innovation covariance S",
+            return Err(FilterError::NonFinite {
+                what: "the correction K (z - h(x))",
             });
         }
         self.state.mean += correction;
@@ -417,6 +417,11 @@ mod tests {
             .is_err()
         );
         assert!(ekf.predict(&Control::new(f64::INFINITY, 0.0), 0.1).is_err());
+        let backwards = ekf.predict(&Control::new(1.0, 0.0), -0.1);
+        assert!(
+            backwards.is_err_and(|e| e.to_string().contains("dt = -0.1 finite and not negative")),
+            "a negative time step is refused and named"
+        );
         assert_eq!(before.mean(), ekf.mean());
         assert_eq!(before.covariance(), ekf.covariance());
         assert!(ekf.landmark_ids().is_empty());

@@ -81,8 +81,10 @@ pub enum FilterError {
         /// The rejected value.
         value: f64,
     },
-    /// A control or time step is NaN or infinite.
-    #[error("control (v = {v}, w = {w}) or time step dt = {dt} is not finite")]
+    /// A control is NaN or infinite, or the time step is that or negative.
+    #[error(
+        "control (v = {v}, w = {w}) must be finite and the time step dt = {dt} finite and not negative"
+    )]
     InvalidControl {
         /// Forward speed.
         v: f64,
@@ -103,6 +105,12 @@ pub enum FilterError {
     #[error("{what} is not positive definite; the update was skipped")]
     NotPositiveDefinite {
         /// Which matrix.
+        what: &'static str,
+    },
+    /// A result came out NaN or infinite (the inputs were finite).
+    #[error("{what} came out NaN or infinite; the step was skipped")]
+    NonFinite {
+        /// Which result.
         what: &'static str,
     },
 }

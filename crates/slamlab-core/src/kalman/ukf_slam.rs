@@ -128,9 +128,8 @@ impl UkfSlam {
             }
         })?;
         if !out.covariance.iter().all(|v| v.is_finite()) {
-            return Err(FilterError::Measurement {
-                id,
-                source: MeasurementError::TooClose { range: 0.0 },
+            return Err(FilterError::NonFinite {
+                what: "the predicted measurement (a sigma point puts the landmark on the robot)",
             });
         }
         let s: Matrix2<f64> = Matrix2::from_iterator(out.covariance.iter().copied())
@@ -147,8 +146,8 @@ impl UkfSlam {
         let gain = &out.cross_other * s_inv;
         let correction = &gain * innovation;
         if !correction.iter().all(|v| v.is_finite()) {
-            return Err(FilterError::NotPositiveDefinite {
-                what: "innovation covariance P_yy",
+            return Err(FilterError::NonFinite {
+                what: "the correction K (z - y)",
             });
         }
         let mut covariance = &self.state.covariance - &gain * s * gain.transpose();
@@ -198,8 +197,8 @@ impl LandmarkSlam for UkfSlam {
             DVector::from_column_slice(&[p.x, p.y, p.theta])
         })?;
         if !out.is_finite() {
-            return Err(FilterError::NotPositiveDefinite {
-                what: "predicted robot covariance",
+            return Err(FilterError::NonFinite {
+                what: "the predicted robot pose or covariance",
             });
         }
         self.state.mean.rows_mut(0, 3).copy_from(&out.mean);
