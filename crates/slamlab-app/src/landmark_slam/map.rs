@@ -398,6 +398,12 @@ fn draw_grid(painter: &egui::Painter, t: &MapTransform, colors: &Colors) {
     while y <= y1 && count < 400 {
         let p = t.xy(0.0, y);
         painter.hline(t.rect.x_range(), p.y, stroke);
+        // The top left corner holds the axis name "y (m)".
+        if p.y < t.rect.top() + 34.0 {
+            y += step;
+            count += 1;
+            continue;
+        }
         painter.text(
             pos2(t.rect.left() + 2.0, p.y - 1.0),
             egui::Align2::LEFT_BOTTOM,
