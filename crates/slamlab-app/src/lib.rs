@@ -506,11 +506,10 @@ mod tests {
 
     #[test]
     fn an_embedded_page_saves_the_settings_it_found() {
-        let stored = Settings {
+        let mut stored = Settings {
             last_params: vec![("landmarks".to_owned(), "33".to_owned())],
             ..Default::default()
         };
-        let mut stored = stored;
         stored.view.heatmap = true;
         stored.view.follow_robot = true;
         let app = SlamLabApp::with_settings("embed=1&landmarks=5", Some(stored.clone()));
