@@ -6,6 +6,13 @@ use egui_plot::{HLine, Legend, Line, LineStyle, Plot, PlotPoints, Points, Span};
 use slamlab_core::stats::chi2_quantile;
 use slamlab_sim::LandmarkSession;
 
+/// Line width (or point radius) of the `index`-th filter's series: the first is drawn
+/// widest, so that where two filters agree the later line runs inside the earlier one
+/// and both stay visible (EKF blue around UKF orange).
+fn line_width(index: usize, base: f32) -> f32 {
+    base + 0.9 * (2.0 - index.min(2) as f32)
+}
+
 /// Longest series drawn, in points; longer ones are thinned evenly.
 const MAX_POINTS: usize = 3000;
 
@@ -136,7 +143,7 @@ pub fn plots_ui(ui: &mut egui::Ui, session: &LandmarkSession) {
             "|true − estimated position| and the filter's own 2σ bound 2√(σx² + σy²)",
         );
         plot("plot_robot_error", "error (m)", height).show(ui, |plot_ui| {
-            for run in session.filters() {
+            for (index, run) in session.filters().iter().enumerate() {
                 let color = palette::estimator_color(run.kind.name());
                 let name = run.kind.name().to_uppercase();
                 let error = thin(run.history.iter().map(|m| [m.time, m.position_error]).collect());
@@ -146,12 +153,16 @@ pub fn plots_ui(ui: &mut egui::Ui, session: &LandmarkSession) {
                         .map(|m| [m.time, m.position_bound_2sigma])
                         .collect(),
                 );
-                plot_ui.line(Line::new(format!("{name} error"), PlotPoints::new(error)).color(color).width(1.6));
+                plot_ui.line(
+                    Line::new(format!("{name} error"), PlotPoints::new(error))
+                        .color(color)
+                        .width(line_width(index, 1.2)),
+                );
                 plot_ui.line(
                     Line::new(format!("{name} 2σ bound"), PlotPoints::new(bound))
                         .color(color)
                         .style(LineStyle::dashed_dense())
-                        .width(1.2),
+                        .width(line_width(index, 1.0)),
                 );
             }
         });
@@ -164,7 +175,7 @@ pub fn plots_ui(ui: &mut egui::Ui, session: &LandmarkSession) {
             "Root mean square position error over the landmarks in each filter's state",
         );
         plot("plot_landmark_rmse", "RMS error (m)", height).show(ui, |plot_ui| {
-            for run in session.filters() {
+            for (index, run) in session.filters().iter().enumerate() {
                 let color = palette::estimator_color(run.kind.name());
                 let points = thin(
                     run.history
@@ -175,7 +186,7 @@ pub fn plots_ui(ui: &mut egui::Ui, session: &LandmarkSession) {
                 plot_ui.line(
                     Line::new(format!("{} landmarks", run.kind.name().to_uppercase()), PlotPoints::new(points))
                         .color(color)
-                        .width(1.6),
+                        .width(line_width(index, 1.2)),
                 );
             }
         });
@@ -199,7 +210,7 @@ pub fn plots_ui(ui: &mut egui::Ui, session: &LandmarkSession) {
             .default_y_bounds(0.0, y_max)
             .show(ui, |plot_ui| {
                 band_ui(plot_ui, lo, hi);
-                for run in session.filters() {
+                for (index, run) in session.filters().iter().enumerate() {
                     let color = palette::estimator_color(run.kind.name());
                     let points = thin(
                         run.history
@@ -210,7 +221,7 @@ pub fn plots_ui(ui: &mut egui::Ui, session: &LandmarkSession) {
                     plot_ui.line(
                         Line::new(format!("{} NEES", run.kind.name().to_uppercase()), PlotPoints::new(points))
                             .color(color)
-                            .width(1.4),
+                            .width(line_width(index, 1.0)),
                     );
                 }
             });
@@ -234,7 +245,7 @@ pub fn plots_ui(ui: &mut egui::Ui, session: &LandmarkSession) {
             .default_y_bounds(0.0, y_max)
             .show(ui, |plot_ui| {
                 band_ui(plot_ui, lo, hi);
-                for run in session.filters() {
+                for (index, run) in session.filters().iter().enumerate() {
                     let color = palette::estimator_color(run.kind.name());
                     let points = thin(
                         run.nis
@@ -245,7 +256,7 @@ pub fn plots_ui(ui: &mut egui::Ui, session: &LandmarkSession) {
                     plot_ui.points(
                         Points::new(format!("{} NIS", run.kind.name().to_uppercase()), PlotPoints::new(points))
                             .color(color)
-                            .radius(1.8),
+                            .radius(line_width(index, 1.4)),
                     );
                 }
             });
