@@ -586,6 +586,8 @@ fn the_sensor_reach_changes_live_from_the_panel_and_the_rest_waits_for_reset() {
             .filter(|(a, b)| a.iter().zip(b.iter()).any(|(x, y)| x.abs_diff(*y) > 24))
             .count();
         assert!(changed > 300, "pixels changed on the map: {changed}");
+    } else {
+        eprintln!("skipping the rendered check of the coming reach: no GPU adapter");
     }
     h.get_by_label("Step tick").click();
     h.run();
