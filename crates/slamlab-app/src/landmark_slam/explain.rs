@@ -3,6 +3,7 @@
 
 use crate::palette;
 use slamlab_core::kalman::UpdateReport;
+use slamlab_core::range_bearing::{self, RangeBearing};
 use slamlab_core::stats::chi2_quantile;
 use slamlab_sim::session::FilterRun;
 use slamlab_sim::{LandmarkSession, Phase};
@@ -102,11 +103,29 @@ pub fn explanation_ui(ui: &mut egui::Ui, session: &LandmarkSession) {
         .next_phase()
         .map_or_else(|| "predict (new tick)".to_owned(), |p| p.label());
     ui.label(format!("Next phase: {next}"));
-    if let Some(Phase::Update { id, .. }) = phase {
+    if let Some(Phase::Update { id, index, .. }) = phase {
         ui.label(
             egui::RichText::new(format!("Landmark {id} is ringed in vermillion on the map."))
                 .color(palette::VERMILLION),
         );
+        if let Some(observation) = session.observations().get(index.wrapping_sub(1)) {
+            let truth = session
+                .world()
+                .landmarks
+                .iter()
+                .find(|l| l.id == observation.id)
+                .and_then(|l| range_bearing::predict(&session.truth(), &l.position).ok())
+                .map(|p| p.measurement);
+            let (reading, note) = measurement_text(
+                &observation.measurement,
+                truth.as_ref(),
+                session.sensor().range_std,
+            );
+            ui.label(reading);
+            if let Some(note) = note {
+                ui.colored_label(palette::VERMILLION, note);
+            }
+        }
     }
     if session.filters().is_empty() {
         ui.colored_label(palette::VERMILLION, "No estimator is running.");
@@ -257,6 +276,35 @@ fn filter_ui(ui: &mut egui::Ui, run: &FilterRun, phase: Option<Phase>) {
         });
 }
 
+/// What the sensor reported for the update being shown, beside the truth only the
+/// simulator knows; and, for a reading below zero, why the sensor could say that.
+fn measurement_text(
+    measured: &RangeBearing,
+    truth: Option<&RangeBearing>,
+    range_std: f64,
+) -> (String, Option<String>) {
+    let mut reading = format!(
+        "Sensor: range {:.2} m, bearing {:+.1}°",
+        measured.range,
+        measured.bearing.to_degrees()
+    );
+    if let Some(t) = truth {
+        reading += &format!(" (true {:.2} m, {:+.1}°)", t.range, t.bearing.to_degrees());
+    }
+    reading.push('.');
+    let note = (measured.range < 0.0).then(|| {
+        let distance = truth.map_or_else(String::new, |t| {
+            format!("the landmark is only {:.2} m away and ", t.range)
+        });
+        format!(
+            "A negative range: {distance}the range noise (σ = {range_std:.2} m) \
+             pushed the reading below zero. A real sensor cannot report that; the filters take \
+             it as their Gaussian noise model says, and the map draws the ray behind the robot."
+        )
+    });
+    (reading, note)
+}
+
 fn row(ui: &mut egui::Ui, name: &str, value: String) {
     ui.label(name);
     ui.label(value);
@@ -276,4 +324,34 @@ fn consistency_ui(ui: &mut egui::Ui) {
          Tick FEJ-EKF among the estimators to run the same EKF with first-estimates \
          Jacobians: its average NEES over a lap lies inside the band.",
     );
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn a_reading_shows_beside_the_truth_and_a_negative_range_is_explained() {
+        let truth = RangeBearing::new(0.3, 0.2);
+        let (reading, note) = measurement_text(&RangeBearing::new(1.234, -0.1), Some(&truth), 0.5);
+        assert_eq!(
+            reading,
+            "Sensor: range 1.23 m, bearing -5.7° (true 0.30 m, +11.5°)."
+        );
+        assert_eq!(note, None);
+
+        let (reading, note) = measurement_text(&RangeBearing::new(-0.42, 0.2), Some(&truth), 0.5);
+        assert!(reading.starts_with("Sensor: range -0.42 m"), "{reading}");
+        let note = note.expect("a negative range is explained");
+        assert!(
+            note.starts_with("A negative range: the landmark is only 0.30 m away and the range noise (σ = 0.50 m)"),
+            "{note}"
+        );
+        let (reading, note) = measurement_text(&RangeBearing::new(-0.42, 0.2), None, 0.5);
+        assert_eq!(reading, "Sensor: range -0.42 m, bearing +11.5°.");
+        assert!(
+            note.unwrap()
+                .starts_with("A negative range: the range noise")
+        );
+    }
 }
