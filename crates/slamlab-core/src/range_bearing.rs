@@ -61,6 +61,17 @@ pub enum MeasurementError {
         /// The distance, metres.
         range: f64,
     },
+    /// A first sighting whose range is no distance (at or below [`MIN_RANGE`]; Gaussian
+    /// range noise gives such readings of landmarks close by): the inverse observation
+    /// model would place the landmark on or behind the robot.
+    #[error(
+        "its first reading has range {range:.2} m, which cannot place it (the inverse \
+         observation model needs a range above {MIN_RANGE} m); it waits for its next sighting"
+    )]
+    NoDistance {
+        /// The measured range, metres.
+        range: f64,
+    },
     /// An input was NaN or infinite.
     #[error("measurement or state is not finite")]
     NotFinite,

@@ -298,8 +298,9 @@ fn measurement_text(
         });
         format!(
             "A negative range: {distance}the range noise (σ = {range_std:.2} m) \
-             pushed the reading below zero. A real sensor cannot report that; the filters take \
-             it as their Gaussian noise model says, and the map draws the ray behind the robot."
+             pushed the reading below zero. A real sensor cannot report that. The filters take \
+             it as their Gaussian noise model says (a first sighting cannot place the landmark \
+             and waits for the next), and the map draws the ray behind the robot."
         )
     });
     (reading, note)

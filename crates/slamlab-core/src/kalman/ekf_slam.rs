@@ -406,6 +406,15 @@ mod tests {
             .unwrap_or_else(|e| panic!("{e}"));
         let before = ekf.clone();
         assert!(ekf.update(1, &RangeBearing::new(0.0, 0.0)).is_err());
+        let error = ekf
+            .update(1, &RangeBearing::new(-0.25, 0.1))
+            .expect_err("a first sighting at a negative range places nothing");
+        assert_eq!(
+            error.to_string(),
+            "landmark 1: its first reading has range -0.25 m, which cannot place it (the \
+             inverse observation model needs a range above 0.001 m); it waits for its next \
+             sighting"
+        );
         assert!(
             ekf.update(
                 1,

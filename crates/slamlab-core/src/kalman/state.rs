@@ -120,7 +120,7 @@ pub(crate) fn check_measurement(
     if first_sighting && z.range < MIN_RANGE {
         return Err(FilterError::Measurement {
             id,
-            source: MeasurementError::TooClose { range: z.range },
+            source: MeasurementError::NoDistance { range: z.range },
         });
     }
     Ok(())

@@ -332,8 +332,18 @@ mod tests {
         assert!(UkfSlam::new(config(), bad, Pose2::IDENTITY).is_err());
         let mut ukf = UkfSlam::new(config(), UnscentedParams::default(), Pose2::IDENTITY)
             .unwrap_or_else(|e| panic!("{e}"));
-        // A first sighting at range 0 has no bearing: refused, nothing added.
-        assert!(ukf.update(0, &RangeBearing::new(0.0, 0.0)).is_err());
+        // A first sighting at range 0, or below it, places nothing: refused, nothing added.
+        for range in [0.0, -0.3] {
+            let error = ukf
+                .update(0, &RangeBearing::new(range, 0.0))
+                .expect_err("no landmark from a reading without distance");
+            assert!(
+                error.to_string().starts_with(&format!(
+                    "landmark 0: its first reading has range {range:.2} m, which cannot place it"
+                )),
+                "{error}"
+            );
+        }
         assert!(ukf.landmark_ids().is_empty());
         assert_eq!(ukf.mean().len(), 3);
         ukf.update(1, &RangeBearing::new(2.0, 0.0))
