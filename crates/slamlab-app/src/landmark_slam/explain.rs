@@ -15,8 +15,8 @@ fn phase_text(kind: &str, phase: Option<Phase>, report: Option<&UpdateReport>) -
         return text
             + " Ideal EKF: every Jacobian is taken at the true state, which only a \
                simulator knows. It is the yardstick: with exact linearization points its \
-               NEES stays in the band, so whatever the other EKFs show beyond it comes \
-               from where they linearize.";
+               average NEES over 50 runs stays in the band, so whatever the other EKFs \
+               show beyond it comes from where they linearize.";
     }
     if kind != "fej-ekf" {
         return text;
