@@ -36,7 +36,9 @@ pub enum Linearization {
     LatestEstimate,
     /// First-estimates Jacobians (FEJ-EKF).
     FirstEstimates,
-    /// Jacobians at the true state (the ideal EKF; simulation only).
+    /// Jacobians at the true state (the ideal EKF; simulation only). The simulator
+    /// hands it the truth before every predict (`observe_truth`); until it has, and
+    /// for a landmark the truth does not list, it falls back on first estimates.
     TrueState,
 }
 
