@@ -61,7 +61,7 @@ pub enum MeasurementError {
         /// The distance, metres.
         range: f64,
     },
-    /// A first sighting whose range is no distance (at or below [`MIN_RANGE`]; Gaussian
+    /// A first sighting whose range is no distance (below [`MIN_RANGE`]; Gaussian
     /// range noise gives such readings of landmarks close by): the inverse observation
     /// model would place the landmark on or behind the robot.
     #[error(
