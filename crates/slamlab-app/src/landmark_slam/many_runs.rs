@@ -42,8 +42,6 @@ pub struct ManyRunsState {
     study: Option<ConsistencyStudy>,
     /// Is the study being advanced (not stopped)?
     running: bool,
-    /// The parameters of the run the study was started from.
-    started_for: Vec<(&'static str, String)>,
     /// Why the last start did not happen, for the user.
     message: Option<String>,
 }
@@ -55,7 +53,6 @@ impl Default for ManyRunsState {
             length: RunLength::OneLap,
             study: None,
             running: false,
-            started_for: Vec::new(),
             message: None,
         }
     }
@@ -102,7 +99,6 @@ impl ManyRunsState {
                 ConsistencyStudy::replaying(scenario, trials, commands[..steps].to_vec())
             }
         };
-        self.started_for = params::to_pairs(&session.scenario_now());
         self.study = Some(study);
         self.running = true;
     }
@@ -213,7 +209,8 @@ pub fn many_runs_ui(ui: &mut egui::Ui, state: &mut ManyRunsState, session: &Land
         ui.weak("Press Run: the runs take a few seconds.");
         return;
     };
-    if state.started_for != params::to_pairs(&session.scenario_now()) {
+    // The study keeps the scenario it was started from.
+    if params::to_pairs(study.scenario()) != params::to_pairs(&session.scenario_now()) {
         ui.colored_label(
             palette::VERMILLION,
             "These runs used other parameters than the run on the map now; run again for the current ones.",
