@@ -13,7 +13,7 @@
 //! app can show the average building up without stalling a frame; the command
 //! line and the tests run it to the end.
 
-use crate::experiments::DIVERGED_ERROR;
+use crate::experiments::{DIVERGED_ERROR, has_diverged};
 use crate::scenario::{ControllerKind, EstimatorKind, LandmarkScenario};
 use crate::session::LandmarkSession;
 use serde::Serialize;
@@ -45,7 +45,6 @@ pub struct ConsistencyStudy {
     commands: Option<Vec<Control>>,
     trials: usize,
     steps: u64,
-    first_seed: u64,
     trials_done: usize,
     current: Option<LandmarkSession>,
     filters: Vec<FilterSums>,
@@ -68,7 +67,6 @@ impl ConsistencyStudy {
             })
             .collect();
         Self {
-            first_seed: template.seed,
             template,
             commands: None,
             trials,
@@ -93,7 +91,7 @@ impl ConsistencyStudy {
     pub fn advance(&mut self, max_ticks: u64) -> bool {
         let mut budget = max_ticks;
         while budget > 0 && !self.is_done() {
-            let seed = self.first_seed.wrapping_add(self.trials_done as u64);
+            let seed = self.template.seed.wrapping_add(self.trials_done as u64);
             let session = self.current.get_or_insert_with(|| {
                 let mut session = LandmarkSession::new(LandmarkScenario {
                     seed,
@@ -150,10 +148,7 @@ impl ConsistencyStudy {
             }
             sums.nis_sum += run.nis.iter().map(|s| s.nis).sum::<f64>();
             sums.nis_count += run.nis.len();
-            if run
-                .latest()
-                .is_some_and(|m| !(m.position_error <= DIVERGED_ERROR))
-            {
+            if has_diverged(run) {
                 sums.diverged += 1;
             }
         }

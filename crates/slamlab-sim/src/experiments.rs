@@ -8,7 +8,7 @@
 //! that sees all around to 8 m. Every parameter is printed with the results.
 
 use crate::scenario::{ControllerKind, EstimatorKind, LandmarkScenario};
-use crate::session::LandmarkSession;
+use crate::session::{FilterRun, LandmarkSession};
 use crate::world::LandmarkLayout;
 use serde::Serialize;
 use std::f64::consts::PI;
@@ -18,6 +18,13 @@ pub const STEPS: u64 = 200;
 
 /// A final robot error above this (metres) counts a trial as diverged.
 pub const DIVERGED_ERROR: f64 = 5.0;
+
+/// Has this run diverged: is its final robot error above [`DIVERGED_ERROR`] (or not
+/// a number)?
+pub(crate) fn has_diverged(run: &FilterRun) -> bool {
+    run.latest()
+        .is_some_and(|m| !(m.position_error <= DIVERGED_ERROR))
+}
 
 /// The scenario of thesis Experiment 1 with the control noise multiplied by
 /// `noise_scale` (2 gives Experiment 2), for one trial's seed.
@@ -157,7 +164,7 @@ pub fn ekf_vs_ukf(
                 landmark_final[f].push(r * r);
             }
             nees[f].extend(h.iter().filter_map(|m| m.nees));
-            if last.is_some_and(|m| !(m.position_error <= DIVERGED_ERROR)) {
+            if has_diverged(run) {
                 diverged[f] += 1;
             }
             for (k, m) in h.iter().enumerate().take(steps) {
