@@ -13,6 +13,7 @@
 
 use nalgebra::{DMatrix, DVector};
 use slamlab_core::MotionModel;
+use slamlab_core::math;
 use slamlab_core::range_bearing::MIN_RANGE;
 use slamlab_sim::world::LandmarkLayout;
 use slamlab_sim::{EstimatorKind, LandmarkScenario, LandmarkSession};
@@ -27,15 +28,19 @@ fn wrap(angle: f64) -> f64 {
 fn step(model: MotionModel, x: [f64; 3], v: f64, w: f64, dt: f64) -> [f64; 3] {
     let [px, py, th] = x;
     match model {
-        MotionModel::Euler => [px + v * dt * th.cos(), py + v * dt * th.sin(), th + w * dt],
+        MotionModel::Euler => [
+            px + v * dt * math::cos(th),
+            py + v * dt * math::sin(th),
+            th + w * dt,
+        ],
         MotionModel::ExactArc if w.abs() < 1e-9 => {
-            [px + v * dt * th.cos(), py + v * dt * th.sin(), th]
+            [px + v * dt * math::cos(th), py + v * dt * math::sin(th), th]
         }
         MotionModel::ExactArc => {
             let r = v / w;
             [
-                px + r * ((th + w * dt).sin() - th.sin()),
-                py + r * (th.cos() - (th + w * dt).cos()),
+                px + r * (math::sin(th + w * dt) - math::sin(th)),
+                py + r * (math::cos(th) - math::cos(th + w * dt)),
                 th + w * dt,
             ]
         }
@@ -101,7 +106,7 @@ impl DenseEkf {
             // Inverse observation model l = g(x, z), its Jacobians by differences.
             let place = |x: &[f64], z: &[f64]| {
                 let a = x[2] + z[1];
-                vec![x[0] + z[0] * a.cos(), x[1] + z[0] * a.sin()]
+                vec![x[0] + z[0] * math::cos(a), x[1] + z[0] * math::sin(a)]
             };
             let robot = [self.mean[0], self.mean[1], self.mean[2]];
             let gx = jacobian(|x| place(x, &z), &robot, &[]);
@@ -126,7 +131,7 @@ impl DenseEkf {
         let j = 3 + 2 * slot;
         let h = |m: &[f64]| {
             let (dx, dy) = (m[j] - m[0], m[j + 1] - m[1]);
-            vec![dx.hypot(dy), wrap(dy.atan2(dx) - m[2])]
+            vec![math::hypot(dx, dy), wrap(math::atan2(dy, dx) - m[2])]
         };
         let at = self.mean.as_slice().to_vec();
         let hm = jacobian(h, &at, &[1]);

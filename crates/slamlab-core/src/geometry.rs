@@ -1,5 +1,6 @@
 //! SE(2) poses, angle wrapping and covariance ellipses.
 
+use crate::math;
 use nalgebra::{Matrix2, Matrix3, Vector2, Vector3};
 use serde::{Deserialize, Serialize};
 use std::f64::consts::PI;
@@ -68,7 +69,7 @@ impl Pose2 {
 
     /// The rotation part as a 2x2 matrix.
     pub fn rotation(&self) -> Matrix2<f64> {
-        let (s, c) = self.theta.sin_cos();
+        let (s, c) = math::sin_cos(self.theta);
         Matrix2::new(c, -s, s, c)
     }
 
@@ -80,7 +81,7 @@ impl Pose2 {
 
     /// The inverse transform, so that `p.compose(&p.inverse())` is the identity.
     pub fn inverse(&self) -> Pose2 {
-        let (s, c) = self.theta.sin_cos();
+        let (s, c) = math::sin_cos(self.theta);
         Pose2::new(
             -c * self.x - s * self.y,
             s * self.x - c * self.y,
@@ -100,7 +101,7 @@ impl Pose2 {
 
     /// The homogeneous 3x3 matrix of this transform.
     pub fn to_matrix(&self) -> Matrix3<f64> {
-        let (s, c) = self.theta.sin_cos();
+        let (s, c) = math::sin_cos(self.theta);
         Matrix3::new(c, -s, self.x, s, c, self.y, 0.0, 0.0, 1.0)
     }
 
@@ -141,7 +142,7 @@ impl CovarianceEllipse {
         let radius = (0.25 * (a - d) * (a - d) + b * b).sqrt();
         let major = (mean + radius).max(0.0);
         let minor = (mean - radius).max(0.0);
-        let angle = 0.5 * (2.0 * b).atan2(a - d);
+        let angle = 0.5 * math::atan2(2.0 * b, a - d);
         let k = chi2.max(0.0);
         Self {
             center,
@@ -153,11 +154,14 @@ impl CovarianceEllipse {
 
     /// `count` points along the ellipse, for drawing.
     pub fn boundary(&self, count: usize) -> Vec<Vector2<f64>> {
-        let (s, c) = self.angle.sin_cos();
+        let (s, c) = math::sin_cos(self.angle);
         (0..count)
             .map(|i| {
                 let t = 2.0 * PI * i as f64 / count as f64;
-                let (ex, ey) = (self.semi_major * t.cos(), self.semi_minor * t.sin());
+                let (ex, ey) = (
+                    self.semi_major * math::cos(t),
+                    self.semi_minor * math::sin(t),
+                );
                 self.center + Vector2::new(c * ex - s * ey, s * ex + c * ey)
             })
             .collect()

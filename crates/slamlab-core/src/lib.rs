@@ -12,7 +12,9 @@
 pub mod geometry;
 pub mod kalman;
 pub mod linalg;
+pub mod math;
 pub mod motion;
+pub mod particle;
 pub mod range_bearing;
 pub mod stats;
 

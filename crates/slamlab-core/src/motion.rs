@@ -1,6 +1,7 @@
 //! Two-wheel differential-drive motion (thesis `000` Sec. 2.5 and 3.4.1; slides `001`).
 
 use crate::geometry::{Pose2, wrap_angle};
+use crate::math;
 use nalgebra::{Matrix2, Matrix3, Matrix3x2, Vector2};
 use serde::{Deserialize, Serialize};
 
@@ -88,7 +89,7 @@ fn arc_functions(phi: f64) -> (f64, f64, f64, f64) {
         let db = 0.5 - p2 / 8.0 + p2 * p2 / 144.0;
         (a, b, da, db)
     } else {
-        let (s, c) = phi.sin_cos();
+        let (s, c) = math::sin_cos(phi);
         let a = s / phi;
         let b = (1.0 - c) / phi;
         let da = (phi * c - s) / (phi * phi);
@@ -122,7 +123,7 @@ impl MotionModel {
             MotionModel::ExactArc => arc_functions(phi),
             MotionModel::Euler => (1.0, 0.0, 0.0, 0.0),
         };
-        let (s, c) = pose.theta.sin_cos();
+        let (s, c) = math::sin_cos(pose.theta);
         let rot = Matrix2::new(c, -s, s, c);
         let dist = control.v * dt;
         let delta = rot * Vector2::new(a, b) * dist;
@@ -183,8 +184,8 @@ mod tests {
                 let p = MotionModel::ExactArc.predict(&pose, &u, dt);
                 let r = u.v / u.w;
                 let th = pose.theta;
-                let x = pose.x - r * th.sin() + r * (th + u.w * dt).sin();
-                let y = pose.y + r * th.cos() - r * (th + u.w * dt).cos();
+                let x = pose.x - r * math::sin(th) + r * math::sin(th + u.w * dt);
+                let y = pose.y + r * math::cos(th) - r * math::cos(th + u.w * dt);
                 assert!(
                     (p.x - x).abs() < 1e-12 && (p.y - y).abs() < 1e-12,
                     "{pose:?} {u:?}"

@@ -5,6 +5,7 @@
 //! (-π, π]; innovations on bearing are wrapped too.
 
 use crate::geometry::{Pose2, wrap_angle};
+use crate::math;
 use nalgebra::{Matrix2, Matrix2x3, Vector2};
 use serde::{Deserialize, Serialize};
 use thiserror::Error;
@@ -100,7 +101,7 @@ pub fn predict(pose: &Pose2, landmark: &Vector2<f64>) -> Result<Prediction, Meas
     if r < MIN_RANGE {
         return Err(MeasurementError::TooClose { range: r });
     }
-    let measurement = RangeBearing::new(r, dy.atan2(dx) - pose.theta);
+    let measurement = RangeBearing::new(r, math::atan2(dy, dx) - pose.theta);
     // The thesis prints (L_x^i y - y_t) in Eq. 3.38/3.39; it is (L_y^i - y_t).
     let jacobian_landmark = Matrix2::new(dx / r, dy / r, -dy / q, dx / q);
     let jacobian_pose = Matrix2x3::new(-dx / r, -dy / r, 0.0, dy / q, -dx / q, -1.0);
@@ -129,7 +130,7 @@ pub fn inverse(pose: &Pose2, z: &RangeBearing) -> Result<InverseObservation, Mea
         return Err(MeasurementError::NotFinite);
     }
     let angle = pose.theta + z.bearing;
-    let (s, c) = angle.sin_cos();
+    let (s, c) = math::sin_cos(angle);
     let landmark = Vector2::new(pose.x + z.range * c, pose.y + z.range * s);
     let jacobian_pose = Matrix2x3::new(1.0, 0.0, -z.range * s, 0.0, 1.0, z.range * c);
     let jacobian_measurement = Matrix2::new(c, -z.range * s, s, z.range * c);
@@ -167,7 +168,7 @@ impl RangeBearingSensor {
         if !(r <= self.max_range) {
             return false;
         }
-        let bearing = wrap_angle(dy.atan2(dx) - pose.theta);
+        let bearing = wrap_angle(math::atan2(dy, dx) - pose.theta);
         bearing.abs() <= 0.5 * self.fov
     }
 }

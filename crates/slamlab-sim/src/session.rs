@@ -15,6 +15,7 @@ use rand_chacha::ChaCha8Rng;
 use slamlab_core::kalman::{
     EkfSlam, LandmarkSlam, Linearization, PredictReport, UkfSlam, UpdateReport,
 };
+use slamlab_core::math;
 use slamlab_core::range_bearing::{self, RangeBearing, RangeBearingSensor};
 use slamlab_core::stats::normalized_squared_error;
 use slamlab_core::{Control, MotionModel, Pose2, wrap_angle};
@@ -687,7 +688,7 @@ impl LandmarkSession {
             );
             let angle = self.truth.theta + measurement.bearing;
             let measured_point = self.truth.translation()
-                + measurement.range * Vector2::new(angle.cos(), angle.sin());
+                + measurement.range * Vector2::new(math::cos(angle), math::sin(angle));
             self.observations.push(Observation {
                 id: landmark.id,
                 measurement,

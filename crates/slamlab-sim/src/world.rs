@@ -4,6 +4,7 @@ use crate::noise::{Stream, stream_rng};
 use nalgebra::Vector2;
 use rand::Rng;
 use serde::{Deserialize, Serialize};
+use slamlab_core::math;
 use std::f64::consts::PI;
 
 /// A landmark with its identity (the sensor reports it: known data association).
@@ -68,11 +69,11 @@ impl LandmarkWorld {
                         // A golden-angle offset keeps neighbouring landmarks apart for any count.
                         let angle = 2.0 * PI * i as f64 / count.max(1) as f64 + 0.35;
                         let radius = if i % 2 == 0 { outer } else { inner };
-                        let jitter = 0.15 * ((i as f64 * 2.399_963).sin());
+                        let jitter = 0.15 * (math::sin(i as f64 * 2.399_963));
                         let r = (radius + jitter * ring_radius * 0.2).clamp(0.0, limit);
                         Landmark {
                             id: i,
-                            position: Vector2::new(r * angle.cos(), r * angle.sin()),
+                            position: Vector2::new(r * math::cos(angle), r * math::sin(angle)),
                         }
                     })
                     .collect()

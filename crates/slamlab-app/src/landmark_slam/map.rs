@@ -9,8 +9,8 @@ use super::drive::{self, DriveState};
 use crate::palette;
 use egui::{Color32, Pos2, Rect, Sense, Shape, Stroke, pos2, vec2};
 use nalgebra::{Matrix2, Vector2};
-use slamlab_core::Pose2;
 use slamlab_core::geometry::{CHI2_2DOF_95, CovarianceEllipse};
+use slamlab_core::{Pose2, math};
 use slamlab_sim::{LandmarkSession, Phase};
 use std::f64::consts::PI;
 
@@ -154,7 +154,8 @@ impl MapTransform {
 
 /// The direction on screen of a world angle (y flips).
 fn screen_dir(angle: f64) -> egui::Vec2 {
-    vec2(angle.cos() as f32, -(angle.sin() as f32))
+    let (sin, cos) = math::sin_cos(angle);
+    vec2(cos as f32, -(sin as f32))
 }
 
 fn finite(p: Pos2) -> bool {
@@ -354,7 +355,7 @@ fn nice_step(min_step: f64) -> f64 {
     if !(min_step.is_finite() && min_step > 0.0) {
         return 1.0;
     }
-    let power = 10_f64.powf(min_step.log10().floor());
+    let power = math::powf(10.0, math::log10(min_step).floor());
     for m in [1.0, 2.0, 5.0, 10.0] {
         if m * power >= min_step {
             return m * power;
@@ -364,7 +365,7 @@ fn nice_step(min_step: f64) -> f64 {
 }
 
 fn format_metres(value: f64, step: f64) -> String {
-    let decimals = (-step.log10().floor()).max(0.0) as usize;
+    let decimals = (-math::log10(step).floor()).max(0.0) as usize;
     let value = if value.abs() < step * 1e-6 {
         0.0
     } else {

@@ -3,6 +3,7 @@
 
 use crate::palette;
 use egui_plot::{HLine, Legend, Line, LineStyle, Plot, PlotPoints, Points, Span};
+use slamlab_core::math;
 use slamlab_core::stats::chi2_quantile;
 use slamlab_sim::LandmarkSession;
 
@@ -79,7 +80,7 @@ pub(super) fn time_axis_steps(base_step: f64) -> [f64; 3] {
     if !(wanted.is_finite() && wanted > 0.0) {
         return [1.0, 2.0, 10.0];
     }
-    let decade = 10_f64.powf(wanted.log10().floor());
+    let decade = math::powf(10.0, math::log10(wanted).floor());
     let (label, minor, major) = match wanted / decade {
         m if m <= 1.0 => (1.0, 0.5, 10.0),
         m if m <= 2.0 => (2.0, 1.0, 10.0),
@@ -97,7 +98,7 @@ pub(super) fn time_axis_label(mark: egui_plot::GridMark) -> String {
     {
         return String::new();
     }
-    let decimals = (-mark.step_size.log10() - 1e-9).ceil().clamp(0.0, 6.0) as usize;
+    let decimals = (-math::log10(mark.step_size) - 1e-9).ceil().clamp(0.0, 6.0) as usize;
     format!("{:.*}", decimals, mark.value.max(0.0))
 }
 

@@ -341,6 +341,7 @@ impl LandmarkSlam for EkfSlam {
 mod tests {
     use super::*;
     use crate::kalman::FilterNoise;
+    use crate::math;
     use crate::motion::MotionModel;
     use nalgebra::Vector2;
 
@@ -452,7 +453,7 @@ mod tests {
                 }
                 let exact = range_bearing::predict(&truth, lm).unwrap_or_else(|e| panic!("{e}"));
                 // A fixed, deterministic "noise" so that corrections move the estimate.
-                let wobble = 0.05 * ((tick * 7 + id * 3) as f64).sin();
+                let wobble = 0.05 * math::sin((tick * 7 + id * 3) as f64);
                 let z = RangeBearing::new(
                     exact.measurement.range + wobble,
                     exact.measurement.bearing - 0.5 * wobble,
@@ -595,7 +596,7 @@ mod tests {
                     let exact = range_bearing::predict(&truth, &lm)
                         .unwrap_or_else(|e| panic!("{e}"))
                         .measurement;
-                    let noise = wobble * ((tick * 5 + id) as f64).sin();
+                    let noise = wobble * math::sin((tick * 5 + id) as f64);
                     let z = RangeBearing::new(exact.range + noise, exact.bearing - noise);
                     ekf.update(id, &z).unwrap_or_else(|e| panic!("{e}"));
                 }

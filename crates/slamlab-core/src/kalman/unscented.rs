@@ -11,6 +11,7 @@
 use super::FilterError;
 use crate::geometry::wrap_angle;
 use crate::linalg::{psd_cholesky, psd_cross_factor};
+use crate::math;
 use nalgebra::{DMatrix, DVector};
 use serde::{Deserialize, Serialize};
 
@@ -176,9 +177,12 @@ pub fn unscented_transform(
             .iter()
             .enumerate()
             .fold((0.0, 0.0), |(s, c), (i, y)| {
-                (s + weight(i) * y[a].sin(), c + weight(i) * y[a].cos())
+                (
+                    s + weight(i) * math::sin(y[a]),
+                    c + weight(i) * math::cos(y[a]),
+                )
             });
-        mean[a] = s.atan2(c);
+        mean[a] = math::atan2(s, c);
     }
     let deviations: Vec<DVector<f64>> = outputs
         .iter()
@@ -291,8 +295,9 @@ mod tests {
         // A range-bearing measurement with a wide bearing spread: the classic banana.
         let (r, b, sr, sb) = (10.0, 0.3, 0.2, 0.35);
         let (m, p) = gaussian(&[r, b], &[sr * sr, 0.0, 0.0, sb * sb]);
-        let polar =
-            |x: &DVector<f64>| DVector::from_column_slice(&[x[0] * x[1].cos(), x[0] * x[1].sin()]);
+        let polar = |x: &DVector<f64>| {
+            DVector::from_column_slice(&[x[0] * math::cos(x[1]), x[0] * math::sin(x[1])])
+        };
         let ut = unscented_transform(
             &UnscentedParams::default(),
             &m,
@@ -303,7 +308,16 @@ mod tests {
         )
         .unwrap_or_else(|e| panic!("{e}"));
         // Linearization: mean f(x̄), covariance J P Jᵀ.
-        let j = DMatrix::from_row_slice(2, 2, &[b.cos(), -r * b.sin(), b.sin(), r * b.cos()]);
+        let j = DMatrix::from_row_slice(
+            2,
+            2,
+            &[
+                math::cos(b),
+                -r * math::sin(b),
+                math::sin(b),
+                r * math::cos(b),
+            ],
+        );
         let lin_mean = polar(&m);
         let lin_cov = &j * &p * j.transpose();
         // 100k-sample Monte Carlo reference.

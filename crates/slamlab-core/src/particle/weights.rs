@@ -1,0 +1,120 @@
+//! Log-space importance weights: normalization by log-sum-exp and the effective
+//! sample size.
+
+use crate::math;
+use thiserror::Error;
+
+/// Why a set of log weights cannot be normalized.
+#[derive(Clone, Copy, Debug, PartialEq, Error)]
+pub enum WeightError {
+    /// There are no particles.
+    #[error("there are no particles to weight")]
+    Empty,
+    /// Every weight is zero (every log weight is −∞): the measurement contradicts
+    /// every particle.
+    #[error("every particle has weight zero: the measurement contradicts them all")]
+    AllZero,
+    /// A log weight is NaN or +∞.
+    #[error("particle {index} has a log weight of {value}, which is not a probability")]
+    NotANumber {
+        /// The first offending particle.
+        index: usize,
+        /// Its log weight.
+        value: f64,
+    },
+}
+
+/// Turns log weights `ℓᵢ` into normalized weights `wᵢ = e^(ℓᵢ − L)` with
+/// `L = log Σⱼ e^(ℓⱼ)` (log-sum-exp, computed around the largest `ℓ` so that
+/// nothing underflows to an all-zero set), written into `weights`.
+///
+/// Returns `L`, the log of the sum of the unnormalized weights (for a particle
+/// filter, the log of the average likelihood times the particle count), which
+/// Augmented MCL's `w_slow` and `w_fast` follow.
+///
+/// A log weight of −∞ is a weight of zero and is allowed; NaN and +∞ are errors.
+/// On an error `weights` is left untouched.
+pub fn normalize_log_weights(
+    log_weights: &[f64],
+    weights: &mut Vec<f64>,
+) -> Result<f64, WeightError> {
+    if log_weights.is_empty() {
+        return Err(WeightError::Empty);
+    }
+    let mut max = f64::NEG_INFINITY;
+    for (index, &value) in log_weights.iter().enumerate() {
+        if value.is_nan() || value == f64::INFINITY {
+            return Err(WeightError::NotANumber { index, value });
+        }
+        max = max.max(value);
+    }
+    if max == f64::NEG_INFINITY {
+        return Err(WeightError::AllZero);
+    }
+    // Shifting by the largest log weight keeps every exponent ≤ 0 and the sum ≥ 1.
+    weights.clear();
+    weights.extend(log_weights.iter().map(|&l| math::exp(l - max)));
+    let sum: f64 = weights.iter().sum();
+    for w in weights.iter_mut() {
+        *w /= sum;
+    }
+    Ok(max + math::ln(sum))
+}
+
+/// The effective sample size `N_eff = 1 / Σ wᵢ²` of normalized weights: `M` for
+/// uniform weights, 1 when one particle holds all the weight (slides, "adaptive
+/// resampling"). Zero for an empty set.
+pub fn effective_sample_size(weights: &[f64]) -> f64 {
+    let sum_sq: f64 = weights.iter().map(|w| w * w).sum();
+    if sum_sq > 0.0 { 1.0 / sum_sq } else { 0.0 }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn normalizes_weights_far_below_the_smallest_double() {
+        // e^-1000 and e^-1001 are both 0.0 as f64; their ratio is e.
+        let mut w = Vec::new();
+        let log_sum = normalize_log_weights(&[-1000.0, -1001.0], &mut w).unwrap();
+        let e = std::f64::consts::E;
+        assert!((w[0] - e / (1.0 + e)).abs() < 1e-15);
+        assert!((w[1] - 1.0 / (1.0 + e)).abs() < 1e-15);
+        assert!((log_sum - (-1000.0 + math::ln(1.0 + 1.0 / e))).abs() < 1e-12);
+        assert!((w.iter().sum::<f64>() - 1.0).abs() < 1e-15);
+    }
+
+    #[test]
+    fn zero_weights_stay_zero_and_all_zero_is_an_error() {
+        let mut w = vec![9.0];
+        normalize_log_weights(&[f64::NEG_INFINITY, 0.0, 0.0], &mut w).unwrap();
+        assert_eq!(w, vec![0.0, 0.5, 0.5]);
+        let mut untouched = vec![7.0];
+        assert_eq!(
+            normalize_log_weights(&[f64::NEG_INFINITY; 3], &mut untouched),
+            Err(WeightError::AllZero)
+        );
+        assert!(matches!(
+            normalize_log_weights(&[0.0, f64::NAN], &mut untouched),
+            Err(WeightError::NotANumber { index: 1, value }) if value.is_nan()
+        ));
+        assert!(matches!(
+            normalize_log_weights(&[0.0, f64::INFINITY], &mut untouched),
+            Err(WeightError::NotANumber { index: 1, .. })
+        ));
+        assert_eq!(
+            normalize_log_weights(&[], &mut untouched),
+            Err(WeightError::Empty)
+        );
+        assert_eq!(untouched, vec![7.0]);
+    }
+
+    #[test]
+    fn effective_sample_size_spans_one_to_m() {
+        assert!((effective_sample_size(&[0.25; 4]) - 4.0).abs() < 1e-12);
+        assert!((effective_sample_size(&[1.0, 0.0, 0.0]) - 1.0).abs() < 1e-12);
+        assert!((effective_sample_size(&[0.5, 0.5, 0.0, 0.0]) - 2.0).abs() < 1e-12);
+        assert_eq!(effective_sample_size(&[]), 0.0);
+    }
+}
