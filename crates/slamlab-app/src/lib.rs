@@ -8,7 +8,7 @@
 
 pub mod frame_stats;
 pub mod landmark_slam;
-pub mod lessons;
+pub mod lesson;
 pub mod palette;
 pub mod query;
 pub mod time_control;
@@ -16,11 +16,12 @@ pub mod time_control;
 #[cfg(target_arch = "wasm32")]
 mod web;
 
-use landmark_slam::{LandmarkSlamLesson, PanelVisibility, ViewOptions};
+use landmark_slam::LandmarkSlamLesson;
+pub use lesson::PanelVisibility;
+use lesson::{Lesson, LessonStart};
 use serde::{Deserialize, Serialize};
-use slamlab_sim::params;
-use std::collections::BTreeSet;
-use time_control::{TimeAction, TimeControl};
+use std::collections::{BTreeMap, BTreeSet};
+use time_control::TimeAction;
 
 /// The eframe storage key of [`Settings`].
 const SETTINGS_KEY: &str = "slamlab_settings";
@@ -34,21 +35,10 @@ pub struct Settings {
     pub dark_mode: Option<bool>,
     /// Which panels are open (full layout only).
     pub panels: PanelVisibility,
-    /// Map layers and the heatmap window.
-    pub view: ViewOptions,
-    /// Speed of the clock.
-    pub time: TimeControl,
-    /// The user's last parameters that differ from the defaults, used when the URL
-    /// gives none.
-    pub last_params: Vec<(String, String)>,
-}
-
-/// The lesson on screen. New lessons add a variant (and an entry in
-/// [`lessons::LESSONS`]).
-#[derive(Debug)]
-pub enum ActiveLesson {
-    /// `landmark-slam`.
-    LandmarkSlam(Box<LandmarkSlamLesson>),
+    /// Each lesson's own settings ([`Lesson::stored_settings`]), by lesson id.
+    pub lessons: BTreeMap<String, serde_json::Value>,
+    /// The lesson open last.
+    pub last_lesson: Option<String>,
 }
 
 /// The SLAM Lab application.
@@ -62,17 +52,17 @@ pub struct SlamLabApp {
     /// eframe's CPU time of the previous frame, milliseconds (none in tests).
     last_cpu_ms: Option<f32>,
     show_frame_timing: bool,
-    lesson_id: &'static str,
-    lesson: ActiveLesson,
+    lesson: Box<dyn Lesson>,
     embed: bool,
     panels: PanelVisibility,
     app_notices: Vec<String>,
     dismissed: BTreeSet<String>,
     dark_mode: Option<bool>,
     theme_applied: bool,
-    /// The settings loaded at start; an embedded page saves these back unchanged
-    /// (except the theme), so a lecture figure never rewrites the student's own setup.
-    loaded_settings: Settings,
+    /// The settings loaded at start, with each lesson's entry updated when the user
+    /// leaves it. An embedded page saves these back unchanged (except the theme), so
+    /// a lecture figure never rewrites the student's own setup.
+    stored: Settings,
 }
 
 impl SlamLabApp {
@@ -93,15 +83,15 @@ impl SlamLabApp {
     }
 
     /// Creates the app from a query string and optional stored settings. The URL's
-    /// parameters win: stored parameters are used only when the URL gives none (and
-    /// never in embed mode, so that a lecture page always shows the same run).
+    /// parameters win: a lesson uses its stored parameters only when the URL gives
+    /// none (and never in embed mode, so that a lecture page always shows the same run).
     pub fn with_settings(query: &str, settings: Option<Settings>) -> Self {
         let parsed = query::Query::parse(query);
         let mut notices: Vec<String> = parsed.issues.clone();
-        let lesson_info = match parsed.lesson.as_deref() {
-            None => lessons::default_lesson(),
-            Some(id) => lessons::find(id).unwrap_or_else(|| {
-                let default = lessons::default_lesson();
+        let entry = match parsed.lesson.as_deref() {
+            None => lesson::default_lesson(),
+            Some(id) => lesson::find(id).unwrap_or_else(|| {
+                let default = lesson::default_lesson();
                 notices.push(format!(
                     "unknown lesson '{id}'; opening \"{}\" instead",
                     default.title
@@ -109,37 +99,16 @@ impl SlamLabApp {
                 default
             }),
         };
-        let settings_given = settings.is_some();
         let settings = settings.unwrap_or_default();
-        let mut scenario = landmark_slam::default_scenario();
-        if parsed.pairs.is_empty() && !parsed.embed {
-            let stored = settings
-                .last_params
-                .iter()
-                .map(|(k, v)| (k.as_str(), v.as_str()));
-            // Stored values were valid when saved; anything stale is dropped quietly.
-            let _ignored = params::apply_pairs(&mut scenario, stored, &query::APP_KEYS);
-        }
-        let pairs = parsed.pairs.iter().map(|(k, v)| (k.as_str(), v.as_str()));
-        let issues = params::apply_pairs(&mut scenario, pairs, &query::APP_KEYS);
-        notices.extend(issues.iter().map(|issue| format!("link: {issue}")));
-
-        let mut lesson = LandmarkSlamLesson::new(scenario);
-        // A lecture figure looks the same for every student: the view a student left
-        // in the full app (an open heatmap, say) stays there.
-        if settings_given && !parsed.embed {
-            lesson.view = settings.view.clone();
-            lesson.time.speed_tps = settings.time.speed_tps;
-            lesson.time.max_speed = settings.time.max_speed;
-        }
-        if let Some(trials) = parsed.many_runs {
-            lesson.start_many_runs(trials);
-        }
-        if parsed.embed {
-            // A lecture figure is small: the map gets the room, and the legend is one
-            // click away (every element also has a tooltip).
-            lesson.view.legend = false;
-        }
+        let stored = (!parsed.embed)
+            .then(|| settings.lessons.get(entry.id))
+            .flatten();
+        let lesson = (entry.open)(&LessonStart {
+            pairs: &parsed.pairs,
+            embed: parsed.embed,
+            stored,
+            many_runs: parsed.many_runs,
+        });
         let panels = if parsed.embed {
             PanelVisibility::embedded()
         } else {
@@ -151,31 +120,46 @@ impl SlamLabApp {
             frame_stats: frame_stats::FrameStats::default(),
             last_cpu_ms: None,
             show_frame_timing: false,
-            lesson_id: lesson_info.id,
-            lesson: ActiveLesson::LandmarkSlam(Box::new(lesson)),
+            lesson,
             embed: parsed.embed,
             panels,
             app_notices: notices,
             dismissed: BTreeSet::new(),
             dark_mode: settings.dark_mode,
             theme_applied: false,
-            loaded_settings: settings,
+            stored: settings,
         }
+    }
+
+    /// The lesson on screen.
+    pub fn lesson(&self) -> &dyn Lesson {
+        &*self.lesson
+    }
+
+    /// The lesson on screen, mutably.
+    pub fn lesson_mut(&mut self) -> &mut dyn Lesson {
+        &mut *self.lesson
+    }
+
+    /// The lesson on screen as its concrete type, if it is one of those.
+    pub fn lesson_as<L: 'static>(&self) -> Option<&L> {
+        self.lesson.as_any().downcast_ref::<L>()
+    }
+
+    /// The lesson on screen as its concrete type, mutably.
+    pub fn lesson_as_mut<L: 'static>(&mut self) -> Option<&mut L> {
+        self.lesson.as_any_mut().downcast_mut::<L>()
     }
 
     /// The landmark-SLAM lesson, if it is the one open.
     pub fn landmark_lesson(&self) -> Option<&LandmarkSlamLesson> {
-        match &self.lesson {
-            ActiveLesson::LandmarkSlam(lesson) => Some(lesson),
-        }
+        self.lesson_as()
     }
 
     /// The landmark-SLAM lesson, mutably (tests drive it through the same methods
     /// as the widgets).
     pub fn landmark_lesson_mut(&mut self) -> Option<&mut LandmarkSlamLesson> {
-        match &mut self.lesson {
-            ActiveLesson::LandmarkSlam(lesson) => Some(lesson),
-        }
+        self.lesson_as_mut()
     }
 
     /// The running landmark-SLAM session, read only.
@@ -185,7 +169,7 @@ impl SlamLabApp {
 
     /// The open lesson's id.
     pub fn lesson_id(&self) -> &'static str {
-        self.lesson_id
+        self.lesson.id()
     }
 
     /// Is the compact embed layout on?
@@ -199,12 +183,10 @@ impl SlamLabApp {
     }
 
     /// Every notice not dismissed: problems with the link, what the simulation had to
-    /// change, and the latest filter errors.
+    /// change, and the latest errors.
     pub fn notices(&self) -> Vec<String> {
         let mut all = self.app_notices.clone();
-        match &self.lesson {
-            ActiveLesson::LandmarkSlam(lesson) => all.extend(lesson.notices()),
-        }
+        all.extend(self.lesson.notices());
         all.retain(|n| !self.dismissed.contains(n));
         all.dedup();
         all
@@ -212,9 +194,7 @@ impl SlamLabApp {
 
     /// Is the clock running?
     pub fn is_running(&self) -> bool {
-        match &self.lesson {
-            ActiveLesson::LandmarkSlam(lesson) => lesson.time.running,
-        }
+        self.lesson.time().running
     }
 
     /// The settings to store.
@@ -222,62 +202,36 @@ impl SlamLabApp {
         if self.embed {
             return Settings {
                 dark_mode: self.dark_mode,
-                ..self.loaded_settings.clone()
+                ..self.stored.clone()
             };
         }
-        match &self.lesson {
-            ActiveLesson::LandmarkSlam(lesson) => Settings {
-                dark_mode: self.dark_mode,
-                panels: self.panels,
-                view: lesson.view.clone(),
-                time: lesson.time.clone(),
-                last_params: lesson.pending_pairs(),
-            },
+        let mut lessons = self.stored.lessons.clone();
+        lessons.insert(self.lesson.id().to_owned(), self.lesson.stored_settings());
+        Settings {
+            dark_mode: self.dark_mode,
+            panels: self.panels,
+            lessons,
+            last_lesson: Some(self.lesson.id().to_owned()),
         }
     }
 
-    /// A one-line JSON summary of the app's state for browser tests.
+    /// A one-line JSON summary of the app's state for browser tests: the shell's
+    /// fields and the lesson's own (`tick`, `phase`, `seed`, ...).
     pub fn test_state_json(&self) -> String {
-        let many_runs = match &self.lesson {
-            ActiveLesson::LandmarkSlam(lesson) => lesson.many_runs.result().map(|r| {
-                serde_json::json!({
-                    "done": r.trials_done,
-                    "running": lesson.many_runs.is_running(),
-                    "nees": r.filters.iter().map(|f| (f.name.clone(), f.nees_mean)).collect::<std::collections::BTreeMap<_, _>>(),
-                })
-            }),
-        };
-        let (tick, time, phase, seed, filters) = match &self.lesson {
-            ActiveLesson::LandmarkSlam(lesson) => {
-                let session = lesson.session();
-                (
-                    session.tick(),
-                    session.time(),
-                    session.last_phase().map(|p| p.label()).unwrap_or_default(),
-                    session.scenario().seed,
-                    session
-                        .filters()
-                        .iter()
-                        .map(|run| run.kind.name())
-                        .collect::<Vec<_>>(),
-                )
-            }
-        };
-        serde_json::json!({
+        let mut state = serde_json::json!({
             "frames": self.frames,
-            "tick": tick,
-            "time": time,
-            "phase": phase,
             "running": self.is_running(),
-            "lesson": self.lesson_id,
+            "lesson": self.lesson.id(),
             "embed": self.embed,
-            "seed": seed,
-            "filters": filters,
             "notices": self.notices().len(),
-            "many_runs": many_runs,
             "frame_timing": self.frame_stats.summary(),
-        })
-        .to_string()
+        });
+        if let (Some(state), serde_json::Value::Object(lesson)) =
+            (state.as_object_mut(), self.lesson.test_state())
+        {
+            state.extend(lesson);
+        }
+        state.to_string()
     }
 
     fn apply_theme(&self, ctx: &egui::Context) {
@@ -290,14 +244,10 @@ impl SlamLabApp {
 
     /// Runs one of the time bar's actions.
     pub fn apply_time_action(&mut self, action: TimeAction) {
-        match &mut self.lesson {
-            ActiveLesson::LandmarkSlam(lesson) => {
-                if action == TimeAction::Reset {
-                    self.dismissed.clear();
-                }
-                lesson.apply_time_action(action);
-            }
+        if action == TimeAction::Reset {
+            self.dismissed.clear();
         }
+        self.lesson.apply_time_action(action);
     }
 
     /// Draws the whole app.
@@ -309,18 +259,14 @@ impl SlamLabApp {
         }
         let ctx = ui.ctx().clone();
 
-        // Input first: shortcuts, drive keys, then the clock.
+        // Input first: shortcuts, the lesson's own keys, then the clock.
         for action in time_control::shortcut_actions(&ctx) {
             self.apply_time_action(action);
         }
         let dt = f64::from(ctx.input(|i| i.stable_dt));
         let sim_start = web_time::Instant::now();
-        match &mut self.lesson {
-            ActiveLesson::LandmarkSlam(lesson) => {
-                lesson.read_drive_keys(&ctx);
-                lesson.advance(dt);
-            }
-        }
+        self.lesson.read_input(&ctx);
+        self.lesson.advance(dt);
         let sim_ms = sim_start.elapsed().as_secs_f32() * 1000.0;
         let interval_ms = ctx.input(|i| i.unstable_dt) * 1000.0;
         self.frame_stats
@@ -328,12 +274,8 @@ impl SlamLabApp {
 
         egui::Panel::top("slamlab_menu").show(ui, |ui| self.menu_bar_ui(ui));
         egui::Panel::top("slamlab_time_bar").show(ui, |ui| {
-            let actions = match &mut self.lesson {
-                ActiveLesson::LandmarkSlam(lesson) => {
-                    let info = lesson.time_info();
-                    time_control::time_bar_ui(ui, &mut lesson.time, &info, self.embed)
-                }
-            };
+            let info = self.lesson.time_info();
+            let actions = time_control::time_bar_ui(ui, self.lesson.time_mut(), &info, self.embed);
             for action in actions {
                 self.apply_time_action(action);
             }
@@ -342,29 +284,23 @@ impl SlamLabApp {
         if !notices.is_empty() {
             egui::Panel::top("slamlab_notices").show(ui, |ui| self.notice_bar_ui(ui, &notices));
         }
-        match &mut self.lesson {
-            ActiveLesson::LandmarkSlam(lesson) => {
-                lesson.panels_ui(ui, &mut self.panels, self.embed);
-                if lesson.wants_repaint() {
-                    ctx.request_repaint();
-                }
-            }
+        self.lesson.panels_ui(ui, &mut self.panels, self.embed);
+        if self.lesson.wants_repaint() {
+            ctx.request_repaint();
         }
     }
 
     fn menu_bar_ui(&mut self, ui: &mut egui::Ui) {
-        let lesson_title = lessons::find(self.lesson_id).map_or("", |l| l.title);
-        let title = match &self.lesson {
-            ActiveLesson::LandmarkSlam(lesson) => match lesson.filters_title() {
-                filters if filters.is_empty() => lesson_title.to_owned(),
-                filters => format!("{lesson_title}: {filters}"),
-            },
+        let lesson_title = lesson::find(self.lesson.id()).map_or("", |l| l.title);
+        let title = match self.lesson.subtitle() {
+            subtitle if subtitle.is_empty() => lesson_title.to_owned(),
+            subtitle => format!("{lesson_title}: {subtitle}"),
         };
         ui.horizontal_wrapped(|ui| {
             ui.label(egui::RichText::new("SLAM Lab").strong());
             ui.menu_button("Lessons", |ui| {
-                for info in lessons::LESSONS {
-                    let selected = info.id == self.lesson_id;
+                for info in lesson::LESSONS {
+                    let selected = info.id == self.lesson.id();
                     let response = ui
                         .selectable_label(selected, info.title)
                         .on_hover_text(info.summary);
@@ -385,13 +321,7 @@ impl SlamLabApp {
                     .on_hover_text(
                         "How long each frame takes: the app's CPU time and the frame rate",
                     );
-                match &mut self.lesson {
-                    ActiveLesson::LandmarkSlam(lesson) => {
-                        ui.checkbox(&mut lesson.view.legend, "Map legend");
-                        ui.checkbox(&mut lesson.view.heatmap, "Covariance heatmap");
-                        ui.checkbox(&mut lesson.view.many_runs, "Many runs (average NEES)");
-                    }
-                }
+                self.lesson.view_menu_ui(ui);
             });
             ui.separator();
             ui.label(egui::RichText::new(title).strong());
@@ -427,14 +357,28 @@ impl SlamLabApp {
         });
     }
 
+    /// Opens lesson `id` as the user left it (its stored settings), keeping the
+    /// settings of the lesson being left.
     fn switch_lesson(&mut self, id: &str) {
-        if let Some(info) = lessons::find(id) {
-            self.lesson_id = info.id;
-            // One lesson today: switching means starting it afresh.
-            self.lesson = ActiveLesson::LandmarkSlam(Box::new(LandmarkSlamLesson::new(
-                landmark_slam::default_scenario(),
-            )));
+        let Some(entry) = lesson::find(id) else {
+            return;
+        };
+        if !self.embed {
+            self.stored
+                .lessons
+                .insert(self.lesson.id().to_owned(), self.lesson.stored_settings());
         }
+        let stored = (!self.embed)
+            .then(|| self.stored.lessons.get(entry.id))
+            .flatten();
+        self.lesson = (entry.open)(&LessonStart {
+            pairs: &[],
+            embed: self.embed,
+            stored,
+            many_runs: None,
+        });
+        self.app_notices.clear();
+        self.dismissed.clear();
     }
 
     fn notice_bar_ui(&mut self, ui: &mut egui::Ui, notices: &[String]) {
@@ -490,12 +434,18 @@ impl eframe::App for SlamLabApp {
 mod tests {
     use super::*;
 
+    fn stored_landmarks(count: &str) -> Settings {
+        let mut settings = Settings::default();
+        settings.lessons.insert(
+            landmark_slam::LESSON_ID.to_owned(),
+            serde_json::json!({ "params": [["landmarks", count]] }),
+        );
+        settings
+    }
+
     #[test]
     fn stored_parameters_apply_only_without_url_parameters() {
-        let settings = Settings {
-            last_params: vec![("landmarks".to_owned(), "33".to_owned())],
-            ..Default::default()
-        };
+        let settings = stored_landmarks("33");
         let app = SlamLabApp::with_settings("lesson=landmark-slam", Some(settings.clone()));
         assert_eq!(app.session().map(|s| s.scenario().landmarks), Some(33));
         let app = SlamLabApp::with_settings("lesson=landmark-slam&seed=4", Some(settings.clone()));
@@ -506,12 +456,14 @@ mod tests {
 
     #[test]
     fn an_embedded_page_saves_the_settings_it_found() {
-        let mut stored = Settings {
-            last_params: vec![("landmarks".to_owned(), "33".to_owned())],
-            ..Default::default()
-        };
-        stored.view.heatmap = true;
-        stored.view.follow_robot = true;
+        let mut stored = stored_landmarks("33");
+        stored.lessons.insert(
+            landmark_slam::LESSON_ID.to_owned(),
+            serde_json::json!({
+                "params": [["landmarks", "33"]],
+                "view": { "heatmap": true, "follow_robot": true },
+            }),
+        );
         let app = SlamLabApp::with_settings("embed=1&landmarks=5", Some(stored.clone()));
         let view = app.landmark_lesson().map(|l| l.view.clone());
         assert!(
@@ -529,11 +481,23 @@ mod tests {
         let app = SlamLabApp::from_query("landmarks=12");
         let settings = app.settings();
         assert_eq!(
-            settings.last_params,
-            vec![("landmarks".to_owned(), "12".to_owned())]
+            settings.lessons[landmark_slam::LESSON_ID]["params"],
+            serde_json::json!([["landmarks", "12"]])
         );
         let text = serde_json::to_string(&settings).unwrap_or_default();
         let back: Settings = serde_json::from_str(&text).unwrap_or_default();
         assert_eq!(back, settings);
+    }
+
+    #[test]
+    fn stored_settings_that_do_not_fit_are_dropped_quietly() {
+        let mut settings = Settings::default();
+        settings.lessons.insert(
+            landmark_slam::LESSON_ID.to_owned(),
+            serde_json::json!({ "params": "nonsense", "view": 7 }),
+        );
+        let app = SlamLabApp::with_settings("", Some(settings));
+        assert_eq!(app.session().map(|s| s.scenario().landmarks), Some(20));
+        assert!(app.notices().is_empty());
     }
 }

@@ -9,7 +9,8 @@ use egui_kittest::Harness;
 use egui_kittest::kittest::Queryable as _;
 use slamlab_app::SlamLabApp;
 use slamlab_sim::Phase;
-use slamlab_sim::params::{self, PARAMS, ParamIssue, ParamKind};
+use slamlab_sim::landmark_params::PARAMS;
+use slamlab_sim::params::{self, ParamIssue, ParamKind};
 
 const SIZE: egui::Vec2 = egui::vec2(1400.0, 900.0);
 

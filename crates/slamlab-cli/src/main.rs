@@ -15,8 +15,9 @@ use anyhow::{Context, Result, bail};
 use clap::{Arg, ArgAction, ArgMatches, Command};
 use slamlab_sim::consistency::ConsistencyStudy;
 use slamlab_sim::experiments;
+use slamlab_sim::landmark_params::PARAMS;
 use slamlab_sim::metrics::{RunSummary, run_headless};
-use slamlab_sim::params::{self, PARAMS};
+use slamlab_sim::params::{self, Scenario};
 use slamlab_sim::{LandmarkScenario, LandmarkSession};
 use std::io::{IsTerminal, Write};
 
@@ -171,7 +172,7 @@ fn print_summary(out: &mut impl Write, summary: &RunSummary) -> Result<()> {
     writeln!(out)?;
     writeln!(out, "parameters:")?;
     for (k, v) in &summary.parameters {
-        let unit = params::spec(k).map_or("", |p| p.unit);
+        let unit = LandmarkScenario::param(k).map_or("", |p| p.unit);
         let text = v.as_str().map_or_else(|| v.to_string(), str::to_owned);
         writeln!(out, "  {k:<16} {text} {unit}")?;
     }
@@ -351,7 +352,7 @@ fn print_parameters(
     writeln!(out, "parameters:")?;
     for (k, v) in parameters {
         let text = v.as_str().map_or_else(|| v.to_string(), str::to_owned);
-        let unit = params::spec(k).map_or("", |p| p.unit);
+        let unit = LandmarkScenario::param(k).map_or("", |p| p.unit);
         writeln!(out, "  {k:<32} {text} {unit}")?;
     }
     Ok(())

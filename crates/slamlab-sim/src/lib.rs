@@ -9,12 +9,14 @@
 
 pub mod consistency;
 pub mod experiments;
+pub mod landmark_params;
 pub mod metrics;
 pub mod noise;
 pub mod params;
 pub mod presets;
 pub mod scenario;
 pub mod session;
+pub mod stepper;
 pub mod world;
 
 pub use scenario::{ControllerKind, EstimatorKind, LandmarkScenario};

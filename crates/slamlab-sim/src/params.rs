@@ -1,17 +1,21 @@
-//! Named scenario parameters, shared by the URL (`?landmarks=30&seed=7`) and the
-//! command line (`--landmarks 30 --seed 7`), so a lecture figure and a CLI run can
-//! be the same run.
+//! Named scenario parameters, one declarative table per lesson, shared by the URL
+//! (`?landmarks=30&seed=7`), share links, the command line (`--landmarks 30 --seed 7`),
+//! `slamlab params --lesson ID` and the app's parameter panel, so a lecture figure
+//! and a CLI run can be the same run.
+//!
+//! A lesson's scenario implements [`Scenario`]: its table lists each parameter once
+//! with its name, unit, range, help and a typed getter and setter ([`Access`]).
+//! Everything else (parsing text, range checks and clamping, messages, pairs for
+//! links, presets first, repairing a scenario read from a file) is written once
+//! here, for every lesson.
 //!
 //! Every value is checked: an unknown name or unreadable value is reported and
 //! leaves the current value; a value outside its range is clamped to the nearest
 //! allowed one and reported. Nothing here panics.
 
-use crate::scenario::{ControllerKind, EstimatorKind, LandmarkScenario};
-use crate::world::LandmarkLayout;
-use slamlab_core::MotionModel;
 use std::fmt;
 
-/// What kind of value a parameter takes.
+/// What kind of value a parameter takes, and its range.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub enum ParamKind {
     /// A real number in `[min, max]`.
@@ -28,7 +32,7 @@ pub enum ParamKind {
         /// Largest allowed value.
         max: u64,
     },
-    /// One of a list of words.
+    /// One of a list of words (or, for list parameters, several, comma separated).
     Choice(&'static [&'static str]),
 }
 
@@ -45,9 +49,55 @@ impl ParamKind {
     }
 }
 
-/// One named parameter.
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub struct ParamSpec {
+/// How a parameter reads and writes its scenario. Getters return the value in the
+/// parameter's own unit (degrees for a `-deg` parameter), `None` when the parameter
+/// has no value in this scenario (a preset; the circle's speeds while driving by
+/// hand). Setters receive a value already checked against the range.
+pub enum Access<S> {
+    /// A real number ([`ParamKind::Number`]). The setter may refuse with the reason
+    /// the value has no effect.
+    Number {
+        /// The current value.
+        get: fn(&S) -> Option<f64>,
+        /// Sets the (clamped) value, or says why it has no effect.
+        set: fn(&mut S, f64) -> Result<(), &'static str>,
+    },
+    /// A whole number ([`ParamKind::Count`]).
+    Count {
+        /// The current value.
+        get: fn(&S) -> Option<u64>,
+        /// Sets the (clamped) value.
+        set: fn(&mut S, u64),
+    },
+    /// A word or a comma-separated list of words ([`ParamKind::Choice`]). The setter
+    /// returns what it expected when it cannot read the text.
+    Words {
+        /// The current value as text.
+        get: fn(&S) -> Option<String>,
+        /// Sets the value from trimmed text, or says what was expected.
+        set: fn(&mut S, &str) -> Result<(), String>,
+    },
+}
+
+impl<S> Clone for Access<S> {
+    fn clone(&self) -> Self {
+        *self
+    }
+}
+impl<S> Copy for Access<S> {}
+impl<S> fmt::Debug for Access<S> {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        f.write_str(match self {
+            Access::Number { .. } => "Access::Number",
+            Access::Count { .. } => "Access::Count",
+            Access::Words { .. } => "Access::Words",
+        })
+    }
+}
+
+/// One named parameter of scenario type `S`.
+#[derive(Debug)]
+pub struct Param<S: 'static> {
     /// The name in URLs and on the command line.
     pub name: &'static str,
     /// Unit shown beside the value.
@@ -56,138 +106,126 @@ pub struct ParamSpec {
     pub help: &'static str,
     /// What values it takes.
     pub kind: ParamKind,
+    /// How it reads and writes the scenario.
+    pub access: Access<S>,
 }
 
-const fn number(
-    name: &'static str,
-    unit: &'static str,
-    help: &'static str,
-    min: f64,
-    max: f64,
-) -> ParamSpec {
-    ParamSpec {
-        name,
-        unit,
-        help,
-        kind: ParamKind::Number { min, max },
+impl<S> Clone for Param<S> {
+    fn clone(&self) -> Self {
+        *self
+    }
+}
+impl<S> Copy for Param<S> {}
+
+impl<S> Param<S> {
+    /// A real-valued parameter in `[min, max]`.
+    pub const fn number(
+        name: &'static str,
+        unit: &'static str,
+        help: &'static str,
+        (min, max): (f64, f64),
+        get: fn(&S) -> Option<f64>,
+        set: fn(&mut S, f64) -> Result<(), &'static str>,
+    ) -> Self {
+        Param {
+            name,
+            unit,
+            help,
+            kind: ParamKind::Number { min, max },
+            access: Access::Number { get, set },
+        }
+    }
+
+    /// A whole-number parameter in `[min, max]`.
+    pub const fn count(
+        name: &'static str,
+        unit: &'static str,
+        help: &'static str,
+        (min, max): (u64, u64),
+        get: fn(&S) -> Option<u64>,
+        set: fn(&mut S, u64),
+    ) -> Self {
+        Param {
+            name,
+            unit,
+            help,
+            kind: ParamKind::Count { min, max },
+            access: Access::Count { get, set },
+        }
+    }
+
+    /// A parameter that takes one of `words` (or a list of them).
+    pub const fn words(
+        name: &'static str,
+        help: &'static str,
+        words: &'static [&'static str],
+        get: fn(&S) -> Option<String>,
+        set: fn(&mut S, &str) -> Result<(), String>,
+    ) -> Self {
+        Param {
+            name,
+            unit: "",
+            help,
+            kind: ParamKind::Choice(words),
+            access: Access::Words { get, set },
+        }
     }
 }
 
-/// Every landmark-scenario parameter. `preset` comes first: it sets all the others
-/// (but the seed), and whatever else is given applies on top of it.
-pub const PARAMS: &[ParamSpec] = &[
-    ParamSpec {
-        name: "preset",
-        unit: "",
-        help: "start from a named scenario (see the README); other parameters apply on top",
-        kind: ParamKind::Choice(crate::presets::PRESET_IDS),
-    },
-    ParamSpec {
-        name: "seed",
-        unit: "",
-        help: "seed of every random stream",
-        kind: ParamKind::Count {
-            min: 0,
-            max: u64::MAX,
-        },
-    },
-    number("dt", "s", "simulation time step", 0.001, 1.0),
-    number("world-size", "m", "side of the square world", 2.0, 200.0),
-    ParamSpec {
-        name: "landmarks",
-        unit: "",
-        help: "number of landmarks",
-        kind: ParamKind::Count { min: 0, max: 500 },
-    },
-    ParamSpec {
-        name: "layout",
-        unit: "",
-        help: "landmark layout",
-        kind: ParamKind::Choice(&["teaching", "random"]),
-    },
-    ParamSpec {
-        name: "motion",
-        unit: "",
-        help: "motion model of the estimators",
-        kind: ParamKind::Choice(&["exact-arc", "euler"]),
-    },
-    number(
-        "v-std",
-        "m/s",
-        "std of the executed forward speed (thesis q[0])",
-        1e-4,
-        2.0,
-    ),
-    number(
-        "w-std-deg",
-        "deg/s",
-        "std of the executed turn rate (thesis q[1] = 10)",
-        0.01,
-        90.0,
-    ),
-    number(
-        "range-std",
-        "m",
-        "std of range measurements (thesis v[0])",
-        1e-3,
-        10.0,
-    ),
-    number(
-        "bearing-std-deg",
-        "deg",
-        "std of bearing measurements (thesis v[1] = 10)",
-        0.01,
-        90.0,
-    ),
-    number("fov-deg", "deg", "sensor field of view", 1.0, 360.0),
-    number("max-range", "m", "sensor maximum range", 0.1, 100.0),
-    number("wheel-base", "m", "distance between the wheels", 0.05, 5.0),
-    ParamSpec {
-        name: "controller",
-        unit: "",
-        help: "who drives: the scripted circle or the user",
-        kind: ParamKind::Choice(&["circle", "manual"]),
-    },
-    number(
-        "v",
-        "m/s",
-        "forward speed of the scripted circle (thesis u_v = 1)",
-        -5.0,
-        5.0,
-    ),
-    number(
-        "w-deg",
-        "deg/s",
-        "turn rate of the scripted circle (thesis u_w = 18)",
-        -180.0,
-        180.0,
-    ),
-    ParamSpec {
-        name: "estimator",
-        unit: "",
-        help: "estimators to run, comma separated",
-        kind: ParamKind::Choice(&["ekf", "ukf", "fej-ekf", "ideal-ekf"]),
-    },
-    number("ukf-alpha", "", "UKF sigma-point spread alpha", 1e-3, 2.0),
-    number(
-        "ukf-beta",
-        "",
-        "UKF prior-knowledge beta (2 for Gaussians)",
-        -10.0,
-        10.0,
-    ),
-    number(
-        "ukf-kappa",
-        "",
-        "UKF secondary scaling kappa (alpha^2 (k + kappa) must exceed 0)",
-        -10.0,
-        10.0,
-    ),
-];
+/// A named scenario: what a source shows ("thesis Experiment 2") or a lesson's key
+/// comparison. A preset sets every parameter but the seed; parameters given beside
+/// it apply on top, whatever their order.
+#[derive(Debug)]
+pub struct Preset<S: 'static> {
+    /// The name in URLs and on the command line (`preset=...`).
+    pub id: &'static str,
+    /// The menu entry.
+    pub title: &'static str,
+    /// What it shows, in one sentence.
+    pub summary: &'static str,
+    /// The scenario with a given seed.
+    pub build: fn(u64) -> S,
+}
 
-/// Looks a parameter up by name.
-pub fn spec(name: &str) -> Option<&'static ParamSpec> {
-    PARAMS.iter().find(|p| p.name == name)
+/// A lesson's scenario: plain data with one declarative parameter table.
+pub trait Scenario: Clone + Default + fmt::Debug + 'static {
+    /// The lesson id (`lesson=` in URLs, `slamlab run ID`).
+    const LESSON: &'static str;
+
+    /// Every parameter, in the order panels and `slamlab params` list them.
+    /// A `preset` parameter, if any, comes first.
+    fn params() -> &'static [Param<Self>];
+
+    /// The presets, in menu order.
+    fn presets() -> &'static [Preset<Self>] {
+        &[]
+    }
+
+    /// The seed of every random stream.
+    fn seed(&self) -> u64;
+
+    /// When pairs apply: lower first. A preset goes first so that the parameters
+    /// beside it apply on top; a lesson can put others early (who drives, before
+    /// the circle's speeds).
+    fn apply_rank(name: &str) -> u8 {
+        u8::from(name != "preset") * 2
+    }
+
+    /// Checks that need more than one parameter (say, a list that must not be
+    /// empty), after [`sanitize`] has checked each one. Repairs and reports.
+    fn check(&mut self) -> Vec<ParamIssue> {
+        Vec::new()
+    }
+
+    /// Looks a parameter up by name.
+    fn param(name: &str) -> Option<&'static Param<Self>> {
+        Self::params().iter().find(|p| p.name == name)
+    }
+
+    /// Looks a preset up by id.
+    fn preset(id: &str) -> Option<&'static Preset<Self>> {
+        Self::presets().iter().find(|p| p.id == id)
+    }
 }
 
 /// A problem with one parameter, worded for the person who typed it.
@@ -250,7 +288,8 @@ impl fmt::Display for ParamIssue {
     }
 }
 
-fn format_number(v: f64) -> String {
+/// A number as the URL and the CLI write it: at most six decimals, no trailing zeros.
+pub fn format_number(v: f64) -> String {
     let s = format!("{v:.6}");
     let s = s.trim_end_matches('0').trim_end_matches('.');
     if s.is_empty() || s == "-" {
@@ -260,53 +299,26 @@ fn format_number(v: f64) -> String {
     }
 }
 
-/// The current value of a parameter, as text in its URL/CLI unit. None for a
-/// preset (not a value the scenario holds) and for the circle's speeds while the
-/// robot is driven by hand.
-pub fn get(scenario: &LandmarkScenario, name: &str) -> Option<String> {
-    let circle = match scenario.controller {
-        ControllerKind::Circle { v, w } => Some((v, w)),
-        ControllerKind::Manual => None,
-    };
-    Some(match name {
-        "seed" => scenario.seed.to_string(),
-        "dt" => format_number(scenario.dt),
-        "world-size" => format_number(scenario.world_size),
-        "landmarks" => scenario.landmarks.to_string(),
-        "layout" => scenario.layout.name().to_owned(),
-        "motion" => match scenario.motion {
-            MotionModel::ExactArc => "exact-arc".to_owned(),
-            MotionModel::Euler => "euler".to_owned(),
-        },
-        "v-std" => format_number(scenario.v_std),
-        "w-std-deg" => format_number(scenario.w_std.to_degrees()),
-        "range-std" => format_number(scenario.range_std),
-        "bearing-std-deg" => format_number(scenario.bearing_std.to_degrees()),
-        "fov-deg" => format_number(scenario.fov.to_degrees()),
-        "max-range" => format_number(scenario.max_range),
-        "wheel-base" => format_number(scenario.wheel_base),
-        "controller" => match scenario.controller {
-            ControllerKind::Circle { .. } => "circle".to_owned(),
-            ControllerKind::Manual => "manual".to_owned(),
-        },
-        "v" => format_number(circle?.0),
-        "w-deg" => format_number(circle?.1.to_degrees()),
-        "estimator" => scenario
-            .estimators
-            .iter()
-            .map(|e| e.name())
-            .collect::<Vec<_>>()
-            .join(","),
-        "ukf-alpha" => format_number(scenario.ukf.alpha),
-        "ukf-beta" => format_number(scenario.ukf.beta),
-        "ukf-kappa" => format_number(scenario.ukf.kappa),
-        _ => return None,
-    })
+/// Looks a parameter of `S` up by name.
+pub fn spec<S: Scenario>(name: &str) -> Option<&'static Param<S>> {
+    S::param(name)
+}
+
+/// The current value of a parameter, as text in its URL/CLI unit. None for an
+/// unknown name, a preset (not a value the scenario holds), and a parameter that
+/// has no value in this scenario.
+pub fn get<S: Scenario>(scenario: &S, name: &str) -> Option<String> {
+    let param = S::param(name)?;
+    match param.access {
+        Access::Number { get, .. } => get(scenario).map(format_number),
+        Access::Count { get, .. } => get(scenario).map(|v| v.to_string()),
+        Access::Words { get, .. } => get(scenario),
+    }
 }
 
 /// Every parameter and its current value, in table order.
-pub fn to_pairs(scenario: &LandmarkScenario) -> Vec<(&'static str, String)> {
-    PARAMS
+pub fn to_pairs<S: Scenario>(scenario: &S) -> Vec<(&'static str, String)> {
+    S::params()
         .iter()
         .filter_map(|p| get(scenario, p.name).map(|v| (p.name, v)))
         .collect()
@@ -314,8 +326,8 @@ pub fn to_pairs(scenario: &LandmarkScenario) -> Vec<(&'static str, String)> {
 
 /// Sets one parameter from text. Returns the issue, if any; on an issue other than
 /// clamping, the scenario is unchanged.
-pub fn set(scenario: &mut LandmarkScenario, name: &str, value: &str) -> Option<ParamIssue> {
-    let Some(spec) = spec(name) else {
+pub fn set<S: Scenario>(scenario: &mut S, name: &str, value: &str) -> Option<ParamIssue> {
+    let Some(param) = S::param(name) else {
         return Some(ParamIssue::Unknown {
             name: name.to_owned(),
         });
@@ -331,149 +343,109 @@ pub fn set(scenario: &mut LandmarkScenario, name: &str, value: &str) -> Option<P
             kept: kept.clone(),
         })
     };
-    match spec.kind {
-        ParamKind::Number { min, max } => {
+    match (param.kind, param.access) {
+        (ParamKind::Number { min, max }, Access::Number { set, .. }) => {
             let parsed = value.parse::<f64>().ok().filter(|v| v.is_finite());
             let Some(v) = parsed else {
                 return unreadable(format!(
                     "a finite number between {} and {} {}",
                     format_number(min),
                     format_number(max),
-                    spec.unit
+                    param.unit
                 ));
             };
-            if matches!(name, "v" | "w-deg")
-                && matches!(scenario.controller, ControllerKind::Manual)
-            {
+            let used = v.clamp(min, max);
+            if let Err(reason) = set(scenario, used) {
                 return Some(ParamIssue::Ignored {
                     name: name.to_owned(),
-                    reason: "the scripted circle's speeds do nothing while the robot is \
-                             driven by hand (controller=manual)",
+                    reason,
                 });
             }
-            let used = v.clamp(min, max);
-            apply_number(scenario, name, used);
             (!(min..=max).contains(&v)).then(|| ParamIssue::Clamped {
                 name: name.to_owned(),
                 value: value.to_owned(),
-                used: format!("{} {}", format_number(used), spec.unit)
+                used: format!("{} {}", format_number(used), param.unit)
                     .trim_end()
                     .to_owned(),
             })
         }
-        ParamKind::Count { min, max } => {
+        (ParamKind::Count { min, max }, Access::Count { set, .. }) => {
             let Ok(v) = value.parse::<u64>() else {
-                let range = spec.kind.range_text(", ");
+                let range = param.kind.range_text(", ");
                 return unreadable(format!("a whole number ({range})"));
             };
             let used = v.clamp(min, max);
-            match name {
-                "seed" => scenario.seed = used,
-                _ => scenario.landmarks = usize::try_from(used).unwrap_or(usize::MAX),
-            }
+            set(scenario, used);
             (used != v).then(|| ParamIssue::Clamped {
                 name: name.to_owned(),
                 value: value.to_owned(),
                 used: used.to_string(),
             })
         }
-        ParamKind::Choice(choices) => {
-            let expected = format!("one of {}", choices.join(", "));
-            match name {
-                "preset" => match crate::presets::scenario(value, scenario.seed) {
-                    Some(preset) => *scenario = preset,
-                    None => return unreadable(expected),
-                },
-                "layout" => match value {
-                    "teaching" => scenario.layout = LandmarkLayout::Teaching,
-                    "random" => scenario.layout = LandmarkLayout::Random,
-                    _ => return unreadable(expected),
-                },
-                "motion" => match value {
-                    "exact-arc" => scenario.motion = MotionModel::ExactArc,
-                    "euler" => scenario.motion = MotionModel::Euler,
-                    _ => return unreadable(expected),
-                },
-                "controller" => match value {
-                    "circle" => {
-                        if matches!(scenario.controller, ControllerKind::Manual) {
-                            scenario.controller = ControllerKind::default();
-                        }
-                    }
-                    "manual" => scenario.controller = ControllerKind::Manual,
-                    _ => return unreadable(expected),
-                },
-                _ => {
-                    let parsed: Option<Vec<EstimatorKind>> = value
-                        .split(',')
-                        .map(|s| EstimatorKind::from_name(s.trim()))
-                        .collect();
-                    match parsed {
-                        Some(mut list) if !list.is_empty() => {
-                            let mut seen = Vec::new();
-                            list.retain(|e| {
-                                if seen.contains(e) {
-                                    false
-                                } else {
-                                    seen.push(*e);
-                                    true
-                                }
-                            });
-                            scenario.estimators = list;
-                        }
-                        _ => {
-                            return unreadable(format!(
-                                "a comma-separated list of {}",
-                                choices.join(", ")
-                            ));
-                        }
-                    }
-                }
-            }
-            None
-        }
+        (_, Access::Words { set, .. }) => match set(scenario, value) {
+            Ok(()) => None,
+            Err(expected) => unreadable(expected),
+        },
+        // A table entry whose kind and access disagree: a slip in the table, which
+        // `every_table_is_consistent`-style tests catch; say so rather than guess.
+        _ => unreadable(format!(
+            "settable: the parameter table's entry for {name} is inconsistent"
+        )),
     }
 }
 
-fn apply_number(scenario: &mut LandmarkScenario, name: &str, v: f64) {
-    match name {
-        "dt" => scenario.dt = v,
-        "world-size" => scenario.world_size = v,
-        "v-std" => scenario.v_std = v,
-        "w-std-deg" => scenario.w_std = v.to_radians(),
-        "range-std" => scenario.range_std = v,
-        "bearing-std-deg" => scenario.bearing_std = v.to_radians(),
-        "fov-deg" => scenario.fov = v.to_radians(),
-        "max-range" => scenario.max_range = v,
-        "wheel-base" => scenario.wheel_base = v,
-        "ukf-alpha" => scenario.ukf.alpha = v,
-        "ukf-beta" => scenario.ukf.beta = v,
-        "ukf-kappa" => scenario.ukf.kappa = v,
-        "v" | "w-deg" => {
-            // Under manual driving `set` refuses these before they get here.
-            let ControllerKind::Circle {
-                v: mut cv,
-                w: mut cw,
-            } = scenario.controller
-            else {
-                return;
-            };
-            if name == "v" {
-                cv = v;
-            } else {
-                cw = v.to_radians();
-            }
-            scenario.controller = ControllerKind::Circle { v: cv, w: cw };
+/// The setter of a single-word parameter: `words` lists the accepted words, and
+/// `apply` sets the one given (its index in `words`).
+pub fn choose(words: &[&str], value: &str) -> Result<usize, String> {
+    words
+        .iter()
+        .position(|w| *w == value)
+        .ok_or_else(|| format!("one of {}", words.join(", ")))
+}
+
+/// Parses a comma-separated list of `words` (duplicates dropped, order kept); an
+/// empty list or an unknown word is an error that says what was expected.
+pub fn choose_list(words: &[&'static str], value: &str) -> Result<Vec<&'static str>, String> {
+    let mut list: Vec<&'static str> = Vec::new();
+    for item in value.split(',') {
+        let item = item.trim();
+        let Some(&word) = words.iter().find(|w| **w == item) else {
+            return Err(format!("a comma-separated list of {}", words.join(", ")));
+        };
+        if !list.contains(&word) {
+            list.push(word);
         }
-        _ => {}
+    }
+    if list.is_empty() {
+        return Err(format!("a comma-separated list of {}", words.join(", ")));
+    }
+    Ok(list)
+}
+
+/// Replaces `scenario` with preset `id` built with the scenario's seed: the setter
+/// of every lesson's `preset` parameter.
+pub fn apply_preset<S: Scenario>(scenario: &mut S, id: &str) -> Result<(), String> {
+    match S::preset(id) {
+        Some(preset) => {
+            *scenario = (preset.build)(scenario.seed());
+            Ok(())
+        }
+        None => Err(format!(
+            "one of {}",
+            S::presets()
+                .iter()
+                .map(|p| p.id)
+                .collect::<Vec<_>>()
+                .join(", ")
+        )),
     }
 }
 
-/// Applies `key=value` pairs, a `preset` first and then the others in order; pairs
-/// whose key is in `skip` belong to someone else (the app's `lesson` and `embed`)
-/// and are passed over.
-pub fn apply_pairs<'a>(
-    scenario: &mut LandmarkScenario,
+/// Applies `key=value` pairs, a `preset` first and then the others in order (see
+/// [`Scenario::apply_rank`]); pairs whose key is in `skip` belong to someone else
+/// (the app's `lesson` and `embed`) and are passed over.
+pub fn apply_pairs<'a, S: Scenario>(
+    scenario: &mut S,
     pairs: impl IntoIterator<Item = (&'a str, &'a str)>,
     skip: &[&str],
 ) -> Vec<ParamIssue> {
@@ -481,13 +453,7 @@ pub fn apply_pairs<'a>(
         .into_iter()
         .filter(|(k, _)| !skip.contains(k))
         .collect();
-    // A preset first, so that the parameters beside it apply on top, and who drives
-    // next, so that the circle's speeds meet the same controller in any order.
-    pairs.sort_by_key(|(k, _)| match *k {
-        "preset" => 0,
-        "controller" => 1,
-        _ => 2,
-    });
+    pairs.sort_by_key(|(k, _)| S::apply_rank(k));
     pairs
         .into_iter()
         .filter_map(|(k, v)| set(scenario, k, v))
@@ -495,9 +461,10 @@ pub fn apply_pairs<'a>(
 }
 
 /// Checks a whole scenario (for one read from a file or built in code) and clamps
-/// whatever is out of range, with the same messages as [`set`].
-pub fn sanitize(scenario: &mut LandmarkScenario) -> Vec<ParamIssue> {
-    let defaults = LandmarkScenario::default();
+/// whatever is out of range, with the same messages as [`set`]; a value that cannot
+/// be used at all (NaN) falls back to the default.
+pub fn sanitize<S: Scenario>(scenario: &mut S) -> Vec<ParamIssue> {
+    let defaults = S::default();
     let mut issues = Vec::new();
     for (name, value) in to_pairs(scenario) {
         let mut probe = scenario.clone();
@@ -514,192 +481,274 @@ pub fn sanitize(scenario: &mut LandmarkScenario) -> Vec<ParamIssue> {
             issues.push(issue);
         }
     }
-    if scenario.estimators.is_empty() {
-        scenario.estimators = defaults.estimators;
-    }
+    issues.extend(scenario.check());
     issues
+}
+
+/// The parameters of `scenario` that differ from `reference`, in table order.
+pub fn changed_pairs<S: Scenario>(scenario: &S, reference: &S) -> Vec<(String, String)> {
+    let defaults = to_pairs(reference);
+    to_pairs(scenario)
+        .into_iter()
+        .filter(|(name, value)| !defaults.iter().any(|(n, v)| n == name && v == value))
+        .map(|(name, value)| (name.to_owned(), value))
+        .collect()
+}
+
+/// One row per parameter for `slamlab params --lesson ID` and help texts:
+/// `(name, unit, range, default, help)`.
+pub fn describe<S: Scenario>() -> Vec<[String; 5]> {
+    let defaults = S::default();
+    S::params()
+        .iter()
+        .map(|p| {
+            [
+                p.name.to_owned(),
+                p.unit.to_owned(),
+                p.kind.range_text(" | "),
+                get(&defaults, p.name).unwrap_or_else(|| "none".to_owned()),
+                p.help.to_owned(),
+            ]
+        })
+        .collect()
 }
 
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::scenario::EstimatorKind;
+
+    /// A tiny scenario to test the machinery by itself.
+    #[derive(Clone, Debug, PartialEq)]
+    struct Toy {
+        seed: u64,
+        speed: f64,
+        angle: f64,
+        colour: usize,
+        tools: Vec<&'static str>,
+        locked: bool,
+    }
+
+    impl Default for Toy {
+        fn default() -> Self {
+            Toy {
+                seed: 0,
+                speed: 0.0,
+                angle: 0.0,
+                colour: 0,
+                tools: vec!["saw"],
+                locked: false,
+            }
+        }
+    }
+
+    const COLOURS: &[&str] = &["red", "green"];
+    const TOOLS: &[&str] = &["saw", "drill"];
+
+    static TOY_PARAMS: &[Param<Toy>] = &[
+        Param::words(
+            "preset",
+            "a named toy",
+            &["fast"],
+            |_| None,
+            apply_preset::<Toy>,
+        ),
+        Param::count(
+            "seed",
+            "",
+            "seed",
+            (0, u64::MAX),
+            |t| Some(t.seed),
+            |t, v| t.seed = v,
+        ),
+        Param::number(
+            "speed",
+            "m/s",
+            "how fast",
+            (0.0, 2.0),
+            |t| (!t.locked).then_some(t.speed),
+            |t, v| {
+                if t.locked {
+                    return Err("the toy is locked");
+                }
+                t.speed = v;
+                Ok(())
+            },
+        ),
+        Param::number(
+            "angle-deg",
+            "deg",
+            "heading",
+            (-180.0, 180.0),
+            |t| Some(t.angle.to_degrees()),
+            |t, v| {
+                t.angle = v.to_radians();
+                Ok(())
+            },
+        ),
+        Param::words(
+            "colour",
+            "paint",
+            COLOURS,
+            |t| COLOURS.get(t.colour).map(|c| (*c).to_owned()),
+            |t, v| choose(COLOURS, v).map(|i| t.colour = i),
+        ),
+        Param::words(
+            "tools",
+            "tool list",
+            TOOLS,
+            |t| Some(t.tools.join(",")),
+            |t, v| choose_list(TOOLS, v).map(|l| t.tools = l),
+        ),
+    ];
+
+    static TOY_PRESETS: &[Preset<Toy>] = &[Preset {
+        id: "fast",
+        title: "Fast",
+        summary: "full speed",
+        build: |seed| Toy {
+            seed,
+            speed: 2.0,
+            ..Toy::default()
+        },
+    }];
+
+    impl Scenario for Toy {
+        const LESSON: &'static str = "toy";
+        fn params() -> &'static [Param<Self>] {
+            TOY_PARAMS
+        }
+        fn presets() -> &'static [Preset<Self>] {
+            TOY_PRESETS
+        }
+        fn seed(&self) -> u64 {
+            self.seed
+        }
+        fn check(&mut self) -> Vec<ParamIssue> {
+            if self.colour >= COLOURS.len() {
+                self.colour = 0;
+                return vec![ParamIssue::Unknown {
+                    name: "colour".to_owned(),
+                }];
+            }
+            Vec::new()
+        }
+    }
 
     #[test]
-    fn round_trip_through_text() {
-        let mut s = LandmarkScenario::default();
+    fn text_round_trips_in_the_parameters_units() {
+        let mut t = Toy::default();
         for (k, v) in [
-            ("landmarks", "33"),
-            ("fov-deg", "90"),
-            ("layout", "random"),
-            ("w-deg", "-20"),
-            ("seed", "99"),
+            ("speed", "1.25"),
+            ("angle-deg", "90"),
+            ("colour", "green"),
+            ("tools", "drill,saw,drill"),
+            ("seed", "7"),
         ] {
-            assert_eq!(set(&mut s, k, v), None, "{k}");
+            assert_eq!(set(&mut t, k, v), None, "{k}");
         }
-        assert_eq!(s.landmarks, 33);
-        assert!((s.fov - std::f64::consts::FRAC_PI_2).abs() < 1e-12);
-        let mut copy = LandmarkScenario::default();
-        for (k, v) in to_pairs(&s) {
-            assert_eq!(set(&mut copy, k, &v), None, "{k}={v}");
-        }
-        assert_eq!(to_pairs(&copy), to_pairs(&s));
-        assert_eq!(copy.seed, 99);
-        assert_eq!(copy.landmarks, 33);
+        assert!((t.angle - std::f64::consts::FRAC_PI_2).abs() < 1e-15);
+        assert_eq!(t.tools, vec!["drill", "saw"]);
+        let pairs = to_pairs(&t);
+        assert_eq!(
+            pairs,
+            vec![
+                ("seed", "7".to_owned()),
+                ("speed", "1.25".to_owned()),
+                ("angle-deg", "90".to_owned()),
+                ("colour", "green".to_owned()),
+                ("tools", "drill,saw".to_owned()),
+            ]
+        );
+        let mut copy = Toy::default();
+        assert!(
+            apply_pairs(&mut copy, pairs.iter().map(|(k, v)| (*k, v.as_str())), &[]).is_empty()
+        );
+        assert_eq!(copy, t);
+        assert_eq!(changed_pairs(&t, &copy), Vec::<(String, String)>::new());
+        assert_eq!(changed_pairs(&t, &Toy::default()).len(), 5);
+        assert_eq!(changed_pairs(&Toy::default(), &Toy::default()).len(), 0);
     }
 
     #[test]
-    fn the_circle_speeds_are_refused_while_driving_by_hand_in_any_order() {
-        for pairs in [
-            [("controller", "manual"), ("v", "2")],
-            [("v", "2"), ("controller", "manual")],
-        ] {
-            let mut s = LandmarkScenario::default();
-            let issues = apply_pairs(&mut s, pairs, &[]);
-            assert_eq!(s.controller, ControllerKind::Manual, "{pairs:?}");
-            assert!(
-                matches!(issues.as_slice(), [ParamIssue::Ignored { name, .. }] if name == "v"),
-                "{pairs:?}: {issues:?}"
-            );
-            // A hand-driven scenario has no circle speeds to report or restore.
-            assert_eq!(get(&s, "v"), None);
-            let mut copy = LandmarkScenario::default();
-            assert!(
-                apply_pairs(
-                    &mut copy,
-                    to_pairs(&s).iter().map(|(k, v)| (*k, v.as_str())),
-                    &[]
-                )
-                .is_empty()
-            );
-            assert_eq!(to_pairs(&copy), to_pairs(&s));
-            assert!(sanitize(&mut s).is_empty());
-        }
-        // With the circle they apply as usual.
-        let mut s = LandmarkScenario::default();
-        assert!(apply_pairs(&mut s, [("v", "2"), ("controller", "circle")], &[]).is_empty());
-        assert_eq!(get(&s, "v").as_deref(), Some("2"));
-    }
-
-    #[test]
-    fn a_preset_applies_first_keeps_the_seed_and_rejects_unknown_names() {
-        let mut s = LandmarkScenario::default();
-        let issues = apply_pairs(
-            &mut s,
-            [("range-std", "1"), ("seed", "5"), ("preset", "thesis-exp2")],
-            &[],
-        );
-        assert!(issues.is_empty(), "{issues:?}");
-        assert_eq!(s.seed, 5);
-        assert!(
-            (s.range_std - 1.0).abs() < 1e-12,
-            "given beside the preset, it wins"
-        );
-        assert!((s.v_std - 0.2).abs() < 1e-12 && (s.world_size - 20.0).abs() < 1e-12);
-        assert_eq!(get(&s, "preset"), None, "a preset is not a parameter value");
-        assert!(to_pairs(&s).iter().all(|(k, _)| *k != "preset"));
-        let before = s.clone();
-        let issue = set(&mut s, "preset", "thesis-exp9");
-        assert!(
-            matches!(issue, Some(ParamIssue::Unreadable { .. })),
-            "{issue:?}"
-        );
-        assert_eq!(s, before);
-        let text = issue.map(|i| i.to_string()).unwrap_or_default();
-        assert!(
-            text.contains("thesis-exp1") && text.contains("using the current parameters"),
-            "{text}"
-        );
-    }
-
-    #[test]
-    fn estimators_and_ukf_parameters_are_named_parameters() {
-        let mut s = LandmarkScenario::default();
-        assert_eq!(set(&mut s, "estimator", "ekf,ukf,ekf"), None);
-        assert_eq!(s.estimators, vec![EstimatorKind::Ekf, EstimatorKind::Ukf]);
-        assert_eq!(get(&s, "estimator").as_deref(), Some("ekf,ukf"));
-        assert_eq!(set(&mut s, "estimator", "fej-ekf"), None);
-        assert_eq!(s.estimators, vec![EstimatorKind::FejEkf]);
-        assert_eq!(set(&mut s, "estimator", "ekf,ukf"), None);
-        for (k, v) in [("ukf-alpha", "0.5"), ("ukf-beta", "0"), ("ukf-kappa", "3")] {
-            assert_eq!(set(&mut s, k, v), None, "{k}");
-            assert_eq!(get(&s, k).as_deref(), Some(v), "{k}");
-        }
-        assert!((s.ukf.alpha - 0.5).abs() < 1e-15 && (s.ukf.kappa - 3.0).abs() < 1e-15);
+    fn bad_values_are_reported_and_leave_the_scenario() {
+        let mut t = Toy::default();
+        let before = t.clone();
         assert!(matches!(
-            set(&mut s, "estimator", "ekf,pf"),
-            Some(ParamIssue::Unreadable { .. })
-        ));
-        assert_eq!(s.estimators, vec![EstimatorKind::Ekf, EstimatorKind::Ukf]);
-        // Every parameter in the table but the preset can be read back.
-        for p in PARAMS.iter().filter(|p| p.name != "preset") {
-            assert!(
-                get(&LandmarkScenario::default(), p.name).is_some(),
-                "{}",
-                p.name
-            );
-        }
-    }
-
-    #[test]
-    fn bad_values_are_reported_and_safe() {
-        let mut s = LandmarkScenario::default();
-        let before = s.clone();
-        assert!(matches!(
-            set(&mut s, "bogus", "1"),
+            set(&mut t, "nope", "1"),
             Some(ParamIssue::Unknown { .. })
         ));
-        assert!(matches!(
-            set(&mut s, "seed", "abc"),
-            Some(ParamIssue::Unreadable { .. })
-        ));
-        assert!(matches!(
-            set(&mut s, "range-std", "NaN"),
-            Some(ParamIssue::Unreadable { .. })
-        ));
-        assert!(matches!(
-            set(&mut s, "range-std", "inf"),
-            Some(ParamIssue::Unreadable { .. })
-        ));
-        assert!(matches!(
-            set(&mut s, "landmarks", "-3"),
-            Some(ParamIssue::Unreadable { .. })
-        ));
-        assert!(matches!(
-            set(&mut s, "layout", "spiral"),
-            Some(ParamIssue::Unreadable { .. })
-        ));
-        assert_eq!(s, before);
-        let issue = set(&mut s, "range-std", "0");
-        assert!(matches!(issue, Some(ParamIssue::Clamped { .. })));
-        assert!((s.range_std - 1e-3).abs() < 1e-15);
-        assert!(
-            issue
-                .map(|i| i.to_string())
-                .unwrap_or_default()
-                .contains("out of range")
+        for (k, v) in [
+            ("speed", "NaN"),
+            ("speed", "inf"),
+            ("speed", "fast"),
+            ("seed", "-1"),
+            ("colour", "blue"),
+            ("tools", ""),
+            ("tools", "saw,hammer"),
+            ("preset", "slow"),
+        ] {
+            let issue = set(&mut t, k, v);
+            assert!(
+                matches!(issue, Some(ParamIssue::Unreadable { .. })),
+                "{k}={v}: {issue:?}"
+            );
+        }
+        assert_eq!(t, before);
+        let text = set(&mut t, "colour", "blue")
+            .map(|i| i.to_string())
+            .unwrap_or_default();
+        assert_eq!(text, "colour = 'blue' is not one of red, green; using red");
+        let issue = set(&mut t, "speed", "9");
+        assert_eq!(
+            issue.map(|i| i.to_string()).as_deref(),
+            Some("speed = 9 is out of range; using 2 m/s")
         );
+        assert_eq!(t.speed, 2.0);
+        t.locked = true;
         assert!(matches!(
-            set(&mut s, "landmarks", "100000"),
-            Some(ParamIssue::Clamped { .. })
+            set(&mut t, "speed", "1"),
+            Some(ParamIssue::Ignored { .. })
         ));
-        assert_eq!(s.landmarks, 500);
-        assert_eq!(set(&mut s, "landmarks", "0"), None);
+        assert_eq!(get(&t, "speed"), None);
     }
 
     #[test]
-    fn sanitize_repairs_non_finite_fields() {
-        let mut s = LandmarkScenario {
-            dt: f64::NAN,
-            bearing_std: -1.0,
-            world_size: f64::INFINITY,
-            ..Default::default()
+    fn a_preset_applies_first_and_keeps_the_seed() {
+        let mut t = Toy::default();
+        let issues = apply_pairs(
+            &mut t,
+            [
+                ("speed", "0.5"),
+                ("seed", "3"),
+                ("preset", "fast"),
+                ("lesson", "x"),
+            ],
+            &["lesson"],
+        );
+        assert!(issues.is_empty(), "{issues:?}");
+        assert_eq!((t.seed, t.speed), (3, 0.5));
+        assert_eq!(get(&t, "preset"), None);
+    }
+
+    #[test]
+    fn sanitize_clamps_and_repairs() {
+        let mut t = Toy {
+            speed: 7.0,
+            angle: f64::NAN,
+            colour: 5,
+            ..Toy::default()
         };
-        let issues = sanitize(&mut s);
+        let issues = sanitize(&mut t);
         assert_eq!(issues.len(), 3, "{issues:?}");
-        assert!((s.dt - 0.1).abs() < 1e-12);
-        assert!((s.bearing_std - 0.01_f64.to_radians()).abs() < 1e-12);
-        assert!((s.world_size - 16.0).abs() < 1e-12);
-        assert!(sanitize(&mut LandmarkScenario::default()).is_empty());
+        assert_eq!(t.speed, 2.0);
+        assert_eq!(t.angle, 0.0);
+        assert_eq!(t.colour, 0, "the lesson's own check ran");
+        assert!(sanitize(&mut t).is_empty());
+        let rows = describe::<Toy>();
+        assert_eq!(
+            rows[2],
+            ["speed", "m/s", "0 .. 2", "0", "how fast"].map(str::to_owned)
+        );
+        assert_eq!(rows[0][3], "none");
     }
 }

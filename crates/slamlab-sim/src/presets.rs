@@ -4,47 +4,57 @@
 //! `--preset thesis-exp2 --landmarks 30`) apply on top, whatever their order.
 
 use crate::experiments::ekf_vs_ukf_scenario;
+use crate::params::Preset;
 use crate::scenario::{EstimatorKind, LandmarkScenario};
 
-/// One preset.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub struct Preset {
-    /// The name in URLs and on the command line (`preset=...`).
-    pub id: &'static str,
-    /// The menu entry.
-    pub title: &'static str,
-    /// What it shows, in one sentence.
-    pub summary: &'static str,
-}
-
 /// Every preset, in menu order.
-pub const PRESETS: &[Preset] = &[
+pub static PRESETS: &[Preset<LandmarkScenario>] = &[
     Preset {
         id: "lesson",
         title: "EKF vs UKF (the lesson's start)",
         summary: "The teaching rings, a 120° 4 m sensor with 0.5 m / 10° noise, EKF-SLAM and UKF-SLAM side by side.",
+        build: lesson,
     },
     Preset {
         id: "thesis-exp1",
         title: "Thesis Experiment 1",
         summary: "Thesis Sec. 3.4.3: 20 random landmarks, q = [0.1 m/s, 10°/s], v = [2 m, 10°], EKF and UKF.",
+        build: |seed| ekf_vs_ukf_scenario(1.0, seed),
     },
     Preset {
         id: "thesis-exp2",
         title: "Thesis Experiment 2 (doubled control noise)",
         summary: "Experiment 1 with q doubled to [0.2 m/s, 20°/s]: where the thesis says the EKF may diverge.",
+        build: |seed| ekf_vs_ukf_scenario(2.0, seed),
     },
     Preset {
         id: "ekf-vs-fej",
         title: "Why EKF-SLAM grows overconfident (EKF vs FEJ-EKF)",
         summary: "The same EKF linearized at its latest estimates and at its first ones: watch the NEES over a lap.",
+        build: |seed| LandmarkScenario {
+            estimators: vec![EstimatorKind::Ekf, EstimatorKind::FejEkf],
+            ..lesson(seed)
+        },
     },
     Preset {
         id: "precise-range",
         title: "Precise range, coarse bearing",
         summary: "0.1 m range noise with 10° bearing noise: a crescent-shaped likelihood no linearization follows.",
+        build: |seed| LandmarkScenario {
+            range_std: 0.1,
+            ..lesson(seed)
+        },
     },
 ];
+
+/// The lesson's start: the simulator's defaults with EKF-SLAM and UKF-SLAM.
+fn lesson(seed: u64) -> LandmarkScenario {
+    LandmarkScenario {
+        seed,
+        estimators: vec![EstimatorKind::Ekf, EstimatorKind::Ukf],
+        ..LandmarkScenario::default()
+    }
+}
 
 /// The preset ids, for the parameter table.
 pub const PRESET_IDS: &[&str] = &[
@@ -57,29 +67,11 @@ pub const PRESET_IDS: &[&str] = &[
 
 /// The scenario of preset `id` with `seed`, or `None` for an unknown id.
 pub fn scenario(id: &str, seed: u64) -> Option<LandmarkScenario> {
-    let lesson = LandmarkScenario {
-        seed,
-        estimators: vec![EstimatorKind::Ekf, EstimatorKind::Ukf],
-        ..LandmarkScenario::default()
-    };
-    Some(match id {
-        "lesson" => lesson,
-        "thesis-exp1" => ekf_vs_ukf_scenario(1.0, seed),
-        "thesis-exp2" => ekf_vs_ukf_scenario(2.0, seed),
-        "ekf-vs-fej" => LandmarkScenario {
-            estimators: vec![EstimatorKind::Ekf, EstimatorKind::FejEkf],
-            ..lesson
-        },
-        "precise-range" => LandmarkScenario {
-            range_std: 0.1,
-            ..lesson
-        },
-        _ => return None,
-    })
+    find(id).map(|p| (p.build)(seed))
 }
 
 /// Looks a preset up by id.
-pub fn find(id: &str) -> Option<&'static Preset> {
+pub fn find(id: &str) -> Option<&'static Preset<LandmarkScenario>> {
     PRESETS.iter().find(|p| p.id == id)
 }
 

@@ -14,7 +14,8 @@ mod map;
 mod params_panel;
 mod plots;
 
-use crate::time_control::{FRAME_BUDGET_MS, TicksDue, TimeAction, TimeControl, TimeInfo};
+use crate::lesson::{self, Lesson, LessonStart, PanelVisibility};
+use crate::time_control::{TimeAction, TimeControl, TimeInfo};
 use serde::{Deserialize, Serialize};
 use slamlab_core::Pose2;
 use slamlab_core::kalman::LandmarkSlam;
@@ -70,39 +71,6 @@ impl Default for ViewOptions {
     }
 }
 
-/// Which side panels are open.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
-#[serde(default)]
-pub struct PanelVisibility {
-    /// The parameter panel (left).
-    pub parameters: bool,
-    /// The explanation panel (right).
-    pub explanation: bool,
-    /// The plots (bottom).
-    pub plots: bool,
-}
-
-impl Default for PanelVisibility {
-    fn default() -> Self {
-        Self {
-            parameters: true,
-            explanation: true,
-            plots: true,
-        }
-    }
-}
-
-impl PanelVisibility {
-    /// The embed layout: map, plots and the time bar; the side panels closed.
-    pub fn embedded() -> Self {
-        Self {
-            parameters: false,
-            explanation: false,
-            plots: true,
-        }
-    }
-}
-
 /// The robot's sigma points if the filter is sigma-point based (UKF), else none.
 pub fn robot_sigma_points(filter: &dyn LandmarkSlam) -> Vec<Pose2> {
     filter.robot_sigma_points()
@@ -117,12 +85,7 @@ pub fn default_scenario() -> LandmarkScenario {
 
 /// The parameters of `scenario` that differ from the lesson's start, in table order.
 fn changed_pairs(scenario: &LandmarkScenario) -> Vec<(String, String)> {
-    let defaults = params::to_pairs(&default_scenario());
-    params::to_pairs(scenario)
-        .into_iter()
-        .filter(|(name, value)| !defaults.iter().any(|(n, v)| n == name && v == value))
-        .map(|(name, value)| (name.to_owned(), value))
-        .collect()
+    params::changed_pairs(scenario, &default_scenario())
 }
 
 /// The landmark-SLAM lesson.
@@ -143,6 +106,60 @@ pub struct LandmarkSlamLesson {
     pub many_runs: many_runs::ManyRunsState,
     /// Bumped whenever the session changes, so caches know when to refresh.
     version: u64,
+    /// Problems with the link the lesson was opened with.
+    link_notices: Vec<String>,
+}
+
+/// What the lesson remembers between visits.
+#[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
+#[serde(default)]
+struct StoredSettings {
+    /// Map layers and windows.
+    view: ViewOptions,
+    /// The clock's speed.
+    time: TimeControl,
+    /// The user's parameters that differ from the lesson's start.
+    params: Vec<(String, String)>,
+}
+
+/// Opens the lesson from the URL's pairs, with what it stored last time (the
+/// stored parameters only when the URL gives none).
+pub fn open(start: &LessonStart<'_>) -> Box<dyn Lesson> {
+    let stored: Option<StoredSettings> = start
+        .stored
+        .and_then(|value| serde_json::from_value(value.clone()).ok());
+    let mut scenario = default_scenario();
+    if start.pairs.is_empty()
+        && !start.embed
+        && let Some(stored) = &stored
+    {
+        let pairs = stored.params.iter().map(|(k, v)| (k.as_str(), v.as_str()));
+        // Stored values were valid when saved; anything stale is dropped quietly.
+        let _ignored = params::apply_pairs(&mut scenario, pairs, &crate::query::APP_KEYS);
+    }
+    let pairs = start.pairs.iter().map(|(k, v)| (k.as_str(), v.as_str()));
+    let issues = params::apply_pairs(&mut scenario, pairs, &crate::query::APP_KEYS);
+    let mut lesson = LandmarkSlamLesson::new(scenario);
+    lesson.link_notices = issues
+        .iter()
+        .map(|issue| format!("link: {issue}"))
+        .collect();
+    // A lecture figure looks the same for every student: the view a student left
+    // in the full app (an open heatmap, say) stays there.
+    if let Some(stored) = stored.filter(|_| !start.embed) {
+        lesson.view = stored.view;
+        lesson.time.speed_tps = stored.time.speed_tps;
+        lesson.time.max_speed = stored.time.max_speed;
+    }
+    if let Some(trials) = start.many_runs {
+        lesson.start_many_runs(trials);
+    }
+    if start.embed {
+        // A lecture figure is small: the map gets the room, and the legend is one
+        // click away (every element also has a tooltip).
+        lesson.view.legend = false;
+    }
+    Box::new(lesson)
 }
 
 impl LandmarkSlamLesson {
@@ -161,6 +178,7 @@ impl LandmarkSlamLesson {
             heatmap: heatmap::HeatmapState::default(),
             many_runs: many_runs::ManyRunsState::default(),
             version: 0,
+            link_notices: Vec::new(),
         }
     }
 
@@ -331,28 +349,19 @@ impl LandmarkSlamLesson {
     /// Runs the ticks the clock owes after `dt` seconds of real time, phase by phase,
     /// within the frame budget (so that even 500 landmarks keep the page responsive).
     pub fn advance(&mut self, dt: f64) {
-        let due = self.time.ticks_due(dt);
-        if due == TicksDue::Count(0) {
-            return;
+        if self.time.running {
+            self.apply_drive_command();
         }
-        self.apply_drive_command();
-        let start = web_time::Instant::now();
-        let mut done = 0_u64;
-        loop {
-            match due {
-                TicksDue::Count(n) if done >= n => break,
-                _ => {}
-            }
-            if start.elapsed().as_millis() >= FRAME_BUDGET_MS {
-                break;
-            }
-            self.session.step_phase();
-            if !self.session.is_mid_tick() {
-                done += 1;
-            }
+        let session = &mut self.session;
+        let mut phases = 0_u64;
+        lesson::advance_within_budget(&mut self.time, dt, || {
+            session.step_phase();
+            phases += 1;
+            !session.is_mid_tick()
+        });
+        if phases > 0 {
+            self.version += 1;
         }
-        self.version += 1;
-        self.time.ticks_done(done);
     }
 
     /// Gives the session the manual-driving command.
@@ -382,7 +391,8 @@ impl LandmarkSlamLesson {
     /// Things the user should know: what the session had to change, and the errors
     /// of the latest phase.
     pub fn notices(&self) -> Vec<String> {
-        let mut notices: Vec<String> = self.session.notices().to_vec();
+        let mut notices = self.link_notices.clone();
+        notices.extend(self.session.notices().iter().cloned());
         notices.extend(
             self.session
                 .filters()
@@ -538,6 +548,98 @@ impl LandmarkSlamLesson {
         if params_panel::parameters_ui(ui, self) {
             self.reset();
         }
+    }
+}
+
+impl Lesson for LandmarkSlamLesson {
+    fn id(&self) -> &'static str {
+        LESSON_ID
+    }
+
+    fn subtitle(&self) -> String {
+        self.filters_title()
+    }
+
+    fn notices(&self) -> Vec<String> {
+        LandmarkSlamLesson::notices(self)
+    }
+
+    fn time(&self) -> &TimeControl {
+        &self.time
+    }
+
+    fn time_mut(&mut self) -> &mut TimeControl {
+        &mut self.time
+    }
+
+    fn time_info(&self) -> TimeInfo {
+        LandmarkSlamLesson::time_info(self)
+    }
+
+    fn apply_time_action(&mut self, action: TimeAction) {
+        LandmarkSlamLesson::apply_time_action(self, action);
+    }
+
+    fn read_input(&mut self, ctx: &egui::Context) {
+        self.read_drive_keys(ctx);
+    }
+
+    fn advance(&mut self, dt: f64) {
+        LandmarkSlamLesson::advance(self, dt);
+    }
+
+    fn wants_repaint(&self) -> bool {
+        LandmarkSlamLesson::wants_repaint(self)
+    }
+
+    fn panels_ui(&mut self, ui: &mut egui::Ui, panels: &mut PanelVisibility, compact: bool) {
+        LandmarkSlamLesson::panels_ui(self, ui, panels, compact);
+    }
+
+    fn view_menu_ui(&mut self, ui: &mut egui::Ui) {
+        ui.checkbox(&mut self.view.legend, "Map legend");
+        ui.checkbox(&mut self.view.heatmap, "Covariance heatmap");
+        ui.checkbox(&mut self.view.many_runs, "Many runs (average NEES)");
+    }
+
+    fn stored_settings(&self) -> serde_json::Value {
+        let stored = StoredSettings {
+            view: self.view.clone(),
+            time: self.time.clone(),
+            params: self.pending_pairs(),
+        };
+        serde_json::to_value(stored).unwrap_or_default()
+    }
+
+    fn share_query(&self, embed: bool) -> String {
+        LandmarkSlamLesson::share_query(self, embed)
+    }
+
+    fn test_state(&self) -> serde_json::Value {
+        let many_runs = self.many_runs.result().map(|r| {
+            serde_json::json!({
+                "done": r.trials_done,
+                "running": self.many_runs.is_running(),
+                "nees": r.filters.iter().map(|f| (f.name.clone(), f.nees_mean)).collect::<BTreeMap<_, _>>(),
+            })
+        });
+        let session = self.session();
+        serde_json::json!({
+            "tick": session.tick(),
+            "time": session.time(),
+            "phase": session.last_phase().map(|p| p.label()).unwrap_or_default(),
+            "seed": session.scenario().seed,
+            "filters": session.filters().iter().map(|run| run.kind.name()).collect::<Vec<_>>(),
+            "many_runs": many_runs,
+        })
+    }
+
+    fn as_any(&self) -> &dyn std::any::Any {
+        self
+    }
+
+    fn as_any_mut(&mut self) -> &mut dyn std::any::Any {
+        self
     }
 }
 

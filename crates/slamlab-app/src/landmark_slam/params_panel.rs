@@ -5,7 +5,8 @@
 use super::LandmarkSlamLesson;
 use crate::palette;
 use slamlab_sim::EstimatorKind;
-use slamlab_sim::params::{self, ParamKind};
+use slamlab_sim::LandmarkScenario;
+use slamlab_sim::params::{self, ParamKind, Scenario};
 use slamlab_sim::scenario::ControllerKind;
 
 /// The parameter's current pending value as a number.
@@ -33,7 +34,7 @@ fn issue_ui(ui: &mut egui::Ui, lesson: &LandmarkSlamLesson, name: &str) {
 
 /// A slider for a real-valued parameter over its allowed range.
 fn number_ui(ui: &mut egui::Ui, lesson: &mut LandmarkSlamLesson, name: &str, label: &str) {
-    let Some(spec) = params::spec(name) else {
+    let Some(spec) = LandmarkScenario::param(name) else {
         return;
     };
     let ParamKind::Number { min, max } = spec.kind else {
@@ -110,7 +111,7 @@ fn seed_ui(ui: &mut egui::Ui, lesson: &mut LandmarkSlamLesson) {
 }
 
 fn landmarks_ui(ui: &mut egui::Ui, lesson: &mut LandmarkSlamLesson) {
-    let (min, max) = match params::spec("landmarks").map(|s| s.kind) {
+    let (min, max) = match LandmarkScenario::param("landmarks").map(|s| s.kind) {
         Some(ParamKind::Count { min, max }) => (min, max),
         _ => (0, 500),
     };

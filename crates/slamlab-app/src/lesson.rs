@@ -1,0 +1,228 @@
+//! Lessons as a family: the trait every lesson implements and the registry the
+//! shell opens them from.
+//!
+//! The shell (menu, time bar, notices, theme, persistence, share links, test
+//! hooks) never matches on a concrete lesson: it holds a `Box<dyn Lesson>`, the
+//! way egui's demo app holds its demos. A new lesson is a folder in this crate
+//! that implements [`Lesson`], plus one [`LessonEntry`] in [`LESSONS`]
+//! (`docs/ADDING-A-LESSON.md` has the whole recipe).
+
+use crate::time_control::{TimeAction, TimeControl, TimeInfo};
+use std::any::Any;
+
+/// Which panels are open around the map.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
+#[serde(default)]
+pub struct PanelVisibility {
+    /// The parameter panel (left).
+    pub parameters: bool,
+    /// The explanation panel (right).
+    pub explanation: bool,
+    /// The plots (bottom).
+    pub plots: bool,
+}
+
+impl Default for PanelVisibility {
+    fn default() -> Self {
+        Self {
+            parameters: true,
+            explanation: true,
+            plots: true,
+        }
+    }
+}
+
+impl PanelVisibility {
+    /// The embed layout: map, plots and the time bar; the side panels closed.
+    pub fn embedded() -> Self {
+        Self {
+            parameters: false,
+            explanation: false,
+            plots: true,
+        }
+    }
+}
+
+/// What a lesson is opened with.
+#[derive(Clone, Copy, Debug)]
+pub struct LessonStart<'a> {
+    /// The URL's `key=value` pairs that belong to the lesson, in order.
+    pub pairs: &'a [(String, String)],
+    /// The compact layout of a lecture-page figure.
+    pub embed: bool,
+    /// What this lesson stored last time ([`Lesson::stored_settings`]); `None` in an
+    /// embedded figure, which always opens the same way for every student.
+    pub stored: Option<&'a serde_json::Value>,
+    /// `many-runs=N` from the URL, for lessons that have such a window.
+    pub many_runs: Option<usize>,
+}
+
+/// One lesson on screen. Everything the shell needs, nothing it must know about
+/// the lesson's world.
+pub trait Lesson: std::fmt::Debug {
+    /// The lesson's id, as in [`LESSONS`].
+    fn id(&self) -> &'static str;
+    /// What runs now, for the top bar after the lesson's title ("EKF vs UKF");
+    /// empty for nothing.
+    fn subtitle(&self) -> String {
+        String::new()
+    }
+    /// Things the user should know now: link problems, what the run had to change,
+    /// the latest errors.
+    fn notices(&self) -> Vec<String>;
+    /// The lesson's clock.
+    fn time(&self) -> &TimeControl;
+    /// The lesson's clock, to change its speed.
+    fn time_mut(&mut self) -> &mut TimeControl;
+    /// What the time bar shows.
+    fn time_info(&self) -> TimeInfo;
+    /// Does what a time-bar button or shortcut asks.
+    fn apply_time_action(&mut self, action: TimeAction);
+    /// Reads the lesson's own input (drive keys) before the clock advances.
+    fn read_input(&mut self, _ctx: &egui::Context) {}
+    /// Runs what the clock owes after `dt` seconds of real time, within the frame budget.
+    fn advance(&mut self, dt: f64);
+    /// Does anything need another frame soon?
+    fn wants_repaint(&self) -> bool {
+        self.time().running
+    }
+    /// The panels and the map.
+    fn panels_ui(&mut self, ui: &mut egui::Ui, panels: &mut PanelVisibility, compact: bool);
+    /// The lesson's entries in the View menu (map layers, windows).
+    fn view_menu_ui(&mut self, _ui: &mut egui::Ui) {}
+    /// What to remember between visits (view options, clock speed, the user's
+    /// parameters); given back as [`LessonStart::stored`].
+    fn stored_settings(&self) -> serde_json::Value;
+    /// The query string (without `?`) that reopens this setup.
+    fn share_query(&self, embed: bool) -> String;
+    /// The lesson's part of the test hook's JSON (tick, phase, seed, estimators, errors).
+    fn test_state(&self) -> serde_json::Value;
+    /// For tests and the shell's typed helpers.
+    fn as_any(&self) -> &dyn Any;
+    /// For tests and the shell's typed helpers.
+    fn as_any_mut(&mut self) -> &mut dyn Any;
+}
+
+/// One entry of the lesson menu.
+#[derive(Clone, Copy, Debug)]
+pub struct LessonEntry {
+    /// The URL's `lesson=` value, e.g. `landmark-slam`.
+    pub id: &'static str,
+    /// The title in the menu and the top bar.
+    pub title: &'static str,
+    /// One line on what the student sees.
+    pub summary: &'static str,
+    /// Opens the lesson.
+    pub open: fn(&LessonStart<'_>) -> Box<dyn Lesson>,
+}
+
+/// Every lesson, in menu order. The first is the default.
+pub const LESSONS: &[LessonEntry] = &[LessonEntry {
+    id: crate::landmark_slam::LESSON_ID,
+    title: "Landmark SLAM",
+    summary: "A robot drives among landmarks; EKF-SLAM and UKF-SLAM estimate its pose and the \
+                  map, with 95% ellipses, NEES/NIS consistency plots and the covariance heatmap.",
+    open: crate::landmark_slam::open,
+}];
+
+/// The lesson that opens when none (or an unknown one) is asked for.
+pub const DEFAULT_LESSON: &str = "landmark-slam";
+
+/// Looks a lesson up by id.
+pub fn find(id: &str) -> Option<&'static LessonEntry> {
+    LESSONS.iter().find(|l| l.id == id)
+}
+
+/// The default lesson's entry.
+pub fn default_lesson() -> &'static LessonEntry {
+    find(DEFAULT_LESSON).unwrap_or(&LESSONS[0])
+}
+
+/// Runs a lesson's phases until the clock's due ticks are done or the frame budget
+/// is spent, whichever comes first: the one frame-budgeted advance every lesson
+/// uses. `step_phase` runs one phase and says whether it finished a tick.
+/// Returns the ticks finished.
+pub fn advance_within_budget(
+    time: &mut TimeControl,
+    dt: f64,
+    mut step_phase: impl FnMut() -> bool,
+) -> u64 {
+    use crate::time_control::{FRAME_BUDGET_MS, TicksDue};
+    let due = time.ticks_due(dt);
+    if due == TicksDue::Count(0) {
+        return 0;
+    }
+    let start = web_time::Instant::now();
+    let mut done = 0_u64;
+    loop {
+        if let TicksDue::Count(n) = due
+            && done >= n
+        {
+            break;
+        }
+        if start.elapsed().as_millis() >= FRAME_BUDGET_MS {
+            break;
+        }
+        if step_phase() {
+            done += 1;
+        }
+    }
+    time.ticks_done(done);
+    done
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn the_default_lesson_is_in_the_catalogue_and_ids_are_unique() {
+        assert_eq!(default_lesson().id, DEFAULT_LESSON);
+        for (i, a) in LESSONS.iter().enumerate() {
+            for b in &LESSONS[i + 1..] {
+                assert_ne!(a.id, b.id);
+            }
+        }
+        assert!(find("nope").is_none());
+    }
+
+    #[test]
+    fn every_lesson_opens_with_its_id_and_a_share_link_that_reopens_it() {
+        for entry in LESSONS {
+            let lesson = (entry.open)(&LessonStart {
+                pairs: &[],
+                embed: false,
+                stored: None,
+                many_runs: None,
+            });
+            assert_eq!(lesson.id(), entry.id);
+            let query = lesson.share_query(true);
+            assert!(
+                query.starts_with(&format!("lesson={}", entry.id)),
+                "{query}"
+            );
+            assert!(query.ends_with("embed=1"), "{query}");
+            assert!(
+                lesson.notices().is_empty(),
+                "{}: {:?}",
+                entry.id,
+                lesson.notices()
+            );
+        }
+    }
+
+    #[test]
+    fn the_advance_stops_at_the_ticks_due() {
+        let mut time = TimeControl {
+            running: true,
+            ..TimeControl::default()
+        };
+        let mut phases = 0;
+        // 0.25 s at 10 ticks/s: 2 ticks due, each of three phases.
+        let done = advance_within_budget(&mut time, 0.25, || {
+            phases += 1;
+            phases % 3 == 0
+        });
+        assert_eq!((done, phases), (2, 6));
+    }
+}
