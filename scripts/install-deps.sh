@@ -5,8 +5,8 @@
 # sudo when it is available.
 #
 #   scripts/install-deps.sh              everything (what ./test.sh needs)
-#   scripts/install-deps.sh --web        the WebAssembly build: Debian's rustc-web toolchain
-#                                        (unless rustup has the wasm32 target), the wasm-bindgen
+#   scripts/install-deps.sh --web        the WebAssembly build: rustup's wasm32 target (tried
+#                                        first), else Debian's rustc-web toolchain; the wasm-bindgen
 #                                        CLI, web/node_modules
 #   scripts/install-deps.sh --browser    Chromium for the headless browser tests
 #   scripts/install-deps.sh --desktop    Xvfb, ImageMagick, xdotool, Mesa: run the native app
@@ -51,9 +51,18 @@ rustup_has_wasm32() {
 	command -v rustup >/dev/null && rustup target list --installed 2>/dev/null | grep -qx wasm32-unknown-unknown
 }
 
+# --- 0. The wasm32 target from rustup, when rustup can fetch it (it could not on some
+# machines); otherwise Debian's rustc-web below.
+if ((want_web)) && ! rustup_has_wasm32 && [[ "${SLAMLAB_WASM_TOOLCHAIN:-}" != debian ]] && command -v rustup >/dev/null; then
+	say "rustup target add wasm32-unknown-unknown"
+	if ! timeout 600 rustup target add wasm32-unknown-unknown; then
+		say "rustup could not add the wasm32 target; using Debian's rustc-web instead"
+	fi
+fi
+
 # --- 1. Debian packages.
 packages=()
-if ((want_web)) && ! rustup_has_wasm32; then
+if ((want_web)) && { ! rustup_has_wasm32 || [[ "${SLAMLAB_WASM_TOOLCHAIN:-}" == debian ]]; }; then
 	# rustc/cargo 1.96 for the web (/usr/bin), the standard library's sources (built
 	# with -Zbuild-std, since this toolchain has no prebuilt wasm32 std) and the linker.
 	packages+=(rustc-web cargo-web rust-web-src rust-web-llvm lld-22)

@@ -213,10 +213,8 @@ mod tests {
 
     #[test]
     fn the_advance_stops_at_the_ticks_due() {
-        let mut time = TimeControl {
-            running: true,
-            ..TimeControl::default()
-        };
+        let mut time = TimeControl::default();
+        time.apply(TimeAction::ToggleRun);
         let mut phases = 0;
         // 0.25 s at 10 ticks/s: 2 ticks due, each of three phases.
         let done = advance_within_budget(&mut time, 0.25, || {

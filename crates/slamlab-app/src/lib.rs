@@ -12,6 +12,7 @@ pub mod lesson;
 pub mod palette;
 pub mod query;
 pub mod time_control;
+pub mod widgets;
 
 #[cfg(target_arch = "wasm32")]
 mod web;

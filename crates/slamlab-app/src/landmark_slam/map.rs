@@ -7,184 +7,22 @@
 use super::ViewOptions;
 use super::drive::{self, DriveState};
 use crate::palette;
-use egui::{Color32, Pos2, Rect, Sense, Shape, Stroke, pos2, vec2};
+use crate::widgets::map_canvas::{
+    self, CanvasColors, MapTransform, MapView, draw_grid, draw_scale_and_axes, finite, screen_dir,
+};
+use egui::{Color32, Pos2, Rect, Shape, Stroke, pos2, vec2};
 use nalgebra::{Matrix2, Vector2};
+use slamlab_core::Pose2;
 use slamlab_core::geometry::{CHI2_2DOF_95, CovarianceEllipse};
-use slamlab_core::{Pose2, math};
 use slamlab_sim::{LandmarkSession, Phase};
 use std::f64::consts::PI;
 
-/// Smallest and largest zoom, pixels per metre.
-const SCALE_RANGE: (f32, f32) = (0.05, 5000.0);
 /// How close (pixels) the pointer must be to an item for its tooltip.
 const HOVER_RADIUS: f32 = 12.0;
 /// Longest path drawn, in points; longer paths are thinned evenly.
 const MAX_PATH_POINTS: usize = 4000;
 /// Radius of the heading-uncertainty wedge, pixels.
 const WEDGE_RADIUS: f32 = 34.0;
-
-/// Where the map looks: its centre (metres) and zoom (pixels per metre).
-#[derive(Clone, Debug, PartialEq)]
-pub struct MapView {
-    center: [f64; 2],
-    scale: f32,
-    fitted: bool,
-    /// Width kept free for the legend at the map's left edge when fitting, points.
-    legend_space: f32,
-    /// The map's size at the last fit; the fit follows size changes until the user
-    /// pans or zooms.
-    fitted_size: egui::Vec2,
-    /// Has the user panned or zoomed since the last fit?
-    adjusted: bool,
-    /// The legend's corner: 0 top left, 1 top right, 2 bottom left, 3 bottom right.
-    legend_corner: usize,
-}
-
-impl Default for MapView {
-    fn default() -> Self {
-        Self {
-            center: [0.0, 0.0],
-            scale: 30.0,
-            fitted: false,
-            legend_space: 300.0,
-            fitted_size: egui::Vec2::ZERO,
-            adjusted: false,
-            legend_corner: 0,
-        }
-    }
-}
-
-impl MapView {
-    /// Fits the world into the map on the next frame.
-    pub fn refit(&mut self) {
-        self.fitted = false;
-    }
-
-    /// Fits the world square into `rect`, beside the legend when there is room:
-    /// smaller (down to 85%) and shifted right rather than under the legend.
-    fn fit(&mut self, rect: Rect, world_size: f64, legend_space: f32) {
-        let side = if world_size.is_finite() {
-            (world_size.max(1.0) * 1.08) as f32
-        } else {
-            16.0
-        };
-        let full = rect.width().min(rect.height()) / side;
-        let beside = (rect.width() - legend_space).min(rect.height()) / side;
-        let scale = if legend_space > 0.0 {
-            beside.max(0.85 * full).min(full)
-        } else {
-            full
-        };
-        let scale = scale.clamp(SCALE_RANGE.0, SCALE_RANGE.1);
-        let half_px = 0.5 * side * scale;
-        let slack = (0.5 * rect.width() - half_px).max(0.0);
-        let wanted = legend_space - (0.5 * rect.width() - half_px);
-        let shift = wanted.clamp(0.0, slack);
-        self.center = [-f64::from(shift / scale), 0.0];
-        self.scale = scale;
-        self.fitted = true;
-        self.fitted_size = rect.size();
-        self.adjusted = false;
-    }
-
-    fn zoom_about(&mut self, rect: Rect, factor: f32, anchor: Pos2) {
-        if !(factor.is_finite() && factor > 0.0) {
-            return;
-        }
-        self.adjusted = true;
-        let before = self.transform(rect);
-        let world = before.world_of(anchor);
-        self.scale = (self.scale * factor).clamp(SCALE_RANGE.0, SCALE_RANGE.1);
-        let offset = anchor - rect.center();
-        self.center = [
-            world[0] - f64::from(offset.x / self.scale),
-            world[1] + f64::from(offset.y / self.scale),
-        ];
-    }
-
-    fn transform(&self, rect: Rect) -> MapTransform {
-        MapTransform {
-            rect,
-            center: self.center,
-            scale: self.scale,
-        }
-    }
-}
-
-/// World (metres, y up) to screen (points, y down).
-#[derive(Clone, Copy, Debug)]
-struct MapTransform {
-    rect: Rect,
-    center: [f64; 2],
-    scale: f32,
-}
-
-impl MapTransform {
-    fn xy(&self, x: f64, y: f64) -> Pos2 {
-        let c = self.rect.center();
-        pos2(
-            c.x + ((x - self.center[0]) as f32) * self.scale,
-            c.y - ((y - self.center[1]) as f32) * self.scale,
-        )
-    }
-
-    fn v(&self, v: &Vector2<f64>) -> Pos2 {
-        self.xy(v[0], v[1])
-    }
-
-    fn pose(&self, p: &Pose2) -> Pos2 {
-        self.xy(p.x, p.y)
-    }
-
-    fn world_of(&self, p: Pos2) -> [f64; 2] {
-        let c = self.rect.center();
-        [
-            self.center[0] + f64::from((p.x - c.x) / self.scale),
-            self.center[1] - f64::from((p.y - c.y) / self.scale),
-        ]
-    }
-
-    /// Metres visible: `(x_min, x_max, y_min, y_max)`.
-    fn visible(&self) -> (f64, f64, f64, f64) {
-        let a = self.world_of(self.rect.left_bottom());
-        let b = self.world_of(self.rect.right_top());
-        (a[0], b[0], a[1], b[1])
-    }
-}
-
-/// The direction on screen of a world angle (y flips).
-fn screen_dir(angle: f64) -> egui::Vec2 {
-    let (sin, cos) = math::sin_cos(angle);
-    vec2(cos as f32, -(sin as f32))
-}
-
-fn finite(p: Pos2) -> bool {
-    p.x.is_finite() && p.y.is_finite()
-}
-
-/// Everything the map draws in one colour scheme.
-struct Colors {
-    truth: Color32,
-    background: Color32,
-    weak_text: Color32,
-    grid: Color32,
-}
-
-impl Colors {
-    fn of(ui: &egui::Ui) -> Self {
-        let dark = ui.visuals().dark_mode;
-        Self {
-            truth: palette::truth_color(dark),
-            background: ui.visuals().extreme_bg_color,
-            weak_text: ui.visuals().weak_text_color(),
-            grid: if dark {
-                Color32::from_gray(55)
-            } else {
-                Color32::from_gray(218)
-            },
-        }
-    }
-}
 
 /// The map toolbar, the map itself, its legend, tooltips and (when driving by
 /// hand) the drive pad.
@@ -196,41 +34,21 @@ pub fn map_ui(
     drive: &mut DriveState,
 ) {
     toolbar_ui(ui, view, opts, session);
-    let size = ui.available_size().max(vec2(120.0, 120.0));
-    let (rect, response) = ui.allocate_exact_size(size, Sense::click_and_drag());
-    response.widget_info(|| egui::WidgetInfo::labeled(egui::Role::Canvas, true, "Map"));
-    let resized = (rect.size() - view.fitted_size).length() > 1.0;
-    if !view.fitted || (resized && !view.adjusted) {
-        let legend_space = if opts.legend { view.legend_space } else { 0.0 };
-        view.fit(rect, session.world().size, legend_space);
-    }
-    apply_zoom_request(ui, view, rect);
-
-    // Pan by dragging, zoom by scrolling or pinching around the pointer.
-    if response.dragged() {
-        let d = response.drag_delta();
-        view.center[0] -= f64::from(d.x / view.scale);
-        view.center[1] += f64::from(d.y / view.scale);
-        view.adjusted = true;
-        opts.follow_robot = false;
-    }
-    if response.hovered() {
-        let (scroll, zoom) = ui.input(|i| (i.smooth_scroll_delta.y, i.zoom_delta()));
-        let factor = (scroll * 0.0025).exp() * zoom;
-        if (factor - 1.0).abs() > 1e-4 {
-            let anchor = response.hover_pos().unwrap_or(rect.center());
-            view.zoom_about(rect, factor, anchor);
-        }
-    }
-    if opts.follow_robot {
-        let truth = session.truth();
-        if truth.is_finite() {
-            view.center = [truth.x, truth.y];
-        }
-    }
-
-    let t = view.transform(rect);
-    let colors = Colors::of(ui);
+    let half = 0.5 * session.world().size;
+    let legend_space = if opts.legend { view.legend_space } else { 0.0 };
+    let truth = session.truth();
+    let mut follow = opts.follow_robot.then_some([truth.x, truth.y]);
+    let (response, t) = map_canvas::canvas_ui(
+        ui,
+        view,
+        [-half, -half, half, half],
+        legend_space,
+        &mut follow,
+        true,
+    );
+    opts.follow_robot = follow.is_some();
+    let rect = t.rect;
+    let colors = CanvasColors::of(ui);
     let painter = ui.painter_at(rect);
     painter.rect_filled(rect, 4.0, colors.background);
     draw_grid(&painter, &t, &colors);
@@ -278,48 +96,15 @@ pub fn map_ui(
     }
 }
 
-/// Zoom buttons act on the map rect, which is only known after the toolbar; the
-/// toolbar leaves the request in egui's temporary memory and this applies it.
-fn apply_zoom_request(ui: &egui::Ui, view: &mut MapView, rect: Rect) {
-    let request: Option<f32> = ui.data_mut(|d| d.remove_temp(zoom_request_id()));
-    if let Some(factor) = request {
-        view.zoom_about(rect, factor, rect.center());
-    }
-}
-
-fn zoom_request_id() -> egui::Id {
-    egui::Id::unique("slamlab_map_zoom_request")
-}
-
 fn toolbar_ui(
     ui: &mut egui::Ui,
     view: &mut MapView,
     opts: &mut ViewOptions,
     session: &LandmarkSession,
 ) {
-    let id = zoom_request_id();
     ui.horizontal_wrapped(|ui| {
         ui.label("Map:");
-        if ui
-            .button("−")
-            .on_hover_text("Zoom out (or scroll / pinch on the map)")
-            .clicked()
-        {
-            ui.data_mut(|d| d.insert_temp(id, 1.0_f32 / 1.25));
-        }
-        if ui
-            .button("+")
-            .on_hover_text("Zoom in (or scroll / pinch on the map)")
-            .clicked()
-        {
-            ui.data_mut(|d| d.insert_temp(id, 1.25_f32));
-        }
-        if ui
-            .button("Fit world")
-            .on_hover_text("Show the whole world square")
-            .clicked()
-        {
-            view.refit();
+        if map_canvas::zoom_buttons_ui(ui, view, "Fit world") {
             opts.follow_robot = false;
         }
         ui.checkbox(&mut opts.follow_robot, "Follow robot")
@@ -349,107 +134,6 @@ fn toolbar_ui(
         ui.toggle_value(&mut opts.many_runs, "Many runs")
             .on_hover_text("This scenario run again with many seeds: each filter's NEES averaged over the runs, against the band of a consistent filter");
     });
-}
-
-fn nice_step(min_step: f64) -> f64 {
-    if !(min_step.is_finite() && min_step > 0.0) {
-        return 1.0;
-    }
-    let power = math::powf(10.0, math::log10(min_step).floor());
-    for m in [1.0, 2.0, 5.0, 10.0] {
-        if m * power >= min_step {
-            return m * power;
-        }
-    }
-    10.0 * power
-}
-
-fn format_metres(value: f64, step: f64) -> String {
-    let decimals = (-math::log10(step).floor()).max(0.0) as usize;
-    let value = if value.abs() < step * 1e-6 {
-        0.0
-    } else {
-        value
-    };
-    format!("{value:.decimals$}")
-}
-
-fn draw_grid(painter: &egui::Painter, t: &MapTransform, colors: &Colors) {
-    let step = nice_step(f64::from(70.0 / t.scale));
-    let (x0, x1, y0, y1) = t.visible();
-    let stroke = Stroke::new(1.0, colors.grid);
-    let font = egui::FontId::proportional(10.5);
-    let mut x = (x0 / step).ceil() * step;
-    let mut count = 0;
-    while x <= x1 && count < 400 {
-        let p = t.xy(x, 0.0);
-        painter.vline(p.x, t.rect.y_range(), stroke);
-        painter.text(
-            pos2(p.x + 2.0, t.rect.bottom() - 2.0),
-            egui::Align2::LEFT_BOTTOM,
-            format_metres(x, step),
-            font.clone(),
-            colors.weak_text,
-        );
-        x += step;
-        count += 1;
-    }
-    let mut y = (y0 / step).ceil() * step;
-    count = 0;
-    while y <= y1 && count < 400 {
-        let p = t.xy(0.0, y);
-        painter.hline(t.rect.x_range(), p.y, stroke);
-        // The top left corner holds the axis name "y (m)".
-        if p.y < t.rect.top() + 34.0 {
-            y += step;
-            count += 1;
-            continue;
-        }
-        painter.text(
-            pos2(t.rect.left() + 2.0, p.y - 1.0),
-            egui::Align2::LEFT_BOTTOM,
-            format_metres(y, step),
-            font.clone(),
-            colors.weak_text,
-        );
-        y += step;
-        count += 1;
-    }
-}
-
-fn draw_scale_and_axes(painter: &egui::Painter, t: &MapTransform, colors: &Colors) {
-    let step = nice_step(f64::from(70.0 / t.scale));
-    let font = egui::FontId::proportional(12.0);
-    // Axis names.
-    painter.text(
-        t.rect.right_bottom() + vec2(-6.0, -16.0),
-        egui::Align2::RIGHT_BOTTOM,
-        "x (m)",
-        font.clone(),
-        colors.weak_text,
-    );
-    painter.text(
-        t.rect.left_top() + vec2(6.0, 4.0),
-        egui::Align2::LEFT_TOP,
-        "y (m)",
-        font.clone(),
-        colors.weak_text,
-    );
-    // Scale bar, bottom left above the x labels.
-    let length = (step as f32) * t.scale;
-    let start = t.rect.left_bottom() + vec2(40.0, -24.0);
-    let end = start + vec2(length, 0.0);
-    let stroke = Stroke::new(2.0, colors.truth);
-    painter.line_segment([start, end], stroke);
-    painter.line_segment([start - vec2(0.0, 4.0), start + vec2(0.0, 4.0)], stroke);
-    painter.line_segment([end - vec2(0.0, 4.0), end + vec2(0.0, 4.0)], stroke);
-    painter.text(
-        pos2((start.x + end.x) / 2.0, start.y - 4.0),
-        egui::Align2::CENTER_BOTTOM,
-        format!("{} m", format_metres(step, step)),
-        font,
-        colors.truth,
-    );
 }
 
 /// Points of a path on screen, thinned to at most [`MAX_PATH_POINTS`], with `last`
@@ -599,7 +283,7 @@ fn draw_world(
     t: &MapTransform,
     session: &LandmarkSession,
     opts: &ViewOptions,
-    colors: &Colors,
+    colors: &CanvasColors,
 ) {
     // World square.
     let half = session.world().size / 2.0;
@@ -711,7 +395,7 @@ fn draw_filters(
     t: &MapTransform,
     session: &LandmarkSession,
     opts: &ViewOptions,
-    colors: &Colors,
+    colors: &CanvasColors,
 ) -> bool {
     let highlight = updated_landmark(session);
     let mut drew_sigma_points = false;
@@ -1046,7 +730,7 @@ fn draw_legend(
     painter: &egui::Painter,
     placement: &LegendPlacement<'_>,
     session: &LandmarkSession,
-    colors: &Colors,
+    colors: &CanvasColors,
     opts: &ViewOptions,
     sigma_points_shown: bool,
 ) -> (Rect, usize) {
@@ -1275,37 +959,6 @@ fn hover_text(t: &MapTransform, session: &LandmarkSession, pointer: Pos2) -> Opt
 #[cfg(test)]
 mod tests {
     use super::*;
-
-    #[test]
-    fn nice_steps() {
-        assert!((nice_step(0.7) - 1.0).abs() < 1e-12);
-        assert!((nice_step(1.2) - 2.0).abs() < 1e-12);
-        assert!((nice_step(3.0) - 5.0).abs() < 1e-12);
-        assert!((nice_step(7.0) - 10.0).abs() < 1e-12);
-        assert!((nice_step(0.03) - 0.05).abs() < 1e-12);
-        assert!((nice_step(f64::NAN) - 1.0).abs() < 1e-12);
-        assert_eq!(format_metres(-4.0, 2.0), "-4");
-        assert_eq!(format_metres(0.5, 0.5), "0.5");
-    }
-
-    #[test]
-    fn transform_round_trips_and_zoom_keeps_the_anchor() {
-        let rect = Rect::from_min_size(pos2(10.0, 20.0), vec2(400.0, 300.0));
-        let mut view = MapView::default();
-        view.fit(rect, 16.0, 0.0);
-        let t = view.transform(rect);
-        let p = t.xy(3.0, -2.0);
-        let w = t.world_of(p);
-        assert!((w[0] - 3.0).abs() < 1e-4 && (w[1] + 2.0).abs() < 1e-4);
-        assert!(t.xy(0.0, 1.0).y < t.xy(0.0, 0.0).y, "y points up");
-        let anchor = pos2(100.0, 80.0);
-        let before = t.world_of(anchor);
-        view.zoom_about(rect, 2.0, anchor);
-        let after = view.transform(rect).world_of(anchor);
-        assert!((before[0] - after[0]).abs() < 1e-3 && (before[1] - after[1]).abs() < 1e-3);
-        view.zoom_about(rect, f32::NAN, anchor);
-        assert!(view.scale.is_finite());
-    }
 
     #[test]
     fn the_legend_moves_off_the_robot() {

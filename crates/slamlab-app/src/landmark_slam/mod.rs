@@ -100,7 +100,7 @@ pub struct LandmarkSlamLesson {
     pub view: ViewOptions,
     /// Manual driving.
     pub drive: drive::DriveState,
-    map_view: map::MapView,
+    map_view: crate::widgets::map_canvas::MapView,
     heatmap: heatmap::HeatmapState,
     /// The "Many runs" window's study.
     pub many_runs: many_runs::ManyRunsState,
@@ -174,7 +174,7 @@ impl LandmarkSlamLesson {
             time: TimeControl::default(),
             view: ViewOptions::default(),
             drive: drive::DriveState::default(),
-            map_view: map::MapView::default(),
+            map_view: crate::widgets::map_canvas::MapView::default(),
             heatmap: heatmap::HeatmapState::default(),
             many_runs: many_runs::ManyRunsState::default(),
             version: 0,

@@ -2,39 +2,10 @@
 //! landmark RMS error, robot-pose NEES and per-update NIS with their 95% bands.
 
 use crate::palette;
-use egui_plot::{HLine, Legend, Line, LineStyle, Plot, PlotPoints, Points, Span};
-use slamlab_core::math;
+pub(super) use crate::widgets::plots::{line_width, thin, time_plot, title_ui};
+use egui_plot::{HLine, Line, LineStyle, Plot, PlotPoints, Points, Span};
 use slamlab_core::stats::chi2_quantile;
 use slamlab_sim::LandmarkSession;
-
-/// Line width (or point radius) of the `index`-th filter's series: the first is drawn
-/// widest, so that where two filters agree the later line runs inside the earlier one
-/// and both stay visible (EKF blue around UKF orange).
-fn line_width(index: usize, base: f32) -> f32 {
-    base + 0.9 * (2.0 - index.min(2) as f32)
-}
-
-/// Longest series drawn, in points; longer ones are thinned evenly.
-const MAX_POINTS: usize = 3000;
-
-/// Thins `points` evenly to at most [`MAX_POINTS`], keeping the last one.
-pub(super) fn thin(points: Vec<[f64; 2]>) -> Vec<[f64; 2]> {
-    let points: Vec<[f64; 2]> = points
-        .into_iter()
-        .filter(|p| p[0].is_finite() && p[1].is_finite())
-        .collect();
-    let stride = points.len() / MAX_POINTS + 1;
-    if stride == 1 {
-        return points;
-    }
-    let last = points.len().saturating_sub(1);
-    points
-        .into_iter()
-        .enumerate()
-        .filter(|(i, _)| i % stride == 0 || *i == last)
-        .map(|(_, p)| p)
-        .collect()
-}
 
 /// The 95% two-sided chi-square band of one sample with `dof` degrees of freedom.
 pub fn band_95(dof: f64) -> (f64, f64) {
@@ -64,63 +35,6 @@ pub(super) fn band_ui(plot_ui: &mut egui_plot::PlotUi<'_>, lo: f64, hi: f64) {
                 .width(1.0),
         );
     }
-}
-
-fn title_ui(ui: &mut egui::Ui, title: &str, hover: &str) {
-    ui.label(egui::RichText::new(title).strong())
-        .on_hover_text(hover);
-}
-
-/// Grid steps for the time axis, `[minor, labelled, major]`, on a 1-2-5 sequence:
-/// `base_step` is the value 8 screen points span (egui_plot's finest grid), and tick
-/// labels need about 60 points (the x axis's minimum label spacing). The default
-/// powers-of-ten grid labels only 0 on a narrow plot of a short run.
-pub(super) fn time_axis_steps(base_step: f64) -> [f64; 3] {
-    let wanted = base_step.abs() * 60.0 / 8.0;
-    if !(wanted.is_finite() && wanted > 0.0) {
-        return [1.0, 2.0, 10.0];
-    }
-    let decade = math::powf(10.0, math::log10(wanted).floor());
-    let (label, minor, major) = match wanted / decade {
-        m if m <= 1.0 => (1.0, 0.5, 10.0),
-        m if m <= 2.0 => (2.0, 1.0, 10.0),
-        m if m <= 5.0 => (5.0, 1.0, 10.0),
-        _ => (10.0, 5.0, 100.0),
-    };
-    [minor * decade, label * decade, major * decade]
-}
-
-/// The label of a time-axis grid mark: as many decimals as its step needs (a 0.5 s
-/// mark reads "1.5", not "2"), and none before the run starts.
-pub(super) fn time_axis_label(mark: egui_plot::GridMark) -> String {
-    if !(mark.value.is_finite() && mark.step_size.is_finite() && mark.step_size > 0.0)
-        || mark.value < -1e-9
-    {
-        return String::new();
-    }
-    let decimals = (-math::log10(mark.step_size) - 1e-9).ceil().clamp(0.0, 6.0) as usize;
-    format!("{:.*}", decimals, mark.value.max(0.0))
-}
-
-/// A plot over time: the time axis with its 1-2-5 grid and labels, and the legend in
-/// the top left corner.
-pub(super) fn time_plot<'a>(id: &str, y_label: &str, height: f32) -> Plot<'a> {
-    Plot::new(id)
-        .height(height)
-        .x_axis_label("time (s)")
-        .y_axis_label(y_label.to_owned())
-        .legend(
-            Legend::default()
-                .position(egui_plot::Corner::LeftTop)
-                .text_style(egui::TextStyle::Small)
-                .background_alpha(0.55),
-        )
-        .x_grid_spacer(egui_plot::uniform_grid_spacer(|input| {
-            time_axis_steps(input.base_step_size)
-        }))
-        .x_axis_formatter(|mark, _range| time_axis_label(mark))
-        .include_x(0.0)
-        .allow_scroll(false)
 }
 
 /// The plots under the map share their time axis and always show the first second.
@@ -267,60 +181,6 @@ pub fn plots_ui(ui: &mut egui::Ui, session: &LandmarkSession) {
 #[cfg(test)]
 mod tests {
     use super::*;
-
-    #[test]
-    fn thinning_keeps_the_ends_and_bounds_the_count() {
-        let points: Vec<[f64; 2]> = (0..10_000).map(|i| [i as f64, 0.0]).collect();
-        let thinned = thin(points);
-        assert!(thinned.len() <= MAX_POINTS + 1);
-        assert_eq!(thinned.first().map(|p| p[0]), Some(0.0));
-        assert_eq!(thinned.last().map(|p| p[0]), Some(9999.0));
-    }
-
-    #[test]
-    fn time_axis_labels_land_60_points_or_more_apart_on_nested_steps() {
-        // 45 points per second (a 6 s run on a 280-point plot): base step 8/45 s.
-        assert_eq!(time_axis_steps(8.0 / 45.0), [1.0, 2.0, 10.0]);
-        // A 200 s run on the same plot: 1.4 points per second.
-        let [minor, label, major] = time_axis_steps(8.0 / 1.4);
-        assert_eq!([minor, label, major], [10.0, 50.0, 100.0]);
-        for base in [1e-3, 0.013, 0.17, 0.5, 2.2, 7.0, 31.0, 640.0] {
-            let [minor, label, major] = time_axis_steps(base);
-            let label_points = label / base * 8.0;
-            assert!(label_points >= 60.0 - 1e-9, "{base}: {label_points}");
-            assert!(
-                label_points < 60.0 * 2.6,
-                "{base}: labels {label_points} apart"
-            );
-            for (fine, coarse) in [(minor, label), (label, major)] {
-                let ratio = coarse / fine;
-                assert!(
-                    (ratio - ratio.round()).abs() < 1e-9,
-                    "{base}: {fine} vs {coarse}"
-                );
-            }
-        }
-        for bad in [0.0, f64::NAN, f64::INFINITY] {
-            assert_eq!(time_axis_steps(bad), [1.0, 2.0, 10.0]);
-        }
-    }
-
-    #[test]
-    fn time_labels_carry_the_decimals_of_their_step_and_start_at_zero() {
-        let label = |value, step_size| time_axis_label(egui_plot::GridMark { value, step_size });
-        assert_eq!(label(0.5, 0.5), "0.5");
-        assert_eq!(label(1.5, 0.5), "1.5");
-        assert_eq!(label(2.0, 0.5), "2.0");
-        assert_eq!(label(2.0, 1.0), "2");
-        assert_eq!(label(20.0, 10.0), "20");
-        assert_eq!(label(0.25, 0.05), "0.25");
-        assert_eq!(label(0.3, 0.1), "0.3");
-        assert_eq!(label(0.0, 1.0), "0");
-        assert_eq!(label(-1e-12, 1.0), "0");
-        assert_eq!(label(-1.0, 1.0), "");
-        assert_eq!(label(f64::NAN, 1.0), "");
-        assert_eq!(label(1.0, 0.0), "");
-    }
 
     #[test]
     fn bands_and_y_range() {

@@ -1,0 +1,7 @@
+//! Widgets every lesson shares: the map canvas (pan, zoom, follow, grid, scale
+//! bar), the parameter panel built from a scenario's parameter table, and plot
+//! helpers.
+
+pub mod map_canvas;
+pub mod params_panel;
+pub mod plots;
