@@ -212,8 +212,8 @@ pub enum FastSlamError {
         /// Time step.
         dt: f64,
     },
-    /// A measurement is NaN, infinite or has a negative range.
-    #[error("measurement (range {range}, bearing {bearing}) must be finite with range ≥ 0")]
+    /// A measurement is NaN or infinite.
+    #[error("measurement (range {range}, bearing {bearing}) must be finite")]
     InvalidMeasurement {
         /// Range.
         range: f64,
@@ -550,7 +550,9 @@ impl FastSlam {
         observation: &LandmarkObservation,
     ) -> Result<ParticleUpdateReport, FastSlamError> {
         let z = observation.z;
-        if !z.is_finite() || z.range < 0.0 {
+        // A negative range is a legitimate noisy reading of a landmark close by
+        // (Gaussian range noise); only a first sighting needs a positive one.
+        if !z.is_finite() {
             return Err(FastSlamError::InvalidMeasurement {
                 range: z.range,
                 bearing: z.bearing,
