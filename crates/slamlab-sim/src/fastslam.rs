@@ -443,7 +443,12 @@ pub fn fastslam_experiment(
         trials,
         steps,
         settings,
-        parameters: crate::metrics::parameters_json(scenario),
+        // The world's parameters; the lesson's estimator list and UKF settings do
+        // not apply here.
+        parameters: crate::metrics::parameters_json(scenario)
+            .into_iter()
+            .filter(|(k, _)| k != "estimator" && !k.starts_with("ukf-"))
+            .collect(),
         results,
     })
 }
