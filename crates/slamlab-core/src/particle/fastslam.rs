@@ -23,9 +23,12 @@
 //!   the motion noise `R` is singular (two control noises drive three pose
 //!   components). With several observations in one step the proposal is refined
 //!   by each in turn; the pose is drawn as `μ + L ε` with one standard-normal `ε`
-//!   per particle and step, and the landmark filters updated this step are
-//!   re-derived at the new draw, so after the last observation the particle is
-//!   exactly "one pose from the full proposal, every landmark updated at it".
+//!   per particle and step, so each measurement moves the draw towards where it
+//!   says the robot is. Each landmark is updated at the draw of its own
+//!   measurement; at the end of the step ([`FastSlam::resample`], or the next
+//!   prediction) the step's landmark updates are re-derived at the final draw, so
+//!   the particle is exactly "one pose from the full proposal, every landmark
+//!   updated at it". This costs one extra 2x2 update per measurement.
 //!
 //! Weights are kept as logarithms ([`super::normalize_log_weights`]). If every
 //! weight underflows to zero (or the lesson forces them to zero), the set falls
@@ -489,6 +492,7 @@ impl FastSlam {
         let model = self.config.motion_model;
         let (v_std, w_std) = (self.config.noise.v_std, self.config.noise.w_std);
         for p in &mut self.particles {
+            finish_step(p, &self.measurement_covariance);
             match self.config.version {
                 FastSlamVersion::V1 => {
                     let executed = if moving {
@@ -595,6 +599,9 @@ impl FastSlam {
     /// configured resampler (thesis `000` Sec. 2.3); survivors share their maps
     /// with their parents, and every weight becomes `1/M`.
     pub fn resample(&mut self) -> ResampleReport {
+        for p in &mut self.particles {
+            finish_step(p, &self.measurement_covariance);
+        }
         let m = self.particles.len();
         let n_eff_before = self.effective_sample_size();
         let n_eff_threshold = match self.config.resample {
@@ -627,6 +634,9 @@ impl FastSlam {
     /// Draws `count` particles by the current weights; returns how many distinct
     /// parents survived.
     fn draw(&mut self, count: usize) -> usize {
+        for p in &mut self.particles {
+            finish_step(p, &self.measurement_covariance);
+        }
         let mut indices = std::mem::take(&mut self.indices);
         resample_indices(
             self.config.resampler,
@@ -778,7 +788,8 @@ impl FastSlam {
     }
 
     /// The best particle's landmarks: id, mean and 2x2 covariance (the lesson
-    /// draws their ellipses).
+    /// draws their ellipses). In the middle of a FastSLAM 2.0 step, the landmarks
+    /// measured earlier in the step are as updated at that measurement's draw.
     pub fn best_landmarks(&self) -> Vec<LandmarkEkf> {
         self.landmarks_of(self.best_particle()).copied().collect()
     }
@@ -1087,30 +1098,54 @@ impl Context {
                 }
             }
         };
-        // Draw the pose from the refined proposal (the same ε all step) and
-        // re-derive this step's landmark updates at it.
+        // Draw the pose from the refined proposal (the same ε all step) and update
+        // this measurement's landmark at it. The landmarks updated earlier this
+        // step were updated at earlier draws; `finish_step` re-derives them at
+        // the final one.
         p.pose = proposal.draw();
-        let map = Arc::make_mut(&mut p.map);
-        for (k, r) in proposal.replays.iter().enumerate() {
-            let first = proposal.replays[..k].iter().all(|e| e.slot != r.slot);
-            let Some(current) = map.get(r.slot) else {
-                continue;
-            };
-            let from: LandmarkEkf = match (first, &r.prior) {
-                (true, Some(prior)) => **prior,
-                (false, _) => **current,
-                (true, None) => {
-                    if let Some(l) = initialize(&p.pose, &r.z, current.id, &self.q) {
-                        *Arc::make_mut(&mut map[r.slot]) = l;
-                    }
-                    continue;
-                }
-            };
-            let next = ekf_update(&p.pose, &from, &r.z, &self.q).map_or(from, |(l, _)| l);
-            *Arc::make_mut(&mut map[r.slot]) = next;
+        if let (Some(AssociationDecision::Matched { .. }), Some(last)) =
+            (outcome.1, proposal.replays.last())
+            && let Some(current) = p.map.get(last.slot)
+            && let Some((next, _)) = ekf_update(&p.pose, current, z, &self.q)
+        {
+            *Arc::make_mut(&mut Arc::make_mut(&mut p.map)[last.slot]) = next;
         }
         p.proposal = Some(proposal);
         outcome
+    }
+}
+
+/// Ends a FastSLAM 2.0 step for one particle: re-derives every landmark update
+/// of the step at the particle's final pose draw (from each landmark's filter
+/// before the step, in order), so the particle is exactly "one pose from the full
+/// proposal, every landmark updated at it". Only landmarks updated before the
+/// last draw change; nothing happens after a single measurement.
+fn finish_step(p: &mut Particle, q: &Matrix2<f64>) {
+    let Some(proposal) = p.proposal.as_mut() else {
+        return;
+    };
+    let replays = std::mem::take(&mut proposal.replays);
+    if replays.len() < 2 {
+        return;
+    }
+    let map = Arc::make_mut(&mut p.map);
+    for (k, r) in replays.iter().enumerate() {
+        let first = replays[..k].iter().all(|e| e.slot != r.slot);
+        let Some(current) = map.get(r.slot) else {
+            continue;
+        };
+        let from: LandmarkEkf = match (first, &r.prior) {
+            (true, Some(prior)) => **prior,
+            (false, _) => **current,
+            (true, None) => {
+                if let Some(l) = initialize(&p.pose, &r.z, current.id, q) {
+                    *Arc::make_mut(&mut map[r.slot]) = l;
+                }
+                continue;
+            }
+        };
+        let next = ekf_update(&p.pose, &from, &r.z, q).map_or(from, |(l, _)| l);
+        *Arc::make_mut(&mut map[r.slot]) = next;
     }
 }
 
@@ -1287,12 +1322,75 @@ mod tests {
     }
 
     #[test]
+    fn fastslam2_ends_a_step_with_every_landmark_updated_at_the_final_draw() {
+        let mut f = FastSlam::new(config(FastSlamVersion::V2, 4), Pose2::IDENTITY).unwrap();
+        let first = [
+            RangeBearing::new(3.0, 0.4),
+            RangeBearing::new(2.5, -0.3),
+            RangeBearing::new(4.0, 0.0),
+        ];
+        for (id, z) in first.iter().enumerate() {
+            f.update(&LandmarkObservation { id, z: *z }).unwrap();
+        }
+        f.resample();
+        let priors: Vec<Vec<LandmarkEkf>> = (0..4)
+            .map(|i| f.landmarks_of(i).copied().collect())
+            .collect();
+        f.predict(&Control::new(1.0, 0.2), 0.3).unwrap();
+        let second = [
+            RangeBearing::new(2.7, 0.35),
+            RangeBearing::new(2.3, -0.45),
+            RangeBearing::new(3.8, -0.1),
+        ];
+        for (id, z) in second.iter().enumerate() {
+            f.update(&LandmarkObservation { id, z: *z }).unwrap();
+        }
+        // Before the end of the step, the first landmark was updated at an
+        // earlier draw; after it, all three are updated at the final pose.
+        let poses: Vec<Pose2> = f.particles().map(|p| p.pose).collect();
+        let before = f.best_landmarks()[0];
+        let (at_final, _) = ekf_update(
+            &poses[f.best_particle()],
+            &priors[f.best_particle()][0],
+            &second[0],
+            &f.measurement_covariance,
+        )
+        .unwrap();
+        assert!(
+            (before.mean - at_final.mean).norm() > 1e-6,
+            "the first update was at another draw"
+        );
+        f.resample_policy_free_finish();
+        for i in 0..4 {
+            let after: Vec<LandmarkEkf> = f.landmarks_of(i).copied().collect();
+            for (k, z) in second.iter().enumerate() {
+                let (expected, _) =
+                    ekf_update(&poses[i], &priors[i][k], z, &f.measurement_covariance).unwrap();
+                assert!(
+                    (after[k].mean - expected.mean).norm() < 1e-12,
+                    "particle {i} landmark {k}"
+                );
+                assert!((after[k].covariance - expected.covariance).norm() < 1e-12);
+            }
+        }
+    }
+
+    #[test]
     fn psd_cholesky_handles_rank_deficient_matrices() {
         let b = nalgebra::Matrix3x2::new(1.0, 0.2, 0.5, -0.3, 0.0, 1.0);
         let a = b * b.transpose();
         let l = psd_cholesky3(&a);
         assert!((l * l.transpose() - a).norm() < 1e-12);
         assert_eq!(psd_cholesky3(&Matrix3::zeros()), Matrix3::zeros());
+    }
+
+    impl FastSlam {
+        /// Ends the step without resampling (tests only).
+        fn resample_policy_free_finish(&mut self) {
+            for p in &mut self.particles {
+                finish_step(p, &self.measurement_covariance);
+            }
+        }
     }
 
     fn run_steps(f: &mut FastSlam, steps: usize, force_zero: bool) {
