@@ -532,7 +532,7 @@ mod tests {
     }
 
     /// Issue 13: unknown association finds the right landmark count on a
-    /// well-separated layout (the teaching rings, 10 landmarks at least 2.4 m
+    /// well-separated layout (the teaching rings, 10 landmarks more than 2 m
     /// apart, with a precise sensor).
     #[test]
     fn maximum_likelihood_association_counts_the_landmarks() {
