@@ -7,7 +7,16 @@
 //! resampling adds. Multinomial has the binomial `M wᵢ (1 − wᵢ)`; low-variance
 //! (systematic) gives `⌊M wᵢ⌋` or `⌈M wᵢ⌉`, so its variance is at most ¼.
 
+use super::resample::{Resampler, resample_indices};
+use rand::SeedableRng;
+use rand_chacha::ChaCha8Rng;
 use serde::{Deserialize, Serialize};
+
+/// The most particles the lab holds (its per-particle histograms grow as `M²`).
+pub const MAX_LAB_PARTICLES: usize = 200;
+
+/// The most resamplings one [`ResamplingLab::resample`] call runs.
+pub const MAX_PRESSES: usize = 100_000;
 
 /// A preset set of weights for the lab.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, Serialize, Deserialize)]
@@ -217,6 +226,137 @@ impl CopyCountStats {
     }
 }
 
+/// One method's record in the lab.
+#[derive(Clone, Debug, PartialEq)]
+struct MethodRecord {
+    method: Resampler,
+    last: Vec<usize>,
+    stats: CopyCountStats,
+    /// `histograms[i][c]`: how often particle `i` got `c` copies.
+    histograms: Vec<Vec<u64>>,
+}
+
+/// The resampling lab's state (`lesson=resampling`): one weighted particle row,
+/// and for every method the copy counts of its latest resampling, the running
+/// mean and variance of each particle's copies, and each particle's histogram of
+/// copy counts. It owns its random generator, so a seed replays the same presses.
+#[derive(Clone, Debug)]
+pub struct ResamplingLab {
+    weights: Vec<f64>,
+    note: Option<String>,
+    rng: ChaCha8Rng,
+    records: Vec<MethodRecord>,
+    indices: Vec<usize>,
+}
+
+impl ResamplingLab {
+    /// A lab on `weights` (checked with [`sanitize_weights`]; more than
+    /// [`MAX_LAB_PARTICLES`] are cut, with a note).
+    pub fn new(weights: &[f64], seed: u64) -> Self {
+        let mut lab = Self {
+            weights: Vec::new(),
+            note: None,
+            rng: ChaCha8Rng::seed_from_u64(seed),
+            records: Vec::new(),
+            indices: Vec::new(),
+        };
+        lab.set_weights(weights);
+        lab
+    }
+
+    /// A lab on a preset with `m` particles (clamped to `1..=MAX_LAB_PARTICLES`).
+    pub fn from_preset(preset: WeightPreset, m: usize, seed: u64) -> Self {
+        Self::new(&preset.weights(m.clamp(1, MAX_LAB_PARTICLES)), seed)
+    }
+
+    /// Replaces the weights (as typed into the editor) and clears every record.
+    /// Returns the note about what had to be changed, if anything.
+    pub fn set_weights(&mut self, weights: &[f64]) -> Option<&str> {
+        let cut = weights.len() > MAX_LAB_PARTICLES;
+        let mut checked = sanitize_weights(&weights[..weights.len().min(MAX_LAB_PARTICLES)]);
+        if cut {
+            let msg = format!(
+                "the lab holds at most {MAX_LAB_PARTICLES} particles; the other {} were left out",
+                weights.len() - MAX_LAB_PARTICLES
+            );
+            checked.note = Some(match checked.note {
+                Some(n) => format!("{msg}; {n}"),
+                None => msg,
+            });
+        }
+        let m = checked.weights.len();
+        self.weights = checked.weights;
+        self.note = checked.note;
+        self.records = Resampler::ALL
+            .into_iter()
+            .map(|method| MethodRecord {
+                method,
+                last: Vec::new(),
+                stats: CopyCountStats::new(m),
+                histograms: vec![vec![0; m + 1]; m],
+            })
+            .collect();
+        self.note.as_deref()
+    }
+
+    /// The normalized weights.
+    pub fn weights(&self) -> &[f64] {
+        &self.weights
+    }
+
+    /// What the weight check changed, if anything.
+    pub fn note(&self) -> Option<&str> {
+        self.note.as_deref()
+    }
+
+    /// `M wᵢ`: the copies each particle gets on average from any unbiased method.
+    pub fn expected_copies(&self) -> Vec<f64> {
+        let m = self.weights.len() as f64;
+        self.weights.iter().map(|w| m * w).collect()
+    }
+
+    fn record(&self, method: Resampler) -> Option<&MethodRecord> {
+        self.records.iter().find(|r| r.method == method)
+    }
+
+    /// Resamples `times` times (at most [`MAX_PRESSES`]) with `method`, drawing
+    /// `M` particles each time.
+    pub fn resample(&mut self, method: Resampler, times: usize) {
+        let m = self.weights.len();
+        let Some(record) = self.records.iter_mut().find(|r| r.method == method) else {
+            return;
+        };
+        for _ in 0..times.min(MAX_PRESSES) {
+            resample_indices(method, &self.weights, m, &mut self.rng, &mut self.indices);
+            let counts = copy_counts(&self.indices, m);
+            record.stats.add(&counts);
+            for (h, &c) in record.histograms.iter_mut().zip(&counts) {
+                if let Some(slot) = h.get_mut(c) {
+                    *slot += 1;
+                }
+            }
+            record.last = counts;
+        }
+    }
+
+    /// The copy counts of `method`'s latest resampling (empty before the first).
+    pub fn last_copies(&self, method: Resampler) -> &[usize] {
+        self.record(method).map_or(&[], |r| &r.last)
+    }
+
+    /// `method`'s running copy-count statistics.
+    pub fn stats(&self, method: Resampler) -> Option<&CopyCountStats> {
+        self.record(method).map(|r| &r.stats)
+    }
+
+    /// How often particle `particle` got 0, 1, …, M copies under `method`.
+    pub fn histogram(&self, method: Resampler, particle: usize) -> &[u64] {
+        self.record(method)
+            .and_then(|r| r.histograms.get(particle))
+            .map_or(&[], |h| h.as_slice())
+    }
+}
+
 /// The copy-count variance of multinomial resampling averaged over particles,
 /// `(1/N) Σ M wᵢ (1 − wᵢ)` (binomial counts), for comparison with measurements.
 pub fn multinomial_variance(weights: &[f64], m: usize) -> f64 {
@@ -227,9 +367,6 @@ pub fn multinomial_variance(weights: &[f64], m: usize) -> f64 {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::particle::{Resampler, resample_indices};
-    use rand::SeedableRng;
-    use rand_chacha::ChaCha8Rng;
 
     #[test]
     fn presets_are_normalized_and_shaped_as_named() {
@@ -319,6 +456,49 @@ mod tests {
                 assert!(low_variance < 1e-12 && residual < 1e-12, "{variance:?}");
             }
         }
+    }
+
+    #[test]
+    fn the_lab_records_presses_per_method() {
+        let mut lab = ResamplingLab::from_preset(WeightPreset::OneDominant, 10, 1);
+        assert_eq!(lab.weights().len(), 10);
+        assert!(lab.last_copies(Resampler::Multinomial).is_empty());
+        lab.resample(Resampler::LowVariance, 1000);
+        lab.resample(Resampler::Multinomial, 1);
+        assert_eq!(lab.stats(Resampler::LowVariance).unwrap().trials(), 1000);
+        assert_eq!(lab.stats(Resampler::Multinomial).unwrap().trials(), 1);
+        assert_eq!(lab.stats(Resampler::Stratified).unwrap().trials(), 0);
+        // The dominant particle (M w = 8) gets exactly 8 copies from low-variance.
+        let h = lab.histogram(Resampler::LowVariance, 5);
+        assert_eq!(h[8], 1000);
+        assert_eq!(lab.last_copies(Resampler::LowVariance)[5], 8);
+        assert_eq!(
+            lab.last_copies(Resampler::Multinomial)
+                .iter()
+                .sum::<usize>(),
+            10
+        );
+        assert!((lab.expected_copies()[5] - 8.0).abs() < 1e-12);
+        // Bad editor input: a note and a safe row; the records start over.
+        let note = lab.set_weights(&[f64::NAN, -1.0, 0.0]).map(str::to_owned);
+        assert!(note.is_some_and(|n| n.contains("uniform")));
+        assert_eq!(lab.weights(), &[1.0 / 3.0; 3]);
+        assert_eq!(lab.stats(Resampler::LowVariance).unwrap().trials(), 0);
+        let big = vec![1.0; MAX_LAB_PARTICLES + 5];
+        assert!(
+            lab.set_weights(&big)
+                .is_some_and(|n| n.contains("left out"))
+        );
+        assert_eq!(lab.weights().len(), MAX_LAB_PARTICLES);
+        // The same seed replays the same presses.
+        let mut a = ResamplingLab::from_preset(WeightPreset::TwoModes, 20, 7);
+        let mut b = ResamplingLab::from_preset(WeightPreset::TwoModes, 20, 7);
+        a.resample(Resampler::Stratified, 5);
+        b.resample(Resampler::Stratified, 5);
+        assert_eq!(
+            a.last_copies(Resampler::Stratified),
+            b.last_copies(Resampler::Stratified)
+        );
     }
 
     #[test]

@@ -15,6 +15,6 @@ pub use fastslam::{
     FastSlam, FastSlamConfig, FastSlamError, FastSlamNoise, FastSlamVersion, LandmarkEkf,
     LandmarkObservation, ParticleUpdateReport, ParticleView, ResamplePolicy, ResampleReport,
 };
-pub use lab::{CopyCountStats, WeightPreset, copy_counts, sanitize_weights};
+pub use lab::{CopyCountStats, ResamplingLab, WeightPreset, copy_counts, sanitize_weights};
 pub use resample::{Resampler, resample_indices};
 pub use weights::{WeightError, effective_sample_size, normalize_log_weights};
