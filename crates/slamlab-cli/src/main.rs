@@ -21,11 +21,13 @@ use slamlab_sim::params::{self, Scenario};
 use slamlab_sim::{LandmarkScenario, LandmarkSession};
 use std::io::{IsTerminal, Write};
 
+mod particle_experiments;
+
 /// Lessons the CLI can run.
 const LESSONS: &[&str] = &["landmark-slam"];
 
 /// Experiments the CLI can run.
-const EXPERIMENTS: &[&str] = &["ekf-vs-ukf", "consistency"];
+const EXPERIMENTS: &[&str] = &["ekf-vs-ukf", "consistency", "fastslam", "resampling"];
 
 fn scenario_args() -> Vec<Arg> {
     PARAMS
@@ -111,6 +113,7 @@ fn cli() -> Command {
                         .help("consistency: ticks per trial (200 ticks of 0.1 s are one lap of the circle)"),
                 )
                 .arg(Arg::new("json").long("json").action(ArgAction::SetTrue).help("print one JSON object"))
+                .args(particle_experiments::args())
                 .arg(
                     Arg::new("csv")
                         .long("csv")
@@ -289,6 +292,17 @@ fn experiment(matches: &ArgMatches) -> Result<()> {
         .get_one::<String>("name")
         .map_or("ekf-vs-ukf", String::as_str);
     let given = |id: &str| matches.value_source(id) == Some(clap::parser::ValueSource::CommandLine);
+    match name {
+        "fastslam" => return particle_experiments::fastslam(matches),
+        "resampling" => return particle_experiments::resampling(matches),
+        _ => {}
+    }
+    if let Some(flag) = ["version", "particles", "method"]
+        .into_iter()
+        .find(|f| given(f))
+    {
+        bail!("--{flag} belongs to the fastslam and resampling experiments");
+    }
     if name == "consistency" {
         if given("noise-scale") {
             bail!(

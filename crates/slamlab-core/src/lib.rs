@@ -9,6 +9,7 @@
 //! metres and radians. A range-bearing measurement is ordered `[range, bearing]`
 //! as in the thesis (`000`, Eq. 3.37); the slides use `[bearing, range]`.
 
+pub mod association;
 pub mod geometry;
 pub mod kalman;
 pub mod linalg;

@@ -9,11 +9,13 @@
 
 pub mod consistency;
 pub mod experiments;
+pub mod fastslam;
 pub mod landmark_params;
 pub mod metrics;
 pub mod noise;
 pub mod params;
 pub mod presets;
+pub mod resampling;
 pub mod scenario;
 pub mod session;
 pub mod stepper;

@@ -6,8 +6,15 @@
 //! easily `e^-800`, which is zero in `f64`. Normalizing with log-sum-exp keeps
 //! every particle's relative weight however small the absolute numbers are.
 
+pub mod fastslam;
+pub mod lab;
 pub mod resample;
 pub mod weights;
 
+pub use fastslam::{
+    FastSlam, FastSlamConfig, FastSlamError, FastSlamNoise, FastSlamVersion, LandmarkEkf,
+    LandmarkObservation, ParticleUpdateReport, ParticleView, ResamplePolicy, ResampleReport,
+};
+pub use lab::{CopyCountStats, ResamplingLab, WeightPreset, copy_counts, sanitize_weights};
 pub use resample::{Resampler, resample_indices};
 pub use weights::{WeightError, effective_sample_size, normalize_log_weights};

@@ -111,9 +111,11 @@ pub fn resample_indices<R: Rng + ?Sized>(
             let mut residual = Vec::with_capacity(weights.len());
             for (i, &w) in weights.iter().enumerate() {
                 let expected = positive(w) / total * count as f64;
-                let copies = expected.floor();
+                // A product that is an integer up to rounding (M × 1/M) counts
+                // whole, so every particle gets at least ⌊M w⌋ copies.
+                let copies = (expected + 1e-9).floor();
                 out.extend(std::iter::repeat_n(i, copies as usize));
-                residual.push(expected - copies);
+                residual.push((expected - copies).max(0.0));
             }
             let remaining = count.saturating_sub(out.len());
             if remaining > 0 {

@@ -1,0 +1,151 @@
+//! `slamlab experiment fastslam` and `slamlab experiment resampling` as a user
+//! runs them.
+
+#![allow(clippy::panic, clippy::unwrap_used, clippy::expect_used)] // a failing test stops
+
+use std::process::Command;
+
+fn slamlab(args: &[&str]) -> (bool, String, String) {
+    let out = Command::new(env!("CARGO_BIN_EXE_slamlab"))
+        .args(args)
+        .output()
+        .unwrap_or_else(|e| panic!("running slamlab: {e}"));
+    (
+        out.status.success(),
+        String::from_utf8_lossy(&out.stdout).into_owned(),
+        String::from_utf8_lossy(&out.stderr).into_owned(),
+    )
+}
+
+fn run_json(args: &[&str]) -> serde_json::Value {
+    let (ok, stdout, stderr) = slamlab(args);
+    assert!(ok, "slamlab {args:?} failed: {stderr}");
+    assert_eq!(stdout.lines().count(), 1, "one JSON object on one line");
+    serde_json::from_str(&stdout).unwrap_or_else(|e| panic!("not JSON ({e}): {stdout}"))
+}
+
+#[test]
+fn fastslam_reports_one_entry_per_particle_count() {
+    let v = run_json(&[
+        "experiment",
+        "fastslam",
+        "--version",
+        "1",
+        "--particles",
+        "3,6",
+        "--trials",
+        "2",
+        "--steps",
+        "50",
+        "--seed",
+        "1",
+        "--json",
+    ]);
+    assert_eq!(v["experiment"], "fastslam");
+    assert_eq!(v["version"], 1);
+    let results = v["results"].as_array().unwrap();
+    assert_eq!(results.len(), 2);
+    for (r, m) in results.iter().zip([3, 6]) {
+        assert_eq!(r["particles"], m);
+        for key in ["robot_rmse", "landmark_rmse"] {
+            for stat in ["mean", "std"] {
+                let x = r[key][stat].as_f64().unwrap_or(f64::NAN);
+                assert!(x.is_finite() && x >= 0.0, "{key}.{stat} = {}", r[key][stat]);
+            }
+            // Half a lap of the teaching world: decimetres, not metres.
+            assert!(r[key]["mean"].as_f64().unwrap() < 1.5, "{key}: {}", r[key]);
+        }
+        let n_eff = r["mean_n_eff"].as_f64().unwrap();
+        assert!(n_eff >= 1.0 && n_eff <= m as f64, "{n_eff}");
+    }
+    assert!(
+        v["settings"]["world"]
+            .as_str()
+            .unwrap()
+            .contains("range_std")
+    );
+}
+
+#[test]
+fn resampling_reports_every_method_on_every_preset() {
+    let v = run_json(&[
+        "experiment",
+        "resampling",
+        "--method",
+        "all",
+        "--trials",
+        "2000",
+        "--json",
+    ]);
+    let results = v["results"].as_array().unwrap();
+    let names: Vec<&str> = results
+        .iter()
+        .map(|r| r["method"].as_str().unwrap())
+        .collect();
+    assert_eq!(
+        names,
+        ["multinomial", "low-variance", "stratified", "residual"]
+    );
+    for r in results {
+        let presets: Vec<&str> = r["presets"]
+            .as_array()
+            .unwrap()
+            .iter()
+            .map(|p| p["preset"].as_str().unwrap())
+            .collect();
+        assert_eq!(
+            presets,
+            ["one-dominant", "uniform", "two-modes", "many-tiny"]
+        );
+    }
+    let var = |m: usize, p: usize| {
+        results[m]["presets"][p]["copy_count_variance"]
+            .as_f64()
+            .unwrap()
+    };
+    for p in 0..4 {
+        assert!(
+            var(1, p) < var(0, p),
+            "low-variance below multinomial on preset {p}"
+        );
+    }
+}
+
+#[test]
+fn bad_input_is_refused_with_a_message() {
+    for (args, expected) in [
+        (
+            vec!["experiment", "fastslam", "--particles", "0"],
+            "at least one particle",
+        ),
+        (
+            vec!["experiment", "fastslam", "--particles", "5,x"],
+            "not a whole number",
+        ),
+        (
+            vec!["experiment", "fastslam", "--method", "all"],
+            "does not belong",
+        ),
+        (
+            vec!["experiment", "resampling", "--method", "systematic"],
+            "not a resampler",
+        ),
+        (
+            vec!["experiment", "resampling", "--landmarks", "5"],
+            "landmark-world parameter",
+        ),
+        (
+            vec!["experiment", "consistency", "--particles", "5"],
+            "belongs to the fastslam",
+        ),
+    ] {
+        let (ok, _, stderr) = slamlab(&args);
+        assert!(!ok, "{args:?} should fail");
+        assert!(stderr.contains(expected), "{args:?}: {stderr}");
+    }
+    let (ok, stdout, _) = slamlab(&["--version"]);
+    assert!(
+        ok && stdout.contains("slamlab"),
+        "the program's own --version still works"
+    );
+}
