@@ -9,6 +9,7 @@
 
 pub mod consistency;
 pub mod experiments;
+pub mod fusion;
 pub mod metrics;
 pub mod noise;
 pub mod params;

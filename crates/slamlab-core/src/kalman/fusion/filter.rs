@@ -6,7 +6,7 @@ use super::model::{self, STATE_SIZE, StateIndex, StateMatrix, StateVector};
 use super::{FusionConfig, FusionError, FusionStats, Measurement, PoseMode, Reading, SensorConfig};
 use crate::geometry::{Pose2, wrap_angle};
 use crate::math;
-use nalgebra::{DMatrix, DVector, Matrix3, Vector3};
+use nalgebra::{DMatrix, Matrix3, SMatrix, Vector3};
 use std::collections::VecDeque;
 
 /// What one update did, for the lesson's explanation panel.
@@ -498,6 +498,11 @@ impl FusionEkf {
     /// `ν = z − H x̄` (heading wrapped), `S = H P̄ Hᵀ + R`, optional Mahalanobis
     /// test `νᵀ S⁻¹ ν < threshold²`, `K = P̄ Hᵀ S⁻¹`, `x = x̄ + K ν`, and the Joseph
     /// form `P = (I − K H) P̄ (I − K H)ᵀ + K R Kᵀ`.
+    ///
+    /// `H` is 3x8 with a zero row for each component that is not fused; that
+    /// component's `R` row and column are those of the identity and its innovation
+    /// is zero, so it adds nothing to `S⁻¹`, `K`, `ν` or `P` (exactly), and every
+    /// matrix keeps a fixed size.
     fn update(
         &mut self,
         selected: &[usize],
@@ -507,40 +512,54 @@ impl FusionEkf {
         threshold: Option<f64>,
         pose_mode: Option<PoseMode>,
     ) -> Result<UpdateReport, &'static str> {
-        let m = selected.len();
-        let idx: Vec<usize> = selected.iter().map(|&k| variables[k] as usize).collect();
-        let mut innovation = DVector::zeros(m);
-        let mut s = DMatrix::zeros(m, m);
-        let mut r_sel = DMatrix::zeros(m, m);
-        for (a, &ka) in selected.iter().enumerate() {
-            let nu = z[ka] - self.mean[idx[a]];
-            innovation[a] = if variables[ka].is_angle() {
+        let mut used = [false; 3];
+        for &k in selected {
+            used[k] = true;
+        }
+        let mut h = SMatrix::<f64, 3, STATE_SIZE>::zeros();
+        let mut innovation = Vector3::zeros();
+        let mut r_used = Matrix3::identity();
+        for a in 0..3 {
+            if !used[a] {
+                continue;
+            }
+            let i = variables[a] as usize;
+            h[(a, i)] = 1.0;
+            let nu = z[a] - self.mean[i];
+            innovation[a] = if variables[a].is_angle() {
                 wrap_angle(nu)
             } else {
                 nu
             };
-            for (b, &kb) in selected.iter().enumerate() {
-                r_sel[(a, b)] = r[(ka, kb)];
-                s[(a, b)] = self.covariance[(idx[a], idx[b])] + r[(ka, kb)];
+            for b in 0..3 {
+                if used[b] {
+                    r_used[(a, b)] = r[(a, b)];
+                }
             }
         }
-        let Some(chol) = s.clone().cholesky() else {
+        let pht = self.covariance * h.transpose();
+        let s = h * pht + r_used;
+        let Some(chol) = s.cholesky() else {
             return Err("the innovation covariance is not positive definite");
         };
-        let s_inv_nu = chol.solve(&innovation);
-        let nis = innovation.dot(&s_inv_nu);
-        // P̄ Hᵀ: the selected columns of P̄.
-        let mut pht = DMatrix::zeros(STATE_SIZE, m);
-        for (a, &i) in idx.iter().enumerate() {
-            pht.set_column(a, &self.covariance.column(i));
-        }
+        let nis = innovation.dot(&chol.solve(&innovation));
         let gain = chol.solve(&pht.transpose()).transpose();
+        let m = selected.len();
+        let mut s_selected = DMatrix::zeros(m, m);
+        for (a, &ka) in selected.iter().enumerate() {
+            for (b, &kb) in selected.iter().enumerate() {
+                s_selected[(a, b)] = s[(ka, kb)];
+            }
+        }
         let report = UpdateReport {
             variables: selected.iter().map(|&k| variables[k]).collect(),
             measured: selected.iter().map(|&k| z[k]).collect(),
-            predicted: idx.iter().map(|&i| self.mean[i]).collect(),
-            innovation: innovation.iter().copied().collect(),
-            innovation_covariance: s,
+            predicted: selected
+                .iter()
+                .map(|&k| self.mean[variables[k] as usize])
+                .collect(),
+            innovation: selected.iter().map(|&k| innovation[k]).collect(),
+            innovation_covariance: s_selected,
             nis,
             gain_norm: gain.norm(),
             rejected: threshold.is_some_and(|t| !(nis < t * t)),
@@ -549,22 +568,18 @@ impl FusionEkf {
         if report.rejected {
             return Ok(report);
         }
-        let correction = &gain * &innovation;
-        let mut mean = self.mean;
-        for i in 0..STATE_SIZE {
-            mean[i] += correction[i];
-        }
+        let mut mean = self.mean + gain * innovation;
         mean[2] = wrap_angle(mean[2]);
-        // I − K H, then the Joseph form.
-        let mut ikh = DMatrix::<f64>::identity(STATE_SIZE, STATE_SIZE);
-        for (a, &i) in idx.iter().enumerate() {
-            for row in 0..STATE_SIZE {
-                ikh[(row, i)] -= gain[(row, a)];
+        let ikh = StateMatrix::identity() - gain * h;
+        // K R Kᵀ with the fused block of R (the unused rows of K are zero).
+        let mut r_fused = Matrix3::zeros();
+        for &a in selected {
+            for &b in selected {
+                r_fused[(a, b)] = r[(a, b)];
             }
         }
-        let p = DMatrix::from_column_slice(STATE_SIZE, STATE_SIZE, self.covariance.as_slice());
-        let joseph = &ikh * p * ikh.transpose() + &gain * r_sel * gain.transpose();
-        let mut covariance = StateMatrix::from_column_slice(joseph.as_slice());
+        let mut covariance =
+            ikh * self.covariance * ikh.transpose() + gain * r_fused * gain.transpose();
         covariance = 0.5 * (covariance + covariance.transpose());
         if !(mean.iter().all(|v| v.is_finite()) && covariance.iter().all(|v| v.is_finite())) {
             return Err("the update came out NaN or infinite");
