@@ -20,11 +20,13 @@ use slamlab_sim::params::{self, PARAMS};
 use slamlab_sim::{LandmarkScenario, LandmarkSession};
 use std::io::{IsTerminal, Write};
 
+mod fusion;
+
 /// Lessons the CLI can run.
 const LESSONS: &[&str] = &["landmark-slam"];
 
 /// Experiments the CLI can run.
-const EXPERIMENTS: &[&str] = &["ekf-vs-ukf", "consistency"];
+const EXPERIMENTS: &[&str] = &["ekf-vs-ukf", "consistency", "fusion"];
 
 fn scenario_args() -> Vec<Arg> {
     PARAMS
@@ -288,6 +290,9 @@ fn experiment(matches: &ArgMatches) -> Result<()> {
         .get_one::<String>("name")
         .map_or("ekf-vs-ukf", String::as_str);
     let given = |id: &str| matches.value_source(id) == Some(clap::parser::ValueSource::CommandLine);
+    if name == "fusion" {
+        return fusion::experiment(matches);
+    }
     if name == "consistency" {
         if given("noise-scale") {
             bail!(

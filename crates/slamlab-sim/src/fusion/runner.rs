@@ -291,7 +291,12 @@ impl ModeRun {
             if front.stamp.is_finite() && front.stamp > limit {
                 break;
             }
-            let before = self.filter.predicted_at(front.stamp).map(|(m, _)| m);
+            // The SLAM updates' jumps: the position predicted to the stamp, before.
+            let before = if front.sensor == SLAM {
+                self.filter.predicted_at(front.stamp).map(|(m, _)| m)
+            } else {
+                None
+            };
             let Some(report) = self.filter.step() else {
                 break;
             };
