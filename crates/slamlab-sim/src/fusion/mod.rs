@@ -16,6 +16,7 @@
 //! ```
 
 mod experiment;
+mod landmark_pose;
 mod runner;
 mod scenario;
 mod sensors;
@@ -29,6 +30,6 @@ pub use experiment::{
 pub use runner::{FusionMode, ModeRun, Rmse, SENSORS, Sample, SlamJump, filter_for, run_modes};
 pub use scenario::{
     DriveKind, DriveParams, FusionScenario, ImuParams, MAX_TRUTH_TICKS, OdometryParams,
-    ScenarioError, SlamParams,
+    ScenarioError, SlamParams, SlamSource,
 };
 pub use sensors::{Arrival, IMU, ODOMETRY, SLAM, SensorLog, TruthSample, simulate};

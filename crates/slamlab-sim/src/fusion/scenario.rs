@@ -145,6 +145,19 @@ impl Default for ImuParams {
     }
 }
 
+/// Where the SLAM pose comes from.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum SlamSource {
+    /// The truth plus white noise, map drift and relocalization jumps (the
+    /// parameters below).
+    #[default]
+    Simulated,
+    /// The landmark lesson's EKF-SLAM on the same drive (its estimate and
+    /// covariance; the noise, drift and outlier parameters below are then unused).
+    LandmarkEkf,
+}
+
 /// The SLAM pose (RTAB-Map's `PoseWithCovarianceStamped`).
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 #[serde(default)]
@@ -153,6 +166,8 @@ pub struct SlamParams {
     pub enabled: bool,
     /// Rate, Hz.
     pub rate: f64,
+    /// Where the poses come from.
+    pub source: SlamSource,
     /// White noise on x and y, metres.
     pub position_noise_std: f64,
     /// White noise on the heading, radians.
@@ -181,6 +196,7 @@ impl Default for SlamParams {
         Self {
             enabled: true,
             rate: 1.0,
+            source: SlamSource::Simulated,
             position_noise_std: 0.05,
             yaw_noise_std: 0.05,
             fuse_yaw: true,

@@ -3,7 +3,7 @@
 //! One [`SensorLog`] holds the truth and every reading of one seeded drive, so
 //! every fusion mode runs on exactly the same data.
 
-use super::scenario::{DriveKind, FusionScenario, ScenarioError};
+use super::scenario::{DriveKind, FusionScenario, ScenarioError, SlamSource};
 use nalgebra::{Matrix3, Vector3};
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
@@ -309,6 +309,15 @@ pub fn simulate(scenario: &FusionScenario) -> Result<SensorLog, ScenarioError> {
         let control = Control::new(0.5 * (v + v_new), 0.5 * (w + w_new));
         pose = MotionModel::ExactArc.predict(&pose, &control, dt);
         (v, w) = (v_new, w_new);
+    }
+    if s.source == SlamSource::LandmarkEkf {
+        super::landmark_pose::replace_slam_with_landmark_ekf(
+            &mut log,
+            scenario.seed,
+            s.rate,
+            s.latency,
+        );
+        return Ok(log);
     }
     log.measurements.sort_by(|a, b| {
         a.arrival
