@@ -65,8 +65,8 @@ impl FusionMode {
 /// The filter configured for `mode`: sensors at the fixed indices [`ODOMETRY`],
 /// [`IMU`], [`SLAM`]; wheel odometry fuses v_x, v_y (= 0) and the yaw rate; the IMU
 /// the yaw rate (and a_x with `fuse_acceleration`); the SLAM pose x, y (and ψ with
-/// `fuse_yaw`). The robot starts at the origin at rest, known to 1e-9 (robot_localization's
-/// default `initial_estimate_covariance`).
+/// `fuse_yaw`). The robot starts at the origin at rest, with the scenario's
+/// `initial_variance` on every variable (robot_localization's default 1e-9).
 pub fn filter_for(scenario: &FusionScenario, mode: FusionMode) -> Result<FusionEkf, FusionError> {
     let mut imu = vec![StateIndex::YawRate];
     if scenario.imu.fuse_acceleration {
@@ -105,7 +105,7 @@ pub fn filter_for(scenario: &FusionScenario, mode: FusionMode) -> Result<FusionE
         sensors,
         0.0,
         StateVector::zeros(),
-        StateMatrix::identity() * 1e-9,
+        StateMatrix::identity() * scenario.initial_variance,
     )
 }
 

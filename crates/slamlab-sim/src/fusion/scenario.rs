@@ -227,6 +227,10 @@ pub struct FusionScenario {
     /// The filter's process-noise densities (robot_localization's diagonal of
     /// `process_noise_covariance`, in state order x, y, ψ, v_x, v_y, ψ̇, a_x, a_y).
     pub process_noise: [f64; 8],
+    /// The filter's initial variance of every state variable (the robot starts at
+    /// the origin at rest, which the simulator knows exactly). robot_localization's
+    /// `initial_estimate_covariance` defaults to 1e-9.
+    pub initial_variance: f64,
     /// Rate at which the fused estimate is sampled for plots and RMSE, Hz
     /// (robot_localization's `frequency`; the thesis's 30 Hz).
     pub output_rate: f64,
@@ -245,6 +249,7 @@ impl Default for FusionScenario {
             slam: SlamParams::default(),
             // robot_localization's defaults for the planar variables.
             process_noise: [0.05, 0.05, 0.06, 0.025, 0.025, 0.02, 0.01, 0.01],
+            initial_variance: 1e-9,
             output_rate: 30.0,
             filter_delay: 0.0,
         }
@@ -444,6 +449,13 @@ impl FusionScenario {
                     expected,
                 });
             }
+        }
+        if !(self.initial_variance.is_finite() && self.initial_variance >= 0.0) {
+            return Err(ScenarioError::Invalid {
+                name: "initial_variance",
+                value: self.initial_variance,
+                expected: non_negative,
+            });
         }
         if !(self.filter_delay.is_finite() && self.filter_delay >= 0.0) {
             return Err(ScenarioError::Invalid {
