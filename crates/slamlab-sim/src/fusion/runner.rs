@@ -240,20 +240,20 @@ impl ModeRun {
     /// Advances the run to time `t`: hands the filter every reading that has
     /// arrived by then, applies those stamped up to `t − filter_delay` one at a time
     /// (calling `on_step` with each report), and samples the estimate at every
-    /// output time up to `t`.
+    /// output time up to `t` (and up to the end of the drive; `t` may be infinite).
     pub fn advance_to(&mut self, log: &SensorLog, t: f64, mut on_step: impl FnMut(&StepReport)) {
+        let end = log.duration();
         loop {
             let output_t = self.next_output as f64 * self.output_period;
-            let target = output_t.min(t);
-            self.feed(log, target, &mut on_step);
-            if output_t <= t {
-                self.sample(log, output_t);
-                self.next_output += 1;
-            } else {
+            if !(output_t <= t && output_t <= end) {
                 break;
             }
+            self.feed(log, output_t, &mut on_step);
+            self.sample(log, output_t);
+            self.next_output += 1;
         }
-        self.now = self.now.max(t);
+        self.feed(log, t, &mut on_step);
+        self.now = self.now.max(if t.is_finite() { t } else { end });
     }
 
     /// Runs to the end of the drive.
@@ -273,7 +273,55 @@ impl ModeRun {
         }
     }
 
-    fn feed(&mut self, log: &SensorLog, t: f64, on_step: &mut impl FnMut(&StepReport)) {
+    /// Applies exactly one measurement, the next one due (in arrival order, each
+    /// applied once the filter's delay has passed), sampling the outputs on the
+    /// way: the lesson's "step one measurement". `None` when every reading of the
+    /// drive has been applied (the remaining outputs are then sampled). Stepping
+    /// to the end gives the same samples as [`ModeRun::run_to_end`].
+    pub fn step_one(&mut self, log: &SensorLog) -> Option<StepReport> {
+        let end = log.duration();
+        loop {
+            self.receive(log, self.now);
+            if let Some(report) = self.apply_ready_one(self.now) {
+                return Some(report);
+            }
+            let next_arrival = log.measurements.get(self.next_arrival).map(|a| a.arrival);
+            let next_release = self
+                .filter
+                .pending()
+                .next()
+                .map(|m| m.stamp + self.filter_delay);
+            let t = match (next_arrival, next_release) {
+                (Some(a), Some(r)) => a.min(r),
+                (Some(a), None) => a,
+                (None, Some(r)) => r,
+                (None, None) => {
+                    self.sample_until(log, end, true);
+                    self.now = self.now.max(end);
+                    return None;
+                }
+            };
+            let t = t.max(self.now);
+            self.sample_until(log, t.min(end), t > end);
+            self.now = t;
+        }
+    }
+
+    /// Samples every output time before `t` (and at `t` when `inclusive`).
+    fn sample_until(&mut self, log: &SensorLog, t: f64, inclusive: bool) {
+        loop {
+            let output_t = self.next_output as f64 * self.output_period;
+            if output_t < t || (inclusive && output_t <= t) {
+                self.sample(log, output_t);
+                self.next_output += 1;
+            } else {
+                break;
+            }
+        }
+    }
+
+    /// Hands the filter every reading (of a sensor in use) that has arrived by `t`.
+    fn receive(&mut self, log: &SensorLog, t: f64) {
         while let Some(a) = log.measurements.get(self.next_arrival) {
             if a.arrival > t {
                 break;
@@ -283,33 +331,37 @@ impl ModeRun {
             }
             self.next_arrival += 1;
         }
-        let limit = t - self.filter_delay;
-        loop {
-            let Some(front) = self.filter.pending().next().copied() else {
-                break;
-            };
-            if front.stamp.is_finite() && front.stamp > limit {
-                break;
-            }
-            // The SLAM updates' jumps: the position predicted to the stamp, before.
-            let before = if front.sensor == SLAM {
-                self.filter.predicted_at(front.stamp).map(|(m, _)| m)
-            } else {
-                None
-            };
-            let Some(report) = self.filter.step() else {
-                break;
-            };
-            if front.sensor == SLAM
-                && let (Outcome::Updated(u), Some(before)) = (&report.outcome, before)
-                && !u.rejected
-            {
-                let after = self.filter.mean();
-                self.slam_jumps.push(SlamJump {
-                    t: front.stamp,
-                    jump: ((after[0] - before[0]).powi(2) + (after[1] - before[1]).powi(2)).sqrt(),
-                });
-            }
+    }
+
+    /// Applies the earliest queued measurement if its delay has passed by `now`.
+    fn apply_ready_one(&mut self, now: f64) -> Option<StepReport> {
+        let front = self.filter.pending().next().copied()?;
+        if front.stamp.is_finite() && front.stamp + self.filter_delay > now {
+            return None;
+        }
+        // The SLAM updates' jumps: the position predicted to the stamp, before.
+        let before = if front.sensor == SLAM {
+            self.filter.predicted_at(front.stamp).map(|(m, _)| m)
+        } else {
+            None
+        };
+        let report = self.filter.step()?;
+        if front.sensor == SLAM
+            && let (Outcome::Updated(u), Some(before)) = (&report.outcome, before)
+            && !u.rejected
+        {
+            let after = self.filter.mean();
+            self.slam_jumps.push(SlamJump {
+                t: front.stamp,
+                jump: ((after[0] - before[0]).powi(2) + (after[1] - before[1]).powi(2)).sqrt(),
+            });
+        }
+        Some(report)
+    }
+
+    fn feed(&mut self, log: &SensorLog, t: f64, on_step: &mut impl FnMut(&StepReport)) {
+        self.receive(log, t);
+        while let Some(report) = self.apply_ready_one(t) {
             on_step(&report);
         }
     }

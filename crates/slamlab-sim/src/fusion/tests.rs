@@ -292,3 +292,38 @@ fn the_slam_pose_can_come_from_the_landmark_lessons_ekf_slam() {
     let (rel, diff) = (runs[0].max_slam_jump(), runs[1].max_slam_jump());
     assert!((0.01..0.03).contains(&rel) && diff < 5e-4, "{rel} {diff}");
 }
+
+#[test]
+fn stepping_one_measurement_at_a_time_gives_the_same_run() {
+    for (latency, delay) in [(0.0, 0.0), (0.3, 0.35)] {
+        let mut s = short(6, 12.0);
+        s.slam.latency = latency;
+        s.filter_delay = delay;
+        let log = simulate(&s).unwrap();
+        let mut whole = ModeRun::new(&s, FusionMode::Relative).unwrap();
+        let mut whole_steps = Vec::new();
+        whole.advance_to(&log, f64::INFINITY, |r| {
+            whole_steps.push((r.sensor, r.stamp))
+        });
+        let mut stepped = ModeRun::new(&s, FusionMode::Relative).unwrap();
+        let mut steps = Vec::new();
+        while let Some(r) = stepped.step_one(&log) {
+            steps.push((r.sensor, r.stamp));
+        }
+        assert_eq!(steps, whole_steps);
+        assert_eq!(steps.len(), 601 + 1201 + 13);
+        assert_eq!(stepped.filter().mean(), whole.filter().mean());
+        let (a, b) = (stepped.samples(), whole.samples());
+        assert_eq!((a.len(), b.len()), (361, 361));
+        for (x, y) in a.iter().zip(b) {
+            assert_eq!(x.t, y.t);
+            assert!(
+                (x.estimate.x - y.estimate.x).abs() < 1e-12,
+                "{} {}",
+                x.t,
+                latency
+            );
+        }
+        assert_eq!(stepped.filter().stats().out_of_order, 0);
+    }
+}
