@@ -21,13 +21,20 @@ use slamlab_sim::params::{self, Scenario};
 use slamlab_sim::{LandmarkScenario, LandmarkSession};
 use std::io::{IsTerminal, Write};
 
+mod fusion;
 mod particle_experiments;
 
 /// Lessons the CLI can run.
 const LESSONS: &[&str] = &["landmark-slam"];
 
 /// Experiments the CLI can run.
-const EXPERIMENTS: &[&str] = &["ekf-vs-ukf", "consistency", "fastslam", "resampling"];
+const EXPERIMENTS: &[&str] = &[
+    "ekf-vs-ukf",
+    "consistency",
+    "fastslam",
+    "resampling",
+    "fusion",
+];
 
 fn scenario_args() -> Vec<Arg> {
     PARAMS
@@ -295,6 +302,7 @@ fn experiment(matches: &ArgMatches) -> Result<()> {
     match name {
         "fastslam" => return particle_experiments::fastslam(matches),
         "resampling" => return particle_experiments::resampling(matches),
+        "fusion" => return fusion::experiment(matches),
         _ => {}
     }
     if let Some(flag) = ["version", "particles", "method"]

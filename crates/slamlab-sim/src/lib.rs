@@ -10,6 +10,7 @@
 pub mod consistency;
 pub mod experiments;
 pub mod fastslam;
+pub mod fusion;
 pub mod landmark_params;
 pub mod metrics;
 pub mod noise;

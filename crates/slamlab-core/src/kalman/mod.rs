@@ -6,6 +6,7 @@
 //! them, and a read-only view for drawing.
 
 mod ekf_slam;
+pub mod fusion;
 mod state;
 mod ukf_slam;
 pub mod unscented;
