@@ -10,10 +10,12 @@
 //! as in the thesis (`000`, Eq. 3.37); the slides use `[bearing, range]`.
 
 pub mod geometry;
+pub mod grid;
 pub mod kalman;
 pub mod linalg;
 pub mod math;
 pub mod motion;
+pub mod odometry;
 pub mod particle;
 pub mod range_bearing;
 pub mod stats;

@@ -6,8 +6,19 @@
 //! easily `e^-800`, which is zero in `f64`. Normalizing with log-sum-exp keeps
 //! every particle's relative weight however small the absolute numbers are.
 
+pub mod cluster;
+pub mod mcl;
 pub mod resample;
+pub mod sensor;
 pub mod weights;
 
+pub use cluster::{ClusterBins, PoseEstimate, heaviest_cluster};
+pub use mcl::{
+    LocalizationMap, MAX_PARTICLES, Mcl, MclConfig, MclError, Particle, ParticleFlag,
+    PredictReport, ResampleReport, WeightReport,
+};
 pub use resample::{Resampler, resample_indices};
+pub use sensor::{
+    BeamLikelihood, BeamModel, LikelihoodFieldModel, MeasurementModel, PreparedModel, Scan,
+};
 pub use weights::{WeightError, effective_sample_size, normalize_log_weights};
