@@ -9,6 +9,8 @@
 
 pub mod consistency;
 pub mod experiments;
+pub mod grid;
+pub mod localization;
 pub mod metrics;
 pub mod noise;
 pub mod params;
