@@ -533,7 +533,8 @@ fn next_token<'a>(bytes: &'a [u8], pos: &mut usize) -> Option<&'a str> {
 pub fn decode_png(bytes: &[u8]) -> Result<GreyImage, MapError> {
     // The IHDR chunk comes first: signature (8), length (4), "IHDR" (4), then
     // width and height. Check the size before the decoder allocates anything.
-    if let (Some(b"IHDR"), Some(w), Some(h)) = (bytes.get(12..16), bytes.get(16..20), bytes.get(20..24))
+    if let (Some(b"IHDR"), Some(w), Some(h)) =
+        (bytes.get(12..16), bytes.get(16..20), bytes.get(20..24))
     {
         let w = u32::from_be_bytes([w[0], w[1], w[2], w[3]]) as usize;
         let h = u32::from_be_bytes([h[0], h[1], h[2], h[3]]) as usize;

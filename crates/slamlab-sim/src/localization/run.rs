@@ -262,12 +262,7 @@ impl MclRun {
                 }
             })
             .collect();
-        let explorer = Explorer::new(
-            map.grid(),
-            radius,
-            scenario.explorer,
-            stream_seed(seed, 4),
-        );
+        let explorer = Explorer::new(map.grid(), radius, scenario.explorer, stream_seed(seed, 4));
         Ok(Self {
             robot: GridRobot {
                 pose: start,
@@ -319,7 +314,8 @@ impl MclRun {
                     for f in self.filters.iter_mut().filter(|f| f.due) {
                         let report = f.mcl.weight(scan);
                         if let Some(note) = &report.note {
-                            self.notes.push(format!("tick {}: {}: {note}", self.tick, f.name));
+                            self.notes
+                                .push(format!("tick {}: {}: {note}", self.tick, f.name));
                         }
                         f.last_weight = Some(report);
                     }
