@@ -91,6 +91,21 @@ const NUMBERS: &[(&str, &str, Setter)] = &[
         |s, v| s.resample_neff_fraction = Some(v),
     ),
     ("robot-radius", "robot radius, m", |s, v| s.robot_radius = v),
+    (
+        "recovery-alpha-slow",
+        "Augmented MCL long-term rate",
+        |s, v| s.recovery_alpha_slow = v,
+    ),
+    (
+        "recovery-alpha-fast",
+        "Augmented MCL short-term rate",
+        |s, v| s.recovery_alpha_fast = v,
+    ),
+    (
+        "kidnap-distance",
+        "a kidnap moves the robot at least this far, m",
+        |s, v| s.kidnap_distance = v,
+    ),
     ("lidar-max-range", "lidar maximum range, m", |s, v| {
         s.lidar.max_range = v
     }),
@@ -135,7 +150,7 @@ pub fn command() -> Command {
             Arg::new("estimator")
                 .long("estimator")
                 .default_value("mcl")
-                .help("comma-separated estimators: mcl"),
+                .help("comma-separated estimators: mcl, amcl, cmcl, acmcl"),
         )
         .arg(
             Arg::new("particles")
@@ -194,6 +209,12 @@ pub fn command() -> Command {
                 .long("lidar-beams")
                 .value_parser(clap::value_parser!(u64).range(1..=10_000))
                 .help("lidar beams per scan (default 180)"),
+        )
+        .arg(
+            Arg::new("kidnap-at")
+                .long("kidnap-at")
+                .value_parser(clap::value_parser!(u64))
+                .help("kidnap the robot at this tick"),
         )
         .arg(
             Arg::new("json")
@@ -274,10 +295,11 @@ fn scenario_from(m: &ArgMatches) -> Result<MclScenario> {
     {
         match LocalizationEstimator::from_name(name.trim()) {
             Some(e) => estimators.push(e),
-            None => bail!("--estimator '{name}' is not one of: mcl"),
+            None => bail!("--estimator '{name}' is not one of: mcl, amcl, cmcl, acmcl"),
         }
     }
     s.estimators = estimators;
+    s.kidnap_at = m.get_one::<u64>("kidnap-at").copied();
     if let Some(t) = m.get_one::<String>("laser-model-type") {
         s.laser_model_type = if t == "beam" {
             LaserModelType::Beam
@@ -380,6 +402,193 @@ pub fn run(args: &[OsString]) -> Result<()> {
         writeln!(
             out,
             "converged: within 0.5 m and 0.3 rad of the truth for 10 consecutive updates (the tick of the first). {collisions} collision(s)."
+        )?;
+    }
+    Ok(())
+}
+
+/// Whether the command line is `slamlab experiment kidnap ...`.
+pub fn is_kidnap_experiment(args: &[OsString]) -> bool {
+    args.get(1).is_some_and(|a| a == "experiment") && args.get(2).is_some_and(|a| a == "kidnap")
+}
+
+/// The `experiment kidnap` command line.
+pub fn experiment_command() -> Command {
+    let mut cmd = Command::new("kidnap")
+        .bin_name("slamlab experiment kidnap")
+        .about("The kidnapped robot (thesis 000 Tables 5.1 and 5.2): updates to recover after a kidnap, and the fraction of particles randomized on the way")
+        .arg(Arg::new("map").long("map").default_value("maze").help("maze, office, or a map_server YAML (or a PGM/PNG with --resolution)"))
+        .arg(Arg::new("resolution").long("resolution").value_parser(clap::value_parser!(f64)).help("metres per pixel, for a lone image"))
+        .arg(Arg::new("particles").long("particles").default_value("500,1000,1500,2000,2500").help("comma-separated particle counts"))
+        .arg(Arg::new("estimator").long("estimator").default_value("amcl,acmcl").help("comma-separated: mcl, amcl, cmcl, acmcl"))
+        .arg(Arg::new("trials").long("trials").value_parser(clap::value_parser!(u64).range(1..=10_000)).default_value("20").help("trials per (estimator, particle count); trial i uses seed + i"))
+        .arg(Arg::new("seed").long("seed").value_parser(clap::value_parser!(u64)).default_value("1").help("first seed"))
+        .arg(Arg::new("limit").long("limit").value_parser(clap::value_parser!(u64).range(10..=100_000)).default_value("500").help("updates after the kidnap before a trial counts as a failure"))
+        .arg(Arg::new("json").long("json").action(ArgAction::SetTrue).help("print one JSON object"))
+        .arg(Arg::new("csv").long("csv").value_name("DIR").value_parser(clap::value_parser!(std::path::PathBuf)).help("write per-trial rows to DIR/kidnap_trials.csv"));
+    for (name, help, _) in NUMBERS {
+        cmd = cmd.arg(
+            Arg::new(*name)
+                .long(*name)
+                .value_name("VALUE")
+                .allow_hyphen_values(true)
+                .help(*help),
+        );
+    }
+    cmd
+}
+
+/// Runs `slamlab experiment kidnap`.
+pub fn experiment(args: &[OsString]) -> Result<()> {
+    use slamlab_sim::localization::experiment::{KidnapProtocol, kidnap_trial, summarize};
+    let mut argv = vec![OsString::from("slamlab experiment kidnap")];
+    argv.extend(args.iter().skip(3).cloned());
+    let m = experiment_command()
+        .try_get_matches_from(argv)
+        .unwrap_or_else(|e| e.exit());
+    let mut base = MclScenario::default();
+    for (name, _, set) in NUMBERS {
+        if let Some(text) = m.get_one::<String>(name) {
+            let v: f64 = text
+                .parse()
+                .ok()
+                .filter(|v: &f64| v.is_finite())
+                .with_context(|| format!("--{name} '{text}' is not a finite number"))?;
+            set(&mut base, v);
+        }
+    }
+    let spec = m.get_one::<String>("map").map_or("maze", String::as_str);
+    let (grid, name) = read_map(spec, m.get_one::<f64>("resolution").copied())?;
+    base.map = name.clone();
+    let mut counts = Vec::new();
+    for p in m
+        .get_one::<String>("particles")
+        .map_or("", String::as_str)
+        .split(',')
+    {
+        let n: usize = p
+            .trim()
+            .parse()
+            .ok()
+            .filter(|n| *n > 0)
+            .with_context(|| format!("--particles '{p}' is not a positive whole number"))?;
+        if n > slamlab_core::particle::MAX_PARTICLES {
+            bail!(
+                "--particles {n} is more than {}",
+                slamlab_core::particle::MAX_PARTICLES
+            );
+        }
+        counts.push(n);
+    }
+    let mut estimators = Vec::new();
+    for e in m
+        .get_one::<String>("estimator")
+        .map_or("", String::as_str)
+        .split(',')
+    {
+        match LocalizationEstimator::from_name(e.trim()) {
+            Some(x) => estimators.push(x),
+            None => bail!("--estimator '{e}' is not one of: mcl, amcl, cmcl, acmcl"),
+        }
+    }
+    let trials = m.get_one::<u64>("trials").copied().unwrap_or(20);
+    let seed = m.get_one::<u64>("seed").copied().unwrap_or(1);
+    let protocol = KidnapProtocol {
+        limit_updates: m.get_one::<u64>("limit").copied().unwrap_or(500) as usize,
+        kidnap_distance: base.kidnap_distance,
+        ..Default::default()
+    };
+    let total = estimators.len() * counts.len() * trials as usize;
+    let mut done = 0;
+    let mut results = Vec::new();
+    let mut rows = Vec::new();
+    for &est in &estimators {
+        for &n in &counts {
+            let mut ts = Vec::new();
+            for i in 0..trials {
+                let t = kidnap_trial(&base, &grid, est, n, seed.wrapping_add(i), &protocol)
+                    .with_context(|| format!("map {name}"))?;
+                done += 1;
+                eprint!("\rkidnap: {done}/{total} trials");
+                ts.push(t);
+            }
+            results.push(summarize(est.name(), n, &ts));
+            rows.extend(ts);
+        }
+    }
+    eprintln!();
+    if let Some(dir) = m.get_one::<std::path::PathBuf>("csv") {
+        std::fs::create_dir_all(dir).with_context(|| format!("cannot create {}", dir.display()))?;
+        let mut csv =
+            String::from("estimator,particles,seed,kidnap_tick,steps_to_converge,recovery_ratio\n");
+        for t in &rows {
+            csv.push_str(&format!(
+                "{},{},{},{},{},{}\n",
+                t.estimator,
+                t.particles,
+                t.seed,
+                t.kidnap_tick.map_or(String::new(), |k| k.to_string()),
+                t.steps_to_converge.map_or(String::new(), |k| k.to_string()),
+                t.recovery_ratio
+            ));
+        }
+        let path = dir.join("kidnap_trials.csv");
+        std::fs::write(&path, csv).with_context(|| format!("cannot write {}", path.display()))?;
+    }
+    let protocol_json = json!({
+        "start": "filter initialized around the true pose (initial_cov_*), the robot explores",
+        "kidnap": format!("after {} filter updates, to a random free pose at least {} m away; the filter is not told", protocol.tracked_updates_before_kidnap, protocol.kidnap_distance),
+        "converged": format!("within {} m and {} rad of the truth for {} consecutive updates", protocol.converged_position, protocol.converged_heading, protocol.converged_updates),
+        "steps_to_converge": "filter updates from the kidnap to the first of those updates",
+        "limit_updates": protocol.limit_updates,
+        "recovery_ratio": "mean fraction of particles injected or regenerated per update between the kidnap and convergence (Table 5.2)",
+        "trials": trials,
+        "seeds": format!("{seed} .. {}", seed + trials - 1),
+    });
+    let out = std::io::stdout();
+    let mut out = out.lock();
+    if m.get_flag("json") {
+        let v = json!({
+            "experiment": "kidnap",
+            "map": {"name": name, "width": grid.width(), "height": grid.height(), "resolution": grid.resolution()},
+            "parameters": serde_json::to_value(&base)?,
+            "protocol": protocol_json,
+            "results": results,
+        });
+        writeln!(out, "{}", serde_json::to_string_pretty(&v)?)?;
+    } else {
+        writeln!(
+            out,
+            "SLAM Lab: kidnapped robot on {name}, {trials} trials per row, seeds from {seed}"
+        )?;
+        writeln!(out)?;
+        writeln!(
+            out,
+            "{:<8} {:>9} {:>8} {:>8} {:>8} {:>9} {:>10}",
+            "filter", "particles", "median", "mean", "p90", "failures", "recovery"
+        )?;
+        let f = |v: Option<f64>| v.map_or("-".to_owned(), |v| format!("{v:.1}"));
+        for r in &results {
+            writeln!(
+                out,
+                "{:<8} {:>9} {:>8} {:>8} {:>8} {:>9} {:>9.2}%",
+                r.estimator,
+                r.particles,
+                f(r.steps_to_converge.median),
+                f(r.steps_to_converge.mean),
+                f(r.steps_to_converge.p90),
+                r.failures,
+                100.0 * r.recovery_ratio
+            )?;
+        }
+        writeln!(out)?;
+        writeln!(
+            out,
+            "steps: filter updates from the kidnap until within {} m and {} rad for {} consecutive updates; limit {} updates.",
+            protocol.converged_position,
+            protocol.converged_heading,
+            protocol.converged_updates,
+            protocol.limit_updates
         )?;
     }
     Ok(())

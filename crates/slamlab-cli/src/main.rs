@@ -6,6 +6,7 @@
 //! slamlab experiment consistency --estimator ekf,ukf,fej-ekf --trials 50 --steps 200
 //! slamlab params
 //! slamlab run kidnap --map maze --estimator mcl --particles 2000 --init global --steps 600 --seed 1 --json
+//! slamlab experiment kidnap --map maze --particles 500,1000 --estimator amcl,acmcl --trials 20 --seed 1 --json
 //! slamlab map info PATH.yaml
 //! slamlab map convert IN.yaml OUT.yaml --format png
 //! ```
@@ -30,7 +31,7 @@ use std::io::{IsTerminal, Write};
 const LESSONS: &[&str] = &["landmark-slam", "kidnap"];
 
 /// Experiments the CLI can run.
-const EXPERIMENTS: &[&str] = &["ekf-vs-ukf", "consistency"];
+const EXPERIMENTS: &[&str] = &["ekf-vs-ukf", "consistency", "kidnap"];
 
 fn scenario_args() -> Vec<Arg> {
     PARAMS
@@ -518,9 +519,13 @@ fn ekf_vs_ukf(matches: &ArgMatches, seed: u64) -> Result<()> {
 fn main() -> std::process::ExitCode {
     let args: Vec<std::ffi::OsString> = std::env::args_os().collect();
     // `run kidnap` has its own flags (kidnap.rs).
-    let matches = (!kidnap::is_kidnap_run(&args)).then(|| cli().get_matches_from(&args));
+    let kidnap_run = kidnap::is_kidnap_run(&args);
+    let kidnap_experiment = kidnap::is_kidnap_experiment(&args);
+    // `run kidnap` and `experiment kidnap` have their own flags (kidnap.rs).
+    let matches = (!kidnap_run && !kidnap_experiment).then(|| cli().get_matches_from(&args));
     let result = match matches.as_ref().map(ArgMatches::subcommand) {
-        None => kidnap::run(&args),
+        None if kidnap_run => kidnap::run(&args),
+        None => kidnap::experiment(&args),
         Some(Some(("map", m))) => map::run(m),
         Some(Some(("run", m))) => run(m),
         Some(Some(("experiment", m))) => experiment(m),

@@ -146,3 +146,49 @@ fn map_convert_and_info_round_trip() {
     assert!(tail(&a).contains("202 x 202 cells"));
     std::fs::remove_dir_all(&dir).ok();
 }
+
+#[test]
+fn experiment_kidnap_prints_its_json_and_csv() {
+    let dir = std::env::temp_dir().join(format!("slamlab-kidnap-exp-{}", std::process::id()));
+    let out = slamlab(&[
+        "experiment",
+        "kidnap",
+        "--map",
+        "maze",
+        "--particles",
+        "200,300",
+        "--estimator",
+        "amcl,acmcl",
+        "--trials",
+        "2",
+        "--limit",
+        "30",
+        "--seed",
+        "1",
+        "--json",
+        "--csv",
+        dir.to_str().unwrap(),
+    ]);
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let v: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
+    assert_eq!(v["experiment"], "kidnap");
+    assert_eq!(v["map"]["name"], "maze");
+    assert!(v["parameters"]["recovery_alpha_fast"].is_f64());
+    assert_eq!(v["protocol"]["limit_updates"], 30);
+    let results = v["results"].as_array().unwrap();
+    assert_eq!(results.len(), 4);
+    for r in results {
+        assert!(r["estimator"] == "amcl" || r["estimator"] == "acmcl");
+        let failures = r["failures"].as_u64().unwrap();
+        assert!(failures <= 2);
+        assert!(r["steps_to_converge"]["median"].is_null() == (failures == 2));
+        assert!(r["recovery_ratio"].as_f64().unwrap() >= 0.0);
+    }
+    let csv = std::fs::read_to_string(dir.join("kidnap_trials.csv")).unwrap();
+    assert_eq!(csv.lines().count(), 1 + 8);
+    std::fs::remove_dir_all(&dir).ok();
+}

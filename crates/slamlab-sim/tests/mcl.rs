@@ -186,8 +186,8 @@ fn runs_replay_exactly_and_clones_are_checkpoints() {
         b.step_phase();
     }
     assert_eq!(a.robot().pose, b.robot().pose);
-    let pa: Vec<_> = a.filters()[0].mcl.particles().to_vec();
-    let pb: Vec<_> = b.filters()[0].mcl.particles().to_vec();
+    let pa: Vec<_> = a.filters()[0].mcl().particles().to_vec();
+    let pb: Vec<_> = b.filters()[0].mcl().particles().to_vec();
     assert_eq!(pa, pb);
     let e = a.filters()[0].ticks.last().unwrap();
     assert!(e.position.is_finite() && wrap_angle(e.heading).abs() <= std::f64::consts::PI);

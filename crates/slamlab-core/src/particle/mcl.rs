@@ -420,7 +420,6 @@ impl Mcl {
             p.pose = sample_increment(p.pose, rot1, trans, rot2, &noise, &mut self.rng);
             p.flag = ParticleFlag::Normal;
         }
-        self.refresh_estimate();
         PredictReport {
             increment: (rot1, trans, rot2),
             first: false,
@@ -605,7 +604,6 @@ impl Mcl {
             .collect();
         self.particles = new;
         self.n_eff = m as f64;
-        self.refresh_estimate();
         ResampleReport {
             n_eff_before,
             resampled: true,
@@ -651,12 +649,21 @@ impl Mcl {
         &mut self.particles
     }
 
+    /// The particles and the random stream together, for filters built on this
+    /// one that redraw particles.
+    pub fn particles_and_rng(&mut self) -> (&mut Vec<Particle>, &mut ChaCha8Rng) {
+        (&mut self.particles, &mut self.rng)
+    }
+
     /// The filter's random stream, for filters built on this one.
     pub fn rng_mut(&mut self) -> &mut ChaCha8Rng {
         &mut self.rng
     }
 
-    /// The heaviest cluster's mean and covariance, `None` before any particle.
+    /// The heaviest cluster's mean and covariance, computed when the particles
+    /// are weighted (and at initialization), as amcl reports its pose once per
+    /// filter update: prediction and resampling leave it as it was. `None` if
+    /// no particle has weight.
     pub fn estimate(&self) -> Option<&PoseEstimate> {
         self.estimate.as_ref()
     }

@@ -8,6 +8,7 @@
 
 pub mod cluster;
 pub mod mcl;
+pub mod recovery;
 pub mod resample;
 pub mod sensor;
 pub mod weights;
@@ -17,6 +18,7 @@ pub use mcl::{
     LocalizationMap, MAX_PARTICLES, Mcl, MclConfig, MclError, Particle, ParticleFlag,
     PredictReport, ResampleReport, WeightReport,
 };
+pub use recovery::{RecoveringMcl, Recovery, RecoveryAlphas, RecoveryReport};
 pub use resample::{Resampler, resample_indices};
 pub use sensor::{
     BeamLikelihood, BeamModel, LikelihoodFieldModel, MeasurementModel, PreparedModel, Scan,

@@ -11,7 +11,7 @@
 //! never changes another's numbers): the start pose, lidar noise, odometry
 //! noise, the explorer's goals, and one per filter.
 
-use super::scenario::{InitMode, LocalizationEstimator, MclScenario};
+use super::scenario::{InitMode, MclScenario};
 use crate::grid::explorer::Explorer;
 use crate::grid::robot::{GridRobot, OdometrySensor};
 use rand::SeedableRng;
@@ -19,7 +19,8 @@ use rand_chacha::ChaCha8Rng;
 use serde::{Deserialize, Serialize};
 use slamlab_core::grid::{Costmap, OccupancyGrid};
 use slamlab_core::particle::{
-    LocalizationMap, Mcl, PredictReport, ResampleReport, Scan, WeightReport,
+    LocalizationMap, Mcl, PredictReport, RecoveringMcl, RecoveryReport, ResampleReport, Scan,
+    WeightReport,
 };
 use slamlab_core::{Pose2, math, wrap_angle};
 use std::sync::Arc;
@@ -78,6 +79,10 @@ pub struct UpdateRecord {
     pub particles: usize,
     /// Whether the filter resampled.
     pub resampled: bool,
+    /// Fraction of the particles injected or regenerated in this update.
+    pub randomized: f64,
+    /// Augmented MCL's injection probability `max(0, 1 − w_fast/w_slow)`.
+    pub injection_probability: f64,
 }
 
 /// The error of a filter's estimate at one tick (moved along with the odometry
@@ -96,7 +101,7 @@ pub struct FilterRun {
     /// Its name.
     pub name: &'static str,
     /// The filter.
-    pub mcl: Mcl,
+    pub filter: RecoveringMcl,
     /// Whether the current tick updates it.
     pub due: bool,
     /// Its records, one per update.
@@ -112,11 +117,21 @@ pub struct FilterRun {
 }
 
 impl FilterRun {
+    /// The inner MCL (particles, estimate, N_eff).
+    pub fn mcl(&self) -> &Mcl {
+        self.filter.mcl()
+    }
+
+    /// What the recovery did in the latest update.
+    pub fn recovery(&self) -> &RecoveryReport {
+        self.filter.report()
+    }
+
     /// The estimate now: the filter's estimate at its last update moved by the
     /// odometry since then.
     pub fn current_estimate(&self, odom_now: &Pose2) -> Option<Pose2> {
-        let e = self.mcl.estimate()?.pose;
-        Some(match self.mcl.last_odometry() {
+        let e = self.mcl().estimate()?.pose;
+        Some(match self.mcl().last_odometry() {
             Some(at_update) => e.compose(&at_update.between(odom_now)),
             None => e,
         })
@@ -143,7 +158,7 @@ impl FilterRun {
         let last = self.ticks.last();
         FilterSummary {
             name: self.name.to_owned(),
-            particles: self.mcl.count(),
+            particles: self.mcl().count(),
             converged_tick,
             position_error_final: last.map(|e| e.position),
             heading_error_final: last.map(|e| e.heading),
@@ -198,6 +213,8 @@ pub struct MclRun {
     scan: Option<Scan>,
     path: Vec<Pose2>,
     notes: Vec<String>,
+    kidnap_rng: ChaCha8Rng,
+    kidnap_tick: Option<u64>,
 }
 
 impl MclRun {
@@ -210,7 +227,7 @@ impl MclRun {
         } else {
             0.2
         };
-        let collision = Costmap::inflate(&grid, radius);
+        let collision = Arc::new(Costmap::inflate(&grid, radius));
         let start_cells = Costmap::inflate(&grid, radius + 0.1).valid_cells();
         let start_cells = if start_cells.is_empty() {
             collision.valid_cells()
@@ -231,17 +248,18 @@ impl MclRun {
             .enumerate()
             .map(|(k, est)| {
                 let name = est.name();
-                let mut mcl = match est {
-                    LocalizationEstimator::Mcl => Mcl::new(
-                        scenario.mcl_config(),
-                        Arc::clone(&map),
-                        stream_seed(seed, 100 + k as u64),
-                    ),
-                };
-                notes.extend(mcl.notices().iter().map(|n| format!("{name}: {n}")));
+                let mut filter = RecoveringMcl::new(
+                    est.recovery(),
+                    scenario.mcl_config(),
+                    scenario.recovery_alphas(),
+                    Arc::clone(&map),
+                    Some(Arc::clone(&collision)),
+                    stream_seed(seed, 100 + k as u64),
+                );
+                notes.extend(filter.notices().iter().map(|n| format!("{name}: {n}")));
                 if scenario.init == InitMode::Tracking {
                     let sd = |v: f64| if v > 0.0 { v.sqrt() } else { 0.0 };
-                    mcl.init_tracking(
+                    filter.mcl_mut().init_tracking(
                         start,
                         [
                             sd(scenario.initial_cov_xx),
@@ -252,7 +270,7 @@ impl MclRun {
                 }
                 FilterRun {
                     name,
-                    mcl,
+                    filter,
                     due: false,
                     updates: Vec::new(),
                     ticks: Vec::new(),
@@ -272,7 +290,7 @@ impl MclRun {
             explorer,
             lidar_rng: ChaCha8Rng::seed_from_u64(stream_seed(seed, 2)),
             odom_rng: ChaCha8Rng::seed_from_u64(stream_seed(seed, 3)),
-            collision: Arc::new(collision),
+            collision,
             map,
             filters,
             tick: 0,
@@ -280,6 +298,8 @@ impl MclRun {
             scan: None,
             path: vec![start],
             notes,
+            kidnap_rng: ChaCha8Rng::seed_from_u64(stream_seed(seed, 5)),
+            kidnap_tick: None,
             scenario,
         })
     }
@@ -293,7 +313,7 @@ impl MclRun {
                 let odom = self.odometry.pose;
                 let mut any = false;
                 for f in &mut self.filters {
-                    f.due = f.mcl.update_due(odom);
+                    f.due = f.filter.update_due(odom);
                     any |= f.due;
                 }
                 if any {
@@ -305,14 +325,14 @@ impl MclRun {
             MclPhase::Predict => {
                 let odom = self.odometry.pose;
                 for f in self.filters.iter_mut().filter(|f| f.due) {
-                    f.last_predict = Some(f.mcl.predict(odom));
+                    f.last_predict = Some(f.filter.predict(odom));
                 }
                 self.phase = MclPhase::Weight;
             }
             MclPhase::Weight => {
                 if let Some(scan) = &self.scan {
                     for f in self.filters.iter_mut().filter(|f| f.due) {
-                        let report = f.mcl.weight(scan);
+                        let report = f.filter.weight(scan);
                         if let Some(note) = &report.note {
                             self.notes
                                 .push(format!("tick {}: {}: {note}", self.tick, f.name));
@@ -326,10 +346,10 @@ impl MclRun {
                 let truth = self.robot.pose;
                 let tick = self.tick;
                 for f in self.filters.iter_mut().filter(|f| f.due) {
-                    let n_eff = f.mcl.n_eff();
-                    let r = f.mcl.resample();
+                    let n_eff = f.filter.mcl().n_eff();
+                    let r = f.filter.resample();
                     f.last_resample = Some(r);
-                    let (pe, he, p2, h2) = match f.mcl.estimate() {
+                    let (pe, he, p2, h2) = match f.filter.mcl().estimate() {
                         Some(e) => {
                             let c = e.covariance;
                             let a = c[(0, 0)];
@@ -352,8 +372,10 @@ impl MclRun {
                         position_2sigma: p2,
                         heading_2sigma: h2,
                         n_eff,
-                        particles: f.mcl.count(),
+                        particles: f.filter.mcl().count(),
                         resampled: r.resampled,
+                        randomized: f.filter.randomized_fraction(),
+                        injection_probability: f.filter.report().injection_probability,
                     });
                 }
                 self.finish_tick();
@@ -378,6 +400,9 @@ impl MclRun {
     }
 
     fn move_robot(&mut self) {
+        if self.scenario.kidnap_at == Some(self.tick) {
+            self.kidnap_random();
+        }
         let dt = if self.scenario.dt > 0.0 && self.scenario.dt.is_finite() {
             self.scenario.dt
         } else {
@@ -432,7 +457,46 @@ impl MclRun {
         self.robot.pose = pose;
         self.explorer.replan();
         self.path.push(pose);
+        self.kidnap_tick = Some(self.tick);
         Ok(())
+    }
+
+    /// Teleports the robot to a random pose where it fits, at least
+    /// `kidnap_distance` from where it is (the farthest of 1,000 draws if none
+    /// is that far, with a note). The filters are not told.
+    pub fn kidnap_random(&mut self) {
+        let cells = self.collision.valid_cells();
+        let here = self.robot.pose;
+        let mut best: Option<(f64, Pose2)> = None;
+        for _ in 0..1000 {
+            let Some(p) = cells.sample(&mut self.kidnap_rng) else {
+                break;
+            };
+            let d = math::hypot(p.x - here.x, p.y - here.y);
+            if best.is_none_or(|(bd, _)| d > bd) {
+                best = Some((d, p));
+            }
+            if d >= self.scenario.kidnap_distance {
+                break;
+            }
+        }
+        if let Some((d, p)) = best {
+            if d < self.scenario.kidnap_distance {
+                self.notes.push(format!(
+                    "tick {}: no free pose {} m away; kidnapped {d:.2} m",
+                    self.tick, self.scenario.kidnap_distance
+                ));
+            }
+            self.robot.pose = p;
+            self.explorer.replan();
+            self.path.push(p);
+            self.kidnap_tick = Some(self.tick);
+        }
+    }
+
+    /// The tick of the latest kidnap.
+    pub fn kidnap_tick(&self) -> Option<u64> {
+        self.kidnap_tick
     }
 
     /// The scenario.

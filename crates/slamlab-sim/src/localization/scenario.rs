@@ -6,7 +6,8 @@ use crate::grid::lidar::Lidar;
 use serde::{Deserialize, Serialize};
 use slamlab_core::odometry::OdometryNoise;
 use slamlab_core::particle::{
-    BeamModel, ClusterBins, LikelihoodFieldModel, MclConfig, MeasurementModel, Resampler,
+    BeamModel, ClusterBins, LikelihoodFieldModel, MclConfig, MeasurementModel, Recovery,
+    RecoveryAlphas, Resampler,
 };
 
 /// How the particles start.
@@ -48,22 +49,41 @@ pub enum LocalizationEstimator {
     /// Plain Monte Carlo localization (thesis `000` Algorithm 8).
     #[default]
     Mcl,
+    /// Augmented MCL (thesis Algorithm 9).
+    Amcl,
+    /// Costmap MCL (thesis Algorithm 10).
+    Cmcl,
+    /// Augmented costmap MCL (thesis Algorithm 11).
+    Acmcl,
 }
 
 impl LocalizationEstimator {
+    /// Every estimator.
+    pub const ALL: [LocalizationEstimator; 4] = [
+        LocalizationEstimator::Mcl,
+        LocalizationEstimator::Amcl,
+        LocalizationEstimator::Cmcl,
+        LocalizationEstimator::Acmcl,
+    ];
+
+    /// The recovery it uses.
+    pub fn recovery(self) -> Recovery {
+        match self {
+            LocalizationEstimator::Mcl => Recovery::None,
+            LocalizationEstimator::Amcl => Recovery::Augmented,
+            LocalizationEstimator::Cmcl => Recovery::Costmap,
+            LocalizationEstimator::Acmcl => Recovery::AugmentedCostmap,
+        }
+    }
+
     /// The CLI / JSON name.
     pub fn name(self) -> &'static str {
-        match self {
-            LocalizationEstimator::Mcl => "mcl",
-        }
+        self.recovery().name()
     }
 
     /// Parses a name.
     pub fn from_name(name: &str) -> Option<Self> {
-        match name {
-            "mcl" => Some(LocalizationEstimator::Mcl),
-            _ => None,
-        }
+        Self::ALL.into_iter().find(|e| e.name() == name)
     }
 }
 
@@ -138,6 +158,15 @@ pub struct MclScenario {
     pub resample_neff_fraction: Option<f64>,
     /// Resampling method.
     pub resampler: Resampler,
+    /// Augmented MCL's long-term rate (amcl `recovery_alpha_slow`).
+    pub recovery_alpha_slow: f64,
+    /// Augmented MCL's short-term rate (amcl `recovery_alpha_fast`).
+    pub recovery_alpha_fast: f64,
+    /// A kidnap at this tick (the robot is teleported; the filters are not
+    /// told).
+    pub kidnap_at: Option<u64>,
+    /// The kidnap takes the robot at least this far, metres.
+    pub kidnap_distance: f64,
     /// Robot radius, metres.
     pub robot_radius: f64,
     /// The simulated lidar.
@@ -181,6 +210,10 @@ impl Default for MclScenario {
             resample_interval: 1,
             resample_neff_fraction: None,
             resampler: Resampler::LowVariance,
+            recovery_alpha_slow: 0.001,
+            recovery_alpha_fast: 0.1,
+            kidnap_at: None,
+            kidnap_distance: 3.0,
             robot_radius: 0.2,
             lidar: Lidar::default(),
             odom_noise: OdometryNoise {
@@ -213,6 +246,14 @@ impl MclScenario {
                     sigma_hit: self.laser_sigma_hit,
                 })
             }
+        }
+    }
+
+    /// Augmented MCL's rates.
+    pub fn recovery_alphas(&self) -> RecoveryAlphas {
+        RecoveryAlphas {
+            alpha_slow: self.recovery_alpha_slow,
+            alpha_fast: self.recovery_alpha_fast,
         }
     }
 
