@@ -199,6 +199,19 @@ impl DistanceField {
         self.metres(self.squared_cells_at(x, y))
     }
 
+    /// A world point in the grid frame, in cells (so cell `(i, j)` covers
+    /// `[i, i+1) x [j, j+1)`).
+    #[inline]
+    pub fn world_to_cells(&self, x: f64, y: f64) -> (f64, f64) {
+        let (gx, gy) = self.grid_frame.world_to_grid_frame(x, y);
+        (gx / self.resolution, gy / self.resolution)
+    }
+
+    /// The heading of the grid frame in the world, radians.
+    pub fn frame_yaw(&self) -> f64 {
+        self.grid_frame.origin().theta
+    }
+
     /// Converts a squared cell distance to metres, capped.
     #[inline]
     pub fn metres(&self, squared_cells: u32) -> f64 {

@@ -92,6 +92,15 @@ pub enum GridError {
     },
 }
 
+/// `⌊v⌋` as an integer, without a call into the C library (`f64::floor` is a
+/// library call on baseline x86-64). Exact for every finite `v` in the `i64`
+/// range; NaN gives 0, out-of-range values saturate.
+#[inline]
+pub fn floor_to_i64(v: f64) -> i64 {
+    let t = v as i64;
+    if (t as f64) > v { t - 1 } else { t }
+}
+
 /// Checks a claimed map size against [`MAX_CELLS`] without allocating.
 pub fn check_size(width: usize, height: usize) -> Result<(), GridError> {
     if width == 0 || height == 0 {
@@ -262,8 +271,8 @@ impl OccupancyGrid {
     pub fn world_to_cell(&self, x: f64, y: f64) -> (i64, i64) {
         let (gx, gy) = self.world_to_grid_frame(x, y);
         (
-            (gx / self.resolution).floor() as i64,
-            (gy / self.resolution).floor() as i64,
+            floor_to_i64(gx / self.resolution),
+            floor_to_i64(gy / self.resolution),
         )
     }
 
@@ -339,6 +348,25 @@ mod tests {
             "{x} {y}"
         );
         assert_eq!(r.world_to_cell(0.75, 2.75), (3, 0));
+    }
+
+    #[test]
+    fn floor_matches_the_library_floor() {
+        for v in [
+            0.0,
+            -0.0,
+            0.5,
+            -0.5,
+            1.0,
+            -1.0,
+            2.999_999,
+            -2.000_001,
+            1e15 + 0.5,
+            -7.0,
+        ] {
+            assert_eq!(floor_to_i64(v), v.floor() as i64, "{v}");
+        }
+        assert_eq!(floor_to_i64(f64::NAN), 0);
     }
 
     #[test]

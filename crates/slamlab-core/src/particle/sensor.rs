@@ -18,7 +18,7 @@
 //! `[0, z_max]` (the factor is within 1% of one when the expected range is more
 //! than `2.4 σ` from both ends).
 
-use super::super::grid::{DistanceField, OccupancyGrid};
+use super::super::grid::{DistanceField, OccupancyGrid, floor_to_i64};
 use crate::geometry::Pose2;
 use crate::math;
 use serde::{Deserialize, Serialize};
@@ -282,13 +282,19 @@ impl PreparedModel {
         match &self.model {
             MeasurementModel::Beam(b) => b.scan_log_likelihood(grid, pose, scan, beams),
             MeasurementModel::LikelihoodField(_) => {
-                let (s, c) = math::sin_cos(pose.theta);
+                // Everything in the grid frame, in cells: one transform per
+                // particle, then a rotation and a table lookup per beam.
+                let (px, py) = field.world_to_cells(pose.x, pose.y);
+                let (s, c) = math::sin_cos(pose.theta - field.frame_yaw());
+                let inv = 1.0 / field.resolution();
+                let (s, c) = (s * inv, c * inv);
+                let last = self.table.len().saturating_sub(1);
                 let mut sum = 0.0;
                 for &(bx, by) in beam_ends {
-                    let x = pose.x + c * bx - s * by;
-                    let y = pose.y + s * bx + c * by;
-                    let sq = field.squared_cells_at(x, y) as usize;
-                    sum += self.table[sq.min(self.table.len().saturating_sub(1))];
+                    let i = floor_to_i64(px + c * bx - s * by);
+                    let j = floor_to_i64(py + s * bx + c * by);
+                    let sq = field.squared_cells(i, j) as usize;
+                    sum += self.table[sq.min(last)];
                 }
                 sum
             }
