@@ -211,6 +211,12 @@ pub fn command() -> Command {
                 .help("lidar beams per scan (default 180)"),
         )
         .arg(
+            Arg::new("kld")
+                .long("kld")
+                .action(ArgAction::SetTrue)
+                .help("KLD-sampling between --min-particles and --particles"),
+        )
+        .arg(
             Arg::new("kidnap-at")
                 .long("kidnap-at")
                 .value_parser(clap::value_parser!(u64))
@@ -300,6 +306,7 @@ fn scenario_from(m: &ArgMatches) -> Result<MclScenario> {
     }
     s.estimators = estimators;
     s.kidnap_at = m.get_one::<u64>("kidnap-at").copied();
+    s.kld_sampling = m.get_flag("kld");
     if let Some(t) = m.get_one::<String>("laser-model-type") {
         s.laser_model_type = if t == "beam" {
             LaserModelType::Beam
@@ -424,6 +431,7 @@ pub fn experiment_command() -> Command {
         .arg(Arg::new("trials").long("trials").value_parser(clap::value_parser!(u64).range(1..=10_000)).default_value("20").help("trials per (estimator, particle count); trial i uses seed + i"))
         .arg(Arg::new("seed").long("seed").value_parser(clap::value_parser!(u64)).default_value("1").help("first seed"))
         .arg(Arg::new("limit").long("limit").value_parser(clap::value_parser!(u64).range(10..=100_000)).default_value("500").help("updates after the kidnap before a trial counts as a failure"))
+        .arg(Arg::new("kld").long("kld").action(ArgAction::SetTrue).help("KLD-sampling between --min-particles and each particle count"))
         .arg(Arg::new("json").long("json").action(ArgAction::SetTrue).help("print one JSON object"))
         .arg(Arg::new("csv").long("csv").value_name("DIR").value_parser(clap::value_parser!(std::path::PathBuf)).help("write per-trial rows to DIR/kidnap_trials.csv"));
     for (name, help, _) in NUMBERS {
@@ -446,7 +454,10 @@ pub fn experiment(args: &[OsString]) -> Result<()> {
     let m = experiment_command()
         .try_get_matches_from(argv)
         .unwrap_or_else(|e| e.exit());
-    let mut base = MclScenario::default();
+    let mut base = MclScenario {
+        kld_sampling: m.get_flag("kld"),
+        ..Default::default()
+    };
     for (name, _, set) in NUMBERS {
         if let Some(text) = m.get_one::<String>(name) {
             let v: f64 = text

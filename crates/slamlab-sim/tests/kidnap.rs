@@ -138,3 +138,42 @@ fn one_kidnap_trial_runs_and_reports() {
         1
     );
 }
+
+/// KLD-sampling: the particle count falls while tracking and rises after a
+/// kidnap (ACMCL regenerates lost particles all over the maze), within its
+/// limits. With the plain product likelihood (exponent 1): the tempered
+/// default keeps the tracking cloud so wide that KLD keeps about the maximum.
+#[test]
+fn kld_count_falls_while_tracking_and_rises_after_a_kidnap() {
+    let mut run = MclRun::new(
+        MclScenario {
+            kld_sampling: true,
+            laser_likelihood_exponent: 1.0,
+            min_particles: 100,
+            max_particles: 3000,
+            ..scenario(vec![LocalizationEstimator::Acmcl], 3000, 6)
+        },
+        BuiltinMap::Maze.load().unwrap(),
+    )
+    .unwrap();
+    while run.filters()[0].updates.len() < 40 {
+        run.tick();
+    }
+    let ups = &run.filters()[0].updates;
+    let tracking = ups[20..].iter().map(|u| u.particles).sum::<usize>() / (ups.len() - 20);
+    assert!(tracking < 800, "{tracking}");
+    run.kidnap_random();
+    let first = run.filters()[0].updates.len();
+    for _ in 0..60 {
+        run.tick();
+    }
+    let ups = &run.filters()[0].updates[first..];
+    let peak = ups.iter().map(|u| u.particles).max().unwrap();
+    assert!(peak > 2 * tracking && peak >= 1000, "{tracking} -> {peak}");
+    assert!(
+        run.filters()[0]
+            .updates
+            .iter()
+            .all(|u| (100..=3000).contains(&u.particles))
+    );
+}

@@ -24,7 +24,7 @@ use crate::geometry::{Pose2, wrap_angle};
 use crate::grid::{DistanceField, FreeCells, OccupancyGrid};
 use crate::math;
 use crate::odometry::{OdometryNoise, odometry_increment, sample_increment};
-use rand::SeedableRng;
+use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
 use rand_distr::{Distribution, StandardNormal};
 use serde::{Deserialize, Serialize};
@@ -137,6 +137,52 @@ pub struct MclConfig {
     /// this reason); `κ < 1` tempers it the same way for every beam. ROS amcl
     /// instead scores `1 + Σ p_k³`, which is softer still.
     pub likelihood_exponent: f64,
+    /// KLD-sampling (Fox 2003; amcl `kld_err`, `kld_z`, `min_particles`,
+    /// `max_particles`): if set, resampling draws particles until their count
+    /// bounds the KL divergence of the binned estimate, between the limits;
+    /// `particles` is then the count at the start.
+    pub kld: Option<KldSampling>,
+}
+
+/// KLD-sampling's parameters (amcl names and defaults).
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+pub struct KldSampling {
+    /// Maximum error between the true and the estimated distribution
+    /// (`kld_err`, 0.01).
+    pub err: f64,
+    /// Upper standard normal quantile for `1 − δ` (`kld_z`; amcl's default 0.99
+    /// is used as the quantile value itself, as amcl does).
+    pub z: f64,
+    /// Fewest particles (`min_particles`, 100).
+    pub min_particles: usize,
+    /// Most particles (`max_particles`, 5000).
+    pub max_particles: usize,
+}
+
+impl Default for KldSampling {
+    fn default() -> Self {
+        Self {
+            err: 0.01,
+            z: 0.99,
+            min_particles: 100,
+            max_particles: 5000,
+        }
+    }
+}
+
+impl KldSampling {
+    /// The particle count that bounds the error with `k` occupied bins (Fox
+    /// 2003, Eq. 7; amcl `pf_resample_limit`), clamped to the limits.
+    pub fn limit(&self, k: usize) -> usize {
+        if k <= 1 {
+            return self.max_particles;
+        }
+        let km1 = (k - 1) as f64;
+        let b = 2.0 / (9.0 * km1);
+        let x = 1.0 - b + b.sqrt() * self.z;
+        let n = (km1 / (2.0 * self.err) * x * x * x).ceil();
+        (n.min(self.max_particles as f64) as usize).clamp(self.min_particles, self.max_particles)
+    }
 }
 
 impl Default for MclConfig {
@@ -153,6 +199,7 @@ impl Default for MclConfig {
             resampler: Resampler::LowVariance,
             cluster: ClusterBins::default(),
             likelihood_exponent: 1.0,
+            kld: None,
         }
     }
 }
@@ -197,6 +244,25 @@ impl MclConfig {
             let c = if f > 1.0 { 1.0 } else { 0.0 };
             notes.push(format!("N_eff fraction {f} clamped to {c}"));
             self.neff_fraction = Some(c);
+        }
+        if let Some(k) = &mut self.kld {
+            if k.min_particles > k.max_particles {
+                notes.push(format!(
+                    "min_particles {} above max_particles {}: swapped",
+                    k.min_particles, k.max_particles
+                ));
+                std::mem::swap(&mut k.min_particles, &mut k.max_particles);
+            }
+            k.min_particles = k.min_particles.clamp(1, MAX_PARTICLES);
+            k.max_particles = k.max_particles.clamp(1, MAX_PARTICLES);
+            if !(k.err > 0.0 && k.err.is_finite()) {
+                notes.push(format!("kld_err {} replaced by 0.01", k.err));
+                k.err = 0.01;
+            }
+            if !k.z.is_finite() {
+                notes.push(format!("kld_z {} replaced by 0.99", k.z));
+                k.z = 0.99;
+            }
         }
         if !(self.likelihood_exponent > 0.0 && self.likelihood_exponent <= 1.0) {
             notes.push(format!(
@@ -583,7 +649,11 @@ impl Mcl {
         self.updates_since_resample = 0;
         let weights = self.weights();
         let mut idx = Vec::with_capacity(m);
-        resample_indices(self.config.resampler, &weights, m, &mut self.rng, &mut idx);
+        match self.config.kld {
+            Some(kld) => self.kld_indices(&weights, &kld, &mut idx),
+            None => resample_indices(self.config.resampler, &weights, m, &mut self.rng, &mut idx),
+        }
+        let m = idx.len();
         let mut distinct = 0;
         let mut last = usize::MAX;
         for &i in &idx {
@@ -609,6 +679,47 @@ impl Mcl {
             resampled: true,
             distinct_parents: distinct,
         }
+    }
+
+    /// KLD-sampling (Fox 2003, Table 1; amcl `pf_update_resample`): independent
+    /// draws in proportion to the weights until the count reaches the bound for
+    /// the number of occupied bins (amcl's 0.5 m / 10° bins), between the
+    /// limits. Returns sorted indices.
+    fn kld_indices(&mut self, weights: &[f64], kld: &KldSampling, out: &mut Vec<usize>) {
+        let mut cumulative = Vec::with_capacity(weights.len());
+        let mut total = 0.0;
+        for &w in weights {
+            total += if w > 0.0 && w.is_finite() { w } else { 0.0 };
+            cumulative.push(total);
+        }
+        out.clear();
+        if !(total > 0.0) || weights.is_empty() {
+            out.extend(0..weights.len().min(kld.max_particles));
+            return;
+        }
+        let cell = self.config.cluster.cell_size.max(1e-3);
+        let angle = self.config.cluster.angle_bin.max(1e-3);
+        let mut bins: Vec<(i64, i64, i64)> = Vec::new();
+        let mut limit = kld.max_particles;
+        while out.len() < kld.max_particles && (out.len() < limit || out.len() < kld.min_particles)
+        {
+            let r = self.rng.random::<f64>() * total;
+            let i = cumulative
+                .partition_point(|&c| c <= r)
+                .min(weights.len() - 1);
+            out.push(i);
+            let p = self.particles[i].pose;
+            let key = (
+                crate::grid::floor_to_i64(p.x / cell),
+                crate::grid::floor_to_i64(p.y / cell),
+                crate::grid::floor_to_i64(p.theta / angle),
+            );
+            if let Err(pos) = bins.binary_search(&key) {
+                bins.insert(pos, key);
+                limit = kld.limit(bins.len());
+            }
+        }
+        out.sort_unstable();
     }
 
     /// One full update if the odometry has moved enough (predict, weight,
@@ -812,6 +923,41 @@ mod tests {
         assert_eq!(mcl.weights(), before);
         assert!(mcl.particles().iter().all(|p| p.weight.is_finite()));
         assert!(mcl.estimate().is_some());
+    }
+
+    #[test]
+    fn kld_limit_follows_fox_and_stays_within_bounds() {
+        let k = KldSampling {
+            min_particles: 100,
+            max_particles: 5000,
+            ..Default::default()
+        };
+        // (k − 1)/(2ε) (1 − 2/(9(k−1)) + sqrt(2/(9(k−1))) z)³, ceiling.
+        assert_eq!(k.limit(10), 651);
+        assert_eq!(k.limit(50), 2936);
+        assert_eq!(k.limit(2), 100);
+        assert_eq!(k.limit(1), 5000);
+        assert_eq!(k.limit(1000), 5000);
+        // A tight cloud needs few particles, a spread one many.
+        let map = room();
+        let config = MclConfig {
+            particles: 3000,
+            kld: Some(KldSampling {
+                min_particles: 50,
+                max_particles: 3000,
+                ..Default::default()
+            }),
+            ..Default::default()
+        };
+        let mut spread = Mcl::new(config.clone(), map.clone(), 4);
+        spread.resample();
+        let mut tight = Mcl::new(config, map, 4);
+        tight.init_tracking(Pose2::new(2.0, 2.0, 0.0), [0.05, 0.05, 0.02]);
+        tight.resample();
+        // The tight cloud straddles bin edges at x = y = 2 m and θ = 0: 8 bins.
+        assert!(tight.count() < 600, "{}", tight.count());
+        assert!(spread.count() > 1000, "{}", spread.count());
+        assert!((tight.weights().iter().sum::<f64>() - 1.0).abs() < 1e-9);
     }
 
     #[test]

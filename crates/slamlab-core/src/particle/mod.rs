@@ -15,7 +15,7 @@ pub mod weights;
 
 pub use cluster::{ClusterBins, PoseEstimate, heaviest_cluster};
 pub use mcl::{
-    LocalizationMap, MAX_PARTICLES, Mcl, MclConfig, MclError, Particle, ParticleFlag,
+    KldSampling, LocalizationMap, MAX_PARTICLES, Mcl, MclConfig, MclError, Particle, ParticleFlag,
     PredictReport, ResampleReport, WeightReport,
 };
 pub use recovery::{RecoveringMcl, Recovery, RecoveryAlphas, RecoveryReport};

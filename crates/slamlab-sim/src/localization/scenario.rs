@@ -6,8 +6,8 @@ use crate::grid::lidar::Lidar;
 use serde::{Deserialize, Serialize};
 use slamlab_core::odometry::OdometryNoise;
 use slamlab_core::particle::{
-    BeamModel, ClusterBins, LikelihoodFieldModel, MclConfig, MeasurementModel, Recovery,
-    RecoveryAlphas, Resampler,
+    BeamModel, ClusterBins, KldSampling, LikelihoodFieldModel, MclConfig, MeasurementModel,
+    Recovery, RecoveryAlphas, Resampler,
 };
 
 /// How the particles start.
@@ -158,6 +158,12 @@ pub struct MclScenario {
     pub resample_neff_fraction: Option<f64>,
     /// Resampling method.
     pub resampler: Resampler,
+    /// KLD-sampling between `min_particles` and `max_particles`.
+    pub kld_sampling: bool,
+    /// KLD-sampling's error bound (amcl `kld_err`).
+    pub kld_err: f64,
+    /// KLD-sampling's quantile (amcl `kld_z`).
+    pub kld_z: f64,
     /// Augmented MCL's long-term rate (amcl `recovery_alpha_slow`).
     pub recovery_alpha_slow: f64,
     /// Augmented MCL's short-term rate (amcl `recovery_alpha_fast`).
@@ -210,6 +216,9 @@ impl Default for MclScenario {
             resample_interval: 1,
             resample_neff_fraction: None,
             resampler: Resampler::LowVariance,
+            kld_sampling: false,
+            kld_err: 0.01,
+            kld_z: 0.99,
             recovery_alpha_slow: 0.001,
             recovery_alpha_fast: 0.1,
             kidnap_at: None,
@@ -276,6 +285,12 @@ impl MclScenario {
             resampler: self.resampler,
             cluster: ClusterBins::default(),
             likelihood_exponent: self.laser_likelihood_exponent,
+            kld: self.kld_sampling.then_some(KldSampling {
+                err: self.kld_err,
+                z: self.kld_z,
+                min_particles: self.min_particles,
+                max_particles: self.max_particles,
+            }),
         }
     }
 }
