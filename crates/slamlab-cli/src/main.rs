@@ -5,11 +5,18 @@
 //! slamlab experiment ekf-vs-ukf --noise-scale 2 --trials 50 --seed 1 --json --csv out/
 //! slamlab experiment consistency --estimator ekf,ukf,fej-ekf --trials 50 --steps 200
 //! slamlab params
+//! slamlab run kidnap --map maze --estimator mcl --particles 2000 --init global --steps 600 --seed 1 --json
+//! slamlab experiment kidnap --map maze --particles 500,1000 --estimator amcl,acmcl --trials 20 --seed 1 --json
+//! slamlab map info PATH.yaml
+//! slamlab map convert IN.yaml OUT.yaml --format png
 //! ```
 //!
 //! Scenario flags have the same names as the lesson's URL parameters, so
 //! `slamlab run landmark-slam --seed 7 --landmarks 30` and
 //! `index.html?lesson=landmark-slam&seed=7&landmarks=30` are the same run.
+
+mod kidnap;
+mod map;
 
 use anyhow::{Context, Result, bail};
 use clap::{Arg, ArgAction, ArgMatches, Command};
@@ -25,7 +32,7 @@ mod fusion;
 mod particle_experiments;
 
 /// Lessons the CLI can run.
-const LESSONS: &[&str] = &["landmark-slam"];
+const LESSONS: &[&str] = &["landmark-slam", "kidnap"];
 
 /// Experiments the CLI can run.
 const EXPERIMENTS: &[&str] = &[
@@ -34,6 +41,7 @@ const EXPERIMENTS: &[&str] = &[
     "fastslam",
     "resampling",
     "fusion",
+    "kidnap",
 ];
 
 fn scenario_args() -> Vec<Arg> {
@@ -131,6 +139,7 @@ fn cli() -> Command {
                 .next_help_heading("Scenario (the same names as `run`; ekf-vs-ukf takes only --seed)")
                 .args(scenario_args()),
         )
+        .subcommand(map::command())
         .subcommand(
             Command::new("params")
                 .about("List the scenario parameters with their units, ranges and defaults"),
@@ -532,11 +541,19 @@ fn ekf_vs_ukf(matches: &ArgMatches, seed: u64) -> Result<()> {
 }
 
 fn main() -> std::process::ExitCode {
-    let matches = cli().get_matches();
-    let result = match matches.subcommand() {
-        Some(("run", m)) => run(m),
-        Some(("experiment", m)) => experiment(m),
-        Some(("params", _)) => list_params(),
+    let args: Vec<std::ffi::OsString> = std::env::args_os().collect();
+    // `run kidnap` has its own flags (kidnap.rs).
+    let kidnap_run = kidnap::is_kidnap_run(&args);
+    let kidnap_experiment = kidnap::is_kidnap_experiment(&args);
+    // `run kidnap` and `experiment kidnap` have their own flags (kidnap.rs).
+    let matches = (!kidnap_run && !kidnap_experiment).then(|| cli().get_matches_from(&args));
+    let result = match matches.as_ref().map(ArgMatches::subcommand) {
+        None if kidnap_run => kidnap::run(&args),
+        None => kidnap::experiment(&args),
+        Some(Some(("map", m))) => map::run(m),
+        Some(Some(("run", m))) => run(m),
+        Some(Some(("experiment", m))) => experiment(m),
+        Some(Some(("params", _))) => list_params(),
         _ => Ok(()),
     };
     match result {

@@ -11,10 +11,12 @@
 
 pub mod association;
 pub mod geometry;
+pub mod grid;
 pub mod kalman;
 pub mod linalg;
 pub mod math;
 pub mod motion;
+pub mod odometry;
 pub mod particle;
 pub mod range_bearing;
 pub mod stats;

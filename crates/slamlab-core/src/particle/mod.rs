@@ -6,15 +6,28 @@
 //! easily `e^-800`, which is zero in `f64`. Normalizing with log-sum-exp keeps
 //! every particle's relative weight however small the absolute numbers are.
 
+pub mod cluster;
 pub mod fastslam;
 pub mod lab;
+pub mod mcl;
+pub mod recovery;
 pub mod resample;
+pub mod sensor;
 pub mod weights;
 
+pub use cluster::{ClusterBins, PoseEstimate, heaviest_cluster};
 pub use fastslam::{
     FastSlam, FastSlamConfig, FastSlamError, FastSlamNoise, FastSlamVersion, LandmarkEkf,
-    LandmarkObservation, ParticleUpdateReport, ParticleView, ResamplePolicy, ResampleReport,
+    LandmarkObservation, ParticleUpdateReport, ParticleView, ResamplePolicy,
 };
 pub use lab::{CopyCountStats, ResamplingLab, WeightPreset, copy_counts, sanitize_weights};
+pub use mcl::{
+    KldSampling, LocalizationMap, MAX_PARTICLES, Mcl, MclConfig, MclError, Particle, ParticleFlag,
+    PredictReport, ResampleReport, WeightReport,
+};
+pub use recovery::{RecoveringMcl, Recovery, RecoveryAlphas, RecoveryReport};
 pub use resample::{Resampler, resample_indices};
+pub use sensor::{
+    BeamLikelihood, BeamModel, LikelihoodFieldModel, MeasurementModel, PreparedModel, Scan,
+};
 pub use weights::{WeightError, effective_sample_size, normalize_log_weights};

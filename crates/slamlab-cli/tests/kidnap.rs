@@ -1,0 +1,194 @@
+//! `slamlab run kidnap` and `slamlab map`: the JSON keys, the map commands, and
+//! refusals of bad input.
+
+#![allow(clippy::panic, clippy::unwrap_used, clippy::expect_used)] // a failing test stops
+
+use std::process::Command;
+
+fn slamlab(args: &[&str]) -> std::process::Output {
+    Command::new(env!("CARGO_BIN_EXE_slamlab"))
+        .args(args)
+        .output()
+        .unwrap()
+}
+
+#[test]
+fn run_kidnap_prints_the_issue_json() {
+    let out = slamlab(&[
+        "run",
+        "kidnap",
+        "--map",
+        "maze",
+        "--estimator",
+        "mcl",
+        "--particles",
+        "300",
+        "--init",
+        "tracking",
+        "--steps",
+        "120",
+        "--seed",
+        "2",
+        "--json",
+    ]);
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let v: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
+    assert_eq!(v["steps"], 120);
+    assert_eq!(v["seed"], 2);
+    assert_eq!(v["map"]["name"], "maze");
+    assert_eq!(v["map"]["width"], 202);
+    assert_eq!(v["map"]["height"], 202);
+    assert_eq!(v["map"]["resolution"], 0.05);
+    assert_eq!(v["parameters"]["max_particles"], 300);
+    assert_eq!(v["parameters"]["laser_model_type"], "likelihood_field");
+    assert!(v["parameters"]["lidar"]["beams"].is_u64());
+    let f = &v["filters"][0];
+    assert_eq!(f["name"], "mcl");
+    assert_eq!(f["particles"], 300);
+    // Tracking from the true start converges at once.
+    assert_eq!(f["converged_tick"], 0);
+    assert!(f["position_error_final"].as_f64().unwrap() < 0.5);
+    assert!(f["heading_error_final"].as_f64().unwrap() < 0.3);
+    assert!(f["position_rmse_converged"].as_f64().unwrap() < 0.3);
+    // Same seed, same numbers.
+    let again = slamlab(&[
+        "run",
+        "kidnap",
+        "--map",
+        "maze",
+        "--estimator",
+        "mcl",
+        "--particles",
+        "300",
+        "--init",
+        "tracking",
+        "--steps",
+        "120",
+        "--seed",
+        "2",
+        "--json",
+    ]);
+    assert_eq!(out.stdout, again.stdout);
+}
+
+#[test]
+fn bad_input_is_refused_or_clamped_with_a_message() {
+    let out = slamlab(&["run", "kidnap", "--particles", "0", "--steps", "3"]);
+    assert!(out.status.success());
+    assert!(String::from_utf8_lossy(&out.stderr).contains("particles 0 clamped to 1"));
+    let out = slamlab(&["run", "kidnap", "--laser-sigma-hit", "nan"]);
+    assert!(!out.status.success());
+    assert!(String::from_utf8_lossy(&out.stderr).contains("--laser-sigma-hit"));
+    let out = slamlab(&["run", "kidnap", "--estimator", "ekf"]);
+    assert!(String::from_utf8_lossy(&out.stderr).contains("not one of"));
+    let dir = std::env::temp_dir().join(format!("slamlab-kidnap-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let yaml = dir.join("m.yaml");
+    std::fs::write(
+        &yaml,
+        "image: missing.png\nresolution: 0.05\norigin: [0, 0, 0]\n",
+    )
+    .unwrap();
+    let out = slamlab(&["map", "info", yaml.to_str().unwrap()]);
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(
+        !out.status.success() && err.contains("missing.png"),
+        "{err}"
+    );
+    std::fs::write(&yaml, "image: m.pgm\nresolution: -1\norigin: [0, 0, 0]\n").unwrap();
+    let out = slamlab(&["map", "info", yaml.to_str().unwrap()]);
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(err.contains("resolution -1"), "{err}");
+    std::fs::remove_dir_all(&dir).ok();
+}
+
+#[test]
+fn map_convert_and_info_round_trip() {
+    let dir = std::env::temp_dir().join(format!("slamlab-map-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let pgm_yaml = dir.join("maze-pgm.yaml");
+    let out = slamlab(&[
+        "map",
+        "convert",
+        "maze",
+        pgm_yaml.to_str().unwrap(),
+        "--format",
+        "pgm",
+    ]);
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    assert!(dir.join("maze-pgm.pgm").is_file());
+    let png_yaml = dir.join("back.yaml");
+    let out = slamlab(&[
+        "map",
+        "convert",
+        pgm_yaml.to_str().unwrap(),
+        png_yaml.to_str().unwrap(),
+    ]);
+    assert!(out.status.success());
+    let a = slamlab(&["map", "info", "maze"]);
+    let b = slamlab(&["map", "info", png_yaml.to_str().unwrap()]);
+    let tail = |o: &std::process::Output| {
+        String::from_utf8_lossy(&o.stdout)
+            .lines()
+            .skip(1)
+            .collect::<Vec<_>>()
+            .join("\n")
+    };
+    assert_eq!(tail(&a), tail(&b));
+    assert!(tail(&a).contains("202 x 202 cells"));
+    std::fs::remove_dir_all(&dir).ok();
+}
+
+#[test]
+fn experiment_kidnap_prints_its_json_and_csv() {
+    let dir = std::env::temp_dir().join(format!("slamlab-kidnap-exp-{}", std::process::id()));
+    let out = slamlab(&[
+        "experiment",
+        "kidnap",
+        "--map",
+        "maze",
+        "--particles",
+        "200,300",
+        "--estimator",
+        "amcl,acmcl",
+        "--trials",
+        "2",
+        "--limit",
+        "30",
+        "--seed",
+        "1",
+        "--json",
+        "--csv",
+        dir.to_str().unwrap(),
+    ]);
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let v: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
+    assert_eq!(v["experiment"], "kidnap");
+    assert_eq!(v["map"]["name"], "maze");
+    assert!(v["parameters"]["recovery_alpha_fast"].is_f64());
+    assert_eq!(v["protocol"]["limit_updates"], 30);
+    let results = v["results"].as_array().unwrap();
+    assert_eq!(results.len(), 4);
+    for r in results {
+        assert!(r["estimator"] == "amcl" || r["estimator"] == "acmcl");
+        let failures = r["failures"].as_u64().unwrap();
+        assert!(failures <= 2);
+        assert!(r["steps_to_converge"]["median"].is_null() == (failures == 2));
+        assert!(r["recovery_ratio"].as_f64().unwrap() >= 0.0);
+    }
+    let csv = std::fs::read_to_string(dir.join("kidnap_trials.csv")).unwrap();
+    assert_eq!(csv.lines().count(), 1 + 8);
+    std::fs::remove_dir_all(&dir).ok();
+}

@@ -1,0 +1,216 @@
+//! The pose estimate of a particle cloud as ROS amcl reports it: particles are
+//! binned into cells of `cell_size x cell_size` metres and `angle_bin` radians
+//! (amcl's `pf_kdtree`: 0.5 m, 0.5 m, 10°), neighbouring occupied bins (the 26
+//! around a bin, heading bins wrapping around) form clusters, and the estimate is
+//! the weighted mean and covariance of the heaviest cluster.
+//!
+//! amcl finds the bins with a kd-tree; here the bins are sorted and neighbours
+//! found by binary search, which gives the same clusters and a result that does
+//! not depend on any hash order (so a seed replays bit for bit).
+
+use crate::geometry::{Pose2, wrap_angle};
+use crate::math;
+use nalgebra::Matrix3;
+use serde::{Deserialize, Serialize};
+use std::f64::consts::TAU;
+
+/// Bin sizes for clustering.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+pub struct ClusterBins {
+    /// Side of a position bin, metres (amcl: 0.5).
+    pub cell_size: f64,
+    /// Width of a heading bin, radians (amcl: 10°).
+    pub angle_bin: f64,
+}
+
+impl Default for ClusterBins {
+    fn default() -> Self {
+        Self {
+            cell_size: 0.5,
+            angle_bin: 10f64.to_radians(),
+        }
+    }
+}
+
+/// The weighted mean of the heaviest cluster and its covariance.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+pub struct PoseEstimate {
+    /// Weighted mean (heading: circular mean).
+    pub pose: Pose2,
+    /// Weighted covariance of `[x, y, θ]` around the mean, heading differences
+    /// wrapped.
+    pub covariance: Matrix3<f64>,
+    /// Total normalized weight of the cluster (1 if all particles are in it).
+    pub weight: f64,
+    /// Particles in the cluster.
+    pub count: usize,
+    /// How many clusters the cloud has.
+    pub clusters: usize,
+}
+
+/// The heaviest cluster's estimate, or `None` for an empty cloud or a cloud
+/// whose weights are all zero or not numbers.
+pub fn heaviest_cluster(
+    poses: &[Pose2],
+    weights: &[f64],
+    bins: &ClusterBins,
+) -> Option<PoseEstimate> {
+    let n = poses.len().min(weights.len());
+    if n == 0 {
+        return None;
+    }
+    let cell = if bins.cell_size > 0.0 && bins.cell_size.is_finite() {
+        bins.cell_size
+    } else {
+        0.5
+    };
+    let angle_bins = if bins.angle_bin > 0.0 && bins.angle_bin.is_finite() {
+        ((TAU / bins.angle_bin).round() as i64).max(1)
+    } else {
+        36
+    };
+    let key = |p: &Pose2| -> (i64, i64, i64) {
+        let a =
+            ((wrap_angle(p.theta) + std::f64::consts::PI) / TAU * angle_bins as f64).floor() as i64;
+        (
+            (p.x / cell).floor() as i64,
+            (p.y / cell).floor() as i64,
+            a.rem_euclid(angle_bins),
+        )
+    };
+    let mut order: Vec<(i64, i64, i64, usize)> = (0..n)
+        .filter(|&i| poses[i].is_finite())
+        .map(|i| {
+            let (a, b, c) = key(&poses[i]);
+            (a, b, c, i)
+        })
+        .collect();
+    order.sort_unstable();
+    // Distinct bins and, for each particle in `order`, its bin.
+    let mut bin_keys: Vec<(i64, i64, i64)> = Vec::new();
+    let mut bin_of: Vec<usize> = Vec::with_capacity(order.len());
+    for &(a, b, c, _) in &order {
+        if bin_keys.last() != Some(&(a, b, c)) {
+            bin_keys.push((a, b, c));
+        }
+        bin_of.push(bin_keys.len() - 1);
+    }
+    // Union-find over bins.
+    let mut parent: Vec<usize> = (0..bin_keys.len()).collect();
+    fn find(parent: &mut [usize], mut i: usize) -> usize {
+        while parent[i] != i {
+            parent[i] = parent[parent[i]];
+            i = parent[i];
+        }
+        i
+    }
+    for (b, &(x, y, a)) in bin_keys.iter().enumerate() {
+        for dx in -1..=1 {
+            for dy in -1..=1 {
+                for da in -1..=1 {
+                    if dx == 0 && dy == 0 && da == 0 {
+                        continue;
+                    }
+                    let neighbour = (x + dx, y + dy, (a + da).rem_euclid(angle_bins));
+                    if let Ok(nb) = bin_keys.binary_search(&neighbour) {
+                        let (ra, rb) = (find(&mut parent, b), find(&mut parent, nb));
+                        if ra != rb {
+                            parent[ra.max(rb)] = ra.min(rb);
+                        }
+                    }
+                }
+            }
+        }
+    }
+    let roots: Vec<usize> = (0..bin_keys.len()).map(|b| find(&mut parent, b)).collect();
+    let mut cluster_weight = vec![0.0; bin_keys.len()];
+    for (k, &(_, _, _, i)) in order.iter().enumerate() {
+        let w = weights[i];
+        if w > 0.0 && w.is_finite() {
+            cluster_weight[roots[bin_of[k]]] += w;
+        }
+    }
+    let clusters = (0..bin_keys.len()).filter(|&b| roots[b] == b).count();
+    let mut best = None;
+    for b in 0..bin_keys.len() {
+        if roots[b] == b && cluster_weight[b] > 0.0 {
+            match best {
+                Some(bb) if cluster_weight[bb] >= cluster_weight[b] => {}
+                _ => best = Some(b),
+            }
+        }
+    }
+    let best = best?;
+    let total = cluster_weight[best];
+    let members: Vec<usize> = order
+        .iter()
+        .enumerate()
+        .filter(|(k, _)| roots[bin_of[*k]] == best)
+        .map(|(_, o)| o.3)
+        .filter(|&i| weights[i] > 0.0 && weights[i].is_finite())
+        .collect();
+    let (mut mx, mut my, mut ms, mut mc) = (0.0, 0.0, 0.0, 0.0);
+    for &i in &members {
+        let w = weights[i] / total;
+        let (s, c) = math::sin_cos(poses[i].theta);
+        mx += w * poses[i].x;
+        my += w * poses[i].y;
+        ms += w * s;
+        mc += w * c;
+    }
+    let mean = Pose2::new(mx, my, math::atan2(ms, mc));
+    let mut cov = Matrix3::zeros();
+    for &i in &members {
+        let w = weights[i] / total;
+        let d = nalgebra::Vector3::new(
+            poses[i].x - mean.x,
+            poses[i].y - mean.y,
+            wrap_angle(poses[i].theta - mean.theta),
+        );
+        cov += w * d * d.transpose();
+    }
+    Some(PoseEstimate {
+        pose: mean,
+        covariance: cov,
+        weight: total,
+        count: members.len(),
+        clusters,
+    })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn two_clusters_the_heavier_wins_with_its_own_statistics() {
+        let mut poses = Vec::new();
+        let mut weights = Vec::new();
+        // Cluster A at (1, 1) across the ±π seam: headings π − 0.05 and −π + 0.05.
+        for (dx, th) in [(0.0, 3.09), (0.1, -3.09), (0.2, 3.09), (0.3, -3.09)] {
+            poses.push(Pose2::new(1.0 + dx, 1.0, th));
+            weights.push(0.15);
+        }
+        // Cluster B at (5, 5), lighter.
+        for dx in [0.0, 0.1] {
+            poses.push(Pose2::new(5.0 + dx, 5.0, 0.0));
+            weights.push(0.2);
+        }
+        let e = heaviest_cluster(&poses, &weights, &ClusterBins::default()).unwrap();
+        assert_eq!(e.clusters, 2);
+        assert_eq!(e.count, 4);
+        assert!((e.weight - 0.6).abs() < 1e-12);
+        assert!((e.pose.x - 1.15).abs() < 1e-12 && (e.pose.y - 1.0).abs() < 1e-12);
+        assert!(
+            (e.pose.theta.abs() - std::f64::consts::PI).abs() < 1e-9,
+            "{:?}",
+            e.pose
+        );
+        // Var x of {0, .1, .2, .3} = 0.0125; heading deviations ±0.0516.
+        assert!((e.covariance[(0, 0)] - 0.0125).abs() < 1e-12);
+        let dev = std::f64::consts::PI - 3.09;
+        assert!((e.covariance[(2, 2)] - dev * dev).abs() < 1e-9);
+        assert!(heaviest_cluster(&poses, &[0.0; 6], &ClusterBins::default()).is_none());
+        assert!(heaviest_cluster(&[], &[], &ClusterBins::default()).is_none());
+    }
+}

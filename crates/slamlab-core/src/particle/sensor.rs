@@ -1,0 +1,442 @@
+//! Range-finder measurement models on an occupancy grid, as log likelihoods
+//! `ln p(z | x, m)` of a whole scan (the beams taken as independent, so the scan's
+//! log likelihood is the sum over beams).
+//!
+//! - [`BeamModel`]: thesis `000` Sec. 3.5.1, Probabilistic Robotics Table 6.1: a
+//!   mixture of a Gaussian around the ray-cast range (`z_hit`, `sigma_hit`), an
+//!   exponential for unexpected short readings (`z_short`, `lambda_short`), a
+//!   point mass at the maximum range (`z_max`) and a uniform (`z_rand`).
+//! - [`LikelihoodFieldModel`]: Probabilistic Robotics Table 6.3 and ROS amcl's
+//!   default `likelihood_field`: each beam end point is scored by its distance to
+//!   the nearest obstacle (`z_hit`, `sigma_hit`) plus a uniform (`z_rand`);
+//!   max-range readings are skipped.
+//!
+//! Departures from ROS amcl, both following Probabilistic Robotics: amcl scores a
+//! scan as `1 + Σ p_k³` (an ad hoc combination) and leaves out the Gaussian's
+//! normalizing constant; here the scan likelihood is the product `Π p_k` and the
+//! Gaussian is a density. The beam model's `p_hit` is not renormalized to
+//! `[0, z_max]` (the factor is within 1% of one when the expected range is more
+//! than `2.4 σ` from both ends).
+
+use super::super::grid::{DistanceField, OccupancyGrid, floor_to_i64};
+use crate::geometry::Pose2;
+use crate::math;
+use serde::{Deserialize, Serialize};
+
+/// `ln(1 / sqrt(2π))`.
+const LN_INV_SQRT_2PI: f64 = -0.918_938_533_204_672_7;
+
+/// A laser scan in the robot frame: the sensor sits at the robot's centre
+/// facing forward; beam `k` points at `angles[k]` (radians, counter-clockwise)
+/// and measured `ranges[k]` metres. A reading at or beyond `range_max` means
+/// "nothing within range"; NaN or negative readings are ignored.
+#[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
+pub struct Scan {
+    /// Beam angles in the robot frame, radians.
+    pub angles: Vec<f64>,
+    /// Measured ranges, metres.
+    pub ranges: Vec<f64>,
+    /// Shortest valid reading, metres.
+    pub range_min: f64,
+    /// Maximum range, metres.
+    pub range_max: f64,
+}
+
+impl Scan {
+    /// The indices of at most `max_beams` beams, evenly spread as amcl picks them
+    /// (`laser_max_beams`: every `(n − 1)/(max_beams − 1)`-th beam); all beams if
+    /// `max_beams` is 0 or at least the beam count.
+    pub fn subsample(&self, max_beams: usize) -> Vec<usize> {
+        let n = self.ranges.len().min(self.angles.len());
+        if max_beams == 0 || max_beams >= n {
+            return (0..n).collect();
+        }
+        if max_beams == 1 {
+            return vec![0];
+        }
+        let step = (n - 1) as f64 / (max_beams - 1) as f64;
+        (0..max_beams)
+            .map(|k| ((k as f64 * step).round() as usize).min(n - 1))
+            .collect()
+    }
+
+    /// Whether reading `k` is a usable number below the maximum range.
+    fn is_hit(&self, k: usize) -> bool {
+        let z = self.ranges[k];
+        z.is_finite() && z >= self.range_min.max(0.0) && z < self.range_max
+    }
+}
+
+/// The likelihood of one beam, for the explanation panel.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+pub struct BeamLikelihood {
+    /// Beam angle in the robot frame, radians.
+    pub angle: f64,
+    /// Measured range, metres.
+    pub range: f64,
+    /// Beam model: the ray-cast range from the particle. Likelihood field: the
+    /// distance from the beam's end point to the nearest obstacle (capped).
+    /// Metres.
+    pub expected: f64,
+    /// `ln p(z_k | x, m)`; `None` for a beam the model skips (a max-range
+    /// reading in the likelihood field, or an unusable number).
+    pub log_likelihood: Option<f64>,
+}
+
+/// The beam model's parameters (thesis `000` Sec. 3.5.1; amcl `laser_z_hit`,
+/// `laser_z_short`, `laser_z_max`, `laser_z_rand`, `laser_sigma_hit`,
+/// `laser_lambda_short`; defaults are ROS 1 amcl's).
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+pub struct BeamModel {
+    /// Weight of the Gaussian around the expected range.
+    pub z_hit: f64,
+    /// Weight of unexpected short readings.
+    pub z_short: f64,
+    /// Weight of max-range readings.
+    pub z_max: f64,
+    /// Weight of uniform noise.
+    pub z_rand: f64,
+    /// Standard deviation of the Gaussian, metres.
+    pub sigma_hit: f64,
+    /// Rate of the exponential of short readings, 1/m.
+    pub lambda_short: f64,
+}
+
+impl Default for BeamModel {
+    fn default() -> Self {
+        Self {
+            z_hit: 0.95,
+            z_short: 0.1,
+            z_max: 0.05,
+            z_rand: 0.05,
+            sigma_hit: 0.2,
+            lambda_short: 0.1,
+        }
+    }
+}
+
+impl BeamModel {
+    /// `ln p(z | z*)` of one reading `z` given the ray-cast range `expected`
+    /// (Probabilistic Robotics Table 6.1).
+    pub fn log_likelihood(&self, z: f64, expected: f64, range_max: f64) -> f64 {
+        let sigma = self.sigma_hit;
+        let mut p = 0.0;
+        if z < range_max {
+            let u = (z - expected) / sigma;
+            p += self.z_hit * math::exp(LN_INV_SQRT_2PI - 0.5 * u * u) / sigma;
+            if z <= expected && self.lambda_short > 0.0 {
+                let eta = 1.0 / (1.0 - math::exp(-self.lambda_short * expected));
+                if eta.is_finite() {
+                    p += self.z_short * eta * self.lambda_short * math::exp(-self.lambda_short * z);
+                }
+            }
+            p += self.z_rand / range_max;
+        } else {
+            p += self.z_max;
+        }
+        math::ln(p)
+    }
+
+    /// `ln p(z | x, m)` of the beams `beams` of `scan` from `pose`, each expected
+    /// range ray-cast on `grid`.
+    pub fn scan_log_likelihood(
+        &self,
+        grid: &OccupancyGrid,
+        pose: &Pose2,
+        scan: &Scan,
+        beams: &[usize],
+    ) -> f64 {
+        let mut sum = 0.0;
+        for &k in beams {
+            let z = scan.ranges[k];
+            if !z.is_finite() || z < scan.range_min.max(0.0) {
+                continue;
+            }
+            let expected =
+                grid.raycast(pose.x, pose.y, pose.theta + scan.angles[k], scan.range_max);
+            sum += self.log_likelihood(z.min(scan.range_max), expected, scan.range_max);
+        }
+        sum
+    }
+}
+
+/// The likelihood-field model's parameters (Probabilistic Robotics Table 6.3; amcl
+/// `laser_z_hit`, `laser_z_rand`, `laser_sigma_hit`; the distance field's cap is
+/// `laser_likelihood_max_dist`, a property of the [`DistanceField`]).
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+pub struct LikelihoodFieldModel {
+    /// Weight of the Gaussian in the distance to the nearest obstacle.
+    pub z_hit: f64,
+    /// Weight of uniform noise.
+    pub z_rand: f64,
+    /// Standard deviation of the Gaussian, metres.
+    pub sigma_hit: f64,
+}
+
+impl Default for LikelihoodFieldModel {
+    fn default() -> Self {
+        Self {
+            z_hit: 0.95,
+            z_rand: 0.05,
+            sigma_hit: 0.2,
+        }
+    }
+}
+
+impl LikelihoodFieldModel {
+    /// `ln(z_hit N(d; 0, σ) + z_rand / z_max)` for an end point at distance `d`
+    /// from the nearest obstacle.
+    pub fn log_likelihood(&self, distance: f64, range_max: f64) -> f64 {
+        let u = distance / self.sigma_hit;
+        let p = self.z_hit * math::exp(LN_INV_SQRT_2PI - 0.5 * u * u) / self.sigma_hit
+            + self.z_rand / range_max;
+        math::ln(p)
+    }
+
+    /// The log likelihood of every squared cell distance the field can hold
+    /// (`0 ..= cap`), so that scoring a beam is a table lookup.
+    pub fn table(&self, field: &DistanceField, range_max: f64) -> Vec<f64> {
+        (0..=field.cap_squared_cells())
+            .map(|sq| self.log_likelihood(field.metres(sq), range_max))
+            .collect()
+    }
+}
+
+/// Which measurement model weights the particles (amcl `laser_model_type`).
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum MeasurementModel {
+    /// Ray casting per beam (thesis Sec. 3.5.1). Exact but slow: one ray per beam
+    /// per particle.
+    Beam(BeamModel),
+    /// End-point scoring on the distance field (amcl's default).
+    LikelihoodField(LikelihoodFieldModel),
+}
+
+impl Default for MeasurementModel {
+    fn default() -> Self {
+        MeasurementModel::LikelihoodField(LikelihoodFieldModel::default())
+    }
+}
+
+impl MeasurementModel {
+    /// amcl's name: `beam` or `likelihood_field`.
+    pub fn name(&self) -> &'static str {
+        match self {
+            MeasurementModel::Beam(_) => "beam",
+            MeasurementModel::LikelihoodField(_) => "likelihood_field",
+        }
+    }
+}
+
+/// A measurement model bound to its map: scores whole scans and explains single
+/// beams. Built once per map and scan maximum range (the likelihood field
+/// tabulates its values).
+#[derive(Clone, Debug)]
+pub struct PreparedModel {
+    model: MeasurementModel,
+    /// Likelihood field: `ln p` per squared cell distance.
+    table: Vec<f64>,
+    range_max: f64,
+}
+
+impl PreparedModel {
+    /// Prepares `model` for `field` (likelihood field) and scans of maximum
+    /// range `range_max`.
+    pub fn new(model: MeasurementModel, field: &DistanceField, range_max: f64) -> Self {
+        let table = match &model {
+            MeasurementModel::LikelihoodField(lf) => lf.table(field, range_max),
+            MeasurementModel::Beam(_) => Vec::new(),
+        };
+        Self {
+            model,
+            table,
+            range_max,
+        }
+    }
+
+    /// The model.
+    pub fn model(&self) -> &MeasurementModel {
+        &self.model
+    }
+
+    /// The maximum range it was prepared for.
+    pub fn range_max(&self) -> f64 {
+        self.range_max
+    }
+
+    /// `ln p(z | x, m)` over the beams `beams` of `scan` from `pose`.
+    ///
+    /// `beam_ends` holds the beam end points in the robot frame for the hits
+    /// among `beams` (see [`beam_end_points`]); the likelihood field uses them,
+    /// the beam model does not.
+    pub fn scan_log_likelihood(
+        &self,
+        grid: &OccupancyGrid,
+        field: &DistanceField,
+        pose: &Pose2,
+        scan: &Scan,
+        beams: &[usize],
+        beam_ends: &[(f64, f64)],
+    ) -> f64 {
+        match &self.model {
+            MeasurementModel::Beam(b) => b.scan_log_likelihood(grid, pose, scan, beams),
+            MeasurementModel::LikelihoodField(_) => {
+                // Everything in the grid frame, in cells: one transform per
+                // particle, then a rotation and a table lookup per beam.
+                let (px, py) = field.world_to_cells(pose.x, pose.y);
+                let (s, c) = math::sin_cos(pose.theta - field.frame_yaw());
+                let inv = 1.0 / field.resolution();
+                let (s, c) = (s * inv, c * inv);
+                let last = self.table.len().saturating_sub(1);
+                let mut sum = 0.0;
+                for &(bx, by) in beam_ends {
+                    let i = floor_to_i64(px + c * bx - s * by);
+                    let j = floor_to_i64(py + s * bx + c * by);
+                    let sq = field.squared_cells(i, j) as usize;
+                    sum += self.table[sq.min(last)];
+                }
+                sum
+            }
+        }
+    }
+
+    /// Every beam's likelihood from `pose` (for the explanation panel).
+    pub fn explain(
+        &self,
+        grid: &OccupancyGrid,
+        field: &DistanceField,
+        pose: &Pose2,
+        scan: &Scan,
+        beams: &[usize],
+    ) -> Vec<BeamLikelihood> {
+        beams
+            .iter()
+            .map(|&k| {
+                let angle = scan.angles[k];
+                let range = scan.ranges[k];
+                match &self.model {
+                    MeasurementModel::Beam(b) => {
+                        let expected =
+                            grid.raycast(pose.x, pose.y, pose.theta + angle, scan.range_max);
+                        let usable = range.is_finite() && range >= scan.range_min.max(0.0);
+                        BeamLikelihood {
+                            angle,
+                            range,
+                            expected,
+                            log_likelihood: usable.then(|| {
+                                b.log_likelihood(
+                                    range.min(scan.range_max),
+                                    expected,
+                                    scan.range_max,
+                                )
+                            }),
+                        }
+                    }
+                    MeasurementModel::LikelihoodField(lf) => {
+                        if scan.is_hit(k) {
+                            let (s, c) = math::sin_cos(pose.theta + angle);
+                            let d = field.distance_at(pose.x + range * c, pose.y + range * s);
+                            BeamLikelihood {
+                                angle,
+                                range,
+                                expected: d,
+                                log_likelihood: Some(lf.log_likelihood(d, scan.range_max)),
+                            }
+                        } else {
+                            BeamLikelihood {
+                                angle,
+                                range,
+                                expected: field.max_distance(),
+                                log_likelihood: None,
+                            }
+                        }
+                    }
+                }
+            })
+            .collect()
+    }
+}
+
+/// The robot-frame end points of the beams `beams` of `scan` that hit something
+/// (finite, at least `range_min`, below `range_max`): what the likelihood field
+/// scores.
+pub fn beam_end_points(scan: &Scan, beams: &[usize]) -> Vec<(f64, f64)> {
+    beams
+        .iter()
+        .filter(|&&k| scan.is_hit(k))
+        .map(|&k| {
+            let (s, c) = math::sin_cos(scan.angles[k]);
+            (scan.ranges[k] * c, scan.ranges[k] * s)
+        })
+        .collect()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::grid::{Cell, OccupancyGrid};
+
+    #[test]
+    fn beam_model_matches_its_mixture() {
+        let b = BeamModel::default();
+        // z = z* = 2 m: Gaussian peak 1/(σ√2π) = 1.9947, short η λ e^{-λz}
+        // with η = 1/(1 − e^{-0.2}), uniform 1/10.
+        let p_hit = 1.0 / (0.2 * (2.0 * std::f64::consts::PI).sqrt());
+        let eta = 1.0 / (1.0 - math::exp(-0.2));
+        let p_short = eta * 0.1 * math::exp(-0.2);
+        let expected = 0.95 * p_hit + 0.1 * p_short + 0.05 / 10.0;
+        assert!((b.log_likelihood(2.0, 2.0, 10.0) - math::ln(expected)).abs() < 1e-12);
+        // Max-range reading: only z_max.
+        assert!((b.log_likelihood(10.0, 2.0, 10.0) - math::ln(0.05)).abs() < 1e-12);
+        // Beyond the expected range there is no short component.
+        let u: f64 = 0.5 / 0.2;
+        let far = 0.95 * p_hit * math::exp(-0.5 * u * u) + 0.005;
+        assert!((b.log_likelihood(2.5, 2.0, 10.0) - math::ln(far)).abs() < 1e-12);
+    }
+
+    #[test]
+    fn likelihood_field_scores_end_points_and_skips_max_range() {
+        let mut g = OccupancyGrid::filled(40, 40, 0.1, Pose2::IDENTITY, Cell::Free).unwrap();
+        for j in 0..40 {
+            g.set(30, j, Cell::Occupied);
+        }
+        let field = DistanceField::new(&g, 2.0);
+        let lf = LikelihoodFieldModel::default();
+        let model = PreparedModel::new(MeasurementModel::LikelihoodField(lf), &field, 5.0);
+        // From (1.05, 2.05) facing +x the wall's cell centres are at x = 3.05.
+        let scan = Scan {
+            angles: vec![0.0, 0.0, 0.0],
+            ranges: vec![2.0, 1.7, 5.0],
+            range_min: 0.0,
+            range_max: 5.0,
+        };
+        let beams = scan.subsample(0);
+        let ends = beam_end_points(&scan, &beams);
+        assert_eq!(ends.len(), 2);
+        let pose = Pose2::new(1.05, 2.05, 0.0);
+        let ll = model.scan_log_likelihood(&g, &field, &pose, &scan, &beams, &ends);
+        let expected = lf.log_likelihood(0.0, 5.0) + lf.log_likelihood(0.3, 5.0);
+        assert!((ll - expected).abs() < 1e-9, "{ll} vs {expected}");
+        let explained = model.explain(&g, &field, &pose, &scan, &beams);
+        assert_eq!(explained[2].log_likelihood, None);
+        assert!((explained[1].expected - 0.3).abs() < 1e-9);
+        // The beam model sees the wall face at x = 3.0: 1.95 m.
+        let bm = PreparedModel::new(MeasurementModel::Beam(BeamModel::default()), &field, 5.0);
+        let e = bm.explain(&g, &field, &pose, &scan, &beams);
+        assert!((e[0].expected - 1.95).abs() < 1e-9);
+    }
+
+    #[test]
+    fn subsampling_spreads_beams_like_amcl() {
+        let scan = Scan {
+            angles: vec![0.0; 181],
+            ranges: vec![1.0; 181],
+            range_min: 0.0,
+            range_max: 5.0,
+        };
+        assert_eq!(scan.subsample(5), vec![0, 45, 90, 135, 180]);
+        assert_eq!(scan.subsample(0).len(), 181);
+        assert_eq!(scan.subsample(1), vec![0]);
+    }
+}
