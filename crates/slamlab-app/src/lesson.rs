@@ -103,6 +103,85 @@ pub trait Lesson: std::fmt::Debug {
     fn as_any_mut(&mut self) -> &mut dyn Any;
 }
 
+/// A lesson with one more notice in front of its own (a lesson that opened in
+/// place of another says why).
+#[derive(Debug)]
+pub struct WithNotice {
+    inner: Box<dyn Lesson>,
+    notice: String,
+}
+
+/// Adds a notice to a lesson.
+pub trait LessonExt {
+    /// This lesson, showing `notice` first.
+    fn with_notice(self, notice: String) -> Box<dyn Lesson>;
+}
+
+impl LessonExt for Box<dyn Lesson> {
+    fn with_notice(self, notice: String) -> Box<dyn Lesson> {
+        Box::new(WithNotice {
+            inner: self,
+            notice,
+        })
+    }
+}
+
+impl Lesson for WithNotice {
+    fn id(&self) -> &'static str {
+        self.inner.id()
+    }
+    fn subtitle(&self) -> String {
+        self.inner.subtitle()
+    }
+    fn notices(&self) -> Vec<String> {
+        let mut all = vec![self.notice.clone()];
+        all.extend(self.inner.notices());
+        all
+    }
+    fn time(&self) -> &TimeControl {
+        self.inner.time()
+    }
+    fn time_mut(&mut self) -> &mut TimeControl {
+        self.inner.time_mut()
+    }
+    fn time_info(&self) -> TimeInfo {
+        self.inner.time_info()
+    }
+    fn apply_time_action(&mut self, action: TimeAction) {
+        self.inner.apply_time_action(action);
+    }
+    fn read_input(&mut self, ctx: &egui::Context) {
+        self.inner.read_input(ctx);
+    }
+    fn advance(&mut self, dt: f64) {
+        self.inner.advance(dt);
+    }
+    fn wants_repaint(&self) -> bool {
+        self.inner.wants_repaint()
+    }
+    fn panels_ui(&mut self, ui: &mut egui::Ui, panels: &mut PanelVisibility, compact: bool) {
+        self.inner.panels_ui(ui, panels, compact);
+    }
+    fn view_menu_ui(&mut self, ui: &mut egui::Ui) {
+        self.inner.view_menu_ui(ui);
+    }
+    fn stored_settings(&self) -> serde_json::Value {
+        self.inner.stored_settings()
+    }
+    fn share_query(&self, embed: bool) -> String {
+        self.inner.share_query(embed)
+    }
+    fn test_state(&self) -> serde_json::Value {
+        self.inner.test_state()
+    }
+    fn as_any(&self) -> &dyn Any {
+        self.inner.as_any()
+    }
+    fn as_any_mut(&mut self) -> &mut dyn Any {
+        self.inner.as_any_mut()
+    }
+}
+
 /// One entry of the lesson menu.
 #[derive(Clone, Copy, Debug)]
 pub struct LessonEntry {
@@ -117,13 +196,22 @@ pub struct LessonEntry {
 }
 
 /// Every lesson, in menu order. The first is the default.
-pub const LESSONS: &[LessonEntry] = &[LessonEntry {
-    id: crate::landmark_slam::LESSON_ID,
-    title: "Landmark SLAM",
-    summary: "A robot drives among landmarks; EKF-SLAM and UKF-SLAM estimate its pose and the \
-                  map, with 95% ellipses, NEES/NIS consistency plots and the covariance heatmap.",
-    open: crate::landmark_slam::open,
-}];
+pub const LESSONS: &[LessonEntry] = &[
+    LessonEntry {
+        id: crate::landmark_slam::LESSON_ID,
+        title: "Landmark SLAM",
+        summary: "A robot drives among landmarks; EKF-SLAM and UKF-SLAM estimate its pose and \
+                  the map, with 95% ellipses, NEES/NIS consistency plots and the covariance heatmap.",
+        open: crate::landmark_slam::open,
+    },
+    LessonEntry {
+        id: crate::kidnap::LESSON_ID,
+        title: "Monte Carlo localization",
+        summary: "A robot with a lidar in a maze or an office; a cloud of particles finds it \
+                  (global localization) and follows it: predict, weight, resample. Kidnap it.",
+        open: crate::kidnap::open,
+    },
+];
 
 /// The lesson that opens when none (or an unknown one) is asked for.
 pub const DEFAULT_LESSON: &str = "landmark-slam";

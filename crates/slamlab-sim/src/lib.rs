@@ -12,6 +12,7 @@ pub mod experiments;
 pub mod fastslam;
 pub mod fusion;
 pub mod grid;
+pub mod kidnap_session;
 pub mod landmark_params;
 pub mod localization;
 pub mod metrics;

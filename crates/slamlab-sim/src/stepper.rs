@@ -25,6 +25,13 @@ pub trait Records: Debug {
     fn truncate(&mut self, mark: &Self::Mark);
 }
 
+/// No records: for a simulation that keeps its short histories in its own state.
+impl Records for () {
+    type Mark = ();
+    fn mark(&self) {}
+    fn truncate(&mut self, _mark: &()) {}
+}
+
 /// A lesson's simulation, stepped one phase at a time.
 pub trait Simulation: Clone + Debug {
     /// One step within a tick ("predict", "update landmark 7", "resample").

@@ -2,6 +2,7 @@
 //! bar), the parameter panel built from a scenario's parameter table, and plot
 //! helpers.
 
+pub mod dropped_files;
 pub mod map_canvas;
 pub mod params_panel;
 pub mod plots;

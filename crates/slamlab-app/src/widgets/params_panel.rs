@@ -120,7 +120,8 @@ fn param_row_ui<S: Scenario>(
                         }
                     })
                     .response
-                    .on_hover_text(param.help);
+                    .on_hover_text(param.help)
+                    .widget_info(|| egui::WidgetInfo::labeled(egui::Role::ComboBox, true, name));
             }
         }
         if let Some(issue) = pending.issues.get(name) {

@@ -1,0 +1,158 @@
+//! The explanation panel: what the phase that just ran did, in two or three
+//! sentences with the source's algorithm, and its live numbers.
+
+use slamlab_core::particle::BeamLikelihood;
+use slamlab_core::{math, wrap_angle};
+use slamlab_sim::localization::{MclPhase, MclRun};
+
+/// The panel for the phase that ran last.
+pub fn explanation_ui(ui: &mut egui::Ui, run: &MclRun, last: Option<MclPhase>) {
+    ui.heading("What just happened");
+    match last {
+        None => {
+            ui.label(
+                "Nothing yet. Each tick has up to four phases: move (the robot drives, its wheels \
+                 report odometry and the lidar scans), then, once the robot has moved far enough \
+                 (update-min-d, update-min-a-deg), predict, weight and resample. Press \"Step phase\".",
+            );
+        }
+        Some(MclPhase::Move) => {
+            let robot = run.robot().pose;
+            ui.label(
+                "Move: the robot drove for one tick. The filters do not see where it went: they get \
+                 the wheel odometry (which has its own noise) and the lidar scan.",
+            );
+            ui.monospace(format!(
+                "true pose ({:.2} m, {:.2} m, {:.1}°)",
+                robot.x,
+                robot.y,
+                robot.theta.to_degrees()
+            ));
+            if let Some(scan) = run.scan() {
+                let hits = scan
+                    .ranges
+                    .iter()
+                    .filter(|r| r.is_finite() && **r < scan.range_max)
+                    .count();
+                ui.monospace(format!(
+                    "scan: {} beams, {hits} hit a wall within {:.1} m",
+                    scan.ranges.len(),
+                    scan.range_max
+                ));
+            }
+        }
+        Some(MclPhase::Predict) => {
+            ui.label(
+                "Predict (Probabilistic Robotics Table 5.6, sample_motion_model_odometry): every particle \
+                 moves by the odometry increment (rotate, translate, rotate) with its own noise drawn from \
+                 odom-alpha1..4. The cloud spreads: the odometry is not trusted exactly.",
+            );
+            for f in run.filters() {
+                if let Some(p) = &f.last_predict {
+                    let (r1, t, r2) = p.increment;
+                    ui.monospace(format!(
+                        "{}: δrot1 {:.1}°, δtrans {:.3} m, δrot2 {:.1}°",
+                        f.name.to_uppercase(),
+                        r1.to_degrees(),
+                        t,
+                        r2.to_degrees()
+                    ));
+                }
+            }
+        }
+        Some(MclPhase::Weight) => {
+            ui.label(
+                "Weight (thesis 000 Algorithm 8, line 4): each particle's weight is the likelihood of the \
+                 scan seen from its pose, the product over the beams (in log space, so that 60 small \
+                 numbers do not round to zero). Darker particles on the map are heavier.",
+            );
+            for f in run.filters() {
+                let Some(w) = &f.last_weight else { continue };
+                ui.separator();
+                ui.strong(f.name.to_uppercase());
+                ui.monospace(format!(
+                    "{} beams; best particle ln p(z|x) = {:.1}, worst {:.1}; N_eff = {:.0} of {}",
+                    w.beams,
+                    w.best.1,
+                    w.worst.1,
+                    w.n_eff,
+                    f.mcl().count()
+                ));
+                if let Some(note) = &w.note {
+                    ui.colored_label(crate::palette::VERMILLION, note);
+                }
+                beams_ui(ui, "best particle", &w.best_beams);
+                beams_ui(ui, "a poor particle", &w.poor_beams);
+            }
+        }
+        Some(MclPhase::Resample) => {
+            ui.label(
+                "Resample (thesis 000 Algorithm 7, low-variance by default): draw a new set of particles \
+                 with probabilities proportional to the weights. Likely particles are copied, unlikely \
+                 ones disappear; afterwards all weights are equal again.",
+            );
+            for f in run.filters() {
+                if let Some(r) = &f.last_resample {
+                    ui.monospace(format!(
+                        "{}: N_eff before {:.0}; {}; {} distinct survivors",
+                        f.name.to_uppercase(),
+                        r.n_eff_before,
+                        if r.resampled {
+                            "resampled"
+                        } else {
+                            "not resampled this update"
+                        },
+                        r.distinct_parents
+                    ));
+                }
+            }
+        }
+    }
+    ui.separator();
+    ui.heading("Estimates");
+    let truth = run.robot().pose;
+    for f in run.filters() {
+        match f.mcl().estimate() {
+            Some(e) => {
+                let error = math::hypot(e.pose.x - truth.x, e.pose.y - truth.y);
+                let heading = wrap_angle(e.pose.theta - truth.theta).to_degrees();
+                ui.monospace(format!(
+                    "{}: ({:.2}, {:.2}) m, error {error:.2} m, {heading:+.1}°; cluster of {} particles ({} clusters)",
+                    f.name.to_uppercase(),
+                    e.pose.x,
+                    e.pose.y,
+                    e.count,
+                    e.clusters
+                ));
+            }
+            None => {
+                ui.monospace(format!("{}: no estimate yet", f.name.to_uppercase()));
+            }
+        }
+    }
+    ui.label(
+        egui::RichText::new(
+            "The estimate is the weighted mean of the heaviest cluster of particles, as ROS amcl \
+             reports it; its ellipse is 95% of that cluster's spread.",
+        )
+        .small(),
+    );
+}
+
+fn beams_ui(ui: &mut egui::Ui, label: &str, beams: &[BeamLikelihood]) {
+    if beams.is_empty() {
+        return;
+    }
+    let shown: Vec<String> = beams
+        .iter()
+        .take(8)
+        .map(|b| match b.log_likelihood {
+            Some(l) => format!("{:+.0}° z={:.2} m: {l:.1}", b.angle.to_degrees(), b.range),
+            None => format!("{:+.0}° z={:.2} m: skipped", b.angle.to_degrees(), b.range),
+        })
+        .collect();
+    ui.label(format!(
+        "{label}, first beams (angle, range: ln p): {}",
+        shown.join(", ")
+    ));
+}

@@ -1,0 +1,465 @@
+//! The grid map: the occupancy grid as an image, the true robot with its lidar
+//! rays, every filter's particles shaded by weight, and each estimate with its 95%
+//! ellipse and heading wedge. A click (with "Kidnap by click" on) teleports the
+//! robot there; dragging sets its heading.
+
+use super::{KidnapView, filter_color};
+use crate::palette;
+use crate::widgets::map_canvas::{
+    self, CanvasColors, MapTransform, MapView, draw_grid, draw_scale_and_axes, finite, screen_dir,
+};
+use egui::{Color32, Pos2, Shape, Stroke, pos2, vec2};
+use nalgebra::{Matrix2, Vector2};
+use slamlab_core::geometry::{CHI2_2DOF_95, CovarianceEllipse};
+use slamlab_core::grid::{Cell, OccupancyGrid};
+use slamlab_core::particle::ParticleFlag;
+use slamlab_core::{Pose2, math};
+use slamlab_sim::localization::MclRun;
+
+/// The occupancy grid as a texture, made once per map.
+#[derive(Default)]
+pub struct GridTexture {
+    texture: Option<(egui::TextureHandle, usize)>,
+}
+
+impl std::fmt::Debug for GridTexture {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str("GridTexture")
+    }
+}
+
+impl GridTexture {
+    /// Forgets the texture (a new map).
+    pub fn clear(&mut self) {
+        self.texture = None;
+    }
+
+    fn get(&mut self, ctx: &egui::Context, grid: &OccupancyGrid, dark: bool) -> egui::TextureId {
+        let key = grid.width() * 31 + grid.height() * 7 + usize::from(dark);
+        if let Some((texture, k)) = &self.texture
+            && *k == key
+        {
+            return texture.id();
+        }
+        let (w, h) = (grid.width(), grid.height());
+        let (free, occupied, unknown) = if dark {
+            (
+                Color32::from_gray(40),
+                Color32::from_gray(230),
+                Color32::from_gray(70),
+            )
+        } else {
+            (
+                Color32::WHITE,
+                Color32::from_gray(20),
+                Color32::from_gray(190),
+            )
+        };
+        let mut pixels = Vec::with_capacity(w * h);
+        // Image row 0 is the top (largest y): grid row h - 1.
+        for row in 0..h {
+            let j = (h - 1 - row) as i64;
+            for i in 0..w as i64 {
+                pixels.push(match grid.get(i, j) {
+                    Some(Cell::Free) => free,
+                    Some(Cell::Occupied) => occupied,
+                    _ => unknown,
+                });
+            }
+        }
+        let image = egui::ColorImage::new([w, h], pixels);
+        let texture = ctx.load_texture("occupancy_grid", image, egui::TextureOptions::NEAREST);
+        let id = texture.id();
+        self.texture = Some((texture, key));
+        id
+    }
+}
+
+/// The world bounds of the grid, `[x_min, y_min, x_max, y_max]`.
+pub fn grid_bounds(grid: &OccupancyGrid) -> [f64; 4] {
+    let (w, h) = (grid.width() as f64, grid.height() as f64);
+    let corners = [(0.0, 0.0), (w, 0.0), (0.0, h), (w, h)]
+        .map(|(i, j)| grid.grid_frame_to_world(i * grid.resolution(), j * grid.resolution()));
+    let xs = corners.map(|c| c.0);
+    let ys = corners.map(|c| c.1);
+    [
+        xs.iter().copied().fold(f64::INFINITY, f64::min),
+        ys.iter().copied().fold(f64::INFINITY, f64::min),
+        xs.iter().copied().fold(f64::NEG_INFINITY, f64::max),
+        ys.iter().copied().fold(f64::NEG_INFINITY, f64::max),
+    ]
+}
+
+/// What the map asks the lesson to do after a frame.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum MapRequest {
+    /// Kidnap the robot to this pose.
+    KidnapTo(Pose2),
+}
+
+/// Where a click-kidnap started (the press), while the pointer is down.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct KidnapDrag {
+    start: Option<[f64; 2]>,
+}
+
+/// The map toolbar and the map.
+pub fn map_ui(
+    ui: &mut egui::Ui,
+    run: &MclRun,
+    canvas: &mut MapView,
+    texture: &mut GridTexture,
+    view: &mut KidnapView,
+    drag: &mut KidnapDrag,
+) -> Option<MapRequest> {
+    ui.horizontal_wrapped(|ui| {
+        ui.label("Map:");
+        if map_canvas::zoom_buttons_ui(ui, canvas, "Fit map") {
+            view.follow_robot = false;
+        }
+        ui.checkbox(&mut view.follow_robot, "Follow robot")
+            .on_hover_text("Keep the true robot in the middle of the map");
+        ui.separator();
+        ui.checkbox(&mut view.legend, "Legend");
+        ui.checkbox(&mut view.rays, "Lidar")
+            .on_hover_text("The lidar's beams as faint rays from the true robot, with their hit points");
+        ui.checkbox(&mut view.particles, "Particles");
+        ui.checkbox(&mut view.path, "Path");
+        ui.separator();
+        ui.toggle_value(&mut view.click_kidnap, "Kidnap by click")
+            .on_hover_text("Click on the map to teleport the robot there (drag to set its heading). The filters are not told.");
+    });
+    let grid = run.map().grid();
+    let bounds = grid_bounds(grid);
+    let truth = run.robot().pose;
+    let mut follow = view.follow_robot.then_some([truth.x, truth.y]);
+    let (response, t) =
+        map_canvas::canvas_ui(ui, canvas, bounds, 0.0, &mut follow, !view.click_kidnap);
+    view.follow_robot = follow.is_some();
+    let colors = CanvasColors::of(ui);
+    let painter = ui.painter_at(t.rect);
+    painter.rect_filled(t.rect, 4.0, colors.background);
+    draw_grid(&painter, &t, &colors);
+    draw_occupancy(ui, &painter, &t, grid, texture);
+    if view.path {
+        draw_path(&painter, &t, run.path(), colors.truth);
+    }
+    if view.rays {
+        draw_rays(&painter, &t, run, colors.truth);
+    }
+    for (k, f) in run.filters().iter().enumerate() {
+        let color = filter_color(k, f.name);
+        if view.particles {
+            draw_particles(&painter, &t, f.mcl().particles(), color);
+        }
+        if let Some(e) = f.mcl().estimate() {
+            draw_estimate(&painter, &t, &e.pose, &e.covariance, color);
+        }
+    }
+    draw_robot(
+        &painter,
+        &t,
+        &truth,
+        run.robot().radius,
+        colors.truth,
+        colors.background,
+    );
+    draw_scale_and_axes(&painter, &t, &colors);
+    if view.legend {
+        draw_legend(&painter, &t, run, &colors);
+    }
+
+    // Click-kidnap: press where, drag for the heading, release to teleport.
+    let mut request = None;
+    if view.click_kidnap {
+        if let Some(p) = response.interact_pointer_pos()
+            && drag.start.is_none()
+            && (response.drag_started() || response.clicked())
+        {
+            drag.start = Some(t.world_of(p));
+        }
+        if let Some([x, y]) = drag.start {
+            let here = response
+                .interact_pointer_pos()
+                .or(response.hover_pos())
+                .map(|p| t.world_of(p));
+            let heading = here
+                .filter(|h| math::hypot(h[0] - x, h[1] - y) > 0.05)
+                .map_or(truth.theta, |h| math::atan2(h[1] - y, h[0] - x));
+            let centre = t.xy(x, y);
+            painter.circle_stroke(centre, 8.0, Stroke::new(2.0, palette::VERMILLION));
+            painter.arrow(
+                centre,
+                screen_dir(heading) * 24.0,
+                Stroke::new(2.0, palette::VERMILLION),
+            );
+            if response.drag_stopped() || response.clicked() {
+                request = Some(MapRequest::KidnapTo(Pose2::new(x, y, heading)));
+                drag.start = None;
+            }
+        }
+    } else {
+        drag.start = None;
+    }
+    if let Some(pointer) = response.hover_pos()
+        && drag.start.is_none()
+    {
+        let [x, y] = t.world_of(pointer);
+        let cell = match grid.cell_at(x, y) {
+            Some(Cell::Free) => "free",
+            Some(Cell::Occupied) => "occupied",
+            Some(Cell::Unknown) => "unknown",
+            None => "outside the map",
+        };
+        response.on_hover_ui_at_pointer(|ui| {
+            ui.label(format!("({x:.2}, {y:.2}) m: {cell}"));
+        });
+    }
+    request
+}
+
+fn draw_occupancy(
+    ui: &egui::Ui,
+    painter: &egui::Painter,
+    t: &MapTransform,
+    grid: &OccupancyGrid,
+    texture: &mut GridTexture,
+) {
+    let id = texture.get(ui.ctx(), grid, ui.visuals().dark_mode);
+    let (w, h) = (
+        grid.width() as f64 * grid.resolution(),
+        grid.height() as f64 * grid.resolution(),
+    );
+    // The image's corners in the world (the origin may be rotated), top row first.
+    let corner = |gx: f64, gy: f64| {
+        let (x, y) = grid.grid_frame_to_world(gx, gy);
+        t.xy(x, y)
+    };
+    let mut mesh = egui::Mesh::with_texture(id);
+    let tint = Color32::from_white_alpha(235);
+    mesh.vertices.extend([
+        egui::epaint::Vertex {
+            pos: corner(0.0, h),
+            uv: pos2(0.0, 0.0),
+            color: tint,
+        },
+        egui::epaint::Vertex {
+            pos: corner(w, h),
+            uv: pos2(1.0, 0.0),
+            color: tint,
+        },
+        egui::epaint::Vertex {
+            pos: corner(w, 0.0),
+            uv: pos2(1.0, 1.0),
+            color: tint,
+        },
+        egui::epaint::Vertex {
+            pos: corner(0.0, 0.0),
+            uv: pos2(0.0, 1.0),
+            color: tint,
+        },
+    ]);
+    mesh.indices.extend([0, 1, 2, 0, 2, 3]);
+    painter.add(Shape::mesh(mesh));
+}
+
+fn draw_path(painter: &egui::Painter, t: &MapTransform, path: &[Pose2], color: Color32) {
+    let stride = path.len() / 3000 + 1;
+    let points: Vec<Pos2> = path
+        .iter()
+        .step_by(stride)
+        .chain(path.last())
+        .map(|p| t.pose(p))
+        .filter(|p| finite(*p))
+        .collect();
+    if points.len() >= 2 {
+        painter.add(Shape::line(
+            points,
+            Stroke::new(1.2, color.gamma_multiply(0.5)),
+        ));
+    }
+}
+
+fn draw_rays(painter: &egui::Painter, t: &MapTransform, run: &MclRun, color: Color32) {
+    let Some(scan) = run.scan() else {
+        return;
+    };
+    let robot = run.robot().pose;
+    let from = t.pose(&robot);
+    let ray = Stroke::new(0.6, palette::VERMILLION.gamma_multiply(0.25));
+    let stride = scan.ranges.len() / 180 + 1;
+    for (angle, range) in scan.angles.iter().zip(&scan.ranges).step_by(stride) {
+        if !range.is_finite() || *range < 0.0 {
+            continue;
+        }
+        let r = range.min(scan.range_max);
+        let a = robot.theta + angle;
+        let (s, c) = math::sin_cos(a);
+        let end = t.xy(robot.x + r * c, robot.y + r * s);
+        painter.line_segment([from, end], ray);
+        if *range < scan.range_max {
+            painter.circle_filled(end, 1.8, palette::VERMILLION);
+        }
+    }
+    let _ = color;
+}
+
+/// Particles as small arrows, their opacity by weight relative to the heaviest;
+/// injected and regenerated ones in their own colours.
+fn draw_particles(
+    painter: &egui::Painter,
+    t: &MapTransform,
+    particles: &[slamlab_core::particle::Particle],
+    color: Color32,
+) {
+    let max_w = particles.iter().map(|p| p.weight).fold(0.0_f64, f64::max);
+    let (x0, x1, y0, y1) = t.visible();
+    let length = (0.12 * t.scale).clamp(4.0, 10.0);
+    let stride = particles.len() / 6000 + 1;
+    for p in particles.iter().step_by(stride) {
+        let pose = p.pose;
+        if pose.x < x0 || pose.x > x1 || pose.y < y0 || pose.y > y1 {
+            continue;
+        }
+        let relative = if max_w > 0.0 {
+            (p.weight / max_w) as f32
+        } else {
+            1.0
+        };
+        let c = match p.flag {
+            ParticleFlag::Normal => color.gamma_multiply(0.15 + 0.85 * relative.sqrt()),
+            ParticleFlag::Injected => palette::VERMILLION,
+            ParticleFlag::Regenerated => palette::GREEN,
+        };
+        let at = t.pose(&pose);
+        let tip = at + screen_dir(pose.theta) * length;
+        painter.line_segment([at, tip], Stroke::new(1.2, c));
+        painter.circle_filled(at, 1.3, c);
+    }
+}
+
+fn draw_estimate(
+    painter: &egui::Painter,
+    t: &MapTransform,
+    pose: &Pose2,
+    covariance: &nalgebra::Matrix3<f64>,
+    color: Color32,
+) {
+    let centre = t.pose(pose);
+    if !finite(centre) {
+        return;
+    }
+    let block = Matrix2::new(
+        covariance[(0, 0)],
+        covariance[(0, 1)],
+        covariance[(1, 0)],
+        covariance[(1, 1)],
+    );
+    let ellipse =
+        CovarianceEllipse::from_covariance(Vector2::new(pose.x, pose.y), &block, CHI2_2DOF_95);
+    let points: Vec<Pos2> = ellipse
+        .boundary(48)
+        .iter()
+        .map(|p| t.v(p))
+        .filter(|p| finite(*p))
+        .collect();
+    if points.len() > 2 {
+        painter.add(Shape::closed_line(points, Stroke::new(2.0, color)));
+    }
+    // Heading wedge: ± 2 sigma.
+    let sigma = covariance[(2, 2)].max(0.0).sqrt();
+    let spread = (2.0 * sigma).min(std::f64::consts::PI);
+    let radius = 26.0;
+    let mut rim = vec![centre];
+    for k in 0..=16 {
+        let a = pose.theta - spread + 2.0 * spread * f64::from(k) / 16.0;
+        rim.push(centre + screen_dir(a) * radius);
+    }
+    painter.add(Shape::convex_polygon(
+        rim,
+        color.gamma_multiply(0.18),
+        Stroke::NONE,
+    ));
+    painter.arrow(
+        centre,
+        screen_dir(pose.theta) * radius,
+        Stroke::new(2.0, color),
+    );
+}
+
+fn draw_robot(
+    painter: &egui::Painter,
+    t: &MapTransform,
+    pose: &Pose2,
+    radius: f64,
+    color: Color32,
+    background: Color32,
+) {
+    let at = t.pose(pose);
+    if !finite(at) {
+        return;
+    }
+    let r = ((radius as f32) * t.scale).max(6.0);
+    painter.circle(
+        at,
+        r,
+        background.gamma_multiply(0.6),
+        Stroke::new(2.0, color),
+    );
+    painter.line_segment(
+        [at, at + screen_dir(pose.theta) * r * 1.4],
+        Stroke::new(2.5, color),
+    );
+}
+
+fn draw_legend(painter: &egui::Painter, t: &MapTransform, run: &MclRun, colors: &CanvasColors) {
+    let mut rows: Vec<(Color32, String)> = vec![
+        (colors.truth, "true robot and path".to_owned()),
+        (palette::VERMILLION, "lidar rays and hits".to_owned()),
+    ];
+    for (k, f) in run.filters().iter().enumerate() {
+        rows.push((
+            filter_color(k, f.name),
+            format!(
+                "{}: particles (darker = heavier), estimate, 95% ellipse",
+                f.name.to_uppercase()
+            ),
+        ));
+    }
+    if run.filters().iter().any(|f| f.name != "mcl") {
+        rows.push((palette::VERMILLION, "injected particles (AMCL)".to_owned()));
+        rows.push((
+            palette::GREEN,
+            "regenerated particles (CMCL, ACMCL)".to_owned(),
+        ));
+    }
+    let font = egui::FontId::proportional(12.5);
+    let origin = t.rect.left_top() + vec2(10.0, 26.0);
+    let width = rows
+        .iter()
+        .map(|(_, text)| {
+            painter
+                .layout_no_wrap(text.clone(), font.clone(), colors.truth)
+                .size()
+                .x
+        })
+        .fold(0.0_f32, f32::max)
+        + 34.0;
+    let height = rows.len() as f32 * 18.0 + 8.0;
+    let frame = egui::Rect::from_min_size(origin, vec2(width, height));
+    painter.rect_filled(frame, 4.0, colors.background.gamma_multiply(0.9));
+    for (i, (color, text)) in rows.iter().enumerate() {
+        let y = origin.y + 13.0 + i as f32 * 18.0;
+        painter.line_segment(
+            [pos2(origin.x + 6.0, y), pos2(origin.x + 22.0, y)],
+            Stroke::new(3.0, *color),
+        );
+        painter.text(
+            pos2(origin.x + 28.0, y),
+            egui::Align2::LEFT_CENTER,
+            text,
+            font.clone(),
+            colors.truth,
+        );
+    }
+}

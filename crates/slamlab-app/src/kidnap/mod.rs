@@ -1,0 +1,563 @@
+//! The Monte Carlo localization lesson (`lesson=kidnap`): a round robot with a
+//! lidar explores a grid map (the built-in maze or office, or a ROS map the
+//! student drops on the window) and a cloud of particles finds it and follows it,
+//! one phase at a time: *move* (the robot, its odometry and a scan), *predict*
+//! (the cloud spreads), *weight* (each particle's scan likelihood) and *resample*
+//! (copies replace the unlikely). The robot can be kidnapped at any moment.
+
+mod explain;
+mod map;
+mod plots;
+
+use crate::lesson::{self, Lesson, LessonExt, LessonStart, PanelVisibility};
+use crate::palette;
+use crate::time_control::{TimeAction, TimeControl, TimeInfo};
+use crate::widgets::dropped_files::DropInbox;
+use crate::widgets::map_canvas::MapView;
+use crate::widgets::params_panel::{self, PendingParams};
+use egui::Color32;
+use serde::{Deserialize, Serialize};
+use slamlab_core::grid::OccupancyGrid;
+use slamlab_sim::kidnap_session::{KidnapEvent, KidnapSim};
+use slamlab_sim::localization::{MclPhase, MclScenario};
+use slamlab_sim::params;
+use slamlab_sim::stepper::{Simulation, Stepper};
+
+/// The lesson's id in URLs and the menu.
+pub const LESSON_ID: &str = "kidnap";
+
+/// The parameters the panel shows, in order (the rest are in the URL and CLI).
+const PANEL_PARAMS: &[&str] = &[
+    "seed",
+    "estimator",
+    "particles",
+    "init",
+    "laser-model-type",
+    "laser-max-beams",
+    "laser-sigma-hit",
+    "laser-z-hit",
+    "laser-z-rand",
+    "laser-likelihood-exponent",
+    "odom-alpha1",
+    "odom-alpha2",
+    "odom-alpha3",
+    "odom-alpha4",
+    "update-min-d",
+    "update-min-a-deg",
+    "resampler",
+    "resample-interval",
+    "lidar-beams",
+    "lidar-max-range",
+    "lidar-range-std",
+    "robot-radius",
+    "kidnap-distance",
+];
+
+/// The colour of filter `k` named `name` (LESSONS.md: particle filters purple,
+/// costmap-aware ones green; a second plain filter orange).
+pub fn filter_color(k: usize, name: &str) -> Color32 {
+    match name {
+        "cmcl" | "acmcl" => palette::GREEN,
+        _ if k == 0 => palette::PURPLE,
+        _ => palette::ORANGE,
+    }
+}
+
+/// What the map shows; saved with the user's settings.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(default)]
+pub struct KidnapView {
+    /// The legend box.
+    pub legend: bool,
+    /// The lidar's rays and hits.
+    pub rays: bool,
+    /// The particles.
+    pub particles: bool,
+    /// The true path.
+    pub path: bool,
+    /// Keep the true robot in the middle.
+    pub follow_robot: bool,
+    /// A click on the map kidnaps the robot (instead of panning).
+    #[serde(skip)]
+    pub click_kidnap: bool,
+}
+
+impl Default for KidnapView {
+    fn default() -> Self {
+        Self {
+            legend: true,
+            rays: true,
+            particles: true,
+            path: true,
+            follow_robot: false,
+            click_kidnap: false,
+        }
+    }
+}
+
+/// What the lesson remembers between visits.
+#[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
+#[serde(default)]
+struct StoredSettings {
+    view: KidnapView,
+    time: TimeControl,
+    params: Vec<(String, String)>,
+}
+
+/// The lesson's start: the simulator's defaults.
+pub fn default_scenario() -> MclScenario {
+    MclScenario::default()
+}
+
+/// The Monte Carlo localization lesson.
+#[derive(Debug)]
+pub struct KidnapLesson {
+    stepper: Stepper<KidnapSim>,
+    pending: PendingParams<MclScenario>,
+    /// A map the student loaded (name, grid); used instead of the built-in one.
+    loaded: Option<(String, OccupancyGrid)>,
+    /// The lesson's clock.
+    pub time: TimeControl,
+    /// What the map shows.
+    pub view: KidnapView,
+    canvas: MapView,
+    texture: map::GridTexture,
+    drag: map::KidnapDrag,
+    /// Link problems and what the run had to change.
+    notices: Vec<String>,
+    /// The latest refusal or load result, shown under the map toolbar.
+    note: Option<String>,
+    /// Maps dropped on the window, while they are read.
+    inbox: DropInbox,
+}
+
+/// Opens the lesson from the URL's pairs, with what it stored last time.
+pub fn open(start: &LessonStart<'_>) -> Box<dyn Lesson> {
+    let stored: Option<StoredSettings> = start
+        .stored
+        .and_then(|value| serde_json::from_value(value.clone()).ok());
+    let mut scenario = default_scenario();
+    if start.pairs.is_empty()
+        && !start.embed
+        && let Some(stored) = &stored
+    {
+        let pairs = stored.params.iter().map(|(k, v)| (k.as_str(), v.as_str()));
+        let _ignored = params::apply_pairs(&mut scenario, pairs, &crate::query::APP_KEYS);
+    }
+    let pairs = start.pairs.iter().map(|(k, v)| (k.as_str(), v.as_str()));
+    let issues = params::apply_pairs(&mut scenario, pairs, &crate::query::APP_KEYS);
+    let mut lesson = match KidnapLesson::new(scenario) {
+        Ok(lesson) => lesson,
+        // Only a broken build could get here (the built-in maze is tested); the
+        // landmark lesson opens instead, saying why.
+        Err(why) => {
+            return crate::landmark_slam::open(&LessonStart {
+                pairs: &[],
+                embed: start.embed,
+                stored: None,
+                many_runs: None,
+            })
+            .with_notice(format!("Monte Carlo localization could not open: {why}"));
+        }
+    };
+    lesson
+        .notices
+        .splice(0..0, issues.iter().map(|issue| format!("link: {issue}")));
+    if let Some(stored) = stored.filter(|_| !start.embed) {
+        lesson.view = stored.view;
+        lesson.time.speed_tps = stored.time.speed_tps;
+        lesson.time.max_speed = stored.time.max_speed;
+    }
+    if start.embed {
+        lesson.view.legend = false;
+    }
+    Box::new(lesson)
+}
+
+impl KidnapLesson {
+    /// Starts the lesson on `scenario` (its map by name; the maze if that map
+    /// cannot hold the robot).
+    pub fn new(scenario: MclScenario) -> Result<Self, String> {
+        let (sim, notices) = KidnapSim::open(scenario, None)?;
+        let pending = PendingParams::new(sim.run().scenario().clone());
+        Ok(Self {
+            stepper: Stepper::new(sim, ()),
+            pending,
+            loaded: None,
+            time: TimeControl::default(),
+            view: KidnapView::default(),
+            canvas: MapView::default(),
+            texture: map::GridTexture::default(),
+            drag: map::KidnapDrag::default(),
+            notices,
+            note: None,
+            inbox: DropInbox::default(),
+        })
+    }
+
+    /// The running simulation.
+    pub fn sim(&self) -> &KidnapSim {
+        self.stepper.sim()
+    }
+
+    /// The scenario being edited in the parameter panel (applied on reset).
+    pub fn pending(&self) -> &MclScenario {
+        &self.pending.scenario
+    }
+
+    /// Sets a parameter of the pending scenario from text, as the panel does.
+    pub fn set_param(&mut self, name: &str, value: &str) -> Option<params::ParamIssue> {
+        self.pending.set(name, value)
+    }
+
+    /// Starts over with the pending parameters (and the loaded map, if any).
+    pub fn reset(&mut self) {
+        let grid = self.loaded.as_ref().map(|(_, g)| g.clone());
+        let (sim, notices) = match KidnapSim::open(self.pending.scenario.clone(), grid) {
+            Ok(opened) => opened,
+            Err(why) => {
+                self.note = Some(format!("Could not start over: {why}; the run goes on"));
+                return;
+            }
+        };
+        self.pending = PendingParams::new(sim.run().scenario().clone());
+        self.stepper = Stepper::new(sim, ());
+        self.notices = notices;
+        self.note = None;
+        self.time.apply(TimeAction::Reset);
+        self.texture.clear();
+        self.canvas.refit();
+    }
+
+    /// Applies a live event (a kidnap, scattering the particles) to the run; it is
+    /// recorded, so stepping back and forth replays it.
+    pub fn apply_event(&mut self, event: KidnapEvent) {
+        if let KidnapEvent::KidnapTo(pose) = event
+            && let Err(why) = self.stepper.sim().check_kidnap(&pose)
+        {
+            self.note = Some(format!("Kidnap refused: {why}"));
+            return;
+        }
+        self.note = Some(event.describe());
+        self.stepper.apply(event);
+    }
+
+    /// Runs one phase.
+    pub fn step_phase(&mut self) {
+        self.stepper.step_phase();
+    }
+
+    /// Finishes the tick, or runs a whole one.
+    pub fn step_tick(&mut self) {
+        self.stepper.step_tick();
+    }
+
+    /// Loads a map the student dropped on the window: a ROS map_server YAML with
+    /// its image, or a lone image at the pending `resolution`. On any problem the
+    /// current map and run stay, with a note that names it.
+    pub fn load_dropped(&mut self, files: &[(String, Vec<u8>)]) {
+        match slamlab_sim::kidnap_session::load_dropped_map(files) {
+            Ok((name, grid, notes)) => {
+                self.note = Some(format!(
+                    "Loaded {name}: {} x {} cells at {} m{}",
+                    grid.width(),
+                    grid.height(),
+                    grid.resolution(),
+                    if notes.is_empty() {
+                        String::new()
+                    } else {
+                        format!(" ({})", notes.join("; "))
+                    }
+                ));
+                self.pending.scenario.map = name.clone();
+                self.loaded = Some((name, grid));
+                let note = self.note.clone();
+                self.reset();
+                self.note = note;
+            }
+            Err(why) => self.note = Some(format!("Could not load the map: {why}")),
+        }
+    }
+
+    /// The query string (without `?`) that reopens this setup.
+    pub fn share_pairs(&self) -> Vec<(String, String)> {
+        let scenario = self.sim().run().scenario();
+        let mut pairs = params::changed_pairs(scenario, &default_scenario());
+        if !pairs.iter().any(|(name, _)| name == "seed") {
+            pairs.insert(0, ("seed".to_owned(), scenario.seed.to_string()));
+        }
+        pairs
+    }
+
+    fn next_phase_label(&self) -> String {
+        match self.sim().run().next_phase() {
+            MclPhase::Move => "move (new tick)".to_owned(),
+            phase => phase_name(phase).to_owned(),
+        }
+    }
+
+    fn parameters_ui(&mut self, ui: &mut egui::Ui) {
+        ui.heading("Monte Carlo localization");
+        ui.horizontal_wrapped(|ui| {
+            if ui
+                .button("Global localization")
+                .on_hover_text("Scatter every filter's particles uniformly over the free space")
+                .clicked()
+            {
+                self.apply_event(KidnapEvent::GlobalLocalization);
+            }
+            if ui
+                .button("Reset around truth")
+                .on_hover_text("Every filter's particles around the true pose (tracking)")
+                .clicked()
+            {
+                self.apply_event(KidnapEvent::ResetAroundTruth);
+            }
+            if ui
+                .button("Kidnap")
+                .on_hover_text("Teleport the robot to a random free pose at least kidnap-distance away; the filters are not told")
+                .clicked()
+            {
+                self.apply_event(KidnapEvent::KidnapRandom);
+            }
+        });
+        ui.separator();
+        ui.horizontal(|ui| {
+            ui.label("map");
+            let current = self.pending.scenario.map.clone();
+            egui::ComboBox::from_id_salt("kidnap_map")
+                .selected_text(current.clone())
+                .show_ui(ui, |ui| {
+                    for name in ["maze", "office"] {
+                        if ui.selectable_label(current == name, name).clicked() {
+                            self.loaded = None;
+                            self.pending.set("map", name);
+                        }
+                    }
+                })
+                .response
+                .on_hover_text("The built-in maps; press \"Apply & reset\" to open one")
+                .widget_info(|| egui::WidgetInfo::labeled(egui::Role::ComboBox, true, "map"));
+        });
+        ui.label(
+            egui::RichText::new(
+                "Or drop a ROS map (its .yaml and .pgm/.png together) on the window.",
+            )
+            .small(),
+        );
+        let running = self.sim().run().scenario().clone();
+        params_panel::params_ui(ui, &mut self.pending, &running, PANEL_PARAMS);
+        ui.separator();
+        let changed = params::to_pairs(&self.pending.scenario) != params::to_pairs(&running);
+        if ui
+            .add_enabled(changed, egui::Button::new("Apply & reset"))
+            .on_hover_text("Start over with these parameters (same seed: same run)")
+            .clicked()
+        {
+            self.reset();
+        }
+        ui.separator();
+        ui.label(egui::RichText::new("Share this setup").strong());
+        let query = lesson::Lesson::share_query(self, false);
+        ui.add(egui::TextEdit::singleline(&mut query.clone()).desired_width(f32::INFINITY))
+            .on_hover_text("index.html?… with these pairs opens exactly this run");
+    }
+}
+
+/// A phase's name on screen.
+fn phase_name(phase: MclPhase) -> &'static str {
+    match phase {
+        MclPhase::Move => "move",
+        MclPhase::Predict => "predict",
+        MclPhase::Weight => "weight",
+        MclPhase::Resample => "resample",
+    }
+}
+
+impl Lesson for KidnapLesson {
+    fn id(&self) -> &'static str {
+        LESSON_ID
+    }
+
+    fn subtitle(&self) -> String {
+        let run = self.sim().run();
+        let names: Vec<String> = run
+            .filters()
+            .iter()
+            .map(|f| f.name.to_uppercase())
+            .collect();
+        format!("{} on the {}", names.join(" vs "), run.scenario().map)
+    }
+
+    fn notices(&self) -> Vec<String> {
+        let mut all = self.notices.clone();
+        all.extend(self.sim().run().notes().iter().rev().take(3).cloned());
+        all
+    }
+
+    fn time(&self) -> &TimeControl {
+        &self.time
+    }
+
+    fn time_mut(&mut self) -> &mut TimeControl {
+        &mut self.time
+    }
+
+    fn time_info(&self) -> TimeInfo {
+        let run = self.sim().run();
+        TimeInfo {
+            tick: run.tick_count(),
+            time_s: run.tick_count() as f64 * run.scenario().dt,
+            last_phase: self.stepper.last_phase().map(|p| phase_name(*p).to_owned()),
+            next_phase: self.next_phase_label(),
+            can_step_back: self.stepper.phases_run() > 0,
+        }
+    }
+
+    fn apply_time_action(&mut self, action: TimeAction) {
+        self.time.apply(action);
+        match action {
+            TimeAction::ToggleRun => {}
+            TimeAction::StepPhase => self.step_phase(),
+            TimeAction::StepTick => self.step_tick(),
+            TimeAction::StepBack => {
+                self.stepper.step_back();
+            }
+            TimeAction::Reset => self.reset(),
+        }
+    }
+
+    fn read_input(&mut self, ctx: &egui::Context) {
+        if let Some(batch) = self.inbox.poll(ctx) {
+            let mut files = Vec::new();
+            for (name, bytes) in batch {
+                match bytes {
+                    Ok(bytes) => files.push((name, bytes)),
+                    Err(why) => {
+                        self.note = Some(format!("Could not read {name}: {why}"));
+                        return;
+                    }
+                }
+            }
+            self.load_dropped(&files);
+        }
+    }
+
+    fn advance(&mut self, dt: f64) {
+        let stepper = &mut self.stepper;
+        lesson::advance_within_budget(&mut self.time, dt, || {
+            stepper.step_phase();
+            !stepper.sim().is_mid_tick()
+        });
+    }
+
+    fn panels_ui(&mut self, ui: &mut egui::Ui, panels: &mut PanelVisibility, compact: bool) {
+        let plot_height = if compact { 150.0 } else { 220.0 };
+        egui::Panel::bottom("kidnap_plots")
+            .resizable(true)
+            .default_size(plot_height)
+            .min_size(110.0)
+            .show_collapsible(ui, &mut panels.plots, |ui| {
+                plots::plots_ui(ui, self.stepper.sim().run());
+                ui.expand_to_include_rect(ui.max_rect());
+            });
+        egui::Panel::left("kidnap_parameters")
+            .resizable(true)
+            .default_size(300.0)
+            .min_size(220.0)
+            .max_size(480.0)
+            .show_collapsible(ui, &mut panels.parameters, |ui| {
+                egui::ScrollArea::vertical()
+                    .id_salt("kidnap_parameters_scroll")
+                    .show(ui, |ui| self.parameters_ui(ui));
+            });
+        egui::Panel::right("kidnap_explanation")
+            .resizable(true)
+            .default_size(330.0)
+            .min_size(220.0)
+            .max_size(520.0)
+            .show_collapsible(ui, &mut panels.explanation, |ui| {
+                egui::ScrollArea::vertical()
+                    .id_salt("kidnap_explanation_scroll")
+                    .show(ui, |ui| {
+                        explain::explanation_ui(
+                            ui,
+                            self.stepper.sim().run(),
+                            self.stepper.last_phase().copied(),
+                        );
+                    });
+            });
+        egui::CentralPanel::default().show(ui, |ui| {
+            if let Some(note) = &self.note {
+                ui.label(egui::RichText::new(note).color(palette::VERMILLION));
+            }
+            let request = map::map_ui(
+                ui,
+                self.stepper.sim().run(),
+                &mut self.canvas,
+                &mut self.texture,
+                &mut self.view,
+                &mut self.drag,
+            );
+            if let Some(map::MapRequest::KidnapTo(pose)) = request {
+                self.apply_event(KidnapEvent::KidnapTo(pose));
+            }
+        });
+    }
+
+    fn view_menu_ui(&mut self, ui: &mut egui::Ui) {
+        ui.checkbox(&mut self.view.legend, "Map legend");
+        ui.checkbox(&mut self.view.rays, "Lidar rays");
+        ui.checkbox(&mut self.view.particles, "Particles");
+    }
+
+    fn stored_settings(&self) -> serde_json::Value {
+        let stored = StoredSettings {
+            view: self.view.clone(),
+            time: self.time.clone(),
+            params: params::changed_pairs(&self.pending.scenario, &default_scenario()),
+        };
+        serde_json::to_value(stored).unwrap_or_default()
+    }
+
+    fn share_query(&self, embed: bool) -> String {
+        crate::query::build(LESSON_ID, &self.share_pairs(), embed)
+    }
+
+    fn test_state(&self) -> serde_json::Value {
+        let run = self.sim().run();
+        let truth = run.robot().pose;
+        let filters: Vec<serde_json::Value> = run
+            .filters()
+            .iter()
+            .map(|f| {
+                let estimate = f.mcl().estimate().map(|e| e.pose);
+                serde_json::json!({
+                    "name": f.name,
+                    "particles": f.mcl().count(),
+                    "position_error": estimate.map(|e| slamlab_core::math::hypot(e.x - truth.x, e.y - truth.y)),
+                    "heading_error": estimate.map(|e| slamlab_core::wrap_angle(e.theta - truth.theta).abs()),
+                    "estimate": estimate.map(|e| [e.x, e.y, e.theta]),
+                    "n_eff": f.mcl().n_eff(),
+                })
+            })
+            .collect();
+        serde_json::json!({
+            "tick": run.tick_count(),
+            "time": run.tick_count() as f64 * run.scenario().dt,
+            "phase": self.stepper.last_phase().map(|p| phase_name(*p)).unwrap_or_default(),
+            "seed": run.scenario().seed,
+            "map": run.scenario().map,
+            "truth": [truth.x, truth.y, truth.theta],
+            "filters": filters,
+        })
+    }
+
+    fn as_any(&self) -> &dyn std::any::Any {
+        self
+    }
+
+    fn as_any_mut(&mut self) -> &mut dyn std::any::Any {
+        self
+    }
+}

@@ -1,0 +1,52 @@
+//! Files dropped on the window, read natively at once and in the browser
+//! asynchronously, delivered to a lesson as one batch (a ROS map's YAML together
+//! with its image).
+
+use std::cell::RefCell;
+use std::rc::Rc;
+
+/// One dropped file: its name and its bytes, or why it could not be read.
+pub type DroppedBytes = (String, Result<Vec<u8>, String>);
+
+/// Collects the files of one drop until all are read.
+#[derive(Debug, Default)]
+pub struct DropInbox {
+    batch: Rc<RefCell<Vec<DroppedBytes>>>,
+    expected: usize,
+}
+
+impl DropInbox {
+    /// Starts reading what was dropped this frame (nothing if nothing was) and
+    /// returns a complete batch once every file of the latest drop is read.
+    pub fn poll(&mut self, ctx: &egui::Context) -> Option<Vec<DroppedBytes>> {
+        let dropped = ctx.input(|i| i.raw.dropped_files.clone());
+        if !dropped.is_empty() {
+            self.batch = Rc::new(RefCell::new(Vec::new()));
+            self.expected = dropped.len();
+            for file in dropped {
+                let name = file
+                    .path()
+                    .file_name()
+                    .map(|n| n.to_string_lossy().into_owned())
+                    .unwrap_or_default();
+                #[cfg(not(target_arch = "wasm32"))]
+                self.batch.borrow_mut().push((name, file.bytes()));
+                #[cfg(target_arch = "wasm32")]
+                {
+                    let batch = Rc::clone(&self.batch);
+                    let ctx = ctx.clone();
+                    wasm_bindgen_futures::spawn_local(async move {
+                        let bytes = file.bytes_async().await;
+                        batch.borrow_mut().push((name, bytes));
+                        ctx.request_repaint();
+                    });
+                }
+            }
+        }
+        if self.expected > 0 && self.batch.borrow().len() >= self.expected {
+            self.expected = 0;
+            return Some(std::mem::take(&mut *self.batch.borrow_mut()));
+        }
+        None
+    }
+}

@@ -1,0 +1,140 @@
+//! Headless UI tests of the Monte Carlo localization lesson through egui_kittest:
+//! it opens by URL, its buttons step the phases and kidnap the robot, stepping
+//! back replays, and the rendered map shows the grid, the particles and the truth.
+
+#![allow(clippy::panic)]
+
+use egui_kittest::Harness;
+use egui_kittest::kittest::Queryable as _;
+use slamlab_app::SlamLabApp;
+use slamlab_app::kidnap::KidnapLesson;
+
+const SIZE: egui::Vec2 = egui::vec2(1400.0, 900.0);
+
+fn harness(query: &str) -> Harness<'static, SlamLabApp> {
+    let query = query.to_owned();
+    Harness::builder()
+        .with_size(SIZE)
+        .with_max_steps(40)
+        .build_eframe(move |cc| SlamLabApp::new(cc, &query))
+}
+
+fn lesson<'h>(h: &'h Harness<'_, SlamLabApp>) -> &'h KidnapLesson {
+    match h.state().lesson_as::<KidnapLesson>() {
+        Some(l) => l,
+        None => panic!("the kidnap lesson is open"),
+    }
+}
+
+fn lesson_mut<'h>(h: &'h mut Harness<'_, SlamLabApp>) -> &'h mut KidnapLesson {
+    match h.state_mut().lesson_as_mut::<KidnapLesson>() {
+        Some(l) => l,
+        None => panic!("the kidnap lesson is open"),
+    }
+}
+
+fn count_pixels(rgba: &[u8], rgb: [u8; 3], tolerance: i32) -> usize {
+    rgba.chunks_exact(4)
+        .filter(|p| (0..3).all(|c| (i32::from(p[c]) - i32::from(rgb[c])).abs() <= tolerance))
+        .count()
+}
+
+#[test]
+fn the_lesson_opens_by_url_with_its_parameters() {
+    let h = harness("lesson=kidnap&map=maze&particles=500&seed=3");
+    assert_eq!(h.state().lesson_id(), "kidnap");
+    let run = lesson(&h).sim().run();
+    assert_eq!(run.scenario().seed, 3);
+    assert_eq!(run.filters()[0].mcl().count(), 500);
+    assert!(h.state().notices().is_empty(), "{:?}", h.state().notices());
+    // Bad values: a message and a safe value.
+    let h = harness("lesson=kidnap&particles=10000000&map=atlantis");
+    let notices = h.state().notices();
+    assert_eq!(notices.len(), 2, "{notices:?}");
+    assert!(
+        notices
+            .iter()
+            .any(|n| n.contains("particles") && n.contains("out of range"))
+    );
+    assert!(
+        notices
+            .iter()
+            .any(|n| n.contains("map") && n.contains("maze, office"))
+    );
+    assert_eq!(lesson(&h).sim().run().scenario().map, "maze");
+}
+
+#[test]
+fn phases_step_one_at_a_time_and_step_back_replays() {
+    let mut h = harness("lesson=kidnap&particles=300&seed=2&init=tracking");
+    h.run();
+    h.get_by_label("Step phase").click();
+    h.run();
+    use slamlab_app::lesson::Lesson as _;
+    assert_eq!(lesson(&h).time_info().last_phase.as_deref(), Some("move"));
+    // Run until the filter has updated a few times.
+    for _ in 0..60 {
+        lesson_mut(&mut h).step_tick();
+    }
+    let updates = lesson(&h).sim().run().filters()[0].updates.len();
+    assert!(updates >= 3, "updates {updates}");
+    let before: Vec<_> = lesson(&h).sim().run().filters()[0]
+        .mcl()
+        .particles()
+        .to_vec();
+    let tick = lesson(&h).sim().run().tick_count();
+    h.get_by_label("Step phase").click();
+    h.run();
+    h.get_by_label("Step back").click();
+    h.run();
+    assert_eq!(lesson(&h).sim().run().tick_count(), tick);
+    assert_eq!(
+        lesson(&h).sim().run().filters()[0].mcl().particles(),
+        before.as_slice()
+    );
+    // Kidnap: the robot moves at least the kidnap distance; the filter is not told.
+    let robot = lesson(&h).sim().run().robot().pose;
+    h.get_by_label("Kidnap").click();
+    h.run();
+    let after = lesson(&h).sim().run().robot().pose;
+    assert!(slamlab_core::math::hypot(after.x - robot.x, after.y - robot.y) >= 3.0);
+    assert_eq!(
+        lesson(&h).sim().run().filters()[0].mcl().particles(),
+        before.as_slice()
+    );
+}
+
+#[test]
+fn rendered_lesson_shows_the_map_the_particles_and_the_truth() {
+    let mut h = Harness::builder()
+        .with_size(SIZE)
+        .with_max_steps(40)
+        .with_theme(egui::Theme::Dark)
+        .build_eframe(|cc| SlamLabApp::new(cc, "lesson=kidnap&particles=2000&seed=3"));
+    h.run();
+    for _ in 0..40 {
+        lesson_mut(&mut h).step_tick();
+    }
+    h.run();
+    let image = match h.render() {
+        Ok(image) => image,
+        Err(err) => {
+            eprintln!("skipping the rendered checks: no GPU adapter ({err})");
+            return;
+        }
+    };
+    let purple = count_pixels(image.as_raw(), [0xCC, 0x79, 0xA7], 50);
+    // Dark theme: walls light grey, free space dark grey.
+    let walls = count_pixels(image.as_raw(), [230, 230, 230], 12);
+    let free = count_pixels(image.as_raw(), [40, 40, 40], 8);
+    let rays = count_pixels(image.as_raw(), [0xD5, 0x5E, 0x00], 40);
+    assert!(purple > 300, "particle-purple pixels {purple}");
+    assert!(walls > 500, "wall pixels {walls}");
+    assert!(free > 50_000, "free-space pixels {free}");
+    assert!(rays > 30, "lidar hit pixels {rays}");
+    let _ = egui_kittest::try_image_snapshot_options(
+        &image,
+        "kidnap_lesson",
+        &egui_kittest::SnapshotOptions::new().threshold(2.0),
+    );
+}
