@@ -211,6 +211,19 @@ pub fn command() -> Command {
                 .help("lidar beams per scan (default 180)"),
         )
         .arg(
+            Arg::new("preset")
+                .long("preset")
+                .value_parser(
+                    slamlab_sim::localization::MCL_PRESETS
+                        .iter()
+                        .map(|(n, _)| *n)
+                        .collect::<Vec<_>>(),
+                )
+                .help(
+                    "start from a preset: amcl-ros1, nav2, thesis-table-5-1 (flags apply on top)",
+                ),
+        )
+        .arg(
             Arg::new("kld")
                 .long("kld")
                 .action(ArgAction::SetTrue)
@@ -282,12 +295,19 @@ pub fn read_map(spec: &str, resolution: Option<f64>) -> Result<(OccupancyGrid, S
 }
 
 fn scenario_from(m: &ArgMatches) -> Result<MclScenario> {
+    let preset = m.get_one::<String>("preset");
     let mut s = MclScenario {
         seed: m.get_one::<u64>("seed").copied().unwrap_or(1),
-        ..Default::default()
+        ..preset
+            .and_then(|p| MclScenario::preset(p))
+            .unwrap_or_default()
     };
-    let particles = m.get_one::<u64>("particles").copied().unwrap_or(2000);
-    s.max_particles = usize::try_from(particles).unwrap_or(usize::MAX);
+    if preset.is_none()
+        || m.value_source("particles") == Some(clap::parser::ValueSource::CommandLine)
+    {
+        let particles = m.get_one::<u64>("particles").copied().unwrap_or(2000);
+        s.max_particles = usize::try_from(particles).unwrap_or(usize::MAX);
+    }
     s.min_particles = s.min_particles.min(s.max_particles);
     s.init = match m.get_one::<String>("init").map(String::as_str) {
         Some("tracking") => InitMode::Tracking,
@@ -306,7 +326,7 @@ fn scenario_from(m: &ArgMatches) -> Result<MclScenario> {
     }
     s.estimators = estimators;
     s.kidnap_at = m.get_one::<u64>("kidnap-at").copied();
-    s.kld_sampling = m.get_flag("kld");
+    s.kld_sampling |= m.get_flag("kld");
     if let Some(t) = m.get_one::<String>("laser-model-type") {
         s.laser_model_type = if t == "beam" {
             LaserModelType::Beam
