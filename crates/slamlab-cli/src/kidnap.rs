@@ -529,24 +529,67 @@ pub fn experiment(args: &[OsString]) -> Result<()> {
         kidnap_distance: base.kidnap_distance,
         ..Default::default()
     };
-    let total = estimators.len() * counts.len() * trials as usize;
-    let mut done = 0;
-    let mut results = Vec::new();
-    let mut rows = Vec::new();
-    for &est in &estimators {
-        for &n in &counts {
-            let mut ts = Vec::new();
-            for i in 0..trials {
-                let t = kidnap_trial(&base, &grid, est, n, seed.wrapping_add(i), &protocol)
-                    .with_context(|| format!("map {name}"))?;
-                done += 1;
-                eprint!("\rkidnap: {done}/{total} trials");
-                ts.push(t);
-            }
-            results.push(summarize(est.name(), n, &ts));
-            rows.extend(ts);
+    // Every (estimator, count, seed) trial is independent: run them on all
+    // cores (natively only; each trial's numbers do not depend on the thread).
+    let jobs: Vec<(LocalizationEstimator, usize, u64)> = estimators
+        .iter()
+        .flat_map(|&e| {
+            counts
+                .iter()
+                .flat_map(move |&n| (0..trials).map(move |i| (e, n, i)))
+        })
+        .collect();
+    let total = jobs.len();
+    let workers = std::thread::available_parallelism()
+        .map_or(1, |n| n.get())
+        .min(total.max(1));
+    let next = std::sync::atomic::AtomicUsize::new(0);
+    let done = std::sync::atomic::AtomicUsize::new(0);
+    let slots: Vec<
+        std::sync::Mutex<
+            Option<Result<slamlab_sim::localization::experiment::KidnapTrial, String>>,
+        >,
+    > = (0..total).map(|_| std::sync::Mutex::new(None)).collect();
+    std::thread::scope(|scope| {
+        for _ in 0..workers {
+            scope.spawn(|| {
+                loop {
+                    let k = next.fetch_add(1, std::sync::atomic::Ordering::Relaxed);
+                    if k >= total {
+                        break;
+                    }
+                    let (est, n, i) = jobs[k];
+                    let r = kidnap_trial(&base, &grid, est, n, seed.wrapping_add(i), &protocol)
+                        .map_err(|e| e.to_string());
+                    if let Ok(mut slot) = slots[k].lock() {
+                        *slot = Some(r);
+                    }
+                    let d = done.fetch_add(1, std::sync::atomic::Ordering::Relaxed) + 1;
+                    eprint!("\rkidnap: {d}/{total} trials");
+                }
+            });
+        }
+    });
+    let mut all = Vec::with_capacity(total);
+    for slot in slots {
+        match slot.into_inner().ok().flatten() {
+            Some(Ok(t)) => all.push(t),
+            Some(Err(e)) => bail!("map {name}: {e}"),
+            None => bail!("a trial did not finish"),
         }
     }
+    let mut results = Vec::new();
+    for &est in &estimators {
+        for &n in &counts {
+            let ts: Vec<_> = all
+                .iter()
+                .filter(|t| t.estimator == est.name() && t.particles == n)
+                .copied()
+                .collect();
+            results.push(summarize(est.name(), n, &ts));
+        }
+    }
+    let rows = all;
     eprintln!();
     if let Some(dir) = m.get_one::<std::path::PathBuf>("csv") {
         std::fs::create_dir_all(dir).with_context(|| format!("cannot create {}", dir.display()))?;
