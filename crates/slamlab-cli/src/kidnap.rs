@@ -211,6 +211,19 @@ pub fn command() -> Command {
                 .help("lidar beams per scan (default 180)"),
         )
         .arg(
+            Arg::new("preset")
+                .long("preset")
+                .value_parser(
+                    slamlab_sim::localization::MCL_PRESETS
+                        .iter()
+                        .map(|(n, _)| *n)
+                        .collect::<Vec<_>>(),
+                )
+                .help(
+                    "start from a preset: amcl-ros1, nav2, thesis-table-5-1 (flags apply on top)",
+                ),
+        )
+        .arg(
             Arg::new("kld")
                 .long("kld")
                 .action(ArgAction::SetTrue)
@@ -282,12 +295,19 @@ pub fn read_map(spec: &str, resolution: Option<f64>) -> Result<(OccupancyGrid, S
 }
 
 fn scenario_from(m: &ArgMatches) -> Result<MclScenario> {
+    let preset = m.get_one::<String>("preset");
     let mut s = MclScenario {
         seed: m.get_one::<u64>("seed").copied().unwrap_or(1),
-        ..Default::default()
+        ..preset
+            .and_then(|p| MclScenario::preset(p))
+            .unwrap_or_default()
     };
-    let particles = m.get_one::<u64>("particles").copied().unwrap_or(2000);
-    s.max_particles = usize::try_from(particles).unwrap_or(usize::MAX);
+    if preset.is_none()
+        || m.value_source("particles") == Some(clap::parser::ValueSource::CommandLine)
+    {
+        let particles = m.get_one::<u64>("particles").copied().unwrap_or(2000);
+        s.max_particles = usize::try_from(particles).unwrap_or(usize::MAX);
+    }
     s.min_particles = s.min_particles.min(s.max_particles);
     s.init = match m.get_one::<String>("init").map(String::as_str) {
         Some("tracking") => InitMode::Tracking,
@@ -306,7 +326,7 @@ fn scenario_from(m: &ArgMatches) -> Result<MclScenario> {
     }
     s.estimators = estimators;
     s.kidnap_at = m.get_one::<u64>("kidnap-at").copied();
-    s.kld_sampling = m.get_flag("kld");
+    s.kld_sampling |= m.get_flag("kld");
     if let Some(t) = m.get_one::<String>("laser-model-type") {
         s.laser_model_type = if t == "beam" {
             LaserModelType::Beam
@@ -509,24 +529,67 @@ pub fn experiment(args: &[OsString]) -> Result<()> {
         kidnap_distance: base.kidnap_distance,
         ..Default::default()
     };
-    let total = estimators.len() * counts.len() * trials as usize;
-    let mut done = 0;
-    let mut results = Vec::new();
-    let mut rows = Vec::new();
-    for &est in &estimators {
-        for &n in &counts {
-            let mut ts = Vec::new();
-            for i in 0..trials {
-                let t = kidnap_trial(&base, &grid, est, n, seed.wrapping_add(i), &protocol)
-                    .with_context(|| format!("map {name}"))?;
-                done += 1;
-                eprint!("\rkidnap: {done}/{total} trials");
-                ts.push(t);
-            }
-            results.push(summarize(est.name(), n, &ts));
-            rows.extend(ts);
+    // Every (estimator, count, seed) trial is independent: run them on all
+    // cores (natively only; each trial's numbers do not depend on the thread).
+    let jobs: Vec<(LocalizationEstimator, usize, u64)> = estimators
+        .iter()
+        .flat_map(|&e| {
+            counts
+                .iter()
+                .flat_map(move |&n| (0..trials).map(move |i| (e, n, i)))
+        })
+        .collect();
+    let total = jobs.len();
+    let workers = std::thread::available_parallelism()
+        .map_or(1, |n| n.get())
+        .min(total.max(1));
+    let next = std::sync::atomic::AtomicUsize::new(0);
+    let done = std::sync::atomic::AtomicUsize::new(0);
+    let slots: Vec<
+        std::sync::Mutex<
+            Option<Result<slamlab_sim::localization::experiment::KidnapTrial, String>>,
+        >,
+    > = (0..total).map(|_| std::sync::Mutex::new(None)).collect();
+    std::thread::scope(|scope| {
+        for _ in 0..workers {
+            scope.spawn(|| {
+                loop {
+                    let k = next.fetch_add(1, std::sync::atomic::Ordering::Relaxed);
+                    if k >= total {
+                        break;
+                    }
+                    let (est, n, i) = jobs[k];
+                    let r = kidnap_trial(&base, &grid, est, n, seed.wrapping_add(i), &protocol)
+                        .map_err(|e| e.to_string());
+                    if let Ok(mut slot) = slots[k].lock() {
+                        *slot = Some(r);
+                    }
+                    let d = done.fetch_add(1, std::sync::atomic::Ordering::Relaxed) + 1;
+                    eprint!("\rkidnap: {d}/{total} trials");
+                }
+            });
+        }
+    });
+    let mut all = Vec::with_capacity(total);
+    for slot in slots {
+        match slot.into_inner().ok().flatten() {
+            Some(Ok(t)) => all.push(t),
+            Some(Err(e)) => bail!("map {name}: {e}"),
+            None => bail!("a trial did not finish"),
         }
     }
+    let mut results = Vec::new();
+    for &est in &estimators {
+        for &n in &counts {
+            let ts: Vec<_> = all
+                .iter()
+                .filter(|t| t.estimator == est.name() && t.particles == n)
+                .copied()
+                .collect();
+            results.push(summarize(est.name(), n, &ts));
+        }
+    }
+    let rows = all;
     eprintln!();
     if let Some(dir) = m.get_one::<std::path::PathBuf>("csv") {
         std::fs::create_dir_all(dir).with_context(|| format!("cannot create {}", dir.display()))?;

@@ -542,7 +542,6 @@ fn ekf_vs_ukf(matches: &ArgMatches, seed: u64) -> Result<()> {
 
 fn main() -> std::process::ExitCode {
     let args: Vec<std::ffi::OsString> = std::env::args_os().collect();
-    // `run kidnap` has its own flags (kidnap.rs).
     let kidnap_run = kidnap::is_kidnap_run(&args);
     let kidnap_experiment = kidnap::is_kidnap_experiment(&args);
     // `run kidnap` and `experiment kidnap` have their own flags (kidnap.rs).

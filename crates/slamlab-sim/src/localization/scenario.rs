@@ -294,3 +294,98 @@ impl MclScenario {
         }
     }
 }
+
+/// The presets of the Monte Carlo localization lessons.
+pub const MCL_PRESETS: &[(&str, &str)] = &[
+    (
+        "amcl-ros1",
+        "ROS 1 amcl defaults: KLD 100..5000 particles (kld_err 0.01, kld_z 0.99), likelihood field, z_hit 0.95, z_rand 0.05, 30 beams, update 0.2 m / 30°, resample every 2 updates",
+    ),
+    (
+        "nav2",
+        "Nav2 amcl defaults: KLD 500..2000 particles (pf_err 0.05, pf_z 0.99), likelihood field, z_hit 0.5, z_rand 0.5, 60 beams, update 0.25 m / 0.2 rad, resample every update",
+    ),
+    (
+        "thesis-table-5-1",
+        "thesis 000 Table 5.1: a fixed particle count (1000), the beam model, resample every update",
+    ),
+];
+
+impl MclScenario {
+    /// A preset by name (see [`MCL_PRESETS`]). Every preset uses the recovery
+    /// rates 0.001 / 0.1 (the thesis and the Nav2 documentation recommend them;
+    /// both amcl versions default to 0, which disables recovery) and SLAM Lab's
+    /// `laser_likelihood_exponent`.
+    pub fn preset(name: &str) -> Option<Self> {
+        let base = Self::default();
+        match name {
+            "amcl-ros1" => Some(Self {
+                kld_sampling: true,
+                kld_err: 0.01,
+                kld_z: 0.99,
+                min_particles: 100,
+                max_particles: 5000,
+                laser_model_type: LaserModelType::LikelihoodField,
+                laser_z_hit: 0.95,
+                laser_z_short: 0.1,
+                laser_z_max: 0.05,
+                laser_z_rand: 0.05,
+                laser_sigma_hit: 0.2,
+                laser_lambda_short: 0.1,
+                laser_likelihood_max_dist: 2.0,
+                laser_max_beams: 30,
+                update_min_d: 0.2,
+                update_min_a: std::f64::consts::PI / 6.0,
+                resample_interval: 2,
+                ..base
+            }),
+            "nav2" => Some(Self {
+                kld_sampling: true,
+                kld_err: 0.05,
+                kld_z: 0.99,
+                min_particles: 500,
+                max_particles: 2000,
+                laser_model_type: LaserModelType::LikelihoodField,
+                laser_z_hit: 0.5,
+                laser_z_short: 0.05,
+                laser_z_max: 0.05,
+                laser_z_rand: 0.5,
+                laser_sigma_hit: 0.2,
+                laser_lambda_short: 0.1,
+                laser_likelihood_max_dist: 2.0,
+                laser_max_beams: 60,
+                update_min_d: 0.25,
+                update_min_a: 0.2,
+                resample_interval: 1,
+                ..base
+            }),
+            "thesis-table-5-1" => Some(Self {
+                kld_sampling: false,
+                max_particles: 1000,
+                laser_model_type: LaserModelType::Beam,
+                resample_interval: 1,
+                ..base
+            }),
+            _ => None,
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn presets_exist_and_differ() {
+        for (name, _) in MCL_PRESETS {
+            let p = MclScenario::preset(name).unwrap();
+            assert_ne!(p, MclScenario::default(), "{name}");
+            assert_eq!(p.recovery_alpha_slow, 0.001);
+            assert_eq!(p.recovery_alpha_fast, 0.1);
+        }
+        let nav2 = MclScenario::preset("nav2").unwrap();
+        assert_eq!((nav2.min_particles, nav2.max_particles), (500, 2000));
+        assert!(nav2.mcl_config().kld.is_some());
+        assert!(MclScenario::preset("nope").is_none());
+    }
+}
