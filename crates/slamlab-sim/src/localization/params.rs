@@ -50,7 +50,7 @@ pub static PARAMS: &[Param<MclScenario>] = &[
     Param::words(
         "preset",
         "start from a named setup; other parameters apply on top",
-        &["amcl", "nav2", "thesis-table-5-1"],
+        &["amcl-ros1", "nav2", "thesis-table-5-1"],
         |_| None,
         crate::params::apply_preset::<MclScenario>,
     ),
@@ -372,73 +372,45 @@ pub static PARAMS: &[Param<MclScenario>] = &[
     ),
 ];
 
-/// The presets: the parameters of ROS 1 amcl's defaults, of Nav2's, and of the
-/// thesis's Table 5.1 runs.
+/// The parameters of preset `id` ([`MclScenario::preset`]) with `seed`.
+fn named(id: &str, seed: u64) -> MclScenario {
+    MclScenario {
+        seed,
+        ..MclScenario::preset(id).unwrap_or_default()
+    }
+}
+
+/// The presets: ROS 1 amcl's defaults, Nav2's, and the thesis's Table 5.1 runs
+/// (each with Augmented MCL's recovery rates 0.001 / 0.1, see [`MclScenario::preset`]).
 pub static PRESETS: &[Preset<MclScenario>] = &[
     Preset {
-        id: "amcl",
-        title: "ROS 1 amcl defaults",
-        summary: "amcl's documented defaults: 100..5000 particles with KLD-sampling, likelihood field, update every 0.2 m or 30°, resample every 2 updates, no recovery (alphas 0).",
+        id: "amcl-ros1",
+        title: "ROS 1 amcl defaults (AMCL)",
+        summary: "amcl's documented defaults: 100..5000 particles with KLD-sampling, likelihood field with 30 beams, an update every 0.2 m or 30°, resampling every 2 updates.",
         build: |seed| MclScenario {
-            seed,
             estimators: vec![LocalizationEstimator::Amcl],
-            min_particles: 100,
-            max_particles: 5000,
-            kld_sampling: true,
-            kld_err: 0.01,
-            kld_z: 0.99,
-            laser_max_beams: 30,
-            laser_z_hit: 0.95,
-            laser_z_rand: 0.05,
-            laser_sigma_hit: 0.2,
-            laser_likelihood_max_dist: 2.0,
-            update_min_d: 0.2,
-            update_min_a: std::f64::consts::PI / 6.0,
-            resample_interval: 2,
-            recovery_alpha_slow: 0.0,
-            recovery_alpha_fast: 0.0,
-            ..MclScenario::default()
+            ..named("amcl-ros1", seed)
         },
     },
     Preset {
         id: "nav2",
-        title: "Nav2 amcl defaults (with recovery)",
-        summary: "Nav2's defaults: 500..2000 particles with KLD-sampling (kld_err 0.05), likelihood field with 60 beams, update every 0.25 m or 0.2 rad, resample every update, recovery alphas 0.001 / 0.1.",
+        title: "Nav2 amcl defaults (AMCL)",
+        summary: "Nav2's defaults: 500..2000 particles with KLD-sampling (kld_err 0.05), likelihood field with 60 beams, an update every 0.25 m or 0.2 rad, resampling every update.",
         build: |seed| MclScenario {
-            seed,
             estimators: vec![LocalizationEstimator::Amcl],
-            min_particles: 500,
-            max_particles: 2000,
-            kld_sampling: true,
-            kld_err: 0.05,
-            kld_z: 0.99,
-            laser_max_beams: 60,
-            laser_z_hit: 0.5,
-            laser_z_rand: 0.5,
-            laser_sigma_hit: 0.2,
-            laser_likelihood_max_dist: 2.0,
-            update_min_d: 0.25,
-            update_min_a: 0.2,
-            resample_interval: 1,
-            recovery_alpha_slow: 0.001,
-            recovery_alpha_fast: 0.1,
-            ..MclScenario::default()
+            ..named("nav2", seed)
         },
     },
     Preset {
         id: "thesis-table-5-1",
-        title: "Thesis Table 5.1: AMCL vs ACMCL on the maze, 1000 particles",
-        summary: "AMCL beside ACMCL with 1000 particles each, recovery alphas 0.001 / 0.1, kidnapped 3 m at tick 300.",
+        title: "Thesis Table 5.1: AMCL vs ACMCL, 1000 particles, kidnapped at tick 300",
+        summary: "AMCL beside ACMCL with 1000 particles each and the beam model, tracking from the start, kidnapped at least 3 m away at tick 300.",
         build: |seed| MclScenario {
-            seed,
             estimators: vec![LocalizationEstimator::Amcl, LocalizationEstimator::Acmcl],
-            max_particles: 1000,
             init: InitMode::Tracking,
-            recovery_alpha_slow: 0.001,
-            recovery_alpha_fast: 0.1,
             kidnap_at: Some(300),
             kidnap_distance: 3.0,
-            ..MclScenario::default()
+            ..named("thesis-table-5-1", seed)
         },
     },
 ];
