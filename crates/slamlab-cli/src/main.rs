@@ -142,7 +142,14 @@ fn cli() -> Command {
         .subcommand(map::command())
         .subcommand(
             Command::new("params")
-                .about("List the scenario parameters with their units, ranges and defaults"),
+                .about("List a lesson's parameters (the URL's and the flags' names) with their units, ranges and defaults")
+                .arg(
+                    Arg::new("lesson")
+                        .long("lesson")
+                        .value_parser(LESSONS.to_vec())
+                        .default_value("landmark-slam")
+                        .help("the lesson id"),
+                ),
         )
 }
 
@@ -259,21 +266,26 @@ fn run(matches: &ArgMatches) -> Result<()> {
     Ok(())
 }
 
-fn list_params() -> Result<()> {
+/// `slamlab params --lesson ID`: the lesson's parameter table (the URL's names).
+fn list_params(matches: &ArgMatches) -> Result<()> {
+    let lesson = matches
+        .get_one::<String>("lesson")
+        .map_or("landmark-slam", String::as_str);
+    let rows = match lesson {
+        "kidnap" => params::describe::<slamlab_sim::localization::MclScenario>(),
+        _ => params::describe::<LandmarkScenario>(),
+    };
     let mut out = std::io::stdout().lock();
-    let defaults = LandmarkScenario::default();
+    let width = rows.iter().map(|r| r[0].len()).max().unwrap_or(16).max(16);
     writeln!(
         out,
-        "{:<16} {:<8} {:<22} {:<12} meaning",
+        "{:<width$} {:<8} {:<22} {:<12} meaning",
         "name", "unit", "range", "default"
     )?;
-    for p in PARAMS {
-        let range = p.kind.range_text(" | ");
-        let default = params::get(&defaults, p.name).unwrap_or_else(|| "none".to_owned());
+    for [name, unit, range, default, help] in rows {
         writeln!(
             out,
-            "{:<16} {:<8} {:<22} {:<12} {}",
-            p.name, p.unit, range, default, p.help
+            "{name:<width$} {unit:<8} {range:<22} {default:<12} {help}"
         )?;
     }
     Ok(())
@@ -552,7 +564,7 @@ fn main() -> std::process::ExitCode {
         Some(Some(("map", m))) => map::run(m),
         Some(Some(("run", m))) => run(m),
         Some(Some(("experiment", m))) => experiment(m),
-        Some(Some(("params", _))) => list_params(),
+        Some(Some(("params", m))) => list_params(m),
         _ => Ok(()),
     };
     match result {
