@@ -491,6 +491,40 @@ async function main() {
       }
     });
 
+    // --- Monte Carlo localization by URL: the lesson runs on the maze, and a seeded
+    // global localization run in this page's wasm converges with exactly the native bits
+    // (crates/slamlab-app/tests/kidnap_ui.rs pins the same numbers).
+    await check("lesson=kidnap runs on the maze and converges with the native numbers", async () => {
+      const url = "index.html?lesson=kidnap&map=maze&seed=3&particles=1000";
+      const { context, page: p, log } = await openPage(browser, baseUrl, url, "kidnap");
+      try {
+        await waitRunning(p);
+        const s0 = await waitState(p, (st) => st.lesson === "kidnap" && st.frames > 2, "the kidnap lesson");
+        assert(s0.map === "maze" && s0.seed === 3, `opened ${JSON.stringify(s0)}`);
+        assert(s0.filters.length === 1 && s0.filters[0].particles === 1000, `filters ${JSON.stringify(s0.filters)}`);
+        await p.keyboard.press("Space");
+        const s1 = await waitState(p, (st) => st.tick >= 20, "20 ticks running", 60_000);
+        await sleep(300);
+        const { stats } = await waitNotBlank(p, "kidnap-running.png");
+        assertNotBlank(stats, "kidnap-running.png");
+        const headless = JSON.parse(
+          await p.evaluate((q) => window.slamlab.slamlab_test_headless(q, 300), "lesson=kidnap&map=maze&seed=3&particles=1000"),
+        );
+        const f = headless.filters[0];
+        assert(f.position_error < 0.5, `the estimate did not converge: ${JSON.stringify(f)}`);
+        const NATIVE = [3.674915041270399, 3.2807691616908534, 1.0349869652703705];
+        assert(
+          f.estimate.every((v, i) => v === NATIVE[i]),
+          `estimate ${JSON.stringify(f.estimate)} in the browser, ${JSON.stringify(NATIVE)} natively`,
+        );
+        await assertNoPanic(p);
+        assert(log.problems.length === 0, log.problems.join("; "));
+        return `ran to tick ${s1.tick}; headless 300 ticks: error ${f.position_error.toFixed(3)} m, estimate bit-identical to native`;
+      } finally {
+        await context.close();
+      }
+    });
+
     // --- A panic must be visible: the red banner, #status "panicked", and the app stops.
     await check("a panic shows the red #panic banner and stops the app", async () => {
       const { context, page: p, log } = await openPage(browser, baseUrl, `index.html?${LESSON}`, "panic (deliberate)");

@@ -236,6 +236,18 @@ impl SlamLabApp {
         state.to_string()
     }
 
+    /// Opens `query` without a window, runs its lesson `ticks` whole ticks and
+    /// returns [`test_state_json`](Self::test_state_json). The browser test calls this
+    /// in wasm and compares it with the native result: the same seed gives the same
+    /// bits in both.
+    pub fn headless_state(query: &str, ticks: u64) -> String {
+        let mut app = Self::from_query(query);
+        for _ in 0..ticks.min(100_000) {
+            app.apply_time_action(TimeAction::StepTick);
+        }
+        app.test_state_json()
+    }
+
     fn apply_theme(&self, ctx: &egui::Context) {
         match self.dark_mode {
             Some(true) => ctx.set_theme(egui::Theme::Dark),

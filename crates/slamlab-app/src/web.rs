@@ -103,6 +103,14 @@ pub fn slamlab_test_state() -> String {
     })
 }
 
+/// Runs `query`'s lesson headless for `ticks` ticks in this wasm module and returns
+/// its test state (see `SlamLabApp::headless_state`), for comparing with the native
+/// numbers.
+#[wasm_bindgen]
+pub fn slamlab_test_headless(query: &str, ticks: u32) -> String {
+    SlamLabApp::headless_state(query, u64::from(ticks))
+}
+
 /// Has the app panicked (and therefore stopped)?
 #[wasm_bindgen]
 pub fn slamlab_panicked() -> bool {

@@ -138,3 +138,20 @@ fn rendered_lesson_shows_the_map_the_particles_and_the_truth() {
         &egui_kittest::SnapshotOptions::new().threshold(2.0),
     );
 }
+
+/// The seeded run the browser test repeats in wasm (`web/tests/browser.test.mjs`):
+/// global localization on the built-in maze converges, and these are its exact bits.
+#[test]
+fn a_seeded_global_localization_converges_with_these_exact_numbers() {
+    let json = SlamLabApp::headless_state("lesson=kidnap&map=maze&seed=3&particles=1000", 300);
+    let state: serde_json::Value = serde_json::from_str(&json).unwrap();
+    let filter = &state["filters"][0];
+    let error = filter["position_error"].as_f64().unwrap();
+    assert!(error < 0.5, "{json}");
+    // The same numbers, to the last bit, are asserted in the browser.
+    assert_eq!(
+        filter["estimate"],
+        serde_json::json!([3.674915041270399, 3.2807691616908534, 1.0349869652703705]),
+        "{json}"
+    );
+}
