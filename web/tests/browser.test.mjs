@@ -502,6 +502,7 @@ async function main() {
         const s0 = await waitState(p, (st) => st.lesson === "kidnap" && st.frames > 2, "the kidnap lesson");
         assert(s0.map === "maze" && s0.seed === 3, `opened ${JSON.stringify(s0)}`);
         assert(s0.filters.length === 1 && s0.filters[0].particles === 1000, `filters ${JSON.stringify(s0.filters)}`);
+        await p.mouse.click(VIEWPORT.width / 2, VIEWPORT.height / 2); // gives the canvas keyboard focus
         await p.keyboard.press("Space");
         const s1 = await waitState(p, (st) => st.tick >= 20, "20 ticks running", 60_000);
         await sleep(300);
