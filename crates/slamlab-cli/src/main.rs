@@ -11,6 +11,8 @@
 //! `slamlab run landmark-slam --seed 7 --landmarks 30` and
 //! `index.html?lesson=landmark-slam&seed=7&landmarks=30` are the same run.
 
+mod graph_cmd;
+
 use anyhow::{Context, Result, bail};
 use clap::{Arg, ArgAction, ArgMatches, Command};
 use slamlab_sim::consistency::ConsistencyStudy;
@@ -120,6 +122,7 @@ fn cli() -> Command {
                 .next_help_heading("Scenario (the same names as `run`; ekf-vs-ukf takes only --seed)")
                 .args(scenario_args()),
         )
+        .subcommand(graph_cmd::command())
         .subcommand(
             Command::new("params")
                 .about("List the scenario parameters with their units, ranges and defaults"),
@@ -514,6 +517,7 @@ fn main() -> std::process::ExitCode {
         Some(("run", m)) => run(m),
         Some(("experiment", m)) => experiment(m),
         Some(("params", _)) => list_params(),
+        Some(("graph", m)) => graph_cmd::run(m),
         _ => Ok(()),
     };
     match result {

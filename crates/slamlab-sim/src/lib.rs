@@ -9,6 +9,7 @@
 
 pub mod consistency;
 pub mod experiments;
+pub mod graph_io;
 pub mod metrics;
 pub mod noise;
 pub mod params;
