@@ -27,7 +27,7 @@ use super::sparse::{
     CholeskyError, FaerCholesky, SparseCholesky, fill_reducing_order, symbolic_factor_pattern,
 };
 use super::{EdgeKind, GraphError, PoseGraph, VertexId, VertexState};
-use crate::geometry::{Pose2, wrap_angle};
+use crate::geometry::Pose2;
 use nalgebra::{Matrix2, Matrix3, SMatrix, Vector2, Vector3};
 use serde::{Deserialize, Serialize};
 use thiserror::Error;
@@ -396,12 +396,51 @@ fn linearize_edge(graph: &PoseGraph, e: &EdgeKind) -> LinearEdge {
         EdgeKind::PosePrior { .. } => (Block3::identity(), Block3::zeros()),
         EdgeKind::PointPrior { .. } => (pad2(&Matrix2::identity()), Block3::zeros()),
     };
+    // Poses are updated in their own frame (x ← x ∘ Exp(δ)), so a pose's
+    // Jacobian block is ∂e/∂x · ∂(x ∘ Exp(δ))/∂δ = ∂e/∂x · diag(R(θ), 1).
+    let (va, vb) = e.vertices();
+    let ja = to_local(graph, va, ja);
+    let jb = match vb {
+        Some(v) => to_local(graph, v, jb),
+        None => jb,
+    };
     LinearEdge {
         e: err,
         omega,
         ja,
         jb,
     }
+}
+
+/// Right-multiplies a pose's Jacobian block by `diag(R(θ), 1)` (a point's is kept).
+fn to_local(graph: &PoseGraph, v: usize, j: Block3) -> Block3 {
+    match graph.vertices()[v].state {
+        VertexState::Pose(p) => {
+            let r = p.rotation();
+            let mut out = j;
+            for row in 0..3 {
+                let (a, b) = (j[(row, 0)], j[(row, 1)]);
+                out[(row, 0)] = a * r[(0, 0)] + b * r[(1, 0)];
+                out[(row, 1)] = a * r[(0, 1)] + b * r[(1, 1)];
+            }
+            out
+        }
+        VertexState::Point(_) => j,
+    }
+}
+
+/// `x ∘ Exp(δ)` on SE(2): the pose moved by `δ = [v_x, v_y, ω]` given in its own
+/// frame (the exponential map, so that a step along a constant twist is exact).
+pub fn retract(x: &Pose2, delta: &Vector3<f64>) -> Pose2 {
+    let w = delta[2];
+    let (s, c) = crate::math::sin_cos(w);
+    let (a, b) = if w.abs() < 1e-9 {
+        (1.0 - w * w / 6.0, 0.5 * w)
+    } else {
+        (s / w, (1.0 - c) / w)
+    };
+    let t = Vector2::new(a * delta[0] - b * delta[1], b * delta[0] + a * delta[1]);
+    x.compose(&Pose2::new(t[0], t[1], w))
 }
 
 /// The cost `Σ ρ(eᵀ Ω e)` of a graph under a kernel (thesis 000 Eq. 4.2).
@@ -749,7 +788,7 @@ impl Optimizer {
         }
     }
 
-    /// Applies `x ← x + α Δx` to the free vertices (θ wrapped).
+    /// Applies `x ← x ∘ Exp(α Δx)` to the free poses and `l ← l + α Δl` to the points.
     fn apply(&mut self, delta: &[f64], alpha: f64) {
         let Some(s) = self.structure.as_ref() else {
             return;
@@ -759,9 +798,8 @@ impl Optimizer {
             let o = s.offset[blk];
             match &mut vertices[v].state {
                 VertexState::Pose(p) => {
-                    p.x += alpha * delta[o];
-                    p.y += alpha * delta[o + 1];
-                    p.theta = wrap_angle(p.theta + alpha * delta[o + 2]);
+                    let d = Vector3::new(delta[o], delta[o + 1], delta[o + 2]) * alpha;
+                    *p = retract(p, &d);
                 }
                 VertexState::Point(p) => {
                     p[0] += alpha * delta[o];
@@ -849,8 +887,7 @@ impl Optimizer {
             damped[k] += lambda;
         }
         let rejected = |this: &mut Self, step_norm: f64| {
-            this.lambda = Some(lambda * this.nu);
-            this.nu *= 2.0;
+            this.lambda = Some(lambda * 10.0);
             StepReport {
                 iteration: this.iteration,
                 cost_before,
@@ -882,8 +919,8 @@ impl Optimizer {
             .sum();
         if cost.is_finite() && cost < cost_before {
             let rho = (cost_before - cost) / predicted.max(f64::MIN_POSITIVE);
-            let factor = (1.0 - (2.0 * rho - 1.0).powi(3)).max(1.0 / 3.0);
-            self.lambda = Some((lambda * factor).max(1e-12));
+            let _ = rho;
+            self.lambda = Some((lambda / 10.0).max(1e-12));
             self.nu = 2.0;
             self.linearization = None;
             let settings = self.settings;
