@@ -26,7 +26,7 @@ use std::io::{IsTerminal, Write};
 const LESSONS: &[&str] = &["landmark-slam"];
 
 /// Experiments the CLI can run.
-const EXPERIMENTS: &[&str] = &["ekf-vs-ukf", "consistency"];
+const EXPERIMENTS: &[&str] = &["ekf-vs-ukf", "consistency", "pose-graph"];
 
 fn scenario_args() -> Vec<Arg> {
     PARAMS
@@ -83,7 +83,7 @@ fn cli() -> Command {
         )
         .subcommand(
             Command::new("experiment")
-                .about("Reproduce an experiment: ekf-vs-ukf (thesis 000 Sec. 3.4.3, Experiments 1 and 2) or consistency (average NEES over many seeded runs of any scenario)")
+                .about("Reproduce an experiment: ekf-vs-ukf (thesis 000 Sec. 3.4.3, Experiments 1 and 2) , consistency (average NEES over many seeded runs of any scenario) or pose-graph (thesis 000 Sec. 4.2: EKF-SLAM path, loop closures, optimized graph)")
                 .arg(
                     Arg::new("name")
                         .required(true)
@@ -112,6 +112,7 @@ fn cli() -> Command {
                         .help("consistency: ticks per trial (200 ticks of 0.1 s are one lap of the circle)"),
                 )
                 .arg(Arg::new("json").long("json").action(ArgAction::SetTrue).help("print one JSON object"))
+                .args(graph_cmd::experiment_args())
                 .arg(
                     Arg::new("csv")
                         .long("csv")
@@ -291,6 +292,9 @@ fn experiment(matches: &ArgMatches) -> Result<()> {
         .get_one::<String>("name")
         .map_or("ekf-vs-ukf", String::as_str);
     let given = |id: &str| matches.value_source(id) == Some(clap::parser::ValueSource::CommandLine);
+    if name == "pose-graph" {
+        return graph_cmd::pose_graph_experiment(matches);
+    }
     if name == "consistency" {
         if given("noise-scale") {
             bail!(

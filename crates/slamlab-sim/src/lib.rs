@@ -13,6 +13,7 @@ pub mod graph_io;
 pub mod metrics;
 pub mod noise;
 pub mod params;
+pub mod pose_graph_experiment;
 pub mod presets;
 pub mod scenario;
 pub mod session;
