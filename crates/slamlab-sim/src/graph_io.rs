@@ -295,7 +295,7 @@ pub fn read_g2o(text: &str) -> Result<PoseGraph, GraphFileError> {
                 f.expect_len(4, "id x y theta")?;
                 let v = f.nums(1, 3)?;
                 graph
-                    .add_pose(f.id(0)?, Pose2::new(v[0], v[1], v[2]))
+                    .add_pose(f.id(0)?, file_pose(v[0], v[1], v[2]))
                     .map_err(|e| line_error(f.line, e.to_string()))?;
             }
             "VERTEX_XY" => {
@@ -313,7 +313,7 @@ pub fn read_g2o(text: &str) -> Result<PoseGraph, GraphFileError> {
                     PendingEdge::Between(
                         f.id(0)?,
                         f.id(1)?,
-                        Pose2::new(v[0], v[1], v[2]),
+                        file_pose(v[0], v[1], v[2]),
                         upper3(&v[3..]),
                     ),
                 ));
@@ -336,7 +336,7 @@ pub fn read_g2o(text: &str) -> Result<PoseGraph, GraphFileError> {
                 let v = f.nums(1, 9)?;
                 pending.push((
                     f.line,
-                    PendingEdge::Prior(f.id(0)?, Pose2::new(v[0], v[1], v[2]), upper3(&v[3..])),
+                    PendingEdge::Prior(f.id(0)?, file_pose(v[0], v[1], v[2]), upper3(&v[3..])),
                 ));
             }
             "FIX" => {
@@ -383,7 +383,7 @@ pub fn read_toro(text: &str) -> Result<PoseGraph, GraphFileError> {
                 f.expect_len(4, "id x y theta")?;
                 let v = f.nums(1, 3)?;
                 graph
-                    .add_pose(f.id(0)?, Pose2::new(v[0], v[1], v[2]))
+                    .add_pose(f.id(0)?, file_pose(v[0], v[1], v[2]))
                     .map_err(|e| line_error(f.line, e.to_string()))?;
             }
             "EDGE2" => {
@@ -392,7 +392,7 @@ pub fn read_toro(text: &str) -> Result<PoseGraph, GraphFileError> {
                 let info = toro_information(&[v[3], v[4], v[5], v[6], v[7], v[8]]);
                 pending.push((
                     f.line,
-                    PendingEdge::Between(f.id(0)?, f.id(1)?, Pose2::new(v[0], v[1], v[2]), info),
+                    PendingEdge::Between(f.id(0)?, f.id(1)?, file_pose(v[0], v[1], v[2]), info),
                 ));
             }
             other => {
@@ -466,7 +466,7 @@ pub fn read_isam(text: &str) -> Result<PoseGraph, GraphFileError> {
                     line: f.line,
                     i: f.id(0)?,
                     j: f.id(1)?,
-                    z: Pose2::new(v[0], v[1], v[2]),
+                    z: file_pose(v[0], v[1], v[2]),
                     info: 0.5 * (info + info.transpose()),
                 });
             }
@@ -578,6 +578,27 @@ pub fn read_isam(text: &str) -> Result<PoseGraph, GraphFileError> {
     Ok(graph)
 }
 
+/// A number in the shortest text that reads back to the same `f64`, in exponent
+/// form when plain digits would be long (denormals, large information values).
+fn num(v: f64) -> String {
+    let a = v.abs();
+    if v == 0.0 || (1e-4..1e15).contains(&a) {
+        format!("{v}")
+    } else {
+        format!("{v:e}")
+    }
+}
+
+/// A pose read from a file: the heading is kept exactly when it already lies in
+/// (-π, π] (so that write-then-read is exact), and wrapped otherwise.
+fn file_pose(x: f64, y: f64, theta: f64) -> Pose2 {
+    if theta > -std::f64::consts::PI && theta <= std::f64::consts::PI {
+        Pose2 { x, y, theta }
+    } else {
+        Pose2::new(x, y, theta)
+    }
+}
+
 /// Writes a graph as g2o 2D text. Numbers are written in Rust's shortest form that
 /// reads back to the same `f64`, so write-then-read gives the same graph. Range-
 /// bearing edges and point priors have no g2o 2D tag and are refused.
@@ -587,10 +608,17 @@ pub fn write_g2o(graph: &PoseGraph) -> Result<String, GraphFileError> {
     for vertex in v {
         match vertex.state {
             VertexState::Pose(p) => {
-                let _ = writeln!(out, "VERTEX_SE2 {} {} {} {}", vertex.id, p.x, p.y, p.theta);
+                let _ = writeln!(
+                    out,
+                    "VERTEX_SE2 {} {} {} {}",
+                    vertex.id,
+                    num(p.x),
+                    num(p.y),
+                    num(p.theta)
+                );
             }
             VertexState::Point(p) => {
-                let _ = writeln!(out, "VERTEX_XY {} {} {}", vertex.id, p[0], p[1]);
+                let _ = writeln!(out, "VERTEX_XY {} {} {}", vertex.id, num(p[0]), num(p[1]));
             }
         }
     }
@@ -610,15 +638,15 @@ pub fn write_g2o(graph: &PoseGraph) -> Result<String, GraphFileError> {
                     "EDGE_SE2 {} {} {} {} {} {} {} {} {} {} {}",
                     v[from].id,
                     v[to].id,
-                    z.x,
-                    z.y,
-                    z.theta,
-                    m[(0, 0)],
-                    m[(0, 1)],
-                    m[(0, 2)],
-                    m[(1, 1)],
-                    m[(1, 2)],
-                    m[(2, 2)]
+                    num(z.x),
+                    num(z.y),
+                    num(z.theta),
+                    num(m[(0, 0)]),
+                    num(m[(0, 1)]),
+                    num(m[(0, 2)]),
+                    num(m[(1, 1)]),
+                    num(m[(1, 2)]),
+                    num(m[(2, 2)])
                 );
             }
             EdgeKind::PosePoint {
@@ -632,11 +660,11 @@ pub fn write_g2o(graph: &PoseGraph) -> Result<String, GraphFileError> {
                     "EDGE_SE2_XY {} {} {} {} {} {} {}",
                     v[pose].id,
                     v[point].id,
-                    z[0],
-                    z[1],
-                    m[(0, 0)],
-                    m[(0, 1)],
-                    m[(1, 1)]
+                    num(z[0]),
+                    num(z[1]),
+                    num(m[(0, 0)]),
+                    num(m[(0, 1)]),
+                    num(m[(1, 1)])
                 );
             }
             EdgeKind::PosePrior {
@@ -648,15 +676,15 @@ pub fn write_g2o(graph: &PoseGraph) -> Result<String, GraphFileError> {
                     out,
                     "EDGE_PRIOR_SE2 {} {} {} {} {} {} {} {} {} {}",
                     v[pose].id,
-                    z.x,
-                    z.y,
-                    z.theta,
-                    m[(0, 0)],
-                    m[(0, 1)],
-                    m[(0, 2)],
-                    m[(1, 1)],
-                    m[(1, 2)],
-                    m[(2, 2)]
+                    num(z.x),
+                    num(z.y),
+                    num(z.theta),
+                    num(m[(0, 0)]),
+                    num(m[(0, 1)]),
+                    num(m[(0, 2)]),
+                    num(m[(1, 1)]),
+                    num(m[(1, 2)]),
+                    num(m[(2, 2)])
                 );
             }
             EdgeKind::RangeBearing { .. } | EdgeKind::PointPrior { .. } => {
