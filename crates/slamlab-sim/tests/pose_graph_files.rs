@@ -1,6 +1,8 @@
 //! Pose-graph files: round trips, TORO's information order, Victoria Park, and
 //! refusals that name the line; and the thesis simulation's golden run.
 
+#![allow(clippy::panic, clippy::unwrap_used, clippy::expect_used)] // a failing test stops
+
 use nalgebra::{Matrix2, Matrix3, Vector2};
 use slamlab_core::Pose2;
 use slamlab_core::graph::{EdgeKind, PoseGraph, VertexState};
