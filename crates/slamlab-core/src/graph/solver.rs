@@ -6,9 +6,13 @@
 //! edge touches only the blocks of its two vertices (Eq. 4.8), so `H` is sparse.
 //!
 //! * Gauss-Newton solves `H Δx = b` and always takes the step.
-//! * Levenberg-Marquardt solves `(H + λ I) Δx = b` (Levenberg's damping, gtsam's
-//!   default, starting at λ = 1e-5 like gtsam), takes the step only if the cost
-//!   falls, and adapts λ with Nielsen's rule (g2o's choice, thesis 002 Sec. 4.4.2).
+//! * Levenberg-Marquardt (thesis 002 Sec. 4.4.2) solves `(H + λ I) Δx = b`
+//!   (Levenberg's damping, gtsam's default, starting at λ = 1e-5 like gtsam), takes
+//!   the step only if the cost falls, and then divides λ by 10; a rejected step
+//!   multiplies λ by 10 (gtsam's fixed λ factor).
+//!
+//! Poses are updated in their own frame, `x ← x ∘ Exp(δ)` (the SE(2) exponential,
+//! as gtsam retracts), points additively.
 //! * The first-order method (in the spirit of TORO and Olson's preconditioned
 //!   gradient descent, thesis 002 Sec. 4.4.1) moves every vertex along its own
 //!   block of the gradient, scaled by the inverse of its diagonal block of `H`
@@ -37,7 +41,7 @@ use thiserror::Error;
 pub enum SolverKind {
     /// Gauss-Newton.
     GaussNewton,
-    /// Levenberg-Marquardt (Marquardt damping, Nielsen's λ update).
+    /// Levenberg-Marquardt (`H + λI`, λ divided or multiplied by 10).
     #[default]
     LevenbergMarquardt,
     /// Block-Jacobi preconditioned gradient descent with step halving.
@@ -276,7 +280,6 @@ pub struct Optimizer {
     structure: Option<Structure>,
     linearization: Option<Linearization>,
     lambda: Option<f64>,
-    nu: f64,
     step_length: f64,
     iteration: usize,
     converged: bool,
@@ -465,7 +468,6 @@ impl Optimizer {
             structure: None,
             linearization: None,
             lambda: None,
-            nu: 2.0,
             step_length: 1.0,
             iteration: 0,
             converged: false,
@@ -827,9 +829,12 @@ impl Optimizer {
             None => return Err(OptimizeError::NothingToOptimize),
         };
         self.iteration += 1;
+        // Gauss-Newton has converged when the cost stops falling by more than the
+        // tolerances; a rise is not convergence (GN may climb from a poor start).
         let tol = |before: f64, after: f64, s: &OptimizerSettings| {
             let decrease = before - after;
-            decrease <= s.absolute_tolerance || decrease <= s.relative_tolerance * before
+            decrease >= 0.0
+                && (decrease <= s.absolute_tolerance || decrease <= s.relative_tolerance * before)
         };
         let report = match self.settings.solver {
             SolverKind::GaussNewton => {
@@ -911,17 +916,8 @@ impl Optimizer {
         let before = self.snapshot();
         self.apply(&delta, 1.0);
         let cost = graph_cost(&self.graph, &self.settings.kernel);
-        // Predicted decrease of the quadratic model: Δᵀ(λ Δ + b).
-        let predicted: f64 = delta
-            .iter()
-            .zip(&b)
-            .map(|(dx, bi)| dx * (lambda * dx + bi))
-            .sum();
         if cost.is_finite() && cost < cost_before {
-            let rho = (cost_before - cost) / predicted.max(f64::MIN_POSITIVE);
-            let _ = rho;
             self.lambda = Some((lambda / 10.0).max(1e-12));
-            self.nu = 2.0;
             self.linearization = None;
             let settings = self.settings;
             let decrease = cost_before - cost;
