@@ -361,3 +361,58 @@ pub fn pose_graph_experiment(m: &ArgMatches) -> Result<()> {
     println!("  optimized graph {:.4}", result.rmse_optimized);
     Ok(())
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn temp_file(name: &str, contents: &str) -> PathBuf {
+        let path = std::env::temp_dir().join(format!("slamlab-{}-{name}", std::process::id()));
+        std::fs::write(&path, contents).unwrap();
+        path
+    }
+
+    #[test]
+    fn a_50_mb_file_is_refused_before_it_is_read() {
+        let path = temp_file("big.g2o", "");
+        let file = std::fs::OpenOptions::new().write(true).open(&path).unwrap();
+        file.set_len(50 * 1024 * 1024).unwrap();
+        let err = read_graph_file(&path).unwrap_err().to_string();
+        std::fs::remove_file(&path).unwrap();
+        assert!(
+            err.contains("52428800 bytes, more than the 33554432 bytes"),
+            "{err}"
+        );
+    }
+
+    #[test]
+    fn bad_files_name_the_file_line_and_problem() {
+        let path = temp_file("one.g2o", "# one vertex\nVERTEX_SE2 0 0 0 0\n");
+        let err = format!("{:#}", read_graph_file(&path).unwrap_err());
+        std::fs::remove_file(&path).unwrap();
+        assert!(err.contains("one.g2o") && err.contains("1 vertex"), "{err}");
+        let path = temp_file(
+            "bad.g2o",
+            "VERTEX_SE2 0 0 0 0\nVERTEX_SE2 1 1 0 0\nEDGE_SE2 0 1 1 0 0 1 0 0 1 0 NaN\n",
+        );
+        let err = format!("{:#}", read_graph_file(&path).unwrap_err());
+        std::fs::remove_file(&path).unwrap();
+        assert!(
+            err.contains("line 3") && err.contains("'NaN' is not a finite number"),
+            "{err}"
+        );
+    }
+
+    #[test]
+    fn the_gauge_is_fixed_at_the_first_vertex_unless_the_file_anchors_it() {
+        let mut g = slamlab_sim::graph_io::read_graph(
+            "VERTEX_SE2 4 0 0 0\nVERTEX_SE2 1 1 0 0\nEDGE_SE2 4 1 1 0 0 1 0 0 1 0 1\n",
+        )
+        .unwrap();
+        let text = fix_gauge(&mut g).unwrap();
+        assert!(text.starts_with("vertex 4"), "{text}");
+        assert!(g.vertex(4).unwrap().fixed && !g.vertex(1).unwrap().fixed);
+        let text = fix_gauge(&mut g).unwrap();
+        assert!(text.contains("own FIX"), "{text}");
+    }
+}

@@ -511,3 +511,49 @@ fn patterns_mark_fill_in_and_covariances_match_the_dense_inverse() {
         }
     }
 }
+
+#[test]
+fn a_robust_kernel_limits_the_damage_of_a_wrong_loop_closure() {
+    // The noise-free loop plus one confident but wrong closure between poses 2 and 11.
+    let wrong = |g: &mut PoseGraph| {
+        g.add_edge(EdgeKind::PosePose {
+            from: 2,
+            to: 11,
+            measurement: Pose2::new(1.0, -2.0, 0.5),
+            information: Matrix3::from_diagonal(&Vector3::new(100.0, 100.0, 400.0)),
+        })
+        .unwrap();
+    };
+    let error_after = |kernel: RobustKernel| {
+        let (mut g, truth) = synthetic(0.0);
+        wrong(&mut g);
+        let mut opt = Optimizer::new(
+            g,
+            OptimizerSettings {
+                kernel,
+                ..Default::default()
+            },
+        )
+        .unwrap();
+        opt.optimize(100, |_| true).unwrap();
+        let sq: f64 = truth
+            .iter()
+            .enumerate()
+            .map(|(k, t)| {
+                let p = opt.graph().vertices()[k].state.position();
+                (p - t.translation()).norm_squared()
+            })
+            .sum();
+        (sq / truth.len() as f64).sqrt()
+    };
+    let plain = error_after(RobustKernel::None);
+    let huber = error_after(RobustKernel::Huber { delta: 1.0 });
+    let cauchy = error_after(RobustKernel::Cauchy { c: 1.0 });
+    println!("position RMSE: plain {plain}, huber {huber}, cauchy {cauchy}");
+    assert!(
+        plain > 0.1,
+        "least squares is pulled off by the wrong closure: {plain}"
+    );
+    assert!(huber < 0.1 * plain, "huber {huber} vs plain {plain}");
+    assert!(cauchy < 0.01 * plain, "cauchy {cauchy} vs plain {plain}");
+}
