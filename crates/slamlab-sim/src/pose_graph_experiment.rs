@@ -249,3 +249,89 @@ pub fn run(config: PoseGraphExperimentConfig) -> Result<PoseGraphExperimentResul
         paths: [truth, dead_reckoning, ekf, optimized],
     })
 }
+
+/// A synthetic Manhattan-world pose graph (after Olson et al.'s M3500): a robot
+/// walks a grid of 1 m cells inside a square of `side` cells, going straight with
+/// probability 0.7 and turning left or right by 90° otherwise; odometry edges carry
+/// Gaussian noise σ = (0.05 m, 0.05 m, 1°); whenever it stands on a cell it visited
+/// more than 10 poses ago, a loop closure to the latest such visit is measured with
+/// the same noise. The initial estimate chains the noisy odometry; pose 0 is fixed.
+/// Returns the graph and the true poses.
+pub fn manhattan_graph(poses: usize, side: i64, seed: u64) -> (PoseGraph, Vec<Pose2>) {
+    use rand::Rng;
+    let sigma = [0.05, 0.05, PI / 180.0];
+    let info = Matrix3::from_diagonal(&Vector3::from(sigma.map(|s| 1.0 / (s * s))));
+    let mut rng = ChaCha8Rng::seed_from_u64(seed);
+    let noisy = |rng: &mut ChaCha8Rng, z: Pose2| {
+        let n: [f64; 3] = [0, 1, 2].map(|k| {
+            let g: f64 = StandardNormal.sample(rng);
+            g * sigma[k]
+        });
+        Pose2::new(z.x + n[0], z.y + n[1], z.theta + n[2])
+    };
+    let side = side.max(2);
+    let (mut cx, mut cy, mut heading) = (0i64, 0i64, 0i64); // heading in quarter turns
+    let mut truth = vec![Pose2::IDENTITY];
+    let mut cells: Vec<(i64, i64)> = vec![(0, 0)];
+    while truth.len() < poses.max(2) {
+        let r: f64 = rng.random();
+        let mut turn = if r < 0.7 {
+            0
+        } else if r < 0.85 {
+            1
+        } else {
+            3
+        };
+        // Turn until the next cell is inside the square.
+        for _ in 0..4 {
+            let h = (heading + turn) % 4;
+            let (dx, dy) = [(1, 0), (0, 1), (-1, 0), (0, -1)][h as usize];
+            if (0..side).contains(&(cx + dx)) && (0..side).contains(&(cy + dy)) {
+                break;
+            }
+            turn = (turn + 1) % 4;
+        }
+        heading = (heading + turn) % 4;
+        let (dx, dy) = [(1, 0), (0, 1), (-1, 0), (0, -1)][heading as usize];
+        cx += dx;
+        cy += dy;
+        truth.push(Pose2::new(cx as f64, cy as f64, heading as f64 * PI / 2.0));
+        cells.push((cx, cy));
+    }
+    let mut graph = PoseGraph::new();
+    let mut estimate = Pose2::IDENTITY;
+    let mut measurements = Vec::with_capacity(truth.len());
+    for k in 0..truth.len() {
+        if k > 0 {
+            let z = noisy(&mut rng, truth[k - 1].between(&truth[k]));
+            estimate = estimate.compose(&z);
+            measurements.push(z);
+        }
+        // Ids and states are valid by construction; a failure here cannot happen.
+        let _ = graph.add_pose(k as u64, estimate);
+    }
+    let _ = graph.set_fixed(0, true);
+    for (k, z) in measurements.iter().enumerate() {
+        let _ = graph.add_edge(EdgeKind::PosePose {
+            from: k,
+            to: k + 1,
+            measurement: *z,
+            information: info,
+        });
+    }
+    for k in 0..truth.len() {
+        if let Some(j) = (0..k.saturating_sub(10))
+            .rev()
+            .find(|&j| cells[j] == cells[k])
+        {
+            let z = noisy(&mut rng, truth[j].between(&truth[k]));
+            let _ = graph.add_edge(EdgeKind::PosePose {
+                from: j,
+                to: k,
+                measurement: z,
+                information: info,
+            });
+        }
+    }
+    (graph, truth)
+}

@@ -232,3 +232,30 @@ fn thesis_simulation_converges_in_a_few_iterations_and_lands_closest_to_the_trut
         assert!(r.rmse_ekf < r.rmse_dead_reckoning, "{r:?}");
     }
 }
+
+#[test]
+fn manhattan_graph_has_loop_closures_and_optimizes_close_to_the_truth() {
+    let (g, truth) = pose_graph_experiment::manhattan_graph(400, 10, 3);
+    assert_eq!(g.pose_count(), 400);
+    let closures = g.edges().len() - 399;
+    assert!(closures > 50, "{closures} loop closures");
+    let mut opt = slamlab_core::graph::Optimizer::new(g, Default::default()).unwrap();
+    let start = opt.cost();
+    opt.optimize(50, |_| true).unwrap();
+    assert!(opt.is_converged());
+    // The minimum of the noise-weighted cost is χ²-distributed with (residuals −
+    // unknowns) = 3 × (loop closures) degrees of freedom: within ±50 % of it.
+    let dof = 3.0 * closures as f64;
+    assert!(
+        opt.cost() > 0.5 * dof && opt.cost() < 1.5 * dof && opt.cost() < 0.02 * start,
+        "{} (start {start}, dof {dof})",
+        opt.cost()
+    );
+    let err: f64 = truth
+        .iter()
+        .zip(opt.graph().vertices())
+        .map(|(t, v)| (v.state.position() - t.translation()).norm_squared())
+        .sum::<f64>()
+        / 400.0;
+    assert!(err.sqrt() < 0.5, "position RMSE {}", err.sqrt());
+}
