@@ -26,7 +26,9 @@ pub fn command() -> Command {
                      `graph.error`. If the file has no prior and no FIX line, the first vertex in the file is \
                      held fixed to fix the gauge (gtsam's reference puts a tight prior on it instead: the \
                      optimum is the same, and no prior term enters the cost). time_ms covers the optimization \
-                     only (the structure analysis and the iterations), not reading the file.",
+                     only (the structure analysis and the iterations), not reading the file. costs[k] is the \
+                     cost after step k; a rejected LM step (λ raised) repeats the previous cost, and \
+                     iterations counts rejected steps too.",
                 )
                 .arg(Arg::new("file").required(true).value_parser(clap::value_parser!(PathBuf)).help("the graph file (.g2o, TORO .graph, or iSAM .txt); the format is detected from the content"))
                 .arg(

@@ -218,6 +218,14 @@ pub enum GraphError {
         /// What is wrong with it.
         reason: String,
     },
+    /// An edge built with a vertex index past the end of the vertex list.
+    #[error("{edge} edge refers to vertex index {index}, past the end of the graph's vertices")]
+    NoSuchIndex {
+        /// The edge's kind.
+        edge: &'static str,
+        /// The index.
+        index: usize,
+    },
     /// No such vertex id.
     #[error("there is no vertex {0}")]
     UnknownVertex(VertexId),
@@ -331,10 +339,10 @@ impl PoseGraph {
     }
 
     fn check_kind(&self, edge: &'static str, i: usize, pose: bool) -> Result<VertexId, GraphError> {
-        let v = self.vertices.get(i).ok_or(GraphError::MissingVertex {
-            edge,
-            id: i as VertexId,
-        })?;
+        let v = self
+            .vertices
+            .get(i)
+            .ok_or(GraphError::NoSuchIndex { edge, index: i })?;
         let is_pose = matches!(v.state, VertexState::Pose(_));
         if is_pose != pose {
             return Err(GraphError::WrongVertexKind {
@@ -345,28 +353,6 @@ impl PoseGraph {
             });
         }
         Ok(v.id)
-    }
-
-    /// Adds an edge given by vertex ids (see [`Self::add_edge`]).
-    pub fn add_edge_by_id(
-        &mut self,
-        make: impl FnOnce(usize, Option<usize>) -> EdgeKind,
-        first: VertexId,
-        second: Option<VertexId>,
-        name: &'static str,
-    ) -> Result<usize, GraphError> {
-        let a = self.index_of(first).ok_or(GraphError::MissingVertex {
-            edge: name,
-            id: first,
-        })?;
-        let b = match second {
-            Some(id) => Some(
-                self.index_of(id)
-                    .ok_or(GraphError::MissingVertex { edge: name, id })?,
-            ),
-            None => None,
-        };
-        self.add_edge(make(a, b))
     }
 
     /// Adds an edge after checking it: its vertices exist and are of the right kind,

@@ -545,6 +545,13 @@ impl Optimizer {
         Ok(i)
     }
 
+    /// Fixes or frees a vertex; the structure is analysed again at the next step.
+    pub fn set_fixed(&mut self, id: VertexId, fixed: bool) -> Result<(), OptimizeError> {
+        self.graph.set_fixed(id, fixed)?;
+        self.invalidate_structure();
+        Ok(())
+    }
+
     /// Removes the last edge; the structure is analysed again at the next step.
     pub fn pop_edge(&mut self) -> Option<EdgeKind> {
         let e = self.graph.pop_edge();
