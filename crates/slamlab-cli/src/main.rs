@@ -15,6 +15,7 @@
 //! `slamlab run landmark-slam --seed 7 --landmarks 30` and
 //! `index.html?lesson=landmark-slam&seed=7&landmarks=30` are the same run.
 
+mod graph_cmd;
 mod kidnap;
 mod map;
 
@@ -42,6 +43,7 @@ const EXPERIMENTS: &[&str] = &[
     "resampling",
     "fusion",
     "kidnap",
+    "pose-graph",
 ];
 
 fn scenario_args() -> Vec<Arg> {
@@ -99,7 +101,7 @@ fn cli() -> Command {
         )
         .subcommand(
             Command::new("experiment")
-                .about("Reproduce an experiment: ekf-vs-ukf (thesis 000 Sec. 3.4.3, Experiments 1 and 2) or consistency (average NEES over many seeded runs of any scenario)")
+                .about("Reproduce an experiment: ekf-vs-ukf (thesis 000 Sec. 3.4.3, Experiments 1 and 2) , consistency (average NEES over many seeded runs of any scenario) or pose-graph (thesis 000 Sec. 4.2: EKF-SLAM path, loop closures, optimized graph)")
                 .arg(
                     Arg::new("name")
                         .required(true)
@@ -129,6 +131,7 @@ fn cli() -> Command {
                 )
                 .arg(Arg::new("json").long("json").action(ArgAction::SetTrue).help("print one JSON object"))
                 .args(particle_experiments::args())
+                .args(graph_cmd::experiment_args())
                 .arg(
                     Arg::new("csv")
                         .long("csv")
@@ -140,6 +143,7 @@ fn cli() -> Command {
                 .args(scenario_args()),
         )
         .subcommand(map::command())
+        .subcommand(graph_cmd::command())
         .subcommand(
             Command::new("params")
                 .about("List a lesson's parameters (the URL's and the flags' names) with their units, ranges and defaults")
@@ -324,6 +328,7 @@ fn experiment(matches: &ArgMatches) -> Result<()> {
         "fastslam" => return particle_experiments::fastslam(matches),
         "resampling" => return particle_experiments::resampling(matches),
         "fusion" => return fusion::experiment(matches),
+        "pose-graph" => return graph_cmd::pose_graph_experiment(matches),
         _ => {}
     }
     if let Some(flag) = ["version", "particles", "method"]
@@ -331,6 +336,12 @@ fn experiment(matches: &ArgMatches) -> Result<()> {
         .find(|f| given(f))
     {
         bail!("--{flag} belongs to the fastslam and resampling experiments");
+    }
+    if let Some(flag) = ["loop-closures", "solver", "max-iterations"]
+        .into_iter()
+        .find(|f| given(f))
+    {
+        bail!("--{flag} belongs to the pose-graph experiment");
     }
     if name == "consistency" {
         if given("noise-scale") {
@@ -562,6 +573,7 @@ fn main() -> std::process::ExitCode {
         None if kidnap_run => kidnap::run(&args),
         None => kidnap::experiment(&args),
         Some(Some(("map", m))) => map::run(m),
+        Some(Some(("graph", m))) => graph_cmd::run(m),
         Some(Some(("run", m))) => run(m),
         Some(Some(("experiment", m))) => experiment(m),
         Some(Some(("params", m))) => list_params(m),

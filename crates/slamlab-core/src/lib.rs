@@ -11,6 +11,7 @@
 
 pub mod association;
 pub mod geometry;
+pub mod graph;
 pub mod grid;
 pub mod kalman;
 pub mod linalg;

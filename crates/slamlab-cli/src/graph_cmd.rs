@@ -1,0 +1,420 @@
+//! `slamlab graph optimize|convert`: pose-graph files on the command line.
+
+use anyhow::{Context, Result, bail};
+use clap::{Arg, ArgAction, ArgMatches, Command};
+use serde::Serialize;
+use slamlab_core::graph::{
+    EdgeKind, OptimizeError, Optimizer, OptimizerSettings, PoseGraph, RobustKernel, SolverKind,
+    StepReport,
+};
+use slamlab_sim::graph_io::{self, MAX_FILE_BYTES};
+use std::path::{Path, PathBuf};
+use std::time::Instant;
+
+/// The `graph` subcommand.
+pub fn command() -> Command {
+    Command::new("graph")
+        .about("Optimize and convert pose-graph files (g2o 2D, TORO 2D, iSAM ODOMETRY/LANDMARK)")
+        .subcommand_required(true)
+        .arg_required_else_help(true)
+        .subcommand(
+            Command::new("optimize")
+                .about("Optimize a pose graph and report the cost per iteration")
+                .long_about(
+                    "Optimize a pose graph and report the cost per iteration.\n\n\
+                     The cost is F = Σ eᵀ Ω e over all edges (thesis 000 Eq. 4.2), which is TWICE gtsam's \
+                     `graph.error`. If the file has no prior and no FIX line, the first vertex in the file is \
+                     held fixed to fix the gauge (gtsam's reference puts a tight prior on it instead: the \
+                     optimum is the same, and no prior term enters the cost). time_ms covers the optimization \
+                     only (the structure analysis and the iterations), not reading the file. costs[k] is the \
+                     cost after step k; a rejected LM step (λ raised) repeats the previous cost, and \
+                     iterations counts rejected steps too.",
+                )
+                .arg(Arg::new("file").required(true).value_parser(clap::value_parser!(PathBuf)).help("the graph file (.g2o, TORO .graph, or iSAM .txt); the format is detected from the content"))
+                .arg(
+                    Arg::new("solver")
+                        .long("solver")
+                        .value_parser(["gn", "lm", "gd"])
+                        .default_value("lm")
+                        .help("gn: Gauss-Newton; lm: Levenberg-Marquardt; gd: first-order (block-Jacobi preconditioned gradient descent)"),
+                )
+                .arg(
+                    Arg::new("max-iterations")
+                        .long("max-iterations")
+                        .value_parser(clap::value_parser!(u64).range(1..=1_000_000))
+                        .default_value("100")
+                        .help("at most this many steps (LM counts rejected steps too)"),
+                )
+                .arg(
+                    Arg::new("kernel")
+                        .long("kernel")
+                        .value_parser(["none", "huber", "cauchy"])
+                        .default_value("none")
+                        .help("robust kernel on every edge (Huber: thesis 000 Eq. 5.9)"),
+                )
+                .arg(
+                    Arg::new("kernel-width")
+                        .long("kernel-width")
+                        .value_parser(clap::value_parser!(f64))
+                        .default_value("1")
+                        .help("Huber δ or Cauchy c, on the Mahalanobis distance √(eᵀΩe)"),
+                )
+                .arg(
+                    Arg::new("target-cost")
+                        .long("target-cost")
+                        .value_parser(clap::value_parser!(f64))
+                        .help("stop as soon as the cost is at or below this (for timing against another solver)"),
+                )
+                .arg(Arg::new("out").long("out").value_name("FILE").value_parser(clap::value_parser!(PathBuf)).help("write the optimized graph (g2o)"))
+                .arg(Arg::new("json").long("json").action(ArgAction::SetTrue).help("print one JSON object")),
+        )
+        .subcommand(
+            Command::new("convert")
+                .about("Convert a pose graph (g2o, TORO or iSAM) into g2o 2D")
+                .arg(Arg::new("input").required(true).value_parser(clap::value_parser!(PathBuf)))
+                .arg(Arg::new("output").required(true).value_parser(clap::value_parser!(PathBuf)).help("the output file; must end in .g2o")),
+        )
+}
+
+/// Runs `slamlab graph …`.
+pub fn run(matches: &ArgMatches) -> Result<()> {
+    match matches.subcommand() {
+        Some(("optimize", m)) => optimize(m),
+        Some(("convert", m)) => convert(m),
+        _ => Ok(()),
+    }
+}
+
+/// Reads a graph file, refusing one over the size limit before reading it.
+pub fn read_graph_file(path: &Path) -> Result<PoseGraph> {
+    let size = std::fs::metadata(path)
+        .with_context(|| format!("reading {}", path.display()))?
+        .len();
+    if size > MAX_FILE_BYTES as u64 {
+        bail!(
+            "{}: the file has {size} bytes, more than the {MAX_FILE_BYTES} bytes SLAM Lab reads",
+            path.display()
+        );
+    }
+    let bytes = std::fs::read(path).with_context(|| format!("reading {}", path.display()))?;
+    let text = String::from_utf8(bytes)
+        .map_err(|e| anyhow::anyhow!("{}: not a text file ({e})", path.display()))?;
+    graph_io::read_graph(&text).with_context(|| format!("{}", path.display()))
+}
+
+/// Fixes the gauge like the gtsam reference run: unless the graph already has a
+/// prior or a fixed vertex, holds the first vertex of the file fixed. Returns a
+/// sentence that says what was done.
+pub fn fix_gauge(graph: &mut PoseGraph) -> Result<String> {
+    let has_anchor =
+        graph.vertices().iter().any(|v| v.fixed) || graph.edges().iter().any(EdgeKind::is_prior);
+    if has_anchor {
+        return Ok("the file's own FIX lines or priors".to_owned());
+    }
+    let Some(first) = graph.vertices().first().map(|v| v.id) else {
+        bail!("the graph has no vertices");
+    };
+    graph.set_fixed(first, true)?;
+    Ok(format!(
+        "vertex {first} (the first in the file) held fixed; gtsam's reference uses a tight prior there instead"
+    ))
+}
+
+#[derive(Serialize)]
+struct OptimizeSummary {
+    file: String,
+    solver: &'static str,
+    kernel: &'static str,
+    vertices: usize,
+    edges: usize,
+    poses: usize,
+    landmarks: usize,
+    gauge: String,
+    cost_definition: &'static str,
+    initial_cost: f64,
+    final_cost: f64,
+    iterations: usize,
+    rejected_steps: usize,
+    converged: bool,
+    time_ms: f64,
+    costs: Vec<f64>,
+    lambdas: Vec<Option<f64>>,
+    step_norms: Vec<f64>,
+}
+
+fn optimize(m: &ArgMatches) -> Result<()> {
+    let Some(path) = m.get_one::<PathBuf>("file") else {
+        bail!("no file given");
+    };
+    let solver = m
+        .get_one::<String>("solver")
+        .and_then(|s| SolverKind::from_short_name(s))
+        .unwrap_or_default();
+    let max_iterations = m.get_one::<u64>("max-iterations").copied().unwrap_or(100) as usize;
+    let width = m.get_one::<f64>("kernel-width").copied().unwrap_or(1.0);
+    let kernel = match m.get_one::<String>("kernel").map(String::as_str) {
+        Some("huber") => RobustKernel::Huber { delta: width },
+        Some("cauchy") => RobustKernel::Cauchy { c: width },
+        _ => RobustKernel::None,
+    };
+    if !kernel.is_valid() {
+        bail!("--kernel-width {width} must be a finite number above 0");
+    }
+    let target = m.get_one::<f64>("target-cost").copied();
+    let mut graph = read_graph_file(path)?;
+    let gauge = fix_gauge(&mut graph)?;
+    let (vertices, edges) = (graph.vertices().len(), graph.edges().len());
+    let (poses, landmarks) = (graph.pose_count(), graph.point_count());
+    let settings = OptimizerSettings {
+        solver,
+        kernel,
+        ..OptimizerSettings::default()
+    };
+    let json = m.get_flag("json");
+    let start = Instant::now();
+    let mut optimizer = Optimizer::new(graph, settings).map_err(explain)?;
+    let initial_cost = optimizer.cost();
+    let mut reports: Vec<StepReport> = Vec::new();
+    if !target.is_some_and(|t| initial_cost <= t) {
+        for _ in 0..max_iterations {
+            let r = optimizer.step().map_err(explain)?;
+            reports.push(r);
+            if !json {
+                eprintln!(
+                    "iteration {:>3}: cost {:.6e}  |Δx| {:.3e}{}{}",
+                    r.iteration,
+                    r.cost,
+                    r.step_norm,
+                    r.lambda
+                        .map_or_else(String::new, |l| format!("  λ {l:.2e}")),
+                    if r.accepted { "" } else { "  (rejected)" }
+                );
+            }
+            if r.converged || target.is_some_and(|t| r.cost <= t) {
+                break;
+            }
+        }
+    }
+    let time_ms = start.elapsed().as_secs_f64() * 1e3;
+    let summary = OptimizeSummary {
+        file: path.display().to_string(),
+        solver: solver.short_name(),
+        kernel: kernel.name(),
+        vertices,
+        edges,
+        poses,
+        landmarks,
+        gauge,
+        cost_definition: "sum over edges of e^T Omega e (twice gtsam's graph.error)",
+        initial_cost,
+        final_cost: optimizer.cost(),
+        iterations: reports.len(),
+        rejected_steps: reports.iter().filter(|r| !r.accepted).count(),
+        converged: optimizer.is_converged(),
+        time_ms,
+        costs: reports.iter().map(|r| r.cost).collect(),
+        lambdas: reports.iter().map(|r| r.lambda).collect(),
+        step_norms: reports.iter().map(|r| r.step_norm).collect(),
+    };
+    if let Some(out) = m.get_one::<PathBuf>("out") {
+        let text = graph_io::write_g2o(optimizer.graph())?;
+        std::fs::write(out, text).with_context(|| format!("writing {}", out.display()))?;
+        eprintln!("wrote {}", out.display());
+    }
+    if json {
+        println!("{}", serde_json::to_string_pretty(&summary)?);
+    } else {
+        println!(
+            "{}: {} vertices ({} poses, {} landmarks), {} edges; solver {}, kernel {}",
+            summary.file, vertices, poses, landmarks, edges, summary.solver, summary.kernel
+        );
+        println!("gauge: {}", summary.gauge);
+        println!(
+            "cost Σ eᵀΩe (twice gtsam's error): {:.6e} -> {:.6e} in {} iterations ({} rejected), {:.1} ms{}",
+            summary.initial_cost,
+            summary.final_cost,
+            summary.iterations,
+            summary.rejected_steps,
+            summary.time_ms,
+            if summary.converged { ", converged" } else { "" }
+        );
+    }
+    Ok(())
+}
+
+fn explain(e: OptimizeError) -> anyhow::Error {
+    anyhow::anyhow!("cannot optimize: {e}")
+}
+
+fn convert(m: &ArgMatches) -> Result<()> {
+    let (Some(input), Some(output)) = (
+        m.get_one::<PathBuf>("input"),
+        m.get_one::<PathBuf>("output"),
+    ) else {
+        bail!("convert needs an input and an output file");
+    };
+    if !output
+        .to_string_lossy()
+        .to_ascii_lowercase()
+        .ends_with(".g2o")
+    {
+        bail!(
+            "{}: SLAM Lab writes g2o 2D only; give the output a .g2o name",
+            output.display()
+        );
+    }
+    let graph = read_graph_file(input)?;
+    let text = graph_io::write_g2o(&graph).with_context(|| format!("{}", input.display()))?;
+    std::fs::write(output, text).with_context(|| format!("writing {}", output.display()))?;
+    eprintln!(
+        "wrote {} ({} vertices, {} edges)",
+        output.display(),
+        graph.vertices().len(),
+        graph.edges().len()
+    );
+    Ok(())
+}
+
+/// The flags `slamlab experiment pose-graph` adds to the experiment command.
+pub fn experiment_args() -> Vec<Arg> {
+    vec![
+        Arg::new("loop-closures")
+            .long("loop-closures")
+            .value_parser(clap::value_parser!(u64).range(0..=10_000))
+            .default_value("10")
+            .help("pose-graph: loop-closure edges from the first pose to random poses"),
+        Arg::new("solver")
+            .long("solver")
+            .value_parser(["gn", "lm", "gd"])
+            .default_value("gn")
+            .help("pose-graph: the solver (the thesis uses Gauss-Newton)"),
+        Arg::new("max-iterations")
+            .long("max-iterations")
+            .value_parser(clap::value_parser!(u64).range(1..=100_000))
+            .default_value("20")
+            .help("pose-graph: at most this many solver steps"),
+    ]
+}
+
+/// `slamlab experiment pose-graph`: thesis 000 Sec. 4.2.
+pub fn pose_graph_experiment(m: &ArgMatches) -> Result<()> {
+    use slamlab_sim::pose_graph_experiment::{PoseGraphExperimentConfig, run};
+    let given = |id: &str| m.value_source(id) == Some(clap::parser::ValueSource::CommandLine);
+    for other in ["trials", "steps", "csv"] {
+        if given(other) {
+            bail!(
+                "--{other} does not apply to pose-graph (one seeded run of {} ticks)",
+                slamlab_sim::pose_graph_experiment::STEPS
+            );
+        }
+    }
+    if let Some(p) = slamlab_sim::landmark_params::PARAMS
+        .iter()
+        .find(|p| p.name != "seed" && given(p.name))
+    {
+        bail!(
+            "--{} sets a scenario parameter; pose-graph runs the thesis's fixed scenario (only --seed, --noise-scale, --loop-closures, --solver, --max-iterations)",
+            p.name
+        );
+    }
+    let noise_scale = m.get_one::<f64>("noise-scale").copied().unwrap_or(1.0);
+    if !(noise_scale > 0.0 && noise_scale <= 20.0) {
+        bail!("--noise-scale {noise_scale} must be in (0, 20]");
+    }
+    let seed = match m.get_one::<String>("seed") {
+        Some(s) => s
+            .parse::<u64>()
+            .map_err(|_| anyhow::anyhow!("--seed '{s}' is not a whole number ≥ 0"))?,
+        None => 1,
+    };
+    let config = PoseGraphExperimentConfig {
+        loop_closures: m.get_one::<u64>("loop-closures").copied().unwrap_or(10) as usize,
+        noise_scale,
+        seed,
+        solver: m
+            .get_one::<String>("solver")
+            .and_then(|s| SolverKind::from_short_name(s))
+            .unwrap_or(SolverKind::GaussNewton),
+        max_iterations: m.get_one::<u64>("max-iterations").copied().unwrap_or(20) as usize,
+    };
+    let result = run(config).map_err(explain)?;
+    if m.get_flag("json") {
+        println!("{}", serde_json::to_string_pretty(&result)?);
+        return Ok(());
+    }
+    println!(
+        "SLAM Lab: pose-graph SLAM on the EKF-SLAM path (thesis 000 Sec. 4.2), seed {}, noise × {}",
+        config.seed, config.noise_scale
+    );
+    for note in &result.notes {
+        println!("  {note}");
+    }
+    println!(
+        "graph: {} poses, {} edges; loop closures to poses {:?}",
+        result.poses, result.edges, result.loop_closure_nodes
+    );
+    println!("cost Σ eᵀΩe: {:.6e}", result.initial_cost);
+    for (k, c) in result.costs.iter().enumerate() {
+        println!("  after iteration {}: {c:.6e}", k + 1);
+    }
+    println!("position RMSE against the truth (m):");
+    println!("  dead reckoning  {:.4}", result.rmse_dead_reckoning);
+    println!("  EKF-SLAM        {:.4}", result.rmse_ekf);
+    println!("  optimized graph {:.4}", result.rmse_optimized);
+    Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn temp_file(name: &str, contents: &str) -> PathBuf {
+        let path = std::env::temp_dir().join(format!("slamlab-{}-{name}", std::process::id()));
+        std::fs::write(&path, contents).unwrap();
+        path
+    }
+
+    #[test]
+    fn a_50_mb_file_is_refused_before_it_is_read() {
+        let path = temp_file("big.g2o", "");
+        let file = std::fs::OpenOptions::new().write(true).open(&path).unwrap();
+        file.set_len(50 * 1024 * 1024).unwrap();
+        let err = read_graph_file(&path).unwrap_err().to_string();
+        std::fs::remove_file(&path).unwrap();
+        assert!(
+            err.contains("52428800 bytes, more than the 33554432 bytes"),
+            "{err}"
+        );
+    }
+
+    #[test]
+    fn bad_files_name_the_file_line_and_problem() {
+        let path = temp_file("one.g2o", "# one vertex\nVERTEX_SE2 0 0 0 0\n");
+        let err = format!("{:#}", read_graph_file(&path).unwrap_err());
+        std::fs::remove_file(&path).unwrap();
+        assert!(err.contains("one.g2o") && err.contains("1 vertex"), "{err}");
+        let path = temp_file(
+            "bad.g2o",
+            "VERTEX_SE2 0 0 0 0\nVERTEX_SE2 1 1 0 0\nEDGE_SE2 0 1 1 0 0 1 0 0 1 0 NaN\n",
+        );
+        let err = format!("{:#}", read_graph_file(&path).unwrap_err());
+        std::fs::remove_file(&path).unwrap();
+        assert!(
+            err.contains("line 3") && err.contains("'NaN' is not a finite number"),
+            "{err}"
+        );
+    }
+
+    #[test]
+    fn the_gauge_is_fixed_at_the_first_vertex_unless_the_file_anchors_it() {
+        let mut g = slamlab_sim::graph_io::read_graph(
+            "VERTEX_SE2 4 0 0 0\nVERTEX_SE2 1 1 0 0\nEDGE_SE2 4 1 1 0 0 1 0 0 1 0 1\n",
+        )
+        .unwrap();
+        let text = fix_gauge(&mut g).unwrap();
+        assert!(text.starts_with("vertex 4"), "{text}");
+        assert!(g.vertex(4).unwrap().fixed && !g.vertex(1).unwrap().fixed);
+        let text = fix_gauge(&mut g).unwrap();
+        assert!(text.contains("own FIX"), "{text}");
+    }
+}
