@@ -19,6 +19,7 @@ pub mod math;
 pub mod motion;
 pub mod odometry;
 pub mod particle;
+pub mod random;
 pub mod range_bearing;
 pub mod stats;
 

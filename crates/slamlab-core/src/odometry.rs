@@ -19,7 +19,6 @@
 use crate::geometry::{Pose2, wrap_angle};
 use crate::math;
 use rand::Rng;
-use rand_distr::StandardNormal;
 use serde::{Deserialize, Serialize};
 use std::f64::consts::PI;
 
@@ -114,9 +113,9 @@ pub fn sample_increment<R: Rng + ?Sized>(
     let sd_rot1 = (noise.alpha1 * r1 * r1 + noise.alpha2 * t2).sqrt();
     let sd_trans = (noise.alpha3 * t2 + noise.alpha4 * (r1 * r1 + r2 * r2)).sqrt();
     let sd_rot2 = (noise.alpha1 * r2 * r2 + noise.alpha2 * t2).sqrt();
-    let n1: f64 = rng.sample(StandardNormal);
-    let n2: f64 = rng.sample(StandardNormal);
-    let n3: f64 = rng.sample(StandardNormal);
+    let n1: f64 = crate::random::standard_normal(rng);
+    let n2: f64 = crate::random::standard_normal(rng);
+    let n3: f64 = crate::random::standard_normal(rng);
     let rot1_hat = rot1 - sd_rot1 * n1;
     let trans_hat = trans - sd_trans * n2;
     let rot2_hat = rot2 - sd_rot2 * n3;

@@ -8,7 +8,6 @@
 
 use rand::SeedableRng;
 use rand_chacha::ChaCha8Rng;
-use rand_distr::{Distribution, StandardNormal};
 
 /// The random streams of a landmark scenario.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -30,7 +29,7 @@ pub fn stream_rng(seed: u64, stream: Stream) -> ChaCha8Rng {
 
 /// One draw from `N(0, std²)`.
 pub fn gaussian(rng: &mut ChaCha8Rng, std: f64) -> f64 {
-    let z: f64 = StandardNormal.sample(rng);
+    let z: f64 = slamlab_core::random::standard_normal(rng);
     std * z
 }
 

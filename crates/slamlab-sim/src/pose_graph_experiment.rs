@@ -13,7 +13,6 @@ use nalgebra::{Matrix3, Vector3};
 use rand::SeedableRng;
 use rand::seq::index::sample;
 use rand_chacha::ChaCha8Rng;
-use rand_distr::{Distribution, StandardNormal};
 use serde::Serialize;
 use slamlab_core::Pose2;
 use slamlab_core::graph::{
@@ -182,7 +181,7 @@ pub fn run(config: PoseGraphExperimentConfig) -> Result<PoseGraphExperimentResul
         let t = truth[0].between(&truth[j]);
         let mut noise = [0.0; 3];
         for (k, v) in noise.iter_mut().enumerate() {
-            let z: f64 = StandardNormal.sample(&mut rng);
+            let z: f64 = slamlab_core::random::standard_normal(&mut rng);
             *v = z * lc_std[k];
         }
         graph.add_edge(EdgeKind::PosePose {
@@ -264,7 +263,7 @@ pub fn manhattan_graph(poses: usize, side: i64, seed: u64) -> (PoseGraph, Vec<Po
     let mut rng = ChaCha8Rng::seed_from_u64(seed);
     let noisy = |rng: &mut ChaCha8Rng, z: Pose2| {
         let n: [f64; 3] = [0, 1, 2].map(|k| {
-            let g: f64 = StandardNormal.sample(rng);
+            let g: f64 = slamlab_core::random::standard_normal(rng);
             g * sigma[k]
         });
         Pose2::new(z.x + n[0], z.y + n[1], z.theta + n[2])

@@ -291,7 +291,6 @@ mod tests {
     #[test]
     fn polar_to_cartesian_is_closer_to_monte_carlo_than_linearization() {
         use rand::SeedableRng;
-        use rand_distr::{Distribution, StandardNormal};
         // A range-bearing measurement with a wide bearing spread: the classic banana.
         let (r, b, sr, sb) = (10.0, 0.3, 0.2, 0.35);
         let (m, p) = gaussian(&[r, b], &[sr * sr, 0.0, 0.0, sb * sb]);
@@ -326,8 +325,8 @@ mod tests {
         let mut mc_mean = DVector::<f64>::zeros(2);
         let mut pts = Vec::with_capacity(samples);
         for _ in 0..samples {
-            let n1: f64 = StandardNormal.sample(&mut rng);
-            let n2: f64 = StandardNormal.sample(&mut rng);
+            let n1: f64 = crate::random::standard_normal(&mut rng);
+            let n2: f64 = crate::random::standard_normal(&mut rng);
             let y = polar(&DVector::from_column_slice(&[r + sr * n1, b + sb * n2]));
             mc_mean += &y / samples as f64;
             pts.push(y);

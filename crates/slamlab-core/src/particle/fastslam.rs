@@ -48,7 +48,6 @@ use crate::range_bearing::{self, MIN_RANGE, RangeBearing};
 use nalgebra::{Matrix2, Matrix3, Vector2, Vector3};
 use rand::SeedableRng;
 use rand_chacha::ChaCha8Rng;
-use rand_distr::{Distribution, StandardNormal};
 use serde::{Deserialize, Serialize};
 use std::sync::Arc;
 use thiserror::Error;
@@ -818,7 +817,7 @@ impl FastSlam {
 }
 
 fn normal(rng: &mut ChaCha8Rng) -> f64 {
-    StandardNormal.sample(rng)
+    crate::random::standard_normal(rng)
 }
 
 impl Proposal {

@@ -26,7 +26,6 @@ use crate::math;
 use crate::odometry::{OdometryNoise, odometry_increment, sample_increment};
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
-use rand_distr::{Distribution, StandardNormal};
 use serde::{Deserialize, Serialize};
 use std::sync::Arc;
 use thiserror::Error;
@@ -433,7 +432,8 @@ impl Mcl {
         let s = std.map(|v| if v > 0.0 && v.is_finite() { v } else { 0.0 });
         self.particles.clear();
         for _ in 0..m {
-            let n: [f64; 3] = std::array::from_fn(|_| StandardNormal.sample(&mut self.rng));
+            let n: [f64; 3] =
+                std::array::from_fn(|_| crate::random::standard_normal(&mut self.rng));
             self.particles.push(Particle {
                 pose: Pose2::new(
                     mean.x + s[0] * n[0],

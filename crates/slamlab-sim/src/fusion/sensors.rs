@@ -7,7 +7,6 @@ use super::scenario::{DriveKind, FusionScenario, ScenarioError, SlamSource};
 use nalgebra::{Matrix3, Vector3};
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
-use rand_distr::{Distribution, StandardNormal};
 use slamlab_core::geometry::{Pose2, wrap_angle};
 use slamlab_core::kalman::fusion::{Measurement, Reading};
 use slamlab_core::math;
@@ -37,7 +36,7 @@ fn stream(seed: u64, which: FusionStream) -> ChaCha8Rng {
 }
 
 fn normal(rng: &mut ChaCha8Rng) -> f64 {
-    StandardNormal.sample(rng)
+    slamlab_core::random::standard_normal(rng)
 }
 
 /// The true state at one tick.

@@ -4,7 +4,6 @@
 //! model's four components describe, thesis `000` Sec. 3.5.1).
 
 use rand::Rng;
-use rand_distr::StandardNormal;
 use serde::{Deserialize, Serialize};
 use slamlab_core::Pose2;
 use slamlab_core::grid::OccupancyGrid;
@@ -86,7 +85,7 @@ impl Lidar {
                 if truth >= self.max_range {
                     return self.max_range;
                 }
-                let n: f64 = rng.sample(StandardNormal);
+                let n: f64 = slamlab_core::random::standard_normal(rng);
                 (truth + std * n).clamp(0.0, self.max_range)
             })
             .collect();
