@@ -57,6 +57,7 @@ fn tail<R: Rng + ?Sized>(rng: &mut R, u: f64) -> f64 {
     }
 }
 
+#[allow(clippy::excessive_precision)]
 const ZIG_NORM_R: f64 = 3.654152885361008796;
 
 #[rustfmt::skip]
