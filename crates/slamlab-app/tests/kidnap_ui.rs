@@ -148,10 +148,11 @@ fn a_seeded_global_localization_converges_with_these_exact_numbers() {
     let filter = &state["filters"][0];
     let error = filter["position_error"].as_f64().unwrap();
     assert!(error < 0.5, "{json}");
-    // The same numbers, to the last bit, are asserted in the browser.
-    assert_eq!(
-        filter["estimate"],
-        serde_json::json!([3.674915041270399, 3.2807691616908534, 1.0349869652703705]),
+    // The same numbers, to the last bit, are asserted in the browser. Compared as
+    // text: serde_json's default float parsing may land an ulp away, and the text
+    // (shortest round-trip digits) is exact.
+    assert!(
+        json.contains(r#""estimate":[3.6749150412703995,3.2807691616908534,1.0349869652703703]"#),
         "{json}"
     );
 }
