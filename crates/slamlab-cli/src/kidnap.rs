@@ -11,116 +11,64 @@ use anyhow::{Context, Result, bail};
 use clap::{Arg, ArgAction, ArgMatches, Command};
 use serde_json::json;
 use slamlab_core::grid::OccupancyGrid;
-use slamlab_core::particle::Resampler;
 use slamlab_sim::grid::BuiltinMap;
 use slamlab_sim::grid::map_io::{load_lone_image, load_map, parse_map_yaml};
-use slamlab_sim::localization::{
-    InitMode, LaserModelType, LocalizationEstimator, MclRun, MclScenario,
-};
+use slamlab_sim::localization::{LocalizationEstimator, MclRun, MclScenario};
+use slamlab_sim::params::{self, Scenario};
 use std::ffi::OsString;
 use std::io::Write;
 use std::path::Path;
 
-type Setter = fn(&mut MclScenario, f64);
+/// The lesson's parameters as flags (`slamlab params --lesson kidnap`), but the
+/// ones these commands take their own way: the map (a name or a file) and, for
+/// the experiment, the lists of particle counts and estimators.
+fn table_args(skip: &[&str]) -> Vec<Arg> {
+    MclScenario::params()
+        .iter()
+        .filter(|p| !skip.contains(&p.name))
+        .map(|p| {
+            let default =
+                params::get(&MclScenario::default(), p.name).unwrap_or_else(|| "none".to_owned());
+            let unit = if p.unit.is_empty() {
+                String::new()
+            } else {
+                format!(", {}", p.unit)
+            };
+            Arg::new(p.name)
+                .long(p.name)
+                .value_name("VALUE")
+                .allow_hyphen_values(true)
+                .help(format!(
+                    "{}{unit} [{}]; default {default}",
+                    p.help,
+                    p.kind.range_text(", ")
+                ))
+        })
+        .collect()
+}
 
-/// Numeric parameters: flag, help, setter.
-const NUMBERS: &[(&str, &str, Setter)] = &[
-    ("laser-z-hit", "weight of the hit Gaussian", |s, v| {
-        s.laser_z_hit = v
-    }),
-    (
-        "laser-z-short",
-        "weight of short readings (beam model)",
-        |s, v| s.laser_z_short = v,
-    ),
-    (
-        "laser-z-max",
-        "weight of max-range readings (beam model)",
-        |s, v| s.laser_z_max = v,
-    ),
-    ("laser-z-rand", "weight of uniform noise", |s, v| {
-        s.laser_z_rand = v
-    }),
-    (
-        "laser-sigma-hit",
-        "hit Gaussian standard deviation, m",
-        |s, v| s.laser_sigma_hit = v,
-    ),
-    (
-        "laser-lambda-short",
-        "rate of short readings, 1/m",
-        |s, v| s.laser_lambda_short = v,
-    ),
-    (
-        "laser-likelihood-max-dist",
-        "distance field cap, m",
-        |s, v| s.laser_likelihood_max_dist = v,
-    ),
-    (
-        "laser-likelihood-exponent",
-        "exponent on each scan likelihood (0, 1]",
-        |s, v| s.laser_likelihood_exponent = v,
-    ),
-    ("odom-alpha1", "rotation noise from rotation", |s, v| {
-        s.odom_alpha1 = v
-    }),
-    ("odom-alpha2", "rotation noise from translation", |s, v| {
-        s.odom_alpha2 = v
-    }),
-    (
-        "odom-alpha3",
-        "translation noise from translation",
-        |s, v| s.odom_alpha3 = v,
-    ),
-    ("odom-alpha4", "translation noise from rotation", |s, v| {
-        s.odom_alpha4 = v
-    }),
-    (
-        "update-min-d",
-        "translation that triggers an update, m",
-        |s, v| s.update_min_d = v,
-    ),
-    (
-        "update-min-a",
-        "rotation that triggers an update, rad",
-        |s, v| s.update_min_a = v,
-    ),
-    (
-        "resample-neff-fraction",
-        "resample only when N_eff < fraction x M",
-        |s, v| s.resample_neff_fraction = Some(v),
-    ),
-    ("robot-radius", "robot radius, m", |s, v| s.robot_radius = v),
-    (
-        "recovery-alpha-slow",
-        "Augmented MCL long-term rate",
-        |s, v| s.recovery_alpha_slow = v,
-    ),
-    (
-        "recovery-alpha-fast",
-        "Augmented MCL short-term rate",
-        |s, v| s.recovery_alpha_fast = v,
-    ),
-    (
-        "kidnap-distance",
-        "a kidnap moves the robot at least this far, m",
-        |s, v| s.kidnap_distance = v,
-    ),
-    ("lidar-max-range", "lidar maximum range, m", |s, v| {
-        s.lidar.max_range = v
-    }),
-    ("lidar-range-std", "lidar range noise, m", |s, v| {
-        s.lidar.range_std = v
-    }),
-    ("lidar-fov-deg", "lidar field of view, degrees", |s, v| {
-        s.lidar.fov = v.to_radians()
-    }),
-    (
-        "lidar-outlier-prob",
-        "probability of a random lidar reading",
-        |s, v| s.lidar.outlier_prob = v,
-    ),
-];
+/// Applies the table's flags that were given (a preset first, then the rest),
+/// refusing what cannot be read and warning about what had to be clamped.
+fn apply_table_flags(m: &ArgMatches, scenario: &mut MclScenario, skip: &[&str]) -> Result<()> {
+    let given: Vec<(&str, &str)> = MclScenario::params()
+        .iter()
+        .filter(|p| !skip.contains(&p.name))
+        .filter_map(|p| m.get_one::<String>(p.name).map(|v| (p.name, v.as_str())))
+        .collect();
+    for issue in params::apply_pairs(scenario, given, &[]) {
+        match issue {
+            params::ParamIssue::Clamped { .. } => eprintln!("warning: {issue}"),
+            params::ParamIssue::Unreadable {
+                name,
+                value,
+                expected,
+                ..
+            } => bail!("--{name} '{value}' is not {expected}"),
+            other => bail!("{other}"),
+        }
+    }
+    Ok(())
+}
 
 /// Whether the command line is `slamlab run kidnap ...`.
 pub fn is_kidnap_run(args: &[OsString]) -> bool {
@@ -129,7 +77,7 @@ pub fn is_kidnap_run(args: &[OsString]) -> bool {
 
 /// The `run kidnap` command line.
 pub fn command() -> Command {
-    let mut cmd = Command::new("kidnap")
+    Command::new("kidnap")
         .bin_name("slamlab run kidnap")
         .about("Monte Carlo localization on a grid map (ROS map_server maps), headless")
         .arg(
@@ -147,110 +95,19 @@ pub fn command() -> Command {
                 ),
         )
         .arg(
-            Arg::new("estimator")
-                .long("estimator")
-                .default_value("mcl")
-                .help("comma-separated estimators: mcl, amcl, cmcl, acmcl"),
-        )
-        .arg(
-            Arg::new("particles")
-                .long("particles")
-                .value_parser(clap::value_parser!(u64))
-                .default_value("2000")
-                .help("particle count (max_particles); clamped to 1 ..= 200000"),
-        )
-        .arg(
-            Arg::new("init")
-                .long("init")
-                .value_parser(["global", "tracking"])
-                .default_value("global")
-                .help("global: uniform over free cells; tracking: around the true start"),
-        )
-        .arg(
             Arg::new("steps")
                 .long("steps")
                 .value_parser(clap::value_parser!(u64).range(0..=1_000_000))
                 .default_value("600")
                 .help("ticks of 0.1 s"),
         )
-        .arg(
-            Arg::new("seed")
-                .long("seed")
-                .value_parser(clap::value_parser!(u64))
-                .default_value("1")
-                .help("master seed"),
-        )
-        .arg(
-            Arg::new("laser-model-type")
-                .long("laser-model-type")
-                .value_parser(["likelihood_field", "beam"])
-                .help("measurement model (default likelihood_field)"),
-        )
-        .arg(
-            Arg::new("laser-max-beams")
-                .long("laser-max-beams")
-                .value_parser(clap::value_parser!(u64).range(1..=10_000))
-                .help("beams per update (default 30)"),
-        )
-        .arg(
-            Arg::new("resample-interval")
-                .long("resample-interval")
-                .value_parser(clap::value_parser!(u32).range(1..=1000))
-                .help("resample every this many updates (default 1)"),
-        )
-        .arg(
-            Arg::new("resampler")
-                .long("resampler")
-                .value_parser(Resampler::ALL.map(Resampler::name).to_vec())
-                .help("resampling method (default low-variance)"),
-        )
-        .arg(
-            Arg::new("lidar-beams")
-                .long("lidar-beams")
-                .value_parser(clap::value_parser!(u64).range(1..=10_000))
-                .help("lidar beams per scan (default 180)"),
-        )
-        .arg(
-            Arg::new("preset")
-                .long("preset")
-                .value_parser(
-                    slamlab_sim::localization::MCL_PRESETS
-                        .iter()
-                        .map(|(n, _)| *n)
-                        .collect::<Vec<_>>(),
-                )
-                .help(
-                    "start from a preset: amcl-ros1, nav2, thesis-table-5-1 (flags apply on top)",
-                ),
-        )
-        .arg(
-            Arg::new("kld")
-                .long("kld")
-                .action(ArgAction::SetTrue)
-                .help("KLD-sampling between --min-particles and --particles"),
-        )
-        .arg(
-            Arg::new("kidnap-at")
-                .long("kidnap-at")
-                .value_parser(clap::value_parser!(u64))
-                .help("kidnap the robot at this tick"),
-        )
+        .args(table_args(&["map"]))
         .arg(
             Arg::new("json")
                 .long("json")
                 .action(ArgAction::SetTrue)
                 .help("print one JSON object"),
-        );
-    for (name, help, _) in NUMBERS {
-        cmd = cmd.arg(
-            Arg::new(*name)
-                .long(*name)
-                .value_name("VALUE")
-                .allow_hyphen_values(true)
-                .help(*help),
-        );
-    }
-    cmd
+        )
 }
 
 /// Reads a map: a built-in name, a YAML (its image beside it), or a lone image
@@ -295,70 +152,8 @@ pub fn read_map(spec: &str, resolution: Option<f64>) -> Result<(OccupancyGrid, S
 }
 
 fn scenario_from(m: &ArgMatches) -> Result<MclScenario> {
-    let preset = m.get_one::<String>("preset");
-    let mut s = MclScenario {
-        seed: m.get_one::<u64>("seed").copied().unwrap_or(1),
-        ..preset
-            .and_then(|p| MclScenario::preset(p))
-            .unwrap_or_default()
-    };
-    if preset.is_none()
-        || m.value_source("particles") == Some(clap::parser::ValueSource::CommandLine)
-    {
-        let particles = m.get_one::<u64>("particles").copied().unwrap_or(2000);
-        s.max_particles = usize::try_from(particles).unwrap_or(usize::MAX);
-    }
-    s.min_particles = s.min_particles.min(s.max_particles);
-    s.init = match m.get_one::<String>("init").map(String::as_str) {
-        Some("tracking") => InitMode::Tracking,
-        _ => InitMode::Global,
-    };
-    let mut estimators = Vec::new();
-    for name in m
-        .get_one::<String>("estimator")
-        .map_or("mcl", String::as_str)
-        .split(',')
-    {
-        match LocalizationEstimator::from_name(name.trim()) {
-            Some(e) => estimators.push(e),
-            None => bail!("--estimator '{name}' is not one of: mcl, amcl, cmcl, acmcl"),
-        }
-    }
-    s.estimators = estimators;
-    s.kidnap_at = m.get_one::<u64>("kidnap-at").copied();
-    s.kld_sampling |= m.get_flag("kld");
-    if let Some(t) = m.get_one::<String>("laser-model-type") {
-        s.laser_model_type = if t == "beam" {
-            LaserModelType::Beam
-        } else {
-            LaserModelType::LikelihoodField
-        };
-    }
-    if let Some(&b) = m.get_one::<u64>("laser-max-beams") {
-        s.laser_max_beams = b as usize;
-    }
-    if let Some(&b) = m.get_one::<u64>("lidar-beams") {
-        s.lidar.beams = b as usize;
-    }
-    if let Some(&r) = m.get_one::<u32>("resample-interval") {
-        s.resample_interval = r;
-    }
-    if let Some(r) = m
-        .get_one::<String>("resampler")
-        .and_then(|r| Resampler::from_name(r))
-    {
-        s.resampler = r;
-    }
-    for (name, _, set) in NUMBERS {
-        if let Some(text) = m.get_one::<String>(name) {
-            let v: f64 = text
-                .parse()
-                .ok()
-                .filter(|v: &f64| v.is_finite())
-                .with_context(|| format!("--{name} '{text}' is not a finite number"))?;
-            set(&mut s, v);
-        }
-    }
+    let mut s = MclScenario::default();
+    apply_table_flags(m, &mut s, &["map"])?;
     Ok(s)
 }
 
@@ -441,7 +236,7 @@ pub fn is_kidnap_experiment(args: &[OsString]) -> bool {
 
 /// The `experiment kidnap` command line.
 pub fn experiment_command() -> Command {
-    let mut cmd = Command::new("kidnap")
+    Command::new("kidnap")
         .bin_name("slamlab experiment kidnap")
         .about("The kidnapped robot (thesis 000 Tables 5.1 and 5.2): updates to recover after a kidnap, and the fraction of particles randomized on the way")
         .arg(Arg::new("map").long("map").default_value("maze").help("maze, office, or a map_server YAML (or a PGM/PNG with --resolution)"))
@@ -451,20 +246,14 @@ pub fn experiment_command() -> Command {
         .arg(Arg::new("trials").long("trials").value_parser(clap::value_parser!(u64).range(1..=10_000)).default_value("20").help("trials per (estimator, particle count); trial i uses seed + i"))
         .arg(Arg::new("seed").long("seed").value_parser(clap::value_parser!(u64)).default_value("1").help("first seed"))
         .arg(Arg::new("limit").long("limit").value_parser(clap::value_parser!(u64).range(10..=100_000)).default_value("500").help("updates after the kidnap before a trial counts as a failure"))
-        .arg(Arg::new("kld").long("kld").action(ArgAction::SetTrue).help("KLD-sampling between --min-particles and each particle count"))
         .arg(Arg::new("json").long("json").action(ArgAction::SetTrue).help("print one JSON object"))
-        .arg(Arg::new("csv").long("csv").value_name("DIR").value_parser(clap::value_parser!(std::path::PathBuf)).help("write per-trial rows to DIR/kidnap_trials.csv"));
-    for (name, help, _) in NUMBERS {
-        cmd = cmd.arg(
-            Arg::new(*name)
-                .long(*name)
-                .value_name("VALUE")
-                .allow_hyphen_values(true)
-                .help(*help),
-        );
-    }
-    cmd
+        .arg(Arg::new("csv").long("csv").value_name("DIR").value_parser(clap::value_parser!(std::path::PathBuf)).help("write per-trial rows to DIR/kidnap_trials.csv"))
+        .args(table_args(EXPERIMENT_OWN))
 }
+
+/// What `experiment kidnap` sets itself (lists, the protocol's tracking start and
+/// kidnap), so the table's flags of these names are not offered there.
+const EXPERIMENT_OWN: &[&str] = &["map", "particles", "estimator", "seed", "init", "kidnap-at"];
 
 /// Runs `slamlab experiment kidnap`.
 pub fn experiment(args: &[OsString]) -> Result<()> {
@@ -474,20 +263,8 @@ pub fn experiment(args: &[OsString]) -> Result<()> {
     let m = experiment_command()
         .try_get_matches_from(argv)
         .unwrap_or_else(|e| e.exit());
-    let mut base = MclScenario {
-        kld_sampling: m.get_flag("kld"),
-        ..Default::default()
-    };
-    for (name, _, set) in NUMBERS {
-        if let Some(text) = m.get_one::<String>(name) {
-            let v: f64 = text
-                .parse()
-                .ok()
-                .filter(|v: &f64| v.is_finite())
-                .with_context(|| format!("--{name} '{text}' is not a finite number"))?;
-            set(&mut base, v);
-        }
-    }
+    let mut base = MclScenario::default();
+    apply_table_flags(&m, &mut base, EXPERIMENT_OWN)?;
     let spec = m.get_one::<String>("map").map_or("maze", String::as_str);
     let (grid, name) = read_map(spec, m.get_one::<f64>("resolution").copied())?;
     base.map = name.clone();
