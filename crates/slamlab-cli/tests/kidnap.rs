@@ -79,7 +79,9 @@ fn run_kidnap_prints_the_issue_json() {
 fn bad_input_is_refused_or_clamped_with_a_message() {
     let out = slamlab(&["run", "kidnap", "--particles", "0", "--steps", "3"]);
     assert!(out.status.success());
-    assert!(String::from_utf8_lossy(&out.stderr).contains("particles = 0 is out of range; using 1"));
+    assert!(
+        String::from_utf8_lossy(&out.stderr).contains("particles = 0 is out of range; using 1")
+    );
     let out = slamlab(&["run", "kidnap", "--laser-sigma-hit", "nan"]);
     assert!(!out.status.success());
     assert!(String::from_utf8_lossy(&out.stderr).contains("--laser-sigma-hit"));

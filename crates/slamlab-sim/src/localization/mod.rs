@@ -8,4 +8,4 @@ pub mod run;
 pub mod scenario;
 
 pub use run::{FilterRun, FilterSummary, MclPhase, MclRun, MclRunError, TickError, UpdateRecord};
-pub use scenario::{InitMode, LaserModelType, LocalizationEstimator, MCL_PRESETS, MclScenario};
+pub use scenario::{InitMode, LaserModelType, LocalizationEstimator, MclScenario};

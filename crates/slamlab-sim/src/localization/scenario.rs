@@ -295,24 +295,9 @@ impl MclScenario {
     }
 }
 
-/// The presets of the Monte Carlo localization lessons.
-pub const MCL_PRESETS: &[(&str, &str)] = &[
-    (
-        "amcl-ros1",
-        "ROS 1 amcl defaults: KLD 100..5000 particles (kld_err 0.01, kld_z 0.99), likelihood field, z_hit 0.95, z_rand 0.05, 30 beams, update 0.2 m / 30°, resample every 2 updates",
-    ),
-    (
-        "nav2",
-        "Nav2 amcl defaults: KLD 500..2000 particles (pf_err 0.05, pf_z 0.99), likelihood field, z_hit 0.5, z_rand 0.5, 60 beams, update 0.25 m / 0.2 rad, resample every update",
-    ),
-    (
-        "thesis-table-5-1",
-        "thesis 000 Table 5.1: a fixed particle count (1000), the beam model, resample every update",
-    ),
-];
-
 impl MclScenario {
-    /// A preset by name (see [`MCL_PRESETS`]). Every preset uses the recovery
+    /// A preset's parameters by name (the lesson's presets, `preset=` in the URL and
+    /// `--preset` on the command line, are listed in [`super::params::PRESETS`]). Every preset uses the recovery
     /// rates 0.001 / 0.1 (the thesis and the Nav2 documentation recommend them;
     /// both amcl versions default to 0, which disables recovery) and SLAM Lab's
     /// `laser_likelihood_exponent`.
@@ -377,7 +362,7 @@ mod tests {
 
     #[test]
     fn presets_exist_and_differ() {
-        for (name, _) in MCL_PRESETS {
+        for name in super::super::params::PRESETS.iter().map(|p| p.id) {
             let p = MclScenario::preset(name).unwrap();
             assert_ne!(p, MclScenario::default(), "{name}");
             assert_eq!(p.recovery_alpha_slow, 0.001);
