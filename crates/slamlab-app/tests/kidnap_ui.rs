@@ -156,3 +156,39 @@ fn a_seeded_global_localization_converges_with_these_exact_numbers() {
         "{json}"
     );
 }
+
+#[test]
+fn a_dropped_map_replaces_the_run_and_a_bad_one_keeps_it() {
+    use slamlab_app::lesson::Lesson as _;
+    use slamlab_sim::grid::BuiltinMap;
+    let mut h = harness("lesson=kidnap&particles=200&seed=1");
+    let image_name = slamlab_sim::grid::map_io::parse_map_yaml(BuiltinMap::Office.yaml())
+        .map(|y| y.image)
+        .unwrap();
+    let lesson = lesson_mut(&mut h);
+    lesson.load_dropped(&[(
+        "broken.yaml".to_owned(),
+        b"image: x.png\nresolution: 0\n".to_vec(),
+    )]);
+    assert_eq!(
+        lesson.map_name(),
+        "maze",
+        "a bad file keeps the current map"
+    );
+    lesson.load_dropped(&[
+        (
+            "my-office.yaml".to_owned(),
+            BuiltinMap::Office.yaml().as_bytes().to_vec(),
+        ),
+        (image_name, BuiltinMap::Office.image().to_vec()),
+    ]);
+    assert_eq!(lesson.map_name(), "my-office.yaml");
+    assert!(
+        lesson.subtitle().ends_with("on my-office.yaml"),
+        "{}",
+        lesson.subtitle()
+    );
+    let (w, _) = lesson.sim().run().map().grid().size_m();
+    assert!(w > 50.0, "the office is 55 m wide: {w}");
+    assert!(h.state().notices().is_empty(), "{:?}", h.state().notices());
+}

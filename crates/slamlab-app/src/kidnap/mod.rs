@@ -269,7 +269,8 @@ impl KidnapLesson {
                         format!(" ({})", notes.join("; "))
                     }
                 ));
-                self.pending.scenario.map = name.clone();
+                // The scenario keeps a built-in map's name (a dropped file cannot
+                // travel in a link); the run uses the loaded grid.
                 self.loaded = Some((name, grid));
                 let note = self.note.clone();
                 self.reset();
@@ -287,6 +288,14 @@ impl KidnapLesson {
             pairs.insert(0, ("seed".to_owned(), scenario.seed.to_string()));
         }
         pairs
+    }
+
+    /// The map on screen: `maze`, `office`, or a loaded file's name.
+    pub fn map_name(&self) -> String {
+        match &self.loaded {
+            Some((name, _)) => name.clone(),
+            None => self.sim().run().scenario().map.clone(),
+        }
     }
 
     fn next_phase_label(&self) -> String {
@@ -386,7 +395,11 @@ impl Lesson for KidnapLesson {
             .iter()
             .map(|f| f.name.to_uppercase())
             .collect();
-        format!("{} on the {}", names.join(" vs "), run.scenario().map)
+        let map = match &self.loaded {
+            Some((name, _)) => name.clone(),
+            None => format!("the {}", self.map_name()),
+        };
+        format!("{} on {map}", names.join(" vs "))
     }
 
     fn notices(&self) -> Vec<String> {
@@ -547,7 +560,7 @@ impl Lesson for KidnapLesson {
             "time": run.tick_count() as f64 * run.scenario().dt,
             "phase": self.stepper.last_phase().map(|p| phase_name(*p)).unwrap_or_default(),
             "seed": run.scenario().seed,
-            "map": run.scenario().map,
+            "map": self.map_name(),
             "truth": [truth.x, truth.y, truth.theta],
             "filters": filters,
         })
