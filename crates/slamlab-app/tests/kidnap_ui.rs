@@ -192,3 +192,72 @@ fn a_dropped_map_replaces_the_run_and_a_bad_one_keeps_it() {
     assert!(w > 50.0, "the office is 55 m wide: {w}");
     assert!(h.state().notices().is_empty(), "{:?}", h.state().notices());
 }
+
+#[test]
+fn status_goes_from_tracking_to_lost_or_recovering_after_a_kidnap() {
+    use slamlab_app::kidnap::explain_status;
+    let mut h = harness("lesson=kidnap&estimator=amcl,acmcl&particles=500&init=tracking&seed=4");
+    let lesson = lesson_mut(&mut h);
+    for _ in 0..40 {
+        lesson.step_tick();
+    }
+    let status = explain_status(lesson);
+    assert!(status.iter().all(|s| s.contains("tracking")), "{status:?}");
+    lesson.apply_event(slamlab_sim::kidnap_session::KidnapEvent::KidnapRandom);
+    for _ in 0..12 {
+        lesson.step_tick();
+    }
+    let status = explain_status(lesson);
+    assert!(
+        status
+            .iter()
+            .all(|s| s.contains("lost") || s.contains("recover")),
+        "{status:?}"
+    );
+}
+
+#[test]
+fn rendered_side_by_side_with_the_costmap_after_a_kidnap() {
+    let mut h = Harness::builder()
+        .with_size(SIZE)
+        .with_max_steps(40)
+        .with_theme(egui::Theme::Light)
+        .build_eframe(|cc| {
+            SlamLabApp::new(
+                cc,
+                "lesson=kidnap&estimator=amcl,acmcl&particles=1000&init=tracking&seed=4",
+            )
+        });
+    h.run();
+    let lesson = lesson_mut(&mut h);
+    lesson.view.costmap = true;
+    for _ in 0..60 {
+        lesson.step_tick();
+    }
+    lesson.apply_event(slamlab_sim::kidnap_session::KidnapEvent::KidnapRandom);
+    for _ in 0..25 {
+        lesson.step_tick();
+    }
+    h.run();
+    let image = match h.render() {
+        Ok(image) => image,
+        Err(err) => {
+            eprintln!("skipping the rendered checks: no GPU adapter ({err})");
+            return;
+        }
+    };
+    // The costmap's pink over white free space, ACMCL's green, AMCL's purple.
+    let pink = count_pixels(image.as_raw(), [0xFF, 0xC2, 0xE2], 30);
+    let green = count_pixels(image.as_raw(), [0x00, 0x9E, 0x73], 40);
+    let purple = count_pixels(image.as_raw(), [0xCC, 0x79, 0xA7], 40);
+    assert!(pink > 2000, "costmap pixels {pink}");
+    assert!(
+        green > 100 && purple > 100,
+        "ACMCL green {green}, AMCL purple {purple}"
+    );
+    let _ = egui_kittest::try_image_snapshot_options(
+        &image,
+        "kidnap_side_by_side",
+        &egui_kittest::SnapshotOptions::new().threshold(2.0),
+    );
+}

@@ -11,7 +11,7 @@ use crate::widgets::map_canvas::{
 use egui::{Color32, Pos2, Shape, Stroke, pos2, vec2};
 use nalgebra::{Matrix2, Vector2};
 use slamlab_core::geometry::{CHI2_2DOF_95, CovarianceEllipse};
-use slamlab_core::grid::{Cell, OccupancyGrid};
+use slamlab_core::grid::{Cell, Costmap, OccupancyGrid};
 use slamlab_core::particle::ParticleFlag;
 use slamlab_core::{Pose2, math};
 use slamlab_sim::localization::MclRun;
@@ -20,6 +20,7 @@ use slamlab_sim::localization::MclRun;
 #[derive(Default)]
 pub struct GridTexture {
     texture: Option<(egui::TextureHandle, usize)>,
+    costmap: Option<(egui::TextureHandle, usize)>,
 }
 
 impl std::fmt::Debug for GridTexture {
@@ -32,6 +33,38 @@ impl GridTexture {
     /// Forgets the texture (a new map).
     pub fn clear(&mut self) {
         self.texture = None;
+        self.costmap = None;
+    }
+
+    /// The costmap's invalid zone (free cells closer to a wall than the robot's
+    /// radius) in translucent pink, as thesis Fig. 5.1 draws it.
+    fn costmap(
+        &mut self,
+        ctx: &egui::Context,
+        grid: &OccupancyGrid,
+        costmap: &Costmap,
+    ) -> egui::TextureId {
+        let (w, h) = costmap.size();
+        let key = w * 31 + h * 7 + (costmap.radius() * 1000.0) as usize;
+        if let Some((texture, k)) = &self.costmap
+            && *k == key
+        {
+            return texture.id();
+        }
+        let pink = Color32::from_rgba_unmultiplied(0xFF, 0x69, 0xB4, 110);
+        let mut pixels = Vec::with_capacity(w * h);
+        for row in 0..h {
+            let j = (h - 1 - row) as i64;
+            for i in 0..w as i64 {
+                let inflated = !costmap.is_valid_cell(i, j) && grid.get(i, j) == Some(Cell::Free);
+                pixels.push(if inflated { pink } else { Color32::TRANSPARENT });
+            }
+        }
+        let image = egui::ColorImage::new([w, h], pixels);
+        let texture = ctx.load_texture("costmap", image, egui::TextureOptions::NEAREST);
+        let id = texture.id();
+        self.costmap = Some((texture, key));
+        id
     }
 
     fn get(&mut self, ctx: &egui::Context, grid: &OccupancyGrid, dark: bool) -> egui::TextureId {
@@ -125,6 +158,10 @@ pub fn map_ui(
             .on_hover_text("The lidar's beams as faint rays from the true robot, with their hit points");
         ui.checkbox(&mut view.particles, "Particles");
         ui.checkbox(&mut view.path, "Path");
+        ui.checkbox(&mut view.costmap, "Costmap").on_hover_text(
+            "Where the robot's centre cannot be: free cells closer to a wall than its radius \
+             (pink, as thesis Fig. 5.1). CMCL and ACMCL regenerate particles that move into it.",
+        );
         ui.separator();
         ui.toggle_value(&mut view.click_kidnap, "Kidnap by click")
             .on_hover_text("Click on the map to teleport the robot there (drag to set its heading). The filters are not told.");
@@ -141,6 +178,9 @@ pub fn map_ui(
     painter.rect_filled(t.rect, 4.0, colors.background);
     draw_grid(&painter, &t, &colors);
     draw_occupancy(ui, &painter, &t, grid, texture);
+    if view.costmap {
+        draw_costmap(ui, &painter, &t, grid, run.collision_map(), texture);
+    }
     if view.path {
         draw_path(&painter, &t, run.path(), colors.truth);
     }
@@ -226,6 +266,29 @@ fn draw_occupancy(
     texture: &mut GridTexture,
 ) {
     let id = texture.get(ui.ctx(), grid, ui.visuals().dark_mode);
+    draw_grid_image(painter, t, grid, id, Color32::from_white_alpha(235));
+}
+
+fn draw_costmap(
+    ui: &egui::Ui,
+    painter: &egui::Painter,
+    t: &MapTransform,
+    grid: &OccupancyGrid,
+    costmap: &Costmap,
+    texture: &mut GridTexture,
+) {
+    let id = texture.costmap(ui.ctx(), grid, costmap);
+    draw_grid_image(painter, t, grid, id, Color32::WHITE);
+}
+
+/// An image with one pixel per grid cell, placed where the grid lies in the world.
+fn draw_grid_image(
+    painter: &egui::Painter,
+    t: &MapTransform,
+    grid: &OccupancyGrid,
+    id: egui::TextureId,
+    tint: Color32,
+) {
     let (w, h) = (
         grid.width() as f64 * grid.resolution(),
         grid.height() as f64 * grid.resolution(),
@@ -236,7 +299,6 @@ fn draw_occupancy(
         t.xy(x, y)
     };
     let mut mesh = egui::Mesh::with_texture(id);
-    let tint = Color32::from_white_alpha(235);
     mesh.vertices.extend([
         egui::epaint::Vertex {
             pos: corner(0.0, h),
@@ -427,6 +489,10 @@ fn draw_legend(painter: &egui::Painter, t: &MapTransform, run: &MclRun, colors: 
         ));
     }
     if run.filters().iter().any(|f| f.name != "mcl") {
+        rows.push((
+            Color32::from_rgb(0xFF, 0x69, 0xB4),
+            "costmap: too close to a wall (toggle)".to_owned(),
+        ));
         rows.push((palette::VERMILLION, "injected particles (AMCL)".to_owned()));
         rows.push((
             palette::GREEN,

@@ -77,6 +77,8 @@ pub struct KidnapView {
     pub path: bool,
     /// Keep the true robot in the middle.
     pub follow_robot: bool,
+    /// The costmap's invalid zone in pink.
+    pub costmap: bool,
     /// A click on the map kidnaps the robot (instead of panning).
     #[serde(skip)]
     pub click_kidnap: bool,
@@ -90,6 +92,7 @@ impl Default for KidnapView {
             particles: true,
             path: true,
             follow_robot: false,
+            costmap: false,
             click_kidnap: false,
         }
     }
@@ -371,6 +374,22 @@ impl KidnapLesson {
         ui.add(egui::TextEdit::singleline(&mut query.clone()).desired_width(f32::INFINITY))
             .on_hover_text("index.html?… with these pairs opens exactly this run");
     }
+}
+
+/// Each filter's status line ("AMCL: lost: 3.2 m off, …"), as the explanation
+/// panel shows it.
+pub fn explain_status(lesson: &KidnapLesson) -> Vec<String> {
+    let run = lesson.sim().run();
+    run.filters()
+        .iter()
+        .map(|f| {
+            format!(
+                "{}: {}",
+                f.name.to_uppercase(),
+                explain::filter_status(f, run.kidnap_tick(), run.scenario().dt)
+            )
+        })
+        .collect()
 }
 
 /// A phase's name on screen.

@@ -16,7 +16,7 @@ pub fn plots_ui(ui: &mut egui::Ui, run: &MclRun) {
             .include_x(1.0)
             .include_y(0.0)
     };
-    ui.columns(3, |columns| {
+    ui.columns(4, |columns| {
         let ui = &mut columns[0];
         title_ui(
             ui,
@@ -78,8 +78,50 @@ pub fn plots_ui(ui: &mut egui::Ui, run: &MclRun) {
                 );
             }
         });
+        let ui = &mut columns[3];
+        title_ui(
+            ui,
+            "Recovery",
+            "Augmented MCL's injection probability max(0, 1 − w_fast/w_slow) (solid) and the \
+             fraction of particles injected or regenerated in each update (dashed)",
+        );
+        plot("kidnap_recovery", "fraction")
+            .include_y(1.0)
+            .show(ui, |plot_ui| {
+                for (k, f) in run.filters().iter().enumerate() {
+                    let color = filter_color(k, f.name);
+                    let name = f.name.to_uppercase();
+                    let p = thin(
+                        f.updates
+                            .iter()
+                            .map(|u| [u.tick as f64 * dt, u.injection_probability])
+                            .collect(),
+                    );
+                    let r = thin(
+                        f.updates
+                            .iter()
+                            .map(|u| [u.tick as f64 * dt, u.randomized])
+                            .collect(),
+                    );
+                    plot_ui.line(
+                        Line::new(format!("{name} injection probability"), PlotPoints::new(p))
+                            .color(color)
+                            .width(line_width(k, 1.2)),
+                    );
+                    plot_ui.line(
+                        Line::new(format!("{name} drawn anew"), PlotPoints::new(r))
+                            .color(color)
+                            .style(LineStyle::dashed_dense())
+                            .width(line_width(k, 1.0)),
+                    );
+                }
+            });
         let ui = &mut columns[2];
-        title_ui(ui, "Particles", "How many particles each filter carries");
+        title_ui(
+            ui,
+            "Particles",
+            "How many particles each filter carries (KLD-sampling adapts it)",
+        );
         plot("kidnap_count", "particles").show(ui, |plot_ui| {
             for (k, f) in run.filters().iter().enumerate() {
                 let points = thin(
