@@ -527,6 +527,34 @@ async function main() {
       }
     });
 
+    // --- The kidnapped robot by URL: AMCL and ACMCL track, the robot is kidnapped at
+    // tick 30 (kidnap-at=30), and each filter's status says it is lost, then recovering
+    // or recovered.
+    await check("a kidnap by URL: the status goes from tracking to lost or recovering", async () => {
+      const url = "index.html?lesson=kidnap&estimator=amcl,acmcl&init=tracking&particles=500&kidnap-at=30&seed=4";
+      const { context, page: p, log } = await openPage(browser, baseUrl, url, "kidnap status");
+      try {
+        await waitRunning(p);
+        await waitState(p, (st) => st.lesson === "kidnap" && st.frames > 2, "the kidnap lesson");
+        await p.mouse.click(VIEWPORT.width / 2, VIEWPORT.height / 2);
+        await p.keyboard.press("Space");
+        const before = await waitState(p, (st) => st.tick >= 25, "25 ticks", 90_000);
+        const tracking = before.filters.map((f) => f.status);
+        assert(tracking.every((s) => s.startsWith("tracking")), `before the kidnap: ${JSON.stringify(tracking)}`);
+        const after = await waitState(p, (st) => st.kidnap_tick === 30 && st.tick >= 34, "the kidnap", 90_000);
+        const statuses = after.filters.map((f) => f.status);
+        assert(statuses.every((s) => /^(lost|recover)/.test(s)), `after the kidnap: ${JSON.stringify(statuses)}`);
+        await sleep(300);
+        const { stats } = await waitNotBlank(p, "kidnap-status.png");
+        assertNotBlank(stats, "kidnap-status.png");
+        await assertNoPanic(p);
+        assert(log.problems.length === 0, log.problems.join("; "));
+        return `before: ${tracking.join(" | ")}; after: ${statuses.join(" | ")}`;
+      } finally {
+        await context.close();
+      }
+    });
+
     // --- A panic must be visible: the red banner, #status "panicked", and the app stops.
     await check("a panic shows the red #panic banner and stops the app", async () => {
       const { context, page: p, log } = await openPage(browser, baseUrl, `index.html?${LESSON}`, "panic (deliberate)");

@@ -26,6 +26,11 @@ pub fn filter_status(f: &FilterRun, kidnap_tick: Option<u64>, dt: f64) -> String
         };
     };
     let since: Vec<&UpdateRecord> = f.updates.iter().filter(|u| u.tick >= kidnap).collect();
+    // Between updates the estimate moves with the odometry; this is how far off it is now.
+    let off = f.ticks.last().map_or(last.position_error, |e| e.position);
+    if since.is_empty() {
+        return format!("lost: {off:.2} m off, no update since the kidnap yet");
+    }
     let recovered = (0..since.len()).find(|&k| {
         since.len() - k >= CONVERGED_UPDATES
             && since[k..k + CONVERGED_UPDATES].iter().all(|u| good(u))
@@ -41,8 +46,7 @@ pub fn filter_status(f: &FilterRun, kidnap_tick: Option<u64>, dt: f64) -> String
             100.0 * last.randomized
         ),
         None => format!(
-            "lost: {:.2} m off, {} updates since the kidnap",
-            last.position_error,
+            "lost: {off:.2} m off, {} updates since the kidnap",
             since.len()
         ),
     }

@@ -571,6 +571,7 @@ impl Lesson for KidnapLesson {
                     "heading_error": estimate.map(|e| slamlab_core::wrap_angle(e.theta - truth.theta).abs()),
                     "estimate": estimate.map(|e| [e.x, e.y, e.theta]),
                     "n_eff": f.mcl().n_eff(),
+                    "status": explain::filter_status(f, run.kidnap_tick(), run.scenario().dt),
                 })
             })
             .collect();
@@ -581,6 +582,7 @@ impl Lesson for KidnapLesson {
             "seed": run.scenario().seed,
             "map": self.map_name(),
             "truth": [truth.x, truth.y, truth.theta],
+            "kidnap_tick": run.kidnap_tick(),
             "filters": filters,
         })
     }
