@@ -308,7 +308,7 @@ impl KidnapLesson {
         }
     }
 
-    fn parameters_ui(&mut self, ui: &mut egui::Ui) {
+    fn kidnap_parameters_ui(&mut self, ui: &mut egui::Ui) {
         ui.heading("Monte Carlo localization");
         ui.horizontal_wrapped(|ui| {
             if ui
@@ -402,6 +402,41 @@ fn phase_name(phase: MclPhase) -> &'static str {
     }
 }
 
+impl crate::widgets::layout::LessonPanels for KidnapLesson {
+    fn plots_ui(&mut self, ui: &mut egui::Ui) {
+        plots::plots_ui(ui, self.stepper.sim().run());
+    }
+
+    fn parameters_ui(&mut self, ui: &mut egui::Ui) {
+        self.kidnap_parameters_ui(ui);
+    }
+
+    fn explanation_ui(&mut self, ui: &mut egui::Ui) {
+        explain::explanation_ui(
+            ui,
+            self.stepper.sim().run(),
+            self.stepper.last_phase().copied(),
+        );
+    }
+
+    fn map_ui(&mut self, ui: &mut egui::Ui) {
+        if let Some(note) = &self.note {
+            ui.label(egui::RichText::new(note).color(palette::VERMILLION));
+        }
+        let request = map::map_ui(
+            ui,
+            self.stepper.sim().run(),
+            &mut self.canvas,
+            &mut self.texture,
+            &mut self.view,
+            &mut self.drag,
+        );
+        if let Some(map::MapRequest::KidnapTo(pose)) = request {
+            self.apply_event(KidnapEvent::KidnapTo(pose));
+        }
+    }
+}
+
 impl Lesson for KidnapLesson {
     fn id(&self) -> &'static str {
         LESSON_ID
@@ -484,57 +519,7 @@ impl Lesson for KidnapLesson {
     }
 
     fn panels_ui(&mut self, ui: &mut egui::Ui, panels: &mut PanelVisibility, compact: bool) {
-        let plot_height = if compact { 150.0 } else { 220.0 };
-        egui::Panel::bottom("kidnap_plots")
-            .resizable(true)
-            .default_size(plot_height)
-            .min_size(110.0)
-            .show_collapsible(ui, &mut panels.plots, |ui| {
-                plots::plots_ui(ui, self.stepper.sim().run());
-                ui.expand_to_include_rect(ui.max_rect());
-            });
-        egui::Panel::left("kidnap_parameters")
-            .resizable(true)
-            .default_size(300.0)
-            .min_size(220.0)
-            .max_size(480.0)
-            .show_collapsible(ui, &mut panels.parameters, |ui| {
-                egui::ScrollArea::vertical()
-                    .id_salt("kidnap_parameters_scroll")
-                    .show(ui, |ui| self.parameters_ui(ui));
-            });
-        egui::Panel::right("kidnap_explanation")
-            .resizable(true)
-            .default_size(330.0)
-            .min_size(220.0)
-            .max_size(520.0)
-            .show_collapsible(ui, &mut panels.explanation, |ui| {
-                egui::ScrollArea::vertical()
-                    .id_salt("kidnap_explanation_scroll")
-                    .show(ui, |ui| {
-                        explain::explanation_ui(
-                            ui,
-                            self.stepper.sim().run(),
-                            self.stepper.last_phase().copied(),
-                        );
-                    });
-            });
-        egui::CentralPanel::default().show(ui, |ui| {
-            if let Some(note) = &self.note {
-                ui.label(egui::RichText::new(note).color(palette::VERMILLION));
-            }
-            let request = map::map_ui(
-                ui,
-                self.stepper.sim().run(),
-                &mut self.canvas,
-                &mut self.texture,
-                &mut self.view,
-                &mut self.drag,
-            );
-            if let Some(map::MapRequest::KidnapTo(pose)) = request {
-                self.apply_event(KidnapEvent::KidnapTo(pose));
-            }
-        });
+        crate::widgets::layout::lesson_panels_ui(self, ui, panels, compact, LESSON_ID);
     }
 
     fn view_menu_ui(&mut self, ui: &mut egui::Ui) {

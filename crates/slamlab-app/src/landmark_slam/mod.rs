@@ -456,45 +456,7 @@ impl LandmarkSlamLesson {
     /// The lesson's panels: parameters (left), explanation (right), plots (bottom)
     /// and the map (centre), plus the heatmap window.
     pub fn panels_ui(&mut self, ui: &mut egui::Ui, panels: &mut PanelVisibility, compact: bool) {
-        let plot_height = if compact { 150.0 } else { 230.0 };
-        egui::Panel::bottom("landmark_plots")
-            .resizable(true)
-            .default_size(plot_height)
-            .min_size(120.0)
-            .show_collapsible(ui, &mut panels.plots, |ui| {
-                plots::plots_ui(ui, &self.session);
-                // Fill the panel to its bottom edge, whatever the plots used.
-                ui.expand_to_include_rect(ui.max_rect());
-            });
-        egui::Panel::left("landmark_parameters")
-            .resizable(true)
-            .default_size(300.0)
-            .min_size(220.0)
-            .max_size(480.0)
-            .show_collapsible(ui, &mut panels.parameters, |ui| {
-                egui::ScrollArea::vertical()
-                    .id_salt("parameters_scroll")
-                    .show(ui, |ui| self.parameters_ui(ui));
-            });
-        egui::Panel::right("landmark_explanation")
-            .resizable(true)
-            .default_size(330.0)
-            .min_size(220.0)
-            .max_size(520.0)
-            .show_collapsible(ui, &mut panels.explanation, |ui| {
-                egui::ScrollArea::vertical()
-                    .id_salt("explanation_scroll")
-                    .show(ui, |ui| explain::explanation_ui(ui, &self.session));
-            });
-        egui::CentralPanel::default().show(ui, |ui| {
-            map::map_ui(
-                ui,
-                &self.session,
-                &mut self.map_view,
-                &mut self.view,
-                &mut self.drive,
-            );
-        });
+        crate::widgets::layout::lesson_panels_ui(self, ui, panels, compact, "landmark");
         if self.view.heatmap {
             let mut open = true;
             egui::Window::new("Covariance as correlations")
@@ -532,7 +494,7 @@ impl LandmarkSlamLesson {
         }
     }
 
-    fn parameters_ui(&mut self, ui: &mut egui::Ui) {
+    fn landmark_parameters_ui(&mut self, ui: &mut egui::Ui) {
         let manual_before = self.is_manual();
         let mut manual = manual_before;
         drive::drive_panel_ui(
@@ -548,6 +510,30 @@ impl LandmarkSlamLesson {
         if params_panel::parameters_ui(ui, self) {
             self.reset();
         }
+    }
+}
+
+impl crate::widgets::layout::LessonPanels for LandmarkSlamLesson {
+    fn plots_ui(&mut self, ui: &mut egui::Ui) {
+        plots::plots_ui(ui, &self.session);
+    }
+
+    fn parameters_ui(&mut self, ui: &mut egui::Ui) {
+        self.landmark_parameters_ui(ui);
+    }
+
+    fn explanation_ui(&mut self, ui: &mut egui::Ui) {
+        explain::explanation_ui(ui, &self.session);
+    }
+
+    fn map_ui(&mut self, ui: &mut egui::Ui) {
+        map::map_ui(
+            ui,
+            &self.session,
+            &mut self.map_view,
+            &mut self.view,
+            &mut self.drive,
+        );
     }
 }
 
