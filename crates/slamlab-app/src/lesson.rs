@@ -57,6 +57,66 @@ pub struct LessonStart<'a> {
     pub many_runs: Option<usize>,
 }
 
+/// What a lesson remembers between visits: its view options, its clock's speed,
+/// and the user's parameters that differ from the lesson's start.
+#[derive(Clone, Debug, Default, PartialEq, serde::Serialize, serde::Deserialize)]
+#[serde(default)]
+pub struct StoredSettings<V> {
+    /// Map layers and windows.
+    pub view: V,
+    /// The clock's speed.
+    pub time: TimeControl,
+    /// The user's parameters, as `key=value` pairs.
+    pub params: Vec<(String, String)>,
+}
+
+impl<V: Default + serde::Serialize + serde::de::DeserializeOwned> StoredSettings<V> {
+    /// What the lesson stored, unless this is an embedded figure (which opens the
+    /// same way for every student) or the stored value no longer fits (dropped quietly).
+    pub fn from_start(start: &LessonStart<'_>) -> Option<Self> {
+        start
+            .stored
+            .filter(|_| !start.embed)
+            .and_then(|value| serde_json::from_value(value.clone()).ok())
+    }
+
+    /// As JSON for [`Lesson::stored_settings`].
+    pub fn to_value(&self) -> serde_json::Value {
+        serde_json::to_value(self).unwrap_or_default()
+    }
+
+    /// Gives `time` the stored speed (the clock itself starts paused).
+    pub fn restore_clock(&self, time: &mut TimeControl) {
+        time.speed_tps = self.time.speed_tps;
+        time.max_speed = self.time.max_speed;
+    }
+}
+
+/// A lesson's scenario as it opens: `default`, then the stored parameters when the
+/// URL gives none, then the URL's pairs. Returns it with the link's problems as
+/// notices ("link: …").
+pub fn scenario_from_start<S: slamlab_sim::params::Scenario>(
+    start: &LessonStart<'_>,
+    default: S,
+    stored: Option<&[(String, String)]>,
+) -> (S, Vec<String>) {
+    use slamlab_sim::params;
+    let mut scenario = default;
+    if start.pairs.is_empty()
+        && let Some(stored) = stored
+    {
+        let pairs = stored.iter().map(|(k, v)| (k.as_str(), v.as_str()));
+        // Stored values were valid when saved; anything stale is dropped quietly.
+        let _ignored = params::apply_pairs(&mut scenario, pairs, &crate::query::APP_KEYS);
+    }
+    let pairs = start.pairs.iter().map(|(k, v)| (k.as_str(), v.as_str()));
+    let notices = params::apply_pairs(&mut scenario, pairs, &crate::query::APP_KEYS)
+        .iter()
+        .map(|issue| format!("link: {issue}"))
+        .collect();
+    (scenario, notices)
+}
+
 /// One lesson on screen. Everything the shell needs, nothing it must know about
 /// the lesson's world.
 pub trait Lesson: std::fmt::Debug {

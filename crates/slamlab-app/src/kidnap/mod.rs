@@ -9,7 +9,7 @@ mod explain;
 mod map;
 mod plots;
 
-use crate::lesson::{self, Lesson, LessonExt, LessonStart, PanelVisibility};
+use crate::lesson::{self, Lesson, LessonExt, LessonStart, PanelVisibility, StoredSettings};
 use crate::palette;
 use crate::time_control::{TimeAction, TimeControl, TimeInfo};
 use crate::widgets::dropped_files::DropInbox;
@@ -98,15 +98,6 @@ impl Default for KidnapView {
     }
 }
 
-/// What the lesson remembers between visits.
-#[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
-#[serde(default)]
-struct StoredSettings {
-    view: KidnapView,
-    time: TimeControl,
-    params: Vec<(String, String)>,
-}
-
 /// The lesson's start: the simulator's defaults.
 pub fn default_scenario() -> MclScenario {
     MclScenario::default()
@@ -136,19 +127,12 @@ pub struct KidnapLesson {
 
 /// Opens the lesson from the URL's pairs, with what it stored last time.
 pub fn open(start: &LessonStart<'_>) -> Box<dyn Lesson> {
-    let stored: Option<StoredSettings> = start
-        .stored
-        .and_then(|value| serde_json::from_value(value.clone()).ok());
-    let mut scenario = default_scenario();
-    if start.pairs.is_empty()
-        && !start.embed
-        && let Some(stored) = &stored
-    {
-        let pairs = stored.params.iter().map(|(k, v)| (k.as_str(), v.as_str()));
-        let _ignored = params::apply_pairs(&mut scenario, pairs, &crate::query::APP_KEYS);
-    }
-    let pairs = start.pairs.iter().map(|(k, v)| (k.as_str(), v.as_str()));
-    let issues = params::apply_pairs(&mut scenario, pairs, &crate::query::APP_KEYS);
+    let stored = StoredSettings::<KidnapView>::from_start(start);
+    let (scenario, link_notices) = lesson::scenario_from_start(
+        start,
+        default_scenario(),
+        stored.as_ref().map(|s| s.params.as_slice()),
+    );
     let mut lesson = match KidnapLesson::new(scenario) {
         Ok(lesson) => lesson,
         // Only a broken build could get here (the built-in maze is tested); the
@@ -163,13 +147,10 @@ pub fn open(start: &LessonStart<'_>) -> Box<dyn Lesson> {
             .with_notice(format!("Monte Carlo localization could not open: {why}"));
         }
     };
-    lesson
-        .notices
-        .splice(0..0, issues.iter().map(|issue| format!("link: {issue}")));
-    if let Some(stored) = stored.filter(|_| !start.embed) {
-        lesson.view = stored.view;
-        lesson.time.speed_tps = stored.time.speed_tps;
-        lesson.time.max_speed = stored.time.max_speed;
+    lesson.notices.splice(0..0, link_notices);
+    if let Some(stored) = stored {
+        lesson.view = stored.view.clone();
+        stored.restore_clock(&mut lesson.time);
     }
     if start.embed {
         lesson.view.legend = false;
@@ -529,12 +510,12 @@ impl Lesson for KidnapLesson {
     }
 
     fn stored_settings(&self) -> serde_json::Value {
-        let stored = StoredSettings {
+        StoredSettings {
             view: self.view.clone(),
             time: self.time.clone(),
             params: params::changed_pairs(&self.pending.scenario, &default_scenario()),
-        };
-        serde_json::to_value(stored).unwrap_or_default()
+        }
+        .to_value()
     }
 
     fn share_query(&self, embed: bool) -> String {

@@ -14,7 +14,7 @@ mod map;
 mod params_panel;
 mod plots;
 
-use crate::lesson::{self, Lesson, LessonStart, PanelVisibility};
+use crate::lesson::{self, Lesson, LessonStart, PanelVisibility, StoredSettings};
 use crate::time_control::{TimeAction, TimeControl, TimeInfo};
 use serde::{Deserialize, Serialize};
 use slamlab_core::Pose2;
@@ -110,46 +110,22 @@ pub struct LandmarkSlamLesson {
     link_notices: Vec<String>,
 }
 
-/// What the lesson remembers between visits.
-#[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
-#[serde(default)]
-struct StoredSettings {
-    /// Map layers and windows.
-    view: ViewOptions,
-    /// The clock's speed.
-    time: TimeControl,
-    /// The user's parameters that differ from the lesson's start.
-    params: Vec<(String, String)>,
-}
-
 /// Opens the lesson from the URL's pairs, with what it stored last time (the
 /// stored parameters only when the URL gives none).
 pub fn open(start: &LessonStart<'_>) -> Box<dyn Lesson> {
-    let stored: Option<StoredSettings> = start
-        .stored
-        .and_then(|value| serde_json::from_value(value.clone()).ok());
-    let mut scenario = default_scenario();
-    if start.pairs.is_empty()
-        && !start.embed
-        && let Some(stored) = &stored
-    {
-        let pairs = stored.params.iter().map(|(k, v)| (k.as_str(), v.as_str()));
-        // Stored values were valid when saved; anything stale is dropped quietly.
-        let _ignored = params::apply_pairs(&mut scenario, pairs, &crate::query::APP_KEYS);
-    }
-    let pairs = start.pairs.iter().map(|(k, v)| (k.as_str(), v.as_str()));
-    let issues = params::apply_pairs(&mut scenario, pairs, &crate::query::APP_KEYS);
+    let stored = StoredSettings::<ViewOptions>::from_start(start);
+    let (scenario, link_notices) = lesson::scenario_from_start(
+        start,
+        default_scenario(),
+        stored.as_ref().map(|s| s.params.as_slice()),
+    );
     let mut lesson = LandmarkSlamLesson::new(scenario);
-    lesson.link_notices = issues
-        .iter()
-        .map(|issue| format!("link: {issue}"))
-        .collect();
+    lesson.link_notices = link_notices;
     // A lecture figure looks the same for every student: the view a student left
     // in the full app (an open heatmap, say) stays there.
-    if let Some(stored) = stored.filter(|_| !start.embed) {
-        lesson.view = stored.view;
-        lesson.time.speed_tps = stored.time.speed_tps;
-        lesson.time.max_speed = stored.time.max_speed;
+    if let Some(stored) = stored {
+        lesson.view = stored.view.clone();
+        stored.restore_clock(&mut lesson.time);
     }
     if let Some(trials) = start.many_runs {
         lesson.start_many_runs(trials);
@@ -589,12 +565,12 @@ impl Lesson for LandmarkSlamLesson {
     }
 
     fn stored_settings(&self) -> serde_json::Value {
-        let stored = StoredSettings {
+        StoredSettings {
             view: self.view.clone(),
             time: self.time.clone(),
             params: self.pending_pairs(),
-        };
-        serde_json::to_value(stored).unwrap_or_default()
+        }
+        .to_value()
     }
 
     fn share_query(&self, embed: bool) -> String {
