@@ -391,7 +391,7 @@ fn draw_particles(
         let c = match p.flag {
             ParticleFlag::Normal => color.gamma_multiply(0.15 + 0.85 * relative.sqrt()),
             ParticleFlag::Injected => palette::VERMILLION,
-            ParticleFlag::Regenerated => palette::GREEN,
+            ParticleFlag::Regenerated => palette::SKY_BLUE,
         };
         let at = t.pose(&pose);
         let tip = at + screen_dir(pose.theta) * length;
@@ -495,7 +495,7 @@ fn draw_legend(painter: &egui::Painter, t: &MapTransform, run: &MclRun, colors: 
         ));
         rows.push((palette::VERMILLION, "injected particles (AMCL)".to_owned()));
         rows.push((
-            palette::GREEN,
+            palette::SKY_BLUE,
             "regenerated particles (CMCL, ACMCL)".to_owned(),
         ));
     }
