@@ -367,7 +367,7 @@ pub fn explain_status(lesson: &KidnapLesson) -> Vec<String> {
             format!(
                 "{}: {}",
                 f.name.to_uppercase(),
-                explain::filter_status(f, run.kidnap_tick(), run.scenario().dt)
+                f.status(run.kidnap_tick(), run.scenario().dt)
             )
         })
         .collect()
@@ -537,7 +537,7 @@ impl Lesson for KidnapLesson {
                     "heading_error": estimate.map(|e| slamlab_core::wrap_angle(e.theta - truth.theta).abs()),
                     "estimate": estimate.map(|e| [e.x, e.y, e.theta]),
                     "n_eff": f.mcl().n_eff(),
-                    "status": explain::filter_status(f, run.kidnap_tick(), run.scenario().dt),
+                    "status": f.status(run.kidnap_tick(), run.scenario().dt),
                 })
             })
             .collect();

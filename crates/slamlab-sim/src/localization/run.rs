@@ -137,6 +137,53 @@ impl FilterRun {
         })
     }
 
+    /// What the filter is doing, as a student should read it: tracking, lost,
+    /// recovering, or recovered after a kidnap (and how long it took), judged by
+    /// the experiments' convergence criterion.
+    pub fn status(&self, kidnap_tick: Option<u64>, dt: f64) -> String {
+        let f = self;
+        let good = |u: &UpdateRecord| {
+            u.position_error <= CONVERGED_POSITION && u.heading_error <= CONVERGED_HEADING
+        };
+        let Some(last) = f.updates.last() else {
+            return "waiting for the robot to move".to_owned();
+        };
+        let Some(kidnap) = kidnap_tick else {
+            return if good(last) {
+                format!("tracking ({:.2} m off)", last.position_error)
+            } else {
+                format!("localizing ({:.2} m off)", last.position_error)
+            };
+        };
+        let since: Vec<&UpdateRecord> = f.updates.iter().filter(|u| u.tick >= kidnap).collect();
+        // Between updates the estimate moves with the odometry; this is how far off it is now.
+        let off = f.ticks.last().map_or(last.position_error, |e| e.position);
+        if since.is_empty() {
+            return format!("lost: {off:.2} m off, no update since the kidnap yet");
+        }
+        let recovered = (0..since.len()).find(|&k| {
+            since.len() - k >= CONVERGED_UPDATES
+                && since[k..k + CONVERGED_UPDATES].iter().all(|u| good(u))
+        });
+        match recovered {
+            Some(k) => format!(
+                "recovered after {k} updates ({:.1} s after the kidnap)",
+                (since[k].tick - kidnap) as f64 * dt
+            ),
+            None if good(last) => {
+                "recovering: on the truth again, not yet for 10 updates".to_owned()
+            }
+            None if last.randomized > 0.0 => format!(
+                "recovering: {:.1}% of its particles drawn anew in the last update",
+                100.0 * last.randomized
+            ),
+            None => format!(
+                "lost: {off:.2} m off, {} updates since the kidnap",
+                since.len()
+            ),
+        }
+    }
+
     /// The metrics the CLI prints.
     pub fn summary(&self) -> FilterSummary {
         let converged_at = (0..self.updates.len()).find(|&u| {
