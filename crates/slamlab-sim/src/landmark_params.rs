@@ -19,18 +19,8 @@ const MANUAL_SPEEDS: &str =
 
 /// A real-valued field in the parameter's unit.
 macro_rules! field {
-    ($name:literal, $unit:literal, $help:literal, $range:expr, $($field:ident).+) => {
-        Param::number(
-            $name,
-            $unit,
-            $help,
-            $range,
-            |s: &LandmarkScenario| Some(s.$($field).+),
-            |s: &mut LandmarkScenario, v| {
-                s.$($field).+ = v;
-                Ok(())
-            },
-        )
+    ($($args:tt)*) => {
+        crate::params::number_field!(LandmarkScenario, $($args)*)
     };
 }
 

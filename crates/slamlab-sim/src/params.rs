@@ -172,6 +172,25 @@ impl<S> Param<S> {
     }
 }
 
+/// A real-valued parameter read and written straight from a field (or a field of
+/// a field) of scenario type `$s`, in the parameter's own unit.
+macro_rules! number_field {
+    ($s:ty, $name:literal, $unit:literal, $help:literal, $range:expr, $($field:ident).+) => {
+        $crate::params::Param::number(
+            $name,
+            $unit,
+            $help,
+            $range,
+            |s: &$s| Some(s.$($field).+),
+            |s: &mut $s, v| {
+                s.$($field).+ = v;
+                Ok(())
+            },
+        )
+    };
+}
+pub(crate) use number_field;
+
 /// A named scenario: what a source shows ("thesis Experiment 2") or a lesson's key
 /// comparison. A preset sets every parameter but the seed; parameters given beside
 /// it apply on top, whatever their order.

@@ -16,18 +16,8 @@ const SWITCH: &[&str] = &["0", "1"];
 
 /// A real-valued field in the parameter's unit.
 macro_rules! field {
-    ($name:literal, $unit:literal, $help:literal, $range:expr, $($field:ident).+) => {
-        Param::number(
-            $name,
-            $unit,
-            $help,
-            $range,
-            |s: &MclScenario| Some(s.$($field).+),
-            |s: &mut MclScenario, v| {
-                s.$($field).+ = v;
-                Ok(())
-            },
-        )
+    ($($args:tt)*) => {
+        crate::params::number_field!(MclScenario, $($args)*)
     };
 }
 
