@@ -185,7 +185,7 @@ pub fn map_ui(
         draw_path(&painter, &t, run.path(), colors.truth);
     }
     if view.rays {
-        draw_rays(&painter, &t, run, colors.truth);
+        draw_rays(&painter, &t, run);
     }
     for (k, f) in run.filters().iter().enumerate() {
         let color = filter_color(k, f.name);
@@ -342,7 +342,7 @@ fn draw_path(painter: &egui::Painter, t: &MapTransform, path: &[Pose2], color: C
     }
 }
 
-fn draw_rays(painter: &egui::Painter, t: &MapTransform, run: &MclRun, color: Color32) {
+fn draw_rays(painter: &egui::Painter, t: &MapTransform, run: &MclRun) {
     let Some(scan) = run.scan() else {
         return;
     };
@@ -363,7 +363,6 @@ fn draw_rays(painter: &egui::Painter, t: &MapTransform, run: &MclRun, color: Col
             painter.circle_filled(end, 1.8, palette::VERMILLION);
         }
     }
-    let _ = color;
 }
 
 /// Particles as small arrows, their opacity by weight relative to the heaviest;
