@@ -555,6 +555,40 @@ async function main() {
       }
     });
 
+    // --- The resampling lab by URL: a press of the Resample button (the "." shortcut)
+    // resamples with every method, and five seeded presses in this page's wasm give
+    // exactly the native copies (crates/slamlab-app/tests/resampling_ui.rs pins them).
+    await check("lesson=resampling resamples and gives the native copies", async () => {
+      const url = "index.html?lesson=resampling&weights=5,1,1,3&seed=3";
+      const { context, page: p, log } = await openPage(browser, baseUrl, url, "resampling");
+      try {
+        await waitRunning(p);
+        const s0 = await waitState(p, (st) => st.lesson === "resampling" && st.frames > 2, "the resampling lab");
+        assert(s0.particles === 4 && s0.resamplings === 0, `opened ${JSON.stringify(s0)}`);
+        await p.mouse.click(VIEWPORT.width / 2, VIEWPORT.height / 2); // gives the canvas keyboard focus
+        await p.keyboard.press("Period");
+        const s1 = await waitState(p, (st) => st.resamplings === 1, "one press");
+        assert(
+          s1.methods.every((m) => m.last_copies.reduce((a, b) => a + b, 0) === 4),
+          `each method draws M = 4: ${JSON.stringify(s1.methods)}`,
+        );
+        await sleep(300);
+        const { stats } = await waitNotBlank(p, "resampling.png");
+        assertNotBlank(stats, "resampling.png");
+        const headless = JSON.parse(
+          await p.evaluate((q) => window.slamlab.slamlab_test_headless(q, 5), "lesson=resampling&weights=5,1,1,3&seed=3"),
+        );
+        const copies = headless.methods.map((m) => `${m.name}=${JSON.stringify(m.last_copies)}`);
+        const NATIVE = ["multinomial=[3,0,1,0]", "low-variance=[2,1,0,1]", "stratified=[2,0,1,1]", "residual=[2,1,0,1]"];
+        assert(JSON.stringify(copies) === JSON.stringify(NATIVE), `copies ${copies} in the browser, ${NATIVE} natively`);
+        await assertNoPanic(p);
+        assert(log.problems.length === 0, log.problems.join("; "));
+        return `one press by key; headless 5 presses: ${copies.join(" ")}`;
+      } finally {
+        await context.close();
+      }
+    });
+
     // --- A panic must be visible: the red banner, #status "panicked", and the app stops.
     await check("a panic shows the red #panic banner and stops the app", async () => {
       const { context, page: p, log } = await openPage(browser, baseUrl, `index.html?${LESSON}`, "panic (deliberate)");

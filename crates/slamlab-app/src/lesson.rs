@@ -271,6 +271,14 @@ pub const LESSONS: &[LessonEntry] = &[
                   (global localization) and follows it: predict, weight, resample. Kidnap it.",
         open: crate::kidnap::open,
     },
+    LessonEntry {
+        id: crate::resampling::LESSON_ID,
+        title: "Resampling lab",
+        summary: "One row of weighted particles and four resamplers side by side: press \
+                  resample once or a thousand times and see how many copies each particle \
+                  gets, and how much they scatter.",
+        open: crate::resampling::open,
+    },
 ];
 
 /// The lesson that opens when none (or an unknown one) is asked for.

@@ -12,6 +12,7 @@ pub mod landmark_slam;
 pub mod lesson;
 pub mod palette;
 pub mod query;
+pub mod resampling;
 pub mod time_control;
 pub mod widgets;
 

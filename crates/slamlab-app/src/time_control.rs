@@ -116,7 +116,8 @@ impl TimeControl {
 pub struct TimeInfo {
     /// Ticks started so far.
     pub tick: u64,
-    /// Simulated time, seconds.
+    /// Simulated time, seconds; NaN for a lesson without a clock of its own (a
+    /// lab whose ticks are presses, a solver whose ticks are iterations).
     pub time_s: f64,
     /// The phase that ran last ("predict", "update landmark 7 (2 of 5)").
     pub last_phase: Option<String>,
@@ -228,8 +229,13 @@ pub fn time_bar_ui(
         ui.checkbox(&mut time.max_speed, "max")
             .on_hover_text("Run as fast as this computer can");
         ui.separator();
-        ui.label(format!("tick {}   t = {:.1} s", info.tick, info.time_s))
-            .on_hover_text("Ticks run so far and the simulated time");
+        if info.time_s.is_finite() {
+            ui.label(format!("tick {}   t = {:.1} s", info.tick, info.time_s))
+                .on_hover_text("Ticks run so far and the simulated time");
+        } else {
+            ui.label(format!("tick {}", info.tick))
+                .on_hover_text("Ticks run so far");
+        }
         if !compact {
             let last = info.last_phase.as_deref().unwrap_or("none yet");
             ui.label(format!("Last phase: {last}"))

@@ -35,6 +35,10 @@ mod particle_experiments;
 /// Lessons the CLI can run.
 const LESSONS: &[&str] = &["landmark-slam", "kidnap"];
 
+/// Lessons with a parameter table (`slamlab params --lesson ID`): those the CLI
+/// runs, and the app's interactive ones.
+const PARAM_LESSONS: &[&str] = &["landmark-slam", "kidnap", "resampling"];
+
 /// Experiments the CLI can run.
 const EXPERIMENTS: &[&str] = &[
     "ekf-vs-ukf",
@@ -150,7 +154,7 @@ fn cli() -> Command {
                 .arg(
                     Arg::new("lesson")
                         .long("lesson")
-                        .value_parser(LESSONS.to_vec())
+                        .value_parser(PARAM_LESSONS.to_vec())
                         .default_value("landmark-slam")
                         .help("the lesson id"),
                 ),
@@ -277,6 +281,7 @@ fn list_params(matches: &ArgMatches) -> Result<()> {
         .map_or("landmark-slam", String::as_str);
     let rows = match lesson {
         "kidnap" => params::describe::<slamlab_sim::localization::MclScenario>(),
+        "resampling" => params::describe::<slamlab_sim::resampling_lab::LabScenario>(),
         _ => params::describe::<LandmarkScenario>(),
     };
     let mut out = std::io::stdout().lock();

@@ -22,6 +22,7 @@ pub mod params;
 pub mod pose_graph_experiment;
 pub mod presets;
 pub mod resampling;
+pub mod resampling_lab;
 pub mod scenario;
 pub mod session;
 pub mod stepper;
