@@ -1,5 +1,7 @@
 //! The plots under the map, one point per filter update: position error against
-//! the estimate's own 2σ bound, the effective sample size, and the particle count.
+//! the estimate's own 2σ bound; Augmented MCL's w_slow and w_fast; the particle
+//! count beside the effective sample size; and the injection probability beside
+//! the fraction of particles drawn anew.
 
 use super::filter_color;
 use crate::widgets::plots::{line_width, thin, time_plot, title_ui};
@@ -56,25 +58,41 @@ pub fn plots_ui(ui: &mut egui::Ui, run: &MclRun) {
         let ui = &mut columns[1];
         title_ui(
             ui,
-            "Effective sample size",
-            "N_eff = 1 / Σ w² after weighting: the particle count when all weights are equal, \
-             1 when one particle holds all the weight",
+            "w_slow and w_fast",
+            "Augmented MCL's short-term (w_fast, solid) and long-term (w_slow, dashed) averages of \
+             the particle weights, as log10 (thesis Algorithm 9). After a kidnap the weights drop \
+             and w_fast falls below w_slow first: that gap is the injection probability. Filters \
+             without recovery (MCL, CMCL) have none.",
         );
-        plot("kidnap_neff", "N_eff").show(ui, |plot_ui| {
+        plot("kidnap_wslow", "log10 w").show(ui, |plot_ui| {
             for (k, f) in run.filters().iter().enumerate() {
-                let points = thin(
-                    f.updates
-                        .iter()
-                        .map(|u| [u.tick as f64 * dt, u.n_eff])
-                        .collect(),
+                let color = filter_color(k, f.name);
+                let name = f.name.to_uppercase();
+                let series = |pick: fn(&slamlab_sim::localization::UpdateRecord) -> Option<f64>| {
+                    thin(
+                        f.updates
+                            .iter()
+                            .filter_map(|u| {
+                                pick(u).map(|l| [u.tick as f64 * dt, l / std::f64::consts::LN_10])
+                            })
+                            .collect(),
+                    )
+                };
+                let fast = series(|u| u.log_w_fast);
+                let slow = series(|u| u.log_w_slow);
+                if fast.is_empty() {
+                    continue;
+                }
+                plot_ui.line(
+                    Line::new(format!("{name} w_fast"), PlotPoints::new(fast))
+                        .color(color)
+                        .width(line_width(k, 1.2)),
                 );
                 plot_ui.line(
-                    Line::new(
-                        format!("{} N_eff", f.name.to_uppercase()),
-                        PlotPoints::new(points),
-                    )
-                    .color(filter_color(k, f.name))
-                    .width(line_width(k, 1.2)),
+                    Line::new(format!("{name} w_slow"), PlotPoints::new(slow))
+                        .color(color)
+                        .style(LineStyle::dashed_dense())
+                        .width(line_width(k, 1.0)),
                 );
             }
         });
@@ -119,24 +137,37 @@ pub fn plots_ui(ui: &mut egui::Ui, run: &MclRun) {
         let ui = &mut columns[2];
         title_ui(
             ui,
-            "Particles",
-            "How many particles each filter carries (KLD-sampling adapts it)",
+            "Particles and N_eff",
+            "How many particles each filter carries (solid; KLD-sampling adapts it) and the \
+             effective sample size N_eff = 1 / Σ w² after weighting (dashed): the particle count \
+             when all weights are equal, 1 when one particle holds all the weight",
         );
         plot("kidnap_count", "particles").show(ui, |plot_ui| {
             for (k, f) in run.filters().iter().enumerate() {
-                let points = thin(
+                let color = filter_color(k, f.name);
+                let name = f.name.to_uppercase();
+                let count = thin(
                     f.updates
                         .iter()
                         .map(|u| [u.tick as f64 * dt, u.particles as f64])
                         .collect(),
                 );
+                let n_eff = thin(
+                    f.updates
+                        .iter()
+                        .map(|u| [u.tick as f64 * dt, u.n_eff])
+                        .collect(),
+                );
                 plot_ui.line(
-                    Line::new(
-                        format!("{} particles", f.name.to_uppercase()),
-                        PlotPoints::new(points),
-                    )
-                    .color(filter_color(k, f.name))
-                    .width(line_width(k, 1.2)),
+                    Line::new(format!("{name} particles"), PlotPoints::new(count))
+                        .color(color)
+                        .width(line_width(k, 1.2)),
+                );
+                plot_ui.line(
+                    Line::new(format!("{name} N_eff"), PlotPoints::new(n_eff))
+                        .color(color)
+                        .style(LineStyle::dashed_dense())
+                        .width(line_width(k, 1.0)),
                 );
             }
         });

@@ -300,7 +300,13 @@ impl ResamplingLesson {
         });
         ui.separator();
         let running = self.run.scenario().clone();
-        if params_panel::params_ui(ui, &mut self.pending, &running, PANEL_PARAMS) {
+        // A typed list has its own length: no particle count to set.
+        let names: Vec<&str> = PANEL_PARAMS
+            .iter()
+            .copied()
+            .filter(|n| *n != "particles" || matches!(running.weights, LabWeights::Preset(_)))
+            .collect();
+        if params_panel::params_ui(ui, &mut self.pending, &running, &names) {
             self.apply_pending();
         }
         ui.separator();

@@ -83,6 +83,10 @@ pub struct UpdateRecord {
     pub randomized: f64,
     /// Augmented MCL's injection probability `max(0, 1 − w_fast/w_slow)`.
     pub injection_probability: f64,
+    /// `ln w_slow` after this update (AMCL and ACMCL; `None` for the others).
+    pub log_w_slow: Option<f64>,
+    /// `ln w_fast` after this update (AMCL and ACMCL; `None` for the others).
+    pub log_w_fast: Option<f64>,
 }
 
 /// The error of a filter's estimate at one tick (moved along with the odometry
@@ -423,6 +427,8 @@ impl MclRun {
                         resampled: r.resampled,
                         randomized: f.filter.randomized_fraction(),
                         injection_probability: f.filter.report().injection_probability,
+                        log_w_slow: f.filter.report().log_w_slow,
+                        log_w_fast: f.filter.report().log_w_fast,
                     });
                 }
                 self.finish_tick();
