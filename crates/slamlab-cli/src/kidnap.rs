@@ -306,8 +306,8 @@ pub fn experiment(args: &[OsString]) -> Result<()> {
         kidnap_distance: base.kidnap_distance,
         ..Default::default()
     };
-    // Every (estimator, count, seed) trial is independent: run them on all
-    // cores (natively only; each trial's numbers do not depend on the thread).
+    // Every (estimator, count, seed) trial is independent: rayon runs them on
+    // all cores (natively only; each trial's numbers do not depend on the thread).
     let jobs: Vec<(LocalizationEstimator, usize, u64)> = estimators
         .iter()
         .flat_map(|&e| {
@@ -317,42 +317,25 @@ pub fn experiment(args: &[OsString]) -> Result<()> {
         })
         .collect();
     let total = jobs.len();
-    let workers = std::thread::available_parallelism()
-        .map_or(1, |n| n.get())
-        .min(total.max(1));
-    let next = std::sync::atomic::AtomicUsize::new(0);
+    let bar = crate::trials_bar("kidnap", total);
     let done = std::sync::atomic::AtomicUsize::new(0);
-    let slots: Vec<
-        std::sync::Mutex<
-            Option<Result<slamlab_sim::localization::experiment::KidnapTrial, String>>,
-        >,
-    > = (0..total).map(|_| std::sync::Mutex::new(None)).collect();
-    std::thread::scope(|scope| {
-        for _ in 0..workers {
-            scope.spawn(|| {
-                loop {
-                    let k = next.fetch_add(1, std::sync::atomic::Ordering::Relaxed);
-                    if k >= total {
-                        break;
-                    }
-                    let (est, n, i) = jobs[k];
-                    let r = kidnap_trial(&base, &grid, est, n, seed.wrapping_add(i), &protocol)
-                        .map_err(|e| e.to_string());
-                    if let Ok(mut slot) = slots[k].lock() {
-                        *slot = Some(r);
-                    }
-                    let d = done.fetch_add(1, std::sync::atomic::Ordering::Relaxed) + 1;
-                    eprint!("\rkidnap: {d}/{total} trials");
-                }
-            });
-        }
-    });
+    let outcomes: Vec<Result<slamlab_sim::localization::experiment::KidnapTrial, String>> = {
+        use rayon::prelude::*;
+        jobs.par_iter()
+            .map(|&(est, n, i)| {
+                let r = kidnap_trial(&base, &grid, est, n, seed.wrapping_add(i), &protocol)
+                    .map_err(|e| e.to_string());
+                let d = done.fetch_add(1, std::sync::atomic::Ordering::Relaxed) + 1;
+                crate::trials_progress(&bar, "kidnap", d, total);
+                r
+            })
+            .collect()
+    };
     let mut all = Vec::with_capacity(total);
-    for slot in slots {
-        match slot.into_inner().ok().flatten() {
-            Some(Ok(t)) => all.push(t),
-            Some(Err(e)) => bail!("map {name}: {e}"),
-            None => bail!("a trial did not finish"),
+    for outcome in outcomes {
+        match outcome {
+            Ok(t) => all.push(t),
+            Err(e) => bail!("map {name}: {e}"),
         }
     }
     let mut results = Vec::new();

@@ -300,27 +300,52 @@ fn list_params(matches: &ArgMatches) -> Result<()> {
     Ok(())
 }
 
-/// Draws a progress bar on stderr: redrawn in place on a terminal, a line every
-/// tenth of the way otherwise (logs).
+/// A progress bar on stderr for `total` trials (indicatif): drawn in place on a
+/// terminal; in a log (stderr not a terminal) a line every tenth of the way
+/// instead. Safe to share between threads.
+pub(crate) fn trials_bar(label: &'static str, total: usize) -> indicatif::ProgressBar {
+    let bar = if std::io::stderr().is_terminal() {
+        indicatif::ProgressBar::new(total as u64)
+    } else {
+        indicatif::ProgressBar::hidden()
+    };
+    if let Ok(style) = indicatif::ProgressStyle::with_template(
+        "{prefix} [{bar:30}] {pos}/{len} trials, {elapsed} (about {eta} left)",
+    ) {
+        bar.set_style(style.progress_chars("=> "));
+    }
+    bar.set_prefix(label);
+    bar.set_length(total as u64);
+    bar
+}
+
+/// Advances `bar` to `done` of `total`, and in a log writes a line every tenth
+/// of the way.
+pub(crate) fn trials_progress(
+    bar: &indicatif::ProgressBar,
+    label: &str,
+    done: usize,
+    total: usize,
+) {
+    bar.set_position(done as u64);
+    if bar.is_hidden()
+        && done > 0
+        && (done == total || (done * 10 / total.max(1)) != ((done - 1) * 10 / total.max(1)))
+    {
+        eprintln!("{label}: {done}/{total} trials");
+    }
+    if done == total {
+        bar.finish();
+    }
+}
+
+/// A progress callback `(done, total)` for the experiments, drawing
+/// [`trials_bar`].
 fn progress_bar(label: &'static str) -> impl FnMut(usize, usize) {
-    let terminal = std::io::stderr().is_terminal();
+    let mut bar: Option<indicatif::ProgressBar> = None;
     move |done, total| {
-        let mut err = std::io::stderr().lock();
-        if terminal {
-            let width = 30;
-            let filled = width * done / total.max(1);
-            let _ = write!(
-                err,
-                "\r{label} [{}{}] {done}/{total} trials",
-                "=".repeat(filled),
-                " ".repeat(width - filled)
-            );
-            if done == total {
-                let _ = writeln!(err);
-            }
-        } else if done == total || (done * 10 / total.max(1)) != ((done - 1) * 10 / total.max(1)) {
-            let _ = writeln!(err, "{label}: {done}/{total} trials");
-        }
+        let bar = bar.get_or_insert_with(|| trials_bar(label, total));
+        trials_progress(bar, label, done, total);
     }
 }
 
