@@ -6,6 +6,7 @@
 #   web/dist/lecture.html               an example lecture page that embeds the app twice
 #   web/dist/pkg/slamlab_app.js         wasm-bindgen's JavaScript glue
 #   web/dist/pkg/slamlab_app_bg.wasm    the app itself (Rust compiled to WebAssembly)
+#   web/dist/maps/                      the built-in maps as ROS map files (map=maps/office.yaml)
 #
 # Usage: web/build.sh            (from anywhere)
 # Environment:
@@ -112,6 +113,10 @@ build_id="$(sha256sum "$wasm_out" | cut -c1-12)"
 for page in index.html lecture.html; do
 	sed "s/__BUILD_ID__/$build_id/g" "web/$page" >"$dist/$page"
 done
+# The built-in maps as ROS map files beside the site: an example of a map an
+# instructor hosts (index.html?lesson=kidnap&map=maps/office.yaml).
+mkdir -p "$dist/maps"
+cp assets/maps/*.yaml assets/maps/*.png "$dist/maps/"
 
 # --- 6. Sizes: what a visitor downloads (servers usually send it gzip-compressed).
 wasm_bytes=$(stat -c %s "$wasm_out")

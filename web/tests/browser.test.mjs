@@ -555,6 +555,37 @@ async function main() {
       }
     });
 
+    // --- map= names a ROS map hosted beside the site (web/build.sh copies the built-in
+    // maps to dist/maps/): the lesson fetches the YAML and its image and runs on it; a
+    // location that does not exist leaves the maze and a note.
+    await check("map=maps/office.yaml loads a hosted ROS map; a missing one keeps the maze", async () => {
+      const url = "index.html?lesson=kidnap&map=maps/office.yaml&particles=300&seed=2";
+      const { context, page: p, log } = await openPage(browser, baseUrl, url, "hosted map");
+      try {
+        await waitRunning(p);
+        const s1 = await waitState(p, (st) => st.lesson === "kidnap" && st.map === "office.yaml", "the hosted office map", 60_000);
+        const { stats } = await waitNotBlank(p, "kidnap-hosted-map.png");
+        assertNotBlank(stats, "kidnap-hosted-map.png");
+        await assertNoPanic(p);
+        assert(log.problems.length === 0, log.problems.join("; "));
+        const missing = await openPage(browser, baseUrl, "index.html?lesson=kidnap&map=maps/nowhere.yaml", "missing hosted map");
+        try {
+          await waitRunning(missing.page);
+          await sleep(1500);
+          const s2 = await testState(missing.page);
+          assert(s2.map === "maze", `a missing map replaced the maze: ${JSON.stringify(s2)}`);
+          await assertNoPanic(missing.page);
+          // The failed request is the point of this check, not a problem.
+          missing.log.problems = missing.log.problems.filter((q) => !/nowhere\.yaml|404/.test(q));
+        } finally {
+          await missing.context.close();
+        }
+        return `map ${s1.map} loaded by URL; maps/nowhere.yaml left the maze`;
+      } finally {
+        await context.close();
+      }
+    });
+
     // --- Two filters of 5,000 particles side by side (AMCL and ACMCL): the lesson runs,
     // draws, and reports its frame timing (recorded in metrics.json, not asserted: the
     // README's table has the numbers with the machine and date).

@@ -261,3 +261,45 @@ fn rendered_side_by_side_with_the_costmap_after_a_kidnap() {
         &egui_kittest::SnapshotOptions::new().threshold(2.0),
     );
 }
+
+#[test]
+fn map_in_the_url_names_a_ros_map_that_is_read_and_shared() {
+    use slamlab_app::lesson::Lesson as _;
+    let yaml = concat!(env!("CARGO_MANIFEST_DIR"), "/../../assets/maps/office.yaml");
+    let mut h = harness(&format!("lesson=kidnap&particles=200&seed=1&map={yaml}"));
+    for _ in 0..4 {
+        h.run();
+    }
+    let l = lesson(&h);
+    assert_eq!(l.map_name(), "office.yaml", "note: {:?}", l.note());
+    assert!(
+        l.note()
+            .is_some_and(|n| n.starts_with("Loaded office.yaml")),
+        "{:?}",
+        l.note()
+    );
+    assert_eq!(l.sim().run().map().grid().width(), 550);
+    assert!(
+        l.share_query(false).contains("map="),
+        "{}",
+        l.share_query(false)
+    );
+    assert!(
+        h.state().notices().iter().all(|n| !n.contains("map")),
+        "{:?}",
+        h.state().notices()
+    );
+
+    // A location that cannot be read: a note that names it, and the built-in maze.
+    let mut h = harness("lesson=kidnap&particles=200&seed=1&map=no/such/lab.yaml");
+    for _ in 0..4 {
+        h.run();
+    }
+    let l = lesson(&h);
+    assert_eq!(l.map_name(), "maze");
+    let note = l.note().unwrap_or_default();
+    assert!(
+        note.contains("Could not load the map no/such/lab.yaml"),
+        "{note}"
+    );
+}

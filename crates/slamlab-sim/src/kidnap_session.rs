@@ -29,6 +29,10 @@ pub enum KidnapEvent {
     GlobalLocalization,
     /// Put every filter's particles around the true pose (tracking).
     ResetAroundTruth,
+    /// Drive by hand with `(v, w)` from the next move on (m/s, rad/s).
+    Drive(f64, f64),
+    /// Give the wheel back to the explorer.
+    Explore,
 }
 
 impl KidnapEvent {
@@ -48,6 +52,10 @@ impl KidnapEvent {
                 "Particles scattered over the whole free space: global localization".to_owned()
             }
             KidnapEvent::ResetAroundTruth => "Particles reset around the true pose".to_owned(),
+            KidnapEvent::Drive(v, w) => {
+                format!("Driving by hand: v = {v:.2} m/s, w = {w:.2} rad/s")
+            }
+            KidnapEvent::Explore => "The explorer drives again".to_owned(),
         }
     }
 }
@@ -166,6 +174,8 @@ impl Simulation for KidnapSim {
                     f.filter.mcl_mut().init_tracking(truth, std);
                 }
             }
+            KidnapEvent::Drive(v, w) => self.run.set_manual(Some((v, w))),
+            KidnapEvent::Explore => self.run.set_manual(None),
         }
     }
 
@@ -287,6 +297,43 @@ mod tests {
             s.step_phase();
         }
         assert_eq!(fingerprint(&s), end);
+    }
+
+    #[test]
+    fn driving_by_hand_moves_the_robot_as_told_and_replays_exactly() {
+        let mut s = lesson_run(2);
+        s.run_ticks(3);
+        // Turn on the spot for five ticks: the position stays, the heading turns
+        // by w · dt per tick.
+        let before = s.sim().run().robot().pose;
+        s.apply(KidnapEvent::Drive(0.0, 0.5));
+        s.run_ticks(5);
+        let turned = s.sim().run().robot().pose;
+        let dt = s.sim().run().scenario().dt;
+        assert!((turned.x - before.x).abs() < 1e-12 && (turned.y - before.y).abs() < 1e-12);
+        let turn = slamlab_core::wrap_angle(turned.theta - before.theta);
+        assert!((turn - 5.0 * 0.5 * dt).abs() < 1e-9, "{turn}");
+        // Straight on; a wall stops the robot with one note, not one per tick.
+        s.apply(KidnapEvent::Drive(1.0, 0.0));
+        s.run_ticks(200);
+        let wall_notes = s.sim().run().notes().len();
+        assert!(wall_notes >= 1, "the robot never met a wall");
+        s.run_ticks(20);
+        assert_eq!(s.sim().run().notes().len(), wall_notes);
+        s.apply(KidnapEvent::Explore);
+        s.run_ticks(20);
+        let end = fingerprint(&s);
+        let phases = s.phases_run();
+        while s.sim().run().tick_count() > 4 {
+            assert!(s.step_back());
+        }
+        while s.phases_run() < phases {
+            s.step_phase();
+        }
+        assert_eq!(fingerprint(&s), end, "the drive commands replay");
+        // NaN commands count as zero.
+        s.apply(KidnapEvent::Drive(f64::NAN, f64::INFINITY));
+        assert_eq!(s.sim().run().manual(), Some((0.0, 0.0)));
     }
 
     #[test]

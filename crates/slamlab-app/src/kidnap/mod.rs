@@ -13,6 +13,7 @@ use crate::lesson::{self, Lesson, LessonExt, LessonStart, PanelVisibility, Store
 use crate::palette;
 use crate::time_control::{TimeAction, TimeControl, TimeInfo};
 use crate::widgets::dropped_files::DropInbox;
+use crate::widgets::fetch::{self, Fetch};
 use crate::widgets::map_canvas::MapView;
 use crate::widgets::params_panel::{self, PendingParams};
 use egui::Color32;
@@ -123,11 +124,54 @@ pub struct KidnapLesson {
     note: Option<String>,
     /// Maps dropped on the window, while they are read.
     inbox: DropInbox,
+    /// `map=` named a ROS map YAML (a URL beside the site, a path on the
+    /// desktop): where it is, and its reading, stage by stage.
+    map_location: Option<MapFetch>,
+}
+
+/// A ROS map read from a location named in the URL: first its YAML, then the
+/// image the YAML names, relative to it.
+#[derive(Debug)]
+struct MapFetch {
+    /// The YAML's location as the URL gave it (kept for share links).
+    location: String,
+    /// Not started yet (it starts with the first frame, which has the context).
+    started: bool,
+    /// The YAML, once read.
+    yaml: Option<Vec<u8>>,
+    /// The read under way.
+    fetch: Fetch,
+    /// The map was loaded from here.
+    loaded: bool,
+}
+
+/// Does a `map=` value name a ROS map YAML rather than a built-in map?
+pub fn is_map_location(value: &str) -> bool {
+    let lower = value.to_ascii_lowercase();
+    lower.ends_with(".yaml") || lower.ends_with(".yml")
 }
 
 /// Opens the lesson from the URL's pairs, with what it stored last time.
 pub fn open(start: &LessonStart<'_>) -> Box<dyn Lesson> {
     let stored = StoredSettings::<KidnapView>::from_start(start);
+    // `map=maps/lab.yaml`: a ROS map beside the site, read after the first frame;
+    // the lesson opens on the default map meanwhile.
+    let location = start
+        .pairs
+        .iter()
+        .rev()
+        .find(|(k, v)| k == "map" && is_map_location(v))
+        .map(|(_, v)| v.clone());
+    let pairs: Vec<(String, String)> = start
+        .pairs
+        .iter()
+        .filter(|(k, v)| !(k == "map" && is_map_location(v)))
+        .cloned()
+        .collect();
+    let start = &LessonStart {
+        pairs: &pairs,
+        ..*start
+    };
     let (scenario, link_notices) = lesson::scenario_from_start(
         start,
         default_scenario(),
@@ -155,6 +199,16 @@ pub fn open(start: &LessonStart<'_>) -> Box<dyn Lesson> {
     if start.embed {
         lesson.view.legend = false;
     }
+    if let Some(location) = location {
+        lesson.note = Some(format!("Loading the map {location}…"));
+        lesson.map_location = Some(MapFetch {
+            location,
+            started: false,
+            yaml: None,
+            fetch: Fetch::default(),
+            loaded: false,
+        });
+    }
     Box::new(lesson)
 }
 
@@ -176,12 +230,18 @@ impl KidnapLesson {
             notices,
             note: None,
             inbox: DropInbox::default(),
+            map_location: None,
         })
     }
 
     /// The running simulation.
     pub fn sim(&self) -> &KidnapSim {
         self.stepper.sim()
+    }
+
+    /// The latest note under the map toolbar (a refusal, what a load did).
+    pub fn note(&self) -> Option<&str> {
+        self.note.as_deref()
     }
 
     /// The scenario being edited in the parameter panel (applied on reset).
@@ -256,6 +316,7 @@ impl KidnapLesson {
                 // The scenario keeps a built-in map's name (a dropped file cannot
                 // travel in a link); the run uses the loaded grid.
                 self.loaded = Some((name, grid));
+                self.map_location = None;
                 let note = self.note.clone();
                 self.reset();
                 self.note = note;
@@ -271,7 +332,82 @@ impl KidnapLesson {
         if !pairs.iter().any(|(name, _)| name == "seed") {
             pairs.insert(0, ("seed".to_owned(), scenario.seed.to_string()));
         }
+        // A map read from a location travels in the link as that location.
+        if let Some(fetch) = self.map_location.as_ref().filter(|f| f.loaded) {
+            pairs.retain(|(name, _)| name != "map");
+            pairs.push(("map".to_owned(), fetch.location.clone()));
+        }
         pairs
+    }
+
+    /// Reads the map named by `map=` stage by stage: the YAML, then its image.
+    fn poll_map_location(&mut self, ctx: &egui::Context) {
+        let Some(state) = self.map_location.as_mut() else {
+            return;
+        };
+        if state.loaded {
+            return;
+        }
+        if !state.started {
+            state.started = true;
+            state.fetch = Fetch::start(&state.location, ctx);
+            return;
+        }
+        let Some(result) = state.fetch.poll() else {
+            return;
+        };
+        let location = state.location.clone();
+        let fail = |lesson: &mut Self, why: String| {
+            lesson.note = Some(format!(
+                "Could not load the map {location}: {why}; showing the {}",
+                lesson.sim().run().scenario().map
+            ));
+            lesson.map_location = None;
+        };
+        let bytes = match result {
+            Ok(bytes) => bytes,
+            Err(why) => return fail(self, why),
+        };
+        let yaml_name = location.rsplit('/').next().unwrap_or(&location).to_owned();
+        match state.yaml.take() {
+            None => {
+                // The YAML: find the image it names and read that next.
+                let image = std::str::from_utf8(&bytes)
+                    .map_err(|_| "it is not text".to_owned())
+                    .and_then(|text| {
+                        slamlab_sim::grid::map_io::parse_map_yaml(text).map_err(|e| e.to_string())
+                    });
+                match image {
+                    Ok(parsed) => {
+                        let image = fetch::relative_to(&location, &parsed.image);
+                        state.yaml = Some(bytes);
+                        state.fetch = Fetch::start(&image, ctx);
+                    }
+                    Err(why) => fail(self, why),
+                }
+            }
+            Some(yaml) => {
+                // The image: load both as if they had been dropped together.
+                let image_name = {
+                    let text = String::from_utf8_lossy(&yaml);
+                    slamlab_sim::grid::map_io::parse_map_yaml(&text)
+                        .map(|p| p.image.rsplit('/').next().unwrap_or(&p.image).to_owned())
+                        .unwrap_or_default()
+                };
+                self.load_dropped(&[(yaml_name, yaml), (image_name, bytes)]);
+                if self.loaded.is_some() {
+                    self.map_location = Some(MapFetch {
+                        location,
+                        started: true,
+                        yaml: None,
+                        fetch: Fetch::default(),
+                        loaded: true,
+                    });
+                } else {
+                    self.map_location = None;
+                }
+            }
+        }
     }
 
     /// The map on screen: `maze`, `office`, or a loaded file's name.
@@ -319,11 +455,12 @@ impl KidnapLesson {
             ui.label("map");
             let current = self.pending.scenario.map.clone();
             egui::ComboBox::from_id_salt("kidnap_map")
-                .selected_text(current.clone())
+                .selected_text(self.map_name())
                 .show_ui(ui, |ui| {
                     for name in ["maze", "office"] {
                         if ui.selectable_label(current == name, name).clicked() {
                             self.loaded = None;
+                            self.map_location = None;
                             self.pending.set("map", name);
                         }
                     }
@@ -476,6 +613,7 @@ impl Lesson for KidnapLesson {
     }
 
     fn read_input(&mut self, ctx: &egui::Context) {
+        self.poll_map_location(ctx);
         if let Some(batch) = self.inbox.poll(ctx) {
             let mut files = Vec::new();
             for (name, bytes) in batch {

@@ -266,6 +266,8 @@ pub struct MclRun {
     notes: Vec<String>,
     kidnap_rng: ChaCha8Rng,
     kidnap_tick: Option<u64>,
+    /// The student's command `(v, w)` while driving by hand; `None`: the explorer drives.
+    manual: Option<(f64, f64)>,
 }
 
 impl MclRun {
@@ -351,6 +353,7 @@ impl MclRun {
             notes,
             kidnap_rng: ChaCha8Rng::seed_from_u64(stream_seed(seed, 5)),
             kidnap_tick: None,
+            manual: None,
             scenario,
         })
     }
@@ -461,10 +464,21 @@ impl MclRun {
         } else {
             0.1
         };
-        let (v, w) = self.explorer.command(&self.robot.pose);
+        let (v, w) = match self.manual {
+            Some(command) => command,
+            None => self.explorer.command(&self.robot.pose),
+        };
         let before = self.robot.pose;
         if let Some(note) = self.robot.drive(&self.collision, v, w, dt) {
-            self.notes.push(format!("tick {}: {note}", self.tick));
+            // A student driving into a wall hears it once, not every tick.
+            let repeat = self.manual.is_some()
+                && self
+                    .notes
+                    .last()
+                    .is_some_and(|n| n.ends_with(note.as_str()));
+            if !repeat {
+                self.notes.push(format!("tick {}: {note}", self.tick));
+            }
             self.explorer.replan();
         }
         let after = self.robot.pose;
@@ -585,6 +599,22 @@ impl MclRun {
     /// The latest scan.
     pub fn scan(&self) -> Option<&Scan> {
         self.scan.as_ref()
+    }
+
+    /// Drives by hand with `(v, w)` (m/s, rad/s; non-finite values count as 0)
+    /// from the next move on, or gives the wheel back to the explorer (`None`),
+    /// which plans afresh from where the robot is.
+    pub fn set_manual(&mut self, command: Option<(f64, f64)>) {
+        let finite = |x: f64| if x.is_finite() { x } else { 0.0 };
+        self.manual = command.map(|(v, w)| (finite(v), finite(w)));
+        if command.is_none() {
+            self.explorer.replan();
+        }
+    }
+
+    /// The student's command while driving by hand.
+    pub fn manual(&self) -> Option<(f64, f64)> {
+        self.manual
     }
 
     /// The explorer (its current path, for drawing).
