@@ -303,3 +303,42 @@ fn map_in_the_url_names_a_ros_map_that_is_read_and_shared() {
         "{note}"
     );
 }
+
+#[test]
+fn driving_by_hand_with_the_keys_moves_the_robot_and_stops_it() {
+    let mut h = harness("lesson=kidnap&particles=200&seed=2&init=tracking");
+    h.run();
+    h.get_by_label("By hand").click();
+    h.run();
+    assert!(lesson(&h).driving_by_hand());
+    let start = lesson(&h).sim().run().robot().pose;
+    // Hold "up" for a few frames: the clock starts and the robot drives forward.
+    h.key_down(egui::Key::ArrowUp);
+    for _ in 0..10 {
+        h.step();
+    }
+    h.key_up(egui::Key::ArrowUp);
+    h.step();
+    assert!(lesson(&h).time.running, "driving starts the clock");
+    assert_eq!(
+        lesson(&h).sim().run().manual(),
+        Some((0.0, 0.0)),
+        "released: stopped"
+    );
+    let moved = lesson(&h).sim().run().robot().pose;
+    let ticks = lesson(&h).sim().run().tick_count();
+    assert!(ticks > 0, "no tick ran");
+    let d = slamlab_core::math::hypot(moved.x - start.x, moved.y - start.y);
+    assert!(d > 0.0, "the robot did not move ({ticks} ticks)");
+    // Stopped: more ticks do not move it.
+    for _ in 0..5 {
+        lesson_mut(&mut h).step_tick();
+    }
+    let still = lesson(&h).sim().run().robot().pose;
+    assert!((still.x - moved.x).abs() < 1e-12 && (still.y - moved.y).abs() < 1e-12);
+    // Back to the explorer.
+    h.get_by_label("Explorer").click();
+    h.step();
+    h.step();
+    assert!(!lesson(&h).driving_by_hand());
+}

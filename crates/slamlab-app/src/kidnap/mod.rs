@@ -12,6 +12,7 @@ mod plots;
 use crate::lesson::{self, Lesson, LessonExt, LessonStart, PanelVisibility, StoredSettings};
 use crate::palette;
 use crate::time_control::{TimeAction, TimeControl, TimeInfo};
+use crate::widgets::drive::{self, PadDirection};
 use crate::widgets::dropped_files::DropInbox;
 use crate::widgets::fetch::{self, Fetch};
 use crate::widgets::map_canvas::MapView;
@@ -127,6 +128,10 @@ pub struct KidnapLesson {
     /// `map=` named a ROS map YAML (a URL beside the site, a path on the
     /// desktop): where it is, and its reading, stage by stage.
     map_location: Option<MapFetch>,
+    /// The pad button held this frame (driving by hand).
+    pad: Option<PadDirection>,
+    /// The latest command sent to the run while driving by hand.
+    sent: Option<(f64, f64)>,
 }
 
 /// A ROS map read from a location named in the URL: first its YAML, then the
@@ -231,6 +236,8 @@ impl KidnapLesson {
             note: None,
             inbox: DropInbox::default(),
             map_location: None,
+            pad: None,
+            sent: None,
         })
     }
 
@@ -425,6 +432,68 @@ impl KidnapLesson {
         }
     }
 
+    /// Is the robot driven by hand (rather than by the explorer)?
+    pub fn driving_by_hand(&self) -> bool {
+        self.sim().run().manual().is_some()
+    }
+
+    /// Takes the wheel (`true`: by hand, the robot stops until told) or gives it
+    /// back to the explorer; recorded like any live event.
+    pub fn set_driving_by_hand(&mut self, by_hand: bool) {
+        if by_hand == self.driving_by_hand() {
+            return;
+        }
+        let event = if by_hand {
+            KidnapEvent::Drive(0.0, 0.0)
+        } else {
+            KidnapEvent::Explore
+        };
+        self.note = Some(if by_hand {
+            "Driving by hand: hold the arrow keys or WASD, or the pad on the map".to_owned()
+        } else {
+            event.describe()
+        });
+        self.sent = None;
+        self.stepper.apply(event);
+    }
+
+    /// Sends the held keys' or pad's command to the run when what is held
+    /// changed; a command to move starts the clock.
+    fn drive_by_hand(&mut self, keys: Option<slamlab_core::Control>) {
+        if !self.driving_by_hand() {
+            self.sent = None;
+            return;
+        }
+        let command = keys
+            .or(self.pad.map(PadDirection::command))
+            .map_or((0.0, 0.0), |c| (c.v, c.w));
+        // Only a change of what is held is an event: stepping back replays the
+        // recorded commands untouched while nothing is pressed.
+        if self.sent == Some(command) {
+            return;
+        }
+        if self.sent.is_some() || self.sim().run().manual() != Some(command) {
+            self.stepper.apply(KidnapEvent::Drive(command.0, command.1));
+        }
+        if command != (0.0, 0.0) {
+            self.time.running = true;
+        }
+        self.sent = Some(command);
+    }
+
+    fn driving_ui(&mut self, ui: &mut egui::Ui) {
+        let mut by_hand = self.driving_by_hand();
+        ui.horizontal(|ui| {
+            ui.label("Driving");
+            ui.radio_value(&mut by_hand, false, "Explorer")
+                .on_hover_text("The robot tours seeded waypoints through the free space");
+            ui.radio_value(&mut by_hand, true, "By hand").on_hover_text(
+                "Arrow keys or WASD, or the pad on the map: forward/back 1 m/s, turn 45°/s",
+            );
+        });
+        self.set_driving_by_hand(by_hand);
+    }
+
     fn kidnap_parameters_ui(&mut self, ui: &mut egui::Ui) {
         ui.heading("Monte Carlo localization");
         ui.horizontal_wrapped(|ui| {
@@ -450,6 +519,7 @@ impl KidnapLesson {
                 self.apply_event(KidnapEvent::KidnapRandom);
             }
         });
+        self.driving_ui(ui);
         ui.separator();
         ui.horizontal(|ui| {
             ui.label("map");
@@ -552,6 +622,15 @@ impl crate::widgets::layout::LessonPanels for KidnapLesson {
         if let Some(map::MapRequest::KidnapTo(pose)) = request {
             self.apply_event(KidnapEvent::KidnapTo(pose));
         }
+        self.pad = None;
+        if self.driving_by_hand() {
+            let press = drive::pad_ui(ui, ui.max_rect());
+            if press.stop {
+                self.stepper.apply(KidnapEvent::Drive(0.0, 0.0));
+                self.sent = Some((0.0, 0.0));
+            }
+            self.pad = press.held;
+        }
     }
 }
 
@@ -614,6 +693,12 @@ impl Lesson for KidnapLesson {
 
     fn read_input(&mut self, ctx: &egui::Context) {
         self.poll_map_location(ctx);
+        let keys = if self.driving_by_hand() {
+            drive::keyboard_command(ctx)
+        } else {
+            None
+        };
+        self.drive_by_hand(keys);
         if let Some(batch) = self.inbox.poll(ctx) {
             let mut files = Vec::new();
             for (name, bytes) in batch {

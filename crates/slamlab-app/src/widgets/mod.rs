@@ -2,6 +2,7 @@
 //! bar), the parameter panel built from a scenario's parameter table, and plot
 //! helpers.
 
+pub mod drive;
 pub mod dropped_files;
 pub mod fetch;
 pub mod layout;
