@@ -681,13 +681,13 @@ async function main() {
             await lecture.mouse.wheel(0, 120);
             await sleep(80);
           }
+          const hint = await frame.evaluate(() => document.getElementById("wheel_hint").dataset.shown);
           await sleep(400);
           const after = await lecture.evaluate(() => window.scrollY);
           const wheel = await frame.evaluate(() => window.slamlabWheel);
           await lecture.screenshot({ path: path.join(outDir, "lecture-wheel-scrolled.png") });
           assert(after - before >= 300, `the page scrolled ${after - before} px over the figure (wheel state ${JSON.stringify(wheel)})`);
           assert(wheel.embedded && !wheel.active && wheel.passed >= 4, `the figure's wheel state ${JSON.stringify(wheel)}`);
-          const hint = await frame.evaluate(() => document.getElementById("wheel_hint").dataset.shown);
           assert(hint === "1", `the hint is not shown (${hint})`);
 
           // After a click into the figure the wheel is the figure's: the page stays put.
