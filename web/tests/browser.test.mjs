@@ -619,6 +619,18 @@ async function main() {
           if (msg.type() === "error" && !ALLOWED_CONSOLE.some((re) => re.test(msg.text()))) log.problems.push(`console.error: ${msg.text()}`);
         });
         page.on("pageerror", (err) => log.problems.push(`uncaught exception: ${err.message}`));
+        // waitRunning() reads when #status changed (as openPage records it).
+        await page.addInitScript(() => {
+          window.__slamlabStatusTimes = {};
+          document.addEventListener("DOMContentLoaded", () => {
+            const status = document.getElementById("status");
+            const note = () => {
+              if (!(status.dataset.state in window.__slamlabStatusTimes)) window.__slamlabStatusTimes[status.dataset.state] = performance.now();
+            };
+            note();
+            new MutationObserver(note).observe(status, { attributes: true, childList: true, characterData: true, subtree: true });
+          });
+        });
         await page.goto(new URL(relativeUrl, baseUrl).href, { waitUntil: "load" });
         return { context, page, log };
       };
@@ -629,7 +641,7 @@ async function main() {
             const { context, page, log } = await openSized(`index.html?lesson=${lesson}&seed=7`, { width: size.width, height: size.height }, name);
             try {
               await waitRunning(page);
-              const state = await waitState(page, (s) => s.frames > 3 && Array.isArray(s.map_rect), "the map's rectangle");
+              const state = await waitState(page, (s) => s.frames >= 1 && Array.isArray(s.map_rect), "the map's rectangle");
               const { stats } = await waitNotBlank(page, `${name}.png`);
               assertNotBlank(stats, name);
               const [x, y, w, h] = state.map_rect;
@@ -657,7 +669,7 @@ async function main() {
           await waitRunning(frame);
           const wanted = Number(new URL(frame.url()).searchParams.get("tick"));
           assert(wanted > 0, `figure 1 has no tick= (${frame.url()})`);
-          const first = await waitState(frame, (s) => s.frames > 3 && Array.isArray(s.map_rect), "figure 1's first frames");
+          const first = await waitState(frame, (s) => s.frames >= 1 && Array.isArray(s.map_rect), "figure 1's first frames");
           assert(first.tick === wanted && !first.running, `figure 1 opened at tick ${first.tick} (running ${first.running}), the URL says ${wanted}`);
           // The plots below the map are drawn: EKF blue (#0072B2) in the plots' rows.
           await sleep(300);
