@@ -659,6 +659,146 @@ async function main() {
       }
     });
 
+    // --- The teaching shell (issue 15): every lesson keeps its map at small and large
+    // windows; an embedded figure lets the lecture page scroll until it is clicked; a
+    // figure opened with tick= shows the run mid-lap with its plots drawn.
+    {
+      // The map (the central panel) must get at least this share of the window.
+      const SHELL_SIZES = [
+        { width: 800, height: 500, minShare: 0.45, narrow: true },
+        { width: 1280, height: 800, minShare: 0.3, narrow: false },
+      ];
+      // Pixels within `tol` of `rgb` in rows y0..y1 of a decoded PNG.
+      const countColour = (image, rgb, tol, y0 = 0, y1 = image.height) => {
+        let n = 0;
+        for (let y = Math.max(0, Math.floor(y0)); y < Math.min(image.height, Math.ceil(y1)); y++) {
+          for (let x = 0; x < image.width; x++) {
+            const o = (y * image.width + x) * image.channels;
+            if (Math.abs(image.data[o] - rgb[0]) <= tol && Math.abs(image.data[o + 1] - rgb[1]) <= tol && Math.abs(image.data[o + 2] - rgb[2]) <= tol) n++;
+          }
+        }
+        return n;
+      };
+      const openSized = async (relativeUrl, viewport, label) => {
+        const context = await browser.newContext({ viewport, deviceScaleFactor: 1 });
+        const page = await context.newPage();
+        const log = { label, url: relativeUrl, console: [], problems: [] };
+        pageLogs.push(log);
+        page.on("console", (msg) => {
+          log.console.push(`[${msg.type()}] ${msg.text()}`);
+          if (msg.type() === "error" && !ALLOWED_CONSOLE.some((re) => re.test(msg.text()))) log.problems.push(`console.error: ${msg.text()}`);
+        });
+        page.on("pageerror", (err) => log.problems.push(`uncaught exception: ${err.message}`));
+        // waitRunning() reads when #status changed (as openPage records it).
+        await page.addInitScript(() => {
+          window.__slamlabStatusTimes = {};
+          document.addEventListener("DOMContentLoaded", () => {
+            const status = document.getElementById("status");
+            const note = () => {
+              if (!(status.dataset.state in window.__slamlabStatusTimes)) window.__slamlabStatusTimes[status.dataset.state] = performance.now();
+            };
+            note();
+            new MutationObserver(note).observe(status, { attributes: true, childList: true, characterData: true, subtree: true });
+          });
+        });
+        await page.goto(new URL(relativeUrl, baseUrl).href, { waitUntil: "load" });
+        return { context, page, log };
+      };
+      for (const lesson of ["landmark-slam", "kidnap", "resampling"]) {
+        for (const size of SHELL_SIZES) {
+          const name = `layout-${lesson}-${size.width}x${size.height}`;
+          await check(`${lesson} at ${size.width} x ${size.height}: the map keeps ≥ ${100 * size.minShare} % of the window`, async () => {
+            const { context, page, log } = await openSized(`index.html?lesson=${lesson}&seed=7`, { width: size.width, height: size.height }, name);
+            try {
+              await waitRunning(page);
+              const state = await waitState(page, (s) => s.frames >= 1 && Array.isArray(s.map_rect), "the map's rectangle");
+              const { stats } = await waitNotBlank(page, `${name}.png`);
+              assertNotBlank(stats, name);
+              const [x, y, w, h] = state.map_rect;
+              const share = (w * h) / (size.width * size.height);
+              assert(state.narrow === size.narrow, `narrow is ${state.narrow}`);
+              assert(share >= size.minShare, `the map is ${w.toFixed(0)} x ${h.toFixed(0)} px at (${x.toFixed(0)}, ${y.toFixed(0)}): ${(100 * share).toFixed(1)} % of the window`);
+              assert(x >= 0 && x + w <= size.width + 0.5 && y + h <= size.height + 0.5, `the map is cut off: ${state.map_rect}`);
+              if (size.narrow) assert(!state.panels.parameters && !state.panels.explanation, `drawers open: ${JSON.stringify(state.panels)}`);
+              await assertNoPanic(page);
+              assert(log.problems.length === 0, log.problems.join("; "));
+              return `map ${w.toFixed(0)} x ${h.toFixed(0)} px = ${(100 * share).toFixed(1)} %; ${describe(stats)}`;
+            } finally {
+              await context.close();
+            }
+          });
+        }
+      }
+
+      await check("lecture.html: the wheel scrolls the page over a figure until it is clicked; figure 1 opens at tick= with its plots", async () => {
+        const { context, page: lecture, log } = await openPage(browser, baseUrl, "lecture.html", "lecture (wheel)");
+        try {
+          const figure = lecture.locator("iframe.slamlab").first();
+          await figure.scrollIntoViewIfNeeded();
+          const frame = await (await figure.elementHandle()).contentFrame();
+          await waitRunning(frame);
+          const wanted = Number(new URL(frame.url()).searchParams.get("tick"));
+          assert(wanted > 0, `figure 1 has no tick= (${frame.url()})`);
+          const first = await waitState(frame, (s) => s.frames >= 1 && Array.isArray(s.map_rect), "figure 1's first frames");
+          assert(first.tick === wanted && !first.running, `figure 1 opened at tick ${first.tick} (running ${first.running}), the URL says ${wanted}`);
+          // The plots below the map are drawn: EKF blue (#0072B2) in the plots' rows.
+          await sleep(300);
+          const image = await screenshot(figure, "lecture-figure1-tick.png");
+          const [, mapTop, , mapHeight] = first.map_rect;
+          const plotBlue = countColour(image, [0x00, 0x72, 0xb2], 40, mapTop + mapHeight, image.height);
+          const mapBlue = countColour(image, [0x00, 0x72, 0xb2], 40, mapTop, mapTop + mapHeight);
+          assert(plotBlue > 100, `only ${plotBlue} EKF-blue pixels in the plots (map ${mapBlue})`);
+          assert(mapBlue > 100, `only ${mapBlue} EKF-blue pixels in the map`);
+
+          // Put the figure in the middle of the window, the pointer over its map, and wheel.
+          await lecture.evaluate(() => {
+            const f = document.querySelector("iframe.slamlab");
+            window.scrollTo(0, f.getBoundingClientRect().top + window.scrollY - 150);
+          });
+          await sleep(200);
+          const box = await figure.boundingBox();
+          await lecture.mouse.move(box.x + box.width / 2, box.y + box.height / 2);
+          const before = await lecture.evaluate(() => window.scrollY);
+          let hint = null;
+          for (let i = 0; i < 4; i++) {
+            await lecture.mouse.wheel(0, 120);
+            await sleep(80);
+            // The hint shows while the wheel passes the figure by (the first turn).
+            if (i === 0) hint = await frame.evaluate(() => document.getElementById("wheel_hint").dataset.shown);
+          }
+          await sleep(400);
+          const after = await lecture.evaluate(() => window.scrollY);
+          const wheel = await frame.evaluate(() => window.slamlabWheel);
+          await lecture.screenshot({ path: path.join(outDir, "lecture-wheel-scrolled.png") });
+          assert(after - before >= 300, `the page scrolled ${after - before} px over the figure (wheel state ${JSON.stringify(wheel)})`);
+          assert(wheel.embedded && !wheel.active && wheel.passed >= 1, `the figure's wheel state ${JSON.stringify(wheel)}`);
+          assert(hint === "1", `the hint is not shown (${hint})`);
+
+          // After a click into the figure the wheel is the figure's: the page stays put.
+          const box2 = await figure.boundingBox();
+          const visibleTop = Math.max(box2.y, 0);
+          const inside = { x: box2.x + box2.width / 2, y: (visibleTop + Math.min(box2.y + box2.height, VIEWPORT.height)) / 2 };
+          await lecture.mouse.click(inside.x, inside.y);
+          await sleep(200);
+          const held = await lecture.evaluate(() => window.scrollY);
+          for (let i = 0; i < 3; i++) {
+            await lecture.mouse.wheel(0, 120);
+            await sleep(80);
+          }
+          await sleep(300);
+          const still = await lecture.evaluate(() => window.scrollY);
+          const active = await frame.evaluate(() => window.slamlabWheel.active);
+          assert(active, "the click did not activate the figure");
+          assert(Math.abs(still - held) < 5, `the page scrolled ${still - held} px over an active figure`);
+          await assertNoPanic(frame);
+          assert(log.problems.length === 0, log.problems.join("; "));
+          return `opened at tick ${first.tick}; EKF-blue pixels: map ${mapBlue}, plots ${plotBlue}; page scrolled ${after - before} px over the passive figure, ${still - held} px over the clicked one`;
+        } finally {
+          await context.close();
+        }
+      });
+    }
+
     // --- A panic must be visible: the red banner, #status "panicked", and the app stops.
     await check("a panic shows the red #panic banner and stops the app", async () => {
       const { context, page: p, log } = await openPage(browser, baseUrl, `index.html?${LESSON}`, "panic (deliberate)");

@@ -161,6 +161,22 @@ pub trait Lesson: std::fmt::Debug {
     fn as_any(&self) -> &dyn Any;
     /// For tests and the shell's typed helpers.
     fn as_any_mut(&mut self) -> &mut dyn Any;
+    /// The lesson's map view, for the URL's `zoom=`; `None` for a lesson without a
+    /// [`MapView`](crate::widgets::map_canvas::MapView) (the shell then says the
+    /// zoom does not apply).
+    fn map_view_mut(&mut self) -> Option<&mut crate::widgets::map_canvas::MapView> {
+        None
+    }
+    /// Shows or hides the map's legend (the URL's `legend=`); false when the lesson
+    /// has no legend to switch.
+    fn set_legend(&mut self, _on: bool) -> bool {
+        false
+    }
+    /// Makes the map follow the robot or not (the URL's `follow=`); false when the
+    /// lesson's map cannot follow anything.
+    fn set_follow(&mut self, _on: bool) -> bool {
+        false
+    }
 }
 
 /// A lesson with one more notice in front of its own (a lesson that opened in
@@ -239,6 +255,15 @@ impl Lesson for WithNotice {
     }
     fn as_any_mut(&mut self) -> &mut dyn Any {
         self.inner.as_any_mut()
+    }
+    fn map_view_mut(&mut self) -> Option<&mut crate::widgets::map_canvas::MapView> {
+        self.inner.map_view_mut()
+    }
+    fn set_legend(&mut self, on: bool) -> bool {
+        self.inner.set_legend(on)
+    }
+    fn set_follow(&mut self, on: bool) -> bool {
+        self.inner.set_follow(on)
     }
 }
 

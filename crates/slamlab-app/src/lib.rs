@@ -4,7 +4,10 @@
 //! [`landmark_slam`]) owns a simulation session from `slamlab-sim` and draws it. The
 //! shell around the lessons is the same everywhere: the lesson menu, the time bar
 //! (run, pause, speed, step phase, step tick, reset), the notice bar, the theme, and
-//! the URL: `?lesson=landmark-slam&seed=7&embed=1&landmarks=30`.
+//! the URL: `?lesson=landmark-slam&seed=7&embed=1&landmarks=30`, with the figure keys
+//! a lecture page uses (`tick=120&run=1&legend=1&panels=plots&zoom=2&follow=1`).
+//! An embedded figure has no menu bar: a one-line header (title, panel toggles, a
+//! link that opens the same setup in the full app) above the time bar.
 
 pub mod frame_stats;
 pub mod kidnap;
@@ -58,6 +61,15 @@ pub struct SlamLabApp {
     lesson: Box<dyn Lesson>,
     embed: bool,
     panels: PanelVisibility,
+    /// The panels of a narrow window (side panels as drawers, closed at first).
+    narrow_panels: PanelVisibility,
+    /// Was the window narrow in the last frame?
+    narrow: bool,
+    /// How the figure opened (the URL's figure keys), for links.
+    figure: query::FigureOptions,
+    /// The map's (central panel's) rectangle and the window's size, last frame.
+    map_rect: Option<egui::Rect>,
+    screen: egui::Vec2,
     app_notices: Vec<String>,
     dismissed: BTreeSet<String>,
     dark_mode: Option<bool>,
@@ -106,17 +118,23 @@ impl SlamLabApp {
         let stored = (!parsed.embed)
             .then(|| settings.lessons.get(entry.id))
             .flatten();
-        let lesson = (entry.open)(&LessonStart {
+        let mut lesson = (entry.open)(&LessonStart {
             pairs: &parsed.pairs,
             embed: parsed.embed,
             stored,
             many_runs: parsed.many_runs,
         });
-        let panels = if parsed.embed {
-            PanelVisibility::embedded()
-        } else {
-            settings.panels
+        let panels = match parsed.figure.panels {
+            Some(panels) => panels,
+            None if parsed.embed => PanelVisibility::embedded(),
+            None => settings.panels,
         };
+        let narrow_panels = parsed.figure.panels.unwrap_or(PanelVisibility {
+            parameters: false,
+            explanation: false,
+            plots: panels.plots,
+        });
+        apply_figure(&mut *lesson, &parsed.figure, &mut notices);
         Self {
             query: query.trim_start_matches('?').to_owned(),
             frames: 0,
@@ -126,6 +144,11 @@ impl SlamLabApp {
             lesson,
             embed: parsed.embed,
             panels,
+            narrow_panels,
+            narrow: false,
+            figure: parsed.figure,
+            map_rect: None,
+            screen: egui::Vec2::ZERO,
             app_notices: notices,
             dismissed: BTreeSet::new(),
             dark_mode: settings.dark_mode,
@@ -180,9 +203,50 @@ impl SlamLabApp {
         self.embed
     }
 
-    /// Which panels are open.
+    /// Which panels are open (in a narrow window: which drawers).
     pub fn panels(&self) -> PanelVisibility {
-        self.panels
+        if self.narrow {
+            self.narrow_panels
+        } else {
+            self.panels
+        }
+    }
+
+    fn panels_mut(&mut self) -> &mut PanelVisibility {
+        if self.narrow {
+            &mut self.narrow_panels
+        } else {
+            &mut self.panels
+        }
+    }
+
+    /// The map's (central panel's) rectangle in the last frame, points.
+    pub fn map_rect(&self) -> Option<egui::Rect> {
+        self.map_rect
+    }
+
+    /// Was the window narrow (side panels as drawers) in the last frame?
+    pub fn is_narrow(&self) -> bool {
+        self.narrow
+    }
+
+    /// The query string (without `?`) that reopens this setup at the current tick:
+    /// the lesson's link and the figure keys (`panels=` only for an embed).
+    pub fn share_query(&self, embed: bool) -> String {
+        let mut figure = self.figure.clone();
+        figure.run = false;
+        if !embed {
+            figure.panels = None;
+        }
+        let mut query = self.lesson.share_query(embed);
+        for (key, value) in figure.pairs(self.lesson.time_info().tick) {
+            query.push_str(&format!(
+                "&{}={}",
+                query::percent_encode(&key),
+                query::percent_encode(&value)
+            ));
+        }
+        query
     }
 
     /// Every notice not dismissed: problems with the link, what the simulation had to
@@ -228,6 +292,14 @@ impl SlamLabApp {
             "embed": self.embed,
             "notices": self.notices().len(),
             "frame_timing": self.frame_stats.summary(),
+            "narrow": self.narrow,
+            "screen": [self.screen.x, self.screen.y],
+            "map_rect": self.map_rect.map(|r| [r.left(), r.top(), r.width(), r.height()]),
+            "panels": {
+                "parameters": self.panels().parameters,
+                "explanation": self.panels().explanation,
+                "plots": self.panels().plots,
+            },
         });
         if let (Some(state), serde_json::Value::Object(lesson)) =
             (state.as_object_mut(), self.lesson.test_state())
@@ -287,7 +359,13 @@ impl SlamLabApp {
         self.frame_stats
             .record(self.last_cpu_ms, sim_ms, interval_ms);
 
-        egui::Panel::top("slamlab_menu").show(ui, |ui| self.menu_bar_ui(ui));
+        self.narrow = widgets::layout::is_narrow(&ctx);
+        self.screen = ctx.content_rect().size();
+        if self.embed {
+            egui::Panel::top("slamlab_embed_header").show(ui, |ui| self.embed_header_ui(ui));
+        } else {
+            egui::Panel::top("slamlab_menu").show(ui, |ui| self.menu_bar_ui(ui));
+        }
         egui::Panel::top("slamlab_time_bar").show(ui, |ui| {
             let info = self.lesson.time_info();
             let actions = time_control::time_bar_ui(ui, self.lesson.time_mut(), &info, self.embed);
@@ -299,18 +377,59 @@ impl SlamLabApp {
         if !notices.is_empty() {
             egui::Panel::top("slamlab_notices").show(ui, |ui| self.notice_bar_ui(ui, &notices));
         }
-        self.lesson.panels_ui(ui, &mut self.panels, self.embed);
+        let panels = if self.narrow {
+            &mut self.narrow_panels
+        } else {
+            &mut self.panels
+        };
+        self.lesson.panels_ui(ui, panels, self.embed);
+        self.map_rect = widgets::layout::map_rect(&ctx);
         if self.lesson.wants_repaint() {
             ctx.request_repaint();
         }
     }
 
-    fn menu_bar_ui(&mut self, ui: &mut egui::Ui) {
+    fn title(&self) -> String {
         let lesson_title = lesson::find(self.lesson.id()).map_or("", |l| l.title);
-        let title = match self.lesson.subtitle() {
+        match self.lesson.subtitle() {
             subtitle if subtitle.is_empty() => lesson_title.to_owned(),
             subtitle => format!("{lesson_title}: {subtitle}"),
-        };
+        }
+    }
+
+    /// The panel toggles of the embed header and of a narrow window's menu bar.
+    fn panel_toggles_ui(&mut self, ui: &mut egui::Ui) {
+        let panels = self.panels_mut();
+        ui.toggle_value(&mut panels.plots, "Plots")
+            .on_hover_text("Show or hide the plots");
+        ui.toggle_value(&mut panels.explanation, "Explain")
+            .on_hover_text("Show or hide the explanation");
+        ui.toggle_value(&mut panels.parameters, "Parameters")
+            .on_hover_text("Show or hide the parameters");
+    }
+
+    /// The header of an embedded figure: the title, the panel toggles, how to
+    /// interact, and a link to the same setup in the full app.
+    fn embed_header_ui(&mut self, ui: &mut egui::Ui) {
+        let title = self.title();
+        ui.horizontal_wrapped(|ui| {
+            ui.label(egui::RichText::new(title).strong());
+            ui.separator();
+            self.panel_toggles_ui(ui);
+            ui.separator();
+            let url = format!("index.html?{}", self.share_query(false));
+            ui.add(egui::Hyperlink::from_label_and_url("Open full app", url).open_in_new_tab(true))
+                .on_hover_text("This setup, at this tick, in the full SLAM Lab (new tab)");
+            ui.label(
+                egui::RichText::new("Click to interact, or Ctrl+wheel to zoom")
+                    .small()
+                    .weak(),
+            );
+        });
+    }
+
+    fn menu_bar_ui(&mut self, ui: &mut egui::Ui) {
+        let title = self.title();
         ui.horizontal_wrapped(|ui| {
             ui.label(egui::RichText::new("SLAM Lab").strong());
             ui.menu_button("Lessons", |ui| {
@@ -329,15 +448,33 @@ impl SlamLabApp {
                 }
             });
             ui.menu_button("View", |ui| {
-                ui.checkbox(&mut self.panels.parameters, "Parameters panel");
-                ui.checkbox(&mut self.panels.explanation, "Explanation panel");
-                ui.checkbox(&mut self.panels.plots, "Plots");
+                let panels = self.panels_mut();
+                ui.checkbox(&mut panels.parameters, "Parameters panel");
+                ui.checkbox(&mut panels.explanation, "Explanation panel");
+                ui.checkbox(&mut panels.plots, "Plots");
                 ui.checkbox(&mut self.show_frame_timing, "Frame timing")
                     .on_hover_text(
                         "How long each frame takes: the app's CPU time and the frame rate",
                     );
                 self.lesson.view_menu_ui(ui);
             });
+            if self.narrow {
+                // A narrow window: the drawer buttons first, then the title; no
+                // right-aligned group for wrapped text to run into.
+                ui.separator();
+                self.panel_toggles_ui(ui);
+                ui.separator();
+                ui.label(egui::RichText::new(title).strong());
+                let dark = ui.visuals().dark_mode;
+                if ui
+                    .small_button(if dark { "Light theme" } else { "Dark theme" })
+                    .clicked()
+                {
+                    self.dark_mode = Some(!dark);
+                    self.apply_theme(ui.ctx());
+                }
+                return;
+            }
             ui.separator();
             ui.label(egui::RichText::new(title).strong());
             ui.with_layout(egui::Layout::right_to_left(egui::Align::Center), |ui| {
@@ -358,16 +495,11 @@ impl SlamLabApp {
                             .monospace(),
                     );
                 }
-                if self.embed {
-                    ui.toggle_value(&mut self.panels.explanation, "Explain");
-                    ui.toggle_value(&mut self.panels.parameters, "Parameters");
-                } else {
-                    ui.label(
-                        egui::RichText::new("Space run/pause · . phase · n tick · r reset")
-                            .small()
-                            .weak(),
-                    );
-                }
+                ui.label(
+                    egui::RichText::new("Space run/pause · . phase · n tick · r reset")
+                        .small()
+                        .weak(),
+                );
             });
         });
     }
@@ -431,6 +563,34 @@ impl SlamLabApp {
                 }
             });
         self.dismissed.extend(dismiss);
+    }
+}
+
+/// Opens the figure the way the URL asks: runs `tick=` ticks, sets the legend,
+/// zoom and following, starts the clock for `run=1`. What a lesson cannot do
+/// becomes a notice.
+fn apply_figure(lesson: &mut dyn Lesson, figure: &query::FigureOptions, notices: &mut Vec<String>) {
+    for _ in 0..figure.tick.unwrap_or(0) {
+        lesson.apply_time_action(TimeAction::StepTick);
+    }
+    if let Some(on) = figure.legend
+        && !lesson.set_legend(on)
+    {
+        notices.push("legend: this lesson's map has no legend to switch".to_owned());
+    }
+    if let Some(zoom) = figure.zoom {
+        match lesson.map_view_mut() {
+            Some(view) => view.zoom_after_fit(zoom),
+            None => notices.push("zoom: this lesson has no map to zoom".to_owned()),
+        }
+    }
+    if let Some(on) = figure.follow
+        && !lesson.set_follow(on)
+    {
+        notices.push("follow: this lesson's map has no robot to follow".to_owned());
+    }
+    if figure.run && !lesson.time().running {
+        lesson.apply_time_action(TimeAction::ToggleRun);
     }
 }
 

@@ -745,6 +745,20 @@ impl Lesson for KidnapLesson {
         crate::query::build(LESSON_ID, &self.share_pairs(), embed)
     }
 
+    fn map_view_mut(&mut self) -> Option<&mut MapView> {
+        Some(&mut self.canvas)
+    }
+
+    fn set_legend(&mut self, on: bool) -> bool {
+        self.view.legend = on;
+        true
+    }
+
+    fn set_follow(&mut self, on: bool) -> bool {
+        self.view.follow_robot = on;
+        true
+    }
+
     fn test_state(&self) -> serde_json::Value {
         let run = self.sim().run();
         let truth = run.robot().pose;

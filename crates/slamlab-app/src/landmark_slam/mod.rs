@@ -577,6 +577,19 @@ impl Lesson for LandmarkSlamLesson {
         LandmarkSlamLesson::share_query(self, embed)
     }
 
+    // The shell's figure keys (zoom=, legend=, follow=).
+    fn map_view_mut(&mut self) -> Option<&mut crate::widgets::map_canvas::MapView> {
+        Some(&mut self.map_view)
+    }
+    fn set_legend(&mut self, on: bool) -> bool {
+        self.view.legend = on;
+        true
+    }
+    fn set_follow(&mut self, on: bool) -> bool {
+        self.view.follow_robot = on;
+        true
+    }
+
     fn test_state(&self) -> serde_json::Value {
         let many_runs = self.many_runs.result().map(|r| {
             serde_json::json!({

@@ -1,8 +1,19 @@
 //! The layout every lesson shares: plots along the bottom, parameters on the
 //! left, the explanation on the right, the map in the middle; each side panel
 //! collapsible and resizable.
+//!
+//! The map always keeps the room: the plots take at most a share of the height,
+//! and below [`NARROW_WIDTH`] the side panels become drawers that slide over the
+//! map (one at a time, closed until asked for) instead of squeezing it. The map's
+//! rectangle is kept for the shell ([`map_rect`]) and the browser tests.
 
 use crate::lesson::PanelVisibility;
+
+/// Below this window width (points) the side panels are drawers over the map.
+pub const NARROW_WIDTH: f32 = 1000.0;
+
+/// The most of the height below the top bars that the plots may take.
+pub const PLOTS_MAX_SHARE: f32 = 0.4;
 
 /// A lesson's four areas.
 pub trait LessonPanels {
@@ -16,6 +27,24 @@ pub trait LessonPanels {
     fn map_ui(&mut self, ui: &mut egui::Ui);
 }
 
+/// Is the window too narrow for side panels beside the map?
+pub fn is_narrow(ctx: &egui::Context) -> bool {
+    ctx.content_rect().width() < NARROW_WIDTH
+}
+
+fn map_rect_id() -> egui::Id {
+    egui::Id::unique("slamlab_map_rect")
+}
+
+fn open_drawer_id(id: &str) -> egui::Id {
+    egui::Id::unique(("slamlab_open_drawer", id))
+}
+
+/// The map's (central panel's) rectangle in the last frame, points.
+pub fn map_rect(ctx: &egui::Context) -> Option<egui::Rect> {
+    ctx.data(|d| d.get_temp(map_rect_id()))
+}
+
 /// Lays out `lesson`'s areas; `id` keeps each lesson's panel sizes apart.
 pub fn lesson_panels_ui(
     lesson: &mut impl LessonPanels,
@@ -24,21 +53,34 @@ pub fn lesson_panels_ui(
     compact: bool,
     id: &str,
 ) {
-    let plot_height = if compact { 150.0 } else { 230.0 };
+    let area = ui.available_rect_before_wrap();
+    let narrow = is_narrow(ui.ctx());
+    // The plots shrink with the window so that the map keeps at least 60% of it.
+    let plots_max = (PLOTS_MAX_SHARE * area.height()).max(60.0);
+    let plot_height: f32 = if compact { 150.0 } else { 230.0 };
+    let plot_height = plot_height.min(0.3 * area.height()).max(60.0);
     egui::Panel::bottom(format!("{id}_plots"))
         .resizable(true)
         .default_size(plot_height)
-        .min_size(120.0)
+        .size_range(plots_max.min(120.0).min(plot_height)..=plots_max)
         .show_collapsible(ui, &mut panels.plots, |ui| {
             lesson.plots_ui(ui);
             // Fill the panel to its bottom edge, whatever the plots used.
             ui.expand_to_include_rect(ui.max_rect());
         });
+    if narrow {
+        let map = egui::CentralPanel::default().show(ui, |ui| lesson.map_ui(ui));
+        let map = map.response.rect;
+        ui.ctx().data_mut(|d| d.insert_temp(map_rect_id(), map));
+        drawers_ui(lesson, ui, panels, id, area.with_min_y(map.top()));
+        return;
+    }
+    // Side panels beside the map, each at most a quarter of the width.
+    let side = |default: f32| default.min(0.24 * area.width()).max(180.0);
     egui::Panel::left(format!("{id}_parameters"))
         .resizable(true)
-        .default_size(300.0)
-        .min_size(220.0)
-        .max_size(480.0)
+        .default_size(side(300.0))
+        .size_range(180.0..=480.0_f32.min(0.35 * area.width()).max(180.0))
         .show_collapsible(ui, &mut panels.parameters, |ui| {
             egui::ScrollArea::vertical()
                 .id_salt(format!("{id}_parameters_scroll"))
@@ -46,13 +88,102 @@ pub fn lesson_panels_ui(
         });
     egui::Panel::right(format!("{id}_explanation"))
         .resizable(true)
-        .default_size(330.0)
-        .min_size(220.0)
-        .max_size(520.0)
+        .default_size(side(330.0))
+        .size_range(180.0..=520.0_f32.min(0.35 * area.width()).max(180.0))
         .show_collapsible(ui, &mut panels.explanation, |ui| {
             egui::ScrollArea::vertical()
                 .id_salt(format!("{id}_explanation_scroll"))
                 .show(ui, |ui| lesson.explanation_ui(ui));
         });
-    egui::CentralPanel::default().show(ui, |ui| lesson.map_ui(ui));
+    let map = egui::CentralPanel::default().show(ui, |ui| lesson.map_ui(ui));
+    ui.ctx()
+        .data_mut(|d| d.insert_temp(map_rect_id(), map.response.rect));
+}
+
+/// The side panels of a narrow window: drawers over the map (and the plots), the
+/// parameters from the left, the explanation from the right, one at a time.
+fn drawers_ui(
+    lesson: &mut impl LessonPanels,
+    ui: &mut egui::Ui,
+    panels: &mut PanelVisibility,
+    id: &str,
+    space: egui::Rect,
+) {
+    // Opening one drawer closes the other.
+    let ctx = ui.ctx().clone();
+    let before: (bool, bool) = ctx.data(|d| d.get_temp(open_drawer_id(id)).unwrap_or_default());
+    if panels.parameters && panels.explanation {
+        if before.0 {
+            panels.parameters = false;
+        } else {
+            panels.explanation = false;
+        }
+    }
+    ctx.data_mut(|d| {
+        d.insert_temp(open_drawer_id(id), (panels.parameters, panels.explanation));
+    });
+    let width = 340.0_f32.min(0.88 * space.width());
+    let drawers = [
+        (panels.parameters, true, "Parameters"),
+        (panels.explanation, false, "Explanation"),
+    ];
+    for (open, left, title) in drawers {
+        if !open {
+            continue;
+        }
+        let x = if left {
+            space.left()
+        } else {
+            space.right() - width
+        };
+        let rect = egui::Rect::from_min_size(
+            egui::pos2(x, space.top()),
+            egui::vec2(width, space.height()),
+        );
+        let mut close = false;
+        egui::Area::new(egui::Id::unique((id, title, "drawer")))
+            .order(egui::Order::Middle)
+            .fixed_pos(rect.min)
+            .constrain(false)
+            .show(&ctx, |ui| {
+                egui::Frame::side_top_panel(ui.style())
+                    .stroke(ui.visuals().window_stroke())
+                    .shadow(ui.visuals().popup_shadow)
+                    .show(ui, |ui| {
+                        let inner = rect.shrink2(egui::vec2(8.0, 2.0));
+                        ui.set_min_size(inner.size());
+                        ui.set_max_size(inner.size());
+                        ui.horizontal(|ui| {
+                            ui.label(egui::RichText::new(title).strong());
+                            ui.with_layout(
+                                egui::Layout::right_to_left(egui::Align::Center),
+                                |ui| {
+                                    close = ui
+                                        .button("Close")
+                                        .on_hover_text("Close this drawer and show the map")
+                                        .clicked();
+                                },
+                            );
+                        });
+                        ui.separator();
+                        egui::ScrollArea::vertical()
+                            .id_salt(format!("{id}_{title}_drawer_scroll"))
+                            .auto_shrink([false, false])
+                            .show(ui, |ui| {
+                                if left {
+                                    lesson.parameters_ui(ui);
+                                } else {
+                                    lesson.explanation_ui(ui);
+                                }
+                            });
+                    });
+            });
+        if close {
+            if left {
+                panels.parameters = false;
+            } else {
+                panels.explanation = false;
+            }
+        }
+    }
 }

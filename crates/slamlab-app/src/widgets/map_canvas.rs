@@ -28,6 +28,8 @@ pub struct MapView {
     pub(crate) adjusted: bool,
     /// The legend's corner: 0 top left, 1 top right, 2 bottom left, 3 bottom right.
     pub(crate) legend_corner: usize,
+    /// A zoom factor on the first fit (the URL's `zoom=`), applied once.
+    pub(crate) pending_zoom: Option<f32>,
 }
 
 impl Default for MapView {
@@ -40,6 +42,7 @@ impl Default for MapView {
             fitted_size: egui::Vec2::ZERO,
             adjusted: false,
             legend_corner: 0,
+            pending_zoom: None,
         }
     }
 }
@@ -107,6 +110,15 @@ impl MapView {
             rect,
             center: self.center,
             scale: self.scale,
+        }
+    }
+
+    /// Opens `factor` times closer than the fitted view (about the map's centre, or
+    /// the followed point); a factor that is not finite and positive is ignored.
+    pub fn zoom_after_fit(&mut self, factor: f32) {
+        if factor.is_finite() && factor > 0.0 {
+            self.pending_zoom = Some(factor);
+            self.fitted = false;
         }
     }
 
@@ -224,6 +236,9 @@ pub fn canvas_ui(
     let resized = (rect.size() - view.fitted_size).length() > 1.0;
     if !view.fitted || (resized && !view.adjusted) {
         view.fit(rect, bounds, legend_space);
+    }
+    if let Some(factor) = view.pending_zoom.take() {
+        view.zoom_about(rect, factor, rect.center());
     }
     let request: Option<f32> = ui.data_mut(|d| d.remove_temp(zoom_request_id()));
     if let Some(factor) = request {

@@ -1,0 +1,296 @@
+//! Headless UI tests of the shell every lesson shares: the layout at small window
+//! sizes (the map keeps its share, side panels become drawers), the embed header,
+//! and the URL's figure keys (`tick=`, `run=`, `legend=`, `panels=`, `zoom=`,
+//! `follow=`) with their bad values.
+
+#![allow(clippy::panic)]
+
+use egui_kittest::Harness;
+use egui_kittest::kittest::Queryable as _;
+use slamlab_app::SlamLabApp;
+use slamlab_app::lesson::LESSONS;
+
+fn harness(query: &str, size: egui::Vec2) -> Harness<'static, SlamLabApp> {
+    let query = query.to_owned();
+    Harness::builder()
+        .with_size(size)
+        .with_max_steps(40)
+        .build_eframe(move |cc| SlamLabApp::new(cc, &query))
+}
+
+fn state(h: &Harness<'_, SlamLabApp>) -> serde_json::Value {
+    serde_json::from_str(&h.state().test_state_json()).unwrap_or_default()
+}
+
+/// The map's share of the window.
+fn map_share(h: &Harness<'_, SlamLabApp>, size: egui::Vec2) -> f32 {
+    let Some(rect) = h.state().map_rect() else {
+        panic!("no map rectangle recorded");
+    };
+    rect.area() / (size.x * size.y)
+}
+
+fn label_visible(h: &Harness<'_, SlamLabApp>, text: &str) -> bool {
+    h.query_all_by_label_contains(text).next().is_some()
+}
+
+fn count_pixels(rgba: &[u8], rgb: [u8; 3], tolerance: i32) -> usize {
+    rgba.chunks_exact(4)
+        .filter(|p| (0..3).all(|c| (i32::from(p[c]) - i32::from(rgb[c])).abs() <= tolerance))
+        .count()
+}
+
+/// The smallest share of the window the map gets, by window size, in the full
+/// app and in an embed (which has no menu bar and smaller plots).
+const SIZES: [(f32, f32, f32); 3] = [
+    (360.0, 480.0, 0.30),
+    (800.0, 500.0, 0.45),
+    (1280.0, 800.0, 0.30),
+];
+
+#[test]
+fn every_lesson_keeps_the_map_at_every_window_size() {
+    for entry in LESSONS {
+        for embed in [false, true] {
+            for (w, h_px, min_share) in SIZES {
+                let size = egui::vec2(w, h_px);
+                let query = format!("lesson={}{}", entry.id, if embed { "&embed=1" } else { "" });
+                let mut h = harness(&query, size);
+                h.run();
+                let share = map_share(&h, size);
+                let rect = h.state().map_rect().unwrap_or(egui::Rect::NOTHING);
+                assert!(
+                    share >= min_share,
+                    "{query} at {w}x{h_px}: the map has {:.0}% of the window ({rect:?})",
+                    100.0 * share
+                );
+                // Nothing is cut off: the map lies inside the window and is usable.
+                assert!(
+                    rect.min.x >= -0.5 && rect.max.x <= w + 0.5,
+                    "{query} {w}: {rect:?}"
+                );
+                assert!(rect.max.y <= h_px + 0.5, "{query} {h_px}: {rect:?}");
+                assert!(
+                    rect.width() >= 0.9 * w || w >= 1000.0,
+                    "{query} {w}: {rect:?}"
+                );
+                assert_eq!(h.state().is_narrow(), w < 1000.0, "{query} {w}");
+                let panels = h.state().panels();
+                if w < 1000.0 {
+                    assert!(
+                        !panels.parameters && !panels.explanation,
+                        "{query} at {w}: the drawers start closed"
+                    );
+                }
+            }
+        }
+    }
+}
+
+#[test]
+fn a_narrow_window_opens_one_drawer_over_the_map() {
+    let size = egui::vec2(800.0, 500.0);
+    let mut h = harness("lesson=landmark-slam&seed=7", size);
+    h.run();
+    let before = h.state().map_rect();
+    assert!(
+        !label_visible(&h, "Share this setup"),
+        "parameters start closed"
+    );
+    h.get_by_label("Parameters").click();
+    h.run();
+    assert!(h.state().panels().parameters);
+    assert!(
+        label_visible(&h, "Share this setup"),
+        "the parameter drawer shows"
+    );
+    assert_eq!(
+        h.state().map_rect(),
+        before,
+        "a drawer does not squeeze the map"
+    );
+    // Opening the explanation closes the parameters.
+    h.get_by_label("Explain").click();
+    h.run();
+    let panels = h.state().panels();
+    assert!(panels.explanation && !panels.parameters, "{panels:?}");
+    h.get_by_label("Close").click();
+    h.run();
+    assert!(!h.state().panels().explanation);
+    // The full layout keeps its own panels.
+    let wide = harness("lesson=landmark-slam&seed=7", egui::vec2(1280.0, 800.0));
+    let mut wide = wide;
+    wide.run();
+    assert!(wide.state().panels().parameters && wide.state().panels().explanation);
+    assert!(label_visible(&wide, "Share this setup"));
+}
+
+#[test]
+fn the_embed_header_replaces_the_menu_bar() {
+    let size = egui::vec2(800.0, 500.0);
+    let mut h = harness("lesson=kidnap&seed=3&embed=1&tick=12", size);
+    h.run();
+    assert!(!label_visible(&h, "Lessons"), "no menu bar in an embed");
+    assert!(label_visible(&h, "Monte Carlo localization"), "the title");
+    assert!(label_visible(&h, "Open full app"));
+    assert!(label_visible(&h, "Ctrl+wheel to zoom"));
+    let link = h.state().share_query(false);
+    assert!(link.starts_with("lesson=kidnap&seed=3"), "{link}");
+    assert!(link.ends_with("&tick=12"), "{link}");
+    assert!(!link.contains("embed"), "{link}");
+    let mut full = harness("lesson=kidnap&seed=3", size);
+    full.run();
+    assert!(label_visible(&full, "Lessons"));
+    assert!(!label_visible(&full, "Open full app"));
+}
+
+#[test]
+fn tick_and_run_open_the_figure_mid_run() {
+    for entry in LESSONS {
+        let app = SlamLabApp::from_query(&format!("lesson={}&seed=7&tick=30", entry.id));
+        let s: serde_json::Value = serde_json::from_str(&app.test_state_json()).unwrap_or_default();
+        assert_eq!(s["tick"], 30, "{}: {s}", entry.id);
+        assert!(!app.is_running());
+        assert!(
+            app.notices().is_empty(),
+            "{}: {:?}",
+            entry.id,
+            app.notices()
+        );
+        // The same as stepping 30 ticks by hand.
+        assert_eq!(
+            app.test_state_json().replace("\"frames\":0,", ""),
+            SlamLabApp::headless_state(&format!("lesson={}&seed=7", entry.id), 30)
+                .replace("\"frames\":0,", ""),
+            "{}",
+            entry.id
+        );
+    }
+    let app = SlamLabApp::from_query("lesson=landmark-slam&tick=5&run=1");
+    assert!(app.is_running());
+    let app = SlamLabApp::from_query("lesson=resampling&tick=99999");
+    let s: serde_json::Value = serde_json::from_str(&app.test_state_json()).unwrap_or_default();
+    assert_eq!(s["tick"], 2000, "{s}");
+    assert!(
+        app.notices().iter().any(|n| n.contains("tick 2000")),
+        "{:?}",
+        app.notices()
+    );
+}
+
+#[test]
+fn zoom_legend_follow_and_panels_from_the_url() {
+    let size = egui::vec2(1280.0, 800.0);
+    let scale = |query: &str| {
+        let mut h = harness(query, size);
+        h.run();
+        let scale = h.state_mut().lesson_mut().map_view_mut().map(|v| v.scale());
+        (scale.unwrap_or(f32::NAN), h.state().notices())
+    };
+    for lesson in ["landmark-slam", "kidnap"] {
+        let (fitted, notices) = scale(&format!("lesson={lesson}&seed=7"));
+        assert!(notices.is_empty(), "{notices:?}");
+        let (zoomed, notices) = scale(&format!("lesson={lesson}&seed=7&zoom=2"));
+        assert!(notices.is_empty(), "{notices:?}");
+        assert!(
+            (zoomed / fitted - 2.0).abs() < 1e-3,
+            "{lesson}: {fitted} -> {zoomed}"
+        );
+        for bad in ["0", "NaN", "-1", "x"] {
+            let (same, notices) = scale(&format!("lesson={lesson}&seed=7&zoom={bad}"));
+            // The fitted view (a little smaller: the notice bar takes some height).
+            let ratio = same / fitted;
+            assert!(
+                (0.7..=1.0001).contains(&ratio),
+                "{lesson} zoom={bad}: {fitted} -> {same}"
+            );
+            assert_eq!(notices.len(), 1, "{lesson} zoom={bad}: {notices:?}");
+        }
+    }
+    // The resampling lab has no map: zoom, legend and follow say so.
+    let app = SlamLabApp::from_query("lesson=resampling&zoom=2&legend=1&follow=1");
+    assert_eq!(app.notices().len(), 3, "{:?}", app.notices());
+
+    // An embed hides the legend unless the URL asks for it.
+    let app = SlamLabApp::from_query("lesson=landmark-slam&embed=1&legend=1&follow=1");
+    assert!(
+        app.landmark_lesson()
+            .is_some_and(|l| l.view.legend && l.view.follow_robot)
+    );
+    let app = SlamLabApp::from_query("lesson=landmark-slam&embed=1");
+    assert!(app.landmark_lesson().is_some_and(|l| !l.view.legend));
+
+    // panels= sets exactly those panels, an unknown name is a notice.
+    let mut h = harness("lesson=kidnap&panels=explanation,maps", size);
+    h.run();
+    let panels = h.state().panels();
+    assert!(
+        panels.explanation && !panels.parameters && !panels.plots,
+        "{panels:?}"
+    );
+    assert_eq!(h.state().notices().len(), 1, "{:?}", h.state().notices());
+    assert!(
+        map_share(&h, size) > 0.6,
+        "without plots and parameters the map has the room"
+    );
+    let s = state(&h);
+    assert_eq!(s["panels"]["explanation"], true);
+}
+
+#[test]
+fn rendered_narrow_figure_at_tick_120_shows_map_and_plots() {
+    let size = egui::vec2(800.0, 500.0);
+    let mut h = Harness::builder()
+        .with_size(size)
+        .with_max_steps(40)
+        .with_theme(egui::Theme::Dark)
+        .build_eframe(|cc| {
+            SlamLabApp::new(cc, "lesson=landmark-slam&seed=7&embed=1&tick=120&legend=1")
+        });
+    h.run();
+    let s = state(&h);
+    assert_eq!(s["tick"], 120);
+    let image = match h.render() {
+        Ok(image) => image,
+        Err(err) => {
+            eprintln!("skipping the rendered checks: no GPU adapter ({err})");
+            return;
+        }
+    };
+    let Some(map) = h.state().map_rect() else {
+        panic!("no map rectangle");
+    };
+    // The EKF estimate (blue) is drawn in the map and in the plots below it.
+    let width = image.width() as usize;
+    let ppp = image.width() as f32 / size.x;
+    let split = ((map.bottom() * ppp) as usize).min(image.height() as usize);
+    let raw = image.as_raw();
+    let blue_map = count_pixels(&raw[..split * width * 4], [0x00, 0x72, 0xB2], 40);
+    let blue_plots = count_pixels(&raw[split * width * 4..], [0x00, 0x72, 0xB2], 40);
+    assert!(blue_map > 200, "EKF-blue pixels in the map: {blue_map}");
+    assert!(
+        blue_plots > 100,
+        "EKF-blue pixels in the plots: {blue_plots}"
+    );
+    let _ = egui_kittest::try_image_snapshot_options(
+        &image,
+        "shell_embed_800x500_tick120",
+        &egui_kittest::SnapshotOptions::new().threshold(2.0),
+    );
+    // The smallest window: the full app at 360 x 480.
+    let mut h = Harness::builder()
+        .with_size(egui::vec2(360.0, 480.0))
+        .with_max_steps(40)
+        .with_theme(egui::Theme::Dark)
+        .build_eframe(|cc| SlamLabApp::new(cc, "lesson=kidnap&seed=3&tick=20"));
+    h.run();
+    if let Ok(image) = h.render() {
+        let purple = count_pixels(image.as_raw(), [0xCC, 0x79, 0xA7], 50);
+        assert!(purple > 100, "particle-purple pixels {purple}");
+        let _ = egui_kittest::try_image_snapshot_options(
+            &image,
+            "shell_kidnap_360x480",
+            &egui_kittest::SnapshotOptions::new().threshold(2.0),
+        );
+    }
+}
