@@ -7,6 +7,7 @@
 //! the URL: `?lesson=landmark-slam&seed=7&embed=1&landmarks=30`.
 
 pub mod frame_stats;
+pub mod fusion;
 pub mod kidnap;
 pub mod landmark_slam;
 pub mod lesson;

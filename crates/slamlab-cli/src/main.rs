@@ -33,7 +33,7 @@ mod fusion;
 mod particle_experiments;
 
 /// Lessons the CLI can run.
-const LESSONS: &[&str] = &["landmark-slam", "kidnap"];
+const LESSONS: &[&str] = &["landmark-slam", "kidnap", "fusion"];
 
 /// Experiments the CLI can run.
 const EXPERIMENTS: &[&str] = &[
@@ -244,6 +244,11 @@ fn print_summary(out: &mut impl Write, summary: &RunSummary) -> Result<()> {
 }
 
 fn run(matches: &ArgMatches) -> Result<()> {
+    if matches.get_one::<String>("lesson").map(String::as_str) == Some("fusion") {
+        bail!(
+            "the fusion lesson runs headless as `slamlab experiment fusion` (thesis 002 Table 5.3)"
+        );
+    }
     let steps = matches.get_one::<u64>("steps").copied().unwrap_or(200);
     let scenario = scenario_from(matches)?;
     check_runnable(&scenario)?;
@@ -277,6 +282,7 @@ fn list_params(matches: &ArgMatches) -> Result<()> {
         .map_or("landmark-slam", String::as_str);
     let rows = match lesson {
         "kidnap" => params::describe::<slamlab_sim::localization::MclScenario>(),
+        "fusion" => params::describe::<slamlab_sim::fusion::params::FusionLessonScenario>(),
         _ => params::describe::<LandmarkScenario>(),
     };
     let mut out = std::io::stdout().lock();
