@@ -154,6 +154,10 @@ pub fn open(start: &LessonStart<'_>) -> Box<dyn Lesson> {
     Box::new(lesson)
 }
 
+/// A live noise slider: the noise, its label, the factor from SI to the shown
+/// unit, and the slider's range in the shown unit.
+type NoiseSlider = (LiveNoise, &'static str, f64, f64, f64);
+
 /// Checkpoints every 10 s of the drive: stepping back replays at most ten
 /// seconds of readings.
 const POLICY: CheckpointPolicy = CheckpointPolicy {
@@ -315,7 +319,7 @@ impl FusionLesson {
                 "These act now, on the running drive: a switch or a noise applies to the readings \
                  that arrive from this moment on. Stepping back undoes them.",
             );
-        let groups: [(usize, &[(LiveNoise, &str, f64, f64, f64)]); 3] = [
+        let groups: [(usize, &[NoiseSlider]); 3] = [
             (
                 ODOMETRY,
                 &[
