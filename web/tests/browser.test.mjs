@@ -837,6 +837,45 @@ async function main() {
       }
     });
 
+    // --- Sensor fusion by URL: the lesson runs, and a seeded 40 s drive fused headless in
+    // this page's wasm gives each mode's RMSE with exactly the native bits
+    // (crates/slamlab-app/tests/fusion_ui.rs pins the same numbers).
+    await check("lesson=fusion runs and its RMSE table has the native numbers", async () => {
+      const query = "lesson=fusion&seed=3&duration=40";
+      const { context, page: p, log } = await openPage(browser, baseUrl, `index.html?${query}`, "fusion");
+      try {
+        await waitRunning(p);
+        const s0 = await waitState(p, (st) => st.lesson === "fusion" && st.frames > 2, "the fusion lesson");
+        assert(s0.seed === 3 && s0.runs.length === 2, `opened ${JSON.stringify(s0)}`);
+        assert(s0.runs[0].mode === "differential" && s0.runs[1].mode === "relative", `modes ${JSON.stringify(s0.runs)}`);
+        await p.mouse.click(VIEWPORT.width / 2, VIEWPORT.height / 2); // gives the canvas keyboard focus
+        await p.keyboard.press("Space");
+        const s1 = await waitState(p, (st) => st.time >= 5, "5 s of the drive running", 60_000);
+        assert(/ at \d+\.\d\d s/.test(s1.phase), `the step label names no reading: "${s1.phase}"`);
+        await sleep(300);
+        const { stats } = await waitNotBlank(p, "fusion-running.png");
+        assertNotBlank(stats, "fusion-running.png");
+        const headless = JSON.parse(await p.evaluate((q) => window.slamlab.slamlab_test_headless(q, 41), query));
+        assert(headless.finished, `the headless drive did not finish: ${JSON.stringify(headless)}`);
+        const NATIVE = [
+          [0.018338686029263813, 0.009054579079795273, 0.02768865985373698],
+          [0.07364447075865203, 0.05369803159610187, 0.04716598788885103],
+        ];
+        headless.runs.forEach((run, k) => {
+          assert(
+            run.rmse.every((v, i) => v === NATIVE[k][i]),
+            `${run.mode}: RMSE ${JSON.stringify(run.rmse)} in the browser, ${JSON.stringify(NATIVE[k])} natively`,
+          );
+        });
+        await assertNoPanic(p);
+        assert(log.problems.length === 0, log.problems.join("; "));
+        const text = headless.runs.map((r) => `${r.mode} x ${r.rmse[0].toFixed(4)} m`).join(", ");
+        return `ran to ${s1.time.toFixed(2)} s ("${s1.phase}"); headless 40 s: ${text}, bit-identical to native`;
+      } finally {
+        await context.close();
+      }
+    });
+
     await check("no console errors, uncaught exceptions or failed requests", async () => {
       const problems = pageLogs.flatMap((log) => log.problems.map((p) => `${log.label}: ${p}`));
       assert(problems.length === 0, problems.join("\n"));

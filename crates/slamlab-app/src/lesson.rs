@@ -304,6 +304,13 @@ pub const LESSONS: &[LessonEntry] = &[
                   gets, and how much they scatter.",
         open: crate::resampling::open,
     },
+    LessonEntry {
+        id: crate::fusion::LESSON_ID,
+        title: "Sensor fusion",
+        summary: "Wheel odometry, an IMU and a 1 Hz SLAM pose fused by robot_localization's EKF; \
+                  the SLAM pose taken absolute, relative or differential, side by side.",
+        open: crate::fusion::open,
+    },
 ];
 
 /// The lesson that opens when none (or an unknown one) is asked for.

@@ -37,7 +37,7 @@ const LESSONS: &[&str] = &["landmark-slam", "kidnap"];
 
 /// Lessons with a parameter table (`slamlab params --lesson ID`): those the CLI
 /// runs, and the app's interactive ones.
-const PARAM_LESSONS: &[&str] = &["landmark-slam", "kidnap", "resampling"];
+const PARAM_LESSONS: &[&str] = &["landmark-slam", "kidnap", "resampling", "fusion"];
 
 /// Experiments the CLI can run.
 const EXPERIMENTS: &[&str] = &[
@@ -282,6 +282,7 @@ fn list_params(matches: &ArgMatches) -> Result<()> {
     let rows = match lesson {
         "kidnap" => params::describe::<slamlab_sim::localization::MclScenario>(),
         "resampling" => params::describe::<slamlab_sim::resampling_lab::LabScenario>(),
+        "fusion" => params::describe::<slamlab_sim::fusion::params::FusionLessonScenario>(),
         _ => params::describe::<LandmarkScenario>(),
     };
     let mut out = std::io::stdout().lock();

@@ -17,6 +17,8 @@
 
 mod experiment;
 mod landmark_pose;
+pub mod lesson;
+pub mod params;
 mod runner;
 mod scenario;
 mod sensors;

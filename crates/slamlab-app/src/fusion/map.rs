@@ -1,0 +1,262 @@
+//! The map: the true path, the raw odometry path (grey, dashed), the SLAM poses
+//! as dots, and each mode's fused path with its current pose, 95% position
+//! ellipse and heading wedge.
+
+use super::{FusionView, mode_color};
+use crate::palette;
+use crate::widgets::map_canvas::{
+    self, CanvasColors, MapTransform, MapView, draw_grid, draw_scale_and_axes, finite, screen_dir,
+};
+use egui::{Color32, Pos2, Shape, Stroke, pos2, vec2};
+use nalgebra::{Matrix2, Vector2};
+use slamlab_core::Pose2;
+use slamlab_core::geometry::{CHI2_2DOF_95, CovarianceEllipse};
+use slamlab_sim::fusion::lesson::FusionSim;
+
+/// Longest polyline drawn, in points.
+const MAX_POINTS: usize = 4000;
+
+/// The map toolbar and the map.
+pub fn map_ui(ui: &mut egui::Ui, sim: &FusionSim, canvas: &mut MapView, view: &mut FusionView) {
+    ui.horizontal_wrapped(|ui| {
+        ui.label("Map:");
+        map_canvas::zoom_buttons_ui(ui, canvas, "Fit room");
+        ui.separator();
+        ui.checkbox(&mut view.legend, "Legend");
+        ui.checkbox(&mut view.odometry_path, "Raw odometry")
+            .on_hover_text("Wheel odometry integrated alone (dead reckoning), grey and dashed");
+        ui.checkbox(&mut view.slam_poses, "SLAM poses")
+            .on_hover_text("Every SLAM pose received so far, as a dot");
+        ui.checkbox(&mut view.ellipses, "95% ellipses");
+    });
+    let room = sim.setup().scenario.drive.room;
+    let bounds = [
+        -0.5 * room[0] - 0.3,
+        -0.5 * room[1] - 0.3,
+        0.5 * room[0] + 0.3,
+        0.5 * room[1] + 0.3,
+    ];
+    let mut follow = None;
+    let (_response, t) = map_canvas::canvas_ui(ui, canvas, bounds, 0.0, &mut follow, true);
+    let colors = CanvasColors::of(ui);
+    let painter = ui.painter_at(t.rect);
+    painter.rect_filled(t.rect, 4.0, colors.background);
+    draw_grid(&painter, &t, &colors);
+    let now = sim.now();
+    let log = sim.log();
+    // The room's walls (the drive keeps inside 80% of it).
+    let corners = [
+        t.xy(-0.5 * room[0], -0.5 * room[1]),
+        t.xy(0.5 * room[0], -0.5 * room[1]),
+        t.xy(0.5 * room[0], 0.5 * room[1]),
+        t.xy(-0.5 * room[0], 0.5 * room[1]),
+    ];
+    painter.add(Shape::closed_line(
+        corners.to_vec(),
+        Stroke::new(1.0, colors.weak_text),
+    ));
+    // The truth up to now.
+    let truth: Vec<Pose2> = log
+        .truth
+        .iter()
+        .take_while(|s| s.t <= now)
+        .map(|s| s.pose)
+        .collect();
+    polyline(&painter, &t, &truth, Stroke::new(2.0, colors.truth), false);
+    if view.odometry_path {
+        let odometry: Vec<Pose2> = log
+            .odometry_path
+            .iter()
+            .take_while(|(s, _)| *s <= now)
+            .map(|(_, p)| *p)
+            .collect();
+        polyline(
+            &painter,
+            &t,
+            &odometry,
+            Stroke::new(1.6, palette::DEAD_RECKONING),
+            true,
+        );
+    }
+    if view.slam_poses {
+        let latency = sim.live().slam.latency;
+        for (stamp, pose) in &log.slam_poses {
+            if stamp + latency > now {
+                break;
+            }
+            let at = t.pose(pose);
+            if finite(at) {
+                painter.circle_filled(at, 3.0, palette::VERMILLION);
+            }
+        }
+    }
+    for run in sim.runs() {
+        let color = mode_color(run.mode());
+        let mut path: Vec<Pose2> = run.samples().iter().map(|s| s.estimate).collect();
+        let pose = run.filter().pose();
+        path.push(pose);
+        polyline(&painter, &t, &path, Stroke::new(1.8, color), false);
+        draw_estimate(
+            &painter,
+            &t,
+            &pose,
+            &run.filter().pose_covariance(),
+            color,
+            view.ellipses,
+        );
+    }
+    let truth_now = log.truth_at(now);
+    let at = t.pose(&truth_now);
+    if finite(at) {
+        painter.circle(
+            at,
+            6.0,
+            colors.background.gamma_multiply(0.6),
+            Stroke::new(2.0, colors.truth),
+        );
+        painter.line_segment(
+            [at, at + screen_dir(truth_now.theta) * 10.0],
+            Stroke::new(2.5, colors.truth),
+        );
+    }
+    draw_scale_and_axes(&painter, &t, &colors);
+    if view.legend {
+        draw_legend(&painter, &t, sim, &colors);
+    }
+}
+
+/// A path as one line (thinned to [`MAX_POINTS`]), dashed or solid.
+fn polyline(
+    painter: &egui::Painter,
+    t: &MapTransform,
+    path: &[Pose2],
+    stroke: Stroke,
+    dashed: bool,
+) {
+    let stride = path.len() / MAX_POINTS + 1;
+    let points: Vec<Pos2> = path
+        .iter()
+        .step_by(stride)
+        .chain(path.last())
+        .map(|p| t.pose(p))
+        .filter(|p| finite(*p))
+        .collect();
+    if points.len() < 2 {
+        return;
+    }
+    if dashed {
+        painter.extend(Shape::dashed_line(&points, stroke, 6.0, 4.0));
+    } else {
+        painter.add(Shape::line(points, stroke));
+    }
+}
+
+fn draw_estimate(
+    painter: &egui::Painter,
+    t: &MapTransform,
+    pose: &Pose2,
+    covariance: &nalgebra::Matrix3<f64>,
+    color: Color32,
+    ellipse: bool,
+) {
+    let centre = t.pose(pose);
+    if !finite(centre) {
+        return;
+    }
+    if ellipse {
+        let block = Matrix2::new(
+            covariance[(0, 0)],
+            covariance[(0, 1)],
+            covariance[(1, 0)],
+            covariance[(1, 1)],
+        );
+        let e =
+            CovarianceEllipse::from_covariance(Vector2::new(pose.x, pose.y), &block, CHI2_2DOF_95);
+        let points: Vec<Pos2> = e
+            .boundary(48)
+            .iter()
+            .map(|p| t.v(p))
+            .filter(|p| finite(*p))
+            .collect();
+        if points.len() > 2 {
+            painter.add(Shape::closed_line(points, Stroke::new(2.0, color)));
+        }
+    }
+    // Heading wedge: ± 2 sigma.
+    let sigma = covariance[(2, 2)].max(0.0).sqrt();
+    let spread = (2.0 * sigma).min(std::f64::consts::PI);
+    let radius = 22.0;
+    let mut rim = vec![centre];
+    for k in 0..=16 {
+        let a = pose.theta - spread + 2.0 * spread * f64::from(k) / 16.0;
+        rim.push(centre + screen_dir(a) * radius);
+    }
+    painter.add(Shape::convex_polygon(
+        rim,
+        color.gamma_multiply(0.18),
+        Stroke::NONE,
+    ));
+    painter.circle_filled(centre, 4.0, color);
+    painter.arrow(
+        centre,
+        screen_dir(pose.theta) * radius,
+        Stroke::new(2.0, color),
+    );
+}
+
+fn draw_legend(painter: &egui::Painter, t: &MapTransform, sim: &FusionSim, colors: &CanvasColors) {
+    let mut rows: Vec<(Color32, String, bool)> = vec![
+        (colors.truth, "true robot and path".to_owned(), false),
+        (
+            palette::DEAD_RECKONING,
+            "raw wheel odometry (dead reckoning)".to_owned(),
+            true,
+        ),
+        (palette::VERMILLION, "SLAM poses (dots)".to_owned(), false),
+    ];
+    for run in sim.runs() {
+        rows.push((
+            mode_color(run.mode()),
+            format!("{}: fused path, estimate, 95% ellipse", run.mode().name()),
+            false,
+        ));
+    }
+    let font = egui::FontId::proportional(12.5);
+    let origin = t.rect.left_top() + vec2(10.0, 26.0);
+    let width = rows
+        .iter()
+        .map(|(_, text, _)| {
+            painter
+                .layout_no_wrap(text.clone(), font.clone(), colors.truth)
+                .size()
+                .x
+        })
+        .fold(0.0_f32, f32::max)
+        + 34.0;
+    let height = rows.len() as f32 * 18.0 + 8.0;
+    let frame = egui::Rect::from_min_size(origin, vec2(width, height));
+    painter.rect_filled(frame, 4.0, colors.background.gamma_multiply(0.9));
+    for (i, (color, text, dashed)) in rows.iter().enumerate() {
+        let y = origin.y + 13.0 + i as f32 * 18.0;
+        let (a, b) = (pos2(origin.x + 6.0, y), pos2(origin.x + 22.0, y));
+        if *dashed {
+            painter.extend(Shape::dashed_line(
+                &[a, b],
+                Stroke::new(2.0, *color),
+                4.0,
+                3.0,
+            ));
+        } else if *color == palette::VERMILLION {
+            painter.circle_filled(pos2(origin.x + 14.0, y), 3.5, *color);
+        } else {
+            painter.line_segment([a, b], Stroke::new(3.0, *color));
+        }
+        painter.text(
+            pos2(origin.x + 28.0, y),
+            egui::Align2::LEFT_CENTER,
+            text,
+            font.clone(),
+            colors.truth,
+        );
+    }
+}

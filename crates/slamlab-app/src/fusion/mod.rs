@@ -1,0 +1,601 @@
+//! The sensor-fusion lesson (`lesson=fusion`, thesis `002` ch. 5): a robot drives
+//! a room with wheel odometry at 50 Hz, an IMU at 100 Hz and a SLAM pose at 1 Hz,
+//! and robot_localization's EKF fuses them, the SLAM pose taken in each chosen
+//! mode (absolute, relative, differential) on the same readings. Step one
+//! reading at a time (each named: "IMU: yaw rate at 12.34 s") or one second at a
+//! time; switch sensors on and off and change their noise while it runs; inject a
+//! bad reading and see it skipped and counted.
+
+mod explain;
+mod map;
+mod plots;
+
+pub use explain::rmse_text;
+
+use crate::lesson::{self, Lesson, LessonExt, LessonStart, PanelVisibility, StoredSettings};
+use crate::palette;
+use crate::time_control::{TimeAction, TimeControl, TimeInfo};
+use crate::widgets::map_canvas::MapView;
+use crate::widgets::params_panel::{self, PendingParams};
+use egui::Color32;
+use serde::{Deserialize, Serialize};
+use slamlab_sim::fusion::lesson::{BadReading, FusionEvent, FusionSim, LiveNoise, sensor_name};
+use slamlab_sim::fusion::params::{FusionLessonScenario, MODE_NAMES, mode_from_name};
+use slamlab_sim::fusion::{FusionMode, IMU, ODOMETRY, SLAM};
+use slamlab_sim::params;
+use slamlab_sim::stepper::{CheckpointPolicy, Simulation, Stepper};
+
+/// The lesson's id in URLs and the menu.
+pub const LESSON_ID: &str = "fusion";
+
+/// The parameters the panel shows, in order (the rest are in the URL and CLI).
+const PANEL_PARAMS: &[&str] = &[
+    "seed",
+    "duration",
+    "odom",
+    "odom-rate",
+    "odom-speed-noise",
+    "odom-turn-noise-deg",
+    "odom-scale-error",
+    "odom-turn-slip",
+    "imu",
+    "imu-rate",
+    "imu-gyro-noise-deg",
+    "imu-gyro-bias-deg",
+    "slam",
+    "slam-rate",
+    "slam-source",
+    "slam-position-noise",
+    "slam-yaw-noise-deg",
+    "slam-fuse-yaw",
+    "slam-drift",
+    "slam-relocalization-interval",
+    "slam-outlier-prob",
+    "slam-latency",
+    "slam-rejection",
+    "filter-delay",
+];
+
+/// The colour of a mode (LESSONS.md's EKF blue for `_differential`, the thesis's
+/// recommended mode; orange for `_relative`; purple for absolute; green for the
+/// odometry-and-IMU-only baseline).
+pub fn mode_color(mode: FusionMode) -> Color32 {
+    match mode {
+        FusionMode::Differential => palette::BLUE,
+        FusionMode::Relative => palette::ORANGE,
+        FusionMode::Absolute => palette::PURPLE,
+        FusionMode::Odometry => palette::GREEN,
+    }
+}
+
+/// What the map shows; saved with the user's settings.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(default)]
+pub struct FusionView {
+    /// The legend box.
+    pub legend: bool,
+    /// The raw odometry path (dead reckoning), grey and dashed.
+    pub odometry_path: bool,
+    /// The SLAM poses as dots.
+    pub slam_poses: bool,
+    /// Each mode's 95% position ellipse.
+    pub ellipses: bool,
+}
+
+impl Default for FusionView {
+    fn default() -> Self {
+        Self {
+            legend: true,
+            odometry_path: true,
+            slam_poses: true,
+            ellipses: true,
+        }
+    }
+}
+
+/// The sensor fusion lesson.
+#[derive(Debug)]
+pub struct FusionLesson {
+    stepper: Stepper<FusionSim>,
+    pending: PendingParams<FusionLessonScenario>,
+    /// The lesson's clock.
+    pub time: TimeControl,
+    /// What the map shows.
+    pub view: FusionView,
+    canvas: MapView,
+    /// Link problems and what the run had to change.
+    notices: Vec<String>,
+    /// The latest live change or refusal, shown above the map.
+    note: Option<String>,
+    /// The live noise sliders' values while one is dragged (SI units).
+    noise_edit: [f64; 5],
+}
+
+/// Opens the lesson from the URL's pairs, with what it stored last time.
+pub fn open(start: &LessonStart<'_>) -> Box<dyn Lesson> {
+    let stored = StoredSettings::<FusionView>::from_start(start);
+    let (setup, link_notices) = lesson::scenario_from_start(
+        start,
+        FusionLessonScenario::default(),
+        stored.as_ref().map(|s| s.params.as_slice()),
+    );
+    let mut lesson = match FusionLesson::new(setup) {
+        Ok(lesson) => lesson,
+        Err(why) => {
+            // The table's ranges keep every scenario valid; should one still fail,
+            // the defaults open, saying why.
+            match FusionLesson::new(FusionLessonScenario::default()) {
+                Ok(mut lesson) => {
+                    lesson
+                        .notices
+                        .push(format!("{why}; the default drive opens instead"));
+                    lesson
+                }
+                Err(why) => {
+                    return crate::landmark_slam::open(&LessonStart {
+                        pairs: &[],
+                        embed: start.embed,
+                        stored: None,
+                        many_runs: None,
+                    })
+                    .with_notice(format!("Sensor fusion could not open: {why}"));
+                }
+            }
+        }
+    };
+    lesson.notices.splice(0..0, link_notices);
+    if let Some(stored) = stored {
+        lesson.view = stored.view.clone();
+        stored.restore_clock(&mut lesson.time);
+    }
+    if start.embed {
+        lesson.view.legend = false;
+    }
+    Box::new(lesson)
+}
+
+/// A live noise slider: the noise, its label, the factor from SI to the shown
+/// unit, and the slider's range in the shown unit.
+type NoiseSlider = (LiveNoise, &'static str, f64, f64, f64);
+
+/// Checkpoints every 10 s of the drive: stepping back replays at most ten
+/// seconds of readings.
+const POLICY: CheckpointPolicy = CheckpointPolicy {
+    every_ticks: 10,
+    max_checkpoints: 40,
+    budget_bytes: 64 << 20,
+};
+
+impl FusionLesson {
+    /// Starts the lesson on `setup` (its parameters sanitized, with notices).
+    pub fn new(mut setup: FusionLessonScenario) -> Result<Self, String> {
+        let notices: Vec<String> = params::sanitize(&mut setup)
+            .iter()
+            .map(ToString::to_string)
+            .collect();
+        let sim = FusionSim::new(setup.clone())?;
+        let noise_edit = LiveNoise::ALL.map(|n| n.get(sim.live()));
+        Ok(Self {
+            stepper: Stepper::with_policy(sim, (), POLICY),
+            pending: PendingParams::new(setup),
+            time: TimeControl::default(),
+            view: FusionView::default(),
+            canvas: MapView::default(),
+            notices,
+            note: None,
+            noise_edit,
+        })
+    }
+
+    /// The running simulation.
+    pub fn sim(&self) -> &FusionSim {
+        self.stepper.sim()
+    }
+
+    /// The setup being edited in the parameter panel (applied on reset).
+    pub fn pending(&self) -> &FusionLessonScenario {
+        &self.pending.scenario
+    }
+
+    /// Sets a parameter of the pending setup from text, as the panel does.
+    pub fn set_param(&mut self, name: &str, value: &str) -> Option<params::ParamIssue> {
+        self.pending.set(name, value)
+    }
+
+    /// Starts over with the pending parameters.
+    pub fn reset(&mut self) {
+        let mut setup = self.pending.scenario.clone();
+        let notices: Vec<String> = params::sanitize(&mut setup)
+            .iter()
+            .map(ToString::to_string)
+            .collect();
+        match FusionSim::new(setup.clone()) {
+            Ok(sim) => {
+                self.noise_edit = LiveNoise::ALL.map(|n| n.get(sim.live()));
+                self.stepper = Stepper::with_policy(sim, (), POLICY);
+                self.pending = PendingParams::new(setup);
+                self.notices = notices;
+                self.note = None;
+            }
+            Err(why) => self.note = Some(format!("Could not start over: {why}; the run goes on")),
+        }
+        self.time.apply(TimeAction::Reset);
+        self.canvas.refit();
+    }
+
+    /// Applies a live change (a sensor switch, a noise, a bad reading); it is
+    /// recorded, so stepping back and forth replays it.
+    pub fn apply_event(&mut self, event: FusionEvent) {
+        if let FusionEvent::SetNoise { value, .. } = event
+            && !(value.is_finite() && value > 0.0)
+        {
+            self.note = Some(format!(
+                "Noise {value} refused: a standard deviation must be a number above 0"
+            ));
+            return;
+        }
+        if self.sim().finished() && matches!(event, FusionEvent::Inject(_)) {
+            self.note = Some("The drive is over: step back or reset to inject a reading".into());
+            return;
+        }
+        self.note = Some(format!(
+            "At {:.2} s: {}",
+            self.sim().now(),
+            event.describe()
+        ));
+        self.stepper.apply(event);
+        self.noise_edit = LiveNoise::ALL.map(|n| n.get(self.sim().live()));
+    }
+
+    /// Applies the next reading.
+    pub fn step_phase(&mut self) {
+        self.stepper.step_phase();
+    }
+
+    /// Runs to the end of the current second, or one whole second.
+    pub fn step_tick(&mut self) {
+        self.stepper.step_tick();
+    }
+
+    /// Goes back one reading.
+    pub fn step_back(&mut self) -> bool {
+        self.stepper.step_back()
+    }
+
+    /// The pairs that reopen this setup (the seed always).
+    pub fn share_pairs(&self) -> Vec<(String, String)> {
+        let setup = self.sim().setup();
+        let mut pairs = params::changed_pairs(setup, &FusionLessonScenario::default());
+        if !pairs.iter().any(|(name, _)| name == "seed") {
+            pairs.insert(0, ("seed".to_owned(), setup.scenario.seed.to_string()));
+        }
+        pairs
+    }
+
+    /// The last phase's name ("IMU: yaw rate at 12.34 s"), if any.
+    pub fn last_phase_label(&self) -> Option<String> {
+        self.stepper.last_phase().map(|p| p.label())
+    }
+
+    fn modes_ui(&mut self, ui: &mut egui::Ui) {
+        ui.label(egui::RichText::new("Modes compared").strong())
+            .on_hover_text(
+                "How the filter takes the SLAM pose; each mode runs on the same readings. \
+                 Applied with \"Apply & reset\".",
+            );
+        ui.horizontal_wrapped(|ui| {
+            let current = self.pending.scenario.modes.clone();
+            for name in MODE_NAMES {
+                let Some(mode) = mode_from_name(name) else {
+                    continue;
+                };
+                let mut on = current.contains(&mode);
+                let text = egui::RichText::new(*name).color(mode_color(mode));
+                if ui.checkbox(&mut on, text).changed() {
+                    let mut list: Vec<&str> = MODE_NAMES
+                        .iter()
+                        .copied()
+                        .filter(|n| {
+                            let m = mode_from_name(n);
+                            if *n == *name {
+                                on
+                            } else {
+                                m.is_some_and(|m| current.contains(&m))
+                            }
+                        })
+                        .collect();
+                    if list.is_empty() {
+                        list.push(name);
+                    }
+                    self.pending.set("modes", &list.join(","));
+                }
+            }
+        });
+    }
+
+    fn live_sensors_ui(&mut self, ui: &mut egui::Ui) {
+        ui.label(egui::RichText::new("Sensors, live").strong())
+            .on_hover_text(
+                "These act now, on the running drive: a switch or a noise applies to the readings \
+                 that arrive from this moment on. Stepping back undoes them.",
+            );
+        let groups: [(usize, &[NoiseSlider]); 3] = [
+            (
+                ODOMETRY,
+                &[
+                    (LiveNoise::OdometrySpeed, "speed noise", 1.0, 1e-4, 0.5),
+                    (
+                        LiveNoise::OdometryTurn,
+                        "yaw-rate noise",
+                        180.0 / std::f64::consts::PI,
+                        0.01,
+                        30.0,
+                    ),
+                ],
+            ),
+            (
+                IMU,
+                &[(
+                    LiveNoise::ImuGyro,
+                    "gyro noise",
+                    180.0 / std::f64::consts::PI,
+                    0.001,
+                    10.0,
+                )],
+            ),
+            (
+                SLAM,
+                &[
+                    (LiveNoise::SlamPosition, "position noise", 1.0, 1e-3, 2.0),
+                    (
+                        LiveNoise::SlamYaw,
+                        "heading noise",
+                        180.0 / std::f64::consts::PI,
+                        0.01,
+                        45.0,
+                    ),
+                ],
+            ),
+        ];
+        let mut events = Vec::new();
+        egui::Grid::new("fusion_live_sensors")
+            .num_columns(2)
+            .striped(true)
+            .show(ui, |ui| {
+                for (sensor, noises) in groups {
+                    let mut on = self.sim().sensor_on(sensor);
+                    if ui
+                        .checkbox(&mut on, sensor_name(sensor))
+                        .on_hover_text("Feed this sensor's readings to the filters from now on")
+                        .changed()
+                    {
+                        events.push(FusionEvent::SetSensor { sensor, on });
+                    }
+                    ui.end_row();
+                    for &(noise, label, scale, min, max) in noises {
+                        let k = LiveNoise::ALL.iter().position(|n| *n == noise).unwrap_or(0);
+                        let unit = if scale == 1.0 {
+                            if sensor == SLAM { " m" } else { " m/s" }
+                        } else if sensor == SLAM {
+                            " deg"
+                        } else {
+                            " deg/s"
+                        };
+                        ui.label("");
+                        let mut shown = self.noise_edit[k] * scale;
+                        let response = ui
+                            .vertical(|ui| {
+                                ui.add(
+                                    egui::Slider::new(&mut shown, min..=max)
+                                        .logarithmic(true)
+                                        .suffix(unit)
+                                        .text(label),
+                                )
+                            })
+                            .inner;
+                        if response.changed() {
+                            self.noise_edit[k] = shown / scale;
+                        }
+                        let live = noise.get(self.sim().live());
+                        if (response.drag_stopped() || (response.changed() && !response.dragged()))
+                            && (self.noise_edit[k] - live).abs() > 1e-9 * live.abs()
+                        {
+                            events.push(FusionEvent::SetNoise {
+                                noise,
+                                value: self.noise_edit[k],
+                            });
+                        }
+                        ui.end_row();
+                    }
+                }
+            });
+        for event in events {
+            self.apply_event(event);
+        }
+        ui.label(egui::RichText::new("Inject a bad reading").strong())
+            .on_hover_text(
+                "Hand every filter a broken reading now: each one is skipped with a message and \
+                 counted (the explanation panel lists the counts).",
+            );
+        ui.horizontal_wrapped(|ui| {
+            for bad in BadReading::ALL {
+                if ui.button(bad.label()).clicked() {
+                    self.apply_event(FusionEvent::Inject(bad));
+                }
+            }
+        });
+    }
+
+    fn fusion_parameters_ui(&mut self, ui: &mut egui::Ui) {
+        ui.heading("Sensor fusion");
+        self.live_sensors_ui(ui);
+        ui.separator();
+        ui.label(egui::RichText::new("The drive (applied with \"Apply & reset\")").strong());
+        self.modes_ui(ui);
+        let running = self.sim().setup().clone();
+        params_panel::params_ui(ui, &mut self.pending, &running, PANEL_PARAMS);
+        ui.separator();
+        let changed = params::to_pairs(&self.pending.scenario) != params::to_pairs(&running);
+        if ui
+            .add_enabled(changed, egui::Button::new("Apply & reset"))
+            .on_hover_text("Start over with these parameters (same seed: same drive)")
+            .clicked()
+        {
+            self.reset();
+        }
+        ui.separator();
+        ui.label(egui::RichText::new("Share this setup").strong());
+        let query = lesson::Lesson::share_query(self, false);
+        ui.add(egui::TextEdit::singleline(&mut query.clone()).desired_width(f32::INFINITY))
+            .on_hover_text("index.html?… with these pairs opens exactly this drive");
+    }
+}
+
+impl crate::widgets::layout::LessonPanels for FusionLesson {
+    fn plots_ui(&mut self, ui: &mut egui::Ui) {
+        plots::plots_ui(ui, self.stepper.sim());
+    }
+
+    fn parameters_ui(&mut self, ui: &mut egui::Ui) {
+        self.fusion_parameters_ui(ui);
+    }
+
+    fn explanation_ui(&mut self, ui: &mut egui::Ui) {
+        explain::explanation_ui(ui, self.stepper.sim(), self.stepper.last_phase());
+    }
+
+    fn map_ui(&mut self, ui: &mut egui::Ui) {
+        if let Some(note) = &self.note {
+            ui.label(egui::RichText::new(note).color(palette::VERMILLION));
+        }
+        map::map_ui(ui, self.stepper.sim(), &mut self.canvas, &mut self.view);
+    }
+}
+
+impl Lesson for FusionLesson {
+    fn id(&self) -> &'static str {
+        LESSON_ID
+    }
+
+    fn subtitle(&self) -> String {
+        let names: Vec<&str> = self.sim().runs().iter().map(|r| r.mode().name()).collect();
+        format!("{} on one drive", names.join(" vs "))
+    }
+
+    fn notices(&self) -> Vec<String> {
+        let mut all = self.notices.clone();
+        all.extend(self.sim().notes().iter().rev().take(3).cloned());
+        all
+    }
+
+    fn time(&self) -> &TimeControl {
+        &self.time
+    }
+
+    fn time_mut(&mut self) -> &mut TimeControl {
+        &mut self.time
+    }
+
+    fn time_info(&self) -> TimeInfo {
+        TimeInfo {
+            tick: self.sim().tick(),
+            time_s: self.sim().now(),
+            last_phase: self.last_phase_label(),
+            next_phase: self.sim().next_reading(),
+            can_step_back: self.stepper.phases_run() > 0,
+        }
+    }
+
+    fn apply_time_action(&mut self, action: TimeAction) {
+        self.time.apply(action);
+        match action {
+            TimeAction::ToggleRun => {}
+            TimeAction::StepPhase => self.step_phase(),
+            TimeAction::StepTick => self.step_tick(),
+            TimeAction::StepBack => {
+                self.step_back();
+                self.noise_edit = LiveNoise::ALL.map(|n| n.get(self.sim().live()));
+            }
+            TimeAction::Reset => self.reset(),
+        }
+    }
+
+    fn advance(&mut self, dt: f64) {
+        let stepper = &mut self.stepper;
+        lesson::advance_within_budget(&mut self.time, dt, || {
+            stepper.step_phase();
+            !stepper.sim().is_mid_tick()
+        });
+        if self.sim().finished() {
+            self.time.running = false;
+        }
+    }
+
+    fn panels_ui(&mut self, ui: &mut egui::Ui, panels: &mut PanelVisibility, compact: bool) {
+        crate::widgets::layout::lesson_panels_ui(self, ui, panels, compact, LESSON_ID);
+    }
+
+    fn view_menu_ui(&mut self, ui: &mut egui::Ui) {
+        ui.checkbox(&mut self.view.legend, "Map legend");
+        ui.checkbox(&mut self.view.odometry_path, "Raw odometry path");
+        ui.checkbox(&mut self.view.slam_poses, "SLAM poses");
+        ui.checkbox(&mut self.view.ellipses, "95% ellipses");
+    }
+
+    fn stored_settings(&self) -> serde_json::Value {
+        StoredSettings {
+            view: self.view.clone(),
+            time: self.time.clone(),
+            params: params::changed_pairs(&self.pending.scenario, &FusionLessonScenario::default()),
+        }
+        .to_value()
+    }
+
+    fn share_query(&self, embed: bool) -> String {
+        crate::query::build(LESSON_ID, &self.share_pairs(), embed)
+    }
+
+    fn test_state(&self) -> serde_json::Value {
+        let sim = self.sim();
+        let runs: Vec<serde_json::Value> = sim
+            .runs()
+            .iter()
+            .map(|r| {
+                let e = r.rmse();
+                let pose = r.filter().pose();
+                let stats = r.filter().stats();
+                serde_json::json!({
+                    "mode": r.mode().name(),
+                    "rmse": [e.x, e.y, e.yaw],
+                    "estimate": [pose.x, pose.y, pose.theta],
+                    "samples": r.samples().len(),
+                    "max_slam_jump": r.max_slam_jump(),
+                    "fused": stats.fused,
+                    "skipped": stats.skipped(),
+                    "non_finite": stats.non_finite,
+                    "bad_noise": stats.bad_noise,
+                    "before_start": stats.before_start,
+                    "out_of_order": stats.out_of_order,
+                })
+            })
+            .collect();
+        serde_json::json!({
+            "tick": sim.tick(),
+            "time": sim.now(),
+            "phase": self.last_phase_label().unwrap_or_default(),
+            "seed": sim.setup().scenario.seed,
+            "finished": sim.finished(),
+            "injected": sim.injected(),
+            "sensors": [sim.sensor_on(ODOMETRY), sim.sensor_on(IMU), sim.sensor_on(SLAM)],
+            "runs": runs,
+        })
+    }
+
+    fn as_any(&self) -> &dyn std::any::Any {
+        self
+    }
+
+    fn as_any_mut(&mut self) -> &mut dyn std::any::Any {
+        self
+    }
+}

@@ -1,0 +1,253 @@
+//! Headless UI tests of the sensor-fusion lesson through egui_kittest: it opens
+//! by URL, "Step phase" applies one named reading, the RMSE table shows the
+//! numbers of a headless seeded run, bad readings are skipped and counted, and
+//! the rendered map shows each mode's colour.
+
+#![allow(clippy::panic)]
+
+use egui_kittest::Harness;
+use egui_kittest::kittest::Queryable as _;
+use slamlab_app::SlamLabApp;
+use slamlab_app::fusion::FusionLesson;
+use slamlab_app::lesson::Lesson as _;
+use slamlab_sim::fusion::lesson::{BadReading, FusionEvent};
+use slamlab_sim::fusion::{FusionMode, SLAM, run_modes, simulate};
+
+const SIZE: egui::Vec2 = egui::vec2(1500.0, 950.0);
+
+fn harness(query: &str) -> Harness<'static, SlamLabApp> {
+    let query = query.to_owned();
+    Harness::builder()
+        .with_size(SIZE)
+        .with_max_steps(40)
+        .build_eframe(move |cc| SlamLabApp::new(cc, &query))
+}
+
+fn lesson<'h>(h: &'h Harness<'_, SlamLabApp>) -> &'h FusionLesson {
+    match h.state().lesson_as::<FusionLesson>() {
+        Some(l) => l,
+        None => panic!("the fusion lesson is open"),
+    }
+}
+
+fn lesson_mut<'h>(h: &'h mut Harness<'_, SlamLabApp>) -> &'h mut FusionLesson {
+    match h.state_mut().lesson_as_mut::<FusionLesson>() {
+        Some(l) => l,
+        None => panic!("the fusion lesson is open"),
+    }
+}
+
+fn count_pixels(rgba: &[u8], rgb: [u8; 3], tolerance: i32) -> usize {
+    rgba.chunks_exact(4)
+        .filter(|p| (0..3).all(|c| (i32::from(p[c]) - i32::from(rgb[c])).abs() <= tolerance))
+        .count()
+}
+
+#[test]
+fn the_lesson_opens_by_url_and_bad_values_get_messages() {
+    let h = harness("lesson=fusion&seed=4&duration=60&modes=absolute,differential");
+    assert_eq!(h.state().lesson_id(), "fusion");
+    let setup = lesson(&h).sim().setup();
+    assert_eq!(setup.scenario.seed, 4);
+    assert_eq!(setup.scenario.drive.duration, 60.0);
+    assert_eq!(
+        setup.modes,
+        vec![FusionMode::Absolute, FusionMode::Differential]
+    );
+    assert!(h.state().notices().is_empty(), "{:?}", h.state().notices());
+    // A rate of 0 and a noise of 0: clamped to the minimum with a message.
+    let h = harness("lesson=fusion&imu-rate=0&slam-position-noise=0&modes=kalman");
+    let notices = h.state().notices();
+    assert_eq!(notices.len(), 3, "{notices:?}");
+    assert!(
+        notices
+            .iter()
+            .any(|n| n.contains("imu-rate = 0 is out of range"))
+    );
+    assert!(
+        notices
+            .iter()
+            .any(|n| n.contains("slam-position-noise = 0 is out of range"))
+    );
+    assert_eq!(lesson(&h).sim().setup().scenario.imu.rate, 0.5);
+    assert_eq!(lesson(&h).sim().runs().len(), 2, "the default modes");
+}
+
+#[test]
+fn a_step_names_its_sensor_and_step_back_replays() {
+    let mut h = harness("lesson=fusion&seed=2&duration=30");
+    h.run();
+    h.get_by_label("Step phase").click();
+    h.run();
+    let label = lesson(&h).time_info().last_phase.unwrap_or_default();
+    assert_eq!(label, "wheel odometry: v_x, v_y, yaw rate at 0.00 s");
+    h.get_by_label("Step phase").click();
+    h.run();
+    let label = lesson(&h).time_info().last_phase.unwrap_or_default();
+    assert_eq!(label, "IMU: yaw rate at 0.00 s");
+    // The explanation panel names it too.
+    let _ = h.get_by_label("IMU: yaw rate at 0.00 s");
+    for _ in 0..5 {
+        lesson_mut(&mut h).step_tick();
+    }
+    h.run();
+    let label = lesson(&h).time_info().last_phase.unwrap_or_default();
+    assert!(
+        label.starts_with("SLAM pose (differential)") && label.ends_with("at 5.00 s"),
+        "{label}"
+    );
+    let before: Vec<_> = lesson(&h)
+        .sim()
+        .runs()
+        .iter()
+        .map(|r| *r.filter().mean())
+        .collect();
+    h.get_by_label("Step phase").click();
+    h.run();
+    h.get_by_label("Step back").click();
+    h.run();
+    let after: Vec<_> = lesson(&h)
+        .sim()
+        .runs()
+        .iter()
+        .map(|r| *r.filter().mean())
+        .collect();
+    assert_eq!(before, after);
+    // Bad readings by button: skipped, named and counted in both modes.
+    h.get_by_label("NaN IMU reading").click();
+    h.run();
+    h.get_by_label("SLAM pose from the past").click();
+    h.run();
+    lesson_mut(&mut h).step_tick();
+    h.run();
+    for run in lesson(&h).sim().runs() {
+        let stats = run.filter().stats();
+        assert_eq!(
+            (stats.non_finite, stats.out_of_order),
+            (1, 1),
+            "{:?}",
+            run.mode()
+        );
+    }
+    let notices = h.state().notices();
+    assert!(
+        notices.iter().any(|n| n.contains("time went backwards")),
+        "{notices:?}"
+    );
+    // Switching the SLAM pose off: the next SLAM reading is not fed.
+    lesson_mut(&mut h).apply_event(FusionEvent::SetSensor {
+        sensor: SLAM,
+        on: false,
+    });
+    let fused = lesson(&h).sim().runs()[0].filter().stats().fused;
+    lesson_mut(&mut h).step_tick();
+    let stats = *lesson(&h).sim().runs()[0].filter().stats();
+    assert_eq!(stats.fused - fused, 150, "50 odometry and 100 IMU readings");
+    lesson_mut(&mut h).apply_event(FusionEvent::Inject(BadReading::SlamBeforeStart));
+    lesson_mut(&mut h).step_tick();
+    assert_eq!(
+        lesson(&h).sim().runs()[0].filter().stats().before_start,
+        0,
+        "the SLAM pose is off: its bad reading is not fed either"
+    );
+}
+
+#[test]
+fn the_rmse_table_shows_a_headless_seeded_run() {
+    let query = "lesson=fusion&seed=3&duration=40";
+    let mut h = harness(query);
+    for _ in 0..41 {
+        h.state_mut()
+            .apply_time_action(slamlab_app::time_control::TimeAction::StepTick);
+    }
+    h.run();
+    assert!(lesson(&h).sim().finished());
+    // The same run headless (what the browser test runs in wasm).
+    let headless: serde_json::Value =
+        serde_json::from_str(&SlamLabApp::headless_state(query, 41)).unwrap_or_default();
+    let setup = lesson(&h).sim().setup().clone();
+    // Both read by the same JSON parser: the same text gives the same numbers.
+    let shown_state: serde_json::Value =
+        serde_json::from_str(&h.state().test_state_json()).unwrap_or_default();
+    assert_eq!(shown_state["runs"], headless["runs"]);
+    let log = simulate(&setup.scenario).unwrap_or_else(|e| panic!("{e}"));
+    let whole = run_modes(&setup.scenario, &log, &setup.modes).unwrap_or_else(|e| panic!("{e}"));
+    for (k, run) in lesson(&h).sim().runs().iter().enumerate() {
+        let e = run.rmse();
+        // The table shows these numbers.
+        for v in [e.x, e.y, e.yaw] {
+            let text = slamlab_app::fusion::rmse_text(v);
+            assert!(
+                h.query_all_by_label(&text).next().is_some(),
+                "{text} not in the RMSE table"
+            );
+        }
+        // And they are the experiment runner's (to rounding: it applies the
+        // readings in one sweep).
+        let w = whole[k].rmse();
+        for (a, b) in [(e.x, w.x), (e.y, w.y), (e.yaw, w.yaw)] {
+            assert!((a - b).abs() < 1e-9, "{a} vs {b}");
+        }
+    }
+    // Pinned (web/tests/browser.test.mjs compares the wasm run with these bits).
+    let pinned = [
+        [
+            0.018338686029263813,
+            0.009054579079795273,
+            0.02768865985373698,
+        ],
+        [
+            0.07364447075865203,
+            0.05369803159610187,
+            0.04716598788885103,
+        ],
+    ];
+    for (run, pinned) in lesson(&h).sim().runs().iter().zip(pinned) {
+        let e = run.rmse();
+        assert_eq!([e.x, e.y, e.yaw], pinned, "{:?}", run.mode());
+    }
+}
+
+#[test]
+fn rendered_lesson_shows_every_mode_in_its_colour() {
+    let mut h = Harness::builder()
+        .with_size(SIZE)
+        .with_max_steps(40)
+        .build_eframe(|cc| {
+            SlamLabApp::new(
+                cc,
+                "lesson=fusion&seed=1&duration=120&modes=differential,relative,absolute",
+            )
+        });
+    h.run();
+    for _ in 0..90 {
+        lesson_mut(&mut h).step_tick();
+    }
+    h.run();
+    let image = match h.render() {
+        Ok(image) => image,
+        Err(err) => {
+            eprintln!("skipping the rendered checks: no GPU adapter ({err})");
+            return;
+        }
+    };
+    let raw = image.as_raw();
+    let blue = count_pixels(raw, [0x00, 0x72, 0xB2], 30);
+    let orange = count_pixels(raw, [0xE6, 0x9F, 0x00], 30);
+    let purple = count_pixels(raw, [0xCC, 0x79, 0xA7], 30);
+    let vermillion = count_pixels(raw, [0xD5, 0x5E, 0x00], 30);
+    let grey = count_pixels(raw, [0x8C, 0x8C, 0x8C], 12);
+    eprintln!(
+        "blue {blue}, orange {orange}, purple {purple}, vermillion {vermillion}, grey {grey}"
+    );
+    assert!(blue > 800, "differential-blue pixels {blue}");
+    assert!(orange > 800, "relative-orange pixels {orange}");
+    assert!(purple > 800, "absolute-purple pixels {purple}");
+    assert!(vermillion > 150, "SLAM-dot pixels {vermillion}");
+    assert!(grey > 200, "raw-odometry grey pixels {grey}");
+    let _ = egui_kittest::try_image_snapshot_options(
+        &image,
+        "fusion_lesson",
+        &egui_kittest::SnapshotOptions::new().threshold(2.0),
+    );
+}
