@@ -271,6 +271,14 @@ pub const LESSONS: &[LessonEntry] = &[
                   (global localization) and follows it: predict, weight, resample. Kidnap it.",
         open: crate::kidnap::open,
     },
+    LessonEntry {
+        id: crate::pose_graph::LESSON_ID,
+        title: "Pose-graph optimization",
+        summary: "A graph of poses, odometry and loop closures optimized one solver iteration at \
+                  a time (GN, LM, first-order); drag vertices, add a wrong loop closure, try \
+                  robust kernels, open g2o/TORO files.",
+        open: crate::pose_graph::open,
+    },
 ];
 
 /// The lesson that opens when none (or an unknown one) is asked for.

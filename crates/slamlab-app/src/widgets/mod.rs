@@ -3,6 +3,7 @@
 //! helpers.
 
 pub mod dropped_files;
+pub mod file_picker;
 pub mod layout;
 pub mod map_canvas;
 pub mod params_panel;
