@@ -297,6 +297,14 @@ pub const LESSONS: &[LessonEntry] = &[
         open: crate::kidnap::open,
     },
     LessonEntry {
+        id: crate::pose_graph::LESSON_ID,
+        title: "Pose-graph optimization",
+        summary: "A graph of poses, odometry and loop closures optimized one solver iteration at \
+                  a time (GN, LM, first-order); drag vertices, add a wrong loop closure, try \
+                  robust kernels, open g2o/TORO files.",
+        open: crate::pose_graph::open,
+    },
+    LessonEntry {
         id: crate::resampling::LESSON_ID,
         title: "Resampling lab",
         summary: "One row of weighted particles and four resamplers side by side: press \

@@ -15,6 +15,7 @@ pub mod kidnap;
 pub mod landmark_slam;
 pub mod lesson;
 pub mod palette;
+pub mod pose_graph;
 pub mod query;
 pub mod resampling;
 pub mod time_control;

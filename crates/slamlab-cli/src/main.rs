@@ -37,7 +37,13 @@ const LESSONS: &[&str] = &["landmark-slam", "kidnap"];
 
 /// Lessons with a parameter table (`slamlab params --lesson ID`): those the CLI
 /// runs, and the app's interactive ones.
-const PARAM_LESSONS: &[&str] = &["landmark-slam", "kidnap", "resampling", "fusion"];
+const PARAM_LESSONS: &[&str] = &[
+    "landmark-slam",
+    "kidnap",
+    "pose-graph",
+    "resampling",
+    "fusion",
+];
 
 /// Experiments the CLI can run.
 const EXPERIMENTS: &[&str] = &[
@@ -283,6 +289,7 @@ fn list_params(matches: &ArgMatches) -> Result<()> {
         "kidnap" => params::describe::<slamlab_sim::localization::MclScenario>(),
         "resampling" => params::describe::<slamlab_sim::resampling_lab::LabScenario>(),
         "fusion" => params::describe::<slamlab_sim::fusion::params::FusionLessonScenario>(),
+        "pose-graph" => params::describe::<slamlab_sim::pose_graph_lesson::PoseGraphScenario>(),
         _ => params::describe::<LandmarkScenario>(),
     };
     let mut out = std::io::stdout().lock();

@@ -20,6 +20,7 @@ pub mod metrics;
 pub mod noise;
 pub mod params;
 pub mod pose_graph_experiment;
+pub mod pose_graph_lesson;
 pub mod presets;
 pub mod resampling;
 pub mod resampling_lab;

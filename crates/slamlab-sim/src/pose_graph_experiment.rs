@@ -143,8 +143,29 @@ fn position_rmse(a: &[Pose2], b: &[Pose2]) -> f64 {
     (sum / n as f64).sqrt()
 }
 
-/// Runs the experiment.
-pub fn run(config: PoseGraphExperimentConfig) -> Result<PoseGraphExperimentResult, OptimizeError> {
+/// The experiment's graph before optimizing, with what it was built from.
+#[derive(Clone, Debug)]
+pub struct ThesisGraph {
+    /// The scenario EKF-SLAM ran.
+    pub scenario: LandmarkScenario,
+    /// The graph: poses at the EKF-SLAM estimate, odometry edges, loop closures; pose 0 fixed.
+    pub graph: PoseGraph,
+    /// Poses in the graph.
+    pub poses: usize,
+    /// The poses the loop closures reach from pose 0.
+    pub loop_closure_nodes: Vec<usize>,
+    /// Odometry information diagonal.
+    pub odometry_information: [f64; 3],
+    /// Loop-closure information diagonal.
+    pub loop_closure_information: [f64; 3],
+    /// Loop-closure standard deviations (x, y, θ).
+    pub loop_closure_std: [f64; 3],
+    /// Paths per tick: truth, dead reckoning, EKF-SLAM.
+    pub paths: [Vec<Pose2>; 3],
+}
+
+/// Runs EKF-SLAM and builds the experiment's graph (the part of [`run`] before the solver).
+pub fn thesis_graph(config: &PoseGraphExperimentConfig) -> Result<ThesisGraph, OptimizeError> {
     let scenario = scenario(config.noise_scale, config.seed);
     let [truth, dead_reckoning, ekf] = run_ekf(&scenario, STEPS);
     let n = ekf.len().min(truth.len());
@@ -191,6 +212,32 @@ pub fn run(config: PoseGraphExperimentConfig) -> Result<PoseGraphExperimentResul
             information: lc,
         })?;
     }
+    Ok(ThesisGraph {
+        scenario,
+        graph,
+        poses: n,
+        loop_closure_nodes: nodes,
+        odometry_information,
+        loop_closure_information,
+        loop_closure_std: lc_std,
+        paths: [truth, dead_reckoning, ekf],
+    })
+}
+
+/// Runs the experiment.
+pub fn run(config: PoseGraphExperimentConfig) -> Result<PoseGraphExperimentResult, OptimizeError> {
+    let ThesisGraph {
+        scenario,
+        graph,
+        poses: n,
+        loop_closure_nodes: nodes,
+        odometry_information,
+        loop_closure_information,
+        loop_closure_std: lc_std,
+        paths: [truth, dead_reckoning, ekf],
+    } = thesis_graph(&config)?;
+    let dt = scenario.dt;
+    let count = nodes.len();
     let edges = graph.edges().len();
     let mut optimizer = Optimizer::new(
         graph,

@@ -358,57 +358,50 @@ impl FusionLesson {
             ),
         ];
         let mut events = Vec::new();
-        egui::Grid::new("fusion_live_sensors")
-            .num_columns(2)
-            .striped(true)
-            .show(ui, |ui| {
-                for (sensor, noises) in groups {
-                    let mut on = self.sim().sensor_on(sensor);
-                    if ui
-                        .checkbox(&mut on, sensor_name(sensor))
-                        .on_hover_text("Feed this sensor's readings to the filters from now on")
-                        .changed()
-                    {
-                        events.push(FusionEvent::SetSensor { sensor, on });
+        // One column: each sensor's switch, then its noise sliders indented (a
+        // narrow panel keeps the map wide).
+        for (sensor, noises) in groups {
+            let mut on = self.sim().sensor_on(sensor);
+            if ui
+                .checkbox(&mut on, sensor_name(sensor))
+                .on_hover_text("Feed this sensor's readings to the filters from now on")
+                .changed()
+            {
+                events.push(FusionEvent::SetSensor { sensor, on });
+            }
+            ui.indent(("fusion_noise", sensor_name(sensor)), |ui| {
+                ui.spacing_mut().slider_width = 110.0;
+                for &(noise, label, scale, min, max) in noises {
+                    let k = LiveNoise::ALL.iter().position(|n| *n == noise).unwrap_or(0);
+                    let unit = if scale == 1.0 {
+                        if sensor == SLAM { " m" } else { " m/s" }
+                    } else if sensor == SLAM {
+                        " deg"
+                    } else {
+                        " deg/s"
+                    };
+                    let mut shown = self.noise_edit[k] * scale;
+                    let response = ui.add(
+                        egui::Slider::new(&mut shown, min..=max)
+                            .logarithmic(true)
+                            .suffix(unit)
+                            .text(label),
+                    );
+                    if response.changed() {
+                        self.noise_edit[k] = shown / scale;
                     }
-                    ui.end_row();
-                    for &(noise, label, scale, min, max) in noises {
-                        let k = LiveNoise::ALL.iter().position(|n| *n == noise).unwrap_or(0);
-                        let unit = if scale == 1.0 {
-                            if sensor == SLAM { " m" } else { " m/s" }
-                        } else if sensor == SLAM {
-                            " deg"
-                        } else {
-                            " deg/s"
-                        };
-                        ui.label("");
-                        let mut shown = self.noise_edit[k] * scale;
-                        let response = ui
-                            .vertical(|ui| {
-                                ui.add(
-                                    egui::Slider::new(&mut shown, min..=max)
-                                        .logarithmic(true)
-                                        .suffix(unit)
-                                        .text(label),
-                                )
-                            })
-                            .inner;
-                        if response.changed() {
-                            self.noise_edit[k] = shown / scale;
-                        }
-                        let live = noise.get(self.sim().live());
-                        if (response.drag_stopped() || (response.changed() && !response.dragged()))
-                            && (self.noise_edit[k] - live).abs() > 1e-9 * live.abs()
-                        {
-                            events.push(FusionEvent::SetNoise {
-                                noise,
-                                value: self.noise_edit[k],
-                            });
-                        }
-                        ui.end_row();
+                    let live = noise.get(self.sim().live());
+                    if (response.drag_stopped() || (response.changed() && !response.dragged()))
+                        && (self.noise_edit[k] - live).abs() > 1e-9 * live.abs()
+                    {
+                        events.push(FusionEvent::SetNoise {
+                            noise,
+                            value: self.noise_edit[k],
+                        });
                     }
                 }
             });
+        }
         for event in events {
             self.apply_event(event);
         }

@@ -82,7 +82,8 @@ pub fn lesson_panels_ui(
         .default_size(side(300.0))
         .size_range(180.0..=480.0_f32.min(0.35 * area.width()).max(180.0))
         .show_collapsible(ui, &mut panels.parameters, |ui| {
-            egui::ScrollArea::vertical()
+            // Scrolls sideways rather than widening the panel over the map.
+            egui::ScrollArea::both()
                 .id_salt(format!("{id}_parameters_scroll"))
                 .show(ui, |ui| lesson.parameters_ui(ui));
         });
@@ -91,7 +92,8 @@ pub fn lesson_panels_ui(
         .default_size(side(330.0))
         .size_range(180.0..=520.0_f32.min(0.35 * area.width()).max(180.0))
         .show_collapsible(ui, &mut panels.explanation, |ui| {
-            egui::ScrollArea::vertical()
+            // Scrolls sideways rather than widening the panel over the map.
+            egui::ScrollArea::both()
                 .id_salt(format!("{id}_explanation_scroll"))
                 .show(ui, |ui| lesson.explanation_ui(ui));
         });

@@ -1,0 +1,387 @@
+//! The graph drawn on the shared map canvas: odometry edges and vertices in blue,
+//! loop closures in vermillion (the wrong ones dashed and thicker), landmark edges
+//! and landmarks in green, the true path in black (white on dark), 95% ellipses
+//! from the marginals once converged, and the result without a kernel in orange.
+//! A vertex dragged with the mouse moves; releasing it re-optimizes.
+
+use super::PoseGraphView;
+use crate::palette;
+use crate::widgets::map_canvas::{
+    self, CanvasColors, MapTransform, MapView, draw_grid, draw_scale_and_axes, finite,
+};
+use egui::{Color32, Pos2, Stroke, pos2, vec2};
+use slamlab_core::geometry::CHI2_2DOF_95;
+use slamlab_core::graph::{EdgeKind, VertexState};
+use slamlab_core::{CovarianceEllipse, math};
+use slamlab_sim::pose_graph_lesson::{EdgeRole, KernelRun, PoseGraphSession};
+
+/// Odometry edges and pose vertices.
+pub const VERTEX: Color32 = palette::BLUE;
+/// Loop closures (LESSONS.md: loop closures in vermillion).
+pub const LOOP_CLOSURE: Color32 = palette::VERMILLION;
+/// Landmark edges and landmarks.
+pub const LANDMARK: Color32 = palette::GREEN;
+/// The optimized result without a kernel, in the comparison.
+pub const WITHOUT_KERNEL: Color32 = palette::ORANGE;
+/// Marginal covariance ellipses.
+pub const ELLIPSE: Color32 = palette::SKY_BLUE;
+
+/// What the map asks the lesson to do.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum MapRequest {
+    /// Move vertex `index` to `(x, y)`.
+    Move(usize, f64, f64),
+    /// The drag of vertex `index` ended.
+    Drop(usize),
+}
+
+/// Grab radius around a vertex, points.
+const GRAB_RADIUS: f32 = 9.0;
+
+fn bounds(session: &PoseGraphSession) -> [f64; 4] {
+    let mut b = [f64::MAX, f64::MAX, f64::MIN, f64::MIN];
+    for v in session.graph().vertices() {
+        let p = v.state.position();
+        b = [
+            b[0].min(p[0]),
+            b[1].min(p[1]),
+            b[2].max(p[0]),
+            b[3].max(p[1]),
+        ];
+    }
+    b
+}
+
+fn nearest_vertex(session: &PoseGraphSession, t: &MapTransform, at: Pos2) -> Option<usize> {
+    let mut best: Option<(usize, f32)> = None;
+    for (i, v) in session.graph().vertices().iter().enumerate() {
+        let d = t.v(&v.state.position()).distance(at);
+        if d <= GRAB_RADIUS && best.is_none_or(|(_, b)| d < b) {
+            best = Some((i, d));
+        }
+    }
+    best.map(|(i, _)| i)
+}
+
+/// The map, its toolbar and the drag of a vertex.
+#[allow(clippy::too_many_arguments)]
+pub fn map_ui(
+    ui: &mut egui::Ui,
+    session: &PoseGraphSession,
+    canvas: &mut MapView,
+    view: &mut PoseGraphView,
+    drag: &mut Option<usize>,
+    last_transform: &mut Option<MapTransform>,
+    marginals: Option<&[(usize, nalgebra::Matrix2<f64>)]>,
+    comparison: Option<&[KernelRun; 2]>,
+) -> Option<MapRequest> {
+    ui.horizontal_wrapped(|ui| {
+        ui.label("Map:");
+        map_canvas::zoom_buttons_ui(ui, canvas, "Fit graph");
+        ui.separator();
+        ui.checkbox(&mut view.legend, "Legend");
+        if session.truth().is_some() {
+            ui.checkbox(&mut view.truth, "Truth");
+        }
+        ui.checkbox(&mut view.ellipses, "Ellipses").on_hover_text(
+            "95% ellipses of the marginal position covariances, once the solver has converged",
+        );
+        ui.checkbox(&mut view.reoptimize_after_drag, "Re-optimize after a drag")
+            .on_hover_text(
+                "Drag a vertex to perturb the graph; on release the solver runs to convergence",
+            );
+    });
+    // A press on a vertex starts a drag (the canvas does not pan then).
+    let (pressed, origin, down, pointer) = ui.input(|i| {
+        (
+            i.pointer.primary_pressed(),
+            i.pointer.press_origin(),
+            i.pointer.primary_down(),
+            i.pointer.interact_pos(),
+        )
+    });
+    if drag.is_none()
+        && pressed
+        && let (Some(t), Some(origin)) = (last_transform.as_ref(), origin)
+        && t.rect.contains(origin)
+    {
+        *drag = nearest_vertex(session, t, origin);
+    }
+    let mut follow = None;
+    let (response, t) = map_canvas::canvas_ui(
+        ui,
+        canvas,
+        bounds(session),
+        if view.legend { 200.0 } else { 0.0 },
+        &mut follow,
+        drag.is_none(),
+    );
+    *last_transform = Some(t);
+    let colors = CanvasColors::of(ui);
+    let painter = ui.painter_at(t.rect);
+    painter.rect_filled(t.rect, 4.0, colors.background);
+    draw_grid(&painter, &t, &colors);
+    if view.truth
+        && let Some(truth) = session.truth()
+    {
+        let points: Vec<Pos2> = truth
+            .iter()
+            .map(|p| t.pose(p))
+            .filter(|p| finite(*p))
+            .collect();
+        painter.add(egui::Shape::line(points, Stroke::new(1.0, colors.truth)));
+    }
+    if let Some([plain, _]) = comparison {
+        draw_positions(&painter, &t, session, &plain.positions, WITHOUT_KERNEL);
+    }
+    draw_graph(&painter, &t, session, &colors);
+    if view.ellipses
+        && let Some(marginals) = marginals
+    {
+        let vertices = session.graph().vertices();
+        for (i, cov) in marginals {
+            if let Some(v) = vertices.get(*i) {
+                let e = CovarianceEllipse::from_covariance(v.state.position(), cov, CHI2_2DOF_95);
+                let mut points: Vec<Pos2> = e.boundary(28).iter().map(|p| t.v(p)).collect();
+                if points.iter().all(|p| finite(*p)) {
+                    points.push(points[0]);
+                    painter.add(egui::Shape::line(points, Stroke::new(1.2, ELLIPSE)));
+                }
+            }
+        }
+    }
+    draw_scale_and_axes(&painter, &t, &colors);
+    if view.legend {
+        draw_legend(&painter, &t, session, &colors, comparison.is_some(), view);
+    }
+
+    let mut request = None;
+    if let Some(i) = *drag {
+        if down {
+            if let Some(p) = pointer {
+                let [x, y] = t.world_of(p);
+                let current = session
+                    .graph()
+                    .vertices()
+                    .get(i)
+                    .map(|v| v.state.position());
+                if current.is_some_and(|c| math::hypot(c[0] - x, c[1] - y) > 1e-9) {
+                    request = Some(MapRequest::Move(i, x, y));
+                }
+                painter.circle_stroke(t.xy(x, y), 8.0, Stroke::new(2.0, palette::VERMILLION));
+            }
+        } else {
+            *drag = None;
+            request = Some(MapRequest::Drop(i));
+        }
+    } else if let Some(pointer) = response.hover_pos() {
+        let [x, y] = t.world_of(pointer);
+        let near = nearest_vertex(session, &t, pointer);
+        response.on_hover_ui_at_pointer(|ui| match near {
+            Some(i) => {
+                let v = &session.graph().vertices()[i];
+                let what = match v.state {
+                    VertexState::Pose(_) => "pose",
+                    VertexState::Point(_) => "landmark",
+                };
+                ui.label(format!(
+                    "{what} {}{}: drag it to perturb the graph",
+                    v.id,
+                    if v.fixed {
+                        " (fixed: holds the gauge)"
+                    } else {
+                        ""
+                    }
+                ));
+            }
+            None => {
+                ui.label(format!("({x:.2}, {y:.2}) m"));
+            }
+        });
+    }
+    request
+}
+
+fn draw_graph(
+    painter: &egui::Painter,
+    t: &MapTransform,
+    session: &PoseGraphSession,
+    colors: &CanvasColors,
+) {
+    let vertices = session.graph().vertices();
+    let many = vertices.len() > 1500;
+    let pos = |i: usize| t.v(&vertices[i].state.position());
+    let width = if many { 1.0 } else { 1.5 };
+    // Odometry and landmark edges first, loop closures over them.
+    for pass in 0..2 {
+        for (edge, role) in session.graph().edges().iter().zip(session.roles()) {
+            let (a, b) = edge.vertices();
+            let Some(b) = b else { continue };
+            let (pa, pb) = (pos(a), pos(b));
+            if !(finite(pa) && finite(pb)) {
+                continue;
+            }
+            match (pass, role) {
+                (0, EdgeRole::Odometry) => {
+                    painter.line_segment([pa, pb], Stroke::new(width, VERTEX));
+                }
+                (0, EdgeRole::Landmark) => {
+                    painter.line_segment([pa, pb], Stroke::new(0.8, palette::faded(LANDMARK, 0.7)));
+                }
+                (1, EdgeRole::LoopClosure) => {
+                    painter.line_segment([pa, pb], Stroke::new(width, LOOP_CLOSURE));
+                }
+                (1, EdgeRole::WrongLoopClosure) => {
+                    painter.extend(egui::Shape::dashed_line(
+                        &[pa, pb],
+                        Stroke::new(3.0, LOOP_CLOSURE),
+                        8.0,
+                        5.0,
+                    ));
+                }
+                _ => {}
+            }
+        }
+    }
+    let radius = if many { 1.3 } else { 2.6 };
+    for (i, v) in vertices.iter().enumerate() {
+        let p = pos(i);
+        if !finite(p) {
+            continue;
+        }
+        match v.state {
+            _ if v.fixed => {
+                painter.rect_filled(
+                    egui::Rect::from_center_size(p, vec2(8.0, 8.0)),
+                    0.0,
+                    colors.truth,
+                );
+            }
+            VertexState::Pose(_) => {
+                painter.circle_filled(p, radius, VERTEX);
+            }
+            VertexState::Point(_) => {
+                painter.rect_filled(
+                    egui::Rect::from_center_size(p, vec2(6.0, 6.0)),
+                    0.0,
+                    LANDMARK,
+                );
+            }
+        }
+    }
+    // Priors: a ring around their vertex.
+    for edge in session.graph().edges() {
+        if let EdgeKind::PosePrior { pose: i, .. } | EdgeKind::PointPrior { point: i, .. } = *edge {
+            painter.circle_stroke(pos(i), 6.0, Stroke::new(1.5, colors.truth));
+        }
+    }
+}
+
+fn draw_positions(
+    painter: &egui::Painter,
+    t: &MapTransform,
+    session: &PoseGraphSession,
+    positions: &[[f64; 2]],
+    color: Color32,
+) {
+    let poses: Vec<Pos2> = positions
+        .iter()
+        .zip(session.graph().vertices())
+        .filter(|(_, v)| matches!(v.state, VertexState::Pose(_)))
+        .map(|(p, _)| t.xy(p[0], p[1]))
+        .filter(|p| finite(*p))
+        .collect();
+    painter.add(egui::Shape::line(poses, Stroke::new(2.0, color)));
+}
+
+fn draw_legend(
+    painter: &egui::Painter,
+    t: &MapTransform,
+    session: &PoseGraphSession,
+    colors: &CanvasColors,
+    comparison: bool,
+    view: &PoseGraphView,
+) {
+    let count = |role: EdgeRole| session.roles().iter().filter(|r| **r == role).count();
+    let mut rows: Vec<(Color32, bool, String)> = vec![
+        (
+            VERTEX,
+            false,
+            format!(
+                "poses ({}) and odometry ({})",
+                session.graph().pose_count(),
+                count(EdgeRole::Odometry)
+            ),
+        ),
+        (
+            LOOP_CLOSURE,
+            false,
+            format!("loop closures ({})", count(EdgeRole::LoopClosure)),
+        ),
+    ];
+    if count(EdgeRole::WrongLoopClosure) > 0 {
+        rows.push((
+            LOOP_CLOSURE,
+            true,
+            format!(
+                "wrong loop closures ({})",
+                count(EdgeRole::WrongLoopClosure)
+            ),
+        ));
+    }
+    if session.graph().point_count() > 0 {
+        rows.push((
+            LANDMARK,
+            false,
+            format!(
+                "landmarks ({}) and their edges ({})",
+                session.graph().point_count(),
+                count(EdgeRole::Landmark)
+            ),
+        ));
+    }
+    rows.push((colors.truth, false, "fixed vertex (square)".to_owned()));
+    if view.truth && session.truth().is_some() {
+        rows.push((colors.truth, false, "true path".to_owned()));
+    }
+    if view.ellipses && session.is_converged() {
+        rows.push((ELLIPSE, false, "95% marginal ellipses".to_owned()));
+    }
+    if comparison {
+        rows.push((
+            WITHOUT_KERNEL,
+            false,
+            "optimized without a kernel".to_owned(),
+        ));
+    }
+    let font = egui::FontId::proportional(12.0);
+    let origin = t.rect.left_top() + vec2(44.0, 28.0);
+    let height = 18.0 * rows.len() as f32 + 8.0;
+    painter.rect_filled(
+        egui::Rect::from_min_size(origin, vec2(250.0, height)),
+        4.0,
+        palette::faded(colors.background, 0.85),
+    );
+    for (k, (color, dashed, text)) in rows.iter().enumerate() {
+        let y = origin.y + 13.0 + 18.0 * k as f32;
+        let a = pos2(origin.x + 8.0, y);
+        let b = pos2(origin.x + 34.0, y);
+        if *dashed {
+            painter.extend(egui::Shape::dashed_line(
+                &[a, b],
+                Stroke::new(3.0, *color),
+                6.0,
+                4.0,
+            ));
+        } else {
+            painter.line_segment([a, b], Stroke::new(2.0, *color));
+        }
+        painter.text(
+            pos2(origin.x + 42.0, y),
+            egui::Align2::LEFT_CENTER,
+            text,
+            font.clone(),
+            colors.weak_text,
+        );
+    }
+}

@@ -1,0 +1,791 @@
+//! The pose-graph lesson (`lesson=pose-graph`): a graph of robot poses (and
+//! landmarks) joined by odometry edges, loop closures and landmark edges, optimized
+//! one solver iteration at a time (Gauss-Newton, Levenberg-Marquardt or a
+//! first-order method) while the path snaps into place. The student drags vertices,
+//! adds a deliberately wrong loop closure and compares robust kernels, and opens
+//! g2o or TORO files (M3500, intel) by the picker or by dropping them on the window.
+
+mod explain;
+mod map;
+mod plots;
+
+use crate::lesson::{self, Lesson, LessonExt as _, LessonStart, PanelVisibility, StoredSettings};
+use crate::palette;
+use crate::time_control::{FRAME_BUDGET_MS, TimeAction, TimeControl, TimeInfo};
+use crate::widgets::dropped_files::DropInbox;
+use crate::widgets::file_picker::FilePicker;
+use crate::widgets::map_canvas::MapView;
+use crate::widgets::params_panel::{self, PendingParams};
+use serde::{Deserialize, Serialize};
+use slamlab_core::graph::SolverKind;
+use slamlab_sim::params;
+use slamlab_sim::pose_graph_lesson::{
+    EdgeRole, KernelRun, MAX_FILE_BYTES, PoseGraphScenario, PoseGraphSession, kernel_name,
+};
+
+/// The lesson's id in URLs and the menu.
+pub const LESSON_ID: &str = "pose-graph";
+
+/// The parameters the panel shows, in order.
+const PANEL_PARAMS: &[&str] = &[
+    "example",
+    "seed",
+    "solver",
+    "kernel",
+    "kernel-width",
+    "loop-closures",
+    "noise-scale",
+    "manhattan-poses",
+    "manhattan-side",
+    "max-iterations",
+];
+
+/// Parameters that apply at once to the running graph (the rest on "Apply & reset").
+const LIVE_PARAMS: &[&str] = &["solver", "kernel", "kernel-width", "max-iterations"];
+
+/// Vertices whose marginal covariance is drawn at most.
+const MAX_ELLIPSES: usize = 300;
+
+/// What the map shows; saved with the user's settings.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(default)]
+pub struct PoseGraphView {
+    /// The legend box.
+    pub legend: bool,
+    /// The true path (built-in examples).
+    pub truth: bool,
+    /// 95% ellipses from the marginals once converged.
+    pub ellipses: bool,
+    /// Optimize at once after a vertex is dropped.
+    pub reoptimize_after_drag: bool,
+}
+
+impl Default for PoseGraphView {
+    fn default() -> Self {
+        Self {
+            legend: true,
+            truth: true,
+            ellipses: true,
+            reoptimize_after_drag: true,
+        }
+    }
+}
+
+/// How long the latest "Optimize" took (to convergence or the iteration limit).
+#[derive(Clone, Copy, Debug, PartialEq, Serialize)]
+pub struct OptimizeTiming {
+    /// From the press (or from the file's bytes, reading and analysing included) to
+    /// the last iteration, milliseconds, including the frames drawn in between.
+    pub wall_ms: f64,
+    /// Time spent in the solver's iterations alone, milliseconds.
+    pub compute_ms: f64,
+    /// Iterations run.
+    pub iterations: usize,
+    /// Did it converge (rather than stop at the limit or on an error)?
+    pub converged: bool,
+}
+
+#[derive(Clone, Copy, Debug)]
+struct OptimizeRun {
+    started: web_time::Instant,
+    compute_ms: f64,
+    iterations: usize,
+}
+
+/// The sparsity images and their counts, rebuilt when the graph's structure changes.
+#[derive(Default)]
+pub(crate) struct Patterns {
+    pub(crate) h: Option<egui::TextureHandle>,
+    pub(crate) l: Option<egui::TextureHandle>,
+    pub(crate) unknowns: usize,
+    pub(crate) h_blocks: usize,
+    pub(crate) l_blocks: usize,
+    pub(crate) fill_blocks: usize,
+    pub(crate) l_nonzeros: usize,
+    pub(crate) error: Option<String>,
+    pub(crate) dirty: bool,
+    pub(crate) dark: bool,
+}
+
+impl std::fmt::Debug for Patterns {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.debug_struct("Patterns")
+            .field("unknowns", &self.unknowns)
+            .field("fill_blocks", &self.fill_blocks)
+            .finish_non_exhaustive()
+    }
+}
+
+/// The lesson's start: the simulator's defaults.
+pub fn default_scenario() -> PoseGraphScenario {
+    PoseGraphScenario::default()
+}
+
+/// The pose-graph lesson.
+#[derive(Debug)]
+pub struct PoseGraphLesson {
+    session: PoseGraphSession,
+    pending: PendingParams<PoseGraphScenario>,
+    /// A file the student opened (name, bytes); "Apply & reset" reopens it.
+    loaded: Option<(String, Vec<u8>)>,
+    /// The lesson's clock.
+    pub time: TimeControl,
+    /// What the map shows.
+    pub view: PoseGraphView,
+    canvas: MapView,
+    drag: Option<usize>,
+    last_transform: Option<crate::widgets::map_canvas::MapTransform>,
+    optimizing: Option<OptimizeRun>,
+    last_optimize: Option<OptimizeTiming>,
+    pub(crate) patterns: Patterns,
+    marginals: Option<Vec<(usize, nalgebra::Matrix2<f64>)>>,
+    comparison: Option<[KernelRun; 2]>,
+    notices: Vec<String>,
+    note: Option<String>,
+    inbox: DropInbox,
+    picker: FilePicker,
+}
+
+/// Opens the lesson from the URL's pairs, with what it stored last time.
+pub fn open(start: &LessonStart<'_>) -> Box<dyn Lesson> {
+    let stored = StoredSettings::<PoseGraphView>::from_start(start);
+    let (scenario, link_notices) = lesson::scenario_from_start(
+        start,
+        default_scenario(),
+        stored.as_ref().map(|s| s.params.as_slice()),
+    );
+    let mut lesson = match PoseGraphLesson::new(scenario) {
+        Ok(lesson) => lesson,
+        Err(why) => {
+            // The defaults are tested; a scenario they refuse falls back to them.
+            let mut lesson = match PoseGraphLesson::new(default_scenario()) {
+                Ok(lesson) => lesson,
+                Err(again) => {
+                    return crate::landmark_slam::open(&LessonStart {
+                        pairs: &[],
+                        embed: start.embed,
+                        stored: None,
+                        many_runs: None,
+                    })
+                    .with_notice(format!("The pose-graph lesson could not open: {again}"));
+                }
+            };
+            lesson.notices.push(format!(
+                "the link's graph could not be built ({why}); showing the default"
+            ));
+            lesson
+        }
+    };
+    lesson.notices.splice(0..0, link_notices);
+    if let Some(stored) = stored {
+        lesson.view = stored.view.clone();
+        stored.restore_clock(&mut lesson.time);
+    }
+    if start.embed {
+        lesson.view.legend = false;
+    }
+    Box::new(lesson)
+}
+
+impl PoseGraphLesson {
+    /// Starts the lesson on the scenario's built-in graph.
+    pub fn new(scenario: PoseGraphScenario) -> Result<Self, String> {
+        let session = PoseGraphSession::from_scenario(scenario)?;
+        let pending = PendingParams::new(session.scenario().clone());
+        let mut time = TimeControl::default();
+        time.speed_tps = 2.0;
+        Ok(Self {
+            session,
+            pending,
+            loaded: None,
+            time,
+            view: PoseGraphView::default(),
+            canvas: MapView::default(),
+            drag: None,
+            last_transform: None,
+            optimizing: None,
+            last_optimize: None,
+            patterns: Patterns {
+                dirty: true,
+                ..Patterns::default()
+            },
+            marginals: None,
+            comparison: None,
+            notices: Vec::new(),
+            note: None,
+            inbox: DropInbox::default(),
+            picker: FilePicker::default(),
+        })
+    }
+
+    /// The running session.
+    pub fn session(&self) -> &PoseGraphSession {
+        &self.session
+    }
+
+    /// The scenario being edited in the parameter panel.
+    pub fn pending(&self) -> &PoseGraphScenario {
+        &self.pending.scenario
+    }
+
+    /// The latest refusal or load result.
+    pub fn note(&self) -> Option<&str> {
+        self.note.as_deref()
+    }
+
+    /// How long the latest "Optimize" took.
+    pub fn last_optimize(&self) -> Option<OptimizeTiming> {
+        self.last_optimize
+    }
+
+    /// Is an "Optimize" under way?
+    pub fn is_optimizing(&self) -> bool {
+        self.optimizing.is_some()
+    }
+
+    /// The kernel comparison, once run.
+    pub fn comparison(&self) -> Option<&[KernelRun; 2]> {
+        self.comparison.as_ref()
+    }
+
+    /// Sets a parameter of the pending scenario from text, as the panel does; the
+    /// solver and the kernel apply to the running graph at once.
+    pub fn set_param(&mut self, name: &str, value: &str) -> Option<params::ParamIssue> {
+        let issue = self.pending.set(name, value);
+        self.apply_live_params();
+        issue
+    }
+
+    fn apply_live_params(&mut self) {
+        let p = self.pending.scenario.clone();
+        if p.solver != self.session.scenario().solver {
+            self.session.set_solver(p.solver);
+            self.after_edit();
+        }
+        let s = self.session.scenario();
+        if p.kernel != s.kernel || p.kernel_width != s.kernel_width {
+            match self.session.set_kernel(p.kernel, p.kernel_width) {
+                Ok(()) => self.after_edit(),
+                Err(why) => self.note = Some(why),
+            }
+        }
+    }
+
+    fn after_edit(&mut self) {
+        self.marginals = None;
+        self.time.running = false;
+    }
+
+    fn install(&mut self, session: PoseGraphSession) {
+        self.session = session;
+        self.pending = PendingParams::new(self.session.scenario().clone());
+        self.time.apply(TimeAction::Reset);
+        self.optimizing = None;
+        self.last_optimize = None;
+        self.patterns.dirty = true;
+        self.marginals = None;
+        self.comparison = None;
+        self.drag = None;
+        self.canvas.refit();
+    }
+
+    /// Starts over with the pending parameters (and the opened file, if any). On a
+    /// problem the current graph stays, with a note.
+    pub fn reset(&mut self) {
+        let scenario = self.pending.scenario.clone();
+        let opened = match &self.loaded {
+            Some((name, bytes)) => PoseGraphSession::from_file(scenario, name, bytes),
+            None => PoseGraphSession::from_scenario(scenario),
+        };
+        match opened {
+            Ok(session) => {
+                self.install(session);
+                self.note = None;
+            }
+            Err(why) => self.note = Some(format!("Could not start over: {why}; the graph stays")),
+        }
+    }
+
+    /// Opens a built-in example (forgetting an opened file).
+    pub fn open_example(&mut self) {
+        self.loaded = None;
+        self.reset();
+    }
+
+    /// Opens a pose-graph file's bytes and starts optimizing it. On any problem the
+    /// graph on screen stays and the note names the problem (and its line).
+    pub fn load_file(&mut self, name: &str, bytes: Vec<u8>) {
+        let started = web_time::Instant::now();
+        match PoseGraphSession::from_file(self.pending.scenario.clone(), name, &bytes) {
+            Ok(session) => {
+                let text = format!(
+                    "Opened {name}: {} vertices, {} edges{}",
+                    session.graph().vertices().len(),
+                    session.graph().edges().len(),
+                    if session.notes().is_empty() {
+                        String::new()
+                    } else {
+                        format!(" ({})", session.notes().join("; "))
+                    }
+                );
+                self.install(session);
+                self.loaded = Some((name.to_owned(), bytes));
+                self.note = Some(text);
+                self.start_optimize();
+                // The time to convergence counts the reading and the structure analysis.
+                if let Some(run) = self.optimizing.as_mut() {
+                    run.started = started;
+                }
+            }
+            Err(why) => {
+                self.note = Some(format!("Could not open {why}; the graph on screen stays"));
+            }
+        }
+    }
+
+    /// One solver iteration.
+    pub fn step_iteration(&mut self) {
+        self.optimizing = None;
+        if let Err(why) = self.session.step() {
+            self.note = Some(format!("The solver stopped: {why}"));
+            self.time.running = false;
+        }
+        self.marginals = None;
+    }
+
+    /// Runs iterations to convergence (or the limit) within the frame budget,
+    /// drawing the progress between frames.
+    pub fn start_optimize(&mut self) {
+        self.time.running = false;
+        self.marginals = None;
+        self.optimizing = Some(OptimizeRun {
+            started: web_time::Instant::now(),
+            compute_ms: 0.0,
+            iterations: 0,
+        });
+    }
+
+    /// Runs what an "Optimize" owes this frame (up to the frame budget, or to the
+    /// end when `budget_ms` is `None`).
+    pub fn advance_optimize(&mut self, budget_ms: Option<u128>) {
+        let Some(mut run) = self.optimizing else {
+            return;
+        };
+        let frame = web_time::Instant::now();
+        let limit = self.session.scenario().max_iterations as usize;
+        let mut finished = None;
+        loop {
+            if run.iterations >= limit {
+                finished = Some(false);
+                break;
+            }
+            if budget_ms.is_some_and(|b| frame.elapsed().as_millis() >= b) {
+                break;
+            }
+            let t0 = web_time::Instant::now();
+            let result = self.session.step();
+            run.compute_ms += t0.elapsed().as_secs_f64() * 1000.0;
+            run.iterations += 1;
+            match result {
+                Ok(report) if report.converged => {
+                    finished = Some(true);
+                    break;
+                }
+                Ok(_) => {}
+                Err(why) => {
+                    self.note = Some(format!("The solver stopped: {why}"));
+                    finished = Some(false);
+                    break;
+                }
+            }
+        }
+        match finished {
+            Some(converged) => {
+                self.optimizing = None;
+                self.last_optimize = Some(OptimizeTiming {
+                    wall_ms: run.started.elapsed().as_secs_f64() * 1000.0,
+                    compute_ms: run.compute_ms,
+                    iterations: run.iterations,
+                    converged,
+                });
+            }
+            None => self.optimizing = Some(run),
+        }
+    }
+
+    /// Adds a deliberately wrong loop closure.
+    pub fn add_wrong_loop_closure(&mut self) {
+        match self.session.add_wrong_loop_closure() {
+            Ok(text) => {
+                self.note = Some(format!("Added a {text}"));
+                self.patterns.dirty = true;
+                self.comparison = None;
+                self.after_edit();
+            }
+            Err(why) => self.note = Some(format!("No wrong loop closure added: {why}")),
+        }
+    }
+
+    /// Optimizes the graph from its start without and with a robust kernel.
+    pub fn compare_kernels(&mut self) {
+        self.comparison = Some(self.session.compare_kernels());
+    }
+
+    /// Moves vertex `index` (a drag on the map).
+    pub fn drag_vertex(&mut self, index: usize, x: f64, y: f64) -> Result<(), String> {
+        self.optimizing = None;
+        self.marginals = None;
+        self.session.move_vertex(index, x, y)
+    }
+
+    /// Ends a drag: records it, and re-optimizes when the view asks for it.
+    pub fn finish_drag(&mut self, index: usize) {
+        self.session.finish_drag(index);
+        if self.view.reoptimize_after_drag {
+            self.start_optimize();
+        }
+    }
+
+    /// The query string pairs that reopen this setup.
+    pub fn share_pairs(&self) -> Vec<(String, String)> {
+        let scenario = self.session.scenario();
+        let mut pairs = params::changed_pairs(scenario, &default_scenario());
+        if !pairs.iter().any(|(name, _)| name == "seed") {
+            pairs.insert(0, ("seed".to_owned(), scenario.seed.to_string()));
+        }
+        pairs
+    }
+
+    fn solver_name(solver: SolverKind) -> &'static str {
+        match solver {
+            SolverKind::GaussNewton => "GN",
+            SolverKind::LevenbergMarquardt => "LM",
+            SolverKind::GradientDescent => "first-order",
+        }
+    }
+
+    fn ensure_marginals(&mut self) {
+        if self.marginals.is_none()
+            && self.view.ellipses
+            && self.session.is_converged()
+            && self.optimizing.is_none()
+        {
+            self.marginals = Some(self.session.marginals(MAX_ELLIPSES).unwrap_or_default());
+        }
+    }
+
+    fn read_files(&mut self, ctx: &egui::Context) {
+        let mut picked = self.picker.poll();
+        if picked.is_none()
+            && let Some(batch) = self.inbox.poll(ctx)
+        {
+            if batch.len() > 1 {
+                self.note = Some(format!(
+                    "{} files were dropped; drop one pose-graph file at a time. The graph on screen stays",
+                    batch.len()
+                ));
+                return;
+            }
+            picked = batch.into_iter().next();
+        }
+        if let Some((name, bytes)) = picked {
+            match bytes {
+                Ok(bytes) => self.load_file(&name, bytes),
+                Err(why) => {
+                    self.note = Some(format!(
+                        "Could not read {name}: {why}; the graph on screen stays"
+                    ))
+                }
+            }
+        }
+    }
+
+    fn parameters_panel_ui(&mut self, ui: &mut egui::Ui) {
+        ui.heading("Pose-graph optimization");
+        ui.horizontal_wrapped(|ui| {
+            if ui
+                .button("Step iteration")
+                .on_hover_text("Run one iteration of the solver (also '.' or 'n')")
+                .clicked()
+            {
+                self.step_iteration();
+            }
+            let optimize = if self.optimizing.is_some() {
+                "Optimizing…"
+            } else {
+                "Optimize"
+            };
+            if ui
+                .add_enabled(self.optimizing.is_none(), egui::Button::new(optimize))
+                .on_hover_text("Iterate until converged (or max-iterations), showing the progress")
+                .clicked()
+            {
+                self.start_optimize();
+            }
+        });
+        ui.horizontal_wrapped(|ui| {
+            if ui
+                .button("Add wrong loop closure")
+                .on_hover_text(
+                    "Claim that two poses far apart are at the same place, with the information of a real loop closure",
+                )
+                .clicked()
+            {
+                self.add_wrong_loop_closure();
+            }
+            if ui
+                .button("Compare kernels")
+                .on_hover_text(
+                    "Optimize the graph from its start with no kernel and with the robust kernel (Huber if none is chosen); the plain result is drawn in orange",
+                )
+                .clicked()
+            {
+                self.compare_kernels();
+            }
+        });
+        ui.separator();
+        ui.label(egui::RichText::new("Open a graph").strong());
+        self.picker
+            .ui(ui, "Open file…", ".g2o,.graph,.toro,.txt", MAX_FILE_BYTES);
+        ui.label(
+            egui::RichText::new("Or drop a .g2o or TORO file (M3500, intel, …) on the window.")
+                .small(),
+        );
+        if self.loaded.is_some()
+            && ui
+                .button("Back to the built-in example")
+                .on_hover_text("Forget the opened file and build the example below")
+                .clicked()
+        {
+            self.open_example();
+        }
+        ui.separator();
+        let running = self.session.scenario().clone();
+        if params_panel::params_ui(ui, &mut self.pending, &running, PANEL_PARAMS) {
+            self.apply_live_params();
+        }
+        ui.label(
+            egui::RichText::new(format!(
+                "{} apply at once; the others on \"Apply & reset\".",
+                LIVE_PARAMS.join(", ")
+            ))
+            .small(),
+        );
+        let changed = params::to_pairs(&self.pending.scenario) != params::to_pairs(&running);
+        if ui
+            .add_enabled(changed, egui::Button::new("Apply & reset"))
+            .on_hover_text("Build the graph again with these parameters (same seed: same graph)")
+            .clicked()
+        {
+            self.reset();
+        }
+        ui.separator();
+        ui.label(egui::RichText::new("Share this setup").strong());
+        let query = Lesson::share_query(self, false);
+        ui.add(egui::TextEdit::singleline(&mut query.clone()).desired_width(f32::INFINITY))
+            .on_hover_text(if self.loaded.is_some() {
+                "An opened file cannot travel in a link: the link opens the built-in example with these settings"
+            } else {
+                "index.html?… with these pairs opens exactly this graph"
+            });
+    }
+}
+
+impl crate::widgets::layout::LessonPanels for PoseGraphLesson {
+    fn plots_ui(&mut self, ui: &mut egui::Ui) {
+        plots::plots_ui(ui, &mut self.session, &mut self.patterns);
+    }
+
+    fn parameters_ui(&mut self, ui: &mut egui::Ui) {
+        self.parameters_panel_ui(ui);
+    }
+
+    fn explanation_ui(&mut self, ui: &mut egui::Ui) {
+        explain::explanation_ui(
+            ui,
+            &self.session,
+            self.optimizing.map(|r| r.iterations),
+            self.last_optimize,
+            self.comparison.as_ref(),
+        );
+    }
+
+    fn map_ui(&mut self, ui: &mut egui::Ui) {
+        if let Some(note) = &self.note {
+            ui.label(egui::RichText::new(note).color(palette::VERMILLION));
+        }
+        self.ensure_marginals();
+        let request = map::map_ui(
+            ui,
+            &self.session,
+            &mut self.canvas,
+            &mut self.view,
+            &mut self.drag,
+            &mut self.last_transform,
+            self.marginals.as_deref(),
+            self.comparison.as_ref(),
+        );
+        match request {
+            Some(map::MapRequest::Move(i, x, y)) => {
+                if let Err(why) = self.drag_vertex(i, x, y) {
+                    self.note = Some(why);
+                    self.drag = None;
+                }
+            }
+            Some(map::MapRequest::Drop(i)) => self.finish_drag(i),
+            None => {}
+        }
+    }
+}
+
+impl Lesson for PoseGraphLesson {
+    fn id(&self) -> &'static str {
+        LESSON_ID
+    }
+
+    fn subtitle(&self) -> String {
+        let s = self.session.scenario();
+        format!(
+            "{} on {}, kernel {}",
+            Self::solver_name(s.solver),
+            self.session.source(),
+            kernel_name(s.kernel)
+        )
+    }
+
+    fn notices(&self) -> Vec<String> {
+        self.notices.clone()
+    }
+
+    fn time(&self) -> &TimeControl {
+        &self.time
+    }
+
+    fn time_mut(&mut self) -> &mut TimeControl {
+        &mut self.time
+    }
+
+    fn time_info(&self) -> TimeInfo {
+        let solver = Self::solver_name(self.session.scenario().solver);
+        let k = self.session.iterations();
+        TimeInfo {
+            tick: k as u64,
+            time_s: 0.0,
+            last_phase: (k > 0).then(|| format!("{solver} iteration {k}")),
+            next_phase: format!("{solver} iteration {}", k + 1),
+            can_step_back: false,
+        }
+    }
+
+    fn apply_time_action(&mut self, action: TimeAction) {
+        self.time.apply(action);
+        match action {
+            TimeAction::ToggleRun => self.optimizing = None,
+            TimeAction::StepPhase | TimeAction::StepTick => self.step_iteration(),
+            TimeAction::StepBack => {
+                self.note = Some(
+                    "A solver iteration cannot be undone; \"Apply & reset\" starts the graph over"
+                        .to_owned(),
+                );
+            }
+            TimeAction::Reset => self.reset(),
+        }
+    }
+
+    fn read_input(&mut self, ctx: &egui::Context) {
+        self.read_files(ctx);
+    }
+
+    fn advance(&mut self, dt: f64) {
+        if self.optimizing.is_some() {
+            self.advance_optimize(Some(FRAME_BUDGET_MS));
+            return;
+        }
+        let session = &mut self.session;
+        let mut error = None;
+        lesson::advance_within_budget(&mut self.time, dt, || {
+            if error.is_none()
+                && !session.is_converged()
+                && let Err(why) = session.step()
+            {
+                error = Some(why);
+            }
+            true
+        });
+        if self.time.running && (self.session.is_converged() || error.is_some()) {
+            self.time.running = false;
+        }
+        if let Some(why) = error {
+            self.note = Some(format!("The solver stopped: {why}"));
+        }
+        if self.time.running {
+            self.marginals = None;
+        }
+    }
+
+    fn wants_repaint(&self) -> bool {
+        self.time.running || self.optimizing.is_some()
+    }
+
+    fn panels_ui(&mut self, ui: &mut egui::Ui, panels: &mut PanelVisibility, compact: bool) {
+        crate::widgets::layout::lesson_panels_ui(self, ui, panels, compact, LESSON_ID);
+    }
+
+    fn view_menu_ui(&mut self, ui: &mut egui::Ui) {
+        ui.checkbox(&mut self.view.legend, "Map legend");
+        ui.checkbox(&mut self.view.truth, "True path");
+        ui.checkbox(&mut self.view.ellipses, "Covariance ellipses");
+        ui.checkbox(
+            &mut self.view.reoptimize_after_drag,
+            "Re-optimize after a drag",
+        );
+    }
+
+    fn stored_settings(&self) -> serde_json::Value {
+        StoredSettings {
+            view: self.view.clone(),
+            time: self.time.clone(),
+            params: params::changed_pairs(&self.pending.scenario, &default_scenario()),
+        }
+        .to_value()
+    }
+
+    fn share_query(&self, embed: bool) -> String {
+        crate::query::build(LESSON_ID, &self.share_pairs(), embed)
+    }
+
+    fn test_state(&self) -> serde_json::Value {
+        let s = self.session.scenario();
+        let count = |role: EdgeRole| self.session.roles().iter().filter(|r| **r == role).count();
+        let report = self.session.last_report();
+        serde_json::json!({
+            "tick": self.session.iterations(),
+            "iterations": self.session.iterations(),
+            "phase": self.time_info().last_phase.unwrap_or_default(),
+            "seed": s.seed,
+            "source": self.session.source(),
+            "solver": s.solver.short_name(),
+            "kernel": kernel_name(s.kernel),
+            "vertices": self.session.graph().vertices().len(),
+            "edges": self.session.graph().edges().len(),
+            "loop_closures": count(EdgeRole::LoopClosure),
+            "wrong_loop_closures": count(EdgeRole::WrongLoopClosure),
+            "initial_cost": self.session.history().first().map(|h| h[1]),
+            "cost": self.session.cost(),
+            "last_cost_before": report.map(|r| r.cost_before),
+            "converged": self.session.is_converged(),
+            "rmse": self.session.rmse(),
+            "optimizing": self.optimizing.is_some(),
+            "optimize": self.last_optimize,
+            "note": self.note,
+        })
+    }
+
+    fn as_any(&self) -> &dyn std::any::Any {
+        self
+    }
+
+    fn as_any_mut(&mut self) -> &mut dyn std::any::Any {
+        self
+    }
+}

@@ -1,0 +1,151 @@
+//! Opening a file by a picker, natively and in the browser, without system
+//! libraries: in the browser a hidden `<input type="file">` (the browser's own
+//! dialog); natively a path field and an "Open" button (a native dialog crate
+//! such as rfd would pull GTK or portal libraries in). Dropping a file on the
+//! window ([`super::dropped_files::DropInbox`]) works in both.
+
+use std::cell::RefCell;
+use std::rc::Rc;
+
+/// A picked file: its name and its bytes, or why it could not be read.
+pub type PickedFile = (String, Result<Vec<u8>, String>);
+
+/// A file picker; [`FilePicker::poll`] hands over what was picked.
+#[derive(Debug, Default)]
+pub struct FilePicker {
+    picked: Rc<RefCell<Option<PickedFile>>>,
+    /// The path typed (native only).
+    #[cfg(not(target_arch = "wasm32"))]
+    path: String,
+}
+
+impl FilePicker {
+    /// The picker's widgets. `accept` lists the extensions offered
+    /// (`".g2o,.graph,.toro,.txt"`); `max_bytes` refuses larger files unread.
+    pub fn ui(&mut self, ui: &mut egui::Ui, label: &str, accept: &str, max_bytes: usize) {
+        #[cfg(not(target_arch = "wasm32"))]
+        {
+            let _ = accept;
+            ui.horizontal(|ui| {
+                let field = ui.add(
+                    egui::TextEdit::singleline(&mut self.path)
+                        .hint_text("path/to/graph.g2o")
+                        .desired_width(150.0),
+                );
+                let enter = field.lost_focus() && ui.input(|i| i.key_pressed(egui::Key::Enter));
+                if ui
+                    .button(label)
+                    .on_hover_text("Read the file at this path")
+                    .clicked()
+                    || enter
+                {
+                    *self.picked.borrow_mut() = Some(read_native(self.path.trim(), max_bytes));
+                }
+            });
+        }
+        #[cfg(target_arch = "wasm32")]
+        {
+            if ui
+                .button(label)
+                .on_hover_text("Choose a file with the browser's dialog")
+                .clicked()
+            {
+                web::open_dialog(
+                    Rc::clone(&self.picked),
+                    ui.ctx().clone(),
+                    accept.to_owned(),
+                    max_bytes,
+                );
+            }
+        }
+    }
+
+    /// What was picked since the last poll.
+    pub fn poll(&mut self) -> Option<PickedFile> {
+        self.picked.borrow_mut().take()
+    }
+}
+
+#[cfg(not(target_arch = "wasm32"))]
+fn read_native(path: &str, max_bytes: usize) -> PickedFile {
+    let name = std::path::Path::new(path)
+        .file_name()
+        .map_or_else(|| path.to_owned(), |n| n.to_string_lossy().into_owned());
+    if path.is_empty() {
+        return (name, Err("type a file's path first".to_owned()));
+    }
+    let bytes = std::fs::metadata(path)
+        .map_err(|e| format!("cannot read {path}: {e}"))
+        .and_then(|m| {
+            if m.len() > max_bytes as u64 {
+                Err(format!(
+                    "{name} has {} bytes, more than the {max_bytes} bytes SLAM Lab reads",
+                    m.len()
+                ))
+            } else {
+                std::fs::read(path).map_err(|e| format!("cannot read {path}: {e}"))
+            }
+        });
+    (name, bytes)
+}
+
+#[cfg(target_arch = "wasm32")]
+mod web {
+    use super::PickedFile;
+    use std::cell::RefCell;
+    use std::rc::Rc;
+    use wasm_bindgen::JsCast as _;
+    use wasm_bindgen::prelude::*;
+
+    /// Opens the browser's file dialog; the chosen file's text lands in `picked`.
+    pub fn open_dialog(
+        picked: Rc<RefCell<Option<PickedFile>>>,
+        ctx: egui::Context,
+        accept: String,
+        max_bytes: usize,
+    ) {
+        let Some(document) = web_sys::window().and_then(|w| w.document()) else {
+            return;
+        };
+        let Ok(input) = document.create_element("input") else {
+            return;
+        };
+        let Ok(input) = input.dyn_into::<web_sys::HtmlInputElement>() else {
+            return;
+        };
+        input.set_type("file");
+        input.set_accept(&accept);
+        let reader_input = input.clone();
+        let on_change = Closure::once_into_js(move || {
+            let Some(file) = reader_input.files().and_then(|files| files.get(0)) else {
+                return;
+            };
+            let name = file.name();
+            let size = file.size();
+            if size > max_bytes as f64 {
+                *picked.borrow_mut() = Some((
+                    name.clone(),
+                    Err(format!(
+                        "{name} has {size} bytes, more than the {max_bytes} bytes SLAM Lab reads"
+                    )),
+                ));
+                ctx.request_repaint();
+                return;
+            }
+            wasm_bindgen_futures::spawn_local(async move {
+                let text = wasm_bindgen_futures::JsFuture::from(file.text()).await;
+                let bytes = match text {
+                    Ok(value) => value
+                        .as_string()
+                        .map(String::into_bytes)
+                        .ok_or_else(|| format!("{name} could not be read as text")),
+                    Err(_) => Err(format!("{name} could not be read")),
+                };
+                *picked.borrow_mut() = Some((name, bytes));
+                ctx.request_repaint();
+            });
+        });
+        input.set_onchange(Some(on_change.unchecked_ref()));
+        input.click();
+    }
+}
