@@ -4,14 +4,24 @@
 
 use crate::params::{self, Param, ParamIssue, Preset, Scenario, choose, choose_list};
 use crate::presets;
-use crate::scenario::{ControllerKind, EstimatorKind, LandmarkScenario};
+use crate::scenario::{Association, ControllerKind, EstimatorKind, LandmarkScenario};
 use crate::world::LandmarkLayout;
 use slamlab_core::MotionModel;
+use slamlab_core::particle::Resampler;
 
 const LAYOUTS: &[&str] = &["teaching", "random"];
 const MOTIONS: &[&str] = &["exact-arc", "euler"];
 const CONTROLLERS: &[&str] = &["circle", "manual"];
-const ESTIMATORS: &[&str] = &["ekf", "ukf", "fej-ekf", "ideal-ekf"];
+const ESTIMATORS: &[&str] = &[
+    "ekf",
+    "ukf",
+    "fej-ekf",
+    "ideal-ekf",
+    "fastslam1",
+    "fastslam2",
+];
+const RESAMPLERS: &[&str] = &["multinomial", "low-variance", "stratified", "residual"];
+const ASSOCIATIONS: &[&str] = &["known", "unknown"];
 
 /// Why the circle's speeds are refused while the robot is driven by hand.
 const MANUAL_SPEEDS: &str =
@@ -237,6 +247,56 @@ pub static PARAMS: &[Param<LandmarkScenario>] = &[
         (-10.0, 10.0),
         ukf.kappa
     ),
+    Param::count(
+        "particles",
+        "",
+        "FastSLAM's particle count M (0 is refused: at least one particle)",
+        (1, 10_000),
+        |s| Some(s.fastslam.particles as u64),
+        |s, v| s.fastslam.particles = usize::try_from(v).unwrap_or(usize::MAX),
+    ),
+    Param::words(
+        "fastslam-resampler",
+        "FastSLAM's resampling method",
+        RESAMPLERS,
+        |s| Some(s.fastslam.resampler.name().to_owned()),
+        |s, v| {
+            choose(RESAMPLERS, v).map(|i| {
+                s.fastslam.resampler = Resampler::from_name(RESAMPLERS[i]).unwrap_or_default();
+            })
+        },
+    ),
+    field!(
+        "resample-threshold",
+        "",
+        "FastSLAM resamples when N_eff < threshold * M; a fraction in [0, 1] (0 never resamples)",
+        (0.0, 1.0),
+        fastslam.resample_threshold
+    ),
+    Param::words(
+        "association",
+        "known: the sensor's landmark ids; unknown: FastSLAM per-particle maximum likelihood, EKF/UKF nearest neighbour",
+        ASSOCIATIONS,
+        |s| Some(s.association.name().to_owned()),
+        |s, v| {
+            choose(ASSOCIATIONS, v)
+                .map(|i| s.association = [Association::Known, Association::Unknown][i])
+        },
+    ),
+    field!(
+        "gate",
+        "",
+        "EKF/UKF nearest-neighbour Mahalanobis gate, chi-square with 2 dof (13.8 = 99.9 %)",
+        (0.1, 100.0),
+        gate
+    ),
+    field!(
+        "new-landmark-threshold",
+        "",
+        "FastSLAM starts a new landmark beyond this squared Mahalanobis distance (unknown association)",
+        (0.1, 100.0),
+        fastslam.new_landmark_threshold
+    ),
 ];
 
 impl Scenario for LandmarkScenario {
@@ -437,6 +497,73 @@ mod tests {
         ));
         assert_eq!(s.landmarks, 500);
         assert_eq!(set(&mut s, "landmarks", "0"), None);
+    }
+
+    #[test]
+    fn fastslam_and_association_parameters_round_trip_and_refuse_bad_values() {
+        let mut s = LandmarkScenario::default();
+        for (k, v) in [
+            ("estimator", "ekf,fastslam2"),
+            ("particles", "250"),
+            ("fastslam-resampler", "residual"),
+            ("resample-threshold", "0.75"),
+            ("association", "unknown"),
+            ("gate", "9.21"),
+            ("new-landmark-threshold", "20"),
+        ] {
+            assert_eq!(set(&mut s, k, v), None, "{k}");
+            assert_eq!(get(&s, k).as_deref(), Some(v), "{k}");
+        }
+        assert_eq!(
+            s.estimators,
+            vec![EstimatorKind::Ekf, EstimatorKind::FastSlam2]
+        );
+        assert_eq!(s.fastslam.particles, 250);
+        assert_eq!(s.fastslam.resampler, Resampler::Residual);
+        assert_eq!(s.association, Association::Unknown);
+        let mut copy = LandmarkScenario::default();
+        assert!(
+            apply_pairs(
+                &mut copy,
+                to_pairs(&s).iter().map(|(k, v)| (*k, v.as_str())),
+                &[]
+            )
+            .is_empty()
+        );
+        assert_eq!(copy, s);
+
+        // Zero particles: a clear message and one particle; a threshold outside
+        // [0, 1]: clamped into it, said so.
+        let issue = set(&mut s, "particles", "0").map(|i| i.to_string());
+        assert_eq!(
+            issue.as_deref(),
+            Some("particles = 0 is out of range; using 1")
+        );
+        assert_eq!(s.fastslam.particles, 1);
+        let issue = set(&mut s, "resample-threshold", "1.5").map(|i| i.to_string());
+        assert_eq!(
+            issue.as_deref(),
+            Some("resample-threshold = 1.5 is out of range; using 1")
+        );
+        assert_eq!(s.fastslam.resample_threshold, 1.0);
+        assert!(set(&mut s, "resample-threshold", "-0.2").is_some());
+        assert_eq!(s.fastslam.resample_threshold, 0.0);
+        assert!(matches!(
+            set(&mut s, "fastslam-resampler", "roulette"),
+            Some(ParamIssue::Unreadable { .. })
+        ));
+        assert!(matches!(
+            set(&mut s, "association", "guess"),
+            Some(ParamIssue::Unreadable { .. })
+        ));
+        // A stored scenario with impossible values is repaired the same way.
+        let mut stored = LandmarkScenario::default();
+        stored.fastslam.particles = 0;
+        stored.fastslam.resample_threshold = f64::NAN;
+        let issues = sanitize(&mut stored);
+        assert_eq!(issues.len(), 2, "{issues:?}");
+        assert_eq!(stored.fastslam.particles, 1);
+        assert_eq!(stored.fastslam.resample_threshold, 0.5);
     }
 
     #[test]

@@ -19,6 +19,7 @@ pub mod localization;
 pub mod metrics;
 pub mod noise;
 pub mod params;
+pub mod particle_estimator;
 pub mod pose_graph_experiment;
 pub mod pose_graph_lesson;
 pub mod presets;

@@ -3,7 +3,9 @@
 
 use crate::world::LandmarkLayout;
 use serde::{Deserialize, Serialize};
+use slamlab_core::association::DEFAULT_GATE;
 use slamlab_core::kalman::{FilterConfig, FilterNoise, UnscentedParams};
+use slamlab_core::particle::Resampler;
 use slamlab_core::range_bearing::RangeBearingSensor;
 use slamlab_core::{MotionModel, Pose2};
 use std::f64::consts::PI;
@@ -25,22 +27,34 @@ pub enum EstimatorKind {
     /// yardstick for consistency (Huang, Mourikis and Roumeliotis 2008). Command
     /// line and URL only; the lesson's menu does not offer it.
     IdealEkf,
+    /// FastSLAM 1.0: particles sampled from the motion model, one 2x2 EKF per
+    /// landmark and particle (Montemerlo et al. 2002).
+    #[serde(rename = "fastslam1")]
+    FastSlam1,
+    /// FastSLAM 2.0: particles sampled from the proposal that includes the
+    /// measurements (Montemerlo et al. 2003).
+    #[serde(rename = "fastslam2")]
+    FastSlam2,
 }
 
 impl EstimatorKind {
     /// Every estimator, in menu order.
-    pub const ALL: [EstimatorKind; 4] = [
+    pub const ALL: [EstimatorKind; 6] = [
         EstimatorKind::Ekf,
         EstimatorKind::Ukf,
         EstimatorKind::FejEkf,
         EstimatorKind::IdealEkf,
+        EstimatorKind::FastSlam1,
+        EstimatorKind::FastSlam2,
     ];
 
     /// The estimators a student can pick in the lesson.
-    pub const LESSON: [EstimatorKind; 3] = [
+    pub const LESSON: [EstimatorKind; 5] = [
         EstimatorKind::Ekf,
         EstimatorKind::Ukf,
         EstimatorKind::FejEkf,
+        EstimatorKind::FastSlam1,
+        EstimatorKind::FastSlam2,
     ];
 
     /// The name used in URLs, on the command line and in JSON.
@@ -50,12 +64,69 @@ impl EstimatorKind {
             EstimatorKind::Ukf => "ukf",
             EstimatorKind::FejEkf => "fej-ekf",
             EstimatorKind::IdealEkf => "ideal-ekf",
+            EstimatorKind::FastSlam1 => "fastslam1",
+            EstimatorKind::FastSlam2 => "fastslam2",
         }
+    }
+
+    /// True for the particle filters (FastSLAM), which add a resampling phase.
+    pub fn is_particle_filter(&self) -> bool {
+        matches!(self, EstimatorKind::FastSlam1 | EstimatorKind::FastSlam2)
     }
 
     /// Looks an estimator up by name.
     pub fn from_name(name: &str) -> Option<Self> {
         Self::ALL.into_iter().find(|e| e.name() == name)
+    }
+}
+
+/// How measurements are matched to landmarks.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "kebab-case")]
+pub enum Association {
+    /// Every estimator trusts the landmark id the sensor reports.
+    #[default]
+    Known,
+    /// The ids are withheld: FastSLAM associates per particle by maximum
+    /// likelihood (a new landmark beyond the new-landmark threshold), the
+    /// Gaussian filters by nearest neighbour with a Mahalanobis gate.
+    Unknown,
+}
+
+impl Association {
+    /// The name used in URLs and on the command line.
+    pub fn name(self) -> &'static str {
+        match self {
+            Association::Known => "known",
+            Association::Unknown => "unknown",
+        }
+    }
+}
+
+/// FastSLAM's settings in the landmark lesson.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(default)]
+pub struct FastSlamSettings {
+    /// Number of particles.
+    pub particles: usize,
+    /// Resampling method.
+    pub resampler: Resampler,
+    /// Resample when `N_eff < threshold · M`, `threshold` in `[0, 1]` (1 resamples
+    /// at nearly every step, 0 never).
+    pub resample_threshold: f64,
+    /// The squared Mahalanobis distance beyond which a particle starts a new
+    /// landmark (unknown association).
+    pub new_landmark_threshold: f64,
+}
+
+impl Default for FastSlamSettings {
+    fn default() -> Self {
+        Self {
+            particles: 100,
+            resampler: Resampler::LowVariance,
+            resample_threshold: 0.5,
+            new_landmark_threshold: DEFAULT_GATE,
+        }
     }
 }
 
@@ -125,6 +196,13 @@ pub struct LandmarkScenario {
     pub estimators: Vec<EstimatorKind>,
     /// Sigma-point parameters of UKF-SLAM.
     pub ukf: UnscentedParams,
+    /// FastSLAM's particles, resampling and new-landmark threshold.
+    pub fastslam: FastSlamSettings,
+    /// Known landmark ids, or association by the estimators.
+    pub association: Association,
+    /// The Mahalanobis gate (χ², 2 degrees of freedom) of the Gaussian filters'
+    /// nearest-neighbour association.
+    pub gate: f64,
 }
 
 impl Default for LandmarkScenario {
@@ -146,6 +224,9 @@ impl Default for LandmarkScenario {
             controller: ControllerKind::default(),
             estimators: vec![EstimatorKind::Ekf],
             ukf: UnscentedParams::default(),
+            fastslam: FastSlamSettings::default(),
+            association: Association::Known,
+            gate: DEFAULT_GATE,
         }
     }
 }

@@ -4,22 +4,37 @@
 //! One tick is: the controller gives a command; the true robot moves with that
 //! command plus noise; the sensor measures the landmarks in view, with noise;
 //! then every estimator runs its phases on the same command and measurements:
-//! first `predict`, then one `update` per observed landmark, in id order.
+//! first `predict`, then one `update` per observed landmark, in id order, and,
+//! when a particle filter (FastSLAM) runs, `resample` last. For FastSLAM the
+//! three phases are: sample (a new pose per particle), weight (per observation),
+//! resample.
+//!
+//! With `association=unknown` the estimators do not get the sensor's ids: FastSLAM
+//! associates per particle by maximum likelihood, the Gaussian filters by nearest
+//! neighbour with a Mahalanobis gate ([`slamlab_core::association`]). A "wrong
+//! association" ([`LandmarkSession::mislabel_next_observation`]) makes the sensor
+//! give one observation of the next tick the id of another landmark.
 
 use crate::noise::{Stream, gaussian, stream_rng};
 use crate::params::{self, ParamIssue};
-use crate::scenario::{ControllerKind, EstimatorKind, LandmarkScenario};
+use crate::particle_estimator::{FastSlamEstimator, OWN_LABELS};
+use crate::scenario::{Association, ControllerKind, EstimatorKind, LandmarkScenario};
 use crate::world::LandmarkWorld;
 use nalgebra::{DMatrix, DVector, Vector2};
 use rand_chacha::ChaCha8Rng;
+use slamlab_core::association::{
+    AssociationMode, GaussianMap, NearestNeighbour, nearest_neighbour,
+};
 use slamlab_core::kalman::{
     EkfSlam, LandmarkSlam, Linearization, PredictReport, UkfSlam, UpdateReport,
 };
 use slamlab_core::math;
+use slamlab_core::particle::fastslam::{FastSlamNoise, ResamplePolicy, ResampleReport};
+use slamlab_core::particle::{FastSlamConfig, FastSlamVersion};
 use slamlab_core::range_bearing::{self, RangeBearing, RangeBearingSensor};
 use slamlab_core::stats::normalized_squared_error;
 use slamlab_core::{Control, MotionModel, Pose2, wrap_angle};
-use std::collections::VecDeque;
+use std::collections::{BTreeSet, VecDeque};
 
 /// One step of an estimator within a tick.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -35,6 +50,8 @@ pub enum Phase {
         /// Number of updates in the tick.
         count: usize,
     },
+    /// Resampling of the particle filters (only in sessions that run one).
+    Resample,
 }
 
 impl Phase {
@@ -45,6 +62,7 @@ impl Phase {
             Phase::Update { id, index, count } => {
                 format!("update landmark {id} ({index} of {count})")
             }
+            Phase::Resample => "resample".to_owned(),
         }
     }
 }
@@ -94,6 +112,30 @@ pub struct NisSample {
     pub nis: f64,
 }
 
+/// A particle filter's effective sample size at one tick, before resampling.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct NeffSample {
+    /// The tick.
+    pub tick: u64,
+    /// `N_eff = 1 / Σ wᵢ²` before the resampling phase.
+    pub n_eff: f64,
+    /// The particle count `M`.
+    pub particles: usize,
+    /// Whether the set was resampled.
+    pub resampled: bool,
+}
+
+/// The wrong association the sensor made this tick.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct Mislabel {
+    /// The observation's position in this tick's list.
+    pub index: usize,
+    /// The landmark really measured.
+    pub true_id: usize,
+    /// The id the sensor reported.
+    pub reported_id: usize,
+}
+
 /// One estimator and its history in a session.
 #[derive(Debug)]
 pub struct FilterRun {
@@ -106,6 +148,13 @@ pub struct FilterRun {
     pub history: Vec<TickMetrics>,
     /// NIS of every correcting update.
     pub nis: Vec<NisSample>,
+    /// A particle filter's `N_eff` at every resampling phase (empty for the others).
+    pub n_eff: Vec<NeffSample>,
+    /// The latest resampling (particle filters).
+    pub last_resample: Option<ResampleReport>,
+    /// The next label for a landmark this filter starts itself (nearest-neighbour
+    /// association), from [`OWN_LABELS`].
+    next_label: usize,
     /// The latest prediction.
     pub last_predict: Option<PredictReport>,
     /// The latest landmark update.
@@ -158,8 +207,8 @@ struct RecordLengths {
     truth_path: usize,
     dead_reckoning_path: usize,
     commands: usize,
-    /// Per filter: path, history, NIS samples.
-    filters: Vec<(usize, usize, usize)>,
+    /// Per filter: path, history, NIS samples, N_eff samples.
+    filters: Vec<(usize, usize, usize, usize)>,
 }
 
 impl FilterRun {
@@ -171,6 +220,9 @@ impl FilterRun {
             path: Vec::new(),
             history: Vec::new(),
             nis: Vec::new(),
+            n_eff: Vec::new(),
+            last_resample: self.last_resample,
+            next_label: self.next_label,
             last_predict: self.last_predict,
             last_update: self.last_update,
             last_error: self.last_error.clone(),
@@ -217,6 +269,12 @@ pub struct LandmarkSession {
     commands: Vec<Control>,
     /// Live changes of the sensor's reach, in tick order.
     sensor_changes: Vec<SensorChange>,
+    /// Ticks at which the sensor mislabels one observation, in order.
+    mislabel_ticks: Vec<u64>,
+    /// This tick's wrong association, if any.
+    mislabel: Option<Mislabel>,
+    /// Landmarks measured in earlier ticks (the mislabel picks one of them).
+    seen: BTreeSet<usize>,
     phases_run: u64,
     /// Checkpoints every [`CHECKPOINT_EVERY`] ticks, oldest first.
     checkpoints: VecDeque<Checkpoint>,
@@ -240,24 +298,32 @@ impl LandmarkSession {
         let start = scenario.start_pose();
         let mut filters = Vec::new();
         for &kind in &scenario.estimators {
-            let built: Result<Box<dyn LandmarkSlamDebug>, _> = match kind {
-                EstimatorKind::Ekf => {
-                    EkfSlam::new(scenario.filter_config(), start).map(|f| Box::new(f) as _)
-                }
+            let built: Result<Box<dyn LandmarkSlamDebug>, String> = match kind {
+                EstimatorKind::Ekf => EkfSlam::new(scenario.filter_config(), start)
+                    .map(|f| Box::new(f) as _)
+                    .map_err(|e| e.to_string()),
                 EstimatorKind::Ukf => UkfSlam::new(scenario.filter_config(), scenario.ukf, start)
-                    .map(|f| Box::new(f) as _),
+                    .map(|f| Box::new(f) as _)
+                    .map_err(|e| e.to_string()),
                 EstimatorKind::FejEkf => EkfSlam::with_linearization(
                     scenario.filter_config(),
                     start,
                     Linearization::FirstEstimates,
                 )
-                .map(|f| Box::new(f) as _),
+                .map(|f| Box::new(f) as _)
+                .map_err(|e| e.to_string()),
                 EstimatorKind::IdealEkf => EkfSlam::with_linearization(
                     scenario.filter_config(),
                     start,
                     Linearization::TrueState,
                 )
-                .map(|f| Box::new(f) as _),
+                .map(|f| Box::new(f) as _)
+                .map_err(|e| e.to_string()),
+                EstimatorKind::FastSlam1 | EstimatorKind::FastSlam2 => {
+                    FastSlamEstimator::new(fastslam_config(&scenario, kind), start)
+                        .map(|f| Box::new(f) as _)
+                        .map_err(|e| e.to_string())
+                }
             };
             match built {
                 Ok(filter) => filters.push(FilterRun {
@@ -266,6 +332,9 @@ impl LandmarkSession {
                     path: vec![start],
                     history: Vec::new(),
                     nis: Vec::new(),
+                    n_eff: Vec::new(),
+                    last_resample: None,
+                    next_label: OWN_LABELS,
                     last_predict: None,
                     last_update: None,
                     last_error: None,
@@ -305,6 +374,9 @@ impl LandmarkSession {
             scenario,
             commands: Vec::new(),
             sensor_changes: Vec::new(),
+            mislabel_ticks: Vec::new(),
+            mislabel: None,
+            seen: BTreeSet::new(),
             phases_run: 0,
             checkpoints: VecDeque::new(),
         }
@@ -338,6 +410,9 @@ impl LandmarkSession {
             notices: Vec::new(),
             commands: Vec::new(),
             sensor_changes: Vec::new(),
+            mislabel_ticks: Vec::new(),
+            mislabel: self.mislabel,
+            seen: self.seen.clone(),
             phases_run: self.phases_run,
             checkpoints: VecDeque::new(),
         }
@@ -351,7 +426,7 @@ impl LandmarkSession {
             filters: self
                 .filters
                 .iter()
-                .map(|r| (r.path.len(), r.history.len(), r.nis.len()))
+                .map(|r| (r.path.len(), r.history.len(), r.nis.len(), r.n_eff.len()))
                 .collect(),
         }
     }
@@ -582,7 +657,7 @@ impl LandmarkSession {
                 replay.dead_reckoning_path =
                     self.dead_reckoning_path[..lengths.dead_reckoning_path].to_vec();
                 replay.commands = self.commands[..lengths.commands].to_vec();
-                for (run, (from, &(path, history, nis))) in replay
+                for (run, (from, &(path, history, nis, n_eff))) in replay
                     .filters
                     .iter_mut()
                     .zip(self.filters.iter().zip(&lengths.filters))
@@ -590,6 +665,7 @@ impl LandmarkSession {
                     run.path = from.path[..path].to_vec();
                     run.history = from.history[..history].to_vec();
                     run.nis = from.nis[..nis].to_vec();
+                    run.n_eff = from.n_eff[..n_eff].to_vec();
                 }
                 replay
             }
@@ -597,6 +673,7 @@ impl LandmarkSession {
         };
         // Every change, the later ones too: stepping forward again replays them.
         replay.sensor_changes = self.sensor_changes.clone();
+        replay.mislabel_ticks = self.mislabel_ticks.clone();
         replay.checkpoints = std::mem::take(&mut self.checkpoints);
         replay.checkpoints.retain(|c| c.state.phases_run <= target);
         while replay.phases_run < target {
@@ -695,6 +772,19 @@ impl LandmarkSession {
                 measured_point,
             });
         }
+        self.mislabel = None;
+        if self.mislabel_ticks.contains(&self.tick) {
+            self.mislabel_one_observation();
+        }
+        self.seen.extend(
+            self.observations
+                .iter()
+                .enumerate()
+                .map(|(i, o)| match self.mislabel {
+                    Some(m) if m.index == i => m.true_id,
+                    _ => o.id,
+                }),
+        );
         let count = self.observations.len();
         self.pending.push_back(Phase::Predict);
         for (i, o) in self.observations.iter().enumerate() {
@@ -704,18 +794,114 @@ impl LandmarkSession {
                 count,
             });
         }
+        if self.filters.iter().any(|r| r.kind.is_particle_filter()) {
+            self.pending.push_back(Phase::Resample);
+        }
+    }
+
+    /// Gives the first observation of this tick the id of another landmark: of
+    /// those seen before and not in view now, the one nearest to the landmark
+    /// really measured (a plausible confusion); without one, the nearest other
+    /// landmark of the world.
+    fn mislabel_one_observation(&mut self) {
+        let Some(first) = self.observations.first() else {
+            return;
+        };
+        let true_id = first.id;
+        let Some(measured) = self.world.landmark(true_id).map(|l| l.position) else {
+            return;
+        };
+        let in_view: BTreeSet<usize> = self.observations.iter().map(|o| o.id).collect();
+        let nearest = |seen_only: bool| {
+            self.world
+                .landmarks
+                .iter()
+                .filter(|l| !in_view.contains(&l.id) && (!seen_only || self.seen.contains(&l.id)))
+                .min_by(|a, b| {
+                    (a.position - measured)
+                        .norm()
+                        .total_cmp(&(b.position - measured).norm())
+                })
+                .map(|l| l.id)
+        };
+        let Some(reported_id) = nearest(true).or_else(|| nearest(false)) else {
+            return;
+        };
+        self.observations[0].id = reported_id;
+        self.mislabel = Some(Mislabel {
+            index: 0,
+            true_id,
+            reported_id,
+        });
+    }
+
+    /// The sensor mislabels one observation of the next tick: it reports the id of
+    /// another landmark (see [`mislabel`](Self::mislabel)). Recorded with the run,
+    /// so stepping back and forward replays it.
+    pub fn mislabel_next_observation(&mut self) {
+        let tick = self.tick + 1;
+        self.mislabel_ticks.retain(|&t| t < tick);
+        self.mislabel_ticks.push(tick);
+    }
+
+    /// The wrong association of the current tick, if the sensor made one.
+    pub fn mislabel(&self) -> Option<Mislabel> {
+        self.mislabel
+    }
+
+    /// Ticks at which the sensor mislabels (or will mislabel) an observation.
+    pub fn mislabel_ticks(&self) -> &[u64] {
+        &self.mislabel_ticks
     }
 
     fn run_phase(&mut self, phase: Phase) {
         let dt = self.scenario.dt;
+        let unknown = self.scenario.association == Association::Unknown;
+        let measurement_covariance = self.scenario.filter_config().noise.measurement_covariance();
         for run in &mut self.filters {
             let result = match phase {
                 Phase::Predict => run
                     .filter
                     .predict(&self.command, dt)
                     .map(|r| run.last_predict = Some(r)),
+                Phase::Resample => {
+                    if let Some(report) = run.filter.resample() {
+                        run.n_eff.push(NeffSample {
+                            tick: self.tick,
+                            n_eff: report.n_eff_before,
+                            particles: run.filter.particle_set().map_or(0, |p| p.particle_count()),
+                            resampled: report.resampled,
+                        });
+                        run.last_resample = Some(report);
+                    }
+                    Ok(())
+                }
                 Phase::Update { id, index, .. } => {
                     let z = self.observations[index - 1].measurement;
+                    // Without the sensor's ids a Gaussian filter picks the nearest
+                    // neighbour inside the gate, or starts a landmark of its own.
+                    let id = if unknown && run.filter.particle_set().is_none() {
+                        let f = run.filter();
+                        let decision =
+                            GaussianMap::from_joint(f.mean(), f.covariance(), f.landmark_ids())
+                                .map(|map| {
+                                    nearest_neighbour(
+                                        &map,
+                                        &z,
+                                        &measurement_covariance,
+                                        self.scenario.gate,
+                                    )
+                                });
+                        match decision {
+                            Some(NearestNeighbour::Matched { id, .. }) => id,
+                            _ => {
+                                run.next_label += 1;
+                                run.next_label - 1
+                            }
+                        }
+                    } else {
+                        id
+                    };
                     run.filter.update(id, &z).map(|r| {
                         if let UpdateReport::Corrected { nis, .. } = r {
                             run.nis.push(NisSample {
@@ -739,6 +925,14 @@ impl LandmarkSession {
         let time = self.time();
         for run in &mut self.filters {
             let metrics = tick_metrics(self.tick, time, &self.truth, &self.world, run.filter());
+            let metrics = if self.scenario.association == Association::Unknown {
+                TickMetrics {
+                    landmark_rmse: nearest_landmark_rmse(&self.world, run.filter()),
+                    ..metrics
+                }
+            } else {
+                metrics
+            };
             run.path.push(run.filter.robot_pose());
             run.history.push(metrics);
         }
@@ -758,6 +952,60 @@ impl LandmarkSession {
             });
         }
     }
+}
+
+/// FastSLAM's configuration in a landmark scenario: the scenario's noise and
+/// motion model, its particle settings and association.
+pub fn fastslam_config(scenario: &LandmarkScenario, kind: EstimatorKind) -> FastSlamConfig {
+    let f = &scenario.fastslam;
+    let version = if kind == EstimatorKind::FastSlam1 {
+        FastSlamVersion::V1
+    } else {
+        FastSlamVersion::V2
+    };
+    FastSlamConfig {
+        version,
+        particles: f.particles,
+        motion_model: scenario.motion,
+        noise: FastSlamNoise {
+            v_std: scenario.v_std,
+            w_std: scenario.w_std,
+            range_std: scenario.range_std,
+            bearing_std: scenario.bearing_std,
+        },
+        association: match scenario.association {
+            Association::Known => AssociationMode::KnownIds,
+            Association::Unknown => AssociationMode::MaximumLikelihood {
+                gate: f.new_landmark_threshold,
+            },
+        },
+        resampler: f.resampler,
+        resample: ResamplePolicy::WhenNeffBelow {
+            threshold: f.resample_threshold,
+        },
+        // The filter's own random stream: from the seed, different for 1.0 and 2.0.
+        seed: scenario
+            .seed
+            .wrapping_mul(0x9E37_79B9_7F4A_7C15)
+            .wrapping_add(u64::from(version.number())),
+    }
+}
+
+/// Landmark RMS error when the estimator labels its landmarks itself: each
+/// estimate against the nearest true landmark.
+fn nearest_landmark_rmse(world: &LandmarkWorld, filter: &dyn LandmarkSlam) -> Option<f64> {
+    let squared: Vec<f64> = filter
+        .landmarks()
+        .iter()
+        .filter_map(|l| {
+            world
+                .landmarks
+                .iter()
+                .map(|t| (t.position - l.mean).norm_squared())
+                .min_by(f64::total_cmp)
+        })
+        .collect();
+    (!squared.is_empty()).then(|| (squared.iter().sum::<f64>() / squared.len() as f64).sqrt())
 }
 
 /// Compares an estimator's state with the truth.
@@ -823,7 +1071,7 @@ mod tests {
         for k in 1..=n {
             match s.step_phase() {
                 Phase::Update { index, count, .. } => assert_eq!((index, count), (k, n)),
-                Phase::Predict => panic!("expected update {k}"),
+                Phase::Predict | Phase::Resample => panic!("expected update {k}"),
             }
         }
         assert!(!s.is_mid_tick());
@@ -1170,6 +1418,208 @@ mod tests {
             (s.truth().x - start.x - 0.5).abs() < 0.5,
             "moved about 0.5 m: {:?}",
             s.truth()
+        );
+    }
+}
+
+#[cfg(test)]
+mod fastslam_tests {
+    use super::*;
+
+    fn ekf_and_fastslam(seed: u64) -> LandmarkScenario {
+        LandmarkScenario {
+            seed,
+            estimators: vec![EstimatorKind::Ekf, EstimatorKind::FastSlam2],
+            ..Default::default()
+        }
+    }
+
+    /// Mean robot position error of every filter over ticks `from..to`.
+    fn mean_errors(s: &LandmarkSession, from: usize, to: usize) -> Vec<f64> {
+        s.filters()
+            .iter()
+            .map(|r| {
+                let e = &r.history[from..to];
+                e.iter().map(|m| m.position_error).sum::<f64>() / e.len() as f64
+            })
+            .collect()
+    }
+
+    fn close(a: f64, b: f64, what: &str) {
+        assert!((a - b).abs() < 1e-9, "{what}: {a} against {b}");
+    }
+
+    #[test]
+    fn ekf_beside_fastslam2_golden_and_the_ekf_is_unchanged() {
+        let mut s = LandmarkSession::new(ekf_and_fastslam(1));
+        // Phases: sample (predict), weight per observation, resample.
+        assert_eq!(s.step_phase(), Phase::Predict);
+        let n = s.observations().len();
+        for _ in 0..n {
+            assert!(matches!(s.step_phase(), Phase::Update { .. }));
+        }
+        assert_eq!(s.step_phase(), Phase::Resample);
+        assert!(!s.is_mid_tick());
+        assert_eq!(Phase::Resample.label(), "resample");
+        s.run_ticks(99);
+        let ekf = s.filters()[0].latest().copied().unwrap();
+        let fast = s.filters()[1].latest().copied().unwrap();
+        close(ekf.position_error, 0.2112864142132007, "EKF position error");
+        close(
+            fast.position_error,
+            0.2792836264881384,
+            "FastSLAM 2.0 position error",
+        );
+        close(
+            fast.landmark_rmse.unwrap(),
+            0.43476188949744654,
+            "FastSLAM landmark RMSE",
+        );
+        assert_eq!(
+            (ekf.landmarks_initialized, fast.landmarks_initialized),
+            (15, 15)
+        );
+        let n_eff = &s.filters()[1].n_eff;
+        assert_eq!(n_eff.len(), 100);
+        assert_eq!(n_eff.iter().filter(|n| n.resampled).count(), 11);
+        close(n_eff[99].n_eff, 49.47614842063085, "N_eff at tick 100");
+        assert!(s.filters()[0].n_eff.is_empty(), "the EKF has no particles");
+        let particles = s.filters()[1].filter().particle_set().unwrap();
+        assert_eq!(particles.particle_count(), 100);
+        // The EKF beside FastSLAM is bit for bit the EKF alone.
+        let mut alone = LandmarkSession::new(LandmarkScenario {
+            seed: 1,
+            ..Default::default()
+        });
+        alone.run_ticks(100);
+        assert_eq!(
+            alone.filters()[0].filter().mean(),
+            s.filters()[0].filter().mean()
+        );
+        assert_eq!(alone.filters()[0].history, s.filters()[0].history);
+    }
+
+    #[test]
+    fn a_wrong_association_is_measured_and_replays_exactly() {
+        // Over ten seeds: the sensor mislabels one observation at tick 61; the rise
+        // of the mean robot position error over ticks 61-101 against the clean run.
+        // With known ids every particle takes the same wrong id, so FastSLAM is
+        // hurt as much as the EKF (2.0 even more: its proposal uses the measurement).
+        for (kind, ekf_rise, fast_rise) in [
+            (EstimatorKind::FastSlam1, 0.994, 0.963),
+            (EstimatorKind::FastSlam2, 0.994, 1.378),
+        ] {
+            let (mut de, mut df) = (0.0, 0.0);
+            for seed in 1..=10 {
+                let sc = LandmarkScenario {
+                    estimators: vec![EstimatorKind::Ekf, kind],
+                    ..ekf_and_fastslam(seed)
+                };
+                let mut clean = LandmarkSession::new(sc.clone());
+                clean.run_ticks(101);
+                let mut wrong = LandmarkSession::new(sc);
+                wrong.run_ticks(60);
+                wrong.mislabel_next_observation();
+                wrong.run_ticks(1);
+                let m = wrong.mislabel().unwrap();
+                assert_ne!(m.true_id, m.reported_id);
+                assert_eq!(wrong.observations()[m.index].id, m.reported_id);
+                wrong.run_ticks(40);
+                let c = mean_errors(&clean, 60, 101);
+                let w = mean_errors(&wrong, 60, 101);
+                de += w[0] - c[0];
+                df += w[1] - c[1];
+            }
+            assert!((de - ekf_rise).abs() < 5e-4, "{kind:?}: EKF {de}");
+            assert!((df - fast_rise).abs() < 5e-4, "{kind:?}: FastSLAM {df}");
+        }
+        // Seed 1: landmark 1 is reported as its neighbour 19; stepping back over
+        // the tick and forward again replays the mislabel.
+        let mut s = LandmarkSession::new(ekf_and_fastslam(1));
+        s.run_ticks(60);
+        s.mislabel_next_observation();
+        s.run_ticks(5);
+        let at_65 = s.filters()[1].filter().mean().clone();
+        while s.tick() > 59 {
+            assert!(s.step_back());
+        }
+        assert_eq!(s.mislabel_ticks(), &[61]);
+        s.run_ticks(2);
+        assert_eq!(
+            s.mislabel(),
+            Some(Mislabel {
+                index: 0,
+                true_id: 1,
+                reported_id: 19
+            })
+        );
+        s.run_ticks(4);
+        assert_eq!(s.filters()[1].filter().mean(), &at_65);
+    }
+
+    #[test]
+    fn unknown_association_runs_nearest_neighbour_and_maximum_likelihood() {
+        let mut s = LandmarkSession::new(LandmarkScenario {
+            association: Association::Unknown,
+            ..ekf_and_fastslam(1)
+        });
+        s.run_ticks(100);
+        let ekf = s.filters()[0].latest().copied().unwrap();
+        let fast = s.filters()[1].latest().copied().unwrap();
+        // Both found the 15 landmarks the robot saw, under labels of their own.
+        assert_eq!(
+            (ekf.landmarks_initialized, fast.landmarks_initialized),
+            (15, 15)
+        );
+        assert!(
+            s.filters()[0]
+                .filter()
+                .landmark_ids()
+                .iter()
+                .all(|&id| id >= OWN_LABELS)
+        );
+        close(
+            ekf.position_error,
+            0.3192219318542592,
+            "EKF (nearest neighbour)",
+        );
+        close(
+            fast.position_error,
+            0.49637817115637156,
+            "FastSLAM 2.0 (maximum likelihood)",
+        );
+        close(
+            ekf.landmark_rmse.unwrap(),
+            0.5783381344141212,
+            "EKF landmark RMSE",
+        );
+    }
+
+    #[test]
+    fn zero_particles_and_a_threshold_outside_0_1_are_repaired_with_a_notice() {
+        let mut s = LandmarkSession::new(LandmarkScenario {
+            fastslam: crate::scenario::FastSlamSettings {
+                particles: 0,
+                resample_threshold: 3.0,
+                ..Default::default()
+            },
+            ..ekf_and_fastslam(1)
+        });
+        assert_eq!(
+            s.notices(),
+            &[
+                "particles = 0 is out of range; using 1".to_owned(),
+                "resample-threshold = 3 is out of range; using 1".to_owned()
+            ]
+        );
+        assert_eq!(s.filters().len(), 2);
+        s.run_ticks(3);
+        assert_eq!(
+            s.filters()[1]
+                .filter()
+                .particle_set()
+                .map(|p| p.particle_count()),
+            Some(1)
         );
     }
 }

@@ -33,14 +33,36 @@ fn phase_text(kind: &str, phase: Option<Phase>, report: Option<&UpdateReport>) -
              range and bearing cannot tell it, and over a lap its average NEES stays near \
              the band where the plain EKF's climbs above it."
         }
-        None => "",
+        Some(Phase::Resample) | None => "",
     };
     text + note
 }
 
 fn textbook_phase_text(kind: &str, phase: Option<Phase>, report: Option<&UpdateReport>) -> String {
     let ukf = kind == "ukf";
+    let fastslam = kind.starts_with("fastslam");
     match (phase, report) {
+        (Some(Phase::Resample), _) if fastslam => "Resample (FastSLAM): when the effective \
+            sample size N_eff = 1 / sum w_i^2 falls below the threshold times M, M particles \
+            are drawn with the chosen resampler in proportion to their weights; heavy particles \
+            are copied (their maps are shared, not copied), light ones vanish, and every \
+            weight becomes 1/M."
+            .to_owned(),
+        (Some(Phase::Resample), _) => "Resample: only particle filters resample; this \
+            Gaussian filter has nothing to do in this phase."
+            .to_owned(),
+        (Some(Phase::Predict), _) if fastslam => "Sample (FastSLAM): every particle draws a \
+            new pose. FastSLAM 1.0 draws it from the motion model with the control noise; \
+            FastSLAM 2.0 starts the proposal N(g(x, u), V M V^T) that this tick's measurements \
+            will sharpen. The particles spread; their maps do not change."
+            .to_owned(),
+        (Some(Phase::Update { id, .. }), _) if fastslam => format!(
+            "Weight (FastSLAM) with the measurement of landmark {id}: each particle associates \
+             it (the sensor's id, or its own maximum-likelihood choice with association=unknown), \
+             updates that landmark's 2x2 EKF in its own map, or starts it, and multiplies its \
+             weight by the measurement's likelihood N(z - h; 0, S). Particles that disagree \
+             with the measurement lose weight."
+        ),
         (None, _) => "Nothing has run yet. The robot starts at a known pose with zero \
             uncertainty and an empty map (thesis Eq. 3.5). Press Step phase (.) to run the \
             first prediction, or Run (Space)."

@@ -405,7 +405,11 @@ fn draw_filters(
         let secondary = index > 0;
         let color = palette::estimator_color(run.kind.name());
         let filter = run.filter();
-        // Landmarks: 95% ellipse, mean, optional line to the truth.
+        if let Some(particles) = filter.particle_set() {
+            draw_particles(painter, t, particles, color);
+        }
+        // Landmarks: 95% ellipse, mean, optional line to the truth. (For FastSLAM:
+        // the best particle's landmarks.)
         for estimate in filter.landmarks() {
             let p = t.v(&estimate.mean);
             if !finite(p) {
@@ -482,6 +486,34 @@ fn draw_filters(
         draw_estimated_robot(painter, p, pose.theta, color, colors.background, secondary);
     }
     drew_sigma_points
+}
+
+/// FastSLAM's particles: every particle's landmark means as faint dots, then
+/// every particle's pose as a dot with a short heading tick.
+fn draw_particles(
+    painter: &egui::Painter,
+    t: &MapTransform,
+    particles: &slamlab_core::particle::FastSlam,
+    color: Color32,
+) {
+    let faint = palette::faded(color, 0.35);
+    for mean in particles.landmark_means() {
+        let p = t.v(&mean);
+        if finite(p) {
+            painter.circle_filled(p, 1.2, faint);
+        }
+    }
+    for particle in particles.particles() {
+        let pose = particle.pose;
+        let p = t.pose(&pose);
+        if !finite(p) {
+            continue;
+        }
+        let (s, c) = slamlab_core::math::sin_cos(pose.theta);
+        let tip = p + egui::vec2(7.0 * c as f32, -7.0 * s as f32);
+        painter.line_segment([p, tip], Stroke::new(1.0, color));
+        painter.circle_filled(p, 2.0, color);
+    }
 }
 
 fn draw_estimated_robot(

@@ -167,6 +167,113 @@ fn estimators_ui(ui: &mut egui::Ui, lesson: &mut LandmarkSlamLesson) {
     issue_ui(ui, lesson, "estimator");
 }
 
+/// FastSLAM's particles and resampling, the association, the wrong-association
+/// button and the particle filters' N_eff over time.
+fn fastslam_ui(ui: &mut egui::Ui, lesson: &mut LandmarkSlamLesson) {
+    let (min, max) = match LandmarkScenario::param("particles").map(|s| s.kind) {
+        Some(ParamKind::Count { min, max }) => (min, max),
+        _ => (1, 10_000),
+    };
+    let mut count = lesson.pending.fastslam.particles as u64;
+    ui.horizontal(|ui| {
+        let response = ui
+            .add(
+                egui::Slider::new(&mut count, min..=max)
+                    .logarithmic(true)
+                    .text("particles M"),
+            )
+            .on_hover_text("FastSLAM's particle count (particles)");
+        if response.changed() {
+            let _issue = lesson.set_param("particles", &count.to_string());
+        }
+        changed_marker_ui(ui, lesson, "particles");
+    });
+    issue_ui(ui, lesson, "particles");
+    choice_ui(
+        ui,
+        lesson,
+        "fastslam-resampler",
+        "resampler",
+        &[
+            ("multinomial", "multinomial"),
+            ("low-variance", "low variance"),
+            ("stratified", "stratified"),
+            ("residual", "residual"),
+        ],
+    );
+    number_ui(ui, lesson, "resample-threshold", "resample when N_eff/M <");
+    choice_ui(
+        ui,
+        lesson,
+        "association",
+        "association",
+        &[("known", "known ids"), ("unknown", "unknown")],
+    );
+    number_ui(ui, lesson, "gate", "EKF/UKF gate χ²");
+    number_ui(
+        ui,
+        lesson,
+        "new-landmark-threshold",
+        "FastSLAM new landmark χ²",
+    );
+    ui.horizontal(|ui| {
+        if ui
+            .button("Wrong association")
+            .on_hover_text(
+                "The sensor gives one observation of the next tick the id of another landmark \
+                 (the nearest one seen before). With known ids every estimator trusts it.",
+            )
+            .clicked()
+        {
+            lesson.session.mislabel_next_observation();
+        }
+        if let Some(m) = lesson.session.mislabel() {
+            ui.colored_label(
+                palette::VERMILLION,
+                format!(
+                    "this tick: landmark {} reported as {}",
+                    m.true_id, m.reported_id
+                ),
+            );
+        }
+    });
+    let runs: Vec<_> = lesson
+        .session
+        .filters()
+        .iter()
+        .filter(|r| !r.n_eff.is_empty())
+        .collect();
+    if !runs.is_empty() {
+        ui.label("N_eff before each resampling (dots: resampled)");
+        egui_plot::Plot::new("plot_n_eff")
+            .height(90.0)
+            .allow_scroll(false)
+            .allow_drag(false)
+            .allow_zoom(false)
+            .include_y(0.0)
+            .show(ui, |plot_ui| {
+                for run in runs {
+                    let color = palette::estimator_color(run.kind.name());
+                    let name = run.kind.name().to_uppercase();
+                    let line: Vec<[f64; 2]> =
+                        run.n_eff.iter().map(|n| [n.tick as f64, n.n_eff]).collect();
+                    let resampled: Vec<[f64; 2]> = run
+                        .n_eff
+                        .iter()
+                        .filter(|n| n.resampled)
+                        .map(|n| [n.tick as f64, n.n_eff])
+                        .collect();
+                    plot_ui.line(egui_plot::Line::new(format!("{name} N_eff"), line).color(color));
+                    plot_ui.points(
+                        egui_plot::Points::new(format!("{name} resampled"), resampled)
+                            .color(color)
+                            .radius(2.0),
+                    );
+                }
+            });
+    }
+}
+
 /// The presets menu: a source's experiment or a key comparison, opened at once
 /// (with the panel's seed).
 fn preset_ui(ui: &mut egui::Ui, lesson: &mut LandmarkSlamLesson) {
@@ -284,6 +391,18 @@ pub fn parameters_ui(ui: &mut egui::Ui, lesson: &mut LandmarkSlamLesson) -> bool
         seed_ui(ui, lesson);
         estimators_ui(ui, lesson);
     });
+    // Shown when FastSLAM is chosen (or runs), so the Kalman-only panel stays as it was.
+    let particle_filters = lesson
+        .pending
+        .estimators
+        .iter()
+        .chain(&lesson.session.scenario().estimators)
+        .any(EstimatorKind::is_particle_filter);
+    if particle_filters {
+        group_ui(ui, "FastSLAM and data association", |ui| {
+            fastslam_ui(ui, lesson);
+        });
+    }
     group_ui(ui, "UKF sigma points", |ui| {
         number_ui(ui, lesson, "ukf-alpha", "spread α");
         number_ui(ui, lesson, "ukf-beta", "prior β");

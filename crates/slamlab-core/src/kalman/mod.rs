@@ -4,6 +4,12 @@
 //! order of discovery. Every estimator here exposes its phases separately
 //! (predict, then one update per observed landmark) so the app can step through
 //! them, and a read-only view for drawing.
+//!
+//! Every estimator shows a robot pose, landmark estimates and a Gaussian over
+//! them (for a particle filter, the Gaussian that summarizes its particles). A
+//! particle filter additionally shows its particles
+//! ([`LandmarkSlam::particle_set`]) and has a third phase, resampling
+//! ([`LandmarkSlam::resample`]); for the Kalman filters both are empty.
 
 mod ekf_slam;
 pub mod fusion;
@@ -17,6 +23,7 @@ pub use unscented::UnscentedParams;
 
 use crate::geometry::Pose2;
 use crate::motion::{Control, MotionModel};
+use crate::particle::fastslam::{FastSlam, ResampleReport};
 use crate::range_bearing::{MeasurementError, RangeBearing};
 use nalgebra::{DMatrix, DVector, Matrix2, Matrix3, Vector2};
 use serde::{Deserialize, Serialize};
@@ -154,6 +161,18 @@ pub enum UpdateReport {
         /// The Frobenius norm of the whole Kalman gain.
         gain_norm: f64,
     },
+    /// A particle filter weighted its particles with the measurement (each
+    /// particle updated or started the landmark in its own map).
+    Weighted {
+        /// The landmark's id as the sensor reported it.
+        id: usize,
+        /// The effective sample size `1 / Σ wᵢ²` after weighting.
+        n_eff: f64,
+        /// How many particles started a new landmark with this measurement.
+        new_landmark_particles: usize,
+        /// The log likelihood of the measurement under the best particle.
+        best_log_likelihood: f64,
+    },
 }
 
 /// One landmark's estimate, for drawing and metrics.
@@ -196,6 +215,18 @@ pub trait LandmarkSlam {
     /// The robot's sigma points (centre first), for filters that use them; empty otherwise.
     fn robot_sigma_points(&self) -> Vec<Pose2> {
         Vec::new()
+    }
+
+    /// The particles, for particle filters (FastSLAM); `None` for Gaussian filters.
+    fn particle_set(&self) -> Option<&FastSlam> {
+        None
+    }
+
+    /// The resampling phase of a particle filter (run once per tick, after the
+    /// updates). Gaussian filters have no such phase: the default does nothing and
+    /// returns `None`.
+    fn resample(&mut self) -> Option<ResampleReport> {
+        None
     }
 
     /// The estimated robot pose.
