@@ -100,6 +100,9 @@ fn the_wrong_association_button_mislabels_the_next_observation() {
         }
     }
     h.run();
+    // The button sits low in the parameter panel: scroll it into view first.
+    h.get_by_label("Wrong association").scroll_to_me();
+    h.run();
     h.get_by_label("Wrong association").click();
     h.run();
     assert_eq!(session(&h).mislabel_ticks(), &[61]);
