@@ -56,9 +56,16 @@ const EXPERIMENTS: &[&str] = &[
     "pose-graph",
 ];
 
-fn scenario_args() -> Vec<Arg> {
+/// Landmark parameters that `slamlab experiment` does not take as scenario
+/// flags, because an experiment has a flag of that name itself (`--particles`, a
+/// list of counts).
+const EXPERIMENT_OWN: &[&str] = &["particles"];
+
+/// The landmark scenario's flags, but those in `skip`.
+fn scenario_args(skip: &'static [&'static str]) -> Vec<Arg> {
     PARAMS
         .iter()
+        .filter(|p| !skip.contains(&p.name))
         .map(|p| {
             let range = format!(" [{}]", p.kind.range_text(", "));
             let default = params::get(&LandmarkScenario::default(), p.name)
@@ -107,7 +114,7 @@ fn cli() -> Command {
                         .action(ArgAction::SetTrue)
                         .help("print one JSON object"),
                 )
-                .args(scenario_args()),
+                .args(scenario_args(&[])),
         )
         .subcommand(
             Command::new("experiment")
@@ -150,7 +157,7 @@ fn cli() -> Command {
                         .help("write the per-step series as CSV into DIR (ekf-vs-ukf: errors, thesis Fig. 3.4 / 3.6; consistency: average NEES and its band)"),
                 )
                 .next_help_heading("Scenario (the same names as `run`; ekf-vs-ukf takes only --seed)")
-                .args(scenario_args()),
+                .args(scenario_args(EXPERIMENT_OWN)),
         )
         .subcommand(map::command())
         .subcommand(graph_cmd::command())
@@ -171,7 +178,14 @@ fn cli() -> Command {
 /// and warns (on stderr) about values it had to clamp.
 fn scenario_from(matches: &ArgMatches) -> Result<LandmarkScenario> {
     let mut scenario = LandmarkScenario::default();
+    // `slamlab experiment` (its positional "name") owns some flags itself.
+    let experiment = matches
+        .try_get_one::<String>("name")
+        .is_ok_and(|v| v.is_some());
     for p in PARAMS {
+        if experiment && EXPERIMENT_OWN.contains(&p.name) {
+            continue;
+        }
         if let Some(value) = matches.get_one::<String>(p.name) {
             match params::set(&mut scenario, p.name, value) {
                 None => {}
