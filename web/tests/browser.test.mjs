@@ -494,7 +494,7 @@ async function main() {
 
     // --- Monte Carlo localization by URL: the lesson runs on the maze, and a seeded
     // global localization run in this page's wasm converges with exactly the native bits
-    // (crates/slamlab-app/tests/kidnap_ui.rs pins the same numbers).
+    // (crates/slamlab-app/tests/lessons/kidnap_ui.rs pins the same numbers).
     await check("lesson=kidnap runs on the maze and converges with the native numbers", async () => {
       const url = "index.html?lesson=kidnap&map=maze&seed=3&particles=1000";
       const { context, page: p, log } = await openPage(browser, baseUrl, url, "kidnap");
@@ -627,7 +627,7 @@ async function main() {
 
     // --- The resampling lab by URL: a press of the Resample button (the "." shortcut)
     // resamples with every method, and five seeded presses in this page's wasm give
-    // exactly the native copies (crates/slamlab-app/tests/resampling_ui.rs pins them).
+    // exactly the native copies (crates/slamlab-app/tests/lessons/resampling_ui.rs pins them).
     await check("lesson=resampling resamples and gives the native copies", async () => {
       const url = "index.html?lesson=resampling&weights=5,1,1,3&seed=3";
       const { context, page: p, log } = await openPage(browser, baseUrl, url, "resampling");
@@ -839,7 +839,7 @@ async function main() {
 
     // --- Sensor fusion by URL: the lesson runs, and a seeded 40 s drive fused headless in
     // this page's wasm gives each mode's RMSE with exactly the native bits
-    // (crates/slamlab-app/tests/fusion_ui.rs pins the same numbers).
+    // (crates/slamlab-app/tests/lessons/fusion_ui.rs pins the same numbers).
     await check("lesson=fusion runs and its RMSE table has the native numbers", async () => {
       const query = "lesson=fusion&seed=3&duration=40";
       const { context, page: p, log } = await openPage(browser, baseUrl, `index.html?${query}`, "fusion");

@@ -2,42 +2,19 @@
 //! drawn, the wrong-association button reaches the sensor, and the new parameters
 //! survive a share link.
 
-// A failing test panics; that is how the test harness reports it.
-#![allow(clippy::panic)]
-
+use super::common::{count_pixels_near as count_pixels, harness};
 use egui_kittest::Harness;
 use egui_kittest::kittest::Queryable as _;
 use slamlab_app::SlamLabApp;
 
-const SIZE: egui::Vec2 = egui::vec2(1400.0, 900.0);
 /// Okabe-Ito reddish purple: FastSLAM.
 const PURPLE: [u8; 3] = [0xCC, 0x79, 0xA7];
-
-fn harness(query: &str) -> Harness<'static, SlamLabApp> {
-    let query = query.to_owned();
-    Harness::builder()
-        .with_size(SIZE)
-        .with_max_steps(40)
-        .build_eframe(move |cc| SlamLabApp::new(cc, &query))
-}
 
 fn session<'h>(h: &'h Harness<'_, SlamLabApp>) -> &'h slamlab_sim::LandmarkSession {
     match h.state().session() {
         Some(s) => s,
         None => panic!("the landmark lesson is open"),
     }
-}
-
-/// Pixels within `tolerance` (sum of absolute channel differences) of `target`.
-fn count_pixels(rgba: &[u8], target: [u8; 3], tolerance: i32) -> usize {
-    rgba.chunks_exact(4)
-        .filter(|p| {
-            (0..3)
-                .map(|c| (i32::from(p[c]) - i32::from(target[c])).abs())
-                .sum::<i32>()
-                <= tolerance
-        })
-        .count()
 }
 
 /// Purple pixels after 60 ticks, or `None` without a GPU adapter.

@@ -2,8 +2,7 @@
 //! its buttons resample, stepping back takes a press back exactly, bad weights
 //! get a note and a safe value, and the rendered row shows every method's copies.
 
-#![allow(clippy::panic)]
-
+use super::common::{SIZE, count_pixels, harness, lesson_of, lesson_of_mut};
 use egui_kittest::Harness;
 use egui_kittest::kittest::Queryable as _;
 use slamlab_app::SlamLabApp;
@@ -11,34 +10,12 @@ use slamlab_app::lesson::Lesson as _;
 use slamlab_app::resampling::ResamplingLesson;
 use slamlab_core::particle::Resampler;
 
-const SIZE: egui::Vec2 = egui::vec2(1400.0, 900.0);
-
-fn harness(query: &str) -> Harness<'static, SlamLabApp> {
-    let query = query.to_owned();
-    Harness::builder()
-        .with_size(SIZE)
-        .with_max_steps(40)
-        .build_eframe(move |cc| SlamLabApp::new(cc, &query))
-}
-
 fn lesson<'h>(h: &'h Harness<'_, SlamLabApp>) -> &'h ResamplingLesson {
-    match h.state().lesson_as::<ResamplingLesson>() {
-        Some(l) => l,
-        None => panic!("the resampling lab is open"),
-    }
+    lesson_of(h)
 }
 
 fn lesson_mut<'h>(h: &'h mut Harness<'_, SlamLabApp>) -> &'h mut ResamplingLesson {
-    match h.state_mut().lesson_as_mut::<ResamplingLesson>() {
-        Some(l) => l,
-        None => panic!("the resampling lab is open"),
-    }
-}
-
-fn count_pixels(rgba: &[u8], rgb: [u8; 3], tolerance: i32) -> usize {
-    rgba.chunks_exact(4)
-        .filter(|p| (0..3).all(|c| (i32::from(p[c]) - i32::from(rgb[c])).abs() <= tolerance))
-        .count()
+    lesson_of_mut(h)
 }
 
 #[test]

@@ -3,8 +3,7 @@
 //! numbers of a headless seeded run, bad readings are skipped and counted, and
 //! the rendered map shows each mode's colour.
 
-#![allow(clippy::panic)]
-
+use super::common::{count_pixels, lesson_of, lesson_of_mut};
 use egui_kittest::Harness;
 use egui_kittest::kittest::Queryable as _;
 use slamlab_app::SlamLabApp;
@@ -24,23 +23,11 @@ fn harness(query: &str) -> Harness<'static, SlamLabApp> {
 }
 
 fn lesson<'h>(h: &'h Harness<'_, SlamLabApp>) -> &'h FusionLesson {
-    match h.state().lesson_as::<FusionLesson>() {
-        Some(l) => l,
-        None => panic!("the fusion lesson is open"),
-    }
+    lesson_of(h)
 }
 
 fn lesson_mut<'h>(h: &'h mut Harness<'_, SlamLabApp>) -> &'h mut FusionLesson {
-    match h.state_mut().lesson_as_mut::<FusionLesson>() {
-        Some(l) => l,
-        None => panic!("the fusion lesson is open"),
-    }
-}
-
-fn count_pixels(rgba: &[u8], rgb: [u8; 3], tolerance: i32) -> usize {
-    rgba.chunks_exact(4)
-        .filter(|p| (0..3).all(|c| (i32::from(p[c]) - i32::from(rgb[c])).abs() <= tolerance))
-        .count()
+    lesson_of_mut(h)
 }
 
 #[test]

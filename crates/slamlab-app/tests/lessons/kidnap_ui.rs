@@ -2,41 +2,18 @@
 //! it opens by URL, its buttons step the phases and kidnap the robot, stepping
 //! back replays, and the rendered map shows the grid, the particles and the truth.
 
-#![allow(clippy::panic)]
-
+use super::common::{SIZE, count_pixels, harness, lesson_of, lesson_of_mut};
 use egui_kittest::Harness;
 use egui_kittest::kittest::Queryable as _;
 use slamlab_app::SlamLabApp;
 use slamlab_app::kidnap::KidnapLesson;
 
-const SIZE: egui::Vec2 = egui::vec2(1400.0, 900.0);
-
-fn harness(query: &str) -> Harness<'static, SlamLabApp> {
-    let query = query.to_owned();
-    Harness::builder()
-        .with_size(SIZE)
-        .with_max_steps(40)
-        .build_eframe(move |cc| SlamLabApp::new(cc, &query))
-}
-
 fn lesson<'h>(h: &'h Harness<'_, SlamLabApp>) -> &'h KidnapLesson {
-    match h.state().lesson_as::<KidnapLesson>() {
-        Some(l) => l,
-        None => panic!("the kidnap lesson is open"),
-    }
+    lesson_of(h)
 }
 
 fn lesson_mut<'h>(h: &'h mut Harness<'_, SlamLabApp>) -> &'h mut KidnapLesson {
-    match h.state_mut().lesson_as_mut::<KidnapLesson>() {
-        Some(l) => l,
-        None => panic!("the kidnap lesson is open"),
-    }
-}
-
-fn count_pixels(rgba: &[u8], rgb: [u8; 3], tolerance: i32) -> usize {
-    rgba.chunks_exact(4)
-        .filter(|p| (0..3).all(|c| (i32::from(p[c]) - i32::from(rgb[c])).abs() <= tolerance))
-        .count()
+    lesson_of_mut(h)
 }
 
 #[test]

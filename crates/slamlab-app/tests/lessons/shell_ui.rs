@@ -3,20 +3,11 @@
 //! and the URL's figure keys (`tick=`, `run=`, `legend=`, `panels=`, `zoom=`,
 //! `follow=`) with their bad values.
 
-#![allow(clippy::panic)]
-
+use super::common::{count_pixels, harness_sized as harness, label_visible};
 use egui_kittest::Harness;
 use egui_kittest::kittest::Queryable as _;
 use slamlab_app::SlamLabApp;
 use slamlab_app::lesson::LESSONS;
-
-fn harness(query: &str, size: egui::Vec2) -> Harness<'static, SlamLabApp> {
-    let query = query.to_owned();
-    Harness::builder()
-        .with_size(size)
-        .with_max_steps(40)
-        .build_eframe(move |cc| SlamLabApp::new(cc, &query))
-}
 
 fn state(h: &Harness<'_, SlamLabApp>) -> serde_json::Value {
     serde_json::from_str(&h.state().test_state_json()).unwrap_or_default()
@@ -28,16 +19,6 @@ fn map_share(h: &Harness<'_, SlamLabApp>, size: egui::Vec2) -> f32 {
         panic!("no map rectangle recorded");
     };
     rect.area() / (size.x * size.y)
-}
-
-fn label_visible(h: &Harness<'_, SlamLabApp>, text: &str) -> bool {
-    h.query_all_by_label_contains(text).next().is_some()
-}
-
-fn count_pixels(rgba: &[u8], rgb: [u8; 3], tolerance: i32) -> usize {
-    rgba.chunks_exact(4)
-        .filter(|p| (0..3).all(|c| (i32::from(p[c]) - i32::from(rgb[c])).abs() <= tolerance))
-        .count()
 }
 
 /// The smallest share of the window the map gets, by window size, in the full

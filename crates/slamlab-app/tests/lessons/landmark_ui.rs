@@ -2,25 +2,13 @@
 //! buttons are found by their labels and clicked, keys are pressed, and the app's
 //! session is checked.
 
-// A failing test panics; that is how the test harness reports it.
-#![allow(clippy::panic)]
-
+use super::common::{SIZE, count_pixels_near as count_pixels, harness, label_visible};
 use egui_kittest::Harness;
 use egui_kittest::kittest::Queryable as _;
 use slamlab_app::SlamLabApp;
 use slamlab_sim::Phase;
 use slamlab_sim::landmark_params::PARAMS;
 use slamlab_sim::params::{self, ParamIssue, ParamKind};
-
-const SIZE: egui::Vec2 = egui::vec2(1400.0, 900.0);
-
-fn harness(query: &str) -> Harness<'static, SlamLabApp> {
-    let query = query.to_owned();
-    Harness::builder()
-        .with_size(SIZE)
-        .with_max_steps(40)
-        .build_eframe(move |cc| SlamLabApp::new(cc, &query))
-}
 
 fn session<'h>(h: &'h Harness<'_, SlamLabApp>) -> &'h slamlab_sim::LandmarkSession {
     match h.state().session() {
@@ -31,10 +19,6 @@ fn session<'h>(h: &'h Harness<'_, SlamLabApp>) -> &'h slamlab_sim::LandmarkSessi
 
 fn robot_covariance_trace(h: &Harness<'_, SlamLabApp>) -> f64 {
     session(h).filters()[0].filter().robot_covariance().trace()
-}
-
-fn label_visible(h: &Harness<'_, SlamLabApp>, text: &str) -> bool {
-    h.query_all_by_label_contains(text).next().is_some()
 }
 
 #[test]
@@ -313,18 +297,6 @@ fn taking_the_wheel_mid_run_keeps_the_run() {
     h.run();
     assert_ne!(session(&h).truth(), before);
     assert_eq!(session(&h).tick(), 22);
-}
-
-/// Pixels within `tolerance` (sum of absolute channel differences) of `target`.
-fn count_pixels(rgba: &[u8], target: [u8; 3], tolerance: i32) -> usize {
-    rgba.chunks_exact(4)
-        .filter(|p| {
-            (0..3)
-                .map(|c| (i32::from(p[c]) - i32::from(target[c])).abs())
-                .sum::<i32>()
-                <= tolerance
-        })
-        .count()
 }
 
 /// Renders the lesson after 60 ticks, stopped on an update, and checks what a student

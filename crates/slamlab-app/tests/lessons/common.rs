@@ -1,0 +1,64 @@
+//! What every lesson's UI tests share: the harness, typed access to the open
+//! lesson, and pixel counts of the colours that must be on screen.
+
+use egui_kittest::Harness;
+use egui_kittest::kittest::Queryable as _;
+use slamlab_app::SlamLabApp;
+
+/// The window the tests open, points.
+pub const SIZE: egui::Vec2 = egui::vec2(1400.0, 900.0);
+
+/// The app opened with `query` in a window of `size`.
+pub fn harness_sized(query: &str, size: egui::Vec2) -> Harness<'static, SlamLabApp> {
+    let query = query.to_owned();
+    Harness::builder()
+        .with_size(size)
+        .with_max_steps(40)
+        .build_eframe(move |cc| SlamLabApp::new(cc, &query))
+}
+
+/// The app opened with `query` in a [`SIZE`] window.
+pub fn harness(query: &str) -> Harness<'static, SlamLabApp> {
+    harness_sized(query, SIZE)
+}
+
+/// The open lesson as type `L` (the test fails when another lesson is open).
+pub fn lesson_of<'h, L: 'static>(h: &'h Harness<'_, SlamLabApp>) -> &'h L {
+    match h.state().lesson_as::<L>() {
+        Some(l) => l,
+        None => panic!("{} is not the open lesson", std::any::type_name::<L>()),
+    }
+}
+
+/// The open lesson as type `L`, to change it.
+pub fn lesson_of_mut<'h, L: 'static>(h: &'h mut Harness<'_, SlamLabApp>) -> &'h mut L {
+    match h.state_mut().lesson_as_mut::<L>() {
+        Some(l) => l,
+        None => panic!("{} is not the open lesson", std::any::type_name::<L>()),
+    }
+}
+
+/// Pixels whose every channel is within `tolerance` of `rgb`.
+pub fn count_pixels(rgba: &[u8], rgb: [u8; 3], tolerance: i32) -> usize {
+    rgba.chunks_exact(4)
+        .filter(|p| (0..3).all(|c| (i32::from(p[c]) - i32::from(rgb[c])).abs() <= tolerance))
+        .count()
+}
+
+/// Pixels within `tolerance` of `target` as the sum of the channels' absolute
+/// differences.
+pub fn count_pixels_near(rgba: &[u8], target: [u8; 3], tolerance: i32) -> usize {
+    rgba.chunks_exact(4)
+        .filter(|p| {
+            (0..3)
+                .map(|c| (i32::from(p[c]) - i32::from(target[c])).abs())
+                .sum::<i32>()
+                <= tolerance
+        })
+        .count()
+}
+
+/// Is a widget whose label contains `text` on screen?
+pub fn label_visible(h: &Harness<'_, SlamLabApp>, text: &str) -> bool {
+    h.query_all_by_label_contains(text).next().is_some()
+}
