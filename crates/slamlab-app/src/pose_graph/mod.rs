@@ -670,7 +670,8 @@ impl Lesson for PoseGraphLesson {
         let k = self.session.iterations();
         TimeInfo {
             tick: k as u64,
-            time_s: 0.0,
+            // Iterations are not moments in time.
+            time_s: f64::NAN,
             last_phase: (k > 0).then(|| format!("{solver} iteration {k}")),
             next_phase: format!("{solver} iteration {}", k + 1),
             can_step_back: false,
