@@ -5,12 +5,11 @@
 use super::{FusionView, mode_color};
 use crate::palette;
 use crate::widgets::map_canvas::{
-    self, CanvasColors, MapTransform, MapView, draw_grid, draw_scale_and_axes, finite, screen_dir,
+    self, CanvasColors, EstimateStyle, MapTransform, MapView, draw_estimate, draw_grid,
+    draw_scale_and_axes, finite, screen_dir,
 };
 use egui::{Color32, Pos2, Shape, Stroke, pos2, vec2};
-use nalgebra::{Matrix2, Vector2};
 use slamlab_core::Pose2;
-use slamlab_core::geometry::{CHI2_2DOF_95, CovarianceEllipse};
 use slamlab_sim::fusion::lesson::FusionSim;
 
 /// Longest polyline drawn, in points.
@@ -101,8 +100,12 @@ pub fn map_ui(ui: &mut egui::Ui, sim: &FusionSim, canvas: &mut MapView, view: &m
             &t,
             &pose,
             &run.filter().pose_covariance(),
-            color,
-            view.ellipses,
+            EstimateStyle {
+                color,
+                ellipse: view.ellipses,
+                wedge_radius: 22.0,
+                dot: true,
+            },
         );
     }
     let truth_now = log.truth_at(now);
@@ -149,59 +152,6 @@ fn polyline(
     } else {
         painter.add(Shape::line(points, stroke));
     }
-}
-
-fn draw_estimate(
-    painter: &egui::Painter,
-    t: &MapTransform,
-    pose: &Pose2,
-    covariance: &nalgebra::Matrix3<f64>,
-    color: Color32,
-    ellipse: bool,
-) {
-    let centre = t.pose(pose);
-    if !finite(centre) {
-        return;
-    }
-    if ellipse {
-        let block = Matrix2::new(
-            covariance[(0, 0)],
-            covariance[(0, 1)],
-            covariance[(1, 0)],
-            covariance[(1, 1)],
-        );
-        let e =
-            CovarianceEllipse::from_covariance(Vector2::new(pose.x, pose.y), &block, CHI2_2DOF_95);
-        let points: Vec<Pos2> = e
-            .boundary(48)
-            .iter()
-            .map(|p| t.v(p))
-            .filter(|p| finite(*p))
-            .collect();
-        if points.len() > 2 {
-            painter.add(Shape::closed_line(points, Stroke::new(2.0, color)));
-        }
-    }
-    // Heading wedge: ± 2 sigma.
-    let sigma = covariance[(2, 2)].max(0.0).sqrt();
-    let spread = (2.0 * sigma).min(std::f64::consts::PI);
-    let radius = 22.0;
-    let mut rim = vec![centre];
-    for k in 0..=16 {
-        let a = pose.theta - spread + 2.0 * spread * f64::from(k) / 16.0;
-        rim.push(centre + screen_dir(a) * radius);
-    }
-    painter.add(Shape::convex_polygon(
-        rim,
-        color.gamma_multiply(0.18),
-        Stroke::NONE,
-    ));
-    painter.circle_filled(centre, 4.0, color);
-    painter.arrow(
-        centre,
-        screen_dir(pose.theta) * radius,
-        Stroke::new(2.0, color),
-    );
 }
 
 fn draw_legend(painter: &egui::Painter, t: &MapTransform, sim: &FusionSim, colors: &CanvasColors) {

@@ -6,11 +6,10 @@
 use super::{KidnapView, filter_color};
 use crate::palette;
 use crate::widgets::map_canvas::{
-    self, CanvasColors, MapTransform, MapView, draw_grid, draw_scale_and_axes, finite, screen_dir,
+    self, CanvasColors, EstimateStyle, MapTransform, MapView, draw_estimate, draw_grid,
+    draw_scale_and_axes, finite, screen_dir,
 };
 use egui::{Color32, Pos2, Shape, Stroke, pos2, vec2};
-use nalgebra::{Matrix2, Vector2};
-use slamlab_core::geometry::{CHI2_2DOF_95, CovarianceEllipse};
 use slamlab_core::grid::{Cell, Costmap, OccupancyGrid};
 use slamlab_core::particle::ParticleFlag;
 use slamlab_core::{Pose2, math};
@@ -193,7 +192,18 @@ pub fn map_ui(
             draw_particles(&painter, &t, f.mcl().particles(), color);
         }
         if let Some(e) = f.mcl().estimate() {
-            draw_estimate(&painter, &t, &e.pose, &e.covariance, color);
+            draw_estimate(
+                &painter,
+                &t,
+                &e.pose,
+                &e.covariance,
+                EstimateStyle {
+                    color,
+                    ellipse: true,
+                    wedge_radius: 26.0,
+                    dot: false,
+                },
+            );
         }
     }
     draw_robot(
@@ -397,55 +407,6 @@ fn draw_particles(
         painter.line_segment([at, tip], Stroke::new(1.2, c));
         painter.circle_filled(at, 1.3, c);
     }
-}
-
-fn draw_estimate(
-    painter: &egui::Painter,
-    t: &MapTransform,
-    pose: &Pose2,
-    covariance: &nalgebra::Matrix3<f64>,
-    color: Color32,
-) {
-    let centre = t.pose(pose);
-    if !finite(centre) {
-        return;
-    }
-    let block = Matrix2::new(
-        covariance[(0, 0)],
-        covariance[(0, 1)],
-        covariance[(1, 0)],
-        covariance[(1, 1)],
-    );
-    let ellipse =
-        CovarianceEllipse::from_covariance(Vector2::new(pose.x, pose.y), &block, CHI2_2DOF_95);
-    let points: Vec<Pos2> = ellipse
-        .boundary(48)
-        .iter()
-        .map(|p| t.v(p))
-        .filter(|p| finite(*p))
-        .collect();
-    if points.len() > 2 {
-        painter.add(Shape::closed_line(points, Stroke::new(2.0, color)));
-    }
-    // Heading wedge: ± 2 sigma.
-    let sigma = covariance[(2, 2)].max(0.0).sqrt();
-    let spread = (2.0 * sigma).min(std::f64::consts::PI);
-    let radius = 26.0;
-    let mut rim = vec![centre];
-    for k in 0..=16 {
-        let a = pose.theta - spread + 2.0 * spread * f64::from(k) / 16.0;
-        rim.push(centre + screen_dir(a) * radius);
-    }
-    painter.add(Shape::convex_polygon(
-        rim,
-        color.gamma_multiply(0.18),
-        Stroke::NONE,
-    ));
-    painter.arrow(
-        centre,
-        screen_dir(pose.theta) * radius,
-        Stroke::new(2.0, color),
-    );
 }
 
 fn draw_robot(

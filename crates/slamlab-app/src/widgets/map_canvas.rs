@@ -187,6 +187,73 @@ pub fn finite(p: Pos2) -> bool {
     p.x.is_finite() && p.y.is_finite()
 }
 
+/// How a pose estimate is drawn: its colour, whether its 95% position ellipse
+/// shows, the radius of its ±2σ heading wedge (points), and a dot at its centre.
+#[derive(Clone, Copy, Debug)]
+pub struct EstimateStyle {
+    /// The estimator's colour.
+    pub color: Color32,
+    /// Draw the 95% position ellipse.
+    pub ellipse: bool,
+    /// Radius of the heading wedge and arrow, points.
+    pub wedge_radius: f32,
+    /// A filled dot at the estimate.
+    pub dot: bool,
+}
+
+/// A pose estimate with its uncertainty: the 95% ellipse of the position block
+/// of `covariance` (x, y, θ), a wedge of ±2σ in heading, and an arrow.
+pub fn draw_estimate(
+    painter: &egui::Painter,
+    t: &MapTransform,
+    pose: &Pose2,
+    covariance: &nalgebra::Matrix3<f64>,
+    style: EstimateStyle,
+) {
+    use slamlab_core::geometry::{CHI2_2DOF_95, CovarianceEllipse};
+    let centre = t.pose(pose);
+    if !finite(centre) {
+        return;
+    }
+    let color = style.color;
+    if style.ellipse {
+        let block = covariance.fixed_view::<2, 2>(0, 0).into_owned();
+        let e =
+            CovarianceEllipse::from_covariance(Vector2::new(pose.x, pose.y), &block, CHI2_2DOF_95);
+        let points: Vec<Pos2> = e
+            .boundary(48)
+            .iter()
+            .map(|p| t.v(p))
+            .filter(|p| finite(*p))
+            .collect();
+        if points.len() > 2 {
+            painter.add(egui::Shape::closed_line(points, Stroke::new(2.0, color)));
+        }
+    }
+    // Heading wedge: ± 2 sigma.
+    let sigma = covariance[(2, 2)].max(0.0).sqrt();
+    let spread = (2.0 * sigma).min(std::f64::consts::PI);
+    let radius = style.wedge_radius;
+    let mut rim = vec![centre];
+    for k in 0..=16 {
+        let a = pose.theta - spread + 2.0 * spread * f64::from(k) / 16.0;
+        rim.push(centre + screen_dir(a) * radius);
+    }
+    painter.add(egui::Shape::convex_polygon(
+        rim,
+        color.gamma_multiply(0.18),
+        Stroke::NONE,
+    ));
+    if style.dot {
+        painter.circle_filled(centre, 4.0, color);
+    }
+    painter.arrow(
+        centre,
+        screen_dir(pose.theta) * radius,
+        Stroke::new(2.0, color),
+    );
+}
+
 /// The canvas's colours in the current theme.
 #[derive(Clone, Copy, Debug)]
 pub struct CanvasColors {
