@@ -117,6 +117,19 @@ pub fn scenario_from_start<S: slamlab_sim::params::Scenario>(
     (scenario, notices)
 }
 
+/// The landmark lesson, opened in place of a lesson that could not open, with
+/// a notice that says `why` (only a broken build gets here: every lesson's
+/// defaults are tested).
+pub fn open_instead(start: &LessonStart<'_>, why: String) -> Box<dyn Lesson> {
+    crate::landmark_slam::open(&LessonStart {
+        pairs: &[],
+        embed: start.embed,
+        stored: None,
+        many_runs: None,
+    })
+    .with_notice(why)
+}
+
 /// One lesson on screen. Everything the shell needs, nothing it must know about
 /// the lesson's world.
 pub trait Lesson: std::fmt::Debug {

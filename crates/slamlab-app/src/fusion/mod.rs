@@ -12,7 +12,7 @@ mod plots;
 
 pub use explain::rmse_text;
 
-use crate::lesson::{self, Lesson, LessonExt, LessonStart, PanelVisibility, StoredSettings};
+use crate::lesson::{self, Lesson, LessonStart, PanelVisibility, StoredSettings};
 use crate::palette;
 use crate::time_control::{TimeAction, TimeControl, TimeInfo};
 use crate::widgets::map_canvas::MapView;
@@ -132,13 +132,10 @@ pub fn open(start: &LessonStart<'_>) -> Box<dyn Lesson> {
                     lesson
                 }
                 Err(why) => {
-                    return crate::landmark_slam::open(&LessonStart {
-                        pairs: &[],
-                        embed: start.embed,
-                        stored: None,
-                        many_runs: None,
-                    })
-                    .with_notice(format!("Sensor fusion could not open: {why}"));
+                    return lesson::open_instead(
+                        start,
+                        format!("Sensor fusion could not open: {why}"),
+                    );
                 }
             }
         }

@@ -9,7 +9,7 @@ mod explain;
 mod map;
 mod plots;
 
-use crate::lesson::{self, Lesson, LessonExt, LessonStart, PanelVisibility, StoredSettings};
+use crate::lesson::{self, Lesson, LessonStart, PanelVisibility, StoredSettings};
 use crate::palette;
 use crate::time_control::{TimeAction, TimeControl, TimeInfo};
 use crate::widgets::drive::{self, PadDirection};
@@ -187,13 +187,10 @@ pub fn open(start: &LessonStart<'_>) -> Box<dyn Lesson> {
         // Only a broken build could get here (the built-in maze is tested); the
         // landmark lesson opens instead, saying why.
         Err(why) => {
-            return crate::landmark_slam::open(&LessonStart {
-                pairs: &[],
-                embed: start.embed,
-                stored: None,
-                many_runs: None,
-            })
-            .with_notice(format!("Monte Carlo localization could not open: {why}"));
+            return lesson::open_instead(
+                start,
+                format!("Monte Carlo localization could not open: {why}"),
+            );
         }
     };
     lesson.notices.splice(0..0, link_notices);

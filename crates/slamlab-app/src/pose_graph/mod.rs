@@ -9,7 +9,7 @@ mod explain;
 mod map;
 mod plots;
 
-use crate::lesson::{self, Lesson, LessonExt as _, LessonStart, PanelVisibility, StoredSettings};
+use crate::lesson::{self, Lesson, LessonStart, PanelVisibility, StoredSettings};
 use crate::palette;
 use crate::time_control::{FRAME_BUDGET_MS, TimeAction, TimeControl, TimeInfo};
 use crate::widgets::dropped_files::DropInbox;
@@ -161,13 +161,10 @@ pub fn open(start: &LessonStart<'_>) -> Box<dyn Lesson> {
             let mut lesson = match PoseGraphLesson::new(default_scenario()) {
                 Ok(lesson) => lesson,
                 Err(again) => {
-                    return crate::landmark_slam::open(&LessonStart {
-                        pairs: &[],
-                        embed: start.embed,
-                        stored: None,
-                        many_runs: None,
-                    })
-                    .with_notice(format!("The pose-graph lesson could not open: {again}"));
+                    return lesson::open_instead(
+                        start,
+                        format!("The pose-graph lesson could not open: {again}"),
+                    );
                 }
             };
             lesson.notices.push(format!(
