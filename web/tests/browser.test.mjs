@@ -460,6 +460,47 @@ async function main() {
       }
     });
 
+    // --- FastSLAM 2.0 with 100 particles beside EKF and UKF on 50 landmarks (the
+    // setting issue 13 names for interactivity): the lesson runs and draws the particles;
+    // its frame timing goes to metrics.json, not into an assertion.
+    await check("FastSLAM 2.0 (100 particles) beside EKF and UKF: runs and reports its frame timing", async () => {
+      const url = "index.html?lesson=landmark-slam&seed=1&landmarks=50&estimator=ekf,ukf,fastslam2&particles=100";
+      const { context, page: p, log } = await openPage(browser, baseUrl, url, "fastslam 100");
+      try {
+        await waitRunning(p);
+        const { stats } = await waitNotBlank(p, "fastslam100-1-start.png");
+        assertNotBlank(stats, "fastslam100-1-start.png");
+        await p.mouse.click(VIEWPORT.width / 2, VIEWPORT.height / 2);
+        const s0 = await testState(p);
+        await p.keyboard.press("Space");
+        await waitState(p, (s) => s.tick > s0.tick, "the first tick after Space");
+        const startedAt = Date.now();
+        await sleep(LOAD_RUN_MS);
+        const s1 = await testState(p);
+        const seconds = (Date.now() - startedAt) / 1000;
+        await screenshot(p, "fastslam100-2-running.png");
+        await assertNoPanic(p);
+        const t = s1.frame_timing;
+        assert(t && t.frames > 0 && Number.isFinite(t.cpu_ms_median), `no frame timing: ${JSON.stringify(s1)}`);
+        assert(s1.filters.join(",") === "ekf,ukf,fastslam2", `filters ${s1.filters}`);
+        assert(s1.tick > s0.tick, "the simulation did not advance");
+        metrics.fastslam100_frame_cpu_ms_median = t.cpu_ms_median;
+        metrics.fastslam100_frame_cpu_ms_p95 = t.cpu_ms_p95;
+        metrics.fastslam100_sim_ms_median = t.sim_ms_median;
+        metrics.fastslam100_sim_ms_p95 = t.sim_ms_p95;
+        metrics.fastslam100_frames_per_second = Number((1000 / t.interval_ms_median).toFixed(1));
+        metrics.fastslam100_ticks_per_second = Number(((s1.tick - s0.tick) / seconds).toFixed(1));
+        assert(log.problems.length === 0, log.problems.join("; "));
+        return (
+          `tick ${s0.tick} -> ${s1.tick} in ${seconds.toFixed(1)} s; frame CPU median ${t.cpu_ms_median.toFixed(2)} ms ` +
+          `(p95 ${t.cpu_ms_p95?.toFixed(2)}), simulation ${t.sim_ms_median.toFixed(2)} ms, ` +
+          `${metrics.fastslam100_frames_per_second} frames/s`
+        );
+      } finally {
+        await context.close();
+      }
+    });
+
     // --- "Many runs" opened by the URL: 20 runs of one lap each, EKF and FEJ-EKF, in
     // the browser's wasm. The averages must be the native ones to the last bit (same seed):
     //   slamlab experiment consistency --preset lesson --estimator ekf,fej-ekf --seed 7 --trials 20 --json

@@ -8,12 +8,14 @@ use super::ViewOptions;
 use super::drive::{self, DriveState};
 use crate::palette;
 use crate::widgets::map_canvas::{
-    self, CanvasColors, MapTransform, MapView, draw_grid, draw_scale_and_axes, finite, screen_dir,
+    self, CanvasColors, MapTransform, MapView, draw_grid, draw_scale_and_axes, finite,
+    format_metres, screen_dir,
 };
 use egui::{Color32, Pos2, Rect, Shape, Stroke, pos2, vec2};
 use nalgebra::{Matrix2, Vector2};
 use slamlab_core::Pose2;
 use slamlab_core::geometry::{CHI2_2DOF_95, CovarianceEllipse};
+use slamlab_core::kalman::LandmarkSlam;
 use slamlab_sim::{LandmarkSession, Phase};
 use std::f64::consts::PI;
 
@@ -53,7 +55,7 @@ pub fn map_ui(
     painter.rect_filled(rect, 4.0, colors.background);
     draw_grid(&painter, &t, &colors);
     draw_world(&painter, &t, session, opts, &colors);
-    let sigma_points_shown = draw_filters(&painter, &t, session, opts, &colors);
+    // The truth first: the estimates' ellipses and wedges are drawn over its marker.
     draw_truth_robot(
         &painter,
         &t,
@@ -61,7 +63,9 @@ pub fn map_ui(
         colors.truth,
         colors.background,
     );
+    let sigma_points_shown = draw_filters(&painter, &t, session, opts, &colors);
     draw_scale_and_axes(&painter, &t, &colors);
+    let mut legend_rect = None;
     if opts.legend {
         let placement = LegendPlacement {
             transform: &t,
@@ -80,6 +84,38 @@ pub fn map_ui(
         if corner == 0 {
             view.legend_space = legend.right() - rect.left() + 8.0;
         }
+        legend_rect = Some(legend);
+    }
+    if opts.magnifier {
+        draw_magnifier(&painter, &t, session, opts, &colors, legend_rect);
+    }
+    if let Some(other) = coinciding_on_screen(session, t.scale) {
+        let names = session.filters();
+        let note = format!(
+            "{} and {} agree here to within a pixel or two: one is drawn over the other. \
+             Try the precise-range preset, where they part.",
+            filter_label(names[0].kind.name()),
+            filter_label(names[other].kind.name()),
+        );
+        // A label, not painted text, so that it wraps and screen readers find it.
+        let width = (rect.width() - 40.0).clamp(100.0, 560.0);
+        let note_rect = Rect::from_center_size(
+            pos2(rect.center().x, rect.bottom() - 70.0),
+            vec2(width, 44.0),
+        );
+        ui.put(note_rect, |ui: &mut egui::Ui| {
+            egui::Frame::new()
+                .fill(palette::faded(colors.background, 0.85))
+                .corner_radius(4.0)
+                .inner_margin(4.0)
+                .show(ui, |ui| {
+                    ui.with_layout(egui::Layout::top_down(egui::Align::Center), |ui| {
+                        ui.label(egui::RichText::new(note).color(ui.visuals().warn_fg_color))
+                    })
+                    .inner
+                })
+                .inner
+        });
     }
     if let Some(pointer) = response.hover_pos()
         && !response.dragged()
@@ -111,6 +147,10 @@ fn toolbar_ui(
             .on_hover_text("Keep the true robot in the middle of the map");
         ui.separator();
         ui.checkbox(&mut opts.legend, "Legend");
+        ui.checkbox(&mut opts.magnifier, "Magnifier").on_hover_text(
+            "A magnified view around the robot, whenever its ellipses are small on the map: \
+             watch predict grow them and each update shrink them",
+        );
         ui.checkbox(&mut opts.fov, "Field of view")
             .on_hover_text("The sensor's field of view and range, from the true robot");
         ui.checkbox(&mut opts.rays, "Observations")
@@ -446,46 +486,267 @@ fn draw_filters(
                 painter.add(Shape::line(path, Stroke::new(1.6, color)));
             }
         }
-        // Robot: 95% position ellipse, ±2σθ heading wedge, triangle.
-        let pose = filter.robot_pose();
-        let p = t.pose(&pose);
-        if !finite(p) {
-            continue;
-        }
-        let cov = filter.robot_covariance();
-        let position_cov = Matrix2::new(cov[(0, 0)], cov[(0, 1)], cov[(1, 0)], cov[(1, 1)]);
-        painter.extend(ellipse_shapes(
+        drew_sigma_points |= draw_robot_estimate(
+            painter,
             t,
-            &pose.translation(),
-            &position_cov,
+            filter,
             color,
-            0.14,
-            2.0,
             secondary,
-        ));
-        let sigma_theta = cov[(2, 2)].max(0.0).sqrt();
-        if sigma_theta.is_finite() {
-            let half = (2.0 * sigma_theta).min(PI);
-            let rim = arc(p, WEDGE_RADIUS, pose.theta - half, pose.theta + half);
-            painter.extend(fan(
-                p,
-                &rim,
-                palette::faded(color, 0.22),
-                Stroke::new(1.0, palette::faded(color, 0.8)),
-            ));
-        }
-        if opts.sigma_points {
-            for sigma in super::robot_sigma_points(filter) {
-                let s = t.pose(&sigma);
-                if finite(s) {
-                    painter.circle_filled(s, 2.2, color);
-                    drew_sigma_points = true;
-                }
-            }
-        }
-        draw_estimated_robot(painter, p, pose.theta, color, colors.background, secondary);
+            opts,
+            colors,
+            WEDGE_RADIUS,
+        );
     }
     drew_sigma_points
+}
+
+/// Smallest magnification worth an inset: below it the robot's ellipses are already
+/// readable on the map.
+const MIN_MAGNIFICATION: f32 = 2.5;
+
+/// The magnifier's square: its side (points) for a map, and the corner it takes (the
+/// first of top right, bottom right, bottom left, top left that stays inside the map,
+/// off the legend and off the true robot; bottom right is the drive pad's when
+/// driving by hand).
+fn magnifier_rect(map: Rect, legend: Option<Rect>, robot: Pos2, manual: bool) -> Option<Rect> {
+    let side = (0.3 * map.width().min(map.height())).clamp(110.0, 200.0);
+    let size = vec2(side, side);
+    let candidates = [
+        (
+            Rect::from_min_size(map.right_top() + vec2(-side - 10.0, 26.0), size),
+            false,
+        ),
+        (
+            Rect::from_min_size(map.right_bottom() + vec2(-side - 10.0, -side - 30.0), size),
+            true,
+        ),
+        (
+            Rect::from_min_size(map.left_bottom() + vec2(48.0, -side - 48.0), size),
+            false,
+        ),
+        (
+            Rect::from_min_size(map.left_top() + vec2(48.0, 26.0), size),
+            false,
+        ),
+    ];
+    candidates
+        .into_iter()
+        .filter(|(_, bottom_right)| !(manual && *bottom_right))
+        .map(|(rect, _)| rect)
+        .find(|rect| {
+            map.contains_rect(*rect)
+                && !legend.is_some_and(|l| l.intersects(rect.expand(4.0)))
+                && !rect.expand(16.0).contains(robot)
+        })
+}
+
+/// How far (metres) the robot's estimates reach from the true robot: each filter's
+/// distance plus its 95% ellipse's semi-major axis. `None` if not finite.
+fn estimate_extent(session: &LandmarkSession) -> Option<f64> {
+    let truth = session.truth().translation();
+    let mut extent = 0.0_f64;
+    for run in session.filters() {
+        let filter = run.filter();
+        let e = CovarianceEllipse::from_covariance(
+            filter.robot_pose().translation(),
+            &robot_position_covariance(filter),
+            CHI2_2DOF_95,
+        );
+        let reach = (filter.robot_pose().translation() - truth).norm() + e.semi_major;
+        if !reach.is_finite() {
+            return None;
+        }
+        extent = extent.max(reach);
+    }
+    Some(extent.max(0.02))
+}
+
+/// A magnified inset around the true robot: every filter's robot ellipse, heading
+/// wedge and (for FastSLAM) particles, with the magnification and the width it shows,
+/// and a square on the map marking where it looks. Drawn only when the ellipses are
+/// small on the map (magnification of at least [`MIN_MAGNIFICATION`]).
+fn draw_magnifier(
+    painter: &egui::Painter,
+    t: &MapTransform,
+    session: &LandmarkSession,
+    opts: &ViewOptions,
+    colors: &CanvasColors,
+    legend: Option<Rect>,
+) {
+    let truth = session.truth();
+    let robot = t.pose(&truth);
+    let Some(extent) = estimate_extent(session) else {
+        return;
+    };
+    if !finite(robot) || !t.rect.contains(robot) {
+        return;
+    }
+    let Some(inset) = magnifier_rect(t.rect, legend, robot, is_manual(session)) else {
+        return;
+    };
+    let scale = (0.42 * f64::from(inset.width()) / extent) as f32;
+    let magnification = scale / t.scale;
+    if !(magnification.is_finite() && magnification >= MIN_MAGNIFICATION) {
+        return;
+    }
+    // Where the inset looks, on the map, joined to the inset.
+    let half = 0.5 * inset.width() / magnification;
+    let looked_at = Rect::from_center_size(robot, vec2(2.0 * half, 2.0 * half).max(vec2(6.0, 6.0)));
+    let frame = Stroke::new(1.0, colors.weak_text);
+    painter.rect_stroke(looked_at, 0.0, frame, egui::StrokeKind::Outside);
+    let nearest_corner = [
+        inset.left_top(),
+        inset.right_top(),
+        inset.left_bottom(),
+        inset.right_bottom(),
+    ]
+    .into_iter()
+    .min_by(|a, b| a.distance(robot).total_cmp(&b.distance(robot)))
+    .unwrap_or(inset.center());
+    painter.line_segment(
+        [
+            looked_at.center() + (nearest_corner - robot).normalized() * half,
+            nearest_corner,
+        ],
+        Stroke::new(1.0, palette::faded(colors.weak_text, 0.6)),
+    );
+
+    painter.rect(
+        inset,
+        4.0,
+        colors.background,
+        Stroke::new(1.2, colors.weak_text),
+        egui::StrokeKind::Outside,
+    );
+    let zoomed = MapTransform {
+        rect: inset,
+        center: [truth.x, truth.y],
+        scale,
+    };
+    let clipped = painter.with_clip_rect(inset);
+    draw_grid(&clipped, &zoomed, colors);
+    draw_truth_robot(&clipped, &zoomed, truth, colors.truth, colors.background);
+    for (index, run) in session.filters().iter().enumerate() {
+        let color = palette::estimator_color(run.kind.name());
+        let filter = run.filter();
+        if let Some(particles) = filter.particle_set() {
+            draw_particles(&clipped, &zoomed, particles, color);
+        }
+        draw_robot_estimate(
+            &clipped,
+            &zoomed,
+            filter,
+            color,
+            index > 0,
+            opts,
+            colors,
+            0.3 * inset.width(),
+        );
+    }
+    let across = f64::from(inset.width() / scale);
+    painter.text(
+        inset.left_top() + vec2(6.0, 4.0),
+        egui::Align2::LEFT_TOP,
+        format!(
+            "robot ×{magnification:.0}, {} m across",
+            format_metres(across, across / 10.0)
+        ),
+        egui::FontId::proportional(12.0),
+        colors.truth,
+    );
+}
+
+/// The first later filter whose robot (mean, 95% ellipse axes) and every landmark mean
+/// are within two screen pixels of the first filter's at `scale` pixels per metre, if
+/// any: two filters drawn over each other, the later one hiding the first.
+fn coinciding_on_screen(session: &LandmarkSession, scale: f32) -> Option<usize> {
+    let runs = session.filters();
+    let first = runs.first()?.filter();
+    let pixel = 2.0 / f64::from(scale);
+    let axes = |filter: &dyn LandmarkSlam| {
+        let e = CovarianceEllipse::from_covariance(
+            filter.robot_pose().translation(),
+            &robot_position_covariance(filter),
+            CHI2_2DOF_95,
+        );
+        (e.semi_major, e.semi_minor)
+    };
+    let (a_major, a_minor) = axes(first);
+    let first_landmarks = first.landmarks();
+    runs.iter().enumerate().skip(1).find_map(|(k, run)| {
+        let other = run.filter();
+        let (b_major, b_minor) = axes(other);
+        let landmarks = other.landmarks();
+        let same = (first.robot_pose().translation() - other.robot_pose().translation()).norm()
+            < pixel
+            && (a_major - b_major).abs() < pixel
+            && (a_minor - b_minor).abs() < pixel
+            && landmarks.len() == first_landmarks.len()
+            && first_landmarks
+                .iter()
+                .zip(&landmarks)
+                .all(|(a, b)| (a.mean - b.mean).norm() < pixel);
+        (same && session.tick() > 0).then_some(k)
+    })
+}
+
+/// One filter's robot: 95% position ellipse, ±2σθ heading wedge (of `wedge_radius`
+/// points), sigma points when asked for, and the triangle. Returns whether it drew
+/// sigma points.
+#[allow(clippy::too_many_arguments)]
+fn draw_robot_estimate(
+    painter: &egui::Painter,
+    t: &MapTransform,
+    filter: &dyn LandmarkSlam,
+    color: Color32,
+    secondary: bool,
+    opts: &ViewOptions,
+    colors: &CanvasColors,
+    wedge_radius: f32,
+) -> bool {
+    let pose = filter.robot_pose();
+    let p = t.pose(&pose);
+    if !finite(p) {
+        return false;
+    }
+    painter.extend(ellipse_shapes(
+        t,
+        &pose.translation(),
+        &robot_position_covariance(filter),
+        color,
+        0.14,
+        2.0,
+        secondary,
+    ));
+    let sigma_theta = filter.robot_covariance()[(2, 2)].max(0.0).sqrt();
+    if sigma_theta.is_finite() {
+        let half = (2.0 * sigma_theta).min(PI);
+        let rim = arc(p, wedge_radius, pose.theta - half, pose.theta + half);
+        painter.extend(fan(
+            p,
+            &rim,
+            palette::faded(color, 0.22),
+            Stroke::new(1.0, palette::faded(color, 0.8)),
+        ));
+    }
+    let mut drew_sigma_points = false;
+    if opts.sigma_points {
+        for sigma in super::robot_sigma_points(filter) {
+            let s = t.pose(&sigma);
+            if finite(s) {
+                painter.circle_filled(s, 2.2, color);
+                drew_sigma_points = true;
+            }
+        }
+    }
+    draw_estimated_robot(painter, p, pose.theta, color, colors.background, secondary);
+    drew_sigma_points
+}
+
+/// The x-y block of a filter's robot covariance.
+fn robot_position_covariance(filter: &dyn LandmarkSlam) -> Matrix2<f64> {
+    let cov = filter.robot_covariance();
+    Matrix2::new(cov[(0, 0)], cov[(0, 1)], cov[(1, 0)], cov[(1, 1)])
 }
 
 /// FastSLAM's particles: every particle's landmark means as faint dots, then
@@ -991,6 +1252,30 @@ fn hover_text(t: &MapTransform, session: &LandmarkSession, pointer: Pos2) -> Opt
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn the_magnifier_takes_a_free_corner() {
+        let map = Rect::from_min_size(pos2(0.0, 0.0), vec2(800.0, 600.0));
+        let far = pos2(400.0, 300.0);
+        // Nothing in the way: top right.
+        let first = magnifier_rect(map, None, far, false).unwrap();
+        assert!(first.right() < map.right() && first.top() < 100.0);
+        assert_eq!(first.width(), 180.0);
+        // The legend over the top right: bottom right; driving by hand (the drive
+        // pad's corner): bottom left.
+        let legend = Rect::from_min_size(pos2(500.0, 20.0), vec2(300.0, 200.0));
+        let second = magnifier_rect(map, Some(legend), far, false).unwrap();
+        assert!(second.bottom() > 400.0 && second.right() > 600.0);
+        let third = magnifier_rect(map, Some(legend), far, true).unwrap();
+        assert!(third.bottom() > 400.0 && third.left() < 100.0);
+        // Never over the true robot.
+        let robot = first.center();
+        let moved = magnifier_rect(map, None, robot, false).unwrap();
+        assert!(!moved.expand(16.0).contains(robot));
+        // A map too small for any corner: no magnifier.
+        let tiny = Rect::from_min_size(pos2(0.0, 0.0), vec2(150.0, 120.0));
+        assert!(magnifier_rect(tiny, None, far, false).is_none());
+    }
 
     #[test]
     fn the_legend_moves_off_the_robot() {

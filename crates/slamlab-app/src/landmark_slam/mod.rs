@@ -37,6 +37,8 @@ pub const LIVE_PARAMS: [&str; 2] = ["fov-deg", "max-range"];
 pub struct ViewOptions {
     /// The legend box on the map.
     pub legend: bool,
+    /// A magnified inset around the robot while its ellipses are small on the map.
+    pub magnifier: bool,
     /// The sensor's field of view as a faint wedge.
     pub fov: bool,
     /// This tick's observations as rays from the true robot.
@@ -59,6 +61,7 @@ impl Default for ViewOptions {
     fn default() -> Self {
         Self {
             legend: true,
+            magnifier: true,
             fov: true,
             rays: true,
             error_lines: false,

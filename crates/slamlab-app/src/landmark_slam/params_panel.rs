@@ -7,7 +7,7 @@ use crate::palette;
 use slamlab_sim::EstimatorKind;
 use slamlab_sim::LandmarkScenario;
 use slamlab_sim::params::{self, ParamKind, Scenario};
-use slamlab_sim::scenario::ControllerKind;
+use slamlab_sim::scenario::{Association, ControllerKind};
 
 /// The parameter's current pending value as a number.
 fn pending_number(lesson: &LandmarkSlamLesson, name: &str) -> Option<f64> {
@@ -216,15 +216,22 @@ fn fastslam_ui(ui: &mut egui::Ui, lesson: &mut LandmarkSlamLesson) {
         "new-landmark-threshold",
         "FastSLAM new landmark χ²",
     );
+    // A mislabel is a wrong id; with unknown association the estimators get no ids,
+    // so the fault is offered only where it changes something.
+    let ids_used = lesson.session.scenario().association == Association::Known;
     ui.horizontal(|ui| {
-        if ui
-            .button("Wrong association")
+        let button = ui
+            .add_enabled(ids_used, egui::Button::new("Wrong association"))
             .on_hover_text(
                 "The sensor gives one observation of the next tick the id of another landmark \
                  (the nearest one seen before). With known ids every estimator trusts it.",
             )
-            .clicked()
-        {
+            .on_disabled_hover_text(
+                "With unknown association the sensor reports no ids, so it cannot mislabel one: \
+                 EKF/UKF pick the nearest landmark inside the gate, each FastSLAM particle its \
+                 own most likely one. Choose known ids (and reset) to try the fault.",
+            );
+        if button.clicked() {
             lesson.session.mislabel_next_observation();
         }
         if let Some(m) = lesson.session.mislabel() {

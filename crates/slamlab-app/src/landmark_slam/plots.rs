@@ -45,8 +45,64 @@ fn plot<'a>(id: &str, y_label: &str, height: f32) -> Plot<'a> {
         .include_y(0.0)
 }
 
+/// Pairs of filters whose plotted series lie on top of each other: the first filter
+/// and each later one whose robot error and NEES never differ by more than 0.5% of the
+/// plot's range (a pixel on a 200-pixel plot), with the largest robot-error difference
+/// in metres. Needs at least ten ticks.
+pub fn coinciding_series(session: &LandmarkSession) -> Vec<(usize, f64)> {
+    let runs = session.filters();
+    let Some(first) = runs.first() else {
+        return Vec::new();
+    };
+    if first.history.len() < 10 {
+        return Vec::new();
+    }
+    let range = |f: &dyn Fn(&slamlab_sim::session::TickMetrics) -> Option<f64>| {
+        runs.iter()
+            .flat_map(|run| run.history.iter().filter_map(f))
+            .filter(|v| v.is_finite())
+            .fold(0.0_f64, |m, v| m.max(v.abs()))
+    };
+    let error_range = range(&|m| Some(m.position_error));
+    let nees_range = range(&|m| m.nees);
+    runs.iter()
+        .enumerate()
+        .skip(1)
+        .filter_map(|(k, run)| {
+            let mut error_gap = 0.0_f64;
+            let mut nees_gap = 0.0_f64;
+            for (a, b) in first.history.iter().zip(&run.history) {
+                error_gap = error_gap.max((a.position_error - b.position_error).abs());
+                if let (Some(x), Some(y)) = (a.nees, b.nees) {
+                    nees_gap = nees_gap.max((x - y).abs());
+                }
+            }
+            let same = run.history.len() == first.history.len()
+                && error_gap <= 0.005 * error_range
+                && nees_gap <= 0.005 * nees_range.max(1.0);
+            (same && error_gap.is_finite()).then_some((k, error_gap))
+        })
+        .collect()
+}
+
+/// The note above the plots when two filters' series coincide, naming them.
+pub fn coincidence_note(session: &LandmarkSession, pairs: &[(usize, f64)]) -> Option<String> {
+    let runs = session.filters();
+    let first = runs.first()?.kind.name().to_uppercase();
+    let (k, gap) = *pairs.first()?;
+    let other = runs.get(k)?.kind.name().to_uppercase();
+    Some(format!(
+        "{first} and {other} agree here: their lines lie on top of each other (robot errors \
+         differ by at most {:.1} mm). Try the precise-range preset, where they part.",
+        gap * 1000.0
+    ))
+}
+
 /// The four plots side by side.
 pub fn plots_ui(ui: &mut egui::Ui, session: &LandmarkSession) {
+    if let Some(note) = coincidence_note(session, &coinciding_series(session)) {
+        ui.label(egui::RichText::new(note).color(ui.visuals().warn_fg_color));
+    }
     let height = (ui.available_height() - 26.0).max(80.0);
     let dt = session.scenario().dt;
     ui.columns(4, |columns| {

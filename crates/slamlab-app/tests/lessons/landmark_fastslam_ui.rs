@@ -4,7 +4,7 @@
 
 use super::common::{count_pixels_near as count_pixels, harness};
 use egui_kittest::Harness;
-use egui_kittest::kittest::Queryable as _;
+use egui_kittest::kittest::{NodeT as _, Queryable as _};
 use slamlab_app::SlamLabApp;
 
 /// Okabe-Ito reddish purple: FastSLAM.
@@ -94,6 +94,21 @@ fn the_wrong_association_button_mislabels_the_next_observation() {
             .next()
             .is_some()
     );
+
+    // With unknown association the sensor gives no ids: the button is greyed out and
+    // a click schedules nothing.
+    let mut h = harness("lesson=landmark-slam&seed=1&estimator=ekf,fastslam2&association=unknown");
+    h.run();
+    h.get_by_label("Wrong association").scroll_to_me();
+    h.run();
+    assert!(
+        h.get_by_label("Wrong association")
+            .accesskit_node()
+            .is_disabled()
+    );
+    h.get_by_label("Wrong association").click();
+    h.run();
+    assert!(session(&h).mislabel_ticks().is_empty());
 }
 
 #[test]
