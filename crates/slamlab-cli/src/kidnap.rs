@@ -108,6 +108,7 @@ pub fn command() -> Command {
                 .action(ArgAction::SetTrue)
                 .help("print one JSON object"),
         )
+        .arg(crate::scenario_file_arg())
 }
 
 /// Reads a map: a built-in name, a YAML (its image beside it), or a lone image

@@ -26,8 +26,11 @@ use slamlab_sim::experiments;
 use slamlab_sim::landmark_params::PARAMS;
 use slamlab_sim::metrics::{RunSummary, run_headless};
 use slamlab_sim::params::{self, Scenario};
+use slamlab_sim::scenario_file::ScenarioFile;
 use slamlab_sim::{LandmarkScenario, LandmarkSession};
+use std::ffi::OsString;
 use std::io::{IsTerminal, Write};
+use std::path::PathBuf;
 
 mod fusion;
 mod particle_experiments;
@@ -84,6 +87,15 @@ fn scenario_args(skip: &'static [&'static str]) -> Vec<Arg> {
         .collect()
 }
 
+/// `--scenario FILE` (read before clap parses, by [`expand_scenario_file`]; the
+/// argument is here for `--help`).
+pub(crate) fn scenario_file_arg() -> Arg {
+    Arg::new("scenario")
+        .long("scenario")
+        .value_name("FILE")
+        .help("a scenario the app exported (Export → Scenario as JSON): its parameters, under the flags given here")
+}
+
 fn cli() -> Command {
     Command::new("slamlab")
         .about(
@@ -114,6 +126,7 @@ fn cli() -> Command {
                         .action(ArgAction::SetTrue)
                         .help("print one JSON object"),
                 )
+                .arg(scenario_file_arg())
                 .args(scenario_args(&[])),
         )
         .subcommand(
@@ -615,8 +628,101 @@ fn ekf_vs_ukf(matches: &ArgMatches, seed: u64) -> Result<()> {
     Ok(())
 }
 
+/// `slamlab run [LESSON] --scenario FILE ...`: the command line with the file's
+/// parameters spelled out as flags (`--seed=7 ...`), so one parser reads both. Flags
+/// given on the command line win over the file's; parameters `slamlab run` has no
+/// flag for are skipped with a warning. Other command lines come back unchanged.
+fn expand_scenario_file(mut args: Vec<OsString>) -> Result<Vec<OsString>> {
+    if args.get(1).is_none_or(|a| a != "run") {
+        return Ok(args);
+    }
+    let Some(at) = args
+        .iter()
+        .position(|a| a == "--scenario" || a.to_string_lossy().starts_with("--scenario="))
+    else {
+        return Ok(args);
+    };
+    let inline = args[at]
+        .to_string_lossy()
+        .strip_prefix("--scenario=")
+        .map(PathBuf::from);
+    let path = match inline {
+        Some(path) => {
+            args.remove(at);
+            path
+        }
+        None if at + 1 < args.len() => {
+            let path = PathBuf::from(args.remove(at + 1));
+            args.remove(at);
+            path
+        }
+        None => bail!("--scenario needs a file: slamlab run --scenario FILE.json"),
+    };
+    let text = std::fs::read_to_string(&path)
+        .with_context(|| format!("reading the scenario {}", path.display()))?;
+    let file =
+        ScenarioFile::parse(&text).map_err(|e| anyhow::anyhow!("{}: {e}", path.display()))?;
+    if !LESSONS.contains(&file.lesson.as_str()) {
+        bail!(
+            "{} is a scenario of the {} lesson; `slamlab run` runs {} (the other lessons' \
+             experiments: `slamlab experiment --help`)",
+            path.display(),
+            file.lesson,
+            LESSONS.join(" and ")
+        );
+    }
+    match args.get(2).map(|a| a.to_string_lossy().into_owned()) {
+        Some(lesson) if !lesson.starts_with('-') => {
+            if lesson != file.lesson {
+                bail!(
+                    "{} is a scenario of the {} lesson, not {lesson}",
+                    path.display(),
+                    file.lesson
+                );
+            }
+        }
+        _ => args.insert(2, OsString::from(&file.lesson)),
+    }
+    let command = if file.lesson == "kidnap" {
+        kidnap::command()
+    } else {
+        cli().find_subcommand("run").cloned().unwrap_or_else(cli)
+    };
+    let flags: Vec<String> = command
+        .get_arguments()
+        .filter_map(|a| a.get_long().map(str::to_owned))
+        .collect();
+    let given = |key: &str| {
+        args.iter().any(|a| {
+            let a = a.to_string_lossy();
+            a == format!("--{key}") || a.starts_with(&format!("--{key}="))
+        })
+    };
+    let mut spelled = Vec::new();
+    for (key, value) in &file.params {
+        if !flags.iter().any(|f| f == key) || key == "scenario" {
+            eprintln!(
+                "warning: {}: `{key}` is not a flag of `slamlab run {}`; ignored",
+                path.display(),
+                file.lesson
+            );
+        } else if !given(key) {
+            spelled.push(OsString::from(format!("--{key}={value}")));
+        }
+    }
+    args.splice(3..3, spelled);
+    Ok(args)
+}
+
 fn main() -> std::process::ExitCode {
-    let args: Vec<std::ffi::OsString> = std::env::args_os().collect();
+    let args: Vec<OsString> = std::env::args_os().collect();
+    let args = match expand_scenario_file(args) {
+        Ok(args) => args,
+        Err(e) => {
+            eprintln!("error: {e:#}");
+            return std::process::ExitCode::FAILURE;
+        }
+    };
     let kidnap_run = kidnap::is_kidnap_run(&args);
     let kidnap_experiment = kidnap::is_kidnap_experiment(&args);
     // `run kidnap` and `experiment kidnap` have their own flags (kidnap.rs).

@@ -409,3 +409,110 @@ fn a_run_that_cannot_go_as_asked_is_refused_with_the_reason() {
     let (ok, _, stderr) = slamlab(&["run", "landmark-slam", "--controller", "manual", "--v", "2"]);
     assert!(!ok && stderr.contains("v was ignored"), "{stderr}");
 }
+
+/// A scenario file the app exported runs the same as its flags; flags on the command
+/// line win; a file of another lesson, a bad file and a missing file are refused.
+#[test]
+fn a_scenario_file_runs_like_its_flags() {
+    let dir = std::env::temp_dir().join(format!("slamlab-scenario-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let file = dir.join("lesson.json");
+    std::fs::write(
+        &file,
+        r#"{
+  "format": "slamlab-scenario",
+  "version": 1,
+  "lesson": "landmark-slam",
+  "params": {
+    "seed": "3",
+    "estimator": "ekf",
+    "landmarks": "30",
+    "range-std": "0.25"
+  },
+  "view": {
+    "tick": "120"
+  }
+}
+"#,
+    )
+    .unwrap();
+    let path = file.to_string_lossy().into_owned();
+    let flags = run_json(&[
+        "run",
+        "landmark-slam",
+        "--seed",
+        "3",
+        "--estimator",
+        "ekf",
+        "--landmarks",
+        "30",
+        "--range-std",
+        "0.25",
+        "--steps",
+        "50",
+        "--json",
+    ]);
+    let from_file = run_json(&["run", "--scenario", &path, "--steps", "50", "--json"]);
+    assert_eq!(from_file["robot_rmse"], flags["robot_rmse"]);
+    assert_eq!(from_file["parameters"], flags["parameters"]);
+    // A flag on the command line wins over the file's value.
+    let seed_5 = run_json(&[
+        "run",
+        "landmark-slam",
+        &format!("--scenario={path}"),
+        "--seed",
+        "5",
+        "--steps",
+        "50",
+        "--json",
+    ]);
+    assert_eq!(seed_5["seed"], 5);
+    assert_eq!(
+        seed_5["parameters"]["landmarks"],
+        flags["parameters"]["landmarks"]
+    );
+
+    let fusion = dir.join("fusion.json");
+    std::fs::write(
+        &fusion,
+        r#"{"format":"slamlab-scenario","version":1,"lesson":"fusion","params":{}}"#,
+    )
+    .unwrap();
+    let fusion = fusion.to_string_lossy().into_owned();
+    let (ok, _, stderr) = slamlab(&["run", "--scenario", &fusion]);
+    assert!(
+        !ok && stderr.contains("scenario of the fusion lesson"),
+        "{stderr}"
+    );
+    let (ok, _, stderr) = slamlab(&["run", "kidnap", "--scenario", &path]);
+    assert!(!ok && stderr.contains("not kidnap"), "{stderr}");
+    let bad = dir.join("bad.json");
+    std::fs::write(&bad, "{ not json").unwrap();
+    let (ok, _, stderr) = slamlab(&["run", "--scenario", &bad.to_string_lossy()]);
+    assert!(!ok && stderr.contains("does not parse"), "{stderr}");
+    let (ok, _, stderr) = slamlab(&["run", "--scenario", "/nonexistent/x.json"]);
+    assert!(!ok && stderr.contains("reading the scenario"), "{stderr}");
+    let (ok, _, stderr) = slamlab(&["run", "--scenario"]);
+    assert!(!ok && stderr.contains("needs a file"), "{stderr}");
+    // The kidnap lesson's file: an app-only key is skipped with a warning.
+    let kidnap = dir.join("kidnap.json");
+    std::fs::write(
+        &kidnap,
+        r#"{"format":"slamlab-scenario","version":1,"lesson":"kidnap",
+            "params":{"seed":"2","particles":"300","estimator":"mcl","init":"tracking","nope":"1"}}"#,
+    )
+    .unwrap();
+    let (ok, stdout, stderr) = slamlab(&[
+        "run",
+        "--scenario",
+        &kidnap.to_string_lossy(),
+        "--steps",
+        "20",
+        "--json",
+    ]);
+    assert!(ok, "{stderr}");
+    assert!(stderr.contains("`nope` is not a flag"), "{stderr}");
+    let v: serde_json::Value = serde_json::from_str(&stdout).unwrap();
+    assert_eq!(v["seed"], 2, "{v}");
+    let _ = std::fs::remove_dir_all(&dir);
+}

@@ -26,6 +26,7 @@ pub mod presets;
 pub mod resampling;
 pub mod resampling_lab;
 pub mod scenario;
+pub mod scenario_file;
 pub mod session;
 pub mod stepper;
 pub mod world;
