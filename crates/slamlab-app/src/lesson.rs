@@ -190,6 +190,10 @@ pub trait Lesson: std::fmt::Debug {
     fn set_follow(&mut self, _on: bool) -> bool {
         false
     }
+    /// Every plot's data, unthinned, for "Export plot data as CSV".
+    fn plot_series(&self) -> Vec<crate::export::PlotSeries> {
+        Vec::new()
+    }
 }
 
 /// A lesson with one more notice in front of its own (a lesson that opened in
@@ -277,6 +281,9 @@ impl Lesson for WithNotice {
     }
     fn set_follow(&mut self, on: bool) -> bool {
         self.inner.set_follow(on)
+    }
+    fn plot_series(&self) -> Vec<crate::export::PlotSeries> {
+        self.inner.plot_series()
     }
 }
 

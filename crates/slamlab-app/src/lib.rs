@@ -9,6 +9,7 @@
 //! An embedded figure has no menu bar: a one-line header (title, panel toggles, a
 //! link that opens the same setup in the full app) above the time bar.
 
+pub mod export;
 pub mod frame_stats;
 pub mod fusion;
 pub mod kidnap;
@@ -76,6 +77,11 @@ pub struct SlamLabApp {
     dismissed: BTreeSet<String>,
     dark_mode: Option<bool>,
     theme_applied: bool,
+    /// Exports in progress (PNG, CSV, JSON) and what the last one did.
+    pub exporter: export::Exporter,
+    /// "Open scenario…": the picker, and scenario files dropped on the window.
+    scenario_picker: widgets::file_picker::FilePicker,
+    scenario_drops: widgets::dropped_files::DropInbox,
     /// The settings loaded at start, with each lesson's entry updated when the user
     /// leaves it. An embedded page saves these back unchanged (except the theme), so
     /// a lecture figure never rewrites the student's own setup.
@@ -155,6 +161,9 @@ impl SlamLabApp {
             dismissed: BTreeSet::new(),
             dark_mode: settings.dark_mode,
             theme_applied: false,
+            exporter: export::Exporter::default(),
+            scenario_picker: widgets::file_picker::FilePicker::default(),
+            scenario_drops: widgets::dropped_files::DropInbox::default(),
             stored: settings,
         }
     }
@@ -379,6 +388,7 @@ impl SlamLabApp {
         if !notices.is_empty() {
             egui::Panel::top("slamlab_notices").show(ui, |ui| self.notice_bar_ui(ui, &notices));
         }
+        self.poll_scenario_files(&ctx);
         let panels = if self.narrow {
             &mut self.narrow_panels
         } else {
@@ -386,6 +396,7 @@ impl SlamLabApp {
         };
         self.lesson.panels_ui(ui, panels, self.embed);
         self.map_rect = widgets::layout::map_rect(&ctx);
+        self.exporter.ui(&ctx);
         if self.lesson.wants_repaint() {
             ctx.request_repaint();
         }
@@ -434,6 +445,7 @@ impl SlamLabApp {
         let title = self.title();
         ui.horizontal_wrapped(|ui| {
             ui.label(egui::RichText::new("SLAM Lab").strong());
+            ui.menu_button("File", |ui| self.file_menu_ui(ui));
             ui.menu_button("Lessons", |ui| {
                 for info in lesson::LESSONS {
                     let selected = info.id == self.lesson.id();
@@ -479,6 +491,10 @@ impl SlamLabApp {
             }
             ui.separator();
             ui.label(egui::RichText::new(title).strong());
+            if let Some(status) = &self.exporter.status {
+                ui.separator();
+                ui.label(status);
+            }
             ui.with_layout(egui::Layout::right_to_left(egui::Align::Center), |ui| {
                 let dark = ui.visuals().dark_mode;
                 let label = if dark { "Light theme" } else { "Dark theme" };
@@ -504,6 +520,144 @@ impl SlamLabApp {
                 );
             });
         });
+    }
+
+    /// The File menu: open a scenario, and the exports.
+    fn file_menu_ui(&mut self, ui: &mut egui::Ui) {
+        ui.label("Open a scenario file (.json) or drop one on the window:");
+        self.scenario_picker
+            .ui(ui, "Open scenario…", ".json,application/json", 1 << 20);
+        ui.separator();
+        let ctx = ui.ctx().clone();
+        if ui
+            .button("Export map as PNG")
+            .on_hover_text("The map panel as it is on screen")
+            .clicked()
+        {
+            self.export(&ctx, export::ExportKind::MapPng);
+            ui.close();
+        }
+        if ui.button("Export window as PNG").clicked() {
+            self.export(&ctx, export::ExportKind::WindowPng);
+            ui.close();
+        }
+        if ui
+            .button("Export plot data as CSV")
+            .on_hover_text("Every plot's series, every point: plot, axes, series, x, y")
+            .clicked()
+        {
+            self.export(&ctx, export::ExportKind::PlotsCsv);
+            ui.close();
+        }
+        if ui
+            .button("Export scenario as JSON")
+            .on_hover_text(
+                "The lesson, its parameters and the view at this tick: open it again here \
+                 (File → Open scenario, or drop it on the window) or run it with \
+                 `slamlab run --scenario FILE`",
+            )
+            .clicked()
+        {
+            self.export(&ctx, export::ExportKind::ScenarioJson);
+            ui.close();
+        }
+    }
+
+    /// Starts an export of the current lesson: a file name with the lesson and tick.
+    pub fn export(&mut self, ctx: &egui::Context, kind: export::ExportKind) {
+        use export::{ExportFile, ExportKind};
+        let stem = format!(
+            "slamlab-{}-t{}",
+            self.lesson.id(),
+            self.lesson.time_info().tick
+        );
+        match kind {
+            ExportKind::MapPng => match self.map_rect {
+                Some(rect) => {
+                    self.exporter
+                        .request_png(ctx, Some(rect), format!("{stem}-map.png"));
+                }
+                None => self.exporter.status = Some("No map on screen to export".to_owned()),
+            },
+            ExportKind::WindowPng => {
+                self.exporter
+                    .request_png(ctx, None, format!("{stem}-window.png"));
+            }
+            ExportKind::PlotsCsv => {
+                let series = self.lesson.plot_series();
+                if series.iter().all(|s| s.points.is_empty()) {
+                    self.exporter.status =
+                        Some("The plots have no data yet: run or step first".to_owned());
+                } else {
+                    self.exporter.save(ExportFile {
+                        name: format!("{stem}-plots.csv"),
+                        mime: "text/csv",
+                        bytes: export::series_csv(&series).into_bytes(),
+                    });
+                }
+            }
+            ExportKind::ScenarioJson => {
+                let file = export::scenario_of_query(&self.share_query(false));
+                self.exporter.save(ExportFile {
+                    name: format!("slamlab-{}-scenario.json", self.lesson.id()),
+                    mime: "application/json",
+                    bytes: file.to_json().into_bytes(),
+                });
+            }
+        }
+    }
+
+    /// Opens a scenario file picked or dropped this frame. A dropped `.json` is taken
+    /// out of the frame's input, so that a lesson that reads dropped maps or graphs
+    /// does not also try it.
+    fn poll_scenario_files(&mut self, ctx: &egui::Context) {
+        let is_json = |file: &egui::DroppedFileHandle| {
+            file.path()
+                .extension()
+                .is_some_and(|e| e.eq_ignore_ascii_case("json"))
+        };
+        let taken = ctx.input_mut(|i| {
+            let (json, rest): (Vec<_>, Vec<_>) = std::mem::take(&mut i.raw.dropped_files)
+                .into_iter()
+                .partition(is_json);
+            i.raw.dropped_files = rest;
+            json
+        });
+        let mut files: Vec<(String, Result<Vec<u8>, String>)> = Vec::new();
+        if let Some(batch) = self.scenario_drops.read(ctx, taken) {
+            files.extend(batch);
+        }
+        if let Some(picked) = self.scenario_picker.poll() {
+            files.push(picked);
+        }
+        for (name, bytes) in files {
+            let opened = bytes
+                .and_then(|b| String::from_utf8(b).map_err(|_| "it is not text".to_owned()))
+                .and_then(|text| slamlab_sim::scenario_file::ScenarioFile::parse(&text));
+            match opened {
+                Ok(file) => self.open_scenario(&file, &name),
+                Err(e) => self.app_notices.push(format!("{name}: {e}")),
+            }
+        }
+    }
+
+    /// Opens a scenario file's lesson with its parameters and view, as a link with
+    /// the same pairs would (its problems become notices).
+    pub fn open_scenario(&mut self, file: &slamlab_sim::scenario_file::ScenarioFile, name: &str) {
+        if lesson::find(&file.lesson).is_none() {
+            self.app_notices.push(format!(
+                "{name}: no lesson '{}' in this SLAM Lab; the current lesson stays",
+                file.lesson
+            ));
+            return;
+        }
+        let query = export::query_of_scenario(file, self.embed);
+        let fresh = Self::with_settings(&query, Some(self.settings()));
+        self.lesson = fresh.lesson;
+        self.figure = fresh.figure;
+        self.app_notices = fresh.app_notices;
+        self.dismissed.clear();
+        self.exporter.status = Some(format!("Opened {name}"));
     }
 
     /// Opens lesson `id` as the user left it (its stored settings), keeping the

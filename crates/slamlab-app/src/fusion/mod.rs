@@ -463,6 +463,10 @@ impl crate::widgets::layout::LessonPanels for FusionLesson {
 }
 
 impl Lesson for FusionLesson {
+    fn plot_series(&self) -> Vec<crate::export::PlotSeries> {
+        plots::series(self.stepper.sim())
+    }
+
     fn id(&self) -> &'static str {
         LESSON_ID
     }

@@ -2,6 +2,7 @@
 //! ±2σ bounds, and the size of every SLAM update's position jump.
 
 use super::mode_color;
+use crate::export::PlotSeries;
 use crate::widgets::plots::{line_width, thin, time_plot, title_ui};
 use egui_plot::{Line, LineStyle, PlotPoints, Points};
 use slamlab_sim::fusion::lesson::FusionSim;
@@ -79,4 +80,44 @@ pub fn plots_ui(ui: &mut egui::Ui, sim: &FusionSim) {
             }
         });
     });
+}
+
+/// Every plot's series, unthinned, for the CSV export.
+pub fn series(sim: &FusionSim) -> Vec<PlotSeries> {
+    let mut out = Vec::new();
+    for run in sim.runs() {
+        let name = run.mode().name();
+        let samples = run.samples();
+        for (k, (plot, axis)) in [
+            ("x error", "x error (m)"),
+            ("y error", "y error (m)"),
+            ("Yaw error", "yaw error (rad)"),
+        ]
+        .into_iter()
+        .enumerate()
+        {
+            out.push(PlotSeries::new(
+                plot,
+                "time (s)",
+                axis,
+                format!("{name} error"),
+                samples.iter().map(|s| [s.t, s.error[k]]).collect(),
+            ));
+            out.push(PlotSeries::new(
+                plot,
+                "time (s)",
+                axis,
+                format!("{name} 2σ"),
+                samples.iter().map(|s| [s.t, 2.0 * s.sigma[k]]).collect(),
+            ));
+        }
+        out.push(PlotSeries::new(
+            "SLAM update jumps",
+            "time (s)",
+            "jump (m)",
+            format!("{name} jump"),
+            run.slam_jumps().iter().map(|j| [j.t, j.jump]).collect(),
+        ));
+    }
+    out
 }

@@ -632,6 +632,10 @@ impl crate::widgets::layout::LessonPanels for KidnapLesson {
 }
 
 impl Lesson for KidnapLesson {
+    fn plot_series(&self) -> Vec<crate::export::PlotSeries> {
+        plots::series(self.stepper.sim().run())
+    }
+
     fn id(&self) -> &'static str {
         LESSON_ID
     }

@@ -4,6 +4,7 @@
 //! the fraction of particles drawn anew.
 
 use super::filter_color;
+use crate::export::PlotSeries;
 use crate::widgets::plots::{line_width, thin, time_plot, title_ui};
 use egui_plot::{Line, LineStyle, PlotPoints};
 use slamlab_sim::localization::MclRun;
@@ -172,4 +173,79 @@ pub fn plots_ui(ui: &mut egui::Ui, run: &MclRun) {
             }
         });
     });
+}
+
+/// Every plot's series, unthinned, for the CSV export.
+pub fn series(run: &MclRun) -> Vec<PlotSeries> {
+    let dt = run.scenario().dt;
+    let mut out = Vec::new();
+    for f in run.filters() {
+        let name = f.name.to_uppercase();
+        let over_time = |pick: &dyn Fn(&slamlab_sim::localization::UpdateRecord) -> Option<f64>| {
+            f.updates
+                .iter()
+                .filter_map(|u| pick(u).map(|v| [u.tick as f64 * dt, v]))
+                .collect::<Vec<_>>()
+        };
+        let log10 = |l: f64| l / std::f64::consts::LN_10;
+        for (plot, axis, series, points) in [
+            (
+                "Position error",
+                "error (m)",
+                "error",
+                over_time(&|u| Some(u.position_error)),
+            ),
+            (
+                "Position error",
+                "error (m)",
+                "2σ bound",
+                over_time(&|u| Some(u.position_2sigma)),
+            ),
+            (
+                "w_slow and w_fast",
+                "log10 w",
+                "w_fast",
+                over_time(&|u| u.log_w_fast.map(log10)),
+            ),
+            (
+                "w_slow and w_fast",
+                "log10 w",
+                "w_slow",
+                over_time(&|u| u.log_w_slow.map(log10)),
+            ),
+            (
+                "Particles and N_eff",
+                "particles",
+                "particles",
+                over_time(&|u| Some(u.particles as f64)),
+            ),
+            (
+                "Particles and N_eff",
+                "particles",
+                "N_eff",
+                over_time(&|u| Some(u.n_eff)),
+            ),
+            (
+                "Recovery",
+                "fraction",
+                "injection probability",
+                over_time(&|u| Some(u.injection_probability)),
+            ),
+            (
+                "Recovery",
+                "fraction",
+                "drawn anew",
+                over_time(&|u| Some(u.randomized)),
+            ),
+        ] {
+            out.push(PlotSeries::new(
+                plot,
+                "time (s)",
+                axis,
+                format!("{name} {series}"),
+                points,
+            ));
+        }
+    }
+    out
 }

@@ -517,6 +517,10 @@ impl crate::widgets::layout::LessonPanels for LandmarkSlamLesson {
 }
 
 impl Lesson for LandmarkSlamLesson {
+    fn plot_series(&self) -> Vec<crate::export::PlotSeries> {
+        plots::series(&self.session)
+    }
+
     fn id(&self) -> &'static str {
         LESSON_ID
     }

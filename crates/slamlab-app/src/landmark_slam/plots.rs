@@ -1,6 +1,7 @@
 //! The plots under the map: robot position error with the filter's 2σ bound,
 //! landmark RMS error, robot-pose NEES and per-update NIS with their 95% bands.
 
+use crate::export::PlotSeries;
 use crate::palette;
 pub(super) use crate::widgets::plots::{line_width, thin, time_plot, title_ui};
 use egui_plot::{HLine, Line, LineStyle, Plot, PlotPoints, Points, Span};
@@ -232,6 +233,71 @@ pub fn plots_ui(ui: &mut egui::Ui, session: &LandmarkSession) {
                 }
             });
     });
+}
+
+/// Every plot's series, unthinned, for the CSV export (the same data as above, and
+/// FastSLAM's N_eff from the parameter panel).
+pub fn series(session: &LandmarkSession) -> Vec<PlotSeries> {
+    let dt = session.scenario().dt;
+    let mut out = Vec::new();
+    for run in session.filters() {
+        let name = run.kind.name().to_uppercase();
+        let over_time = |pick: &dyn Fn(&slamlab_sim::session::TickMetrics) -> Option<f64>| {
+            run.history
+                .iter()
+                .filter_map(|m| pick(m).map(|v| [m.time, v]))
+                .collect::<Vec<_>>()
+        };
+        let error = "Robot position error";
+        out.push(PlotSeries::new(
+            error,
+            "time (s)",
+            "error (m)",
+            format!("{name} error"),
+            over_time(&|m| Some(m.position_error)),
+        ));
+        out.push(PlotSeries::new(
+            error,
+            "time (s)",
+            "error (m)",
+            format!("{name} 2σ bound"),
+            over_time(&|m| Some(m.position_bound_2sigma)),
+        ));
+        out.push(PlotSeries::new(
+            "Mean landmark error",
+            "time (s)",
+            "RMS error (m)",
+            format!("{name} landmarks"),
+            over_time(&|m| m.landmark_rmse),
+        ));
+        out.push(PlotSeries::new(
+            "Robot pose NEES (3 dof)",
+            "time (s)",
+            "NEES",
+            format!("{name} NEES"),
+            over_time(&|m| m.nees),
+        ));
+        out.push(PlotSeries::new(
+            "Update NIS (2 dof)",
+            "time (s)",
+            "NIS",
+            format!("{name} NIS"),
+            run.nis
+                .iter()
+                .map(|s| [s.tick as f64 * dt, s.nis])
+                .collect(),
+        ));
+        if !run.n_eff.is_empty() {
+            out.push(PlotSeries::new(
+                "N_eff before each resampling",
+                "tick",
+                "N_eff",
+                format!("{name} N_eff"),
+                run.n_eff.iter().map(|n| [n.tick as f64, n.n_eff]).collect(),
+            ));
+        }
+    }
+    out
 }
 
 #[cfg(test)]

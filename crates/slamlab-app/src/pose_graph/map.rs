@@ -91,7 +91,8 @@ pub fn map_ui(
                 "Drag a vertex to perturb the graph; on release the solver runs to convergence",
             );
     });
-    // A press on a vertex starts a drag (the canvas does not pan then).
+    // A press on a vertex starts a drag (the canvas does not pan then); not a press
+    // on a menu, window or tooltip above the map.
     let (pressed, origin, down, pointer) = ui.input(|i| {
         (
             i.pointer.primary_pressed(),
@@ -104,6 +105,7 @@ pub fn map_ui(
         && pressed
         && let (Some(t), Some(origin)) = (last_transform.as_ref(), origin)
         && t.rect.contains(origin)
+        && ui.ctx().layer_id_at(origin) == Some(ui.layer_id())
     {
         *drag = nearest_vertex(session, t, origin);
     }

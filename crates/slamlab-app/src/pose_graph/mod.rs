@@ -636,6 +636,10 @@ impl crate::widgets::layout::LessonPanels for PoseGraphLesson {
 }
 
 impl Lesson for PoseGraphLesson {
+    fn plot_series(&self) -> Vec<crate::export::PlotSeries> {
+        plots::series(&self.session)
+    }
+
     fn id(&self) -> &'static str {
         LESSON_ID
     }

@@ -3,6 +3,7 @@
 //! `L` as images, with the fill-in marked in vermillion.
 
 use super::Patterns;
+use crate::export::PlotSeries;
 use crate::palette;
 use crate::widgets::plots::{thin, title_ui};
 use egui::{Color32, ColorImage, TextureOptions};
@@ -183,6 +184,17 @@ pub fn raster(pattern: &BlockPattern, symmetric: bool, background: Color32) -> C
         }
     }
     image
+}
+
+/// The cost plot's series (cost, not its logarithm), for the CSV export.
+pub fn series(session: &PoseGraphSession) -> Vec<PlotSeries> {
+    vec![PlotSeries::new(
+        "Cost per iteration",
+        "iteration",
+        "cost",
+        "cost",
+        session.history().iter().map(|h| [h[0], h[1]]).collect(),
+    )]
 }
 
 #[cfg(test)]

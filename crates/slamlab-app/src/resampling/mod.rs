@@ -340,6 +340,10 @@ impl crate::widgets::layout::LessonPanels for ResamplingLesson {
 }
 
 impl Lesson for ResamplingLesson {
+    fn plot_series(&self) -> Vec<crate::export::PlotSeries> {
+        plots::series(&self.run)
+    }
+
     fn id(&self) -> &'static str {
         LESSON_ID
     }

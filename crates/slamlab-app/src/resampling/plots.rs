@@ -5,6 +5,7 @@
 //! `f (1 − f)` with `f` the fractional part of `M wᵢ`.
 
 use super::method_color;
+use crate::export::PlotSeries;
 use crate::palette;
 use crate::widgets::plots::{line_width, title_ui};
 use egui_plot::{Bar, BarChart, Legend, Line, LineStyle, Plot, PlotPoints, Points};
@@ -140,4 +141,77 @@ pub fn plots_ui(ui: &mut egui::Ui, run: &LabRun) {
                 }
             });
     });
+}
+
+/// Every plot's series, for the CSV export: each method's copy-count histogram of
+/// the plotted particle (fractions), the binomial law, and every particle's
+/// copy-count variance per method with the two reference curves.
+pub fn series(run: &LabRun) -> Vec<PlotSeries> {
+    let lab = run.lab();
+    let m = run.particles();
+    let focus = run.focus();
+    let copies = format!("Copies of particle {focus}");
+    let mut out = Vec::new();
+    for &method in &run.scenario().methods {
+        let histogram = lab.histogram(method, focus);
+        let total: u64 = histogram.iter().sum();
+        if total > 0 {
+            out.push(PlotSeries::new(
+                &copies,
+                "copies",
+                "fraction of resamplings",
+                method.name(),
+                histogram
+                    .iter()
+                    .enumerate()
+                    .map(|(k, &n)| [k as f64, n as f64 / total as f64])
+                    .collect(),
+            ));
+        }
+    }
+    out.push(PlotSeries::new(
+        &copies,
+        "copies",
+        "fraction of resamplings",
+        "binomial (multinomial's law)",
+        (0..=m)
+            .map(|k| [k as f64, run.binomial_pmf(focus, k)])
+            .collect(),
+    ));
+    let variance = "Copy-count variance per particle";
+    out.push(PlotSeries::new(
+        variance,
+        "particle",
+        "variance of copies",
+        "M w (1 − w)",
+        (0..m)
+            .map(|i| [i as f64, run.multinomial_variance_of(i)])
+            .collect(),
+    ));
+    out.push(PlotSeries::new(
+        variance,
+        "particle",
+        "variance of copies",
+        "f (1 − f): least possible",
+        (0..m)
+            .map(|i| [i as f64, run.least_variance_of(i)])
+            .collect(),
+    ));
+    for &method in &run.scenario().methods {
+        if let Some(stats) = lab.stats(method).filter(|s| s.trials() > 1) {
+            out.push(PlotSeries::new(
+                variance,
+                "particle",
+                "variance of copies",
+                method.name(),
+                stats
+                    .variances()
+                    .iter()
+                    .enumerate()
+                    .map(|(i, &v)| [i as f64, v])
+                    .collect(),
+            ));
+        }
+    }
+    out
 }

@@ -20,6 +20,17 @@ impl DropInbox {
     /// returns a complete batch once every file of the latest drop is read.
     pub fn poll(&mut self, ctx: &egui::Context) -> Option<Vec<DroppedBytes>> {
         let dropped = ctx.input(|i| i.raw.dropped_files.clone());
+        self.read(ctx, dropped)
+    }
+
+    /// Like [`poll`](Self::poll), for files the caller took out of the frame's input
+    /// itself (none this frame: just see whether the last batch is complete).
+    #[cfg_attr(not(target_arch = "wasm32"), allow(unused_variables))]
+    pub fn read(
+        &mut self,
+        ctx: &egui::Context,
+        dropped: Vec<egui::DroppedFileHandle>,
+    ) -> Option<Vec<DroppedBytes>> {
         if !dropped.is_empty() {
             self.batch = Rc::new(RefCell::new(Vec::new()));
             self.expected = dropped.len();

@@ -7,6 +7,7 @@
 
 mod common;
 
+mod exports_ui;
 mod fusion_ui;
 mod kidnap_ui;
 mod landmark_fastslam_ui;
