@@ -253,6 +253,23 @@ pub fn is_open(ctx: &egui::Context) -> bool {
     state(ctx).open
 }
 
+/// The key of the highlighted entry, if any.
+pub fn highlighted(ctx: &egui::Context) -> Option<&'static str> {
+    state(ctx)
+        .highlight
+        .and_then(|i| SOURCES.get(i))
+        .map(|s| s.key)
+}
+
+fn window_id() -> egui::Id {
+    egui::Id::unique("slamlab_sources_window_area")
+}
+
+/// Where the Sources window was drawn last (none before it first opens).
+pub fn window_rect(ctx: &egui::Context) -> Option<egui::Rect> {
+    ctx.memory(|m| m.area_rect(window_id()))
+}
+
 /// A link-styled label that opens the Sources window on entry `key`.
 pub fn source_link(
     ui: &mut egui::Ui,
@@ -285,6 +302,7 @@ pub fn sources_window(ctx: &egui::Context) {
     let mut open = true;
     let mut scroll = st.scroll;
     egui::Window::new(TITLE)
+        .id(window_id())
         .open(&mut open)
         .constrain(true)
         .collapsible(false)
