@@ -30,7 +30,7 @@ pub fn explanation_ui(ui: &mut egui::Ui, sim: &FusionSim, last: Option<&FusionPh
             );
             ui.horizontal_wrapped(|ui| {
                 ui.label("Sources:");
-                sources::source_link(ui, "wu", "Wu's thesis §3.5, §5.3");
+                sources::source_link(ui, "wu", "Wu's thesis §3.5 and §5.3;");
                 sources::source_link(ui, "ros", "ROS robot_localization");
             });
         }
@@ -62,35 +62,40 @@ pub fn explanation_ui(ui: &mut egui::Ui, sim: &FusionSim, last: Option<&FusionPh
         ));
         sources::source_link(ui, "wu", "Source: Wu's thesis");
     });
-    egui::Grid::new("fusion_rmse")
-        .num_columns(6)
-        .striped(true)
+    // A horizontal scroll keeps the six columns from widening the whole panel.
+    egui::ScrollArea::horizontal()
+        .id_salt("fusion_rmse_scroll")
         .show(ui, |ui| {
-            for head in [
-                "mode",
-                "x (m)",
-                "y (m)",
-                "yaw (rad)",
-                "error now (m)",
-                "largest jump (m)",
-            ] {
-                ui.label(egui::RichText::new(head).strong());
-            }
-            ui.end_row();
-            for run in sim.runs() {
-                let e = run.rmse();
-                ui.colored_label(mode_color(run.mode()), run.mode().name());
-                ui.monospace(rmse_text(e.x));
-                ui.monospace(rmse_text(e.y));
-                ui.monospace(rmse_text(e.yaw));
-                let now = run
-                    .samples()
-                    .last()
-                    .map_or(0.0, |s| math::hypot(s.error[0], s.error[1]));
-                ui.monospace(format!("{now:.3}"));
-                ui.monospace(format!("{:.3}", run.max_slam_jump()));
-                ui.end_row();
-            }
+            egui::Grid::new("fusion_rmse")
+                .num_columns(6)
+                .striped(true)
+                .show(ui, |ui| {
+                    for head in [
+                        "mode",
+                        "x (m)",
+                        "y (m)",
+                        "yaw (rad)",
+                        "error now (m)",
+                        "largest jump (m)",
+                    ] {
+                        ui.label(egui::RichText::new(head).strong());
+                    }
+                    ui.end_row();
+                    for run in sim.runs() {
+                        let e = run.rmse();
+                        ui.colored_label(mode_color(run.mode()), run.mode().name());
+                        ui.monospace(rmse_text(e.x));
+                        ui.monospace(rmse_text(e.y));
+                        ui.monospace(rmse_text(e.yaw));
+                        let now = run
+                            .samples()
+                            .last()
+                            .map_or(0.0, |s| math::hypot(s.error[0], s.error[1]));
+                        ui.monospace(format!("{now:.3}"));
+                        ui.monospace(format!("{:.3}", run.max_slam_jump()));
+                        ui.end_row();
+                    }
+                });
         });
     ui.separator();
     ui.heading("Readings skipped");

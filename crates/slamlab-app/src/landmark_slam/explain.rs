@@ -200,117 +200,140 @@ fn filter_ui(ui: &mut egui::Ui, run: &FilterRun, phase: Option<Phase>) {
                 ui.colored_label(palette::VERMILLION, format!("This phase failed: {error}"));
             }
             let n = filter.landmark_ids().len();
-            egui::Grid::new(("live_numbers", name))
-                .num_columns(2)
-                .striped(true)
+            // A horizontal scroll keeps a long row from widening the whole panel
+            // (which would push the wrapped texts past its edge).
+            egui::ScrollArea::horizontal()
+                .id_salt(("live_numbers_scroll", name))
                 .show(ui, |ui| {
-                    row(ui, "landmarks in the state", n.to_string());
-                    row(
-                        ui,
-                        "state dimension",
-                        format!("{} = 3 + 2·{n}", filter.mean().len()),
-                    );
-                    match (phase, &run.last_predict, report) {
-                        (Some(Phase::Predict), Some(predict), _) => {
+                    egui::Grid::new(("live_numbers", name))
+                        .num_columns(2)
+                        .striped(true)
+                        .show(ui, |ui| {
+                            row(ui, "landmarks in the state", n.to_string());
                             row(
                                 ui,
-                                "command (v, w)",
-                                format!(
-                                    "{:.2} m/s, {:.3} rad/s",
-                                    predict.control.v, predict.control.w
-                                ),
+                                "state dimension",
+                                format!("{} = 3 + 2·{n}", filter.mean().len()),
                             );
-                            let growth = if predict.robot_det_before > 0.0 {
-                                format!(
-                                    "×{:.3}",
-                                    (predict.robot_det_after / predict.robot_det_before).sqrt()
-                                )
-                            } else {
-                                "from zero".to_owned()
-                            };
-                            row(
-                                ui,
-                                "√det P_RR (robot)",
-                                format!(
-                                    "{:.2e} to {:.2e} ({growth})",
-                                    predict.robot_det_before.max(0.0).sqrt(),
-                                    predict.robot_det_after.max(0.0).sqrt()
-                                ),
-                            );
-                        }
-                        (_, _, Some(UpdateReport::Initialized { id, position })) => {
-                            row(
-                                ui,
-                                "placed",
-                                format!(
-                                    "landmark {id} at ({:.2}, {:.2}) m",
-                                    position[0], position[1]
-                                ),
-                            );
-                        }
-                        (
-                            _,
-                            _,
-                            Some(UpdateReport::Corrected {
-                                innovation,
-                                innovation_covariance,
-                                nis,
-                                robot_gain_norm,
-                                gain_norm,
-                                ..
-                            }),
-                        ) => {
-                            row(ui, "innovation, range", format!("{:+.3} m", innovation[0]));
-                            row(
-                                ui,
-                                "innovation, bearing",
-                                format!(
-                                    "{:+.4} rad ({:+.2}°)",
-                                    innovation[1],
-                                    innovation[1].to_degrees()
-                                ),
-                            );
-                            row(
-                                ui,
-                                "√S (range, bearing)",
-                                format!(
-                                    "{:.3} m, {:.2}°",
-                                    innovation_covariance[(0, 0)].max(0.0).sqrt(),
-                                    innovation_covariance[(1, 1)].max(0.0).sqrt().to_degrees()
-                                ),
-                            );
-                            let (lo, hi) = (chi2_quantile(0.025, 2.0), chi2_quantile(0.975, 2.0));
-                            let verdict = if *nis > hi {
-                                format!("above {hi:.2}")
-                            } else if *nis < lo {
-                                format!("below {lo:.2}")
-                            } else {
-                                format!("in {lo:.2}..{hi:.2}")
-                            };
-                            row(ui, "NIS ν^T S^-1 ν (2 dof)", format!("{nis:.2}, {verdict}"));
-                            row(ui, "gain |K|, robot rows", format!("{robot_gain_norm:.3}"));
-                            row(ui, "gain |K|, whole state", format!("{gain_norm:.3}"));
-                        }
-                        _ => {}
-                    }
-                    if let Some(m) = run.latest() {
-                        row(
-                            ui,
-                            "robot position error",
-                            format!("{:.3} m", m.position_error),
-                        );
-                        row(
-                            ui,
-                            "its 2σ bound",
-                            format!("{:.3} m", m.position_bound_2sigma),
-                        );
-                        if let Some(nees) = m.nees {
-                            row(ui, "robot NEES (3 dof)", format!("{nees:.2}"));
-                        }
-                        if let Some(rmse) = m.landmark_rmse {
-                            row(ui, "landmark RMS error", format!("{rmse:.3} m"));
-                        }
-                    }
+                            match (phase, &run.last_predict, report) {
+                                (Some(Phase::Predict), Some(predict), _) => {
+                                    row(
+                                        ui,
+                                        "command (v, w)",
+                                        format!(
+                                            "{:.2} m/s, {:.3} rad/s",
+                                            predict.control.v, predict.control.w
+                                        ),
+                                    );
+                                    let growth = if predict.robot_det_before > 0.0 {
+                                        format!(
+                                            "×{:.3}",
+                                            (predict.robot_det_after / predict.robot_det_before)
+                                                .sqrt()
+                                        )
+                                    } else {
+                                        "from zero".to_owned()
+                                    };
+                                    row(
+                                        ui,
+                                        "√det P_RR (robot)",
+                                        format!(
+                                            "{:.2e} to {:.2e} ({growth})",
+                                            predict.robot_det_before.max(0.0).sqrt(),
+                                            predict.robot_det_after.max(0.0).sqrt()
+                                        ),
+                                    );
+                                }
+                                (_, _, Some(UpdateReport::Initialized { id, position })) => {
+                                    row(
+                                        ui,
+                                        "placed",
+                                        format!(
+                                            "landmark {id} at ({:.2}, {:.2}) m",
+                                            position[0], position[1]
+                                        ),
+                                    );
+                                }
+                                (
+                                    _,
+                                    _,
+                                    Some(UpdateReport::Corrected {
+                                        innovation,
+                                        innovation_covariance,
+                                        nis,
+                                        robot_gain_norm,
+                                        gain_norm,
+                                        ..
+                                    }),
+                                ) => {
+                                    row(
+                                        ui,
+                                        "innovation, range",
+                                        format!("{:+.3} m", innovation[0]),
+                                    );
+                                    row(
+                                        ui,
+                                        "innovation, bearing",
+                                        format!(
+                                            "{:+.4} rad ({:+.2}°)",
+                                            innovation[1],
+                                            innovation[1].to_degrees()
+                                        ),
+                                    );
+                                    row(
+                                        ui,
+                                        "√S (range, bearing)",
+                                        format!(
+                                            "{:.3} m, {:.2}°",
+                                            innovation_covariance[(0, 0)].max(0.0).sqrt(),
+                                            innovation_covariance[(1, 1)]
+                                                .max(0.0)
+                                                .sqrt()
+                                                .to_degrees()
+                                        ),
+                                    );
+                                    let (lo, hi) =
+                                        (chi2_quantile(0.025, 2.0), chi2_quantile(0.975, 2.0));
+                                    let verdict = if *nis > hi {
+                                        format!("above {hi:.2}")
+                                    } else if *nis < lo {
+                                        format!("below {lo:.2}")
+                                    } else {
+                                        format!("in {lo:.2}..{hi:.2}")
+                                    };
+                                    row(
+                                        ui,
+                                        "NIS ν^T S^-1 ν (2 dof)",
+                                        format!("{nis:.2}, {verdict}"),
+                                    );
+                                    row(
+                                        ui,
+                                        "gain |K|, robot rows",
+                                        format!("{robot_gain_norm:.3}"),
+                                    );
+                                    row(ui, "gain |K|, whole state", format!("{gain_norm:.3}"));
+                                }
+                                _ => {}
+                            }
+                            if let Some(m) = run.latest() {
+                                row(
+                                    ui,
+                                    "robot position error",
+                                    format!("{:.3} m", m.position_error),
+                                );
+                                row(
+                                    ui,
+                                    "its 2σ bound",
+                                    format!("{:.3} m", m.position_bound_2sigma),
+                                );
+                                if let Some(nees) = m.nees {
+                                    row(ui, "robot NEES (3 dof)", format!("{nees:.2}"));
+                                }
+                                if let Some(rmse) = m.landmark_rmse {
+                                    row(ui, "landmark RMS error", format!("{rmse:.3} m"));
+                                }
+                            }
+                        });
                 });
         });
 }

@@ -391,7 +391,7 @@ pub fn parameters_ui(ui: &mut egui::Ui, lesson: &mut LandmarkSlamLesson) -> bool
         );
         ui.horizontal_wrapped(|ui| {
             ui.label("Sources:");
-            sources::source_link(ui, "xiang", "Xiang's thesis §2.5, §3.4.2");
+            sources::source_link(ui, "xiang", "Xiang's thesis §2.5 and §3.4.2;");
             sources::source_link(ui, "waslander", "Waslander's slides, \"EKF SLAM\"");
         });
         number_ui(ui, lesson, "wheel-base", "wheel base D");

@@ -112,7 +112,7 @@ pub fn explanation_ui(ui: &mut egui::Ui, run: &LabRun) {
     }
     ui.horizontal_wrapped(|ui| {
         ui.label("Sources:");
-        sources::source_link(ui, "xiang", "Xiang's thesis §2.3.1");
+        sources::source_link(ui, "xiang", "Xiang's thesis §2.3.1;");
         sources::source_link(ui, "thrun", "Probabilistic Robotics, Table 4.4");
     });
     ui.separator();

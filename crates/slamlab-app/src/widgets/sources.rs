@@ -308,6 +308,7 @@ pub fn sources_window(ctx: &egui::Context) {
         .collapsible(false)
         .default_pos(screen.center_top() + egui::vec2(-width / 2.0, 40.0))
         .default_width(width)
+        .default_height(height.min(620.0))
         .max_width(width)
         .max_height(height)
         .vscroll(true)
