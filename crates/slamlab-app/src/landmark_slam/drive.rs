@@ -91,7 +91,7 @@ pub fn drive_panel_ui(
         return;
     }
     ui.label("Hold the arrow keys or WASD, or the pad on the map: forward/back 1 m/s, turn 45°/s. Driving starts the clock.");
-    ui.horizontal(|ui| {
+    ui.horizontal_wrapped(|ui| {
         ui.label("Steady command as");
         ui.radio_value(&mut drive.input, DriveInput::VelocityAndTurnRate, "(v, w)");
         ui.radio_value(
@@ -141,23 +141,17 @@ pub fn drive_panel_ui(
     }
     let command = drive.command();
     let (v_l, v_r) = command.to_wheel_speeds(wheel_base);
-    egui::Grid::new("drive_command")
-        .num_columns(2)
-        .show(ui, |ui| {
-            ui.label("command now");
-            ui.label(format!(
-                "v = {:.2} m/s, w = {:.3} rad/s ({:.1}°/s)",
-                command.v,
-                command.w,
-                command.w.to_degrees()
-            ));
-            ui.end_row();
-            ui.label("as wheel speeds");
-            ui.label(format!(
-                "v_l = {v_l:.2} m/s, v_r = {v_r:.2} m/s (D = {wheel_base:.2} m)"
-            ));
-            ui.end_row();
-        });
+    // Wrapped lines rather than a grid: a grid row does not wrap and would widen
+    // the panel past its edge.
+    ui.label(format!(
+        "Command now: v = {:.2} m/s, w = {:.3} rad/s ({:.1}°/s)",
+        command.v,
+        command.w,
+        command.w.to_degrees()
+    ));
+    ui.label(format!(
+        "As wheel speeds: v_l = {v_l:.2} m/s, v_r = {v_r:.2} m/s (D = {wheel_base:.2} m)"
+    ));
     ui.horizontal_wrapped(|ui| {
         ui.label("v = (v_l + v_r) / 2,  w = (v_r − v_l) / D  (Eq. 2.65-2.66 of Xiang's thesis)");
         sources::source_link(ui, "xiang", "Source: §2.5");

@@ -352,7 +352,7 @@ fn entry_ui(ui: &mut egui::Ui, source: &Source, highlighted: bool) -> egui::Resp
             ui.set_width(ui.available_width());
             ui.label(egui::RichText::new(source.short).heading());
             ui.label(egui::RichText::new(source.title).strong().italics());
-            ui.label(format!("Author: {}", source.author));
+            ui.label(format!("By {}", source.author));
             ui.label(source.publisher);
             ui.label(format!("Year: {}", source.year));
             ui.label(format!("What SLAM Lab takes from it: {}", source.covers));
