@@ -400,6 +400,7 @@ impl SlamLabApp {
         if self.lesson.wants_repaint() {
             ctx.request_repaint();
         }
+        widgets::sources::sources_window(&ctx);
     }
 
     fn title(&self) -> String {
@@ -472,6 +473,13 @@ impl SlamLabApp {
                     );
                 self.lesson.view_menu_ui(ui);
             });
+            if ui
+                .button("Sources")
+                .on_hover_text("The documents the lessons cite: titles, authors, sections")
+                .clicked()
+            {
+                widgets::sources::open_sources(ui.ctx(), None);
+            }
             if self.narrow {
                 // A narrow window: the drawer buttons first, then the title; no
                 // right-aligned group for wrapped text to run into.

@@ -124,28 +124,28 @@ pub static PARAMS: &[Param<LandmarkScenario>] = &[
     field!(
         "v-std",
         "m/s",
-        "std of the executed forward speed (thesis q[0])",
+        "std of the executed forward speed (Xiang's thesis §3.4.3: q[0])",
         (1e-4, 2.0),
         v_std
     ),
     degrees!(
         "w-std-deg",
         "deg/s",
-        "std of the executed turn rate (thesis q[1] = 10)",
+        "std of the executed turn rate (Xiang's thesis §3.4.3: q[1] = 10)",
         (0.01, 90.0),
         w_std
     ),
     field!(
         "range-std",
         "m",
-        "std of range measurements (thesis v[0])",
+        "std of range measurements (Xiang's thesis §3.4.3: v[0])",
         (1e-3, 10.0),
         range_std
     ),
     degrees!(
         "bearing-std-deg",
         "deg",
-        "std of bearing measurements (thesis v[1] = 10)",
+        "std of bearing measurements (Xiang's thesis §3.4.3: v[1] = 10)",
         (0.01, 90.0),
         bearing_std
     ),
@@ -180,7 +180,7 @@ pub static PARAMS: &[Param<LandmarkScenario>] = &[
     Param::number(
         "v",
         "m/s",
-        "forward speed of the scripted circle (thesis u_v = 1)",
+        "forward speed of the scripted circle (Xiang's thesis §3.4.3: u_v = 1)",
         (-5.0, 5.0),
         |s| circle(s).map(|(v, _)| v),
         |s, v| {
@@ -192,7 +192,7 @@ pub static PARAMS: &[Param<LandmarkScenario>] = &[
     Param::number(
         "w-deg",
         "deg/s",
-        "turn rate of the scripted circle (thesis u_w = 18)",
+        "turn rate of the scripted circle (Xiang's thesis §3.4.3: u_w = 18)",
         (-180.0, 180.0),
         |s| circle(s).map(|(_, w)| w.to_degrees()),
         |s, w| {

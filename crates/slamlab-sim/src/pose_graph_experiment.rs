@@ -259,7 +259,7 @@ pub fn run(config: PoseGraphExperimentConfig) -> Result<PoseGraphExperimentResul
         .collect();
     let notes = vec![
         format!(
-            "EKF-SLAM on thesis Experiment 1's circle (v = 1 m/s, w = π/10 rad/s, dt = {dt} s, {STEPS} ticks, 20 random landmarks); control and measurement noise × {}",
+            "EKF-SLAM on the circle of Experiment 1 in Xiang's thesis (§3.4.3) (v = 1 m/s, w = π/10 rad/s, dt = {dt} s, {STEPS} ticks, 20 random landmarks); control and measurement noise × {}",
             config.noise_scale
         ),
         "graph: one pose per tick at the EKF-SLAM estimate; odometry edges measure the EKF's relative pose between consecutive ticks".to_owned(),
@@ -268,7 +268,7 @@ pub fn run(config: PoseGraphExperimentConfig) -> Result<PoseGraphExperimentResul
             scenario.v_std, scenario.w_std
         ),
         format!(
-            "{count} loop closures from pose 0 to distinct random poses (seeded), measured as the true relative pose plus Gaussian noise σ = ({:.3} m, {:.3} m, {:.4} rad); the thesis uses the exact true relative pose",
+            "{count} loop closures from pose 0 to distinct random poses (seeded), measured as the true relative pose plus Gaussian noise σ = ({:.3} m, {:.3} m, {:.4} rad); Xiang's thesis (§4.2) uses the exact true relative pose",
             lc_std[0], lc_std[1], lc_std[2]
         ),
         "gauge: pose 0 held fixed at the EKF's (and the truth's) start pose".to_owned(),

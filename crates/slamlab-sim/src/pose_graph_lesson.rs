@@ -129,7 +129,7 @@ pub static PARAMS: &[Param<PoseGraphScenario>] = &[
     ),
     Param::words(
         "example",
-        "built-in graph: thesis (EKF-SLAM path on the circle, thesis 000 Sec. 4.2) or manhattan (a synthetic grid walk); or open a .g2o/TORO file",
+        "built-in graph: thesis (EKF-SLAM path on the circle, §4.2 of Xiang's thesis) or manhattan (a synthetic grid walk); or open a .g2o/TORO file",
         EXAMPLES,
         |s| Some(EXAMPLES[s.example as usize].to_owned()),
         |s, v| choose(EXAMPLES, v).map(|i| s.example = [Example::Thesis, Example::Manhattan][i]),
@@ -180,7 +180,7 @@ pub static PARAMS: &[Param<PoseGraphScenario>] = &[
         PoseGraphScenario,
         "noise-scale",
         "",
-        "thesis example: multiplies control, measurement and loop-closure noise (2 is thesis Experiment 2)",
+        "thesis example: multiplies control, measurement and loop-closure noise (2 is Experiment 2 of Xiang's thesis, §4.2)",
         (0.1, 10.0),
         noise_scale
     ),

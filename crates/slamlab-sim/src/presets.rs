@@ -18,13 +18,13 @@ pub static PRESETS: &[Preset<LandmarkScenario>] = &[
     Preset {
         id: "thesis-exp1",
         title: "Thesis Experiment 1",
-        summary: "Thesis Sec. 3.4.3: 20 random landmarks, q = [0.1 m/s, 10°/s], v = [2 m, 10°], EKF and UKF.",
+        summary: "Xiang's thesis §3.4.3: 20 random landmarks, q = [0.1 m/s, 10°/s], v = [2 m, 10°], EKF and UKF.",
         build: |seed| ekf_vs_ukf_scenario(1.0, seed),
     },
     Preset {
         id: "thesis-exp2",
         title: "Thesis Experiment 2 (doubled control noise)",
-        summary: "Experiment 1 with q doubled to [0.2 m/s, 20°/s]: where the thesis says the EKF may diverge.",
+        summary: "Experiment 1 with q doubled to [0.2 m/s, 20°/s]: where Xiang's thesis says the EKF may diverge.",
         build: |seed| ekf_vs_ukf_scenario(2.0, seed),
     },
     Preset {

@@ -4,6 +4,7 @@
 
 use super::mode_color;
 use crate::palette;
+use crate::widgets::sources;
 use slamlab_core::kalman::fusion::{Outcome, StepReport};
 use slamlab_core::math;
 use slamlab_sim::fusion::lesson::{FusionPhase, FusionSim};
@@ -21,11 +22,17 @@ pub fn explanation_ui(ui: &mut egui::Ui, sim: &FusionSim, last: Option<&FusionPh
         None => {
             ui.label(
                 "Nothing yet. Every reading is one step: the filter predicts its state to the \
-                 reading's stamp (robot_localization's omnidirectional model, x' = f(x, Δt), \
-                 P' = F P F^T + Q Δt) and corrects the variables that sensor measures. Wheel \
-                 odometry arrives at 50 Hz, the IMU at 100 Hz, the SLAM pose at 1 Hz. Press \
+                 reading's stamp (the omnidirectional model of the ROS package \
+                 robot_localization, x' = f(x, Δt), P' = F P F^T + Q Δt) and corrects the \
+                 variables that sensor measures. Wheel odometry arrives at 50 Hz, the IMU at \
+                 100 Hz, the SLAM pose at 1 Hz, as in the experiments of Wu's thesis. Press \
                  \"Step phase\" for one reading, \"Step tick\" for one second.",
             );
+            ui.horizontal_wrapped(|ui| {
+                ui.label("Sources:");
+                sources::source_link(ui, "wu", "Wu's thesis §3.5 and §5.3;");
+                sources::source_link(ui, "ros", "ROS robot_localization");
+            });
         }
         Some(phase) => {
             ui.label(egui::RichText::new(phase.label()).strong());
@@ -46,43 +53,49 @@ pub fn explanation_ui(ui: &mut egui::Ui, sim: &FusionSim, last: Option<&FusionPh
     }
     ui.separator();
     ui.heading("RMSE so far");
-    ui.label(
-        egui::RichText::new(format!(
-            "Over the fused estimate sampled at {} Hz up to {:.1} s, as thesis 002 Table 5.3.",
+    ui.horizontal_wrapped(|ui| {
+        ui.label(format!(
+            "Over the fused estimate sampled at {} Hz up to {:.1} s, as in Table 5.3 of Wu's \
+             thesis (§5.3).",
             sim.live().output_rate,
             sim.now()
-        ))
-        .small(),
-    );
-    egui::Grid::new("fusion_rmse")
-        .num_columns(6)
-        .striped(true)
+        ));
+        sources::source_link(ui, "wu", "Source: Wu's thesis");
+    });
+    // A horizontal scroll keeps the six columns from widening the whole panel.
+    egui::ScrollArea::horizontal()
+        .id_salt("fusion_rmse_scroll")
         .show(ui, |ui| {
-            for head in [
-                "mode",
-                "x (m)",
-                "y (m)",
-                "yaw (rad)",
-                "error now (m)",
-                "largest jump (m)",
-            ] {
-                ui.label(egui::RichText::new(head).strong());
-            }
-            ui.end_row();
-            for run in sim.runs() {
-                let e = run.rmse();
-                ui.colored_label(mode_color(run.mode()), run.mode().name());
-                ui.monospace(rmse_text(e.x));
-                ui.monospace(rmse_text(e.y));
-                ui.monospace(rmse_text(e.yaw));
-                let now = run
-                    .samples()
-                    .last()
-                    .map_or(0.0, |s| math::hypot(s.error[0], s.error[1]));
-                ui.monospace(format!("{now:.3}"));
-                ui.monospace(format!("{:.3}", run.max_slam_jump()));
-                ui.end_row();
-            }
+            egui::Grid::new("fusion_rmse")
+                .num_columns(6)
+                .striped(true)
+                .show(ui, |ui| {
+                    for head in [
+                        "mode",
+                        "x (m)",
+                        "y (m)",
+                        "yaw (rad)",
+                        "error now (m)",
+                        "largest jump (m)",
+                    ] {
+                        ui.label(egui::RichText::new(head).strong());
+                    }
+                    ui.end_row();
+                    for run in sim.runs() {
+                        let e = run.rmse();
+                        ui.colored_label(mode_color(run.mode()), run.mode().name());
+                        ui.monospace(rmse_text(e.x));
+                        ui.monospace(rmse_text(e.y));
+                        ui.monospace(rmse_text(e.yaw));
+                        let now = run
+                            .samples()
+                            .last()
+                            .map_or(0.0, |s| math::hypot(s.error[0], s.error[1]));
+                        ui.monospace(format!("{now:.3}"));
+                        ui.monospace(format!("{:.3}", run.max_slam_jump()));
+                        ui.end_row();
+                    }
+                });
         });
     ui.separator();
     ui.heading("Readings skipped");
@@ -116,9 +129,9 @@ pub fn explanation_ui(ui: &mut egui::Ui, sim: &FusionSim, last: Option<&FusionPh
     ui.heading("The three modes");
     ui.label(
         "absolute: the SLAM pose is fused as it is, x, y and yaw in the filter's world frame. \
-         relative (robot_localization's _relative): the pose relative to the first SLAM reading, \
-         inv(P0) * P, fused as a position. Here SLAM's map starts where the robot starts, so the \
-         two agree.",
+         relative (robot_localization's _relative, Wu's thesis §3.5 and §5.3): the pose \
+         relative to the first SLAM reading, inv(P0) * P, fused as a position. Here SLAM's map \
+         starts where the robot starts, so the two agree.",
     );
     ui.label(
         "differential (_differential): two consecutive SLAM poses are differenced into a \
@@ -132,6 +145,11 @@ pub fn explanation_ui(ui: &mut egui::Ui, sim: &FusionSim, last: Option<&FusionPh
          it only ever corrects a velocity, so the position is an integral, smooth at the \
          updates, but every velocity error adds up and nothing pulls the position back: it \
          drifts like odometry, only slower.",
+    );
+    sources::source_link(
+        ui,
+        "wu",
+        "Source: Wu's thesis §5.3.1, \"Results of _differential and _relative\"",
     );
     let jumps: Vec<String> = sim
         .runs()

@@ -1,6 +1,7 @@
 //! The explanation panel: what the phase that just ran did, in two or three
 //! sentences with the source's algorithm, and its live numbers.
 
+use crate::widgets::sources;
 use slamlab_core::particle::BeamLikelihood;
 use slamlab_core::{math, wrap_angle};
 use slamlab_sim::localization::{MclPhase, MclRun};
@@ -47,6 +48,12 @@ pub fn explanation_ui(ui: &mut egui::Ui, run: &MclRun, last: Option<MclPhase>) {
                  report odometry and the lidar scans), then, once the robot has moved far enough \
                  (update-min-d, update-min-a-deg), predict, weight and resample. Press \"Step phase\".",
             );
+            ui.label(
+                "AMCL, CMCL and ACMCL and the kidnapped robot problem follow §5.1 of Xiang's \
+                 thesis (Algorithms 9-11); ACMCL updates w_slow and w_fast once per step, after \
+                 the particle loop, where the thesis's Algorithm 11 prints them inside it.",
+            );
+            sources::source_link(ui, "xiang", "Source: Xiang's thesis §5.1");
         }
         Some(MclPhase::Move) => {
             let robot = run.robot().pose;
@@ -75,10 +82,12 @@ pub fn explanation_ui(ui: &mut egui::Ui, run: &MclRun, last: Option<MclPhase>) {
         }
         Some(MclPhase::Predict) => {
             ui.label(
-                "Predict (Probabilistic Robotics Table 5.6, sample_motion_model_odometry): every particle \
-                 moves by the odometry increment (rotate, translate, rotate) with its own noise drawn from \
-                 odom-alpha1..4. The cloud spreads: the odometry is not trusted exactly.",
+                "Predict (sample_motion_model_odometry, Table 5.6 of Thrun, Burgard and Fox, \
+                 Probabilistic Robotics): every particle moves by the odometry increment (rotate, \
+                 translate, rotate) with its own noise drawn from odom-alpha1..4. The cloud \
+                 spreads: the odometry is not trusted exactly.",
             );
+            sources::source_link(ui, "thrun", "Source: Probabilistic Robotics, Table 5.6");
             for f in run.filters() {
                 if let Some(p) = &f.last_predict {
                     let (r1, t, r2) = p.increment;
@@ -94,10 +103,12 @@ pub fn explanation_ui(ui: &mut egui::Ui, run: &MclRun, last: Option<MclPhase>) {
         }
         Some(MclPhase::Weight) => {
             ui.label(
-                "Weight (thesis 000 Algorithm 8, line 4): each particle's weight is the likelihood of the \
-                 scan seen from its pose, the product over the beams (in log space, so that 60 small \
-                 numbers do not round to zero). Darker particles on the map are heavier.",
+                "Weight (Algorithm 8, line 4, of Xiang's thesis, §3.5.1): each particle's weight \
+                 is the likelihood of the scan seen from its pose, the product over the beams (in \
+                 log space, so that 60 small numbers do not round to zero). Darker particles on \
+                 the map are heavier.",
             );
+            sources::source_link(ui, "xiang", "Source: Xiang's thesis §3.5.1, beam model");
             for f in run.filters() {
                 let Some(w) = &f.last_weight else { continue };
                 ui.separator();
@@ -119,10 +130,12 @@ pub fn explanation_ui(ui: &mut egui::Ui, run: &MclRun, last: Option<MclPhase>) {
         }
         Some(MclPhase::Resample) => {
             ui.label(
-                "Resample (thesis 000 Algorithm 7, low-variance by default): draw a new set of particles \
-                 with probabilities proportional to the weights. Likely particles are copied, unlikely \
-                 ones disappear; afterwards all weights are equal again.",
+                "Resample (Algorithm 7 of Xiang's thesis, §2.3.1; low-variance by default): draw \
+                 a new set of particles with probabilities proportional to the weights. Likely \
+                 particles are copied, unlikely ones disappear; afterwards all weights are equal \
+                 again.",
             );
+            sources::source_link(ui, "xiang", "Source: Xiang's thesis §2.3.1, resampling");
             for f in run.filters() {
                 if let Some(r) = &f.last_resample {
                     ui.monospace(format!(
@@ -163,12 +176,10 @@ pub fn explanation_ui(ui: &mut egui::Ui, run: &MclRun, last: Option<MclPhase>) {
         }
     }
     ui.label(
-        egui::RichText::new(
-            "The estimate is the weighted mean of the heaviest cluster of particles, as ROS amcl \
-             reports it; its ellipse is 95% of that cluster's spread.",
-        )
-        .small(),
+        "The estimate is the weighted mean of the heaviest cluster of particles, as ROS amcl \
+         reports it; its ellipse is 95% of that cluster's spread.",
     );
+    sources::source_link(ui, "ros", "Source: ROS amcl");
 }
 
 fn beams_ui(ui: &mut egui::Ui, label: &str, beams: &[BeamLikelihood]) {

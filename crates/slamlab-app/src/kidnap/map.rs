@@ -159,7 +159,7 @@ pub fn map_ui(
         ui.checkbox(&mut view.path, "Path");
         ui.checkbox(&mut view.costmap, "Costmap").on_hover_text(
             "Where the robot's centre cannot be: free cells closer to a wall than its radius \
-             (pink, as thesis Fig. 5.1). CMCL and ACMCL regenerate particles that move into it.",
+             (pink, as in Fig. 5.1 of Xiang's thesis). CMCL and ACMCL regenerate particles that move into it.",
         );
         ui.separator();
         ui.toggle_value(&mut view.click_kidnap, "Kidnap by click")

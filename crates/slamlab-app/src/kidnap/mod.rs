@@ -536,12 +536,7 @@ impl KidnapLesson {
                 .on_hover_text("The built-in maps; press \"Apply & reset\" to open one")
                 .widget_info(|| egui::WidgetInfo::labeled(egui::Role::ComboBox, true, "map"));
         });
-        ui.label(
-            egui::RichText::new(
-                "Or drop a ROS map (its .yaml and .pgm/.png together) on the window.",
-            )
-            .small(),
-        );
+        ui.label("Or drop a ROS map (its .yaml and .pgm/.png together) on the window.");
         let running = self.sim().run().scenario().clone();
         params_panel::params_ui(ui, &mut self.pending, &running, PANEL_PARAMS);
         ui.separator();

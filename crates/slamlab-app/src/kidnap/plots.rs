@@ -61,7 +61,7 @@ pub fn plots_ui(ui: &mut egui::Ui, run: &MclRun) {
             ui,
             "w_slow and w_fast",
             "Augmented MCL's short-term (w_fast, solid) and long-term (w_slow, dashed) averages of \
-             the particle weights, as log10 (thesis Algorithm 9). After a kidnap the weights drop \
+             the particle weights, as log10 (Algorithm 9 of Xiang's thesis, §5.1.2). After a kidnap the weights drop \
              and w_fast falls below w_slow first: that gap is the injection probability. Filters \
              without recovery (MCL, CMCL) have none.",
         );

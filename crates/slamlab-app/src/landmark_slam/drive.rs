@@ -3,6 +3,7 @@
 
 use crate::widgets::drive::pad_ui;
 pub use crate::widgets::drive::{KEY_SPEED, KEY_TURN_RATE, PadDirection, keyboard_command};
+use crate::widgets::sources;
 use serde::{Deserialize, Serialize};
 use slamlab_core::Control;
 use std::f64::consts::PI;
@@ -74,18 +75,23 @@ pub fn drive_panel_ui(
     ui.heading("Driving");
     ui.horizontal(|ui| {
         ui.radio_value(manual, false, "Scripted circle")
-            .on_hover_text("Thesis Experiment 1: v = 1 m/s, w = π/10 rad/s, from the next tick on");
+            .on_hover_text(
+                "Experiment 1 of Xiang's thesis (§3.4.3): v = 1 m/s, w = π/10 rad/s, from the next tick on",
+            );
         ui.radio_value(manual, true, "Manual").on_hover_text(
             "Take the wheel from the next tick on: the run, the map and the filters go on. \
              Drive with the arrow keys / WASD or the pad on the map",
         );
     });
     if !*manual {
-        ui.label("The robot follows the scripted circle (thesis Experiment 1).");
+        ui.horizontal_wrapped(|ui| {
+            ui.label("The robot follows the scripted circle of Experiment 1 in Xiang's thesis.");
+            sources::source_link(ui, "xiang", "Source: §3.4.3");
+        });
         return;
     }
     ui.label("Hold the arrow keys or WASD, or the pad on the map: forward/back 1 m/s, turn 45°/s. Driving starts the clock.");
-    ui.horizontal(|ui| {
+    ui.horizontal_wrapped(|ui| {
         ui.label("Steady command as");
         ui.radio_value(&mut drive.input, DriveInput::VelocityAndTurnRate, "(v, w)");
         ui.radio_value(
@@ -135,27 +141,21 @@ pub fn drive_panel_ui(
     }
     let command = drive.command();
     let (v_l, v_r) = command.to_wheel_speeds(wheel_base);
-    egui::Grid::new("drive_command")
-        .num_columns(2)
-        .show(ui, |ui| {
-            ui.label("command now");
-            ui.label(format!(
-                "v = {:.2} m/s, w = {:.3} rad/s ({:.1}°/s)",
-                command.v,
-                command.w,
-                command.w.to_degrees()
-            ));
-            ui.end_row();
-            ui.label("as wheel speeds");
-            ui.label(format!(
-                "v_l = {v_l:.2} m/s, v_r = {v_r:.2} m/s (D = {wheel_base:.2} m)"
-            ));
-            ui.end_row();
-        });
-    ui.label(
-        egui::RichText::new("v = (v_l + v_r) / 2,  w = (v_r − v_l) / D  (thesis Eq. 2.65-2.66)")
-            .small(),
-    );
+    // Wrapped lines rather than a grid: a grid row does not wrap and would widen
+    // the panel past its edge.
+    ui.label(format!(
+        "Command now: v = {:.2} m/s, w = {:.3} rad/s ({:.1}°/s)",
+        command.v,
+        command.w,
+        command.w.to_degrees()
+    ));
+    ui.label(format!(
+        "As wheel speeds: v_l = {v_l:.2} m/s, v_r = {v_r:.2} m/s (D = {wheel_base:.2} m)"
+    ));
+    ui.horizontal_wrapped(|ui| {
+        ui.label("v = (v_l + v_r) / 2,  w = (v_r − v_l) / D  (Eq. 2.65-2.66 of Xiang's thesis)");
+        sources::source_link(ui, "xiang", "Source: §2.5");
+    });
 }
 
 /// The on-screen drive pad, bottom right of `rect`: press and hold (mouse or touch).

@@ -1,7 +1,9 @@
-//! The explanation panel: what the current phase does, with the thesis equations,
-//! and its live numbers (innovation, NIS, gain, state size), per filter.
+//! The explanation panel: what the current phase does, with the equations of Xiang's
+//! thesis (or Waslander's slides for FastSLAM) and a link to the Sources window, and
+//! its live numbers (innovation, NIS, gain, state size), per filter.
 
 use crate::palette;
+use crate::widgets::sources;
 use slamlab_core::kalman::UpdateReport;
 use slamlab_core::range_bearing::{self, RangeBearing};
 use slamlab_core::stats::chi2_quantile;
@@ -38,11 +40,22 @@ fn phase_text(kind: &str, phase: Option<Phase>, report: Option<&UpdateReport>) -
     text + note
 }
 
+/// The document and section a filter's phase texts come from, for the link under them.
+fn phase_source(kind: &str) -> (&'static str, &'static str) {
+    if kind.starts_with("fastslam") {
+        ("waslander", "Source: Waslander's slides, \"FastSLAM\"")
+    } else if kind == "ukf" {
+        ("xiang", "Source: Xiang's thesis, §3.3 UKF-SLAM")
+    } else {
+        ("xiang", "Source: Xiang's thesis, §3.2 EKF-SLAM")
+    }
+}
+
 fn textbook_phase_text(kind: &str, phase: Option<Phase>, report: Option<&UpdateReport>) -> String {
     let ukf = kind == "ukf";
     let fastslam = kind.starts_with("fastslam");
     match (phase, report) {
-        (Some(Phase::Resample), _) if fastslam => "Resample (FastSLAM): when the effective \
+        (Some(Phase::Resample), _) if fastslam => "Resample (FastSLAM, Waslander's slides): when the effective \
             sample size N_eff = 1 / sum w_i^2 falls below the threshold times M, M particles \
             are drawn with the chosen resampler in proportion to their weights; heavy particles \
             are copied (their maps are shared, not copied), light ones vanish, and every \
@@ -51,59 +64,61 @@ fn textbook_phase_text(kind: &str, phase: Option<Phase>, report: Option<&UpdateR
         (Some(Phase::Resample), _) => "Resample: only particle filters resample; this \
             Gaussian filter has nothing to do in this phase."
             .to_owned(),
-        (Some(Phase::Predict), _) if fastslam => "Sample (FastSLAM): every particle draws a \
+        (Some(Phase::Predict), _) if fastslam => "Sample (FastSLAM, Waslander's slides): every particle draws a \
             new pose. FastSLAM 1.0 draws it from the motion model with the control noise; \
             FastSLAM 2.0 starts the proposal N(g(x, u), V M V^T) that this tick's measurements \
             will sharpen. The particles spread; their maps do not change."
             .to_owned(),
         (Some(Phase::Update { id, .. }), _) if fastslam => format!(
-            "Weight (FastSLAM) with the measurement of landmark {id}: each particle associates \
+            "Weight (FastSLAM, Waslander's slides) with the measurement of landmark {id}: each particle associates \
              it (the sensor's id, or its own maximum-likelihood choice with association=unknown), \
              updates that landmark's 2x2 EKF in its own map, or starts it, and multiplies its \
              weight by the measurement's likelihood N(z - h; 0, S). Particles that disagree \
              with the measurement lose weight."
         ),
         (None, _) => "Nothing has run yet. The robot starts at a known pose with zero \
-            uncertainty and an empty map (thesis Eq. 3.5). Press Step phase (.) to run the \
+            uncertainty and an empty map (Eq. 3.5 of Xiang's thesis). Press Step phase (.) to run the \
             first prediction, or Run (Space)."
             .to_owned(),
-        (Some(Phase::Predict), _) if ukf => "Predict (thesis Eq. 3.26-3.30): sigma points \
-            of the robot pose and of the control noise (augmented, so the noise is carried \
-            through the motion model once, correcting Eq. 3.28) are moved through the motion \
-            model with the command (v, w); their weighted spread is the new robot covariance. \
+        (Some(Phase::Predict), _) if ukf => "Predict (Eq. 3.26-3.30 of Xiang's thesis): sigma \
+            points of the robot pose and of the control noise (augmented, so the noise is \
+            carried through the motion model once; the printed Eq. 3.28 adds it twice) are \
+            moved through the motion model with the command (v, w); their weighted spread is the new robot covariance. \
             Landmarks do not move, so only the robot block and the robot-landmark cross terms \
             change: the robot's ellipse grows."
             .to_owned(),
-        (Some(Phase::Predict), _) => "Predict (thesis Eq. 3.17-3.19 with the motion \
-            Jacobians of Eq. 3.34-3.35): the robot's mean moves by the command (v, w) for one \
-            time step. Only the robot block P_RR and the robot-landmark cross terms P_RL \
+        (Some(Phase::Predict), _) => "Predict (Eq. 3.17-3.19 of Xiang's thesis, with \
+            the motion Jacobians of its Eq. 3.34-3.35): the robot's mean moves by the command \
+            (v, w) for one time step. Only the robot block P_RR and the robot-landmark cross terms P_RL \
             change (P_RR = F P_RR F^T + G Q G^T, P_RL = F P_RL); the motion noise makes the \
             robot's ellipse grow, and the landmarks stay where they were."
             .to_owned(),
         (Some(Phase::Update { id, .. }), Some(UpdateReport::Initialized { .. })) if ukf => {
             format!(
-                "New landmark {id} (thesis Eq. 3.21-3.25): the first measurement of landmark \
-                 {id} is pushed through the inverse observation model with sigma points of \
+                "New landmark {id} (Eq. 3.21-3.25 of Xiang's thesis): the first measurement \
+                 of landmark {id} is pushed through the inverse observation model with sigma points of \
                  the robot pose and the measurement noise; their spread gives its covariance \
                  and its correlation with the robot. The state grows by two numbers."
             )
         }
         (Some(Phase::Update { id, .. }), Some(UpdateReport::Initialized { .. })) => format!(
-            "New landmark {id} (inverse observation model, thesis Eq. 3.8-3.16): landmark {id} \
-             is seen for the first time, so it is placed at the robot pose plus the measured \
-             range and bearing. Its covariance combines the robot's uncertainty and the \
+            "New landmark {id} (inverse observation model, Eq. 3.8-3.16 of Xiang's thesis): \
+             landmark {id} is seen for the first time, so it is placed at the robot pose plus \
+             the measured range and bearing. Its covariance combines the robot's uncertainty and the \
              measurement noise and is correlated with the robot; the state grows by two numbers."
         ),
         (Some(Phase::Update { id, .. }), _) if ukf => format!(
-            "Update with landmark {id} (thesis Eq. 3.31-3.32, corrected per the errata: \
-             K = P_My P_yy^-1 and P = P̄ − K P_yy K^T): sigma points of the state are pushed \
-             through the measurement model; the innovation z − ȳ, weighted by K, corrects the \
+            "Update with landmark {id} (Eq. 3.31-3.32 of Xiang's thesis, with two printing \
+             slips corrected: the gain printed as P_yM P_yy^T is K = P_My P_yy^-1, and where \
+             Eq. 3.32 prints P = P̄ + K P_yy K^T the correct update subtracts, \
+             P = P̄ − K P_yy K^T): sigma points of the state are pushed through the \
+             measurement model; the innovation z − ȳ, weighted by K, corrects the \
              robot and every landmark correlated with it. The robot's and landmarks' ellipses shrink."
         ),
         (Some(Phase::Update { id, .. }), _) => format!(
-            "Update with landmark {id} (thesis Eq. 3.18-3.20, with H from Eq. 3.37-3.39 as \
-             corrected in the errata): the predicted range and bearing of landmark {id} are \
-             compared with the measurement. The innovation, weighted by the Kalman gain K, \
+            "Update with landmark {id} (Eq. 3.18-3.20 of Xiang's thesis, with H from its \
+             Eq. 3.37-3.39; Eq. 3.38-3.39 print (L_x y − y_t) where (L_y − y_t) is meant): the \
+             predicted range and bearing of landmark {id} are compared with the measurement. The innovation, weighted by the Kalman gain K, \
              corrects the robot and, through the correlations, every landmark; the robot's and \
              the landmarks' ellipses shrink."
         ),
@@ -179,121 +194,146 @@ fn filter_ui(ui: &mut egui::Ui, run: &FilterRun, phase: Option<Phase>) {
                     .color(color),
             );
             ui.label(phase_text(name, phase, report));
+            let (key, source) = phase_source(name);
+            sources::source_link(ui, key, source);
             if let Some(error) = &run.last_error {
                 ui.colored_label(palette::VERMILLION, format!("This phase failed: {error}"));
             }
             let n = filter.landmark_ids().len();
-            egui::Grid::new(("live_numbers", name))
-                .num_columns(2)
-                .striped(true)
+            // A horizontal scroll keeps a long row from widening the whole panel
+            // (which would push the wrapped texts past its edge).
+            egui::ScrollArea::horizontal()
+                .id_salt(("live_numbers_scroll", name))
                 .show(ui, |ui| {
-                    row(ui, "landmarks in the state", n.to_string());
-                    row(
-                        ui,
-                        "state dimension",
-                        format!("{} = 3 + 2·{n}", filter.mean().len()),
-                    );
-                    match (phase, &run.last_predict, report) {
-                        (Some(Phase::Predict), Some(predict), _) => {
+                    egui::Grid::new(("live_numbers", name))
+                        .num_columns(2)
+                        .striped(true)
+                        .show(ui, |ui| {
+                            row(ui, "landmarks in the state", n.to_string());
                             row(
                                 ui,
-                                "command (v, w)",
-                                format!(
-                                    "{:.2} m/s, {:.3} rad/s",
-                                    predict.control.v, predict.control.w
-                                ),
+                                "state dimension",
+                                format!("{} = 3 + 2·{n}", filter.mean().len()),
                             );
-                            let growth = if predict.robot_det_before > 0.0 {
-                                format!(
-                                    "×{:.3}",
-                                    (predict.robot_det_after / predict.robot_det_before).sqrt()
-                                )
-                            } else {
-                                "from zero".to_owned()
-                            };
-                            row(
-                                ui,
-                                "√det P_RR (robot)",
-                                format!(
-                                    "{:.2e} to {:.2e} ({growth})",
-                                    predict.robot_det_before.max(0.0).sqrt(),
-                                    predict.robot_det_after.max(0.0).sqrt()
-                                ),
-                            );
-                        }
-                        (_, _, Some(UpdateReport::Initialized { id, position })) => {
-                            row(
-                                ui,
-                                "placed",
-                                format!(
-                                    "landmark {id} at ({:.2}, {:.2}) m",
-                                    position[0], position[1]
-                                ),
-                            );
-                        }
-                        (
-                            _,
-                            _,
-                            Some(UpdateReport::Corrected {
-                                innovation,
-                                innovation_covariance,
-                                nis,
-                                robot_gain_norm,
-                                gain_norm,
-                                ..
-                            }),
-                        ) => {
-                            row(ui, "innovation, range", format!("{:+.3} m", innovation[0]));
-                            row(
-                                ui,
-                                "innovation, bearing",
-                                format!(
-                                    "{:+.4} rad ({:+.2}°)",
-                                    innovation[1],
-                                    innovation[1].to_degrees()
-                                ),
-                            );
-                            row(
-                                ui,
-                                "√S (range, bearing)",
-                                format!(
-                                    "{:.3} m, {:.2}°",
-                                    innovation_covariance[(0, 0)].max(0.0).sqrt(),
-                                    innovation_covariance[(1, 1)].max(0.0).sqrt().to_degrees()
-                                ),
-                            );
-                            let (lo, hi) = (chi2_quantile(0.025, 2.0), chi2_quantile(0.975, 2.0));
-                            let verdict = if *nis > hi {
-                                format!("above {hi:.2}")
-                            } else if *nis < lo {
-                                format!("below {lo:.2}")
-                            } else {
-                                format!("in {lo:.2}..{hi:.2}")
-                            };
-                            row(ui, "NIS ν^T S^-1 ν (2 dof)", format!("{nis:.2}, {verdict}"));
-                            row(ui, "gain |K|, robot rows", format!("{robot_gain_norm:.3}"));
-                            row(ui, "gain |K|, whole state", format!("{gain_norm:.3}"));
-                        }
-                        _ => {}
-                    }
-                    if let Some(m) = run.latest() {
-                        row(
-                            ui,
-                            "robot position error",
-                            format!("{:.3} m", m.position_error),
-                        );
-                        row(
-                            ui,
-                            "its 2σ bound",
-                            format!("{:.3} m", m.position_bound_2sigma),
-                        );
-                        if let Some(nees) = m.nees {
-                            row(ui, "robot NEES (3 dof)", format!("{nees:.2}"));
-                        }
-                        if let Some(rmse) = m.landmark_rmse {
-                            row(ui, "landmark RMS error", format!("{rmse:.3} m"));
-                        }
-                    }
+                            match (phase, &run.last_predict, report) {
+                                (Some(Phase::Predict), Some(predict), _) => {
+                                    row(
+                                        ui,
+                                        "command (v, w)",
+                                        format!(
+                                            "{:.2} m/s, {:.3} rad/s",
+                                            predict.control.v, predict.control.w
+                                        ),
+                                    );
+                                    let growth = if predict.robot_det_before > 0.0 {
+                                        format!(
+                                            "×{:.3}",
+                                            (predict.robot_det_after / predict.robot_det_before)
+                                                .sqrt()
+                                        )
+                                    } else {
+                                        "from zero".to_owned()
+                                    };
+                                    row(
+                                        ui,
+                                        "√det P_RR (robot)",
+                                        format!(
+                                            "{:.2e} to {:.2e} ({growth})",
+                                            predict.robot_det_before.max(0.0).sqrt(),
+                                            predict.robot_det_after.max(0.0).sqrt()
+                                        ),
+                                    );
+                                }
+                                (_, _, Some(UpdateReport::Initialized { id, position })) => {
+                                    row(
+                                        ui,
+                                        "placed",
+                                        format!(
+                                            "landmark {id} at ({:.2}, {:.2}) m",
+                                            position[0], position[1]
+                                        ),
+                                    );
+                                }
+                                (
+                                    _,
+                                    _,
+                                    Some(UpdateReport::Corrected {
+                                        innovation,
+                                        innovation_covariance,
+                                        nis,
+                                        robot_gain_norm,
+                                        gain_norm,
+                                        ..
+                                    }),
+                                ) => {
+                                    row(
+                                        ui,
+                                        "innovation, range",
+                                        format!("{:+.3} m", innovation[0]),
+                                    );
+                                    row(
+                                        ui,
+                                        "innovation, bearing",
+                                        format!(
+                                            "{:+.4} rad ({:+.2}°)",
+                                            innovation[1],
+                                            innovation[1].to_degrees()
+                                        ),
+                                    );
+                                    row(
+                                        ui,
+                                        "√S (range, bearing)",
+                                        format!(
+                                            "{:.3} m, {:.2}°",
+                                            innovation_covariance[(0, 0)].max(0.0).sqrt(),
+                                            innovation_covariance[(1, 1)]
+                                                .max(0.0)
+                                                .sqrt()
+                                                .to_degrees()
+                                        ),
+                                    );
+                                    let (lo, hi) =
+                                        (chi2_quantile(0.025, 2.0), chi2_quantile(0.975, 2.0));
+                                    let verdict = if *nis > hi {
+                                        format!("above {hi:.2}")
+                                    } else if *nis < lo {
+                                        format!("below {lo:.2}")
+                                    } else {
+                                        format!("in {lo:.2}..{hi:.2}")
+                                    };
+                                    row(
+                                        ui,
+                                        "NIS ν^T S^-1 ν (2 dof)",
+                                        format!("{nis:.2}, {verdict}"),
+                                    );
+                                    row(
+                                        ui,
+                                        "gain |K|, robot rows",
+                                        format!("{robot_gain_norm:.3}"),
+                                    );
+                                    row(ui, "gain |K|, whole state", format!("{gain_norm:.3}"));
+                                }
+                                _ => {}
+                            }
+                            if let Some(m) = run.latest() {
+                                row(
+                                    ui,
+                                    "robot position error",
+                                    format!("{:.3} m", m.position_error),
+                                );
+                                row(
+                                    ui,
+                                    "its 2σ bound",
+                                    format!("{:.3} m", m.position_bound_2sigma),
+                                );
+                                if let Some(nees) = m.nees {
+                                    row(ui, "robot NEES (3 dof)", format!("{nees:.2}"));
+                                }
+                                if let Some(rmse) = m.landmark_rmse {
+                                    row(ui, "landmark RMS error", format!("{rmse:.3} m"));
+                                }
+                            }
+                        });
                 });
         });
 }

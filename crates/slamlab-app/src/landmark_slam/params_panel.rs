@@ -4,6 +4,7 @@
 
 use super::LandmarkSlamLesson;
 use crate::palette;
+use crate::widgets::sources;
 use slamlab_sim::EstimatorKind;
 use slamlab_sim::LandmarkScenario;
 use slamlab_sim::params::{self, ParamKind, Scenario};
@@ -301,7 +302,9 @@ fn preset_ui(ui: &mut egui::Ui, lesson: &mut LandmarkSlamLesson) {
                 }
             })
             .response
-            .on_hover_text("Open a thesis experiment or a key comparison; the seed stays");
+            .on_hover_text(
+                "Open an experiment of Xiang's thesis (§3.4.3) or a key comparison; the seed stays",
+            );
     });
     if let Some(id) = chosen {
         lesson.open_preset(id);
@@ -377,17 +380,20 @@ pub fn parameters_ui(ui: &mut egui::Ui, lesson: &mut LandmarkSlamLesson) -> bool
             "motion",
             "filter model",
             &[
-                ("exact-arc", "exact arc (Eq. 2.70)"),
-                ("euler", "Euler (slides)"),
+                ("exact-arc", "exact arc (Xiang Eq. 2.70)"),
+                ("euler", "Euler (Waslander's slides)"),
             ],
         );
         number_ui(ui, lesson, "dt", "time step Δt");
         ui.label(
-            egui::RichText::new(
-                "The thesis gives no Δt; 0.1 s makes its 200 iterations one lap of the circle.",
-            )
-            .small(),
+            "Xiang's thesis (§3.4.2) gives no Δt; 0.1 s makes its 200 iterations one lap of \
+             the circle.",
         );
+        ui.horizontal_wrapped(|ui| {
+            ui.label("Sources:");
+            sources::source_link(ui, "xiang", "Xiang's thesis §2.5 and §3.4.2;");
+            sources::source_link(ui, "waslander", "Waslander's slides, \"EKF SLAM\"");
+        });
         number_ui(ui, lesson, "wheel-base", "wheel base D");
         if matches!(lesson.pending.controller, ControllerKind::Circle { .. }) {
             number_ui(ui, lesson, "v", "circle speed v");
@@ -447,12 +453,7 @@ fn share_ui(ui: &mut egui::Ui, lesson: &LandmarkSlamLesson) {
             .hint_text("share link"),
     );
     if lesson.params_changed() {
-        ui.label(
-            egui::RichText::new(
-                "The link describes the running setup; reset to include your changes.",
-            )
-            .small(),
-        );
+        ui.label("The link describes the running setup; reset to include your changes.");
     }
     ui.data_mut(|d| d.insert_temp(id, embed));
 }

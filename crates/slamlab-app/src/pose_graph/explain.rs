@@ -3,6 +3,7 @@
 
 use super::OptimizeTiming;
 use crate::palette;
+use crate::widgets::sources;
 use slamlab_core::graph::SolverKind;
 use slamlab_sim::pose_graph_lesson::{EdgeRole, KernelRun, PoseGraphSession, kernel_name};
 
@@ -19,9 +20,15 @@ pub fn explanation_ui(
     ui.heading("What the solver does");
     ui.label(
         "Every edge says where one vertex should be as seen from another; its error e is the \
-         prediction minus the measurement, and the graph's cost is F(x) = Σ e^TΩe (thesis 000 \
-         Eq. 4.2). Linearizing every error, e(x+Δx) ~ e + JΔx, gives the sparse normal \
-         equations H Δx = b with H = Σ J^TΩJ and b = -Σ J^TΩe.",
+         prediction minus the measurement, and the graph's cost is F(x) = Σ e^TΩe (Eq. 4.2 \
+         of Xiang's thesis, which prints Ω^-1; Ω is the information matrix, so it multiplies). \
+         Linearizing every error, e(x+Δx) ~ e + JΔx, gives the sparse normal equations \
+         H Δx = b with H = Σ J^TΩJ and b = -Σ J^TΩe.",
+    );
+    sources::source_link(
+        ui,
+        "xiang",
+        "Source: Xiang's thesis §4.1, \"The Pose Graph\"",
     );
     ui.add_space(4.0);
     let text = match s.solver {
@@ -32,16 +39,25 @@ pub fn explanation_ui(
         SolverKind::LevenbergMarquardt => {
             "Levenberg-Marquardt solves (H + λI) Δx = b. It takes the step only if the cost falls, \
              and then divides λ by 10 (towards Gauss-Newton); a rejected step multiplies λ by 10 \
-             (towards a short gradient step). Thesis 002 Sec. 4.4.2."
+             (towards a short gradient step), as g2o does (Wu's thesis §4.4.2)."
         }
         SolverKind::GradientDescent => {
             "The first-order method moves every vertex along its own block of the gradient, scaled \
              by the inverse of its diagonal block of H, halving the step until the cost falls \
-             (in the spirit of TORO, thesis 002 Sec. 4.4.1). It uses no off-diagonal blocks, so \
+             (in the spirit of TORO, Wu's thesis §4.4.1). It uses no off-diagonal blocks, so \
              a loop's correction travels around it one edge per iteration: many iterations."
         }
     };
     ui.label(text);
+    match s.solver {
+        SolverKind::GaussNewton => {}
+        SolverKind::LevenbergMarquardt => {
+            sources::source_link(ui, "wu", "Source: Wu's thesis §4.4.2, g2o");
+        }
+        SolverKind::GradientDescent => {
+            sources::source_link(ui, "wu", "Source: Wu's thesis §4.4.1, TORO");
+        }
+    }
     if s.kernel != slamlab_sim::pose_graph_lesson::KernelChoice::None {
         ui.add_space(4.0);
         ui.label(format!(
@@ -141,7 +157,7 @@ pub fn explanation_ui(
         }
     ));
     for note in session.notes().iter().rev().take(3) {
-        ui.label(egui::RichText::new(note).small());
+        ui.label(note);
     }
     if let Some([plain, robust]) = comparison {
         ui.separator();
@@ -159,10 +175,8 @@ pub fn explanation_ui(
             };
         }
         ui.label(
-            egui::RichText::new(
-                "Both start from the graph's first estimate; the orange path is the result without a kernel.",
-            )
-            .small(),
+            "Both start from the graph's first estimate; the orange path is the result without a \
+             kernel.",
         );
     }
 }

@@ -544,10 +544,10 @@ impl PoseGraphLesson {
         ui.label(egui::RichText::new("Open a graph").strong());
         self.picker
             .ui(ui, "Open file…", ".g2o,.graph,.toro,.txt", MAX_FILE_BYTES);
-        ui.label(
-            egui::RichText::new("Or drop a .g2o or TORO file (M3500, intel, …) on the window.")
-                .small(),
-        );
+        ui.horizontal_wrapped(|ui| {
+            ui.label("Or drop a .g2o or TORO file (M3500, intel, …) on the window.");
+            crate::widgets::sources::source_link(ui, "datasets", "Sources: the datasets");
+        });
         if self.loaded.is_some()
             && ui
                 .button("Back to the built-in example")
@@ -561,13 +561,10 @@ impl PoseGraphLesson {
         if params_panel::params_ui(ui, &mut self.pending, &running, PANEL_PARAMS) {
             self.apply_live_params();
         }
-        ui.label(
-            egui::RichText::new(format!(
-                "{} apply at once; the others on \"Apply & reset\".",
-                LIVE_PARAMS.join(", ")
-            ))
-            .small(),
-        );
+        ui.label(format!(
+            "{} apply at once; the others on \"Apply & reset\".",
+            LIVE_PARAMS.join(", ")
+        ));
         let changed = params::to_pairs(&self.pending.scenario) != params::to_pairs(&running);
         if ui
             .add_enabled(changed, egui::Button::new("Apply & reset"))

@@ -33,11 +33,9 @@ pub fn plots_ui(ui: &mut egui::Ui, session: &mut PoseGraphSession, patterns: &mu
                 "Information matrix H ({0} x {0})",
                 patterns.unknowns
             ),
-            "H = Σ J^TΩJ in the graph's vertex order: a block is non-zero where an edge joins two vertices (thesis 000 Eq. 4.8). Blue: non-zero.",
+            "H = Σ J^TΩJ in the graph's vertex order: a block is non-zero where an edge joins two vertices (Eq. 4.8 of Xiang's thesis). Blue: non-zero.",
         );
-        ui.label(
-            egui::RichText::new(format!("{} non-zero blocks", patterns.h_blocks)).small(),
-        );
+        ui.label(format!("{} non-zero blocks", patterns.h_blocks));
         image_ui(ui, h.as_ref(), height - 20.0, "Information matrix H");
         let ui = &mut columns[2];
         title_ui(
@@ -45,13 +43,10 @@ pub fn plots_ui(ui: &mut egui::Ui, session: &mut PoseGraphSession, patterns: &mu
             "Cholesky factor L",
             "L L^T = H after a fill-reducing reordering of the vertices: blue where H was already non-zero, vermillion where elimination created fill-in.",
         );
-        ui.label(
-            egui::RichText::new(format!(
-                "{} blocks, {} of them fill-in; {} scalar non-zeros",
-                patterns.l_blocks, patterns.fill_blocks, patterns.l_nonzeros
-            ))
-            .small(),
-        );
+        ui.label(format!(
+            "{} blocks, {} of them fill-in; {} scalar non-zeros",
+            patterns.l_blocks, patterns.fill_blocks, patterns.l_nonzeros
+        ));
         image_ui(ui, l.as_ref(), height - 20.0, "Cholesky factor L");
         if let Some(e) = &patterns.error {
             ui.colored_label(palette::VERMILLION, e);
@@ -63,7 +58,7 @@ fn cost_plot(ui: &mut egui::Ui, session: &PoseGraphSession, height: f32) {
     title_ui(
         ui,
         "Cost per iteration (log scale)",
-        "F(x) = Σ ρ(e^TΩe) after each iteration (thesis 000 Eq. 4.2); dots mark edits (a drag, a wrong loop closure, another solver or kernel)",
+        "F(x) = Σ ρ(e^TΩe) after each iteration (Eq. 4.2 of Xiang's thesis); dots mark edits (a drag, a wrong loop closure, another solver or kernel)",
     );
     let log = |c: f64| if c > 0.0 { math::log10(c) } else { f64::NAN };
     let history = session.history();

@@ -2,6 +2,7 @@
 //! the live numbers (mean copy-count variance, the largest bias of the mean).
 
 use super::method_color;
+use crate::widgets::sources;
 use slamlab_core::particle::Resampler;
 use slamlab_core::particle::lab::multinomial_variance;
 use slamlab_sim::resampling_lab::LabRun;
@@ -10,14 +11,16 @@ use slamlab_sim::resampling_lab::LabRun;
 pub fn method_text(method: Resampler) -> &'static str {
     match method {
         Resampler::Multinomial => {
-            "M independent draws, each picking particle i with probability w_i (thesis 000 \
-             Algorithm 6, the \"naive sampler\", with its search corrected: the first i whose \
-             cumulative weight reaches the draw). Copy counts are binomial, variance M w_i (1 − w_i)."
+            "M independent draws, each picking particle i with probability w_i (Algorithm 6 \
+             of Xiang's thesis, §2.3.1, the \"naive sampler\"; its search loop is printed \
+             inverted, and here it finds the first i whose cumulative weight reaches the \
+             draw). Copy counts are binomial, variance M w_i (1 − w_i)."
         }
         Resampler::LowVariance => {
             "One random offset r in [0, 1/M) and M pointers r + m/M spaced evenly over the \
-             cumulative weights (thesis 000 Algorithm 7; Probabilistic Robotics Table 4.4). A \
-             particle gets floor(M w_i) or ceil(M w_i) copies, never anything else."
+             cumulative weights (Algorithm 7 of Xiang's thesis, §2.3.1; Table 4.4 of Thrun, \
+             Burgard and Fox, Probabilistic Robotics). A particle gets floor(M w_i) or \
+             ceil(M w_i) copies, never anything else."
         }
         Resampler::Stratified => {
             "One independent draw in each of the M strata [m/M, (m+1)/M) of the cumulative \
@@ -107,6 +110,11 @@ pub fn explanation_ui(ui: &mut egui::Ui, run: &LabRun) {
         );
         ui.label(method_text(method));
     }
+    ui.horizontal_wrapped(|ui| {
+        ui.label("Sources:");
+        sources::source_link(ui, "xiang", "Xiang's thesis §2.3.1;");
+        sources::source_link(ui, "thrun", "Probabilistic Robotics, Table 4.4");
+    });
     ui.separator();
     ui.label(
         "Try: \"one-dominant\" (who keeps the heavy particle's copies exact?), \"many-tiny\" \
@@ -116,7 +124,9 @@ pub fn explanation_ui(ui: &mut egui::Ui, run: &LabRun) {
     );
     ui.label(
         "In a filter, resample only when the weights have degenerated: when N_eff = 1/Σw_i² \
-         falls below a threshold times M (slides 001). The Monte Carlo localization lesson's \
-         resampler parameter chooses among these four.",
+         falls below a threshold times M (Waslander's slides, \"Occupancy Grid SLAM: \
+         Resampling\"). The Monte Carlo localization lesson's resampler parameter chooses \
+         among these four.",
     );
+    sources::source_link(ui, "waslander", "Source: Waslander's slides");
 }

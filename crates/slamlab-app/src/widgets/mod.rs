@@ -10,3 +10,4 @@ pub mod layout;
 pub mod map_canvas;
 pub mod params_panel;
 pub mod plots;
+pub mod sources;

@@ -15,3 +15,4 @@ mod landmark_ui;
 mod pose_graph_ui;
 mod resampling_ui;
 mod shell_ui;
+mod sources_ui;

@@ -122,7 +122,7 @@ pub static PARAMS: &[Param<FusionLessonScenario>] = &[
     field!(
         "max-speed",
         "m/s",
-        "top forward speed of the joystick drive (thesis: 0.1)",
+        "top forward speed of the joystick drive (Wu's thesis: 0.1)",
         (0.01, 2.0),
         drive.max_speed
     ),
@@ -285,7 +285,7 @@ pub static PARAMS: &[Param<FusionLessonScenario>] = &[
     field!(
         "output-rate",
         "Hz",
-        "rate at which the fused estimate is sampled for plots and RMSE (thesis: 30)",
+        "rate at which the fused estimate is sampled for plots and RMSE (Wu's thesis: 30)",
         (1.0, 200.0),
         output_rate
     ),

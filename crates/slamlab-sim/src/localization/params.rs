@@ -126,7 +126,7 @@ pub static PARAMS: &[Param<MclScenario>] = &[
     field!("dt", "s", "simulation time step", (0.01, 1.0), dt),
     Param::words(
         "laser-model-type",
-        "measurement model: likelihood field (amcl's default) or beam model (thesis 3.5.1)",
+        "measurement model: likelihood field (amcl's default) or beam model (Xiang's thesis §3.5.1)",
         LASER_MODELS,
         |s| {
             Some(
@@ -393,7 +393,7 @@ pub static PRESETS: &[Preset<MclScenario>] = &[
     },
     Preset {
         id: "thesis-table-5-1",
-        title: "Thesis Table 5.1: AMCL vs ACMCL, 1000 particles, kidnapped at tick 300",
+        title: "Table 5.1 of Xiang's thesis: AMCL vs ACMCL, 1000 particles, kidnapped at tick 300",
         summary: "AMCL beside ACMCL with 1000 particles each and the beam model, tracking from the start, kidnapped at least 3 m away at tick 300.",
         build: |seed| MclScenario {
             estimators: vec![LocalizationEstimator::Amcl, LocalizationEstimator::Acmcl],
