@@ -190,6 +190,10 @@ pub trait Lesson: std::fmt::Debug {
     fn set_follow(&mut self, _on: bool) -> bool {
         false
     }
+    /// The lesson's own keys beside the time bar's, for the Keys menu.
+    fn keys(&self) -> Vec<(&'static str, &'static str)> {
+        Vec::new()
+    }
     /// Every plot's data, unthinned, for "Export plot data as CSV".
     fn plot_series(&self) -> Vec<crate::export::PlotSeries> {
         Vec::new()
@@ -284,6 +288,9 @@ impl Lesson for WithNotice {
     }
     fn plot_series(&self) -> Vec<crate::export::PlotSeries> {
         self.inner.plot_series()
+    }
+    fn keys(&self) -> Vec<(&'static str, &'static str)> {
+        self.inner.keys()
     }
 }
 

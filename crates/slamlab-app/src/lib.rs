@@ -480,6 +480,7 @@ impl SlamLabApp {
             {
                 widgets::sources::open_sources(ui.ctx(), None);
             }
+            ui.menu_button("Keys", |ui| self.keys_ui(ui));
             if self.narrow {
                 // A narrow window: the drawer buttons first, then the title; no
                 // right-aligned group for wrapped text to run into.
@@ -521,13 +522,27 @@ impl SlamLabApp {
                             .monospace(),
                     );
                 }
-                ui.label(
-                    egui::RichText::new("Space run/pause · . phase · n tick · r reset")
-                        .small()
-                        .weak(),
-                );
             });
         });
+    }
+
+    /// Every keyboard shortcut: the time bar's, then the lesson's own (drive keys).
+    fn keys_ui(&mut self, ui: &mut egui::Ui) {
+        ui.label("With the mouse over the app and no text field active:");
+        egui::Grid::new("slamlab_keys")
+            .num_columns(2)
+            .striped(true)
+            .show(ui, |ui| {
+                for (key, what) in time_control::SHORTCUTS
+                    .iter()
+                    .copied()
+                    .chain(self.lesson.keys())
+                {
+                    ui.label(egui::RichText::new(key).monospace().strong());
+                    ui.label(what);
+                    ui.end_row();
+                }
+            });
     }
 
     /// The File menu: open a scenario, and the exports.

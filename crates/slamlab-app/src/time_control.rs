@@ -127,6 +127,15 @@ pub struct TimeInfo {
     pub can_step_back: bool,
 }
 
+/// The time bar's keys and what they do, for the Keys menu.
+pub const SHORTCUTS: &[(&str, &str)] = &[
+    ("Space", "run / pause"),
+    (".", "step one phase (the time bar's Step phase)"),
+    (",", "step back one phase"),
+    ("n", "step one whole tick"),
+    ("r", "reset the run"),
+];
+
 /// Reads the keyboard shortcuts (Space, `.`, `,`, `n`, `r`) unless a text field has the
 /// keyboard focus. The keys are consumed so that a focused button does not also react.
 pub fn shortcut_actions(ctx: &egui::Context) -> Vec<TimeAction> {

@@ -627,6 +627,10 @@ impl crate::widgets::layout::LessonPanels for KidnapLesson {
 }
 
 impl Lesson for KidnapLesson {
+    fn keys(&self) -> Vec<(&'static str, &'static str)> {
+        crate::widgets::drive::DRIVE_KEYS.to_vec()
+    }
+
     fn plot_series(&self) -> Vec<crate::export::PlotSeries> {
         plots::series(self.stepper.sim().run())
     }

@@ -517,6 +517,10 @@ impl crate::widgets::layout::LessonPanels for LandmarkSlamLesson {
 }
 
 impl Lesson for LandmarkSlamLesson {
+    fn keys(&self) -> Vec<(&'static str, &'static str)> {
+        crate::widgets::drive::DRIVE_KEYS.to_vec()
+    }
+
     fn plot_series(&self) -> Vec<crate::export::PlotSeries> {
         plots::series(&self.session)
     }

@@ -33,6 +33,14 @@ impl PadDirection {
     }
 }
 
+/// The drive keys, for the Keys menu of lessons that drive by hand.
+pub const DRIVE_KEYS: &[(&str, &str)] = &[
+    ("↑ or W", "drive forward (while held)"),
+    ("↓ or S", "drive backward"),
+    ("← or A", "turn left"),
+    ("→ or D", "turn right"),
+];
+
 /// The command of the drive keys held now (arrows or WASD), or `None` when none is
 /// held or a text field has the keyboard. Arrow presses are consumed so that a
 /// focused slider does not move too.

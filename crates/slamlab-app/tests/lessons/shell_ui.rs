@@ -275,3 +275,31 @@ fn rendered_narrow_figure_at_tick_120_shows_map_and_plots() {
         );
     }
 }
+
+/// The Keys menu lists every shortcut at body size: the time bar's five, and the
+/// drive keys in lessons that drive by hand.
+#[test]
+fn the_keys_menu_lists_every_shortcut() {
+    for (query, drive) in [
+        ("lesson=landmark-slam", true),
+        ("lesson=kidnap", true),
+        ("lesson=resampling", false),
+    ] {
+        let mut h = super::common::harness(query);
+        h.run();
+        h.get_by_label("Keys").click();
+        h.run();
+        for key in ["Space", ".", ",", "n", "r"] {
+            assert!(
+                h.query_all_by_label(key).next().is_some(),
+                "{query}: key {key:?} is not listed"
+            );
+        }
+        assert!(super::common::label_visible(&h, "step back one phase"));
+        assert_eq!(
+            super::common::label_visible(&h, "drive forward"),
+            drive,
+            "{query}"
+        );
+    }
+}
