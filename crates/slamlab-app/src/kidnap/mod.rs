@@ -446,7 +446,7 @@ impl KidnapLesson {
             KidnapEvent::Explore
         };
         self.note = Some(if by_hand {
-            "Driving by hand: hold the arrow keys or WASD, or the pad on the map".to_owned()
+            "Driving by hand: hold the arrow keys or WASD, or the pad above the map".to_owned()
         } else {
             event.describe()
         });
@@ -485,7 +485,7 @@ impl KidnapLesson {
             ui.radio_value(&mut by_hand, false, "Explorer")
                 .on_hover_text("The robot tours seeded waypoints through the free space");
             ui.radio_value(&mut by_hand, true, "By hand").on_hover_text(
-                "Arrow keys or WASD, or the pad on the map: forward/back 1 m/s, turn 45°/s",
+                "Arrow keys or WASD, or the pad above the map: forward/back 1 m/s, turn 45°/s",
             );
         });
         self.set_driving_by_hand(by_hand);
@@ -603,6 +603,15 @@ impl crate::widgets::layout::LessonPanels for KidnapLesson {
         if let Some(note) = &self.note {
             ui.label(egui::RichText::new(note).color(palette::VERMILLION));
         }
+        self.pad = None;
+        if self.driving_by_hand() {
+            let press = drive::pad_ui(ui);
+            if press.stop {
+                self.stepper.apply(KidnapEvent::Drive(0.0, 0.0));
+                self.sent = Some((0.0, 0.0));
+            }
+            self.pad = press.held;
+        }
         let request = map::map_ui(
             ui,
             self.stepper.sim().run(),
@@ -613,15 +622,6 @@ impl crate::widgets::layout::LessonPanels for KidnapLesson {
         );
         if let Some(map::MapRequest::KidnapTo(pose)) = request {
             self.apply_event(KidnapEvent::KidnapTo(pose));
-        }
-        self.pad = None;
-        if self.driving_by_hand() {
-            let press = drive::pad_ui(ui, ui.max_rect());
-            if press.stop {
-                self.stepper.apply(KidnapEvent::Drive(0.0, 0.0));
-                self.sent = Some((0.0, 0.0));
-            }
-            self.pad = press.held;
         }
     }
 }

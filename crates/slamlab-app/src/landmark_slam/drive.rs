@@ -80,7 +80,7 @@ pub fn drive_panel_ui(
             );
         ui.radio_value(manual, true, "Manual").on_hover_text(
             "Take the wheel from the next tick on: the run, the map and the filters go on. \
-             Drive with the arrow keys / WASD or the pad on the map",
+             Drive with the arrow keys / WASD or the pad above the map",
         );
     });
     if !*manual {
@@ -90,7 +90,7 @@ pub fn drive_panel_ui(
         });
         return;
     }
-    ui.label("Hold the arrow keys or WASD, or the pad on the map: forward/back 1 m/s, turn 45°/s. Driving starts the clock.");
+    ui.label("Hold the arrow keys or WASD, or the pad above the map: forward/back 1 m/s, turn 45°/s. Driving starts the clock.");
     ui.horizontal_wrapped(|ui| {
         ui.label("Steady command as");
         ui.radio_value(&mut drive.input, DriveInput::VelocityAndTurnRate, "(v, w)");
@@ -160,8 +160,8 @@ pub fn drive_panel_ui(
 
 /// The on-screen drive pad, bottom right of `rect`: press and hold (mouse or touch).
 /// Sets `drive.pad` to the button held now.
-pub fn drive_pad_ui(ui: &mut egui::Ui, rect: egui::Rect, drive: &mut DriveState) {
-    let press = pad_ui(ui, rect);
+pub fn drive_pad_ui(ui: &mut egui::Ui, drive: &mut DriveState) {
+    let press = pad_ui(ui);
     if press.stop {
         drive.stop();
     }

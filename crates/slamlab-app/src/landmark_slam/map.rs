@@ -26,8 +26,8 @@ const MAX_PATH_POINTS: usize = 4000;
 /// Radius of the heading-uncertainty wedge, pixels.
 const WEDGE_RADIUS: f32 = 34.0;
 
-/// The map toolbar, the map itself, its legend, tooltips and (when driving by
-/// hand) the drive pad.
+/// The map toolbar, (when driving by hand) the drive pad under it, the map itself,
+/// its legend and tooltips.
 pub fn map_ui(
     ui: &mut egui::Ui,
     session: &LandmarkSession,
@@ -36,6 +36,11 @@ pub fn map_ui(
     drive: &mut DriveState,
 ) {
     toolbar_ui(ui, view, opts, session);
+    if matches!(session.controller(), slamlab_sim::ControllerKind::Manual) {
+        drive::drive_pad_ui(ui, drive);
+    } else {
+        drive.pad = None;
+    }
     let half = 0.5 * session.world().size;
     let legend_space = if opts.legend { view.legend_space } else { 0.0 };
     let truth = session.truth();
@@ -70,7 +75,6 @@ pub fn map_ui(
         let placement = LegendPlacement {
             transform: &t,
             preferred: view.legend_corner,
-            avoid_bottom_right: is_manual(session),
         };
         let (legend, corner) = draw_legend(
             &painter,
@@ -124,11 +128,6 @@ pub fn map_ui(
         response.on_hover_ui_at_pointer(|ui| {
             ui.label(text);
         });
-    }
-    if matches!(session.controller(), slamlab_sim::ControllerKind::Manual) {
-        drive::drive_pad_ui(ui, rect, drive);
-    } else {
-        drive.pad = None;
     }
 }
 
@@ -503,45 +502,31 @@ fn draw_filters(
 /// Smallest magnification worth an inset: below it the robot's ellipses are already
 /// readable on the map.
 const MIN_MAGNIFICATION: f32 = 2.5;
+/// Largest magnification: a millimetre ellipse stays a millimetre ellipse.
+const MAX_MAGNIFICATION: f32 = 50.0;
 
 /// The magnifier's square: its side (points) for a map, and the corner it takes (the
 /// first of top right, bottom right, bottom left, top left that stays inside the map,
-/// off the legend and off the true robot; bottom right is the drive pad's when
-/// driving by hand).
-fn magnifier_rect(map: Rect, legend: Option<Rect>, robot: Pos2, manual: bool) -> Option<Rect> {
+/// off the legend and off the true robot).
+fn magnifier_rect(map: Rect, legend: Option<Rect>, robot: Pos2) -> Option<Rect> {
     let side = (0.3 * map.width().min(map.height())).clamp(110.0, 200.0);
     let size = vec2(side, side);
     let candidates = [
-        (
-            Rect::from_min_size(map.right_top() + vec2(-side - 10.0, 26.0), size),
-            false,
-        ),
-        (
-            Rect::from_min_size(map.right_bottom() + vec2(-side - 10.0, -side - 30.0), size),
-            true,
-        ),
-        (
-            Rect::from_min_size(map.left_bottom() + vec2(48.0, -side - 48.0), size),
-            false,
-        ),
-        (
-            Rect::from_min_size(map.left_top() + vec2(48.0, 26.0), size),
-            false,
-        ),
+        Rect::from_min_size(map.right_top() + vec2(-side - 10.0, 26.0), size),
+        Rect::from_min_size(map.right_bottom() + vec2(-side - 10.0, -side - 30.0), size),
+        Rect::from_min_size(map.left_bottom() + vec2(48.0, -side - 48.0), size),
+        Rect::from_min_size(map.left_top() + vec2(48.0, 26.0), size),
     ];
-    candidates
-        .into_iter()
-        .filter(|(_, bottom_right)| !(manual && *bottom_right))
-        .map(|(rect, _)| rect)
-        .find(|rect| {
-            map.contains_rect(*rect)
-                && !legend.is_some_and(|l| l.intersects(rect.expand(4.0)))
-                && !rect.expand(16.0).contains(robot)
-        })
+    candidates.into_iter().find(|rect| {
+        map.contains_rect(*rect)
+            && !legend.is_some_and(|l| l.intersects(rect.expand(4.0)))
+            && !rect.expand(16.0).contains(robot)
+    })
 }
 
 /// How far (metres) the robot's estimates reach from the true robot: each filter's
-/// distance plus its 95% ellipse's semi-major axis. `None` if not finite.
+/// distance plus its 95% ellipse's semi-major axis. `None` if not finite, or below a
+/// tenth of a millimetre.
 fn estimate_extent(session: &LandmarkSession) -> Option<f64> {
     let truth = session.truth().translation();
     let mut extent = 0.0_f64;
@@ -558,7 +543,8 @@ fn estimate_extent(session: &LandmarkSession) -> Option<f64> {
         }
         extent = extent.max(reach);
     }
-    Some(extent.max(0.02))
+    // Nothing to magnify before the first prediction (every ellipse a point).
+    (extent > 1e-4).then_some(extent)
 }
 
 /// A magnified inset around the true robot: every filter's robot ellipse, heading
@@ -581,11 +567,12 @@ fn draw_magnifier(
     if !finite(robot) || !t.rect.contains(robot) {
         return;
     }
-    let Some(inset) = magnifier_rect(t.rect, legend, robot, is_manual(session)) else {
+    let Some(inset) = magnifier_rect(t.rect, legend, robot) else {
         return;
     };
-    let scale = (0.42 * f64::from(inset.width()) / extent) as f32;
-    let magnification = scale / t.scale;
+    let magnification =
+        ((0.42 * f64::from(inset.width()) / extent) as f32 / t.scale).min(MAX_MAGNIFICATION);
+    let scale = magnification * t.scale;
     if !(magnification.is_finite() && magnification >= MIN_MAGNIFICATION) {
         return;
     }
@@ -958,11 +945,6 @@ fn filter_label(name: &str) -> String {
 struct LegendPlacement<'a> {
     transform: &'a MapTransform,
     preferred: usize,
-    avoid_bottom_right: bool,
-}
-
-fn is_manual(session: &LandmarkSession) -> bool {
-    matches!(session.controller(), slamlab_sim::ControllerKind::Manual)
 }
 
 /// Picks the legend's corner: the one covering the fewest robots (heavily weighted)
@@ -1001,8 +983,7 @@ fn legend_corner(
             .count();
         100 * robots_inside + landmarks_inside
     };
-    let allowed =
-        |k: usize| !(k == 3 && placement.avoid_bottom_right) && map.contains_rect(corners[k]);
+    let allowed = |k: usize| map.contains_rect(corners[k]);
     let preferred = placement.preferred.min(3);
     let mut best = (preferred, score(&corners[preferred]));
     if !allowed(preferred) {
@@ -1258,23 +1239,20 @@ mod tests {
         let map = Rect::from_min_size(pos2(0.0, 0.0), vec2(800.0, 600.0));
         let far = pos2(400.0, 300.0);
         // Nothing in the way: top right.
-        let first = magnifier_rect(map, None, far, false).unwrap();
+        let first = magnifier_rect(map, None, far).unwrap();
         assert!(first.right() < map.right() && first.top() < 100.0);
         assert_eq!(first.width(), 180.0);
-        // The legend over the top right: bottom right; driving by hand (the drive
-        // pad's corner): bottom left.
+        // The legend over the top right: bottom right.
         let legend = Rect::from_min_size(pos2(500.0, 20.0), vec2(300.0, 200.0));
-        let second = magnifier_rect(map, Some(legend), far, false).unwrap();
+        let second = magnifier_rect(map, Some(legend), far).unwrap();
         assert!(second.bottom() > 400.0 && second.right() > 600.0);
-        let third = magnifier_rect(map, Some(legend), far, true).unwrap();
-        assert!(third.bottom() > 400.0 && third.left() < 100.0);
         // Never over the true robot.
         let robot = first.center();
-        let moved = magnifier_rect(map, None, robot, false).unwrap();
+        let moved = magnifier_rect(map, None, robot).unwrap();
         assert!(!moved.expand(16.0).contains(robot));
         // A map too small for any corner: no magnifier.
         let tiny = Rect::from_min_size(pos2(0.0, 0.0), vec2(150.0, 120.0));
-        assert!(magnifier_rect(tiny, None, far, false).is_none());
+        assert!(magnifier_rect(tiny, None, far).is_none());
     }
 
     #[test]
@@ -1288,7 +1266,6 @@ mod tests {
         let placement = LegendPlacement {
             transform: &view.transform(rect),
             preferred: 0,
-            avoid_bottom_right: false,
         };
         assert_eq!(legend_corner(&placement, &session, size).0, 0);
         // The true robot under the top-left legend: it moves.
@@ -1301,11 +1278,9 @@ mod tests {
         let placement = LegendPlacement {
             transform: &t,
             preferred: 0,
-            avoid_bottom_right: true,
         };
         let (corner, legend) = legend_corner(&placement, &session, size);
         assert_ne!(corner, 0);
-        assert_ne!(corner, 3, "the drive pad's corner is avoided");
         assert!(!legend.contains(t.pose(&truth)));
     }
 }

@@ -87,40 +87,29 @@ pub struct PadPress {
     pub stop: bool,
 }
 
-/// The on-screen drive pad, at the bottom right of `rect`: press and hold.
-pub fn pad_ui(ui: &mut egui::Ui, rect: egui::Rect) -> PadPress {
-    let size = egui::vec2(70.0, 34.0);
-    let gap = 4.0;
-    let origin = rect.right_bottom()
-        - egui::vec2(
-            3.0 * size.x + 2.0 * gap + 10.0,
-            3.0 * size.y + 2.0 * gap + 10.0,
-        );
-    let cell = |col: f32, row: f32| {
-        egui::Rect::from_min_size(
-            origin + egui::vec2(col * (size.x + gap), row * (size.y + gap)),
-            size,
-        )
-    };
+/// The on-screen drive pad: one row of buttons above the map (docked outside it, so
+/// it never covers the world): press and hold to drive, Stop to halt.
+pub fn pad_ui(ui: &mut egui::Ui) -> PadPress {
     let buttons = [
-        (cell(1.0, 0.0), "Forward", Some(PadDirection::Forward)),
-        (cell(0.0, 1.0), "Left", Some(PadDirection::Left)),
-        (cell(1.0, 1.0), "Stop", None),
-        (cell(2.0, 1.0), "Right", Some(PadDirection::Right)),
-        (cell(1.0, 2.0), "Back", Some(PadDirection::Backward)),
+        ("Left", Some(PadDirection::Left)),
+        ("Forward", Some(PadDirection::Forward)),
+        ("Stop", None),
+        ("Back", Some(PadDirection::Backward)),
+        ("Right", Some(PadDirection::Right)),
     ];
     let mut press = PadPress::default();
-    for (button_rect, label, direction) in buttons {
-        let response = ui
-            .put(button_rect, egui::Button::new(label))
-            .on_hover_text("Press and hold to drive");
-        match direction {
-            Some(direction) if response.is_pointer_button_down_on() => {
-                press.held = Some(direction);
+    ui.horizontal_wrapped(|ui| {
+        ui.label("Drive (press and hold, or arrow keys / WASD):");
+        for (label, direction) in buttons {
+            let response = ui.add(egui::Button::new(label).min_size(egui::vec2(64.0, 26.0)));
+            match direction {
+                Some(direction) if response.is_pointer_button_down_on() => {
+                    press.held = Some(direction);
+                }
+                None if response.clicked() => press.stop = true,
+                _ => {}
             }
-            None if response.clicked() => press.stop = true,
-            _ => {}
         }
-    }
+    });
     press
 }

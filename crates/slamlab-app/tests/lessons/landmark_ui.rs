@@ -663,3 +663,24 @@ fn coinciding_filters_are_named_and_parted_ones_are_not() {
         60
     ));
 }
+
+/// Driving by hand: the pad is a row of buttons above the map, not on it: its
+/// Forward button lies above the map canvas's top edge... and holding it drives.
+#[test]
+fn the_drive_pad_sits_above_the_map_and_drives() {
+    let mut h = harness("lesson=landmark-slam&seed=7&controller=manual");
+    h.run();
+    let forward = h.get_by_label("Forward").rect();
+    let map = h.state().map_rect().unwrap_or(egui::Rect::NOTHING);
+    assert!(map.contains_rect(forward), "{forward:?} in {map:?}");
+    // Above the canvas: the toolbar and the pad take the panel's top rows.
+    assert!(
+        forward.bottom() < map.top() + 110.0,
+        "{forward:?} in {map:?}"
+    );
+    if let Ok(dir) = std::env::var("SLAMLAB_SCREENSHOTS")
+        && let Ok(image) = h.render()
+    {
+        let _ = image.save(format!("{dir}/manual-pad.png"));
+    }
+}
