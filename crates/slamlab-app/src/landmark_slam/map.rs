@@ -144,35 +144,50 @@ fn toolbar_ui(
         }
         ui.checkbox(&mut opts.follow_robot, "Follow robot")
             .on_hover_text("Keep the true robot in the middle of the map");
-        ui.separator();
-        ui.checkbox(&mut opts.legend, "Legend");
-        ui.checkbox(&mut opts.magnifier, "Magnifier").on_hover_text(
-            "A magnified view around the robot, whenever its ellipses are small on the map: \
-             watch predict grow them and each update shrink them",
-        );
-        ui.checkbox(&mut opts.fov, "Field of view")
-            .on_hover_text("The sensor's field of view and range, from the true robot");
-        ui.checkbox(&mut opts.rays, "Observations")
-            .on_hover_text("This tick's measurements as rays from the true robot");
-        ui.checkbox(&mut opts.ids, "Ids");
-        ui.checkbox(&mut opts.error_lines, "Errors")
-            .on_hover_text("A thin line from each estimated landmark to its true position");
         let has_sigma_points = session
             .filters()
             .iter()
             .any(|run| !super::robot_sigma_points(run.filter()).is_empty());
-        ui.add_enabled(
-            has_sigma_points,
-            egui::Checkbox::new(&mut opts.sigma_points, "Sigma points"),
-        )
-        .on_hover_text("The UKF's sigma points of the robot pose, as its next prediction spreads them")
-        .on_disabled_hover_text("Only sigma-point filters (UKF) have sigma points");
+        ui.separator();
+        // A small map (a phone, an iframe) keeps its layers in a menu, so that the
+        // toolbar stays one row and the map keeps the height.
+        if ui.available_width() < 640.0 {
+            ui.menu_button("Layers", |ui| layers_ui(ui, opts, has_sigma_points));
+        } else {
+            layers_ui(ui, opts, has_sigma_points);
+        }
         ui.separator();
         ui.toggle_value(&mut opts.heatmap, "Covariance heatmap")
             .on_hover_text("Every filter's covariance as a correlation matrix");
         ui.toggle_value(&mut opts.many_runs, "Many runs")
             .on_hover_text("This scenario run again with many seeds: each filter's NEES averaged over the runs, against the band of a consistent filter");
     });
+}
+
+/// The map's layer switches.
+fn layers_ui(ui: &mut egui::Ui, opts: &mut ViewOptions, has_sigma_points: bool) {
+    ui.checkbox(&mut opts.legend, "Legend");
+    ui.checkbox(&mut opts.magnifier, "Magnifier").on_hover_text(
+        "A magnified view around the robot, whenever its ellipses are small on the map: \
+         watch predict grow them and each update shrink them",
+    );
+    ui.checkbox(&mut opts.fov, "Field of view")
+        .on_hover_text("The sensor's field of view and range, from the true robot");
+    ui.checkbox(&mut opts.rays, "Observations")
+        .on_hover_text("This tick's measurements as rays from the true robot");
+    ui.checkbox(&mut opts.ids, "Ids");
+    ui.checkbox(&mut opts.error_lines, "Errors")
+        .on_hover_text("A thin line from each estimated landmark to its true position");
+    if has_sigma_points {
+        ui.checkbox(&mut opts.sigma_points, "Sigma points")
+            .on_hover_text(
+                "The UKF's sigma points of the robot pose, as its next prediction spreads them",
+            );
+    } else {
+        // Shown unticked: no filter here has sigma points to draw.
+        ui.add_enabled(false, egui::Checkbox::new(&mut false, "Sigma points"))
+            .on_disabled_hover_text("Only sigma-point filters (UKF) have sigma points");
+    }
 }
 
 /// Points of a path on screen, thinned to at most [`MAX_PATH_POINTS`], with `last`

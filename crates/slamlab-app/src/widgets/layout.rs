@@ -15,6 +15,13 @@ pub const NARROW_WIDTH: f32 = 1000.0;
 /// The most of the height below the top bars that the plots may take.
 pub const PLOTS_MAX_SHARE: f32 = 0.4;
 
+/// Below this width or this height (points, below the top bars) the plots leave the
+/// bottom of the window for a drawer of their own, closed until asked for: a phone
+/// in landscape or a small iframe keeps the whole height for the map.
+pub const TINY_WIDTH: f32 = 600.0;
+/// See [`TINY_WIDTH`].
+pub const TINY_HEIGHT: f32 = 400.0;
+
 /// A lesson's four areas.
 pub trait LessonPanels {
     /// The plots (bottom).
@@ -55,6 +62,27 @@ pub fn lesson_panels_ui(
 ) {
     let area = ui.available_rect_before_wrap();
     let narrow = is_narrow(ui.ctx());
+    let tiny = area.width() < TINY_WIDTH || area.height() < TINY_HEIGHT;
+    if tiny {
+        // The plots become a drawer, closed when the window first gets this small.
+        let ctx = ui.ctx().clone();
+        let was_tiny_id = egui::Id::unique(("slamlab_was_tiny", id));
+        if !ctx.data(|d| d.get_temp::<bool>(was_tiny_id).unwrap_or(false)) {
+            panels.plots = false;
+        }
+        ctx.data_mut(|d| d.insert_temp(was_tiny_id, true));
+        let map = egui::CentralPanel::default().show(ui, |ui| lesson.map_ui(ui));
+        let map = map.response.rect;
+        ctx.data_mut(|d| d.insert_temp(map_rect_id(), map));
+        let space = area.with_min_y(map.top());
+        drawers_ui(lesson, ui, panels, id, space);
+        if panels.plots {
+            plots_drawer_ui(lesson, &ctx, panels, id, space);
+        }
+        return;
+    }
+    ui.ctx()
+        .data_mut(|d| d.insert_temp(egui::Id::unique(("slamlab_was_tiny", id)), false));
     // The plots shrink with the window so that the map keeps at least 60% of it.
     let plots_max = (PLOTS_MAX_SHARE * area.height()).max(60.0);
     let plot_height: f32 = if compact { 150.0 } else { 230.0 };
@@ -187,5 +215,57 @@ fn drawers_ui(
                 panels.explanation = false;
             }
         }
+    }
+}
+
+/// The plots of a tiny window: a drawer over the lower part of the map, with a
+/// Close button.
+fn plots_drawer_ui(
+    lesson: &mut impl LessonPanels,
+    ctx: &egui::Context,
+    panels: &mut PanelVisibility,
+    id: &str,
+    space: egui::Rect,
+) {
+    let height = (0.6 * space.height()).max(120.0).min(space.height());
+    let rect = egui::Rect::from_min_size(
+        egui::pos2(space.left(), space.bottom() - height),
+        egui::vec2(space.width(), height),
+    );
+    let mut close = false;
+    egui::Area::new(egui::Id::unique((id, "plots drawer")))
+        .order(egui::Order::Middle)
+        .fixed_pos(rect.min)
+        .constrain(false)
+        .show(ctx, |ui| {
+            egui::Frame::side_top_panel(ui.style())
+                .stroke(ui.visuals().window_stroke())
+                .shadow(ui.visuals().popup_shadow)
+                .show(ui, |ui| {
+                    let inner = rect.shrink2(egui::vec2(8.0, 2.0));
+                    ui.set_min_size(inner.size());
+                    ui.set_max_size(inner.size());
+                    ui.horizontal(|ui| {
+                        ui.label(egui::RichText::new("Plots").strong());
+                        ui.with_layout(egui::Layout::right_to_left(egui::Align::Center), |ui| {
+                            close = ui
+                                .button("Close")
+                                .on_hover_text("Close the plots and show the map")
+                                .clicked();
+                        });
+                    });
+                    ui.separator();
+                    // Side by side, scrolled sideways: each plot keeps a readable width.
+                    egui::ScrollArea::horizontal()
+                        .id_salt(format!("{id}_plots_drawer_scroll"))
+                        .show(ui, |ui| {
+                            ui.set_min_width(900.0);
+                            ui.set_height(ui.available_height());
+                            lesson.plots_ui(ui);
+                        });
+                });
+        });
+    if close {
+        panels.plots = false;
     }
 }

@@ -22,9 +22,10 @@ fn map_share(h: &Harness<'_, SlamLabApp>, size: egui::Vec2) -> f32 {
 }
 
 /// The smallest share of the window the map gets, by window size, in the full
-/// app and in an embed (which has no menu bar and smaller plots).
+/// app and in an embed (which has no menu bar and smaller plots). At 360 x 480 the
+/// plots are a drawer, closed at first.
 const SIZES: [(f32, f32, f32); 3] = [
-    (360.0, 480.0, 0.30),
+    (360.0, 480.0, 0.60),
     (800.0, 500.0, 0.45),
     (1280.0, 800.0, 0.30),
 ];
@@ -302,4 +303,34 @@ fn the_keys_menu_lists_every_shortcut() {
             "{query}"
         );
     }
+}
+
+/// A tiny window (a phone in landscape): the plots leave the bottom for a drawer,
+/// closed at first; the Plots button opens it over the map, Close shuts it.
+#[test]
+fn a_tiny_window_keeps_the_plots_in_a_drawer() {
+    let size = egui::vec2(360.0, 480.0);
+    let mut h = harness("lesson=landmark-slam&seed=7&tick=40", size);
+    h.run();
+    assert!(!h.state().panels().plots);
+    let closed = map_share(&h, size);
+    h.get_by_label("Plots").click();
+    h.run();
+    assert!(h.state().panels().plots);
+    assert!(
+        label_visible(&h, "Robot position error"),
+        "no plots in the drawer"
+    );
+    assert!(
+        (map_share(&h, size) - closed).abs() < 1e-3,
+        "the drawer moved the map"
+    );
+    if let Ok(dir) = std::env::var("SLAMLAB_SCREENSHOTS")
+        && let Ok(image) = h.render()
+    {
+        let _ = image.save(format!("{dir}/tiny-plots.png"));
+    }
+    h.get_by_label("Close").click();
+    h.run();
+    assert!(!h.state().panels().plots);
 }
