@@ -706,6 +706,8 @@ async function main() {
     {
       // The map (the central panel) must get at least this share of the window.
       const SHELL_SIZES = [
+        // 360 x 480: a phone in landscape; the plots are a drawer, closed at first.
+        { width: 360, height: 480, minShare: 0.55, narrow: true },
         { width: 800, height: 500, minShare: 0.45, narrow: true },
         { width: 1280, height: 800, minShare: 0.3, narrow: false },
       ];
@@ -745,7 +747,7 @@ async function main() {
         await page.goto(new URL(relativeUrl, baseUrl).href, { waitUntil: "load" });
         return { context, page, log };
       };
-      for (const lesson of ["landmark-slam", "kidnap", "resampling"]) {
+      for (const lesson of ["landmark-slam", "kidnap", "pose-graph", "resampling", "fusion"]) {
         for (const size of SHELL_SIZES) {
           const name = `layout-${lesson}-${size.width}x${size.height}`;
           await check(`${lesson} at ${size.width} x ${size.height}: the map keeps ≥ ${100 * size.minShare} % of the window`, async () => {
@@ -971,6 +973,69 @@ async function main() {
         await assertNoPanic(p);
         assert(log.problems.length === 0, log.problems.join("; "));
         return `cost ${s0.cost.toExponential(4)} -> ${s1.cost.toExponential(4)} after one iteration; ${m3500}`;
+      } finally {
+        await context.close();
+      }
+    });
+
+    // --- Exports (File menu; started here through the test hook, as the menu does):
+    // every plot's data as CSV, the scenario as JSON, the map as PNG, each a real
+    // download. The JSON, dropped on a page of another lesson, reopens the same setup.
+    await check("exports: plot CSV, scenario JSON and map PNG download, and the JSON reopens the setup", async () => {
+      const url = "index.html?lesson=landmark-slam&seed=7&estimator=ekf,ukf&tick=30";
+      const { context, page: p, log } = await openPage(browser, baseUrl, url, "exports");
+      try {
+        await waitRunning(p);
+        const s0 = await waitState(p, (st) => st.frames >= 2 && Array.isArray(st.map_rect), "the first frames");
+        const download = async (kind) => {
+          const [file] = await Promise.all([
+            p.waitForEvent("download", { timeout: 20_000 }),
+            p.evaluate((k) => window.slamlab.slamlab_test_export(k), kind),
+          ]);
+          const where = await file.path();
+          return { name: file.suggestedFilename(), bytes: await readFile(where) };
+        };
+        const csv = await download("plots-csv");
+        const rows = csv.bytes.toString("utf8").trim().split("\n");
+        assert(rows[0] === "plot,x_axis,y_axis,series,x,y", `CSV header: ${rows[0]}`);
+        assert(rows.length > 100, `only ${rows.length} CSV rows`);
+        assert(rows.some((r) => r.startsWith("Robot pose NEES (3 dof),time (s),NEES,UKF NEES,")), "no UKF NEES rows");
+        assert(csv.name === "slamlab-landmark-slam-t30-plots.csv", `CSV name ${csv.name}`);
+        const json = await download("scenario-json");
+        const scenario = JSON.parse(json.bytes.toString("utf8"));
+        assert(scenario.format === "slamlab-scenario" && scenario.lesson === "landmark-slam", json.bytes.toString());
+        assert(scenario.params.seed === "7" && scenario.params.estimator === "ekf,ukf" && scenario.view.tick === "30", json.bytes.toString());
+        const png = await download("map-png");
+        const image = decodePng(png.bytes);
+        const [, , mw, mh] = s0.map_rect;
+        assert(Math.abs(image.width - mw) <= 2 && Math.abs(image.height - mh) <= 2, `PNG ${image.width} x ${image.height}, map ${mw} x ${mh}`);
+        assertNotBlank(imageStats(image), "the exported map");
+        await writeFile(path.join(outDir, "export-map.png"), png.bytes);
+
+        // The JSON dropped on the fusion lesson's page opens the landmark lesson at tick 30.
+        const { context: c2, page: other, log: log2 } = await openPage(browser, baseUrl, "index.html?lesson=fusion", "exports (reopen)");
+        try {
+          await waitRunning(other);
+          await waitState(other, (st) => st.lesson === "fusion" && st.frames >= 2, "the fusion lesson");
+          await other.evaluate((text) => {
+            const dt = new DataTransfer();
+            dt.items.add(new File([text], "scenario.json", { type: "application/json" }));
+            const canvas = document.getElementById("the_canvas_id");
+            for (const type of ["dragenter", "dragover", "drop"]) {
+              canvas.dispatchEvent(new DragEvent(type, { dataTransfer: dt, bubbles: true, cancelable: true }));
+            }
+          }, json.bytes.toString("utf8"));
+          const reopened = await waitState(other, (st) => st.lesson === "landmark-slam", "the dropped scenario", 20_000);
+          assert(reopened.tick === 30 && reopened.seed === 7 && reopened.filters.join(",") === "ekf,ukf", JSON.stringify(reopened));
+          assert(reopened.notices === 0, `notices after the drop: ${reopened.notices}`);
+          await assertNoPanic(other);
+          assert(log2.problems.length === 0, log2.problems.join("; "));
+        } finally {
+          await c2.close();
+        }
+        await assertNoPanic(p);
+        assert(log.problems.length === 0, log.problems.join("; "));
+        return `CSV ${rows.length - 1} rows, JSON ${json.bytes.length} bytes, map PNG ${image.width} x ${image.height}; the JSON dropped on another lesson reopened tick 30`;
       } finally {
         await context.close();
       }

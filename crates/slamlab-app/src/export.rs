@@ -138,6 +138,21 @@ pub enum ExportKind {
     ScenarioJson,
 }
 
+impl ExportKind {
+    /// Every kind, with its name in the browser test hook.
+    pub const ALL: [(Self, &'static str); 4] = [
+        (Self::MapPng, "map-png"),
+        (Self::WindowPng, "window-png"),
+        (Self::PlotsCsv, "plots-csv"),
+        (Self::ScenarioJson, "scenario-json"),
+    ];
+
+    /// The kind called `name` (`map-png`, `window-png`, `plots-csv`, `scenario-json`).
+    pub fn from_name(name: &str) -> Option<Self> {
+        Self::ALL.iter().find(|(_, n)| *n == name).map(|(k, _)| *k)
+    }
+}
+
 /// A file ready to save.
 #[derive(Clone, Debug, PartialEq)]
 pub struct ExportFile {

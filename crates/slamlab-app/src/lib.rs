@@ -79,6 +79,10 @@ pub struct SlamLabApp {
     theme_applied: bool,
     /// Exports in progress (PNG, CSV, JSON) and what the last one did.
     pub exporter: export::Exporter,
+    /// An export asked for from outside a frame (the browser test hook), and the
+    /// context to wake for it.
+    pending_export: Option<export::ExportKind>,
+    ctx: Option<egui::Context>,
     /// "Open scenario…": the picker, and scenario files dropped on the window.
     scenario_picker: widgets::file_picker::FilePicker,
     scenario_drops: widgets::dropped_files::DropInbox,
@@ -162,6 +166,8 @@ impl SlamLabApp {
             dark_mode: settings.dark_mode,
             theme_applied: false,
             exporter: export::Exporter::default(),
+            pending_export: None,
+            ctx: None,
             scenario_picker: widgets::file_picker::FilePicker::default(),
             scenario_drops: widgets::dropped_files::DropInbox::default(),
             stored: settings,
@@ -244,20 +250,28 @@ impl SlamLabApp {
     /// The query string (without `?`) that reopens this setup at the current tick:
     /// the lesson's link and the figure keys (`panels=` only for an embed).
     pub fn share_query(&self, embed: bool) -> String {
+        self.lesson.share_query(embed) + &self.figure_suffix(embed)
+    }
+
+    /// The figure keys of a share link (`&tick=42&legend=1`): how the figure opened,
+    /// at the current tick, never running; `panels=` only for an embed.
+    fn figure_suffix(&self, embed: bool) -> String {
         let mut figure = self.figure.clone();
         figure.run = false;
         if !embed {
             figure.panels = None;
         }
-        let mut query = self.lesson.share_query(embed);
-        for (key, value) in figure.pairs(self.lesson.time_info().tick) {
-            query.push_str(&format!(
-                "&{}={}",
-                query::percent_encode(&key),
-                query::percent_encode(&value)
-            ));
-        }
-        query
+        figure
+            .pairs(self.lesson.time_info().tick)
+            .iter()
+            .map(|(key, value)| {
+                format!(
+                    "&{}={}",
+                    query::percent_encode(key),
+                    query::percent_encode(value)
+                )
+            })
+            .collect()
     }
 
     /// Every notice not dismissed: problems with the link, what the simulation had to
@@ -304,6 +318,11 @@ impl SlamLabApp {
             "notices": self.notices().len(),
             "frame_timing": self.frame_stats.summary(),
             "narrow": self.narrow,
+            "export_status": self.exporter.status,
+            "export_last": self.exporter.last.as_ref().map(|f| serde_json::json!({
+                "name": f.name,
+                "bytes": f.bytes.len(),
+            })),
             "screen": [self.screen.x, self.screen.y],
             "map_rect": self.map_rect.map(|r| [r.left(), r.top(), r.width(), r.height()]),
             "panels": {
@@ -389,6 +408,17 @@ impl SlamLabApp {
             egui::Panel::top("slamlab_notices").show(ui, |ui| self.notice_bar_ui(ui, &notices));
         }
         self.poll_scenario_files(&ctx);
+        widgets::share::set_figure_suffix(
+            &ctx,
+            self.figure_suffix(false),
+            self.figure_suffix(true),
+        );
+        if let Some(kind) = self.pending_export.take() {
+            self.export(&ctx, kind);
+        }
+        if self.ctx.is_none() {
+            self.ctx = Some(ctx.clone());
+        }
         let panels = if self.narrow {
             &mut self.narrow_panels
         } else {
@@ -583,6 +613,15 @@ impl SlamLabApp {
         {
             self.export(&ctx, export::ExportKind::ScenarioJson);
             ui.close();
+        }
+    }
+
+    /// Asks for an export in the next frame (for callers outside a frame: the browser
+    /// test hook).
+    pub fn request_export(&mut self, kind: export::ExportKind) {
+        self.pending_export = Some(kind);
+        if let Some(ctx) = &self.ctx {
+            ctx.request_repaint();
         }
     }
 

@@ -12,8 +12,9 @@
 //! 4. writes `running` or `error: ...` into `#status` (`panicked` after a panic).
 //!
 //! The browser tests (`web/tests/`) read the app's state through
-//! [`slamlab_test_state`], [`slamlab_panicked`] and [`slamlab_panic_message`], and check
-//! the panic banner with [`slamlab_debug_panic`]. The page puts these exports on
+//! [`slamlab_test_state`], [`slamlab_panicked`] and [`slamlab_panic_message`], start
+//! exports with [`slamlab_test_export`], and check the panic banner with
+//! [`slamlab_debug_panic`]. The page puts these exports on
 //! `window.slamlab`, so they can also be called from the browser's developer console.
 
 use std::cell::RefCell;
@@ -109,6 +110,29 @@ pub fn slamlab_test_state() -> String {
 #[wasm_bindgen]
 pub fn slamlab_test_headless(query: &str, ticks: u32) -> String {
     SlamLabApp::headless_state(query, u64::from(ticks))
+}
+
+/// Starts an export as the File menu would (`map-png`, `window-png`, `plots-csv`,
+/// `scenario-json`); the browser downloads the file a frame or two later. False for
+/// an unknown kind or when the app is not running.
+#[wasm_bindgen]
+pub fn slamlab_test_export(kind: &str) -> bool {
+    let Some(kind) = crate::export::ExportKind::from_name(kind) else {
+        return false;
+    };
+    RUNNER.with(|cell| {
+        let runner = cell.borrow();
+        let Some(runner) = runner.as_ref().filter(|r| !r.has_panicked()) else {
+            return false;
+        };
+        match runner.app_mut::<WebApp>() {
+            Some(mut app) => {
+                app.inner.request_export(kind);
+                true
+            }
+            None => false,
+        }
+    })
 }
 
 /// Has the app panicked (and therefore stopped)?

@@ -434,10 +434,12 @@ impl FusionLesson {
             self.reset();
         }
         ui.separator();
-        ui.label(egui::RichText::new("Share this setup").strong());
-        let query = lesson::Lesson::share_query(self, false);
-        ui.add(egui::TextEdit::singleline(&mut query.clone()).desired_width(f32::INFINITY))
-            .on_hover_text("index.html?… with these pairs opens exactly this drive");
+        crate::widgets::share::share_ui(
+            ui,
+            |embed| lesson::Lesson::share_query(self, embed),
+            "index.html?… with these pairs opens exactly this drive",
+            None,
+        );
     }
 }
 

@@ -428,32 +428,14 @@ pub fn parameters_ui(ui: &mut egui::Ui, lesson: &mut LandmarkSlamLesson) -> bool
 
 /// The link that reproduces the running setup, for instructors to share or embed.
 fn share_ui(ui: &mut egui::Ui, lesson: &LandmarkSlamLesson) {
-    let id = egui::Id::unique("slamlab_share_embed");
-    let mut embed: bool = ui.data(|d| d.get_temp(id)).unwrap_or(false);
-    ui.label(egui::RichText::new("Share this setup").strong())
-        .on_hover_text("The query string that reproduces the running setup: the lesson, the seed, every parameter that is not at its default, and the Many runs window when it is open");
-    let link = format!("?{}", lesson.share_query(embed));
-    ui.horizontal(|ui| {
-        if ui
-            .button("Copy link")
-            .on_hover_text("Copy the query string")
-            .clicked()
-        {
-            ui.ctx().copy_text(link.clone());
-        }
-        ui.checkbox(&mut embed, "for embedding (embed=1)");
-    });
-    let mut shown: &str = &link;
-    ui.add(
-        egui::TextEdit::multiline(&mut shown)
-            .desired_rows(2)
-            .desired_width(f32::INFINITY)
-            .code_editor()
-            .interactive(true)
-            .hint_text("share link"),
+    crate::widgets::share::share_ui(
+        ui,
+        |embed| lesson.share_query(embed),
+        "The query string that reproduces the running setup: the lesson, the seed, every \
+         parameter that is not at its default, the Many runs window when it is open, and \
+         the figure keys (the current tick)",
+        lesson
+            .params_changed()
+            .then_some("The link describes the running setup; reset to include your changes."),
     );
-    if lesson.params_changed() {
-        ui.label("The link describes the running setup; reset to include your changes.");
-    }
-    ui.data_mut(|d| d.insert_temp(id, embed));
 }

@@ -574,14 +574,12 @@ impl PoseGraphLesson {
             self.reset();
         }
         ui.separator();
-        ui.label(egui::RichText::new("Share this setup").strong());
-        let query = Lesson::share_query(self, false);
-        ui.add(egui::TextEdit::singleline(&mut query.clone()).desired_width(f32::INFINITY))
-            .on_hover_text(if self.loaded.is_some() {
-                "An opened file cannot travel in a link: the link opens the built-in example with these settings"
-            } else {
-                "index.html?… with these pairs opens exactly this graph"
-            });
+        let hover = if self.loaded.is_some() {
+            "An opened file cannot travel in a link: the link opens the built-in example with these settings"
+        } else {
+            "index.html?… with these pairs opens exactly this graph"
+        };
+        crate::widgets::share::share_ui(ui, |embed| Lesson::share_query(self, embed), hover, None);
     }
 }
 

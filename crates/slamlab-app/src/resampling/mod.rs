@@ -310,10 +310,12 @@ impl ResamplingLesson {
             self.apply_pending();
         }
         ui.separator();
-        ui.label(egui::RichText::new("Share this setup").strong());
-        let query = Lesson::share_query(self, false);
-        ui.add(egui::TextEdit::singleline(&mut query.clone()).desired_width(f32::INFINITY))
-            .on_hover_text("index.html?… with these pairs opens this lab; presses are not in it");
+        crate::widgets::share::share_ui(
+            ui,
+            |embed| Lesson::share_query(self, embed),
+            "index.html?… with these pairs opens this lab; presses are not in it",
+            None,
+        );
     }
 }
 

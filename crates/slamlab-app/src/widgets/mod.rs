@@ -1,6 +1,6 @@
 //! Widgets every lesson shares: the map canvas (pan, zoom, follow, grid, scale
-//! bar), the parameter panel built from a scenario's parameter table, and plot
-//! helpers.
+//! bar), the parameter panel built from a scenario's parameter table, plot helpers,
+//! the drive pad, file picking and drops, the share link and the Sources window.
 
 pub mod drive;
 pub mod dropped_files;
@@ -10,4 +10,5 @@ pub mod layout;
 pub mod map_canvas;
 pub mod params_panel;
 pub mod plots;
+pub mod share;
 pub mod sources;

@@ -334,3 +334,28 @@ fn a_tiny_window_keeps_the_plots_in_a_drawer() {
     h.run();
     assert!(!h.state().panels().plots);
 }
+
+/// Every lesson's "Share this setup" link carries the figure keys: opened at tick 12,
+/// stepped once, its link reopens at tick 13.
+#[test]
+fn every_lessons_share_link_carries_the_figure_keys() {
+    for entry in LESSONS {
+        let size = egui::vec2(1400.0, 900.0);
+        let mut h = harness(&format!("lesson={}&seed=3&tick=12", entry.id), size);
+        h.run();
+        h.state_mut()
+            .apply_time_action(slamlab_app::time_control::TimeAction::StepTick);
+        h.run();
+        let links: Vec<String> = h
+            .query_all_by(|node| node.value().is_some_and(|v| v.starts_with("?lesson=")))
+            .filter_map(|node| node.value())
+            .collect();
+        let expected = format!("?{}", h.state().share_query(false));
+        assert!(
+            expected.ends_with("&tick=13"),
+            "{}: the app's link {expected}",
+            entry.id
+        );
+        assert_eq!(links, vec![expected], "{}", entry.id);
+    }
+}
