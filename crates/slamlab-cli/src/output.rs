@@ -1,0 +1,171 @@
+//! What every lesson run and experiment prints the same way: `--json` (one object
+//! on one line), `--csv DIR` files, the parameter summary of the readable output,
+//! and the progress bars on stderr.
+
+use anyhow::{Context, Result};
+use clap::{Arg, ArgAction, ArgMatches};
+use serde_json::{Map, Value};
+use std::io::{IsTerminal, Write};
+use std::path::PathBuf;
+
+/// `--json`: every lesson and experiment has it (the registry adds it).
+pub fn json_arg() -> Arg {
+    Arg::new("json")
+        .long("json")
+        .action(ArgAction::SetTrue)
+        .help("print one JSON object")
+}
+
+/// `--csv DIR`, for the commands that write files; `help` says what they write.
+pub fn csv_arg(help: &'static str) -> Arg {
+    Arg::new("csv")
+        .long("csv")
+        .value_name("DIR")
+        .value_parser(clap::value_parser!(PathBuf))
+        .help(help)
+}
+
+/// Where a command's results go: the readable text or `--json` on stdout, files
+/// into `--csv DIR`, notes on stderr.
+pub struct Output<'a> {
+    json: bool,
+    csv: Option<PathBuf>,
+    out: Box<dyn Write + 'a>,
+}
+
+impl<'a> Output<'a> {
+    /// Output to `out`, as the command line's `--json` and `--csv` ask.
+    pub fn new(matches: &ArgMatches, out: Box<dyn Write + 'a>) -> Self {
+        Output {
+            json: matches
+                .try_get_one::<bool>("json")
+                .ok()
+                .flatten()
+                .copied()
+                .unwrap_or(false),
+            csv: matches
+                .try_get_one::<PathBuf>("csv")
+                .ok()
+                .flatten()
+                .cloned(),
+            out,
+        }
+    }
+
+    /// Whether `--json` was given.
+    pub fn json(&self) -> bool {
+        self.json
+    }
+
+    /// With `--json`: prints `value` as one line of JSON and returns `true`.
+    pub fn print_json(&mut self, value: &impl serde::Serialize) -> Result<bool> {
+        if !self.json {
+            return Ok(false);
+        }
+        serde_json::to_writer(&mut self.out, value).context("writing JSON")?;
+        writeln!(self.out)?;
+        Ok(true)
+    }
+
+    /// With `--csv DIR`: writes `contents()` to `DIR/file_name` (creating DIR) and
+    /// says so on stderr.
+    pub fn write_csv(&self, file_name: &str, contents: impl FnOnce() -> String) -> Result<()> {
+        let Some(dir) = &self.csv else {
+            return Ok(());
+        };
+        std::fs::create_dir_all(dir).with_context(|| format!("creating {}", dir.display()))?;
+        let path = dir.join(file_name);
+        std::fs::write(&path, contents()).with_context(|| format!("writing {}", path.display()))?;
+        eprintln!("wrote {}", path.display());
+        Ok(())
+    }
+
+    /// The parameters block of the readable output: a `parameters:` line, then one
+    /// line per parameter with its value and (for the landmark table's names) unit,
+    /// names padded to `width`.
+    pub fn parameters(&mut self, parameters: &Map<String, Value>, width: usize) -> Result<()> {
+        writeln!(self.out, "parameters:")?;
+        self.values(parameters, width, |k| {
+            <slamlab_sim::LandmarkScenario as slamlab_sim::params::Scenario>::param(k)
+                .map_or("", |p| p.unit)
+        })
+    }
+
+    /// One line per entry, `  name value`, names padded to `width`, and with
+    /// `unit(name)` after the value when it is given.
+    pub fn values(
+        &mut self,
+        values: &Map<String, Value>,
+        width: usize,
+        unit: impl Fn(&str) -> &'static str,
+    ) -> Result<()> {
+        for (k, v) in values {
+            let text = v.as_str().map_or_else(|| v.to_string(), str::to_owned);
+            writeln!(self.out, "  {k:<width$} {text} {}", unit(k))?;
+        }
+        Ok(())
+    }
+
+    /// Like [`Output::values`] without a unit column.
+    pub fn settings(&mut self, values: &Map<String, Value>, width: usize) -> Result<()> {
+        for (k, v) in values {
+            let text = v.as_str().map_or_else(|| v.to_string(), str::to_owned);
+            writeln!(self.out, "  {k:<width$} {text}")?;
+        }
+        Ok(())
+    }
+}
+
+impl Write for Output<'_> {
+    fn write(&mut self, buf: &[u8]) -> std::io::Result<usize> {
+        self.out.write(buf)
+    }
+
+    fn flush(&mut self) -> std::io::Result<()> {
+        self.out.flush()
+    }
+}
+
+/// A progress bar on stderr for `total` trials (indicatif): drawn in place on a
+/// terminal; in a log (stderr not a terminal) a line every tenth of the way
+/// instead. Safe to share between threads.
+pub fn trials_bar(label: &'static str, total: usize) -> indicatif::ProgressBar {
+    let bar = if std::io::stderr().is_terminal() {
+        indicatif::ProgressBar::new(total as u64)
+    } else {
+        indicatif::ProgressBar::hidden()
+    };
+    if let Ok(style) = indicatif::ProgressStyle::with_template(
+        "{prefix} [{bar:30}] {pos}/{len} trials, {elapsed} (about {eta} left)",
+    ) {
+        bar.set_style(style.progress_chars("=> "));
+    }
+    bar.set_prefix(label);
+    bar.set_length(total as u64);
+    bar
+}
+
+/// Advances `bar` to `done` of `total`, and in a log writes a line every tenth
+/// of the way.
+pub fn trials_progress(bar: &indicatif::ProgressBar, label: &str, done: usize, total: usize) {
+    bar.set_position(done as u64);
+    if bar.is_hidden()
+        && done > 0
+        && (done == total || (done * 10 / total.max(1)) != ((done - 1) * 10 / total.max(1)))
+    {
+        eprintln!("{label}: {done}/{total} trials");
+    }
+    if done == total {
+        bar.finish();
+    }
+}
+
+/// A progress callback `(done, total)` for the experiments, drawing
+/// [`trials_bar`].
+pub fn progress_bar(label: &'static str) -> impl FnMut(usize, usize) {
+    let mut bar: Option<indicatif::ProgressBar> = None;
+    move |done, total| {
+        let bar = bar.get_or_insert_with(|| trials_bar(label, total));
+        trials_progress(bar, label, done, total);
+    }
+}
