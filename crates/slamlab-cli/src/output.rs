@@ -169,3 +169,56 @@ pub fn progress_bar(label: &'static str) -> impl FnMut(usize, usize) {
         trials_progress(bar, label, done, total);
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn matches(args: &[&str]) -> ArgMatches {
+        clap::Command::new("t")
+            .no_binary_name(true)
+            .arg(json_arg())
+            .arg(csv_arg("files"))
+            .try_get_matches_from(args)
+            .unwrap_or_else(|e| panic!("{e}"))
+    }
+
+    #[test]
+    fn json_is_one_line_and_only_when_asked() {
+        let mut text = Vec::new();
+        let value = serde_json::json!({"a": [1, 2], "b": {"c": "d"}});
+        assert!(
+            !Output::new(&matches(&[]), Box::new(&mut text))
+                .print_json(&value)
+                .unwrap()
+        );
+        assert!(text.is_empty());
+        assert!(
+            Output::new(&matches(&["--json"]), Box::new(&mut text))
+                .print_json(&value)
+                .unwrap()
+        );
+        let text = String::from_utf8(text).unwrap();
+        assert_eq!(text, "{\"a\":[1,2],\"b\":{\"c\":\"d\"}}\n");
+    }
+
+    #[test]
+    fn csv_goes_into_the_directory_and_parameters_carry_units() {
+        let dir = std::env::temp_dir().join(format!("slamlab-output-{}", std::process::id()));
+        let dir_arg = dir.to_string_lossy().into_owned();
+        let mut text = Vec::new();
+        let mut out = Output::new(&matches(&["--csv", &dir_arg]), Box::new(&mut text));
+        out.write_csv("x.csv", || "a,b\n".to_owned()).unwrap();
+        let mut map = Map::new();
+        map.insert("range-std".into(), 0.5.into());
+        map.insert("estimator".into(), "ekf".into());
+        out.parameters(&map, 10).unwrap();
+        drop(out);
+        assert_eq!(std::fs::read_to_string(dir.join("x.csv")).unwrap(), "a,b\n");
+        std::fs::remove_dir_all(&dir).ok();
+        assert_eq!(
+            String::from_utf8(text).unwrap(),
+            "parameters:\n  estimator  ekf \n  range-std  0.5 m\n"
+        );
+    }
+}

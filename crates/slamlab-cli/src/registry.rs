@@ -228,3 +228,94 @@ pub fn run_experiment(matches: &ArgMatches, out: &mut dyn Write) -> Result<()> {
     refuse_foreign_flags(*experiment, m)?;
     experiment.run(m, &mut Output::new(m, Box::new(out)))
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// The visible long flags of `command`, sorted.
+    fn visible(command: &Command) -> Vec<String> {
+        let mut flags: Vec<String> = command
+            .get_arguments()
+            .filter(|a| !a.is_hide_set())
+            .filter_map(|a| a.get_long().map(str::to_owned))
+            .collect();
+        flags.sort();
+        flags
+    }
+
+    #[test]
+    fn names_are_unique() {
+        for (i, l) in LESSONS.iter().enumerate() {
+            assert!(LESSONS[..i].iter().all(|o| o.id() != l.id()), "{}", l.id());
+        }
+        for (i, e) in EXPERIMENTS.iter().enumerate() {
+            let name = e.name();
+            assert!(EXPERIMENTS[..i].iter().all(|o| o.name() != name), "{name}");
+        }
+    }
+
+    #[test]
+    fn an_experiments_help_lists_exactly_its_own_flags() {
+        let line = experiment_command_line();
+        for e in EXPERIMENTS {
+            let sub = line
+                .find_subcommand(e.name())
+                .unwrap_or_else(|| panic!("no {}", e.name()));
+            let own = e.command().arg(output::json_arg());
+            assert_eq!(visible(sub), visible(&own), "{}", e.name());
+            // Every other experiment's flag is there, hidden, to be refused.
+            for other in EXPERIMENTS {
+                for arg in other.command().get_arguments() {
+                    assert!(
+                        sub.get_arguments().any(|a| a.get_id() == arg.get_id()),
+                        "{} lacks --{}",
+                        e.name(),
+                        arg.get_id()
+                    );
+                }
+            }
+        }
+        let run = run_command();
+        let kidnap = run
+            .find_subcommand("kidnap")
+            .map(visible)
+            .unwrap_or_default();
+        let landmark = run
+            .find_subcommand("landmark-slam")
+            .map(visible)
+            .unwrap_or_default();
+        assert!(kidnap.contains(&"laser-sigma-hit".to_owned()));
+        assert!(!kidnap.contains(&"landmarks".to_owned()));
+        assert!(landmark.contains(&"landmarks".to_owned()));
+        assert!(landmark.contains(&"scenario".to_owned()));
+    }
+
+    /// Runs `slamlab experiment ARGS`, printing nowhere.
+    fn experiment(args: &[&str]) -> Result<()> {
+        let m = experiment_command_line()
+            .no_binary_name(true)
+            .try_get_matches_from(args)
+            .unwrap_or_else(|e| panic!("{e}"));
+        run_experiment(&m, &mut std::io::sink())
+    }
+
+    #[test]
+    fn another_experiments_flag_is_refused_with_its_owners() {
+        let e = experiment(&["fusion", "--loop-closures", "x"]).unwrap_err();
+        assert_eq!(
+            e.to_string(),
+            "--loop-closures does not belong to the fusion experiment; it belongs to the pose-graph experiment"
+        );
+        let e = experiment(&["kidnap", "--version", "1"]).unwrap_err();
+        assert!(
+            e.to_string()
+                .ends_with("belongs to the fastslam experiment"),
+            "{e}"
+        );
+        // An experiment's own reason wins.
+        let e = experiment(&["consistency", "--noise-scale", "2"]).unwrap_err();
+        assert!(e.to_string().contains("--v-std"), "{e}");
+        assert_eq!(and_list(&["a", "b", "c"]), "a, b and c");
+    }
+}
