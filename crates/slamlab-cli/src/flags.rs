@@ -45,7 +45,7 @@ pub fn scenario_from<S: Scenario>(matches: &ArgMatches, skip: &[&str]) -> Result
 
 /// Applies the table's flags of `scenario` that the command has and that were
 /// given, but those in `skip`; see [`scenario_from`].
-pub fn apply_table_flags<S: Scenario>(
+fn apply_table_flags<S: Scenario>(
     matches: &ArgMatches,
     scenario: &mut S,
     skip: &[&str],

@@ -85,32 +85,34 @@ impl<'a> Output<'a> {
     /// names padded to `width`.
     pub fn parameters(&mut self, parameters: &Map<String, Value>, width: usize) -> Result<()> {
         writeln!(self.out, "parameters:")?;
-        self.values(parameters, width, |k| {
-            <slamlab_sim::LandmarkScenario as slamlab_sim::params::Scenario>::param(k)
-                .map_or("", |p| p.unit)
-        })
+        self.rows(
+            parameters,
+            width,
+            Some(&|k| {
+                <slamlab_sim::LandmarkScenario as slamlab_sim::params::Scenario>::param(k)
+                    .map_or("", |p| p.unit)
+            }),
+        )
     }
 
-    /// One line per entry, `  name value`, names padded to `width`, and with
-    /// `unit(name)` after the value when it is given.
-    pub fn values(
+    /// Settings that are not parameters: one line each, `  name value`, names
+    /// padded to `width`.
+    pub fn settings(&mut self, values: &Map<String, Value>, width: usize) -> Result<()> {
+        self.rows(values, width, None)
+    }
+
+    fn rows(
         &mut self,
         values: &Map<String, Value>,
         width: usize,
-        unit: impl Fn(&str) -> &'static str,
+        unit: Option<&dyn Fn(&str) -> &'static str>,
     ) -> Result<()> {
         for (k, v) in values {
             let text = v.as_str().map_or_else(|| v.to_string(), str::to_owned);
-            writeln!(self.out, "  {k:<width$} {text} {}", unit(k))?;
-        }
-        Ok(())
-    }
-
-    /// Like [`Output::values`] without a unit column.
-    pub fn settings(&mut self, values: &Map<String, Value>, width: usize) -> Result<()> {
-        for (k, v) in values {
-            let text = v.as_str().map_or_else(|| v.to_string(), str::to_owned);
-            writeln!(self.out, "  {k:<width$} {text}")?;
+            match unit {
+                Some(unit) => writeln!(self.out, "  {k:<width$} {text} {}", unit(k))?,
+                None => writeln!(self.out, "  {k:<width$} {text}")?,
+            }
         }
         Ok(())
     }
