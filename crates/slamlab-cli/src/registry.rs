@@ -104,6 +104,9 @@ pub fn run_command() -> Command {
         ))
         .subcommand_required(true)
         .arg_required_else_help(true)
+        .disable_help_subcommand(true)
+        .subcommand_value_name("LESSON")
+        .subcommand_help_heading("Lessons")
         .subcommands(LESSONS.iter().map(|l| lesson_command(*l)))
 }
 
@@ -202,6 +205,9 @@ pub fn experiment_command_line() -> Command {
         .about("Reproduce an experiment of the sources, or run many seeded trials of a scenario")
         .subcommand_required(true)
         .arg_required_else_help(true)
+        .disable_help_subcommand(true)
+        .subcommand_value_name("NAME")
+        .subcommand_help_heading("Experiments")
         .subcommands(EXPERIMENTS.iter().map(|e| experiment_command(*e)))
 }
 
