@@ -1,4 +1,5 @@
 //! `slamlab graph optimize|convert`: pose-graph files on the command line.
+//! (`slamlab experiment pose-graph` is in `experiments/pose_graph.rs`.)
 
 use anyhow::{Context, Result, bail};
 use clap::{Arg, ArgAction, ArgMatches, Command};
@@ -242,7 +243,8 @@ fn optimize(m: &ArgMatches) -> Result<()> {
     Ok(())
 }
 
-fn explain(e: OptimizeError) -> anyhow::Error {
+/// An optimizer's error as the CLI reports it.
+pub fn explain(e: OptimizeError) -> anyhow::Error {
     anyhow::anyhow!("cannot optimize: {e}")
 }
 
@@ -272,95 +274,6 @@ fn convert(m: &ArgMatches) -> Result<()> {
         graph.vertices().len(),
         graph.edges().len()
     );
-    Ok(())
-}
-
-/// The flags `slamlab experiment pose-graph` adds to the experiment command.
-pub fn experiment_args() -> Vec<Arg> {
-    vec![
-        Arg::new("loop-closures")
-            .long("loop-closures")
-            .value_parser(clap::value_parser!(u64).range(0..=10_000))
-            .default_value("10")
-            .help("pose-graph: loop-closure edges from the first pose to random poses"),
-        Arg::new("solver")
-            .long("solver")
-            .value_parser(["gn", "lm", "gd"])
-            .default_value("gn")
-            .help("pose-graph: the solver (the thesis uses Gauss-Newton)"),
-        Arg::new("max-iterations")
-            .long("max-iterations")
-            .value_parser(clap::value_parser!(u64).range(1..=100_000))
-            .default_value("20")
-            .help("pose-graph: at most this many solver steps"),
-    ]
-}
-
-/// `slamlab experiment pose-graph`: thesis 000 Sec. 4.2.
-pub fn pose_graph_experiment(m: &ArgMatches) -> Result<()> {
-    use slamlab_sim::pose_graph_experiment::{PoseGraphExperimentConfig, run};
-    let given = |id: &str| m.value_source(id) == Some(clap::parser::ValueSource::CommandLine);
-    for other in ["trials", "steps", "csv"] {
-        if given(other) {
-            bail!(
-                "--{other} does not apply to pose-graph (one seeded run of {} ticks)",
-                slamlab_sim::pose_graph_experiment::STEPS
-            );
-        }
-    }
-    if let Some(p) = slamlab_sim::landmark_params::PARAMS
-        .iter()
-        .find(|p| p.name != "seed" && given(p.name))
-    {
-        bail!(
-            "--{} sets a scenario parameter; pose-graph runs the thesis's fixed scenario (only --seed, --noise-scale, --loop-closures, --solver, --max-iterations)",
-            p.name
-        );
-    }
-    let noise_scale = m.get_one::<f64>("noise-scale").copied().unwrap_or(1.0);
-    if !(noise_scale > 0.0 && noise_scale <= 20.0) {
-        bail!("--noise-scale {noise_scale} must be in (0, 20]");
-    }
-    let seed = match m.get_one::<String>("seed") {
-        Some(s) => s
-            .parse::<u64>()
-            .map_err(|_| anyhow::anyhow!("--seed '{s}' is not a whole number ≥ 0"))?,
-        None => 1,
-    };
-    let config = PoseGraphExperimentConfig {
-        loop_closures: m.get_one::<u64>("loop-closures").copied().unwrap_or(10) as usize,
-        noise_scale,
-        seed,
-        solver: m
-            .get_one::<String>("solver")
-            .and_then(|s| SolverKind::from_short_name(s))
-            .unwrap_or(SolverKind::GaussNewton),
-        max_iterations: m.get_one::<u64>("max-iterations").copied().unwrap_or(20) as usize,
-    };
-    let result = run(config).map_err(explain)?;
-    if m.get_flag("json") {
-        println!("{}", serde_json::to_string_pretty(&result)?);
-        return Ok(());
-    }
-    println!(
-        "SLAM Lab: pose-graph SLAM on the EKF-SLAM path (thesis 000 Sec. 4.2), seed {}, noise × {}",
-        config.seed, config.noise_scale
-    );
-    for note in &result.notes {
-        println!("  {note}");
-    }
-    println!(
-        "graph: {} poses, {} edges; loop closures to poses {:?}",
-        result.poses, result.edges, result.loop_closure_nodes
-    );
-    println!("cost Σ eᵀΩe: {:.6e}", result.initial_cost);
-    for (k, c) in result.costs.iter().enumerate() {
-        println!("  after iteration {}: {c:.6e}", k + 1);
-    }
-    println!("position RMSE against the truth (m):");
-    println!("  dead reckoning  {:.4}", result.rmse_dead_reckoning);
-    println!("  EKF-SLAM        {:.4}", result.rmse_ekf);
-    println!("  optimized graph {:.4}", result.rmse_optimized);
     Ok(())
 }
 

@@ -1,19 +1,35 @@
 //! `slamlab map info PATH` and `slamlab map convert IN.yaml OUT.yaml --format png|pgm`:
 //! ROS map_server maps.
 
-use crate::kidnap::read_map;
 use anyhow::{Context, Result, bail};
 use clap::{Arg, ArgMatches, Command};
-use slamlab_sim::grid::map_io::{ImageFormat, export_map};
+use slamlab_core::grid::OccupancyGrid;
+use slamlab_sim::grid::BuiltinMap;
+use slamlab_sim::grid::map_io::{
+    ImageFormat, export_map, load_lone_image, load_map, parse_map_yaml,
+};
 use std::io::Write;
 use std::path::Path;
 
-/// The `map` subcommand.
-pub fn command() -> Command {
-    let resolution = Arg::new("resolution")
+/// `--map`, for the commands that run on a grid map.
+pub fn map_arg() -> Arg {
+    Arg::new("map")
+        .long("map")
+        .default_value("maze")
+        .help("maze, office, or a map_server YAML (or a PGM/PNG with --resolution)")
+}
+
+/// `--resolution`, for a map given as a lone image; `help` as the command words it.
+pub fn resolution_arg(help: &'static str) -> Arg {
+    Arg::new("resolution")
         .long("resolution")
         .value_parser(clap::value_parser!(f64))
-        .help("metres per pixel, for a lone PGM/PNG image");
+        .help(help)
+}
+
+/// The `map` subcommand.
+pub fn command() -> Command {
+    let resolution = resolution_arg("metres per pixel, for a lone PGM/PNG image");
     Command::new("map")
         .about("ROS map_server maps: print their size and cell counts, or convert them")
         .subcommand_required(true)
@@ -103,4 +119,45 @@ pub fn run(m: &ArgMatches) -> Result<()> {
         _ => {}
     }
     Ok(())
+}
+
+/// Reads a map: a built-in name, a YAML (its image beside it), or a lone image
+/// with `resolution`. Returns the grid and its name.
+pub fn read_map(spec: &str, resolution: Option<f64>) -> Result<(OccupancyGrid, String)> {
+    if let Some(b) = BuiltinMap::from_name(spec) {
+        return Ok((b.load()?, b.name().to_owned()));
+    }
+    let path = Path::new(spec);
+    let ext = path
+        .extension()
+        .and_then(|e| e.to_str())
+        .map(str::to_ascii_lowercase)
+        .unwrap_or_default();
+    if ext == "pgm" || ext == "png" {
+        let Some(res) = resolution else {
+            bail!(
+                "{spec} is an image without a YAML: give its resolution with --resolution METRES"
+            );
+        };
+        let bytes = std::fs::read(path).with_context(|| format!("cannot read {spec}"))?;
+        let grid = load_lone_image(&bytes, res).with_context(|| format!("map {spec}"))?;
+        return Ok((grid, spec.to_owned()));
+    }
+    let text = std::fs::read_to_string(path).with_context(|| {
+        format!("cannot read {spec} (a map is maze, office, a map_server YAML, or a PGM/PNG)")
+    })?;
+    let yaml = parse_map_yaml(&text).with_context(|| format!("map {spec}"))?;
+    let image_path = path
+        .parent()
+        .unwrap_or_else(|| Path::new("."))
+        .join(&yaml.image);
+    let bytes = std::fs::read(&image_path).with_context(|| {
+        format!(
+            "image '{}' named in {spec} cannot be read at {}",
+            yaml.image,
+            image_path.display()
+        )
+    })?;
+    let (grid, _) = load_map(&text, &bytes).with_context(|| format!("map {spec}"))?;
+    Ok((grid, spec.to_owned()))
 }

@@ -1,0 +1,135 @@
+//! `slamlab experiment resampling`: the resamplers' copy-count variance on fixed
+//! weight sets.
+//!
+//! ```text
+//! slamlab experiment resampling --method all --trials 10000 --json
+//! ```
+
+use super::fastslam::parse_counts;
+use super::{landmark_flags_but_seed, seed_arg, trials_arg};
+use crate::lessons::landmark::scenario_from;
+use crate::output::{Output, progress_bar};
+use crate::registry::{Experiment, Refusal};
+use anyhow::{Result, bail};
+use clap::{Arg, ArgMatches, Command};
+use slamlab_core::particle::{Resampler, WeightPreset};
+use slamlab_sim::resampling::{self, resampling_experiment};
+use std::io::Write;
+
+/// The resamplers compared.
+pub struct Resampling;
+
+impl Experiment for Resampling {
+    fn name(&self) -> &'static str {
+        "resampling"
+    }
+
+    fn about(&self) -> &'static str {
+        "The resamplers' copy-count variance and bias on four weight sets, against multinomial theory"
+    }
+
+    fn command(&self) -> Command {
+        Command::new(self.name())
+            .arg(
+                Arg::new("method")
+                    .long("method")
+                    .value_name("LIST")
+                    .default_value("all")
+                    .help("all, or comma-separated methods (multinomial, low-variance, stratified, residual)"),
+            )
+            .arg(
+                Arg::new("particles")
+                    .long("particles")
+                    .value_name("COUNT")
+                    .help(format!(
+                        "particles per weight set (1 .. 10000); default {}",
+                        resampling::DEFAULT_PARTICLES
+                    )),
+            )
+            .arg(trials_arg("10000"))
+            .args(seed_arg())
+    }
+
+    fn refusals(&self) -> Vec<Refusal> {
+        vec![Refusal {
+            flags: landmark_flags_but_seed(&["particles"]),
+            reason: |flag| {
+                format!(
+                    "--{flag} is a landmark-world parameter; the resampling experiment uses only --method, --particles, --trials and --seed"
+                )
+            },
+        }]
+    }
+
+    fn run(&self, matches: &ArgMatches, out: &mut Output) -> Result<()> {
+        let seed = scenario_from(matches, &["particles"])?.seed;
+        let methods: Vec<Resampler> = match matches.get_one::<String>("method").map(String::as_str)
+        {
+            None | Some("all") => Resampler::ALL.to_vec(),
+            Some(list) => {
+                let mut methods = Vec::new();
+                for name in list.split(',').map(str::trim).filter(|p| !p.is_empty()) {
+                    let Some(m) = Resampler::from_name(name) else {
+                        bail!(
+                            "--method: '{name}' is not a resampler (all, multinomial, low-variance, stratified, residual)"
+                        );
+                    };
+                    methods.push(m);
+                }
+                if methods.is_empty() {
+                    bail!("--method: give 'all' or at least one method");
+                }
+                methods
+            }
+        };
+        let particles = match matches.get_one::<String>("particles") {
+            None => resampling::DEFAULT_PARTICLES,
+            Some(text) => match parse_counts(text)?[..] {
+                [n] => n,
+                _ => bail!("--particles: the resampling experiment takes one count"),
+            },
+        };
+        let trials = matches.get_one::<u64>("trials").copied().unwrap_or(10_000) as usize;
+        let result = resampling_experiment(
+            &methods,
+            particles,
+            trials,
+            seed,
+            progress_bar("resampling"),
+        );
+        if out.print_json(&result)? {
+            return Ok(());
+        }
+        writeln!(
+            out,
+            "SLAM Lab experiment resampling: {trials} resamplings of {particles} particles per method and weight set, seed {seed}"
+        )?;
+        writeln!(out)?;
+        writeln!(
+            out,
+            "copy-count variance, averaged over particles (max |mean copies − M w| in brackets):"
+        )?;
+        write!(out, "{:<14}", "method")?;
+        for p in WeightPreset::ALL {
+            write!(out, " {:>22}", p.name())?;
+        }
+        writeln!(out)?;
+        for r in &result.results {
+            write!(out, "{:<14}", r.method)?;
+            for p in &r.presets {
+                write!(
+                    out,
+                    " {:>12.4} [{:>7.4}]",
+                    p.copy_count_variance, p.max_bias
+                )?;
+            }
+            writeln!(out)?;
+        }
+        write!(out, "{:<14}", "theory (mult.)")?;
+        for (_, v) in &result.multinomial_theory {
+            write!(out, " {:>12.4} {:>9}", v, "")?;
+        }
+        writeln!(out)?;
+        Ok(())
+    }
+}

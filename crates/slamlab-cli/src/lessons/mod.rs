@@ -1,0 +1,5 @@
+//! The lessons `slamlab run` runs, one module each (listed in
+//! [`crate::registry::LESSONS`]).
+
+pub mod kidnap;
+pub mod landmark;
