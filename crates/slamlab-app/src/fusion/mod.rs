@@ -367,7 +367,8 @@ impl FusionLesson {
                 events.push(FusionEvent::SetSensor { sensor, on });
             }
             ui.indent(("fusion_noise", sensor_name(sensor)), |ui| {
-                ui.spacing_mut().slider_width = 110.0;
+                // Slider, value and label within the panel's width.
+                ui.spacing_mut().slider_width = (ui.available_width() - 190.0).clamp(60.0, 160.0);
                 for &(noise, label, scale, min, max) in noises {
                     let k = LiveNoise::ALL.iter().position(|n| *n == noise).unwrap_or(0);
                     let unit = if scale == 1.0 {

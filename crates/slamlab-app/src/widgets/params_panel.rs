@@ -56,15 +56,15 @@ pub fn params_ui<S: Scenario>(
     } else {
         names.iter().filter_map(|n| S::param(n)).collect()
     };
-    egui::Grid::new(("params_grid", S::LESSON))
-        .num_columns(2)
-        .striped(true)
-        .show(ui, |ui| {
-            for param in rows {
-                changed |= param_row_ui(ui, pending, running, param);
-                ui.end_row();
-            }
-        });
+    // One parameter per row: its name, then its control below it, so that a
+    // narrow panel (or a drawer) shows both whole.
+    ui.scope(|ui| {
+        ui.spacing_mut().slider_width = (ui.available_width() - 110.0).clamp(80.0, 220.0);
+        for param in rows {
+            changed |= param_row_ui(ui, pending, running, param);
+            ui.add_space(4.0);
+        }
+    });
     changed
 }
 

@@ -364,3 +364,34 @@ fn every_lessons_share_link_carries_the_figure_keys() {
         );
     }
 }
+
+/// Every lesson rendered at 1280 x 800 and 360 x 480 after 40 ticks draws a picture
+/// (hundreds of colours, not a blank frame). With `SLAMLAB_SCREENSHOTS=DIR` the PNGs
+/// are saved there for a look.
+#[test]
+fn every_lesson_renders_at_a_large_and_a_tiny_size() {
+    for entry in LESSONS {
+        for size in [egui::vec2(1280.0, 800.0), egui::vec2(360.0, 480.0)] {
+            let mut h = harness(&format!("lesson={}&seed=5&tick=40", entry.id), size);
+            h.run();
+            let Ok(image) = h.render() else {
+                eprintln!("skipping: no GPU adapter");
+                return;
+            };
+            let colours: std::collections::HashSet<[u8; 4]> = image
+                .as_raw()
+                .chunks_exact(4)
+                .map(|p| [p[0], p[1], p[2], p[3]])
+                .collect();
+            assert!(
+                colours.len() > 100,
+                "{} at {size:?}: {} colours",
+                entry.id,
+                colours.len()
+            );
+            if let Ok(dir) = std::env::var("SLAMLAB_SCREENSHOTS") {
+                let _ = image.save(format!("{dir}/{}-{}x{}.png", entry.id, size.x, size.y));
+            }
+        }
+    }
+}
