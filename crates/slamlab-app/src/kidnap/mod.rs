@@ -15,6 +15,7 @@ use crate::time_control::{TimeAction, TimeControl, TimeInfo};
 use crate::widgets::drive::{self, PadDirection};
 use crate::widgets::dropped_files::DropInbox;
 use crate::widgets::fetch::{self, Fetch};
+use crate::widgets::file_picker::{FilesPicker, PickedFile};
 use crate::widgets::map_canvas::MapView;
 use crate::widgets::params_panel::{self, PendingParams};
 use egui::Color32;
@@ -125,6 +126,8 @@ pub struct KidnapLesson {
     note: Option<String>,
     /// Maps dropped on the window, while they are read.
     inbox: DropInbox,
+    /// "Open map…": a map's YAML with its image.
+    map_picker: FilesPicker,
     /// `map=` named a ROS map YAML (a URL beside the site, a path on the
     /// desktop): where it is, and its reading, stage by stage.
     map_location: Option<MapFetch>,
@@ -232,6 +235,7 @@ impl KidnapLesson {
             notices,
             note: None,
             inbox: DropInbox::default(),
+            map_picker: FilesPicker::default(),
             map_location: None,
             pad: None,
             sent: None,
@@ -327,6 +331,38 @@ impl KidnapLesson {
             }
             Err(why) => self.note = Some(format!("Could not load the map: {why}")),
         }
+    }
+
+    /// A picked map YAML with the image it names, read from beside it (natively the
+    /// picker gives one file; in the browser the student picks both).
+    #[cfg_attr(target_arch = "wasm32", allow(clippy::unused_self))]
+    fn with_named_image(&self, batch: Vec<PickedFile>) -> Vec<PickedFile> {
+        #[cfg(not(target_arch = "wasm32"))]
+        let mut batch = batch;
+        #[cfg(not(target_arch = "wasm32"))]
+        {
+            let yaml_image = batch.iter().find_map(|(name, bytes)| {
+                let lower = name.to_ascii_lowercase();
+                let text = bytes
+                    .as_ref()
+                    .ok()
+                    .and_then(|b| std::str::from_utf8(b).ok())?;
+                (lower.ends_with(".yaml") || lower.ends_with(".yml"))
+                    .then(|| slamlab_sim::grid::map_io::parse_map_yaml(text).ok())
+                    .flatten()
+                    .map(|yaml| yaml.image)
+            });
+            if let (Some(image), Some(folder)) = (yaml_image, self.map_picker.folder()) {
+                let path = folder.join(&image);
+                let name = path
+                    .file_name()
+                    .map_or_else(|| image.clone(), |n| n.to_string_lossy().into_owned());
+                let bytes = std::fs::read(&path)
+                    .map_err(|e| format!("the image {} beside the YAML: {e}", path.display()));
+                batch.push((name, bytes));
+            }
+        }
+        batch
     }
 
     /// The query string (without `?`) that reopens this setup.
@@ -536,7 +572,14 @@ impl KidnapLesson {
                 .on_hover_text("The built-in maps; press \"Apply & reset\" to open one")
                 .widget_info(|| egui::WidgetInfo::labeled(egui::Role::ComboBox, true, "map"));
         });
-        ui.label("Or drop a ROS map (its .yaml and .pgm/.png together) on the window.");
+        ui.label("Or open a ROS map (its .yaml and .pgm/.png together), or drop it on the window:");
+        self.map_picker.ui(
+            ui,
+            "Open map…",
+            ".yaml,.yml,.pgm,.png",
+            64 << 20,
+            "path/to/map.yaml",
+        );
         let running = self.sim().run().scenario().clone();
         params_panel::params_ui(ui, &mut self.pending, &running, PANEL_PARAMS);
         ui.separator();
@@ -701,7 +744,11 @@ impl Lesson for KidnapLesson {
             None
         };
         self.drive_by_hand(keys);
-        if let Some(batch) = self.inbox.poll(ctx) {
+        let picked = self
+            .map_picker
+            .poll()
+            .map(|batch| self.with_named_image(batch));
+        if let Some(batch) = self.inbox.poll(ctx).or(picked) {
             let mut files = Vec::new();
             for (name, bytes) in batch {
                 match bytes {

@@ -1,4 +1,4 @@
-//! Opening a file by a picker, natively and in the browser, without system
+//! Opening files by a picker, natively and in the browser, without system
 //! libraries: in the browser a hidden `<input type="file">` (the browser's own
 //! dialog); natively a path field and an "Open" button (a native dialog crate
 //! such as rfd would pull GTK or portal libraries in). Dropping a file on the
@@ -66,6 +66,91 @@ impl FilePicker {
     }
 }
 
+/// A picker of several files at once, read as bytes: a ROS map's YAML together with
+/// its image. In the browser the dialog allows choosing several files; natively the
+/// path field takes one file, and [`FilesPicker::folder`] tells where it was, so that
+/// the caller can read the files it names (the YAML's image) beside it.
+#[derive(Debug, Default)]
+pub struct FilesPicker {
+    picked: Rc<RefCell<Option<Vec<PickedFile>>>>,
+    /// The path typed (native only).
+    #[cfg(not(target_arch = "wasm32"))]
+    path: String,
+    /// The folder of the file picked last (native only).
+    #[cfg(not(target_arch = "wasm32"))]
+    folder: Option<std::path::PathBuf>,
+}
+
+impl FilesPicker {
+    /// The picker's widgets; `accept` lists the extensions offered, `hint` is the
+    /// path field's placeholder (native).
+    pub fn ui(
+        &mut self,
+        ui: &mut egui::Ui,
+        label: &str,
+        accept: &str,
+        max_bytes: usize,
+        hint: &str,
+    ) {
+        #[cfg(not(target_arch = "wasm32"))]
+        {
+            let _ = accept;
+            ui.horizontal(|ui| {
+                let path_label = ui.label("path");
+                let field = ui
+                    .add(
+                        egui::TextEdit::singleline(&mut self.path)
+                            .hint_text(hint)
+                            .desired_width(150.0),
+                    )
+                    .labelled_by(path_label.id);
+                let enter = field.lost_focus() && ui.input(|i| i.key_pressed(egui::Key::Enter));
+                if ui
+                    .button(label)
+                    .on_hover_text("Read the file at this path (a YAML's image is read beside it)")
+                    .clicked()
+                    || enter
+                {
+                    let path = self.path.trim();
+                    self.folder = std::path::Path::new(path)
+                        .parent()
+                        .map(std::path::Path::to_path_buf);
+                    *self.picked.borrow_mut() = Some(vec![read_native(path, max_bytes)]);
+                }
+            });
+        }
+        #[cfg(target_arch = "wasm32")]
+        {
+            let _ = hint;
+            if ui
+                .button(label)
+                .on_hover_text(
+                    "Choose the files with the browser's dialog (a YAML and its image together)",
+                )
+                .clicked()
+            {
+                web::open_files_dialog(
+                    Rc::clone(&self.picked),
+                    ui.ctx().clone(),
+                    accept.to_owned(),
+                    max_bytes,
+                );
+            }
+        }
+    }
+
+    /// What was picked since the last poll.
+    pub fn poll(&mut self) -> Option<Vec<PickedFile>> {
+        self.picked.borrow_mut().take()
+    }
+
+    /// The folder of the file picked last (native), to read what it names beside it.
+    #[cfg(not(target_arch = "wasm32"))]
+    pub fn folder(&self) -> Option<&std::path::Path> {
+        self.folder.as_deref()
+    }
+}
+
 #[cfg(not(target_arch = "wasm32"))]
 fn read_native(path: &str, max_bytes: usize) -> PickedFile {
     let name = std::path::Path::new(path)
@@ -96,6 +181,62 @@ mod web {
     use std::rc::Rc;
     use wasm_bindgen::JsCast as _;
     use wasm_bindgen::prelude::*;
+
+    /// Opens the browser's file dialog for several files; once every chosen file is
+    /// read (as bytes), the batch lands in `picked`.
+    pub fn open_files_dialog(
+        picked: Rc<RefCell<Option<Vec<PickedFile>>>>,
+        ctx: egui::Context,
+        accept: String,
+        max_bytes: usize,
+    ) {
+        let Some(document) = web_sys::window().and_then(|w| w.document()) else {
+            return;
+        };
+        let Ok(input) = document.create_element("input") else {
+            return;
+        };
+        let Ok(input) = input.dyn_into::<web_sys::HtmlInputElement>() else {
+            return;
+        };
+        input.set_type("file");
+        input.set_multiple(true);
+        input.set_accept(&accept);
+        let reader_input = input.clone();
+        let on_change = Closure::once_into_js(move || {
+            let Some(files) = reader_input.files() else {
+                return;
+            };
+            let files: Vec<web_sys::File> =
+                (0..files.length()).filter_map(|i| files.get(i)).collect();
+            wasm_bindgen_futures::spawn_local(async move {
+                let mut batch = Vec::new();
+                for file in files {
+                    let name = file.name();
+                    let size = file.size();
+                    if size > max_bytes as f64 {
+                        batch.push((
+                            name.clone(),
+                            Err(format!(
+                                "{name} has {size} bytes, more than the {max_bytes} bytes SLAM Lab reads"
+                            )),
+                        ));
+                        continue;
+                    }
+                    let buffer = wasm_bindgen_futures::JsFuture::from(file.array_buffer()).await;
+                    let bytes = match buffer {
+                        Ok(value) => Ok(js_sys::Uint8Array::new(&value).to_vec()),
+                        Err(_) => Err(format!("{name} could not be read")),
+                    };
+                    batch.push((name, bytes));
+                }
+                *picked.borrow_mut() = Some(batch);
+                ctx.request_repaint();
+            });
+        });
+        input.set_onchange(Some(on_change.unchecked_ref()));
+        input.click();
+    }
 
     /// Opens the browser's file dialog; the chosen file's text lands in `picked`.
     pub fn open_dialog(

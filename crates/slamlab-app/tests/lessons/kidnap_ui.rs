@@ -319,3 +319,38 @@ fn driving_by_hand_with_the_keys_moves_the_robot_and_stops_it() {
     h.step();
     assert!(!lesson(&h).driving_by_hand());
 }
+
+/// "Open map…" natively: the path of a map's YAML; its image is read beside it and
+/// the lesson restarts on the loaded map. A missing file leaves the map and a note.
+#[test]
+fn open_map_reads_the_yaml_and_its_image() {
+    let yaml = format!(
+        "{}/../../assets/maps/office.yaml",
+        env!("CARGO_MANIFEST_DIR")
+    );
+    let mut h = harness("lesson=kidnap&seed=2");
+    h.run();
+    h.get_by_label("Open map…").scroll_to_me();
+    h.run();
+    h.get_by_label("path").focus();
+    h.get_by_label("path").type_text("/nonexistent/map.yaml");
+    h.run();
+    h.get_by_label("Open map…").click();
+    h.run();
+    assert_eq!(lesson(&h).map_name(), "maze");
+    let notes = lesson(&h).note().unwrap_or_default().to_owned();
+    assert!(notes.contains("Could not read map.yaml"), "{notes}");
+    let field = h.get_by_label("path");
+    field.focus();
+    h.run();
+    for _ in 0.."/nonexistent/map.yaml".len() {
+        h.key_press(egui::Key::Backspace);
+    }
+    h.get_by_label("path").type_text(&yaml);
+    h.run();
+    h.get_by_label("Open map…").click();
+    h.run();
+    assert_eq!(lesson(&h).map_name(), "office.yaml");
+    let notes = lesson(&h).note().unwrap_or_default().to_owned();
+    assert!(notes.contains("Loaded office.yaml"), "{notes}");
+}
