@@ -438,10 +438,18 @@ impl LandmarkSlamLesson {
         crate::widgets::layout::lesson_panels_ui(self, ui, panels, compact, "landmark");
         if self.view.heatmap {
             let mut open = true;
+            // Beside the map where there is room (the right of the window), inside the
+            // frame always: a lecture iframe of 800 x 500 included.
+            let screen = ui.ctx().content_rect();
+            let size = egui::vec2(
+                440.0_f32.min(screen.width() - 16.0),
+                560.0_f32.min(screen.height() - 40.0),
+            );
             egui::Window::new("Covariance as correlations")
                 .open(&mut open)
-                .default_size([600.0, 700.0])
-                .default_pos(ui.ctx().content_rect().center() - egui::vec2(300.0, 360.0))
+                .default_size(size)
+                .default_pos(screen.right_top() + egui::vec2(-size.x - 8.0, 32.0))
+                .constrain(true)
                 .resizable(true)
                 .show(ui.ctx(), |ui| {
                     heatmap::heatmap_ui(ui, &self.session, &mut self.heatmap, self.version);

@@ -684,3 +684,29 @@ fn the_drive_pad_sits_above_the_map_and_drives() {
         let _ = image.save(format!("{dir}/manual-pad.png"));
     }
 }
+
+/// The covariance heatmap and Many runs windows stay inside the frame, heatmap and
+/// scale bar included, at 800 x 500 (a lecture iframe) and 1280 x 800.
+#[test]
+fn the_windows_stay_inside_the_frame() {
+    for size in [egui::vec2(800.0, 500.0), egui::vec2(1280.0, 800.0)] {
+        let mut h = super::common::harness_sized("lesson=landmark-slam&seed=7&tick=30", size);
+        h.run();
+        if let Some(lesson) = h.state_mut().landmark_lesson_mut() {
+            lesson.view.heatmap = true;
+        }
+        h.run();
+        let screen = egui::Rect::from_min_size(egui::Pos2::ZERO, size);
+        let image = h
+            .get_by_role_and_label(egui::accesskit::Role::Image, "Covariance heatmap")
+            .rect();
+        assert!(screen.contains_rect(image), "{size:?}: heatmap {image:?}");
+        if let Some(lesson) = h.state_mut().landmark_lesson_mut() {
+            lesson.view.heatmap = false;
+            lesson.view.many_runs = true;
+        }
+        h.run();
+        let title = h.get_by_label("Consistency over many runs").rect();
+        assert!(screen.contains_rect(title), "{size:?}: many runs {title:?}");
+    }
+}
