@@ -4,6 +4,7 @@
 use crate::export::PlotSeries;
 use crate::palette;
 pub(super) use crate::widgets::plots::{line_width, thin, time_plot, title_ui};
+use crate::widgets::plots::{series_key_ui, time_plot_without_legend};
 use egui_plot::{HLine, Line, LineStyle, Plot, PlotPoints, Points, Span};
 use slamlab_core::stats::chi2_quantile;
 use slamlab_sim::LandmarkSession;
@@ -40,7 +41,7 @@ pub(super) fn band_ui(plot_ui: &mut egui_plot::PlotUi<'_>, lo: f64, hi: f64) {
 
 /// The plots under the map share their time axis and always show the first second.
 fn plot<'a>(id: &str, y_label: &str, height: f32) -> Plot<'a> {
-    time_plot(id, y_label, height)
+    time_plot_without_legend(id, y_label, height)
         .link_axis(egui::Id::unique("slamlab_time_axis"), [true, false])
         .include_x(1.0)
         .include_y(0.0)
@@ -104,6 +105,23 @@ pub fn plots_ui(ui: &mut egui::Ui, session: &LandmarkSession) {
     if let Some(note) = coincidence_note(session, &coinciding_series(session)) {
         ui.label(egui::RichText::new(note).color(ui.visuals().warn_fg_color));
     }
+    // The filters' colours once for the row, not a legend over every plot's data.
+    let filters: Vec<(String, egui::Color32)> = session
+        .filters()
+        .iter()
+        .map(|run| {
+            (
+                run.kind.name().to_uppercase(),
+                palette::estimator_color(run.kind.name()),
+            )
+        })
+        .collect();
+    series_key_ui(
+        ui,
+        &filters,
+        "· solid: error, NEES, NIS; dashed: the filter's own 2σ bound; green: the 95% band \
+         of a consistent filter",
+    );
     let height = (ui.available_height() - 26.0).max(80.0);
     let dt = session.scenario().dt;
     ui.columns(4, |columns| {

@@ -74,16 +74,35 @@ pub fn time_axis_label(mark: egui_plot::GridMark) -> String {
 /// A plot over time: the time axis with its 1-2-5 grid and labels, and the legend in
 /// the top left corner.
 pub fn time_plot<'a>(id: &str, y_label: &str, height: f32) -> Plot<'a> {
+    time_plot_without_legend(id, y_label, height).legend(
+        Legend::default()
+            .position(egui_plot::Corner::LeftTop)
+            .text_style(egui::TextStyle::Small)
+            .background_alpha(0.55),
+    )
+}
+
+/// One line above a row of plots that names each filter's colour and what solid and
+/// dashed mean, instead of a legend inside every plot over the data.
+pub fn series_key_ui(ui: &mut egui::Ui, filters: &[(String, egui::Color32)], styles: &str) {
+    ui.horizontal_wrapped(|ui| {
+        for (name, color) in filters {
+            ui.label(
+                egui::RichText::new(format!("— {name}"))
+                    .color(*color)
+                    .strong(),
+            );
+        }
+        ui.label(styles);
+    });
+}
+
+/// [`time_plot`] without a legend (the row's [`series_key_ui`] names the series).
+pub fn time_plot_without_legend<'a>(id: &str, y_label: &str, height: f32) -> Plot<'a> {
     Plot::new(id)
         .height(height)
         .x_axis_label("time (s)")
         .y_axis_label(y_label.to_owned())
-        .legend(
-            Legend::default()
-                .position(egui_plot::Corner::LeftTop)
-                .text_style(egui::TextStyle::Small)
-                .background_alpha(0.55),
-        )
         .x_grid_spacer(egui_plot::uniform_grid_spacer(|input| {
             time_axis_steps(input.base_step_size)
         }))
