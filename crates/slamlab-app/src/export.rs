@@ -164,10 +164,15 @@ pub struct ExportFile {
     pub bytes: Vec<u8>,
 }
 
+/// How long a screenshot may take before the export gives up, seconds.
+const SHOT_TIMEOUT_S: f32 = 10.0;
+
 /// A screenshot asked of eframe, and where it lands.
 #[derive(Debug)]
 struct PendingShot {
     slot: Arc<Mutex<Option<Arc<egui::ColorImage>>>>,
+    /// When it was asked for: a picture that never comes is given up after a while.
+    asked: web_time::Instant,
     /// The area to keep, points (`None`: the whole window).
     crop: Option<egui::Rect>,
     name: String,
@@ -202,7 +207,12 @@ impl Exporter {
                 repaint.request_repaint();
             }),
         ));
-        self.shot = Some(PendingShot { slot, crop, name });
+        self.shot = Some(PendingShot {
+            slot,
+            asked: web_time::Instant::now(),
+            crop,
+            name,
+        });
         self.status = Some("Taking the picture…".to_owned());
         ctx.request_repaint();
     }
@@ -255,6 +265,19 @@ impl Exporter {
                     bytes,
                 }),
                 Err(e) => self.status = Some(format!("{} could not be made: {e}", shot.name)),
+            }
+        }
+        // The picture arrives after a frame is painted; keep frames coming until it
+        // does (an idle page paints nothing), and give up after a few seconds.
+        if let Some(shot) = &self.shot {
+            if shot.asked.elapsed().as_secs_f32() > SHOT_TIMEOUT_S {
+                self.status = Some(format!(
+                    "{} could not be made: the window gave no picture; try again",
+                    shot.name
+                ));
+                self.shot = None;
+            } else {
+                ctx.request_repaint();
             }
         }
         #[cfg(not(target_arch = "wasm32"))]
