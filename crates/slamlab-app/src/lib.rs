@@ -578,8 +578,13 @@ impl SlamLabApp {
     /// The File menu: open a scenario, and the exports.
     fn file_menu_ui(&mut self, ui: &mut egui::Ui) {
         ui.label("Open a scenario file (.json) or drop one on the window:");
-        self.scenario_picker
-            .ui(ui, "Open scenario…", ".json,application/json", 1 << 20);
+        self.scenario_picker.ui(
+            ui,
+            "Open scenario…",
+            ".json,application/json",
+            1 << 20,
+            "path/to/scenario.json",
+        );
         ui.separator();
         let ctx = ui.ctx().clone();
         if ui

@@ -1,7 +1,7 @@
 //! One FastSLAM step (the world's tick, prediction, one update per measurement,
 //! resampling) with a full map: `cargo bench -p slamlab-sim --bench fastslam`.
 //!
-//! Target (issue 13): FastSLAM 2.0 with 100 particles and 50 landmarks ≤ 2 ms
+//! Target: FastSLAM 2.0 with 100 particles and 50 landmarks ≤ 2 ms
 //! per step natively.
 
 use slamlab_core::association::AssociationMode;

@@ -15,7 +15,7 @@ use crate::time_control::{TimeAction, TimeControl, TimeInfo};
 use crate::widgets::drive::{self, PadDirection};
 use crate::widgets::dropped_files::DropInbox;
 use crate::widgets::fetch::{self, Fetch};
-use crate::widgets::file_picker::{FilesPicker, PickedFile};
+use crate::widgets::file_picker::{FilePicker, PickedFile};
 use crate::widgets::map_canvas::MapView;
 use crate::widgets::params_panel::{self, PendingParams};
 use egui::Color32;
@@ -127,7 +127,7 @@ pub struct KidnapLesson {
     /// Maps dropped on the window, while they are read.
     inbox: DropInbox,
     /// "Open map…": a map's YAML with its image.
-    map_picker: FilesPicker,
+    map_picker: FilePicker,
     /// `map=` named a ROS map YAML (a URL beside the site, a path on the
     /// desktop): where it is, and its reading, stage by stage.
     map_location: Option<MapFetch>,
@@ -235,7 +235,7 @@ impl KidnapLesson {
             notices,
             note: None,
             inbox: DropInbox::default(),
-            map_picker: FilesPicker::default(),
+            map_picker: FilePicker::multiple(),
             map_location: None,
             pad: None,
             sent: None,
@@ -746,7 +746,7 @@ impl Lesson for KidnapLesson {
         self.drive_by_hand(keys);
         let picked = self
             .map_picker
-            .poll()
+            .poll_all()
             .map(|batch| self.with_named_image(batch));
         if let Some(batch) = self.inbox.poll(ctx).or(picked) {
             let mut files = Vec::new();

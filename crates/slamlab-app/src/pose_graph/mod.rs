@@ -542,8 +542,13 @@ impl PoseGraphLesson {
         });
         ui.separator();
         ui.label(egui::RichText::new("Open a graph").strong());
-        self.picker
-            .ui(ui, "Open file…", ".g2o,.graph,.toro,.txt", MAX_FILE_BYTES);
+        self.picker.ui(
+            ui,
+            "Open file…",
+            ".g2o,.graph,.toro,.txt",
+            MAX_FILE_BYTES,
+            "path/to/graph.g2o",
+        );
         ui.horizontal_wrapped(|ui| {
             ui.label("Or drop a .g2o or TORO file (M3500, intel, …) on the window.");
             crate::widgets::sources::source_link(ui, "datasets", "Sources: the datasets");

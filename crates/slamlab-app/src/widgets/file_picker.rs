@@ -3,6 +3,11 @@
 //! dialog); natively a path field and an "Open" button (a native dialog crate
 //! such as rfd would pull GTK or portal libraries in). Dropping a file on the
 //! window ([`super::dropped_files::DropInbox`]) works in both.
+//!
+//! A picker takes one file, or several at once ([`FilePicker::multiple`]: a ROS
+//! map's YAML together with its image). Natively the path field always names one
+//! file, and [`FilePicker::folder`] says where it was, so that the caller can read
+//! the files it names (the YAML's image) beside it.
 
 use std::cell::RefCell;
 use std::rc::Rc;
@@ -13,66 +18,10 @@ pub type PickedFile = (String, Result<Vec<u8>, String>);
 /// A file picker; [`FilePicker::poll`] hands over what was picked.
 #[derive(Debug, Default)]
 pub struct FilePicker {
-    picked: Rc<RefCell<Option<PickedFile>>>,
-    /// The path typed (native only).
-    #[cfg(not(target_arch = "wasm32"))]
-    path: String,
-}
-
-impl FilePicker {
-    /// The picker's widgets. `accept` lists the extensions offered
-    /// (`".g2o,.graph,.toro,.txt"`); `max_bytes` refuses larger files unread.
-    pub fn ui(&mut self, ui: &mut egui::Ui, label: &str, accept: &str, max_bytes: usize) {
-        #[cfg(not(target_arch = "wasm32"))]
-        {
-            let _ = accept;
-            ui.horizontal(|ui| {
-                let field = ui.add(
-                    egui::TextEdit::singleline(&mut self.path)
-                        .hint_text("path/to/graph.g2o")
-                        .desired_width(150.0),
-                );
-                let enter = field.lost_focus() && ui.input(|i| i.key_pressed(egui::Key::Enter));
-                if ui
-                    .button(label)
-                    .on_hover_text("Read the file at this path")
-                    .clicked()
-                    || enter
-                {
-                    *self.picked.borrow_mut() = Some(read_native(self.path.trim(), max_bytes));
-                }
-            });
-        }
-        #[cfg(target_arch = "wasm32")]
-        {
-            if ui
-                .button(label)
-                .on_hover_text("Choose a file with the browser's dialog")
-                .clicked()
-            {
-                web::open_dialog(
-                    Rc::clone(&self.picked),
-                    ui.ctx().clone(),
-                    accept.to_owned(),
-                    max_bytes,
-                );
-            }
-        }
-    }
-
-    /// What was picked since the last poll.
-    pub fn poll(&mut self) -> Option<PickedFile> {
-        self.picked.borrow_mut().take()
-    }
-}
-
-/// A picker of several files at once, read as bytes: a ROS map's YAML together with
-/// its image. In the browser the dialog allows choosing several files; natively the
-/// path field takes one file, and [`FilesPicker::folder`] tells where it was, so that
-/// the caller can read the files it names (the YAML's image) beside it.
-#[derive(Debug, Default)]
-pub struct FilesPicker {
     picked: Rc<RefCell<Option<Vec<PickedFile>>>>,
+    /// Does the browser's dialog let the student choose several files?
+    #[cfg_attr(not(target_arch = "wasm32"), allow(dead_code))]
+    multiple: bool,
     /// The path typed (native only).
     #[cfg(not(target_arch = "wasm32"))]
     path: String,
@@ -81,9 +30,18 @@ pub struct FilesPicker {
     folder: Option<std::path::PathBuf>,
 }
 
-impl FilesPicker {
-    /// The picker's widgets; `accept` lists the extensions offered, `hint` is the
-    /// path field's placeholder (native).
+impl FilePicker {
+    /// A picker whose browser dialog takes several files at once.
+    pub fn multiple() -> Self {
+        Self {
+            multiple: true,
+            ..Self::default()
+        }
+    }
+
+    /// The picker's widgets. `accept` lists the extensions offered
+    /// (`".g2o,.graph,.toro,.txt"`); `max_bytes` refuses larger files unread; `hint`
+    /// is the path field's placeholder (native).
     pub fn ui(
         &mut self,
         ui: &mut egui::Ui,
@@ -107,7 +65,7 @@ impl FilesPicker {
                 let enter = field.lost_focus() && ui.input(|i| i.key_pressed(egui::Key::Enter));
                 if ui
                     .button(label)
-                    .on_hover_text("Read the file at this path (a YAML's image is read beside it)")
+                    .on_hover_text("Read the file at this path")
                     .clicked()
                     || enter
                 {
@@ -122,25 +80,31 @@ impl FilesPicker {
         #[cfg(target_arch = "wasm32")]
         {
             let _ = hint;
-            if ui
-                .button(label)
-                .on_hover_text(
-                    "Choose the files with the browser's dialog (a YAML and its image together)",
-                )
-                .clicked()
-            {
-                web::open_files_dialog(
+            let hover = if self.multiple {
+                "Choose the files with the browser's dialog (several at once)"
+            } else {
+                "Choose a file with the browser's dialog"
+            };
+            if ui.button(label).on_hover_text(hover).clicked() {
+                web::open_dialog(
                     Rc::clone(&self.picked),
                     ui.ctx().clone(),
                     accept.to_owned(),
                     max_bytes,
+                    self.multiple,
                 );
             }
         }
     }
 
-    /// What was picked since the last poll.
-    pub fn poll(&mut self) -> Option<Vec<PickedFile>> {
+    /// The first file picked since the last poll.
+    pub fn poll(&mut self) -> Option<PickedFile> {
+        self.poll_all().and_then(|files| files.into_iter().next())
+    }
+
+    /// Every file picked since the last poll (several, from a [`multiple`](Self::multiple)
+    /// picker in the browser).
+    pub fn poll_all(&mut self) -> Option<Vec<PickedFile>> {
         self.picked.borrow_mut().take()
     }
 
@@ -182,13 +146,14 @@ mod web {
     use wasm_bindgen::JsCast as _;
     use wasm_bindgen::prelude::*;
 
-    /// Opens the browser's file dialog for several files; once every chosen file is
-    /// read (as bytes), the batch lands in `picked`.
-    pub fn open_files_dialog(
+    /// Opens the browser's file dialog; once every chosen file is read (as bytes),
+    /// the batch lands in `picked`.
+    pub fn open_dialog(
         picked: Rc<RefCell<Option<Vec<PickedFile>>>>,
         ctx: egui::Context,
         accept: String,
         max_bytes: usize,
+        multiple: bool,
     ) {
         let Some(document) = web_sys::window().and_then(|w| w.document()) else {
             return;
@@ -200,7 +165,7 @@ mod web {
             return;
         };
         input.set_type("file");
-        input.set_multiple(true);
+        input.set_multiple(multiple);
         input.set_accept(&accept);
         let reader_input = input.clone();
         let on_change = Closure::once_into_js(move || {
@@ -215,12 +180,10 @@ mod web {
                     let name = file.name();
                     let size = file.size();
                     if size > max_bytes as f64 {
-                        batch.push((
-                            name.clone(),
-                            Err(format!(
-                                "{name} has {size} bytes, more than the {max_bytes} bytes SLAM Lab reads"
-                            )),
-                        ));
+                        let why = format!(
+                            "{name} has {size} bytes, more than the {max_bytes} bytes SLAM Lab reads"
+                        );
+                        batch.push((name, Err(why)));
                         continue;
                     }
                     let buffer = wasm_bindgen_futures::JsFuture::from(file.array_buffer()).await;
@@ -231,58 +194,6 @@ mod web {
                     batch.push((name, bytes));
                 }
                 *picked.borrow_mut() = Some(batch);
-                ctx.request_repaint();
-            });
-        });
-        input.set_onchange(Some(on_change.unchecked_ref()));
-        input.click();
-    }
-
-    /// Opens the browser's file dialog; the chosen file's text lands in `picked`.
-    pub fn open_dialog(
-        picked: Rc<RefCell<Option<PickedFile>>>,
-        ctx: egui::Context,
-        accept: String,
-        max_bytes: usize,
-    ) {
-        let Some(document) = web_sys::window().and_then(|w| w.document()) else {
-            return;
-        };
-        let Ok(input) = document.create_element("input") else {
-            return;
-        };
-        let Ok(input) = input.dyn_into::<web_sys::HtmlInputElement>() else {
-            return;
-        };
-        input.set_type("file");
-        input.set_accept(&accept);
-        let reader_input = input.clone();
-        let on_change = Closure::once_into_js(move || {
-            let Some(file) = reader_input.files().and_then(|files| files.get(0)) else {
-                return;
-            };
-            let name = file.name();
-            let size = file.size();
-            if size > max_bytes as f64 {
-                *picked.borrow_mut() = Some((
-                    name.clone(),
-                    Err(format!(
-                        "{name} has {size} bytes, more than the {max_bytes} bytes SLAM Lab reads"
-                    )),
-                ));
-                ctx.request_repaint();
-                return;
-            }
-            wasm_bindgen_futures::spawn_local(async move {
-                let text = wasm_bindgen_futures::JsFuture::from(file.text()).await;
-                let bytes = match text {
-                    Ok(value) => value
-                        .as_string()
-                        .map(String::into_bytes)
-                        .ok_or_else(|| format!("{name} could not be read as text")),
-                    Err(_) => Err(format!("{name} could not be read")),
-                };
-                *picked.borrow_mut() = Some((name, bytes));
                 ctx.request_repaint();
             });
         });

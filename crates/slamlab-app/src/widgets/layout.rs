@@ -170,44 +170,24 @@ fn drawers_ui(
             egui::pos2(x, space.top()),
             egui::vec2(width, space.height()),
         );
-        let mut close = false;
-        egui::Area::new(egui::Id::unique((id, title, "drawer")))
-            .order(egui::Order::Middle)
-            .fixed_pos(rect.min)
-            .constrain(false)
-            .show(&ctx, |ui| {
-                egui::Frame::side_top_panel(ui.style())
-                    .stroke(ui.visuals().window_stroke())
-                    .shadow(ui.visuals().popup_shadow)
+        let close = drawer_ui(
+            &ctx,
+            egui::Id::unique((id, title, "drawer")),
+            rect,
+            title,
+            |ui| {
+                egui::ScrollArea::vertical()
+                    .id_salt(format!("{id}_{title}_drawer_scroll"))
+                    .auto_shrink([false, false])
                     .show(ui, |ui| {
-                        let inner = rect.shrink2(egui::vec2(8.0, 2.0));
-                        ui.set_min_size(inner.size());
-                        ui.set_max_size(inner.size());
-                        ui.horizontal(|ui| {
-                            ui.label(egui::RichText::new(title).strong());
-                            ui.with_layout(
-                                egui::Layout::right_to_left(egui::Align::Center),
-                                |ui| {
-                                    close = ui
-                                        .button("Close")
-                                        .on_hover_text("Close this drawer and show the map")
-                                        .clicked();
-                                },
-                            );
-                        });
-                        ui.separator();
-                        egui::ScrollArea::vertical()
-                            .id_salt(format!("{id}_{title}_drawer_scroll"))
-                            .auto_shrink([false, false])
-                            .show(ui, |ui| {
-                                if left {
-                                    lesson.parameters_ui(ui);
-                                } else {
-                                    lesson.explanation_ui(ui);
-                                }
-                            });
+                        if left {
+                            lesson.parameters_ui(ui);
+                        } else {
+                            lesson.explanation_ui(ui);
+                        }
                     });
-            });
+            },
+        );
         if close {
             if left {
                 panels.parameters = false;
@@ -232,8 +212,38 @@ fn plots_drawer_ui(
         egui::pos2(space.left(), space.bottom() - height),
         egui::vec2(space.width(), height),
     );
+    let close = drawer_ui(
+        ctx,
+        egui::Id::unique((id, "plots drawer")),
+        rect,
+        "Plots",
+        |ui| {
+            // Side by side, scrolled sideways: each plot keeps a readable width.
+            egui::ScrollArea::horizontal()
+                .id_salt(format!("{id}_plots_drawer_scroll"))
+                .show(ui, |ui| {
+                    ui.set_min_width(900.0);
+                    ui.set_height(ui.available_height());
+                    lesson.plots_ui(ui);
+                });
+        },
+    );
+    if close {
+        panels.plots = false;
+    }
+}
+
+/// A drawer at `rect` over the map: a title row with a Close button, then
+/// `add_contents`. Returns whether Close was clicked.
+fn drawer_ui(
+    ctx: &egui::Context,
+    id: egui::Id,
+    rect: egui::Rect,
+    title: &str,
+    add_contents: impl FnOnce(&mut egui::Ui),
+) -> bool {
     let mut close = false;
-    egui::Area::new(egui::Id::unique((id, "plots drawer")))
+    egui::Area::new(id)
         .order(egui::Order::Middle)
         .fixed_pos(rect.min)
         .constrain(false)
@@ -246,26 +256,17 @@ fn plots_drawer_ui(
                     ui.set_min_size(inner.size());
                     ui.set_max_size(inner.size());
                     ui.horizontal(|ui| {
-                        ui.label(egui::RichText::new("Plots").strong());
+                        ui.label(egui::RichText::new(title).strong());
                         ui.with_layout(egui::Layout::right_to_left(egui::Align::Center), |ui| {
                             close = ui
                                 .button("Close")
-                                .on_hover_text("Close the plots and show the map")
+                                .on_hover_text("Close this drawer and show the map")
                                 .clicked();
                         });
                     });
                     ui.separator();
-                    // Side by side, scrolled sideways: each plot keeps a readable width.
-                    egui::ScrollArea::horizontal()
-                        .id_salt(format!("{id}_plots_drawer_scroll"))
-                        .show(ui, |ui| {
-                            ui.set_min_width(900.0);
-                            ui.set_height(ui.available_height());
-                            lesson.plots_ui(ui);
-                        });
+                    add_contents(ui);
                 });
         });
-    if close {
-        panels.plots = false;
-    }
+    close
 }
