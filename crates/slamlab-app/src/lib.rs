@@ -518,6 +518,9 @@ impl SlamLabApp {
                 self.panel_toggles_ui(ui);
                 ui.separator();
                 ui.label(egui::RichText::new(title).strong());
+                if let Some(status) = &self.exporter.status {
+                    ui.label(status);
+                }
                 let dark = ui.visuals().dark_mode;
                 if ui
                     .small_button(if dark { "Light theme" } else { "Dark theme" })
@@ -719,7 +722,11 @@ impl SlamLabApp {
             return;
         }
         let query = export::query_of_scenario(file, self.embed);
+        // The lesson being left keeps its settings, as when switching lessons.
         let fresh = Self::with_settings(&query, Some(self.settings()));
+        if !self.embed {
+            self.stored.lessons = fresh.stored.lessons.clone();
+        }
         self.lesson = fresh.lesson;
         self.figure = fresh.figure;
         self.app_notices = fresh.app_notices;

@@ -173,3 +173,27 @@ fn a_bad_scenario_file_is_a_notice_and_the_lesson_stays() {
     let notices = h.state().notices().join(" | ");
     assert!(notices.contains("landmarks"), "{notices}");
 }
+
+/// Opening a scenario of another lesson keeps the lesson being left as the user had
+/// it: its settings are stored, as when switching lessons from the menu.
+#[test]
+fn opening_a_scenario_keeps_the_left_lessons_settings() {
+    let mut h = harness("lesson=landmark-slam&seed=3&landmarks=30");
+    h.run();
+    let file = ScenarioFile {
+        lesson: "kidnap".into(),
+        params: vec![("seed".into(), "2".into())],
+        view: vec![],
+    };
+    h.state_mut().open_scenario(&file, "kidnap.json");
+    h.run();
+    assert_eq!(h.state().lesson_id(), "kidnap");
+    let stored = h.state().settings();
+    let landmark = stored.lessons.get("landmark-slam").map(ToString::to_string);
+    assert!(
+        landmark
+            .as_deref()
+            .is_some_and(|s| s.contains("\"landmarks\"") && s.contains("\"30\"")),
+        "{landmark:?}"
+    );
+}
