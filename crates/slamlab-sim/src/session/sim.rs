@@ -18,6 +18,7 @@
 
 use super::records::{LandmarkRecords, NeffSample, NisSample, TickMetrics};
 use super::records::{nearest_landmark_rmse, tick_metrics};
+use crate::ideal_ekf::IdealEkf;
 use crate::noise::{Stream, gaussian, stream_rng};
 use crate::params::{self, ParamIssue};
 use crate::particle_estimator::{FastSlamEstimator, OWN_LABELS};
@@ -115,15 +116,54 @@ pub enum LandmarkEvent {
     },
 }
 
-/// `LandmarkSlam` plus `Debug` and cloning, so sessions can be printed and
-/// checkpointed.
+/// An estimator of the landmark lesson: `LandmarkSlam` plus `Debug` and
+/// cloning, so sessions can be printed and checkpointed, and an ear for the truth.
 pub trait LandmarkSlamDebug: LandmarkSlam + std::fmt::Debug {
     /// A boxed copy.
     fn clone_box(&self) -> Box<dyn LandmarkSlamDebug>;
+
+    /// The simulator offers every estimator the true state of the tick that is
+    /// starting (the robot before and after its move, and every landmark). Real
+    /// estimators ignore it (the default); the ideal EKF linearizes at it.
+    fn observe_truth(
+        &mut self,
+        _robot_before: Pose2,
+        _robot: Pose2,
+        _landmarks: &mut dyn Iterator<Item = (usize, Vector2<f64>)>,
+    ) {
+    }
 }
-impl<T: LandmarkSlam + std::fmt::Debug + Clone + 'static> LandmarkSlamDebug for T {
+
+impl LandmarkSlamDebug for EkfSlam {
     fn clone_box(&self) -> Box<dyn LandmarkSlamDebug> {
         Box::new(self.clone())
+    }
+}
+
+impl LandmarkSlamDebug for UkfSlam {
+    fn clone_box(&self) -> Box<dyn LandmarkSlamDebug> {
+        Box::new(self.clone())
+    }
+}
+
+impl LandmarkSlamDebug for FastSlamEstimator {
+    fn clone_box(&self) -> Box<dyn LandmarkSlamDebug> {
+        Box::new(self.clone())
+    }
+}
+
+impl LandmarkSlamDebug for IdealEkf {
+    fn clone_box(&self) -> Box<dyn LandmarkSlamDebug> {
+        Box::new(self.clone())
+    }
+
+    fn observe_truth(
+        &mut self,
+        robot_before: Pose2,
+        robot: Pose2,
+        landmarks: &mut dyn Iterator<Item = (usize, Vector2<f64>)>,
+    ) {
+        IdealEkf::observe_truth(self, robot_before, robot, landmarks);
     }
 }
 
@@ -231,13 +271,9 @@ impl LandmarkSim {
                 )
                 .map(|f| Box::new(f) as _)
                 .map_err(|e| e.to_string()),
-                EstimatorKind::IdealEkf => EkfSlam::with_linearization(
-                    scenario.filter_config(),
-                    start,
-                    Linearization::TrueState,
-                )
-                .map(|f| Box::new(f) as _)
-                .map_err(|e| e.to_string()),
+                EstimatorKind::IdealEkf => IdealEkf::new(scenario.filter_config(), start)
+                    .map(|f| Box::new(f) as _)
+                    .map_err(|e| e.to_string()),
                 EstimatorKind::FastSlam1 | EstimatorKind::FastSlam2 => {
                     FastSlamEstimator::new(fastslam_config(&scenario, kind), start)
                         .map(|f| Box::new(f) as _)
