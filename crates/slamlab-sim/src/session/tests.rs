@@ -362,3 +362,43 @@ fn a_stopped_manual_robot_stays_put() {
         s.truth()
     );
 }
+
+#[test]
+fn live_changes_are_recorded_once_and_replay_after_stepping_back() {
+    let scenario = LandmarkScenario {
+        estimators: vec![EstimatorKind::Ekf],
+        ..Default::default()
+    };
+    let mut s = LandmarkSession::new(scenario.clone());
+    s.run_ticks(5);
+    s.set_controller(ControllerKind::Manual);
+    s.set_teleop(Control::new(0.5, 0.2));
+    // The lesson hands the drive command before every step: the same one again
+    // is no new event.
+    s.set_teleop(Control::new(0.5, 0.2));
+    s.set_controller(ControllerKind::Manual);
+    s.run_ticks(5);
+    s.set_sensor_reach(2.0 * PI, 6.0);
+    s.mislabel_next_observation();
+    s.mislabel_next_observation();
+    s.run_ticks(5);
+    assert_eq!(s.stepper().events().len(), 4);
+    assert_eq!(s.mislabel_ticks(), vec![11]);
+    let at_15 = (s.truth(), s.filters()[0].filter().mean().clone());
+
+    // Back before the switch: the circle drives, as it did then.
+    while s.tick() > 3 {
+        assert!(s.step_back());
+    }
+    assert_eq!(s.controller(), scenario.controller);
+    assert_eq!(s.teleop(), Control::default());
+    assert_eq!(s.mislabel_ticks(), vec![11], "still to come");
+    // Forward again (handed the drive command of that moment): every change
+    // replays where it was made.
+    s.set_teleop(Control::default());
+    s.run_ticks(12);
+    assert_eq!(s.controller(), ControllerKind::Manual);
+    assert_eq!(s.sensor().max_range, 6.0);
+    assert_eq!((s.truth(), s.filters()[0].filter().mean().clone()), at_15);
+    assert_eq!(s.stepper().events().len(), 4);
+}
