@@ -47,7 +47,7 @@ use slamlab_core::{Control, Pose2};
 
 /// One estimator of a session: its state now and, through `Deref`, its
 /// [`FilterRecords`] (`run.path`, `run.history`, `run.nis`, `run.n_eff`).
-#[derive(Clone, Copy, Debug)]
+#[derive(Clone, Debug)]
 pub struct FilterRun<'a> {
     /// Which estimator this is.
     pub kind: EstimatorKind,
@@ -60,7 +60,7 @@ pub struct FilterRun<'a> {
     /// The latest landmark update.
     pub last_update: Option<UpdateReport>,
     /// The latest error, if the latest phase failed (the state is then unchanged).
-    pub last_error: &'a Option<String>,
+    pub last_error: Option<String>,
 }
 
 impl<'a> FilterRun<'a> {
@@ -196,7 +196,7 @@ impl LandmarkSession {
                 last_resample: state.last_resample,
                 last_predict: state.last_predict,
                 last_update: state.last_update,
-                last_error: &state.last_error,
+                last_error: state.last_error.clone(),
             })
             .collect()
     }
