@@ -148,7 +148,7 @@ impl ConsistencyStudy {
             }
             sums.nis_sum += run.nis.iter().map(|s| s.nis).sum::<f64>();
             sums.nis_count += run.nis.len();
-            if has_diverged(run) {
+            if has_diverged(&run) {
                 sums.diverged += 1;
             }
         }
@@ -395,7 +395,7 @@ mod tests {
         assert_eq!(result.nees_band, [lo, hi]);
         let nis: Vec<f64> = runs
             .iter()
-            .flat_map(|s| s.filters()[0].nis.iter().map(|n| n.nis))
+            .flat_map(|s| s.filters()[0].records().nis.iter().map(|n| n.nis))
             .collect();
         assert_eq!(result.filters[0].nis_updates, nis.len());
         let nis_mean = nis.iter().sum::<f64>() / nis.len() as f64;

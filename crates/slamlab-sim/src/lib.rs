@@ -13,6 +13,7 @@ pub mod fastslam;
 pub mod fusion;
 pub mod graph_io;
 pub mod grid;
+pub mod ideal_ekf;
 pub mod kidnap_session;
 pub mod landmark_params;
 pub mod localization;

@@ -169,7 +169,7 @@ pub fn explanation_ui(ui: &mut egui::Ui, session: &LandmarkSession) {
     }
     for run in session.filters() {
         ui.add_space(6.0);
-        filter_ui(ui, run, phase);
+        filter_ui(ui, &run, phase);
     }
     ui.add_space(8.0);
     ui.separator();

@@ -248,7 +248,7 @@ fn fastslam_ui(ui: &mut egui::Ui, lesson: &mut LandmarkSlamLesson) {
     let runs: Vec<_> = lesson
         .session
         .filters()
-        .iter()
+        .into_iter()
         .filter(|r| !r.n_eff.is_empty())
         .collect();
     if !runs.is_empty() {

@@ -24,11 +24,12 @@ use std::collections::HashMap;
 /// initialized. The residuals still use the latest estimate. With these Jacobians
 /// the linearized system keeps the three unobservable directions of the true one.
 ///
-/// The ideal EKF evaluates them at the true state, which only a simulator knows
-/// (it is given through [`LandmarkSlam::observe_truth`]). It is the yardstick of
-/// Huang et al.: its linearization is exact, so any inconsistency it shows comes
-/// from the noise models or the nonlinearity of the innovation, not from where the
-/// Jacobians were taken.
+/// A supplied linearization evaluates them where the caller says, before every
+/// predict ([`EkfSlam::supply_linearization_point`]): the robot's move of the tick
+/// and the landmarks' positions. A simulator that supplies its true state gets the
+/// "ideal EKF", the yardstick of Huang et al.: its linearization is exact, so any
+/// inconsistency it shows comes from the noise models or the nonlinearity of the
+/// innovation, not from where the Jacobians were taken.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
 pub enum Linearization {
     /// Jacobians at the latest estimate (thesis Sec. 3.2, the slides).
@@ -36,15 +37,16 @@ pub enum Linearization {
     LatestEstimate,
     /// First-estimates Jacobians (FEJ-EKF).
     FirstEstimates,
-    /// Jacobians at the true state (the ideal EKF; simulation only). The simulator
-    /// hands it the truth before every predict (`observe_truth`); until it has, and
-    /// for a landmark the truth does not list, it falls back on first estimates.
-    TrueState,
+    /// Jacobians at a point supplied from outside before every predict
+    /// ([`EkfSlam::supply_linearization_point`]); until one is, and for a landmark
+    /// it does not list, first estimates.
+    Supplied,
 }
 
-/// The true state, as far as the ideal EKF needs it.
+/// A linearization point supplied from outside: the robot's move of the tick
+/// and the landmarks' positions.
 #[derive(Clone, Debug, Default)]
-struct Truth {
+struct SuppliedPoint {
     robot_before: Pose2,
     robot: Pose2,
     landmarks: HashMap<usize, Vector2<f64>>,
@@ -72,8 +74,9 @@ pub struct EkfSlam {
     robot_prior: Pose2,
     /// Each landmark's position when it was initialized, in slot order.
     first_estimates: Vec<Vector2<f64>>,
-    /// The true state, for [`Linearization::TrueState`]; `None` until it is given.
-    truth: Option<Truth>,
+    /// The supplied linearization point, for [`Linearization::Supplied`]; `None`
+    /// until one is given.
+    supplied: Option<SuppliedPoint>,
 }
 
 impl EkfSlam {
@@ -95,8 +98,31 @@ impl EkfSlam {
             linearization,
             robot_prior: start,
             first_estimates: Vec::new(),
-            truth: None,
+            supplied: None,
         })
+    }
+
+    /// For [`Linearization::Supplied`]: the point at which the Jacobians of the
+    /// tick that is starting are evaluated. The prediction's at the move from
+    /// `robot_before` to `robot`, the updates' at `robot` and the landmarks'
+    /// positions, which are read on the first call only (they do not move); a
+    /// landmark not among them is linearized at its first estimate. Other
+    /// linearizations ignore it.
+    pub fn supply_linearization_point(
+        &mut self,
+        robot_before: Pose2,
+        robot: Pose2,
+        landmarks: &mut dyn Iterator<Item = (usize, Vector2<f64>)>,
+    ) {
+        if self.linearization != Linearization::Supplied {
+            return;
+        }
+        let point = self.supplied.get_or_insert_with(SuppliedPoint::default);
+        point.robot_before = robot_before;
+        point.robot = robot;
+        if point.landmarks.is_empty() {
+            point.landmarks.extend(landmarks);
+        }
     }
 
     /// Where the Jacobians of landmark `id` are evaluated when they are not at the
@@ -108,14 +134,14 @@ impl EkfSlam {
         slot: Option<usize>,
         current: Vector2<f64>,
     ) -> (Pose2, Vector2<f64>) {
-        let truth = self
-            .truth
+        let supplied = self
+            .supplied
             .as_ref()
-            .filter(|_| self.linearization == Linearization::TrueState);
-        match truth {
-            Some(truth) => (
-                truth.robot,
-                truth.landmarks.get(&id).copied().unwrap_or(current),
+            .filter(|_| self.linearization == Linearization::Supplied);
+        match supplied {
+            Some(point) => (
+                point.robot,
+                point.landmarks.get(&id).copied().unwrap_or(current),
             ),
             None => (
                 self.robot_prior,
@@ -146,7 +172,7 @@ impl EkfSlam {
         let innovation = z.difference(&pred.measurement);
         let (h_r, h_l) = match self.linearization {
             Linearization::LatestEstimate => (pred.jacobian_pose, pred.jacobian_landmark),
-            Linearization::FirstEstimates | Linearization::TrueState => {
+            Linearization::FirstEstimates | Linearization::Supplied => {
                 let (at_pose, at_landmark) = self.linearization_point(id, Some(slot), landmark);
                 let first = range_bearing::predict(&at_pose, &at_landmark)
                     .map_err(|source| FilterError::Measurement { id, source })?;
@@ -213,7 +239,7 @@ impl EkfSlam {
         // robot pose predicted for this tick (the landmark's first estimate is this one).
         let g_r = match self.linearization {
             Linearization::LatestEstimate => g.jacobian_pose,
-            Linearization::FirstEstimates | Linearization::TrueState => {
+            Linearization::FirstEstimates | Linearization::Supplied => {
                 let (p, l) = self.linearization_point(id, None, g.landmark);
                 Matrix2x3::new(1.0, 0.0, -(l[1] - p.y), 0.0, 1.0, l[0] - p.x)
             }
@@ -241,24 +267,7 @@ impl LandmarkSlam for EkfSlam {
         match self.linearization {
             Linearization::LatestEstimate => "ekf",
             Linearization::FirstEstimates => "fej-ekf",
-            Linearization::TrueState => "ideal-ekf",
-        }
-    }
-
-    fn observe_truth(
-        &mut self,
-        robot_before: Pose2,
-        robot: Pose2,
-        landmarks: &mut dyn Iterator<Item = (usize, Vector2<f64>)>,
-    ) {
-        if self.linearization != Linearization::TrueState {
-            return;
-        }
-        let truth = self.truth.get_or_insert_with(Truth::default);
-        truth.robot_before = robot_before;
-        truth.robot = robot;
-        if truth.landmarks.is_empty() {
-            truth.landmarks.extend(landmarks);
+            Linearization::Supplied => "ekf-supplied",
         }
     }
 
@@ -273,10 +282,10 @@ impl LandmarkSlam for EkfSlam {
         let g = step.jacobian_control;
         // ∂f/∂θ = J (p' - p) for both motion models. FEJ takes the displacement
         // from the previous *predicted* position, so that the products of F over time
-        // telescope as they do for the true system; the ideal EKF takes the true move.
-        let displacement = match (self.linearization, &self.truth) {
+        // telescope as they do for the true system; a supplied point gives the move.
+        let displacement = match (self.linearization, &self.supplied) {
             (Linearization::LatestEstimate, _) => None,
-            (Linearization::TrueState, Some(truth)) => Some((truth.robot_before, truth.robot)),
+            (Linearization::Supplied, Some(point)) => Some((point.robot_before, point.robot)),
             _ => Some((self.robot_prior, step.pose)),
         };
         if let Some((from, to)) = displacement {
@@ -575,62 +584,6 @@ mod tests {
             heading_before - heading_after > 1e-5 * heading_before,
             "textbook EKF heading variance {heading_before} -> {heading_after}"
         );
-    }
-
-    #[test]
-    fn the_ideal_ekf_is_the_textbook_ekf_when_the_estimate_is_the_truth() {
-        // Exact commands and measurements keep the estimate on the truth (every
-        // innovation is zero), so Jacobians at the truth and at the estimate agree.
-        let landmarks = [(4, Vector2::new(3.0, 1.0)), (9, Vector2::new(1.0, 3.5))];
-        let run = |linearization: Linearization, wobble: f64| {
-            let mut ekf = EkfSlam::with_linearization(config(), Pose2::IDENTITY, linearization)
-                .unwrap_or_else(|e| panic!("{e}"));
-            let mut truth = Pose2::IDENTITY;
-            let control = Control::new(1.0, 0.3);
-            for tick in 0..20 {
-                let before = truth;
-                truth = MotionModel::ExactArc.step(&truth, &control, 0.1).pose;
-                ekf.observe_truth(before, truth, &mut landmarks.iter().copied());
-                ekf.predict(&control, 0.1).unwrap_or_else(|e| panic!("{e}"));
-                for (id, lm) in landmarks {
-                    let exact = range_bearing::predict(&truth, &lm)
-                        .unwrap_or_else(|e| panic!("{e}"))
-                        .measurement;
-                    let noise = wobble * math::sin((tick * 5 + id) as f64);
-                    let z = RangeBearing::new(exact.range + noise, exact.bearing - noise);
-                    ekf.update(id, &z).unwrap_or_else(|e| panic!("{e}"));
-                }
-            }
-            ekf
-        };
-        let (textbook, ideal) = (
-            run(Linearization::LatestEstimate, 0.0),
-            run(Linearization::TrueState, 0.0),
-        );
-        assert_eq!(ideal.name(), "ideal-ekf");
-        assert!((textbook.covariance() - ideal.covariance()).norm() < 1e-12);
-        assert!((textbook.mean() - ideal.mean()).norm() < 1e-12);
-        // With noisy measurements the estimate leaves the truth and the two differ.
-        let (textbook, ideal) = (
-            run(Linearization::LatestEstimate, 0.05),
-            run(Linearization::TrueState, 0.05),
-        );
-        assert!((textbook.covariance() - ideal.covariance()).norm() > 1e-6);
-        // Other linearizations ignore the truth they are offered.
-        let mut fej = run(Linearization::FirstEstimates, 0.05);
-        let before = fej.clone();
-        fej.observe_truth(
-            Pose2::new(9.0, 9.0, 1.0),
-            Pose2::new(9.0, 9.0, 1.0),
-            &mut landmarks.iter().copied(),
-        );
-        fej.predict(&Control::new(1.0, 0.3), 0.1)
-            .unwrap_or_else(|e| panic!("{e}"));
-        let mut reference = before;
-        reference
-            .predict(&Control::new(1.0, 0.3), 0.1)
-            .unwrap_or_else(|e| panic!("{e}"));
-        assert_eq!(fej.covariance(), reference.covariance());
     }
 
     #[test]

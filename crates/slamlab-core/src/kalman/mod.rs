@@ -201,17 +201,6 @@ pub trait LandmarkSlam {
     /// Landmark ids in state order (order of discovery).
     fn landmark_ids(&self) -> &[usize];
 
-    /// Offers the true state of the tick that is starting (the robot before and
-    /// after its move, and every landmark), for filters that linearize at the truth
-    /// as a yardstick. Real filters ignore it; the default does nothing.
-    fn observe_truth(
-        &mut self,
-        _robot_before: Pose2,
-        _robot: Pose2,
-        _landmarks: &mut dyn Iterator<Item = (usize, Vector2<f64>)>,
-    ) {
-    }
-
     /// The robot's sigma points (centre first), for filters that use them; empty otherwise.
     fn robot_sigma_points(&self) -> Vec<Pose2> {
         Vec::new()

@@ -66,7 +66,7 @@ pub(crate) fn replace_slam_with_landmark_ekf(
         if k % every != 0 {
             continue;
         }
-        let Some(run) = session.filters().first() else {
+        let Some(run) = session.filters().first().cloned() else {
             return;
         };
         let estimate = run.filter().robot_pose();
