@@ -106,6 +106,15 @@ pub fn default_scenario() -> MclScenario {
     MclScenario::default()
 }
 
+/// An image without its YAML: it needs a resolution before it is a map.
+#[derive(Debug)]
+struct LoneImage {
+    name: String,
+    bytes: Vec<u8>,
+    /// Metres per pixel, as typed.
+    resolution: f64,
+}
+
 /// The Monte Carlo localization lesson.
 #[derive(Debug)]
 pub struct KidnapLesson {
@@ -126,6 +135,8 @@ pub struct KidnapLesson {
     note: Option<String>,
     /// Maps dropped on the window, while they are read.
     inbox: DropInbox,
+    /// A lone image dropped or opened without its YAML, waiting for its resolution.
+    lone_image: Option<LoneImage>,
     /// "Open map…": a map's YAML with its image.
     map_picker: FilePicker,
     /// `map=` named a ROS map YAML (a URL beside the site, a path on the
@@ -236,6 +247,7 @@ impl KidnapLesson {
             note: None,
             inbox: DropInbox::default(),
             map_picker: FilePicker::multiple(),
+            lone_image: None,
             map_location: None,
             pad: None,
             sent: None,
@@ -308,29 +320,76 @@ impl KidnapLesson {
     /// its image, or a lone image at the pending `resolution`. On any problem the
     /// current map and run stay, with a note that names it.
     pub fn load_dropped(&mut self, files: &[(String, Vec<u8>)]) {
+        // A lone image has no resolution: ask for it before loading.
+        let is = |name: &str, exts: &[&str]| {
+            let lower = name.to_ascii_lowercase();
+            exts.iter().any(|e| lower.ends_with(e))
+        };
+        if let [(name, bytes)] = files
+            && is(name, &[".pgm", ".png"])
+        {
+            self.lone_image = Some(LoneImage {
+                name: name.clone(),
+                bytes: bytes.clone(),
+                resolution: slamlab_sim::kidnap_session::LONE_IMAGE_RESOLUTION,
+            });
+            self.note = Some(format!(
+                "{name} has no YAML: give its resolution (metres per pixel) above the map and press Load"
+            ));
+            return;
+        }
         match slamlab_sim::kidnap_session::load_dropped_map(files) {
-            Ok((name, grid, notes)) => {
-                self.note = Some(format!(
-                    "Loaded {name}: {} x {} cells at {} m{}",
-                    grid.width(),
-                    grid.height(),
-                    grid.resolution(),
-                    if notes.is_empty() {
-                        String::new()
-                    } else {
-                        format!(" ({})", notes.join("; "))
-                    }
-                ));
-                // The scenario keeps a built-in map's name (a dropped file cannot
-                // travel in a link); the run uses the loaded grid.
-                self.loaded = Some((name, grid));
-                self.map_location = None;
-                let note = self.note.clone();
-                self.reset();
-                self.note = note;
-            }
+            Ok((name, grid, notes)) => self.use_loaded_map(name, grid, &notes),
             Err(why) => self.note = Some(format!("Could not load the map: {why}")),
         }
+    }
+
+    /// The lone image waiting for its resolution, if any: its name and the
+    /// resolution typed so far.
+    pub fn lone_image(&self) -> Option<(&str, f64)> {
+        self.lone_image
+            .as_ref()
+            .map(|l| (l.name.as_str(), l.resolution))
+    }
+
+    /// Loads the waiting lone image at `resolution` metres per pixel (origin at 0).
+    pub fn load_lone_image(&mut self, resolution: f64) {
+        let Some(image) = self.lone_image.take() else {
+            return;
+        };
+        match slamlab_sim::grid::map_io::load_lone_image(&image.bytes, resolution) {
+            Ok(grid) => self.use_loaded_map(
+                image.name,
+                grid,
+                &["its origin at (0, 0), as no YAML gives one".to_owned()],
+            ),
+            Err(why) => {
+                self.note = Some(format!("Could not load {}: {why}", image.name));
+                self.lone_image = Some(image);
+            }
+        }
+    }
+
+    /// Restarts the run on a loaded map, with a note that describes it.
+    fn use_loaded_map(&mut self, name: String, grid: OccupancyGrid, notes: &[String]) {
+        let note = format!(
+            "Loaded {name}: {} x {} cells at {} m{}",
+            grid.width(),
+            grid.height(),
+            grid.resolution(),
+            if notes.is_empty() {
+                String::new()
+            } else {
+                format!(" ({})", notes.join("; "))
+            }
+        );
+        // The scenario keeps a built-in map's name (a loaded file cannot travel in a
+        // link); the run uses the loaded grid.
+        self.loaded = Some((name, grid));
+        self.map_location = None;
+        self.lone_image = None;
+        self.reset();
+        self.note = Some(note);
     }
 
     /// A picked map YAML with the image it names, read from beside it (natively the
@@ -647,6 +706,36 @@ impl crate::widgets::layout::LessonPanels for KidnapLesson {
     fn map_ui(&mut self, ui: &mut egui::Ui) {
         if let Some(note) = &self.note {
             ui.label(egui::RichText::new(note).color(palette::VERMILLION));
+        }
+        let mut lone_action = None;
+        if let Some(image) = &mut self.lone_image {
+            ui.horizontal_wrapped(|ui| {
+                let label = ui.label(format!("{}: metres per pixel", image.name));
+                ui.add(
+                    egui::DragValue::new(&mut image.resolution)
+                        .range(0.001..=10.0)
+                        .speed(0.001)
+                        .fixed_decimals(3),
+                )
+                .labelled_by(label.id);
+                if ui.button("Load").clicked() {
+                    lone_action = Some(true);
+                }
+                if ui.button("Cancel").clicked() {
+                    lone_action = Some(false);
+                }
+            });
+        }
+        match lone_action {
+            Some(true) => {
+                let resolution = self.lone_image.as_ref().map_or(0.05, |i| i.resolution);
+                self.load_lone_image(resolution);
+            }
+            Some(false) => {
+                self.lone_image = None;
+                self.note = None;
+            }
+            None => {}
         }
         self.pad = None;
         if self.driving_by_hand() {

@@ -354,3 +354,42 @@ fn open_map_reads_the_yaml_and_its_image() {
     let notes = lesson(&h).note().unwrap_or_default().to_owned();
     assert!(notes.contains("Loaded office.yaml"), "{notes}");
 }
+
+/// A lone image (no YAML) asks for its resolution: the prompt above the map takes
+/// metres per pixel, Load opens the map at that scale, Cancel leaves the run alone.
+#[test]
+fn a_lone_image_asks_for_its_resolution() {
+    use slamlab_sim::grid::BuiltinMap;
+    let mut h = harness("lesson=kidnap&particles=200&seed=1");
+    h.run();
+    let image = BuiltinMap::Office.image().to_vec();
+    lesson_mut(&mut h).load_dropped(&[("plan.png".to_owned(), image.clone())]);
+    h.run();
+    assert_eq!(
+        lesson(&h).map_name(),
+        "maze",
+        "nothing loads before the resolution"
+    );
+    assert_eq!(lesson(&h).lone_image(), Some(("plan.png", 0.05)));
+    assert!(h.query_by_label("Load").is_some(), "no prompt");
+    // Cancel: the prompt goes, the maze stays.
+    h.get_by_label("Cancel").click();
+    h.run();
+    assert!(lesson(&h).lone_image().is_none());
+    assert_eq!(lesson(&h).map_name(), "maze");
+    // Again, at 0.1 m per pixel: twice the office's own 0.05 m, so twice as wide.
+    lesson_mut(&mut h).load_dropped(&[("plan.png".to_owned(), image)]);
+    lesson_mut(&mut h).load_lone_image(0.1);
+    h.run();
+    assert_eq!(lesson(&h).map_name(), "plan.png");
+    let (w, _) = lesson(&h).sim().run().map().grid().size_m();
+    let office = slamlab_sim::grid::map_io::parse_map_yaml(BuiltinMap::Office.yaml())
+        .map(|y| y.resolution)
+        .unwrap_or(0.05);
+    assert!(w > 50.0 * 0.1 / office, "{w} m wide");
+    let note = lesson(&h).note().unwrap_or_default().to_owned();
+    assert!(
+        note.starts_with("Loaded plan.png") && note.contains("at 0.1 m"),
+        "{note}"
+    );
+}
