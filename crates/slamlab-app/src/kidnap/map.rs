@@ -169,8 +169,21 @@ pub fn map_ui(
     let bounds = grid_bounds(grid);
     let truth = run.robot().pose;
     let mut follow = view.follow_robot.then_some([truth.x, truth.y]);
-    let (response, t) =
-        map_canvas::canvas_ui(ui, canvas, bounds, 0.0, &mut follow, !view.click_kidnap);
+    // The fitted map leaves room on the left for the legend where the panel has it
+    // (the legend's width from the last frame), so the legend sits off the map.
+    let legend_space = if view.legend {
+        canvas.legend_space
+    } else {
+        0.0
+    };
+    let (response, t) = map_canvas::canvas_ui(
+        ui,
+        canvas,
+        bounds,
+        legend_space,
+        &mut follow,
+        !view.click_kidnap,
+    );
     view.follow_robot = follow.is_some();
     let colors = CanvasColors::of(ui);
     let painter = ui.painter_at(t.rect);
@@ -216,7 +229,8 @@ pub fn map_ui(
     );
     draw_scale_and_axes(&painter, &t, &colors);
     if view.legend {
-        draw_legend(&painter, &t, run, &colors);
+        let legend = draw_legend(&painter, &t, run, &colors);
+        canvas.legend_space = legend.right() - t.rect.left() + 8.0;
     }
 
     // Click-kidnap: press where, drag for the heading, release to teleport.
@@ -434,7 +448,13 @@ fn draw_robot(
     );
 }
 
-fn draw_legend(painter: &egui::Painter, t: &MapTransform, run: &MclRun, colors: &CanvasColors) {
+/// The legend in the map's top-left corner; returns its rectangle.
+fn draw_legend(
+    painter: &egui::Painter,
+    t: &MapTransform,
+    run: &MclRun,
+    colors: &CanvasColors,
+) -> egui::Rect {
     let mut rows: Vec<(Color32, String)> = vec![
         (colors.truth, "true robot and path".to_owned()),
         (palette::VERMILLION, "lidar rays and hits".to_owned()),
@@ -488,4 +508,5 @@ fn draw_legend(painter: &egui::Painter, t: &MapTransform, run: &MclRun, colors: 
             colors.truth,
         );
     }
+    frame
 }
