@@ -13,20 +13,19 @@
 //! commands and measurements as EKF-SLAM and UKF-SLAM in the lesson. The filter
 //! assumes exactly the noise the world injects.
 
-use crate::noise::{Stream, gaussian, stream_rng};
+use crate::noise::{Stream, stream_rng};
 use crate::scenario::{ControllerKind, LandmarkScenario};
 use crate::session::Observation;
+use crate::session::sim::{executed_command, measure_landmarks};
 use crate::world::LandmarkWorld;
-use nalgebra::Vector2;
 use rand_chacha::ChaCha8Rng;
 use serde::Serialize;
 use slamlab_core::association::AssociationMode;
-use slamlab_core::math;
 use slamlab_core::particle::{
     FastSlam, FastSlamConfig, FastSlamError, FastSlamNoise, FastSlamVersion, LandmarkObservation,
     ResamplePolicy, Resampler,
 };
-use slamlab_core::range_bearing::{self, RangeBearing, RangeBearingSensor};
+use slamlab_core::range_bearing::RangeBearingSensor;
 use slamlab_core::{Control, MotionModel, Pose2};
 
 /// The landmark world's truth and sensor, tick by tick, drawing the same noise as
@@ -74,38 +73,20 @@ impl LandmarkTruth {
             ControllerKind::Circle { v, w } => Control::new(v, w),
             ControllerKind::Manual => Control::default(),
         };
-        let executed = if self.command == Control::default() {
-            self.command
-        } else {
-            Control::new(
-                self.command.v + gaussian(&mut self.control_rng, self.scenario.v_std),
-                self.command.w + gaussian(&mut self.control_rng, self.scenario.w_std),
-            )
-        };
+        let executed = executed_command(
+            self.command,
+            self.scenario.v_std,
+            self.scenario.w_std,
+            &mut self.control_rng,
+        );
         self.truth = MotionModel::ExactArc.predict(&self.truth, &executed, dt);
-        self.observations.clear();
-        for landmark in &self.world.landmarks {
-            if !self.sensor.sees(&self.truth, &landmark.position) {
-                continue;
-            }
-            let Ok(exact) = range_bearing::predict(&self.truth, &landmark.position) else {
-                continue;
-            };
-            let measurement = RangeBearing::new(
-                exact.measurement.range
-                    + gaussian(&mut self.measurement_rng, self.sensor.range_std),
-                exact.measurement.bearing
-                    + gaussian(&mut self.measurement_rng, self.sensor.bearing_std),
-            );
-            let angle = self.truth.theta + measurement.bearing;
-            let measured_point = self.truth.translation()
-                + measurement.range * Vector2::new(math::cos(angle), math::sin(angle));
-            self.observations.push(Observation {
-                id: landmark.id,
-                measurement,
-                measured_point,
-            });
-        }
+        measure_landmarks(
+            &self.truth,
+            &self.world,
+            &self.sensor,
+            &mut self.measurement_rng,
+            &mut self.observations,
+        );
         self.command
     }
 

@@ -25,7 +25,7 @@
 #[cfg(test)]
 mod fastslam_tests;
 mod records;
-mod sim;
+pub(crate) mod sim;
 #[cfg(test)]
 mod tests;
 

@@ -365,16 +365,12 @@ impl LandmarkSim {
             ControllerKind::Manual => self.teleop,
         };
         records.commands.push(self.command);
-        // Noise is on the executed wheel speeds of a moving robot; a robot told to
-        // stop stays put (and the estimators add no process noise for it).
-        let executed = if self.command == Control::default() {
-            self.command
-        } else {
-            Control::new(
-                self.command.v + gaussian(&mut self.control_rng, self.scenario.v_std),
-                self.command.w + gaussian(&mut self.control_rng, self.scenario.w_std),
-            )
-        };
+        let executed = executed_command(
+            self.command,
+            self.scenario.v_std,
+            self.scenario.w_std,
+            &mut self.control_rng,
+        );
         let robot_before = self.truth;
         self.truth = MotionModel::ExactArc.predict(&self.truth, &executed, dt);
         for run in &mut self.filters {
@@ -389,30 +385,13 @@ impl LandmarkSim {
             .motion
             .predict(&self.dead_reckoning, &self.command, dt);
 
-        self.observations.clear();
-        for landmark in &self.world.landmarks {
-            if !self.sensor.sees(&self.truth, &landmark.position) {
-                continue;
-            }
-            let Ok(exact) = range_bearing::predict(&self.truth, &landmark.position) else {
-                // The landmark is under the robot: no bearing to measure.
-                continue;
-            };
-            let measurement = RangeBearing::new(
-                exact.measurement.range
-                    + gaussian(&mut self.measurement_rng, self.sensor.range_std),
-                exact.measurement.bearing
-                    + gaussian(&mut self.measurement_rng, self.sensor.bearing_std),
-            );
-            let angle = self.truth.theta + measurement.bearing;
-            let measured_point = self.truth.translation()
-                + measurement.range * Vector2::new(math::cos(angle), math::sin(angle));
-            self.observations.push(Observation {
-                id: landmark.id,
-                measurement,
-                measured_point,
-            });
-        }
+        measure_landmarks(
+            &self.truth,
+            &self.world,
+            &self.sensor,
+            &mut self.measurement_rng,
+            &mut self.observations,
+        );
         self.mislabel = None;
         if self.mislabel_tick.is_some_and(|t| t <= self.tick) {
             if self.mislabel_tick == Some(self.tick) {
@@ -678,5 +657,56 @@ pub fn fastslam_config(scenario: &LandmarkScenario, kind: EstimatorKind) -> Fast
             .seed
             .wrapping_mul(0x9E37_79B9_7F4A_7C15)
             .wrapping_add(u64::from(version.number())),
+    }
+}
+
+/// The command as the robot executes it: Gaussian noise `(v_std, w_std)` on the
+/// wheel speeds of a moving robot; a robot told to stop stays put (and the
+/// estimators add no process noise for it).
+pub(crate) fn executed_command(
+    command: Control,
+    v_std: f64,
+    w_std: f64,
+    rng: &mut ChaCha8Rng,
+) -> Control {
+    if command == Control::default() {
+        return command;
+    }
+    Control::new(
+        command.v + gaussian(rng, v_std),
+        command.w + gaussian(rng, w_std),
+    )
+}
+
+/// Every landmark `sensor` sees from `truth`, in id order, measured with Gaussian
+/// range and bearing noise from `rng`, into `observations` (cleared first).
+pub(crate) fn measure_landmarks(
+    truth: &Pose2,
+    world: &LandmarkWorld,
+    sensor: &RangeBearingSensor,
+    rng: &mut ChaCha8Rng,
+    observations: &mut Vec<Observation>,
+) {
+    observations.clear();
+    for landmark in &world.landmarks {
+        if !sensor.sees(truth, &landmark.position) {
+            continue;
+        }
+        let Ok(exact) = range_bearing::predict(truth, &landmark.position) else {
+            // The landmark is under the robot: no bearing to measure.
+            continue;
+        };
+        let measurement = RangeBearing::new(
+            exact.measurement.range + gaussian(rng, sensor.range_std),
+            exact.measurement.bearing + gaussian(rng, sensor.bearing_std),
+        );
+        let angle = truth.theta + measurement.bearing;
+        let measured_point = truth.translation()
+            + measurement.range * Vector2::new(math::cos(angle), math::sin(angle));
+        observations.push(Observation {
+            id: landmark.id,
+            measurement,
+            measured_point,
+        });
     }
 }
