@@ -17,6 +17,32 @@ pub fn harness_sized(query: &str, size: egui::Vec2) -> Harness<'static, SlamLabA
         .build_eframe(move |cc| SlamLabApp::new(cc, &query))
 }
 
+/// The app opened with `query` in a window of `size`, in `theme` (for rendered checks).
+pub fn harness_themed(
+    query: &str,
+    size: egui::Vec2,
+    theme: egui::Theme,
+) -> Harness<'static, SlamLabApp> {
+    let query = query.to_owned();
+    Harness::builder()
+        .with_size(size)
+        .with_max_steps(40)
+        .with_theme(theme)
+        .build_eframe(move |cc| SlamLabApp::new(cc, &query))
+}
+
+/// The rendered window, or `None` with a note where there is no GPU adapter (the
+/// rendered checks are skipped then; the rest of the test still runs).
+pub fn render_or_skip(h: &mut Harness<'_, SlamLabApp>) -> Option<image::RgbaImage> {
+    match h.render() {
+        Ok(image) => Some(image),
+        Err(err) => {
+            eprintln!("skipping the rendered checks: no GPU adapter ({err})");
+            None
+        }
+    }
+}
+
 /// The app opened with `query` in a [`SIZE`] window.
 pub fn harness(query: &str) -> Harness<'static, SlamLabApp> {
     harness_sized(query, SIZE)

@@ -3,7 +3,7 @@
 //! numbers of a headless seeded run, bad readings are skipped and counted, and
 //! the rendered map shows each mode's colour.
 
-use super::common::{count_pixels, lesson_of, lesson_of_mut};
+use super::common::{count_pixels, harness_sized, lesson_of, lesson_of_mut, render_or_skip};
 use egui_kittest::Harness;
 use egui_kittest::kittest::Queryable as _;
 use slamlab_app::SlamLabApp;
@@ -15,11 +15,7 @@ use slamlab_sim::fusion::{FusionMode, SLAM, run_modes, simulate};
 const SIZE: egui::Vec2 = egui::vec2(1500.0, 950.0);
 
 fn harness(query: &str) -> Harness<'static, SlamLabApp> {
-    let query = query.to_owned();
-    Harness::builder()
-        .with_size(SIZE)
-        .with_max_steps(40)
-        .build_eframe(move |cc| SlamLabApp::new(cc, &query))
+    harness_sized(query, SIZE)
 }
 
 fn lesson<'h>(h: &'h Harness<'_, SlamLabApp>) -> &'h FusionLesson {
@@ -197,26 +193,14 @@ fn the_rmse_table_shows_a_headless_seeded_run() {
 
 #[test]
 fn rendered_lesson_shows_every_mode_in_its_colour() {
-    let mut h = Harness::builder()
-        .with_size(SIZE)
-        .with_max_steps(40)
-        .build_eframe(|cc| {
-            SlamLabApp::new(
-                cc,
-                "lesson=fusion&seed=1&duration=120&modes=differential,relative,absolute",
-            )
-        });
+    let mut h = harness("lesson=fusion&seed=1&duration=120&modes=differential,relative,absolute");
     h.run();
     for _ in 0..90 {
         lesson_mut(&mut h).step_tick();
     }
     h.run();
-    let image = match h.render() {
-        Ok(image) => image,
-        Err(err) => {
-            eprintln!("skipping the rendered checks: no GPU adapter ({err})");
-            return;
-        }
+    let Some(image) = render_or_skip(&mut h) else {
+        return;
     };
     let raw = image.as_raw();
     let blue = count_pixels(raw, [0x00, 0x72, 0xB2], 30);

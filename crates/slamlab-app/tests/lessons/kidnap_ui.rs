@@ -2,7 +2,9 @@
 //! it opens by URL, its buttons step the phases and kidnap the robot, stepping
 //! back replays, and the rendered map shows the grid, the particles and the truth.
 
-use super::common::{SIZE, count_pixels, harness, lesson_of, lesson_of_mut};
+use super::common::{
+    SIZE, count_pixels, harness, harness_themed, lesson_of, lesson_of_mut, render_or_skip,
+};
 use egui_kittest::Harness;
 use egui_kittest::kittest::Queryable as _;
 use slamlab_app::SlamLabApp;
@@ -83,22 +85,18 @@ fn phases_step_one_at_a_time_and_step_back_replays() {
 
 #[test]
 fn rendered_lesson_shows_the_map_the_particles_and_the_truth() {
-    let mut h = Harness::builder()
-        .with_size(SIZE)
-        .with_max_steps(40)
-        .with_theme(egui::Theme::Dark)
-        .build_eframe(|cc| SlamLabApp::new(cc, "lesson=kidnap&particles=2000&seed=3"));
+    let mut h = harness_themed(
+        "lesson=kidnap&particles=2000&seed=3",
+        SIZE,
+        egui::Theme::Dark,
+    );
     h.run();
     for _ in 0..40 {
         lesson_mut(&mut h).step_tick();
     }
     h.run();
-    let image = match h.render() {
-        Ok(image) => image,
-        Err(err) => {
-            eprintln!("skipping the rendered checks: no GPU adapter ({err})");
-            return;
-        }
+    let Some(image) = render_or_skip(&mut h) else {
+        return;
     };
     let purple = count_pixels(image.as_raw(), [0xCC, 0x79, 0xA7], 50);
     // Dark theme: walls light grey, free space dark grey.
@@ -195,16 +193,11 @@ fn status_goes_from_tracking_to_lost_or_recovering_after_a_kidnap() {
 
 #[test]
 fn rendered_side_by_side_with_the_costmap_after_a_kidnap() {
-    let mut h = Harness::builder()
-        .with_size(SIZE)
-        .with_max_steps(40)
-        .with_theme(egui::Theme::Light)
-        .build_eframe(|cc| {
-            SlamLabApp::new(
-                cc,
-                "lesson=kidnap&estimator=amcl,acmcl&particles=1000&init=tracking&seed=4",
-            )
-        });
+    let mut h = harness_themed(
+        "lesson=kidnap&estimator=amcl,acmcl&particles=1000&init=tracking&seed=4",
+        SIZE,
+        egui::Theme::Light,
+    );
     h.run();
     let lesson = lesson_mut(&mut h);
     lesson.view.costmap = true;
@@ -216,12 +209,8 @@ fn rendered_side_by_side_with_the_costmap_after_a_kidnap() {
         lesson.step_tick();
     }
     h.run();
-    let image = match h.render() {
-        Ok(image) => image,
-        Err(err) => {
-            eprintln!("skipping the rendered checks: no GPU adapter ({err})");
-            return;
-        }
+    let Some(image) = render_or_skip(&mut h) else {
+        return;
     };
     // The costmap's pink over white free space, ACMCL's green, AMCL's purple.
     let pink = count_pixels(image.as_raw(), [0xFF, 0xC2, 0xE2], 30);

@@ -2,7 +2,9 @@
 //! buttons are found by their labels and clicked, keys are pressed, and the app's
 //! session is checked.
 
-use super::common::{SIZE, count_pixels_near as count_pixels, harness, label_visible};
+use super::common::{
+    SIZE, count_pixels_near as count_pixels, harness, harness_themed, label_visible, render_or_skip,
+};
 use egui_kittest::Harness;
 use egui_kittest::kittest::Queryable as _;
 use slamlab_app::SlamLabApp;
@@ -306,12 +308,7 @@ fn taking_the_wheel_mid_run_keeps_the_run() {
 /// is strict only with `SLAMLAB_STRICT_SNAPSHOTS=1`, because font rasterization differs
 /// between GPU backends.
 fn rendered_lesson(query: &str, theme: egui::Theme, name: &str) {
-    let owned = query.to_owned();
-    let mut h = Harness::builder()
-        .with_size(SIZE)
-        .with_max_steps(40)
-        .with_theme(theme)
-        .build_eframe(move |cc| SlamLabApp::new(cc, &owned));
+    let mut h = harness_themed(query, SIZE, theme);
     h.run();
     if let Some(lesson) = h.state_mut().landmark_lesson_mut() {
         for _ in 0..60 {
@@ -323,12 +320,8 @@ fn rendered_lesson(query: &str, theme: egui::Theme, name: &str) {
         }
     }
     h.run();
-    let image = match h.render() {
-        Ok(image) => image,
-        Err(err) => {
-            eprintln!("skipping the rendered checks: no GPU adapter ({err})");
-            return;
-        }
+    let Some(image) = render_or_skip(&mut h) else {
+        return;
     };
     let truth = if theme == egui::Theme::Dark {
         [255, 255, 255]

@@ -4,7 +4,9 @@
 //! leaves the graph on screen, and the rendered map shows the blue poses and
 //! odometry, the vermillion loop closures and the sparsity images.
 
-use super::common::{SIZE, count_pixels, harness, lesson_of, lesson_of_mut};
+use super::common::{
+    SIZE, count_pixels, harness, harness_themed, lesson_of, lesson_of_mut, render_or_skip,
+};
 use egui_kittest::Harness;
 use egui_kittest::kittest::Queryable as _;
 use slamlab_app::SlamLabApp;
@@ -129,21 +131,17 @@ fn a_bad_file_leaves_the_graph_on_screen_with_a_message() {
 
 #[test]
 fn rendered_lesson_shows_poses_odometry_loop_closures_and_the_sparsity_images() {
-    let mut h = Harness::builder()
-        .with_size(SIZE)
-        .with_max_steps(40)
-        .with_theme(egui::Theme::Light)
-        .build_eframe(|cc| SlamLabApp::new(cc, "lesson=pose-graph&example=manhattan&seed=2"));
+    let mut h = harness_themed(
+        "lesson=pose-graph&example=manhattan&seed=2",
+        SIZE,
+        egui::Theme::Light,
+    );
     h.run();
     lesson_mut(&mut h).add_wrong_loop_closure();
     lesson_mut(&mut h).step_iteration();
     h.run();
-    let image = match h.render() {
-        Ok(image) => image,
-        Err(err) => {
-            eprintln!("skipping the rendered checks: no GPU adapter ({err})");
-            return;
-        }
+    let Some(image) = render_or_skip(&mut h) else {
+        return;
     };
     let blue = count_pixels(image.as_raw(), [0x00, 0x72, 0xB2], 30);
     let vermillion = count_pixels(image.as_raw(), [0xD5, 0x5E, 0x00], 30);

@@ -2,7 +2,9 @@
 //! its buttons resample, stepping back takes a press back exactly, bad weights
 //! get a note and a safe value, and the rendered row shows every method's copies.
 
-use super::common::{SIZE, count_pixels, harness, lesson_of, lesson_of_mut};
+use super::common::{
+    SIZE, count_pixels, harness, harness_themed, lesson_of, lesson_of_mut, render_or_skip,
+};
 use egui_kittest::Harness;
 use egui_kittest::kittest::Queryable as _;
 use slamlab_app::SlamLabApp;
@@ -117,21 +119,13 @@ fn dragging_a_bar_sets_that_weight_and_keeps_the_others_proportions() {
 
 #[test]
 fn the_rendered_lab_shows_every_methods_copies() {
-    let mut h = Harness::builder()
-        .with_size(SIZE)
-        .with_max_steps(40)
-        .with_theme(egui::Theme::Light)
-        .build_eframe(|cc| SlamLabApp::new(cc, "lesson=resampling&seed=3"));
+    let mut h = harness_themed("lesson=resampling&seed=3", SIZE, egui::Theme::Light);
     h.run();
     lesson_mut(&mut h).press(1);
     lesson_mut(&mut h).press(500);
     h.run();
-    let image = match h.render() {
-        Ok(image) => image,
-        Err(err) => {
-            eprintln!("skipping the rendered checks: no GPU adapter ({err})");
-            return;
-        }
+    let Some(image) = render_or_skip(&mut h) else {
+        return;
     };
     for (name, rgb) in [
         ("multinomial purple", [0xCC, 0x79, 0xA7]),

@@ -3,7 +3,9 @@
 //! and the URL's figure keys (`tick=`, `run=`, `legend=`, `panels=`, `zoom=`,
 //! `follow=`) with their bad values.
 
-use super::common::{count_pixels, harness_sized as harness, label_visible};
+use super::common::{
+    count_pixels, harness_sized as harness, harness_themed, label_visible, render_or_skip,
+};
 use egui_kittest::Harness;
 use egui_kittest::kittest::Queryable as _;
 use slamlab_app::SlamLabApp;
@@ -222,22 +224,16 @@ fn zoom_legend_follow_and_panels_from_the_url() {
 #[test]
 fn rendered_narrow_figure_at_tick_120_shows_map_and_plots() {
     let size = egui::vec2(800.0, 500.0);
-    let mut h = Harness::builder()
-        .with_size(size)
-        .with_max_steps(40)
-        .with_theme(egui::Theme::Dark)
-        .build_eframe(|cc| {
-            SlamLabApp::new(cc, "lesson=landmark-slam&seed=7&embed=1&tick=120&legend=1")
-        });
+    let mut h = harness_themed(
+        "lesson=landmark-slam&seed=7&embed=1&tick=120&legend=1",
+        size,
+        egui::Theme::Dark,
+    );
     h.run();
     let s = state(&h);
     assert_eq!(s["tick"], 120);
-    let image = match h.render() {
-        Ok(image) => image,
-        Err(err) => {
-            eprintln!("skipping the rendered checks: no GPU adapter ({err})");
-            return;
-        }
+    let Some(image) = render_or_skip(&mut h) else {
+        return;
     };
     let Some(map) = h.state().map_rect() else {
         panic!("no map rectangle");
@@ -260,11 +256,11 @@ fn rendered_narrow_figure_at_tick_120_shows_map_and_plots() {
         &egui_kittest::SnapshotOptions::new().threshold(2.0),
     );
     // The smallest window: the full app at 360 x 480.
-    let mut h = Harness::builder()
-        .with_size(egui::vec2(360.0, 480.0))
-        .with_max_steps(40)
-        .with_theme(egui::Theme::Dark)
-        .build_eframe(|cc| SlamLabApp::new(cc, "lesson=kidnap&seed=3&tick=20"));
+    let mut h = harness_themed(
+        "lesson=kidnap&seed=3&tick=20",
+        egui::vec2(360.0, 480.0),
+        egui::Theme::Dark,
+    );
     h.run();
     if let Ok(image) = h.render() {
         let purple = count_pixels(image.as_raw(), [0xCC, 0x79, 0xA7], 50);
