@@ -41,6 +41,18 @@ pub fn map_ui(
     } else {
         drive.pad = None;
     }
+    // Above the map, not over it: two filters drawn over each other (at the scale
+    // of the last frame).
+    if let Some(other) = coinciding_on_screen(session, view.scale) {
+        let names = session.filters();
+        let note = format!(
+            "{} and {} agree here to within a pixel or two: one is drawn over the other. \
+             Try the precise-range preset, where they part.",
+            filter_label(names[0].kind.name()),
+            filter_label(names[other].kind.name()),
+        );
+        ui.label(egui::RichText::new(note).color(ui.visuals().warn_fg_color));
+    }
     let half = 0.5 * session.world().size;
     let legend_space = if opts.legend { view.legend_space } else { 0.0 };
     let truth = session.truth();
@@ -92,34 +104,6 @@ pub fn map_ui(
     }
     if opts.magnifier {
         draw_magnifier(&painter, &t, session, opts, &colors, legend_rect);
-    }
-    if let Some(other) = coinciding_on_screen(session, t.scale) {
-        let names = session.filters();
-        let note = format!(
-            "{} and {} agree here to within a pixel or two: one is drawn over the other. \
-             Try the precise-range preset, where they part.",
-            filter_label(names[0].kind.name()),
-            filter_label(names[other].kind.name()),
-        );
-        // A label, not painted text, so that it wraps and screen readers find it.
-        let width = (rect.width() - 40.0).clamp(100.0, 560.0);
-        let note_rect = Rect::from_center_size(
-            pos2(rect.center().x, rect.bottom() - 70.0),
-            vec2(width, 44.0),
-        );
-        ui.put(note_rect, |ui: &mut egui::Ui| {
-            egui::Frame::new()
-                .fill(palette::faded(colors.background, 0.85))
-                .corner_radius(4.0)
-                .inner_margin(4.0)
-                .show(ui, |ui| {
-                    ui.with_layout(egui::Layout::top_down(egui::Align::Center), |ui| {
-                        ui.label(egui::RichText::new(note).color(ui.visuals().warn_fg_color))
-                    })
-                    .inner
-                })
-                .inner
-        });
     }
     if let Some(pointer) = response.hover_pos()
         && !response.dragged()
@@ -650,7 +634,8 @@ fn draw_magnifier(
         inset.left_top() + vec2(6.0, 4.0),
         egui::Align2::LEFT_TOP,
         format!(
-            "robot ×{magnification:.0}, {} m across",
+            // Two short lines: the inset is as narrow as 110 points.
+            "robot ×{magnification:.0}\n{} m across",
             format_metres(across, across / 10.0)
         ),
         egui::FontId::proportional(12.0),
@@ -853,14 +838,22 @@ fn legend_ellipse(
 #[derive(Clone, Copy)]
 enum Symbol {
     TruthRobot,
-    Line { dashed: bool },
-    EstimatedRobot { secondary: bool },
+    Line {
+        dashed: bool,
+    },
+    EstimatedRobot {
+        secondary: bool,
+    },
     TrueLandmark,
-    EstimatedLandmark { secondary: bool },
+    EstimatedLandmark {
+        secondary: bool,
+    },
     Ray,
     FieldOfView,
     Highlight,
     SigmaPoints,
+    /// No symbol: a note row.
+    None,
 }
 
 fn draw_symbol(
@@ -872,6 +865,7 @@ fn draw_symbol(
 ) {
     let c = rect.center();
     match symbol {
+        Symbol::None => {}
         Symbol::TruthRobot => {
             painter.circle(c, 6.0, Color32::TRANSPARENT, Stroke::new(2.0, color));
             painter.line_segment([c, c + vec2(11.0, 0.0)], Stroke::new(2.0, color));
@@ -1100,6 +1094,20 @@ fn draw_legend(
     let compact = map_rect.height() < 420.0;
     let font = egui::FontId::proportional(if compact { 10.5 } else { 12.0 });
     let row_height = if compact { 14.0 } else { 18.0 };
+    // A map too short for every row (a small iframe) shows the rows that fit and
+    // says how many are left out, rather than running off the map's bottom.
+    let fitting = ((map_rect.height() - 26.0 - 48.0 - 12.0) / row_height)
+        .floor()
+        .max(2.0) as usize;
+    if entries.len() > fitting {
+        let hidden = entries.len() - (fitting - 1);
+        entries.truncate(fitting - 1);
+        entries.push((
+            Symbol::None,
+            colors.weak_text,
+            format!("… {hidden} more in a taller window"),
+        ));
+    }
     let symbol_width = 26.0;
     let text_width = entries
         .iter()

@@ -361,13 +361,17 @@ fn every_lessons_share_link_carries_the_figure_keys() {
     }
 }
 
-/// Every lesson rendered at 1280 x 800 and 360 x 480 after 40 ticks draws a picture
+/// Every lesson rendered at 1280 x 800, 800 x 500 and 360 x 480 after 40 ticks draws a picture
 /// (hundreds of colours, not a blank frame). With `SLAMLAB_SCREENSHOTS=DIR` the PNGs
 /// are saved there for a look.
 #[test]
-fn every_lesson_renders_at_a_large_and_a_tiny_size() {
+fn every_lesson_renders_at_three_sizes() {
     for entry in LESSONS {
-        for size in [egui::vec2(1280.0, 800.0), egui::vec2(360.0, 480.0)] {
+        for size in [
+            egui::vec2(1280.0, 800.0),
+            egui::vec2(800.0, 500.0),
+            egui::vec2(360.0, 480.0),
+        ] {
             let mut h = harness(&format!("lesson={}&seed=5&tick=40", entry.id), size);
             h.run();
             let Ok(image) = h.render() else {
