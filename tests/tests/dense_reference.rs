@@ -181,6 +181,9 @@ fn compare(scenario: LandmarkScenario, ticks: u64) -> (f64, f64, usize) {
         }
         let filter = session.filters()[0].filter();
         assert_eq!(filter.landmark_ids(), dense.ids.as_slice());
+        let Some(filter) = filter.gaussian() else {
+            panic!("the EKF keeps a joint Gaussian");
+        };
         let mut diff = filter.mean() - &dense.mean;
         diff[2] = wrap(diff[2]);
         worst_mean = worst_mean.max(diff.amax());

@@ -10,6 +10,7 @@
 //! as in the thesis (`000`, Eq. 3.37); the slides use `[bearing, range]`.
 
 pub mod association;
+pub mod belief;
 pub mod geometry;
 pub mod graph;
 pub mod grid;

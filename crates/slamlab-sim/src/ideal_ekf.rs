@@ -9,7 +9,8 @@
 //! simulator's true robot move and landmark positions before every tick
 //! ([`IdealEkf::observe_truth`]).
 
-use nalgebra::{DMatrix, DVector, Vector2};
+use nalgebra::{DMatrix, DVector, Matrix3, Vector2};
+use slamlab_core::belief::{JointGaussian, LandmarkBelief, LandmarkEstimate, PoseBelief};
 use slamlab_core::kalman::{
     EkfSlam, FilterConfig, FilterError, LandmarkSlam, Linearization, PredictReport, UpdateReport,
 };
@@ -60,6 +61,12 @@ impl LandmarkSlam for IdealEkf {
         self.ekf.update(id, z)
     }
 
+    fn gaussian(&self) -> Option<&dyn JointGaussian> {
+        Some(&self.ekf)
+    }
+}
+
+impl JointGaussian for IdealEkf {
     fn mean(&self) -> &DVector<f64> {
         self.ekf.mean()
     }
@@ -67,9 +74,25 @@ impl LandmarkSlam for IdealEkf {
     fn covariance(&self) -> &DMatrix<f64> {
         self.ekf.covariance()
     }
+}
 
+impl PoseBelief for IdealEkf {
+    fn robot_pose(&self) -> Pose2 {
+        self.ekf.robot_pose()
+    }
+
+    fn robot_covariance(&self) -> Matrix3<f64> {
+        self.ekf.robot_covariance()
+    }
+}
+
+impl LandmarkBelief for IdealEkf {
     fn landmark_ids(&self) -> &[usize] {
         self.ekf.landmark_ids()
+    }
+
+    fn landmarks(&self) -> Vec<LandmarkEstimate> {
+        self.ekf.landmarks()
     }
 }
 

@@ -2,24 +2,20 @@
 //! UKF-SLAM: an adapter that runs a [`FastSlam`] filter behind the
 //! [`LandmarkSlam`] trait.
 //!
-//! The lesson compares estimators by their robot pose, landmark estimates and
-//! uncertainty, so the adapter summarizes the particles as a Gaussian after every
-//! phase:
-//!
-//! - robot: the weighted mean pose and the weighted covariance of the particle
-//!   poses around it (heading differences wrapped);
-//! - landmarks: the best (heaviest) particle's map, each landmark with its own 2x2
-//!   EKF; cross covariances are zero (given the path, FastSLAM's landmarks are
-//!   independent).
-//!
-//! The particles themselves are available through [`LandmarkSlam::particle_set`].
+//! The lesson compares estimators by what they show
+//! ([`slamlab_core::belief`]): FastSLAM's robot pose is the weighted mean and
+//! covariance of its particles, its landmarks are the best (heaviest)
+//! particle's map, each landmark with its own 2x2 EKF. It keeps no joint
+//! Gaussian: given the path, FastSLAM's landmarks are independent, and the
+//! particles are what it has ([`LandmarkSlam::particle_set`]).
 
-use nalgebra::{DMatrix, DVector, Vector3};
+use nalgebra::Matrix3;
+use slamlab_core::belief::{LandmarkBelief, LandmarkEstimate, PoseBelief};
 use slamlab_core::kalman::{FilterError, LandmarkSlam, PredictReport, UpdateReport};
 use slamlab_core::particle::fastslam::{FastSlam, FastSlamError, ResampleReport};
 use slamlab_core::particle::{FastSlamConfig, LandmarkObservation};
 use slamlab_core::range_bearing::RangeBearing;
-use slamlab_core::{Control, Pose2, wrap_angle};
+use slamlab_core::{Control, Pose2};
 
 /// The ids a filter gives the landmarks it starts itself when the sensor's ids are
 /// withheld start here, so that they never look like a true landmark's id.
@@ -31,8 +27,8 @@ pub struct FastSlamEstimator {
     inner: FastSlam,
     /// True when the filter labels landmarks itself (maximum likelihood).
     own_labels: bool,
-    mean: DVector<f64>,
-    covariance: DMatrix<f64>,
+    /// The best particle's landmarks, as the lesson labels them.
+    landmarks: Vec<LandmarkEstimate>,
     ids: Vec<usize>,
 }
 
@@ -68,8 +64,7 @@ impl FastSlamEstimator {
         let mut estimator = Self {
             inner: FastSlam::new(config, start)?,
             own_labels,
-            mean: DVector::zeros(3),
-            covariance: DMatrix::zeros(3, 3),
+            landmarks: Vec::new(),
             ids: Vec::new(),
         };
         estimator.summarize();
@@ -81,43 +76,44 @@ impl FastSlamEstimator {
         &self.inner
     }
 
-    /// Recomputes the Gaussian summary from the particles.
+    /// Reads the best particle's map after every phase (it may be another
+    /// particle than before).
     fn summarize(&mut self) {
-        let f = &self.inner;
-        let mean_pose = f.mean_pose();
-        let mut robot = nalgebra::Matrix3::zeros();
-        for (p, &w) in f.particles().map(|p| p.pose).zip(f.weights()) {
-            let d = Vector3::new(
-                p.x - mean_pose.x,
-                p.y - mean_pose.y,
-                wrap_angle(p.theta - mean_pose.theta),
-            );
-            robot += w * d * d.transpose();
-        }
-        let landmarks = f.best_landmarks();
-        let n = 3 + 2 * landmarks.len();
-        let mut mean = DVector::zeros(n);
-        let mut covariance = DMatrix::zeros(n, n);
-        mean[0] = mean_pose.x;
-        mean[1] = mean_pose.y;
-        mean[2] = mean_pose.theta;
-        covariance.fixed_view_mut::<3, 3>(0, 0).copy_from(&robot);
+        self.landmarks.clear();
         self.ids.clear();
-        for (slot, l) in landmarks.iter().enumerate() {
-            let j = 3 + 2 * slot;
-            mean[j] = l.mean.x;
-            mean[j + 1] = l.mean.y;
-            covariance
-                .fixed_view_mut::<2, 2>(j, j)
-                .copy_from(&l.covariance);
-            self.ids.push(if self.own_labels {
+        for l in self.inner.best_landmarks() {
+            let id = if self.own_labels {
                 OWN_LABELS + l.id
             } else {
                 l.id
+            };
+            self.ids.push(id);
+            self.landmarks.push(LandmarkEstimate {
+                id,
+                mean: l.mean,
+                covariance: l.covariance,
             });
         }
-        self.mean = mean;
-        self.covariance = covariance;
+    }
+}
+
+impl PoseBelief for FastSlamEstimator {
+    fn robot_pose(&self) -> Pose2 {
+        self.inner.robot_pose()
+    }
+
+    fn robot_covariance(&self) -> Matrix3<f64> {
+        self.inner.robot_covariance()
+    }
+}
+
+impl LandmarkBelief for FastSlamEstimator {
+    fn landmark_ids(&self) -> &[usize] {
+        &self.ids
+    }
+
+    fn landmarks(&self) -> Vec<LandmarkEstimate> {
+        self.landmarks.clone()
     }
 }
 
@@ -149,18 +145,6 @@ impl LandmarkSlam for FastSlamEstimator {
             new_landmark_particles: report.new_landmark_particles,
             best_log_likelihood: report.best_log_weight_change,
         })
-    }
-
-    fn mean(&self) -> &DVector<f64> {
-        &self.mean
-    }
-
-    fn covariance(&self) -> &DMatrix<f64> {
-        &self.covariance
-    }
-
-    fn landmark_ids(&self) -> &[usize] {
-        &self.ids
     }
 
     fn particle_set(&self) -> Option<&FastSlam> {

@@ -9,6 +9,7 @@ use crate::widgets::map_canvas::{
     self, CanvasColors, EstimateStyle, MapTransform, MapView, draw_estimate, draw_grid,
     draw_scale_and_axes, finite, screen_dir,
 };
+use crate::widgets::particles::ParticleMesh;
 use egui::{Color32, Pos2, Shape, Stroke, pos2, vec2};
 use slamlab_core::grid::{Cell, Costmap, OccupancyGrid};
 use slamlab_core::particle::ParticleFlag;
@@ -389,7 +390,7 @@ fn draw_rays(painter: &egui::Painter, t: &MapTransform, run: &MclRun) {
     }
 }
 
-/// Particles as small arrows, their opacity by weight relative to the heaviest;
+/// Particles as small darts (one mesh), their opacity by weight relative to the heaviest;
 /// injected and regenerated ones in their own colours.
 fn draw_particles(
     painter: &egui::Painter,
@@ -401,6 +402,7 @@ fn draw_particles(
     let (x0, x1, y0, y1) = t.visible();
     let length = (0.12 * t.scale).clamp(4.0, 10.0);
     let stride = particles.len() / 6000 + 1;
+    let mut mesh = ParticleMesh::with_capacity(particles.len() / stride);
     for p in particles.iter().step_by(stride) {
         let pose = p.pose;
         if pose.x < x0 || pose.x > x1 || pose.y < y0 || pose.y > y1 {
@@ -416,11 +418,9 @@ fn draw_particles(
             ParticleFlag::Injected => palette::VERMILLION,
             ParticleFlag::Regenerated => palette::SKY_BLUE,
         };
-        let at = t.pose(&pose);
-        let tip = at + screen_dir(pose.theta) * length;
-        painter.line_segment([at, tip], Stroke::new(1.2, c));
-        painter.circle_filled(at, 1.3, c);
+        mesh.dart(t.pose(&pose), screen_dir(pose.theta), length, c);
     }
+    mesh.paint(painter);
 }
 
 fn draw_robot(

@@ -210,11 +210,19 @@ fn filter_ui(ui: &mut egui::Ui, run: &FilterRun, phase: Option<Phase>) {
                         .striped(true)
                         .show(ui, |ui| {
                             row(ui, "landmarks in the state", n.to_string());
-                            row(
-                                ui,
-                                "state dimension",
-                                format!("{} = 3 + 2·{n}", filter.mean().len()),
-                            );
+                            match (filter.gaussian(), filter.particles()) {
+                                (Some(g), _) => row(
+                                    ui,
+                                    "state dimension",
+                                    format!("{} = 3 + 2·{n}", g.mean().len()),
+                                ),
+                                (None, Some(p)) => row(
+                                    ui,
+                                    "particles, each with its own map",
+                                    p.particle_count().to_string(),
+                                ),
+                                (None, None) => {}
+                            }
                             match (phase, &run.last_predict, report) {
                                 (Some(Phase::Predict), Some(predict), _) => {
                                     row(

@@ -92,23 +92,43 @@ pub fn heatmap_ui(
     version: u64,
 ) {
     let filters = session.filters();
-    if filters.is_empty() {
-        ui.label("No estimator is running.");
+    // Particle filters keep no joint covariance: say so, and offer the others.
+    for run in filters.iter().filter(|r| r.filter().gaussian().is_none()) {
+        ui.label(format!(
+            "{} keeps no joint covariance. Each of its {} particles carries a map of its own, \
+             and given the particle's path its landmarks are independent: one 2x2 filter each, \
+             no robot–landmark or landmark–landmark correlations to show. The map draws the \
+             particles and the best particle's landmark ellipses.",
+            run.kind.name().to_uppercase(),
+            run.filter().particles().map_or(0, |p| p.particle_count()),
+        ));
+    }
+    let gaussian_runs: Vec<usize> = (0..filters.len())
+        .filter(|&k| filters[k].filter().gaussian().is_some())
+        .collect();
+    if gaussian_runs.is_empty() {
+        ui.label("No Gaussian filter is running.");
         return;
     }
-    state.selected = state.selected.min(filters.len() - 1);
+    if !gaussian_runs.contains(&state.selected) {
+        state.selected = gaussian_runs[0];
+    }
     ui.horizontal(|ui| {
         ui.label("Filter:");
-        for (k, run) in filters.iter().enumerate() {
-            let text = egui::RichText::new(run.kind.name().to_uppercase())
-                .color(palette::estimator_color(run.kind.name()));
+        for &k in &gaussian_runs {
+            let name = filters[k].kind.name();
+            let text =
+                egui::RichText::new(name.to_uppercase()).color(palette::estimator_color(name));
             ui.selectable_value(&mut state.selected, k, text);
         }
     });
     let run = &filters[state.selected];
     let filter = run.filter();
-    let p = filter.covariance();
     let ids = filter.landmark_ids();
+    let Some(gaussian) = filter.gaussian() else {
+        return;
+    };
+    let p = gaussian.covariance();
     let n = p.nrows();
     ui.label(format!(
         "Correlation ρ = P_ij / √(P_ii P_jj) of the {}×{} covariance: robot x, y, θ first, then the {} landmarks in order of discovery. Hover a cell for the pair.",

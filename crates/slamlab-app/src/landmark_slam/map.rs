@@ -11,6 +11,7 @@ use crate::widgets::map_canvas::{
     self, CanvasColors, MapTransform, MapView, draw_grid, draw_scale_and_axes, finite,
     format_metres, screen_dir,
 };
+use crate::widgets::particles::ParticleMesh;
 use egui::{Color32, Pos2, Rect, Shape, Stroke, pos2, vec2};
 use nalgebra::{Matrix2, Vector2};
 use slamlab_core::Pose2;
@@ -737,7 +738,7 @@ fn robot_position_covariance(filter: &dyn LandmarkSlam) -> Matrix2<f64> {
 }
 
 /// FastSLAM's particles: every particle's landmark means as faint dots, then
-/// every particle's pose as a dot with a short heading tick.
+/// every particle's pose as a dart pointing along its heading.
 fn draw_particles(
     painter: &egui::Painter,
     t: &MapTransform,
@@ -745,23 +746,16 @@ fn draw_particles(
     color: Color32,
 ) {
     let faint = palette::faded(color, 0.35);
-    for mean in particles.landmark_means() {
-        let p = t.v(&mean);
-        if finite(p) {
-            painter.circle_filled(p, 1.2, faint);
-        }
+    let means = particles.landmark_means();
+    let mut mesh = ParticleMesh::with_capacity(particles.particle_count() + 2 * means.len());
+    for mean in means {
+        mesh.dot(t.v(&mean), 1.1, faint);
     }
     for particle in particles.particles() {
         let pose = particle.pose;
-        let p = t.pose(&pose);
-        if !finite(p) {
-            continue;
-        }
-        let (s, c) = slamlab_core::math::sin_cos(pose.theta);
-        let tip = p + egui::vec2(7.0 * c as f32, -7.0 * s as f32);
-        painter.line_segment([p, tip], Stroke::new(1.0, color));
-        painter.circle_filled(p, 2.0, color);
+        mesh.dart(t.pose(&pose), screen_dir(pose.theta), 8.0, color);
     }
+    mesh.paint(painter);
 }
 
 fn draw_estimated_robot(

@@ -1,6 +1,6 @@
 //! Widgets every lesson shares: the map canvas (pan, zoom, follow, grid, scale
 //! bar), the parameter panel built from a scenario's parameter table, plot helpers,
-//! the drive pad, file picking and drops, the share link and the Sources window.
+//! particle clouds as one mesh, the drive pad, file picking and drops, the share link and the Sources window.
 
 pub mod drive;
 pub mod dropped_files;
@@ -9,6 +9,7 @@ pub mod file_picker;
 pub mod layout;
 pub mod map_canvas;
 pub mod params_panel;
+pub mod particles;
 pub mod plots;
 pub mod share;
 pub mod sources;

@@ -42,7 +42,13 @@ fn step_phase_button_changes_the_filter_state() {
         after_predict > 0.0,
         "prediction grows the robot's covariance"
     );
-    assert_eq!(session(&h).filters()[0].filter().mean().len(), 3);
+    assert_eq!(
+        session(&h).filters()[0]
+            .filter()
+            .gaussian()
+            .map(|g| g.mean().len()),
+        Some(3)
+    );
 
     // The '.' key steps too: the first update of the tick adds a landmark.
     h.key_press(egui::Key::Period);
@@ -51,14 +57,26 @@ fn step_phase_button_changes_the_filter_state() {
         session(&h).last_phase(),
         Some(Phase::Update { index: 1, .. })
     ));
-    assert_eq!(session(&h).filters()[0].filter().mean().len(), 5);
+    assert_eq!(
+        session(&h).filters()[0]
+            .filter()
+            .gaussian()
+            .map(|g| g.mean().len()),
+        Some(5)
+    );
     assert!(!h.state().is_running(), "stepping leaves the clock paused");
 
     // ',' (and "Step back") goes back one phase: the landmark is gone again.
     h.key_press(egui::Key::Comma);
     h.run();
     assert_eq!(session(&h).last_phase(), Some(Phase::Predict));
-    assert_eq!(session(&h).filters()[0].filter().mean().len(), 3);
+    assert_eq!(
+        session(&h).filters()[0]
+            .filter()
+            .gaussian()
+            .map(|g| g.mean().len()),
+        Some(3)
+    );
     assert!((robot_covariance_trace(&h) - after_predict).abs() < 1e-12);
     h.get_by_label("Step back").click();
     h.run();
@@ -168,7 +186,18 @@ fn the_lesson_survives_extreme_parameters() {
             lesson.view.heatmap = true;
         }
         h.run();
-        assert!(label_visible(&h, "Correlation"));
+        // A Gaussian filter's correlations; FastSLAM alone (the maximum of the
+        // estimator choice) keeps no joint covariance and the window says so.
+        let gaussian = session(&h)
+            .filters()
+            .iter()
+            .any(|r| r.filter().gaussian().is_some());
+        let expected = if gaussian {
+            "Correlation"
+        } else {
+            "keeps no joint covariance"
+        };
+        assert!(label_visible(&h, expected), "{extreme}: {expected}");
     }
 
     // Values typed out of range are clamped and the panel says so.
@@ -426,7 +455,12 @@ fn the_fej_ekf_joins_from_its_checkbox_and_explains_itself() {
         h.run();
     }
     for run in session(&h).filters() {
-        assert_eq!(run.filter().mean().len(), 5, "{}", run.kind.name());
+        assert_eq!(
+            run.filter().gaussian().map(|g| g.mean().len()),
+            Some(5),
+            "{}",
+            run.kind.name()
+        );
     }
     assert!(label_visible(&h, "FEJ-EKF-SLAM"));
     assert!(label_visible(&h, "FEJ-EKF: H is evaluated"));

@@ -2,6 +2,7 @@
 
 use super::state::{SlamState, check_control, check_measurement};
 use super::{FilterConfig, FilterError, LandmarkSlam, PredictReport, UpdateReport, symmetrize};
+use crate::belief::{self, JointGaussian, LandmarkBelief, LandmarkEstimate, PoseBelief};
 use crate::geometry::Pose2;
 use crate::motion::Control;
 use crate::range_bearing::{self, RangeBearing};
@@ -333,6 +334,12 @@ impl LandmarkSlam for EkfSlam {
         }
     }
 
+    fn gaussian(&self) -> Option<&dyn JointGaussian> {
+        Some(self)
+    }
+}
+
+impl JointGaussian for EkfSlam {
     fn mean(&self) -> &DVector<f64> {
         &self.state.mean
     }
@@ -340,9 +347,25 @@ impl LandmarkSlam for EkfSlam {
     fn covariance(&self) -> &DMatrix<f64> {
         &self.state.covariance
     }
+}
 
+impl PoseBelief for EkfSlam {
+    fn robot_pose(&self) -> Pose2 {
+        belief::joint_robot_pose(self)
+    }
+
+    fn robot_covariance(&self) -> Matrix3<f64> {
+        belief::joint_robot_covariance(self)
+    }
+}
+
+impl LandmarkBelief for EkfSlam {
     fn landmark_ids(&self) -> &[usize] {
         self.state.landmark_ids()
+    }
+
+    fn landmarks(&self) -> Vec<LandmarkEstimate> {
+        belief::joint_landmarks(self, self.state.landmark_ids())
     }
 }
 

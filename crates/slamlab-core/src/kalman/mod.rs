@@ -5,11 +5,12 @@
 //! (predict, then one update per observed landmark) so the app can step through
 //! them, and a read-only view for drawing.
 //!
-//! Every estimator shows a robot pose, landmark estimates and a Gaussian over
-//! them (for a particle filter, the Gaussian that summarizes its particles). A
-//! particle filter additionally shows its particles
-//! ([`LandmarkSlam::particle_set`]) and has a third phase, resampling
-//! ([`LandmarkSlam::resample`]); for the Kalman filters both are empty.
+//! Every estimator shows a robot pose and landmark estimates
+//! ([`PoseBelief`], [`LandmarkBelief`]). The Kalman filters also show their joint
+//! Gaussian ([`LandmarkSlam::gaussian`], for the correlation heatmap and gated
+//! association); a particle filter has none, shows its particles instead
+//! ([`LandmarkSlam::particles`]) and has a third phase, resampling
+//! ([`LandmarkSlam::resample`]). See [`crate::belief`].
 
 mod ekf_slam;
 pub mod fusion;
@@ -21,11 +22,13 @@ pub use ekf_slam::{EkfSlam, Linearization};
 pub use ukf_slam::UkfSlam;
 pub use unscented::UnscentedParams;
 
+pub use crate::belief::LandmarkEstimate;
+use crate::belief::{JointGaussian, LandmarkBelief, ParticleBelief, PoseBelief};
 use crate::geometry::Pose2;
 use crate::motion::{Control, MotionModel};
 use crate::particle::fastslam::{FastSlam, ResampleReport};
 use crate::range_bearing::{MeasurementError, RangeBearing};
-use nalgebra::{DMatrix, DVector, Matrix2, Matrix3, Vector2};
+use nalgebra::{DMatrix, Matrix2, Vector2};
 use serde::{Deserialize, Serialize};
 use thiserror::Error;
 
@@ -175,40 +178,37 @@ pub enum UpdateReport {
     },
 }
 
-/// One landmark's estimate, for drawing and metrics.
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub struct LandmarkEstimate {
-    /// The landmark's id (the sensor's data association).
-    pub id: usize,
-    /// Estimated position, metres.
-    pub mean: Vector2<f64>,
-    /// Its 2x2 covariance.
-    pub covariance: Matrix2<f64>,
-}
-
-/// A SLAM filter over robot pose and landmark positions, phase by phase.
-pub trait LandmarkSlam {
+/// A SLAM filter over robot pose and landmark positions, phase by phase. What it
+/// can show beyond the pose and the landmarks depends on what it keeps: a joint
+/// Gaussian (EKF, UKF) or particles (FastSLAM).
+pub trait LandmarkSlam: PoseBelief + LandmarkBelief {
     /// A short name ("ekf", "ukf").
     fn name(&self) -> &'static str;
     /// Prediction: moves the robot by `control` for `dt` seconds and grows its uncertainty.
     fn predict(&mut self, control: &Control, dt: f64) -> Result<PredictReport, FilterError>;
     /// Update with one measurement of landmark `id`; initializes it when new.
     fn update(&mut self, id: usize, z: &RangeBearing) -> Result<UpdateReport, FilterError>;
-    /// The full state mean `M`.
-    fn mean(&self) -> &DVector<f64>;
-    /// The full state covariance `P`.
-    fn covariance(&self) -> &DMatrix<f64>;
-    /// Landmark ids in state order (order of discovery).
-    fn landmark_ids(&self) -> &[usize];
+
+    /// The joint Gaussian over robot and landmarks, for filters that keep one
+    /// (EKF, UKF); `None` for a particle filter.
+    fn gaussian(&self) -> Option<&dyn JointGaussian> {
+        None
+    }
+
+    /// The particles, for a particle filter; `None` for a Gaussian filter.
+    fn particles(&self) -> Option<&dyn ParticleBelief> {
+        self.particle_set().map(|f| f as &dyn ParticleBelief)
+    }
+
+    /// FastSLAM's particles with their maps (what the lesson draws and explains
+    /// beyond poses and weights); `None` for other filters.
+    fn particle_set(&self) -> Option<&FastSlam> {
+        None
+    }
 
     /// The robot's sigma points (centre first), for filters that use them; empty otherwise.
     fn robot_sigma_points(&self) -> Vec<Pose2> {
         Vec::new()
-    }
-
-    /// The particles, for particle filters (FastSLAM); `None` for Gaussian filters.
-    fn particle_set(&self) -> Option<&FastSlam> {
-        None
     }
 
     /// The resampling phase of a particle filter (run once per tick, after the
@@ -216,32 +216,6 @@ pub trait LandmarkSlam {
     /// returns `None`.
     fn resample(&mut self) -> Option<ResampleReport> {
         None
-    }
-
-    /// The estimated robot pose.
-    fn robot_pose(&self) -> Pose2 {
-        let m = self.mean();
-        Pose2::new(m[0], m[1], m[2])
-    }
-    /// The robot's 3x3 covariance block.
-    fn robot_covariance(&self) -> Matrix3<f64> {
-        self.covariance().fixed_view::<3, 3>(0, 0).into_owned()
-    }
-    /// Every landmark's estimate, in state order.
-    fn landmarks(&self) -> Vec<LandmarkEstimate> {
-        let (m, p) = (self.mean(), self.covariance());
-        self.landmark_ids()
-            .iter()
-            .enumerate()
-            .map(|(slot, &id)| {
-                let j = 3 + 2 * slot;
-                LandmarkEstimate {
-                    id,
-                    mean: Vector2::new(m[j], m[j + 1]),
-                    covariance: p.fixed_view::<2, 2>(j, j).into_owned(),
-                }
-            })
-            .collect()
     }
 }
 

@@ -3,11 +3,12 @@
 use super::state::{SlamState, check_control, check_measurement};
 use super::unscented::{UnscentedParams, sigma_points, unscented_transform};
 use super::{FilterConfig, FilterError, LandmarkSlam, PredictReport, UpdateReport, symmetrize};
+use crate::belief::{self, JointGaussian, LandmarkBelief, LandmarkEstimate, PoseBelief};
 use crate::geometry::{Pose2, wrap_angle};
 use crate::linalg::psd_cholesky;
 use crate::motion::Control;
 use crate::range_bearing::{self, MeasurementError, RangeBearing};
-use nalgebra::{DMatrix, DVector, Matrix2, Vector2};
+use nalgebra::{DMatrix, DVector, Matrix2, Matrix3, Vector2};
 
 /// UKF-SLAM with known data association.
 ///
@@ -225,16 +226,8 @@ impl LandmarkSlam for UkfSlam {
         }
     }
 
-    fn mean(&self) -> &DVector<f64> {
-        &self.state.mean
-    }
-
-    fn covariance(&self) -> &DMatrix<f64> {
-        &self.state.covariance
-    }
-
-    fn landmark_ids(&self) -> &[usize] {
-        self.state.landmark_ids()
+    fn gaussian(&self) -> Option<&dyn JointGaussian> {
+        Some(self)
     }
 
     /// The robot part of the sigma points the next prediction uses: the pose
@@ -252,6 +245,36 @@ impl LandmarkSlam for UkfSlam {
             .iter()
             .map(|v| Pose2::new(v[0], v[1], v[2]))
             .collect()
+    }
+}
+
+impl JointGaussian for UkfSlam {
+    fn mean(&self) -> &DVector<f64> {
+        &self.state.mean
+    }
+
+    fn covariance(&self) -> &DMatrix<f64> {
+        &self.state.covariance
+    }
+}
+
+impl PoseBelief for UkfSlam {
+    fn robot_pose(&self) -> Pose2 {
+        belief::joint_robot_pose(self)
+    }
+
+    fn robot_covariance(&self) -> Matrix3<f64> {
+        belief::joint_robot_covariance(self)
+    }
+}
+
+impl LandmarkBelief for UkfSlam {
+    fn landmark_ids(&self) -> &[usize] {
+        self.state.landmark_ids()
+    }
+
+    fn landmarks(&self) -> Vec<LandmarkEstimate> {
+        belief::joint_landmarks(self, self.state.landmark_ids())
     }
 }
 

@@ -41,6 +41,7 @@ use super::weights::{WeightError, effective_sample_size, normalize_log_weights};
 use crate::association::{
     self, AssociationDecision, AssociationMode, DEFAULT_GATE, log_gaussian, mahalanobis_squared,
 };
+use crate::belief::{ParticleBelief, PoseBelief};
 use crate::geometry::{Pose2, wrap_angle};
 use crate::math;
 use crate::motion::{Control, MotionModel};
@@ -1145,6 +1146,47 @@ fn finish_step(p: &mut Particle, q: &Matrix2<f64>) {
         };
         let next = ekf_update(&p.pose, &from, &r.z, q).map_or(from, |(l, _)| l);
         *Arc::make_mut(&mut map[r.slot]) = next;
+    }
+}
+
+impl PoseBelief for FastSlam {
+    /// The weighted mean pose ([`FastSlam::mean_pose`]).
+    fn robot_pose(&self) -> Pose2 {
+        self.mean_pose()
+    }
+
+    /// The weighted covariance of the particle poses around the mean, heading
+    /// differences wrapped.
+    fn robot_covariance(&self) -> Matrix3<f64> {
+        let mean = self.mean_pose();
+        let mut cov = Matrix3::zeros();
+        for (p, &w) in self.particles.iter().zip(&self.weights) {
+            let d = Vector3::new(
+                p.pose.x - mean.x,
+                p.pose.y - mean.y,
+                wrap_angle(p.pose.theta - mean.theta),
+            );
+            cov += w * d * d.transpose();
+        }
+        cov
+    }
+}
+
+impl ParticleBelief for FastSlam {
+    fn particle_count(&self) -> usize {
+        self.particles.len()
+    }
+
+    fn particle_pose(&self, index: usize) -> Option<Pose2> {
+        self.particles.get(index).map(|p| p.pose)
+    }
+
+    fn particle_weight(&self, index: usize) -> f64 {
+        self.weights.get(index).copied().unwrap_or(0.0)
+    }
+
+    fn n_eff(&self) -> f64 {
+        self.effective_sample_size()
     }
 }
 

@@ -821,6 +821,41 @@ pub fn is_all_zero(e: &WeightError) -> bool {
     matches!(e, WeightError::AllZero)
 }
 
+impl crate::belief::PoseBelief for Mcl {
+    /// The heaviest cluster's weighted mean, as amcl reports it (the origin for
+    /// a cloud without weight).
+    fn robot_pose(&self) -> Pose2 {
+        self.estimate.as_ref().map_or(Pose2::IDENTITY, |e| e.pose)
+    }
+
+    /// The heaviest cluster's covariance; infinite variances for a cloud without
+    /// weight (it says nothing about the pose).
+    fn robot_covariance(&self) -> nalgebra::Matrix3<f64> {
+        self.estimate.as_ref().map_or_else(
+            || nalgebra::Matrix3::from_diagonal_element(f64::INFINITY),
+            |e| e.covariance,
+        )
+    }
+}
+
+impl crate::belief::ParticleBelief for Mcl {
+    fn particle_count(&self) -> usize {
+        self.particles.len()
+    }
+
+    fn particle_pose(&self, index: usize) -> Option<Pose2> {
+        self.particles.get(index).map(|p| p.pose)
+    }
+
+    fn particle_weight(&self, index: usize) -> f64 {
+        self.particles.get(index).map_or(0.0, |p| p.weight)
+    }
+
+    fn n_eff(&self) -> f64 {
+        self.n_eff
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

@@ -22,9 +22,11 @@
 
 use super::mcl::{LocalizationMap, Mcl, MclConfig, ParticleFlag};
 use super::{PredictReport, ResampleReport, Scan, WeightReport};
+use crate::belief::{ParticleBelief, PoseBelief};
 use crate::geometry::Pose2;
 use crate::grid::{Costmap, FreeCells};
 use crate::math;
+use nalgebra::Matrix3;
 use rand::Rng;
 use serde::{Deserialize, Serialize};
 use std::sync::Arc;
@@ -357,6 +359,34 @@ impl RecoveringMcl {
     pub fn randomized_fraction(&self) -> f64 {
         let n = self.mcl.count().max(1);
         (self.report.injected + self.report.regenerated) as f64 / n as f64
+    }
+}
+
+impl PoseBelief for RecoveringMcl {
+    fn robot_pose(&self) -> Pose2 {
+        self.mcl.robot_pose()
+    }
+
+    fn robot_covariance(&self) -> Matrix3<f64> {
+        self.mcl.robot_covariance()
+    }
+}
+
+impl ParticleBelief for RecoveringMcl {
+    fn particle_count(&self) -> usize {
+        self.mcl.particle_count()
+    }
+
+    fn particle_pose(&self, index: usize) -> Option<Pose2> {
+        self.mcl.particle_pose(index)
+    }
+
+    fn particle_weight(&self, index: usize) -> f64 {
+        self.mcl.particle_weight(index)
+    }
+
+    fn n_eff(&self) -> f64 {
+        ParticleBelief::n_eff(&self.mcl)
     }
 }
 

@@ -474,7 +474,7 @@ impl LandmarkSim {
                         rec.n_eff.push(NeffSample {
                             tick: self.tick,
                             n_eff: report.n_eff_before,
-                            particles: run.filter.particle_set().map_or(0, |p| p.particle_count()),
+                            particles: run.filter.particles().map_or(0, |p| p.particle_count()),
                             resampled: report.resampled,
                         });
                         run.last_resample = Some(report);
@@ -485,18 +485,16 @@ impl LandmarkSim {
                     let z = self.observations[index - 1].measurement;
                     // Without the sensor's ids a Gaussian filter picks the nearest
                     // neighbour inside the gate, or starts a landmark of its own.
-                    let id = if unknown && run.filter.particle_set().is_none() {
-                        let f = run.filter();
-                        let decision =
-                            GaussianMap::from_joint(f.mean(), f.covariance(), f.landmark_ids())
-                                .map(|map| {
-                                    nearest_neighbour(
-                                        &map,
-                                        &z,
-                                        &measurement_covariance,
-                                        self.scenario.gate,
-                                    )
-                                });
+                    let gaussian = run.filter.gaussian();
+                    let id = if unknown && let Some(g) = gaussian {
+                        let decision = GaussianMap::from_joint(
+                            g.mean(),
+                            g.covariance(),
+                            run.filter.landmark_ids(),
+                        )
+                        .map(|map| {
+                            nearest_neighbour(&map, &z, &measurement_covariance, self.scenario.gate)
+                        });
                         match decision {
                             Some(NearestNeighbour::Matched { id, .. }) => id,
                             _ => {
@@ -610,8 +608,8 @@ impl Simulation for LandmarkSim {
             .filters
             .iter()
             .map(|r| {
-                let n = r.filter.mean().len();
-                let particles = r.filter.particle_set().map_or(0, |p| {
+                let n = r.filter.gaussian().map_or(0, |g| g.mean().len());
+                let particles = r.filter.particles().map_or(0, |p| {
                     p.particle_count() * (4 + 6 * r.filter.landmark_ids().len())
                 });
                 n * n + n + particles
