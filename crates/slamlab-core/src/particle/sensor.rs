@@ -335,8 +335,10 @@ impl PreparedModel {
                     let y = py + s * bx + c * by;
                     sum += if x >= 0.0 && x < w && y >= 0.0 && y < h {
                         // Inside the map the coordinates are not negative, so
-                        // truncating them is flooring them.
-                        self.cell_log_likelihood[y as usize * self.width + x as usize]
+                        // truncating them is flooring them. (Through `i64`:
+                        // `f64 as usize` compiles to a longer sequence.)
+                        let (i, j) = (x as i64 as usize, y as i64 as usize);
+                        self.cell_log_likelihood[j * self.width + i]
                     } else {
                         // Outside the map, or not a number.
                         self.log_likelihood_in_cell(floor_to_i64(x), floor_to_i64(y))
