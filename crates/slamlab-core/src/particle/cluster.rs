@@ -101,11 +101,16 @@ pub fn heaviest_cluster(
         }
         i
     }
+    // Being neighbours is symmetric (heading offsets count modulo the number
+    // of heading bins), so looking only in the 13 directions that come after
+    // (0, 0, 0) in (x, y, heading) order finds every pair of neighbouring bins
+    // from one of its two bins. A union keeps the smaller root, so each
+    // cluster's root ends up its smallest bin whatever order the pairs come in.
     for (b, &(x, y, a)) in bin_keys.iter().enumerate() {
         for dx in -1..=1 {
             for dy in -1..=1 {
                 for da in -1..=1 {
-                    if dx == 0 && dy == 0 && da == 0 {
+                    if (dx, dy, da) <= (0, 0, 0) {
                         continue;
                     }
                     let neighbour = (x + dx, y + dy, (a + da).rem_euclid(angle_bins));
@@ -257,6 +262,21 @@ mod tests {
         assert!((e.covariance[(2, 2)] - dev * dev).abs() < 1e-9);
         assert!(heaviest_cluster(&poses, &[0.0; 6], &ClusterBins::default()).is_none());
         assert!(heaviest_cluster(&[], &[], &ClusterBins::default()).is_none());
+    }
+
+    #[test]
+    fn bins_touching_diagonally_across_the_heading_seam_are_one_cluster() {
+        // Bins (0, 0, 0) and (1, −1, 35): x + 1, y − 1 and heading bin 0 − 1
+        // wrapped to 35. A third particle far away is its own cluster.
+        let poses = [
+            Pose2::new(0.25, 0.25, -std::f64::consts::PI + 0.05),
+            Pose2::new(0.75, -0.25, std::f64::consts::PI - 0.05),
+            Pose2::new(5.0, 5.0, 0.0),
+        ];
+        let e = heaviest_cluster(&poses, &[0.3, 0.3, 0.4], &ClusterBins::default()).unwrap();
+        assert_eq!((e.clusters, e.count), (2, 2));
+        assert!((e.weight - 0.6).abs() < 1e-12);
+        assert!((e.pose.x - 0.5).abs() < 1e-12 && e.pose.y.abs() < 1e-12);
     }
 
     #[test]
