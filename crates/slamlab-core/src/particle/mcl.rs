@@ -18,7 +18,8 @@
 use super::cluster::{ClusterBins, PoseEstimate, heaviest_cluster};
 use super::sensor::{BeamLikelihood, MeasurementModel, PreparedModel, Scan, beam_end_points};
 use super::{
-    Resampler, WeightError, effective_sample_size, normalize_log_weights, resample_indices,
+    Resampler, WeightError, effective_sample_size, log_sum_exp, normalize_log_weights,
+    resample_indices,
 };
 use crate::geometry::{Pose2, wrap_angle};
 use crate::grid::{DistanceField, FreeCells, OccupancyGrid};
@@ -593,7 +594,7 @@ impl Mcl {
         }
         let mut w = std::mem::take(&mut self.scratch_w);
         let mut note = None;
-        let log_likelihood_sum = match normalize_log_weights(&ll[..n], &mut w) {
+        let log_likelihood_sum = match log_sum_exp(&ll[..n]) {
             Ok(sum) => sum,
             Err(e) => {
                 note = Some(format!("{e}; the weights are kept from before this scan"));
@@ -622,7 +623,7 @@ impl Mcl {
             }
         }
         self.scratch_w = w;
-        self.n_eff = effective_sample_size(&self.weights());
+        self.n_eff = effective_sample_size(self.particles.iter().map(|p| &p.weight));
         self.refresh_estimate();
         let (best_beams, poor_beams) = if n > 0
             && let Some(model) = &self.prepared
@@ -815,7 +816,7 @@ impl Mcl {
 
     /// Recomputes the estimate after the particles were changed from outside.
     pub fn recompute_estimate(&mut self) {
-        self.n_eff = effective_sample_size(&self.weights());
+        self.n_eff = effective_sample_size(self.particles.iter().map(|p| &p.weight));
         self.refresh_estimate();
     }
 
