@@ -78,20 +78,17 @@ pub fn heaviest_cluster(
             a.rem_euclid(angle_bins),
         )
     };
-    let mut order: Vec<(i64, i64, i64, usize)> = (0..n)
+    let keyed: Vec<((i64, i64, i64), usize)> = (0..n)
         .filter(|&i| poses[i].is_finite())
-        .map(|i| {
-            let (a, b, c) = key(&poses[i]);
-            (a, b, c, i)
-        })
+        .map(|i| (key(&poses[i]), i))
         .collect();
-    order.sort_unstable();
+    let order = sort_by_bin(keyed);
     // Distinct bins and, for each particle in `order`, its bin.
     let mut bin_keys: Vec<(i64, i64, i64)> = Vec::new();
     let mut bin_of: Vec<usize> = Vec::with_capacity(order.len());
-    for &(a, b, c, _) in &order {
-        if bin_keys.last() != Some(&(a, b, c)) {
-            bin_keys.push((a, b, c));
+    for &(k, _) in &order {
+        if bin_keys.last() != Some(&k) {
+            bin_keys.push(k);
         }
         bin_of.push(bin_keys.len() - 1);
     }
@@ -104,11 +101,16 @@ pub fn heaviest_cluster(
         }
         i
     }
+    // Being neighbours is symmetric (heading offsets count modulo the number
+    // of heading bins), so looking only in the 13 directions that come after
+    // (0, 0, 0) in (x, y, heading) order finds every pair of neighbouring bins
+    // from one of its two bins. A union keeps the smaller root, so each
+    // cluster's root ends up its smallest bin whatever order the pairs come in.
     for (b, &(x, y, a)) in bin_keys.iter().enumerate() {
         for dx in -1..=1 {
             for dy in -1..=1 {
                 for da in -1..=1 {
-                    if dx == 0 && dy == 0 && da == 0 {
+                    if (dx, dy, da) <= (0, 0, 0) {
                         continue;
                     }
                     let neighbour = (x + dx, y + dy, (a + da).rem_euclid(angle_bins));
@@ -124,7 +126,7 @@ pub fn heaviest_cluster(
     }
     let roots: Vec<usize> = (0..bin_keys.len()).map(|b| find(&mut parent, b)).collect();
     let mut cluster_weight = vec![0.0; bin_keys.len()];
-    for (k, &(_, _, _, i)) in order.iter().enumerate() {
+    for (k, &(_, i)) in order.iter().enumerate() {
         let w = weights[i];
         if w > 0.0 && w.is_finite() {
             cluster_weight[roots[bin_of[k]]] += w;
@@ -146,7 +148,7 @@ pub fn heaviest_cluster(
         .iter()
         .enumerate()
         .filter(|(k, _)| roots[bin_of[*k]] == best)
-        .map(|(_, o)| o.3)
+        .map(|(_, o)| o.1)
         .filter(|&i| weights[i] > 0.0 && weights[i].is_finite())
         .collect();
     let (mut mx, mut my, mut ms, mut mc) = (0.0, 0.0, 0.0, 0.0);
@@ -176,6 +178,54 @@ pub fn heaviest_cluster(
         count: members.len(),
         clusters,
     })
+}
+
+/// Sorts `(bin, particle)` pairs, given in increasing particle order, by bin and
+/// then by particle: the order that groups each bin's particles together and
+/// fixes the order in which their weights are summed.
+///
+/// Comparing `(i64, i64, i64, usize)` tuples is slow, so when the occupied bins
+/// span a small enough box (always, for a cloud on a map), each pair is packed
+/// into one `u64`: the bin's rank in that box in row-major order (x, then y,
+/// then heading, each counted from the smallest occupied one), shifted left,
+/// with the pair's position in `keyed` in the low bits. Ranks preserve the
+/// order of the bins and positions that of the particles, so sorting the
+/// packed numbers gives exactly the tuple order. A cloud spread too far to
+/// pack is sorted as tuples.
+fn sort_by_bin(mut keyed: Vec<((i64, i64, i64), usize)>) -> Vec<((i64, i64, i64), usize)> {
+    let Some(&(first, _)) = keyed.first() else {
+        return keyed;
+    };
+    let (mut lo, mut hi) = (first, first);
+    for &((x, y, a), _) in &keyed {
+        lo = (lo.0.min(x), lo.1.min(y), lo.2.min(a));
+        hi = (hi.0.max(x), hi.1.max(y), hi.2.max(a));
+    }
+    // Bits for a position in `keyed`.
+    let shift = usize::BITS - (keyed.len() - 1).leading_zeros();
+    // Bins along each axis, `None` if the box (times the positions) does not
+    // fit in a u64.
+    let span = |l: i64, h: i64| h.abs_diff(l).checked_add(1);
+    let bins_per_axis = (|| {
+        let (nx, ny, na) = (span(lo.0, hi.0)?, span(lo.1, hi.1)?, span(lo.2, hi.2)?);
+        let ranks = nx.checked_mul(ny)?.checked_mul(na)?;
+        (ranks <= u64::MAX >> shift).then_some((ny, na))
+    })();
+    let Some((ny, na)) = bins_per_axis else {
+        keyed.sort_unstable();
+        return keyed;
+    };
+    let mut packed: Vec<u64> = keyed
+        .iter()
+        .zip(0u64..)
+        .map(|(&((x, y, a), _), position)| {
+            let rank = (x.abs_diff(lo.0) * ny + y.abs_diff(lo.1)) * na + a.abs_diff(lo.2);
+            rank << shift | position
+        })
+        .collect();
+    packed.sort_unstable();
+    let mask = (1u64 << shift) - 1;
+    packed.iter().map(|&p| keyed[(p & mask) as usize]).collect()
 }
 
 #[cfg(test)]
@@ -212,5 +262,40 @@ mod tests {
         assert!((e.covariance[(2, 2)] - dev * dev).abs() < 1e-9);
         assert!(heaviest_cluster(&poses, &[0.0; 6], &ClusterBins::default()).is_none());
         assert!(heaviest_cluster(&[], &[], &ClusterBins::default()).is_none());
+    }
+
+    #[test]
+    fn bins_touching_diagonally_across_the_heading_seam_are_one_cluster() {
+        // Bins (0, 0, 0) and (1, −1, 35): x + 1, y − 1 and heading bin 0 − 1
+        // wrapped to 35. A third particle far away is its own cluster.
+        let poses = [
+            Pose2::new(0.25, 0.25, -std::f64::consts::PI + 0.05),
+            Pose2::new(0.75, -0.25, std::f64::consts::PI - 0.05),
+            Pose2::new(5.0, 5.0, 0.0),
+        ];
+        let e = heaviest_cluster(&poses, &[0.3, 0.3, 0.4], &ClusterBins::default()).unwrap();
+        assert_eq!((e.clusters, e.count), (2, 2));
+        assert!((e.weight - 0.6).abs() < 1e-12);
+        assert!((e.pose.x - 0.5).abs() < 1e-12 && e.pose.y.abs() < 1e-12);
+    }
+
+    #[test]
+    fn packed_sort_gives_the_tuple_order() {
+        use rand::{Rng, SeedableRng};
+        let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(11);
+        // Small boxes (packed), and bins far apart (sorted as tuples).
+        for spread in [1, 3, 40, i64::MAX / 2] {
+            let keyed: Vec<((i64, i64, i64), usize)> = (0..500)
+                .map(|i| {
+                    let mut r = || rng.random_range(-spread..=spread);
+                    ((r(), r(), r().rem_euclid(36)), i * 2)
+                })
+                .collect();
+            let mut expected = keyed.clone();
+            expected.sort_unstable();
+            assert_eq!(sort_by_bin(keyed), expected, "spread {spread}");
+        }
+        assert!(sort_by_bin(Vec::new()).is_empty());
+        assert_eq!(sort_by_bin(vec![((4, -2, 7), 3)]), vec![((4, -2, 7), 3)]);
     }
 }

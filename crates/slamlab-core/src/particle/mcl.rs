@@ -18,7 +18,8 @@
 use super::cluster::{ClusterBins, PoseEstimate, heaviest_cluster};
 use super::sensor::{BeamLikelihood, MeasurementModel, PreparedModel, Scan, beam_end_points};
 use super::{
-    Resampler, WeightError, effective_sample_size, normalize_log_weights, resample_indices,
+    Resampler, WeightError, effective_sample_size, log_sum_exp, normalize_log_weights,
+    resample_indices,
 };
 use crate::geometry::{Pose2, wrap_angle};
 use crate::grid::{DistanceField, FreeCells, OccupancyGrid};
@@ -27,7 +28,7 @@ use crate::odometry::{OdometryNoise, odometry_increment, sample_increment};
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
 use serde::{Deserialize, Serialize};
-use std::sync::Arc;
+use std::sync::{Arc, Mutex};
 use thiserror::Error;
 
 /// The most particles a filter accepts (larger requests are clamped).
@@ -36,11 +37,26 @@ pub const MAX_PARTICLES: usize = 200_000;
 /// A map prepared for localization: the grid, its distance field (capped at
 /// amcl's `laser_likelihood_max_dist`) and its free cells. Shared between filters
 /// with an [`Arc`].
-#[derive(Clone, Debug)]
+#[derive(Debug)]
 pub struct LocalizationMap {
     grid: OccupancyGrid,
     field: DistanceField,
     free: FreeCells,
+    /// The measurement model last prepared on this map (see
+    /// [`prepared_model`](Self::prepared_model)), so that the filters sharing
+    /// the map tabulate it once instead of once each.
+    prepared: Mutex<Option<Arc<PreparedModel>>>,
+}
+
+impl Clone for LocalizationMap {
+    fn clone(&self) -> Self {
+        Self {
+            grid: self.grid.clone(),
+            field: self.field.clone(),
+            free: self.free.clone(),
+            prepared: Mutex::new(None),
+        }
+    }
 }
 
 /// Why a map cannot be used for localization.
@@ -60,7 +76,12 @@ impl LocalizationMap {
             return Err(MclError::NoFreeCell);
         }
         let field = DistanceField::new(&grid, likelihood_max_dist);
-        Ok(Self { grid, field, free })
+        Ok(Self {
+            grid,
+            field,
+            free,
+            prepared: Mutex::new(None),
+        })
     }
 
     /// The occupancy grid.
@@ -76,6 +97,24 @@ impl LocalizationMap {
     /// The free cells.
     pub fn free_cells(&self) -> &FreeCells {
         &self.free
+    }
+
+    /// `model` prepared on this map's distance field for scans of maximum range
+    /// `range_max` (the likelihood field's per-cell table). The map keeps the
+    /// last one it prepared and hands it to every filter that asks for the
+    /// same model and range; a different request replaces it.
+    pub fn prepared_model(&self, model: MeasurementModel, range_max: f64) -> Arc<PreparedModel> {
+        // A panic while the lock was held cannot leave the slot half written
+        // (it holds an `Arc` or nothing), so a poisoned lock is still usable.
+        let mut slot = self.prepared.lock().unwrap_or_else(|e| e.into_inner());
+        match &*slot {
+            Some(p) if *p.model() == model && p.range_max() == range_max => Arc::clone(p),
+            _ => {
+                let p = Arc::new(PreparedModel::new(model, &self.field, range_max));
+                *slot = Some(Arc::clone(&p));
+                p
+            }
+        }
     }
 }
 
@@ -368,7 +407,7 @@ pub struct Mcl {
     updates_since_resample: u32,
     estimate: Option<PoseEstimate>,
     n_eff: f64,
-    prepared: Option<PreparedModel>,
+    prepared: Option<Arc<PreparedModel>>,
     notices: Vec<String>,
     scratch_log: Vec<f64>,
     scratch_w: Vec<f64>,
@@ -504,11 +543,7 @@ impl Mcl {
             1.0
         };
         if rebuild {
-            self.prepared = Some(PreparedModel::new(
-                self.config.model,
-                &self.map.field,
-                range_max,
-            ));
+            self.prepared = Some(self.map.prepared_model(self.config.model, range_max));
         }
         let beams = scan.subsample(self.config.max_beams);
         let ends = beam_end_points(scan, &beams);
@@ -559,7 +594,7 @@ impl Mcl {
         }
         let mut w = std::mem::take(&mut self.scratch_w);
         let mut note = None;
-        let log_likelihood_sum = match normalize_log_weights(&ll[..n], &mut w) {
+        let log_likelihood_sum = match log_sum_exp(&ll[..n]) {
             Ok(sum) => sum,
             Err(e) => {
                 note = Some(format!("{e}; the weights are kept from before this scan"));
@@ -588,7 +623,7 @@ impl Mcl {
             }
         }
         self.scratch_w = w;
-        self.n_eff = effective_sample_size(&self.weights());
+        self.n_eff = effective_sample_size(self.particles.iter().map(|p| &p.weight));
         self.refresh_estimate();
         let (best_beams, poor_beams) = if n > 0
             && let Some(model) = &self.prepared
@@ -781,7 +816,7 @@ impl Mcl {
 
     /// Recomputes the estimate after the particles were changed from outside.
     pub fn recompute_estimate(&mut self) {
-        self.n_eff = effective_sample_size(&self.weights());
+        self.n_eff = effective_sample_size(self.particles.iter().map(|p| &p.weight));
         self.refresh_estimate();
     }
 
@@ -931,6 +966,17 @@ mod tests {
         assert!(r.resampled && r.distinct_parents < 500);
         assert!((mcl.n_eff() - 500.0).abs() < 1e-9);
         assert!(mcl.particles().iter().all(|p| p.weight == 1.0 / 500.0));
+    }
+
+    #[test]
+    fn filters_on_one_map_share_its_prepared_model() {
+        let map = room();
+        let model = MeasurementModel::default();
+        let first = map.prepared_model(model, 8.0);
+        assert!(Arc::ptr_eq(&first, &map.prepared_model(model, 8.0)));
+        let other_range = map.prepared_model(model, 5.0);
+        assert!(!Arc::ptr_eq(&first, &other_range));
+        assert_eq!(other_range.range_max(), 5.0);
     }
 
     #[test]

@@ -30,4 +30,4 @@ pub use resample::{Resampler, resample_indices};
 pub use sensor::{
     BeamLikelihood, BeamModel, LikelihoodFieldModel, MeasurementModel, PreparedModel, Scan,
 };
-pub use weights::{WeightError, effective_sample_size, normalize_log_weights};
+pub use weights::{WeightError, effective_sample_size, log_sum_exp, normalize_log_weights};

@@ -22,6 +22,7 @@ use super::super::grid::{DistanceField, OccupancyGrid, floor_to_i64};
 use crate::geometry::Pose2;
 use crate::math;
 use serde::{Deserialize, Serialize};
+use std::sync::Arc;
 
 /// `ln(1 / sqrt(2π))`.
 const LN_INV_SQRT_2PI: f64 = -0.918_938_533_204_672_7;
@@ -235,8 +236,22 @@ impl MeasurementModel {
 #[derive(Clone, Debug)]
 pub struct PreparedModel {
     model: MeasurementModel,
-    /// Likelihood field: `ln p` per squared cell distance.
-    table: Vec<f64>,
+    /// Likelihood field: `ln p` of a beam ending in each cell of the distance
+    /// field (row-major, `width x height`), empty for the beam model.
+    ///
+    /// Cell `(i, j)` holds `table[squared_cells(i, j)]`, where `table` is
+    /// [`LikelihoodFieldModel::table`] (the log likelihood of every squared
+    /// cell distance): the very number the formula gives for an end point in
+    /// that cell, computed once when the model is prepared (8 bytes per cell).
+    /// Scoring a beam is then one load instead of a distance lookup followed
+    /// by a table lookup. Never changes, so filters share it (an `Arc`).
+    cell_log_likelihood: Arc<[f64]>,
+    /// Likelihood field: `ln p` of an end point outside the map, where the
+    /// distance field reads its cap.
+    outside_log_likelihood: f64,
+    /// Cells per row and rows of `cell_log_likelihood`.
+    width: usize,
+    height: usize,
     range_max: f64,
 }
 
@@ -244,13 +259,26 @@ impl PreparedModel {
     /// Prepares `model` for `field` (likelihood field) and scans of maximum
     /// range `range_max`.
     pub fn new(model: MeasurementModel, field: &DistanceField, range_max: f64) -> Self {
-        let table = match &model {
-            MeasurementModel::LikelihoodField(lf) => lf.table(field, range_max),
-            MeasurementModel::Beam(_) => Vec::new(),
+        let (width, height) = field.size();
+        let (cells, outside): (Arc<[f64]>, f64) = match &model {
+            MeasurementModel::LikelihoodField(lf) => {
+                let table = lf.table(field, range_max);
+                let last = table.len() - 1;
+                let lookup = |sq: u32| table[(sq as usize).min(last)];
+                let cells = (0..height as i64)
+                    .flat_map(|j| (0..width as i64).map(move |i| (i, j)))
+                    .map(|(i, j)| lookup(field.squared_cells(i, j)))
+                    .collect();
+                (cells, lookup(field.cap_squared_cells()))
+            }
+            MeasurementModel::Beam(_) => (Arc::from([]), 0.0),
         };
         Self {
             model,
-            table,
+            cell_log_likelihood: cells,
+            outside_log_likelihood: outside,
+            width,
+            height,
             range_max,
         }
     }
@@ -265,8 +293,20 @@ impl PreparedModel {
         self.range_max
     }
 
+    /// Likelihood field: `ln p` of a beam ending in cell `(i, j)` (the cap's
+    /// value outside the map, as [`DistanceField::squared_cells`] reads it).
+    fn log_likelihood_in_cell(&self, i: i64, j: i64) -> f64 {
+        if i >= 0 && j >= 0 && (i as usize) < self.width && (j as usize) < self.height {
+            self.cell_log_likelihood[j as usize * self.width + i as usize]
+        } else {
+            self.outside_log_likelihood
+        }
+    }
+
     /// `ln p(z | x, m)` over the beams `beams` of `scan` from `pose`.
     ///
+    /// `field` must be the distance field the model was prepared on (the
+    /// likelihood field reads its frame; the values come from the cells).
     /// `beam_ends` holds the beam end points in the robot frame for the hits
     /// among `beams` (see [`beam_end_points`]); the likelihood field uses them,
     /// the beam model does not.
@@ -283,18 +323,26 @@ impl PreparedModel {
             MeasurementModel::Beam(b) => b.scan_log_likelihood(grid, pose, scan, beams),
             MeasurementModel::LikelihoodField(_) => {
                 // Everything in the grid frame, in cells: one transform per
-                // particle, then a rotation and a table lookup per beam.
+                // particle, then a rotation and one lookup per beam.
                 let (px, py) = field.world_to_cells(pose.x, pose.y);
                 let (s, c) = math::sin_cos(pose.theta - field.frame_yaw());
                 let inv = 1.0 / field.resolution();
                 let (s, c) = (s * inv, c * inv);
-                let last = self.table.len().saturating_sub(1);
+                let (w, h) = (self.width as f64, self.height as f64);
                 let mut sum = 0.0;
                 for &(bx, by) in beam_ends {
-                    let i = floor_to_i64(px + c * bx - s * by);
-                    let j = floor_to_i64(py + s * bx + c * by);
-                    let sq = field.squared_cells(i, j) as usize;
-                    sum += self.table[sq.min(last)];
+                    let x = px + c * bx - s * by;
+                    let y = py + s * bx + c * by;
+                    sum += if x >= 0.0 && x < w && y >= 0.0 && y < h {
+                        // Inside the map the coordinates are not negative, so
+                        // truncating them is flooring them. (Through `i64`:
+                        // `f64 as usize` compiles to a longer sequence.)
+                        let (i, j) = (x as i64 as usize, y as i64 as usize);
+                        self.cell_log_likelihood[j * self.width + i]
+                    } else {
+                        // Outside the map, or not a number.
+                        self.log_likelihood_in_cell(floor_to_i64(x), floor_to_i64(y))
+                    };
                 }
                 sum
             }
@@ -425,6 +473,52 @@ mod tests {
         let bm = PreparedModel::new(MeasurementModel::Beam(BeamModel::default()), &field, 5.0);
         let e = bm.explain(&g, &field, &pose, &scan, &beams);
         assert!((e[0].expected - 1.95).abs() < 1e-9);
+    }
+
+    #[test]
+    fn per_cell_values_equal_the_squared_distance_table() {
+        // A room with a pillar, off the world origin and rotated.
+        let mut g =
+            OccupancyGrid::filled(30, 20, 0.1, Pose2::new(-1.0, 0.5, 0.3), Cell::Free).unwrap();
+        for k in 0..30 {
+            g.set(k, 0, Cell::Occupied);
+            g.set(k, 19, Cell::Occupied);
+        }
+        g.set(12, 9, Cell::Occupied);
+        let field = DistanceField::new(&g, 0.7);
+        let lf = LikelihoodFieldModel::default();
+        let model = PreparedModel::new(MeasurementModel::LikelihoodField(lf), &field, 6.0);
+        let table = lf.table(&field, 6.0);
+        let scan = Scan {
+            angles: (0..36).map(|k| k as f64 * 0.17).collect(),
+            ranges: (0..36).map(|k| 0.05 + k as f64 * 0.13).collect(),
+            range_min: 0.0,
+            range_max: 6.0,
+        };
+        let beams = scan.subsample(0);
+        let ends = beam_end_points(&scan, &beams);
+        // Poses inside, on the edge of and outside the map, and not a number.
+        for pose in [
+            Pose2::new(0.3, 1.4, 0.2),
+            Pose2::new(-1.0, 0.5, 0.3),
+            Pose2::new(1.7, 2.2, -2.0),
+            Pose2::new(-4.0, 9.0, 1.0),
+            Pose2::new(f64::NAN, 1.0, 0.0),
+        ] {
+            // The model before the per-cell table: floor, squared distance,
+            // table.
+            let (px, py) = field.world_to_cells(pose.x, pose.y);
+            let (s, c) = math::sin_cos(pose.theta - field.frame_yaw());
+            let (s, c) = (s / field.resolution(), c / field.resolution());
+            let mut expected = 0.0;
+            for &(bx, by) in &ends {
+                let i = floor_to_i64(px + c * bx - s * by);
+                let j = floor_to_i64(py + s * bx + c * by);
+                expected += table[field.squared_cells(i, j) as usize];
+            }
+            let ll = model.scan_log_likelihood(&g, &field, &pose, &scan, &beams, &ends);
+            assert_eq!(ll.to_bits(), expected.to_bits(), "{pose:?}");
+        }
     }
 
     #[test]

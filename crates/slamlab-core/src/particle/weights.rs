@@ -38,6 +38,27 @@ pub fn normalize_log_weights(
     log_weights: &[f64],
     weights: &mut Vec<f64>,
 ) -> Result<f64, WeightError> {
+    let max = largest_log_weight(log_weights)?;
+    // Shifting by the largest log weight keeps every exponent ≤ 0 and the sum ≥ 1.
+    weights.clear();
+    weights.extend(log_weights.iter().map(|&l| math::exp(l - max)));
+    let sum: f64 = weights.iter().sum();
+    for w in weights.iter_mut() {
+        *w /= sum;
+    }
+    Ok(max + math::ln(sum))
+}
+
+/// `L = log Σⱼ e^(ℓⱼ)` alone: what [`normalize_log_weights`] returns (the same
+/// number, bit for bit, and the same errors), without writing the weights.
+pub fn log_sum_exp(log_weights: &[f64]) -> Result<f64, WeightError> {
+    let max = largest_log_weight(log_weights)?;
+    let sum: f64 = log_weights.iter().map(|&l| math::exp(l - max)).sum();
+    Ok(max + math::ln(sum))
+}
+
+/// The largest log weight, or why the set cannot be normalized.
+fn largest_log_weight(log_weights: &[f64]) -> Result<f64, WeightError> {
     if log_weights.is_empty() {
         return Err(WeightError::Empty);
     }
@@ -51,21 +72,15 @@ pub fn normalize_log_weights(
     if max == f64::NEG_INFINITY {
         return Err(WeightError::AllZero);
     }
-    // Shifting by the largest log weight keeps every exponent ≤ 0 and the sum ≥ 1.
-    weights.clear();
-    weights.extend(log_weights.iter().map(|&l| math::exp(l - max)));
-    let sum: f64 = weights.iter().sum();
-    for w in weights.iter_mut() {
-        *w /= sum;
-    }
-    Ok(max + math::ln(sum))
+    Ok(max)
 }
 
 /// The effective sample size `N_eff = 1 / Σ wᵢ²` of normalized weights: `M` for
 /// uniform weights, 1 when one particle holds all the weight (slides, "adaptive
-/// resampling"). Zero for an empty set.
-pub fn effective_sample_size(weights: &[f64]) -> f64 {
-    let sum_sq: f64 = weights.iter().map(|w| w * w).sum();
+/// resampling"). Zero for an empty set. Takes any sequence of weights (a
+/// slice, or the weights of a particle set) in order.
+pub fn effective_sample_size<'a>(weights: impl IntoIterator<Item = &'a f64>) -> f64 {
+    let sum_sq: f64 = weights.into_iter().map(|w| w * w).sum();
     if sum_sq > 0.0 { 1.0 / sum_sq } else { 0.0 }
 }
 
@@ -108,6 +123,19 @@ mod tests {
             Err(WeightError::Empty)
         );
         assert_eq!(untouched, vec![7.0]);
+    }
+
+    #[test]
+    fn log_sum_exp_is_the_normalizations_sum() {
+        let logs = [-1000.0, -1001.5, f64::NEG_INFINITY, -998.25, -1003.0];
+        let mut w = Vec::new();
+        let expected = normalize_log_weights(&logs, &mut w).unwrap();
+        assert_eq!(log_sum_exp(&logs).unwrap().to_bits(), expected.to_bits());
+        assert_eq!(
+            log_sum_exp(&[f64::NEG_INFINITY; 2]),
+            Err(WeightError::AllZero)
+        );
+        assert_eq!(log_sum_exp(&[]), Err(WeightError::Empty));
     }
 
     #[test]
