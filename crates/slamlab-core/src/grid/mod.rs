@@ -98,7 +98,7 @@ pub enum GridError {
 #[inline]
 pub fn floor_to_i64(v: f64) -> i64 {
     let t = v as i64;
-    if (t as f64) > v { t - 1 } else { t }
+    if (t as f64) > v { t.saturating_sub(1) } else { t }
 }
 
 /// Checks a claimed map size against [`MAX_CELLS`] without allocating.
@@ -367,6 +367,10 @@ mod tests {
             assert_eq!(floor_to_i64(v), v.floor() as i64, "{v}");
         }
         assert_eq!(floor_to_i64(f64::NAN), 0);
+        // Far outside the range: saturates, never overflows.
+        assert_eq!(floor_to_i64(-1e30), i64::MIN);
+        assert_eq!(floor_to_i64(f64::NEG_INFINITY), i64::MIN);
+        assert_eq!(floor_to_i64(1e30), i64::MAX);
     }
 
     #[test]
