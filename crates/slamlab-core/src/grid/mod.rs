@@ -98,7 +98,11 @@ pub enum GridError {
 #[inline]
 pub fn floor_to_i64(v: f64) -> i64 {
     let t = v as i64;
-    if (t as f64) > v { t.saturating_sub(1) } else { t }
+    if (t as f64) > v {
+        t.saturating_sub(1)
+    } else {
+        t
+    }
 }
 
 /// Checks a claimed map size against [`MAX_CELLS`] without allocating.
