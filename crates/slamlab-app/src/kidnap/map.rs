@@ -463,11 +463,12 @@ fn draw_legend(
         rows.push((
             filter_color(k, f.name),
             format!(
-                "{}: particles (darker = heavier), estimate, 95% ellipse",
+                "{}: particles, estimate, 95% ellipse",
                 f.name.to_uppercase()
             ),
         ));
     }
+    rows.push((colors.weak_text, "a darker particle weighs more".to_owned()));
     if run.filters().iter().any(|f| f.name != "mcl") {
         rows.push((
             Color32::from_rgb(0xFF, 0x69, 0xB4),

@@ -316,7 +316,7 @@ fn summary_ui(ui: &mut egui::Ui, result: &ConsistencyResult) {
     });
     if honest_innovations_overconfident_pose {
         ui.add_space(4.0);
-        ui.weak(
+        ui.label(
             "Mean NIS near 2 with the NEES above the band: the innovations look honest, yet \
              the pose is overconfident. The spurious confidence lies where range and bearing \
              cannot look: where the whole map sits and how it is turned.",

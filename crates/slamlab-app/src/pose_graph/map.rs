@@ -347,7 +347,21 @@ fn draw_legend(
         rows.push((colors.truth, false, "true path".to_owned()));
     }
     if view.ellipses && session.is_converged() {
-        rows.push((ELLIPSE, false, "95% marginal ellipses".to_owned()));
+        let stride = session
+            .graph()
+            .vertices()
+            .len()
+            .div_ceil(super::MAX_ELLIPSES)
+            .max(1);
+        rows.push((
+            ELLIPSE,
+            false,
+            if stride > 1 {
+                format!("95% marginal ellipses (one vertex in {stride})")
+            } else {
+                "95% marginal ellipses".to_owned()
+            },
+        ));
     }
     if comparison {
         rows.push((

@@ -43,8 +43,10 @@ const PANEL_PARAMS: &[&str] = &[
 /// Parameters that apply at once to the running graph (the rest on "Apply & reset").
 const LIVE_PARAMS: &[&str] = &["solver", "kernel", "kernel-width", "max-iterations"];
 
-/// Vertices whose marginal covariance is drawn at most.
-const MAX_ELLIPSES: usize = 300;
+/// Vertices whose marginal covariance is drawn at most: every k-th vertex of a
+/// large graph, few enough that the ellipses far from the fixed vertex (which
+/// grow to tens of metres on M3500) do not hide the graph.
+pub(crate) const MAX_ELLIPSES: usize = 60;
 
 /// What the map shows; saved with the user's settings.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
