@@ -423,17 +423,24 @@ async function main() {
     });
 
     // Opens `url`, presses Space, runs LOAD_RUN_MS and records the frame timing under
-    // metrics.`${key}_*`; `filters` is the estimators the lesson must show.
-    const timedRun = (url, key, filters) => async () => {
+    // metrics.`${key}_*`; `filters` is the estimators the lesson must show, as
+    // `filtersOf` writes the state's filters; the click that gives the page keyboard
+    // focus lands at `focusAt`.
+    const timedRun = (
+      url,
+      key,
+      filters,
+      { filtersOf = (fs) => fs.join(","), focusAt = [VIEWPORT.width / 2, VIEWPORT.height / 2] } = {},
+    ) => async () => {
       const { context, page: p, log } = await openPage(browser, baseUrl, url, key);
       try {
         await waitRunning(p);
         const { stats } = await waitNotBlank(p, `${key}-1-start.png`);
         assertNotBlank(stats, `${key}-1-start.png`);
-        await p.mouse.click(VIEWPORT.width / 2, VIEWPORT.height / 2);
+        await p.mouse.click(...focusAt);
         const s0 = await testState(p);
         await p.keyboard.press("Space");
-        await waitState(p, (s) => s.tick > s0.tick, "the first tick after Space");
+        await waitState(p, (s) => s.tick > s0.tick, "the first tick after Space", 60_000);
         const startedAt = Date.now();
         await sleep(LOAD_RUN_MS);
         const s1 = await testState(p);
@@ -442,7 +449,7 @@ async function main() {
         await assertNoPanic(p);
         const t = s1.frame_timing;
         assert(t && t.frames > 0 && Number.isFinite(t.cpu_ms_median), `no frame timing: ${JSON.stringify(s1)}`);
-        assert(s1.filters.join(",") === filters, `filters ${s1.filters}`);
+        assert(filtersOf(s1.filters) === filters, `filters ${JSON.stringify(s1.filters)}`);
         assert(s1.tick > s0.tick, "the simulation did not advance");
         metrics[`${key}_frame_cpu_ms_median`] = t.cpu_ms_median;
         metrics[`${key}_frame_cpu_ms_p95`] = t.cpu_ms_p95;
@@ -614,47 +621,18 @@ async function main() {
       ["mcl5000", "mcl", "MCL with 5,000 particles"],
       ["mcl2x5000", "amcl,acmcl", "AMCL and ACMCL with 5,000 particles each"],
     ]) {
-      await check(`${what}: runs and reports its frame timing`, async () => {
-        const url = `index.html?lesson=kidnap&estimator=${estimator}&particles=5000&init=tracking&seed=5`;
-        const { context, page: p, log } = await openPage(browser, baseUrl, url, `kidnap ${key}`);
-        try {
-          await waitRunning(p);
-          await waitState(p, (st) => st.lesson === "kidnap" && st.frames > 2, "the kidnap lesson");
-          await p.mouse.click(VIEWPORT.width / 2, 20); // keyboard focus, away from the map
-          const s0 = await testState(p);
-          await p.keyboard.press("Space");
-          await waitState(p, (st) => st.tick > s0.tick, "the first tick after Space", 60_000);
-          const startedAt = Date.now();
-          await sleep(LOAD_RUN_MS);
-          const s1 = await testState(p);
-          const seconds = (Date.now() - startedAt) / 1000;
-          const shot = `kidnap-${key}.png`;
-          const { stats } = await waitNotBlank(p, shot);
-          assertNotBlank(stats, shot);
-          await assertNoPanic(p);
-          const t = s1.frame_timing;
-          assert(t && t.frames > 0 && Number.isFinite(t.cpu_ms_median), `no frame timing: ${JSON.stringify(s1)}`);
-          assert(
-            s1.filters.length === estimator.split(",").length && s1.filters.every((f) => f.particles === 5000),
-            `filters ${JSON.stringify(s1.filters)}`,
-          );
-          assert(s1.tick > s0.tick, "the simulation did not advance");
-          metrics[`${key}_frame_cpu_ms_median`] = t.cpu_ms_median;
-          metrics[`${key}_frame_cpu_ms_p95`] = t.cpu_ms_p95;
-          metrics[`${key}_sim_ms_median`] = t.sim_ms_median;
-          metrics[`${key}_sim_ms_p95`] = t.sim_ms_p95;
-          metrics[`${key}_frames_per_second`] = Number((1000 / t.interval_ms_median).toFixed(1));
-          metrics[`${key}_ticks_per_second`] = Number(((s1.tick - s0.tick) / seconds).toFixed(1));
-          assert(log.problems.length === 0, log.problems.join("; "));
-          return (
-            `tick ${s0.tick} -> ${s1.tick} in ${seconds.toFixed(1)} s; frame CPU median ${t.cpu_ms_median.toFixed(1)} ms ` +
-            `(p95 ${t.cpu_ms_p95.toFixed(1)}), simulation ${t.sim_ms_median.toFixed(1)} ms (p95 ${t.sim_ms_p95.toFixed(1)}), ` +
-            `${metrics[`${key}_frames_per_second`]} frames/s`
-          );
-        } finally {
-          await context.close();
-        }
-      });
+      await check(
+        `${what}: runs and reports its frame timing`,
+        timedRun(
+          `index.html?lesson=kidnap&estimator=${estimator}&particles=5000&init=tracking&seed=5`,
+          key,
+          estimator.split(",").map((name) => `${name}:5000`).join(","),
+          {
+            filtersOf: (fs) => fs.map((f) => `${f.name}:${f.particles}`).join(","),
+            focusAt: [VIEWPORT.width / 2, 20], // away from the map (a click there may kidnap)
+          },
+        ),
+      );
     }
 
     // --- The resampling lab by URL: a press of the Resample button (the "." shortcut)

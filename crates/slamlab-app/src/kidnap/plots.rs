@@ -65,7 +65,17 @@ pub fn plots_ui(ui: &mut egui::Ui, run: &MclRun) {
              and w_fast falls below w_slow first: that gap is the injection probability. Filters \
              without recovery (MCL, CMCL) have none.",
         );
-        plot("kidnap_wslow", "log10 w").show(ui, |plot_ui| {
+        if !run
+            .filters()
+            .iter()
+            .any(|f| matches!(f.name, "amcl" | "acmcl"))
+        {
+            ui.label(
+                "Only Augmented MCL keeps these averages: choose amcl or acmcl as the \
+                 estimator to see w_fast fall below w_slow after a kidnap.",
+            );
+        } else {
+            plot("kidnap_wslow", "log10 w").show(ui, |plot_ui| {
             for (k, f) in run.filters().iter().enumerate() {
                 let color = filter_color(k, f.name);
                 let name = f.name.to_uppercase();
@@ -97,6 +107,7 @@ pub fn plots_ui(ui: &mut egui::Ui, run: &MclRun) {
                 );
             }
         });
+        }
         let ui = &mut columns[3];
         title_ui(
             ui,

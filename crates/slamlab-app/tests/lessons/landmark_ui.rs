@@ -19,6 +19,14 @@ fn session<'h>(h: &'h Harness<'_, SlamLabApp>) -> &'h slamlab_sim::LandmarkSessi
     }
 }
 
+/// The first filter's state dimension `3 + 2n` (it keeps a joint Gaussian).
+fn state_dimension(h: &Harness<'_, SlamLabApp>) -> Option<usize> {
+    session(h).filters()[0]
+        .filter()
+        .gaussian()
+        .map(|g| g.mean().len())
+}
+
 fn robot_covariance_trace(h: &Harness<'_, SlamLabApp>) -> f64 {
     session(h).filters()[0].filter().robot_covariance().trace()
 }
@@ -42,13 +50,7 @@ fn step_phase_button_changes_the_filter_state() {
         after_predict > 0.0,
         "prediction grows the robot's covariance"
     );
-    assert_eq!(
-        session(&h).filters()[0]
-            .filter()
-            .gaussian()
-            .map(|g| g.mean().len()),
-        Some(3)
-    );
+    assert_eq!(state_dimension(&h), Some(3));
 
     // The '.' key steps too: the first update of the tick adds a landmark.
     h.key_press(egui::Key::Period);
@@ -57,26 +59,14 @@ fn step_phase_button_changes_the_filter_state() {
         session(&h).last_phase(),
         Some(Phase::Update { index: 1, .. })
     ));
-    assert_eq!(
-        session(&h).filters()[0]
-            .filter()
-            .gaussian()
-            .map(|g| g.mean().len()),
-        Some(5)
-    );
+    assert_eq!(state_dimension(&h), Some(5));
     assert!(!h.state().is_running(), "stepping leaves the clock paused");
 
     // ',' (and "Step back") goes back one phase: the landmark is gone again.
     h.key_press(egui::Key::Comma);
     h.run();
     assert_eq!(session(&h).last_phase(), Some(Phase::Predict));
-    assert_eq!(
-        session(&h).filters()[0]
-            .filter()
-            .gaussian()
-            .map(|g| g.mean().len()),
-        Some(3)
-    );
+    assert_eq!(state_dimension(&h), Some(3));
     assert!((robot_covariance_trace(&h) - after_predict).abs() < 1e-12);
     h.get_by_label("Step back").click();
     h.run();
