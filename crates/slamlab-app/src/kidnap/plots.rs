@@ -5,14 +5,101 @@
 
 use super::filter_color;
 use crate::export::PlotSeries;
-use crate::widgets::plots::{line_width, thin, time_plot, title_ui};
-use egui_plot::{Line, LineStyle, PlotPoints};
-use slamlab_sim::localization::MclRun;
+use crate::widgets::plots::{
+    Mark, Styled, draw_series, line_width, series_data, time_plot, title_ui,
+};
+use slamlab_sim::localization::{MclRun, UpdateRecord};
+
+/// Every plotted series, defined once: the plots draw them, the CSV export
+/// writes them unthinned.
+fn plotted(run: &MclRun) -> Vec<Styled> {
+    let dt = run.scenario().dt;
+    let log10 = |l: f64| l / std::f64::consts::LN_10;
+    let mut out = Vec::new();
+    for (k, f) in run.filters().iter().enumerate() {
+        let color = filter_color(k, f.name);
+        let name = f.name.to_uppercase();
+        let over_time = |pick: &dyn Fn(&UpdateRecord) -> Option<f64>| {
+            f.updates
+                .iter()
+                .filter_map(|u| pick(u).map(|v| [u.tick as f64 * dt, v]))
+                .collect::<Vec<_>>()
+        };
+        // Per plot: the solid series, then the dashed one.
+        for (plot, axis, series, mark, points) in [
+            (
+                "Position error",
+                "error (m)",
+                "error",
+                Mark::Solid,
+                over_time(&|u| Some(u.position_error)),
+            ),
+            (
+                "Position error",
+                "error (m)",
+                "2σ bound",
+                Mark::Dashed,
+                over_time(&|u| Some(u.position_2sigma)),
+            ),
+            (
+                "w_slow and w_fast",
+                "log10 w",
+                "w_fast",
+                Mark::Solid,
+                over_time(&|u| u.log_w_fast.map(log10)),
+            ),
+            (
+                "w_slow and w_fast",
+                "log10 w",
+                "w_slow",
+                Mark::Dashed,
+                over_time(&|u| u.log_w_slow.map(log10)),
+            ),
+            (
+                "Particles and N_eff",
+                "particles",
+                "particles",
+                Mark::Solid,
+                over_time(&|u| Some(u.particles as f64)),
+            ),
+            (
+                "Particles and N_eff",
+                "particles",
+                "N_eff",
+                Mark::Dashed,
+                over_time(&|u| Some(u.n_eff)),
+            ),
+            (
+                "Recovery",
+                "fraction",
+                "injection probability",
+                Mark::Solid,
+                over_time(&|u| Some(u.injection_probability)),
+            ),
+            (
+                "Recovery",
+                "fraction",
+                "drawn anew",
+                Mark::Dashed,
+                over_time(&|u| Some(u.randomized)),
+            ),
+        ] {
+            let width = line_width(k, if mark == Mark::Solid { 1.2 } else { 1.0 });
+            out.push(Styled::new(
+                PlotSeries::new(plot, "time (s)", axis, format!("{name} {series}"), points),
+                color,
+                mark,
+                width,
+            ));
+        }
+    }
+    out
+}
 
 /// The plots side by side.
 pub fn plots_ui(ui: &mut egui::Ui, run: &MclRun) {
+    let all = plotted(run);
     let height = (ui.available_height() - 26.0).max(80.0);
-    let dt = run.scenario().dt;
     let plot = |id: &str, y: &str| {
         time_plot(id, y, height)
             .link_axis(egui::Id::unique("kidnap_time_axis"), [true, false])
@@ -27,35 +114,9 @@ pub fn plots_ui(ui: &mut egui::Ui, run: &MclRun) {
             "Distance from the estimate (the heaviest cluster's weighted mean) to the true robot, \
              and the estimate's own 2σ bound along its longest axis",
         );
-        plot("kidnap_error", "error (m)").show(ui, |plot_ui| {
-            for (k, f) in run.filters().iter().enumerate() {
-                let color = filter_color(k, f.name);
-                let name = f.name.to_uppercase();
-                let error = thin(
-                    f.updates
-                        .iter()
-                        .map(|u| [u.tick as f64 * dt, u.position_error])
-                        .collect(),
-                );
-                let bound = thin(
-                    f.updates
-                        .iter()
-                        .map(|u| [u.tick as f64 * dt, u.position_2sigma])
-                        .collect(),
-                );
-                plot_ui.line(
-                    Line::new(format!("{name} error"), PlotPoints::new(error))
-                        .color(color)
-                        .width(line_width(k, 1.2)),
-                );
-                plot_ui.line(
-                    Line::new(format!("{name} 2σ bound"), PlotPoints::new(bound))
-                        .color(color)
-                        .style(LineStyle::dashed_dense())
-                        .width(line_width(k, 1.0)),
-                );
-            }
-        });
+        plot("kidnap_error", "error (m)")
+            .show(ui, |plot_ui| draw_series(plot_ui, &all, "Position error"));
+
         let ui = &mut columns[1];
         title_ui(
             ui,
@@ -65,49 +126,31 @@ pub fn plots_ui(ui: &mut egui::Ui, run: &MclRun) {
              and w_fast falls below w_slow first: that gap is the injection probability. Filters \
              without recovery (MCL, CMCL) have none.",
         );
-        if !run
+        if run
             .filters()
             .iter()
             .any(|f| matches!(f.name, "amcl" | "acmcl"))
         {
+            plot("kidnap_wslow", "log10 w")
+                .show(ui, |plot_ui| draw_series(plot_ui, &all, "w_slow and w_fast"));
+        } else {
             ui.label(
                 "Only Augmented MCL keeps these averages: choose amcl or acmcl as the \
                  estimator to see w_fast fall below w_slow after a kidnap.",
             );
-        } else {
-            plot("kidnap_wslow", "log10 w").show(ui, |plot_ui| {
-            for (k, f) in run.filters().iter().enumerate() {
-                let color = filter_color(k, f.name);
-                let name = f.name.to_uppercase();
-                let series = |pick: fn(&slamlab_sim::localization::UpdateRecord) -> Option<f64>| {
-                    thin(
-                        f.updates
-                            .iter()
-                            .filter_map(|u| {
-                                pick(u).map(|l| [u.tick as f64 * dt, l / std::f64::consts::LN_10])
-                            })
-                            .collect(),
-                    )
-                };
-                let fast = series(|u| u.log_w_fast);
-                let slow = series(|u| u.log_w_slow);
-                if fast.is_empty() {
-                    continue;
-                }
-                plot_ui.line(
-                    Line::new(format!("{name} w_fast"), PlotPoints::new(fast))
-                        .color(color)
-                        .width(line_width(k, 1.2)),
-                );
-                plot_ui.line(
-                    Line::new(format!("{name} w_slow"), PlotPoints::new(slow))
-                        .color(color)
-                        .style(LineStyle::dashed_dense())
-                        .width(line_width(k, 1.0)),
-                );
-            }
-        });
         }
+
+        let ui = &mut columns[2];
+        title_ui(
+            ui,
+            "Particles and N_eff",
+            "How many particles each filter carries (solid; KLD-sampling adapts it) and the \
+             effective sample size N_eff = 1 / Σ w² after weighting (dashed): the particle count \
+             when all weights are equal, 1 when one particle holds all the weight",
+        );
+        plot("kidnap_count", "particles")
+            .show(ui, |plot_ui| draw_series(plot_ui, &all, "Particles and N_eff"));
+
         let ui = &mut columns[3];
         title_ui(
             ui,
@@ -117,146 +160,11 @@ pub fn plots_ui(ui: &mut egui::Ui, run: &MclRun) {
         );
         plot("kidnap_recovery", "fraction")
             .include_y(1.0)
-            .show(ui, |plot_ui| {
-                for (k, f) in run.filters().iter().enumerate() {
-                    let color = filter_color(k, f.name);
-                    let name = f.name.to_uppercase();
-                    let p = thin(
-                        f.updates
-                            .iter()
-                            .map(|u| [u.tick as f64 * dt, u.injection_probability])
-                            .collect(),
-                    );
-                    let r = thin(
-                        f.updates
-                            .iter()
-                            .map(|u| [u.tick as f64 * dt, u.randomized])
-                            .collect(),
-                    );
-                    plot_ui.line(
-                        Line::new(format!("{name} injection probability"), PlotPoints::new(p))
-                            .color(color)
-                            .width(line_width(k, 1.2)),
-                    );
-                    plot_ui.line(
-                        Line::new(format!("{name} drawn anew"), PlotPoints::new(r))
-                            .color(color)
-                            .style(LineStyle::dashed_dense())
-                            .width(line_width(k, 1.0)),
-                    );
-                }
-            });
-        let ui = &mut columns[2];
-        title_ui(
-            ui,
-            "Particles and N_eff",
-            "How many particles each filter carries (solid; KLD-sampling adapts it) and the \
-             effective sample size N_eff = 1 / Σ w² after weighting (dashed): the particle count \
-             when all weights are equal, 1 when one particle holds all the weight",
-        );
-        plot("kidnap_count", "particles").show(ui, |plot_ui| {
-            for (k, f) in run.filters().iter().enumerate() {
-                let color = filter_color(k, f.name);
-                let name = f.name.to_uppercase();
-                let count = thin(
-                    f.updates
-                        .iter()
-                        .map(|u| [u.tick as f64 * dt, u.particles as f64])
-                        .collect(),
-                );
-                let n_eff = thin(
-                    f.updates
-                        .iter()
-                        .map(|u| [u.tick as f64 * dt, u.n_eff])
-                        .collect(),
-                );
-                plot_ui.line(
-                    Line::new(format!("{name} particles"), PlotPoints::new(count))
-                        .color(color)
-                        .width(line_width(k, 1.2)),
-                );
-                plot_ui.line(
-                    Line::new(format!("{name} N_eff"), PlotPoints::new(n_eff))
-                        .color(color)
-                        .style(LineStyle::dashed_dense())
-                        .width(line_width(k, 1.0)),
-                );
-            }
-        });
+            .show(ui, |plot_ui| draw_series(plot_ui, &all, "Recovery"));
     });
 }
 
 /// Every plot's series, unthinned, for the CSV export.
 pub fn series(run: &MclRun) -> Vec<PlotSeries> {
-    let dt = run.scenario().dt;
-    let mut out = Vec::new();
-    for f in run.filters() {
-        let name = f.name.to_uppercase();
-        let over_time = |pick: &dyn Fn(&slamlab_sim::localization::UpdateRecord) -> Option<f64>| {
-            f.updates
-                .iter()
-                .filter_map(|u| pick(u).map(|v| [u.tick as f64 * dt, v]))
-                .collect::<Vec<_>>()
-        };
-        let log10 = |l: f64| l / std::f64::consts::LN_10;
-        for (plot, axis, series, points) in [
-            (
-                "Position error",
-                "error (m)",
-                "error",
-                over_time(&|u| Some(u.position_error)),
-            ),
-            (
-                "Position error",
-                "error (m)",
-                "2σ bound",
-                over_time(&|u| Some(u.position_2sigma)),
-            ),
-            (
-                "w_slow and w_fast",
-                "log10 w",
-                "w_fast",
-                over_time(&|u| u.log_w_fast.map(log10)),
-            ),
-            (
-                "w_slow and w_fast",
-                "log10 w",
-                "w_slow",
-                over_time(&|u| u.log_w_slow.map(log10)),
-            ),
-            (
-                "Particles and N_eff",
-                "particles",
-                "particles",
-                over_time(&|u| Some(u.particles as f64)),
-            ),
-            (
-                "Particles and N_eff",
-                "particles",
-                "N_eff",
-                over_time(&|u| Some(u.n_eff)),
-            ),
-            (
-                "Recovery",
-                "fraction",
-                "injection probability",
-                over_time(&|u| Some(u.injection_probability)),
-            ),
-            (
-                "Recovery",
-                "fraction",
-                "drawn anew",
-                over_time(&|u| Some(u.randomized)),
-            ),
-        ] {
-            out.push(PlotSeries::new(
-                plot,
-                "time (s)",
-                axis,
-                format!("{name} {series}"),
-                points,
-            ));
-        }
-    }
-    out
+    series_data(plotted(run))
 }

@@ -3,9 +3,11 @@
 
 use crate::export::PlotSeries;
 use crate::palette;
+use crate::widgets::plots::{
+    Mark, Styled, draw_series, plot_values, series_data, series_key_ui, time_plot_without_legend,
+};
 pub(super) use crate::widgets::plots::{line_width, thin, time_plot, title_ui};
-use crate::widgets::plots::{series_key_ui, time_plot_without_legend};
-use egui_plot::{HLine, Line, LineStyle, Plot, PlotPoints, Points, Span};
+use egui_plot::{HLine, LineStyle, Plot, Span};
 use slamlab_core::stats::chi2_quantile;
 use slamlab_sim::LandmarkSession;
 
@@ -122,98 +124,42 @@ pub fn plots_ui(ui: &mut egui::Ui, session: &LandmarkSession) {
         "· solid: error, NEES, NIS; dashed: the filter's own 2σ bound; green: the 95% band \
          of a consistent filter",
     );
+    let all = plotted(session);
     let height = (ui.available_height() - 26.0).max(80.0);
-    let dt = session.scenario().dt;
     ui.columns(4, |columns| {
         // 1. Robot position error and the 2σ bound.
         let ui = &mut columns[0];
         title_ui(
             ui,
-            "Robot position error",
+            ROBOT_ERROR,
             "|true − estimated position| and the filter's own 2σ bound 2√(σx² + σy²)",
         );
-        plot("plot_robot_error", "error (m)", height).show(ui, |plot_ui| {
-            for (index, run) in session.filters().iter().enumerate() {
-                let color = palette::estimator_color(run.kind.name());
-                let name = run.kind.name().to_uppercase();
-                let error = thin(run.history.iter().map(|m| [m.time, m.position_error]).collect());
-                let bound = thin(
-                    run.history
-                        .iter()
-                        .map(|m| [m.time, m.position_bound_2sigma])
-                        .collect(),
-                );
-                plot_ui.line(
-                    Line::new(format!("{name} error"), PlotPoints::new(error))
-                        .color(color)
-                        .width(line_width(index, 1.2)),
-                );
-                plot_ui.line(
-                    Line::new(format!("{name} 2σ bound"), PlotPoints::new(bound))
-                        .color(color)
-                        .style(LineStyle::dashed_dense())
-                        .width(line_width(index, 1.0)),
-                );
-            }
-        });
+        plot("plot_robot_error", "error (m)", height)
+            .show(ui, |plot_ui| draw_series(plot_ui, &all, ROBOT_ERROR));
 
         // 2. Landmark RMS error.
         let ui = &mut columns[1];
         title_ui(
             ui,
-            "Mean landmark error",
+            LANDMARK_ERROR,
             "Root mean square position error over the landmarks in each filter's state",
         );
-        plot("plot_landmark_rmse", "RMS error (m)", height).show(ui, |plot_ui| {
-            for (index, run) in session.filters().iter().enumerate() {
-                let color = palette::estimator_color(run.kind.name());
-                let points = thin(
-                    run.history
-                        .iter()
-                        .filter_map(|m| m.landmark_rmse.map(|r| [m.time, r]))
-                        .collect(),
-                );
-                plot_ui.line(
-                    Line::new(format!("{} landmarks", run.kind.name().to_uppercase()), PlotPoints::new(points))
-                        .color(color)
-                        .width(line_width(index, 1.2)),
-                );
-            }
-        });
+        plot("plot_landmark_rmse", "RMS error (m)", height)
+            .show(ui, |plot_ui| draw_series(plot_ui, &all, LANDMARK_ERROR));
 
         // 3. Robot-pose NEES with the 3-dof band.
         let ui = &mut columns[2];
         let (lo, hi) = band_95(3.0);
         title_ui(
             ui,
-            "Robot pose NEES (3 dof)",
+            NEES,
             "e^T P_RR^-1 e of the robot pose each tick. Above the band: overconfident; below: conservative.",
         );
-        let y_max = consistency_y_max(
-            session
-                .filters()
-                .iter()
-                .flat_map(|run| run.history.iter().filter_map(|m| m.nees)),
-            hi,
-        );
         plot("plot_nees", "NEES", height)
-            .default_y_bounds(0.0, y_max)
+            .default_y_bounds(0.0, consistency_y_max(plot_values(&all, NEES), hi))
             .show(ui, |plot_ui| {
                 band_ui(plot_ui, lo, hi);
-                for (index, run) in session.filters().iter().enumerate() {
-                    let color = palette::estimator_color(run.kind.name());
-                    let points = thin(
-                        run.history
-                            .iter()
-                            .filter_map(|m| m.nees.map(|n| [m.time, n]))
-                            .collect(),
-                    );
-                    plot_ui.line(
-                        Line::new(format!("{} NEES", run.kind.name().to_uppercase()), PlotPoints::new(points))
-                            .color(color)
-                            .width(line_width(index, 1.0)),
-                    );
-                }
+                draw_series(plot_ui, &all, NEES);
             });
 
         // 4. NIS of every update with the 2-dof band.
@@ -221,101 +167,110 @@ pub fn plots_ui(ui: &mut egui::Ui, session: &LandmarkSession) {
         let (lo, hi) = band_95(2.0);
         title_ui(
             ui,
-            "Update NIS (2 dof)",
+            NIS,
             "ν^T S^-1 ν of every landmark update. Above the band: the innovations are larger than the filter expects.",
         );
-        let y_max = consistency_y_max(
-            session
-                .filters()
-                .iter()
-                .flat_map(|run| run.nis.iter().map(|s| s.nis)),
-            hi,
-        );
         plot("plot_nis", "NIS", height)
-            .default_y_bounds(0.0, y_max)
+            .default_y_bounds(0.0, consistency_y_max(plot_values(&all, NIS), hi))
             .show(ui, |plot_ui| {
                 band_ui(plot_ui, lo, hi);
-                for (index, run) in session.filters().iter().enumerate() {
-                    let color = palette::estimator_color(run.kind.name());
-                    let points = thin(
-                        run.nis
-                            .iter()
-                            .map(|s| [s.tick as f64 * dt, s.nis])
-                            .collect(),
-                    );
-                    plot_ui.points(
-                        Points::new(format!("{} NIS", run.kind.name().to_uppercase()), PlotPoints::new(points))
-                            .color(color)
-                            .radius(line_width(index, 1.4)),
-                    );
-                }
+                draw_series(plot_ui, &all, NIS);
             });
     });
 }
 
-/// Every plot's series, unthinned, for the CSV export (the same data as above, and
-/// FastSLAM's N_eff from the parameter panel).
-pub fn series(session: &LandmarkSession) -> Vec<PlotSeries> {
+const ROBOT_ERROR: &str = "Robot position error";
+const LANDMARK_ERROR: &str = "Mean landmark error";
+const NEES: &str = "Robot pose NEES (3 dof)";
+const NIS: &str = "Update NIS (2 dof)";
+
+/// Every series, defined once: the four plots draw theirs, the CSV export
+/// writes them all unthinned (with FastSLAM's N_eff, which the parameter panel
+/// plots).
+fn plotted(session: &LandmarkSession) -> Vec<Styled> {
     let dt = session.scenario().dt;
     let mut out = Vec::new();
-    for run in session.filters() {
+    for (index, run) in session.filters().iter().enumerate() {
         let name = run.kind.name().to_uppercase();
+        let color = palette::estimator_color(run.kind.name());
         let over_time = |pick: &dyn Fn(&slamlab_sim::session::TickMetrics) -> Option<f64>| {
             run.history
                 .iter()
                 .filter_map(|m| pick(m).map(|v| [m.time, v]))
                 .collect::<Vec<_>>()
         };
-        let error = "Robot position error";
-        out.push(PlotSeries::new(
-            error,
-            "time (s)",
+        let mut push = |plot: &str, axis: &str, series: &str, points, mark, width| {
+            out.push(Styled::new(
+                PlotSeries::new(plot, "time (s)", axis, format!("{name} {series}"), points),
+                color,
+                mark,
+                line_width(index, width),
+            ));
+        };
+        push(
+            ROBOT_ERROR,
             "error (m)",
-            format!("{name} error"),
+            "error",
             over_time(&|m| Some(m.position_error)),
-        ));
-        out.push(PlotSeries::new(
-            error,
-            "time (s)",
+            Mark::Solid,
+            1.2,
+        );
+        push(
+            ROBOT_ERROR,
             "error (m)",
-            format!("{name} 2σ bound"),
+            "2σ bound",
             over_time(&|m| Some(m.position_bound_2sigma)),
-        ));
-        out.push(PlotSeries::new(
-            "Mean landmark error",
-            "time (s)",
+            Mark::Dashed,
+            1.0,
+        );
+        push(
+            LANDMARK_ERROR,
             "RMS error (m)",
-            format!("{name} landmarks"),
+            "landmarks",
             over_time(&|m| m.landmark_rmse),
-        ));
-        out.push(PlotSeries::new(
-            "Robot pose NEES (3 dof)",
-            "time (s)",
+            Mark::Solid,
+            1.2,
+        );
+        push(
+            NEES,
             "NEES",
-            format!("{name} NEES"),
+            "NEES",
             over_time(&|m| m.nees),
-        ));
-        out.push(PlotSeries::new(
-            "Update NIS (2 dof)",
-            "time (s)",
+            Mark::Solid,
+            1.0,
+        );
+        push(
+            NIS,
             "NIS",
-            format!("{name} NIS"),
+            "NIS",
             run.nis
                 .iter()
                 .map(|s| [s.tick as f64 * dt, s.nis])
                 .collect(),
-        ));
+            Mark::Dots,
+            1.4,
+        );
         if !run.n_eff.is_empty() {
-            out.push(PlotSeries::new(
-                "N_eff before each resampling",
-                "tick",
-                "N_eff",
-                format!("{name} N_eff"),
-                run.n_eff.iter().map(|n| [n.tick as f64, n.n_eff]).collect(),
+            out.push(Styled::new(
+                PlotSeries::new(
+                    "N_eff before each resampling",
+                    "tick",
+                    "N_eff",
+                    format!("{name} N_eff"),
+                    run.n_eff.iter().map(|n| [n.tick as f64, n.n_eff]).collect(),
+                ),
+                color,
+                Mark::Solid,
+                line_width(index, 1.2),
             ));
         }
     }
     out
+}
+
+/// Every plot's series, unthinned, for the CSV export.
+pub fn series(session: &LandmarkSession) -> Vec<PlotSeries> {
+    series_data(plotted(session))
 }
 
 #[cfg(test)]

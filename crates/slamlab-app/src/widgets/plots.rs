@@ -1,9 +1,104 @@
 //! Plot helpers every lesson shares: a time axis with a 1-2-5 grid and honest
-//! labels, titles with hover help, thinning of long series, and line widths that
-//! keep coinciding filters visible.
+//! labels, titles with hover help, thinning of long series, line widths that keep
+//! coinciding filters visible, and series defined once for both the plot and the
+//! CSV export ([`Styled`]).
 
-use egui_plot::{Legend, Plot};
+use crate::export::PlotSeries;
+use egui::Color32;
+use egui_plot::{Legend, Line, LineStyle, Plot, PlotPoints, PlotUi, Points};
 use slamlab_core::math;
+
+/// How a series is drawn.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Mark {
+    /// A solid line.
+    Solid,
+    /// A dashed line (a bound, a second quantity of the same filter).
+    Dashed,
+    /// A dashed ±bound: the series holds the bound, drawn at +y and at −y.
+    DashedPlusMinus,
+    /// Separate points (one per event, such as an update).
+    Dots,
+}
+
+/// A plotted series as a lesson defines it, once: its data (what the CSV export
+/// writes, unthinned) and how the plot draws it.
+#[derive(Clone, Debug)]
+pub struct Styled {
+    /// The plot it belongs to, its axes, its name and its points.
+    pub data: PlotSeries,
+    /// Its colour.
+    pub color: Color32,
+    /// Line or points.
+    pub mark: Mark,
+    /// Line width or point radius, points.
+    pub width: f32,
+}
+
+impl Styled {
+    /// `data` drawn as `mark` in `color`, `width` points wide.
+    pub fn new(data: PlotSeries, color: Color32, mark: Mark, width: f32) -> Self {
+        Self {
+            data,
+            color,
+            mark,
+            width,
+        }
+    }
+}
+
+/// Draws, in order, every series of `all` that belongs to the plot titled `plot`,
+/// thinned for the screen. Series without points are left out (no legend entry
+/// for nothing).
+pub fn draw_series(plot_ui: &mut PlotUi<'_>, all: &[Styled], plot: &str) {
+    for s in all.iter().filter(|s| s.data.plot == plot) {
+        let points = thin(s.data.points.clone());
+        if points.is_empty() {
+            continue;
+        }
+        let name = s.data.series.clone();
+        match s.mark {
+            Mark::DashedPlusMinus => {
+                let below: Vec<[f64; 2]> = points.iter().map(|p| [p[0], -p[1]]).collect();
+                for side in [points, below] {
+                    plot_ui.line(
+                        Line::new(name.clone(), PlotPoints::new(side))
+                            .color(s.color)
+                            .style(LineStyle::dashed_dense())
+                            .width(s.width),
+                    );
+                }
+            }
+            Mark::Solid | Mark::Dashed => {
+                let line = Line::new(name, PlotPoints::new(points))
+                    .color(s.color)
+                    .width(s.width);
+                plot_ui.line(if s.mark == Mark::Dashed {
+                    line.style(LineStyle::dashed_dense())
+                } else {
+                    line
+                });
+            }
+            Mark::Dots => plot_ui.points(
+                Points::new(name, PlotPoints::new(points))
+                    .color(s.color)
+                    .radius(s.width),
+            ),
+        }
+    }
+}
+
+/// The data of every series, for the CSV export.
+pub fn series_data(all: Vec<Styled>) -> Vec<PlotSeries> {
+    all.into_iter().map(|s| s.data).collect()
+}
+
+/// The y values of the series of plot `plot` (for a plot's y range).
+pub fn plot_values<'a>(all: &'a [Styled], plot: &'a str) -> impl Iterator<Item = f64> + 'a {
+    all.iter()
+        .filter(move |s| s.data.plot == plot)
+        .flat_map(|s| s.data.points.iter().map(|p| p[1]))
+}
 
 /// Line width (or point radius) of the `index`-th filter's series: the first is drawn
 /// widest, so that where two filters agree the later line runs inside the earlier one
