@@ -211,6 +211,30 @@ mod tests {
     use super::*;
 
     #[test]
+    fn a_plot_reads_its_own_series_and_the_export_all_of_them() {
+        let series = |plot: &str, name: &str, y: f64| {
+            Styled::new(
+                PlotSeries::new(plot, "t", "y", name, vec![[0.0, y], [1.0, 2.0 * y]]),
+                Color32::RED,
+                Mark::Solid,
+                1.0,
+            )
+        };
+        let all = vec![
+            series("A", "a1", 1.0),
+            series("B", "b1", 5.0),
+            series("A", "a2", 3.0),
+        ];
+        assert_eq!(
+            plot_values(&all, "A").collect::<Vec<_>>(),
+            [1.0, 2.0, 3.0, 6.0]
+        );
+        assert_eq!(plot_values(&all, "C").count(), 0);
+        let names: Vec<String> = series_data(all).into_iter().map(|s| s.series).collect();
+        assert_eq!(names, ["a1", "b1", "a2"], "every series, in order");
+    }
+
+    #[test]
     fn thinning_keeps_the_ends_and_bounds_the_count() {
         let points: Vec<[f64; 2]> = (0..10_000).map(|i| [i as f64, 0.0]).collect();
         let thinned = thin(points);
