@@ -3,7 +3,7 @@
 //! `slamlab experiment fastslam`.
 //!
 //! The truth and the noise are exactly the landmark lesson's
-//! ([`crate::LandmarkSession`]): the world from [`LandmarkWorld::generate`] with the
+//! ([`crate::LandmarkSession`]): the world from [`LandmarkScenario::world`] with the
 //! scenario's layout, the command of the scenario's controller (the circle of
 //! thesis `000` Experiment 1 by default), executed with Gaussian noise
 //! `(v_std, w_std)` from the [`Stream::Control`] stream and moved along the exact
@@ -46,13 +46,7 @@ impl LandmarkTruth {
     /// The world of `scenario` with the robot at its start pose. The scenario is
     /// taken as given (run [`crate::params::sanitize`] on user input first).
     pub fn new(scenario: &LandmarkScenario) -> Self {
-        let world = LandmarkWorld::generate(
-            scenario.layout,
-            scenario.landmarks,
-            scenario.world_size,
-            scenario.circle_radius(),
-            scenario.seed,
-        );
+        let world = scenario.world();
         Self {
             sensor: scenario.sensor(),
             control_rng: stream_rng(scenario.seed, Stream::Control),
@@ -253,11 +247,7 @@ pub fn run_fastslam(
                     .landmark(l.id)
                     .map(|t| (t.position - l.mean).norm_squared())
             } else {
-                world
-                    .landmarks
-                    .iter()
-                    .map(|t| (t.position - l.mean).norm_squared())
-                    .min_by(f64::total_cmp)
+                world.nearest_squared_distance(&l.mean)
             }
         })
         .collect();
@@ -525,13 +515,7 @@ mod tests {
             bearing_std: 0.03,
             ..LandmarkScenario::default()
         };
-        let world = LandmarkWorld::generate(
-            scenario.layout,
-            10,
-            scenario.world_size,
-            scenario.circle_radius(),
-            1,
-        );
+        let world = scenario.world();
         let closest = world
             .landmarks
             .iter()

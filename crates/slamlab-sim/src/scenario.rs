@@ -1,7 +1,7 @@
 //! The landmark-SLAM scenario: plain data that runs the same headless, in the
 //! app and from a URL.
 
-use crate::world::LandmarkLayout;
+use crate::world::{LandmarkLayout, LandmarkWorld};
 use serde::{Deserialize, Serialize};
 use slamlab_core::association::DEFAULT_GATE;
 use slamlab_core::kalman::{FilterConfig, FilterNoise, UnscentedParams};
@@ -250,6 +250,17 @@ impl LandmarkScenario {
         let r = self.circle_radius().min(0.9 * half);
         let turning_left = !matches!(self.controller, ControllerKind::Circle { w, .. } if w < 0.0);
         Pose2::new(0.0, if turning_left { -r } else { r }, 0.0)
+    }
+
+    /// Its world: the landmarks of its layout, count, size and seed.
+    pub fn world(&self) -> LandmarkWorld {
+        LandmarkWorld::generate(
+            self.layout,
+            self.landmarks,
+            self.world_size,
+            self.circle_radius(),
+            self.seed,
+        )
     }
 
     /// The sensor it simulates.

@@ -107,11 +107,39 @@ impl LandmarkWorld {
     pub fn landmark(&self, id: usize) -> Option<&Landmark> {
         self.landmarks.iter().find(|l| l.id == id)
     }
+
+    /// The squared distance from `p` to the nearest landmark (`None` for a
+    /// world without landmarks): how far off an estimate is when the filter
+    /// labels its landmarks itself.
+    pub fn nearest_squared_distance(&self, p: &Vector2<f64>) -> Option<f64> {
+        self.landmarks
+            .iter()
+            .map(|t| (t.position - p).norm_squared())
+            .min_by(f64::total_cmp)
+    }
 }
 
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn the_nearest_landmark_is_the_closest_one() {
+        let world = LandmarkWorld::generate(LandmarkLayout::Random, 10, 16.0, 3.2, 5);
+        let p = Vector2::new(0.3, -0.7);
+        let brute = world
+            .landmarks
+            .iter()
+            .map(|l| (l.position - p).norm_squared())
+            .fold(f64::INFINITY, f64::min);
+        assert_eq!(world.nearest_squared_distance(&p), Some(brute));
+        assert_eq!(
+            world.nearest_squared_distance(&world.landmarks[3].position),
+            Some(0.0)
+        );
+        let empty = LandmarkWorld::generate(LandmarkLayout::Random, 0, 16.0, 3.2, 5);
+        assert_eq!(empty.nearest_squared_distance(&p), None);
+    }
 
     #[test]
     fn layouts_fit_the_world_and_are_reproducible() {

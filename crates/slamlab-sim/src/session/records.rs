@@ -152,13 +152,7 @@ pub(crate) fn nearest_landmark_rmse(
     let squared: Vec<f64> = filter
         .landmarks()
         .iter()
-        .filter_map(|l| {
-            world
-                .landmarks
-                .iter()
-                .map(|t| (t.position - l.mean).norm_squared())
-                .min_by(f64::total_cmp)
-        })
+        .filter_map(|l| world.nearest_squared_distance(&l.mean))
         .collect();
     (!squared.is_empty()).then(|| (squared.iter().sum::<f64>() / squared.len() as f64).sqrt())
 }

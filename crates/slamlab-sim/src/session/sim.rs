@@ -247,13 +247,7 @@ impl LandmarkSim {
             .iter()
             .map(ParamIssue::to_string)
             .collect();
-        let world = LandmarkWorld::generate(
-            scenario.layout,
-            scenario.landmarks,
-            scenario.world_size,
-            scenario.circle_radius(),
-            scenario.seed,
-        );
+        let world = scenario.world();
         let start = scenario.start_pose();
         let mut filters = Vec::new();
         for &kind in &scenario.estimators {
