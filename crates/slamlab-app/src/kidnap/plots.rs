@@ -126,11 +126,7 @@ pub fn plots_ui(ui: &mut egui::Ui, run: &MclRun) {
              and w_fast falls below w_slow first: that gap is the injection probability. Filters \
              without recovery (MCL, CMCL) have none.",
         );
-        if run
-            .filters()
-            .iter()
-            .any(|f| matches!(f.name, "amcl" | "acmcl"))
-        {
+        if run.filters().iter().any(|f| f.filter.kind().injects()) {
             plot("kidnap_wslow", "log10 w")
                 .show(ui, |plot_ui| draw_series(plot_ui, &all, "w_slow and w_fast"));
         } else {

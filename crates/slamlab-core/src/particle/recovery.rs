@@ -69,7 +69,8 @@ impl Recovery {
         .find(|r| r.name() == name)
     }
 
-    fn injects(self) -> bool {
+    /// Whether it injects random particles (Augmented MCL's `w_slow`/`w_fast`).
+    pub fn injects(self) -> bool {
         matches!(self, Recovery::Augmented | Recovery::AugmentedCostmap)
     }
 
