@@ -92,6 +92,10 @@ pub fn heatmap_ui(
     version: u64,
 ) {
     let filters = session.filters();
+    if filters.is_empty() {
+        ui.label("No estimator is running.");
+        return;
+    }
     // Particle filters keep no joint covariance: say so, and offer the others.
     for run in filters.iter().filter(|r| r.filter().gaussian().is_none()) {
         ui.label(format!(
