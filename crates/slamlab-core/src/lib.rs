@@ -22,6 +22,7 @@ pub mod odometry;
 pub mod particle;
 pub mod random;
 pub mod range_bearing;
+pub mod scan;
 pub mod stats;
 
 pub use geometry::{CovarianceEllipse, Pose2, wrap_angle};
