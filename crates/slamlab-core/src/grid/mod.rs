@@ -18,10 +18,15 @@
 
 mod costmap;
 mod distance;
+mod probability;
 mod raycast;
 
 pub use costmap::{Costmap, FreeCells};
 pub use distance::{DistanceField, squared_distance_transform};
+pub use probability::{
+    InsertParams, InsertReport, LogOddsSteps, ProbabilityGrid, TILE, UpdateRule, log_odds,
+    probability, segment_cells,
+};
 
 use crate::geometry::Pose2;
 use crate::math;

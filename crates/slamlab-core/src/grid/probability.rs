@@ -1,0 +1,975 @@
+//! A growable occupancy probability grid built from lidar scans: the map the
+//! lidar lessons make (occupancy-grid mapping, grid FastSLAM, submaps).
+//!
+//! Cell `(i, j)` covers the square `[i r, (i+1) r) x [j r, (j+1) r)` of the
+//! world (`r` the resolution); `i` and `j` may be negative, and the grid grows
+//! in whole tiles of [`TILE`] x [`TILE`] cells wherever a scan reaches, so its
+//! extent need not be known in advance.
+//!
+//! Each cell holds its log odds `l = ln(p / (1 − p))`, or nothing while it has
+//! never been observed. Both textbook update rules are one addition in log-odds
+//! space followed by a clamp; [`UpdateRule`] says which numbers are added and
+//! where the clamp sits:
+//!
+//! - **Log odds with clamping** (Probabilistic Robotics Table 9.1/9.2, the
+//!   slides' form): `l ← clamp(l + l_occ)` for a hit, `l ← clamp(l + l_free)` for
+//!   a miss (the prior `l₀ = 0`, p = 0.5), clamped to `[l_min, l_max]`.
+//! - **Cartographer's probability grid** (thesis `000` Eq. 5.3-5.4):
+//!   `M_new = clamp(odds⁻¹(odds(M_old) · odds(p_hit)))`, clamped to
+//!   `[p_min, p_max]`. Multiplying odds is adding log odds, so this is the
+//!   same step with `l_occ = ln odds(p_hit)`, `l_free = ln odds(p_miss)` and
+//!   the clamp at `ln odds(p_min)` and `ln odds(p_max)`; a never-seen cell
+//!   (odds 1) becomes exactly `p_hit` or `p_miss`, as in Cartographer.
+//!
+//! One scan updates each cell at most once ([`ProbabilityGrid::insert_scan`]):
+//! the *hit* set is the cells holding a beam's end point; the *miss* set is the
+//! cells the beams cross on their way there, minus the hit set. A beam that
+//! returned nothing (max range) marks free space up to a configurable distance
+//! and hits nothing. Cells are stamped during a scan as Cartographer stamps
+//! them (its `kUpdateMarker`): a large offset on the stored value, replaced by
+//! the updated value when the scan is done.
+//!
+//! Tiles are shared copy-on-write (`Arc`): a clone of the grid shares every
+//! tile until one of them writes to it, which copies that tile alone. Grid
+//! FastSLAM's particles and Cartographer's submaps rely on that.
+
+use super::floor_to_i64;
+use crate::geometry::Pose2;
+use crate::math;
+use crate::scan::Scan;
+use serde::{Deserialize, Serialize};
+use std::sync::Arc;
+
+/// Cells per tile side.
+pub const TILE: usize = 32;
+const TILE_CELLS: usize = TILE * TILE;
+/// log2 of [`TILE`].
+const TILE_SHIFT: u32 = 5;
+/// The offset that stamps a cell as updated during one scan; log odds stay
+/// far below it (the clamps are checked to be within ±50).
+const UPDATE_MARK: f32 = 1.0e4;
+/// The largest clamp magnitude accepted, in log odds (p within 1e-22 of 0 or 1).
+const MAX_LOG_ODDS: f64 = 50.0;
+/// The largest grid, in tiles (a tile is 4 KiB): 4 GiB of cells is refused.
+const MAX_TILES: usize = 1 << 20;
+
+/// `ln(p / (1 − p))`.
+pub fn log_odds(p: f64) -> f64 {
+    math::ln(p / (1.0 - p))
+}
+
+/// The probability whose log odds is `l`: `1 / (1 + e^{−l})`.
+pub fn probability(l: f64) -> f64 {
+    1.0 / (1.0 + math::exp(-l))
+}
+
+/// How a scan changes the cells it touches.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(tag = "rule", rename_all = "kebab-case")]
+pub enum UpdateRule {
+    /// Probabilistic Robotics Table 9.2: add `l_occ` on a hit and `l_free` on a
+    /// miss, clamp to `[l_min, l_max]` (log odds).
+    LogOdds {
+        /// Added on a hit (positive).
+        l_occ: f64,
+        /// Added on a miss (negative).
+        l_free: f64,
+        /// Lower clamp.
+        l_min: f64,
+        /// Upper clamp.
+        l_max: f64,
+    },
+    /// Thesis `000` Eq. 5.3-5.4 (Cartographer): multiply the odds by
+    /// `odds(p_hit)` or `odds(p_miss)`, clamp the probability to
+    /// `[p_min, p_max]`.
+    Odds {
+        /// Probability of a hit cell (above 0.5).
+        p_hit: f64,
+        /// Probability of a miss cell (below 0.5).
+        p_miss: f64,
+        /// Lower clamp.
+        p_min: f64,
+        /// Upper clamp.
+        p_max: f64,
+    },
+}
+
+impl Default for UpdateRule {
+    fn default() -> Self {
+        Self::LOG_ODDS
+    }
+}
+
+impl UpdateRule {
+    /// The slides' numbers: `l_occ = 0.85`, `l_free = −0.4` (p = 0.7 and 0.4),
+    /// clamped to `[−2, 3.5]` (p in [0.12, 0.97]).
+    pub const LOG_ODDS: Self = Self::LogOdds {
+        l_occ: 0.85,
+        l_free: -0.4,
+        l_min: -2.0,
+        l_max: 3.5,
+    };
+    /// Cartographer's 2-D defaults: `hit_probability 0.55`,
+    /// `miss_probability 0.49`, clamped to `[0.1, 0.9]`.
+    pub const CARTOGRAPHER: Self = Self::Odds {
+        p_hit: 0.55,
+        p_miss: 0.49,
+        p_min: 0.1,
+        p_max: 0.9,
+    };
+
+    /// The rule's name as the URL and the CLI spell it.
+    pub fn name(&self) -> &'static str {
+        match self {
+            Self::LogOdds { .. } => "log-odds",
+            Self::Odds { .. } => "odds",
+        }
+    }
+
+    /// The rule as four log-odds numbers `(hit, miss, min, max)`, or a message
+    /// saying what is wrong with it (a hit that does not raise the odds, a
+    /// miss that does not lower them, clamps in the wrong order or not
+    /// finite, probabilities outside (0, 1)).
+    pub fn log_odds_steps(&self) -> Result<LogOddsSteps, String> {
+        let steps = match *self {
+            Self::LogOdds {
+                l_occ,
+                l_free,
+                l_min,
+                l_max,
+            } => LogOddsSteps {
+                hit: l_occ,
+                miss: l_free,
+                min: l_min,
+                max: l_max,
+            },
+            Self::Odds {
+                p_hit,
+                p_miss,
+                p_min,
+                p_max,
+            } => {
+                for (name, p) in [
+                    ("p_hit", p_hit),
+                    ("p_miss", p_miss),
+                    ("p_min", p_min),
+                    ("p_max", p_max),
+                ] {
+                    if !(p > 0.0 && p < 1.0) {
+                        return Err(format!("{name} = {p} is not a probability in (0, 1)"));
+                    }
+                }
+                LogOddsSteps {
+                    hit: log_odds(p_hit),
+                    miss: log_odds(p_miss),
+                    min: log_odds(p_min),
+                    max: log_odds(p_max),
+                }
+            }
+        };
+        if !(steps.hit > 0.0) {
+            return Err(format!(
+                "a hit must raise the odds of occupancy (its log odds {:.3} is not positive)",
+                steps.hit
+            ));
+        }
+        if !(steps.miss < 0.0) {
+            return Err(format!(
+                "a miss must lower the odds of occupancy (its log odds {:.3} is not negative)",
+                steps.miss
+            ));
+        }
+        if !(steps.min < 0.0
+            && steps.max > 0.0
+            && steps.min.abs() <= MAX_LOG_ODDS
+            && steps.max <= MAX_LOG_ODDS)
+        {
+            return Err(format!(
+                "the clamp [{:.3}, {:.3}] (log odds) must contain 0 and lie within ±{MAX_LOG_ODDS}",
+                steps.min, steps.max
+            ));
+        }
+        Ok(steps)
+    }
+}
+
+/// An update rule as log-odds steps (see [`UpdateRule::log_odds_steps`]).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct LogOddsSteps {
+    /// Added on a hit.
+    pub hit: f64,
+    /// Added on a miss.
+    pub miss: f64,
+    /// Lower clamp.
+    pub min: f64,
+    /// Upper clamp.
+    pub max: f64,
+}
+
+impl LogOddsSteps {
+    /// One update of a cell holding `old` (`None`: never seen, log odds 0).
+    pub fn apply(&self, old: Option<f64>, hit: bool) -> f64 {
+        let step = if hit { self.hit } else { self.miss };
+        (old.unwrap_or(0.0) + step).clamp(self.min, self.max)
+    }
+}
+
+/// How scans are inserted.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(default)]
+pub struct InsertParams {
+    /// The update rule.
+    pub rule: UpdateRule,
+    /// A beam that returned nothing (max range) marks free space up to this
+    /// distance from the sensor, metres (0: such beams change nothing).
+    /// Cartographer's `missing_data_ray_length`.
+    pub max_range_free: f64,
+}
+
+impl Default for InsertParams {
+    fn default() -> Self {
+        Self {
+            rule: UpdateRule::default(),
+            max_range_free: 5.0,
+        }
+    }
+}
+
+/// What one scan did to the grid.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Serialize, Deserialize)]
+pub struct InsertReport {
+    /// Cells updated as hits.
+    pub hits: usize,
+    /// Cells updated as misses.
+    pub misses: usize,
+    /// Cells never seen before this scan.
+    pub new_cells: usize,
+}
+
+/// One tile of cells: log odds, NaN where never observed.
+#[derive(Clone, Debug, PartialEq)]
+struct Tile {
+    cells: [f32; TILE_CELLS],
+}
+
+impl Tile {
+    fn unknown() -> Self {
+        Self {
+            cells: [f32::NAN; TILE_CELLS],
+        }
+    }
+}
+
+/// The growable grid. See the module documentation.
+#[derive(Clone, Debug)]
+pub struct ProbabilityGrid {
+    resolution: f64,
+    /// Tile coordinates of the lower-left tile held.
+    tile_origin: (i64, i64),
+    /// Tiles held per row and column.
+    tiles_wide: usize,
+    tiles_high: usize,
+    /// `tiles_wide x tiles_high` tiles, row-major from the bottom; `None`
+    /// where no scan has reached.
+    tiles: Vec<Option<Arc<Tile>>>,
+    /// A revision per tile slot, raised whenever the tile changes (for a view
+    /// that redraws only what changed).
+    revisions: Vec<u64>,
+    /// Every revision ever handed out is below this.
+    next_revision: u64,
+    /// The cells stamped during the scan being inserted, with the value each
+    /// gets when the stamp comes off.
+    stamped: Vec<(usize, usize, f32)>,
+}
+
+impl ProbabilityGrid {
+    /// An empty grid of `resolution` metres per cell (a non-positive or
+    /// non-finite resolution becomes 0.05 m).
+    pub fn new(resolution: f64) -> Self {
+        let resolution = if resolution.is_finite() && resolution > 1e-4 {
+            resolution
+        } else {
+            0.05
+        };
+        Self {
+            resolution,
+            tile_origin: (0, 0),
+            tiles_wide: 0,
+            tiles_high: 0,
+            tiles: Vec::new(),
+            revisions: Vec::new(),
+            next_revision: 1,
+            stamped: Vec::new(),
+        }
+    }
+
+    /// Metres per cell.
+    pub fn resolution(&self) -> f64 {
+        self.resolution
+    }
+
+    /// The cell holding the world point `(x, y)`.
+    pub fn cell_of(&self, x: f64, y: f64) -> (i64, i64) {
+        (
+            floor_to_i64(x / self.resolution),
+            floor_to_i64(y / self.resolution),
+        )
+    }
+
+    /// The centre of cell `(i, j)` in the world, metres.
+    pub fn cell_center(&self, i: i64, j: i64) -> (f64, f64) {
+        (
+            (i as f64 + 0.5) * self.resolution,
+            (j as f64 + 0.5) * self.resolution,
+        )
+    }
+
+    /// The slot of the tile holding cell `(i, j)` and the cell's index in it,
+    /// if that tile lies within the held rectangle.
+    #[inline]
+    fn locate(&self, i: i64, j: i64) -> Option<(usize, usize)> {
+        let (ti, tj) = (i >> TILE_SHIFT, j >> TILE_SHIFT);
+        let (di, dj) = (ti - self.tile_origin.0, tj - self.tile_origin.1);
+        if di < 0 || dj < 0 || di >= self.tiles_wide as i64 || dj >= self.tiles_high as i64 {
+            return None;
+        }
+        let slot = dj as usize * self.tiles_wide + di as usize;
+        let local = ((j & (TILE as i64 - 1)) as usize) * TILE + (i & (TILE as i64 - 1)) as usize;
+        Some((slot, local))
+    }
+
+    /// The log odds of cell `(i, j)`, or `None` if it was never observed.
+    #[inline]
+    pub fn log_odds_at(&self, i: i64, j: i64) -> Option<f64> {
+        let (slot, local) = self.locate(i, j)?;
+        let v = self.tiles[slot].as_ref()?.cells[local];
+        (!v.is_nan()).then_some(v as f64)
+    }
+
+    /// The occupancy probability of cell `(i, j)`, or `None` if never observed.
+    #[inline]
+    pub fn probability_at(&self, i: i64, j: i64) -> Option<f64> {
+        self.log_odds_at(i, j).map(probability)
+    }
+
+    /// Grows the held rectangle of tiles to include the tile of cell `(i, j)`.
+    /// Returns false (and changes nothing) if the grid would exceed its cap.
+    fn ensure_cell(&mut self, i: i64, j: i64) -> bool {
+        if self.locate(i, j).is_some() {
+            return true;
+        }
+        let (ti, tj) = (i >> TILE_SHIFT, j >> TILE_SHIFT);
+        let (x0, y0, x1, y1) = if self.tiles_wide == 0 {
+            (ti, tj, ti + 1, tj + 1)
+        } else {
+            let (ox, oy) = self.tile_origin;
+            // Grow by a margin so that a robot driving on does not re-lay the
+            // grid at every new tile.
+            let margin = 2;
+            (
+                if ti < ox { ti - margin } else { ox },
+                if tj < oy { tj - margin } else { oy },
+                if ti >= ox + self.tiles_wide as i64 {
+                    ti + 1 + margin
+                } else {
+                    ox + self.tiles_wide as i64
+                },
+                if tj >= oy + self.tiles_high as i64 {
+                    tj + 1 + margin
+                } else {
+                    oy + self.tiles_high as i64
+                },
+            )
+        };
+        let (w, h) = ((x1 - x0) as usize, (y1 - y0) as usize);
+        if w.saturating_mul(h) > MAX_TILES {
+            return false;
+        }
+        let mut tiles = vec![None; w * h];
+        let mut revisions = vec![0; w * h];
+        for dj in 0..self.tiles_high {
+            for di in 0..self.tiles_wide {
+                let old = dj * self.tiles_wide + di;
+                let nx = (self.tile_origin.0 + di as i64 - x0) as usize;
+                let ny = (self.tile_origin.1 + dj as i64 - y0) as usize;
+                tiles[ny * w + nx] = self.tiles[old].take();
+                revisions[ny * w + nx] = self.revisions[old];
+            }
+        }
+        self.tiles = tiles;
+        self.revisions = revisions;
+        self.tile_origin = (x0, y0);
+        self.tiles_wide = w;
+        self.tiles_high = h;
+        true
+    }
+
+    /// Updates cell `(i, j)` once in the scan being inserted (a stamped cell
+    /// is left alone). Returns whether it was updated and whether it was new.
+    fn update_cell(&mut self, i: i64, j: i64, steps: &LogOddsSteps, hit: bool) -> (bool, bool) {
+        if !self.ensure_cell(i, j) {
+            return (false, false);
+        }
+        let Some((slot, local)) = self.locate(i, j) else {
+            return (false, false);
+        };
+        let tile = self.tiles[slot].get_or_insert_with(|| Arc::new(Tile::unknown()));
+        let old = tile.cells[local];
+        if old > UPDATE_MARK / 2.0 {
+            return (false, false);
+        }
+        let was_new = old.is_nan();
+        let new = steps.apply((!was_new).then_some(old as f64), hit);
+        Arc::make_mut(tile).cells[local] = new as f32 + UPDATE_MARK;
+        self.stamped.push((slot, local, new as f32));
+        (true, was_new)
+    }
+
+    /// Inserts one scan taken from `world_from_sensor` (Cartographer's
+    /// `ProbabilityGridRangeDataInserter2D`): every end point's cell once as a
+    /// hit, then every cell the beams cross (and, for max-range beams, the
+    /// cells up to `params.max_range_free`) once as a miss, skipping the hit
+    /// cells. An invalid rule changes nothing and is reported as an error.
+    pub fn insert_scan(
+        &mut self,
+        world_from_sensor: &Pose2,
+        scan: &Scan,
+        params: &InsertParams,
+    ) -> Result<InsertReport, String> {
+        let steps = params.rule.log_odds_steps()?;
+        if !world_from_sensor.is_finite() {
+            return Err("the scan's pose is not finite".to_owned());
+        }
+        let mut report = InsertReport::default();
+        let r = self.resolution;
+        let (ox, oy) = (world_from_sensor.x / r, world_from_sensor.y / r);
+        let n = scan.len();
+        let free_length = if params.max_range_free.is_finite() {
+            params.max_range_free.clamp(0.0, scan.range_max.max(0.0))
+        } else {
+            0.0
+        };
+        // Hits first, so that the misses skip them.
+        for k in 0..n {
+            if !scan.is_end_point(k) {
+                continue;
+            }
+            let (x, y) = beam_end(world_from_sensor, scan.angles[k], scan.ranges[k]);
+            let (i, j) = self.cell_of(x, y);
+            let (updated, new) = self.update_cell(i, j, &steps, true);
+            report.hits += updated as usize;
+            report.new_cells += new as usize;
+        }
+        for k in 0..n {
+            let (length, include_end) = if scan.is_end_point(k) {
+                (scan.ranges[k], false)
+            } else if scan.is_max_range(k) && free_length > 0.0 {
+                (free_length, true)
+            } else {
+                continue;
+            };
+            let (x, y) = beam_end(world_from_sensor, scan.angles[k], length);
+            segment_cells((ox, oy), (x / r, y / r), include_end, |i, j| {
+                let (updated, new) = self.update_cell(i, j, &steps, false);
+                report.misses += updated as usize;
+                report.new_cells += new as usize;
+            });
+        }
+        self.finish_scan();
+        Ok(report)
+    }
+
+    /// Removes the stamps of the scan just inserted and raises the revision of
+    /// every tile it changed.
+    fn finish_scan(&mut self) {
+        let revision = self.next_revision;
+        self.next_revision += 1;
+        for &(slot, local, value) in &self.stamped {
+            if let Some(tile) = self.tiles[slot].as_mut() {
+                Arc::make_mut(tile).cells[local] = value;
+            }
+            self.revisions[slot] = revision;
+        }
+        self.stamped.clear();
+    }
+
+    /// The cells observed at least once.
+    pub fn known_cells(&self) -> usize {
+        self.tiles
+            .iter()
+            .flatten()
+            .map(|t| t.cells.iter().filter(|v| !v.is_nan()).count())
+            .sum()
+    }
+
+    /// The bounding box of the observed cells, `(i_min, j_min, i_max, j_max)`
+    /// inclusive, or `None` for an empty grid.
+    pub fn known_bounds(&self) -> Option<(i64, i64, i64, i64)> {
+        let mut b: Option<(i64, i64, i64, i64)> = None;
+        for (i0, j0, tile) in self.tiles() {
+            for (local, v) in tile.iter().enumerate() {
+                if v.is_nan() {
+                    continue;
+                }
+                let (i, j) = (i0 + (local % TILE) as i64, j0 + (local / TILE) as i64);
+                b = Some(match b {
+                    None => (i, j, i, j),
+                    Some((a, c, d, e)) => (a.min(i), c.min(j), d.max(i), e.max(j)),
+                });
+            }
+        }
+        b
+    }
+
+    /// Every tile held: its lower-left cell and its cells' log odds (row-major
+    /// from the bottom, NaN where unknown).
+    pub fn tiles(&self) -> impl Iterator<Item = (i64, i64, &[f32; TILE_CELLS])> {
+        self.tiles.iter().enumerate().filter_map(|(slot, t)| {
+            let t = t.as_ref()?;
+            let (ti, tj) = self.slot_tile(slot);
+            Some((ti * TILE as i64, tj * TILE as i64, &t.cells))
+        })
+    }
+
+    /// Tile coordinates of a slot.
+    fn slot_tile(&self, slot: usize) -> (i64, i64) {
+        (
+            self.tile_origin.0 + (slot % self.tiles_wide) as i64,
+            self.tile_origin.1 + (slot / self.tiles_wide) as i64,
+        )
+    }
+
+    /// Every tile held with its revision: `(tile_i, tile_j, revision)`, tile
+    /// coordinates in tiles. A view redraws a tile when its revision changed.
+    pub fn tile_revisions(&self) -> impl Iterator<Item = (i64, i64, u64)> + '_ {
+        self.tiles.iter().enumerate().filter_map(|(slot, t)| {
+            t.as_ref()?;
+            let (ti, tj) = self.slot_tile(slot);
+            Some((ti, tj, self.revisions[slot]))
+        })
+    }
+
+    /// The cells of tile `(ti, tj)` (tile coordinates), if held.
+    pub fn tile_cells(&self, ti: i64, tj: i64) -> Option<&[f32; TILE_CELLS]> {
+        let (slot, _) = self.locate(ti * TILE as i64, tj * TILE as i64)?;
+        self.tiles[slot].as_ref().map(|t| &t.cells)
+    }
+
+    /// Bytes of cell storage in tiles this grid holds (shared tiles counted in
+    /// full).
+    pub fn memory_bytes(&self) -> usize {
+        self.tiles.iter().flatten().count() * std::mem::size_of::<Tile>()
+            + self.tiles.len() * (std::mem::size_of::<Option<Arc<Tile>>>() + 8)
+    }
+
+    /// Tiles this grid shares with `other` (the same allocation), for
+    /// copy-on-write accounting.
+    pub fn shared_tiles_with(&self, other: &ProbabilityGrid) -> usize {
+        let theirs: std::collections::HashSet<*const Tile> =
+            other.tiles.iter().flatten().map(Arc::as_ptr).collect();
+        self.tiles
+            .iter()
+            .flatten()
+            .filter(|t| theirs.contains(&Arc::as_ptr(t)))
+            .count()
+    }
+
+    /// The probability grid as a three-state occupancy grid over its observed
+    /// bounds: occupied above `occupied_above`, free below `free_below`,
+    /// unknown between and where never observed (ROS map_server's
+    /// `occupied_thresh` and `free_thresh`). `None` for an empty grid.
+    pub fn to_occupancy_grid(
+        &self,
+        occupied_above: f64,
+        free_below: f64,
+    ) -> Option<super::OccupancyGrid> {
+        let (i0, j0, i1, j1) = self.known_bounds()?;
+        let (w, h) = ((i1 - i0 + 1) as usize, (j1 - j0 + 1) as usize);
+        let mut cells = vec![super::Cell::Unknown; w * h];
+        for j in 0..h {
+            for i in 0..w {
+                if let Some(p) = self.probability_at(i0 + i as i64, j0 + j as i64) {
+                    cells[j * w + i] = if p > occupied_above {
+                        super::Cell::Occupied
+                    } else if p < free_below {
+                        super::Cell::Free
+                    } else {
+                        super::Cell::Unknown
+                    };
+                }
+            }
+        }
+        let origin = Pose2::new(
+            i0 as f64 * self.resolution,
+            j0 as f64 * self.resolution,
+            0.0,
+        );
+        super::OccupancyGrid::new(w, h, self.resolution, origin, cells).ok()
+    }
+}
+
+/// The world point `length` metres along the beam at `angle` (sensor frame).
+#[inline]
+fn beam_end(world_from_sensor: &Pose2, angle: f64, length: f64) -> (f64, f64) {
+    let (s, c) = math::sin_cos(world_from_sensor.theta + angle);
+    (
+        world_from_sensor.x + length * c,
+        world_from_sensor.y + length * s,
+    )
+}
+
+/// Visits the cells the segment from `p0` to `p1` (in cell units) passes
+/// through, in order, from the cell of `p0` to the cell of `p1` (that last one
+/// only if `include_end`): an exact 4-connected traversal (Amanatides and Woo
+/// 1987). It visits `|Δi| + |Δj| + 1` cells and always ends in the cell of `p1`,
+/// whatever the rounding near corners.
+pub fn segment_cells(
+    p0: (f64, f64),
+    p1: (f64, f64),
+    include_end: bool,
+    mut visit: impl FnMut(i64, i64),
+) {
+    let (mut i, mut j) = (floor_to_i64(p0.0), floor_to_i64(p0.1));
+    let (ie, je) = (floor_to_i64(p1.0), floor_to_i64(p1.1));
+    let (dx, dy) = (p1.0 - p0.0, p1.1 - p0.1);
+    let step_i: i64 = if dx > 0.0 { 1 } else { -1 };
+    let step_j: i64 = if dy > 0.0 { 1 } else { -1 };
+    let delta_i = if dx != 0.0 {
+        1.0 / dx.abs()
+    } else {
+        f64::INFINITY
+    };
+    let delta_j = if dy != 0.0 {
+        1.0 / dy.abs()
+    } else {
+        f64::INFINITY
+    };
+    let mut next_i = if dx > 0.0 {
+        (i as f64 + 1.0 - p0.0) * delta_i
+    } else if dx < 0.0 {
+        (p0.0 - i as f64) * delta_i
+    } else {
+        f64::INFINITY
+    };
+    let mut next_j = if dy > 0.0 {
+        (j as f64 + 1.0 - p0.1) * delta_j
+    } else if dy < 0.0 {
+        (p0.1 - j as f64) * delta_j
+    } else {
+        f64::INFINITY
+    };
+    let steps = (ie - i).unsigned_abs() + (je - j).unsigned_abs();
+    for _ in 0..steps {
+        visit(i, j);
+        // Step along the axis whose boundary comes first, unless that axis is
+        // already done (rounding near a corner).
+        if (next_i < next_j && i != ie) || j == je {
+            i += step_i;
+            next_i += delta_i;
+        } else {
+            j += step_j;
+            next_j += delta_j;
+        }
+    }
+    if include_end {
+        visit(i, j);
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn one_beam(range: f64, angle: f64, range_max: f64) -> Scan {
+        Scan {
+            angles: vec![angle],
+            ranges: vec![range],
+            range_min: 0.0,
+            range_max,
+        }
+    }
+
+    #[test]
+    fn log_odds_and_probability_invert_each_other() {
+        for p in [0.01, 0.1, 0.49, 0.5, 0.55, 0.9, 0.999] {
+            assert!((probability(log_odds(p)) - p).abs() < 1e-12);
+        }
+        assert_eq!(log_odds(0.5), 0.0);
+    }
+
+    #[test]
+    fn one_beam_with_log_odds_matches_hand_computed_cells() {
+        // Sensor at the centre of cell (0, 0), beam along +x, 0.5 m at 0.1 m
+        // cells: end point at x = 0.55, cell 5. Misses: cells 0..=4.
+        let mut g = ProbabilityGrid::new(0.1);
+        let pose = Pose2::new(0.05, 0.05, 0.0);
+        let params = InsertParams {
+            rule: UpdateRule::LOG_ODDS,
+            max_range_free: 0.0,
+        };
+        let report = g
+            .insert_scan(&pose, &one_beam(0.5, 0.0, 10.0), &params)
+            .unwrap();
+        assert_eq!(report.hits, 1);
+        assert_eq!(report.misses, 5);
+        assert_eq!(report.new_cells, 6);
+        let l = |g: &ProbabilityGrid, i| g.log_odds_at(i, 0).unwrap();
+        assert!((l(&g, 5) - 0.85).abs() < 1e-6);
+        for i in 0..5 {
+            assert!((l(&g, i) + 0.4).abs() < 1e-6, "cell {i}: {}", l(&g, i));
+        }
+        assert_eq!(g.log_odds_at(6, 0), None);
+        assert_eq!(g.log_odds_at(0, 1), None);
+        // Five more scans: hits clamp at l_max = 3.5 (0.85 · 5 = 4.25), misses
+        // at l_min = −2 (−0.4 · 6 = −2.4).
+        for _ in 0..5 {
+            g.insert_scan(&pose, &one_beam(0.5, 0.0, 10.0), &params)
+                .unwrap();
+        }
+        assert!((l(&g, 5) - 3.5).abs() < 1e-6);
+        assert!((l(&g, 0) + 2.0).abs() < 1e-6);
+        assert!((g.probability_at(5, 0).unwrap() - probability(3.5)).abs() < 1e-6);
+    }
+
+    #[test]
+    fn one_beam_with_odds_matches_eq_5_4_by_hand() {
+        let mut g = ProbabilityGrid::new(0.1);
+        let pose = Pose2::new(0.05, 0.05, 0.0);
+        let params = InsertParams {
+            rule: UpdateRule::CARTOGRAPHER,
+            max_range_free: 0.0,
+        };
+        let odds = |p: f64| p / (1.0 - p);
+        let inv = |o: f64| o / (1.0 + o);
+        let (mut hit, mut miss) = (0.5_f64, 0.5_f64);
+        for scan in 0..40 {
+            g.insert_scan(&pose, &one_beam(0.3, 0.0, 10.0), &params)
+                .unwrap();
+            // Eq. 5.4 in probability space, then the clamp.
+            hit = inv(odds(hit) * odds(0.55)).clamp(0.1, 0.9);
+            miss = inv(odds(miss) * odds(0.49)).clamp(0.1, 0.9);
+            let got_hit = g.probability_at(3, 0).unwrap();
+            let got_miss = g.probability_at(1, 0).unwrap();
+            assert!(
+                (got_hit - hit).abs() < 1e-5,
+                "scan {scan}: {got_hit} vs {hit}"
+            );
+            assert!(
+                (got_miss - miss).abs() < 1e-5,
+                "scan {scan}: {got_miss} vs {miss}"
+            );
+        }
+        // A never-seen cell becomes exactly p_hit after one hit.
+        let mut fresh = ProbabilityGrid::new(0.1);
+        fresh
+            .insert_scan(&pose, &one_beam(0.3, 0.0, 10.0), &params)
+            .unwrap();
+        assert!((fresh.probability_at(3, 0).unwrap() - 0.55).abs() < 1e-6);
+        assert!((fresh.probability_at(0, 0).unwrap() - 0.49).abs() < 1e-6);
+        // After 40 hits the clamp holds it at p_max.
+        assert!((hit - 0.9).abs() < 1e-12);
+    }
+
+    #[test]
+    fn a_cell_is_updated_once_per_scan_and_hits_win_over_misses() {
+        // 90 beams all ending in the same cell, and one beam that crosses that
+        // cell on its way further out.
+        let mut g = ProbabilityGrid::new(0.1);
+        let pose = Pose2::new(0.05, 0.05, 0.0);
+        let mut angles = vec![0.0; 90];
+        let mut ranges = vec![0.52; 90];
+        angles.push(0.0);
+        ranges.push(1.02);
+        let scan = Scan {
+            angles,
+            ranges,
+            range_min: 0.0,
+            range_max: 10.0,
+        };
+        let params = InsertParams {
+            rule: UpdateRule::LOG_ODDS,
+            max_range_free: 0.0,
+        };
+        let report = g.insert_scan(&pose, &scan, &params).unwrap();
+        assert_eq!(report.hits, 2, "cells 5 and 10");
+        assert_eq!(report.misses, 9, "cells 0-4 and 6-9");
+        assert!((g.log_odds_at(5, 0).unwrap() - 0.85).abs() < 1e-6);
+        assert!((g.log_odds_at(10, 0).unwrap() - 0.85).abs() < 1e-6);
+        assert!((g.log_odds_at(2, 0).unwrap() + 0.4).abs() < 1e-6);
+        assert!((g.log_odds_at(7, 0).unwrap() + 0.4).abs() < 1e-6);
+        // No stamp is left behind.
+        for (_, _, cells) in g.tiles() {
+            assert!(cells.iter().all(|v| v.is_nan() || v.abs() < 60.0));
+        }
+    }
+
+    #[test]
+    fn max_range_beams_mark_free_space_up_to_the_set_distance_and_no_hit() {
+        let mut g = ProbabilityGrid::new(0.1);
+        let pose = Pose2::new(0.05, 0.05, 0.0);
+        let params = InsertParams {
+            rule: UpdateRule::LOG_ODDS,
+            max_range_free: 0.8,
+        };
+        let report = g
+            .insert_scan(&pose, &one_beam(10.0, 0.0, 10.0), &params)
+            .unwrap();
+        assert_eq!(report.hits, 0);
+        // From x = 0.05 to 0.85: cells 0..=8.
+        assert_eq!(report.misses, 9);
+        assert!(g.log_odds_at(8, 0).unwrap() < 0.0);
+        assert_eq!(g.log_odds_at(9, 0), None);
+        // With max_range_free = 0 the beam changes nothing.
+        let mut g2 = ProbabilityGrid::new(0.1);
+        let none = InsertParams {
+            max_range_free: 0.0,
+            ..params
+        };
+        let r2 = g2
+            .insert_scan(&pose, &one_beam(10.0, 0.0, 10.0), &none)
+            .unwrap();
+        assert_eq!((r2.hits, r2.misses), (0, 0));
+        // NaN and negative readings change nothing either.
+        let r3 = g2
+            .insert_scan(&pose, &one_beam(f64::NAN, 0.0, 10.0), &params)
+            .unwrap();
+        let r4 = g2
+            .insert_scan(&pose, &one_beam(-1.0, 0.0, 10.0), &params)
+            .unwrap();
+        assert_eq!((r3.hits, r3.misses, r4.hits, r4.misses), (0, 0, 0, 0));
+    }
+
+    #[test]
+    fn the_grid_grows_in_every_direction_and_keeps_what_it_had() {
+        let mut g = ProbabilityGrid::new(0.05);
+        let params = InsertParams::default();
+        let pose = Pose2::new(0.0, 0.0, 0.0);
+        g.insert_scan(&pose, &one_beam(1.0, 0.0, 10.0), &params)
+            .unwrap();
+        let before = g.log_odds_at(20, 0);
+        assert!(before.is_some());
+        for (angle, range) in [(3.0, 7.0), (-1.5, 9.0), (1.5, 8.0), (2.4, 6.0)] {
+            g.insert_scan(&pose, &one_beam(range, angle, 10.0), &params)
+                .unwrap();
+        }
+        assert_eq!(g.log_odds_at(20, 0), before);
+        let (i0, j0, i1, j1) = g.known_bounds().unwrap();
+        assert!(
+            i0 < -100 && j0 < -150 && i1 >= 20 && j1 > 150,
+            "{:?}",
+            (i0, j0, i1, j1)
+        );
+        // The end point of the beam at 3.0 rad, 7 m.
+        let (x, y) = (7.0 * math::cos(3.0), 7.0 * math::sin(3.0));
+        let (i, j) = g.cell_of(x, y);
+        assert!(g.log_odds_at(i, j).unwrap() > 0.0);
+    }
+
+    #[test]
+    fn clones_share_tiles_until_they_write() {
+        let mut parent = ProbabilityGrid::new(0.05);
+        let params = InsertParams::default();
+        for k in 0..8 {
+            let a = k as f64 * 0.8;
+            parent
+                .insert_scan(&Pose2::IDENTITY, &one_beam(4.0, a, 10.0), &params)
+                .unwrap();
+        }
+        let tiles = parent.tiles().count();
+        assert!(tiles > 4);
+        let mut child = parent.clone();
+        assert_eq!(child.shared_tiles_with(&parent), tiles);
+        // A write of one cell copies exactly one tile: a 1 cm beam from the
+        // middle of a cell touches only that cell.
+        let pose = Pose2::new(0.025, 0.025, 0.0);
+        let tiny = one_beam(0.01, 0.0, 10.0);
+        child
+            .insert_scan(
+                &pose,
+                &tiny,
+                &InsertParams {
+                    max_range_free: 0.0,
+                    ..params
+                },
+            )
+            .unwrap();
+        assert_eq!(child.shared_tiles_with(&parent), tiles - 1);
+        assert_eq!(
+            parent.log_odds_at(0, 0).is_some(),
+            child.log_odds_at(0, 0).is_some()
+        );
+    }
+
+    #[test]
+    fn segment_traversal_visits_the_cells_between_and_ends_in_the_right_cell() {
+        let mut seen = Vec::new();
+        segment_cells((0.5, 0.5), (3.5, 1.5), true, |i, j| seen.push((i, j)));
+        assert_eq!(seen.len(), 5);
+        assert_eq!(seen.first(), Some(&(0, 0)));
+        assert_eq!(seen.last(), Some(&(3, 1)));
+        // Exactly through a corner, and backwards with negative cells.
+        let mut corner = Vec::new();
+        segment_cells((0.5, 0.5), (2.5, 2.5), false, |i, j| corner.push((i, j)));
+        assert_eq!(corner.len(), 4);
+        let mut back = Vec::new();
+        segment_cells((0.2, 0.3), (-2.7, -1.1), true, |i, j| back.push((i, j)));
+        assert_eq!(back.last(), Some(&(-3, -2)));
+        assert_eq!(back.len(), 3 + 2 + 1);
+        // Each step moves to a 4-neighbour.
+        for w in back.windows(2) {
+            assert_eq!((w[0].0 - w[1].0).abs() + (w[0].1 - w[1].1).abs(), 1);
+        }
+    }
+
+    #[test]
+    fn bad_rules_are_refused_with_a_reason() {
+        let mut g = ProbabilityGrid::new(0.05);
+        for rule in [
+            UpdateRule::LogOdds {
+                l_occ: -1.0,
+                l_free: -0.4,
+                l_min: -2.0,
+                l_max: 2.0,
+            },
+            UpdateRule::Odds {
+                p_hit: 0.55,
+                p_miss: 0.6,
+                p_min: 0.1,
+                p_max: 0.9,
+            },
+            UpdateRule::Odds {
+                p_hit: f64::NAN,
+                p_miss: 0.4,
+                p_min: 0.1,
+                p_max: 0.9,
+            },
+        ] {
+            let params = InsertParams {
+                rule,
+                max_range_free: 1.0,
+            };
+            let err = g.insert_scan(&Pose2::IDENTITY, &one_beam(1.0, 0.0, 5.0), &params);
+            assert!(err.is_err());
+        }
+        assert_eq!(g.known_cells(), 0);
+    }
+
+    #[test]
+    fn the_occupancy_grid_export_thresholds_probabilities() {
+        let mut g = ProbabilityGrid::new(0.1);
+        let pose = Pose2::new(0.05, 0.05, 0.0);
+        let params = InsertParams {
+            rule: UpdateRule::LOG_ODDS,
+            max_range_free: 0.0,
+        };
+        for _ in 0..4 {
+            g.insert_scan(&pose, &one_beam(0.5, 0.0, 10.0), &params)
+                .unwrap();
+        }
+        let occ = g.to_occupancy_grid(0.65, 0.196).unwrap();
+        assert_eq!((occ.width(), occ.height()), (6, 1));
+        assert_eq!(occ.get(5, 0), Some(super::super::Cell::Occupied));
+        assert_eq!(occ.get(0, 0), Some(super::super::Cell::Free));
+        assert!((occ.origin().x - 0.0).abs() < 1e-12);
+    }
+}
