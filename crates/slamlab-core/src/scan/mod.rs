@@ -13,6 +13,8 @@
 
 pub use crate::particle::Scan;
 
+pub mod scan_to_map;
+
 use crate::geometry::Pose2;
 use crate::math;
 use serde::{Deserialize, Serialize};
@@ -81,4 +83,15 @@ pub struct ScanMatch {
     pub iterations: usize,
     /// Whether it stopped because it converged rather than at its limit.
     pub converged: bool,
+}
+
+/// A scan matcher: something that holds a reference (a scan, a map) and
+/// finds the pose that puts a new scan where the reference says it belongs.
+/// The lidar lessons switch between matchers through this trait.
+pub trait ScanMatcher {
+    /// The matcher's name as the URL and the CLI spell it.
+    fn name(&self) -> &'static str;
+    /// Matches `scan` against the reference, starting from `initial`
+    /// (`reference_from_scan`); `None` when the scan gives nothing to match.
+    fn match_scan(&self, scan: &Scan, initial: Pose2) -> Option<ScanMatch>;
 }
