@@ -242,6 +242,42 @@ impl Exporter {
         }
     }
 
+    /// Saves several files at once: downloads in the browser; on the desktop,
+    /// written to the working folder (a save window per file would be a
+    /// chore), with the status naming them.
+    pub fn save_all(&mut self, files: Vec<ExportFile>) {
+        #[cfg(target_arch = "wasm32")]
+        {
+            let mut done = Vec::new();
+            for file in files {
+                match web::download(&file) {
+                    Ok(()) => done.push(file.name.clone()),
+                    Err(e) => {
+                        self.status = Some(format!("{} could not be downloaded: {e}", file.name));
+                        return;
+                    }
+                }
+                self.last = Some(file);
+            }
+            self.status = Some(format!("Downloaded {}", done.join(" and ")));
+        }
+        #[cfg(not(target_arch = "wasm32"))]
+        {
+            let dir = std::env::current_dir().unwrap_or_default();
+            let mut done = Vec::new();
+            for file in files {
+                let path = dir.join(&file.name);
+                if let Err(e) = std::fs::write(&path, &file.bytes) {
+                    self.status = Some(format!("Could not write {}: {e}", path.display()));
+                    return;
+                }
+                done.push(path.display().to_string());
+                self.last = Some(file);
+            }
+            self.status = Some(format!("Saved {}", done.join(" and ")));
+        }
+    }
+
     /// Finishes a screenshot that arrived, and (desktop) shows the save window.
     pub fn ui(&mut self, ctx: &egui::Context) {
         let arrived = self

@@ -130,6 +130,25 @@ pub fn open_instead(start: &LessonStart<'_>, why: String) -> Box<dyn Lesson> {
     .with_notice(why)
 }
 
+/// What a lesson asks of the shell, which it cannot do from inside its panels.
+pub enum LessonRequest {
+    /// Save these files (downloads in the browser, the working folder on the
+    /// desktop).
+    Save(Vec<crate::export::ExportFile>),
+    /// Replace the lesson on screen with this one (a hand-off between lessons,
+    /// such as localizing in a map just built).
+    Open(Box<dyn Lesson>),
+}
+
+impl std::fmt::Debug for LessonRequest {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        match self {
+            Self::Save(files) => write!(f, "Save({} files)", files.len()),
+            Self::Open(lesson) => write!(f, "Open({})", lesson.id()),
+        }
+    }
+}
+
 /// One lesson on screen. Everything the shell needs, nothing it must know about
 /// the lesson's world.
 pub trait Lesson: std::fmt::Debug {
@@ -197,6 +216,10 @@ pub trait Lesson: std::fmt::Debug {
     /// Every plot's data, unthinned, for "Export plot data as CSV".
     fn plot_series(&self) -> Vec<crate::export::PlotSeries> {
         Vec::new()
+    }
+    /// A request for the shell, taken once (polled every frame).
+    fn take_request(&mut self) -> Option<LessonRequest> {
+        None
     }
 }
 
@@ -292,6 +315,9 @@ impl Lesson for WithNotice {
     fn keys(&self) -> Vec<(&'static str, &'static str)> {
         self.inner.keys()
     }
+    fn take_request(&mut self) -> Option<LessonRequest> {
+        self.inner.take_request()
+    }
 }
 
 /// One entry of the lesson menu.
@@ -345,6 +371,14 @@ pub const LESSONS: &[LessonEntry] = &[
         summary: "Wheel odometry, an IMU and a 1 Hz SLAM pose fused by robot_localization's EKF; \
                   the SLAM pose taken absolute, relative or differential, side by side.",
         open: crate::fusion::open,
+    },
+    LessonEntry {
+        id: crate::mapping::LESSON_ID,
+        title: "Mapping with a lidar",
+        summary: "A lidar's scans build an occupancy grid; poses from the truth, raw odometry, \
+                  ICP or scan-to-map matching, switched live on the same scans; a simulated \
+                  robot or a real CARMEN log (the Intel lab).",
+        open: crate::mapping::open,
     },
 ];
 

@@ -15,6 +15,7 @@ pub mod fusion;
 pub mod kidnap;
 pub mod landmark_slam;
 pub mod lesson;
+pub mod mapping;
 pub mod palette;
 pub mod pose_graph;
 pub mod query;
@@ -425,6 +426,20 @@ impl SlamLabApp {
             &mut self.panels
         };
         self.lesson.panels_ui(ui, panels, self.embed);
+        match self.lesson.take_request() {
+            Some(lesson::LessonRequest::Save(files)) => self.exporter.save_all(files),
+            Some(lesson::LessonRequest::Open(next)) => {
+                if !self.embed {
+                    self.stored
+                        .lessons
+                        .insert(self.lesson.id().to_owned(), self.lesson.stored_settings());
+                }
+                self.lesson = next;
+                self.app_notices.clear();
+                self.dismissed.clear();
+            }
+            None => {}
+        }
         self.map_rect = widgets::layout::map_rect(&ctx);
         self.exporter.ui(&ctx);
         if self.lesson.wants_repaint() {

@@ -49,6 +49,10 @@ const PARAM_TABLES: &[(&str, Describe)] = &[
         params::describe::<slamlab_sim::localization::MclScenario>,
     ),
     (
+        "mapping",
+        params::describe::<slamlab_sim::mapping::MappingScenario>,
+    ),
+    (
         "pose-graph",
         params::describe::<slamlab_sim::pose_graph_lesson::PoseGraphScenario>,
     ),

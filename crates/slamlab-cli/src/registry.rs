@@ -54,7 +54,7 @@ pub trait Experiment: Sync {
 
 /// The lessons `slamlab run` runs.
 pub static LESSONS: &[&dyn RunLesson] =
-    &[&lessons::landmark::LandmarkSlam, &lessons::kidnap::Kidnap];
+    &[&lessons::landmark::LandmarkSlam, &lessons::kidnap::Kidnap, &lessons::mapping::Mapping];
 
 /// The experiments, in the order `slamlab experiment --help` lists them.
 pub static EXPERIMENTS: &[&dyn Experiment] = &[

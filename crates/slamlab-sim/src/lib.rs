@@ -17,6 +17,7 @@ pub mod ideal_ekf;
 pub mod kidnap_session;
 pub mod landmark_params;
 pub mod localization;
+pub mod mapping;
 pub mod metrics;
 pub mod noise;
 pub mod params;

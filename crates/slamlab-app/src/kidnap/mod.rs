@@ -228,6 +228,27 @@ pub fn open(start: &LessonStart<'_>) -> Box<dyn Lesson> {
     Box::new(lesson)
 }
 
+/// Opens the lesson on `grid` (a map another lesson built), named `name` in
+/// the notes; the default scenario otherwise. A map the robot cannot be placed
+/// in leaves the maze, with a note that says why.
+pub fn open_with_map(name: String, grid: OccupancyGrid) -> Box<dyn Lesson> {
+    match KidnapLesson::new(default_scenario()) {
+        Ok(mut lesson) => {
+            lesson.use_loaded_map(name, grid, &[]);
+            Box::new(lesson)
+        }
+        Err(why) => lesson::open_instead(
+            &LessonStart {
+                pairs: &[],
+                embed: false,
+                stored: None,
+                many_runs: None,
+            },
+            format!("Monte Carlo localization could not open: {why}"),
+        ),
+    }
+}
+
 impl KidnapLesson {
     /// Starts the lesson on `scenario` (its map by name; the maze if that map
     /// cannot hold the robot).

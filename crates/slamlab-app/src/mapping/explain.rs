@@ -1,0 +1,109 @@
+//! The explanation panel: what the last phase did, with its numbers and the
+//! equations it follows.
+
+use slamlab_sim::mapping::{MappingPhase, MappingSession, PoseSource, RuleKind};
+
+/// The panel.
+pub fn explanation_ui(ui: &mut egui::Ui, session: &MappingSession) {
+    let sim = session.sim();
+    let scenario = session.scenario();
+    ui.heading("What happens");
+    ui.label(format!(
+        "{} scans of {} mapped with {}.",
+        sim.scans_done(),
+        sim.input().scans.len(),
+        sim.source().label()
+    ));
+    ui.add_space(4.0);
+    match session.stepper().last_phase() {
+        Some(MappingPhase::Predict { scan, pose }) => {
+            ui.label(format!(
+                "Predict, scan {scan}: the last pose moved by the odometry between the two scans \
+                 gives ({:.3} m, {:.3} m, {:.1}°).",
+                pose.x,
+                pose.y,
+                pose.theta.to_degrees()
+            ));
+        }
+        Some(MappingPhase::Match {
+            scan,
+            pose,
+            cost,
+            iterations,
+        }) => {
+            if cost.is_finite() {
+                ui.label(format!(
+                    "Match, scan {scan}: the matcher moved the pose to ({:.3} m, {:.3} m, {:.1}°) \
+                     in {iterations} iterations; cost {cost:.4}.",
+                    pose.x,
+                    pose.y,
+                    pose.theta.to_degrees()
+                ));
+            } else {
+                ui.label(format!("Match, scan {scan}: nothing to match against yet; the prediction stands."));
+            }
+            if let Some(record) = sim.last_scan_to_map().filter(|_| sim.source() == PoseSource::ScanToMap)
+                && let Some((best, score)) = record.correlative
+            {
+                ui.label(format!(
+                    "Correlative search: {} candidate poses at {:.2}° steps; best mean cell probability {score:.3} \
+                     at ({:.3}, {:.3}, {:.1}°). Then {} Levenberg-Marquardt steps on Eq. 5.5.",
+                    record.candidates,
+                    record.angular_step.to_degrees(),
+                    best.x,
+                    best.y,
+                    best.theta.to_degrees(),
+                    record.steps.len()
+                ));
+            }
+        }
+        Some(MappingPhase::Insert { scan, report }) => {
+            ui.label(format!(
+                "Insert, scan {scan}: {} end-point cells updated as hits, {} crossed cells as misses \
+                 ({} seen for the first time). Each cell changes at most once per scan.",
+                report.hits, report.misses, report.new_cells
+            ));
+        }
+        Some(MappingPhase::Done) => {
+            ui.label("Every scan is in the map.");
+        }
+        None => {
+            ui.label("Press Step phase (.) or Run to insert the first scan.");
+        }
+    }
+    ui.separator();
+    ui.strong("The pose sources");
+    ui.label(
+        "True poses show what mapping with known poses gives (the map is only as wrong as the lidar). \
+         Raw odometry smears the map: its error grows without bound. ICP aligns each scan to the one \
+         before (point-to-point: closed form; point-to-line: linearized least squares), so errors still \
+         add up, only more slowly. Scan-to-map matches each scan against the whole map built so far \
+         (Cartographer's local SLAM, thesis Sec. 5.2.1): a correlative search over a small window, then \
+         Eq. 5.5, argmin Σ (1 − M_smooth(T_ξ h_k))², on the bicubic-interpolated grid.",
+    );
+    ui.separator();
+    ui.strong("The update rule");
+    match scenario.rule {
+        RuleKind::LogOdds => ui.label(format!(
+            "Log odds (Probabilistic Robotics Table 9.2): a hit adds l_occ = {}, a crossed cell adds \
+             l_free = {}, clamped to [{}, {}].",
+            scenario.l_occ, scenario.l_free, scenario.l_min, scenario.l_max
+        )),
+        RuleKind::Odds => ui.label(format!(
+            "Odds (thesis Eq. 5.3-5.4): odds(p) = p/(1−p); a hit multiplies a cell's odds by odds({}), \
+             a crossed cell by odds({}); the probability is clamped to [{}, {}].",
+            scenario.hit_probability, scenario.miss_probability, scenario.p_min, scenario.p_max
+        )),
+    };
+    let summary = session.summary_without_agreement();
+    ui.separator();
+    ui.strong("So far");
+    if let Some(rmse) = summary.trajectory_rmse {
+        ui.label(format!("Trajectory RMSE: {rmse:.3} m"));
+    }
+    ui.label(format!(
+        "Map: {} known cells, {:.1} MB of tiles",
+        summary.map.known_cells,
+        summary.map.memory_bytes as f64 / 1e6
+    ));
+}

@@ -1,0 +1,722 @@
+//! The mapping lesson (`lesson=mapping`): a lidar's scans build an occupancy
+//! grid, scan by scan, with each scan's pose from the truth (simulation only),
+//! raw odometry, ICP against the previous scan, or matching against the map so
+//! far. The scans come from a simulated robot exploring a built-in map or from
+//! a real CARMEN log (dropped on the window, opened, or named by `log=`).
+//! Switching the pose source replays the same scans from the start.
+
+mod explain;
+mod map;
+mod plots;
+
+use crate::lesson::{self, Lesson, LessonRequest, LessonStart, PanelVisibility, StoredSettings};
+use crate::palette;
+use crate::time_control::{TimeAction, TimeControl, TimeInfo};
+use crate::widgets::dropped_files::DropInbox;
+use crate::widgets::fetch::Fetch;
+use crate::widgets::file_picker::{FilePicker, PickedFile};
+use crate::widgets::map_canvas::MapView;
+use crate::widgets::params_panel::{self, PendingParams};
+use serde::{Deserialize, Serialize};
+use slamlab_sim::laser_log::LaserLog;
+use slamlab_sim::mapping::{
+    MappingInput, MappingPhase, MappingScenario, MappingSession, PoseSource, builtin_map, log_input,
+    simulated_input,
+};
+use slamlab_sim::params;
+use slamlab_sim::stepper::Simulation;
+use std::sync::Arc;
+
+/// The lesson's id in URLs and the menu.
+pub const LESSON_ID: &str = "mapping";
+
+/// The parameters the panel shows, in order (the rest are in the URL and CLI).
+const PANEL_PARAMS: &[&str] = &[
+    "seed",
+    "steps",
+    "rule",
+    "resolution",
+    "max-range-free",
+    "l-occ",
+    "l-free",
+    "l-min",
+    "l-max",
+    "hit-probability",
+    "miss-probability",
+    "p-min",
+    "p-max",
+    "linear-search-window",
+    "angular-search-window-deg",
+    "translation-weight",
+    "rotation-weight",
+    "icp-max-distance",
+    "icp-trim",
+    "beams",
+    "lidar-range",
+    "range-std",
+    "odometry-noise",
+];
+
+/// What the map shows; saved with the user's settings.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(default)]
+pub struct MappingView {
+    /// The legend line above the map.
+    pub legend: bool,
+    /// The current scan's rays and hit points.
+    pub scan: bool,
+    /// The estimated path.
+    pub path: bool,
+    /// The true path (simulation only).
+    pub truth: bool,
+    /// The true map, faint, under the built one (simulation only).
+    pub true_map: bool,
+    /// Keep the robot in the middle.
+    pub follow_robot: bool,
+}
+
+impl Default for MappingView {
+    fn default() -> Self {
+        Self {
+            legend: true,
+            scan: true,
+            path: true,
+            truth: true,
+            true_map: false,
+            follow_robot: false,
+        }
+    }
+}
+
+/// A log being read from `log=` (a location beside the site, a path on the
+/// desktop).
+#[derive(Debug)]
+struct LogFetch {
+    location: String,
+    started: bool,
+    fetch: Fetch,
+}
+
+/// The mapping lesson.
+#[derive(Debug)]
+pub struct MappingLesson {
+    session: MappingSession,
+    pending: PendingParams<MappingScenario>,
+    /// The input every pose source maps (kept when the source changes).
+    input: Arc<MappingInput>,
+    /// The log the input came from, if any: its name (or `log=` location).
+    log_name: Option<String>,
+    /// The location of a log read from `log=` (kept for share links).
+    log_location: Option<String>,
+    /// Replaying to this many scans after a change of pose source.
+    catch_up: Option<usize>,
+    /// Milliseconds each scan took (index = scan), as measured here.
+    scan_ms: Vec<f64>,
+    /// The lesson's clock.
+    pub time: TimeControl,
+    /// What the map shows.
+    pub view: MappingView,
+    canvas: MapView,
+    tiles: map::GridTiles,
+    notices: Vec<String>,
+    note: Option<String>,
+    inbox: DropInbox,
+    log_picker: FilePicker,
+    log_fetch: Option<LogFetch>,
+    /// A request for the shell (a file to save, another lesson to open).
+    request: Option<LessonRequest>,
+}
+
+/// The lesson's start: the simulator's defaults.
+pub fn default_scenario() -> MappingScenario {
+    MappingScenario::default()
+}
+
+/// Does a `log=` value look like a log location?
+fn log_location(pairs: &[(String, String)]) -> Option<String> {
+    pairs.iter().rev().find(|(k, _)| k == "log").map(|(_, v)| v.clone())
+}
+
+/// Opens the lesson from the URL's pairs, with what it stored last time.
+pub fn open(start: &LessonStart<'_>) -> Box<dyn Lesson> {
+    let stored = StoredSettings::<MappingView>::from_start(start);
+    let location = log_location(start.pairs);
+    let pairs: Vec<(String, String)> = start.pairs.iter().filter(|(k, _)| k != "log").cloned().collect();
+    let start = &LessonStart {
+        pairs: &pairs,
+        ..*start
+    };
+    let (scenario, link_notices) = lesson::scenario_from_start(
+        start,
+        default_scenario(),
+        stored.as_ref().map(|s| s.params.as_slice()),
+    );
+    let mut lesson = match MappingLesson::new(scenario) {
+        Ok(lesson) => lesson,
+        Err(why) => return lesson::open_instead(start, format!("Mapping could not open: {why}")),
+    };
+    lesson.notices.splice(0..0, link_notices);
+    if let Some(stored) = stored {
+        lesson.view = stored.view.clone();
+        stored.restore_clock(&mut lesson.time);
+    }
+    if let Some(location) = location {
+        lesson.note = Some(format!("Loading the log {location}…"));
+        lesson.log_fetch = Some(LogFetch {
+            location,
+            started: false,
+            fetch: Fetch::default(),
+        });
+    }
+    Box::new(lesson)
+}
+
+impl MappingLesson {
+    /// Starts the lesson on `scenario`: a simulated robot in its built-in map.
+    pub fn new(scenario: MappingScenario) -> Result<Self, String> {
+        let input = Arc::new(Self::simulate(&scenario)?);
+        let (session, notices) = MappingSession::new(scenario, input.clone());
+        let pending = PendingParams::new(session.scenario().clone());
+        Ok(Self {
+            session,
+            pending,
+            input,
+            log_name: None,
+            log_location: None,
+            catch_up: None,
+            scan_ms: Vec::new(),
+            time: TimeControl::default(),
+            view: MappingView::default(),
+            canvas: MapView::default(),
+            tiles: map::GridTiles::default(),
+            notices,
+            note: None,
+            inbox: DropInbox::default(),
+            log_picker: FilePicker::multiple(),
+            log_fetch: None,
+            request: None,
+        })
+    }
+
+    fn simulate(scenario: &MappingScenario) -> Result<MappingInput, String> {
+        let name = if scenario.map == "office" { "office" } else { "maze" };
+        let grid = builtin_map(name)?;
+        simulated_input(scenario, Arc::new(grid), name)
+    }
+
+    /// The session (the run, its records, its stepper).
+    pub fn session(&self) -> &MappingSession {
+        &self.session
+    }
+
+    /// The latest note under the map toolbar.
+    pub fn note(&self) -> Option<&str> {
+        self.note.as_deref()
+    }
+
+    /// Sets a parameter of the pending scenario from text, as the panel does.
+    pub fn set_param(&mut self, name: &str, value: &str) -> Option<params::ParamIssue> {
+        self.pending.set(name, value)
+    }
+
+    /// Starts over with the pending parameters: a new simulated log if the
+    /// simulation changed, the same scans otherwise (a loaded log stays).
+    pub fn reset(&mut self) {
+        let scenario = self.pending.scenario.clone();
+        let running = self.session.scenario();
+        let new_data = self.log_name.is_none()
+            && (scenario.map != running.map
+                || scenario.steps != running.steps
+                || scenario.seed != running.seed
+                || scenario.beams != running.beams
+                || scenario.lidar_range != running.lidar_range
+                || scenario.range_std != running.range_std
+                || scenario.odometry_noise != running.odometry_noise);
+        if new_data {
+            match Self::simulate(&scenario) {
+                Ok(input) => self.input = Arc::new(input),
+                Err(why) => {
+                    self.note = Some(format!("Could not start over: {why}; the run goes on"));
+                    return;
+                }
+            }
+        }
+        self.restart(scenario, None);
+    }
+
+    /// A new session on the current input with `scenario`, replaying to
+    /// `catch_up` scans if given.
+    fn restart(&mut self, scenario: MappingScenario, catch_up: Option<usize>) {
+        let (session, notices) = MappingSession::new(scenario, self.input.clone());
+        self.pending = PendingParams::new(session.scenario().clone());
+        self.session = session;
+        self.notices = notices;
+        self.catch_up = catch_up.filter(|&n| n > 0);
+        self.scan_ms.clear();
+        self.tiles.clear();
+        if catch_up.is_none() {
+            self.time.apply(TimeAction::Reset);
+            self.canvas.refit();
+        }
+    }
+
+    /// Switches the pose source live: the same scans replay from the start
+    /// with the new source up to where the run was.
+    pub fn set_pose_source(&mut self, source: PoseSource) {
+        if source == self.session.sim().source() {
+            return;
+        }
+        if source == PoseSource::Truth && self.input.truth.is_none() {
+            self.note = Some("A real log has no true poses: choose another pose source".to_owned());
+            return;
+        }
+        let done = self.session.sim().scans_done();
+        let mut scenario = self.session.scenario().clone();
+        scenario.poses = source;
+        self.pending.scenario.poses = source;
+        self.restart(scenario, Some(done));
+        self.note = Some(format!("Mapping again with {} up to scan {done}", source.label()));
+    }
+
+    /// Maps a laser log (bytes of a CARMEN file, plain or compressed) instead
+    /// of the simulated robot. On any problem the current run stays, with a
+    /// note that names it.
+    pub fn load_log(&mut self, name: &str, bytes: &[u8]) {
+        let log = match LaserLog::from_bytes(bytes) {
+            Ok(log) => log,
+            Err(why) => {
+                self.note = Some(format!("Could not read the log {name}: {why}"));
+                return;
+            }
+        };
+        if log.scans.is_empty() {
+            self.note = Some(format!("{name} has no laser scans"));
+            return;
+        }
+        let input = log_input(&log, name);
+        let count = input.scans.len();
+        let span = input.duration();
+        self.input = Arc::new(input);
+        self.log_name = Some(name.to_owned());
+        let mut scenario = self.pending.scenario.clone();
+        if scenario.poses == PoseSource::Truth {
+            scenario.poses = PoseSource::ScanToMap;
+        }
+        self.restart(scenario, None);
+        self.note = Some(format!(
+            "Loaded {name}: {count} scans over {:.0} s; no ground truth, so no error plot",
+            span
+        ));
+    }
+
+    /// Reads the log named by `log=`.
+    fn poll_log_fetch(&mut self, ctx: &egui::Context) {
+        let Some(state) = self.log_fetch.as_mut() else {
+            return;
+        };
+        if !state.started {
+            state.started = true;
+            state.fetch = Fetch::start(&state.location, ctx);
+            return;
+        }
+        let Some(result) = state.fetch.poll() else {
+            return;
+        };
+        let location = state.location.clone();
+        self.log_fetch = None;
+        match result {
+            Ok(bytes) => {
+                let name = location.rsplit('/').next().unwrap_or(&location).to_owned();
+                self.load_log(&name, &bytes);
+                if self.log_name.as_deref() == Some(name.as_str()) {
+                    self.log_location = Some(location);
+                }
+            }
+            Err(why) => {
+                self.note = Some(format!(
+                    "Could not load the log {location}: {why}; the simulated robot maps instead"
+                ));
+            }
+        }
+    }
+
+    /// Runs one phase (or catches up after a change of pose source).
+    pub fn step_phase(&mut self) {
+        let before = self.session.sim().scans_done();
+        let started = web_time::Instant::now();
+        self.session.stepper_mut().step_phase();
+        self.record_time(before, started);
+    }
+
+    /// Finishes the scan, or runs a whole one.
+    pub fn step_tick(&mut self) {
+        let before = self.session.sim().scans_done();
+        let started = web_time::Instant::now();
+        self.session.stepper_mut().step_tick();
+        self.record_time(before, started);
+    }
+
+    fn record_time(&mut self, before: usize, started: web_time::Instant) {
+        let after = self.session.sim().scans_done();
+        let ms = started.elapsed().as_secs_f64() * 1e3;
+        if after > before {
+            self.scan_ms.resize(after, f64::NAN);
+            self.scan_ms[after - 1] = ms;
+        }
+    }
+
+    /// The built map as a ROS map (YAML and PGM), for download.
+    fn export_map(&mut self) {
+        let Some(grid) = self.session.sim().grid().to_occupancy_grid(0.65, 0.196) else {
+            self.note = Some("The map is empty: nothing to export yet".to_owned());
+            return;
+        };
+        match slamlab_sim::grid::map_io::export_map(&grid, "slamlab-map.pgm", slamlab_sim::grid::map_io::ImageFormat::Pgm) {
+            Ok((yaml, image)) => {
+                self.request = Some(LessonRequest::Save(vec![
+                    crate::export::ExportFile {
+                        name: "slamlab-map.yaml".to_owned(),
+                        mime: "text/yaml",
+                        bytes: yaml.into_bytes(),
+                    },
+                    crate::export::ExportFile {
+                        name: "slamlab-map.pgm".to_owned(),
+                        mime: "image/x-portable-graymap",
+                        bytes: image,
+                    },
+                ]));
+            }
+            Err(why) => self.note = Some(format!("Could not export the map: {why}")),
+        }
+    }
+
+    /// Opens the Monte Carlo localization lesson on the map built so far.
+    fn localize_in_map(&mut self) {
+        let Some(grid) = self.session.sim().grid().to_occupancy_grid(0.65, 0.196) else {
+            self.note = Some("The map is empty: map some scans first".to_owned());
+            return;
+        };
+        let name = format!("the map built from {}", self.input.name);
+        self.request = Some(LessonRequest::Open(crate::kidnap::open_with_map(name, grid)));
+    }
+
+    fn next_phase_label(&self) -> String {
+        let sim = self.session.sim();
+        if sim.is_done() {
+            return "done: every scan is in".to_owned();
+        }
+        if sim.is_mid_tick() {
+            "next phase of this scan".to_owned()
+        } else {
+            format!("scan {}", sim.scans_done())
+        }
+    }
+
+    fn source_ui(&mut self, ui: &mut egui::Ui) {
+        let current = self.session.sim().source();
+        let mut chosen = current;
+        ui.label("Pose source (live, same scans):");
+        for source in PoseSource::ALL {
+            let enabled = source != PoseSource::Truth || self.input.truth.is_some();
+            ui.add_enabled_ui(enabled, |ui| {
+                ui.radio_value(&mut chosen, source, source.label());
+            });
+        }
+        if chosen != current {
+            self.set_pose_source(chosen);
+        }
+    }
+
+    fn mapping_parameters_ui(&mut self, ui: &mut egui::Ui) {
+        ui.heading("Mapping with a lidar");
+        self.source_ui(ui);
+        ui.separator();
+        ui.horizontal_wrapped(|ui| {
+            if ui
+                .button("Export map")
+                .on_hover_text("Download the map built so far as a ROS map (YAML + PGM)")
+                .clicked()
+            {
+                self.export_map();
+            }
+            if ui
+                .button("Localize in this map")
+                .on_hover_text("Open the Monte Carlo localization lesson on the map built so far")
+                .clicked()
+            {
+                self.localize_in_map();
+            }
+        });
+        ui.separator();
+        ui.horizontal(|ui| {
+            ui.label("map");
+            let current = self.pending.scenario.map.clone();
+            egui::ComboBox::from_id_salt("mapping_map")
+                .selected_text(match &self.log_name {
+                    Some(name) => name.clone(),
+                    None => current.clone(),
+                })
+                .show_ui(ui, |ui| {
+                    for name in ["maze", "office"] {
+                        if ui.selectable_label(current == name && self.log_name.is_none(), name).clicked() {
+                            self.log_name = None;
+                            self.log_location = None;
+                            self.pending.set("map", name);
+                        }
+                    }
+                })
+                .response
+                .on_hover_text("The built-in maps the simulated robot explores; press \"Apply & reset\"")
+                .widget_info(|| egui::WidgetInfo::labeled(egui::Role::ComboBox, true, "map"));
+        });
+        ui.label("Or open a CARMEN laser log (.clf, .log, .gz, .bz2), or drop it on the window:");
+        self.log_picker.ui(ui, "Open log…", ".clf,.log,.gz,.bz2,.txt", 256 << 20, "path/to/intel.clf.bz2");
+        let running = self.session.scenario().clone();
+        params_panel::params_ui(ui, &mut self.pending, &running, PANEL_PARAMS);
+        ui.separator();
+        let changed = params::to_pairs(&self.pending.scenario) != params::to_pairs(&running);
+        if ui
+            .add_enabled(changed || self.log_name.is_some() && self.pending.scenario.map != running.map, egui::Button::new("Apply & reset"))
+            .on_hover_text("Start over with these parameters (same seed: same scans)")
+            .clicked()
+        {
+            self.reset();
+        }
+        ui.separator();
+        crate::widgets::share::share_ui(
+            ui,
+            |embed| lesson::Lesson::share_query(self, embed),
+            "index.html?… with these pairs opens exactly this run",
+            None,
+        );
+    }
+
+    /// The pairs that reopen this setup.
+    pub fn share_pairs(&self) -> Vec<(String, String)> {
+        let scenario = self.session.scenario();
+        let mut pairs = params::changed_pairs(scenario, &default_scenario());
+        if !pairs.iter().any(|(name, _)| name == "seed") {
+            pairs.insert(0, ("seed".to_owned(), scenario.seed.to_string()));
+        }
+        if let Some(location) = &self.log_location {
+            pairs.push(("log".to_owned(), location.clone()));
+        }
+        pairs
+    }
+}
+
+impl crate::widgets::layout::LessonPanels for MappingLesson {
+    fn plots_ui(&mut self, ui: &mut egui::Ui) {
+        plots::plots_ui(ui, &self.session, &self.scan_ms);
+    }
+
+    fn parameters_ui(&mut self, ui: &mut egui::Ui) {
+        self.mapping_parameters_ui(ui);
+    }
+
+    fn explanation_ui(&mut self, ui: &mut egui::Ui) {
+        explain::explanation_ui(ui, &self.session);
+    }
+
+    fn map_ui(&mut self, ui: &mut egui::Ui) {
+        if let Some(note) = &self.note {
+            ui.label(egui::RichText::new(note).color(palette::VERMILLION));
+        }
+        if let Some(target) = self.catch_up {
+            ui.label(format!(
+                "Mapping again: scan {} of {target}…",
+                self.session.sim().scans_done()
+            ));
+        }
+        map::map_ui(ui, &self.session, &mut self.canvas, &mut self.tiles, &mut self.view);
+    }
+}
+
+impl Lesson for MappingLesson {
+    fn id(&self) -> &'static str {
+        LESSON_ID
+    }
+
+    fn subtitle(&self) -> String {
+        format!("{} with {}", self.input.name, self.session.sim().source().label())
+    }
+
+    fn notices(&self) -> Vec<String> {
+        let mut all = self.notices.clone();
+        if let Some(note) = self.session.sim().note() {
+            all.push(note.to_owned());
+        }
+        all
+    }
+
+    fn time(&self) -> &TimeControl {
+        &self.time
+    }
+
+    fn time_mut(&mut self) -> &mut TimeControl {
+        &mut self.time
+    }
+
+    fn time_info(&self) -> TimeInfo {
+        let sim = self.session.sim();
+        let last = sim.scans_done().checked_sub(1);
+        TimeInfo {
+            tick: sim.scans_done() as u64,
+            time_s: last.and_then(|k| sim.input().scans.get(k)).map_or(0.0, |s| s.time),
+            last_phase: self.session.stepper().last_phase().map(MappingPhase::label),
+            next_phase: self.next_phase_label(),
+            can_step_back: self.session.stepper().phases_run() > 0,
+        }
+    }
+
+    fn apply_time_action(&mut self, action: TimeAction) {
+        self.time.apply(action);
+        match action {
+            TimeAction::ToggleRun => {}
+            TimeAction::StepPhase => self.step_phase(),
+            TimeAction::StepTick => self.step_tick(),
+            TimeAction::StepBack => {
+                self.catch_up = None;
+                self.session.stepper_mut().step_back();
+            }
+            TimeAction::Reset => {
+                let scenario = self.session.scenario().clone();
+                self.restart(scenario, None);
+            }
+        }
+    }
+
+    fn read_input(&mut self, ctx: &egui::Context) {
+        self.poll_log_fetch(ctx);
+        let picked = self.log_picker.poll_all();
+        if let Some(batch) = self.inbox.poll(ctx).or(picked) {
+            let batch: Vec<PickedFile> = batch;
+            if let Some((name, bytes)) = batch.into_iter().next() {
+                match bytes {
+                    Ok(bytes) => self.load_log(&name, &bytes),
+                    Err(why) => self.note = Some(format!("Could not read {name}: {why}")),
+                }
+            }
+        }
+    }
+
+    fn advance(&mut self, dt: f64) {
+        if let Some(target) = self.catch_up {
+            // Replay after a change of pose source, within the frame budget.
+            let started = web_time::Instant::now();
+            while self.session.sim().scans_done() < target
+                && !self.session.sim().is_done()
+                && started.elapsed().as_millis() < 12
+            {
+                self.step_tick();
+            }
+            if self.session.sim().scans_done() >= target || self.session.sim().is_done() {
+                self.catch_up = None;
+            }
+            return;
+        }
+        if self.session.sim().is_done() {
+            self.time.running = false;
+            return;
+        }
+        let mut due = Vec::new();
+        {
+            let session = &mut self.session;
+            let scan_ms = &mut self.scan_ms;
+            lesson::advance_within_budget(&mut self.time, dt, || {
+                let before = session.sim().scans_done();
+                let started = web_time::Instant::now();
+                session.stepper_mut().step_phase();
+                let after = session.sim().scans_done();
+                if after > before {
+                    due.push((after - 1, started.elapsed().as_secs_f64() * 1e3));
+                }
+                !session.sim().is_mid_tick()
+            });
+            for (k, ms) in due.drain(..) {
+                if scan_ms.len() <= k {
+                    scan_ms.resize(k + 1, f64::NAN);
+                }
+                scan_ms[k] = ms;
+            }
+        }
+    }
+
+    fn wants_repaint(&self) -> bool {
+        self.time.running || self.catch_up.is_some() || self.log_fetch.is_some()
+    }
+
+    fn panels_ui(&mut self, ui: &mut egui::Ui, panels: &mut PanelVisibility, compact: bool) {
+        crate::widgets::layout::lesson_panels_ui(self, ui, panels, compact, LESSON_ID);
+    }
+
+    fn view_menu_ui(&mut self, ui: &mut egui::Ui) {
+        ui.checkbox(&mut self.view.legend, "Map legend");
+        ui.checkbox(&mut self.view.scan, "Current scan");
+        ui.checkbox(&mut self.view.path, "Estimated path");
+        ui.checkbox(&mut self.view.truth, "True path");
+        ui.checkbox(&mut self.view.true_map, "True map underneath");
+    }
+
+    fn stored_settings(&self) -> serde_json::Value {
+        StoredSettings {
+            view: self.view.clone(),
+            time: self.time.clone(),
+            params: params::changed_pairs(&self.pending.scenario, &default_scenario()),
+        }
+        .to_value()
+    }
+
+    fn share_query(&self, embed: bool) -> String {
+        crate::query::build(LESSON_ID, &self.share_pairs(), embed)
+    }
+
+    fn map_view_mut(&mut self) -> Option<&mut MapView> {
+        Some(&mut self.canvas)
+    }
+
+    fn set_legend(&mut self, on: bool) -> bool {
+        self.view.legend = on;
+        true
+    }
+
+    fn set_follow(&mut self, on: bool) -> bool {
+        self.view.follow_robot = on;
+        true
+    }
+
+    fn plot_series(&self) -> Vec<crate::export::PlotSeries> {
+        plots::series(&self.session, &self.scan_ms)
+    }
+
+    fn take_request(&mut self) -> Option<LessonRequest> {
+        self.request.take()
+    }
+
+    fn test_state(&self) -> serde_json::Value {
+        let summary = self.session.summary();
+        let pose = self.session.sim().current().map(|(_, _, p)| [p.x, p.y, p.theta]);
+        serde_json::json!({
+            "tick": summary.scans,
+            "scans": summary.scans,
+            "total_scans": self.input.scans.len(),
+            "seed": self.session.scenario().seed,
+            "poses": summary.poses,
+            "input": summary.input,
+            "pose": pose,
+            "trajectory_rmse": summary.trajectory_rmse,
+            "map_agreement": summary.map_agreement,
+            "known_cells": summary.map.known_cells,
+            "catching_up": self.catch_up.is_some(),
+            "phase": self.session.stepper().last_phase().map(MappingPhase::label).unwrap_or_default(),
+        })
+    }
+
+    fn as_any(&self) -> &dyn std::any::Any {
+        self
+    }
+
+    fn as_any_mut(&mut self) -> &mut dyn std::any::Any {
+        self
+    }
+}

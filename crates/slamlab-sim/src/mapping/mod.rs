@@ -1,0 +1,247 @@
+//! Occupancy-grid mapping with a lidar (`lesson=mapping`, `slamlab run
+//! mapping`): a simulated robot's log or a real CARMEN log, each scan given a
+//! pose by the chosen source (the truth, odometry, ICP against the previous
+//! scan, or matching against the map so far) and inserted into a growing
+//! probability grid.
+//!
+//! - [`scenario`]: the parameter table.
+//! - [`run`]: the run stepped phase by phase, and its metrics.
+//! - [`MappingSession`]: the lesson's face on a [`Stepper`], opened from a
+//!   scenario and an input.
+
+pub mod run;
+pub mod scenario;
+#[cfg(test)]
+mod tests;
+
+pub use run::{
+    InputScan, MappingInput, MappingPhase, MappingRecords, MappingSim, MatcherSettings, map_agreement,
+    trajectory_rmse,
+};
+pub use scenario::{MappingScenario, PoseSource, RuleKind};
+
+use crate::grid::builtin::BuiltinMap;
+use crate::laser_log::{LaserLog, SimulatedLogConfig, simulate_log};
+use crate::params;
+use crate::stepper::{CheckpointPolicy, Stepper};
+use serde::Serialize;
+use slamlab_core::grid::OccupancyGrid;
+use slamlab_core::scan::icp::IcpConfig;
+use std::sync::Arc;
+
+/// The simulated input of a scenario: the explorer drives the robot through
+/// `map` for `scenario.steps` scans (0.1 s apart) with the scenario's lidar and
+/// odometry noise. The true poses and the map travel beside the scans for the
+/// metrics.
+pub fn simulated_input(scenario: &MappingScenario, map: Arc<OccupancyGrid>, map_name: &str) -> Result<MappingInput, String> {
+    let mut config = SimulatedLogConfig::default();
+    config.lidar.beams = scenario.beams;
+    config.lidar.max_range = scenario.lidar_range;
+    config.lidar.range_std = scenario.range_std;
+    let k = scenario.odometry_noise.max(0.0);
+    config.odom_noise.alpha1 *= k;
+    config.odom_noise.alpha2 *= k;
+    config.odom_noise.alpha3 *= k;
+    config.odom_noise.alpha4 *= k;
+    let (log, truth) = simulate_log(&map, scenario.steps, scenario.seed, &config).map_err(|e| e.to_string())?;
+    let mut input = log_input(&log, &format!("simulated {map_name}, seed {}", scenario.seed));
+    input.truth = Some(truth.iter().map(|t| t.pose).collect());
+    input.true_map = Some(map);
+    Ok(input)
+}
+
+/// The input of a laser log: its scans with the odometry pose of each, times
+/// from the first scan. The laser is taken to sit at the robot's centre (the
+/// Intel log's `robot_frontlaser_offset` is 0).
+pub fn log_input(log: &LaserLog, name: &str) -> MappingInput {
+    let t0 = log.scans.first().map_or(0.0, |s| s.timestamp);
+    MappingInput {
+        name: name.to_owned(),
+        scans: log
+            .scans
+            .iter()
+            .map(|s| InputScan {
+                time: s.timestamp - t0,
+                scan: s.scan.clone(),
+                odometry: s.odometry,
+            })
+            .collect(),
+        truth: None,
+        true_map: None,
+    }
+}
+
+/// The built-in map a scenario names (the maze for anything else).
+pub fn builtin_map(name: &str) -> Result<OccupancyGrid, String> {
+    BuiltinMap::from_name(name)
+        .unwrap_or(BuiltinMap::Maze)
+        .load()
+        .map_err(|e| e.to_string())
+}
+
+/// What a finished (or paused) run says about itself: `slamlab run mapping
+/// --json` prints it.
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct MappingSummary {
+    /// Scans inserted.
+    pub scans: usize,
+    /// The pose source.
+    pub poses: &'static str,
+    /// The input's name.
+    pub input: String,
+    /// Seconds of data mapped.
+    pub duration_s: f64,
+    /// RMS position error against the truth, metres (simulation only).
+    pub trajectory_rmse: Option<f64>,
+    /// Share of the true map's known cells the built map classifies the same
+    /// (simulation only).
+    pub map_agreement: Option<f64>,
+    /// The built map.
+    pub map: MapSummary,
+    /// Mean matcher iterations per scan (0 without a matcher).
+    pub mean_iterations: f64,
+}
+
+/// The built map's size.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize)]
+pub struct MapSummary {
+    /// Cells across its observed bounds.
+    pub width: usize,
+    /// Cells up its observed bounds.
+    pub height: usize,
+    /// Metres per cell.
+    pub resolution: f64,
+    /// Cells observed at least once.
+    pub known_cells: usize,
+    /// Bytes of cell storage.
+    pub memory_bytes: usize,
+}
+
+/// A mapping run with step and step back: the lesson's face on a
+/// [`Stepper<MappingSim>`].
+#[derive(Debug)]
+pub struct MappingSession {
+    scenario: MappingScenario,
+    stepper: Stepper<MappingSim>,
+}
+
+impl MappingSession {
+    /// A run of `scenario` over `input` (its pose source, rule and matcher
+    /// settings); parameters out of range are clamped, and the notices say so.
+    pub fn new(mut scenario: MappingScenario, input: Arc<MappingInput>) -> (Self, Vec<String>) {
+        let mut notices: Vec<String> = params::sanitize(&mut scenario).iter().map(ToString::to_string).collect();
+        if scenario.poses == PoseSource::Truth && input.truth.is_none() {
+            notices.push("a log has no true poses: mapping with raw odometry instead".to_owned());
+        }
+        if let Err(why) = scenario.update_rule().log_odds_steps() {
+            notices.push(format!("the update rule cannot be used ({why}); the defaults apply"));
+            let defaults = MappingScenario::default();
+            scenario.l_occ = defaults.l_occ;
+            scenario.l_free = defaults.l_free;
+            scenario.l_min = defaults.l_min;
+            scenario.l_max = defaults.l_max;
+            scenario.hit_probability = defaults.hit_probability;
+            scenario.miss_probability = defaults.miss_probability;
+            scenario.p_min = defaults.p_min;
+            scenario.p_max = defaults.p_max;
+        }
+        let matchers = MatcherSettings {
+            scan_to_map: scenario.scan_to_map_params(),
+            icp: IcpConfig {
+                max_correspondence_distance: scenario.icp_max_distance,
+                trim_fraction: scenario.icp_trim,
+                ..IcpConfig::default()
+            },
+        };
+        let sim = MappingSim::new(
+            input,
+            scenario.poses,
+            scenario.resolution,
+            scenario.insert_params(),
+            matchers,
+        );
+        let policy = CheckpointPolicy {
+            every_ticks: 100,
+            max_checkpoints: 30,
+            budget_bytes: 64 << 20,
+        };
+        let stepper = Stepper::with_policy(sim, MappingRecords::default(), policy);
+        (Self { scenario, stepper }, notices)
+    }
+
+    /// The scenario (as clamped).
+    pub fn scenario(&self) -> &MappingScenario {
+        &self.scenario
+    }
+
+    /// The stepper (step, step back, records).
+    pub fn stepper(&self) -> &Stepper<MappingSim> {
+        &self.stepper
+    }
+
+    /// The stepper, to step.
+    pub fn stepper_mut(&mut self) -> &mut Stepper<MappingSim> {
+        &mut self.stepper
+    }
+
+    /// The run now.
+    pub fn sim(&self) -> &MappingSim {
+        self.stepper.sim()
+    }
+
+    /// Runs every remaining scan.
+    pub fn run_to_end(&mut self) {
+        while !self.sim().is_done() {
+            self.stepper.step_tick();
+        }
+    }
+
+    /// The metrics so far.
+    pub fn summary(&self) -> MappingSummary {
+        let mut summary = self.summary_without_agreement();
+        let sim = self.sim();
+        summary.map_agreement = sim
+            .input()
+            .true_map
+            .as_ref()
+            .and_then(|m| map_agreement(sim.grid(), m));
+        summary
+    }
+
+    /// The metrics so far but the map agreement (which reads every cell of
+    /// the true map): cheap enough for every frame.
+    pub fn summary_without_agreement(&self) -> MappingSummary {
+        let sim = self.sim();
+        let input = sim.input();
+        let records = self.stepper.records();
+        let grid = sim.grid();
+        let (width, height) = grid
+            .known_bounds()
+            .map_or((0, 0), |(i0, j0, i1, j1)| ((i1 - i0 + 1) as usize, (j1 - j0 + 1) as usize));
+        let matched: Vec<usize> = records.iterations.iter().copied().filter(|&n| n > 0).collect();
+        let duration = input
+            .scans
+            .get(records.poses.len().saturating_sub(1))
+            .map_or(0.0, |s| s.time);
+        MappingSummary {
+            scans: records.poses.len(),
+            poses: sim.source().name(),
+            input: input.name.clone(),
+            duration_s: duration,
+            trajectory_rmse: trajectory_rmse(&records.poses, input.truth.as_deref()),
+            map_agreement: None,
+            map: MapSummary {
+                width,
+                height,
+                resolution: grid.resolution(),
+                known_cells: grid.known_cells(),
+                memory_bytes: grid.memory_bytes(),
+            },
+            mean_iterations: if matched.is_empty() {
+                0.0
+            } else {
+                matched.iter().sum::<usize>() as f64 / matched.len() as f64
+            },
+        }
+    }
+}

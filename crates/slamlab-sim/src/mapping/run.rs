@@ -1,0 +1,430 @@
+//! One mapping run: scans in order, each given a pose by the chosen source and
+//! inserted into a probability grid. Stepped phase by phase by the generic
+//! [`Stepper`](crate::stepper::Stepper): *predict* (odometry), *match* (the
+//! scan matcher's correction), *insert* (the grid update).
+//!
+//! The input is the same for every pose source (a simulated log or a real
+//! one), so switching the source replays the same scans. The truth of a
+//! simulated log travels beside the input and reaches only the metrics.
+
+use super::scenario::PoseSource;
+use crate::stepper::{Records, Simulation};
+use slamlab_core::Pose2;
+use slamlab_core::grid::{Cell, InsertParams, InsertReport, OccupancyGrid, ProbabilityGrid};
+use slamlab_core::scan::icp::{IcpConfig, IcpVariant, align};
+use slamlab_core::scan::scan_to_map::{ProbabilityLookup, ScanToMapParams, ScanToMapRecord, match_scan_to_map};
+use slamlab_core::scan::{Point2, Scan};
+use slamlab_core::wrap_angle;
+use std::sync::Arc;
+
+/// One scan of the input.
+#[derive(Clone, Debug, PartialEq)]
+pub struct InputScan {
+    /// Seconds since the log's start.
+    pub time: f64,
+    /// The scan, in the sensor frame (the sensor at the robot's centre).
+    pub scan: Scan,
+    /// The odometry pose when it was taken.
+    pub odometry: Pose2,
+}
+
+/// What a run maps: scans with odometry, and for a simulated log the truth
+/// (metrics only).
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct MappingInput {
+    /// What the input is ("simulated maze, seed 3", "intel.clf.bz2").
+    pub name: String,
+    /// The scans in time order.
+    pub scans: Vec<InputScan>,
+    /// The true pose at each scan (simulation only).
+    pub truth: Option<Vec<Pose2>>,
+    /// The map the simulated robot drove in (simulation only).
+    pub true_map: Option<Arc<OccupancyGrid>>,
+}
+
+impl MappingInput {
+    /// Seconds from the first scan to the last.
+    pub fn duration(&self) -> f64 {
+        match (self.scans.first(), self.scans.last()) {
+            (Some(a), Some(b)) => (b.time - a.time).max(0.0),
+            _ => 0.0,
+        }
+    }
+}
+
+/// The phase a run is at.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+enum Stage {
+    Predict,
+    Match,
+    Insert,
+}
+
+/// What one phase did.
+#[derive(Clone, Debug, PartialEq)]
+pub enum MappingPhase {
+    /// The pose predicted for scan `scan` (odometry or truth).
+    Predict {
+        /// Scan index.
+        scan: usize,
+        /// The predicted pose.
+        pose: Pose2,
+    },
+    /// The matcher's correction.
+    Match {
+        /// Scan index.
+        scan: usize,
+        /// The matched pose.
+        pose: Pose2,
+        /// The matcher's final cost.
+        cost: f64,
+        /// Its iterations.
+        iterations: usize,
+    },
+    /// The scan went into the map.
+    Insert {
+        /// Scan index.
+        scan: usize,
+        /// What it changed.
+        report: InsertReport,
+    },
+    /// Every scan is in.
+    Done,
+}
+
+impl MappingPhase {
+    /// A short name for the time bar.
+    pub fn label(&self) -> String {
+        match self {
+            MappingPhase::Predict { scan, .. } => format!("predict scan {scan}"),
+            MappingPhase::Match { scan, iterations, .. } => {
+                format!("match scan {scan} ({iterations} iterations)")
+            }
+            MappingPhase::Insert { scan, report } => format!(
+                "insert scan {scan}: {} hit, {} crossed cells",
+                report.hits, report.misses
+            ),
+            MappingPhase::Done => "every scan is in the map".to_owned(),
+        }
+    }
+}
+
+/// What a run records scan by scan (outside the checkpoints).
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct MappingRecords {
+    /// The pose each scan was inserted at.
+    pub poses: Vec<Pose2>,
+    /// The matcher's cost per scan (NaN where nothing was matched).
+    pub costs: Vec<f64>,
+    /// The matcher's iterations per scan.
+    pub iterations: Vec<usize>,
+}
+
+impl Records for MappingRecords {
+    type Mark = usize;
+    fn mark(&self) -> usize {
+        self.poses.len()
+    }
+    fn truncate(&mut self, mark: &usize) {
+        self.poses.truncate(*mark);
+        self.costs.truncate(*mark);
+        self.iterations.truncate(*mark);
+    }
+}
+
+/// The matcher settings of a run.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct MatcherSettings {
+    /// Scan-to-map.
+    pub scan_to_map: ScanToMapParams,
+    /// ICP (the variant is set by the pose source).
+    pub icp: IcpConfig,
+}
+
+/// One mapping run. Cloning it is a checkpoint (the grid's tiles are shared
+/// until written).
+#[derive(Clone, Debug)]
+pub struct MappingSim {
+    input: Arc<MappingInput>,
+    source: PoseSource,
+    insert: InsertParams,
+    matchers: MatcherSettings,
+    lookup: Arc<ProbabilityLookup>,
+    grid: ProbabilityGrid,
+    /// The scan the next tick works on.
+    next: usize,
+    stage: Stage,
+    /// The current scan's pose (predicted, then matched).
+    pose: Pose2,
+    /// The last inserted scan's pose and index.
+    last: Option<(usize, Pose2)>,
+    /// The last scan-to-map match, for the explanation panel.
+    last_record: Option<Arc<ScanToMapRecord>>,
+    /// The last message about something that went wrong (a bad rule).
+    note: Option<String>,
+}
+
+impl MappingSim {
+    /// A run over `input` with poses from `source`.
+    pub fn new(
+        input: Arc<MappingInput>,
+        source: PoseSource,
+        resolution: f64,
+        insert: InsertParams,
+        matchers: MatcherSettings,
+    ) -> Self {
+        // Without truth there are no true poses to map with.
+        let source = if source == PoseSource::Truth && input.truth.is_none() {
+            PoseSource::Odometry
+        } else {
+            source
+        };
+        Self {
+            input,
+            source,
+            insert,
+            matchers,
+            lookup: Arc::new(ProbabilityLookup::default()),
+            grid: ProbabilityGrid::new(resolution),
+            next: 0,
+            stage: Stage::Predict,
+            pose: Pose2::IDENTITY,
+            last: None,
+            last_record: None,
+            note: None,
+        }
+    }
+
+    /// The input.
+    pub fn input(&self) -> &Arc<MappingInput> {
+        &self.input
+    }
+
+    /// The pose source (odometry if truth was asked for a log without it).
+    pub fn source(&self) -> PoseSource {
+        self.source
+    }
+
+    /// The map so far.
+    pub fn grid(&self) -> &ProbabilityGrid {
+        &self.grid
+    }
+
+    /// Scans inserted so far.
+    pub fn scans_done(&self) -> usize {
+        self.last.map_or(0, |(k, _)| k + 1)
+    }
+
+    /// Whether every scan is in the map.
+    pub fn is_done(&self) -> bool {
+        self.next >= self.input.scans.len()
+    }
+
+    /// The scan being worked on (or the last one), its index and its pose now.
+    pub fn current(&self) -> Option<(usize, &InputScan, Pose2)> {
+        if self.stage != Stage::Predict && self.next < self.input.scans.len() {
+            return Some((self.next, &self.input.scans[self.next], self.pose));
+        }
+        let (k, pose) = self.last?;
+        Some((k, &self.input.scans[k], pose))
+    }
+
+    /// The last scan-to-map match.
+    pub fn last_scan_to_map(&self) -> Option<&ScanToMapRecord> {
+        self.last_record.as_deref()
+    }
+
+    /// A problem the run met (an update rule it could not use).
+    pub fn note(&self) -> Option<&str> {
+        self.note.as_deref()
+    }
+
+    /// The phases one scan takes with this source.
+    fn has_match_phase(&self) -> bool {
+        matches!(self.source, PoseSource::Icp | PoseSource::Plicp | PoseSource::ScanToMap)
+    }
+
+    /// The odometry prediction of scan `k`: the last pose moved by the
+    /// odometry increment between the two scans.
+    fn predict(&self, k: usize) -> Pose2 {
+        let scans = &self.input.scans;
+        match self.last {
+            None => scans[k].odometry,
+            Some((j, pose)) => {
+                let increment = scans[j].odometry.between(&scans[k].odometry);
+                let p = pose.compose(&increment);
+                Pose2::new(p.x, p.y, wrap_angle(p.theta))
+            }
+        }
+    }
+
+    /// The matcher's correction of scan `k` from `predicted`; `None` when
+    /// there is nothing to match against (the first scan) or nothing to match.
+    fn correct(&mut self, k: usize, predicted: Pose2) -> Option<(Pose2, f64, usize)> {
+        let scan = &self.input.scans[k].scan;
+        let points = scan.points();
+        match self.source {
+            PoseSource::ScanToMap => {
+                if self.grid.known_cells() == 0 && self.last.is_none() {
+                    return None;
+                }
+                let (m, record) = match_scan_to_map(
+                    &self.grid,
+                    &self.lookup,
+                    &points,
+                    predicted,
+                    &self.matchers.scan_to_map,
+                )?;
+                self.last_record = Some(Arc::new(record));
+                Some((m.pose, m.cost, m.iterations))
+            }
+            PoseSource::Icp | PoseSource::Plicp => {
+                let (j, last_pose) = self.last?;
+                let reference: Vec<Point2> = self.input.scans[j].scan.points();
+                // The scan's pose in the previous scan's frame, from odometry.
+                let initial = last_pose.between(&predicted);
+                let params = IcpConfig {
+                    variant: if self.source == PoseSource::Icp {
+                        IcpVariant::PointToPoint
+                    } else {
+                        IcpVariant::PointToLine
+                    },
+                    ..self.matchers.icp
+                };
+                let (m, _) = align(&reference, &points, initial, &params).ok()?;
+                let p = last_pose.compose(&m.pose);
+                Some((Pose2::new(p.x, p.y, wrap_angle(p.theta)), m.cost, m.iterations))
+            }
+            PoseSource::Truth | PoseSource::Odometry => None,
+        }
+    }
+}
+
+impl Simulation for MappingSim {
+    type Phase = MappingPhase;
+    type Event = ();
+    type Records = MappingRecords;
+
+    fn step_phase(&mut self, records: &mut MappingRecords) -> MappingPhase {
+        let k = self.next;
+        if k >= self.input.scans.len() {
+            return MappingPhase::Done;
+        }
+        match self.stage {
+            Stage::Predict => {
+                self.pose = match (&self.input.truth, self.source) {
+                    (Some(truth), PoseSource::Truth) if k < truth.len() => truth[k],
+                    _ => self.predict(k),
+                };
+                self.stage = if self.has_match_phase() {
+                    Stage::Match
+                } else {
+                    Stage::Insert
+                };
+                records.costs.push(f64::NAN);
+                records.iterations.push(0);
+                MappingPhase::Predict { scan: k, pose: self.pose }
+            }
+            Stage::Match => {
+                self.stage = Stage::Insert;
+                let predicted = self.pose;
+                match self.correct(k, predicted) {
+                    Some((pose, cost, iterations)) if pose.is_finite() => {
+                        self.pose = pose;
+                        if let Some(c) = records.costs.last_mut() {
+                            *c = cost;
+                        }
+                        if let Some(n) = records.iterations.last_mut() {
+                            *n = iterations;
+                        }
+                        MappingPhase::Match {
+                            scan: k,
+                            pose,
+                            cost,
+                            iterations,
+                        }
+                    }
+                    _ => MappingPhase::Match {
+                        scan: k,
+                        pose: predicted,
+                        cost: f64::NAN,
+                        iterations: 0,
+                    },
+                }
+            }
+            Stage::Insert => {
+                let scan = &self.input.scans[k].scan;
+                let report = match self.grid.insert_scan(&self.pose, scan, &self.insert) {
+                    Ok(report) => report,
+                    Err(message) => {
+                        self.note = Some(message);
+                        InsertReport::default()
+                    }
+                };
+                records.poses.push(self.pose);
+                self.last = Some((k, self.pose));
+                self.next += 1;
+                self.stage = Stage::Predict;
+                MappingPhase::Insert { scan: k, report }
+            }
+        }
+    }
+
+    fn is_mid_tick(&self) -> bool {
+        self.stage != Stage::Predict
+    }
+
+    fn tick(&self) -> u64 {
+        self.next as u64 + u64::from(self.is_mid_tick())
+    }
+
+    fn apply_event(&mut self, _event: &()) {}
+
+    fn checkpoint_bytes(&self) -> usize {
+        // Tiles are shared with the live run until it writes them; count the
+        // tile table and a share of the tiles.
+        self.grid.memory_bytes() / 8 + 1024
+    }
+}
+
+/// The root-mean-square position error of `poses` against `truth` (the first
+/// `poses.len()` true poses), metres; `None` without truth or poses.
+pub fn trajectory_rmse(poses: &[Pose2], truth: Option<&[Pose2]>) -> Option<f64> {
+    let truth = truth?;
+    let n = poses.len().min(truth.len());
+    if n == 0 {
+        return None;
+    }
+    let sum: f64 = poses
+        .iter()
+        .zip(truth)
+        .take(n)
+        .map(|(p, t)| (p.x - t.x) * (p.x - t.x) + (p.y - t.y) * (p.y - t.y))
+        .sum();
+    Some((sum / n as f64).sqrt())
+}
+
+/// The share of the true map's free and occupied cells that the built map
+/// classifies the same (occupied above probability 0.5, free below), over the
+/// cells the built map knows (looked up at each true cell's centre). `None`
+/// when the built map knows none of them.
+pub fn map_agreement(built: &ProbabilityGrid, truth: &OccupancyGrid) -> Option<f64> {
+    let (mut known, mut same) = (0usize, 0usize);
+    for j in 0..truth.height() as i64 {
+        for i in 0..truth.width() as i64 {
+            let Some(cell) = truth.get(i, j) else { continue };
+            if cell == Cell::Unknown {
+                continue;
+            }
+            let (x, y) = truth.cell_center(i, j);
+            let (bi, bj) = built.cell_of(x, y);
+            let Some(l) = built.log_odds_at(bi, bj) else { continue };
+            if l == 0.0 {
+                continue;
+            }
+            known += 1;
+            same += usize::from((l > 0.0) == (cell == Cell::Occupied));
+        }
+    }
+    (known > 0).then(|| same as f64 / known as f64)
+}

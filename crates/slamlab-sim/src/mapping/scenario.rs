@@ -1,0 +1,374 @@
+//! The mapping lesson's scenario and its parameter table (`lesson=mapping`):
+//! where the scans come from (a simulated robot in a built-in or loaded map,
+//! or a laser log), which poses build the map, and how scans change it.
+
+use crate::params::{Param, Scenario, choose};
+use serde::{Deserialize, Serialize};
+use slamlab_core::grid::{InsertParams, UpdateRule};
+use slamlab_core::scan::scan_to_map::ScanToMapParams;
+
+/// Where each scan's pose comes from.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash, Serialize, Deserialize)]
+#[serde(rename_all = "kebab-case")]
+pub enum PoseSource {
+    /// The simulator's true pose (simulation only): mapping with known poses.
+    Truth,
+    /// Wheel odometry alone: the smeared map that motivates SLAM.
+    Odometry,
+    /// Odometry corrected by point-to-point ICP against the previous scan.
+    Icp,
+    /// Odometry corrected by point-to-line ICP against the previous scan.
+    Plicp,
+    /// Odometry corrected by matching the scan against the map built so far
+    /// (Cartographer's local SLAM).
+    #[default]
+    ScanToMap,
+}
+
+impl PoseSource {
+    /// Every source, in menu order.
+    pub const ALL: [PoseSource; 5] = [
+        PoseSource::Truth,
+        PoseSource::Odometry,
+        PoseSource::Icp,
+        PoseSource::Plicp,
+        PoseSource::ScanToMap,
+    ];
+    /// The names the URL and the CLI use.
+    pub const NAMES: &'static [&'static str] = &["truth", "odometry", "icp", "plicp", "scan-to-map"];
+
+    /// The name the URL and the CLI use.
+    pub fn name(self) -> &'static str {
+        Self::NAMES[self as usize]
+    }
+
+    /// The source of a name.
+    pub fn from_name(name: &str) -> Option<Self> {
+        Self::NAMES.iter().position(|n| *n == name).map(|i| Self::ALL[i])
+    }
+
+    /// A label for legends and menus.
+    pub fn label(self) -> &'static str {
+        match self {
+            PoseSource::Truth => "true poses",
+            PoseSource::Odometry => "raw odometry",
+            PoseSource::Icp => "ICP scan-to-scan (point-to-point)",
+            PoseSource::Plicp => "ICP scan-to-scan (point-to-line)",
+            PoseSource::ScanToMap => "scan-to-map matching",
+        }
+    }
+}
+
+/// Which update rule builds the map.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "kebab-case")]
+pub enum RuleKind {
+    /// Probabilistic Robotics Table 9.2 (log odds, clamped).
+    LogOdds,
+    /// Thesis Eq. 5.3-5.4 (Cartographer's odds, clamped).
+    #[default]
+    Odds,
+}
+
+const RULES: &[&str] = &["log-odds", "odds"];
+
+/// The mapping lesson's scenario.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(default)]
+pub struct MappingScenario {
+    /// Seed of every random stream.
+    pub seed: u64,
+    /// Built-in map name (`maze`, `office`) or a map file's location.
+    pub map: String,
+    /// Scans to simulate.
+    pub steps: usize,
+    /// Where the poses come from.
+    pub poses: PoseSource,
+    /// Which update rule.
+    pub rule: RuleKind,
+    /// Grid resolution, metres per cell.
+    pub resolution: f64,
+    /// Free space marked along a max-range beam, metres.
+    pub max_range_free: f64,
+    /// Log-odds rule: added on a hit.
+    pub l_occ: f64,
+    /// Log-odds rule: added on a miss.
+    pub l_free: f64,
+    /// Log-odds rule: lower clamp.
+    pub l_min: f64,
+    /// Log-odds rule: upper clamp.
+    pub l_max: f64,
+    /// Odds rule: hit probability.
+    pub hit_probability: f64,
+    /// Odds rule: miss probability.
+    pub miss_probability: f64,
+    /// Odds rule: lower clamp.
+    pub p_min: f64,
+    /// Odds rule: upper clamp.
+    pub p_max: f64,
+    /// Scan-to-map: correlative search half-width in x and y, metres.
+    pub linear_search_window: f64,
+    /// Scan-to-map: correlative search half-width in heading, degrees.
+    pub angular_search_window_deg: f64,
+    /// Scan-to-map: pull towards the search's translation.
+    pub translation_weight: f64,
+    /// Scan-to-map: pull towards the search's heading.
+    pub rotation_weight: f64,
+    /// ICP: correspondences farther than this are rejected, metres.
+    pub icp_max_distance: f64,
+    /// ICP: the share of correspondences kept (trimming).
+    pub icp_trim: f64,
+    /// Simulated lidar: beams per scan (over 360°).
+    pub beams: usize,
+    /// Simulated lidar: maximum range, metres.
+    pub lidar_range: f64,
+    /// Simulated lidar: range noise standard deviation, metres.
+    pub range_std: f64,
+    /// Simulated odometry noise scale (1: the Monte Carlo lesson's α values).
+    pub odometry_noise: f64,
+}
+
+impl Default for MappingScenario {
+    fn default() -> Self {
+        let s2m = ScanToMapParams::default();
+        Self {
+            seed: 1,
+            map: "maze".to_owned(),
+            steps: 1500,
+            poses: PoseSource::ScanToMap,
+            rule: RuleKind::Odds,
+            resolution: 0.05,
+            max_range_free: 5.0,
+            l_occ: 0.85,
+            l_free: -0.4,
+            l_min: -2.0,
+            l_max: 3.5,
+            hit_probability: 0.55,
+            miss_probability: 0.49,
+            p_min: 0.1,
+            p_max: 0.9,
+            linear_search_window: s2m.linear_search_window,
+            angular_search_window_deg: s2m.angular_search_window.to_degrees(),
+            translation_weight: s2m.translation_weight,
+            rotation_weight: s2m.rotation_weight,
+            icp_max_distance: 0.5,
+            icp_trim: 0.9,
+            beams: 360,
+            lidar_range: 12.0,
+            range_std: 0.03,
+            odometry_noise: 1.0,
+        }
+    }
+}
+
+impl MappingScenario {
+    /// The update rule with this scenario's numbers.
+    pub fn update_rule(&self) -> UpdateRule {
+        match self.rule {
+            RuleKind::LogOdds => UpdateRule::LogOdds {
+                l_occ: self.l_occ,
+                l_free: self.l_free,
+                l_min: self.l_min,
+                l_max: self.l_max,
+            },
+            RuleKind::Odds => UpdateRule::Odds {
+                p_hit: self.hit_probability,
+                p_miss: self.miss_probability,
+                p_min: self.p_min,
+                p_max: self.p_max,
+            },
+        }
+    }
+
+    /// How scans are inserted.
+    pub fn insert_params(&self) -> InsertParams {
+        InsertParams {
+            rule: self.update_rule(),
+            max_range_free: self.max_range_free,
+        }
+    }
+
+    /// The scan-to-map matcher's parameters.
+    pub fn scan_to_map_params(&self) -> ScanToMapParams {
+        ScanToMapParams {
+            linear_search_window: self.linear_search_window,
+            angular_search_window: self.angular_search_window_deg.to_radians(),
+            translation_weight: self.translation_weight,
+            rotation_weight: self.rotation_weight,
+            ..ScanToMapParams::default()
+        }
+    }
+}
+
+/// A real-valued field in the parameter's unit.
+macro_rules! field {
+    ($($args:tt)*) => {
+        crate::params::number_field!(MappingScenario, $($args)*)
+    };
+}
+
+/// Every parameter of the lesson, in the order `slamlab params --lesson
+/// mapping` lists them. Cartographer's names where it has one.
+pub static PARAMS: &[Param<MappingScenario>] = &[
+    Param::count(
+        "seed",
+        "",
+        "seed of every random stream",
+        (0, u64::MAX),
+        |s| Some(s.seed),
+        |s, v| s.seed = v,
+    ),
+    Param::words(
+        "map",
+        "built-in map the simulated robot explores (or drop a ROS map or a laser log on the app's window)",
+        &["maze", "office"],
+        |s| Some(s.map.clone()),
+        |s, v| {
+            if v.ends_with(".yaml") || v.ends_with(".yml") {
+                s.map = v.to_owned();
+                Ok(())
+            } else {
+                choose(&["maze", "office"], v).map(|i| s.map = ["maze", "office"][i].to_owned())
+            }
+        },
+    ),
+    Param::count(
+        "steps",
+        "",
+        "scans the simulated robot records (0.1 s apart)",
+        (1, 20_000),
+        |s| Some(s.steps as u64),
+        |s, v| s.steps = usize::try_from(v).unwrap_or(20_000),
+    ),
+    Param::words(
+        "poses",
+        "where each scan's pose comes from",
+        PoseSource::NAMES,
+        |s| Some(s.poses.name().to_owned()),
+        |s, v| choose(PoseSource::NAMES, v).map(|i| s.poses = PoseSource::ALL[i]),
+    ),
+    Param::words(
+        "rule",
+        "map update: log-odds (Probabilistic Robotics Table 9.2) or odds (thesis Eq. 5.4)",
+        RULES,
+        |s| Some(RULES[s.rule as usize].to_owned()),
+        |s, v| choose(RULES, v).map(|i| s.rule = [RuleKind::LogOdds, RuleKind::Odds][i]),
+    ),
+    field!("resolution", "m", "grid cell size", (0.01, 0.5), resolution),
+    field!(
+        "max-range-free",
+        "m",
+        "free space marked along a beam that returned nothing (missing_data_ray_length)",
+        (0.0, 100.0),
+        max_range_free
+    ),
+    field!("l-occ", "", "log-odds rule: added to a hit cell", (0.01, 10.0), l_occ),
+    field!("l-free", "", "log-odds rule: added to a crossed cell", (-10.0, -0.01), l_free),
+    field!("l-min", "", "log-odds rule: lower clamp", (-40.0, -0.01), l_min),
+    field!("l-max", "", "log-odds rule: upper clamp", (0.01, 40.0), l_max),
+    field!("hit-probability", "", "odds rule: p_hit", (0.501, 0.999), hit_probability),
+    field!("miss-probability", "", "odds rule: p_miss", (0.001, 0.499), miss_probability),
+    field!("p-min", "", "odds rule: lower clamp", (0.001, 0.499), p_min),
+    field!("p-max", "", "odds rule: upper clamp", (0.501, 0.999), p_max),
+    field!(
+        "linear-search-window",
+        "m",
+        "scan-to-map: correlative search half-width in x and y",
+        (0.0, 2.0),
+        linear_search_window
+    ),
+    field!(
+        "angular-search-window-deg",
+        "°",
+        "scan-to-map: correlative search half-width in heading",
+        (0.0, 90.0),
+        angular_search_window_deg
+    ),
+    field!(
+        "translation-weight",
+        "",
+        "scan-to-map: pull towards the correlative search's position",
+        (0.0, 1000.0),
+        translation_weight
+    ),
+    field!(
+        "rotation-weight",
+        "",
+        "scan-to-map: pull towards the correlative search's heading",
+        (0.0, 1000.0),
+        rotation_weight
+    ),
+    field!(
+        "icp-max-distance",
+        "m",
+        "ICP: correspondences farther apart are rejected",
+        (0.01, 10.0),
+        icp_max_distance
+    ),
+    field!("icp-trim", "", "ICP: share of the closest correspondences kept", (0.1, 1.0), icp_trim),
+    Param::count(
+        "beams",
+        "",
+        "simulated lidar: beams over 360°",
+        (8, 2048),
+        |s| Some(s.beams as u64),
+        |s, v| s.beams = usize::try_from(v).unwrap_or(2048),
+    ),
+    field!("lidar-range", "m", "simulated lidar: maximum range", (1.0, 80.0), lidar_range),
+    field!("range-std", "m", "simulated lidar: range noise", (0.0, 1.0), range_std),
+    field!(
+        "odometry-noise",
+        "",
+        "simulated odometry noise, times the Monte Carlo lesson's α values",
+        (0.0, 20.0),
+        odometry_noise
+    ),
+];
+
+impl Scenario for MappingScenario {
+    const LESSON: &'static str = "mapping";
+
+    fn params() -> &'static [Param<Self>] {
+        PARAMS
+    }
+
+    fn seed(&self) -> u64 {
+        self.seed
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::params::{apply_pairs, to_pairs};
+
+    #[test]
+    fn the_table_round_trips_and_refuses_nonsense() {
+        let mut s = MappingScenario::default();
+        s.poses = PoseSource::Plicp;
+        s.rule = RuleKind::LogOdds;
+        s.resolution = 0.1;
+        let pairs = to_pairs(&s);
+        let mut back = MappingScenario::default();
+        let owned: Vec<(String, String)> = pairs.iter().map(|(k, v)| (k.to_string(), v.clone())).collect();
+        let issues = apply_pairs(&mut back, owned.iter().map(|(k, v)| (k.as_str(), v.as_str())), &[]);
+        assert!(issues.is_empty(), "{issues:?}");
+        assert_eq!(to_pairs(&back), pairs);
+        let mut bad = MappingScenario::default();
+        let issues = apply_pairs(
+            &mut bad,
+            [("poses", "teleport"), ("resolution", "NaN"), ("p-max", "3")],
+            &[],
+        );
+        assert_eq!(issues.len(), 3, "{issues:?}");
+        assert_eq!(bad.poses, PoseSource::ScanToMap);
+        assert!(bad.p_max <= 0.999);
+    }
+
+    #[test]
+    fn pose_source_names_round_trip() {
+        for p in PoseSource::ALL {
+            assert_eq!(PoseSource::from_name(p.name()), Some(p));
+        }
+    }
+}
