@@ -11,6 +11,8 @@
 //! final cost and how it got there, so a lesson can step through the
 //! iterations.
 
+pub mod kdtree;
+
 pub use crate::particle::Scan;
 
 use crate::geometry::Pose2;
@@ -65,10 +67,7 @@ impl Scan {
 /// `pose` applied to a point: `R p + t`.
 pub fn transform_point(pose: &Pose2, p: Point2) -> Point2 {
     let (s, c) = math::sin_cos(pose.theta);
-    [
-        c * p[0] - s * p[1] + pose.x,
-        s * p[0] + c * p[1] + pose.y,
-    ]
+    [c * p[0] - s * p[1] + pose.x, s * p[0] + c * p[1] + pose.y]
 }
 
 /// What a scan matcher returns.
