@@ -11,6 +11,9 @@
 //! final cost and how it got there, so a lesson can step through the
 //! iterations.
 
+pub mod icp;
+pub mod kdtree;
+
 pub use crate::particle::Scan;
 
 pub mod scan_to_map;
