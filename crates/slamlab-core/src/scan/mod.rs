@@ -65,10 +65,7 @@ impl Scan {
 /// `pose` applied to a point: `R p + t`.
 pub fn transform_point(pose: &Pose2, p: Point2) -> Point2 {
     let (s, c) = math::sin_cos(pose.theta);
-    [
-        c * p[0] - s * p[1] + pose.x,
-        s * p[0] + c * p[1] + pose.y,
-    ]
+    [c * p[0] - s * p[1] + pose.x, s * p[0] + c * p[1] + pose.y]
 }
 
 /// What a scan matcher returns.
