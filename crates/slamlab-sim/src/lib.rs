@@ -16,6 +16,7 @@ pub mod grid;
 pub mod ideal_ekf;
 pub mod kidnap_session;
 pub mod landmark_params;
+pub mod laser_log;
 pub mod localization;
 pub mod mapping;
 pub mod metrics;

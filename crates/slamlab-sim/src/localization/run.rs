@@ -238,7 +238,7 @@ pub struct FilterSummary {
 }
 
 /// SplitMix64: derives independent stream seeds from the master seed.
-fn stream_seed(seed: u64, stream: u64) -> u64 {
+pub(crate) fn stream_seed(seed: u64, stream: u64) -> u64 {
     let mut z = seed
         .wrapping_add(stream.wrapping_mul(0x9E37_79B9_7F4A_7C15))
         .wrapping_add(0x9E37_79B9_7F4A_7C15);
