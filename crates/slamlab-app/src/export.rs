@@ -186,6 +186,9 @@ pub struct Exporter {
     /// A file the desktop's save window is asking a path for, and the path typed.
     #[cfg_attr(target_arch = "wasm32", allow(dead_code))]
     saving: Option<(ExportFile, String)>,
+    /// Files of the same export waiting for their save window (desktop).
+    #[cfg(not(target_arch = "wasm32"))]
+    queued: Vec<ExportFile>,
     /// What the last export did ("Saved …", or why it failed), shown in the menu bar.
     pub status: Option<String>,
     /// The last file handed to the browser or written (tests read it back).
@@ -242,9 +245,9 @@ impl Exporter {
         }
     }
 
-    /// Saves several files at once: downloads in the browser; on the desktop,
-    /// written to the working folder (a save window per file would be a
-    /// chore), with the status naming them.
+    /// Saves several files that belong together (a ROS map's YAML and image):
+    /// downloads in the browser; on the desktop, one save window after the
+    /// other, each proposing the folder the one before was saved in.
     pub fn save_all(&mut self, files: Vec<ExportFile>) {
         #[cfg(target_arch = "wasm32")]
         {
@@ -263,19 +266,18 @@ impl Exporter {
         }
         #[cfg(not(target_arch = "wasm32"))]
         {
-            let dir = std::env::current_dir().unwrap_or_default();
-            let mut done = Vec::new();
-            for file in files {
-                let path = dir.join(&file.name);
-                if let Err(e) = std::fs::write(&path, &file.bytes) {
-                    self.status = Some(format!("Could not write {}: {e}", path.display()));
-                    return;
-                }
-                done.push(path.display().to_string());
-                self.last = Some(file);
+            let mut files = files.into_iter();
+            if let Some(first) = files.next() {
+                self.queued = files.collect();
+                self.save(first);
             }
-            self.status = Some(format!("Saved {}", done.join(" and ")));
         }
+    }
+
+    /// The files waiting for their save window after the one open now.
+    #[cfg(not(target_arch = "wasm32"))]
+    pub fn queued(&self) -> &[ExportFile] {
+        &self.queued
     }
 
     /// Finishes a screenshot that arrived, and (desktop) shows the save window.
@@ -355,14 +357,32 @@ impl Exporter {
         if let Some(result) = done
             && let Some((file, _)) = self.saving.take()
         {
+            let folder = result.as_ref().ok().and_then(|path| {
+                std::path::Path::new(path)
+                    .parent()
+                    .map(std::path::Path::to_path_buf)
+            });
             self.status = Some(match result {
                 Ok(path) => {
                     let text = format!("Saved {} to {path}", size_text(file.bytes.len()));
                     self.last = Some(file);
                     text
                 }
-                Err(e) => e,
+                Err(e) => {
+                    // A cancelled file cancels the rest of its export.
+                    self.queued.clear();
+                    e
+                }
             });
+            if !self.queued.is_empty() {
+                let next = self.queued.remove(0);
+                let path = folder
+                    .unwrap_or_default()
+                    .join(&next.name)
+                    .to_string_lossy()
+                    .into_owned();
+                self.saving = Some((next, path));
+            }
         }
     }
 }

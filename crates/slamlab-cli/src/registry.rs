@@ -53,8 +53,11 @@ pub trait Experiment: Sync {
 }
 
 /// The lessons `slamlab run` runs.
-pub static LESSONS: &[&dyn RunLesson] =
-    &[&lessons::landmark::LandmarkSlam, &lessons::kidnap::Kidnap, &lessons::mapping::Mapping];
+pub static LESSONS: &[&dyn RunLesson] = &[
+    &lessons::landmark::LandmarkSlam,
+    &lessons::kidnap::Kidnap,
+    &lessons::mapping::Mapping,
+];
 
 /// The experiments, in the order `slamlab experiment --help` lists them.
 pub static EXPERIMENTS: &[&dyn Experiment] = &[

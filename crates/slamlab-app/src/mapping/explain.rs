@@ -40,9 +40,13 @@ pub fn explanation_ui(ui: &mut egui::Ui, session: &MappingSession) {
                     pose.theta.to_degrees()
                 ));
             } else {
-                ui.label(format!("Match, scan {scan}: nothing to match against yet; the prediction stands."));
+                ui.label(format!(
+                    "Match, scan {scan}: nothing to match against yet; the prediction stands."
+                ));
             }
-            if let Some(record) = sim.last_scan_to_map().filter(|_| sim.source() == PoseSource::ScanToMap)
+            if let Some(record) = sim
+                .last_scan_to_map()
+                .filter(|_| sim.source() == PoseSource::ScanToMap)
                 && let Some((best, score)) = record.correlative
             {
                 ui.label(format!(

@@ -32,14 +32,21 @@ impl GridTiles {
 
     /// Brings the textures up to date with `grid` (only tiles whose revision
     /// changed are redrawn) and returns each tile's texture and world square.
-    fn update(&mut self, ctx: &egui::Context, grid: &ProbabilityGrid) -> Vec<(egui::TextureId, [f64; 4])> {
+    fn update(
+        &mut self,
+        ctx: &egui::Context,
+        grid: &ProbabilityGrid,
+    ) -> Vec<(egui::TextureId, [f64; 4])> {
         let r = grid.resolution();
         let side = TILE as f64 * r;
         let mut out = Vec::new();
         let mut live = std::collections::HashSet::new();
         for (ti, tj, revision) in grid.tile_revisions() {
             live.insert((ti, tj));
-            let stale = self.tiles.get(&(ti, tj)).is_none_or(|(_, rev)| *rev != revision);
+            let stale = self
+                .tiles
+                .get(&(ti, tj))
+                .is_none_or(|(_, rev)| *rev != revision);
             if stale && let Some(cells) = grid.tile_cells(ti, tj) {
                 let image = tile_image(cells);
                 match self.tiles.get_mut(&(ti, tj)) {
@@ -48,7 +55,11 @@ impl GridTiles {
                         *rev = revision;
                     }
                     None => {
-                        let handle = ctx.load_texture(format!("mapping-tile-{ti}-{tj}"), image, egui::TextureOptions::NEAREST);
+                        let handle = ctx.load_texture(
+                            format!("mapping-tile-{ti}-{tj}"),
+                            image,
+                            egui::TextureOptions::NEAREST,
+                        );
                         self.tiles.insert((ti, tj), (handle, revision));
                     }
                 }
@@ -108,9 +119,18 @@ fn bounds(session: &MappingSession) -> [f64; 4] {
     let grid = sim.grid();
     if let Some((i0, j0, i1, j1)) = grid.known_bounds() {
         let r = grid.resolution();
-        return [i0 as f64 * r, j0 as f64 * r, (i1 + 1) as f64 * r, (j1 + 1) as f64 * r];
+        return [
+            i0 as f64 * r,
+            j0 as f64 * r,
+            (i1 + 1) as f64 * r,
+            (j1 + 1) as f64 * r,
+        ];
     }
-    let p = sim.input().scans.first().map_or([0.0, 0.0], |s| [s.odometry.x, s.odometry.y]);
+    let p = sim
+        .input()
+        .scans
+        .first()
+        .map_or([0.0, 0.0], |s| [s.odometry.x, s.odometry.y]);
     [p[0] - 5.0, p[1] - 5.0, p[0] + 5.0, p[1] + 5.0]
 }
 
@@ -132,23 +152,33 @@ pub fn map_ui(
         ui.checkbox(&mut view.follow_robot, "Follow robot");
         ui.separator();
         ui.checkbox(&mut view.legend, "Legend");
-        ui.checkbox(&mut view.scan, "Scan").on_hover_text("The current scan's beams and end points, placed at its pose now");
+        ui.checkbox(&mut view.scan, "Scan")
+            .on_hover_text("The current scan's beams and end points, placed at its pose now");
         ui.checkbox(&mut view.path, "Path");
         if has_truth {
             ui.checkbox(&mut view.truth, "True path");
-            ui.checkbox(&mut view.true_map, "True map")
-                .on_hover_text("The map the simulated robot drives in, faint, under the one being built");
+            ui.checkbox(&mut view.true_map, "True map").on_hover_text(
+                "The map the simulated robot drives in, faint, under the one being built",
+            );
         }
     });
     let source = sim.source();
     let color = source_color(source);
     if view.legend {
         ui.horizontal_wrapped(|ui| {
-            ui.label(egui::RichText::new(format!("— path ({})", source.label())).color(color).strong());
+            ui.label(
+                egui::RichText::new(format!("— path ({})", source.label()))
+                    .color(color)
+                    .strong(),
+            );
             if has_truth && view.truth {
                 ui.label(egui::RichText::new("— true path").strong());
             }
-            ui.label(egui::RichText::new("· scan end points").color(palette::VERMILLION).strong());
+            ui.label(
+                egui::RichText::new("· scan end points")
+                    .color(palette::VERMILLION)
+                    .strong(),
+            );
             ui.label("cells: white free, black occupied, grey uncertain, none unknown");
         });
     }
@@ -179,7 +209,11 @@ pub fn map_ui(
             for i in (i0.max(0)..=i1.min(map.width() as i64 - 1)).step_by(step as usize) {
                 if map.is_occupied(i, j) {
                     let (x, y) = map.cell_center(i, j);
-                    painter.rect_filled(egui::Rect::from_center_size(t.xy(x, y), egui::vec2(size, size)), 0.0, faint);
+                    painter.rect_filled(
+                        egui::Rect::from_center_size(t.xy(x, y), egui::vec2(size, size)),
+                        0.0,
+                        faint,
+                    );
                 }
             }
         }
@@ -188,17 +222,35 @@ pub fn map_ui(
     for (texture, [x0, y0, x1, y1]) in tiles.update(ui.ctx(), sim.grid()) {
         let rect = egui::Rect::from_two_pos(t.xy(x0, y1), t.xy(x1, y0));
         if rect.intersects(t.rect) {
-            painter.image(texture, rect, egui::Rect::from_min_max(Pos2::ZERO, Pos2::new(1.0, 1.0)), mesh_color);
+            painter.image(
+                texture,
+                rect,
+                egui::Rect::from_min_max(Pos2::ZERO, Pos2::new(1.0, 1.0)),
+                mesh_color,
+            );
         }
     }
-    if has_truth && view.truth
+    if has_truth
+        && view.truth
         && let Some(truth) = &sim.input().truth
     {
         let n = records.poses.len().min(truth.len());
-        draw_path(&painter, &t, truth[..n].iter().map(|p| [p.x, p.y]), colors.truth, 1.2);
+        draw_path(
+            &painter,
+            &t,
+            truth[..n].iter().map(|p| [p.x, p.y]),
+            colors.truth,
+            1.2,
+        );
     }
     if view.path {
-        draw_path(&painter, &t, records.poses.iter().map(|p| [p.x, p.y]), color, 1.6);
+        draw_path(
+            &painter,
+            &t,
+            records.poses.iter().map(|p| [p.x, p.y]),
+            color,
+            1.6,
+        );
     }
     if let Some((_, scan, pose)) = current {
         if view.scan {
@@ -209,7 +261,11 @@ pub fn map_ui(
                 if !hit && !scan.scan.is_max_range(k) {
                     continue;
                 }
-                let range = if hit { scan.scan.ranges[k] } else { scan.scan.range_max.min(30.0) };
+                let range = if hit {
+                    scan.scan.ranges[k]
+                } else {
+                    scan.scan.range_max.min(30.0)
+                };
                 let (s, c) = math::sin_cos(pose.theta + scan.scan.angles[k]);
                 let end = t.xy(pose.x + range * c, pose.y + range * s);
                 painter.line_segment([origin, end], Stroke::new(0.6, ray));
@@ -221,7 +277,12 @@ pub fn map_ui(
         // The robot: a disc with a heading line.
         let centre = t.xy(pose.x, pose.y);
         let radius = (0.2 * t.scale).max(4.0);
-        painter.circle(centre, radius, Color32::from_rgba_unmultiplied(0x00, 0x72, 0xB2, 60), Stroke::new(1.5, color));
+        painter.circle(
+            centre,
+            radius,
+            Color32::from_rgba_unmultiplied(0x00, 0x72, 0xB2, 60),
+            Stroke::new(1.5, color),
+        );
         let head = centre + map_canvas::screen_dir(pose.theta) * radius * 1.6;
         painter.line_segment([centre, head], Stroke::new(2.0, color));
     }

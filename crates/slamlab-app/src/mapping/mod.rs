@@ -20,8 +20,8 @@ use crate::widgets::params_panel::{self, PendingParams};
 use serde::{Deserialize, Serialize};
 use slamlab_sim::laser_log::LaserLog;
 use slamlab_sim::mapping::{
-    MappingInput, MappingPhase, MappingScenario, MappingSession, PoseSource, builtin_map, log_input,
-    simulated_input,
+    MappingInput, MappingPhase, MappingScenario, MappingSession, PoseSource, builtin_map,
+    log_input, simulated_input,
 };
 use slamlab_sim::params;
 use slamlab_sim::stepper::Simulation;
@@ -134,14 +134,23 @@ pub fn default_scenario() -> MappingScenario {
 
 /// Does a `log=` value look like a log location?
 fn log_location(pairs: &[(String, String)]) -> Option<String> {
-    pairs.iter().rev().find(|(k, _)| k == "log").map(|(_, v)| v.clone())
+    pairs
+        .iter()
+        .rev()
+        .find(|(k, _)| k == "log")
+        .map(|(_, v)| v.clone())
 }
 
 /// Opens the lesson from the URL's pairs, with what it stored last time.
 pub fn open(start: &LessonStart<'_>) -> Box<dyn Lesson> {
     let stored = StoredSettings::<MappingView>::from_start(start);
     let location = log_location(start.pairs);
-    let pairs: Vec<(String, String)> = start.pairs.iter().filter(|(k, _)| k != "log").cloned().collect();
+    let pairs: Vec<(String, String)> = start
+        .pairs
+        .iter()
+        .filter(|(k, _)| k != "log")
+        .cloned()
+        .collect();
     let start = &LessonStart {
         pairs: &pairs,
         ..*start
@@ -199,7 +208,11 @@ impl MappingLesson {
     }
 
     fn simulate(scenario: &MappingScenario) -> Result<MappingInput, String> {
-        let name = if scenario.map == "office" { "office" } else { "maze" };
+        let name = if scenario.map == "office" {
+            "office"
+        } else {
+            "maze"
+        };
         let grid = builtin_map(name)?;
         simulated_input(scenario, Arc::new(grid), name)
     }
@@ -275,7 +288,10 @@ impl MappingLesson {
         scenario.poses = source;
         self.pending.scenario.poses = source;
         self.restart(scenario, Some(done));
-        self.note = Some(format!("Mapping again with {} up to scan {done}", source.label()));
+        self.note = Some(format!(
+            "Mapping again with {} up to scan {done}",
+            source.label()
+        ));
     }
 
     /// Maps a laser log (bytes of a CARMEN file, plain or compressed) instead
@@ -371,7 +387,11 @@ impl MappingLesson {
             self.note = Some("The map is empty: nothing to export yet".to_owned());
             return;
         };
-        match slamlab_sim::grid::map_io::export_map(&grid, "slamlab-map.pgm", slamlab_sim::grid::map_io::ImageFormat::Pgm) {
+        match slamlab_sim::grid::map_io::export_map(
+            &grid,
+            "slamlab-map.pgm",
+            slamlab_sim::grid::map_io::ImageFormat::Pgm,
+        ) {
             Ok((yaml, image)) => {
                 self.request = Some(LessonRequest::Save(vec![
                     crate::export::ExportFile {
@@ -397,7 +417,9 @@ impl MappingLesson {
             return;
         };
         let name = format!("the map built from {}", self.input.name);
-        self.request = Some(LessonRequest::Open(crate::kidnap::open_with_map(name, grid)));
+        self.request = Some(LessonRequest::Open(crate::kidnap::open_with_map(
+            name, grid,
+        )));
     }
 
     fn next_phase_label(&self) -> String {
@@ -458,7 +480,10 @@ impl MappingLesson {
                 })
                 .show_ui(ui, |ui| {
                     for name in ["maze", "office"] {
-                        if ui.selectable_label(current == name && self.log_name.is_none(), name).clicked() {
+                        if ui
+                            .selectable_label(current == name && self.log_name.is_none(), name)
+                            .clicked()
+                        {
                             self.log_name = None;
                             self.log_location = None;
                             self.pending.set("map", name);
@@ -466,17 +491,28 @@ impl MappingLesson {
                     }
                 })
                 .response
-                .on_hover_text("The built-in maps the simulated robot explores; press \"Apply & reset\"")
+                .on_hover_text(
+                    "The built-in maps the simulated robot explores; press \"Apply & reset\"",
+                )
                 .widget_info(|| egui::WidgetInfo::labeled(egui::Role::ComboBox, true, "map"));
         });
         ui.label("Or open a CARMEN laser log (.clf, .log, .gz, .bz2), or drop it on the window:");
-        self.log_picker.ui(ui, "Open log…", ".clf,.log,.gz,.bz2,.txt", 256 << 20, "path/to/intel.clf.bz2");
+        self.log_picker.ui(
+            ui,
+            "Open log…",
+            ".clf,.log,.gz,.bz2,.txt",
+            256 << 20,
+            "path/to/intel.clf.bz2",
+        );
         let running = self.session.scenario().clone();
         params_panel::params_ui(ui, &mut self.pending, &running, PANEL_PARAMS);
         ui.separator();
         let changed = params::to_pairs(&self.pending.scenario) != params::to_pairs(&running);
         if ui
-            .add_enabled(changed || self.log_name.is_some() && self.pending.scenario.map != running.map, egui::Button::new("Apply & reset"))
+            .add_enabled(
+                changed || self.log_name.is_some() && self.pending.scenario.map != running.map,
+                egui::Button::new("Apply & reset"),
+            )
             .on_hover_text("Start over with these parameters (same seed: same scans)")
             .clicked()
         {
@@ -528,7 +564,13 @@ impl crate::widgets::layout::LessonPanels for MappingLesson {
                 self.session.sim().scans_done()
             ));
         }
-        map::map_ui(ui, &self.session, &mut self.canvas, &mut self.tiles, &mut self.view);
+        map::map_ui(
+            ui,
+            &self.session,
+            &mut self.canvas,
+            &mut self.tiles,
+            &mut self.view,
+        );
     }
 }
 
@@ -538,7 +580,11 @@ impl Lesson for MappingLesson {
     }
 
     fn subtitle(&self) -> String {
-        format!("{} with {}", self.input.name, self.session.sim().source().label())
+        format!(
+            "{} with {}",
+            self.input.name,
+            self.session.sim().source().label()
+        )
     }
 
     fn notices(&self) -> Vec<String> {
@@ -562,7 +608,9 @@ impl Lesson for MappingLesson {
         let last = sim.scans_done().checked_sub(1);
         TimeInfo {
             tick: sim.scans_done() as u64,
-            time_s: last.and_then(|k| sim.input().scans.get(k)).map_or(0.0, |s| s.time),
+            time_s: last
+                .and_then(|k| sim.input().scans.get(k))
+                .map_or(0.0, |s| s.time),
             last_phase: self.session.stepper().last_phase().map(MappingPhase::label),
             next_phase: self.next_phase_label(),
             can_step_back: self.session.stepper().phases_run() > 0,
@@ -695,7 +743,11 @@ impl Lesson for MappingLesson {
 
     fn test_state(&self) -> serde_json::Value {
         let summary = self.session.summary();
-        let pose = self.session.sim().current().map(|(_, _, p)| [p.x, p.y, p.theta]);
+        let pose = self
+            .session
+            .sim()
+            .current()
+            .map(|(_, _, p)| [p.x, p.y, p.theta]);
         serde_json::json!({
             "tick": summary.scans,
             "scans": summary.scans,

@@ -28,7 +28,13 @@ fn plotted(session: &MappingSession, scan_ms: &[f64]) -> Vec<Styled> {
             .map(|(k, (p, t))| [k as f64, slamlab_core::math::hypot(p.x - t.x, p.y - t.y)])
             .collect();
         out.push(Styled::new(
-            PlotSeries::new(ERROR, "scan", "error (m)", format!("{name} position error"), error),
+            PlotSeries::new(
+                ERROR,
+                "scan",
+                "error (m)",
+                format!("{name} position error"),
+                error,
+            ),
             color,
             Mark::Solid,
             1.4,
@@ -54,7 +60,13 @@ fn plotted(session: &MappingSession, scan_ms: &[f64]) -> Vec<Styled> {
         .map(|(k, t)| [k as f64, *t])
         .collect();
     out.push(Styled::new(
-        PlotSeries::new(TIME, "scan", "time (ms)", format!("{name} time per scan"), time),
+        PlotSeries::new(
+            TIME,
+            "scan",
+            "time (ms)",
+            format!("{name} time per scan"),
+            time,
+        ),
         color,
         Mark::Solid,
         1.0,

@@ -12,6 +12,7 @@ mod fusion_ui;
 mod kidnap_ui;
 mod landmark_fastslam_ui;
 mod landmark_ui;
+mod mapping_ui;
 mod pose_graph_ui;
 mod resampling_ui;
 mod shell_ui;

@@ -36,10 +36,9 @@ impl RunLesson for Mapping {
         Command::new(self.id())
             .arg(map_arg())
             .arg(
-                Arg::new("log")
-                    .long("log")
-                    .value_name("FILE")
-                    .help("map a CARMEN laser log (plain, .gz or .bz2) instead of a simulated robot"),
+                Arg::new("log").long("log").value_name("FILE").help(
+                    "map a CARMEN laser log (plain, .gz or .bz2) instead of a simulated robot",
+                ),
             )
             .arg(
                 Arg::new("map-out")
@@ -53,7 +52,8 @@ impl RunLesson for Mapping {
     fn run(&self, m: &ArgMatches, out: &mut Output) -> Result<()> {
         let mut scenario: MappingScenario = flags::scenario_from(m, &["map"])?;
         let input = if let Some(log_path) = m.get_one::<String>("log") {
-            let log = LaserLog::read_file(Path::new(log_path)).with_context(|| format!("reading {log_path}"))?;
+            let log = LaserLog::read_file(Path::new(log_path))
+                .with_context(|| format!("reading {log_path}"))?;
             let name = Path::new(log_path)
                 .file_name()
                 .map_or(log_path.clone(), |n| n.to_string_lossy().into_owned());
@@ -104,7 +104,9 @@ impl RunLesson for Mapping {
             }))?;
             return Ok(());
         }
-        let f = |v: Option<f64>, unit: &str| v.map_or("- (no truth)".to_owned(), |v| format!("{v:.4}{unit}"));
+        let f = |v: Option<f64>, unit: &str| {
+            v.map_or("- (no truth)".to_owned(), |v| format!("{v:.4}{unit}"))
+        };
         writeln!(
             out,
             "SLAM Lab: mapping {} with {} poses — {} scans ({:.0} s of data), seed {}",
@@ -144,7 +146,8 @@ fn write_map(grid: &slamlab_core::grid::ProbabilityGrid, path: &Path) -> Result<
     let (yaml, image) = export_map(&occupancy, &image_name, ImageFormat::Pgm)?;
     std::fs::write(path, yaml).with_context(|| format!("writing {}", path.display()))?;
     let image_path = path.with_file_name(&image_name);
-    std::fs::write(&image_path, image).with_context(|| format!("writing {}", image_path.display()))?;
+    std::fs::write(&image_path, image)
+        .with_context(|| format!("writing {}", image_path.display()))?;
     eprintln!("wrote {} and {}", path.display(), image_path.display());
     Ok(())
 }

@@ -15,8 +15,8 @@ pub mod scenario;
 mod tests;
 
 pub use run::{
-    InputScan, MappingInput, MappingPhase, MappingRecords, MappingSim, MatcherSettings, map_agreement,
-    trajectory_rmse,
+    InputScan, MappingInput, MappingPhase, MappingRecords, MappingSim, MatcherSettings,
+    map_agreement, trajectory_rmse,
 };
 pub use scenario::{MappingScenario, PoseSource, RuleKind};
 
@@ -33,7 +33,11 @@ use std::sync::Arc;
 /// `map` for `scenario.steps` scans (0.1 s apart) with the scenario's lidar and
 /// odometry noise. The true poses and the map travel beside the scans for the
 /// metrics.
-pub fn simulated_input(scenario: &MappingScenario, map: Arc<OccupancyGrid>, map_name: &str) -> Result<MappingInput, String> {
+pub fn simulated_input(
+    scenario: &MappingScenario,
+    map: Arc<OccupancyGrid>,
+    map_name: &str,
+) -> Result<MappingInput, String> {
     let mut config = SimulatedLogConfig::default();
     config.lidar.beams = scenario.beams;
     config.lidar.max_range = scenario.lidar_range;
@@ -43,8 +47,12 @@ pub fn simulated_input(scenario: &MappingScenario, map: Arc<OccupancyGrid>, map_
     config.odom_noise.alpha2 *= k;
     config.odom_noise.alpha3 *= k;
     config.odom_noise.alpha4 *= k;
-    let (log, truth) = simulate_log(&map, scenario.steps, scenario.seed, &config).map_err(|e| e.to_string())?;
-    let mut input = log_input(&log, &format!("simulated {map_name}, seed {}", scenario.seed));
+    let (log, truth) =
+        simulate_log(&map, scenario.steps, scenario.seed, &config).map_err(|e| e.to_string())?;
+    let mut input = log_input(
+        &log,
+        &format!("simulated {map_name}, seed {}", scenario.seed),
+    );
     input.truth = Some(truth.iter().map(|t| t.pose).collect());
     input.true_map = Some(map);
     Ok(input)
@@ -129,12 +137,17 @@ impl MappingSession {
     /// A run of `scenario` over `input` (its pose source, rule and matcher
     /// settings); parameters out of range are clamped, and the notices say so.
     pub fn new(mut scenario: MappingScenario, input: Arc<MappingInput>) -> (Self, Vec<String>) {
-        let mut notices: Vec<String> = params::sanitize(&mut scenario).iter().map(ToString::to_string).collect();
+        let mut notices: Vec<String> = params::sanitize(&mut scenario)
+            .iter()
+            .map(ToString::to_string)
+            .collect();
         if scenario.poses == PoseSource::Truth && input.truth.is_none() {
             notices.push("a log has no true poses: mapping with raw odometry instead".to_owned());
         }
         if let Err(why) = scenario.update_rule().log_odds_steps() {
-            notices.push(format!("the update rule cannot be used ({why}); the defaults apply"));
+            notices.push(format!(
+                "the update rule cannot be used ({why}); the defaults apply"
+            ));
             let defaults = MappingScenario::default();
             scenario.l_occ = defaults.l_occ;
             scenario.l_free = defaults.l_free;
@@ -215,10 +228,15 @@ impl MappingSession {
         let input = sim.input();
         let records = self.stepper.records();
         let grid = sim.grid();
-        let (width, height) = grid
-            .known_bounds()
-            .map_or((0, 0), |(i0, j0, i1, j1)| ((i1 - i0 + 1) as usize, (j1 - j0 + 1) as usize));
-        let matched: Vec<usize> = records.iterations.iter().copied().filter(|&n| n > 0).collect();
+        let (width, height) = grid.known_bounds().map_or((0, 0), |(i0, j0, i1, j1)| {
+            ((i1 - i0 + 1) as usize, (j1 - j0 + 1) as usize)
+        });
+        let matched: Vec<usize> = records
+            .iterations
+            .iter()
+            .copied()
+            .filter(|&n| n > 0)
+            .collect();
         let duration = input
             .scans
             .get(records.poses.len().saturating_sub(1))

@@ -12,7 +12,9 @@ use crate::stepper::{Records, Simulation};
 use slamlab_core::Pose2;
 use slamlab_core::grid::{Cell, InsertParams, InsertReport, OccupancyGrid, ProbabilityGrid};
 use slamlab_core::scan::icp::{IcpConfig, IcpVariant, align};
-use slamlab_core::scan::scan_to_map::{ProbabilityLookup, ScanToMapParams, ScanToMapRecord, match_scan_to_map};
+use slamlab_core::scan::scan_to_map::{
+    ProbabilityLookup, ScanToMapParams, ScanToMapRecord, match_scan_to_map,
+};
 use slamlab_core::scan::{Point2, Scan};
 use slamlab_core::wrap_angle;
 use std::sync::Arc;
@@ -97,7 +99,9 @@ impl MappingPhase {
     pub fn label(&self) -> String {
         match self {
             MappingPhase::Predict { scan, .. } => format!("predict scan {scan}"),
-            MappingPhase::Match { scan, iterations, .. } => {
+            MappingPhase::Match {
+                scan, iterations, ..
+            } => {
                 format!("match scan {scan} ({iterations} iterations)")
             }
             MappingPhase::Insert { scan, report } => format!(
@@ -241,7 +245,10 @@ impl MappingSim {
 
     /// The phases one scan takes with this source.
     fn has_match_phase(&self) -> bool {
-        matches!(self.source, PoseSource::Icp | PoseSource::Plicp | PoseSource::ScanToMap)
+        matches!(
+            self.source,
+            PoseSource::Icp | PoseSource::Plicp | PoseSource::ScanToMap
+        )
     }
 
     /// The odometry prediction of scan `k`: the last pose moved by the
@@ -293,7 +300,11 @@ impl MappingSim {
                 };
                 let (m, _) = align(&reference, &points, initial, &params).ok()?;
                 let p = last_pose.compose(&m.pose);
-                Some((Pose2::new(p.x, p.y, wrap_angle(p.theta)), m.cost, m.iterations))
+                Some((
+                    Pose2::new(p.x, p.y, wrap_angle(p.theta)),
+                    m.cost,
+                    m.iterations,
+                ))
             }
             PoseSource::Truth | PoseSource::Odometry => None,
         }
@@ -323,7 +334,10 @@ impl Simulation for MappingSim {
                 };
                 records.costs.push(f64::NAN);
                 records.iterations.push(0);
-                MappingPhase::Predict { scan: k, pose: self.pose }
+                MappingPhase::Predict {
+                    scan: k,
+                    pose: self.pose,
+                }
             }
             Stage::Match => {
                 self.stage = Stage::Insert;
@@ -412,13 +426,17 @@ pub fn map_agreement(built: &ProbabilityGrid, truth: &OccupancyGrid) -> Option<f
     let (mut known, mut same) = (0usize, 0usize);
     for j in 0..truth.height() as i64 {
         for i in 0..truth.width() as i64 {
-            let Some(cell) = truth.get(i, j) else { continue };
+            let Some(cell) = truth.get(i, j) else {
+                continue;
+            };
             if cell == Cell::Unknown {
                 continue;
             }
             let (x, y) = truth.cell_center(i, j);
             let (bi, bj) = built.cell_of(x, y);
-            let Some(l) = built.log_odds_at(bi, bj) else { continue };
+            let Some(l) = built.log_odds_at(bi, bj) else {
+                continue;
+            };
             if l == 0.0 {
                 continue;
             }

@@ -35,7 +35,8 @@ impl PoseSource {
         PoseSource::ScanToMap,
     ];
     /// The names the URL and the CLI use.
-    pub const NAMES: &'static [&'static str] = &["truth", "odometry", "icp", "plicp", "scan-to-map"];
+    pub const NAMES: &'static [&'static str] =
+        &["truth", "odometry", "icp", "plicp", "scan-to-map"];
 
     /// The name the URL and the CLI use.
     pub fn name(self) -> &'static str {
@@ -44,7 +45,10 @@ impl PoseSource {
 
     /// The source of a name.
     pub fn from_name(name: &str) -> Option<Self> {
-        Self::NAMES.iter().position(|n| *n == name).map(|i| Self::ALL[i])
+        Self::NAMES
+            .iter()
+            .position(|n| *n == name)
+            .map(|i| Self::ALL[i])
     }
 
     /// A label for legends and menus.
@@ -262,12 +266,48 @@ pub static PARAMS: &[Param<MappingScenario>] = &[
         (0.0, 100.0),
         max_range_free
     ),
-    field!("l-occ", "", "log-odds rule: added to a hit cell", (0.01, 10.0), l_occ),
-    field!("l-free", "", "log-odds rule: added to a crossed cell", (-10.0, -0.01), l_free),
-    field!("l-min", "", "log-odds rule: lower clamp", (-40.0, -0.01), l_min),
-    field!("l-max", "", "log-odds rule: upper clamp", (0.01, 40.0), l_max),
-    field!("hit-probability", "", "odds rule: p_hit", (0.501, 0.999), hit_probability),
-    field!("miss-probability", "", "odds rule: p_miss", (0.001, 0.499), miss_probability),
+    field!(
+        "l-occ",
+        "",
+        "log-odds rule: added to a hit cell",
+        (0.01, 10.0),
+        l_occ
+    ),
+    field!(
+        "l-free",
+        "",
+        "log-odds rule: added to a crossed cell",
+        (-10.0, -0.01),
+        l_free
+    ),
+    field!(
+        "l-min",
+        "",
+        "log-odds rule: lower clamp",
+        (-40.0, -0.01),
+        l_min
+    ),
+    field!(
+        "l-max",
+        "",
+        "log-odds rule: upper clamp",
+        (0.01, 40.0),
+        l_max
+    ),
+    field!(
+        "hit-probability",
+        "",
+        "odds rule: p_hit",
+        (0.501, 0.999),
+        hit_probability
+    ),
+    field!(
+        "miss-probability",
+        "",
+        "odds rule: p_miss",
+        (0.001, 0.499),
+        miss_probability
+    ),
     field!("p-min", "", "odds rule: lower clamp", (0.001, 0.499), p_min),
     field!("p-max", "", "odds rule: upper clamp", (0.501, 0.999), p_max),
     field!(
@@ -305,7 +345,13 @@ pub static PARAMS: &[Param<MappingScenario>] = &[
         (0.01, 10.0),
         icp_max_distance
     ),
-    field!("icp-trim", "", "ICP: share of the closest correspondences kept", (0.1, 1.0), icp_trim),
+    field!(
+        "icp-trim",
+        "",
+        "ICP: share of the closest correspondences kept",
+        (0.1, 1.0),
+        icp_trim
+    ),
     Param::count(
         "beams",
         "",
@@ -314,8 +360,20 @@ pub static PARAMS: &[Param<MappingScenario>] = &[
         |s| Some(s.beams as u64),
         |s, v| s.beams = usize::try_from(v).unwrap_or(2048),
     ),
-    field!("lidar-range", "m", "simulated lidar: maximum range", (1.0, 80.0), lidar_range),
-    field!("range-std", "m", "simulated lidar: range noise", (0.0, 1.0), range_std),
+    field!(
+        "lidar-range",
+        "m",
+        "simulated lidar: maximum range",
+        (1.0, 80.0),
+        lidar_range
+    ),
+    field!(
+        "range-std",
+        "m",
+        "simulated lidar: range noise",
+        (0.0, 1.0),
+        range_std
+    ),
     field!(
         "odometry-noise",
         "",
@@ -350,8 +408,15 @@ mod tests {
         s.resolution = 0.1;
         let pairs = to_pairs(&s);
         let mut back = MappingScenario::default();
-        let owned: Vec<(String, String)> = pairs.iter().map(|(k, v)| (k.to_string(), v.clone())).collect();
-        let issues = apply_pairs(&mut back, owned.iter().map(|(k, v)| (k.as_str(), v.as_str())), &[]);
+        let owned: Vec<(String, String)> = pairs
+            .iter()
+            .map(|(k, v)| (k.to_string(), v.clone()))
+            .collect();
+        let issues = apply_pairs(
+            &mut back,
+            owned.iter().map(|(k, v)| (k.as_str(), v.as_str())),
+            &[],
+        );
         assert!(issues.is_empty(), "{issues:?}");
         assert_eq!(to_pairs(&back), pairs);
         let mut bad = MappingScenario::default();

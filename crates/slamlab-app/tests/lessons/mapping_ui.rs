@@ -1,0 +1,122 @@
+//! Headless UI tests of the mapping lesson through egui_kittest: it opens by
+//! URL, builds a map scan by scan, switches the pose source live on the same
+//! scans, exports the map as a ROS map, hands the map to the Monte Carlo
+//! lesson, and the rendered map shows occupied cells and the scan.
+
+use super::common::{count_pixels, harness, lesson_of, lesson_of_mut, render_or_skip};
+use egui_kittest::Harness;
+use egui_kittest::kittest::Queryable as _;
+use slamlab_app::SlamLabApp;
+use slamlab_app::lesson::Lesson as _;
+use slamlab_app::mapping::MappingLesson;
+use slamlab_sim::mapping::PoseSource;
+
+fn lesson<'h>(h: &'h Harness<'_, SlamLabApp>) -> &'h MappingLesson {
+    lesson_of(h)
+}
+
+fn lesson_mut<'h>(h: &'h mut Harness<'_, SlamLabApp>) -> &'h mut MappingLesson {
+    lesson_of_mut(h)
+}
+
+#[test]
+fn the_lesson_opens_by_url_and_bad_values_get_a_message() {
+    let h = harness("lesson=mapping&map=maze&seed=3&steps=120&poses=odometry");
+    assert_eq!(h.state().lesson_id(), "mapping");
+    let session = lesson(&h).session();
+    assert_eq!(session.scenario().seed, 3);
+    assert_eq!(session.sim().input().scans.len(), 120);
+    assert_eq!(session.sim().source(), PoseSource::Odometry);
+    assert!(h.state().notices().is_empty(), "{:?}", h.state().notices());
+    let h = harness("lesson=mapping&steps=999999999&poses=teleport&resolution=NaN");
+    let notices = h.state().notices();
+    assert_eq!(notices.len(), 3, "{notices:?}");
+    assert_eq!(lesson(&h).session().scenario().poses, PoseSource::ScanToMap);
+}
+
+#[test]
+fn scans_build_the_map_and_a_pose_source_switch_replays_the_same_scans() {
+    let mut h = harness("lesson=mapping&map=maze&seed=3&steps=150");
+    h.run();
+    h.get_by_label("Step phase").click();
+    h.run();
+    assert_eq!(
+        lesson(&h).time_info().last_phase.as_deref(),
+        Some("predict scan 0")
+    );
+    for _ in 0..100 {
+        lesson_mut(&mut h).step_tick();
+    }
+    let summary = lesson(&h).session().summary();
+    assert_eq!(summary.scans, 100);
+    let agreement = summary.map_agreement.unwrap();
+    assert!(agreement > 0.9, "{agreement}");
+    // Switch to raw odometry: the same 100 scans replay (within a few frames).
+    lesson_mut(&mut h).set_pose_source(PoseSource::Odometry);
+    for _ in 0..200 {
+        h.step();
+        if lesson(&h).session().sim().scans_done() >= 100 {
+            break;
+        }
+    }
+    let odometry = lesson(&h).session().summary();
+    assert_eq!(odometry.poses, "odometry");
+    assert_eq!(odometry.scans, 100);
+    assert!(odometry.trajectory_rmse.unwrap() > summary.trajectory_rmse.unwrap());
+    // Step back goes one phase back.
+    h.get_by_label("Step back").click();
+    h.run();
+    assert_eq!(lesson(&h).session().sim().scans_done(), 99);
+}
+
+#[test]
+fn export_writes_a_ros_map_and_localize_opens_the_monte_carlo_lesson() {
+    let mut h = harness("lesson=mapping&map=maze&seed=3&steps=80&poses=truth");
+    for _ in 0..80 {
+        lesson_mut(&mut h).step_tick();
+    }
+    let dir = std::env::temp_dir().join(format!("slamlab-mapping-export-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    h.get_by_label("Export map").click();
+    h.run();
+    // The desktop asks where to save the YAML, then proposes the same folder
+    // for its image.
+    let yaml_path = dir.join("slamlab-map.yaml").to_string_lossy().into_owned();
+    *h.state_mut().exporter.save_path_mut().unwrap() = yaml_path;
+    assert_eq!(h.state().exporter.queued().len(), 1);
+    h.get_by_label("Save").click();
+    h.run();
+    let proposed = h.state_mut().exporter.save_path_mut().unwrap().clone();
+    assert_eq!(proposed, dir.join("slamlab-map.pgm").to_string_lossy());
+    h.get_by_label("Save").click();
+    h.run();
+    let yaml = std::fs::read_to_string(dir.join("slamlab-map.yaml")).unwrap();
+    let pgm = std::fs::read(dir.join("slamlab-map.pgm")).unwrap();
+    let (grid, _) = slamlab_sim::grid::map_io::load_map(&yaml, &pgm).unwrap();
+    let (free, occupied, _) = grid.counts();
+    assert!(
+        free > 1000 && occupied > 100,
+        "{free} free, {occupied} occupied"
+    );
+    h.get_by_label("Localize in this map").click();
+    h.run();
+    assert_eq!(h.state().lesson_id(), "kidnap");
+}
+
+#[test]
+fn the_rendered_map_shows_walls_and_the_scan() {
+    let mut h = harness("lesson=mapping&map=maze&seed=3&steps=60&poses=truth");
+    for _ in 0..60 {
+        lesson_mut(&mut h).step_tick();
+    }
+    h.run();
+    let Some(image) = render_or_skip(&mut h) else {
+        return;
+    };
+    let dark = count_pixels(image.as_raw(), [0, 0, 0], 40);
+    let scan = count_pixels(image.as_raw(), [0xD5, 0x5E, 0x00], 30);
+    assert!(dark > 300, "occupied cells: {dark} dark pixels");
+    assert!(scan > 50, "scan end points: {scan} vermillion pixels");
+    let path = std::env::temp_dir().join("slamlab-mapping.png");
+    let _ = image.save(&path);
+}
