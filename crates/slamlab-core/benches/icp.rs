@@ -1,8 +1,8 @@
 //! ICP of two 360-beam scans of a simulated room taken 0.1 m and 3° apart:
 //! `cargo bench -p slamlab-core --bench icp`.
 //!
-//! Target (issue "Building a map with a lidar"): point-to-line ≤ 0.3 ms
-//! natively. Results with date and machine are in `docs/icp.md`.
+//! Target: point-to-line ≤ 0.3 ms natively. Results with date and machine are
+//! in `docs/icp.md`.
 
 use rand::SeedableRng;
 use rand_chacha::ChaCha8Rng;
