@@ -45,7 +45,7 @@
 //! between iterations.
 
 use super::kdtree::{Neighbour, PointTree, PointTreeError};
-use super::{Point2, Scan, ScanMatch, transform_point};
+use super::{Point2, Scan, ScanMatch};
 use crate::geometry::{Pose2, wrap_angle};
 use crate::math;
 use serde::{Deserialize, Serialize};
@@ -539,8 +539,11 @@ impl IcpState {
         let point_to_line = self.config.variant == IcpVariant::PointToLine;
         self.pairs.clear();
         self.order.clear();
+        // `transform_point` without a sine and cosine per point.
+        let (sin, cos) = math::sin_cos(self.pose.theta);
+        let (tx, ty) = (self.pose.x, self.pose.y);
         for (i, &p) in self.scan.iter().enumerate() {
-            let q = transform_point(&self.pose, p);
+            let q = [cos * p[0] - sin * p[1] + tx, sin * p[0] + cos * p[1] + ty];
             let Some(nearest) = self.tree.nearest(q) else {
                 continue;
             };
@@ -570,19 +573,21 @@ impl IcpState {
                 status,
             });
         }
-        // Trimming (Chetverikov et al. 2002): sort the candidates by error
-        // (ties by scan order, so the result is deterministic) and keep the
-        // best ⌈ξ N⌉.
+        // Trimming (Chetverikov et al. 2002): keep the ⌈ξ N⌉ candidates with
+        // the smallest error (ties by scan order, so the kept set is
+        // deterministic). A selection, not a sort: O(N).
         let candidates = self.order.len();
         let keep =
             ((self.config.trim_fraction * candidates as f64).ceil() as usize).min(candidates);
-        let pairs = &self.pairs;
-        self.order.sort_unstable_by(|&a, &b| {
-            pairs[a]
-                .error_squared
-                .total_cmp(&pairs[b].error_squared)
-                .then(a.cmp(&b))
-        });
+        if keep > 0 && keep < candidates {
+            let pairs = &self.pairs;
+            self.order.select_nth_unstable_by(keep - 1, |&a, &b| {
+                pairs[a]
+                    .error_squared
+                    .total_cmp(&pairs[b].error_squared)
+                    .then(a.cmp(&b))
+            });
+        }
         for &k in &self.order[keep..] {
             self.pairs[k].status = PairStatus::Trimmed;
         }
@@ -593,10 +598,12 @@ impl IcpState {
                 needed: self.config.min_correspondences,
             });
         }
+        // Summed in scan order, whatever order the selection left.
         let sum: f64 = self
-            .order
+            .pairs
             .iter()
-            .map(|&k| self.pairs[k].error_squared)
+            .filter(|p| p.status == PairStatus::Kept)
+            .map(|p| p.error_squared)
             .sum();
         Ok((keep, sum / keep as f64))
     }

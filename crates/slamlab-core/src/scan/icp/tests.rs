@@ -1,5 +1,6 @@
 use super::*;
 use crate::random::gaussian;
+use crate::scan::transform_point;
 use rand::SeedableRng;
 use rand_chacha::ChaCha8Rng;
 use std::f64::consts::PI;

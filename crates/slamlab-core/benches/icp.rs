@@ -1,0 +1,125 @@
+//! ICP of two 360-beam scans of a simulated room taken 0.1 m and 3° apart:
+//! `cargo bench -p slamlab-core --bench icp`.
+//!
+//! Target: point-to-line ≤ 0.3 ms natively. Results with date and machine are
+//! in `docs/icp.md`.
+
+use rand::SeedableRng;
+use rand_chacha::ChaCha8Rng;
+use slamlab_core::Pose2;
+use slamlab_core::math;
+use slamlab_core::random::gaussian;
+use slamlab_core::scan::icp::{IcpConfig, IcpState, IcpVariant, align};
+use slamlab_core::scan::{Point2, Scan};
+use std::f64::consts::PI;
+
+fn main() {
+    // Print what is being timed once, so the numbers can be read with it.
+    let (reference, scan) = room_scans();
+    for variant in [IcpVariant::PointToLine, IcpVariant::PointToPoint] {
+        match align(&reference, &scan, Pose2::IDENTITY, &config(variant)) {
+            Ok((m, _)) => println!(
+                "{variant:?}: {} + {} points, {} iterations, converged {}, pose ({:.4} m, {:.4} m, {:.3}°), truth (0.1 m, 0 m, 3°)",
+                reference.len(),
+                scan.len(),
+                m.iterations,
+                m.converged,
+                m.pose.x,
+                m.pose.y,
+                m.pose.theta.to_degrees()
+            ),
+            Err(e) => println!("{variant:?}: {e}"),
+        }
+    }
+    divan::main();
+}
+
+type Segment = (Point2, Point2);
+
+fn rectangle(x0: f64, y0: f64, x1: f64, y1: f64) -> [Segment; 4] {
+    [
+        ([x0, y0], [x1, y0]),
+        ([x1, y0], [x1, y1]),
+        ([x1, y1], [x0, y1]),
+        ([x0, y1], [x0, y0]),
+    ]
+}
+
+/// An 8 m × 6 m room with a table, a cupboard and a pillar.
+fn room() -> Vec<Segment> {
+    let mut walls = Vec::new();
+    walls.extend(rectangle(-4.0, -3.0, 4.0, 3.0));
+    walls.extend(rectangle(1.0, -0.5, 2.2, 0.3));
+    walls.extend(rectangle(-3.8, 1.8, -2.0, 3.0));
+    walls.extend(rectangle(-1.5, -2.0, -1.2, -1.7));
+    walls
+}
+
+/// 360 beams over 360°, 10 m range, 1 cm Gaussian range noise.
+fn ray_cast(walls: &[Segment], pose: Pose2, rng: &mut ChaCha8Rng) -> Scan {
+    let beams = 360;
+    let range_max = 10.0;
+    let mut angles = Vec::with_capacity(beams);
+    let mut ranges = Vec::with_capacity(beams);
+    for k in 0..beams {
+        let angle = -PI + 2.0 * PI * k as f64 / beams as f64;
+        let (s, c) = math::sin_cos(pose.theta + angle);
+        let mut best = range_max;
+        for &(a, b) in walls {
+            let (ex, ey) = (b[0] - a[0], b[1] - a[1]);
+            let den = c * ey - s * ex;
+            if den.abs() < 1e-12 {
+                continue;
+            }
+            let (wx, wy) = (a[0] - pose.x, a[1] - pose.y);
+            let r = (wx * ey - wy * ex) / den;
+            let u = (wx * s - wy * c) / den;
+            if r > 1e-9 && (0.0..=1.0).contains(&u) && r < best {
+                best = r;
+            }
+        }
+        if best < range_max {
+            best += gaussian(rng, 0.01);
+        }
+        angles.push(angle);
+        ranges.push(best);
+    }
+    Scan {
+        angles,
+        ranges,
+        range_min: 0.0,
+        range_max,
+    }
+}
+
+fn room_scans() -> (Vec<Point2>, Vec<Point2>) {
+    let mut rng = ChaCha8Rng::seed_from_u64(1);
+    let walls = room();
+    let reference = ray_cast(&walls, Pose2::new(0.0, 0.5, 0.0), &mut rng).points();
+    let scan = ray_cast(&walls, Pose2::new(0.1, 0.5, 3f64.to_radians()), &mut rng).points();
+    (reference, scan)
+}
+
+fn config(variant: IcpVariant) -> IcpConfig {
+    IcpConfig {
+        variant,
+        ..IcpConfig::default()
+    }
+}
+
+/// The whole registration: k-d tree, normals, iterations, final cost.
+#[divan::bench(args = [IcpVariant::PointToLine, IcpVariant::PointToPoint])]
+fn align_360_beams(bencher: divan::Bencher, variant: IcpVariant) {
+    let (reference, scan) = room_scans();
+    let config = config(variant);
+    bencher.bench_local(|| align(&reference, &scan, Pose2::IDENTITY, &config).map(|r| r.0));
+}
+
+/// Only the set-up: the k-d tree over the reference and, for point-to-line,
+/// its normals.
+#[divan::bench(args = [IcpVariant::PointToLine, IcpVariant::PointToPoint])]
+fn setup_360_beams(bencher: divan::Bencher, variant: IcpVariant) {
+    let (reference, scan) = room_scans();
+    let config = config(variant);
+    bencher.bench_local(|| IcpState::new(&reference, &scan, Pose2::IDENTITY, config).is_ok());
+}
