@@ -1,7 +1,7 @@
 //! Laser log reading speed: `cargo bench -p slamlab-sim --bench laser_log`.
 //!
 //! The Intel Research Lab log (`../shared/data/laser/intel.clf.bz2` beside
-//! the repository, 2.3 MB bzip2, 16.4 MB and 13,631 scans unpacked): the whole
+//! the repository, or in `$SLAMLAB_SHARED`; 2.3 MB bzip2, 16.4 MB and 13,631 scans unpacked): the whole
 //! read (bzip2 and parse), and parsing the unpacked text alone. Skipped with a
 //! message when the file is absent.
 
@@ -15,8 +15,11 @@ fn main() {
 }
 
 fn intel_bytes() -> Option<Vec<u8>> {
-    let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR"))
-        .join("../../../shared/data/laser/intel.clf.bz2");
+    let shared = std::env::var_os("SLAMLAB_SHARED").map_or_else(
+        || std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../../../shared"),
+        std::path::PathBuf::from,
+    );
+    let path = shared.join("data/laser/intel.clf.bz2");
     match std::fs::read(&path) {
         Ok(bytes) => Some(bytes),
         Err(e) => {
