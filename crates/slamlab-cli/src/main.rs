@@ -23,6 +23,7 @@ mod experiments;
 mod flags;
 mod graph_cmd;
 mod lessons;
+mod log_cmd;
 mod map;
 mod output;
 mod registry;
@@ -78,6 +79,7 @@ fn cli() -> Command {
         .subcommand(registry::experiment_command_line())
         .subcommand(map::command())
         .subcommand(graph_cmd::command())
+        .subcommand(log_cmd::command())
         .subcommand(
             Command::new("params")
                 .about("List a lesson's parameters (the URL's and the flags' names) with their units, ranges and defaults")
@@ -129,6 +131,7 @@ fn main() -> std::process::ExitCode {
     let result = match matches.subcommand() {
         Some(("map", m)) => map::run(m),
         Some(("graph", m)) => graph_cmd::run(m),
+        Some(("log", m)) => log_cmd::run(m),
         Some(("run", m)) => registry::run_lesson(m, &mut std::io::stdout().lock()),
         Some(("experiment", m)) => registry::run_experiment(m, &mut std::io::stdout().lock()),
         Some(("params", m)) => list_params(m),

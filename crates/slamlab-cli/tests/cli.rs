@@ -516,3 +516,54 @@ fn a_scenario_file_runs_like_its_flags() {
     assert_eq!(v["seed"], 2, "{v}");
     let _ = std::fs::remove_dir_all(&dir);
 }
+
+#[test]
+fn log_record_writes_a_carmen_log_and_its_truth_that_log_info_reads() {
+    let dir = std::env::temp_dir().join(format!("slamlab-cli-log-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let log = dir.join("maze.clf");
+    let log_s = log.to_str().unwrap();
+    let (ok, stdout, stderr) = slamlab(&[
+        "log", "record", "--map", "maze", "--steps", "40", "--seed", "2", "--out", log_s,
+    ]);
+    assert!(ok, "{stderr}");
+    assert!(stdout.contains("40 scans of 360 beams"), "{stdout}");
+    let truth = std::fs::read_to_string(dir.join("maze.clf.truth")).unwrap();
+    let lines: Vec<&str> = truth.lines().filter(|l| !l.starts_with('#')).collect();
+    assert_eq!(lines.len(), 40);
+    assert!(lines[0].starts_with("0.100000 "), "{}", lines[0]);
+    assert!(lines[39].starts_with("4.000000 "), "{}", lines[39]);
+
+    let v = run_json(&["log", "info", log_s, "--json"]);
+    assert_eq!(v["compression"], "plain");
+    assert_eq!(v["scans"], 40);
+    assert_eq!(v["scan_records"]["FLASER"], 40);
+    assert_eq!(v["odometry"], 40);
+    assert_eq!(v["beams"], 360);
+    assert_eq!(v["max_range"], 12.0);
+    assert!((v["fov_deg"].as_f64().unwrap() - 360.0).abs() < 1e-6, "{v}");
+    assert_eq!(v["first_timestamp"], 0.1);
+    assert_eq!(v["last_timestamp"], 4.0);
+    assert_eq!(v["params"]["slamlab_map"], "maze");
+    assert_eq!(v["params"]["slamlab_seed"], "2");
+    assert_eq!(v["unusable_readings"], 0);
+    let (ok, stdout, _) = slamlab(&["log", "info", log_s]);
+    assert!(
+        ok && stdout.contains("scans:       40 (40 FLASER)"),
+        "{stdout}"
+    );
+
+    // Bad input: a message naming the line, no panic.
+    let bad = dir.join("bad.clf");
+    std::fs::write(&bad, "FLASER 3 1 2\n").unwrap();
+    let (ok, _, stderr) = slamlab(&["log", "info", bad.to_str().unwrap()]);
+    assert!(
+        !ok && stderr.contains("line 1: malformed FLASER record"),
+        "{stderr}"
+    );
+    let (ok, _, stderr) = slamlab(&["log", "info", dir.join("missing.clf").to_str().unwrap()]);
+    assert!(!ok && stderr.contains("cannot read"), "{stderr}");
+    let (ok, _, stderr) = slamlab(&["log", "record", "--map", "nowhere.yaml", "--out", log_s]);
+    assert!(!ok && stderr.contains("nowhere.yaml"), "{stderr}");
+    let _ = std::fs::remove_dir_all(&dir);
+}
