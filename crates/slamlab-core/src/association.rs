@@ -34,7 +34,9 @@ pub enum AssociationMode {
     KnownIds,
     /// Ignore the id; pick the most likely landmark, or start a new one when the
     /// best candidate's squared Mahalanobis distance exceeds `gate` (χ², 2 degrees
-    /// of freedom).
+    /// of freedom). FastSLAM compares likelihoods instead: the best landmark's
+    /// `N(ν; 0, S)` against the new-landmark likelihood `p₀` that the gate sets
+    /// ([`new_landmark_log_likelihood`]; Montemerlo et al. 2003).
     MaximumLikelihood {
         /// The new-landmark threshold on the squared Mahalanobis distance.
         gate: f64,

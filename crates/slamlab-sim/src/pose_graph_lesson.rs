@@ -716,7 +716,9 @@ impl PoseGraphSession {
             .into_iter()
             .zip(covs)
             .filter_map(|(i, c)| match c {
-                MarginalCovariance::Pose(m) => Some((i, m.fixed_view::<2, 2>(0, 0).into_owned())),
+                MarginalCovariance::WorldPose(m) => {
+                    Some((i, m.fixed_view::<2, 2>(0, 0).into_owned()))
+                }
                 MarginalCovariance::Point(m) => Some((i, m)),
                 MarginalCovariance::Fixed => None,
             })

@@ -4,7 +4,7 @@
 
 use slamlab_core::particle::ParticleFlag;
 use slamlab_sim::grid::BuiltinMap;
-use slamlab_sim::localization::experiment::{KidnapProtocol, kidnap_trial, summarize};
+use slamlab_sim::localization::experiment::{KidnapProtocol, KidnapTrial, kidnap_trial, summarize};
 use slamlab_sim::localization::{InitMode, LocalizationEstimator, MclPhase, MclRun, MclScenario};
 
 fn scenario(est: Vec<LocalizationEstimator>, particles: usize, seed: u64) -> MclScenario {
@@ -101,7 +101,7 @@ fn seeded_kidnap_acmcl_recovers_faster_than_amcl() {
         let trials: Vec<_> = (1..=6)
             .map(|s| kidnap_trial(&MclScenario::default(), &grid, est, 1000, s, &protocol).unwrap())
             .collect();
-        results.push(summarize(est.name(), 1000, &trials));
+        results.push(summarize(est.name(), 1000, &trials, protocol.limit_updates));
     }
     let (amcl, acmcl) = (&results[0], &results[1]);
     assert!(amcl.failures <= 2 && acmcl.failures <= 1, "{results:?}");
@@ -132,11 +132,31 @@ fn one_kidnap_trial_runs_and_reports() {
     .unwrap();
     assert!(t.kidnap_tick.is_some());
     assert!(t.recovery_ratio > 0.0 && t.recovery_ratio < 1.0, "{t:?}");
-    let s = summarize("acmcl", 300, &[t]);
+    let s = summarize("acmcl", 300, &[t], 60);
     assert_eq!(
         s.failures + usize::from(s.steps_to_converge.median.is_some()),
         1
     );
+    // One trial: the median over all trials is its steps, or the limit.
+    assert_eq!(
+        s.median_all_trials,
+        Some(t.steps_to_converge.unwrap_or(60) as f64)
+    );
+    // Failures count as the limit: steps 10, 20 and two failures (limit 60)
+    // give 40 over all trials, 15 over the converged ones.
+    let trial = |steps| KidnapTrial {
+        steps_to_converge: steps,
+        ..t
+    };
+    let s = summarize(
+        "acmcl",
+        300,
+        &[trial(Some(10)), trial(None), trial(Some(20)), trial(None)],
+        60,
+    );
+    assert_eq!(s.steps_to_converge.median, Some(15.0));
+    assert_eq!(s.median_all_trials, Some(40.0));
+    assert_eq!(s.failures, 2);
 }
 
 /// KLD-sampling: the particle count falls while tracking and rises after a

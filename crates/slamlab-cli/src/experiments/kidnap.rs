@@ -157,7 +157,7 @@ impl Experiment for Kidnap {
                     .filter(|t| t.estimator == est.name() && t.particles == n)
                     .copied()
                     .collect();
-                results.push(summarize(est.name(), n, &ts));
+                results.push(summarize(est.name(), n, &ts, protocol.limit_updates));
             }
         }
         eprintln!();
@@ -204,19 +204,20 @@ impl Experiment for Kidnap {
         writeln!(out)?;
         writeln!(
             out,
-            "{:<8} {:>9} {:>8} {:>8} {:>8} {:>9} {:>10}",
-            "filter", "particles", "median", "mean", "p90", "failures", "recovery"
+            "{:<8} {:>9} {:>8} {:>8} {:>8} {:>8} {:>9} {:>10}",
+            "filter", "particles", "median", "mean", "p90", "all", "failures", "recovery"
         )?;
         let f = |v: Option<f64>| v.map_or("-".to_owned(), |v| format!("{v:.1}"));
         for r in &results {
             writeln!(
                 out,
-                "{:<8} {:>9} {:>8} {:>8} {:>8} {:>9} {:>9.2}%",
+                "{:<8} {:>9} {:>8} {:>8} {:>8} {:>8} {:>9} {:>9.2}%",
                 r.estimator,
                 r.particles,
                 f(r.steps_to_converge.median),
                 f(r.steps_to_converge.mean),
                 f(r.steps_to_converge.p90),
+                f(r.median_all_trials),
                 r.failures,
                 100.0 * r.recovery_ratio
             )?;
@@ -224,7 +225,7 @@ impl Experiment for Kidnap {
         writeln!(out)?;
         writeln!(
             out,
-            "steps: filter updates from the kidnap until within {} m and {} rad for {} consecutive updates; limit {} updates.",
+            "steps: filter updates from the kidnap until within {} m and {} rad for {} consecutive updates; limit {} updates. median, mean, p90: over the converged trials; all: median over all trials, a failure counted as the limit.",
             protocol.converged_position,
             protocol.converged_heading,
             protocol.converged_updates,

@@ -23,7 +23,7 @@ pub use gauge::FreeComponent;
 pub use kernel::RobustKernel;
 pub use solver::{
     BlockPattern, MarginalCovariance, OptimizeError, Optimizer, OptimizerSettings, SolverKind,
-    StepReport, graph_cost,
+    StepReport, graph_cost, local_to_world_covariance,
 };
 
 use crate::geometry::Pose2;

@@ -179,11 +179,15 @@ fn free_gauge_message(components: &[FreeComponent], total: usize) -> String {
 }
 
 /// A marginal covariance of one vertex, from the Cholesky factor of `H` at the
-/// current estimate (`Σ = H⁻¹`, its diagonal block).
+/// current estimate (`Σ = H⁻¹`, its diagonal block), in the world frame.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub enum MarginalCovariance {
-    /// 3x3 covariance of a pose `[x, y, θ]`.
-    Pose(Matrix3<f64>),
+    /// 3x3 covariance of a pose's world coordinates `[x, y, θ]`. The solver
+    /// linearizes a pose in its own frame (`x ∘ Exp(δ)`), so `H⁻¹` holds the
+    /// covariance `Σ_δ` of the local increment; this is
+    /// `diag(R(θ), 1) Σ_δ diag(R(θ), 1)ᵀ`, what an ellipse drawn on the map
+    /// needs (to first order, the world position moves by `R(θ) δ_xy`).
+    WorldPose(Matrix3<f64>),
     /// 2x2 covariance of a point.
     Point(Matrix2<f64>),
     /// A fixed vertex has no uncertainty in this model.
@@ -430,6 +434,18 @@ fn to_local(graph: &PoseGraph, v: usize, j: Block3) -> Block3 {
         }
         VertexState::Point(_) => j,
     }
+}
+
+/// `diag(R(θ), 1) Σ diag(R(θ), 1)ᵀ`: the covariance of a pose's world
+/// coordinates from the covariance `Σ` of its increment in its own frame
+/// (`x ∘ Exp(δ)` moves the position by `R(θ) δ_xy + O(|δ|²)` and the heading by
+/// `δ_θ`).
+pub fn local_to_world_covariance(local: &Matrix3<f64>, theta: f64) -> Matrix3<f64> {
+    let (s, c) = crate::math::sin_cos(theta);
+    let j = Matrix3::new(c, -s, 0.0, s, c, 0.0, 0.0, 0.0, 1.0);
+    let w = j * local * j.transpose();
+    // Exactly symmetric, whatever the rounding.
+    (w + w.transpose()) * 0.5
 }
 
 /// `x ∘ Exp(δ)` on SE(2): the pose moved by `δ = [v_x, v_y, ω]` given in its own
@@ -1043,7 +1059,9 @@ impl Optimizer {
     }
 
     /// Marginal covariances of the given vertices at the current estimate, from
-    /// the Cholesky factor of the undamped `H`: the vertex's columns of `H⁻¹`.
+    /// the Cholesky factor of the undamped `H`: the vertex's columns of `H⁻¹`,
+    /// a pose's turned from its own frame into the world frame
+    /// ([`MarginalCovariance::WorldPose`]).
     pub fn marginal_covariances(
         &mut self,
         ids: &[VertexId],
@@ -1082,7 +1100,11 @@ impl Optimizer {
                 }
             }
             out.push(if d == 3 {
-                MarginalCovariance::Pose(cov)
+                let theta = match self.graph.vertices()[v].state {
+                    VertexState::Pose(p) => p.theta,
+                    VertexState::Point(_) => 0.0,
+                };
+                MarginalCovariance::WorldPose(local_to_world_covariance(&cov, theta))
             } else {
                 MarginalCovariance::Point(cov.fixed_view::<2, 2>(0, 0).into_owned())
             });

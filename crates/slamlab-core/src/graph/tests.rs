@@ -469,9 +469,17 @@ fn patterns_mark_fill_in_and_covariances_match_the_dense_inverse() {
 
     // Marginal covariance of pose 5 against a dense inverse of H.
     let cov = opt.marginal_covariances(&[5, 100]).unwrap();
-    let MarginalCovariance::Pose(c5) = cov[0] else {
+    let MarginalCovariance::WorldPose(world5) = cov[0] else {
         panic!("pose expected")
     };
+    // H is in the poses' own frames: compare its inverse with the local
+    // covariance, the world one turned back.
+    let theta5 = match g_vertex_state(&opt, 5) {
+        VertexState::Pose(p) => p.theta,
+        VertexState::Point(_) => panic!("pose expected"),
+    };
+    let back = local_to_world_covariance(&world5, -theta5);
+    let c5 = back;
     let MarginalCovariance::Point(_) = cov[1] else {
         panic!("point expected")
     };
@@ -510,6 +518,94 @@ fn patterns_mark_fill_in_and_covariances_match_the_dense_inverse() {
             );
         }
     }
+}
+
+fn g_vertex_state(opt: &Optimizer, id: u64) -> VertexState {
+    opt.graph().vertex(id).unwrap().state
+}
+
+/// The marginal of a pose heading 2 rad is the world-frame covariance: it
+/// matches the spread of the optimized pose over many noisy re-samplings of
+/// the measurements (the local-frame `H⁻¹` block, drawn as a world ellipse,
+/// would be turned by the heading).
+#[test]
+fn pose_marginals_are_world_frame_covariances_at_a_heading_far_from_zero() {
+    use crate::random::standard_normal;
+    use rand::SeedableRng;
+    let heading = 2.0;
+    let (s, c) = crate::math::sin_cos(heading);
+    // Four poses 1 m apart straight along the heading; pose 0 fixed. Odometry
+    // noise sd: 0.01 m forward, 0.05 m sideways, 0.02 rad. A range-bearing-free
+    // chain: the world spread of pose 3 is long across the direction of travel.
+    let truth: Vec<Pose2> = (0..4)
+        .map(|k| Pose2::new(1.0 + k as f64 * c, -2.0 + k as f64 * s, heading))
+        .collect();
+    let sd = [0.01, 0.05, 0.02];
+    let info = Matrix3::from_diagonal(&Vector3::new(
+        1.0 / (sd[0] * sd[0]),
+        1.0 / (sd[1] * sd[1]),
+        1.0 / (sd[2] * sd[2]),
+    ));
+    let build = |noise: &[[f64; 3]]| {
+        let mut g = PoseGraph::new();
+        for (k, p) in truth.iter().enumerate() {
+            g.add_pose(k as u64, *p).unwrap();
+        }
+        g.set_fixed(0, true).unwrap();
+        for k in 0..3 {
+            // Straight steps: θ_ij = 0, so noise added to the measurement's
+            // components has exactly the information `info` (Eq. 4.5).
+            let n = noise[k];
+            g.add_edge(EdgeKind::PosePose {
+                from: k,
+                to: k + 1,
+                measurement: Pose2::new(1.0 + sd[0] * n[0], sd[1] * n[1], sd[2] * n[2]),
+                information: info,
+            })
+            .unwrap();
+        }
+        g
+    };
+    let mut opt = Optimizer::new(build(&[[0.0; 3]; 3]), OptimizerSettings::default()).unwrap();
+    let MarginalCovariance::WorldPose(marginal) = opt.marginal_covariances(&[3]).unwrap()[0] else {
+        panic!("pose expected")
+    };
+    let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(17);
+    let trials = 3000;
+    let mut xs = Vec::with_capacity(trials);
+    for _ in 0..trials {
+        let noise: Vec<[f64; 3]> = (0..3)
+            .map(|_| std::array::from_fn(|_| standard_normal(&mut rng)))
+            .collect();
+        let mut opt = Optimizer::new(build(&noise), OptimizerSettings::default()).unwrap();
+        opt.optimize(50, |_| true).unwrap();
+        let VertexState::Pose(p) = g_vertex_state(&opt, 3) else {
+            panic!("pose expected")
+        };
+        xs.push([p.x, p.y, wrap_angle(p.theta - heading)]);
+    }
+    let n = trials as f64;
+    let mean: [f64; 3] = std::array::from_fn(|k| xs.iter().map(|x| x[k]).sum::<f64>() / n);
+    let mut sample = Matrix3::zeros();
+    for x in &xs {
+        let d = Vector3::new(x[0] - mean[0], x[1] - mean[1], x[2] - mean[2]);
+        sample += d * d.transpose() / (n - 1.0);
+    }
+    // Relative standard error of a sample covariance with 3000 draws: about
+    // sqrt(2/3000) = 2.6% of the scale; allow 8% of the largest entry.
+    let scale = sample.abs().max();
+    let diff = (marginal - sample).abs().max();
+    assert!(
+        diff < 0.08 * scale,
+        "marginal {marginal} sample {sample} diff {diff}"
+    );
+    // Not a coincidence of the heading: the local-frame covariance (what the
+    // solver's H⁻¹ holds) is far from the spread.
+    let local = local_to_world_covariance(&marginal, -heading);
+    assert!(
+        (local - sample).abs().max() > 0.5 * scale,
+        "local {local} sample {sample}"
+    );
 }
 
 #[test]

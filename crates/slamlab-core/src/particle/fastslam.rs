@@ -30,6 +30,18 @@
 //!   the particle is exactly "one pose from the full proposal, every landmark
 //!   updated at it". This costs one extra 2x2 update per measurement.
 //!
+//! **Maximum-likelihood association** (unknown ids; Montemerlo et al. 2003,
+//! Sec. 4; Probabilistic Robotics Table 13.2, lines 11-18): each particle
+//! scores every landmark of its own map, `π_j = N(ν_j; 0, S_j)`, and takes
+//! `ĉ = argmax{π_1, …, π_N, p₀}`: the landmark if its `π_j` beats the
+//! new-landmark likelihood `p₀`, else a new landmark; the particle's weight is
+//! multiplied by that maximum. The gate does not decide by itself: it sets
+//! `p₀` (the likelihood of a measurement at squared distance `gate` under `Q`,
+//! see [`association::new_landmark_log_likelihood`]), so a landmark is matched
+//! when `d² < gate − ln(det S_j / det Q)`, a little inside the gate for an
+//! uncertain landmark. Gating on `d²` alone would match a landmark just inside
+//! the gate with a weight below the `p₀` a new landmark would have given.
+//!
 //! Weights are kept as logarithms ([`super::normalize_log_weights`]). If every
 //! weight underflows to zero (or the lesson forces them to zero), the set falls
 //! back to uniform weights and says so in its report. Landmark filters are
@@ -952,7 +964,9 @@ impl Context {
                 Some(slot) => Choice::Existing { slot, d2: 0.0 },
                 None => Choice::New { nearest: None },
             },
-            AssociationMode::MaximumLikelihood { gate } => {
+            AssociationMode::MaximumLikelihood { .. } => {
+                // ĉ = argmax{π_1, …, π_N, p₀} (Montemerlo et al. 2003;
+                // Probabilistic Robotics Table 13.2): the gate enters through p₀.
                 let mut best: Option<(usize, f64, f64)> = None;
                 for (slot, l) in map.iter().enumerate() {
                     let Some((nu, s, _)) = self.innovation(pose, pose_cov, l, z) else {
@@ -968,7 +982,7 @@ impl Context {
                     }
                 }
                 match best {
-                    Some((slot, d2, _)) if d2 <= gate => Choice::Existing { slot, d2 },
+                    Some((slot, d2, ll)) if ll >= self.new_log => Choice::Existing { slot, d2 },
                     _ => Choice::New {
                         nearest: best.and_then(|(slot, d2, _)| map.get(slot).map(|l| (l.id, d2))),
                     },
@@ -1584,6 +1598,77 @@ mod tests {
         assert!(r.n_eff_before < 25.0, "{r:?}");
         assert!(r.resampled && r.distinct_survivors < 50);
         assert!((f.effective_sample_size() - 50.0).abs() < 1e-9);
+    }
+
+    #[test]
+    fn a_match_just_inside_the_gate_that_is_less_likely_than_p0_starts_a_new_landmark() {
+        // One particle, no motion. The first sighting places the landmark with
+        // Σ = G Q Gᵀ, so a second sighting from the same pose has S = 2 Q
+        // (det S = 4 det Q). An innovation with d² = gate − 0.5 is inside the
+        // gate, but ln N(ν; 0, S) = −½ d² − ln 2π − ½ ln det S is below
+        // ln p₀ = −½ gate − ln 2π − ½ ln det Q by ½ ln 4 − 0.25 = 0.443:
+        // ĉ = argmax{π, p₀} is a new landmark, weighted p₀.
+        let cfg = FastSlamConfig {
+            association: AssociationMode::maximum_likelihood(),
+            ..config(FastSlamVersion::V1, 1)
+        };
+        let noise = cfg.noise;
+        let mut f = FastSlam::new(cfg, Pose2::IDENTITY).unwrap();
+        let first = RangeBearing::new(3.0, 0.5);
+        f.update(&LandmarkObservation { id: 0, z: first }).unwrap();
+        let d2_inside = DEFAULT_GATE - 0.5;
+        let dr = (d2_inside * 2.0 * noise.range_std * noise.range_std).sqrt();
+        let r = f
+            .update(&LandmarkObservation {
+                id: 0,
+                z: RangeBearing::new(3.0 + dr, 0.5),
+            })
+            .unwrap();
+        let q_det = noise.range_std.powi(2) * noise.bearing_std.powi(2);
+        let ln_p0 =
+            -0.5 * DEFAULT_GATE - math::ln(2.0 * std::f64::consts::PI) - 0.5 * math::ln(q_det);
+        let ln_match =
+            -0.5 * d2_inside - math::ln(2.0 * std::f64::consts::PI) - 0.5 * math::ln(4.0 * q_det);
+        assert!((ln_p0 - ln_match - (0.5 * math::ln(4.0) - 0.25)).abs() < 1e-12);
+        match r.decision {
+            Some(AssociationDecision::New {
+                id: 1,
+                nearest: Some((0, d2)),
+            }) => assert!((d2 - d2_inside).abs() < 1e-6, "{d2}"),
+            other => panic!("{other:?}"),
+        }
+        assert!(
+            (r.best_log_weight_change - ln_p0).abs() < 1e-9,
+            "{} vs {ln_p0}",
+            r.best_log_weight_change
+        );
+        // Closer in, where π beats p₀ (d² = gate − 2, ln π − ln p₀ = 0.307):
+        // matched, weighted π.
+        let mut f = FastSlam::new(
+            FastSlamConfig {
+                association: AssociationMode::maximum_likelihood(),
+                ..config(FastSlamVersion::V1, 1)
+            },
+            Pose2::IDENTITY,
+        )
+        .unwrap();
+        f.update(&LandmarkObservation { id: 0, z: first }).unwrap();
+        let d2_close = DEFAULT_GATE - 2.0;
+        let dr = (d2_close * 2.0 * noise.range_std * noise.range_std).sqrt();
+        let r = f
+            .update(&LandmarkObservation {
+                id: 0,
+                z: RangeBearing::new(3.0 + dr, 0.5),
+            })
+            .unwrap();
+        let ln_close =
+            -0.5 * d2_close - math::ln(2.0 * std::f64::consts::PI) - 0.5 * math::ln(4.0 * q_det);
+        assert!(ln_close > ln_p0);
+        assert!(
+            matches!(r.decision, Some(AssociationDecision::Matched { id: 0, .. })),
+            "{r:?}"
+        );
+        assert!((r.best_log_weight_change - ln_close).abs() < 1e-6, "{r:?}");
     }
 
     #[test]

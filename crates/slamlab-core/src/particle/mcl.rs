@@ -16,7 +16,9 @@
 //! The filter owns its random number generator, so a clone is a checkpoint.
 
 use super::cluster::{ClusterBins, PoseEstimate, heaviest_cluster};
-use super::sensor::{BeamLikelihood, MeasurementModel, PreparedModel, Scan, beam_end_points};
+use super::sensor::{
+    BeamLikelihood, MeasurementModel, PreparedModel, Scan, ScanAggregation, beam_end_points,
+};
 use super::{
     Resampler, WeightError, effective_sample_size, log_sum_exp, normalize_log_weights,
     resample_indices,
@@ -24,7 +26,7 @@ use super::{
 use crate::geometry::{Pose2, wrap_angle};
 use crate::grid::{DistanceField, FreeCells, OccupancyGrid};
 use crate::math;
-use crate::odometry::{OdometryNoise, odometry_increment, sample_increment};
+use crate::odometry::{OdometryModel, OdometryNoise, odometry_increment, sample_increment_with};
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
 use serde::{Deserialize, Serialize};
@@ -100,17 +102,34 @@ impl LocalizationMap {
     }
 
     /// `model` prepared on this map's distance field for scans of maximum range
-    /// `range_max` (the likelihood field's per-cell table). The map keeps the
-    /// last one it prepared and hands it to every filter that asks for the
-    /// same model and range; a different request replaces it.
-    pub fn prepared_model(&self, model: MeasurementModel, range_max: f64) -> Arc<PreparedModel> {
+    /// `range_max`, its beams combined by `aggregation` (the likelihood field's
+    /// per-cell table). The map keeps the last one it prepared and hands it to
+    /// every filter that asks for the same model, aggregation and range; a
+    /// different request replaces it.
+    pub fn prepared_model(
+        &self,
+        model: MeasurementModel,
+        aggregation: ScanAggregation,
+        range_max: f64,
+    ) -> Arc<PreparedModel> {
         // A panic while the lock was held cannot leave the slot half written
         // (it holds an `Arc` or nothing), so a poisoned lock is still usable.
         let mut slot = self.prepared.lock().unwrap_or_else(|e| e.into_inner());
         match &*slot {
-            Some(p) if *p.model() == model && p.range_max() == range_max => Arc::clone(p),
+            Some(p)
+                if *p.model() == model
+                    && p.aggregation() == aggregation
+                    && p.range_max() == range_max =>
+            {
+                Arc::clone(p)
+            }
             _ => {
-                let p = Arc::new(PreparedModel::new(model, &self.field, range_max));
+                let p = Arc::new(PreparedModel::new(
+                    model,
+                    aggregation,
+                    &self.field,
+                    range_max,
+                ));
                 *slot = Some(Arc::clone(&p));
                 p
             }
@@ -152,8 +171,16 @@ pub struct MclConfig {
     pub particles: usize,
     /// Odometry model noise (`odom_alpha1..4`).
     pub odom: OdometryNoise,
+    /// Whether the odometry sums are variances or standard deviations
+    /// (`odom_model_type`: `diff-corrected`, the default, or ROS 1's `diff`).
+    #[serde(default)]
+    pub odom_model: OdometryModel,
     /// Measurement model (`laser_model_type` and its `laser_z_*`).
     pub model: MeasurementModel,
+    /// How the beams' likelihoods combine: the product (Probabilistic
+    /// Robotics, tempered by `likelihood_exponent`) or amcl's `1 + Σ p_k³`.
+    #[serde(default)]
+    pub aggregation: ScanAggregation,
     /// Beams used per scan (`laser_max_beams`; 0: all).
     pub max_beams: usize,
     /// Translation that triggers an update, metres (`update_min_d`).
@@ -173,7 +200,8 @@ pub struct MclConfig {
     /// independent, so their product is overconfident (Probabilistic Robotics
     /// Sec. 6.3.4 and 6.4 recommend subsampling beams or inflating the noise for
     /// this reason); `κ < 1` tempers it the same way for every beam. ROS amcl
-    /// instead scores `1 + Σ p_k³`, which is softer still.
+    /// instead scores `1 + Σ p_k³` ([`ScanAggregation::AmclCubes`]), which is
+    /// softer still; the exponent applies to the product only.
     pub likelihood_exponent: f64,
     /// KLD-sampling (Fox 2003; amcl `kld_err`, `kld_z`, `min_particles`,
     /// `max_particles`): if set, resampling draws particles until their count
@@ -228,7 +256,9 @@ impl Default for MclConfig {
         Self {
             particles: 2000,
             odom: OdometryNoise::default(),
+            odom_model: OdometryModel::default(),
             model: MeasurementModel::default(),
+            aggregation: ScanAggregation::default(),
             max_beams: 30,
             update_min_d: 0.2,
             update_min_a: std::f64::consts::PI / 6.0,
@@ -521,8 +551,9 @@ impl Mcl {
         };
         let (rot1, trans, rot2) = odometry_increment(last, odom);
         let noise = self.config.odom;
+        let model = self.config.odom_model;
         for p in &mut self.particles {
-            p.pose = sample_increment(p.pose, rot1, trans, rot2, &noise, &mut self.rng);
+            p.pose = sample_increment_with(model, p.pose, rot1, trans, rot2, &noise, &mut self.rng);
             p.flag = ParticleFlag::Normal;
         }
         PredictReport {
@@ -534,7 +565,11 @@ impl Mcl {
     /// The scan log likelihood of every particle, into `out`.
     pub fn scan_log_likelihoods(&mut self, scan: &Scan, out: &mut Vec<f64>) -> usize {
         let rebuild = match &self.prepared {
-            Some(p) => p.range_max() != scan.range_max || *p.model() != self.config.model,
+            Some(p) => {
+                p.range_max() != scan.range_max
+                    || *p.model() != self.config.model
+                    || p.aggregation() != self.config.aggregation
+            }
             None => true,
         };
         let range_max = if scan.range_max > 0.0 && scan.range_max.is_finite() {
@@ -543,7 +578,11 @@ impl Mcl {
             1.0
         };
         if rebuild {
-            self.prepared = Some(self.map.prepared_model(self.config.model, range_max));
+            self.prepared = Some(self.map.prepared_model(
+                self.config.model,
+                self.config.aggregation,
+                range_max,
+            ));
         }
         let beams = scan.subsample(self.config.max_beams);
         let ends = beam_end_points(scan, &beams);
@@ -557,6 +596,21 @@ impl Mcl {
         beams.len()
     }
 
+    /// The log likelihoods that weight the particles: those of
+    /// [`scan_log_likelihoods`](Self::scan_log_likelihoods), multiplied by
+    /// `likelihood_exponent` for the product (amcl's sum of cubes is used as
+    /// it is). Returns the number of beams used.
+    pub fn weighting_log_likelihoods(&mut self, scan: &Scan, out: &mut Vec<f64>) -> usize {
+        let beams = self.scan_log_likelihoods(scan, out);
+        let kappa = self.config.likelihood_exponent;
+        if kappa != 1.0 && self.config.aggregation == ScanAggregation::Product {
+            for l in out.iter_mut() {
+                *l *= kappa;
+            }
+        }
+        beams
+    }
+
     /// Phase 2: multiplies every weight by the likelihood of `scan` from the
     /// particle's pose (in log space, normalized with log-sum-exp).
     ///
@@ -565,13 +619,7 @@ impl Mcl {
     /// ever becomes NaN.
     pub fn weight(&mut self, scan: &Scan) -> WeightReport {
         let mut ll = std::mem::take(&mut self.scratch_log);
-        let beams = self.scan_log_likelihoods(scan, &mut ll);
-        let kappa = self.config.likelihood_exponent;
-        if kappa != 1.0 {
-            for l in &mut ll {
-                *l *= kappa;
-            }
-        }
+        let beams = self.weighting_log_likelihoods(scan, &mut ll);
         let report = self.apply_log_likelihoods(&ll, scan, beams);
         self.scratch_log = ll;
         report
@@ -972,9 +1020,13 @@ mod tests {
     fn filters_on_one_map_share_its_prepared_model() {
         let map = room();
         let model = MeasurementModel::default();
-        let first = map.prepared_model(model, 8.0);
-        assert!(Arc::ptr_eq(&first, &map.prepared_model(model, 8.0)));
-        let other_range = map.prepared_model(model, 5.0);
+        let product = ScanAggregation::Product;
+        let first = map.prepared_model(model, product, 8.0);
+        assert!(Arc::ptr_eq(
+            &first,
+            &map.prepared_model(model, product, 8.0)
+        ));
+        let other_range = map.prepared_model(model, product, 5.0);
         assert!(!Arc::ptr_eq(&first, &other_range));
         assert_eq!(other_range.range_max(), 5.0);
     }

@@ -29,5 +29,6 @@ pub use recovery::{RecoveringMcl, Recovery, RecoveryAlphas, RecoveryReport};
 pub use resample::{Resampler, resample_indices};
 pub use sensor::{
     BeamLikelihood, BeamModel, LikelihoodFieldModel, MeasurementModel, PreparedModel, Scan,
+    ScanAggregation,
 };
 pub use weights::{WeightError, effective_sample_size, log_sum_exp, normalize_log_weights};

@@ -1,11 +1,15 @@
 //! Recovery from localization failure on top of [`Mcl`]:
 //!
 //! - **AMCL**, Augmented MCL (thesis `000` Algorithm 9; Probabilistic Robotics
-//!   Table 8.3): short- and long-term averages `w_fast`, `w_slow` of the mean
-//!   likelihood `w_avg`; at resampling each particle is replaced by a uniform
-//!   random pose over the free cells with probability
-//!   `max(0, 1 − w_fast / w_slow)`. As ROS amcl, both averages restart from the
-//!   next `w_avg` after an update that injected.
+//!   Table 8.3): short- and long-term averages `w_fast`, `w_slow` of the
+//!   average likelihood `w_avg`; at resampling each particle is replaced by a
+//!   uniform random pose over the free cells with probability
+//!   `max(0, 1 − w_fast / w_slow)`. As ROS amcl: `w_avg = Σ wᵢ p(z | xᵢ)` with
+//!   the prior weights `wᵢ` (the table's plain mean assumes they are uniform,
+//!   which holds only when the filter resamples at every update); injection
+//!   follows `w_fast < w_slow` whatever the rates (with `α_slow = 0` the long
+//!   average stays at its first value); both averages restart from the next
+//!   `w_avg` after an update that injected.
 //! - **CMCL**, Costmap MCL (thesis Algorithm 10): after the motion step, a
 //!   particle whose straight path from its previous pose enters an invalid cell
 //!   of the costmap (the map inflated by the robot radius, thesis Sec. 5.1.3;
@@ -15,6 +19,14 @@
 //!   of `w_avg`. Erratum (seeds README): the listing updates `w_slow` and
 //!   `w_fast` inside the particle loop; they are updated once per filter step,
 //!   after the loop, from the average weight of the valid particles.
+//!   Departure from the listing: Algorithm 11 sets the regenerated particles
+//!   apart as `X_c`, unweighted and not resampled, and returns `⟨X_t, X_c⟩`,
+//!   which leaves the next set's size (`M + |X_c|`?) and the weights of `X_c`
+//!   undefined. Here, as in CMCL (Algorithm 10, line 8) and in amcl, on which
+//!   the thesis built it, every particle of the set is weighted by the scan
+//!   and takes part in resampling, so the set stays `M` particles with
+//!   normalized weights; a regenerated particle that lands near the truth
+//!   survives resampling by its weight, as any other.
 //!
 //! `w_slow` and `w_fast` are kept as logarithms (a likelihood over 30 beams is
 //! far below the smallest `f64`); the exponential smoothing
@@ -129,6 +141,32 @@ pub struct RecoveringMcl {
     valid_cells: Option<Arc<FreeCells>>,
     report: RecoveryReport,
     notices: Vec<String>,
+}
+
+/// `ln w_avg` with `w_avg = Σ wᵢ p(z | xᵢ) / Σ wᵢ` from pairs `(ln wᵢ, ln p(z | xᵢ))`
+/// of prior (normalized) weight and scan likelihood: the likelihood of the scan
+/// under the predicted belief, as amcl's `pf_update_sensor` sums it before
+/// normalizing. With uniform prior weights (resampling at every update) it is
+/// the plain mean of Probabilistic Robotics Table 8.3, line 8; with
+/// `resample_interval > 1` or selective resampling the prior weights matter.
+/// ACMCL passes only its valid particles (renormalized over them). `None` if no
+/// pair has weight and likelihood.
+fn log_weighted_average(pairs: impl Iterator<Item = (f64, f64)>) -> Option<f64> {
+    let pairs: Vec<(f64, f64)> = pairs.collect();
+    let top = pairs
+        .iter()
+        .map(|&(w, l)| w + l)
+        .fold(f64::NEG_INFINITY, f64::max);
+    let top_w = pairs
+        .iter()
+        .map(|&(w, _)| w)
+        .fold(f64::NEG_INFINITY, f64::max);
+    if !top.is_finite() || !top_w.is_finite() {
+        return None;
+    }
+    let num: f64 = pairs.iter().map(|&(w, l)| math::exp(w + l - top)).sum();
+    let den: f64 = pairs.iter().map(|&(w, _)| math::exp(w - top_w)).sum();
+    Some(top + math::ln(num) - top_w - math::ln(den))
 }
 
 /// `ln((1 − α) e^a + α e^b)`.
@@ -286,27 +324,17 @@ impl RecoveringMcl {
     /// regenerated).
     pub fn weight(&mut self, scan: &Scan) -> WeightReport {
         let mut ll = Vec::new();
-        let beams = self.mcl.scan_log_likelihoods(scan, &mut ll);
-        let kappa = self.mcl.config().likelihood_exponent;
-        if kappa != 1.0 {
-            for l in &mut ll {
-                *l *= kappa;
-            }
-        }
+        let beams = self.mcl.weighting_log_likelihoods(scan, &mut ll);
         if self.kind.injects() {
             let skip_regenerated = self.kind == Recovery::AugmentedCostmap;
-            let valid: Vec<f64> = self
-                .mcl
-                .particles()
-                .iter()
-                .zip(&ll)
-                .filter(|(p, _)| !(skip_regenerated && p.flag == ParticleFlag::Regenerated))
-                .map(|(_, &l)| l)
-                .collect();
-            let m = valid.iter().copied().fold(f64::NEG_INFINITY, f64::max);
-            if !valid.is_empty() && m.is_finite() {
-                let sum: f64 = valid.iter().map(|&l| math::exp(l - m)).sum();
-                let log_avg = m + math::ln(sum) - math::ln(valid.len() as f64);
+            if let Some(log_avg) = log_weighted_average(
+                self.mcl
+                    .particles()
+                    .iter()
+                    .zip(&ll)
+                    .filter(|(p, _)| !(skip_regenerated && p.flag == ParticleFlag::Regenerated))
+                    .map(|(p, &l)| (p.log_weight, l)),
+            ) {
                 self.log_w_slow = Some(match self.log_w_slow {
                     Some(s) => log_smooth(s, log_avg, self.alphas.alpha_slow),
                     None => log_avg,
@@ -319,10 +347,11 @@ impl RecoveringMcl {
             }
             self.report.log_w_slow = self.log_w_slow;
             self.report.log_w_fast = self.log_w_fast;
+            // amcl injects whenever w_fast < w_slow, whatever the rates: with
+            // α_slow = 0, w_slow stays at the first w_avg and w_fast falling
+            // below it injects (with both 0 they never part).
             self.report.injection_probability = match (self.log_w_slow, self.log_w_fast) {
-                (Some(s), Some(f)) if self.alphas.alpha_slow > 0.0 => {
-                    (1.0 - math::exp(f - s)).max(0.0)
-                }
+                (Some(s), Some(f)) => (1.0 - math::exp(f - s)).max(0.0),
                 _ => 0.0,
             };
         }
@@ -394,6 +423,153 @@ impl ParticleBelief for RecoveringMcl {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::grid::{Cell, OccupancyGrid};
+
+    /// A 4 x 4 m room of 0.1 m cells with a wall all around and a pillar.
+    fn room() -> Arc<LocalizationMap> {
+        let mut g = OccupancyGrid::filled(40, 40, 0.1, Pose2::IDENTITY, Cell::Free).unwrap();
+        for k in 0..40 {
+            g.set(k, 0, Cell::Occupied);
+            g.set(k, 39, Cell::Occupied);
+            g.set(0, k, Cell::Occupied);
+            g.set(39, k, Cell::Occupied);
+        }
+        for i in 25..30 {
+            for j in 8..12 {
+                g.set(i, j, Cell::Occupied);
+            }
+        }
+        Arc::new(LocalizationMap::new(g, 2.0).unwrap())
+    }
+
+    fn scan_from(map: &LocalizationMap, pose: Pose2) -> Scan {
+        let angles: Vec<f64> = (0..60)
+            .map(|k| -std::f64::consts::PI + std::f64::consts::TAU * k as f64 / 60.0)
+            .collect();
+        let ranges = angles
+            .iter()
+            .map(|a| map.grid().raycast(pose.x, pose.y, pose.theta + a, 8.0))
+            .collect();
+        Scan {
+            angles,
+            ranges,
+            range_min: 0.0,
+            range_max: 8.0,
+        }
+    }
+
+    #[test]
+    fn w_avg_weights_each_likelihood_by_the_prior_weight() {
+        // amcl pf_update_sensor: w_avg = Σ wᵢ p(z | xᵢ) with the weights from
+        // before the scan (not resampled since), not the plain mean.
+        let map = room();
+        let truth = Pose2::new(1.2, 2.5, 0.4);
+        let config = MclConfig {
+            particles: 200,
+            likelihood_exponent: 0.05,
+            ..Default::default()
+        };
+        let mut f = RecoveringMcl::new(
+            Recovery::Augmented,
+            config,
+            RecoveryAlphas::default(),
+            map.clone(),
+            None,
+            3,
+        );
+        f.mcl_mut().init_tracking(truth, [0.5, 0.5, 0.5]);
+        let scan = scan_from(&map, truth);
+        let mut ll = Vec::new();
+        f.mcl.clone().weighting_log_likelihoods(&scan, &mut ll);
+        // Prior weight 0.9 on the least likely particle, the rest shared.
+        let worst = (0..ll.len())
+            .min_by(|&a, &b| ll[a].total_cmp(&ll[b]))
+            .unwrap();
+        let rest = 0.1 / 199.0;
+        for (i, p) in f.mcl_mut().particles_mut().iter_mut().enumerate() {
+            p.weight = if i == worst { 0.9 } else { rest };
+            p.log_weight = math::ln(p.weight);
+        }
+        let top = ll.iter().copied().fold(f64::NEG_INFINITY, f64::max);
+        let weighted: f64 = f
+            .mcl()
+            .particles()
+            .iter()
+            .zip(&ll)
+            .map(|(p, &l)| p.weight * math::exp(l - top))
+            .sum();
+        let expected = top + math::ln(weighted);
+        let plain = top + math::ln(ll.iter().map(|&l| math::exp(l - top)).sum::<f64>() / 200.0);
+        f.weight(&scan);
+        let got = f.report().log_w_avg.unwrap();
+        assert!((got - expected).abs() < 1e-9, "{got} vs {expected}");
+        // The plain mean would be far off (the heavy particle is the worst).
+        assert!(plain - expected > 1.0, "plain {plain} weighted {expected}");
+        // Uniform weights: the plain mean.
+        let mut g = RecoveringMcl::new(
+            Recovery::Augmented,
+            f.mcl().config().clone(),
+            RecoveryAlphas::default(),
+            map.clone(),
+            None,
+            3,
+        );
+        g.mcl_mut().init_tracking(truth, [0.5, 0.5, 0.5]);
+        g.weight(&scan);
+        assert!((g.report().log_w_avg.unwrap() - plain).abs() < 1e-9);
+    }
+
+    #[test]
+    fn injection_with_alpha_slow_zero_follows_w_fast() {
+        // amcl: w_slow stays at the first w_avg when α_slow = 0; a scan that
+        // contradicts the cloud pulls w_fast below it, and the filter injects.
+        let map = room();
+        let truth = Pose2::new(1.2, 2.5, 0.4);
+        let elsewhere = Pose2::new(3.0, 3.2, -2.0);
+        let run = |alphas: RecoveryAlphas| {
+            let mut f = RecoveringMcl::new(
+                Recovery::Augmented,
+                MclConfig {
+                    particles: 300,
+                    likelihood_exponent: 0.05,
+                    ..Default::default()
+                },
+                alphas,
+                map.clone(),
+                None,
+                5,
+            );
+            f.mcl_mut().init_tracking(truth, [0.05, 0.05, 0.05]);
+            f.weight(&scan_from(&map, truth));
+            let first = f.report().log_w_slow.unwrap();
+            f.weight(&scan_from(&map, elsewhere));
+            let r = *f.report();
+            let resampled = f.resample();
+            (first, r, resampled, f.report().injected)
+        };
+        let (first, r, resampled, injected) = run(RecoveryAlphas {
+            alpha_slow: 0.0,
+            alpha_fast: 0.5,
+        });
+        assert_eq!(r.log_w_slow, Some(first));
+        // w_fast = 0.5 w_avg1 + 0.5 w_avg2 with w_avg2 ≪ w_avg1: about half.
+        assert!(r.log_w_fast.unwrap() < first - 0.6, "{r:?}");
+        let ratio = math::exp(r.log_w_avg.unwrap() - first);
+        assert!(
+            (r.injection_probability - (0.5 - 0.5 * ratio)).abs() < 1e-9,
+            "{r:?}"
+        );
+        assert!(r.injection_probability > 0.49, "{r:?}");
+        assert!(resampled.resampled);
+        assert!(injected > 100, "{injected}");
+        // Both rates 0: the averages never part, nothing is injected.
+        let (_, r0, _, injected0) = run(RecoveryAlphas {
+            alpha_slow: 0.0,
+            alpha_fast: 0.0,
+        });
+        assert_eq!(r0.injection_probability, 0.0);
+        assert_eq!(injected0, 0);
+    }
 
     #[test]
     fn log_smoothing_is_the_exponential_smoother() {

@@ -146,16 +146,40 @@ pub struct KidnapResult {
     pub estimator: String,
     /// Particle count.
     pub particles: usize,
-    /// Updates from the kidnap to convergence.
+    /// Updates from the kidnap to convergence, over the converged trials.
     pub steps_to_converge: StepStats,
+    /// Median over all trials, a failure counted as the limit (the median over
+    /// the converged trials alone hides the failures). `None` without trials.
+    pub median_all_trials: Option<f64>,
     /// Trials that did not converge within the limit.
     pub failures: usize,
     /// Mean over trials of the per-update randomized fraction (Table 5.2).
     pub recovery_ratio: f64,
 }
 
-/// Summarizes trials of one estimator and particle count.
-pub fn summarize(estimator: &str, particles: usize, trials: &[KidnapTrial]) -> KidnapResult {
+/// The median of the sorted `values`, `None` if empty.
+fn median_of_sorted(values: &[f64]) -> Option<f64> {
+    let n = values.len();
+    match n {
+        0 => None,
+        _ if n % 2 == 1 => Some(values[n / 2]),
+        _ => Some(0.5 * (values[n / 2 - 1] + values[n / 2])),
+    }
+}
+
+/// Summarizes trials of one estimator and particle count; a failed trial
+/// counts as `limit_updates` in [`KidnapResult::median_all_trials`].
+pub fn summarize(
+    estimator: &str,
+    particles: usize,
+    trials: &[KidnapTrial],
+    limit_updates: usize,
+) -> KidnapResult {
+    let mut all: Vec<f64> = trials
+        .iter()
+        .map(|t| t.steps_to_converge.unwrap_or(limit_updates) as f64)
+        .collect();
+    all.sort_by(f64::total_cmp);
     let mut steps: Vec<f64> = trials
         .iter()
         .filter_map(|t| t.steps_to_converge.map(|s| s as f64))
@@ -169,14 +193,9 @@ pub fn summarize(estimator: &str, particles: usize, trials: &[KidnapTrial]) -> K
             p90: None,
         }
     } else {
-        let median = if n % 2 == 1 {
-            steps[n / 2]
-        } else {
-            0.5 * (steps[n / 2 - 1] + steps[n / 2])
-        };
         let rank = ((0.9 * n as f64).ceil() as usize).clamp(1, n);
         StepStats {
-            median: Some(median),
+            median: median_of_sorted(&steps),
             mean: Some(steps.iter().sum::<f64>() / n as f64),
             p90: Some(steps[rank - 1]),
         }
@@ -185,6 +204,7 @@ pub fn summarize(estimator: &str, particles: usize, trials: &[KidnapTrial]) -> K
         estimator: estimator.to_owned(),
         particles,
         steps_to_converge: stats,
+        median_all_trials: median_of_sorted(&all),
         failures: trials.len() - n,
         recovery_ratio: if trials.is_empty() {
             0.0

@@ -5,7 +5,8 @@
 
 use super::scenario::{InitMode, LaserModelType, LocalizationEstimator, MclScenario};
 use crate::params::{Param, ParamIssue, Preset, Scenario, choose, choose_list};
-use slamlab_core::particle::Resampler;
+use slamlab_core::odometry::OdometryModel;
+use slamlab_core::particle::{Resampler, ScanAggregation};
 
 const MAPS: &[&str] = &["maze", "office"];
 const ESTIMATORS: &[&str] = &["mcl", "amcl", "cmcl", "acmcl"];
@@ -13,6 +14,8 @@ const INITS: &[&str] = &["global", "tracking"];
 const LASER_MODELS: &[&str] = &["likelihood_field", "beam"];
 const RESAMPLERS: &[&str] = &["low-variance", "multinomial", "stratified", "residual"];
 const SWITCH: &[&str] = &["0", "1"];
+const AGGREGATIONS: &[&str] = &["product", "amcl"];
+const ODOM_MODELS: &[&str] = &["diff-corrected", "diff"];
 
 /// A real-valued field in the parameter's unit.
 macro_rules! field {
@@ -199,12 +202,34 @@ pub static PARAMS: &[Param<MclScenario>] = &[
         (0.05, 20.0),
         laser_likelihood_max_dist
     ),
+    Param::words(
+        "laser-likelihood-aggregation",
+        "how beams combine: product (Probabilistic Robotics, tempered by the exponent) or amcl (1 + sum of cubes, as ROS amcl)",
+        AGGREGATIONS,
+        |s| Some(s.laser_likelihood_aggregation.name().to_owned()),
+        |s, v| {
+            choose(AGGREGATIONS, v).map(|i| {
+                s.laser_likelihood_aggregation =
+                    [ScanAggregation::Product, ScanAggregation::AmclCubes][i]
+            })
+        },
+    ),
     field!(
         "laser-likelihood-exponent",
         "",
-        "exponent on each scan's likelihood (1: the plain product over beams)",
+        "exponent on each scan's likelihood (1: the plain product over beams; the amcl aggregation ignores it)",
         (0.001, 1.0),
         laser_likelihood_exponent
+    ),
+    Param::words(
+        "odom-model-type",
+        "odometry noise sums as variances (diff-corrected, Nav2) or standard deviations (diff, ROS 1 amcl's default)",
+        ODOM_MODELS,
+        |s| Some(s.odom_model_type.name().to_owned()),
+        |s, v| {
+            choose(ODOM_MODELS, v)
+                .map(|i| s.odom_model_type = [OdometryModel::DiffCorrected, OdometryModel::Diff][i])
+        },
     ),
     field!(
         "odom-alpha1",
@@ -376,7 +401,7 @@ pub static PRESETS: &[Preset<MclScenario>] = &[
     Preset {
         id: "amcl-ros1",
         title: "ROS 1 amcl defaults (AMCL)",
-        summary: "amcl's documented defaults: 100..5000 particles with KLD-sampling, likelihood field with 30 beams, an update every 0.2 m or 30°, resampling every 2 updates.",
+        summary: "amcl's documented defaults: 100..5000 particles with KLD-sampling, likelihood field with 30 beams scored as amcl does (1 + sum of cubes), the diff odometry model, an update every 0.2 m or 30°, resampling every 2 updates.",
         build: |seed| MclScenario {
             estimators: vec![LocalizationEstimator::Amcl],
             ..named("amcl-ros1", seed)
@@ -385,7 +410,7 @@ pub static PRESETS: &[Preset<MclScenario>] = &[
     Preset {
         id: "nav2",
         title: "Nav2 amcl defaults (AMCL)",
-        summary: "Nav2's defaults: 500..2000 particles with KLD-sampling (kld_err 0.05), likelihood field with 60 beams, an update every 0.25 m or 0.2 rad, resampling every update.",
+        summary: "Nav2's defaults: 500..2000 particles with KLD-sampling (kld_err 0.05), likelihood field with 60 beams scored as amcl does (1 + sum of cubes), an update every 0.25 m or 0.2 rad, resampling every update.",
         build: |seed| MclScenario {
             estimators: vec![LocalizationEstimator::Amcl],
             ..named("nav2", seed)
@@ -469,6 +494,8 @@ mod tests {
             ("resampler", "stratified"),
             ("lidar-fov-deg", "270"),
             ("kld", "1"),
+            ("laser-likelihood-aggregation", "amcl"),
+            ("odom-model-type", "diff"),
         ] {
             assert_eq!(set(&mut s, k, v), None, "{k}");
             assert_eq!(get(&s, k).as_deref(), Some(v), "{k}");

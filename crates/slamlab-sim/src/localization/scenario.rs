@@ -4,10 +4,10 @@
 use crate::grid::explorer::ExplorerConfig;
 use crate::grid::lidar::Lidar;
 use serde::{Deserialize, Serialize};
-use slamlab_core::odometry::OdometryNoise;
+use slamlab_core::odometry::{OdometryModel, OdometryNoise};
 use slamlab_core::particle::{
     BeamModel, ClusterBins, KldSampling, LikelihoodFieldModel, MclConfig, MeasurementModel,
-    Recovery, RecoveryAlphas, Resampler,
+    Recovery, RecoveryAlphas, Resampler, ScanAggregation,
 };
 
 /// How the particles start.
@@ -90,12 +90,15 @@ impl LocalizationEstimator {
 /// Everything a Monte Carlo localization run needs besides the map itself.
 /// Filter parameters carry ROS 1 amcl's names and defaults, except
 /// `resample_interval` (1: resample every update, as thesis Algorithm 8; amcl
-/// uses 2) and `laser_likelihood_exponent`, which amcl does not have: SLAM Lab
-/// multiplies the beams' likelihoods (Probabilistic Robotics) where amcl adds
-/// their cubes, and the plain product of 30 beams is so sharp that global
-/// localization with 5,000 particles on the maze locks onto a wrong place in
-/// about half the seeds; the default exponent 0.05 tempers it (10 of 10 seeds
-/// converge, README "Monte Carlo localization").
+/// uses 2), `odom_model_type` (`diff-corrected`, Probabilistic Robotics' form;
+/// ROS 1 amcl's default is `diff`), and the scan aggregation: by default SLAM
+/// Lab multiplies the beams' likelihoods (Probabilistic Robotics,
+/// `laser_likelihood_aggregation = product`) where amcl adds their cubes
+/// (`amcl`, the `amcl-ros1` and `nav2` presets). The plain product of 30 beams
+/// is so sharp that global localization with 5,000 particles on the maze locks
+/// onto a wrong place in about half the seeds, so it is raised to
+/// `laser_likelihood_exponent` (default 0.05; 10 of 10 seeds converge,
+/// docs/kidnap-tables.md).
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 #[serde(default)]
 pub struct MclScenario {
@@ -137,9 +140,16 @@ pub struct MclScenario {
     pub laser_likelihood_max_dist: f64,
     /// Beams used per update.
     pub laser_max_beams: usize,
+    /// How the beams' likelihoods combine: `product` (Probabilistic Robotics,
+    /// tempered by the exponent) or `amcl` (`1 + Σ p_k³`, ROS amcl).
+    pub laser_likelihood_aggregation: ScanAggregation,
     /// Exponent applied to each scan's likelihood (1: the plain product over
-    /// beams; default 0.05; see `MclConfig::likelihood_exponent`).
+    /// beams; default 0.05; see `MclConfig::likelihood_exponent`); the `amcl`
+    /// aggregation ignores it.
     pub laser_likelihood_exponent: f64,
+    /// amcl's `odom_model_type`: the noise sums as variances
+    /// (`diff-corrected`, Nav2) or standard deviations (ROS 1 `diff`).
+    pub odom_model_type: OdometryModel,
     /// Rotation noise from rotation.
     pub odom_alpha1: f64,
     /// Rotation noise from translation.
@@ -206,7 +216,9 @@ impl Default for MclScenario {
             laser_lambda_short: beam.lambda_short,
             laser_likelihood_max_dist: 2.0,
             laser_max_beams: 30,
+            laser_likelihood_aggregation: ScanAggregation::Product,
             laser_likelihood_exponent: 0.05,
+            odom_model_type: OdometryModel::DiffCorrected,
             odom_alpha1: 0.2,
             odom_alpha2: 0.2,
             odom_alpha3: 0.2,
@@ -276,7 +288,9 @@ impl MclScenario {
                 alpha3: self.odom_alpha3,
                 alpha4: self.odom_alpha4,
             },
+            odom_model: self.odom_model_type,
             model: self.measurement_model(),
+            aggregation: self.laser_likelihood_aggregation,
             max_beams: self.laser_max_beams,
             update_min_d: self.update_min_d,
             update_min_a: self.update_min_a,
@@ -300,7 +314,10 @@ impl MclScenario {
     /// `--preset` on the command line, are listed in [`super::params::PRESETS`]). Every preset uses the recovery
     /// rates 0.001 / 0.1 (the thesis and the Nav2 documentation recommend them;
     /// both amcl versions default to 0, which disables recovery) and SLAM Lab's
-    /// `laser_likelihood_exponent`.
+    /// scan aggregation: the two amcl presets score scans as amcl does
+    /// (`1 + Σ p_k³`, exponent 1); `amcl-ros1` samples motion with ROS 1's
+    /// `diff` model, `nav2` with Nav2's (`diff-corrected`); the thesis preset
+    /// keeps SLAM Lab's tempered product.
     pub fn preset(name: &str) -> Option<Self> {
         let base = Self::default();
         match name {
@@ -319,6 +336,9 @@ impl MclScenario {
                 laser_lambda_short: 0.1,
                 laser_likelihood_max_dist: 2.0,
                 laser_max_beams: 30,
+                laser_likelihood_aggregation: ScanAggregation::AmclCubes,
+                laser_likelihood_exponent: 1.0,
+                odom_model_type: OdometryModel::Diff,
                 update_min_d: 0.2,
                 update_min_a: std::f64::consts::PI / 6.0,
                 resample_interval: 2,
@@ -339,6 +359,9 @@ impl MclScenario {
                 laser_lambda_short: 0.1,
                 laser_likelihood_max_dist: 2.0,
                 laser_max_beams: 60,
+                laser_likelihood_aggregation: ScanAggregation::AmclCubes,
+                laser_likelihood_exponent: 1.0,
+                odom_model_type: OdometryModel::DiffCorrected,
                 update_min_d: 0.25,
                 update_min_a: 0.2,
                 resample_interval: 1,
@@ -372,5 +395,14 @@ mod tests {
         assert_eq!((nav2.min_particles, nav2.max_particles), (500, 2000));
         assert!(nav2.mcl_config().kld.is_some());
         assert!(MclScenario::preset("nope").is_none());
+        for name in ["amcl-ros1", "nav2"] {
+            let c = MclScenario::preset(name).unwrap().mcl_config();
+            assert_eq!(c.aggregation, ScanAggregation::AmclCubes, "{name}");
+        }
+        assert_eq!(
+            MclScenario::preset("amcl-ros1").unwrap().odom_model_type,
+            OdometryModel::Diff
+        );
+        assert_eq!(nav2.odom_model_type, OdometryModel::DiffCorrected);
     }
 }
