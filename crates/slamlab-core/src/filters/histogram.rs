@@ -48,6 +48,17 @@ pub struct Histogram {
     belief: Vec<f64>,
 }
 
+impl Default for Histogram {
+    /// The uniform belief over 400 cells of 5 cm from 0: the default corridor's.
+    fn default() -> Self {
+        Self {
+            origin: 0.0,
+            cell: 0.05,
+            belief: vec![1.0 / 400.0; 400],
+        }
+    }
+}
+
 /// At most this many cells.
 pub const MAX_CELLS: usize = 100_000;
 
@@ -161,8 +172,10 @@ impl Histogram {
     /// The prediction (thesis `000` Algorithm 1 line 3, Eq. 2.14): the robot moved
     /// `shift` metres with Gaussian noise of deviation `std`. Each cell's mass is
     /// spread over the cells by the noise's probability of landing in each
-    /// (normal CDF differences); mass that would leave the corridor stops at its
-    /// end cell (the walls). `std = 0` moves the mass to the cell the shift lands in.
+    /// (normal CDF differences). The corridor closes on itself (a loop, as the
+    /// classic histogram-filter exercises have it): mass that leaves one end comes
+    /// in at the other, so none piles against a wall. `std = 0` moves the mass to
+    /// the cell the shift lands in.
     pub fn predict(&mut self, shift: f64, std: f64) -> Result<(), HistogramError> {
         if !shift.is_finite() {
             return Err(HistogramError::Parameter {
@@ -202,7 +215,7 @@ impl Histogram {
                 continue;
             }
             for &(k, p) in &kernel {
-                let j = (i as i64 + k).clamp(0, n - 1) as usize;
+                let j = (i as i64 + k).rem_euclid(n) as usize;
                 next[j] += mass * p / total;
             }
         }
@@ -243,7 +256,8 @@ fn math_round(x: f64) -> i64 {
     x.round() as i64
 }
 
-/// A corridor with doors: the world of the Bayes-filter example.
+/// A corridor with doors, closed into a loop: the world of the Bayes-filter
+/// example.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 pub struct Corridor {
     /// Length, metres (positions from 0).
@@ -267,19 +281,41 @@ impl Default for Corridor {
 }
 
 impl Corridor {
+    /// `x` wrapped into `[0, length)`: the corridor is a loop.
+    pub fn wrap(&self, x: f64) -> f64 {
+        if self.length > 0.0 {
+            x.rem_euclid(self.length)
+        } else {
+            x
+        }
+    }
+
+    /// The door `d` as seen from `x` around the loop: `d + k L` nearest to `x`.
+    fn unwrapped(&self, d: f64, x: f64) -> f64 {
+        if self.length > 0.0 {
+            d + ((x - d) / self.length).round() * self.length
+        } else {
+            d
+        }
+    }
+
     /// True when `x` is in front of a door.
     pub fn at_door(&self, x: f64) -> bool {
         self.doors
             .iter()
-            .any(|d| (x - d).abs() <= 0.5 * self.door_width)
+            .any(|&d| (x - self.unwrapped(d, x)).abs() <= 0.5 * self.door_width)
     }
 
-    /// The door nearest to `x`.
+    /// The door nearest to `x` around the loop, as the position nearest to `x`
+    /// (possibly beyond an end, so that `z − x` is the short way round).
     pub fn nearest_door(&self, x: f64) -> Option<f64> {
-        self.doors.iter().copied().fold(None, |best, d| match best {
-            Some(b) if (b - x).abs() <= (d - x).abs() => Some(b),
-            _ => Some(d),
-        })
+        self.doors
+            .iter()
+            .map(|&d| self.unwrapped(d, x))
+            .fold(None, |best, d| match best {
+                Some(b) if (b - x).abs() <= (d - x).abs() => Some(b),
+                _ => Some(d),
+            })
     }
 
     /// `p(z | x)` of the door sensor: it says "door" with probability `p_hit` in
@@ -395,13 +431,15 @@ mod tests {
     }
 
     #[test]
-    fn zero_noise_shifts_by_whole_cells_and_walls_keep_the_mass() {
+    fn zero_noise_shifts_by_whole_cells_around_the_loop() {
         let mut h = Histogram::uniform(0.0, 1.0, 5).unwrap();
         h.update(|x| if x < 1.0 { 1.0 } else { 0.0 }).unwrap();
         h.predict(2.0, 0.0).unwrap();
         assert_eq!(h.belief(), &[0.0, 0.0, 1.0, 0.0, 0.0]);
-        h.predict(10.0, 0.0).unwrap();
-        assert_eq!(h.belief(), &[0.0, 0.0, 0.0, 0.0, 1.0]);
+        h.predict(4.0, 0.0).unwrap();
+        assert_eq!(h.belief(), &[0.0, 1.0, 0.0, 0.0, 0.0]);
+        h.predict(-1.4, 0.0).unwrap();
+        assert_eq!(h.belief(), &[1.0, 0.0, 0.0, 0.0, 0.0]);
         assert!(h.predict(f64::NAN, 0.1).is_err());
         assert!(h.predict(1.0, -0.1).is_err());
         let before = h.clone();
