@@ -65,6 +65,10 @@ const PARAM_TABLES: &[(&str, Describe)] = &[
         "fusion",
         params::describe::<slamlab_sim::fusion::params::FusionLessonScenario>,
     ),
+    (
+        "filters",
+        params::describe::<slamlab_sim::filters_lab::FiltersScenario>,
+    ),
 ];
 
 fn cli() -> Command {

@@ -68,6 +68,7 @@ pub static EXPERIMENTS: &[&dyn Experiment] = &[
     &experiments::fusion::Fusion,
     &experiments::kidnap::Kidnap,
     &experiments::pose_graph::PoseGraph,
+    &experiments::unscented::Unscented,
 ];
 
 /// Looks a lesson up by id.

@@ -11,6 +11,7 @@
 
 pub mod association;
 pub mod belief;
+pub mod filters;
 pub mod geometry;
 pub mod graph;
 pub mod grid;

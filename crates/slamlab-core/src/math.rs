@@ -100,6 +100,12 @@ pub fn hypot(x: f64, y: f64) -> f64 {
     libm::hypot(x, y)
 }
 
+/// The error function `erf(x) = 2/√π ∫₀ˣ e^(−t²) dt` (for the normal CDF).
+#[inline]
+pub fn erf(x: f64) -> f64 {
+    libm::erf(x)
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

@@ -10,6 +10,7 @@
 pub mod consistency;
 pub mod experiments;
 pub mod fastslam;
+pub mod filters_lab;
 pub mod fusion;
 pub mod graph_io;
 pub mod grid;

@@ -1,0 +1,583 @@
+//! The filters lesson (`lesson=filters`): the estimators before any SLAM
+//! (Xiang's thesis ch. 2; Wu's thesis ch. 2).
+//!
+//! Two views share the lesson:
+//! - **One step**: a prior Gaussian the student drags, pushed through a nonlinear
+//!   function by the EKF (linearization), the UKF (sigma points) and particles,
+//!   against 100,000 samples drawn as a density image, with a table of how far
+//!   each Gaussian is from the samples' moments;
+//! - **Corridor**: a histogram Bayes filter and a Kalman filter on the same
+//!   robot, motions and door sightings, stepped with the time bar (predict,
+//!   update, step back), with the Kalman gain's plot.
+
+mod corridor;
+mod explain;
+mod one_step;
+
+use crate::lesson::{self, Lesson, LessonStart, PanelVisibility, StoredSettings};
+use crate::palette;
+use crate::time_control::{TimeAction, TimeControl, TimeInfo};
+use crate::widgets::map_canvas::MapView;
+use crate::widgets::params_panel::{self, PendingParams};
+use serde::{Deserialize, Serialize};
+use slamlab_sim::filters_lab::{
+    CorridorSim, FUNCTION_NAMES, FiltersScenario, FunctionKind, OneStep, one_step,
+};
+use slamlab_sim::params;
+use slamlab_sim::stepper::Stepper;
+
+/// The lesson's id in URLs and the menu.
+pub const LESSON_ID: &str = "filters";
+
+/// Which view the centre shows.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "kebab-case")]
+pub enum Tab {
+    /// The one-step comparison.
+    #[default]
+    OneStep,
+    /// The corridor.
+    Corridor,
+}
+
+/// What the lesson shows; saved with the user's settings.
+#[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
+#[serde(default)]
+pub struct FiltersView {
+    /// The view in the centre.
+    pub tab: Tab,
+}
+
+/// The parameters of the one-step view's panel.
+const ONE_STEP_PARAMS: &[&str] = &[
+    "coefficient",
+    "dt",
+    "mean-1",
+    "mean-2",
+    "std-1",
+    "std-2",
+    "rho",
+    "alpha",
+    "beta",
+    "kappa",
+    "samples",
+    "particles",
+    "seed",
+];
+
+/// The parameters of the corridor view's panel.
+const CORRIDOR_PARAMS: &[&str] = &[
+    "step",
+    "motion-std",
+    "measurement-std",
+    "p-hit",
+    "p-false",
+    "start",
+    "cell",
+    "seed",
+];
+
+/// The filters lesson.
+#[derive(Debug)]
+pub struct FiltersLesson {
+    scenario: FiltersScenario,
+    pending: PendingParams<FiltersScenario>,
+    /// The last valid one-step comparison.
+    result: Option<OneStep>,
+    /// Why the latest belief or setting was refused (the last valid one is kept).
+    note: Option<String>,
+    corridor: Stepper<CorridorSim>,
+    /// The lesson's clock: one tick is one corridor step (predict, update).
+    pub time: TimeControl,
+    view: FiltersView,
+    notices: Vec<String>,
+    input_view: MapView,
+    output_view: MapView,
+    density: one_step::Density,
+    density_stale: bool,
+    grab: Option<one_step::Grab>,
+    /// How long the last one-step computation took, milliseconds.
+    last_compute_ms: f64,
+}
+
+/// Opens the lesson from the URL's pairs, with what it stored last time.
+pub fn open(start: &LessonStart<'_>) -> Box<dyn Lesson> {
+    let stored = StoredSettings::<FiltersView>::from_start(start);
+    // `view=` chooses the tab; it is not a scenario parameter.
+    let pairs: Vec<(String, String)> = start
+        .pairs
+        .iter()
+        .filter(|(k, _)| k != "view")
+        .cloned()
+        .collect();
+    let scenario_start = LessonStart {
+        pairs: &pairs,
+        ..*start
+    };
+    let (scenario, notices) = lesson::scenario_from_start(
+        &scenario_start,
+        FiltersScenario::default(),
+        stored.as_ref().map(|s| s.params.as_slice()),
+    );
+    let mut lesson = FiltersLesson::new(scenario);
+    lesson.notices.extend(notices);
+    if let Some(stored) = stored {
+        lesson.view = stored.view.clone();
+        stored.restore_clock(&mut lesson.time);
+    }
+    if let Some((_, v)) = start.pairs.iter().find(|(k, _)| k == "view") {
+        match v.as_str() {
+            "corridor" => lesson.view.tab = Tab::Corridor,
+            "one-step" => lesson.view.tab = Tab::OneStep,
+            other => lesson.notices.push(format!(
+                "link: view={other} is not a view (one-step or corridor); showing one-step"
+            )),
+        }
+    }
+    Box::new(lesson)
+}
+
+impl FiltersLesson {
+    /// The lesson on `scenario`.
+    pub fn new(scenario: FiltersScenario) -> Self {
+        let mut time = TimeControl::default();
+        time.speed_tps = 2.0;
+        let mut lesson = Self {
+            pending: PendingParams::new(scenario.clone()),
+            corridor: Stepper::new(CorridorSim::new(scenario.clone()), ()),
+            scenario,
+            result: None,
+            note: None,
+            time,
+            view: FiltersView::default(),
+            notices: Vec::new(),
+            input_view: MapView::default(),
+            output_view: MapView::default(),
+            density: one_step::Density::default(),
+            density_stale: true,
+            grab: None,
+            last_compute_ms: 0.0,
+        };
+        lesson.recompute();
+        if lesson.result.is_none() {
+            // A link with a bad belief: say why, and show the function's own prior.
+            let mut fallback = lesson.scenario.clone();
+            (fallback.mean, fallback.std, fallback.rho) = fallback.function.default_prior();
+            fallback.particles = fallback.particles.max(2);
+            fallback.alpha = 1.0;
+            fallback.kappa = 0.0;
+            let why = lesson.note.clone();
+            lesson.scenario = fallback;
+            lesson.pending = PendingParams::new(lesson.scenario.clone());
+            lesson.recompute();
+            if let Some(why) = why {
+                lesson
+                    .notices
+                    .push(format!("{why}; showing the function's default prior"));
+            }
+        }
+        lesson
+    }
+
+    /// The last valid one-step comparison.
+    pub fn result(&self) -> Option<&OneStep> {
+        self.result.as_ref()
+    }
+
+    /// The running scenario.
+    pub fn scenario(&self) -> &FiltersScenario {
+        &self.scenario
+    }
+
+    /// Why the latest change was refused.
+    pub fn note(&self) -> Option<&str> {
+        self.note.as_deref()
+    }
+
+    /// The corridor run.
+    pub fn corridor(&self) -> &CorridorSim {
+        self.corridor.sim()
+    }
+
+    /// Shows a view.
+    pub fn set_tab(&mut self, tab: Tab) {
+        self.view.tab = tab;
+    }
+
+    /// Sets a parameter from text, as the panel does, and applies it.
+    pub fn set_param(&mut self, name: &str, value: &str) -> Option<params::ParamIssue> {
+        let issue = self.pending.set(name, value);
+        self.apply_pending();
+        issue
+    }
+
+    /// Runs the one-step comparison on the running scenario; on failure keeps the
+    /// last valid result and says why.
+    fn recompute(&mut self) {
+        let start = web_time::Instant::now();
+        match one_step(&self.scenario) {
+            Ok(r) => {
+                self.result = Some(r);
+                self.note = None;
+                self.density_stale = true;
+            }
+            Err(e) => self.note = Some(format!("{e}. The last valid belief is kept.")),
+        }
+        self.last_compute_ms = start.elapsed().as_secs_f64() * 1e3;
+    }
+
+    /// Applies the panel's parameters: a new function refits the views, a changed
+    /// corridor parameter replays the corridor to the same step.
+    fn apply_pending(&mut self) {
+        let new = self.pending.scenario.clone();
+        let function_changed = new.function != self.scenario.function;
+        let corridor_changed = corridor_part(&new) != corridor_part(&self.scenario);
+        let last_valid = std::mem::replace(&mut self.scenario, new);
+        self.recompute();
+        if self.note.is_some() && self.result.is_some() {
+            // Refused: the last valid setting stays (the note says why).
+            self.scenario = last_valid;
+            self.pending.scenario = self.scenario.clone();
+        }
+        if function_changed {
+            self.input_view.refit();
+            self.output_view.refit();
+        }
+        if corridor_changed {
+            let phases = self.corridor.phases_run();
+            self.corridor = Stepper::new(CorridorSim::new(self.scenario.clone()), ());
+            for _ in 0..phases {
+                self.corridor.step_phase();
+            }
+        }
+    }
+
+    /// Moves the prior (from a drag).
+    pub fn set_prior(&mut self, mean: [f64; 2], std: [f64; 2], rho: f64) {
+        self.pending.scenario.mean = mean;
+        self.pending.scenario.std = std;
+        self.pending.scenario.rho = rho;
+        self.apply_pending();
+    }
+
+    fn one_step_map_ui(&mut self, ui: &mut egui::Ui) {
+        let f = self.scenario.step_function();
+        if self.density_stale
+            && let Some(r) = &self.result
+        {
+            let bounds = if self.output_view_needs_bounds() {
+                one_step::output_bounds(r)
+            } else {
+                self.density.bounds
+            };
+            let color = palette::truth_color(ui.visuals().dark_mode);
+            self.density
+                .update(ui.ctx(), &r.truth.points, bounds, color);
+            self.density_stale = false;
+        }
+        let prior = self
+            .result
+            .as_ref()
+            .map_or(self.scenario.prior(), |r| r.prior);
+        let width = ui.available_width();
+        let height = ui.available_height();
+        let horizontal = width > 1.2 * height;
+        let mut change = None;
+        let layout = |ui: &mut egui::Ui, this: &mut Self, first: bool| {
+            if first {
+                this.input_ui(ui, &prior, f.input_axes())
+            } else {
+                if let Some(r) = &this.result {
+                    one_step::output_ui(
+                        ui,
+                        &mut this.output_view,
+                        &this.density,
+                        r,
+                        f.output_axes(),
+                    );
+                }
+                None
+            }
+        };
+        if horizontal {
+            ui.columns(2, |c| {
+                change = layout(&mut c[0], self, true);
+                layout(&mut c[1], self, false);
+            });
+        } else {
+            let half = (height * 0.5 - 4.0).max(80.0);
+            ui.allocate_ui(egui::vec2(width, half), |ui| {
+                change = layout(ui, self, true)
+            });
+            layout(ui, self, false);
+        }
+        if let Some((mean, std, rho)) = change {
+            self.set_prior(mean, std, rho);
+        }
+    }
+
+    fn input_ui(
+        &mut self,
+        ui: &mut egui::Ui,
+        prior: &slamlab_core::filters::Gaussian2,
+        axes: [&'static str; 2],
+    ) -> Option<([f64; 2], [f64; 2], f64)> {
+        one_step::input_ui(
+            ui,
+            &mut self.input_view,
+            prior,
+            self.result.as_ref(),
+            axes,
+            &mut self.grab,
+        )
+    }
+
+    /// The density image keeps its bounds while the student drags, so the
+    /// picture does not jump; it takes new ones when nothing is grabbed.
+    fn output_view_needs_bounds(&self) -> bool {
+        self.grab.is_none() || self.density.bounds == [0.0; 4]
+    }
+
+    fn parameters_panel_ui(&mut self, ui: &mut egui::Ui) {
+        ui.heading("Filters: from Bayes to particles");
+        ui.horizontal(|ui| {
+            ui.selectable_value(&mut self.view.tab, Tab::OneStep, "One step");
+            ui.selectable_value(&mut self.view.tab, Tab::Corridor, "Corridor");
+        });
+        ui.separator();
+        if let Some(note) = &self.note {
+            ui.colored_label(palette::VERMILLION, note);
+        }
+        let names = match self.view.tab {
+            Tab::OneStep => {
+                let mut chosen = self.scenario.function.name();
+                ui.horizontal(|ui| {
+                    ui.label("function");
+                    egui::ComboBox::from_id_salt("filters_function")
+                        .selected_text(chosen)
+                        .show_ui(ui, |ui| {
+                            for name in FUNCTION_NAMES {
+                                ui.selectable_value(&mut chosen, name, *name);
+                            }
+                        })
+                        .response
+                        .on_hover_text(
+                            "The nonlinear function; choosing one resets the prior to its own",
+                        )
+                        .widget_info(|| {
+                            egui::WidgetInfo::labeled(egui::Role::ComboBox, true, "function")
+                        });
+                });
+                if chosen != self.scenario.function.name() {
+                    self.set_param("function", chosen);
+                }
+                ui.label(egui::RichText::new(self.scenario.step_function().formula()).monospace());
+                let used: Vec<&str> = ONE_STEP_PARAMS
+                    .iter()
+                    .copied()
+                    .filter(|n| match *n {
+                        "coefficient" => matches!(
+                            self.scenario.function,
+                            FunctionKind::Linear | FunctionKind::Quadratic | FunctionKind::Exp
+                        ),
+                        "dt" => self.scenario.function == FunctionKind::Motion,
+                        _ => true,
+                    })
+                    .collect();
+                used
+            }
+            Tab::Corridor => CORRIDOR_PARAMS.to_vec(),
+        };
+        let running = self.scenario.clone();
+        if params_panel::params_ui(ui, &mut self.pending, &running, &names) {
+            self.apply_pending();
+        }
+        ui.separator();
+        crate::widgets::share::share_ui(
+            ui,
+            |embed| Lesson::share_query(self, embed),
+            "index.html?… with these pairs opens this setup",
+            None,
+        );
+    }
+}
+
+/// The corridor's parameters (a change replays the corridor).
+fn corridor_part(s: &FiltersScenario) -> [f64; 8] {
+    [
+        s.seed as f64,
+        s.step,
+        s.motion_std,
+        s.start,
+        s.p_hit,
+        s.p_false,
+        s.measurement_std,
+        s.cell,
+    ]
+}
+
+impl crate::widgets::layout::LessonPanels for FiltersLesson {
+    fn plots_ui(&mut self, ui: &mut egui::Ui) {
+        match self.view.tab {
+            Tab::OneStep => explain::table_ui(ui, self.result.as_ref(), self.last_compute_ms),
+            Tab::Corridor => {
+                let h = ui.available_height() - 50.0;
+                corridor::gain_ui(ui, self.corridor.sim(), h);
+            }
+        }
+    }
+
+    fn parameters_ui(&mut self, ui: &mut egui::Ui) {
+        self.parameters_panel_ui(ui);
+    }
+
+    fn explanation_ui(&mut self, ui: &mut egui::Ui) {
+        match self.view.tab {
+            Tab::OneStep => explain::one_step_ui(ui, self.result.as_ref(), &self.scenario),
+            Tab::Corridor => explain::corridor_ui(ui, &self.corridor),
+        }
+    }
+
+    fn map_ui(&mut self, ui: &mut egui::Ui) {
+        match self.view.tab {
+            Tab::OneStep => self.one_step_map_ui(ui),
+            Tab::Corridor => corridor::belief_ui(ui, self.corridor.sim()),
+        }
+    }
+}
+
+impl Lesson for FiltersLesson {
+    fn plot_series(&self) -> Vec<crate::export::PlotSeries> {
+        corridor::series(self.corridor.sim())
+    }
+
+    fn id(&self) -> &'static str {
+        LESSON_ID
+    }
+
+    fn subtitle(&self) -> String {
+        match self.view.tab {
+            Tab::OneStep => format!("one step through {}", self.scenario.function.name()),
+            Tab::Corridor => "corridor: histogram vs Kalman".to_owned(),
+        }
+    }
+
+    fn notices(&self) -> Vec<String> {
+        self.notices.clone()
+    }
+
+    fn time(&self) -> &TimeControl {
+        &self.time
+    }
+
+    fn time_mut(&mut self) -> &mut TimeControl {
+        &mut self.time
+    }
+
+    fn time_info(&self) -> TimeInfo {
+        let sim = self.corridor.sim();
+        TimeInfo {
+            tick: slamlab_sim::stepper::Simulation::tick(sim),
+            time_s: f64::NAN,
+            last_phase: self
+                .corridor
+                .last_phase()
+                .map(|p| format!("corridor {}", p.name())),
+            next_phase: format!("corridor {}", sim.next_phase().name()),
+            can_step_back: self.corridor.phases_run() > 0,
+        }
+    }
+
+    fn apply_time_action(&mut self, action: TimeAction) {
+        self.time.apply(action);
+        match action {
+            TimeAction::ToggleRun => {}
+            TimeAction::StepPhase => {
+                self.corridor.step_phase();
+            }
+            TimeAction::StepTick => self.corridor.step_tick(),
+            TimeAction::StepBack => {
+                self.corridor.step_back();
+            }
+            TimeAction::Reset => {
+                self.corridor = Stepper::new(CorridorSim::new(self.scenario.clone()), ());
+            }
+        }
+    }
+
+    fn advance(&mut self, dt: f64) {
+        let corridor = &mut self.corridor;
+        lesson::advance_within_budget(&mut self.time, dt, || {
+            corridor.step_phase();
+            !slamlab_sim::stepper::Simulation::is_mid_tick(corridor.sim())
+        });
+    }
+
+    fn panels_ui(&mut self, ui: &mut egui::Ui, panels: &mut PanelVisibility, compact: bool) {
+        crate::widgets::layout::lesson_panels_ui(self, ui, panels, compact, LESSON_ID);
+    }
+
+    fn stored_settings(&self) -> serde_json::Value {
+        StoredSettings {
+            view: self.view.clone(),
+            time: self.time.clone(),
+            params: params::changed_pairs(&self.scenario, &FiltersScenario::default()),
+        }
+        .to_value()
+    }
+
+    fn share_query(&self, embed: bool) -> String {
+        let mut pairs = params::changed_pairs(&self.scenario, &FiltersScenario::default());
+        if !pairs.iter().any(|(name, _)| name == "seed") {
+            pairs.insert(0, ("seed".to_owned(), self.scenario.seed.to_string()));
+        }
+        if self.view.tab == Tab::Corridor {
+            pairs.push(("view".to_owned(), "corridor".to_owned()));
+        }
+        crate::query::build(LESSON_ID, &pairs, embed)
+    }
+
+    fn test_state(&self) -> serde_json::Value {
+        let sim = self.corridor.sim();
+        let rows: Vec<serde_json::Value> = self
+            .result
+            .iter()
+            .flat_map(|r| r.rows.iter())
+            .map(|row| {
+                serde_json::json!({
+                    "method": row.method,
+                    "mean": [row.gaussian.mean[0], row.gaussian.mean[1]],
+                    "mean_error": row.comparison.mean_error,
+                    "covariance_error": row.comparison.covariance_error,
+                    "kl_divergence": row.comparison.kl_divergence,
+                })
+            })
+            .collect();
+        serde_json::json!({
+            "tick": slamlab_sim::stepper::Simulation::tick(sim),
+            "seed": self.scenario.seed,
+            "view": match self.view.tab { Tab::OneStep => "one-step", Tab::Corridor => "corridor" },
+            "function": self.scenario.function.name(),
+            "note": self.note,
+            "samples_mean": self.result.as_ref().map(|r| [r.truth.moments.mean[0], r.truth.moments.mean[1]]),
+            "density_inside": self.density.inside,
+            "compute_ms": self.last_compute_ms,
+            "results": rows,
+            "corridor": {
+                "histogram_mean": sim.histogram().mean(),
+                "histogram_mode": sim.histogram().mode(),
+                "kalman_mean": sim.kalman().mean,
+                "kalman_variance": sim.kalman().variance,
+                "gain": sim.last_update().map(|(u, _)| u.gain),
+            },
+        })
+    }
+
+    fn as_any(&self) -> &dyn std::any::Any {
+        self
+    }
+
+    fn as_any_mut(&mut self) -> &mut dyn std::any::Any {
+        self
+    }
+}
