@@ -23,6 +23,7 @@ pub mod particle;
 pub mod random;
 pub mod range_bearing;
 pub mod stats;
+pub mod vision;
 
 pub use geometry::{CovarianceEllipse, Pose2, wrap_angle};
 pub use motion::{Control, MotionModel};
