@@ -53,8 +53,11 @@ pub trait Experiment: Sync {
 }
 
 /// The lessons `slamlab run` runs.
-pub static LESSONS: &[&dyn RunLesson] =
-    &[&lessons::landmark::LandmarkSlam, &lessons::kidnap::Kidnap];
+pub static LESSONS: &[&dyn RunLesson] = &[
+    &lessons::landmark::LandmarkSlam,
+    &lessons::kidnap::Kidnap,
+    &lessons::visual_odometry::VisualOdometry,
+];
 
 /// The experiments, in the order `slamlab experiment --help` lists them.
 pub static EXPERIMENTS: &[&dyn Experiment] = &[
@@ -65,6 +68,7 @@ pub static EXPERIMENTS: &[&dyn Experiment] = &[
     &experiments::fusion::Fusion,
     &experiments::kidnap::Kidnap,
     &experiments::pose_graph::PoseGraph,
+    &experiments::two_view::TwoView,
 ];
 
 /// Looks a lesson up by id.

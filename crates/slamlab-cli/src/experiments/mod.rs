@@ -8,6 +8,7 @@ pub mod fusion;
 pub mod kidnap;
 pub mod pose_graph;
 pub mod resampling;
+pub mod two_view;
 
 use clap::Arg;
 use slamlab_sim::landmark_params::PARAMS;

@@ -3,3 +3,4 @@
 
 pub mod kidnap;
 pub mod landmark;
+pub mod visual_odometry;
