@@ -57,6 +57,7 @@ pub static LESSONS: &[&dyn RunLesson] = &[
     &lessons::landmark::LandmarkSlam,
     &lessons::kidnap::Kidnap,
     &lessons::mapping::Mapping,
+    &lessons::visual_odometry::VisualOdometry,
 ];
 
 /// The experiments, in the order `slamlab experiment --help` lists them.
@@ -69,6 +70,7 @@ pub static EXPERIMENTS: &[&dyn Experiment] = &[
     &experiments::kidnap::Kidnap,
     &experiments::pose_graph::PoseGraph,
     &experiments::unscented::Unscented,
+    &experiments::two_view::TwoView,
 ];
 
 /// Looks a lesson up by id.

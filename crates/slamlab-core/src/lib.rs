@@ -25,6 +25,7 @@ pub mod random;
 pub mod range_bearing;
 pub mod scan;
 pub mod stats;
+pub mod vision;
 
 pub use geometry::{CovarianceEllipse, Pose2, wrap_angle};
 pub use motion::{Control, MotionModel};

@@ -33,6 +33,7 @@ pub mod scenario;
 pub mod scenario_file;
 pub mod session;
 pub mod stepper;
+pub mod vision;
 pub mod world;
 
 pub use scenario::{ControllerKind, EstimatorKind, LandmarkScenario};

@@ -8,6 +8,7 @@ pub mod fusion;
 pub mod kidnap;
 pub mod pose_graph;
 pub mod resampling;
+pub mod two_view;
 pub mod unscented;
 
 use clap::Arg;

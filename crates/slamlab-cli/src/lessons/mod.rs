@@ -4,3 +4,4 @@
 pub mod kidnap;
 pub mod landmark;
 pub mod mapping;
+pub mod visual_odometry;

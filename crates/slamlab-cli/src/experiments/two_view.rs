@@ -1,0 +1,178 @@
+//! `slamlab experiment two-view`: eight-point and five-point RANSAC on seeded
+//! random two-view scenes, by outlier share (thesis `000` Sec. 4.3).
+//!
+//! ```text
+//! slamlab experiment two-view --method eight-point,five-point --outliers 0,0.3,0.5 --noise-px 1 --points 200 --trials 200 --seed 1 --json
+//! ```
+
+use crate::output::{Output, progress_bar};
+use crate::registry::Experiment;
+use anyhow::{Result, bail};
+use clap::{Arg, ArgAction, ArgMatches, Command};
+use slamlab_core::vision::Method;
+use slamlab_sim::vision::{TwoViewSettings, two_view_experiment};
+use std::io::Write;
+
+/// The two-view experiment.
+pub struct TwoView;
+
+/// Parses `--method`.
+fn methods(text: &str) -> Result<Vec<Method>> {
+    let mut out = Vec::new();
+    for name in text.split(',').map(str::trim).filter(|p| !p.is_empty()) {
+        match Method::from_name(name) {
+            Some(m) => out.push(m),
+            None => bail!("--method: '{name}' is not a method (eight-point, five-point)"),
+        }
+    }
+    if out.is_empty() {
+        bail!("--method: give eight-point, five-point or both");
+    }
+    Ok(out)
+}
+
+/// Parses `--outliers`: shares in [0, 0.95].
+fn shares(text: &str) -> Result<Vec<f64>> {
+    let mut out = Vec::new();
+    for part in text.split(',').map(str::trim).filter(|p| !p.is_empty()) {
+        let Ok(v) = part.parse::<f64>() else {
+            bail!("--outliers: '{part}' is not a number");
+        };
+        if !(0.0..=0.95).contains(&v) {
+            bail!("--outliers: {v} is outside 0 .. 0.95");
+        }
+        out.push(v);
+    }
+    if out.is_empty() {
+        bail!("--outliers: give at least one share");
+    }
+    Ok(out)
+}
+
+impl Experiment for TwoView {
+    fn name(&self) -> &'static str {
+        "two-view"
+    }
+
+    fn about(&self) -> &'static str {
+        "Eight-point and five-point RANSAC on seeded two-view scenes: R and t errors, iterations, inlier precision and recall"
+    }
+
+    fn command(&self) -> Command {
+        Command::new(self.name())
+            .arg(
+                Arg::new("method")
+                    .long("method")
+                    .value_name("LIST")
+                    .default_value("eight-point,five-point")
+                    .help("comma-separated solvers: eight-point, five-point"),
+            )
+            .arg(
+                Arg::new("outliers")
+                    .long("outliers")
+                    .value_name("LIST")
+                    .default_value("0,0.3,0.5")
+                    .help("comma-separated shares of wrong matches, 0 .. 0.95"),
+            )
+            .arg(
+                Arg::new("noise-px")
+                    .long("noise-px")
+                    .value_parser(clap::value_parser!(f64))
+                    .default_value("1")
+                    .help("pixel noise standard deviation, pixels (0 .. 20)"),
+            )
+            .arg(
+                Arg::new("points")
+                    .long("points")
+                    .value_parser(clap::value_parser!(u64).range(8..=5000))
+                    .default_value("200")
+                    .help("matches per trial"),
+            )
+            .arg(
+                Arg::new("trials")
+                    .long("trials")
+                    .value_parser(clap::value_parser!(u64).range(1..=100_000))
+                    .default_value("200")
+                    .help("trials per method and share; trial i uses seed + i"),
+            )
+            .arg(
+                Arg::new("seed")
+                    .long("seed")
+                    .value_parser(clap::value_parser!(u64))
+                    .default_value("1")
+                    .help("first seed"),
+            )
+            .arg(
+                Arg::new("no-normalize")
+                    .long("no-normalize")
+                    .action(ArgAction::SetTrue)
+                    .help("eight-point without Hartley normalization"),
+            )
+    }
+
+    fn run(&self, m: &ArgMatches, out: &mut Output) -> Result<()> {
+        let noise_px = m.get_one::<f64>("noise-px").copied().unwrap_or(1.0);
+        if !(noise_px.is_finite() && (0.0..=20.0).contains(&noise_px)) {
+            bail!("--noise-px: {noise_px} is outside 0 .. 20");
+        }
+        let settings = TwoViewSettings {
+            methods: methods(
+                m.get_one::<String>("method")
+                    .map_or("eight-point,five-point", String::as_str),
+            )?,
+            outliers: shares(
+                m.get_one::<String>("outliers")
+                    .map_or("0,0.3,0.5", String::as_str),
+            )?,
+            noise_px,
+            points: m.get_one::<u64>("points").copied().unwrap_or(200) as usize,
+            trials: m.get_one::<u64>("trials").copied().unwrap_or(200) as usize,
+            seed: m.get_one::<u64>("seed").copied().unwrap_or(1),
+            normalize: !m.get_flag("no-normalize"),
+        };
+        let report = two_view_experiment(&settings, progress_bar("two-view"));
+        if out.print_json(&report)? {
+            return Ok(());
+        }
+        writeln!(
+            out,
+            "SLAM Lab experiment two-view: {} trials of {} matches, {} px noise, seed {}, normalization {}",
+            settings.trials,
+            settings.points,
+            settings.noise_px,
+            settings.seed,
+            if settings.normalize { "on" } else { "off" }
+        )?;
+        writeln!(out, "scene: {}", report.scene)?;
+        writeln!(out)?;
+        writeln!(
+            out,
+            "{:<12} {:>8} {:>18} {:>18} {:>11} {:>10} {:>8} {:>9}",
+            "method",
+            "outliers",
+            "rot err deg med/90",
+            "t err deg med/90",
+            "iterations",
+            "precision",
+            "recall",
+            "failures"
+        )?;
+        for r in &report.results {
+            writeln!(
+                out,
+                "{:<12} {:>8.2} {:>8.3} / {:>7.3} {:>8.3} / {:>7.3} {:>11.0} {:>10.4} {:>8.4} {:>9}",
+                r.method,
+                r.outliers,
+                r.rotation_error_deg.median,
+                r.rotation_error_deg.p90,
+                r.translation_angle_error_deg.median,
+                r.translation_angle_error_deg.p90,
+                r.ransac_iterations.median,
+                r.inlier_precision,
+                r.inlier_recall,
+                r.failures
+            )?;
+        }
+        Ok(())
+    }
+}

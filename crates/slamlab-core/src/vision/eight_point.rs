@@ -1,0 +1,209 @@
+//! The eight-point algorithm (thesis `000` Sec. 4.3, Eq. 4.18-4.21) with
+//! Hartley's normalization ("In defense of the eight-point algorithm", 1997).
+
+use nalgebra::{DMatrix, Matrix3, SMatrix, SVector, Vector2, Vector3};
+
+use super::{Correspondence, Intrinsics, VisionError, check_finite};
+
+/// Minimal number of matches of the eight-point algorithm.
+pub const EIGHT: usize = 8;
+
+/// Hartley's normalizing similarity for a set of pixels: translate the centroid
+/// to the origin and scale so that the mean distance from it is √2. Returns `T`
+/// with `x̂ = T x`.
+pub fn hartley_normalization<'a>(
+    points: impl Iterator<Item = &'a Vector2<f64>> + Clone,
+) -> Matrix3<f64> {
+    let n = points.clone().count().max(1) as f64;
+    let centroid = points.clone().fold(Vector2::zeros(), |acc, p| acc + p) / n;
+    let mean_distance = points.map(|p| (p - centroid).norm()).sum::<f64>() / n;
+    let scale = if mean_distance > 1e-12 {
+        std::f64::consts::SQRT_2 / mean_distance
+    } else {
+        1.0
+    };
+    Matrix3::new(
+        scale,
+        0.0,
+        -scale * centroid.x,
+        0.0,
+        scale,
+        -scale * centroid.y,
+        0.0,
+        0.0,
+        1.0,
+    )
+}
+
+/// The row of `A` for one match (thesis Eq. 4.20):
+/// `a = [x_r x_l, x_r y_l, x_r, y_r x_l, y_r y_l, y_r, x_l, y_l, 1]`, so that
+/// `a · f = x_rᵀ F x_l` with `f` the entries of F row by row.
+pub fn constraint_row(left: &Vector3<f64>, right: &Vector3<f64>) -> [f64; 9] {
+    let (xl, yl, wl) = (left.x, left.y, left.z);
+    let (xr, yr, wr) = (right.x, right.y, right.z);
+    [
+        xr * xl,
+        xr * yl,
+        xr * wl,
+        yr * xl,
+        yr * yl,
+        yr * wl,
+        wr * xl,
+        wr * yl,
+        wr * wl,
+    ]
+}
+
+/// The unit vector `f` minimizing `‖A f‖` (Eq. 4.21): the right singular vector
+/// of the smallest singular value, as a 3x3 matrix row by row.
+pub(crate) fn smallest_right_singular(rows: &[[f64; 9]]) -> Result<Matrix3<f64>, VisionError> {
+    let last_row = if rows.len() <= 9 {
+        // A minimal sample: pad with zero rows to 9x9 so the SVD returns all of V.
+        let mut a = SMatrix::<f64, 9, 9>::zeros();
+        for (i, row) in rows.iter().enumerate() {
+            for (j, v) in row.iter().enumerate() {
+                a[(i, j)] = *v;
+            }
+        }
+        let svd = a
+            .try_svd(false, true, f64::EPSILON, 500)
+            .ok_or(VisionError::Degenerate("the SVD did not converge"))?;
+        check_rank(svd.singular_values.as_slice())?;
+        let v_t = svd
+            .v_t
+            .ok_or(VisionError::Degenerate("the SVD returned no V"))?;
+        v_t.row(8).transpose().into_owned()
+    } else {
+        let mut a = DMatrix::<f64>::zeros(rows.len(), 9);
+        for (i, row) in rows.iter().enumerate() {
+            for (j, v) in row.iter().enumerate() {
+                a[(i, j)] = *v;
+            }
+        }
+        let svd = a
+            .try_svd(false, true, f64::EPSILON, 500)
+            .ok_or(VisionError::Degenerate("the SVD did not converge"))?;
+        check_rank(svd.singular_values.as_slice())?;
+        let v_t = svd
+            .v_t
+            .ok_or(VisionError::Degenerate("the SVD returned no V"))?;
+        // Sorted descending: the last row of Vᵀ belongs to the smallest value.
+        SVector::<f64, 9>::from_iterator(v_t.row(8).iter().copied())
+    };
+    let f = last_row;
+    if f.iter().any(|v| !v.is_finite()) {
+        return Err(VisionError::Degenerate(
+            "the SVD returned non-finite values",
+        ));
+    }
+    Ok(Matrix3::new(
+        f[0], f[1], f[2], f[3], f[4], f[5], f[6], f[7], f[8],
+    ))
+}
+
+/// `A` must have rank 8 for a unique F: a second zero singular value means the
+/// matches fit a whole family of F, as when every scene point lies on one
+/// plane (the eight-point algorithm's degenerate case; five points still work).
+fn check_rank(singular_values: &[f64]) -> Result<(), VisionError> {
+    let largest = singular_values.first().copied().unwrap_or(0.0);
+    let eighth = singular_values.get(7).copied().unwrap_or(0.0);
+    if !(eighth > 1e-9 * largest) {
+        return Err(VisionError::Degenerate(
+            "the matches fit more than one F (all scene points on one plane, or repeated matches)",
+        ));
+    }
+    Ok(())
+}
+
+/// The SVD of a 3x3 matrix, `(U, σ, Vᵀ)` with σ descending; `None` if it did
+/// not converge (non-finite input).
+pub(crate) fn svd3(m: &Matrix3<f64>) -> Option<(Matrix3<f64>, Vector3<f64>, Matrix3<f64>)> {
+    let svd = m.try_svd(true, true, f64::EPSILON, 500)?;
+    Some((svd.u?, svd.singular_values, svd.v_t?))
+}
+
+/// The closest rank-2 matrix in the Frobenius norm: the smallest singular value
+/// set to zero (F has rank 2: every epipolar line passes through the epipole).
+pub fn project_to_rank_two(m: &Matrix3<f64>) -> Matrix3<f64> {
+    match svd3(m) {
+        Some((u, s, v_t)) => u * Matrix3::from_diagonal(&Vector3::new(s[0], s[1], 0.0)) * v_t,
+        _ => *m,
+    }
+}
+
+/// The closest essential matrix: singular values `(s, s, 0)` with
+/// `s = (σ₁ + σ₂) / 2` (Hartley and Zisserman, Result 9.18), scaled to
+/// `‖E‖_F = 1`. An essential matrix has two equal singular values and a zero
+/// one (thesis Eq. 4.15-4.16).
+pub fn project_to_essential(m: &Matrix3<f64>) -> Matrix3<f64> {
+    match svd3(m) {
+        Some((u, _, v_t)) => {
+            let s = std::f64::consts::FRAC_1_SQRT_2;
+            u * Matrix3::from_diagonal(&Vector3::new(s, s, 0.0)) * v_t
+        }
+        _ => *m,
+    }
+}
+
+/// The fundamental matrix of at least eight pixel matches by the eight-point
+/// algorithm (Eq. 4.18-4.21), with the rank-2 projection, scaled to `‖F‖_F = 1`.
+///
+/// With `normalize`, the pixels of each image are first moved to zero mean and
+/// a mean distance of √2 (Hartley), and F is mapped back: `F = T_rᵀ F̂ T_l`.
+/// Without it the columns of `A` differ by five orders of magnitude (pixels²
+/// next to 1) and noise moves the solution far more.
+pub fn fundamental_eight_point(
+    matches: &[Correspondence],
+    normalize: bool,
+) -> Result<Matrix3<f64>, VisionError> {
+    if matches.len() < EIGHT {
+        return Err(VisionError::TooFewMatches {
+            method: "the eight-point algorithm",
+            needed: EIGHT,
+            got: matches.len(),
+        });
+    }
+    check_finite(matches)?;
+    let (t_left, t_right) = if normalize {
+        (
+            hartley_normalization(matches.iter().map(|m| &m.left)),
+            hartley_normalization(matches.iter().map(|m| &m.right)),
+        )
+    } else {
+        (Matrix3::identity(), Matrix3::identity())
+    };
+    let rows: Vec<[f64; 9]> = matches
+        .iter()
+        .map(|m| {
+            let l = t_left * Vector3::new(m.left.x, m.left.y, 1.0);
+            let r = t_right * Vector3::new(m.right.x, m.right.y, 1.0);
+            constraint_row(&l, &r)
+        })
+        .collect();
+    let f_hat = project_to_rank_two(&smallest_right_singular(&rows)?);
+    let f = t_right.transpose() * f_hat * t_left;
+    let norm = f.norm();
+    if !(norm > 0.0 && norm.is_finite()) {
+        return Err(VisionError::Degenerate("the fundamental matrix vanished"));
+    }
+    Ok(f / norm)
+}
+
+/// The essential matrix of at least eight pixel matches from a calibrated
+/// camera: F by [`fundamental_eight_point`], then `E = Kᵀ F K` (Eq. 4.17
+/// inverted) projected onto the essential matrices ([`project_to_essential`]).
+pub fn essential_eight_point(
+    matches: &[Correspondence],
+    k: &Intrinsics,
+    normalize: bool,
+) -> Result<Matrix3<f64>, VisionError> {
+    k.validate()?;
+    let f = fundamental_eight_point(matches, normalize)?;
+    Ok(essential_from_fundamental(&f, k))
+}
+
+/// The essential matrix closest to `Kᵀ F K` (Eq. 4.17 inverted), `‖E‖_F = 1`.
+pub fn essential_from_fundamental(fundamental: &Matrix3<f64>, k: &Intrinsics) -> Matrix3<f64> {
+    let km = k.matrix();
+    project_to_essential(&(km.transpose() * fundamental * km))
+}
