@@ -213,6 +213,12 @@ pub trait Lesson: std::fmt::Debug {
     fn keys(&self) -> Vec<(&'static str, &'static str)> {
         Vec::new()
     }
+    /// Has the lesson started over on a file the URL named (a map read after the
+    /// first frame) since the last call? The shell then applies the URL's figure keys
+    /// (`tick=`, `run=`, `zoom=`, …) again, so that the link opens as shared.
+    fn take_restarted_from_link(&mut self) -> bool {
+        false
+    }
     /// Every plot's data, unthinned, for "Export plot data as CSV".
     fn plot_series(&self) -> Vec<crate::export::PlotSeries> {
         Vec::new()
@@ -317,6 +323,9 @@ impl Lesson for WithNotice {
     }
     fn take_request(&mut self) -> Option<LessonRequest> {
         self.inner.take_request()
+    }
+    fn take_restarted_from_link(&mut self) -> bool {
+        self.inner.take_restarted_from_link()
     }
 }
 

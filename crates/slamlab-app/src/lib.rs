@@ -51,6 +51,14 @@ pub struct Settings {
     pub last_lesson: Option<String>,
 }
 
+/// Does the URL set anything up (a lesson parameter, a figure key, many runs)? Such
+/// a link opens exactly as shared, whatever an earlier visit stored.
+pub fn link_sets_up(parsed: &query::Query) -> bool {
+    !parsed.pairs.is_empty()
+        || parsed.many_runs.is_some()
+        || parsed.figure != query::FigureOptions::default()
+}
+
 /// The SLAM Lab application.
 #[derive(Debug)]
 pub struct SlamLabApp {
@@ -128,7 +136,11 @@ impl SlamLabApp {
             }),
         };
         let settings = settings.unwrap_or_default();
-        let stored = (!parsed.embed)
+        // A link that sets anything up (a parameter, a figure key, many runs) opens
+        // exactly as shared: the lesson's defaults and the link, never the windows,
+        // view or panels of an earlier visit. Preferences such as the theme stay.
+        let link_sets_up = link_sets_up(&parsed);
+        let stored = (!parsed.embed && !link_sets_up)
             .then(|| settings.lessons.get(entry.id))
             .flatten();
         let mut lesson = (entry.open)(&LessonStart {
@@ -140,6 +152,7 @@ impl SlamLabApp {
         let panels = match parsed.figure.panels {
             Some(panels) => panels,
             None if parsed.embed => PanelVisibility::embedded(),
+            None if link_sets_up => PanelVisibility::default(),
             None => settings.panels,
         };
         let narrow_panels = parsed.figure.panels.unwrap_or(PanelVisibility {
@@ -384,6 +397,12 @@ impl SlamLabApp {
         let dt = f64::from(ctx.input(|i| i.stable_dt));
         let sim_start = web_time::Instant::now();
         self.lesson.read_input(&ctx);
+        if self.lesson.take_restarted_from_link() {
+            // A map named in the URL arrived and the run started over on it: the
+            // link's figure keys hold for the run on that map.
+            let figure = self.figure.clone();
+            apply_figure(&mut *self.lesson, &figure, &mut self.app_notices);
+        }
         self.lesson.advance(dt);
         let sim_ms = sim_start.elapsed().as_secs_f32() * 1000.0;
         let interval_ms = ctx.input(|i| i.unstable_dt) * 1000.0;

@@ -197,3 +197,47 @@ fn kld_count_falls_while_tracking_and_rises_after_a_kidnap() {
             .all(|u| (100..=3000).contains(&u.particles))
     );
 }
+
+/// Right after a kidnap the scan is still the one taken before it (drawn from where
+/// it was taken), the true path breaks at the teleport, and the status reads the
+/// estimate's error against the truth now.
+#[test]
+fn a_kidnap_breaks_the_path_keeps_the_scan_pose_and_the_status_reads_the_error_now() {
+    use LocalizationEstimator::*;
+    let mut run = MclRun::new(
+        scenario(vec![Amcl], 300, 3),
+        BuiltinMap::Maze.load().unwrap(),
+    )
+    .unwrap();
+    run.run_ticks(30);
+    let before = run.robot().pose;
+    assert_eq!(run.scan_pose(), Some(before), "the scan of the last move");
+    assert_eq!(run.path_stretches().len(), 1);
+    let path_len = run.path().len();
+    run.kidnap_random();
+    let after = run.robot().pose;
+    assert!(slamlab_core::math::hypot(after.x - before.x, after.y - before.y) > 1.0);
+    assert_eq!(run.scan_pose(), Some(before), "a kidnap takes no scan");
+    let stretches = run.path_stretches();
+    assert_eq!(stretches.len(), 2);
+    assert_eq!(stretches[0].len(), path_len);
+    assert_eq!(stretches[1], &[after][..]);
+    // The status's error is the estimate's against the truth now, several metres.
+    let now = run.error_now(0).unwrap();
+    let estimate = run.filters()[0].current_estimate(&run.odometry()).unwrap();
+    let by_hand = slamlab_core::math::hypot(estimate.x - after.x, estimate.y - after.y);
+    assert_eq!(now.position, by_hand);
+    assert!(now.position > 1.0, "{now:?}");
+    let status = run.status_of(0);
+    assert!(
+        status.starts_with(&format!("lost: {:.2} m off", now.position)),
+        "{status}"
+    );
+    // The records still hold the error from before the kidnap.
+    let recorded = run.filters()[0].ticks.last().unwrap().position;
+    assert!(recorded < 0.5, "{recorded}");
+    // After the next move the scan is taken at the new place.
+    run.run_ticks(1);
+    assert_eq!(run.scan_pose(), Some(run.robot().pose));
+    assert_eq!(run.path_stretches().len(), 2);
+}

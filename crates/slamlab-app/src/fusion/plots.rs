@@ -4,7 +4,8 @@
 use super::mode_color;
 use crate::export::PlotSeries;
 use crate::widgets::plots::{
-    Mark, Styled, draw_series, line_width, series_data, time_plot, title_ui,
+    Figure, Mark, Styled, draw_series, figure_ui, line_width, series_data, series_key_ui,
+    style_entries, time_plot,
 };
 use slamlab_sim::fusion::lesson::FusionSim;
 
@@ -65,40 +66,68 @@ fn plotted(sim: &FusionSim) -> Vec<Styled> {
     out
 }
 
-/// The plots side by side.
+/// The plots side by side, each with its key on a line above it.
 pub fn plots_ui(ui: &mut egui::Ui, sim: &FusionSim) {
     let all = plotted(sim);
-    let height = (ui.available_height() - 26.0).max(80.0);
-    let plot = |id: &str, y: &str| {
-        time_plot(id, y, height)
-            .link_axis(egui::Id::unique("fusion_time_axis"), [true, false])
-            .include_x(1.0)
-            .include_y(0.0)
+    // The modes' colours once for the row; each plot's key names only its styles.
+    let modes: Vec<(String, egui::Color32)> = sim
+        .runs()
+        .iter()
+        .map(|run| (run.mode().name().to_owned(), mode_color(run.mode())))
+        .collect();
+    // One alone needs no row of colours (the title bar names it): its plots' keys
+    // take its colour.
+    let text = match modes.as_slice() {
+        [(_, color)] => *color,
+        _ => {
+            series_key_ui(ui, &modes, "");
+            ui.visuals().text_color()
+        }
+    };
+    let height = ui.available_height().max(80.0);
+    let plot = |id: &'static str| {
+        move |h: f32, y: &str| {
+            time_plot(id, y, h)
+                .link_axis(egui::Id::unique("fusion_time_axis"), [true, false])
+                .include_x(1.0)
+                .include_y(0.0)
+        }
     };
     ui.columns(4, |columns| {
-        for (k, (title, axis, id)) in ERROR_PLOTS.iter().enumerate() {
-            let ui = &mut columns[k];
-            title_ui(
-                ui,
-                title,
-                "Estimate minus truth at the output rate (solid) and the filter's own ±2σ \
-                 (dashed): a consistent filter keeps its error inside about 95% of the time",
+        for (k, (title, axis, id)) in ERROR_PLOTS.into_iter().enumerate() {
+            figure_ui(
+                &mut columns[k],
+                &Figure {
+                    title,
+                    hover: "Estimate minus truth at the output rate (solid) and the filter's own \
+                            ±2σ (dashed): a consistent filter keeps its error inside about 95% \
+                            of the time",
+                    key: style_entries(&all, title, text),
+                    y_label: axis,
+                    height,
+                },
+                plot(id),
+                |plot_ui| draw_series(plot_ui, &all, title),
             );
-            plot(id, axis).show(ui, |plot_ui| draw_series(plot_ui, &all, title));
         }
-        let ui = &mut columns[3];
-        title_ui(
-            ui,
-            "SLAM update jumps",
-            "How far each fused SLAM pose moved the position estimate at its update: \
-             relative and absolute correct the position itself (jumps), differential only \
-             a velocity (millimetres)",
+        figure_ui(
+            &mut columns[3],
+            &Figure {
+                title: JUMPS,
+                hover: "How far each fused SLAM pose moved the position estimate at its update: \
+                        relative and absolute correct the position itself (jumps), differential \
+                        only a velocity (millimetres)",
+                key: style_entries(&all, JUMPS, text),
+                y_label: "jump (m)",
+                height,
+            },
+            plot("fusion_jumps"),
+            |plot_ui| draw_series(plot_ui, &all, JUMPS),
         );
-        plot("fusion_jumps", "jump (m)").show(ui, |plot_ui| {
-            draw_series(plot_ui, &all, "SLAM update jumps")
-        });
     });
 }
+
+const JUMPS: &str = "SLAM update jumps";
 
 /// Every plot's series, unthinned, for the CSV export.
 pub fn series(sim: &FusionSim) -> Vec<PlotSeries> {

@@ -3,7 +3,7 @@
 
 use crate::widgets::sources;
 use slamlab_core::particle::BeamLikelihood;
-use slamlab_core::{math, wrap_angle};
+use slamlab_core::wrap_angle;
 use slamlab_sim::localization::{MclPhase, MclRun};
 
 /// The panel for the phase that ran last.
@@ -16,12 +16,8 @@ pub fn explanation_ui(ui: &mut egui::Ui, run: &MclRun, last: Option<MclPhase>) {
             run.tick_count().saturating_sub(kidnap) as f64 * dt
         ));
     }
-    for f in run.filters() {
-        ui.monospace(format!(
-            "{}: {}",
-            f.name.to_uppercase(),
-            f.status(run.kidnap_tick(), dt)
-        ));
+    for (k, f) in run.filters().iter().enumerate() {
+        ui.monospace(format!("{}: {}", f.name.to_uppercase(), run.status_of(k)));
         let r = f.recovery();
         if r.log_w_slow.is_some() {
             ui.monospace(format!(
@@ -156,21 +152,24 @@ pub fn explanation_ui(ui: &mut egui::Ui, run: &MclRun, last: Option<MclPhase>) {
     ui.separator();
     ui.heading("Estimates");
     let truth = run.robot().pose;
-    for f in run.filters() {
-        match f.mcl().estimate() {
-            Some(e) => {
-                let error = math::hypot(e.pose.x - truth.x, e.pose.y - truth.y);
-                let heading = wrap_angle(e.pose.theta - truth.theta).to_degrees();
+    for (k, f) in run.filters().iter().enumerate() {
+        // The estimate as amcl publishes it: moved by the odometry since the update,
+        // against the truth now (the status above reads the same error).
+        match (f.mcl().estimate(), f.current_estimate(&run.odometry())) {
+            (Some(e), Some(now)) => {
+                let error = run.error_now(k).map_or(f64::NAN, |e| e.position);
+                let heading = wrap_angle(now.theta - truth.theta).to_degrees();
                 ui.monospace(format!(
-                    "{}: ({:.2}, {:.2}) m, error {error:.2} m, {heading:+.1}°; cluster of {} particles ({} clusters)",
+                    "{}: ({:.2}, {:.2}) m; position error {error:.2} m, heading error \
+                     {heading:+.1}°; cluster of {} particles ({} clusters)",
                     f.name.to_uppercase(),
-                    e.pose.x,
-                    e.pose.y,
+                    now.x,
+                    now.y,
                     e.count,
                     e.clusters
                 ));
             }
-            None => {
+            _ => {
                 ui.monospace(format!("{}: no estimate yet", f.name.to_uppercase()));
             }
         }

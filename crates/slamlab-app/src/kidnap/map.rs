@@ -195,7 +195,9 @@ pub fn map_ui(
         draw_costmap(ui, &painter, &t, grid, run.collision_map(), texture);
     }
     if view.path {
-        draw_path(&painter, &t, run.path(), colors.truth);
+        for stretch in run.path_stretches() {
+            draw_path(&painter, &t, stretch, colors.truth);
+        }
     }
     if view.rays {
         draw_rays(&painter, &t, run);
@@ -371,7 +373,9 @@ fn draw_rays(painter: &egui::Painter, t: &MapTransform, run: &MclRun) {
     let Some(scan) = run.scan() else {
         return;
     };
-    let robot = run.robot().pose;
+    // From where the scan was taken: after a kidnap the robot is elsewhere until
+    // its next move takes a new scan.
+    let robot = run.scan_pose().unwrap_or(run.robot().pose);
     let from = t.pose(&robot);
     let ray = Stroke::new(0.6, palette::VERMILLION.gamma_multiply(0.25));
     let stride = scan.ranges.len() / 180 + 1;

@@ -146,6 +146,8 @@ pub struct KidnapLesson {
     pad: Option<PadDirection>,
     /// The latest command sent to the run while driving by hand.
     sent: Option<(f64, f64)>,
+    /// The run started over on the map the URL named (for the shell's figure keys).
+    restarted_from_link: bool,
 }
 
 /// A ROS map read from a location named in the URL: first its YAML, then the
@@ -212,9 +214,8 @@ pub fn open(start: &LessonStart<'_>) -> Box<dyn Lesson> {
         lesson.view = stored.view.clone();
         stored.restore_clock(&mut lesson.time);
     }
-    if start.embed {
-        lesson.view.legend = false;
-    }
+    // An embed keeps the legend on: without it a lecture figure's particle clouds,
+    // rays and ellipses are unexplained (`legend=0` hides it).
     if let Some(location) = location {
         lesson.note = Some(format!("Loading the map {location}…"));
         lesson.map_location = Some(MapFetch {
@@ -272,6 +273,7 @@ impl KidnapLesson {
             map_location: None,
             pad: None,
             sent: None,
+            restarted_from_link: false,
         })
     }
 
@@ -516,6 +518,7 @@ impl KidnapLesson {
                 };
                 self.load_dropped(&[(yaml_name, yaml), (image_name, bytes)]);
                 if self.loaded.is_some() {
+                    self.restarted_from_link = true;
                     self.map_location = Some(MapFetch {
                         location,
                         started: true,
@@ -607,8 +610,9 @@ impl KidnapLesson {
         self.set_driving_by_hand(by_hand);
     }
 
-    fn kidnap_parameters_ui(&mut self, ui: &mut egui::Ui) {
-        ui.heading("Monte Carlo localization");
+    /// The lesson's main actions, in the row above the map at every window size
+    /// (never only in a closed drawer).
+    fn actions_ui(&mut self, ui: &mut egui::Ui) {
         ui.horizontal_wrapped(|ui| {
             if ui
                 .button("Global localization")
@@ -632,6 +636,11 @@ impl KidnapLesson {
                 self.apply_event(KidnapEvent::KidnapRandom);
             }
         });
+    }
+
+    fn kidnap_parameters_ui(&mut self, ui: &mut egui::Ui) {
+        ui.heading("Monte Carlo localization");
+        ui.label("Kidnap, Global localization and Reset around truth are above the map.");
         self.driving_ui(ui);
         ui.separator();
         ui.horizontal(|ui| {
@@ -687,13 +696,8 @@ pub fn explain_status(lesson: &KidnapLesson) -> Vec<String> {
     let run = lesson.sim().run();
     run.filters()
         .iter()
-        .map(|f| {
-            format!(
-                "{}: {}",
-                f.name.to_uppercase(),
-                f.status(run.kidnap_tick(), run.scenario().dt)
-            )
-        })
+        .enumerate()
+        .map(|(k, f)| format!("{}: {}", f.name.to_uppercase(), run.status_of(k)))
         .collect()
 }
 
@@ -725,6 +729,7 @@ impl crate::widgets::layout::LessonPanels for KidnapLesson {
     }
 
     fn map_ui(&mut self, ui: &mut egui::Ui) {
+        self.actions_ui(ui);
         if let Some(note) = &self.note {
             ui.label(egui::RichText::new(note).color(palette::VERMILLION));
         }
@@ -846,6 +851,9 @@ impl Lesson for KidnapLesson {
         }
     }
 
+    fn take_restarted_from_link(&mut self) -> bool {
+        std::mem::take(&mut self.restarted_from_link)
+    }
     fn read_input(&mut self, ctx: &egui::Context) {
         self.poll_map_location(ctx);
         let keys = if self.driving_by_hand() {
@@ -924,16 +932,23 @@ impl Lesson for KidnapLesson {
         let filters: Vec<serde_json::Value> = run
             .filters()
             .iter()
-            .map(|f| {
+            .enumerate()
+            .map(|(k, f)| {
+                // `estimate` at the filter's last update; `estimate_now` and the
+                // errors as the panels show them: moved by the odometry since, against
+                // the truth now.
                 let estimate = f.mcl().estimate().map(|e| e.pose);
+                let now = f.current_estimate(&run.odometry());
+                let error = run.error_now(k);
                 serde_json::json!({
                     "name": f.name,
                     "particles": f.mcl().count(),
-                    "position_error": estimate.map(|e| slamlab_core::math::hypot(e.x - truth.x, e.y - truth.y)),
-                    "heading_error": estimate.map(|e| slamlab_core::wrap_angle(e.theta - truth.theta).abs()),
+                    "position_error": error.map(|e| e.position),
+                    "heading_error": error.map(|e| e.heading),
                     "estimate": estimate.map(|e| [e.x, e.y, e.theta]),
+                    "estimate_now": now.map(|e| [e.x, e.y, e.theta]),
                     "n_eff": f.mcl().n_eff(),
-                    "status": f.status(run.kidnap_tick(), run.scenario().dt),
+                    "status": run.status_of(k),
                 })
             })
             .collect();

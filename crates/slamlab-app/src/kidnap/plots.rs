@@ -6,7 +6,8 @@
 use super::filter_color;
 use crate::export::PlotSeries;
 use crate::widgets::plots::{
-    Mark, Styled, draw_series, line_width, series_data, time_plot, title_ui,
+    Figure, Mark, Styled, draw_series, figure_ui, line_width, series_data, series_key_ui,
+    style_entries, time_plot, title_ui,
 };
 use slamlab_sim::localization::{MclRun, UpdateRecord};
 
@@ -96,67 +97,98 @@ fn plotted(run: &MclRun) -> Vec<Styled> {
     out
 }
 
-/// The plots side by side.
+/// The plots side by side, each with its key on a line above it.
 pub fn plots_ui(ui: &mut egui::Ui, run: &MclRun) {
     let all = plotted(run);
-    let height = (ui.available_height() - 26.0).max(80.0);
-    let plot = |id: &str, y: &str| {
-        time_plot(id, y, height)
-            .link_axis(egui::Id::unique("kidnap_time_axis"), [true, false])
-            .include_x(1.0)
-            .include_y(0.0)
+    // The filters' colours once for the row; each plot's key names only its styles.
+    let filters: Vec<(String, egui::Color32)> = run
+        .filters()
+        .iter()
+        .enumerate()
+        .map(|(k, f)| (f.name.to_uppercase(), filter_color(k, f.name)))
+        .collect();
+    // One alone needs no row of colours (the title bar names it): its plots' keys
+    // take its colour.
+    let text = match filters.as_slice() {
+        [(_, color)] => *color,
+        _ => {
+            series_key_ui(ui, &filters, "");
+            ui.visuals().text_color()
+        }
+    };
+    let height = ui.available_height().max(80.0);
+    let plot = |id: &'static str| {
+        move |h: f32, y: &str| {
+            time_plot(id, y, h)
+                .link_axis(egui::Id::unique("kidnap_time_axis"), [true, false])
+                .include_x(1.0)
+                .include_y(0.0)
+        }
+    };
+    let figure = |title: &'static str, hover: &'static str, y_label: &'static str| Figure {
+        title,
+        hover,
+        key: style_entries(&all, title, text),
+        y_label,
+        height,
     };
     ui.columns(4, |columns| {
-        let ui = &mut columns[0];
-        title_ui(
-            ui,
-            "Position error",
-            "Distance from the estimate (the heaviest cluster's weighted mean) to the true robot, \
-             and the estimate's own 2σ bound along its longest axis",
+        figure_ui(
+            &mut columns[0],
+            &figure(
+                "Position error",
+                "Distance from the estimate (the heaviest cluster's weighted mean) to the true \
+                 robot, and the estimate's own 2σ bound along its longest axis",
+                "error (m)",
+            ),
+            plot("kidnap_error"),
+            |plot_ui| draw_series(plot_ui, &all, "Position error"),
         );
-        plot("kidnap_error", "error (m)")
-            .show(ui, |plot_ui| draw_series(plot_ui, &all, "Position error"));
 
         let ui = &mut columns[1];
-        title_ui(
-            ui,
-            "w_slow and w_fast",
-            "Augmented MCL's short-term (w_fast, solid) and long-term (w_slow, dashed) averages of \
-             the particle weights, as log10 (Algorithm 9 of Xiang's thesis, §5.1.2). After a kidnap the weights drop \
-             and w_fast falls below w_slow first: that gap is the injection probability. Filters \
-             without recovery (MCL, CMCL) have none.",
-        );
+        let hover = "Augmented MCL's short-term (w_fast, solid) and long-term (w_slow, dashed) \
+             averages of the particle weights, as log10 (Algorithm 9 of Xiang's thesis, §5.1.2). \
+             After a kidnap the weights drop and w_fast falls below w_slow first: that gap is the \
+             injection probability. Filters without recovery (MCL, CMCL) have none.";
         if run.filters().iter().any(|f| f.filter.kind().injects()) {
-            plot("kidnap_wslow", "log10 w")
-                .show(ui, |plot_ui| draw_series(plot_ui, &all, "w_slow and w_fast"));
+            figure_ui(
+                ui,
+                &figure("w_slow and w_fast", hover, "log10 w"),
+                plot("kidnap_wslow"),
+                |plot_ui| draw_series(plot_ui, &all, "w_slow and w_fast"),
+            );
         } else {
+            title_ui(ui, "w_slow and w_fast", hover);
             ui.label(
                 "Only Augmented MCL keeps these averages: choose amcl or acmcl as the \
                  estimator to see w_fast fall below w_slow after a kidnap.",
             );
         }
 
-        let ui = &mut columns[2];
-        title_ui(
-            ui,
-            "Particles and N_eff",
-            "How many particles each filter carries (solid; KLD-sampling adapts it) and the \
-             effective sample size N_eff = 1 / Σ w² after weighting (dashed): the particle count \
-             when all weights are equal, 1 when one particle holds all the weight",
+        figure_ui(
+            &mut columns[2],
+            &figure(
+                "Particles and N_eff",
+                "How many particles each filter carries (solid; KLD-sampling adapts it) and the \
+                 effective sample size N_eff = 1 / Σ w² after weighting (dashed): the particle \
+                 count when all weights are equal, 1 when one particle holds all the weight",
+                "particles",
+            ),
+            plot("kidnap_count"),
+            |plot_ui| draw_series(plot_ui, &all, "Particles and N_eff"),
         );
-        plot("kidnap_count", "particles")
-            .show(ui, |plot_ui| draw_series(plot_ui, &all, "Particles and N_eff"));
 
-        let ui = &mut columns[3];
-        title_ui(
-            ui,
-            "Recovery",
-            "Augmented MCL's injection probability max(0, 1 − w_fast/w_slow) (solid) and the \
-             fraction of particles injected or regenerated in each update (dashed)",
+        figure_ui(
+            &mut columns[3],
+            &figure(
+                "Recovery",
+                "Augmented MCL's injection probability max(0, 1 − w_fast/w_slow) (solid) and \
+                 the fraction of particles injected or regenerated in each update (dashed)",
+                "fraction",
+            ),
+            |h, y| plot("kidnap_recovery")(h, y).include_y(1.0),
+            |plot_ui| draw_series(plot_ui, &all, "Recovery"),
         );
-        plot("kidnap_recovery", "fraction")
-            .include_y(1.0)
-            .show(ui, |plot_ui| draw_series(plot_ui, &all, "Recovery"));
     });
 }
 

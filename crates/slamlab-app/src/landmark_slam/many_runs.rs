@@ -10,6 +10,7 @@
 use super::plots::{band_ui, thin, time_plot};
 use crate::palette;
 use crate::query::MANY_RUNS_RANGE;
+use crate::widgets::plots::{KeyEntry, Mark, key_ui};
 use egui_plot::{Line, PlotPoints};
 use slamlab_sim::consistency::{ConsistencyResult, ConsistencyStudy};
 use slamlab_sim::params;
@@ -229,6 +230,22 @@ fn average_nees_plot_ui(ui: &mut egui::Ui, study: &ConsistencyStudy, result: &Co
     let [lo, hi] = result.nees_band;
     let dt = study.scenario().dt;
     let average = study.average_nees();
+    let mut key: Vec<KeyEntry> = average
+        .iter()
+        .map(|(name, _)| {
+            KeyEntry::new(
+                format!("{} average NEES", name.to_uppercase()),
+                palette::estimator_color(name),
+                Mark::Solid,
+            )
+        })
+        .collect();
+    key.push(KeyEntry::new(
+        format!("95% band of a consistent filter's average {lo:.2}..{hi:.2}"),
+        palette::GREEN,
+        Mark::Dashed,
+    ));
+    key_ui(ui, &key);
     time_plot("many_runs_nees", "average NEES", 220.0)
         // Fitted to the data and the band every frame: the average settles as runs come in.
         .include_y(0.0)
@@ -272,12 +289,48 @@ pub fn verdict(in_band: f64, above: f64) -> &'static str {
     }
 }
 
+/// Runs needed before the window gives a verdict: with fewer, the band a
+/// consistent filter's average stays in is so wide that an overconfident filter
+/// passes (over 6 runs a 3-dof average may lie anywhere in [1.37, 5.25]).
+pub const VERDICT_RUNS: usize = 20;
+
+/// The 95% band of the average of `runs` robot-pose NEES values of a consistent
+/// filter (3 dof): `runs` times the average is chi-square with 3 `runs` dof.
+pub fn average_nees_band(runs: usize) -> [f64; 2] {
+    let n = runs.max(1) as f64;
+    [
+        slamlab_core::stats::chi2_quantile(0.025, 3.0 * n) / n,
+        slamlab_core::stats::chi2_quantile(0.975, 3.0 * n) / n,
+    ]
+}
+
+/// The verdict column: a verdict from [`VERDICT_RUNS`] runs on, before that how many
+/// runs are still missing.
+pub fn verdict_after(runs: usize, in_band: f64, above: f64) -> String {
+    if runs < VERDICT_RUNS {
+        format!("too few runs for a verdict ({runs} of {VERDICT_RUNS})")
+    } else {
+        verdict(in_band, above).to_owned()
+    }
+}
+
 fn summary_ui(ui: &mut egui::Ui, result: &ConsistencyResult) {
     let [lo, hi] = result.nees_band;
     ui.label(format!(
         "Over {} runs the band is [{lo:.2}, {hi:.2}]; a consistent filter's average stays in it at about 95% of the ticks.",
         result.trials_done
     ));
+    if result.trials_done < VERDICT_RUNS {
+        let [lo_v, hi_v] = average_nees_band(VERDICT_RUNS);
+        ui.label(
+            egui::RichText::new(format!(
+                "Too few runs for a verdict: the band is still wide. Over {VERDICT_RUNS} runs \
+                 it narrows to [{lo_v:.2}, {hi_v:.2}]; the average must stay in that to count \
+                 as consistent."
+            ))
+            .color(ui.visuals().warn_fg_color),
+        );
+    }
     let fmt = |v: Option<f64>| v.map_or_else(|| "–".to_owned(), |v| format!("{v:.2}"));
     egui::Grid::new("many_runs_summary")
         .num_columns(7)
@@ -303,7 +356,8 @@ fn summary_ui(ui: &mut egui::Ui, result: &ConsistencyResult) {
                 ui.label(format!("{:.0}%", 100.0 * f.ticks_in_band));
                 ui.label(fmt(f.nis_mean))
                     .on_hover_text("Mean NIS of every landmark update (2 dof: expected 2)");
-                let mut text = verdict(f.ticks_in_band, f.ticks_above_band).to_owned();
+                let mut text =
+                    verdict_after(result.trials_done, f.ticks_in_band, f.ticks_above_band);
                 if f.diverged > 0 {
                     text.push_str(&format!(", {} diverged", f.diverged));
                 }
@@ -402,6 +456,26 @@ mod tests {
         assert!(state.message.is_none() && state.is_running());
         state.stop();
         assert!(!state.is_running());
+    }
+
+    #[test]
+    fn no_verdict_before_enough_runs_and_the_band_they_would_need() {
+        assert_eq!(
+            verdict_after(6, 0.95, 0.0),
+            "too few runs for a verdict (6 of 20)"
+        );
+        assert_eq!(verdict_after(20, 0.95, 0.0), "consistent");
+        // The band of a consistent average: chi-square(3n)/n, narrowing with n.
+        let [lo6, hi6] = average_nees_band(6);
+        assert!(
+            (lo6 - 1.372).abs() < 0.01 && (hi6 - 5.254).abs() < 0.01,
+            "{lo6} {hi6}"
+        );
+        let [lo50, hi50] = average_nees_band(50);
+        assert!(
+            (lo50 - 2.360).abs() < 0.01 && (hi50 - 3.716).abs() < 0.01,
+            "{lo50} {hi50}"
+        );
     }
 
     #[test]

@@ -505,6 +505,16 @@ const MIN_MAGNIFICATION: f32 = 2.5;
 /// Largest magnification: a millimetre ellipse stays a millimetre ellipse.
 const MAX_MAGNIFICATION: f32 = 50.0;
 
+/// The magnification shown: the largest of 2.5, 5, 10, 20 and 50 that is not above
+/// `wanted`, so that it holds while stepping (predict grows √det P by a few percent,
+/// which a continuous magnification would undo, keeping the picture the same).
+fn steady_magnification(wanted: f32) -> f32 {
+    [50.0, 20.0, 10.0, 5.0, MIN_MAGNIFICATION]
+        .into_iter()
+        .find(|&m| m <= wanted)
+        .unwrap_or(wanted)
+}
+
 /// The magnifier's square: its side (points) for a map, and the corner it takes (the
 /// first of top right, bottom right, bottom left, top left that stays inside the map,
 /// off the legend and off the true robot).
@@ -570,8 +580,9 @@ fn draw_magnifier(
     let Some(inset) = magnifier_rect(t.rect, legend, robot) else {
         return;
     };
-    let magnification =
-        ((0.42 * f64::from(inset.width()) / extent) as f32 / t.scale).min(MAX_MAGNIFICATION);
+    let magnification = steady_magnification(
+        ((0.42 * f64::from(inset.width()) / extent) as f32 / t.scale).min(MAX_MAGNIFICATION),
+    );
     let scale = magnification * t.scale;
     if !(magnification.is_finite() && magnification >= MIN_MAGNIFICATION) {
         return;
@@ -636,7 +647,7 @@ fn draw_magnifier(
         egui::Align2::LEFT_TOP,
         format!(
             // Two short lines: the inset is as narrow as 110 points.
-            "robot ×{magnification:.0}\n{} m across",
+            "robot ×{magnification}\n{} m across",
             format_metres(across, across / 10.0)
         ),
         egui::FontId::proportional(12.0),
@@ -1250,6 +1261,21 @@ fn hover_text(t: &MapTransform, session: &LandmarkSession, pointer: Pos2) -> Opt
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn the_magnification_holds_on_steps_of_two() {
+        assert_eq!(steady_magnification(3.0), 2.5);
+        assert_eq!(steady_magnification(4.2), 2.5);
+        assert_eq!(steady_magnification(9.9), 5.0);
+        assert_eq!(steady_magnification(10.0), 10.0);
+        assert_eq!(steady_magnification(50.0), 50.0);
+        assert_eq!(
+            steady_magnification(1.0),
+            1.0,
+            "below the least: no inset is drawn"
+        );
+        assert!(steady_magnification(f32::NAN).is_nan());
+    }
 
     #[test]
     fn the_magnifier_takes_a_free_corner() {

@@ -456,6 +456,16 @@ impl LandmarkSlamLesson {
                 });
             self.view.heatmap = open;
         }
+        // Esc closes the windows over the map, the one on top (Many runs) first.
+        if (self.view.many_runs || self.view.heatmap)
+            && ui.input(|i| i.key_pressed(egui::Key::Escape))
+        {
+            if self.view.many_runs {
+                self.view.many_runs = false;
+            } else {
+                self.view.heatmap = false;
+            }
+        }
         if self.view.many_runs {
             let mut open = true;
             // As large as it needs, as small as a lecture page's iframe.

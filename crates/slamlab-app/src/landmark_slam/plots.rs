@@ -4,9 +4,10 @@
 use crate::export::PlotSeries;
 use crate::palette;
 use crate::widgets::plots::{
-    Mark, Styled, draw_series, plot_values, series_data, series_key_ui, time_plot_without_legend,
+    Figure, Mark, Styled, draw_series, figure_ui, plot_values, series_data, series_key_ui,
+    time_plot_without_legend,
 };
-pub(super) use crate::widgets::plots::{line_width, thin, time_plot, title_ui};
+pub(super) use crate::widgets::plots::{line_width, thin, time_plot};
 use egui_plot::{HLine, LineStyle, Plot, Span};
 use slamlab_core::stats::chi2_quantile;
 use slamlab_sim::LandmarkSession;
@@ -125,57 +126,72 @@ pub fn plots_ui(ui: &mut egui::Ui, session: &LandmarkSession) {
          of a consistent filter",
     );
     let all = plotted(session);
-    let height = (ui.available_height() - 26.0).max(80.0);
+    let height = ui.available_height().max(80.0);
+    let figure = |title: &'static str, hover: &'static str, y_label: &'static str| Figure {
+        title,
+        hover,
+        key: Vec::new(),
+        y_label,
+        height,
+    };
     ui.columns(4, |columns| {
         // 1. Robot position error and the 2σ bound.
-        let ui = &mut columns[0];
-        title_ui(
-            ui,
-            ROBOT_ERROR,
-            "|true − estimated position| and the filter's own 2σ bound 2√(σx² + σy²)",
+        figure_ui(
+            &mut columns[0],
+            &figure(
+                ROBOT_ERROR,
+                "|true − estimated position| and the filter's own 2σ bound 2√(σx² + σy²)",
+                "error (m)",
+            ),
+            |h, y| plot("plot_robot_error", y, h),
+            |plot_ui| draw_series(plot_ui, &all, ROBOT_ERROR),
         );
-        plot("plot_robot_error", "error (m)", height)
-            .show(ui, |plot_ui| draw_series(plot_ui, &all, ROBOT_ERROR));
 
         // 2. Landmark RMS error.
-        let ui = &mut columns[1];
-        title_ui(
-            ui,
-            LANDMARK_ERROR,
-            "Root mean square position error over the landmarks in each filter's state",
+        figure_ui(
+            &mut columns[1],
+            &figure(
+                LANDMARK_ERROR,
+                "Root mean square position error over the landmarks in each filter's state",
+                "RMS error (m)",
+            ),
+            |h, y| plot("plot_landmark_rmse", y, h),
+            |plot_ui| draw_series(plot_ui, &all, LANDMARK_ERROR),
         );
-        plot("plot_landmark_rmse", "RMS error (m)", height)
-            .show(ui, |plot_ui| draw_series(plot_ui, &all, LANDMARK_ERROR));
 
         // 3. Robot-pose NEES with the 3-dof band.
-        let ui = &mut columns[2];
         let (lo, hi) = band_95(3.0);
-        title_ui(
-            ui,
-            NEES,
-            "e^T P_RR^-1 e of the robot pose each tick. Above the band: overconfident; below: conservative.",
-        );
-        plot("plot_nees", "NEES", height)
-            .default_y_bounds(0.0, consistency_y_max(plot_values(&all, NEES), hi))
-            .show(ui, |plot_ui| {
+        let nees_max = consistency_y_max(plot_values(&all, NEES), hi);
+        figure_ui(
+            &mut columns[2],
+            &figure(
+                NEES,
+                "e^T P_RR^-1 e of the robot pose each tick. Above the band: overconfident; below: conservative.",
+                "NEES",
+            ),
+            |h, y| plot("plot_nees", y, h).default_y_bounds(0.0, nees_max),
+            |plot_ui| {
                 band_ui(plot_ui, lo, hi);
                 draw_series(plot_ui, &all, NEES);
-            });
+            },
+        );
 
         // 4. NIS of every update with the 2-dof band.
-        let ui = &mut columns[3];
         let (lo, hi) = band_95(2.0);
-        title_ui(
-            ui,
-            NIS,
-            "ν^T S^-1 ν of every landmark update. Above the band: the innovations are larger than the filter expects.",
-        );
-        plot("plot_nis", "NIS", height)
-            .default_y_bounds(0.0, consistency_y_max(plot_values(&all, NIS), hi))
-            .show(ui, |plot_ui| {
+        let nis_max = consistency_y_max(plot_values(&all, NIS), hi);
+        figure_ui(
+            &mut columns[3],
+            &figure(
+                NIS,
+                "ν^T S^-1 ν of every landmark update. Above the band: the innovations are larger than the filter expects.",
+                "NIS",
+            ),
+            |h, y| plot("plot_nis", y, h).default_y_bounds(0.0, nis_max),
+            |plot_ui| {
                 band_ui(plot_ui, lo, hi);
                 draw_series(plot_ui, &all, NIS);
-            });
+            },
+        );
     });
 }
 

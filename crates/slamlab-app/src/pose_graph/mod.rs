@@ -100,6 +100,8 @@ pub(crate) struct Patterns {
     pub(crate) h: Option<egui::TextureHandle>,
     pub(crate) l: Option<egui::TextureHandle>,
     pub(crate) unknowns: usize,
+    /// Vertices of the graph (blocks of H per side).
+    pub(crate) vertices: usize,
     pub(crate) h_blocks: usize,
     pub(crate) l_blocks: usize,
     pub(crate) fill_blocks: usize,

@@ -5,9 +5,11 @@
 use super::Patterns;
 use crate::export::PlotSeries;
 use crate::palette;
-use crate::widgets::plots::{thin, title_ui};
+use crate::widgets::plots::{
+    Figure, KeyEntry, Mark, figure_plot, figure_ui, marker_radius, thin, title_ui,
+};
 use egui::{Color32, ColorImage, TextureOptions};
-use egui_plot::{Line, Plot, PlotPoints, Points};
+use egui_plot::{Line, LineStyle, PlotPoints, Points, VLine};
 use slamlab_core::graph::BlockPattern;
 use slamlab_core::math;
 use slamlab_sim::pose_graph_lesson::PoseGraphSession;
@@ -30,12 +32,23 @@ pub fn plots_ui(ui: &mut egui::Ui, session: &mut PoseGraphSession, patterns: &mu
         title_ui(
             ui,
             &format!(
-                "Information matrix H ({0} x {0})",
+                "Information matrix H ({0} x {0} vertex blocks)",
+                patterns.vertices
+            ),
+            &format!(
+                "H = Σ J^TΩJ in the graph's vertex order, one square per vertex block ({0} x {0} \
+                 scalars): a block is non-zero where an edge joins two vertices (Eq. 4.8 of \
+                 Xiang's thesis). Blue: non-zero; a loop closure is a square away from the \
+                 diagonal band, with its mirror across the diagonal.",
                 patterns.unknowns
             ),
-            "H = Σ J^TΩJ in the graph's vertex order: a block is non-zero where an edge joins two vertices (Eq. 4.8 of Xiang's thesis). Blue: non-zero.",
         );
-        ui.label(format!("{} non-zero blocks", patterns.h_blocks));
+        ui.label(format!("{} non-zero blocks", patterns.h_blocks))
+            .on_hover_text(
+                "The fixed vertex (the white square on the map) is not an unknown: an edge to \
+                 it adds only to its other vertex's diagonal block, so loop closures to the \
+                 fixed vertex leave no square off the diagonal.",
+            );
         image_ui(ui, h.as_ref(), height - 20.0, "Information matrix H");
         let ui = &mut columns[2];
         title_ui(
@@ -54,50 +67,89 @@ pub fn plots_ui(ui: &mut egui::Ui, session: &mut PoseGraphSession, patterns: &mu
     });
 }
 
-fn cost_plot(ui: &mut egui::Ui, session: &PoseGraphSession, height: f32) {
-    title_ui(
-        ui,
-        "Cost per iteration (log scale)",
-        "F(x) = Σ ρ(e^TΩe) after each iteration (Eq. 4.2 of Xiang's thesis); dots mark edits (a drag, a wrong loop closure, another solver or kernel)",
-    );
+/// The cost history split at the edits: one polyline per stretch of iterations
+/// (an edit changes the cost without an iteration, so it starts a new stretch), and
+/// the edits' points. Costs of zero or less have no logarithm and are left out.
+pub fn cost_segments(history: &[[f64; 2]]) -> (Vec<Vec<[f64; 2]>>, Vec<[f64; 2]>) {
     let log = |c: f64| if c > 0.0 { math::log10(c) } else { f64::NAN };
-    let history = session.history();
-    let points: Vec<[f64; 2]> = history.iter().map(|h| [h[0], log(h[1])]).collect();
-    // Edits: a point at the same iteration as the one before.
-    let edits: Vec<[f64; 2]> = history
-        .windows(2)
-        .filter(|w| w[1][0] == w[0][0])
-        .map(|w| [w[1][0], log(w[1][1])])
-        .filter(|p| p[1].is_finite())
-        .collect();
-    Plot::new("pose_graph_cost")
-        .height(height)
-        .x_axis_label("iteration")
-        .y_axis_label("cost")
-        .y_axis_formatter(|mark, _| format!("1e{:.0}", mark.value))
-        .y_grid_spacer(egui_plot::uniform_grid_spacer(|_| [1.0, 1.0, 10.0]))
-        .include_x(0.0)
-        .include_x(5.0)
-        .allow_scroll(false)
-        .show(ui, |plot_ui| {
-            plot_ui.line(
-                Line::new("cost", PlotPoints::new(thin(points.clone())))
-                    .color(palette::BLUE)
-                    .width(2.0),
-            );
-            plot_ui.points(
-                Points::new("iterations", PlotPoints::new(thin(points)))
-                    .color(palette::BLUE)
-                    .radius(2.5),
-            );
+    let mut segments: Vec<Vec<[f64; 2]>> = Vec::new();
+    let mut edits = Vec::new();
+    let mut current: Vec<[f64; 2]> = Vec::new();
+    for (k, h) in history.iter().enumerate() {
+        let point = [h[0], log(h[1])];
+        let is_edit = k > 0 && history.get(k - 1).is_some_and(|before| before[0] == h[0]);
+        if is_edit {
+            if current.len() > 0 {
+                segments.push(std::mem::take(&mut current));
+            }
+            if point[1].is_finite() {
+                edits.push(point);
+            }
+        }
+        if point[1].is_finite() {
+            current.push(point);
+        }
+    }
+    if !current.is_empty() {
+        segments.push(current);
+    }
+    (segments, edits)
+}
+
+fn cost_plot(ui: &mut egui::Ui, session: &PoseGraphSession, height: f32) {
+    let (segments, edits) = cost_segments(session.history());
+    let mut key = vec![KeyEntry::new(
+        "cost after each iteration",
+        palette::BLUE,
+        Mark::Solid,
+    )];
+    if !edits.is_empty() {
+        key.push(KeyEntry::new("edit", palette::VERMILLION, Mark::Dots));
+    }
+    figure_ui(
+        ui,
+        &Figure {
+            title: "Cost per iteration (log scale)",
+            hover: "F(x) = Σ ρ(e^TΩe) after each iteration (Eq. 4.2 of Xiang's thesis); \
+                    vermillion marks edits (a drag, a wrong loop closure, another solver or \
+                    kernel), where the line starts again",
+            key,
+            y_label: "cost",
+            height,
+        },
+        |h, y| {
+            figure_plot("pose_graph_cost", "iteration", y, h)
+                .y_axis_formatter(|mark, _| format!("1e{:.0}", mark.value))
+                .y_grid_spacer(egui_plot::uniform_grid_spacer(|_| [1.0, 1.0, 10.0]))
+                .include_x(0.0)
+                .include_x(5.0)
+        },
+        move |plot_ui| {
+            let radius = marker_radius(4.0, plot_ui.response().rect.height());
+            for edit in &edits {
+                plot_ui.vline(
+                    VLine::new("edit", edit[0])
+                        .color(palette::faded(palette::VERMILLION, 0.6))
+                        .style(LineStyle::dashed_dense())
+                        .width(1.0),
+                );
+            }
+            for segment in segments {
+                plot_ui.line(
+                    Line::new("cost", PlotPoints::new(thin(segment)))
+                        .color(palette::BLUE)
+                        .width(2.0),
+                );
+            }
             if !edits.is_empty() {
                 plot_ui.points(
                     Points::new("edits", PlotPoints::new(edits))
                         .color(palette::VERMILLION)
-                        .radius(4.0),
+                        .radius(radius),
                 );
             }
-        });
+        },
+    );
 }
 
 fn image_ui(ui: &mut egui::Ui, texture: Option<&egui::TextureHandle>, height: f32, name: &str) {
@@ -120,6 +172,7 @@ fn rebuild(
     match session.patterns() {
         Ok((h, l, nnz)) => {
             patterns.unknowns = h.dims.iter().sum();
+            patterns.vertices = h.dims.len();
             patterns.h_blocks = h.entries.len();
             patterns.l_blocks = l.entries.len();
             patterns.fill_blocks = l.fill_in.iter().filter(|f| **f).count();
@@ -143,35 +196,48 @@ fn rebuild(
     }
 }
 
-/// The pattern as an image: blue non-zeros, vermillion fill-in. `symmetric`
-/// mirrors each block (`H`'s pattern lists both triangles already; `L` is lower).
+/// The pattern as an image with one cell per vertex block (a 200-pose graph is a
+/// 200 x 200 block image): blue non-zeros, vermillion fill-in. `symmetric` mirrors
+/// each block (`H`'s pattern lists both triangles already; `L` is lower). Cells are
+/// [`MAX_IMAGE`]` / n` pixels wide (at least 1), and every non-zero block is drawn at
+/// least 1/[`MIN_MARK_SHARE`] of the image wide, so that a single loop closure far
+/// from the diagonal stays a visible square when the image is shown 120 points wide.
 pub fn raster(pattern: &BlockPattern, symmetric: bool, background: Color32) -> ColorImage {
-    let n: usize = pattern.dims.iter().sum();
-    let side = n.clamp(1, MAX_IMAGE);
+    let n = pattern.dims.len().max(1);
+    let cell = (MAX_IMAGE / n).max(1);
+    let side = (n * cell).min(MAX_IMAGE.max(n)).max(1);
     let mut image = ColorImage::filled([side, side], background);
-    let mut offset = Vec::with_capacity(pattern.dims.len());
-    let mut o = 0;
-    for &d in &pattern.dims {
-        offset.push(o);
-        o += d;
-    }
-    let px = |k: usize| (k * side / n.max(1)).min(side - 1);
-    for (k, &(r, c)) in pattern.entries.iter().enumerate() {
+    // The block of vertices (r, c) covers pixels from px(r) to px(r + 1) - 1.
+    let px = |k: usize| (k * side / n).min(side);
+    let mark = (side / MIN_MARK_SHARE).max(1);
+    let span = |k: usize| {
+        let (a, b) = (px(k), px(k + 1).max(px(k) + 1));
+        if b - a >= mark {
+            (a, b)
+        } else {
+            let centre = (a + b) / 2;
+            let a = centre.saturating_sub(mark / 2).min(side - mark.min(side));
+            (a, (a + mark).min(side))
+        }
+    };
+    // Original non-zeros last, so that fill-in never hides one that shares a pixel.
+    let mut order: Vec<usize> = (0..pattern.entries.len()).collect();
+    order.sort_by_key(|&k| !pattern.fill_in.get(k).copied().unwrap_or(false));
+    for k in order {
+        let Some(&(r, c)) = pattern.entries.get(k) else {
+            continue;
+        };
         let fill = pattern.fill_in.get(k).copied().unwrap_or(false);
         let color = if fill {
             palette::VERMILLION
         } else {
             palette::BLUE
         };
-        let (r0, r1) = (px(offset[r]), px(offset[r] + pattern.dims[r] - 1));
-        let (c0, c1) = (px(offset[c]), px(offset[c] + pattern.dims[c] - 1));
-        for y in r0..=r1 {
-            for x in c0..=c1 {
-                let i = y * side + x;
-                // Fill-in never hides an original non-zero that shares its pixel.
-                if !(fill && image.pixels[i] == palette::BLUE) {
-                    image.pixels[i] = color;
-                }
+        let (r0, r1) = span(r);
+        let (c0, c1) = span(c);
+        for y in r0..r1 {
+            for x in c0..c1 {
+                image.pixels[y * side + x] = color;
                 if symmetric {
                     image.pixels[x * side + y] = color;
                 }
@@ -180,6 +246,9 @@ pub fn raster(pattern: &BlockPattern, symmetric: bool, background: Color32) -> C
     }
     image
 }
+
+/// A non-zero block is at least 1/`MIN_MARK_SHARE` of the sparsity image wide.
+pub const MIN_MARK_SHARE: usize = 45;
 
 /// The cost plot's series (cost, not its logarithm), for the CSV export.
 pub fn series(session: &PoseGraphSession) -> Vec<PlotSeries> {
@@ -197,7 +266,34 @@ mod tests {
     use super::*;
 
     #[test]
-    fn a_pattern_rasters_its_blocks_and_marks_fill_in() {
+    fn the_cost_line_starts_again_after_each_edit() {
+        let history = [
+            [0.0, 100.0],
+            [1.0, 10.0],
+            [1.0, 1000.0],
+            [2.0, 1.0],
+            [3.0, 0.0],
+        ];
+        let (segments, edits) = cost_segments(&history);
+        let expected = [vec![[0.0, 2.0], [1.0, 1.0]], vec![[1.0, 3.0], [2.0, 0.0]]];
+        assert_eq!(
+            segments.len(),
+            2,
+            "zero cost has no logarithm: {segments:?}"
+        );
+        for (got, want) in segments.iter().zip(&expected) {
+            assert_eq!(got.len(), want.len());
+            for (g, w) in got.iter().zip(want) {
+                assert!(g[0] == w[0] && (g[1] - w[1]).abs() < 1e-12, "{got:?}");
+            }
+        }
+        assert_eq!(edits.len(), 1);
+        assert!(edits[0][0] == 1.0 && (edits[0][1] - 3.0).abs() < 1e-12);
+        assert_eq!(cost_segments(&[]), (Vec::new(), Vec::new()));
+    }
+
+    #[test]
+    fn a_pattern_rasters_one_cell_per_vertex_block_and_marks_fill_in() {
         let pattern = BlockPattern {
             vertex_ids: vec![1, 2, 3],
             dims: vec![3, 3, 2],
@@ -205,11 +301,46 @@ mod tests {
             fill_in: vec![false, false, false, true, false],
         };
         let image = raster(&pattern, false, Color32::WHITE);
-        assert_eq!(image.size, [8, 8]);
+        // Three vertices: three cells of 120 pixels.
+        assert_eq!(image.size, [360, 360]);
         let count = |c: Color32| image.pixels.iter().filter(|p| **p == c).count();
-        assert_eq!(count(palette::BLUE), 9 + 9 + 6 + 4);
-        assert_eq!(count(palette::VERMILLION), 6);
-        assert_eq!(image.pixels[6 * 8 + 3], palette::VERMILLION);
-        assert_eq!(image.pixels[3 * 8 + 6], Color32::WHITE);
+        assert_eq!(count(palette::BLUE), 4 * 120 * 120);
+        assert_eq!(count(palette::VERMILLION), 120 * 120);
+        assert_eq!(image.pixels[(2 * 120 + 5) * 360 + 125], palette::VERMILLION);
+        assert_eq!(image.pixels[125 * 360 + 2 * 120 + 5], Color32::WHITE);
+    }
+
+    #[test]
+    fn a_single_loop_closure_of_a_200_pose_graph_is_a_visible_block() {
+        // A chain of 200 poses and one loop closure from pose 0 to pose 150.
+        let n = 200;
+        let mut entries: Vec<(usize, usize)> = (0..n).map(|k| (k, k)).collect();
+        entries.extend((1..n).flat_map(|k| [(k, k - 1), (k - 1, k)]));
+        entries.extend([(150, 0), (0, 150)]);
+        let pattern = BlockPattern {
+            vertex_ids: (0..n as u64).collect(),
+            dims: vec![3; n],
+            fill_in: vec![false; entries.len()],
+            entries,
+        };
+        let image = raster(&pattern, true, Color32::WHITE);
+        assert_eq!(image.size, [200, 200], "one pixel per vertex block");
+        let side = image.size[0];
+        let mark = side / MIN_MARK_SHARE;
+        assert_eq!(mark, 4);
+        // The loop closure: a mark x mark square of blue around (row 150, column 0).
+        let blue_near = |row: usize, col: usize| {
+            let mut n = 0;
+            for y in row.saturating_sub(4)..(row + 5).min(side) {
+                for x in col.saturating_sub(4)..(col + 5).min(side) {
+                    n += usize::from(image.pixels[y * side + x] == palette::BLUE);
+                }
+            }
+            n
+        };
+        assert_eq!(blue_near(150, 0), mark * mark);
+        assert_eq!(blue_near(0, 150), mark * mark, "and its mirror");
+        // Nothing between the band and the loop closure.
+        assert_eq!(image.pixels[100 * side + 20], Color32::WHITE);
     }
 }

@@ -7,34 +7,29 @@
 use super::method_color;
 use crate::export::PlotSeries;
 use crate::palette;
-use crate::widgets::plots::{line_width, title_ui};
-use egui_plot::{Bar, BarChart, Legend, Line, LineStyle, Plot, PlotPoints, Points};
+use crate::widgets::plots::{
+    Figure, KeyEntry, Mark, figure_plot, figure_ui, line_width, marker_radius,
+};
+use egui_plot::{Bar, BarChart, Line, LineStyle, PlotPoints, Points};
 use slamlab_sim::resampling_lab::LabRun;
 
 /// The two plots side by side.
 pub fn plots_ui(ui: &mut egui::Ui, run: &LabRun) {
-    let height = (ui.available_height() - 26.0).max(80.0);
+    let height = ui.available_height().max(80.0);
     let lab = run.lab();
     let methods = &run.scenario().methods;
     let m = run.particles();
     let focus = run.focus();
     let truth = palette::truth_color(ui.visuals().dark_mode);
-    let legend = || {
-        Legend::default()
-            .position(egui_plot::Corner::RightTop)
-            .text_style(egui::TextStyle::Small)
-            .background_alpha(0.55)
+    let method_keys = |mark: Mark| {
+        methods
+            .iter()
+            .map(|&method| KeyEntry::new(method.name(), method_color(method), mark))
+            .collect::<Vec<_>>()
     };
     ui.columns(2, |columns| {
         let ui = &mut columns[0];
         let expected = lab.expected_copies().get(focus).copied().unwrap_or(0.0);
-        title_ui(
-            ui,
-            &format!("Copies of particle {focus} (M·w = {expected:.2})"),
-            "How often each method gave this particle 0, 1, 2, … copies, over every resampling \
-             so far; the dots are the binomial law of multinomial resampling. Click a column \
-             of the row above to pick another particle.",
-        );
         // Up to the largest count seen or likely, so a histogram is never cut.
         let seen = methods
             .iter()
@@ -45,17 +40,32 @@ pub fn plots_ui(ui: &mut egui::Ui, run: &LabRun) {
             .max((expected + 4.0 * expected.sqrt() + 2.0).ceil() as usize)
             .min(m);
         let width = 0.8 / methods.len().max(1) as f64;
-        Plot::new("resampling_histogram")
-            .height(height)
-            .x_axis_label("copies")
-            .y_axis_label("fraction of resamplings")
-            .legend(legend())
-            .include_y(0.0)
-            .include_y(1.0)
-            .include_x(-0.5)
-            .include_x(k_max as f64 + 0.5)
-            .allow_scroll(false)
-            .show(ui, |plot_ui| {
+        let title = format!("Copies of particle {focus} (M·w = {expected:.2})");
+        let mut key = method_keys(Mark::Solid);
+        key.push(KeyEntry::new(
+            "binomial (multinomial's law)",
+            truth,
+            Mark::Dots,
+        ));
+        figure_ui(
+            ui,
+            &Figure {
+                title: &title,
+                hover: "How often each method gave this particle 0, 1, 2, … copies, over every \
+                        resampling so far; the dots are the binomial law of multinomial \
+                        resampling. Click a column of the row above to pick another particle.",
+                key,
+                y_label: "fraction of resamplings",
+                height,
+            },
+            |h, y| {
+                figure_plot("resampling_histogram", "copies", y, h)
+                    .include_y(0.0)
+                    .include_y(1.0)
+                    .include_x(-0.5)
+                    .include_x(k_max as f64 + 0.5)
+            },
+            |plot_ui| {
                 for (j, &method) in methods.iter().enumerate() {
                     let histogram = lab.histogram(method, focus);
                     let total: u64 = histogram.iter().sum();
@@ -79,32 +89,41 @@ pub fn plots_ui(ui: &mut egui::Ui, run: &LabRun) {
                 let binomial: Vec<[f64; 2]> = (0..=k_max)
                     .map(|k| [k as f64, run.binomial_pmf(focus, k)])
                     .collect();
+                let radius = marker_radius(3.0, plot_ui.response().rect.height());
                 plot_ui.points(
                     Points::new("binomial (multinomial's law)", PlotPoints::new(binomial))
                         .color(truth)
-                        .radius(3.0),
+                        .radius(radius),
                 );
-            });
+            },
+        );
 
         let ui = &mut columns[1];
-        title_ui(
+        let mut key = vec![
+            KeyEntry::new("M w (1 − w): multinomial", truth, Mark::Dashed),
+            KeyEntry::new("f (1 − f): least possible", truth, Mark::Dotted),
+        ];
+        key.extend(method_keys(Mark::Solid));
+        figure_ui(
             ui,
-            "Copy-count variance per particle",
-            "The variance of each particle's copy count over every resampling so far, per \
-             method: the noise resampling adds. Dashed: multinomial's binomial variance \
-             M w (1 − w). Dotted: the least any unbiased method can give, f (1 − f) with f \
-             the fractional part of M w; low-variance resampling reaches it.",
-        );
-        Plot::new("resampling_variance")
-            .height(height)
-            .x_axis_label("particle")
-            .y_axis_label("variance of copies")
-            .legend(legend())
-            .include_y(0.0)
-            .include_x(0.0)
-            .include_x(m.saturating_sub(1) as f64)
-            .allow_scroll(false)
-            .show(ui, |plot_ui| {
+            &Figure {
+                title: "Copy-count variance per particle",
+                hover: "The variance of each particle's copy count over every resampling so \
+                        far, per method: the noise resampling adds. Dashed: multinomial's \
+                        binomial variance M w (1 − w). Dotted: the least any unbiased method \
+                        can give, f (1 − f) with f the fractional part of M w; low-variance \
+                        resampling reaches it.",
+                key,
+                y_label: "variance of copies",
+                height,
+            },
+            |h, y| {
+                figure_plot("resampling_variance", "particle", y, h)
+                    .include_y(0.0)
+                    .include_x(0.0)
+                    .include_x(m.saturating_sub(1) as f64)
+            },
+            |plot_ui| {
                 let binomial: Vec<[f64; 2]> = (0..m)
                     .map(|i| [i as f64, run.multinomial_variance_of(i)])
                     .collect();
@@ -139,7 +158,8 @@ pub fn plots_ui(ui: &mut egui::Ui, run: &LabRun) {
                             .width(line_width(j.min(2), 1.0)),
                     );
                 }
-            });
+            },
+        );
     });
 }
 

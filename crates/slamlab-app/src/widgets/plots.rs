@@ -1,11 +1,17 @@
-//! Plot helpers every lesson shares: a time axis with a 1-2-5 grid and honest
-//! labels, titles with hover help, thinning of long series, line widths that keep
-//! coinciding filters visible, and series defined once for both the plot and the
-//! CSV export ([`Styled`]).
+//! Plot helpers every lesson shares: axes with a 1-2-5 grid and honest labels at
+//! every size, titles with hover help, a key on a line above the plot (never over
+//! its data), plots that stay where they are put (no pan or zoom a student must undo),
+//! thinning of long series, line widths that keep coinciding filters visible, and
+//! series defined once for both the plot and the CSV export ([`Styled`]).
+//!
+//! [`figure_ui`] draws one plot the way every lesson should: title, key, axes with
+//! values, the y-axis name moved into the title when the plot is too short for it.
+//! Each drawn plot and key leaves its rectangles in [`figure_records`], for the
+//! shell's render tests.
 
 use crate::export::PlotSeries;
 use egui::Color32;
-use egui_plot::{Legend, Line, LineStyle, Plot, PlotPoints, PlotUi, Points};
+use egui_plot::{Line, LineStyle, Plot, PlotPoints, PlotUi, Points};
 use slamlab_core::math;
 
 /// How a series is drawn.
@@ -17,6 +23,8 @@ pub enum Mark {
     Dashed,
     /// A dashed ±bound: the series holds the bound, drawn at +y and at −y.
     DashedPlusMinus,
+    /// A dotted line (a second bound beside a dashed one).
+    Dotted,
     /// Separate points (one per event, such as an update).
     Dots,
 }
@@ -47,11 +55,20 @@ impl Styled {
     }
 }
 
-/// Draws, in order, every series of `all` that belongs to the plot titled `plot`,
-/// thinned for the screen. Series without points are left out (no legend entry
-/// for nothing).
+/// Draws every series of `all` that belongs to the plot titled `plot`, thinned for
+/// the screen: first the dashed ones (bounds), then the lines, then the markers, each
+/// group in order, so that a bound never hides the curve it bounds. Series without
+/// points are left out.
 pub fn draw_series(plot_ui: &mut PlotUi<'_>, all: &[Styled], plot: &str) {
-    for s in all.iter().filter(|s| s.data.plot == plot) {
+    let plot_height = plot_ui.response().rect.height();
+    let layer = |mark: Mark| match mark {
+        Mark::Dashed | Mark::DashedPlusMinus | Mark::Dotted => 0,
+        Mark::Solid => 1,
+        Mark::Dots => 2,
+    };
+    let mut ordered: Vec<&Styled> = all.iter().filter(|s| s.data.plot == plot).collect();
+    ordered.sort_by_key(|s| layer(s.mark));
+    for s in ordered {
         let points = thin(s.data.points.clone());
         if points.is_empty() {
             continue;
@@ -69,23 +86,35 @@ pub fn draw_series(plot_ui: &mut PlotUi<'_>, all: &[Styled], plot: &str) {
                     );
                 }
             }
-            Mark::Solid | Mark::Dashed => {
+            Mark::Solid | Mark::Dashed | Mark::Dotted => {
                 let line = Line::new(name, PlotPoints::new(points))
                     .color(s.color)
                     .width(s.width);
-                plot_ui.line(if s.mark == Mark::Dashed {
-                    line.style(LineStyle::dashed_dense())
-                } else {
-                    line
+                plot_ui.line(match s.mark {
+                    Mark::Dashed => line.style(LineStyle::dashed_dense()),
+                    Mark::Dotted => line.style(LineStyle::dotted_dense()),
+                    _ => line,
                 });
             }
             Mark::Dots => plot_ui.points(
                 Points::new(name, PlotPoints::new(points))
                     .color(s.color)
-                    .radius(s.width),
+                    .radius(marker_radius(s.width, plot_height)),
             ),
         }
     }
+}
+
+/// A marker's radius on a plot `plot_height` points tall: `radius` on a plot of 150
+/// points or more, smaller on a smaller one (down to 40%), so that events stay
+/// separate dots instead of a blob.
+pub fn marker_radius(radius: f32, plot_height: f32) -> f32 {
+    let scale = if plot_height.is_finite() {
+        (plot_height / 150.0).clamp(0.4, 1.0)
+    } else {
+        1.0
+    };
+    (radius * scale).max(0.8)
 }
 
 /// The data of every series, for the CSV export.
@@ -135,12 +164,12 @@ pub fn title_ui(ui: &mut egui::Ui, title: &str, hover: &str) {
         .on_hover_text(hover);
 }
 
-/// Grid steps for the time axis, `[minor, labelled, major]`, on a 1-2-5 sequence:
-/// `base_step` is the value 8 screen points span (egui_plot's finest grid), and tick
-/// labels need about 60 points (the x axis's minimum label spacing). The default
-/// powers-of-ten grid labels only 0 on a narrow plot of a short run.
-pub fn time_axis_steps(base_step: f64) -> [f64; 3] {
-    let wanted = base_step.abs() * 60.0 / 8.0;
+/// Grid steps `[minor, labelled, major]` on a 1-2-5 sequence for an axis whose
+/// labels need `label_points` screen points between them: `base_step` is the value
+/// 8 screen points span (egui_plot's finest grid). egui_plot's default grid steps by
+/// powers of ten, which on a short plot labels only 0.
+pub fn nice_axis_steps(base_step: f64, label_points: f64) -> [f64; 3] {
+    let wanted = base_step.abs() * label_points / 8.0;
     if !(wanted.is_finite() && wanted > 0.0) {
         return [1.0, 2.0, 10.0];
     }
@@ -154,6 +183,18 @@ pub fn time_axis_steps(base_step: f64) -> [f64; 3] {
     [minor * decade, label * decade, major * decade]
 }
 
+/// Grid steps for the time axis, `[minor, labelled, major]`, on a 1-2-5 sequence:
+/// tick labels need about 60 points (the x axis's minimum label spacing).
+pub fn time_axis_steps(base_step: f64) -> [f64; 3] {
+    nice_axis_steps(base_step, X_LABEL_POINTS)
+}
+
+/// Screen points between two labelled marks of an x axis (a label is a few digits wide).
+pub const X_LABEL_POINTS: f64 = 60.0;
+/// Screen points between two labelled marks of a y axis (a label is one line high;
+/// egui_plot shows y labels at full strength from 30 points apart).
+pub const Y_LABEL_POINTS: f64 = 30.0;
+
 /// The label of a time-axis grid mark: as many decimals as its step needs (a 0.5 s
 /// mark reads "1.5", not "2"), and none before the run starts.
 pub fn time_axis_label(mark: egui_plot::GridMark) -> String {
@@ -162,48 +203,485 @@ pub fn time_axis_label(mark: egui_plot::GridMark) -> String {
     {
         return String::new();
     }
-    let decimals = (-math::log10(mark.step_size) - 1e-9).ceil().clamp(0.0, 6.0) as usize;
-    format!("{:.*}", decimals, mark.value.max(0.0))
+    value_axis_label(egui_plot::GridMark {
+        value: mark.value.max(0.0),
+        step_size: mark.step_size,
+    })
 }
 
-/// A plot over time: the time axis with its 1-2-5 grid and labels, and the legend in
-/// the top left corner.
-pub fn time_plot<'a>(id: &str, y_label: &str, height: f32) -> Plot<'a> {
-    time_plot_without_legend(id, y_label, height).legend(
-        Legend::default()
-            .position(egui_plot::Corner::LeftTop)
-            .text_style(egui::TextStyle::Small)
-            .background_alpha(0.55),
-    )
+/// The label of a value-axis grid mark: as many decimals as its step needs (0.05 m
+/// steps read "0.15", 2 m steps "4"), never "-0".
+pub fn value_axis_label(mark: egui_plot::GridMark) -> String {
+    if !(mark.value.is_finite() && mark.step_size.is_finite() && mark.step_size > 0.0) {
+        return String::new();
+    }
+    let decimals = decimals_of(mark.step_size);
+    // A mark within a millionth of a step of zero is zero (no "-0.00").
+    let value = if mark.value.abs() < 1e-6 * mark.step_size {
+        0.0
+    } else {
+        mark.value
+    };
+    format!("{:.*}", decimals, value)
 }
 
-/// One line above a row of plots that names each filter's colour and what solid and
-/// dashed mean, instead of a legend inside every plot over the data.
-pub fn series_key_ui(ui: &mut egui::Ui, filters: &[(String, egui::Color32)], styles: &str) {
-    ui.horizontal_wrapped(|ui| {
-        for (name, color) in filters {
-            ui.label(
-                egui::RichText::new(format!("— {name}"))
-                    .color(*color)
-                    .strong(),
-            );
-        }
-        ui.label(styles);
-    });
-}
-
-/// [`time_plot`] without a legend (the row's [`series_key_ui`] names the series).
-pub fn time_plot_without_legend<'a>(id: &str, y_label: &str, height: f32) -> Plot<'a> {
+/// A plot that shows its data and stays put: a 1-2-5 grid with labelled values on
+/// both axes, the axes named, no legend over the data (the key is a line above:
+/// [`key_ui`]), and no pan, zoom or axis drag that a student would have to undo.
+/// `height` is the whole plot's (axes included); the y values are spaced to it
+/// ([`value_axis_marks`]) so that even a short plot shows at least two.
+pub fn figure_plot<'a>(id: &str, x_label: &str, y_label: &str, height: f32) -> Plot<'a> {
+    let y_axis = egui_plot::AxisHints::new_y()
+        .label(egui::RichText::new(y_label).small())
+        .formatter(|mark, _range| value_axis_label(mark))
+        .tick_label_font(egui::FontId::proportional(TICK_FONT_SIZE))
+        // Every mark the spacer gives is a labelled value, at full strength.
+        .label_spacing(LEAST_Y_LABEL_POINTS - 1.0..=LEAST_Y_LABEL_POINTS);
+    let x_axis = egui_plot::AxisHints::new_x()
+        .label(egui::RichText::new(x_label).small())
+        .formatter(|mark, _range| value_axis_label(mark))
+        .tick_label_font(egui::FontId::proportional(TICK_FONT_SIZE));
     Plot::new(id)
         .height(height)
-        .x_axis_label("time (s)")
-        .y_axis_label(y_label.to_owned())
+        .custom_x_axes(vec![x_axis])
+        .custom_y_axes(vec![y_axis])
+        .x_grid_spacer(egui_plot::uniform_grid_spacer(|input| {
+            nice_axis_steps(input.base_step_size, X_LABEL_POINTS)
+        }))
+        .y_grid_spacer(|input| {
+            value_axis_marks(
+                input.bounds,
+                input.base_step_size,
+                Y_LABEL_POINTS,
+                f64::from(LEAST_Y_LABEL_POINTS),
+            )
+        })
+        .allow_drag(false)
+        .allow_zoom(false)
+        .allow_scroll(false)
+        .allow_boxed_zoom(false)
+        .allow_axis_zoom_drag(false)
+        .allow_double_click_reset(false)
+}
+
+/// The size of tick labels, points (a little under egui's body text, so that values
+/// fit a short plot).
+pub const TICK_FONT_SIZE: f32 = 11.0;
+
+/// The least room between two labelled y values, points (one tick label's height).
+pub const LEAST_Y_LABEL_POINTS: f32 = 13.0;
+
+/// The labelled marks of a value axis showing `bounds`, where `base_step` is the
+/// value 8 screen points span: multiples of the 1-2-5 step that puts them
+/// `preferred` points apart, or of a smaller one (down to `least` points apart) when
+/// that leaves fewer than two values on the axis (a short plot, a range such as
+/// −4.6..4.6 where steps of 5 label only 0). Only labelled values get grid lines.
+pub fn value_axis_marks(
+    bounds: (f64, f64),
+    base_step: f64,
+    preferred: f64,
+    least: f64,
+) -> Vec<egui_plot::GridMark> {
+    let (lo, hi) = (bounds.0.min(bounds.1), bounds.0.max(bounds.1));
+    let points_per_value = 8.0 / base_step.abs();
+    if !(lo.is_finite() && hi.is_finite() && points_per_value.is_finite() && hi > lo) {
+        return Vec::new();
+    }
+    let count = |step: f64| ((hi / step).floor() - (lo / step).ceil() + 1.0).max(0.0);
+    let mut step = nice_axis_steps(base_step, preferred)[1];
+    while count(step) < 2.0 {
+        let smaller = step_down(step);
+        if smaller * points_per_value < least {
+            break;
+        }
+        step = smaller;
+    }
+    let first = (lo / step).ceil();
+    let last = (hi / step).floor();
+    if !(last - first < 1000.0) {
+        return Vec::new();
+    }
+    let mut marks = Vec::new();
+    let mut k = first;
+    while k <= last {
+        marks.push(egui_plot::GridMark {
+            value: k * step,
+            step_size: step,
+        });
+        k += 1.0;
+    }
+    marks
+}
+
+/// The next smaller step of the 1-2-2.5-5 ladder: 5 to 2.5, 2.5 to 2, 2 to 1, 1 to 0.5.
+fn step_down(step: f64) -> f64 {
+    let decade = math::powf(10.0, math::log10(step).floor());
+    let mantissa = (step / decade * 10.0).round() / 10.0;
+    if mantissa >= 5.0 {
+        2.5 * decade
+    } else if mantissa >= 2.5 {
+        2.0 * decade
+    } else if mantissa >= 2.0 {
+        decade
+    } else {
+        0.5 * decade
+    }
+}
+
+/// The decimals a multiple of `step` needs: 0 for 2, 1 for 0.5 and 2.5, 2 for 0.05.
+fn decimals_of(step: f64) -> usize {
+    (0..6)
+        .find(|&d| {
+            let scaled = step * math::powf(10.0, d as f64);
+            (scaled - scaled.round()).abs() < 1e-6 * scaled.abs().max(1.0)
+        })
+        .unwrap_or(6)
+}
+
+/// A plot over time: [`figure_plot`] with the time axis's 1-2-5 grid and labels from
+/// 0 s. It has no legend: draw its key above with [`key_ui`] (or a row's
+/// [`series_key_ui`]).
+pub fn time_plot<'a>(id: &str, y_label: &str, height: f32) -> Plot<'a> {
+    figure_plot(id, "time (s)", y_label, height)
         .x_grid_spacer(egui_plot::uniform_grid_spacer(|input| {
             time_axis_steps(input.base_step_size)
         }))
         .x_axis_formatter(|mark, _range| time_axis_label(mark))
         .include_x(0.0)
-        .allow_scroll(false)
+}
+
+/// [`time_plot`] (which has no legend either; kept for the lessons that name it).
+pub fn time_plot_without_legend<'a>(id: &str, y_label: &str, height: f32) -> Plot<'a> {
+    time_plot(id, y_label, height)
+}
+
+/// One entry of a plot's key: a name, its colour and how it is drawn.
+#[derive(Clone, Debug, PartialEq)]
+pub struct KeyEntry {
+    /// What the entry names.
+    pub name: String,
+    /// Its colour.
+    pub color: Color32,
+    /// Line, dashes or markers, drawn as a small sample before the name.
+    pub mark: Mark,
+}
+
+impl KeyEntry {
+    /// An entry named `name`, drawn as `mark` in `color`.
+    pub fn new(name: impl Into<String>, color: Color32, mark: Mark) -> Self {
+        Self {
+            name: name.into(),
+            color,
+            mark,
+        }
+    }
+}
+
+/// The key of the plot titled `plot`: one entry per series with points, in order.
+pub fn key_entries(all: &[Styled], plot: &str) -> Vec<KeyEntry> {
+    all.iter()
+        .filter(|s| s.data.plot == plot && !s.data.points.is_empty())
+        .map(|s| KeyEntry::new(s.data.series.clone(), s.color, s.mark))
+        .collect()
+}
+
+/// The key of the plot titled `plot` by style only, for a row of plots whose
+/// colours a [`series_key_ui`] line above the row names: one entry per distinct
+/// series name without its first word (the filter's: "EKF error" and "UKF error"
+/// are one "error" entry) and mark, drawn in `color` (the text colour).
+pub fn style_entries(all: &[Styled], plot: &str, color: Color32) -> Vec<KeyEntry> {
+    let mut out: Vec<KeyEntry> = Vec::new();
+    for s in all
+        .iter()
+        .filter(|s| s.data.plot == plot && !s.data.points.is_empty())
+    {
+        let name = s
+            .data
+            .series
+            .split_once(' ')
+            .map_or(s.data.series.as_str(), |(_, rest)| rest);
+        let entry = KeyEntry::new(name, color, s.mark);
+        if !out.contains(&entry) {
+            out.push(entry);
+        }
+    }
+    out
+}
+
+/// Draws a key on a line (wrapped when needed) above a plot: a sample of each
+/// entry's line, dashes or marker, then its name. Returns the rectangle it took
+/// (recorded in [`figure_records`]).
+pub fn key_ui(ui: &mut egui::Ui, entries: &[KeyEntry]) -> egui::Rect {
+    if entries.is_empty() {
+        return egui::Rect::NOTHING;
+    }
+    let response = ui
+        .horizontal_wrapped(|ui| {
+            ui.spacing_mut().item_spacing.x = 4.0;
+            for entry in entries {
+                mark_sample_ui(ui, entry.color, entry.mark);
+                ui.label(egui::RichText::new(&entry.name).small());
+                ui.add_space(6.0);
+            }
+        })
+        .response;
+    record(
+        ui.ctx(),
+        FigureRecord {
+            title: String::new(),
+            data: None,
+            key: Some(response.rect),
+        },
+    );
+    response.rect
+}
+
+/// A small sample of a series' look: a line, dashes or a marker.
+fn mark_sample_ui(ui: &mut egui::Ui, color: Color32, mark: Mark) {
+    let height = ui.text_style_height(&egui::TextStyle::Small);
+    let (rect, _) = ui.allocate_exact_size(egui::vec2(18.0, height), egui::Sense::hover());
+    let painter = ui.painter_at(rect);
+    let y = rect.center().y;
+    let stroke = egui::Stroke::new(1.8, color);
+    match mark {
+        Mark::Solid => {
+            painter.line_segment(
+                [egui::pos2(rect.left(), y), egui::pos2(rect.right(), y)],
+                stroke,
+            );
+        }
+        Mark::Dashed | Mark::DashedPlusMinus => {
+            painter.extend(egui::Shape::dashed_line(
+                &[egui::pos2(rect.left(), y), egui::pos2(rect.right(), y)],
+                stroke,
+                4.0,
+                3.0,
+            ));
+        }
+        Mark::Dotted => {
+            painter.extend(egui::Shape::dotted_line(
+                &[egui::pos2(rect.left(), y), egui::pos2(rect.right(), y)],
+                color,
+                4.0,
+                1.0,
+            ));
+        }
+        Mark::Dots => {
+            painter.circle_filled(rect.center(), 2.5, color);
+        }
+    }
+}
+
+/// One line above a row of plots that names each filter's colour and what solid and
+/// dashed mean, instead of a legend inside every plot over the data.
+pub fn series_key_ui(ui: &mut egui::Ui, filters: &[(String, egui::Color32)], styles: &str) {
+    let response = ui
+        .horizontal_wrapped(|ui| {
+            for (name, color) in filters {
+                ui.label(
+                    egui::RichText::new(format!("— {name}"))
+                        .color(*color)
+                        .strong(),
+                );
+            }
+            if !styles.is_empty() {
+                ui.label(egui::RichText::new(styles).small());
+            }
+        })
+        .response;
+    record(
+        ui.ctx(),
+        FigureRecord {
+            title: String::new(),
+            data: None,
+            key: Some(response.rect),
+        },
+    );
+}
+
+/// A plot as a lesson describes it to [`figure_ui`].
+#[derive(Clone, Debug)]
+pub struct Figure<'s> {
+    /// The title above it (and the key of its series in [`Styled`] lists).
+    pub title: &'s str,
+    /// What it shows, on hover over the title.
+    pub hover: &'s str,
+    /// Its key, drawn on a line between the title and the plot.
+    pub key: Vec<KeyEntry>,
+    /// The y axis's name with its unit.
+    pub y_label: &'s str,
+    /// The whole height it may take (title, key and plot), points.
+    pub height: f32,
+}
+
+/// The least height of a plot's data area that still holds two labelled y values.
+pub const MIN_PLOT_HEIGHT: f32 = 60.0;
+
+/// Draws `figure`: its title (with the y axis's name when the plot is too short to
+/// write it beside the axis), its key on a line, then `plot` (made from the height
+/// left and the y label to use, e.g. by [`time_plot`]) with `add` drawing the data.
+/// Records the plot's data rectangle and key in [`figure_records`].
+pub fn figure_ui<'a, R>(
+    ui: &mut egui::Ui,
+    figure: &Figure<'_>,
+    plot: impl FnOnce(f32, &str) -> Plot<'a>,
+    add: impl FnOnce(&mut PlotUi<'a>) -> R + 'a,
+) -> egui_plot::PlotResponse<R> {
+    let top = ui.cursor().top();
+    // Below the title and key: the x axis (labels and name) takes about 34 points.
+    let estimated_plot = figure.height - 2.0 * ui.text_style_height(&egui::TextStyle::Body) - 34.0;
+    let fits = y_label_fits(ui, figure.y_label, estimated_plot);
+    let title = match unit_of(figure.y_label).filter(|_| !fits) {
+        // Too short to name the axis beside it: the title carries the unit.
+        Some(unit) => format!("{} ({unit})", figure.title),
+        None => figure.title.to_owned(),
+    };
+    // The key beside the title when both fit on one line, else on a line of its own.
+    let title_width = text_width(ui, &title, egui::TextStyle::Body) + 12.0;
+    if title_width + key_width(ui, &figure.key) <= ui.available_width() {
+        ui.horizontal(|ui| {
+            title_ui(ui, &title, figure.hover);
+            key_ui(ui, &figure.key);
+        });
+    } else {
+        title_ui(ui, &title, figure.hover);
+        key_ui(ui, &figure.key);
+    }
+    let used = ui.cursor().top() - top;
+    let height = (figure.height - used).max(MIN_PLOT_HEIGHT);
+    let response = plot(height, if fits { figure.y_label } else { "" }).show(ui, add);
+    edge_values_ui(ui, &response);
+    record(
+        ui.ctx(),
+        FigureRecord {
+            title: figure.title.to_owned(),
+            data: Some(response.response.rect),
+            key: None,
+        },
+    );
+    response
+}
+
+/// The width of `text` in `style`, points.
+fn text_width(ui: &egui::Ui, text: &str, style: egui::TextStyle) -> f32 {
+    let font = style.resolve(ui.style());
+    ui.painter()
+        .layout_no_wrap(text.to_owned(), font, Color32::WHITE)
+        .size()
+        .x
+}
+
+/// The width [`key_ui`] takes on one line, points.
+fn key_width(ui: &egui::Ui, entries: &[KeyEntry]) -> f32 {
+    entries
+        .iter()
+        .map(|e| 18.0 + 4.0 + text_width(ui, &e.name, egui::TextStyle::Small) + 4.0 + 6.0 + 4.0)
+        .sum()
+}
+
+/// The unit of an axis name, the text in its last parentheses: "m" of "error (m)".
+pub fn unit_of(axis: &str) -> Option<&str> {
+    let open = axis.rfind('(')?;
+    let close = open + axis[open..].find(')')?;
+    let unit = axis[open + 1..close].trim();
+    (!unit.is_empty()).then_some(unit)
+}
+
+/// Where the plot is too short for two labelled y values (a value axis's marks
+/// need [`LEAST_Y_LABEL_POINTS`] between them), writes the values of its top and
+/// bottom edges beside the axis instead, so that its scale can still be read.
+fn edge_values_ui<R>(ui: &egui::Ui, response: &egui_plot::PlotResponse<R>) {
+    let rect = response.response.rect;
+    let bounds = response.transform.bounds();
+    let (lo, hi) = (bounds.min()[1], bounds.max()[1]);
+    let base = (hi - lo) / f64::from(rect.height().max(1.0)) * 8.0;
+    let marks = value_axis_marks(
+        (lo, hi),
+        base,
+        Y_LABEL_POINTS,
+        f64::from(LEAST_Y_LABEL_POINTS),
+    );
+    if marks.len() >= 2 || !(lo.is_finite() && hi.is_finite()) {
+        return;
+    }
+    let painter = ui.painter();
+    let font = egui::FontId::proportional(TICK_FONT_SIZE);
+    let color = ui.visuals().text_color();
+    for (value, y, align) in [
+        (hi, rect.top(), egui::Align2::RIGHT_TOP),
+        (lo, rect.bottom(), egui::Align2::RIGHT_BOTTOM),
+    ] {
+        painter.text(
+            egui::pos2(rect.left() - 3.0, y),
+            align,
+            two_significant(value),
+            font.clone(),
+            color,
+        );
+    }
+}
+
+/// `value` with two significant digits: 0.45, 12, 1300.
+pub fn two_significant(value: f64) -> String {
+    if !value.is_finite() {
+        return String::new();
+    }
+    if value.abs() < 1e-12 {
+        return "0".to_owned();
+    }
+    let magnitude = math::log10(value.abs()).floor();
+    let decimals = (1.0 - magnitude).clamp(0.0, 6.0) as usize;
+    format!("{value:.decimals$}")
+}
+
+/// Does the y axis's name, written along the axis in small text, fit a plot of
+/// `plot_height` points?
+pub fn y_label_fits(ui: &egui::Ui, y_label: &str, plot_height: f32) -> bool {
+    let font = egui::TextStyle::Small.resolve(ui.style());
+    let width = ui
+        .painter()
+        .layout_no_wrap(y_label.to_owned(), font, Color32::WHITE)
+        .size()
+        .x;
+    width + 8.0 <= plot_height
+}
+
+/// Where a plot or a plot's key was drawn in the last frame (for the shell's render
+/// tests: tick labels in the axis strip, no key over any plot's data).
+#[derive(Clone, Debug, PartialEq)]
+pub struct FigureRecord {
+    /// The plot's title (empty for a key).
+    pub title: String,
+    /// The plot's data rectangle (the area inside its axes).
+    pub data: Option<egui::Rect>,
+    /// A key's rectangle.
+    pub key: Option<egui::Rect>,
+}
+
+fn records_id() -> egui::Id {
+    egui::Id::unique("slamlab_figure_records")
+}
+
+/// Records `record` for this pass.
+pub fn record(ctx: &egui::Context, record: FigureRecord) {
+    let pass = ctx.cumulative_pass_nr();
+    ctx.data_mut(|d| {
+        let entry = d.get_temp_mut_or_default::<(u64, Vec<FigureRecord>)>(records_id());
+        if entry.0 != pass {
+            *entry = (pass, Vec::new());
+        }
+        entry.1.push(record);
+    });
+}
+
+/// The plots and keys drawn in the latest pass (this one while it draws, the one
+/// that just ended between passes).
+pub fn figure_records(ctx: &egui::Context) -> Vec<FigureRecord> {
+    let pass = ctx.cumulative_pass_nr();
+    ctx.data(|d| d.get_temp::<(u64, Vec<FigureRecord>)>(records_id()))
+        .filter(|(p, _)| p + 1 >= pass)
+        .map(|(_, records)| records)
+        .unwrap_or_default()
 }
 
 #[cfg(test)]
@@ -232,6 +710,140 @@ mod tests {
         assert_eq!(plot_values(&all, "C").count(), 0);
         let names: Vec<String> = series_data(all).into_iter().map(|s| s.series).collect();
         assert_eq!(names, ["a1", "b1", "a2"], "every series, in order");
+    }
+
+    #[test]
+    fn every_value_axis_shows_two_values_or_more_when_they_fit() {
+        // (bounds, data height in points): short plots of an 800 x 500 window, a
+        // symmetric ±2σ range, a tall plot.
+        for ((lo, hi), height) in [
+            ((0.0, 0.35), 43.0),
+            ((0.0, 0.012), 43.0),
+            ((-4.6, 4.6), 52.0),
+            ((-10.4, 10.4), 40.0),
+            ((0.0, 9.5), 70.0),
+            ((0.0, 1234.0), 270.0),
+            ((2.36, 3.72), 150.0),
+        ] {
+            let base = (hi - lo) / height * 8.0;
+            let marks = value_axis_marks((lo, hi), base, 30.0, 13.0);
+            assert!(marks.len() >= 2, "{lo}..{hi} on {height}: {marks:?}");
+            let step = marks[1].value - marks[0].value;
+            assert!(
+                step / (hi - lo) * height >= 13.0 - 1e-9,
+                "{lo}..{hi}: {step}"
+            );
+            for m in &marks {
+                assert!(m.value >= lo - 1e-12 && m.value <= hi + 1e-12);
+                assert!((m.value / m.step_size - (m.value / m.step_size).round()).abs() < 1e-9);
+            }
+        }
+        // Steps of 5 would label only 0 of -4.6..4.6 on 52 points: steps of 2.5 fit three.
+        let marks = value_axis_marks((-4.6, 4.6), 9.2 / 52.0 * 8.0, 30.0, 13.0);
+        assert_eq!(
+            marks.iter().map(|m| m.value).collect::<Vec<_>>(),
+            [-2.5, 0.0, 2.5]
+        );
+        let label = |value, step_size| value_axis_label(egui_plot::GridMark { value, step_size });
+        assert_eq!(label(2.5, 2.5), "2.5");
+        assert_eq!(label(-25.0, 25.0), "-25");
+        assert_eq!(step_down(2.5), 2.0);
+        // Where two values cannot fit, one; nothing for nonsense.
+        assert_eq!(value_axis_marks((0.0, 1.0), 1.0, 30.0, 13.0).len(), 1);
+        assert!(value_axis_marks((f64::NAN, 1.0), 0.1, 30.0, 13.0).is_empty());
+        assert!(value_axis_marks((1.0, 1.0), 0.1, 30.0, 13.0).is_empty());
+        assert_eq!(step_down(5.0), 2.5);
+        assert_eq!(step_down(0.2), 0.1);
+        assert_eq!(step_down(1.0), 0.5);
+    }
+
+    #[test]
+    fn value_labels_carry_the_decimals_of_their_step_and_never_read_minus_zero() {
+        let label = |value, step_size| value_axis_label(egui_plot::GridMark { value, step_size });
+        assert_eq!(label(0.15, 0.05), "0.15");
+        assert_eq!(label(-0.2, 0.1), "-0.2");
+        assert_eq!(label(-1e-17, 0.1), "0.0");
+        assert_eq!(label(4.0, 2.0), "4");
+        assert_eq!(label(2000.0, 500.0), "2000");
+        assert_eq!(label(f64::NAN, 1.0), "");
+    }
+
+    #[test]
+    fn edge_values_keep_two_significant_digits() {
+        assert_eq!(two_significant(0.4531), "0.45");
+        assert_eq!(two_significant(-0.04531), "-0.045");
+        assert_eq!(two_significant(12.3), "12");
+        assert_eq!(two_significant(1300.0), "1300");
+        assert_eq!(two_significant(0.0), "0");
+        assert_eq!(two_significant(f64::NAN), "");
+    }
+
+    #[test]
+    fn the_unit_of_an_axis_name_is_its_last_parentheses() {
+        assert_eq!(unit_of("RMS error (m)"), Some("m"));
+        assert_eq!(unit_of("yaw error (rad)"), Some("rad"));
+        assert_eq!(unit_of("NEES"), None);
+        assert_eq!(unit_of("odd ( )"), None);
+        assert_eq!(unit_of("broken (m"), None);
+    }
+
+    #[test]
+    fn markers_shrink_on_short_plots_but_stay_visible() {
+        assert_eq!(marker_radius(2.0, 300.0), 2.0);
+        assert_eq!(marker_radius(2.0, 75.0), 1.0);
+        assert_eq!(marker_radius(1.0, 10.0), 0.8);
+        assert_eq!(marker_radius(2.0, f32::NAN), 2.0);
+    }
+
+    #[test]
+    fn a_plots_key_lists_its_series_with_points_in_order() {
+        let series = |plot: &str, name: &str, points: Vec<[f64; 2]>, mark| {
+            Styled::new(
+                PlotSeries::new(plot, "t", "y", name, points),
+                Color32::RED,
+                mark,
+                1.0,
+            )
+        };
+        let all = vec![
+            series("A", "error", vec![[0.0, 1.0]], Mark::Solid),
+            series("B", "other", vec![[0.0, 1.0]], Mark::Solid),
+            series("A", "bound", vec![[0.0, 2.0]], Mark::Dashed),
+            series("A", "empty", Vec::new(), Mark::Dots),
+        ];
+        let key = key_entries(&all, "A");
+        assert_eq!(
+            key,
+            vec![
+                KeyEntry::new("error", Color32::RED, Mark::Solid),
+                KeyEntry::new("bound", Color32::RED, Mark::Dashed),
+            ]
+        );
+    }
+
+    #[test]
+    fn a_rows_plots_name_their_styles_once_for_every_filter() {
+        let series = |name: &str, mark| {
+            Styled::new(
+                PlotSeries::new("A", "t", "y", name, vec![[0.0, 1.0]]),
+                Color32::RED,
+                mark,
+                1.0,
+            )
+        };
+        let all = vec![
+            series("EKF error", Mark::Solid),
+            series("EKF 2σ bound", Mark::Dashed),
+            series("UKF error", Mark::Solid),
+            series("UKF 2σ bound", Mark::Dashed),
+        ];
+        assert_eq!(
+            style_entries(&all, "A", Color32::GRAY),
+            vec![
+                KeyEntry::new("error", Color32::GRAY, Mark::Solid),
+                KeyEntry::new("2σ bound", Color32::GRAY, Mark::Dashed),
+            ]
+        );
     }
 
     #[test]

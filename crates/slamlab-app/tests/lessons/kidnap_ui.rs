@@ -382,3 +382,86 @@ fn a_lone_image_asks_for_its_resolution() {
         "{note}"
     );
 }
+
+#[test]
+fn figure_keys_hold_after_a_map_read_from_the_url() {
+    use slamlab_app::lesson::Lesson as _;
+    let yaml = concat!(env!("CARGO_MANIFEST_DIR"), "/../../assets/maps/maze.yaml");
+    let open = |extra: &str| {
+        let mut h = harness(&format!(
+            "lesson=kidnap&particles=200&seed=1&kidnap-at=40&map={yaml}{extra}"
+        ));
+        // The YAML, then its image, then the run on the map read.
+        for _ in 0..6 {
+            h.step();
+        }
+        h
+    };
+    let mut plain = open("");
+    let mut shared = open("&tick=5&zoom=2&run=1");
+    let l = lesson(&shared);
+    assert_eq!(l.map_name(), "maze.yaml", "note: {:?}", l.note());
+    assert!(
+        l.time().running,
+        "run=1 holds for the run on the map read from the URL"
+    );
+    assert!(
+        l.sim().run().tick_count() >= 5,
+        "tick=5 holds: {}",
+        l.sim().run().tick_count()
+    );
+    assert_eq!(l.sim().run().scenario().kidnap_at, Some(40));
+    let scale = |h: &mut Harness<'_, SlamLabApp>| {
+        h.state_mut()
+            .lesson_mut()
+            .map_view_mut()
+            .map_or(0.0, |v| v.scale())
+    };
+    let ratio = scale(&mut shared) / scale(&mut plain);
+    assert!((ratio - 2.0).abs() < 0.05, "zoom=2 holds: {ratio}");
+    assert!(
+        !lesson(&plain).time().running,
+        "no run= keeps the clock paused"
+    );
+    // The same link with a built-in map: the same figure.
+    let builtin = harness("lesson=kidnap&particles=200&seed=1&kidnap-at=40&map=maze&tick=5&run=1");
+    assert!(lesson(&builtin).time().running);
+}
+
+#[test]
+fn right_after_a_kidnap_the_status_reads_the_estimates_error_now() {
+    let mut h = harness("lesson=kidnap&map=maze&seed=3&particles=300&init=tracking&estimator=amcl");
+    for _ in 0..30 {
+        lesson_mut(&mut h).step_tick();
+    }
+    lesson_mut(&mut h).apply_event(slamlab_sim::kidnap_session::KidnapEvent::KidnapRandom);
+    h.run();
+    let state: serde_json::Value =
+        serde_json::from_str(&h.state().test_state_json()).unwrap_or_default();
+    let filter = &state["filters"][0];
+    let error = filter["position_error"].as_f64().unwrap_or(f64::NAN);
+    assert!(
+        error > 1.0,
+        "the kidnap moved the robot away from the estimate: {state}"
+    );
+    let status = filter["status"].as_str().unwrap_or_default();
+    let off = format!("{error:.2} m off");
+    assert!(
+        status.starts_with("lost: ") && status.contains(&off),
+        "status {status:?}, error {error}"
+    );
+    // The explanation panel's status and its estimate line read the same error.
+    let lesson = lesson(&h);
+    let lines = slamlab_app::kidnap::explain_status(lesson);
+    assert!(lines[0].contains(&off), "{lines:?}");
+    let error_text = format!("position error {error:.2} m, heading error");
+    h.get_by_label_contains(&error_text);
+}
+
+#[test]
+fn an_embedded_figure_keeps_the_legend_that_explains_its_clouds() {
+    let h = harness("lesson=kidnap&embed=1");
+    assert!(lesson(&h).view.legend);
+    let h = harness("lesson=kidnap&embed=1&legend=0");
+    assert!(!lesson(&h).view.legend);
+}

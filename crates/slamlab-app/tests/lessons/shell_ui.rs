@@ -395,3 +395,216 @@ fn every_lesson_renders_at_three_sizes() {
         }
     }
 }
+
+/// The app opened with `query` over `settings` stored by an earlier visit.
+fn harness_with_settings(
+    query: &str,
+    settings: slamlab_app::Settings,
+    size: egui::Vec2,
+) -> Harness<'static, SlamLabApp> {
+    let query = query.to_owned();
+    Harness::builder()
+        .with_size(size)
+        .with_max_steps(40)
+        .build_eframe(move |_cc| SlamLabApp::with_settings(&query, Some(settings.clone())))
+}
+
+/// What an earlier visit stored: the landmark lesson with its Many runs and heatmap
+/// windows open, every panel open, the dark theme.
+fn settings_with_windows_open() -> slamlab_app::Settings {
+    let mut app = SlamLabApp::from_query("lesson=landmark-slam");
+    let Some(lesson) = app.lesson_as_mut::<slamlab_app::landmark_slam::LandmarkSlamLesson>() else {
+        panic!("the landmark lesson did not open");
+    };
+    lesson.view.many_runs = true;
+    lesson.view.heatmap = true;
+    let stored = app.lesson().stored_settings();
+    let mut settings = slamlab_app::Settings {
+        dark_mode: Some(true),
+        panels: slamlab_app::PanelVisibility {
+            parameters: true,
+            explanation: true,
+            plots: false,
+        },
+        ..Default::default()
+    };
+    settings.lessons.insert("landmark-slam".to_owned(), stored);
+    settings
+}
+
+#[test]
+fn a_link_opens_as_shared_over_stored_windows() {
+    let size = egui::vec2(1280.0, 800.0);
+    // Without a setup in the link, the earlier visit comes back (its windows too).
+    let mut h = harness_with_settings("lesson=landmark-slam", settings_with_windows_open(), size);
+    h.run();
+    assert!(
+        label_visible(&h, "Consistency over many runs"),
+        "the stored Many runs window reopens on a plain visit"
+    );
+    assert!(!h.state().panels().plots, "the stored panels come back");
+    // A link with a setup opens with the link's setup and the lesson's default windows.
+    let link = "lesson=landmark-slam&estimator=ekf,fastslam2";
+    let mut h = harness_with_settings(link, settings_with_windows_open(), size);
+    h.run();
+    let lesson = super::common::lesson_of::<slamlab_app::landmark_slam::LandmarkSlamLesson>(&h);
+    assert!(
+        !lesson.view.many_runs && !lesson.view.heatmap,
+        "stored windows stay closed"
+    );
+    assert!(!label_visible(&h, "Consistency over many runs"));
+    assert!(!label_visible(&h, "Covariance as correlations"));
+    let names: Vec<String> = lesson
+        .session()
+        .filters()
+        .iter()
+        .map(|f| f.kind.name().to_owned())
+        .collect();
+    assert_eq!(names, ["ekf", "fastslam2"], "the link's estimators");
+    assert_eq!(
+        h.state().panels(),
+        slamlab_app::PanelVisibility::default(),
+        "the lesson's default panels, not the stored ones"
+    );
+    assert_eq!(h.ctx.theme(), egui::Theme::Dark, "the stored theme stays");
+    // A figure key alone is a setup too.
+    let mut h = harness_with_settings(
+        "lesson=landmark-slam&tick=10",
+        settings_with_windows_open(),
+        size,
+    );
+    h.run();
+    assert!(!label_visible(&h, "Consistency over many runs"));
+}
+
+/// Every text drawn in the last frame with its rectangle.
+fn texts(h: &Harness<'_, SlamLabApp>) -> Vec<(String, egui::Rect)> {
+    fn walk(shape: &egui::Shape, out: &mut Vec<(String, egui::Rect)>) {
+        match shape {
+            egui::Shape::Text(t) => {
+                out.push((t.galley.text().to_owned(), t.visual_bounding_rect()))
+            }
+            egui::Shape::Vec(shapes) => shapes.iter().for_each(|s| walk(s, out)),
+            _ => {}
+        }
+    }
+    let mut out = Vec::new();
+    for clipped in &h.output().shapes {
+        walk(&clipped.shape, &mut out);
+    }
+    out
+}
+
+/// Saves `image` as `name`.png in `SLAMLAB_SCREENSHOTS` when that folder is set (to
+/// look at every lesson at every size).
+fn save_screenshot(image: &image::RgbaImage, name: &str) {
+    if let Some(dir) = std::env::var_os("SLAMLAB_SCREENSHOTS") {
+        let path = std::path::Path::new(&dir).join(format!("{name}.png"));
+        if let Err(err) = image.save(&path) {
+            eprintln!("could not save {}: {err}", path.display());
+        }
+    }
+}
+
+/// At 800 x 500 and 1280 x 800, in the app and embedded, every plot of every lesson
+/// has numbers in its y-axis strip, and no key lies on any plot's data.
+#[test]
+fn every_plot_shows_its_values_and_no_key_sits_on_data() {
+    let render = std::env::var_os("SLAMLAB_SCREENSHOTS").is_some();
+    for entry in LESSONS {
+        for embed in [false, true] {
+            for (w, h_px) in [(800.0, 500.0), (1280.0, 800.0)] {
+                let query = format!(
+                    "lesson={}&tick=40{}",
+                    entry.id,
+                    if embed { "&embed=1" } else { "" }
+                );
+                let mut h = harness(&query, egui::vec2(w, h_px));
+                h.run();
+                if render && let Some(image) = render_or_skip(&mut h) {
+                    let name = format!(
+                        "{}_{}x{}{}",
+                        entry.id,
+                        w as u32,
+                        h_px as u32,
+                        if embed { "_embed" } else { "" }
+                    );
+                    save_screenshot(&image, &name);
+                }
+                let records = slamlab_app::widgets::plots::figure_records(&h.ctx);
+                let plots: Vec<_> = records
+                    .iter()
+                    .filter_map(|r| r.data.map(|d| (r, d)))
+                    .collect();
+                let keys: Vec<egui::Rect> = records.iter().filter_map(|r| r.key).collect();
+                assert!(!plots.is_empty(), "{query} at {w}x{h_px}: no plot drawn");
+                let texts = texts(&h);
+                for (record, data) in &plots {
+                    // Room for two tick labels (13 points apart) and the data.
+                    assert!(
+                        data.height() >= 30.0,
+                        "{query} at {w}x{h_px}: '{}' is {:.0} points tall",
+                        record.title,
+                        data.height()
+                    );
+                    // Tick labels: numbers right of the axis strip's left edge, left of the data.
+                    let numbers = texts
+                        .iter()
+                        .filter(|(text, rect)| {
+                            text.chars().any(|c| c.is_ascii_digit())
+                                && rect.right() <= data.left() + 1.0
+                                && rect.left() >= data.left() - 80.0
+                                && rect.center().y >= data.top() - 2.0
+                                && rect.center().y <= data.bottom() + 2.0
+                        })
+                        .count();
+                    assert!(
+                        numbers >= 2,
+                        "{query} at {w}x{h_px}: '{}' {data:?} has {numbers} y-axis values",
+                        record.title
+                    );
+                    for key in &keys {
+                        let overlap = key.intersect(*data);
+                        assert!(
+                            !(overlap.width() > 0.5 && overlap.height() > 0.5),
+                            "{query} at {w}x{h_px}: a key {key:?} lies on '{}' {data:?}",
+                            record.title
+                        );
+                    }
+                }
+            }
+        }
+    }
+}
+
+#[test]
+fn esc_closes_the_windows_over_the_map_one_at_a_time() {
+    let mut h = harness(
+        "lesson=landmark-slam&many-runs=5",
+        egui::vec2(1280.0, 800.0),
+    );
+    {
+        let Some(lesson) = h
+            .state_mut()
+            .lesson_as_mut::<slamlab_app::landmark_slam::LandmarkSlamLesson>()
+        else {
+            panic!("the landmark lesson did not open");
+        };
+        lesson.view.heatmap = true;
+    }
+    h.step();
+    assert!(label_visible(&h, "Consistency over many runs"));
+    h.key_press(egui::Key::Escape);
+    h.step();
+    h.step();
+    let lesson = super::common::lesson_of::<slamlab_app::landmark_slam::LandmarkSlamLesson>(&h);
+    assert!(
+        !lesson.view.many_runs && lesson.view.heatmap,
+        "Many runs first"
+    );
+    h.key_press(egui::Key::Escape);
+    h.step();
+    h.step();
+    let lesson = super::common::lesson_of::<slamlab_app::landmark_slam::LandmarkSlamLesson>(&h);
+    assert!(!lesson.view.heatmap, "then the heatmap");
+}

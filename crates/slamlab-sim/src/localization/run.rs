@@ -143,8 +143,10 @@ impl FilterRun {
 
     /// What the filter is doing, as a student should read it: tracking, lost,
     /// recovering, or recovered after a kidnap (and how long it took), judged by
-    /// the experiments' convergence criterion.
-    pub fn status(&self, kidnap_tick: Option<u64>, dt: f64) -> String {
+    /// the experiments' convergence criterion. `now` is the estimate's error against
+    /// the truth as it is now ([`MclRun::error_now`]): right after a kidnap the
+    /// records still hold the error from before it. [`MclRun::status_of`] gives both.
+    pub fn status(&self, kidnap_tick: Option<u64>, dt: f64, now: Option<TickError>) -> String {
         let f = self;
         let good = |u: &UpdateRecord| {
             u.position_error <= CONVERGED_POSITION && u.heading_error <= CONVERGED_HEADING
@@ -152,16 +154,18 @@ impl FilterRun {
         let Some(last) = f.updates.last() else {
             return "waiting for the robot to move".to_owned();
         };
+        // Between updates the estimate moves with the odometry; this is how far off it is now.
+        let off = now
+            .or_else(|| f.ticks.last().copied())
+            .map_or(last.position_error, |e| e.position);
         let Some(kidnap) = kidnap_tick else {
             return if good(last) {
-                format!("tracking ({:.2} m off)", last.position_error)
+                format!("tracking ({off:.2} m off)")
             } else {
-                format!("localizing ({:.2} m off)", last.position_error)
+                format!("localizing ({off:.2} m off)")
             };
         };
         let since: Vec<&UpdateRecord> = f.updates.iter().filter(|u| u.tick >= kidnap).collect();
-        // Between updates the estimate moves with the odometry; this is how far off it is now.
-        let off = f.ticks.last().map_or(last.position_error, |e| e.position);
         if since.is_empty() {
             return format!("lost: {off:.2} m off, no update since the kidnap yet");
         }
@@ -262,7 +266,11 @@ pub struct MclRun {
     tick: u64,
     phase: MclPhase,
     scan: Option<Scan>,
+    /// Where the latest scan was taken (the robot may have been kidnapped since).
+    scan_pose: Option<Pose2>,
     path: Vec<Pose2>,
+    /// Indices of `path` where a kidnap starts a new stretch (a teleport, not a drive).
+    path_breaks: Vec<usize>,
     notes: Vec<String>,
     kidnap_rng: ChaCha8Rng,
     kidnap_tick: Option<u64>,
@@ -349,7 +357,9 @@ impl MclRun {
             tick: 0,
             phase: MclPhase::Move,
             scan: None,
+            scan_pose: None,
             path: vec![start],
+            path_breaks: Vec::new(),
             notes,
             kidnap_rng: ChaCha8Rng::seed_from_u64(stream_seed(seed, 5)),
             kidnap_tick: None,
@@ -488,6 +498,7 @@ impl MclRun {
                 .lidar
                 .scan(self.map.grid(), &after, &mut self.lidar_rng),
         );
+        self.scan_pose = Some(after);
         self.path.push(after);
     }
 
@@ -523,6 +534,7 @@ impl MclRun {
         }
         self.robot.pose = pose;
         self.explorer.replan();
+        self.path_breaks.push(self.path.len());
         self.path.push(pose);
         self.kidnap_tick = Some(self.tick);
         Ok(())
@@ -556,6 +568,7 @@ impl MclRun {
             }
             self.robot.pose = p;
             self.explorer.replan();
+            self.path_breaks.push(self.path.len());
             self.path.push(p);
             self.kidnap_tick = Some(self.tick);
         }
@@ -589,6 +602,47 @@ impl MclRun {
     /// The true path so far.
     pub fn path(&self) -> &[Pose2] {
         &self.path
+    }
+
+    /// The true path in stretches: a kidnap teleports the robot, so the path breaks
+    /// there instead of joining the two places through the walls.
+    pub fn path_stretches(&self) -> Vec<&[Pose2]> {
+        let mut out = Vec::with_capacity(self.path_breaks.len() + 1);
+        let mut start = 0;
+        for &b in &self.path_breaks {
+            if b > start && b <= self.path.len() {
+                out.push(&self.path[start..b]);
+                start = b;
+            }
+        }
+        out.push(&self.path[start..]);
+        out
+    }
+
+    /// Where the latest scan ([`Self::scan`]) was taken: the robot's pose at its last
+    /// move, which a kidnap since then does not change.
+    pub fn scan_pose(&self) -> Option<Pose2> {
+        self.scan_pose
+    }
+
+    /// Filter `k`'s error now: its estimate moved by the odometry since its last
+    /// update (as amcl publishes it) against the true pose now, kidnap included.
+    /// `None` before the filter has an estimate.
+    pub fn error_now(&self, k: usize) -> Option<TickError> {
+        let estimate = self.filters.get(k)?.current_estimate(&self.odometry())?;
+        let truth = self.robot().pose;
+        Some(TickError {
+            position: math::hypot(estimate.x - truth.x, estimate.y - truth.y),
+            heading: wrap_angle(estimate.theta - truth.theta).abs(),
+        })
+    }
+
+    /// Filter `k`'s status ([`FilterRun::status`]) with its error now: the one status
+    /// line every panel shows.
+    pub fn status_of(&self, k: usize) -> String {
+        self.filters.get(k).map_or_else(String::new, |f| {
+            f.status(self.kidnap_tick(), self.scenario().dt, self.error_now(k))
+        })
     }
 
     /// The odometry pose.
