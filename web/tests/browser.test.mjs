@@ -638,6 +638,31 @@ async function main() {
     // --- The resampling lab by URL: a press of the Resample button (the "." shortcut)
     // resamples with every method, and five seeded presses in this page's wasm give
     // exactly the native copies (crates/slamlab-app/tests/lessons/resampling_ui.rs pins them).
+    // --- Mapping with a lidar: the simulated robot explores the maze and scan-to-map
+    // matching builds the map; its agreement with the true map rises as scans come in.
+    await check("lesson=mapping builds the maze map and its agreement with the truth rises", async () => {
+      const url = "index.html?lesson=mapping&map=maze&seed=3&steps=300";
+      const { context, page: p, log } = await openPage(browser, baseUrl, url, "mapping");
+      try {
+        await waitRunning(p);
+        const s0 = await waitState(p, (st) => st.lesson === "mapping" && st.frames > 2, "the mapping lesson");
+        assert(s0.total_scans === 300 && s0.poses === "scan-to-map" && s0.scans === 0, `opened ${JSON.stringify(s0)}`);
+        await p.mouse.click(VIEWPORT.width / 2, VIEWPORT.height / 2); // gives the canvas keyboard focus
+        await p.keyboard.press("Space");
+        const s1 = await waitState(p, (st) => st.scans >= 150, "150 scans mapped", 120_000);
+        assert(s1.map_agreement > 0.85, `map agreement ${s1.map_agreement} after ${s1.scans} scans`);
+        assert(s1.trajectory_rmse < 0.5, `trajectory RMSE ${s1.trajectory_rmse} m`);
+        await sleep(300);
+        const { stats } = await waitNotBlank(p, "mapping.png");
+        assertNotBlank(stats, "mapping.png");
+        await assertNoPanic(p);
+        assert(log.problems.length === 0, log.problems.join("; "));
+        return `${s1.scans} scans: map agreement ${s1.map_agreement.toFixed(3)}, trajectory RMSE ${s1.trajectory_rmse.toFixed(3)} m, ${s1.known_cells} known cells`;
+      } finally {
+        await context.close();
+      }
+    });
+
     await check("lesson=resampling resamples and gives the native copies", async () => {
       const url = "index.html?lesson=resampling&weights=5,1,1,3&seed=3";
       const { context, page: p, log } = await openPage(browser, baseUrl, url, "resampling");
