@@ -32,5 +32,8 @@ pub mod session;
 pub mod stepper;
 pub mod world;
 
+#[cfg(test)]
+mod fuzz_tests;
+
 pub use scenario::{ControllerKind, EstimatorKind, LandmarkScenario};
 pub use session::{LandmarkSession, Phase};
