@@ -10,7 +10,7 @@
 #   6. web-test  web/test.sh                       (headless Chromium: starts, draws, runs)
 #   7. desktop   scripts/desktop-smoke.sh          (the native app on a virtual screen)
 # It works from a fresh clone of the repository on Debian 12 with rustup, node/npm and
-# python3; a first run downloads and builds a lot (about 25 minutes on 2 cores).
+# python3; a first run downloads and builds a lot (about 30 minutes on 2 cores).
 #
 # For quicker local runs, skip parts (everything runs by default):
 #   SLAMLAB_SKIP_DEPS=1 SLAMLAB_SKIP_LINT=1 (fmt + clippy) SLAMLAB_SKIP_TEST=1

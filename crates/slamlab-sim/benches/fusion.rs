@@ -2,7 +2,7 @@
 //! 50 Hz, IMU 100 Hz, SLAM pose 1 Hz: 90,601 measurements):
 //! `cargo bench -p slamlab-sim --bench fusion`.
 //!
-//! Target (README, "Sensor fusion (headless)"): under 0.5 s per drive natively.
+//! Target (docs/fusion.md, "Sensor fusion (headless)"): under 0.5 s per drive natively.
 
 use slamlab_sim::fusion::{DriveParams, FusionMode, FusionScenario, ModeRun, SensorLog, simulate};
 

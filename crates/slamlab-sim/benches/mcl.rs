@@ -1,6 +1,6 @@
 //! Monte Carlo localization speed: `cargo bench -p slamlab-sim --bench mcl`.
 //!
-//! Targets (README "Monte Carlo localization (headless)"): one MCL
+//! Targets (docs/kidnap.md, "Monte Carlo localization (headless)"): one MCL
 //! update (motion, likelihood field, resampling) with 5,000 particles and 60
 //! beams ≤ 2 ms; the distance field of a 1000 x 1000 map ≤ 100 ms; a 360-beam
 //! scan on the office map ≤ 0.1 ms.

@@ -2,7 +2,7 @@
 //!
 //! Levenberg-Marquardt to convergence on synthetic Manhattan graphs (structure
 //! analysis included), and one LM step. The comparison with gtsam on the standard
-//! data sets is `scripts/bench-posegraph.sh` (README, "Pose-graph SLAM").
+//! data sets is `scripts/bench-posegraph.sh` (docs/pose-graph.md, "Pose-graph SLAM").
 
 use slamlab_core::graph::{Optimizer, OptimizerSettings};
 use slamlab_sim::pose_graph_experiment::manhattan_graph;

@@ -1,7 +1,7 @@
 //! One simulation tick (truth, sensor, and every phase of the estimator) with a
 //! full map: `cargo bench -p slamlab-sim --bench tick`.
 //!
-//! Targets (README, "Speed"): EKF-SLAM with 100 landmarks ≤ 1 ms; UKF-SLAM with
+//! Targets (docs/landmark-slam.md, "Speed"): EKF-SLAM with 100 landmarks ≤ 1 ms; UKF-SLAM with
 //! 50 landmarks ≤ 5 ms.
 
 use slamlab_sim::world::LandmarkLayout;

@@ -36,5 +36,8 @@ pub mod stepper;
 pub mod vision;
 pub mod world;
 
+#[cfg(test)]
+mod fuzz_tests;
+
 pub use scenario::{ControllerKind, EstimatorKind, LandmarkScenario};
 pub use session::{LandmarkSession, Phase};

@@ -37,7 +37,7 @@ fn shared_maps() -> Option<PathBuf> {
 /// and every tick. With the plain product of the beams' likelihoods
 /// (`laser_likelihood_exponent` 1; measured worst 0.13 m). The tempered
 /// default (0.05), made for global localization, tracks more loosely: worst
-/// 0.33 / 0.54 / 0.30 m on seeds 3 / 4 / 5 (README).
+/// 0.33 / 0.54 / 0.30 m on seeds 3 / 4 / 5 (docs/kidnap.md).
 #[test]
 fn tracking_on_the_maze_stays_within_30_cm() {
     let scenario = MclScenario {

@@ -5,9 +5,10 @@
 //!
 //! YAML keys (ROS `map_server`): `image`, `resolution`, `origin: [x, y, yaw]`,
 //! `negate`, `occupied_thresh`, `free_thresh`, `mode` (`trinary` by default,
-//! `scale`, `raw`). The YAML reader is a small one for exactly this flat format
-//! (scalars, `[a, b, c]` and `- item` lists, comments), so every error can name
-//! its line.
+//! `scale`, `raw`). The YAML is read by serde-saphyr under a budget (size, events,
+//! depth, aliases), so a hostile file is refused quickly; every error names its
+//! line. The images are decoded by the `image` crate (its `pnm` and `png` decoders
+//! only), after the size in the header has been checked.
 //!
 //! Pixel to cell (map_server, `trinary`): with `v` the grey value scaled to
 //! `0..255` (`255 − v` if `negate`), `p = (255 − v) / 255`; occupied if
@@ -82,8 +83,10 @@ pub enum MapError {
     /// A PNG that cannot be decoded.
     #[error("PNG: {0}")]
     Png(String),
-    /// The grid itself is refused (size, resolution, origin).
-    #[error("{0}")]
+    /// The grid itself is refused (size, resolution, origin). Transparent: the
+    /// grid's message is the whole message (a `{0}` wrapper with `#[from]` made
+    /// error chains print it twice).
+    #[error(transparent)]
     Grid(#[from] GridError),
     /// Every cell is occupied or unknown.
     #[error("the map has no free cell: there is nowhere for the robot to be")]
@@ -146,208 +149,178 @@ impl Default for MapYaml {
     }
 }
 
-/// Removes a `#` comment that is not inside quotes.
-fn strip_comment(line: &str) -> &str {
-    let mut quote: Option<char> = None;
-    for (i, c) in line.char_indices() {
-        match (quote, c) {
-            (None, '"' | '\'') => quote = Some(c),
-            (Some(q), c) if c == q => quote = None,
-            (None, '#') => return &line[..i],
-            _ => {}
-        }
-    }
-    line
+/// The most bytes of map YAML read (a map_server file is a few hundred).
+pub const MAX_YAML_BYTES: usize = 64 * 1024;
+
+/// serde-saphyr's budget for a map YAML: a flat mapping of a dozen keys needs a few
+/// dozen parser events; these limits refuse a hostile file (deep nesting, alias
+/// bombs, huge scalars) before it costs memory or time.
+fn yaml_options() -> serde_saphyr::Options {
+    let mut budget = serde_saphyr::Budget::default();
+    budget.max_reader_input_bytes = Some(MAX_YAML_BYTES);
+    budget.max_events = 4_096;
+    budget.max_nodes = 2_048;
+    budget.max_depth = 16;
+    budget.max_aliases = 16;
+    budget.max_anchors = 16;
+    budget.max_documents = 1;
+    budget.max_total_scalar_bytes = MAX_YAML_BYTES;
+    budget.max_merge_keys = 0;
+    let mut options = serde_saphyr::Options::default();
+    options.budget = Some(budget);
+    options
 }
 
-fn unquote(s: &str) -> &str {
-    let s = s.trim();
-    if s.len() >= 2
-        && ((s.starts_with('"') && s.ends_with('"')) || (s.starts_with('\'') && s.ends_with('\'')))
+/// One value of the YAML with the line it is on.
+type Spanned = serde_saphyr::Spanned<serde_json::Value>;
+
+/// A value as the user wrote it, for messages.
+fn shown(value: &serde_json::Value) -> String {
+    match value {
+        serde_json::Value::String(s) => s.clone(),
+        serde_json::Value::Null => "(nothing, or a number that is not finite)".to_owned(),
+        serde_json::Value::Array(items) => {
+            format!(
+                "[{}]",
+                items.iter().map(shown).collect::<Vec<_>>().join(", ")
+            )
+        }
+        other => other.to_string(),
+    }
+}
+
+fn line_of(value: &Spanned) -> usize {
+    usize::try_from(value.referenced.line()).unwrap_or(usize::MAX)
+}
+
+fn bad_value(key: &str, value: &Spanned, expected: &'static str) -> MapError {
+    MapError::BadValue {
+        key: key.to_owned(),
+        line: line_of(value),
+        value: shown(&value.value),
+        expected,
+    }
+}
+
+/// A number: a YAML number or a quoted one.
+fn number(key: &str, value: &Spanned) -> Result<f64, MapError> {
+    match &value.value {
+        serde_json::Value::Number(n) => n.as_f64(),
+        serde_json::Value::String(s) => s.trim().parse::<f64>().ok(),
+        _ => None,
+    }
+    .ok_or_else(|| bad_value(key, value, "a number"))
+}
+
+/// The line of a serde-saphyr error (1 when it gives none), and its message.
+fn yaml_error(error: &serde_saphyr::Error) -> MapError {
+    let line = error.location().map_or(1, |l| {
+        usize::try_from(l.line()).unwrap_or(usize::MAX).max(1)
+    });
+    // The error's Display draws a source snippet; the first line says what is wrong.
+    let text = error.to_string();
+    let first = text
+        .lines()
+        .map(str::trim)
+        .find(|l| !l.is_empty())
+        .unwrap_or("the YAML does not parse");
+    let first = first.strip_prefix("error: ").unwrap_or(first);
+    // "line 2 column 13: what" -> "column 13: what" (the line is said once).
+    let message = match first
+        .strip_prefix("line ")
+        .and_then(|rest| rest.split_once(' '))
     {
-        &s[1..s.len() - 1]
-    } else {
-        s
-    }
+        Some((_, rest)) if rest.starts_with("column ") => rest.to_owned(),
+        _ => first.to_owned(),
+    };
+    MapError::Yaml { line, message }
 }
 
-fn number(key: &str, line: usize, value: &str) -> Result<f64, MapError> {
-    unquote(value)
-        .parse::<f64>()
-        .map_err(|_| MapError::BadValue {
-            key: key.to_owned(),
-            line,
-            value: value.to_owned(),
-            expected: "a number",
-        })
-}
-
-/// Parses a ROS map YAML file. Unknown keys are ignored, as map_server does.
+/// Parses a ROS map YAML file with serde-saphyr (budget-limited; see
+/// [`MAX_YAML_BYTES`]). Unknown keys are ignored, as map_server does. Every error
+/// names its line.
 pub fn parse_map_yaml(text: &str) -> Result<MapYaml, MapError> {
+    if text.len() > MAX_YAML_BYTES {
+        return Err(MapError::Yaml {
+            line: 1,
+            message: format!(
+                "the file has {} bytes, more than the {MAX_YAML_BYTES} bytes a map YAML may have",
+                text.len()
+            ),
+        });
+    }
+    // An empty file (or one of comments only) is a document with no keys.
+    let entries: std::collections::BTreeMap<String, Spanned> = if text
+        .lines()
+        .all(|l| l.trim().is_empty() || l.trim_start().starts_with('#'))
+    {
+        std::collections::BTreeMap::new()
+    } else {
+        serde_saphyr::from_str_with_options::<Option<_>>(text, yaml_options())
+            .map_err(|e| yaml_error(&e))?
+            .unwrap_or_default()
+    };
     let mut yaml = MapYaml::default();
-    let mut have_image = false;
-    let mut have_resolution = false;
-    // A key whose value is a block list (`origin:` then `- x` lines).
-    let mut block: Option<(String, usize, Vec<String>)> = None;
-    let mut origin_seen = false;
-    let mut entries: Vec<(String, usize, Value)> = Vec::new();
-    enum Value {
-        Scalar(String),
-        List(Vec<String>),
-    }
-    for (k, raw) in text.lines().enumerate() {
-        let line = k + 1;
-        let content = strip_comment(raw).trim_end();
-        if content.trim().is_empty() || content.trim() == "---" {
-            continue;
-        }
-        let trimmed = content.trim_start();
-        if let Some(item) =
-            trimmed
-                .strip_prefix("- ")
-                .or(if trimmed == "-" { Some("") } else { None })
-        {
-            match &mut block {
-                Some((_, _, items)) => {
-                    items.push(item.trim().to_owned());
-                    continue;
-                }
-                None => {
-                    return Err(MapError::Yaml {
-                        line,
-                        message: format!("list item '{trimmed}' belongs to no key"),
-                    });
-                }
-            }
-        }
-        if let Some((key, l, items)) = block.take() {
-            entries.push((key, l, Value::List(items)));
-        }
-        let Some((key, value)) = trimmed.split_once(':') else {
-            return Err(MapError::Yaml {
-                line,
-                message: format!("'{trimmed}' is not `key: value`"),
-            });
-        };
-        let key = unquote(key).to_owned();
-        if key.is_empty() {
-            return Err(MapError::Yaml {
-                line,
-                message: "a value without a key".to_owned(),
-            });
-        }
-        let value = value.trim();
-        if value.is_empty() {
-            block = Some((key, line, Vec::new()));
-        } else if let Some(inner) = value.strip_prefix('[') {
-            let Some(inner) = inner.strip_suffix(']') else {
-                return Err(MapError::Yaml {
-                    line,
-                    message: format!("the list '{value}' has no closing ']'"),
-                });
-            };
-            let items = if inner.trim().is_empty() {
-                Vec::new()
-            } else {
-                inner.split(',').map(|s| s.trim().to_owned()).collect()
-            };
-            entries.push((key, line, Value::List(items)));
-        } else {
-            entries.push((key, line, Value::Scalar(value.to_owned())));
-        }
-    }
-    if let Some((key, l, items)) = block.take() {
-        entries.push((key, l, Value::List(items)));
-    }
-    for (key, line, value) in entries {
-        let scalar = |expected: &'static str| match &value {
-            Value::Scalar(s) => Ok(s.clone()),
-            Value::List(items) => Err(MapError::BadValue {
-                key: key.clone(),
-                line,
-                value: format!("[{}]", items.join(", ")),
-                expected,
-            }),
-        };
-        match key.as_str() {
-            "image" => {
-                let s = scalar("a file name")?;
-                yaml.image = unquote(&s).to_owned();
-                have_image = !yaml.image.is_empty();
-            }
-            "resolution" => {
-                yaml.resolution = number(&key, line, &scalar("a number")?)?;
-                have_resolution = true;
-            }
-            "origin" => {
-                let items = match &value {
-                    Value::List(items) => items,
-                    Value::Scalar(s) => {
-                        return Err(MapError::BadValue {
-                            key: key.clone(),
-                            line,
-                            value: s.clone(),
-                            expected: "a list [x, y, yaw]",
-                        });
-                    }
-                };
-                if items.len() != 3 {
-                    return Err(MapError::BadValue {
-                        key: key.clone(),
-                        line,
-                        value: format!("[{}]", items.join(", ")),
-                        expected: "a list of three numbers [x, y, yaw]",
-                    });
-                }
-                for (o, item) in yaml.origin.iter_mut().zip(items) {
-                    *o = number("origin", line, item)?;
-                }
-                origin_seen = true;
-            }
-            "negate" => {
-                let s = scalar("0 or 1")?;
-                yaml.negate = match unquote(&s) {
-                    "0" | "false" | "False" => false,
-                    "1" | "true" | "True" => true,
-                    _ => {
-                        return Err(MapError::BadValue {
-                            key: key.clone(),
-                            line,
-                            value: s,
-                            expected: "0 or 1",
-                        });
-                    }
-                };
-            }
-            "occupied_thresh" => yaml.occupied_thresh = number(&key, line, &scalar("a number")?)?,
-            "free_thresh" => yaml.free_thresh = number(&key, line, &scalar("a number")?)?,
-            "mode" => {
-                let s = scalar("trinary, scale or raw")?;
-                yaml.mode = match unquote(&s) {
-                    "trinary" => MapMode::Trinary,
-                    "scale" => MapMode::Scale,
-                    "raw" => MapMode::Raw,
-                    _ => {
-                        return Err(MapError::BadValue {
-                            key: key.clone(),
-                            line,
-                            value: s,
-                            expected: "trinary, scale or raw",
-                        });
-                    }
-                };
-            }
-            _ => {}
-        }
-    }
-    if !have_image {
+    let Some(image) = entries.get("image") else {
         return Err(MapError::MissingKey("image"));
-    }
-    if !have_resolution {
+    };
+    yaml.image = match &image.value {
+        serde_json::Value::String(s) if !s.trim().is_empty() => s.trim().to_owned(),
+        serde_json::Value::Number(n) => n.to_string(),
+        _ => return Err(bad_value("image", image, "a file name")),
+    };
+    let Some(resolution) = entries.get("resolution") else {
         return Err(MapError::MissingKey("resolution"));
-    }
-    if !origin_seen {
+    };
+    yaml.resolution = number("resolution", resolution)?;
+    let Some(origin) = entries.get("origin") else {
         return Err(MapError::MissingKey("origin"));
+    };
+    match &origin.value {
+        serde_json::Value::Array(items) if items.len() == 3 => {
+            for (o, item) in yaml.origin.iter_mut().zip(items) {
+                let item = Spanned::new(item.clone(), origin.referenced, origin.defined);
+                *o = number("origin", &item)?;
+            }
+        }
+        serde_json::Value::Array(_) => {
+            return Err(bad_value(
+                "origin",
+                origin,
+                "a list of three numbers [x, y, yaw]",
+            ));
+        }
+        _ => return Err(bad_value("origin", origin, "a list [x, y, yaw]")),
+    }
+    if let Some(negate) = entries.get("negate") {
+        yaml.negate = match &negate.value {
+            serde_json::Value::Bool(b) => *b,
+            serde_json::Value::Number(n) if n.as_f64() == Some(0.0) => false,
+            serde_json::Value::Number(n) if n.as_f64() == Some(1.0) => true,
+            serde_json::Value::String(s) => match s.trim() {
+                "0" | "false" | "False" => false,
+                "1" | "true" | "True" => true,
+                _ => return Err(bad_value("negate", negate, "0 or 1")),
+            },
+            _ => return Err(bad_value("negate", negate, "0 or 1")),
+        };
+    }
+    if let Some(v) = entries.get("occupied_thresh") {
+        yaml.occupied_thresh = number("occupied_thresh", v)?;
+    }
+    if let Some(v) = entries.get("free_thresh") {
+        yaml.free_thresh = number("free_thresh", v)?;
+    }
+    if let Some(mode) = entries.get("mode") {
+        yaml.mode = match &mode.value {
+            serde_json::Value::String(s) => match s.trim() {
+                "trinary" => MapMode::Trinary,
+                "scale" => MapMode::Scale,
+                "raw" => MapMode::Raw,
+                _ => return Err(bad_value("mode", mode, "trinary, scale or raw")),
+            },
+            _ => return Err(bad_value("mode", mode, "trinary, scale or raw")),
+        };
     }
     check_yaml(&yaml)?;
     Ok(yaml)
@@ -422,115 +395,116 @@ pub fn decode_image(bytes: &[u8]) -> Result<GreyImage, MapError> {
     }
 }
 
-/// Decodes a PGM image: `P5` (binary, 1 byte per pixel if `maxval < 256`, else
-/// 2 bytes big-endian) or `P2` (ASCII). The size is checked against
-/// `slamlab_core::grid::MAX_CELLS` before anything is allocated.
-pub fn decode_pgm(bytes: &[u8]) -> Result<GreyImage, MapError> {
-    let binary = match bytes.get(..2) {
-        Some(b"P5") => true,
-        Some(b"P2") => false,
-        _ => {
-            return Err(MapError::Pgm(
-                "the file does not start with P2 or P5".to_owned(),
-            ));
+/// The most bytes the image decoders may allocate for one image (the largest map
+/// SLAM Lab accepts, `MAX_CELLS` 16-bit RGBA pixels, is far less).
+const MAX_DECODE_BYTES: u64 = 512 * 1024 * 1024;
+
+/// A short description of an `image` error, without the crate's type names.
+fn image_error_text(error: &image::ImageError) -> String {
+    match error {
+        image::ImageError::IoError(e) if e.kind() == std::io::ErrorKind::UnexpectedEof => {
+            "the data ends early".to_owned()
         }
-    };
-    let mut pos = 2;
-    let mut header = [0u64; 3];
-    for (k, name) in ["width", "height", "maxval"].iter().enumerate() {
-        header[k] = next_token(bytes, &mut pos)
-            .ok_or_else(|| MapError::Pgm(format!("the header ends before its {name}")))?
-            .parse::<u64>()
-            .map_err(|_| MapError::Pgm(format!("the {name} is not a whole number")))?;
+        other => other.to_string(),
     }
-    let [w, h, maxval] = header;
-    if !(1..=65535).contains(&maxval) {
-        return Err(MapError::Pgm(format!(
-            "maxval {maxval} is outside 1..65535"
-        )));
+}
+
+/// Whether an `image` error says the pixel data stops early.
+fn is_truncation(error: &image::ImageError) -> bool {
+    match error {
+        image::ImageError::IoError(e) => e.kind() == std::io::ErrorKind::UnexpectedEof,
+        other => other.to_string().contains("Not enough data"),
     }
-    let width = usize::try_from(w).unwrap_or(usize::MAX);
-    let height = usize::try_from(h).unwrap_or(usize::MAX);
+}
+
+/// Decodes a PGM image with the `image` crate's PNM decoder: `P5` (binary, 1 byte
+/// per pixel if `maxval < 256`, else 2 bytes big-endian) or `P2` (ASCII). Grey values
+/// come scaled to 8 or 16 bits (`maxval` 255 or 65535). The size in the header is
+/// checked against `slamlab_core::grid::MAX_CELLS` before the pixels are allocated.
+pub fn decode_pgm(bytes: &[u8]) -> Result<GreyImage, MapError> {
+    use image::ImageDecoder;
+    use image::codecs::pnm::{PnmDecoder, PnmSubtype, SampleEncoding};
+    if !matches!(bytes.get(..2), Some(b"P5" | b"P2")) {
+        return Err(MapError::Pgm(
+            "the file does not start with P2 or P5".to_owned(),
+        ));
+    }
+    let decoder = PnmDecoder::new(std::io::Cursor::new(bytes)).map_err(|e| {
+        MapError::Pgm(format!(
+            "the header cannot be read: {}",
+            image_error_text(&e)
+        ))
+    })?;
+    let (w, h) = decoder.dimensions();
+    let (width, height) = (w as usize, h as usize);
     check_size(width, height)?;
     let n = width * height;
-    let maxval = maxval as u16;
-    let pixels = if binary {
-        // Exactly one whitespace byte after maxval.
-        pos += 1;
-        let data = bytes.get(pos..).unwrap_or(&[]);
-        let per = if maxval < 256 { 1 } else { 2 };
-        let got = data.len() / per;
-        if got < n {
-            return Err(MapError::Truncated { expected: n, got });
+    let sixteen = match decoder.color_type() {
+        image::ColorType::L8 => false,
+        image::ColorType::L16 => true,
+        other => {
+            return Err(MapError::Pgm(format!(
+                "a grey image was expected, the header describes {other:?}"
+            )));
         }
-        if per == 1 {
-            data[..n].iter().map(|&b| u16::from(b)).collect()
-        } else {
-            data[..2 * n]
-                .chunks_exact(2)
-                .map(|c| u16::from_be_bytes([c[0], c[1]]))
-                .collect()
-        }
-    } else {
-        let mut pixels = Vec::with_capacity(n);
-        while pixels.len() < n {
-            let Some(tok) = next_token(bytes, &mut pos) else {
-                return Err(MapError::Truncated {
-                    expected: n,
-                    got: pixels.len(),
-                });
-            };
-            let v: u32 = tok.parse().map_err(|_| {
-                MapError::Pgm(format!("pixel {} '{tok}' is not a number", pixels.len()))
-            })?;
-            pixels.push(v.min(u32::from(maxval)) as u16);
-        }
-        pixels
     };
-    if let Some(bad) = pixels.iter().position(|&v| v > maxval) {
-        return Err(MapError::Pgm(format!(
-            "pixel {bad} is {} above maxval {maxval}",
-            pixels[bad]
-        )));
+    // How many pixels the data can hold, checked before the pixels are allocated: a
+    // binary PGM has 1 or 2 bytes per pixel, an ASCII one at least 2 (a digit and a
+    // separator, the last one without).
+    let header_len = PnmDecoder::new(std::io::Cursor::new(bytes))
+        .ok()
+        .map_or(bytes.len(), |d| {
+            usize::try_from(d.into_inner().0.position()).unwrap_or(bytes.len())
+        });
+    let data_len = bytes.len().saturating_sub(header_len);
+    match decoder.subtype() {
+        PnmSubtype::Graymap(SampleEncoding::Binary) => {
+            let got = data_len / if sixteen { 2 } else { 1 };
+            if got < n {
+                return Err(MapError::Truncated { expected: n, got });
+            }
+        }
+        _ => {
+            if data_len + 1 < 2 * n {
+                return Err(MapError::Pgm(format!(
+                    "the pixel data ends before its {n} pixels ({data_len} bytes of text)"
+                )));
+            }
+        }
     }
+    let total = usize::try_from(decoder.total_bytes()).unwrap_or(usize::MAX);
+    let mut buf = vec![0u8; total];
+    decoder.read_image(&mut buf).map_err(|e| {
+        if is_truncation(&e) {
+            MapError::Pgm(format!("the pixel data ends before its {n} pixels"))
+        } else {
+            MapError::Pgm(format!(
+                "the pixel data cannot be read: {}",
+                image_error_text(&e)
+            ))
+        }
+    })?;
+    let pixels = if sixteen {
+        buf.chunks_exact(2)
+            .map(|c| u16::from_ne_bytes([c[0], c[1]]))
+            .collect()
+    } else {
+        buf.iter().map(|&b| u16::from(b)).collect()
+    };
     Ok(GreyImage {
         width,
         height,
-        maxval,
+        maxval: if sixteen { 65535 } else { 255 },
         pixels,
         alpha: None,
     })
 }
 
-/// The next whitespace-separated token of a PGM header, skipping `#` comments.
-fn next_token<'a>(bytes: &'a [u8], pos: &mut usize) -> Option<&'a str> {
-    loop {
-        while *pos < bytes.len() && bytes[*pos].is_ascii_whitespace() {
-            *pos += 1;
-        }
-        if *pos < bytes.len() && bytes[*pos] == b'#' {
-            while *pos < bytes.len() && bytes[*pos] != b'\n' {
-                *pos += 1;
-            }
-            continue;
-        }
-        break;
-    }
-    let start = *pos;
-    while *pos < bytes.len() && !bytes[*pos].is_ascii_whitespace() && bytes[*pos] != b'#' {
-        *pos += 1;
-    }
-    if start == *pos {
-        None
-    } else {
-        std::str::from_utf8(&bytes[start..*pos]).ok()
-    }
-}
-
-/// Decodes a PNG: grey, grey + alpha, RGB or RGBA (colour channels averaged, as
-/// map_server does), palette images expanded; 1 to 16 bits. The size is checked
-/// from the header before the pixels are decoded.
+/// Decodes a PNG with the `image` crate's PNG decoder: grey, grey + alpha, RGB or
+/// RGBA (colour channels averaged, as map_server does), palette images expanded; 1
+/// to 16 bits. The size is checked from the header before the pixels are decoded.
 pub fn decode_png(bytes: &[u8]) -> Result<GreyImage, MapError> {
+    use image::ImageDecoder;
     // The IHDR chunk comes first: signature (8), length (4), "IHDR" (4), then
     // width and height. Check the size before the decoder allocates anything.
     if let (Some(b"IHDR"), Some(w), Some(h)) =
@@ -540,54 +514,45 @@ pub fn decode_png(bytes: &[u8]) -> Result<GreyImage, MapError> {
         let h = u32::from_be_bytes([h[0], h[1], h[2], h[3]]) as usize;
         check_size(w, h)?;
     }
-    let mut decoder = png::Decoder::new(std::io::Cursor::new(bytes));
-    decoder.set_transformations(png::Transformations::EXPAND);
-    let mut reader = decoder
-        .read_info()
-        .map_err(|e| MapError::Png(e.to_string()))?;
-    let (w, h) = (reader.info().width as usize, reader.info().height as usize);
+    let mut limits = image::Limits::default();
+    limits.max_alloc = Some(MAX_DECODE_BYTES);
+    let decoder = image::codecs::png::PngDecoder::with_limits(std::io::Cursor::new(bytes), limits)
+        .map_err(|e| MapError::Png(image_error_text(&e)))?;
+    let (w, h) = decoder.dimensions();
+    let (w, h) = (w as usize, h as usize);
     check_size(w, h)?;
-    let size = reader
-        .output_buffer_size()
-        .ok_or_else(|| MapError::Png("the image is too large to decode".to_owned()))?;
-    let mut buf = vec![0u8; size];
-    let frame = reader
-        .next_frame(&mut buf)
-        .map_err(|e| MapError::Png(e.to_string()))?;
-    let (channels, has_alpha) = match frame.color_type {
-        png::ColorType::Grayscale => (1, false),
-        png::ColorType::GrayscaleAlpha => (2, true),
-        png::ColorType::Rgb => (3, false),
-        png::ColorType::Rgba => (4, true),
-        png::ColorType::Indexed => {
-            return Err(MapError::Png("the palette was not expanded".to_owned()));
-        }
-    };
-    let sixteen = frame.bit_depth == png::BitDepth::Sixteen;
+    let color = decoder.color_type();
+    let channels = usize::from(color.channel_count());
+    let has_alpha = color.has_alpha();
+    let sixteen = color.bytes_per_pixel() / color.channel_count() == 2;
+    let total = usize::try_from(decoder.total_bytes()).unwrap_or(usize::MAX);
+    let mut buf = vec![0u8; total];
+    decoder
+        .read_image(&mut buf)
+        .map_err(|e| MapError::Png(image_error_text(&e)))?;
     let maxval: u16 = if sixteen { 65535 } else { 255 };
-    let bps = if sixteen { 2 } else { 1 };
-    let sample = |row: &[u8], k: usize| -> u32 {
+    // `image` gives 16-bit samples in native byte order.
+    let sample = |k: usize| -> u32 {
         if sixteen {
-            u32::from(u16::from_be_bytes([row[2 * k], row[2 * k + 1]]))
+            u32::from(u16::from_ne_bytes([buf[2 * k], buf[2 * k + 1]]))
         } else {
-            u32::from(row[k])
+            u32::from(buf[k])
         }
     };
-    let colour = if has_alpha { channels - 1 } else { channels };
+    let colour = if has_alpha { channels - 1 } else { channels }.max(1);
+    if buf.len() < w * h * channels * if sixteen { 2 } else { 1 } {
+        return Err(MapError::Png(
+            "the image data is shorter than its header".to_owned(),
+        ));
+    }
     let mut pixels = Vec::with_capacity(w * h);
     let mut alpha = has_alpha.then(|| Vec::with_capacity(w * h));
-    for r in 0..h {
-        let start = r * frame.line_size;
-        let row = buf
-            .get(start..start + w * channels * bps)
-            .ok_or_else(|| MapError::Png("the image data is shorter than its header".to_owned()))?;
-        for x in 0..w {
-            let base = x * channels;
-            let sum: u32 = (0..colour).map(|c| sample(row, base + c)).sum();
-            pixels.push((sum / colour as u32) as u16);
-            if let Some(a) = &mut alpha {
-                a.push(sample(row, base + channels - 1) as u16);
-            }
+    for p in 0..w * h {
+        let base = p * channels;
+        let sum: u32 = (0..colour).map(|c| sample(base + c)).sum();
+        pixels.push((sum / colour as u32) as u16);
+        if let Some(a) = &mut alpha {
+            a.push(sample(base + channels - 1) as u16);
         }
     }
     Ok(GreyImage {
@@ -897,7 +862,9 @@ mod tests {
             assert!(
                 matches!(
                     e,
-                    MapError::Grid(GridError::BadResolution(_)) | MapError::BadValue { .. }
+                    MapError::Grid(GridError::BadResolution(_))
+                        | MapError::BadValue { .. }
+                        | MapError::Yaml { line: 2, .. }
                 ),
                 "{r}: {e}"
             );
@@ -924,13 +891,8 @@ mod tests {
                 got: 7
             }
         );
-        assert!(matches!(
-            decode_image(b"P2 3 1 255 0 1"),
-            Err(MapError::Truncated {
-                expected: 3,
-                got: 2
-            })
-        ));
+        let e = decode_image(b"P2 3 1 255 0 1").unwrap_err();
+        assert!(e.to_string().contains("ends before its 3 pixels"), "{e}");
         assert!(matches!(decode_image(b"P5 4"), Err(MapError::Pgm(_))));
         assert!(matches!(
             decode_image(b"P5 4 4 70000\n"),

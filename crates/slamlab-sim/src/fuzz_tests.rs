@@ -1,0 +1,314 @@
+//! Fuzz tests of every reader in this crate a user can feed: ROS map YAML, PGM and
+//! PNG images, g2o/TORO/iSAM pose graphs and scenario JSON. Each runs
+//! [`slamlab_fuzz::inputs_per_reader`] mutated inputs (10,000 in `./test.sh`,
+//! 1,000,000 in `scripts/fuzz.sh`) from real files: the shared data sets
+//! (`../shared/data`, when present) and the built-in maps. See the `slamlab-fuzz`
+//! crate for what is checked and how to add a reader.
+
+use crate::graph_io::{self, GraphFormat};
+use crate::grid::map_io::{self, ImageFormat};
+use crate::scenario_file::ScenarioFile;
+use slamlab_core::Pose2;
+use slamlab_core::graph::PoseGraph;
+use slamlab_core::grid::{Cell, OccupancyGrid};
+use slamlab_fuzz::{Target, head, shared_file_seeds, workspace_root};
+
+/// A reader's cap on the bytes it holds at once while reading one input. The map
+/// readers may build a grid of up to `MAX_CELLS` cells, but the seeds are small and a
+/// mutation can only claim a large size in a header, which is refused before any
+/// allocation: 64 MiB is far above any honest input here.
+const CAP: u64 = 64 << 20;
+
+fn asset(name: &str) -> Vec<u8> {
+    std::fs::read(workspace_root().join("assets/maps").join(name)).unwrap_or_default()
+}
+
+/// Real maps, cut to a 48 x 48 window (a mutation loop on a 300 kB image spends its
+/// time copying pixels, not in the decoder's branches), in both image formats.
+fn image_seeds() -> Vec<Vec<u8>> {
+    let mut seeds = vec![asset("maze.png"), asset("office.png")];
+    let mut grids = Vec::new();
+    for bytes in shared_file_seeds("maps", &["pgm", "png"], usize::MAX) {
+        if let Ok(image) = map_io::decode_image(&bytes) {
+            let yaml = map_io::MapYaml {
+                resolution: 0.05,
+                ..map_io::MapYaml::default()
+            };
+            if let Ok(grid) = map_io::grid_from_image(&image, &yaml) {
+                grids.push(crop(&grid, 48));
+            }
+        }
+    }
+    for grid in grids.iter().flatten() {
+        for format in [ImageFormat::Pgm, ImageFormat::Png] {
+            if let Ok(bytes) = map_io::encode_image(grid, format) {
+                seeds.push(bytes);
+            }
+        }
+    }
+    // An ASCII PGM and a 16-bit one (map_server reads both).
+    seeds.push(
+        b"P2\n# a small map\n4 3\n255\n255 0 255 255\n255 255 205 255\n254 254 254 0\n".to_vec(),
+    );
+    let mut p5 = b"P5 3 2 65535\n".to_vec();
+    for v in [0u16, 65535, 52000, 65535, 0, 65535] {
+        p5.extend_from_slice(&v.to_be_bytes());
+    }
+    seeds.push(p5);
+    seeds.retain(|s| !s.is_empty());
+    seeds
+}
+
+fn crop(grid: &OccupancyGrid, side: usize) -> Option<OccupancyGrid> {
+    let (w, h) = (grid.width().min(side), grid.height().min(side));
+    let (x0, y0) = ((grid.width() - w) / 2, (grid.height() - h) / 2);
+    let cells: Vec<Cell> = (0..h)
+        .flat_map(|j| (0..w).map(move |i| (i, j)))
+        .map(|(i, j)| {
+            grid.get((x0 + i) as i64, (y0 + j) as i64)
+                .unwrap_or(Cell::Unknown)
+        })
+        .collect();
+    OccupancyGrid::new(w, h, grid.resolution(), Pose2::new(0.0, 0.0, 0.0), cells).ok()
+}
+
+#[test]
+fn map_yaml_survives_mutations() {
+    let mut seeds = vec![asset("maze.yaml"), asset("office.yaml")];
+    seeds.extend(shared_file_seeds("maps", &["yaml"], 4096));
+    seeds.push(
+        b"# every key map_server reads\nimage: \"a b.pgm\"\nresolution: 0.05\norigin:\n  - -12.5\n  - 3\n  - 0.0\nnegate: 1\noccupied_thresh: 0.65\nfree_thresh: 0.196\nmode: scale\n"
+            .to_vec(),
+    );
+    seeds.retain(|s| !s.is_empty());
+    let report = Target::new("map YAML", seeds, CAP).run_checked(
+        |bytes| {
+            map_io::parse_map_yaml(&String::from_utf8_lossy(bytes))
+                .map(drop)
+                .map_err(|e| e.to_string())
+        },
+        // Syntax errors and bad values say which line.
+        |message| {
+            let names_line = message.contains("line ");
+            let whole_file = message.contains("has no `")
+                || message.contains("thresh")
+                || message.contains("resolution")
+                || message.contains("origin");
+            if names_line || whole_file {
+                Ok(())
+            } else {
+                Err(format!("'{message}' names neither a line nor a key"))
+            }
+        },
+    );
+    report.assert_clean();
+}
+
+#[test]
+fn map_images_survive_mutations() {
+    let seeds = image_seeds();
+    assert!(seeds.len() >= 4, "only {} image seeds", seeds.len());
+    let report = Target::new("map image (PGM/PNG)", seeds, CAP).run_checked(
+        |bytes| {
+            map_io::decode_image(bytes)
+                .map(drop)
+                .map_err(|e| e.to_string())
+        },
+        |message| {
+            if ["PGM", "PNG", "image", "map", "cells"]
+                .iter()
+                .any(|w| message.contains(w))
+            {
+                Ok(())
+            } else {
+                Err(format!(
+                    "'{message}' does not say which image or what is wrong"
+                ))
+            }
+        },
+    );
+    report.assert_clean();
+}
+
+#[test]
+fn map_files_survive_mutations_together() {
+    // YAML and image through `load_map`, the app's and the CLI's entry point: the
+    // thresholds and modes of the YAML meet every pixel value.
+    let yaml = "image: m.png\nresolution: 0.1\norigin: [-2, -3, 0.5]\nnegate: 0\noccupied_thresh: 0.65\nfree_thresh: 0.196\n";
+    let mut seeds: Vec<Vec<u8>> = image_seeds()
+        .into_iter()
+        .map(|image| {
+            let mut s = yaml.as_bytes().to_vec();
+            s.extend_from_slice(b"\0");
+            s.extend_from_slice(&image);
+            s
+        })
+        .collect();
+    seeds.truncate(6);
+    let report = Target::new("map YAML + image", seeds, CAP).run(|bytes| {
+        let split = bytes.iter().position(|&b| b == 0).unwrap_or(bytes.len());
+        let (text, image) = bytes.split_at(split);
+        let image = image.get(1..).unwrap_or(&[]);
+        map_io::load_map(&String::from_utf8_lossy(text), image)
+            .map(drop)
+            .map_err(|e| e.to_string())
+    });
+    report.assert_clean();
+}
+
+/// Pieces of the real files under `shared/data/posegraphs` with one of `extensions`:
+/// the first 4 kB and, to reach the loop closures, 4 kB from the middle.
+fn graph_pieces(extensions: &[&str]) -> Vec<Vec<u8>> {
+    let mut pieces = Vec::new();
+    for bytes in shared_file_seeds("posegraphs", extensions, usize::MAX) {
+        pieces.push(head(&bytes, 4096));
+        let middle = bytes.len() / 2;
+        let from = bytes[middle..]
+            .iter()
+            .position(|&b| b == b'\n')
+            .map_or(middle, |k| middle + k + 1);
+        pieces.push(head(&bytes[from..], 4096));
+    }
+    pieces
+}
+
+const SMALL_G2O: &[u8] = b"VERTEX_SE2 0 0 0 0\nVERTEX_SE2 1 1 0 0.1\nVERTEX_SE2 2 1 1 1.6\nVERTEX_XY 7 2 2\nEDGE_SE2 0 1 1 0 0.1 500 0 0 500 0 2000\nEDGE_SE2 1 2 0 1 1.5 500 0 0 500 0 2000\nEDGE_SE2 2 0 -1 1 -1.6 500 0 0 500 0 2000\nEDGE_SE2_XY 2 7 1 1 100 0 100\nFIX 0\n";
+
+/// A g2o text as TORO: `VERTEX2`, and `EDGE2` with the information matrix's entries
+/// in TORO's order (xx xy yy tt xt yt; g2o writes xx xy xt yy yt tt).
+fn g2o_as_toro(text: &[u8]) -> Vec<u8> {
+    let mut out = String::new();
+    for line in String::from_utf8_lossy(text).lines() {
+        let w: Vec<&str> = line.split_whitespace().collect();
+        match w.as_slice() {
+            ["VERTEX_SE2", rest @ ..] => out.push_str(&format!("VERTEX2 {}\n", rest.join(" "))),
+            ["EDGE_SE2", a, b, x, y, t, i11, i12, i13, i22, i23, i33] => out.push_str(&format!(
+                "EDGE2 {a} {b} {x} {y} {t} {i11} {i12} {i22} {i33} {i13} {i23}\n"
+            )),
+            _ => {}
+        }
+    }
+    out.into_bytes()
+}
+
+fn graph_seeds(format: GraphFormat) -> Vec<Vec<u8>> {
+    let mut g2o = graph_pieces(&["g2o"]);
+    g2o.push(SMALL_G2O.to_vec());
+    match format {
+        GraphFormat::G2o => g2o,
+        GraphFormat::Toro => g2o.iter().map(|t| g2o_as_toro(t)).collect(),
+        GraphFormat::Isam => {
+            // victoria_park.txt is iSAM's format.
+            let mut seeds = graph_pieces(&["txt"]);
+            seeds.push(
+                b"ODOMETRY 1 0 1 0 0.1 100 0 0 100 0 1000\nODOMETRY 2 1 1 0 0.1 100 0 0 100 0 1000\nLANDMARK 2 0 3 1 10 0 10\nLANDMARK 1 0 2 2 10 0 10\n"
+                    .to_vec(),
+            );
+            seeds
+        }
+    }
+}
+
+fn fuzz_graph(
+    name: &str,
+    format: GraphFormat,
+    read: fn(&str) -> Result<PoseGraph, graph_io::GraphFileError>,
+) {
+    let seeds = graph_seeds(format);
+    assert!(!seeds.is_empty(), "no {name} seeds");
+    let report = Target::new(name, seeds, CAP).run_checked(
+        |bytes| {
+            read(&String::from_utf8_lossy(bytes))
+                .map(drop)
+                .map_err(|e| e.to_string())
+        },
+        |message| {
+            if message.contains("line ")
+                || message.contains("pose-graph file")
+                || message.contains("bytes")
+                || message.contains("vert")
+                || message.contains("edge")
+            {
+                Ok(())
+            } else {
+                Err(format!(
+                    "'{message}' names neither a line nor what is missing"
+                ))
+            }
+        },
+    );
+    report.assert_clean();
+}
+
+#[test]
+fn g2o_graphs_survive_mutations() {
+    fuzz_graph("g2o graph", GraphFormat::G2o, graph_io::read_g2o);
+}
+
+#[test]
+fn toro_graphs_survive_mutations() {
+    fuzz_graph("TORO graph", GraphFormat::Toro, graph_io::read_toro);
+}
+
+#[test]
+fn isam_graphs_survive_mutations() {
+    fuzz_graph("iSAM graph", GraphFormat::Isam, graph_io::read_isam);
+}
+
+#[test]
+fn any_graph_file_survives_mutations() {
+    // `read_graph` tells the formats apart: a g2o line in a TORO file and so on.
+    let mut seeds = graph_seeds(GraphFormat::G2o);
+    seeds.truncate(4);
+    seeds.extend(graph_seeds(GraphFormat::Toro).into_iter().take(3));
+    seeds.extend(graph_seeds(GraphFormat::Isam).into_iter().take(3));
+    fuzz_graph_any(seeds);
+}
+
+fn fuzz_graph_any(seeds: Vec<Vec<u8>>) {
+    let report = Target::new("pose-graph file (any format)", seeds, CAP).run(|bytes| {
+        graph_io::read_graph(&String::from_utf8_lossy(bytes))
+            .map(drop)
+            .map_err(|e| e.to_string())
+    });
+    report.assert_clean();
+}
+
+#[test]
+fn scenario_files_survive_mutations() {
+    let seeds: Vec<Vec<u8>> = [
+        ScenarioFile {
+            lesson: "kidnap".into(),
+            params: vec![
+                ("map".into(), "maze".into()),
+                ("particles".into(), "1000".into()),
+                ("estimator".into(), "amcl,acmcl".into()),
+            ],
+            view: vec![("tick".into(), "30".into()), ("legend".into(), "0".into())],
+        },
+        ScenarioFile {
+            lesson: "landmark-slam".into(),
+            params: vec![("seed".into(), "7".into()), ("fov-deg".into(), "90".into())],
+            view: Vec::new(),
+        },
+    ]
+    .iter()
+    .map(|f| f.to_json().into_bytes())
+    .chain([
+        br#"{"format": "slamlab-scenario", "version": 1, "lesson": "pose-graph", "params": {"noise": 0.1, "closures": true, "kernel": null}}"#.to_vec(),
+    ])
+    .collect();
+    let report = Target::new("scenario JSON", seeds, CAP).run_checked(
+        |bytes| ScenarioFile::parse(&String::from_utf8_lossy(bytes)).map(drop),
+        |message| {
+            if message.contains("scenario") || message.contains('"') {
+                Ok(())
+            } else {
+                Err(format!(
+                    "'{message}' does not say what is wrong with the scenario"
+                ))
+            }
+        },
+    );
+    report.assert_clean();
+}
