@@ -1,6 +1,7 @@
 //! The explanation panel: what the last phase did, with its numbers and the
 //! equations it follows.
 
+use crate::widgets::sources::source_link;
 use slamlab_sim::mapping::{MappingPhase, MappingSession, PoseSource, RuleKind};
 
 /// The panel.
@@ -75,6 +76,12 @@ pub fn explanation_ui(ui: &mut egui::Ui, session: &MappingSession) {
             ui.label("Press Step phase (.) or Run to insert the first scan.");
         }
     }
+    ui.horizontal_wrapped(|ui| {
+        ui.label("Sources:");
+        source_link(ui, "xiang", "Xiang's thesis, Sec. 5.2.1 (Eq. 5.3-5.5)");
+        source_link(ui, "waslander", "Waslander's slides (occupancy grids, ICP)");
+        source_link(ui, "thrun", "Probabilistic Robotics, Table 9.2");
+    });
     ui.separator();
     ui.strong("The pose sources");
     ui.label(
@@ -82,7 +89,7 @@ pub fn explanation_ui(ui: &mut egui::Ui, session: &MappingSession) {
          Raw odometry smears the map: its error grows without bound. ICP aligns each scan to the one \
          before (point-to-point: closed form; point-to-line: linearized least squares), so errors still \
          add up, only more slowly. Scan-to-map matches each scan against the whole map built so far \
-         (Cartographer's local SLAM, thesis Sec. 5.2.1): a correlative search over a small window, then \
+         (Cartographer's local SLAM, Sec. 5.2.1 of Xiang's thesis): a correlative search over a small window, then \
          Eq. 5.5, argmin Σ (1 − M_smooth(T_ξ h_k))², on the bicubic-interpolated grid.",
     );
     ui.separator();
@@ -94,7 +101,7 @@ pub fn explanation_ui(ui: &mut egui::Ui, session: &MappingSession) {
             scenario.l_occ, scenario.l_free, scenario.l_min, scenario.l_max
         )),
         RuleKind::Odds => ui.label(format!(
-            "Odds (thesis Eq. 5.3-5.4): odds(p) = p/(1−p); a hit multiplies a cell's odds by odds({}), \
+            "Odds (Eq. 5.3-5.4 of Xiang's thesis): odds(p) = p/(1−p); a hit multiplies a cell's odds by odds({}), \
              a crossed cell by odds({}); the probability is clamped to [{}, {}].",
             scenario.hit_probability, scenario.miss_probability, scenario.p_min, scenario.p_max
         )),

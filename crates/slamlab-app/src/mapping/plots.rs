@@ -4,8 +4,9 @@
 
 use super::map::source_color;
 use crate::export::PlotSeries;
-use crate::widgets::plots::{Mark, Styled, draw_series, series_data, series_key_ui, title_ui};
-use egui_plot::Plot;
+use crate::widgets::plots::{
+    Figure, Mark, Styled, draw_series, figure_plot, figure_ui, series_data, style_entries, title_ui,
+};
 use slamlab_sim::mapping::MappingSession;
 
 const ERROR: &str = "Trajectory error";
@@ -74,56 +75,56 @@ fn plotted(session: &MappingSession, scan_ms: &[f64]) -> Vec<Styled> {
     out
 }
 
-/// A plot over scans, without a legend inside (the key is the line above).
-fn scan_plot<'a>(id: &str, y_label: &str, height: f32) -> Plot<'a> {
-    Plot::new(id)
-        .height(height)
-        .x_axis_label("scan")
-        .y_axis_label(y_label.to_owned())
-        .include_x(0.0)
-        .include_y(0.0)
-        .allow_scroll(false)
-        .allow_drag(false)
-        .allow_zoom(false)
-        .allow_boxed_zoom(false)
-}
-
-/// The plots side by side.
+/// The plots side by side, each with its key on a line above it.
 pub fn plots_ui(ui: &mut egui::Ui, session: &MappingSession, scan_ms: &[f64]) {
     let all = plotted(session, scan_ms);
     let sim = session.sim();
-    series_key_ui(
-        ui,
-        &[(sim.source().label().to_owned(), source_color(sim.source()))],
-        "one point per scan",
-    );
-    let height = (ui.available_height() - 26.0).max(70.0);
+    let color = source_color(sim.source());
+    let height = ui.available_height().max(80.0);
     let has_truth = sim.input().truth.is_some();
+    let plot = |id: &'static str| {
+        move |h: f32, y: &str| figure_plot(id, "scan", y, h).include_x(0.0).include_y(0.0)
+    };
+    let figure = |title: &'static str, hover: &'static str, y_label: &'static str| Figure {
+        title,
+        hover,
+        key: style_entries(&all, title, color),
+        y_label,
+        height,
+    };
     ui.columns(3, |columns| {
-        let ui = &mut columns[0];
-        title_ui(
-            ui,
-            ERROR,
-            "Distance from each scan's pose (as the pose source gave it) to the true pose, metres. \
-             Raw odometry drifts; a matcher holds the error down until it meets something it cannot match.",
-        );
+        let error_hover = "Distance from each scan's pose (as the pose source gave it) to the true pose, \
+             metres. Raw odometry drifts; a matcher holds the error down until it meets something it \
+             cannot match.";
         if has_truth {
-            scan_plot("mapping_error", "error (m)", height).show(ui, |p| draw_series(p, &all, ERROR));
+            figure_ui(
+                &mut columns[0],
+                &figure(ERROR, error_hover, "error (m)"),
+                plot("mapping_error"),
+                |p| draw_series(p, &all, ERROR),
+            );
         } else {
-            ui.label("A real log has no ground truth: no error to plot.");
+            title_ui(&mut columns[0], ERROR, error_hover);
+            columns[0].label("A real log has no ground truth: no error to plot.");
         }
-        let ui = &mut columns[1];
-        title_ui(
-            ui,
-            COST,
-            "The matcher's final cost per scan: scan-to-map, the sum of squared residuals of thesis Eq. 5.5 \
-             with its two pulls; ICP, the mean squared distance of the kept pairs (m²). A jump marks a scan \
-             the matcher found hard.",
+        figure_ui(
+            &mut columns[1],
+            &figure(
+                COST,
+                "The matcher's final cost per scan: scan-to-map, the sum of squared residuals of Eq. 5.5 \
+                 of Xiang's thesis with its two pulls; ICP, the mean squared distance of the kept pairs \
+                 (m²). A jump marks a scan the matcher found hard.",
+                "cost",
+            ),
+            plot("mapping_cost"),
+            |p| draw_series(p, &all, COST),
         );
-        scan_plot("mapping_cost", "cost", height).show(ui, |p| draw_series(p, &all, COST));
-        let ui = &mut columns[2];
-        title_ui(ui, TIME, "How long each scan took here (predict, match and insert), milliseconds");
-        scan_plot("mapping_time", "time (ms)", height).show(ui, |p| draw_series(p, &all, TIME));
+        figure_ui(
+            &mut columns[2],
+            &figure(TIME, "How long each scan took here (predict, match and insert), milliseconds", "time (ms)"),
+            plot("mapping_time"),
+            |p| draw_series(p, &all, TIME),
+        );
     });
 }
 
