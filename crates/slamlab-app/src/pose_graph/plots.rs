@@ -79,7 +79,7 @@ pub fn cost_segments(history: &[[f64; 2]]) -> (Vec<Vec<[f64; 2]>>, Vec<[f64; 2]>
         let point = [h[0], log(h[1])];
         let is_edit = k > 0 && history.get(k - 1).is_some_and(|before| before[0] == h[0]);
         if is_edit {
-            if current.len() > 0 {
+            if !current.is_empty() {
                 segments.push(std::mem::take(&mut current));
             }
             if point[1].is_finite() {

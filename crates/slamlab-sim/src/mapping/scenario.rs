@@ -402,10 +402,12 @@ mod tests {
 
     #[test]
     fn the_table_round_trips_and_refuses_nonsense() {
-        let mut s = MappingScenario::default();
-        s.poses = PoseSource::Plicp;
-        s.rule = RuleKind::LogOdds;
-        s.resolution = 0.1;
+        let s = MappingScenario {
+            poses: PoseSource::Plicp,
+            rule: RuleKind::LogOdds,
+            resolution: 0.1,
+            ..MappingScenario::default()
+        };
         let pairs = to_pairs(&s);
         let mut back = MappingScenario::default();
         let owned: Vec<(String, String)> = pairs
