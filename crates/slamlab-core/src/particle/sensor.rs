@@ -81,12 +81,6 @@ impl Scan {
             .map(|k| ((k as f64 * step).round() as usize).min(n - 1))
             .collect()
     }
-
-    /// Whether reading `k` is a usable number below the maximum range.
-    fn is_hit(&self, k: usize) -> bool {
-        let z = self.ranges[k];
-        z.is_finite() && z >= self.range_min.max(0.0) && z < self.range_max
-    }
 }
 
 /// How the beams' likelihoods combine into a scan's (amcl has the sum of cubes
@@ -512,7 +506,7 @@ impl PreparedModel {
                         }
                     }
                     MeasurementModel::LikelihoodField(lf) => {
-                        if scan.is_hit(k) {
+                        if scan.is_end_point(k) {
                             let (s, c) = math::sin_cos(pose.theta + angle);
                             let d = field.distance_at(pose.x + range * c, pose.y + range * s);
                             BeamLikelihood {
@@ -549,7 +543,7 @@ impl PreparedModel {
 pub fn beam_end_points(scan: &Scan, beams: &[usize]) -> Vec<(f64, f64)> {
     beams
         .iter()
-        .filter(|&&k| scan.is_hit(k))
+        .filter(|&&k| scan.is_end_point(k))
         .map(|&k| {
             let (s, c) = math::sin_cos(scan.angles[k]);
             (scan.ranges[k] * c, scan.ranges[k] * s)
