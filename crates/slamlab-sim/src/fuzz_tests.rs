@@ -1,5 +1,6 @@
 //! Fuzz tests of every reader in this crate a user can feed: ROS map YAML, PGM and
-//! PNG images, g2o/TORO/iSAM pose graphs and scenario JSON. Each runs
+//! PNG images, g2o/TORO/iSAM pose graphs, scenario JSON and CARMEN laser logs (plain,
+//! gzip and bzip2). Each runs
 //! [`slamlab_fuzz::inputs_per_reader`] mutated inputs (10,000 in `./test.sh`,
 //! 1,000,000 in `scripts/fuzz.sh`) from real files: the shared data sets
 //! (`../shared/data`, when present) and the built-in maps. See the `slamlab-fuzz`
@@ -307,6 +308,103 @@ fn scenario_files_survive_mutations() {
                 Err(format!(
                     "'{message}' does not say what is wrong with the scenario"
                 ))
+            }
+        },
+    );
+    report.assert_clean();
+}
+
+/// CARMEN laser logs through the one entry point the app and the CLI use
+/// ([`LaserLog::from_bytes_with_limits`]: size cap, compression detected from the
+/// bytes, then the parser). Seeds: a hand-made file with every record type the reader
+/// knows and some it skips, a simulated log written by [`write_carmen`], the head of
+/// the Intel log (when `../shared` is present), and gzip and bzip2 copies of the small
+/// ones, so mutations also hit the decompressors' headers and streams.
+#[test]
+fn carmen_logs_survive_mutations() {
+    use crate::laser_log::{
+        LaserLog, LogLimits, SimulatedLogConfig, simulate_log, write_carmen,
+    };
+    use std::io::{Read as _, Write as _};
+    let mut text_seeds: Vec<Vec<u8>> = vec![
+        b"PARAM robot_frontlaser_offset 0.0 nohost 0
+PARAM laser_front_laser_resolution 1.0 nohost 0
+ODOM 0.0 0.0 -0.002 0.0 0.0 0.0 100.0 nohost 0.0
+FLASER 4 1.07 2.5 81.83 0.50 0.1 0.2 0.3 0.1 0.2 0.3 100.1 nohost 0.1
+RLASER 2 3.0 4.0 1.0 2.0 3.1 0.0 0.0 3.0 100.15 nohost 0.15
+SYNC tag 100.2 nohost 0.2
+ROBOTLASER1 0 -1.5 3.0 0.5 30.0 0.01 0 7 1 2 3 4 5 6 7 2 0.9 0.8 5.1 5.2 0.1 5.0 5.0 0.1 0.2 0.3 0.4 0.5 0 100.5 nohost 0.5
+NMEA-GGA 1 2 3 100.7 nohost 0.7
+"
+        .to_vec(),
+    ];
+    if let Ok(map) = crate::grid::BuiltinMap::Maze.load() {
+        let config = SimulatedLogConfig {
+            lidar: crate::grid::lidar::Lidar {
+                beams: 24,
+                ..SimulatedLogConfig::default().lidar
+            },
+            ..SimulatedLogConfig::default()
+        };
+        if let Ok((log, _)) = simulate_log(&map, 6, 1, &config)
+            && let Ok(text) = write_carmen(&log)
+        {
+            text_seeds.push(text.into_bytes());
+        }
+    }
+    // The Intel log is bzip2-compressed: the head of its text is the seed.
+    for bytes in shared_file_seeds("laser", &["bz2", "gz", "clf", "log"], usize::MAX) {
+        let mut text = Vec::new();
+        let unpacked = if bytes.starts_with(b"BZh") {
+            bzip2::read::MultiBzDecoder::new(&bytes[..])
+                .take(64 << 10)
+                .read_to_end(&mut text)
+        } else if bytes.starts_with(&[0x1f, 0x8b]) {
+            flate2::read::MultiGzDecoder::new(&bytes[..])
+                .take(64 << 10)
+                .read_to_end(&mut text)
+        } else {
+            text.extend_from_slice(&bytes[..bytes.len().min(64 << 10)]);
+            Ok(text.len())
+        };
+        if unpacked.is_ok() {
+            text_seeds.push(head(&text, 4096));
+        }
+    }
+    let mut seeds = text_seeds.clone();
+    for text in text_seeds.iter().take(2) {
+        let mut gz = flate2::write::GzEncoder::new(Vec::new(), flate2::Compression::default());
+        let mut bz = bzip2::write::BzEncoder::new(Vec::new(), bzip2::Compression::default());
+        if gz.write_all(text).is_ok()
+            && bz.write_all(text).is_ok()
+            && let (Ok(gz), Ok(bz)) = (gz.finish(), bz.finish())
+        {
+            seeds.push(gz);
+            seeds.push(bz);
+        }
+    }
+    // Caps far below the defaults: a mutated gzip header may claim anything, and the
+    // unpacked-size cap must stop it before it allocates.
+    let limits = LogLimits {
+        max_input_bytes: 1 << 20,
+        max_unpacked_bytes: 8 << 20,
+    };
+    let report = Target::new("CARMEN log", seeds, CAP).run_checked(
+        |bytes| LaserLog::from_bytes_with_limits(bytes, limits)
+            .map(drop)
+            .map_err(|e| e.to_string()),
+        |message| {
+            let names_place = message.contains("line")
+                || message.contains("laser")
+                || message.contains("compress")
+                || message.contains("gzip")
+                || message.contains("bzip2")
+                || message.contains("beam")
+                || message.contains("log");
+            if names_place {
+                Ok(())
+            } else {
+                Err(format!("'{message}' does not say what is wrong with the log"))
             }
         },
     );
