@@ -24,7 +24,7 @@ mod raycast;
 pub use costmap::{Costmap, FreeCells};
 pub use distance::{DistanceField, squared_distance_transform};
 pub use probability::{
-    InsertParams, InsertReport, LogOddsSteps, ProbabilityGrid, TILE, UpdateRule, log_odds,
+    BeamCell, BeamUpdate, InsertParams, InsertReport, LogOddsSteps, ProbabilityGrid, TILE, UpdateRule, log_odds,
     probability, segment_cells,
 };
 

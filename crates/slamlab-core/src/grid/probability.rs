@@ -246,6 +246,37 @@ pub struct InsertReport {
     pub new_cells: usize,
 }
 
+/// One cell of a beam's update ([`ProbabilityGrid::explain_beam`]).
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+pub struct BeamCell {
+    /// The cell `(i, j)`.
+    pub cell: (i64, i64),
+    /// Whether this is the beam's end-point cell (the last in the list).
+    pub end: bool,
+    /// Whether the scan updates it as a hit (some beam ends in it) rather
+    /// than as a miss.
+    pub hit: bool,
+    /// Its log odds before the scan (`None`: never observed, p = 0.5).
+    pub before: Option<f64>,
+    /// Its log odds after the scan.
+    pub after: f64,
+    /// Whether this beam is the one that updates it (once per scan: an
+    /// earlier beam, or a hit of another beam, may have taken it).
+    pub updated_here: bool,
+}
+
+/// What one beam of a scan does to the grid.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct BeamUpdate {
+    /// The beam's index in the scan.
+    pub beam: usize,
+    /// The sensor's position, metres.
+    pub origin: (f64, f64),
+    /// The cells it crosses in order from the sensor, then its end-point cell
+    /// (absent for a beam with no usable end point).
+    pub cells: Vec<BeamCell>,
+}
+
 /// One tile of cells: log odds, NaN where never observed.
 #[derive(Clone, Debug, PartialEq)]
 struct Tile {
@@ -441,35 +472,21 @@ impl ProbabilityGrid {
             return Err("the scan's pose is not finite".to_owned());
         }
         let mut report = InsertReport::default();
-        let r = self.resolution;
-        let (ox, oy) = (world_from_sensor.x / r, world_from_sensor.y / r);
         let n = scan.len();
-        let free_length = if params.max_range_free.is_finite() {
-            params.max_range_free.clamp(0.0, scan.range_max.max(0.0))
-        } else {
-            0.0
-        };
         // Hits first, so that the misses skip them.
         for k in 0..n {
-            if !scan.is_end_point(k) {
-                continue;
+            if let Some((i, j)) = self.hit_cell(world_from_sensor, scan, k) {
+                let (updated, new) = self.update_cell(i, j, &steps, true);
+                report.hits += updated as usize;
+                report.new_cells += new as usize;
             }
-            let (x, y) = beam_end(world_from_sensor, scan.angles[k], scan.ranges[k]);
-            let (i, j) = self.cell_of(x, y);
-            let (updated, new) = self.update_cell(i, j, &steps, true);
-            report.hits += updated as usize;
-            report.new_cells += new as usize;
         }
         for k in 0..n {
-            let (length, include_end) = if scan.is_end_point(k) {
-                (scan.ranges[k], false)
-            } else if scan.is_max_range(k) && free_length > 0.0 {
-                (free_length, true)
-            } else {
+            let Some((from, to, include_end)) = self.free_segment(world_from_sensor, scan, k, params)
+            else {
                 continue;
             };
-            let (x, y) = beam_end(world_from_sensor, scan.angles[k], length);
-            segment_cells((ox, oy), (x / r, y / r), include_end, |i, j| {
+            segment_cells(from, to, include_end, |i, j| {
                 let (updated, new) = self.update_cell(i, j, &steps, false);
                 report.misses += updated as usize;
                 report.new_cells += new as usize;
@@ -477,6 +494,126 @@ impl ProbabilityGrid {
         }
         self.finish_scan();
         Ok(report)
+    }
+
+    /// The cell of beam `k`'s end point, if the beam has one.
+    fn hit_cell(&self, world_from_sensor: &Pose2, scan: &Scan, k: usize) -> Option<(i64, i64)> {
+        if !scan.is_end_point(k) {
+            return None;
+        }
+        let (x, y) = beam_end(world_from_sensor, scan.angles[k], scan.ranges[k]);
+        Some(self.cell_of(x, y))
+    }
+
+    /// The segment beam `k` marks as free, in cell units, and whether its
+    /// last cell is included: up to (not into) its end point's cell, or, for
+    /// a max-range beam, up to `params.max_range_free` (last cell included);
+    /// `None` for a beam that marks nothing.
+    fn free_segment(
+        &self,
+        world_from_sensor: &Pose2,
+        scan: &Scan,
+        k: usize,
+        params: &InsertParams,
+    ) -> Option<((f64, f64), (f64, f64), bool)> {
+        let free_length = if params.max_range_free.is_finite() {
+            params.max_range_free.clamp(0.0, scan.range_max.max(0.0))
+        } else {
+            0.0
+        };
+        let (length, include_end) = if scan.is_end_point(k) {
+            (scan.ranges[k], false)
+        } else if scan.is_max_range(k) && free_length > 0.0 {
+            (free_length, true)
+        } else {
+            return None;
+        };
+        let r = self.resolution;
+        let (x, y) = beam_end(world_from_sensor, scan.angles[k], length);
+        let origin = (world_from_sensor.x / r, world_from_sensor.y / r);
+        Some((origin, (x / r, y / r), include_end))
+    }
+
+    /// The cells beam `k` marks as free, in order from the sensor.
+    fn crossed_cells(
+        &self,
+        world_from_sensor: &Pose2,
+        scan: &Scan,
+        k: usize,
+        params: &InsertParams,
+    ) -> Vec<(i64, i64)> {
+        let mut cells = Vec::new();
+        if let Some((from, to, include_end)) = self.free_segment(world_from_sensor, scan, k, params) {
+            segment_cells(from, to, include_end, |i, j| cells.push((i, j)));
+        }
+        cells
+    }
+
+    /// What inserting `scan` at `world_from_sensor` does to the cells of beam
+    /// `beam`, without changing the grid: every cell it crosses, in order from
+    /// the sensor, then its end point's cell, each with its log odds before and
+    /// after the scan and whether this beam is the one that updates it (a cell
+    /// changes once per scan: a crossed cell that holds another beam's end point
+    /// is a hit, not a miss, and a cell an earlier beam crossed was updated by
+    /// that beam). The lesson steps through a scan's beams with it.
+    pub fn explain_beam(
+        &self,
+        world_from_sensor: &Pose2,
+        scan: &Scan,
+        beam: usize,
+        params: &InsertParams,
+    ) -> Result<BeamUpdate, String> {
+        let steps = params.rule.log_odds_steps()?;
+        if !world_from_sensor.is_finite() {
+            return Err("the scan's pose is not finite".to_owned());
+        }
+        if beam >= scan.len() {
+            return Err(format!("beam {beam} of a scan of {} beams", scan.len()));
+        }
+        let hits: std::collections::HashSet<(i64, i64)> = (0..scan.len())
+            .filter_map(|k| self.hit_cell(world_from_sensor, scan, k))
+            .collect();
+        let earlier: std::collections::HashSet<(i64, i64)> = (0..beam)
+            .flat_map(|k| self.crossed_cells(world_from_sensor, scan, k, params))
+            .collect();
+        let earlier_hits: std::collections::HashSet<(i64, i64)> = (0..beam)
+            .filter_map(|k| self.hit_cell(world_from_sensor, scan, k))
+            .collect();
+        let crossed = self.crossed_cells(world_from_sensor, scan, beam, params);
+        let hit = self.hit_cell(world_from_sensor, scan, beam);
+        let mut seen_here = std::collections::HashSet::new();
+        let mut cells = Vec::with_capacity(crossed.len() + 1);
+        for (cell, end) in crossed
+            .into_iter()
+            .map(|c| (c, false))
+            .chain(hit.map(|c| (c, true)))
+        {
+            let is_hit = hits.contains(&cell);
+            let before = self.log_odds_at(cell.0, cell.1);
+            let first_time_here = seen_here.insert(cell);
+            // Hits are inserted before every miss: a hit cell is this beam's
+            // to update only if it is this beam's end point and no earlier
+            // beam ended in it.
+            let updated_here = first_time_here
+                && if is_hit {
+                    end && !earlier_hits.contains(&cell)
+                } else {
+                    !earlier.contains(&cell)
+                };
+            cells.push(BeamCell {
+                cell,
+                end,
+                hit: is_hit,
+                before,
+                after: steps.apply(before, is_hit),
+                updated_here,
+            });
+        }
+        Ok(BeamUpdate {
+            beam,
+            origin: (world_from_sensor.x, world_from_sensor.y),
+            cells,
+        })
     }
 
     /// Removes the stamps of the scan just inserted and raises the revision of
@@ -801,6 +938,68 @@ mod tests {
         for (_, _, cells) in g.tiles() {
             assert!(cells.iter().all(|v| v.is_nan() || v.abs() < 60.0));
         }
+    }
+
+    #[test]
+    fn a_beam_explained_names_its_cells_values_and_who_updates_them() {
+        // The scan of the test above: beam 90 crosses cell 5, where the first
+        // 90 beams end, so cell 5 is a hit there, not a miss, and it is beam
+        // 0's to update; cells 0-4 were crossed by beam 0 already.
+        let mut g = ProbabilityGrid::new(0.1);
+        let pose = Pose2::new(0.05, 0.05, 0.0);
+        let mut angles = vec![0.0; 90];
+        let mut ranges = vec![0.52; 90];
+        angles.push(0.0);
+        ranges.push(1.02);
+        let scan = Scan {
+            angles,
+            ranges,
+            range_min: 0.0,
+            range_max: 10.0,
+        };
+        let params = InsertParams {
+            rule: UpdateRule::LOG_ODDS,
+            max_range_free: 0.0,
+        };
+        // A first scan so that "before" is not empty: cell 3 at -0.4.
+        g.insert_scan(&pose, &one_beam(0.32, 0.0, 10.0), &params).unwrap();
+        let first = g.explain_beam(&pose, &scan, 0, &params).unwrap();
+        let cells: Vec<(i64, i64)> = first.cells.iter().map(|c| c.cell).collect();
+        assert_eq!(cells, [(0, 0), (1, 0), (2, 0), (3, 0), (4, 0), (5, 0)]);
+        assert!(first.cells.iter().all(|c| c.updated_here));
+        // Cell 3 held the first scan's end point; in this scan it is crossed:
+        // a miss, 0.85 - 0.4.
+        let c3 = first.cells[3];
+        assert_eq!((c3.hit, c3.end), (false, false));
+        assert!((c3.before.unwrap() - 0.85).abs() < 1e-6);
+        assert!((c3.after - 0.45).abs() < 1e-6);
+        assert!(first.cells[5].end && first.cells[5].hit);
+        let last = g.explain_beam(&pose, &scan, 90, &params).unwrap();
+        let cells: Vec<(i64, i64)> = last.cells.iter().map(|c| c.cell).collect();
+        assert_eq!(cells, (0..=10).map(|i| (i, 0)).collect::<Vec<_>>());
+        let c5 = last.cells[5];
+        assert!(c5.hit && !c5.end && !c5.updated_here, "{c5:?}");
+        assert!((c5.after - 0.85).abs() < 1e-9, "a hit: 0 + l_occ");
+        let c7 = last.cells[7];
+        assert!(!c7.hit && c7.updated_here && c7.before.is_none());
+        assert!((c7.after + 0.4).abs() < 1e-9);
+        let c10 = last.cells[10];
+        assert!(c10.end && c10.hit && c10.updated_here);
+        assert!(!last.cells[2].updated_here, "beam 0 crossed cell 2 first");
+        // Whatever the scan, the values explained are the values inserted.
+        let mut after = g.clone();
+        after.insert_scan(&pose, &scan, &params).unwrap();
+        for beam in [0, 45, 90] {
+            for c in g.explain_beam(&pose, &scan, beam, &params).unwrap().cells {
+                let got = after.log_odds_at(c.cell.0, c.cell.1).unwrap();
+                assert!((got - c.after).abs() < 1e-6, "beam {beam} {c:?}: {got}");
+            }
+        }
+        assert!(g.explain_beam(&pose, &scan, 91, &params).is_err());
+        assert!(
+            g.explain_beam(&Pose2::new(f64::NAN, 0.0, 0.0), &scan, 0, &params)
+                .is_err()
+        );
     }
 
     #[test]
