@@ -322,9 +322,7 @@ fn scenario_files_survive_mutations() {
 /// ones, so mutations also hit the decompressors' headers and streams.
 #[test]
 fn carmen_logs_survive_mutations() {
-    use crate::laser_log::{
-        LaserLog, LogLimits, SimulatedLogConfig, simulate_log, write_carmen,
-    };
+    use crate::laser_log::{LaserLog, LogLimits, SimulatedLogConfig, simulate_log, write_carmen};
     use std::io::{Read as _, Write as _};
     let mut text_seeds: Vec<Vec<u8>> = vec![
         b"PARAM robot_frontlaser_offset 0.0 nohost 0
@@ -390,9 +388,11 @@ NMEA-GGA 1 2 3 100.7 nohost 0.7
         max_unpacked_bytes: 8 << 20,
     };
     let report = Target::new("CARMEN log", seeds, CAP).run_checked(
-        |bytes| LaserLog::from_bytes_with_limits(bytes, limits)
-            .map(drop)
-            .map_err(|e| e.to_string()),
+        |bytes| {
+            LaserLog::from_bytes_with_limits(bytes, limits)
+                .map(drop)
+                .map_err(|e| e.to_string())
+        },
         |message| {
             let names_place = message.contains("line")
                 || message.contains("laser")
@@ -404,7 +404,9 @@ NMEA-GGA 1 2 3 100.7 nohost 0.7
             if names_place {
                 Ok(())
             } else {
-                Err(format!("'{message}' does not say what is wrong with the log"))
+                Err(format!(
+                    "'{message}' does not say what is wrong with the log"
+                ))
             }
         },
     );

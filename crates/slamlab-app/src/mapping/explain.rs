@@ -62,6 +62,23 @@ pub fn explanation_ui(ui: &mut egui::Ui, session: &MappingSession) {
                 ));
             }
         }
+        Some(MappingPhase::Iteration {
+            scan,
+            iteration,
+            of,
+            pose,
+            mean_squared_error,
+            kept,
+        }) => {
+            ui.label(format!(
+                "ICP iteration {iteration} of {of}, scan {scan}: {kept} pairs kept, mean squared \
+                 error {mean_squared_error:.5} m² before the step; the step took the scan to \
+                 ({:.3} m, {:.3} m, {:.1}°). The map shows this iteration's pairs.",
+                pose.x,
+                pose.y,
+                pose.theta.to_degrees()
+            ));
+        }
         Some(MappingPhase::Insert { scan, report }) => {
             ui.label(format!(
                 "Insert, scan {scan}: {} end-point cells updated as hits, {} crossed cells as misses \

@@ -141,6 +141,7 @@ pub fn map_ui(
     canvas: &mut MapView,
     tiles: &mut GridTiles,
     view: &mut MappingView,
+    beam: Option<usize>,
 ) {
     let sim = session.sim();
     let has_truth = sim.input().truth.is_some();
@@ -188,8 +189,12 @@ pub fn map_ui(
         .follow_robot
         .then(|| current.map(|(_, _, p)| [p.x, p.y]))
         .flatten();
+    let following = follow.is_some();
     let (_response, t) = map_canvas::canvas_ui(ui, canvas, bounds(session), 0.0, &mut follow, true);
-    view.follow_robot = view.follow_robot && follow.is_some();
+    if following {
+        // Dragging the map stops following.
+        view.follow_robot = follow.is_some();
+    }
     let colors = CanvasColors::of(ui);
     let painter = ui.painter_at(t.rect);
     painter.rect_filled(t.rect, 4.0, colors.background);
@@ -252,8 +257,10 @@ pub fn map_ui(
             1.6,
         );
     }
+    super::inspect::draw_beam(&painter, &t, session, beam);
+    super::inspect::draw_correspondences(&painter, &t, session);
     if let Some((_, scan, pose)) = current {
-        if view.scan {
+        if view.scan && beam.is_none() {
             let origin = t.xy(pose.x, pose.y);
             let ray = Color32::from_rgba_unmultiplied(0xD5, 0x5E, 0x00, 40);
             for k in 0..scan.scan.len() {

@@ -6,6 +6,7 @@
 //! Switching the pose source replays the same scans from the start.
 
 mod explain;
+mod inspect;
 mod map;
 mod plots;
 
@@ -20,8 +21,8 @@ use crate::widgets::params_panel::{self, PendingParams};
 use serde::{Deserialize, Serialize};
 use slamlab_sim::laser_log::LaserLog;
 use slamlab_sim::mapping::{
-    MappingInput, MappingPhase, MappingScenario, MappingSession, PoseSource, builtin_map,
-    log_input, simulated_input,
+    MappingEvent, MappingInput, MappingPhase, MappingScenario, MappingSession, PoseSource,
+    builtin_map, log_input, simulated_input,
 };
 use slamlab_sim::params;
 use slamlab_sim::stepper::Simulation;
@@ -125,6 +126,8 @@ pub struct MappingLesson {
     log_fetch: Option<LogFetch>,
     /// A request for the shell (a file to save, another lesson to open).
     request: Option<LessonRequest>,
+    /// The beam of the current scan whose update is inspected, if any.
+    pub beam: Option<usize>,
 }
 
 /// The lesson's start: the simulator's defaults.
@@ -204,6 +207,7 @@ impl MappingLesson {
             log_picker: FilePicker::multiple(),
             log_fetch: None,
             request: None,
+            beam: None,
         })
     }
 
@@ -447,6 +451,35 @@ impl MappingLesson {
         if chosen != current {
             self.set_pose_source(chosen);
         }
+        let icp = matches!(chosen, PoseSource::Icp | PoseSource::Plicp);
+        let mut stepping = self.session.sim().steps_iterations();
+        ui.add_enabled_ui(icp, |ui| {
+            ui.checkbox(&mut stepping, "ICP one iteration per phase")
+                .on_hover_text(
+                    "Step phase (.) then shows each ICP iteration of a match on its own: the pairs \
+                     it used and the pose it reached",
+                );
+        });
+        self.set_iteration_stepping(stepping);
+    }
+
+    /// Shows ICP matches one iteration per phase (or whole); switching it on
+    /// follows the robot closely enough to see the pairs.
+    pub fn set_iteration_stepping(&mut self, on: bool) {
+        if on != self.session.sim().steps_iterations() {
+            self.session
+                .stepper_mut()
+                .apply(MappingEvent::StepIterations(on));
+            if on {
+                self.look_closer(150.0);
+            }
+        }
+    }
+
+    /// Follows the robot at `scale` pixels per metre or closer.
+    fn look_closer(&mut self, scale: f32) {
+        self.view.follow_robot = true;
+        self.canvas.zoom_to_at_least(scale);
     }
 
     fn mapping_parameters_ui(&mut self, ui: &mut egui::Ui) {
@@ -552,6 +585,13 @@ impl crate::widgets::layout::LessonPanels for MappingLesson {
 
     fn explanation_ui(&mut self, ui: &mut egui::Ui) {
         explain::explanation_ui(ui, &self.session);
+        inspect::iteration_ui(ui, &self.session);
+        let inspecting = self.beam.is_some();
+        inspect::beam_ui(ui, &self.session, &mut self.beam);
+        if self.beam.is_some() && !inspecting {
+            // Cells of 5 cm: about 8 pixels each.
+            self.look_closer(160.0);
+        }
     }
 
     fn map_ui(&mut self, ui: &mut egui::Ui) {
@@ -570,6 +610,7 @@ impl crate::widgets::layout::LessonPanels for MappingLesson {
             &mut self.canvas,
             &mut self.tiles,
             &mut self.view,
+            self.beam,
         );
     }
 }

@@ -122,6 +122,16 @@ impl MapView {
         }
     }
 
+    /// Looks closer: at least `scale` pixels per metre from now on (as if the
+    /// user had zoomed), e.g. to show single cells.
+    pub fn zoom_to_at_least(&mut self, scale: f32) {
+        if scale.is_finite() && scale > self.scale {
+            self.scale = scale.clamp(SCALE_RANGE.0, SCALE_RANGE.1);
+            self.fitted = true;
+            self.adjusted = true;
+        }
+    }
+
     /// Pixels per metre.
     pub fn scale(&self) -> f32 {
         self.scale

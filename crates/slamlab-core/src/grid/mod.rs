@@ -24,8 +24,8 @@ mod raycast;
 pub use costmap::{Costmap, FreeCells};
 pub use distance::{DistanceField, squared_distance_transform};
 pub use probability::{
-    BeamCell, BeamUpdate, InsertParams, InsertReport, LogOddsSteps, ProbabilityGrid, TILE, UpdateRule, log_odds,
-    probability, segment_cells,
+    BeamCell, BeamUpdate, InsertParams, InsertReport, LogOddsSteps, ProbabilityGrid, TILE,
+    UpdateRule, log_odds, probability, segment_cells,
 };
 
 use crate::geometry::Pose2;

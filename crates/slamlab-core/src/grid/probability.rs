@@ -246,6 +246,9 @@ pub struct InsertReport {
     pub new_cells: usize,
 }
 
+/// A segment of a beam in cell units, `(from, to, include_last_cell)`.
+type FreeSegment = ((f64, f64), (f64, f64), bool);
+
 /// One cell of a beam's update ([`ProbabilityGrid::explain_beam`]).
 #[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
 pub struct BeamCell {
@@ -427,6 +430,13 @@ impl ProbabilityGrid {
                 revisions[ny * w + nx] = self.revisions[old];
             }
         }
+        // Cells stamped earlier in this scan move with their tiles.
+        for stamp in &mut self.stamped {
+            let (di, dj) = (stamp.0 % self.tiles_wide, stamp.0 / self.tiles_wide);
+            let nx = (self.tile_origin.0 + di as i64 - x0) as usize;
+            let ny = (self.tile_origin.1 + dj as i64 - y0) as usize;
+            stamp.0 = ny * w + nx;
+        }
         self.tiles = tiles;
         self.revisions = revisions;
         self.tile_origin = (x0, y0);
@@ -482,7 +492,8 @@ impl ProbabilityGrid {
             }
         }
         for k in 0..n {
-            let Some((from, to, include_end)) = self.free_segment(world_from_sensor, scan, k, params)
+            let Some((from, to, include_end)) =
+                self.free_segment(world_from_sensor, scan, k, params)
             else {
                 continue;
             };
@@ -515,7 +526,7 @@ impl ProbabilityGrid {
         scan: &Scan,
         k: usize,
         params: &InsertParams,
-    ) -> Option<((f64, f64), (f64, f64), bool)> {
+    ) -> Option<FreeSegment> {
         let free_length = if params.max_range_free.is_finite() {
             params.max_range_free.clamp(0.0, scan.range_max.max(0.0))
         } else {
@@ -543,7 +554,8 @@ impl ProbabilityGrid {
         params: &InsertParams,
     ) -> Vec<(i64, i64)> {
         let mut cells = Vec::new();
-        if let Some((from, to, include_end)) = self.free_segment(world_from_sensor, scan, k, params) {
+        if let Some((from, to, include_end)) = self.free_segment(world_from_sensor, scan, k, params)
+        {
             segment_cells(from, to, include_end, |i, j| cells.push((i, j)));
         }
         cells
@@ -962,7 +974,8 @@ mod tests {
             max_range_free: 0.0,
         };
         // A first scan so that "before" is not empty: cell 3 at -0.4.
-        g.insert_scan(&pose, &one_beam(0.32, 0.0, 10.0), &params).unwrap();
+        g.insert_scan(&pose, &one_beam(0.32, 0.0, 10.0), &params)
+            .unwrap();
         let first = g.explain_beam(&pose, &scan, 0, &params).unwrap();
         let cells: Vec<(i64, i64)> = first.cells.iter().map(|c| c.cell).collect();
         assert_eq!(cells, [(0, 0), (1, 0), (2, 0), (3, 0), (4, 0), (5, 0)]);
@@ -1000,6 +1013,108 @@ mod tests {
             g.explain_beam(&Pose2::new(f64::NAN, 0.0, 0.0), &scan, 0, &params)
                 .is_err()
         );
+    }
+
+    #[test]
+    fn a_grid_that_grows_during_a_scan_leaves_no_stamp_behind() {
+        // The first beam ends in the first tile; the next ones reach tiles to
+        // the west, south and north-east, so the grid is laid out again three
+        // times while cells of the first tiles are stamped.
+        let mut g = ProbabilityGrid::new(0.1);
+        let pose = Pose2::new(0.05, 0.05, 0.0);
+        let scan = Scan {
+            angles: vec![0.0, std::f64::consts::PI, -std::f64::consts::FRAC_PI_2, 0.8],
+            ranges: vec![1.0, 9.0, 12.0, 20.0],
+            range_min: 0.0,
+            range_max: 30.0,
+        };
+        let params = InsertParams {
+            rule: UpdateRule::LOG_ODDS,
+            max_range_free: 0.0,
+        };
+        let report = g.insert_scan(&pose, &scan, &params).unwrap();
+        assert_eq!(report.hits, 4);
+        for (_, _, cells) in g.tiles() {
+            assert!(
+                cells.iter().all(|v| v.is_nan() || v.abs() < 60.0),
+                "a stamp survived the scan"
+            );
+        }
+        // Every cell holds the value one update gives it.
+        assert!((g.log_odds_at(10, 0).unwrap() - 0.85).abs() < 1e-6);
+        assert!((g.log_odds_at(5, 0).unwrap() + 0.4).abs() < 1e-6);
+        assert!((g.log_odds_at(-90, 0).unwrap() - 0.85).abs() < 1e-6);
+        assert!((g.log_odds_at(-40, 0).unwrap() + 0.4).abs() < 1e-6);
+        assert!((g.log_odds_at(0, -120).unwrap() - 0.85).abs() < 1e-6);
+    }
+
+    #[test]
+    fn scans_from_a_wandering_sensor_match_a_cell_by_cell_reference() {
+        // The grid against the plainest implementation of the rule: a map from
+        // cell to log odds, the hit set and the miss set minus the hits, each
+        // cell updated once per scan. The sensor wanders far, so the grid is
+        // laid out again in the middle of many scans.
+        use std::collections::{HashMap, HashSet};
+        let params = InsertParams {
+            rule: UpdateRule::LOG_ODDS,
+            max_range_free: 3.0,
+        };
+        let steps = params.rule.log_odds_steps().unwrap();
+        let mut g = ProbabilityGrid::new(0.1);
+        let mut reference: HashMap<(i64, i64), f64> = HashMap::new();
+        let mut state = 12345u64;
+        let mut uniform = move || {
+            state = state
+                .wrapping_mul(6364136223846793005)
+                .wrapping_add(1442695040888963407);
+            (state >> 11) as f64 / (1u64 << 53) as f64
+        };
+        for k in 0..40 {
+            let pose = Pose2::new(
+                -20.0 + 40.0 * uniform(),
+                -20.0 + 40.0 * uniform(),
+                6.0 * uniform(),
+            );
+            let n = 60;
+            let angles: Vec<f64> = (0..n).map(|b| -3.1 + 6.2 * b as f64 / n as f64).collect();
+            let ranges: Vec<f64> = (0..n)
+                .map(|_| {
+                    if uniform() < 0.1 {
+                        8.0
+                    } else {
+                        0.3 + 7.0 * uniform()
+                    }
+                })
+                .collect();
+            let scan = Scan {
+                angles,
+                ranges,
+                range_min: 0.0,
+                range_max: 8.0,
+            };
+            g.insert_scan(&pose, &scan, &params).unwrap();
+            let mut hits = HashSet::new();
+            let mut misses = HashSet::new();
+            for b in 0..n {
+                if let Some(c) = g.hit_cell(&pose, &scan, b) {
+                    hits.insert(c);
+                }
+                misses.extend(g.crossed_cells(&pose, &scan, b, &params));
+            }
+            for c in &hits {
+                let old = reference.get(c).copied();
+                reference.insert(*c, steps.apply(old, true));
+            }
+            for c in misses.difference(&hits) {
+                let old = reference.get(c).copied();
+                reference.insert(*c, steps.apply(old, false));
+            }
+            assert_eq!(g.known_cells(), reference.len(), "scan {k}");
+        }
+        for (&(i, j), &l) in &reference {
+            let got = g.log_odds_at(i, j).unwrap();
+            assert!((got - l).abs() < 1e-5, "cell ({i}, {j}): {got} against {l}");
+        }
     }
 
     #[test]

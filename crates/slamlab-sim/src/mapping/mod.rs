@@ -15,8 +15,8 @@ pub mod scenario;
 mod tests;
 
 pub use run::{
-    InputScan, MappingInput, MappingPhase, MappingRecords, MappingSim, MatcherSettings,
-    map_agreement, trajectory_rmse,
+    IcpScanRecord, InputScan, MappingEvent, MappingInput, MappingPhase, MappingRecords, MappingSim,
+    MatcherSettings, map_agreement, trajectory_rmse,
 };
 pub use scenario::{MappingScenario, PoseSource, RuleKind};
 

@@ -1,7 +1,10 @@
 //! One mapping run: scans in order, each given a pose by the chosen source and
 //! inserted into a probability grid. Stepped phase by phase by the generic
 //! [`Stepper`](crate::stepper::Stepper): *predict* (odometry), *match* (the
-//! scan matcher's correction), *insert* (the grid update).
+//! scan matcher's correction), *insert* (the grid update). With
+//! [`MappingEvent::StepIterations`] on, an ICP match is shown one iteration
+//! per phase (the alignment is computed at once; each phase reveals the next
+//! iteration's correspondences and pose).
 //!
 //! The input is the same for every pose source (a simulated log or a real
 //! one), so switching the source replays the same scans. The truth of a
@@ -10,8 +13,10 @@
 use super::scenario::PoseSource;
 use crate::stepper::{Records, Simulation};
 use slamlab_core::Pose2;
-use slamlab_core::grid::{Cell, InsertParams, InsertReport, OccupancyGrid, ProbabilityGrid};
-use slamlab_core::scan::icp::{IcpConfig, IcpVariant, align};
+use slamlab_core::grid::{
+    BeamUpdate, Cell, InsertParams, InsertReport, OccupancyGrid, ProbabilityGrid,
+};
+use slamlab_core::scan::icp::{IcpConfig, IcpIteration, IcpVariant, align};
 use slamlab_core::scan::scan_to_map::{
     ProbabilityLookup, ScanToMapParams, ScanToMapRecord, match_scan_to_map,
 };
@@ -59,7 +64,31 @@ impl MappingInput {
 enum Stage {
     Predict,
     Match,
+    /// Showing ICP iteration `i` (0-based) of the current scan's match.
+    Iteration(usize),
     Insert,
+}
+
+/// A change a student makes during a run (recorded, so that stepping back
+/// replays it).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum MappingEvent {
+    /// Show ICP matches one iteration per phase (or the whole match in one).
+    StepIterations(bool),
+}
+
+/// The ICP alignment of one scan against the previous one, every iteration.
+#[derive(Clone, Debug, PartialEq)]
+pub struct IcpScanRecord {
+    /// The scan matched.
+    pub scan: usize,
+    /// The scan it was matched against (the previous one).
+    pub reference_scan: usize,
+    /// The reference scan's pose in the world: the frame of the iterations'
+    /// poses and correspondences.
+    pub reference_pose: Pose2,
+    /// Every iteration, in order.
+    pub iterations: Vec<IcpIteration>,
 }
 
 /// What one phase did.
@@ -83,6 +112,21 @@ pub enum MappingPhase {
         /// Its iterations.
         iterations: usize,
     },
+    /// One ICP iteration of the current scan's match, shown on its own.
+    Iteration {
+        /// Scan index.
+        scan: usize,
+        /// 1 for the first iteration.
+        iteration: usize,
+        /// Iterations of the whole match.
+        of: usize,
+        /// The pose after this iteration (world frame).
+        pose: Pose2,
+        /// Mean squared error of the kept pairs at the iteration's start, m².
+        mean_squared_error: f64,
+        /// Pairs kept.
+        kept: usize,
+    },
     /// The scan went into the map.
     Insert {
         /// Scan index.
@@ -104,6 +148,12 @@ impl MappingPhase {
             } => {
                 format!("match scan {scan} ({iterations} iterations)")
             }
+            MappingPhase::Iteration {
+                scan,
+                iteration,
+                of,
+                ..
+            } => format!("scan {scan}: ICP iteration {iteration} of {of}"),
             MappingPhase::Insert { scan, report } => format!(
                 "insert scan {scan}: {} hit, {} crossed cells",
                 report.hits, report.misses
@@ -164,6 +214,17 @@ pub struct MappingSim {
     last: Option<(usize, Pose2)>,
     /// The last scan-to-map match, for the explanation panel.
     last_record: Option<Arc<ScanToMapRecord>>,
+    /// The last ICP match, every iteration (for drawing its correspondences).
+    icp_record: Option<Arc<IcpScanRecord>>,
+    /// The ICP iteration shown now (while stepping through a match).
+    shown_iteration: Option<usize>,
+    /// Whether ICP matches are shown one iteration per phase.
+    step_iterations: bool,
+    /// The grid before the last insertion (tiles shared), so that a beam's
+    /// update can still be explained after it happened.
+    grid_before_insert: Option<ProbabilityGrid>,
+    /// The matched pose while its iterations are being shown.
+    matched: Pose2,
     /// The last message about something that went wrong (a bad rule).
     note: Option<String>,
 }
@@ -195,6 +256,11 @@ impl MappingSim {
             pose: Pose2::IDENTITY,
             last: None,
             last_record: None,
+            icp_record: None,
+            shown_iteration: None,
+            step_iterations: false,
+            grid_before_insert: None,
+            matched: Pose2::IDENTITY,
             note: None,
         }
     }
@@ -236,6 +302,37 @@ impl MappingSim {
     /// The last scan-to-map match.
     pub fn last_scan_to_map(&self) -> Option<&ScanToMapRecord> {
         self.last_record.as_deref()
+    }
+
+    /// The last ICP match and the iteration shown now (`None`: the whole
+    /// match is done).
+    pub fn icp_record(&self) -> Option<(&IcpScanRecord, Option<usize>)> {
+        self.icp_record
+            .as_deref()
+            .map(|record| (record, self.shown_iteration))
+    }
+
+    /// Whether ICP matches are shown one iteration per phase.
+    pub fn steps_iterations(&self) -> bool {
+        self.step_iterations
+    }
+
+    /// Whether the next phase inserts the current scan.
+    pub fn next_is_insert(&self) -> bool {
+        self.stage == Stage::Insert && !self.is_done()
+    }
+
+    /// What beam `beam` of the current scan does to the map: before the
+    /// insertion (the next phase inserts it) or, once it is in, what it did.
+    /// `None` before the first scan.
+    pub fn explain_beam(&self, beam: usize) -> Option<Result<BeamUpdate, String>> {
+        let (grid, k, pose) = if self.next_is_insert() {
+            (&self.grid, self.next, self.pose)
+        } else {
+            let (k, pose) = self.last?;
+            (self.grid_before_insert.as_ref()?, k, pose)
+        };
+        Some(grid.explain_beam(&pose, &self.input.scans[k].scan, beam, &self.insert))
     }
 
     /// A problem the run met (an update rule it could not use).
@@ -298,7 +395,13 @@ impl MappingSim {
                     },
                     ..self.matchers.icp
                 };
-                let (m, _) = align(&reference, &points, initial, &params).ok()?;
+                let (m, iterations) = align(&reference, &points, initial, &params).ok()?;
+                self.icp_record = Some(Arc::new(IcpScanRecord {
+                    scan: k,
+                    reference_scan: j,
+                    reference_pose: last_pose,
+                    iterations,
+                }));
                 let p = last_pose.compose(&m.pose);
                 Some((
                     Pose2::new(p.x, p.y, wrap_angle(p.theta)),
@@ -311,9 +414,59 @@ impl MappingSim {
     }
 }
 
+impl MappingSim {
+    /// Shows ICP iteration `i` of scan `k`'s match: the pose moves to where
+    /// that iteration left it; after the last one, to the match.
+    fn show_iteration(&mut self, k: usize, i: usize) -> MappingPhase {
+        let Some(record) = self.icp_record.clone() else {
+            self.stage = Stage::Insert;
+            self.pose = self.matched;
+            return MappingPhase::Match {
+                scan: k,
+                pose: self.pose,
+                cost: f64::NAN,
+                iterations: 0,
+            };
+        };
+        let of = record.iterations.len();
+        let Some(step) = record.iterations.get(i) else {
+            self.stage = Stage::Insert;
+            self.shown_iteration = None;
+            self.pose = self.matched;
+            return MappingPhase::Match {
+                scan: k,
+                pose: self.pose,
+                cost: f64::NAN,
+                iterations: of,
+            };
+        };
+        let last = i + 1 >= of;
+        let p = record.reference_pose.compose(&step.pose);
+        self.pose = if last {
+            self.matched
+        } else {
+            Pose2::new(p.x, p.y, wrap_angle(p.theta))
+        };
+        self.shown_iteration = Some(i);
+        self.stage = if last {
+            Stage::Insert
+        } else {
+            Stage::Iteration(i + 1)
+        };
+        MappingPhase::Iteration {
+            scan: k,
+            iteration: step.iteration,
+            of,
+            pose: self.pose,
+            mean_squared_error: step.mean_squared_error,
+            kept: step.kept,
+        }
+    }
+}
+
 impl Simulation for MappingSim {
     type Phase = MappingPhase;
-    type Event = ();
+    type Event = MappingEvent;
     type Records = MappingRecords;
 
     fn step_phase(&mut self, records: &mut MappingRecords) -> MappingPhase {
@@ -342,15 +495,22 @@ impl Simulation for MappingSim {
             Stage::Match => {
                 self.stage = Stage::Insert;
                 let predicted = self.pose;
+                self.icp_record = None;
+                self.shown_iteration = None;
                 match self.correct(k, predicted) {
                     Some((pose, cost, iterations)) if pose.is_finite() => {
-                        self.pose = pose;
                         if let Some(c) = records.costs.last_mut() {
                             *c = cost;
                         }
                         if let Some(n) = records.iterations.last_mut() {
                             *n = iterations;
                         }
+                        if self.step_iterations && self.icp_record.is_some() {
+                            // The match is known; reveal it one iteration per phase.
+                            self.matched = pose;
+                            return self.show_iteration(k, 0);
+                        }
+                        self.pose = pose;
                         MappingPhase::Match {
                             scan: k,
                             pose,
@@ -366,7 +526,10 @@ impl Simulation for MappingSim {
                     },
                 }
             }
+            Stage::Iteration(i) => self.show_iteration(k, i),
             Stage::Insert => {
+                self.shown_iteration = None;
+                self.grid_before_insert = Some(self.grid.clone());
                 let scan = &self.input.scans[k].scan;
                 let report = match self.grid.insert_scan(&self.pose, scan, &self.insert) {
                     Ok(report) => report,
@@ -392,7 +555,11 @@ impl Simulation for MappingSim {
         self.next as u64 + u64::from(self.is_mid_tick())
     }
 
-    fn apply_event(&mut self, _event: &()) {}
+    fn apply_event(&mut self, event: &MappingEvent) {
+        match *event {
+            MappingEvent::StepIterations(on) => self.step_iterations = on,
+        }
+    }
 
     fn checkpoint_bytes(&self) -> usize {
         // Tiles are shared with the live run until it writes them; count the
