@@ -128,6 +128,12 @@ pub struct MappingLesson {
     request: Option<LessonRequest>,
     /// The beam of the current scan whose update is inspected, if any.
     pub beam: Option<usize>,
+    /// A ROS map the student loaded for the simulated robot to explore
+    /// (instead of the scenario's built-in map): its name and grid.
+    loaded_map: Option<(String, Arc<slamlab_core::grid::OccupancyGrid>)>,
+    /// A built-in map was chosen in place of a log or a loaded map: the next
+    /// reset simulates anew.
+    builtin_chosen: bool,
 }
 
 /// The lesson's start: the simulator's defaults.
@@ -208,6 +214,8 @@ impl MappingLesson {
             log_fetch: None,
             request: None,
             beam: None,
+            loaded_map: None,
+            builtin_chosen: false,
         })
     }
 
@@ -219,6 +227,59 @@ impl MappingLesson {
         };
         let grid = builtin_map(name)?;
         simulated_input(scenario, Arc::new(grid), name)
+    }
+
+    /// The simulated input on the loaded map if there is one, else on the
+    /// scenario's built-in map.
+    fn simulate_current(&self, scenario: &MappingScenario) -> Result<MappingInput, String> {
+        match &self.loaded_map {
+            Some((name, grid)) => simulated_input(scenario, grid.clone(), name),
+            None => Self::simulate(scenario),
+        }
+    }
+
+    /// Lets the simulated robot explore a ROS map (map_server YAML with its
+    /// PGM or PNG image) instead of a built-in one. On any problem the current
+    /// run stays, with a note that names it.
+    pub fn load_map_files(&mut self, files: &[(String, Vec<u8>)]) {
+        let (name, grid, notes) = match slamlab_sim::kidnap_session::load_dropped_map(files) {
+            Ok(loaded) => loaded,
+            Err(why) => {
+                self.note = Some(format!("Could not load the map: {why}; the run goes on"));
+                return;
+            }
+        };
+        let grid = Arc::new(grid);
+        let scenario = self.pending.scenario.clone();
+        let scenario = MappingScenario {
+            poses: if scenario.poses == PoseSource::Truth || self.log_name.is_none() {
+                scenario.poses
+            } else {
+                PoseSource::ScanToMap
+            },
+            ..scenario
+        };
+        match simulated_input(&scenario, grid.clone(), &name) {
+            Ok(input) => {
+                let (w, h, r) = (grid.width(), grid.height(), grid.resolution());
+                self.input = Arc::new(input);
+                self.loaded_map = Some((name.clone(), grid));
+                self.log_name = None;
+                self.log_location = None;
+                self.restart(scenario, None);
+                self.note = Some(format!(
+                    "The robot explores {name}: {w} x {h} cells at {r} m{}",
+                    if notes.is_empty() {
+                        String::new()
+                    } else {
+                        format!(" ({})", notes.join("; "))
+                    }
+                ));
+            }
+            Err(why) => {
+                self.note = Some(format!("Could not drive in {name}: {why}; the run goes on"));
+            }
+        }
     }
 
     /// The session (the run, its records, its stepper).
@@ -241,16 +302,17 @@ impl MappingLesson {
     pub fn reset(&mut self) {
         let scenario = self.pending.scenario.clone();
         let running = self.session.scenario();
-        let new_data = self.log_name.is_none()
-            && (scenario.map != running.map
-                || scenario.steps != running.steps
-                || scenario.seed != running.seed
-                || scenario.beams != running.beams
-                || scenario.lidar_range != running.lidar_range
-                || scenario.range_std != running.range_std
-                || scenario.odometry_noise != running.odometry_noise);
+        let new_data = self.builtin_chosen
+            || self.log_name.is_none()
+                && (scenario.map != running.map
+                    || scenario.steps != running.steps
+                    || scenario.seed != running.seed
+                    || scenario.beams != running.beams
+                    || scenario.lidar_range != running.lidar_range
+                    || scenario.range_std != running.range_std
+                    || scenario.odometry_noise != running.odometry_noise);
         if new_data {
-            match Self::simulate(&scenario) {
+            match self.simulate_current(&scenario) {
                 Ok(input) => self.input = Arc::new(input),
                 Err(why) => {
                     self.note = Some(format!("Could not start over: {why}; the run goes on"));
@@ -258,6 +320,7 @@ impl MappingLesson {
                 }
             }
         }
+        self.builtin_chosen = false;
         self.restart(scenario, None);
     }
 
@@ -507,18 +570,20 @@ impl MappingLesson {
             ui.label("map");
             let current = self.pending.scenario.map.clone();
             egui::ComboBox::from_id_salt("mapping_map")
-                .selected_text(match &self.log_name {
-                    Some(name) => name.clone(),
-                    None => current.clone(),
+                .selected_text(match (&self.log_name, &self.loaded_map) {
+                    (Some(name), _) | (None, Some((name, _))) => name.clone(),
+                    (None, None) => current.clone(),
                 })
                 .show_ui(ui, |ui| {
                     for name in ["maze", "office"] {
-                        if ui
-                            .selectable_label(current == name && self.log_name.is_none(), name)
-                            .clicked()
-                        {
+                        let chosen =
+                            current == name && self.log_name.is_none() && self.loaded_map.is_none();
+                        if ui.selectable_label(chosen, name).clicked() {
+                            self.builtin_chosen |=
+                                self.log_name.is_some() || self.loaded_map.is_some();
                             self.log_name = None;
                             self.log_location = None;
+                            self.loaded_map = None;
                             self.pending.set("map", name);
                         }
                     }
@@ -529,11 +594,14 @@ impl MappingLesson {
                 )
                 .widget_info(|| egui::WidgetInfo::labeled(egui::Role::ComboBox, true, "map"));
         });
-        ui.label("Or open a CARMEN laser log (.clf, .log, .gz, .bz2), or drop it on the window:");
+        ui.label(
+            "Or open a CARMEN laser log (.clf, .log, .gz, .bz2), or a ROS map (its YAML with the \
+             image) for the robot to explore; or drop either on the window:",
+        );
         self.log_picker.ui(
             ui,
-            "Open log…",
-            ".clf,.log,.gz,.bz2,.txt",
+            "Open log or map…",
+            ".clf,.log,.gz,.bz2,.txt,.yaml,.yml,.pgm,.png",
             256 << 20,
             "path/to/intel.clf.bz2",
         );
@@ -543,7 +611,9 @@ impl MappingLesson {
         let changed = params::to_pairs(&self.pending.scenario) != params::to_pairs(&running);
         if ui
             .add_enabled(
-                changed || self.log_name.is_some() && self.pending.scenario.map != running.map,
+                changed
+                    || self.builtin_chosen
+                    || self.log_name.is_some() && self.pending.scenario.map != running.map,
                 egui::Button::new("Apply & reset"),
             )
             .on_hover_text("Start over with these parameters (same seed: same scans)")
@@ -680,11 +750,23 @@ impl Lesson for MappingLesson {
         let picked = self.log_picker.poll_all();
         if let Some(batch) = self.inbox.poll(ctx).or(picked) {
             let batch: Vec<PickedFile> = batch;
-            if let Some((name, bytes)) = batch.into_iter().next() {
+            let is_map_file = |name: &str| {
+                let lower = name.to_ascii_lowercase();
+                [".yaml", ".yml", ".pgm", ".png"]
+                    .iter()
+                    .any(|e| lower.ends_with(e))
+            };
+            let mut files = Vec::new();
+            for (name, bytes) in batch {
                 match bytes {
-                    Ok(bytes) => self.load_log(&name, &bytes),
+                    Ok(bytes) => files.push((name, bytes)),
                     Err(why) => self.note = Some(format!("Could not read {name}: {why}")),
                 }
+            }
+            if files.iter().any(|(name, _)| is_map_file(name)) {
+                self.load_map_files(&files);
+            } else if let Some((name, bytes)) = files.first() {
+                self.load_log(name, bytes);
             }
         }
     }

@@ -189,3 +189,40 @@ fn icp_steps_one_iteration_per_phase_and_a_beam_shows_its_cells() {
     );
     let _ = image.save(std::env::temp_dir().join("slamlab-mapping-beam.png"));
 }
+
+#[test]
+fn a_dropped_ros_map_is_explored_and_a_broken_one_leaves_the_run() {
+    let mut h = harness("lesson=mapping&map=maze&seed=2&steps=60&poses=truth");
+    let assets = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../../assets/maps");
+    let read = |name: &str| std::fs::read(assets.join(name)).unwrap();
+    // The office, dropped as files: the robot explores it instead of the maze.
+    lesson_mut(&mut h).load_map_files(&[
+        ("office.yaml".to_owned(), read("office.yaml")),
+        ("office.png".to_owned(), read("office.png")),
+    ]);
+    h.run();
+    let input = lesson(&h).session().sim().input().clone();
+    assert!(input.name.contains("office.yaml"), "{}", input.name);
+    assert_eq!(input.scans.len(), 60);
+    let office = slamlab_sim::mapping::builtin_map("office").unwrap();
+    assert_eq!(input.true_map.as_ref().unwrap().width(), office.width());
+    for _ in 0..60 {
+        lesson_mut(&mut h).step_tick();
+    }
+    let summary = lesson(&h).session().summary();
+    assert!(summary.map_agreement.unwrap() > 0.85, "{summary:?}");
+    // A YAML without its image: a note, and the office run stays.
+    lesson_mut(&mut h).load_map_files(&[("office.yaml".to_owned(), read("office.yaml"))]);
+    h.run();
+    let note = lesson(&h).note().unwrap_or_default().to_owned();
+    assert!(note.contains("drop it together with the YAML"), "{note}");
+    assert_eq!(lesson(&h).session().sim().scans_done(), 60);
+    assert!(
+        lesson(&h)
+            .session()
+            .sim()
+            .input()
+            .name
+            .contains("office.yaml")
+    );
+}
