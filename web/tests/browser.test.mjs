@@ -656,9 +656,23 @@ async function main() {
         await sleep(300);
         const { stats } = await waitNotBlank(p, "mapping.png");
         assertNotBlank(stats, "mapping.png");
+        // Scan-to-map in wasm without drawing: the office, 600 scans of 360 beams (60 s of
+        // data), timed for the real-time factor (reported, not asserted), and the pose it
+        // ends at against the native run (crates/slamlab-app/tests/lessons/mapping_ui.rs).
+        const started = Date.now();
+        const headless = JSON.parse(
+          await p.evaluate((q) => window.slamlab.slamlab_test_headless(q, 600), "lesson=mapping&map=office&steps=600&seed=1"),
+        );
+        const seconds = (Date.now() - started) / 1000;
+        const NATIVE = [19.29859043482542, 47.94699415441172, -1.546091238599251];
+        const apart = Math.hypot(headless.pose[0] - NATIVE[0], headless.pose[1] - NATIVE[1]);
+        assert(headless.scans === 600 && apart < 0.05, `ended at ${JSON.stringify(headless.pose)}, natively ${JSON.stringify(NATIVE)}`);
+        const same = headless.pose.every((v, i) => v === NATIVE[i]);
+        metrics.mapping_office_600_scans_s = Number(seconds.toFixed(2));
+        metrics.mapping_real_time_factor = Number((60 / seconds).toFixed(1));
         await assertNoPanic(p);
         assert(log.problems.length === 0, log.problems.join("; "));
-        return `${s1.scans} scans: map agreement ${s1.map_agreement.toFixed(3)}, trajectory RMSE ${s1.trajectory_rmse.toFixed(3)} m, ${s1.known_cells} known cells`;
+        return `${s1.scans} scans: map agreement ${s1.map_agreement.toFixed(3)}, trajectory RMSE ${s1.trajectory_rmse.toFixed(3)} m, ${s1.known_cells} known cells; office headless: 600 scans (60 s of data, simulation included) in ${seconds.toFixed(1)} s = ${(60 / seconds).toFixed(1)}x real time, pose ${same ? "bit-identical to native" : `${(apart * 1000).toFixed(2)} mm from native`}`;
       } finally {
         await context.close();
       }

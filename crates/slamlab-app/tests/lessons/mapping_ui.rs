@@ -226,3 +226,24 @@ fn a_dropped_ros_map_is_explored_and_a_broken_one_leaves_the_run() {
             .contains("office.yaml")
     );
 }
+
+/// The headless run the browser check repeats in wasm (web/tests/browser.test.mjs,
+/// "lesson=mapping builds the maze map…", which also times it): the same seed maps
+/// to the same pose. Map agreement 0.939 after these 600 scans.
+const HEADLESS_OFFICE: &str = "lesson=mapping&map=office&steps=600&seed=1";
+const HEADLESS_OFFICE_POSE: [f64; 3] = [19.29859043482542, 47.94699415441172, -1.546091238599251];
+
+#[test]
+fn a_headless_office_run_ends_at_the_pose_the_browser_must_match() {
+    let state: serde_json::Value =
+        serde_json::from_str(&SlamLabApp::headless_state(HEADLESS_OFFICE, 600)).unwrap();
+    assert_eq!(state["scans"], 600);
+    let pose: Vec<f64> = state["pose"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|v| v.as_f64().unwrap())
+        .collect();
+    eprintln!("pose {pose:?}, agreement {}", state["map_agreement"]);
+    assert_eq!(pose, HEADLESS_OFFICE_POSE);
+}
