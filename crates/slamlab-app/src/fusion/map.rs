@@ -126,6 +126,61 @@ pub fn map_ui(ui: &mut egui::Ui, sim: &FusionSim, canvas: &mut MapView, view: &m
     if view.legend {
         draw_legend(&painter, &t, sim, &colors);
     }
+    if view.ellipses {
+        draw_wide_ellipse_notes(&painter, &t, sim, room);
+    }
+}
+
+/// A line at the map's foot for each mode whose 95% ellipse is wider than the
+/// room (the differential mode's, whose position is only dead-reckoned): its
+/// size and why, so that arcs at the map's edges are not read as a fault.
+fn draw_wide_ellipse_notes(
+    painter: &egui::Painter,
+    t: &MapTransform,
+    sim: &FusionSim,
+    room: [f64; 2],
+) {
+    use slamlab_core::geometry::{CHI2_2DOF_95, CovarianceEllipse};
+    let mut y = t.rect.top() + 8.0;
+    for run in sim.runs() {
+        let pose = run.filter().pose();
+        let block = run
+            .filter()
+            .pose_covariance()
+            .fixed_view::<2, 2>(0, 0)
+            .into_owned();
+        let e = CovarianceEllipse::from_covariance(
+            nalgebra::Vector2::new(pose.x, pose.y),
+            &block,
+            CHI2_2DOF_95,
+        );
+        let across = 2.0 * e.semi_major;
+        if !(across.is_finite() && across > room[0].max(room[1])) {
+            continue;
+        }
+        let text = format!(
+            "{}'s 95% ellipse is {across:.1} m across:\nits position is only dead-reckoned \
+             (Explain)",
+            run.mode().name()
+        );
+        let galley = painter.layout(
+            text,
+            egui::FontId::proportional(12.0),
+            Color32::WHITE,
+            (0.45 * t.rect.width()).max(120.0),
+        );
+        let at = pos2(t.rect.right() - 10.0 - galley.size().x, y);
+        let frame = egui::Rect::from_min_size(at, galley.size()).expand(4.0);
+        painter.rect_filled(frame, 3.0, Color32::from_black_alpha(200));
+        painter.rect_stroke(
+            frame,
+            3.0,
+            Stroke::new(1.5, mode_color(run.mode())),
+            egui::StrokeKind::Outside,
+        );
+        y += galley.size().y + 14.0;
+        painter.galley(at, galley, Color32::WHITE);
+    }
 }
 
 /// A path as one line (thinned to [`MAX_POINTS`]), dashed or solid.

@@ -230,13 +230,18 @@ pub fn draw_estimate(
         let block = covariance.fixed_view::<2, 2>(0, 0).into_owned();
         let e =
             CovarianceEllipse::from_covariance(Vector2::new(pose.x, pose.y), &block, CHI2_2DOF_95);
+        // Under a pixel the ellipse is hidden by the dot, and a stroke around a
+        // point-sized polygon tessellates into spikes; beyond a million pixels the
+        // screen coordinates lose their precision. Neither is drawn.
+        let across = (e.semi_major * f64::from(t.scale)) as f32;
+        let drawable = across.is_finite() && (1.0..1.0e6).contains(&across);
         let points: Vec<Pos2> = e
             .boundary(48)
             .iter()
             .map(|p| t.v(p))
             .filter(|p| finite(*p))
             .collect();
-        if points.len() > 2 {
+        if drawable && points.len() > 2 {
             painter.add(egui::Shape::closed_line(points, Stroke::new(2.0, color)));
         }
     }
@@ -244,16 +249,20 @@ pub fn draw_estimate(
     let sigma = covariance[(2, 2)].max(0.0).sqrt();
     let spread = (2.0 * sigma).min(std::f64::consts::PI);
     let radius = style.wedge_radius;
-    let mut rim = vec![centre];
-    for k in 0..=16 {
-        let a = pose.theta - spread + 2.0 * spread * f64::from(k) / 16.0;
-        rim.push(centre + screen_dir(a) * radius);
+    // A wedge narrower than half a pixel at its rim is a sliver whose fill
+    // tessellates into a spike along the heading: the arrow shows the heading.
+    if spread * f64::from(radius) >= 0.25 {
+        let mut rim = vec![centre];
+        for k in 0..=16 {
+            let a = pose.theta - spread + 2.0 * spread * f64::from(k) / 16.0;
+            rim.push(centre + screen_dir(a) * radius);
+        }
+        painter.add(egui::Shape::convex_polygon(
+            rim,
+            color.gamma_multiply(0.18),
+            Stroke::NONE,
+        ));
     }
-    painter.add(egui::Shape::convex_polygon(
-        rim,
-        color.gamma_multiply(0.18),
-        Stroke::NONE,
-    ));
     if style.dot {
         painter.circle_filled(centre, 4.0, color);
     }

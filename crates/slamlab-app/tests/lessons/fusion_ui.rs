@@ -222,3 +222,75 @@ fn rendered_lesson_shows_every_mode_in_its_colour() {
         &egui_kittest::SnapshotOptions::new().threshold(2.0),
     );
 }
+
+#[test]
+fn at_800_by_500_nothing_stray_at_the_start_and_the_wide_ellipse_is_explained() {
+    assert_eq!(slamlab_app::fusion::rmse_text(-1e-9), "0.0000");
+    assert_eq!(slamlab_app::fusion::rmse_text(-0.0), "0.0000");
+    let mut h = harness_sized(
+        "lesson=fusion&seed=1&duration=120&modes=differential,relative,absolute",
+        egui::vec2(800.0, 500.0),
+    );
+    h.run();
+    let Some(image) = render_or_skip(&mut h) else {
+        return;
+    };
+    let _ = image.save(std::env::temp_dir().join("slamlab-fusion-800-start.png"));
+    // At t = 0 every estimate sits on the robot with a covariance of 1e-9: nothing
+    // of the modes' colours may reach beyond the robot's marker (a degenerate
+    // ellipse or heading wedge used to draw a line to the map's edge).
+    let robot = {
+        let (mut sx, mut sy, mut n) = (0usize, 0usize, 0usize);
+        for (x, y, p) in image.enumerate_pixels() {
+            if x > 320 && p.0[..3] == [0xCC, 0x79, 0xA7] {
+                sx += x as usize;
+                sy += y as usize;
+                n += 1;
+            }
+        }
+        assert!(n > 0, "the absolute estimate is drawn");
+        (sx / n, sy / n)
+    };
+    // Any colour at any strength (the map's background, grid and walls are grey;
+    // the heading wedges are filled at 18% alpha, three of them on top of each other).
+    let coloured = |p: &image::Rgba<u8>| {
+        let [r, g, b, _] = p.0.map(i32::from);
+        r.max(g).max(b) - r.min(g).min(b) > 20
+    };
+    let far = image
+        .enumerate_pixels()
+        .filter(|(x, y, p)| {
+            let (dx, dy) = (*x as i64 - robot.0 as i64, *y as i64 - robot.1 as i64);
+            // Right of the legend (at the map's top left), inside the map.
+            dx * dx + dy * dy > 40 * 40
+                && *x > 320
+                && (*y as usize) > 130
+                && (*y as usize) < 370
+                && coloured(p)
+        })
+        .count();
+    assert!(
+        far < 10,
+        "{far} coloured pixels away from the robot at t = 0"
+    );
+    // After a minute the differential mode's ellipse is far wider than the 4 x 3 m
+    // room, with its error at centimetres; the map says so beside it.
+    for _ in 0..60 {
+        lesson_mut(&mut h).step_tick();
+    }
+    h.run();
+    let run = &lesson(&h).sim().runs()[0];
+    let p = run.filter().pose_covariance();
+    let across = 2.0 * (slamlab_core::geometry::CHI2_2DOF_95 * p[(0, 0)].max(p[(1, 1)])).sqrt();
+    assert!(across > 4.0, "differential's ellipse {across} m across");
+    let Some(image) = render_or_skip(&mut h) else {
+        return;
+    };
+    let _ = image.save(std::env::temp_dir().join("slamlab-fusion-800-60s.png"));
+    // The note's frame in differential-blue at the map's top right.
+    let frame = image
+        .enumerate_pixels()
+        .filter(|(x, y, p)| *x > 500 && *y > 120 && *y < 170 && p.0[..3] == [0x00, 0x72, 0xB2])
+        .count();
+    assert!(frame > 100, "the note's frame: {frame} blue pixels");
+}
