@@ -193,7 +193,10 @@ pub fn beam_ui(ui: &mut egui::Ui, session: &MappingSession, beam: &mut Option<us
     };
     match sim.explain_beam(b) {
         None => {
-            ui.label("No scan yet: step once (.) first.");
+            ui.label(
+                "This scan went in before the beam view was on: step to the next scan's \
+                 insertion (.) to see its beams.",
+            );
         }
         Some(Err(why)) => {
             ui.label(egui::RichText::new(why).color(palette::VERMILLION));

@@ -665,6 +665,15 @@ impl crate::widgets::layout::LessonPanels for MappingLesson {
     }
 
     fn map_ui(&mut self, ui: &mut egui::Ui) {
+        // While a beam is inspected the run keeps the grid from before each
+        // insertion, to explain a scan already in (a new run or a step back
+        // starts without it).
+        if self.session.sim().keeps_grid_before_insert() != self.beam.is_some() {
+            self.session
+                .stepper_mut()
+                .sim_mut_untracked()
+                .keep_grid_before_insert(self.beam.is_some());
+        }
         if let Some(note) = &self.note {
             ui.label(egui::RichText::new(note).color(palette::VERMILLION));
         }

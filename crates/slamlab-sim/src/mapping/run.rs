@@ -221,8 +221,12 @@ pub struct MappingSim {
     /// Whether ICP matches are shown one iteration per phase.
     step_iterations: bool,
     /// The grid before the last insertion (tiles shared), so that a beam's
-    /// update can still be explained after it happened.
+    /// update can still be explained after it happened; kept only while
+    /// [`MappingSim::keep_grid_before_insert`] is on, as holding it makes every
+    /// insertion copy the tiles it writes.
     grid_before_insert: Option<ProbabilityGrid>,
+    /// Whether to keep [`Self::grid_before_insert`].
+    keep_before: bool,
     /// The matched pose while its iterations are being shown.
     matched: Pose2,
     /// The last message about something that went wrong (a bad rule).
@@ -260,6 +264,7 @@ impl MappingSim {
             shown_iteration: None,
             step_iterations: false,
             grid_before_insert: None,
+            keep_before: false,
             matched: Pose2::IDENTITY,
             note: None,
         }
@@ -317,6 +322,21 @@ impl MappingSim {
         self.step_iterations
     }
 
+    /// Keeps the grid as it was before each insertion (shared tiles), so that
+    /// [`explain_beam`](Self::explain_beam) can explain a scan already inserted.
+    /// A display setting: it changes no result.
+    pub fn keep_grid_before_insert(&mut self, on: bool) {
+        self.keep_before = on;
+        if !on {
+            self.grid_before_insert = None;
+        }
+    }
+
+    /// Whether the grid before each insertion is kept.
+    pub fn keeps_grid_before_insert(&self) -> bool {
+        self.keep_before
+    }
+
     /// Whether the next phase inserts the current scan.
     pub fn next_is_insert(&self) -> bool {
         self.stage == Stage::Insert && !self.is_done()
@@ -324,7 +344,8 @@ impl MappingSim {
 
     /// What beam `beam` of the current scan does to the map: before the
     /// insertion (the next phase inserts it) or, once it is in, what it did.
-    /// `None` before the first scan.
+    /// `None` before the first scan, or after an insertion made while
+    /// [`keep_grid_before_insert`](Self::keep_grid_before_insert) was off.
     pub fn explain_beam(&self, beam: usize) -> Option<Result<BeamUpdate, String>> {
         let (grid, k, pose) = if self.next_is_insert() {
             (&self.grid, self.next, self.pose)
@@ -369,7 +390,8 @@ impl MappingSim {
         let points = scan.points();
         match self.source {
             PoseSource::ScanToMap => {
-                if self.grid.known_cells() == 0 && self.last.is_none() {
+                // (known_cells reads every cell: only before the first scan.)
+                if self.last.is_none() && self.grid.known_cells() == 0 {
                     return None;
                 }
                 let (m, record) = match_scan_to_map(
@@ -529,7 +551,7 @@ impl Simulation for MappingSim {
             Stage::Iteration(i) => self.show_iteration(k, i),
             Stage::Insert => {
                 self.shown_iteration = None;
-                self.grid_before_insert = Some(self.grid.clone());
+                self.grid_before_insert = self.keep_before.then(|| self.grid.clone());
                 let scan = &self.input.scans[k].scan;
                 let report = match self.grid.insert_scan(&self.pose, scan, &self.insert) {
                     Ok(report) => report,

@@ -202,6 +202,9 @@ fn icp_iterations_step_one_per_phase_and_land_where_the_whole_match_does() {
 fn a_beam_is_explained_before_and_after_its_scan_goes_in() {
     let mut s = session("maze", 10, 1, PoseSource::Odometry);
     assert!(s.sim().explain_beam(0).is_none(), "no scan yet");
+    s.stepper_mut()
+        .sim_mut_untracked()
+        .keep_grid_before_insert(true);
     s.stepper_mut().run_ticks(3);
     s.stepper_mut().step_phase(); // predict scan 3: the next phase inserts it
     assert!(s.sim().next_is_insert());
