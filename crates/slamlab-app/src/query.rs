@@ -56,7 +56,7 @@ pub struct FigureOptions {
     /// `legend=0|1`: the map's legend.
     pub legend: Option<bool>,
     /// `panels=parameters,explanation,plots`: exactly these panels open.
-    pub panels: Option<crate::lesson::PanelVisibility>,
+    pub panels: Option<crate::panels::PanelVisibility>,
     /// `zoom=2`: the map this many times closer than the fitted view.
     pub zoom: Option<f32>,
     /// `follow=1`: the map follows the robot.
@@ -177,7 +177,7 @@ impl Query {
                 )),
             },
             "panels" => {
-                let mut panels = crate::lesson::PanelVisibility {
+                let mut panels = crate::panels::PanelVisibility {
                     parameters: false,
                     explanation: false,
                     plots: false,
@@ -349,7 +349,7 @@ mod tests {
         assert_eq!(f.follow, Some(true));
         assert_eq!(
             f.panels,
-            Some(crate::lesson::PanelVisibility {
+            Some(crate::panels::PanelVisibility {
                 parameters: false,
                 explanation: true,
                 plots: true
@@ -387,7 +387,7 @@ mod tests {
         assert!(q.issues[0].contains("'maps'"), "{:?}", q.issues);
         assert_eq!(
             q.figure.panels,
-            Some(crate::lesson::PanelVisibility {
+            Some(crate::panels::PanelVisibility {
                 parameters: true,
                 explanation: false,
                 plots: true

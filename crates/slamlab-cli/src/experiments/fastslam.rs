@@ -7,7 +7,7 @@
 use super::{scenario_args, steps_arg, trials_arg};
 use crate::lessons::landmark::{refuse_manual, scenario_from};
 use crate::output::{Output, csv_arg, progress_bar};
-use crate::registry::Experiment;
+use crate::command::Experiment;
 use anyhow::{Result, bail};
 use clap::{Arg, ArgMatches, Command};
 use slamlab_core::particle::FastSlamVersion;

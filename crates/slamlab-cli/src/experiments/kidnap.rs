@@ -7,7 +7,7 @@
 use crate::flags;
 use crate::map::{map_arg, read_map, resolution_arg};
 use crate::output::{Output, csv_arg, trials_bar, trials_progress};
-use crate::registry::Experiment;
+use crate::command::Experiment;
 use anyhow::{Context, Result, bail};
 use clap::{Arg, ArgMatches, Command};
 use serde_json::json;

@@ -6,7 +6,7 @@
 //! ```
 
 use crate::output::{Output, progress_bar};
-use crate::registry::Experiment;
+use crate::command::Experiment;
 use anyhow::{Result, bail};
 use clap::{Arg, ArgAction, ArgMatches, Command};
 use slamlab_core::vision::Method;

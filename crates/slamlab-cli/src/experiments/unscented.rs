@@ -9,7 +9,7 @@
 
 use crate::flags::{scenario_from, table_args};
 use crate::output::Output;
-use crate::registry::Experiment;
+use crate::command::Experiment;
 use anyhow::{Result, anyhow};
 use clap::{ArgMatches, Command};
 use slamlab_sim::filters_lab::{FiltersScenario, one_step};

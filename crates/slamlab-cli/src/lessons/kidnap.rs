@@ -10,7 +10,7 @@
 use crate::flags;
 use crate::map::{map_arg, read_map, resolution_arg};
 use crate::output::Output;
-use crate::registry::RunLesson;
+use crate::command::RunLesson;
 use anyhow::{Context, Result};
 use clap::{Arg, ArgMatches, Command};
 use serde_json::json;

@@ -6,7 +6,7 @@
 
 use crate::flags;
 use crate::output::Output;
-use crate::registry::RunLesson;
+use crate::command::RunLesson;
 use anyhow::{Context, Result, bail};
 use clap::{Arg, ArgMatches, Command};
 use slamlab_sim::metrics::{RunSummary, run_headless};

@@ -8,7 +8,7 @@
 use crate::flags;
 use crate::map::{map_arg, read_map};
 use crate::output::{Output, progress_bar};
-use crate::registry::RunLesson;
+use crate::command::RunLesson;
 use anyhow::{Context, Result, bail};
 use clap::{Arg, ArgMatches, Command};
 use serde_json::json;

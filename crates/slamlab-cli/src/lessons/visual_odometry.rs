@@ -6,7 +6,7 @@
 //! ```
 
 use crate::output::Output;
-use crate::registry::RunLesson;
+use crate::command::RunLesson;
 use anyhow::{Result, bail};
 use clap::{Arg, ArgAction, ArgMatches, Command};
 use serde_json::json;
