@@ -145,12 +145,15 @@ impl SlamLabApp {
         let stored = (!parsed.embed && !link_sets_up)
             .then(|| settings.lessons.get(entry.id))
             .flatten();
-        let mut lesson = registry::open(entry, &LessonStart {
-            pairs: &parsed.pairs,
-            embed: parsed.embed,
-            stored,
-            many_runs: parsed.many_runs,
-        });
+        let mut lesson = registry::open(
+            entry,
+            &LessonStart {
+                pairs: &parsed.pairs,
+                embed: parsed.embed,
+                stored,
+                many_runs: parsed.many_runs,
+            },
+        );
         let panels = match parsed.figure.panels {
             Some(panels) => panels,
             None if parsed.embed => PanelVisibility::embedded(),
@@ -786,12 +789,15 @@ impl SlamLabApp {
         let stored = (!self.embed)
             .then(|| self.stored.lessons.get(entry.id))
             .flatten();
-        self.lesson = registry::open(entry, &LessonStart {
-            pairs: &[],
-            embed: self.embed,
-            stored,
-            many_runs: None,
-        });
+        self.lesson = registry::open(
+            entry,
+            &LessonStart {
+                pairs: &[],
+                embed: self.embed,
+                stored,
+                many_runs: None,
+            },
+        );
         self.app_notices.clear();
         self.dismissed.clear();
     }

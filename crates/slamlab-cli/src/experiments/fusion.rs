@@ -5,8 +5,8 @@
 //! ```
 
 use super::{landmark_flags_but_seed, seed_arg};
-use crate::output::{Output, csv_arg, progress_bar};
 use crate::command::{Experiment, Refusal};
+use crate::output::{Output, csv_arg, progress_bar};
 use anyhow::Result;
 use clap::{Arg, ArgMatches, Command};
 use slamlab_sim::fusion::{
