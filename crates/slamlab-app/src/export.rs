@@ -76,9 +76,7 @@ pub fn series_csv(series: &[PlotSeries]) -> String {
 /// lesson's pairs as `params`, the figure keys as `view`; `embed` is left out.
 pub fn scenario_of_query(share_query: &str) -> ScenarioFile {
     let mut file = ScenarioFile::default();
-    for part in share_query.trim_start_matches('?').split('&') {
-        let (key, value) = part.split_once('=').unwrap_or((part, ""));
-        let (key, value) = (query::percent_decode(key), query::percent_decode(value));
+    for (key, value) in query::decode_pairs(share_query.trim_start_matches('?')) {
         match key.as_str() {
             "" | "embed" => {}
             "lesson" => file.lesson = value,

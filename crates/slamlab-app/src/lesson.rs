@@ -1,47 +1,17 @@
-//! Lessons as a family: the trait every lesson implements and the registry the
-//! shell opens them from.
+//! Lessons as a family: the trait every lesson implements and what the shell
+//! opens them with. The menu of lessons is [`crate::registry`]: this module names
+//! no lesson, so every lesson imports it and it imports none of them.
 //!
 //! The shell (menu, time bar, notices, theme, persistence, share links, test
 //! hooks) never matches on a concrete lesson: it holds a `Box<dyn Lesson>`, the
 //! way egui's demo app holds its demos. A new lesson is a folder in this crate
-//! that implements [`Lesson`], plus one [`LessonEntry`] in [`LESSONS`]
-//! (`docs/ADDING-A-LESSON.md` has the whole recipe).
+//! that implements [`Lesson`], plus one [`crate::registry::LessonEntry`] in
+//! [`crate::registry::LESSONS`] (`docs/ADDING-A-LESSON.md` has the whole recipe).
 
 use crate::time_control::{TimeAction, TimeControl, TimeInfo};
 use std::any::Any;
 
-/// Which panels are open around the map.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
-#[serde(default)]
-pub struct PanelVisibility {
-    /// The parameter panel (left).
-    pub parameters: bool,
-    /// The explanation panel (right).
-    pub explanation: bool,
-    /// The plots (bottom).
-    pub plots: bool,
-}
-
-impl Default for PanelVisibility {
-    fn default() -> Self {
-        Self {
-            parameters: true,
-            explanation: true,
-            plots: true,
-        }
-    }
-}
-
-impl PanelVisibility {
-    /// The embed layout: map, plots and the time bar; the side panels closed.
-    pub fn embedded() -> Self {
-        Self {
-            parameters: false,
-            explanation: false,
-            plots: true,
-        }
-    }
-}
+pub use crate::panels::PanelVisibility;
 
 /// What a lesson is opened with.
 #[derive(Clone, Copy, Debug)]
@@ -117,17 +87,63 @@ pub fn scenario_from_start<S: slamlab_sim::params::Scenario>(
     (scenario, notices)
 }
 
-/// The landmark lesson, opened in place of a lesson that could not open, with
-/// a notice that says `why` (only a broken build gets here: every lesson's
-/// defaults are tested).
-pub fn open_instead(start: &LessonStart<'_>, why: String) -> Box<dyn Lesson> {
-    crate::landmark_slam::open(&LessonStart {
-        pairs: &[],
-        embed: start.embed,
-        stored: None,
-        many_runs: None,
+/// A lesson that could not open, with a notice that says `why` (only a broken build
+/// gets here: every lesson's defaults are tested). The registry
+/// ([`crate::registry::open`]) opens the default lesson in its place with the notice,
+/// so no lesson needs to import another.
+pub fn open_instead(_start: &LessonStart<'_>, why: String) -> Box<dyn Lesson> {
+    Box::new(CouldNotOpen {
+        why,
+        time: TimeControl::default(),
     })
-    .with_notice(why)
+}
+
+/// What [`open_instead`] returns: a placeholder the registry replaces.
+#[derive(Debug)]
+pub struct CouldNotOpen {
+    why: String,
+    time: TimeControl,
+}
+
+impl Lesson for CouldNotOpen {
+    fn id(&self) -> &'static str {
+        ""
+    }
+    fn could_not_open(&self) -> Option<&str> {
+        Some(&self.why)
+    }
+    fn notices(&self) -> Vec<String> {
+        vec![self.why.clone()]
+    }
+    fn time(&self) -> &TimeControl {
+        &self.time
+    }
+    fn time_mut(&mut self) -> &mut TimeControl {
+        &mut self.time
+    }
+    fn time_info(&self) -> TimeInfo {
+        TimeInfo::default()
+    }
+    fn apply_time_action(&mut self, _action: TimeAction) {}
+    fn advance(&mut self, _dt: f64) {}
+    fn panels_ui(&mut self, ui: &mut egui::Ui, _panels: &mut PanelVisibility, _compact: bool) {
+        ui.label(&self.why);
+    }
+    fn stored_settings(&self) -> serde_json::Value {
+        serde_json::Value::Null
+    }
+    fn share_query(&self, _embed: bool) -> String {
+        String::new()
+    }
+    fn test_state(&self) -> serde_json::Value {
+        serde_json::Value::Null
+    }
+    fn as_any(&self) -> &dyn Any {
+        self
+    }
+    fn as_any_mut(&mut self) -> &mut dyn Any {
+        self
+    }
 }
 
 /// What a lesson asks of the shell, which it cannot do from inside its panels.
@@ -135,16 +151,23 @@ pub enum LessonRequest {
     /// Save these files (downloads in the browser, the working folder on the
     /// desktop).
     Save(Vec<crate::export::ExportFile>),
-    /// Replace the lesson on screen with this one (a hand-off between lessons,
-    /// such as localizing in a map just built).
-    Open(Box<dyn Lesson>),
+    /// Open the Monte Carlo localization lesson on this map (a hand-off between
+    /// lessons: localizing in a map just built). The shell asks the registry
+    /// ([`crate::registry::localize_in_map`]), so the lesson that asks never names
+    /// the lesson that answers.
+    LocalizeInMap {
+        /// What the map is called in the localization lesson's notes.
+        name: String,
+        /// The map.
+        grid: slamlab_core::grid::OccupancyGrid,
+    },
 }
 
 impl std::fmt::Debug for LessonRequest {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
         match self {
             Self::Save(files) => write!(f, "Save({} files)", files.len()),
-            Self::Open(lesson) => write!(f, "Open({})", lesson.id()),
+            Self::LocalizeInMap { name, .. } => write!(f, "LocalizeInMap({name})"),
         }
     }
 }
@@ -152,7 +175,7 @@ impl std::fmt::Debug for LessonRequest {
 /// One lesson on screen. Everything the shell needs, nothing it must know about
 /// the lesson's world.
 pub trait Lesson: std::fmt::Debug {
-    /// The lesson's id, as in [`LESSONS`].
+    /// The lesson's id, as in [`crate::registry::LESSONS`].
     fn id(&self) -> &'static str;
     /// What runs now, for the top bar after the lesson's title ("EKF vs UKF");
     /// empty for nothing.
@@ -225,6 +248,10 @@ pub trait Lesson: std::fmt::Debug {
     }
     /// A request for the shell, taken once (polled every frame).
     fn take_request(&mut self) -> Option<LessonRequest> {
+        None
+    }
+    /// Why the lesson could not open, if it could not ([`open_instead`]).
+    fn could_not_open(&self) -> Option<&str> {
         None
     }
 }
@@ -327,81 +354,9 @@ impl Lesson for WithNotice {
     fn take_restarted_from_link(&mut self) -> bool {
         self.inner.take_restarted_from_link()
     }
-}
-
-/// One entry of the lesson menu.
-#[derive(Clone, Copy, Debug)]
-pub struct LessonEntry {
-    /// The URL's `lesson=` value, e.g. `landmark-slam`.
-    pub id: &'static str,
-    /// The title in the menu and the top bar.
-    pub title: &'static str,
-    /// One line on what the student sees.
-    pub summary: &'static str,
-    /// Opens the lesson.
-    pub open: fn(&LessonStart<'_>) -> Box<dyn Lesson>,
-}
-
-/// Every lesson, in menu order. The first is the default.
-pub const LESSONS: &[LessonEntry] = &[
-    LessonEntry {
-        id: crate::landmark_slam::LESSON_ID,
-        title: "Landmark SLAM",
-        summary: "A robot drives among landmarks; EKF-SLAM and UKF-SLAM estimate its pose and \
-                  the map, with 95% ellipses, NEES/NIS consistency plots and the covariance heatmap.",
-        open: crate::landmark_slam::open,
-    },
-    LessonEntry {
-        id: crate::kidnap::LESSON_ID,
-        title: "Monte Carlo localization",
-        summary: "A robot with a lidar in a maze or an office; a cloud of particles finds it \
-                  (global localization) and follows it: predict, weight, resample. Kidnap it.",
-        open: crate::kidnap::open,
-    },
-    LessonEntry {
-        id: crate::pose_graph::LESSON_ID,
-        title: "Pose-graph optimization",
-        summary: "A graph of poses, odometry and loop closures optimized one solver iteration at \
-                  a time (GN, LM, first-order); drag vertices, add a wrong loop closure, try \
-                  robust kernels, open g2o/TORO files.",
-        open: crate::pose_graph::open,
-    },
-    LessonEntry {
-        id: crate::resampling::LESSON_ID,
-        title: "Resampling lab",
-        summary: "One row of weighted particles and four resamplers side by side: press \
-                  resample once or a thousand times and see how many copies each particle \
-                  gets, and how much they scatter.",
-        open: crate::resampling::open,
-    },
-    LessonEntry {
-        id: crate::fusion::LESSON_ID,
-        title: "Sensor fusion",
-        summary: "Wheel odometry, an IMU and a 1 Hz SLAM pose fused by robot_localization's EKF; \
-                  the SLAM pose taken absolute, relative or differential, side by side.",
-        open: crate::fusion::open,
-    },
-    LessonEntry {
-        id: crate::mapping::LESSON_ID,
-        title: "Mapping with a lidar",
-        summary: "A lidar's scans build an occupancy grid; poses from the truth, raw odometry, \
-                  ICP or scan-to-map matching, switched live on the same scans; a simulated \
-                  robot or a real CARMEN log (the Intel lab).",
-        open: crate::mapping::open,
-    },
-];
-
-/// The lesson that opens when none (or an unknown one) is asked for.
-pub const DEFAULT_LESSON: &str = "landmark-slam";
-
-/// Looks a lesson up by id.
-pub fn find(id: &str) -> Option<&'static LessonEntry> {
-    LESSONS.iter().find(|l| l.id == id)
-}
-
-/// The default lesson's entry.
-pub fn default_lesson() -> &'static LessonEntry {
-    find(DEFAULT_LESSON).unwrap_or(&LESSONS[0])
+    fn could_not_open(&self) -> Option<&str> {
+        self.inner.could_not_open()
+    }
 }
 
 /// Runs a lesson's phases until the clock's due ticks are done or the frame budget
@@ -440,42 +395,6 @@ pub fn advance_within_budget(
 #[cfg(test)]
 mod tests {
     use super::*;
-
-    #[test]
-    fn the_default_lesson_is_in_the_catalogue_and_ids_are_unique() {
-        assert_eq!(default_lesson().id, DEFAULT_LESSON);
-        for (i, a) in LESSONS.iter().enumerate() {
-            for b in &LESSONS[i + 1..] {
-                assert_ne!(a.id, b.id);
-            }
-        }
-        assert!(find("nope").is_none());
-    }
-
-    #[test]
-    fn every_lesson_opens_with_its_id_and_a_share_link_that_reopens_it() {
-        for entry in LESSONS {
-            let lesson = (entry.open)(&LessonStart {
-                pairs: &[],
-                embed: false,
-                stored: None,
-                many_runs: None,
-            });
-            assert_eq!(lesson.id(), entry.id);
-            let query = lesson.share_query(true);
-            assert!(
-                query.starts_with(&format!("lesson={}", entry.id)),
-                "{query}"
-            );
-            assert!(query.ends_with("embed=1"), "{query}");
-            assert!(
-                lesson.notices().is_empty(),
-                "{}: {:?}",
-                entry.id,
-                lesson.notices()
-            );
-        }
-    }
 
     #[test]
     fn the_advance_stops_at_the_ticks_due() {

@@ -17,8 +17,10 @@ pub mod landmark_slam;
 pub mod lesson;
 pub mod mapping;
 pub mod palette;
+pub mod panels;
 pub mod pose_graph;
 pub mod query;
+pub mod registry;
 pub mod resampling;
 pub mod time_control;
 pub mod widgets;
@@ -27,8 +29,8 @@ pub mod widgets;
 mod web;
 
 use landmark_slam::LandmarkSlamLesson;
-pub use lesson::PanelVisibility;
 use lesson::{Lesson, LessonStart};
+pub use panels::PanelVisibility;
 use serde::{Deserialize, Serialize};
 use std::collections::{BTreeMap, BTreeSet};
 use time_control::TimeAction;
@@ -125,9 +127,9 @@ impl SlamLabApp {
         let parsed = query::Query::parse(query);
         let mut notices: Vec<String> = parsed.issues.clone();
         let entry = match parsed.lesson.as_deref() {
-            None => lesson::default_lesson(),
-            Some(id) => lesson::find(id).unwrap_or_else(|| {
-                let default = lesson::default_lesson();
+            None => registry::default_lesson(),
+            Some(id) => registry::find(id).unwrap_or_else(|| {
+                let default = registry::default_lesson();
                 notices.push(format!(
                     "unknown lesson '{id}'; opening \"{}\" instead",
                     default.title
@@ -143,12 +145,15 @@ impl SlamLabApp {
         let stored = (!parsed.embed && !link_sets_up)
             .then(|| settings.lessons.get(entry.id))
             .flatten();
-        let mut lesson = (entry.open)(&LessonStart {
-            pairs: &parsed.pairs,
-            embed: parsed.embed,
-            stored,
-            many_runs: parsed.many_runs,
-        });
+        let mut lesson = registry::open(
+            entry,
+            &LessonStart {
+                pairs: &parsed.pairs,
+                embed: parsed.embed,
+                stored,
+                many_runs: parsed.many_runs,
+            },
+        );
         let panels = match parsed.figure.panels {
             Some(panels) => panels,
             None if parsed.embed => PanelVisibility::embedded(),
@@ -447,15 +452,17 @@ impl SlamLabApp {
         self.lesson.panels_ui(ui, panels, self.embed);
         match self.lesson.take_request() {
             Some(lesson::LessonRequest::Save(files)) => self.exporter.save_all(files),
-            Some(lesson::LessonRequest::Open(next)) => {
-                if !self.embed {
-                    self.stored
-                        .lessons
-                        .insert(self.lesson.id().to_owned(), self.lesson.stored_settings());
+            Some(request) => {
+                if let Some(next) = registry::requested(request) {
+                    if !self.embed {
+                        self.stored
+                            .lessons
+                            .insert(self.lesson.id().to_owned(), self.lesson.stored_settings());
+                    }
+                    self.lesson = next;
+                    self.app_notices.clear();
+                    self.dismissed.clear();
                 }
-                self.lesson = next;
-                self.app_notices.clear();
-                self.dismissed.clear();
             }
             None => {}
         }
@@ -468,7 +475,7 @@ impl SlamLabApp {
     }
 
     fn title(&self) -> String {
-        let lesson_title = lesson::find(self.lesson.id()).map_or("", |l| l.title);
+        let lesson_title = registry::find(self.lesson.id()).map_or("", |l| l.title);
         match self.lesson.subtitle() {
             subtitle if subtitle.is_empty() => lesson_title.to_owned(),
             subtitle => format!("{lesson_title}: {subtitle}"),
@@ -512,7 +519,7 @@ impl SlamLabApp {
             ui.label(egui::RichText::new("SLAM Lab").strong());
             ui.menu_button("File", |ui| self.file_menu_ui(ui));
             ui.menu_button("Lessons", |ui| {
-                for info in lesson::LESSONS {
+                for info in registry::LESSONS {
                     let selected = info.id == self.lesson.id();
                     let response = ui
                         .selectable_label(selected, info.title)
@@ -748,7 +755,7 @@ impl SlamLabApp {
     /// Opens a scenario file's lesson with its parameters and view, as a link with
     /// the same pairs would (its problems become notices).
     pub fn open_scenario(&mut self, file: &slamlab_sim::scenario_file::ScenarioFile, name: &str) {
-        if lesson::find(&file.lesson).is_none() {
+        if registry::find(&file.lesson).is_none() {
             self.app_notices.push(format!(
                 "{name}: no lesson '{}' in this SLAM Lab; the current lesson stays",
                 file.lesson
@@ -771,7 +778,7 @@ impl SlamLabApp {
     /// Opens lesson `id` as the user left it (its stored settings), keeping the
     /// settings of the lesson being left.
     fn switch_lesson(&mut self, id: &str) {
-        let Some(entry) = lesson::find(id) else {
+        let Some(entry) = registry::find(id) else {
             return;
         };
         if !self.embed {
@@ -782,12 +789,15 @@ impl SlamLabApp {
         let stored = (!self.embed)
             .then(|| self.stored.lessons.get(entry.id))
             .flatten();
-        self.lesson = (entry.open)(&LessonStart {
-            pairs: &[],
-            embed: self.embed,
-            stored,
-            many_runs: None,
-        });
+        self.lesson = registry::open(
+            entry,
+            &LessonStart {
+                pairs: &[],
+                embed: self.embed,
+                stored,
+                many_runs: None,
+            },
+        );
         self.app_notices.clear();
         self.dismissed.clear();
     }

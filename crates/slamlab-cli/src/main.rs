@@ -17,8 +17,10 @@
 //!
 //! `slamlab run LESSON` and `slamlab experiment NAME` dispatch through the
 //! registries in [`registry`]: a lesson or an experiment is one module (in
-//! `lessons/` or `experiments/`) and one entry there.
+//! `lessons/` or `experiments/`, implementing a trait of [`command`]) and one entry
+//! there.
 
+mod command;
 mod experiments;
 mod flags;
 mod graph_cmd;

@@ -1,56 +1,20 @@
 //! The lessons `slamlab run` runs and the experiments `slamlab experiment`
-//! reproduces. Each is one module implementing [`RunLesson`] or [`Experiment`]
-//! and one entry in [`LESSONS`] or [`EXPERIMENTS`]: its flags become the
+//! reproduces: the one module that names them all. Each is one module implementing
+//! [`RunLesson`] or [`Experiment`] (the traits live in [`crate::command`], which
+//! imports none of them, so imports run one way: `main -> registry -> {lessons,
+//! experiments} -> command`) and one entry in [`LESSONS`] or [`EXPERIMENTS`]: its
+//! flags become the
 //! subcommand's (`slamlab run kidnap --help` lists exactly its own), and the
 //! shared `--json`, `--csv`, progress bars and refusals come from here and from
 //! [`crate::output`].
 
+use crate::command::{Experiment, RunLesson};
 use crate::experiments;
 use crate::lessons;
 use crate::output::{self, Output};
 use anyhow::{Result, bail};
 use clap::{Arg, ArgMatches, Command};
 use std::io::Write;
-
-/// A lesson whose scenario `slamlab run ID` runs headless.
-pub trait RunLesson: Sync {
-    /// The lesson id (the app's `?lesson=ID`).
-    fn id(&self) -> &'static str;
-    /// One line for `slamlab run --help`.
-    fn about(&self) -> &'static str;
-    /// The subcommand with the lesson's flags (`--json` and `--scenario FILE` are
-    /// added by the registry).
-    fn command(&self) -> Command;
-    /// Runs it, printing to `out`.
-    fn run(&self, matches: &ArgMatches, out: &mut Output) -> Result<()>;
-}
-
-/// Flags of other commands that an experiment refuses with a reason of its own
-/// (the flag's name in, the message out), rather than the shared "belongs to".
-pub struct Refusal {
-    /// The flags (their ids, which are their long names).
-    pub flags: Vec<&'static str>,
-    /// The message for one of them.
-    pub reason: fn(&str) -> String,
-}
-
-/// An experiment `slamlab experiment NAME` reproduces.
-pub trait Experiment: Sync {
-    /// Its name on the command line.
-    fn name(&self) -> &'static str;
-    /// One line for `slamlab experiment --help`.
-    fn about(&self) -> &'static str;
-    /// The subcommand with the experiment's flags (`--json` is added by the
-    /// registry).
-    fn command(&self) -> Command;
-    /// Other experiments' flags it refuses with its own message, checked in this
-    /// order; any other experiment's flag is refused as belonging to that one.
-    fn refusals(&self) -> Vec<Refusal> {
-        Vec::new()
-    }
-    /// Runs it, printing to `out`.
-    fn run(&self, matches: &ArgMatches, out: &mut Output) -> Result<()>;
-}
 
 /// The lessons `slamlab run` runs.
 pub static LESSONS: &[&dyn RunLesson] = &[
@@ -329,5 +293,64 @@ mod tests {
         let e = experiment(&["consistency", "--noise-scale", "2"]).unwrap_err();
         assert!(e.to_string().contains("--v-std"), "{e}");
         assert_eq!(and_list(&["a", "b", "c"]), "a, b and c");
+    }
+
+    #[test]
+    fn fusion_refuses_landmark_flags_and_bad_seeds_with_their_names() {
+        let e = experiment(&["fusion", "--landmarks", "5"]).unwrap_err();
+        assert!(e.to_string().contains("--landmarks"), "{e}");
+        let e = experiment(&["fusion", "--steps", "5"]).unwrap_err();
+        assert!(e.to_string().contains("--steps"), "{e}");
+        let e = experiment(&["fusion", "--seed", "-3"]).unwrap_err();
+        assert!(e.to_string().contains("--seed '-3'"), "{e}");
+    }
+
+    /// Imports run one way: `main -> registry -> {lessons, experiments} -> command`.
+    /// No lesson or experiment names the registry or `main`, no lesson names an
+    /// experiment, and `command` names none of them.
+    #[test]
+    fn imports_run_one_way() {
+        let src = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("src");
+        let read = |path: std::path::PathBuf| -> Vec<(String, String)> {
+            let files: Vec<std::path::PathBuf> = if path.is_dir() {
+                let mut files: Vec<_> = std::fs::read_dir(&path)
+                    .into_iter()
+                    .flatten()
+                    .flatten()
+                    .map(|e| e.path())
+                    .collect();
+                files.sort();
+                files
+            } else {
+                vec![path]
+            };
+            files
+                .into_iter()
+                .map(|file| {
+                    let text = std::fs::read_to_string(&file).unwrap_or_default();
+                    let code: Vec<&str> = text
+                        .lines()
+                        .filter(|l| !l.trim_start().starts_with("//"))
+                        .collect();
+                    (file.display().to_string(), code.join("\n"))
+                })
+                .collect()
+        };
+        let rules: [(&str, &[&str]); 3] = [
+            ("lessons", &["registry", "experiments", "cli"]),
+            ("experiments", &["registry", "cli"]),
+            ("command.rs", &["registry", "lessons", "experiments", "cli"]),
+        ];
+        let mut wrong = Vec::new();
+        for (part, forbidden) in rules {
+            for (file, code) in read(src.join(part)) {
+                for name in forbidden {
+                    if code.contains(&format!("crate::{name}")) {
+                        wrong.push(format!("{file} names crate::{name}"));
+                    }
+                }
+            }
+        }
+        assert!(wrong.is_empty(), "{}", wrong.join("\n"));
     }
 }

@@ -666,6 +666,19 @@ mod tests {
         );
     }
 
+    /// The lesson a share link opens, read as the shell reads it (the shell's own
+    /// path through the registry is tested in `tests/lessons/shell_ui.rs`).
+    fn reopen(link: &str) -> Box<dyn Lesson> {
+        let q = crate::query::Query::parse(link);
+        assert_eq!(q.lesson.as_deref(), Some(LESSON_ID), "{link}");
+        open(&LessonStart {
+            pairs: &q.pairs,
+            embed: q.embed,
+            stored: None,
+            many_runs: q.many_runs,
+        })
+    }
+
     #[test]
     fn a_shared_link_reopens_the_same_setup() {
         let setups: [&[(&str, &str)]; 4] = [
@@ -687,9 +700,10 @@ mod tests {
             // A live change of the sensor's reach is part of the setup too.
             assert!(lesson.set_param_live("fov-deg", "200").is_none());
             let link = lesson.share_query(true);
-            let reopened = crate::SlamLabApp::from_query(&link);
+            let reopened = reopen(&link);
             let pairs = reopened
-                .landmark_lesson()
+                .as_any()
+                .downcast_ref::<LandmarkSlamLesson>()
                 .map(|l| params::to_pairs(&l.session().scenario_now()));
             assert_eq!(
                 pairs,
@@ -707,8 +721,8 @@ mod tests {
         lesson.many_runs.trials = 80;
         let link = lesson.share_query(true);
         assert_eq!(link, "lesson=landmark-slam&seed=1&many-runs=80&embed=1");
-        let opened = crate::SlamLabApp::from_query(&link);
-        let reopened = opened.landmark_lesson();
+        let opened = reopen(&link);
+        let reopened = opened.as_any().downcast_ref::<LandmarkSlamLesson>();
         assert!(reopened.is_some_and(|l| l.view.many_runs && l.many_runs.trials == 80));
     }
 

@@ -484,9 +484,7 @@ impl MappingLesson {
             return;
         };
         let name = format!("the map built from {}", self.input.name);
-        self.request = Some(LessonRequest::Open(crate::kidnap::open_with_map(
-            name, grid,
-        )));
+        self.request = Some(LessonRequest::LocalizeInMap { name, grid });
     }
 
     fn next_phase_label(&self) -> String {

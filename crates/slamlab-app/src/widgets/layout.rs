@@ -7,7 +7,7 @@
 //! map (one at a time, closed until asked for) instead of squeezing it. The map's
 //! rectangle is kept for the shell ([`map_rect`]) and the browser tests.
 
-use crate::lesson::PanelVisibility;
+use crate::panels::PanelVisibility;
 
 /// Below this window width (points) the side panels are drawers over the map.
 pub const NARROW_WIDTH: f32 = 1000.0;

@@ -6,7 +6,7 @@ use super::common::harness;
 use egui_kittest::Harness;
 use egui_kittest::kittest::Queryable as _;
 use slamlab_app::SlamLabApp;
-use slamlab_app::lesson::LESSONS;
+use slamlab_app::registry::LESSONS;
 use slamlab_sim::scenario_file::ScenarioFile;
 use std::path::PathBuf;
 

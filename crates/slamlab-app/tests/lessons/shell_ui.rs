@@ -9,7 +9,7 @@ use super::common::{
 use egui_kittest::Harness;
 use egui_kittest::kittest::Queryable as _;
 use slamlab_app::SlamLabApp;
-use slamlab_app::lesson::LESSONS;
+use slamlab_app::registry::LESSONS;
 
 fn state(h: &Harness<'_, SlamLabApp>) -> serde_json::Value {
     serde_json::from_str(&h.state().test_state_json()).unwrap_or_default()

@@ -88,7 +88,7 @@ fn unnamed_citations(h: &egui_kittest::Harness<'_, slamlab_app::SlamLabApp>) -> 
 
 #[test]
 fn no_lesson_cites_a_document_without_naming_it() {
-    for entry in slamlab_app::lesson::LESSONS {
+    for entry in slamlab_app::registry::LESSONS {
         let mut h = harness(&format!("lesson={}&seed=3", entry.id));
         h.run();
         assert!(

@@ -6,9 +6,9 @@
 //! ```
 
 use super::{scenario_args, steps_arg, trials_arg};
+use crate::command::{Experiment, Refusal};
 use crate::lessons::landmark::{check_runnable, scenario_from};
 use crate::output::{Output, csv_arg, progress_bar};
-use crate::registry::{Experiment, Refusal};
 use anyhow::Result;
 use clap::{ArgMatches, Command};
 use slamlab_sim::consistency::ConsistencyStudy;

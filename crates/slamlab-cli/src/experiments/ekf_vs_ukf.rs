@@ -5,9 +5,9 @@
 //! ```
 
 use super::{landmark_flags_but_seed, noise_scale_arg, seed_arg, trials_arg};
+use crate::command::{Experiment, Refusal};
 use crate::lessons::landmark::scenario_from;
 use crate::output::{Output, csv_arg, progress_bar};
-use crate::registry::{Experiment, Refusal};
 use anyhow::{Result, bail};
 use clap::{ArgMatches, Command};
 use slamlab_sim::experiments;

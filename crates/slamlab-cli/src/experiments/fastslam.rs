@@ -5,9 +5,9 @@
 //! ```
 
 use super::{scenario_args, steps_arg, trials_arg};
+use crate::command::Experiment;
 use crate::lessons::landmark::{refuse_manual, scenario_from};
 use crate::output::{Output, csv_arg, progress_bar};
-use crate::registry::Experiment;
 use anyhow::{Result, bail};
 use clap::{Arg, ArgMatches, Command};
 use slamlab_core::particle::FastSlamVersion;

@@ -5,8 +5,8 @@
 //! ```
 
 use super::{landmark_flags_but_seed, seed_arg};
+use crate::command::{Experiment, Refusal};
 use crate::output::{Output, csv_arg, progress_bar};
-use crate::registry::{Experiment, Refusal};
 use anyhow::Result;
 use clap::{Arg, ArgMatches, Command};
 use slamlab_sim::fusion::{
@@ -170,29 +170,6 @@ fn series_csv(template: &FusionScenario) -> String {
 #[cfg(test)]
 mod tests {
     use super::*;
-
-    /// Runs `slamlab experiment fusion ARGS` as `main` does, printing nowhere.
-    fn experiment(args: &[&str]) -> Result<()> {
-        let mut all = vec!["slamlab", "experiment", "fusion"];
-        all.extend_from_slice(args);
-        let m = crate::cli()
-            .try_get_matches_from(all)
-            .unwrap_or_else(|e| panic!("{e}"));
-        let Some(("experiment", sub)) = m.subcommand() else {
-            panic!("no experiment")
-        };
-        crate::registry::run_experiment(sub, &mut std::io::sink())
-    }
-
-    #[test]
-    fn landmark_flags_and_bad_seeds_are_refused_with_their_names() {
-        let e = experiment(&["--landmarks", "5"]).unwrap_err();
-        assert!(e.to_string().contains("--landmarks"), "{e}");
-        let e = experiment(&["--steps", "5"]).unwrap_err();
-        assert!(e.to_string().contains("--steps"), "{e}");
-        let e = experiment(&["--seed", "-3"]).unwrap_err();
-        assert!(e.to_string().contains("--seed '-3'"), "{e}");
-    }
 
     #[test]
     fn the_series_csv_has_an_error_and_a_2_sigma_column_per_mode_and_axis() {

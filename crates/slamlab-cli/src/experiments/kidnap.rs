@@ -4,10 +4,10 @@
 //! slamlab experiment kidnap --map maze --particles 500,1000 --estimator amcl,acmcl --trials 20 --seed 1 --json
 //! ```
 
+use crate::command::Experiment;
 use crate::flags;
 use crate::map::{map_arg, read_map, resolution_arg};
 use crate::output::{Output, csv_arg, trials_bar, trials_progress};
-use crate::registry::Experiment;
 use anyhow::{Context, Result, bail};
 use clap::{Arg, ArgMatches, Command};
 use serde_json::json;

@@ -6,8 +6,8 @@
 //! ```
 
 use super::{landmark_flags_but_seed, noise_scale_arg, seed_arg};
+use crate::command::{Experiment, Refusal};
 use crate::output::Output;
-use crate::registry::{Experiment, Refusal};
 use anyhow::{Result, bail};
 use clap::{Arg, ArgMatches, Command};
 use slamlab_core::graph::SolverKind;

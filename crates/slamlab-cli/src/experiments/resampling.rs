@@ -7,9 +7,9 @@
 
 use super::fastslam::parse_counts;
 use super::{landmark_flags_but_seed, seed_arg, trials_arg};
+use crate::command::{Experiment, Refusal};
 use crate::lessons::landmark::scenario_from;
 use crate::output::{Output, progress_bar};
-use crate::registry::{Experiment, Refusal};
 use anyhow::{Result, bail};
 use clap::{Arg, ArgMatches, Command};
 use slamlab_core::particle::{Resampler, WeightPreset};

@@ -5,8 +5,8 @@
 //! slamlab experiment two-view --method eight-point,five-point --outliers 0,0.3,0.5 --noise-px 1 --points 200 --trials 200 --seed 1 --json
 //! ```
 
+use crate::command::Experiment;
 use crate::output::{Output, progress_bar};
-use crate::registry::Experiment;
 use anyhow::{Result, bail};
 use clap::{Arg, ArgAction, ArgMatches, Command};
 use slamlab_core::vision::Method;

@@ -7,9 +7,9 @@
 //! slamlab experiment unscented --function polar --bearing-std-deg 30 --range-std 0.1 --samples 100000 --seed 1 --json
 //! ```
 
+use crate::command::Experiment;
 use crate::flags::{scenario_from, table_args};
 use crate::output::Output;
-use crate::registry::Experiment;
 use anyhow::{Result, anyhow};
 use clap::{ArgMatches, Command};
 use slamlab_sim::filters_lab::{FiltersScenario, one_step};

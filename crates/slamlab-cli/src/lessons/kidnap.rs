@@ -7,10 +7,10 @@
 //! Parameter flags carry ROS amcl's names with dashes (`--laser-sigma-hit`,
 //! `--odom-alpha1`, `--update-min-d`, ...).
 
+use crate::command::RunLesson;
 use crate::flags;
 use crate::map::{map_arg, read_map, resolution_arg};
 use crate::output::Output;
-use crate::registry::RunLesson;
 use anyhow::{Context, Result};
 use clap::{Arg, ArgMatches, Command};
 use serde_json::json;

@@ -4,9 +4,9 @@
 //! slamlab run landmark-slam --estimator ekf --steps 200 --seed 1 --json
 //! ```
 
+use crate::command::RunLesson;
 use crate::flags;
 use crate::output::Output;
-use crate::registry::RunLesson;
 use anyhow::{Context, Result, bail};
 use clap::{Arg, ArgMatches, Command};
 use slamlab_sim::metrics::{RunSummary, run_headless};

@@ -5,10 +5,10 @@
 //! slamlab run mapping --log intel.clf.bz2 --poses scan-to-map --json --map-out intel.yaml
 //! ```
 
+use crate::command::RunLesson;
 use crate::flags;
 use crate::map::{map_arg, read_map};
 use crate::output::{Output, progress_bar};
-use crate::registry::RunLesson;
 use anyhow::{Context, Result, bail};
 use clap::{Arg, ArgMatches, Command};
 use serde_json::json;

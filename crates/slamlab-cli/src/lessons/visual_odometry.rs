@@ -5,8 +5,8 @@
 //! slamlab run visual-odometry --frames 200 --seed 1 --json
 //! ```
 
+use crate::command::RunLesson;
 use crate::output::Output;
-use crate::registry::RunLesson;
 use anyhow::{Result, bail};
 use clap::{Arg, ArgAction, ArgMatches, Command};
 use serde_json::json;
