@@ -96,6 +96,9 @@ pub struct FiltersLesson {
     density: one_step::Density,
     density_stale: bool,
     grab: Option<one_step::Grab>,
+    /// Where the prior's handles were drawn last frame: mean, first and second
+    /// column of the covariance's factor (screen points).
+    handles_on_screen: Option<[egui::Pos2; 3]>,
     /// How long the last one-step computation took, milliseconds.
     last_compute_ms: f64,
 }
@@ -156,6 +159,7 @@ impl FiltersLesson {
             density: one_step::Density::default(),
             density_stale: true,
             grab: None,
+            handles_on_screen: None,
             last_compute_ms: 0.0,
         };
         lesson.recompute();
@@ -192,6 +196,17 @@ impl FiltersLesson {
     /// Why the latest change was refused.
     pub fn note(&self) -> Option<&str> {
         self.note.as_deref()
+    }
+
+    /// Where the prior's handles were drawn in the last frame (mean, first and
+    /// second covariance handle), screen points; `None` off the one-step view.
+    pub fn handles_on_screen(&self) -> Option<[egui::Pos2; 3]> {
+        self.handles_on_screen
+    }
+
+    /// The view in the centre.
+    pub fn tab(&self) -> Tab {
+        self.view.tab
     }
 
     /// The corridor run.
@@ -329,6 +344,7 @@ impl FiltersLesson {
             self.result.as_ref(),
             axes,
             &mut self.grab,
+            &mut self.handles_on_screen,
         )
     }
 
@@ -352,7 +368,7 @@ impl FiltersLesson {
             Tab::OneStep => {
                 let mut chosen = self.scenario.function.name();
                 ui.horizontal(|ui| {
-                    ui.label("function");
+                    ui.label("Function");
                     egui::ComboBox::from_id_salt("filters_function")
                         .selected_text(chosen)
                         .show_ui(ui, |ui| {
@@ -421,7 +437,7 @@ impl crate::widgets::layout::LessonPanels for FiltersLesson {
         match self.view.tab {
             Tab::OneStep => explain::table_ui(ui, self.result.as_ref(), self.last_compute_ms),
             Tab::Corridor => {
-                let h = ui.available_height() - 50.0;
+                let h = ui.available_height();
                 corridor::gain_ui(ui, self.corridor.sim(), h);
             }
         }
@@ -441,7 +457,10 @@ impl crate::widgets::layout::LessonPanels for FiltersLesson {
     fn map_ui(&mut self, ui: &mut egui::Ui) {
         match self.view.tab {
             Tab::OneStep => self.one_step_map_ui(ui),
-            Tab::Corridor => corridor::belief_ui(ui, self.corridor.sim()),
+            Tab::Corridor => {
+                self.handles_on_screen = None;
+                corridor::belief_ui(ui, self.corridor.sim());
+            }
         }
     }
 }
@@ -560,6 +579,21 @@ impl Lesson for FiltersLesson {
             "function": self.scenario.function.name(),
             "note": self.note,
             "samples_mean": self.result.as_ref().map(|r| [r.truth.moments.mean[0], r.truth.moments.mean[1]]),
+            "samples": self.result.as_ref().map(|r| r.truth.points.len()),
+            "prior": {
+                "mean": self.scenario.mean,
+                "std": self.scenario.std,
+                "rho": self.scenario.rho,
+            },
+            "handles_px": self.handles_on_screen.map(|h| h.map(|p| [p.x, p.y])),
+            "jacobian": self.result.as_ref().map(|r| {
+                let j = r.ekf.jacobian;
+                [[j[(0, 0)], j[(0, 1)]], [j[(1, 0)], j[(1, 1)]]]
+            }),
+            "ukf_weights": self.result.as_ref().map(|r| {
+                let w = r.ukf.weights;
+                serde_json::json!({ "lambda": w.lambda, "mean0": w.mean0, "cov0": w.cov0, "other": w.other })
+            }),
             "density_inside": self.density.inside,
             "compute_ms": self.last_compute_ms,
             "results": rows,
