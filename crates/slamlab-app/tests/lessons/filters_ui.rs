@@ -11,6 +11,11 @@ use slamlab_app::filters::{FiltersLesson, Tab};
 use slamlab_app::lesson::Lesson as _;
 use slamlab_app::time_control::TimeAction;
 
+/// Where a screenshot goes: the tests' scratch folder in the target directory.
+fn shot(name: &str) -> std::path::PathBuf {
+    std::path::Path::new(env!("CARGO_TARGET_TMPDIR")).join(format!("{name}.png"))
+}
+
 fn lesson<'h>(h: &'h Harness<'_, SlamLabApp>) -> &'h FiltersLesson {
     lesson_of(h)
 }
@@ -37,7 +42,7 @@ fn the_polar_banana_opens_by_url_and_the_ukf_beats_the_ekf() {
         return;
     };
     image
-        .save("target/filters_one_step.png")
+        .save(shot("filters_one_step"))
         .unwrap_or_else(|e| eprintln!("could not save the screenshot: {e}"));
     for (name, rgb) in [
         ("EKF blue", [0x00, 0x72, 0xB2]),
@@ -104,7 +109,7 @@ fn the_time_bar_steps_the_corridor_and_steps_back_exactly() {
         return;
     };
     image
-        .save("target/filters_corridor.png")
+        .save(shot("filters_corridor"))
         .unwrap_or_else(|e| eprintln!("could not save the screenshot: {e}"));
     let green = count_pixels(image.as_raw(), [0x00, 0x9E, 0x73], 30);
     assert!(green > 200, "histogram bars: {green} pixels");
@@ -315,7 +320,7 @@ fn the_lesson_renders_readably_at_800_by_500_and_full_size() {
             return;
         };
         image
-            .save(format!("target/{name}.png"))
+            .save(shot(name))
             .unwrap_or_else(|e| eprintln!("could not save the screenshot: {e}"));
         let blue = count_pixels(image.as_raw(), [0x00, 0x72, 0xB2], 30);
         assert!(blue > 100, "{name}: EKF blue {blue} pixels");
@@ -326,7 +331,7 @@ fn the_lesson_renders_readably_at_800_by_500_and_full_size() {
         h.run();
         if let Some(image) = render_or_skip(&mut h) {
             image
-                .save(format!("target/{name}_corridor.png"))
+                .save(shot(&format!("{name}_corridor")))
                 .unwrap_or_else(|e| eprintln!("could not save the screenshot: {e}"));
         }
     }
