@@ -336,3 +336,24 @@ fn the_lesson_renders_readably_at_800_by_500_and_full_size() {
         }
     }
 }
+
+/// The seeded table the browser test repeats in wasm (`web/tests/browser.test.mjs`,
+/// `FILTERS_NATIVE`): the same bits natively and in the browser.
+#[test]
+fn the_seeded_table_has_these_exact_numbers() {
+    let json = SlamLabApp::headless_state("lesson=filters&samples=20000&seed=1", 0);
+    let state: serde_json::Value = serde_json::from_str(&json).unwrap();
+    let table: Vec<String> = state["results"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|r| format!("{}={}", r["method"].as_str().unwrap(), r["mean_error"]))
+        .collect();
+    assert_eq!(table, FILTERS_NATIVE, "{json}");
+}
+
+const FILTERS_NATIVE: [&str; 3] = [
+    "ekf=0.12957845707913004",
+    "ukf=0.001541246456905519",
+    "particles=0.021033324669198564",
+];
