@@ -13,6 +13,16 @@ fn method_color(method: &str) -> egui::Color32 {
     }
 }
 
+/// The documents this lesson follows, as links to the Sources window.
+fn sources_line(ui: &mut egui::Ui) {
+    ui.horizontal_wrapped(|ui| {
+        ui.label("Sources:");
+        source_link(ui, "xiang", "Xiang's thesis, ch. 2 (Bayes, EKF, UKF, particles)");
+        source_link(ui, "wu", "Wu's thesis, ch. 2 (the Kalman filter's derivation)");
+        source_link(ui, "thrun", "Probabilistic Robotics, ch. 2-4 (the corridor)");
+    });
+}
+
 /// The comparison table: each Gaussian against the samples' moments.
 pub fn table_ui(ui: &mut egui::Ui, result: Option<&OneStep>, compute_ms: f64) {
     let Some(r) = result else {
@@ -72,6 +82,7 @@ pub fn one_step_ui(ui: &mut egui::Ui, result: Option<&OneStep>, scenario: &Filte
         "The prior (left) goes through the function. The samples show the true result: \
          not a Gaussian. Each filter replaces it with a Gaussian, in its own way.",
     );
+    sources_line(ui);
     let Some(r) = result else {
         return;
     };
@@ -87,7 +98,8 @@ pub fn one_step_ui(ui: &mut egui::Ui, result: Option<&OneStep>, scenario: &Filte
         source_link(ui, "wu", "Wu Eq. 2.15-2.18");
         ui.label("). The tangent plane's Jacobian at the mean:");
     });
-    let j = r.ekf.jacobian;
+    // + 0.0 writes −0 as 0.
+    let j = r.ekf.jacobian.map(|v| v + 0.0);
     ui.monospace(format!(
         "J = [{:>9.4} {:>9.4}]\n    [{:>9.4} {:>9.4}]",
         j[(0, 0)],
@@ -148,6 +160,7 @@ pub fn corridor_ui(ui: &mut egui::Ui, stepper: &Stepper<CorridorSim>) {
         source_link(ui, "wu", "Wu §2.1.1");
         ui.label(") on the same motions and sensor readings.");
     });
+    sources_line(ui);
     ui.add_space(6.0);
     match stepper.last_phase() {
         None => {

@@ -12,6 +12,7 @@
 
 mod corridor;
 mod explain;
+mod marginal;
 mod one_step;
 
 use crate::lesson::{self, Lesson, LessonStart, PanelVisibility, StoredSettings};
@@ -99,6 +100,8 @@ pub struct FiltersLesson {
     /// Where the prior's handles were drawn last frame: mean, first and second
     /// column of the covariance's factor (screen points).
     handles_on_screen: Option<[egui::Pos2; 3]>,
+    /// The samples' histogram of the first output and its range.
+    marginal: (Vec<[f64; 2]>, [f64; 2]),
     /// How long the last one-step computation took, milliseconds.
     last_compute_ms: f64,
 }
@@ -160,6 +163,7 @@ impl FiltersLesson {
             density_stale: true,
             grab: None,
             handles_on_screen: None,
+            marginal: (Vec::new(), [0.0, 1.0]),
             last_compute_ms: 0.0,
         };
         lesson.recompute();
@@ -232,6 +236,7 @@ impl FiltersLesson {
         let start = web_time::Instant::now();
         match one_step(&self.scenario) {
             Ok(r) => {
+                self.marginal = marginal::histogram(&r);
                 self.result = Some(r);
                 self.note = None;
                 self.density_stale = true;
@@ -294,58 +299,62 @@ impl FiltersLesson {
             .result
             .as_ref()
             .map_or(self.scenario.prior(), |r| r.prior);
-        let width = ui.available_width();
-        let height = ui.available_height();
-        let horizontal = width > 1.2 * height;
-        let mut change = None;
-        let layout = |ui: &mut egui::Ui, this: &mut Self, first: bool| {
-            if first {
-                this.input_ui(ui, &prior, f.input_axes())
-            } else {
-                if let Some(r) = &this.result {
-                    one_step::output_ui(
-                        ui,
-                        &mut this.output_view,
-                        &this.density,
-                        r,
-                        f.output_axes(),
-                    );
-                }
-                None
-            }
-        };
-        if horizontal {
-            ui.columns(2, |c| {
-                change = layout(&mut c[0], self, true);
-                layout(&mut c[1], self, false);
-            });
+        // Two halves of exactly the room there is (side by side when the area is
+        // wide): nothing spills out of a small window. A short half drops the keys
+        // to a hover, so that the canvas keeps its room.
+        let full = ui.available_rect_before_wrap();
+        let horizontal = full.width() > 1.2 * full.height();
+        let gap = 8.0;
+        let (first, second) = if horizontal {
+            let w = 0.5 * (full.width() - gap);
+            (
+                egui::Rect::from_min_size(full.min, egui::vec2(w, full.height())),
+                egui::Rect::from_min_size(
+                    full.min + egui::vec2(w + gap, 0.0),
+                    egui::vec2(w, full.height()),
+                ),
+            )
         } else {
-            let half = (height * 0.5 - 4.0).max(80.0);
-            ui.allocate_ui(egui::vec2(width, half), |ui| {
-                change = layout(ui, self, true)
-            });
-            layout(ui, self, false);
-        }
+            let h = 0.5 * (full.height() - gap);
+            (
+                egui::Rect::from_min_size(full.min, egui::vec2(full.width(), h)),
+                egui::Rect::from_min_size(
+                    full.min + egui::vec2(0.0, h + gap),
+                    egui::vec2(full.width(), h),
+                ),
+            )
+        };
+        let compact = first.height() < 280.0 || first.width() < 330.0;
+        let mut change = None;
+        ui.scope_builder(egui::UiBuilder::new().max_rect(first), |ui| {
+            ui.set_clip_rect(first.intersect(ui.clip_rect()));
+            change = one_step::input_ui(
+                ui,
+                &mut self.input_view,
+                &prior,
+                self.result.as_ref(),
+                f.input_axes(),
+                &mut self.grab,
+                &mut self.handles_on_screen,
+                compact,
+            );
+        });
+        ui.scope_builder(egui::UiBuilder::new().max_rect(second), |ui| {
+            ui.set_clip_rect(second.intersect(ui.clip_rect()));
+            if let Some(r) = &self.result {
+                one_step::output_ui(
+                    ui,
+                    &mut self.output_view,
+                    &self.density,
+                    r,
+                    f.output_axes(),
+                    compact,
+                );
+            }
+        });
         if let Some((mean, std, rho)) = change {
             self.set_prior(mean, std, rho);
         }
-    }
-
-    fn input_ui(
-        &mut self,
-        ui: &mut egui::Ui,
-        prior: &slamlab_core::filters::Gaussian2,
-        axes: [&'static str; 2],
-    ) -> Option<([f64; 2], [f64; 2], f64)> {
-        one_step::input_ui(
-            ui,
-            &mut self.input_view,
-            prior,
-            self.result.as_ref(),
-            axes,
-            &mut self.grab,
-            &mut self.handles_on_screen,
-        )
     }
 
     /// The density image keeps its bounds while the student drags, so the
@@ -435,7 +444,28 @@ fn corridor_part(s: &FiltersScenario) -> [f64; 8] {
 impl crate::widgets::layout::LessonPanels for FiltersLesson {
     fn plots_ui(&mut self, ui: &mut egui::Ui) {
         match self.view.tab {
-            Tab::OneStep => explain::table_ui(ui, self.result.as_ref(), self.last_compute_ms),
+            Tab::OneStep => {
+                let height = ui.available_height();
+                let Some(r) = &self.result else {
+                    ui.label("No valid belief yet.");
+                    return;
+                };
+                let (histogram, range) = (&self.marginal.0, self.marginal.1);
+                let compute_ms = self.last_compute_ms;
+                if ui.available_width() >= 900.0 {
+                    ui.columns(2, |c| {
+                        explain::table_ui(&mut c[0], Some(r), compute_ms);
+                        marginal::marginal_ui(&mut c[1], r, histogram, range, height);
+                    });
+                } else {
+                    // A narrow window: the plot, and the table under it (scrolled).
+                    let plot_height = (0.6 * height).max(110.0);
+                    marginal::marginal_ui(ui, r, histogram, range, plot_height);
+                    egui::ScrollArea::vertical()
+                        .id_salt("filters_table_scroll")
+                        .show(ui, |ui| explain::table_ui(ui, Some(r), compute_ms));
+                }
+            }
             Tab::Corridor => {
                 let h = ui.available_height();
                 corridor::gain_ui(ui, self.corridor.sim(), h);
@@ -467,7 +497,11 @@ impl crate::widgets::layout::LessonPanels for FiltersLesson {
 
 impl Lesson for FiltersLesson {
     fn plot_series(&self) -> Vec<crate::export::PlotSeries> {
-        corridor::series(self.corridor.sim())
+        let mut all = corridor::series(self.corridor.sim());
+        if let Some(r) = &self.result {
+            all.extend(marginal::series(r, &self.marginal.0, self.marginal.1));
+        }
+        all
     }
 
     fn id(&self) -> &'static str {
@@ -595,7 +629,6 @@ impl Lesson for FiltersLesson {
                 serde_json::json!({ "lambda": w.lambda, "mean0": w.mean0, "cov0": w.cov0, "other": w.other })
             }),
             "density_inside": self.density.inside,
-            "compute_ms": self.last_compute_ms,
             "results": rows,
             "corridor": {
                 "histogram_mean": sim.histogram().mean(),

@@ -174,12 +174,25 @@ pub fn diamond(painter: &egui::Painter, at: Pos2, color: Color32, filled: bool) 
     painter.add(shape);
 }
 
-/// The canvas's title and its axes' names, on lines above it (never over the data).
-pub fn heading_ui(ui: &mut egui::Ui, title: &str, axes: [&str; 2]) {
+/// The canvas's title, its axes' names and its key, on lines above it (never over
+/// the data); `compact`: the title alone on one line, the axes and the key on hover.
+pub fn heading_ui(
+    ui: &mut egui::Ui,
+    title: &str,
+    axes: [&str; 2],
+    key: &[KeyEntry],
+    compact: bool,
+) {
+    let axes = format!("horizontal: {}; vertical: {}", axes[0], axes[1]);
+    if compact {
+        let names: Vec<&str> = key.iter().map(|k| k.name.as_str()).collect();
+        ui.add(egui::Label::new(egui::RichText::new(title).small().strong()).truncate())
+            .on_hover_text(format!("{axes}\nKey: {}", names.join("; ")));
+        return;
+    }
     ui.label(egui::RichText::new(title).strong());
-    ui.label(
-        egui::RichText::new(format!("horizontal: {}; vertical: {}", axes[0], axes[1])).small(),
-    );
+    ui.label(egui::RichText::new(axes).small());
+    key_ui(ui, key);
 }
 
 /// What a drag on the input canvas does.
@@ -246,16 +259,19 @@ pub fn input_ui(
     axes: [&str; 2],
     grab: &mut Option<Grab>,
     on_screen: &mut Option<[Pos2; 3]>,
+    compact: bool,
 ) -> Option<([f64; 2], [f64; 2], f64)> {
     let colors = CanvasColors::of(ui);
-    heading_ui(ui, "Prior belief: drag the mean (cross) and the handles (dots)", axes);
-    key_ui(
+    heading_ui(
         ui,
+        "Prior belief: drag the mean (cross) and the handles (dots)",
+        axes,
         &[
             KeyEntry::new("prior, 95% ellipse", colors.truth, Mark::Solid),
             KeyEntry::new("covariance handles", palette::VERMILLION, Mark::Dots),
             KeyEntry::new("sigma points", palette::ORANGE, Mark::Dots),
         ],
+        compact,
     );
     let (response, t) = map_canvas::canvas_ui(ui, view, input_bounds(prior), 0.0, &mut None, false);
     let painter = ui.painter_at(t.rect);
@@ -314,11 +330,13 @@ pub fn output_ui(
     density: &Density,
     result: &OneStep,
     axes: [&str; 2],
+    compact: bool,
 ) {
     let colors = CanvasColors::of(ui);
-    heading_ui(ui, "After the function (drag to pan, scroll to zoom)", axes);
-    key_ui(
+    heading_ui(
         ui,
+        "After the function (drag to pan, scroll to zoom)",
+        axes,
         &[
             KeyEntry::new(
                 format!("{} samples and their 95% ellipse", result.truth.points.len()),
@@ -333,6 +351,7 @@ pub fn output_ui(
                 Mark::Dots,
             ),
         ],
+        compact,
     );
     let (_response, t) = map_canvas::canvas_ui(ui, view, density.bounds, 0.0, &mut None, true);
     let painter = ui.painter_at(t.rect);
