@@ -57,7 +57,7 @@ fn plotted(result: &OneStep, histogram: &[[f64; 2]], range: [f64; 2], text: egui
         PlotSeries::new(TITLE, x_axis, y_axis, "samples (histogram)", histogram.to_vec()),
         text,
         Mark::Solid,
-        1.2,
+        1.0,
     )];
     for (row, color) in result
         .rows

@@ -47,6 +47,8 @@ pub enum Tab {
 pub struct FiltersView {
     /// The view in the centre.
     pub tab: Tab,
+    /// A narrow window's bottom panel: the error table instead of the marginal plot.
+    pub table: bool,
 }
 
 /// The parameters of the one-step view's panel.
@@ -458,12 +460,20 @@ impl crate::widgets::layout::LessonPanels for FiltersLesson {
                         marginal::marginal_ui(&mut c[1], r, histogram, range, height);
                     });
                 } else {
-                    // A narrow window: the plot, and the table under it (scrolled).
-                    let plot_height = (0.6 * height).max(110.0);
-                    marginal::marginal_ui(ui, r, histogram, range, plot_height);
-                    egui::ScrollArea::vertical()
-                        .id_salt("filters_table_scroll")
-                        .show(ui, |ui| explain::table_ui(ui, Some(r), compute_ms));
+                    // A narrow window: the plot or the table, one at a time.
+                    let top = ui.cursor().top();
+                    ui.horizontal(|ui| {
+                        ui.selectable_value(&mut self.view.table, false, "Marginal plot");
+                        ui.selectable_value(&mut self.view.table, true, "Error table");
+                    });
+                    let height = height - (ui.cursor().top() - top);
+                    if self.view.table {
+                        egui::ScrollArea::vertical()
+                            .id_salt("filters_table_scroll")
+                            .show(ui, |ui| explain::table_ui(ui, Some(r), compute_ms));
+                    } else {
+                        marginal::marginal_ui(ui, r, histogram, range, height);
+                    }
                 }
             }
             Tab::Corridor => {
