@@ -17,9 +17,21 @@ fn method_color(method: &str) -> egui::Color32 {
 fn sources_line(ui: &mut egui::Ui) {
     ui.horizontal_wrapped(|ui| {
         ui.label("Sources:");
-        source_link(ui, "xiang", "Xiang's thesis, ch. 2 (Bayes, EKF, UKF, particles)");
-        source_link(ui, "wu", "Wu's thesis, ch. 2 (the Kalman filter's derivation)");
-        source_link(ui, "thrun", "Probabilistic Robotics, ch. 2-4 (the corridor)");
+        source_link(
+            ui,
+            "xiang",
+            "Xiang's thesis, ch. 2 (Bayes, EKF, UKF, particles)",
+        );
+        source_link(
+            ui,
+            "wu",
+            "Wu's thesis, ch. 2 (the Kalman filter's derivation)",
+        );
+        source_link(
+            ui,
+            "thrun",
+            "Probabilistic Robotics, ch. 2-4 (the corridor)",
+        );
     });
 }
 

@@ -50,11 +50,22 @@ pub fn histogram(result: &OneStep) -> (Vec<[f64; 2]>, [f64; 2]) {
 }
 
 /// Every series of the plot, for the plot and the CSV export.
-fn plotted(result: &OneStep, histogram: &[[f64; 2]], range: [f64; 2], text: egui::Color32) -> Vec<Styled> {
+fn plotted(
+    result: &OneStep,
+    histogram: &[[f64; 2]],
+    range: [f64; 2],
+    text: egui::Color32,
+) -> Vec<Styled> {
     let x_axis = "first output";
     let y_axis = "density (1/unit)";
     let mut out = vec![Styled::new(
-        PlotSeries::new(TITLE, x_axis, y_axis, "samples (histogram)", histogram.to_vec()),
+        PlotSeries::new(
+            TITLE,
+            x_axis,
+            y_axis,
+            "samples (histogram)",
+            histogram.to_vec(),
+        ),
         text,
         Mark::Solid,
         1.0,
@@ -87,7 +98,13 @@ fn plotted(result: &OneStep, histogram: &[[f64; 2]], range: [f64; 2], text: egui
 }
 
 /// The plot, `height` points tall with its title and key.
-pub fn marginal_ui(ui: &mut egui::Ui, result: &OneStep, histogram: &[[f64; 2]], range: [f64; 2], height: f32) {
+pub fn marginal_ui(
+    ui: &mut egui::Ui,
+    result: &OneStep,
+    histogram: &[[f64; 2]],
+    range: [f64; 2],
+    height: f32,
+) {
     let text = palette::truth_color(ui.visuals().dark_mode);
     let all = plotted(result, histogram, range, text);
     let figure = Figure {

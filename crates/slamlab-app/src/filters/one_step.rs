@@ -339,7 +339,10 @@ pub fn output_ui(
         axes,
         &[
             KeyEntry::new(
-                format!("{} samples and their 95% ellipse", result.truth.points.len()),
+                format!(
+                    "{} samples and their 95% ellipse",
+                    result.truth.points.len()
+                ),
                 colors.truth,
                 Mark::Solid,
             ),

@@ -145,7 +145,9 @@ fn drag(h: &mut Harness<'_, SlamLabApp>, from: egui::Pos2, to: egui::Pos2) {
 }
 
 fn handles(h: &Harness<'_, SlamLabApp>) -> [egui::Pos2; 3] {
-    lesson(h).handles_on_screen().expect("the prior's handles on screen")
+    lesson(h)
+        .handles_on_screen()
+        .expect("the prior's handles on screen")
 }
 
 #[test]
@@ -175,9 +177,16 @@ fn dragging_the_mean_and_a_handle_moves_the_prior_and_every_gaussian_follows() {
     assert!((ekf.mean - ukf.mean).norm() < 1e-12);
     assert!((ekf.covariance - ukf.covariance).norm() < 1e-12);
     let j = r.ekf.jacobian;
-    assert_eq!([j[(0, 0)], j[(0, 1)], j[(1, 0)], j[(1, 1)]], [1.0, 0.5, 0.0, 1.0]);
+    assert_eq!(
+        [j[(0, 0)], j[(0, 1)], j[(1, 0)], j[(1, 1)]],
+        [1.0, 0.5, 0.0, 1.0]
+    );
     // The samples' moments are within sampling error of the exact ones.
-    assert!(r.rows[0].comparison.covariance_error < 0.05, "{:?}", r.rows[0]);
+    assert!(
+        r.rows[0].comparison.covariance_error < 0.05,
+        "{:?}",
+        r.rows[0]
+    );
     // Drag the first handle out: the first deviation grows, the mean stays.
     let [mean, col1, _] = handles(&h);
     drag(&mut h, col1, col1 + egui::vec2(col1.x - mean.x, 0.0));
@@ -197,7 +206,10 @@ fn dragging_the_mean_and_a_handle_moves_the_prior_and_every_gaussian_follows() {
         lesson(&h).note()
     );
     let kept = lesson(&h).scenario().clone();
-    assert!(kept.std[1] > 0.0 && kept.std[1] < 0.5 && kept.rho.abs() < 1.0, "{kept:?}");
+    assert!(
+        kept.std[1] > 0.0 && kept.std[1] < 0.5 && kept.rho.abs() < 1.0,
+        "{kept:?}"
+    );
     let r = lesson(&h).result().expect("kept");
     assert_eq!(r.prior, kept.prior());
     assert!(r.rows.iter().all(|row| row.gaussian.is_finite()));
@@ -206,8 +218,14 @@ fn dragging_the_mean_and_a_handle_moves_the_prior_and_every_gaussian_follows() {
     let reopened = harness(&query);
     let again = lesson(&reopened).scenario();
     let close = |a: f64, b: f64| (a - b).abs() < 1e-5;
-    assert!(close(again.mean[0], moved[0]) && close(again.mean[1], moved[1]), "{query}");
-    assert!(close(again.std[0], kept.std[0]) && close(again.std[1], kept.std[1]), "{query}");
+    assert!(
+        close(again.mean[0], moved[0]) && close(again.mean[1], moved[1]),
+        "{query}"
+    );
+    assert!(
+        close(again.std[0], kept.std[0]) && close(again.std[1], kept.std[1]),
+        "{query}"
+    );
     assert!(close(again.rho, kept.rho), "{query}");
     assert!(lesson(&reopened).note().is_none(), "{query}");
 }
@@ -227,7 +245,11 @@ fn the_function_menu_the_unscented_weights_and_overflow() {
     // w = 0.5 rad/s: (v/w sin(w), v/w (1 − cos w)).
     let (v, w) = (1.0_f64, 0.5_f64);
     let arc = [v / w * w.sin(), v / w * (1.0 - w.cos())];
-    assert!((r.ekf.gaussian.mean[0] - arc[0]).abs() < 1e-12, "{:?}", r.ekf.gaussian.mean);
+    assert!(
+        (r.ekf.gaussian.mean[0] - arc[0]).abs() < 1e-12,
+        "{:?}",
+        r.ekf.gaussian.mean
+    );
     assert!((r.ekf.gaussian.mean[1] - arc[1]).abs() < 1e-12);
     // ∂x/∂v = sin(w)/w.
     assert!((r.ekf.jacobian[(0, 0)] - w.sin() / w).abs() < 1e-9);
@@ -252,7 +274,10 @@ fn the_function_menu_the_unscented_weights_and_overflow() {
     let kept = lesson(&h).result().expect("valid").rows.clone();
     lesson_mut(&mut h).set_param("std-2", "3");
     let note = lesson(&h).note().unwrap_or_default().to_owned();
-    assert!(note.contains("overflow") || note.contains("infinite"), "{note}");
+    assert!(
+        note.contains("overflow") || note.contains("infinite"),
+        "{note}"
+    );
     assert_eq!(lesson(&h).result().expect("kept").rows, kept);
     h.run();
     let state: serde_json::Value = serde_json::from_str(&h.state().test_state_json()).unwrap();
@@ -262,7 +287,10 @@ fn the_function_menu_the_unscented_weights_and_overflow() {
         for key in ["mean_error", "covariance_error"] {
             assert!(row[key].as_f64().is_some_and(f64::is_finite), "{row}");
         }
-        assert!(row["mean"].as_array().unwrap().iter().all(|v| v.is_f64()), "{row}");
+        assert!(
+            row["mean"].as_array().unwrap().iter().all(|v| v.is_f64()),
+            "{row}"
+        );
     }
 }
 
@@ -283,7 +311,10 @@ fn corridor_buttons_step_both_filters_and_the_gain_is_the_balance() {
     // Seed 1: after the doors at 3 m and 6 m the histogram has found the robot.
     let hist = sim.histogram();
     let mass = hist.mass_within(sim.truth() - 1.0, sim.truth() + 1.0);
-    assert!(mass > 0.7 && (hist.mode() - sim.truth()).abs() < 0.25, "{mass}");
+    assert!(
+        mass > 0.7 && (hist.mode() - sim.truth()).abs() < 0.25,
+        "{mass}"
+    );
     let state: serde_json::Value = serde_json::from_str(&h.state().test_state_json()).unwrap();
     assert_eq!(state["tick"], 14);
     assert_eq!(state["view"], "corridor");
@@ -296,14 +327,20 @@ fn corridor_buttons_step_both_filters_and_the_gain_is_the_balance() {
     // A larger R lowers every gain: the corridor replays to the same step.
     let gain = state["corridor"]["gain"].as_f64();
     lesson_mut(&mut h).set_param("measurement-std", "2");
-    assert_eq!(slamlab_sim::stepper::Simulation::tick(lesson(&h).corridor()), 14);
+    assert_eq!(
+        slamlab_sim::stepper::Simulation::tick(lesson(&h).corridor()),
+        14
+    );
     let after = lesson(&h).corridor().last_update().map(|(u, _)| u.gain);
     if let (Some(before), Some(after)) = (gain, after) {
         assert!(after < before, "{after} vs {before}");
     }
     h.get_by_label("Step back").click();
     h.run();
-    assert_eq!(lesson(&h).time_info().last_phase.as_deref(), Some("corridor predict"));
+    assert_eq!(
+        lesson(&h).time_info().last_phase.as_deref(),
+        Some("corridor predict")
+    );
 }
 
 #[test]
@@ -315,7 +352,10 @@ fn the_lesson_renders_readably_at_800_by_500_and_full_size() {
     ] {
         let mut h = harness_sized("lesson=filters&samples=20000&seed=1", size);
         h.run();
-        assert!(lesson(&h).handles_on_screen().is_some(), "{name}: no prior on screen");
+        assert!(
+            lesson(&h).handles_on_screen().is_some(),
+            "{name}: no prior on screen"
+        );
         let Some(image) = render_or_skip(&mut h) else {
             return;
         };
