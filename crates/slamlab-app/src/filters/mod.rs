@@ -98,10 +98,8 @@ pub struct FiltersLesson {
     output_view: MapView,
     density: one_step::Density,
     density_stale: bool,
-    grab: Option<one_step::Grab>,
-    /// Where the prior's handles were drawn last frame: mean, first and second
-    /// column of the covariance's factor (screen points).
-    handles_on_screen: Option<[egui::Pos2; 3]>,
+    /// The prior's handles: which is held, where they were drawn.
+    drag: one_step::DragState,
     /// The samples' histogram of the first output and its range.
     marginal: (Vec<[f64; 2]>, [f64; 2]),
     /// How long the last one-step computation took, milliseconds.
@@ -163,8 +161,7 @@ impl FiltersLesson {
             output_view: MapView::default(),
             density: one_step::Density::default(),
             density_stale: true,
-            grab: None,
-            handles_on_screen: None,
+            drag: one_step::DragState::default(),
             marginal: (Vec::new(), [0.0, 1.0]),
             last_compute_ms: 0.0,
         };
@@ -207,7 +204,7 @@ impl FiltersLesson {
     /// Where the prior's handles were drawn in the last frame (mean, first and
     /// second covariance handle), screen points; `None` off the one-step view.
     pub fn handles_on_screen(&self) -> Option<[egui::Pos2; 3]> {
-        self.handles_on_screen
+        self.drag.on_screen
     }
 
     /// The view in the centre.
@@ -336,8 +333,7 @@ impl FiltersLesson {
                 &prior,
                 self.result.as_ref(),
                 f.input_axes(),
-                &mut self.grab,
-                &mut self.handles_on_screen,
+                &mut self.drag,
                 compact,
             );
         });
@@ -362,7 +358,7 @@ impl FiltersLesson {
     /// The density image keeps its bounds while the student drags, so the
     /// picture does not jump; it takes new ones when nothing is grabbed.
     fn output_view_needs_bounds(&self) -> bool {
-        self.grab.is_none() || self.density.bounds == [0.0; 4]
+        self.drag.grab.is_none() || self.density.bounds == [0.0; 4]
     }
 
     fn parameters_panel_ui(&mut self, ui: &mut egui::Ui) {
@@ -498,7 +494,7 @@ impl crate::widgets::layout::LessonPanels for FiltersLesson {
         match self.view.tab {
             Tab::OneStep => self.one_step_map_ui(ui),
             Tab::Corridor => {
-                self.handles_on_screen = None;
+                self.drag.on_screen = None;
                 corridor::belief_ui(ui, self.corridor.sim());
             }
         }
@@ -629,7 +625,7 @@ impl Lesson for FiltersLesson {
                 "std": self.scenario.std,
                 "rho": self.scenario.rho,
             },
-            "handles_px": self.handles_on_screen.map(|h| h.map(|p| [p.x, p.y])),
+            "handles_px": self.drag.on_screen.map(|h| h.map(|p| [p.x, p.y])),
             "jacobian": self.result.as_ref().map(|r| {
                 let j = r.ekf.jacobian;
                 [[j[(0, 0)], j[(0, 1)]], [j[(1, 0)], j[(1, 1)]]]

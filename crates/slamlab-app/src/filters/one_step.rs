@@ -206,6 +206,16 @@ pub enum Grab {
     Column2,
 }
 
+/// The input canvas's drag: the handle held, and where the handles were drawn
+/// in the last frame (mean, first and second column; screen points).
+#[derive(Clone, Copy, Debug, Default)]
+pub struct DragState {
+    /// The handle being dragged.
+    pub grab: Option<Grab>,
+    /// The handles on screen.
+    pub on_screen: Option<[Pos2; 3]>,
+}
+
 /// The handles: the mean and the tips of the Cholesky factor's columns
 /// `μ + L e₁`, `μ + L e₂` (one standard deviation along each).
 pub fn handles(prior: &Gaussian2) -> Option<[Vector2<f64>; 3]> {
@@ -257,8 +267,7 @@ pub fn input_ui(
     prior: &Gaussian2,
     result: Option<&OneStep>,
     axes: [&str; 2],
-    grab: &mut Option<Grab>,
-    on_screen: &mut Option<[Pos2; 3]>,
+    drag: &mut DragState,
     compact: bool,
 ) -> Option<([f64; 2], [f64; 2], f64)> {
     let colors = CanvasColors::of(ui);
@@ -279,9 +288,9 @@ pub fn input_ui(
     map_canvas::draw_grid(&painter, &t, &colors);
     ellipse(&painter, &t, prior, Stroke::new(2.0, colors.truth));
     let mut change = None;
-    *on_screen = None;
+    drag.on_screen = None;
     if let Some(h) = handles(prior) {
-        *on_screen = Some([t.v(&h[0]), t.v(&h[1]), t.v(&h[2])]);
+        drag.on_screen = Some([t.v(&h[0]), t.v(&h[1]), t.v(&h[2])]);
         cross(&painter, t.v(&h[0]), colors.truth);
         for tip in &h[1..] {
             painter.line_segment([t.v(&h[0]), t.v(tip)], Stroke::new(1.0, colors.truth));
@@ -301,7 +310,7 @@ pub fn input_ui(
                 .fold((Grab::Mean, f32::INFINITY), |best, c| {
                     if c.1 < best.1 { c } else { best }
                 });
-            *grab = (nearest.1 < 24.0).then_some(nearest.0);
+            drag.grab = (nearest.1 < 24.0).then_some(nearest.0);
         }
     }
     if let Some(r) = result {
@@ -310,14 +319,14 @@ pub fn input_ui(
         }
     }
     if response.dragged()
-        && let (Some(g), Some(p)) = (*grab, response.interact_pointer_pos())
+        && let (Some(g), Some(p)) = (drag.grab, response.interact_pointer_pos())
     {
         let w = t.world_of(p);
         let snap = 3.0 / f64::from(t.scale);
         change = Some(drag_prior(prior, g, Vector2::new(w[0], w[1]), snap));
     }
     if response.drag_stopped() {
-        *grab = None;
+        drag.grab = None;
     }
     change
 }

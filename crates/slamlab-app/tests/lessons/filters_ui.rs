@@ -10,6 +10,7 @@ use slamlab_app::SlamLabApp;
 use slamlab_app::filters::{FiltersLesson, Tab};
 use slamlab_app::lesson::Lesson as _;
 use slamlab_app::time_control::TimeAction;
+use slamlab_core::math;
 
 /// Where a screenshot goes: the tests' scratch folder in the target directory.
 fn shot(name: &str) -> std::path::PathBuf {
@@ -145,9 +146,10 @@ fn drag(h: &mut Harness<'_, SlamLabApp>, from: egui::Pos2, to: egui::Pos2) {
 }
 
 fn handles(h: &Harness<'_, SlamLabApp>) -> [egui::Pos2; 3] {
-    lesson(h)
-        .handles_on_screen()
-        .expect("the prior's handles on screen")
+    match lesson(h).handles_on_screen() {
+        Some(handles) => handles,
+        None => panic!("the prior's handles are not on screen"),
+    }
 }
 
 #[test]
@@ -244,7 +246,7 @@ fn the_function_menu_the_unscented_weights_and_overflow() {
     // The exact arc from the origin, heading 0, after dt = 1 s at v = 1 m/s,
     // w = 0.5 rad/s: (v/w sin(w), v/w (1 − cos w)).
     let (v, w) = (1.0_f64, 0.5_f64);
-    let arc = [v / w * w.sin(), v / w * (1.0 - w.cos())];
+    let arc = [v / w * math::sin(w), v / w * (1.0 - math::cos(w))];
     assert!(
         (r.ekf.gaussian.mean[0] - arc[0]).abs() < 1e-12,
         "{:?}",
@@ -252,7 +254,7 @@ fn the_function_menu_the_unscented_weights_and_overflow() {
     );
     assert!((r.ekf.gaussian.mean[1] - arc[1]).abs() < 1e-12);
     // ∂x/∂v = sin(w)/w.
-    assert!((r.ekf.jacobian[(0, 0)] - w.sin() / w).abs() < 1e-9);
+    assert!((r.ekf.jacobian[(0, 0)] - math::sin(w) / w).abs() < 1e-9);
     // α = 0.5, β = 2, κ = 1, n = 2: λ = 0.25·3 − 2 = −1.25, W₀(m) = λ/(n + λ) = −5/3,
     // W₀(c) = W₀(m) + 1 − α² + β = 13/12, W_i = 1/(2(n + λ)) = 2/3.
     assert!(lesson_mut(&mut h).set_param("alpha", "0.5").is_none());
