@@ -184,8 +184,12 @@ pub fn gain_ui(ui: &mut egui::Ui, sim: &CorridorSim, height: f32) {
         return;
     };
     let title = format!(
-        "Kalman gain K = P_p / (P_p + R) = {:.3} / ({:.3} + {:.3}) = {:.3}",
-        u.prior_variance, u.prior_variance, u.measurement_variance, u.gain
+        "Kalman gain at step {} (the last door sighting): K = P_p / (P_p + R) = {:.3} / ({:.3} + {:.3}) = {:.3}",
+        sim.last_update_tick(),
+        u.prior_variance,
+        u.prior_variance,
+        u.measurement_variance,
+        u.gain
     );
     let length = sim.corridor().length;
     let prediction = density_points(length, u.prior_mean, u.prior_variance);

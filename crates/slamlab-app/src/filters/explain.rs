@@ -213,7 +213,10 @@ pub fn corridor_ui(ui: &mut egui::Ui, stepper: &Stepper<CorridorSim>) {
     ));
     if let Some((u, door)) = sim.last_update() {
         ui.add_space(6.0);
-        ui.strong("The Kalman update, step by step (Wu Eq. 2.5-2.9)");
+        ui.strong(format!(
+            "The Kalman update of step {} (the last door sighting), step by step (Wu Eq. 2.5-2.10)",
+            sim.last_update_tick()
+        ));
         ui.monospace(format!(
             "1 prediction   x_p = {:.3} m, P_p = {:.4} m²      (2.10, 2.18)\n\
              2 measurement  z = {door:.3} m (door), R = {:.4} m²\n\

@@ -642,6 +642,7 @@ impl Lesson for FiltersLesson {
                 "kalman_mean": sim.kalman().mean,
                 "kalman_variance": sim.kalman().variance,
                 "gain": sim.last_update().map(|(u, _)| u.gain),
+                "gain_tick": sim.last_update().map(|_| sim.last_update_tick()),
             },
         })
     }

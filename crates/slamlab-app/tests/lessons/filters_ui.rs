@@ -347,7 +347,7 @@ fn corridor_buttons_step_both_filters_and_the_gain_is_the_balance() {
 
 #[test]
 fn the_lesson_renders_readably_at_800_by_500_and_full_size() {
-    use super::common::harness_sized;
+    use super::common::{harness_sized, harness_themed};
     for (size, name) in [
         (egui::vec2(800.0, 500.0), "filters_800x500"),
         (egui::vec2(1400.0, 900.0), "filters_full"),
@@ -366,8 +366,12 @@ fn the_lesson_renders_readably_at_800_by_500_and_full_size() {
             .unwrap_or_else(|e| eprintln!("could not save the screenshot: {e}"));
         let blue = count_pixels(image.as_raw(), [0x00, 0x72, 0xB2], 30);
         assert!(blue > 100, "{name}: EKF blue {blue} pixels");
-        let mut h = harness_sized("lesson=filters&view=corridor&seed=1", size);
-        for _ in 0..6 {
+        let mut h = harness_themed(
+            "lesson=filters&view=corridor&seed=1",
+            size,
+            egui::Theme::Light,
+        );
+        for _ in 0..14 {
             lesson_mut(&mut h).apply_time_action(TimeAction::StepTick);
         }
         h.run();
