@@ -678,6 +678,65 @@ async function main() {
       }
     });
 
+    // --- The filters lesson: the polar banana with 100,000 samples. Drag the prior's
+    // mean with the mouse: every move recomputes the samples, the EKF, the UKF and the
+    // particles and redraws the density image. The frame CPU median while dragging is
+    // recorded in metrics.json (filters_drag_*), not asserted: the issue asks for under
+    // 16 ms, and the README states what was measured where. A seeded headless run in
+    // wasm gives the native table (crates/slamlab-app/tests/lessons/filters_ui.rs pins it).
+    await check("lesson=filters drags the prior over 100,000 samples and matches native", async () => {
+      const url = "index.html?lesson=filters&function=polar&seed=1";
+      const { context, page: p, log } = await openPage(browser, baseUrl, url, "filters");
+      try {
+        await waitRunning(p);
+        const s0 = await waitState(p, (st) => st.lesson === "filters" && st.frames > 2 && st.handles_px, "the filters lesson");
+        assert(s0.samples === 100000 && s0.results.length === 3 && s0.note === null, `opened ${JSON.stringify(s0)}`);
+        const [mean, handle] = s0.handles_px;
+        const scale = handle[0] - mean[0]; // the first handle is one range deviation (0.1 m) to the right
+        assert(scale > 1, `handles ${JSON.stringify(s0.handles_px)}`);
+        await p.mouse.move(mean[0], mean[1]);
+        await p.mouse.down();
+        const MOVES = 150;
+        const startedAt = Date.now();
+        for (let k = 1; k <= MOVES; k++) {
+          // Back and forth along the range axis, at most half a deviation from the start.
+          const dx = 0.5 * scale * Math.sin((2 * Math.PI * k) / 50);
+          await p.mouse.move(mean[0] + dx, mean[1] + 0.2 * dx);
+        }
+        await p.mouse.move(mean[0] + 0.5 * scale, mean[1]);
+        await sleep(300);
+        const during = await testState(p);
+        await p.mouse.up();
+        const seconds = (Date.now() - startedAt) / 1000;
+        const s1 = await waitState(p, (st) => st.frames > during.frames, "a frame after the release");
+        assert(s1.note === null, `a note after the drag: ${s1.note}`);
+        const moved = s1.prior.mean[0] - s0.prior.mean[0];
+        assert(Math.abs(moved - 0.05) < 0.01, `the mean moved ${moved} m, not 0.05 m: ${JSON.stringify(s1.prior)}`);
+        assert(s1.results.every((r) => Number.isFinite(r.mean_error) && Number.isFinite(r.covariance_error)), JSON.stringify(s1.results));
+        await screenshot(p, "filters-dragged.png");
+        const t = during.frame_timing;
+        assert(t && t.frames > 0 && Number.isFinite(t.cpu_ms_median), `no frame timing: ${JSON.stringify(during)}`);
+        metrics.filters_drag_frame_cpu_ms_median = t.cpu_ms_median;
+        metrics.filters_drag_frame_cpu_ms_p95 = t.cpu_ms_p95;
+        metrics.filters_drag_frames_per_second = Number((1000 / t.interval_ms_median).toFixed(1));
+        const headless = JSON.parse(
+          await p.evaluate((q) => window.slamlab.slamlab_test_headless(q, 0), "lesson=filters&samples=20000&seed=1"),
+        );
+        const table = headless.results.map((r) => `${r.method}=${r.mean_error}`);
+        const NATIVE = ["ekf=0.12957845707913004", "ukf=0.001541246456905519", "particles=0.021033324669198564"];
+        assert(JSON.stringify(table) === JSON.stringify(NATIVE), `${table} in the browser, ${NATIVE} natively`);
+        await assertNoPanic(p);
+        assert(log.problems.length === 0, log.problems.join("; "));
+        return (
+          `${MOVES} moves in ${seconds.toFixed(1)} s; frame CPU median ${t.cpu_ms_median.toFixed(2)} ms ` +
+          `(p95 ${t.cpu_ms_p95?.toFixed(2)}), ` +
+          `${metrics.filters_drag_frames_per_second} frames/s; headless ${table.join(" ")}`
+        );
+      } finally {
+        await context.close();
+      }
+    });
+
     await check("lesson=resampling resamples and gives the native copies", async () => {
       const url = "index.html?lesson=resampling&weights=5,1,1,3&seed=3";
       const { context, page: p, log } = await openPage(browser, baseUrl, url, "resampling");

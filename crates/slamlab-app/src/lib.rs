@@ -10,6 +10,7 @@
 //! link that opens the same setup in the full app) above the time bar.
 
 pub mod export;
+pub mod filters;
 pub mod frame_stats;
 pub mod fusion;
 pub mod kidnap;

@@ -66,6 +66,14 @@ pub const LESSONS: &[LessonEntry] = &[
                   robot or a real CARMEN log (the Intel lab).",
         open: crate::mapping::open,
     },
+    LessonEntry {
+        id: crate::filters::LESSON_ID,
+        title: "Filters: from Bayes to particles",
+        summary: "One Gaussian through one nonlinear step by the EKF, the unscented transform \
+                  and particles against 100,000 samples; a histogram Bayes filter beside a \
+                  Kalman filter in a corridor with doors.",
+        open: crate::filters::open,
+    },
 ];
 
 /// The lesson that opens when none (or an unknown one) is asked for.

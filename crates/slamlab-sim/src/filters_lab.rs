@@ -577,8 +577,11 @@ pub struct CorridorSim {
     next: CorridorPhase,
     /// What the last sensor reading said.
     saw_door: Option<bool>,
-    /// The Kalman filter's last update (a door sighting), with the door it assumed.
+    /// The Kalman filter's last update (a door sighting), with the door it assumed;
+    /// kept through the wall readings after it, until the next sighting.
     last_update: Option<(KalmanUpdate, f64)>,
+    /// The step of that update.
+    last_update_tick: u64,
     /// Why the last step could not be taken.
     note: Option<String>,
 }
@@ -609,6 +612,7 @@ impl CorridorSim {
             next: CorridorPhase::Predict,
             saw_door: None,
             last_update: None,
+            last_update_tick: 0,
             note,
         }
     }
@@ -641,9 +645,14 @@ impl CorridorSim {
     pub fn saw_door(&self) -> Option<bool> {
         self.saw_door
     }
-    /// The Kalman filter's last update and the door it assumed it saw.
+    /// The Kalman filter's last update (its last door sighting, however many wall
+    /// readings ago) and the door it assumed it saw.
     pub fn last_update(&self) -> Option<&(KalmanUpdate, f64)> {
         self.last_update.as_ref()
+    }
+    /// The step of [`last_update`](Self::last_update).
+    pub fn last_update_tick(&self) -> u64 {
+        self.last_update_tick
     }
     /// Why the last step was refused.
     pub fn note(&self) -> Option<&str> {
@@ -681,8 +690,7 @@ impl CorridorSim {
         }
         // A Gaussian filter can only use "door" as a position: the door nearest its
         // mean (the association a unimodal belief has to make). "No door" tells it
-        // nothing it can write as a Gaussian.
-        self.last_update = None;
+        // nothing it can write as a Gaussian (its last update stays on record).
         if saw && let Some(door) = self.corridor.nearest_door(self.kalman.mean) {
             match self
                 .kalman
@@ -691,6 +699,7 @@ impl CorridorSim {
                 Ok(report) => {
                     self.kalman.mean = self.corridor.wrap(self.kalman.mean);
                     self.last_update = Some((report, door));
+                    self.last_update_tick = self.tick;
                 }
                 Err(e) => self.note = Some(e.to_string()),
             }

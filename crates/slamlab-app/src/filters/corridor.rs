@@ -4,8 +4,8 @@
 
 use crate::export::PlotSeries;
 use crate::palette;
-use crate::widgets::plots::title_ui;
-use egui_plot::{Bar, BarChart, Line, LineStyle, Plot, PlotPoints, Polygon, VLine};
+use crate::widgets::plots::{Figure, KeyEntry, Mark, figure_plot, figure_ui, title_ui};
+use egui_plot::{Bar, BarChart, Line, LineStyle, PlotPoints, Polygon, VLine};
 use slamlab_core::math;
 use slamlab_sim::filters_lab::CorridorSim;
 
@@ -78,24 +78,19 @@ pub fn series(sim: &CorridorSim) -> Vec<PlotSeries> {
     out
 }
 
-/// The belief plot (centre).
+/// The belief plot (centre): its key on a line above it, values on both axes.
 pub fn belief_ui(ui: &mut egui::Ui, sim: &CorridorSim) {
     let truth = palette::truth_color(ui.visuals().dark_mode);
-    title_ui(
-        ui,
-        "Corridor: histogram Bayes filter vs Kalman filter",
-        "Bars: the histogram filter's belief per cell (any shape). Blue curve: the Kalman \
-         filter's Gaussian. Black line: the robot (the filters never see it). Shaded: doors.",
-    );
-    ui.horizontal_wrapped(|ui| {
-        ui.colored_label(palette::GREEN, "■ histogram belief");
-        ui.colored_label(palette::BLUE, "— Kalman Gaussian");
-        ui.colored_label(truth, "| robot (truth)");
-        ui.colored_label(palette::faded(palette::SKY_BLUE, 0.9), "▮ doors");
-        if let Some(saw) = sim.saw_door() {
-            ui.label(if saw { "sensor: door" } else { "sensor: wall" });
-        }
-    });
+    let reading = match sim.saw_door() {
+        None => "no reading yet".to_owned(),
+        Some(true) => "the sensor said: door".to_owned(),
+        Some(false) => "the sensor said: wall".to_owned(),
+    };
+    ui.label(egui::RichText::new(format!(
+        "Step {}: {reading}. Robot at {:.2} m (the filters never see it).",
+        slamlab_sim::stepper::Simulation::tick(sim),
+        sim.truth()
+    )));
     let h = sim.histogram();
     let length = sim.corridor().length;
     let peak = h.belief().iter().copied().fold(0.0, f64::max) / h.cell();
@@ -108,16 +103,40 @@ pub fn belief_ui(ui: &mut egui::Ui, sim: &CorridorSim) {
         .map(|(i, p)| Bar::new(h.center(i), p / h.cell()).width(h.cell()))
         .collect();
     let door_half = 0.5 * sim.corridor().door_width;
-    Plot::new("filters_corridor")
-        .x_axis_label("position along the corridor (m)")
-        .y_axis_label("probability density (1/m)")
-        .include_x(0.0)
-        .include_x(length)
-        .include_y(0.0)
-        .include_y(top)
-        .allow_scroll(false)
-        .show(ui, |plot_ui| {
-            for &d in &sim.corridor().doors {
+    let doors = sim.corridor().doors.clone();
+    let kalman = density_points(length, sim.kalman().mean, sim.kalman().variance);
+    let robot = sim.truth();
+    let figure = Figure {
+        title: "Corridor: histogram Bayes filter vs Kalman filter",
+        hover: "Bars: the histogram filter's belief per cell (any shape). Blue curve: the \
+                Kalman filter's Gaussian. Black line: the robot (the filters never see it). \
+                Shaded: doors.",
+        key: vec![
+            KeyEntry::new("histogram belief", palette::GREEN, Mark::Solid),
+            KeyEntry::new("Kalman Gaussian", palette::BLUE, Mark::Solid),
+            KeyEntry::new("robot (truth)", truth, Mark::Solid),
+            KeyEntry::new("doors", palette::faded(palette::SKY_BLUE, 0.6), Mark::Solid),
+        ],
+        y_label: "density (1/m)",
+        height: ui.available_height().max(120.0),
+    };
+    figure_ui(
+        ui,
+        &figure,
+        |height, y_label| {
+            figure_plot(
+                "filters_corridor",
+                "position along the corridor (m)",
+                y_label,
+                height,
+            )
+            .include_x(0.0)
+            .include_x(length)
+            .include_y(0.0)
+            .include_y(top)
+        },
+        move |plot_ui| {
+            for d in doors {
                 plot_ui.polygon(
                     Polygon::new(
                         "doors",
@@ -140,23 +159,13 @@ pub fn belief_ui(ui: &mut egui::Ui, sim: &CorridorSim) {
                     })),
             );
             plot_ui.line(
-                Line::new(
-                    "Kalman Gaussian",
-                    PlotPoints::new(density_points(
-                        length,
-                        sim.kalman().mean,
-                        sim.kalman().variance,
-                    )),
-                )
-                .color(palette::BLUE)
-                .width(2.0),
-            );
-            plot_ui.vline(
-                VLine::new("robot (truth)", sim.truth())
-                    .color(truth)
+                Line::new("Kalman Gaussian", PlotPoints::new(kalman))
+                    .color(palette::BLUE)
                     .width(2.0),
             );
-        });
+            plot_ui.vline(VLine::new("robot (truth)", robot).color(truth).width(2.0));
+        },
+    );
 }
 
 /// The gain plot (bottom): prediction, measurement and posterior of the last update.
@@ -174,65 +183,65 @@ pub fn gain_ui(ui: &mut egui::Ui, sim: &CorridorSim, height: f32) {
         );
         return;
     };
-    title_ui(
-        ui,
-        &format!(
-            "Kalman gain K = P̄ / (P̄ + R) = {:.3} / ({:.3} + {:.3}) = {:.3}",
-            u.prior_variance, u.prior_variance, u.measurement_variance, u.gain
-        ),
-        "Eq. 2.8 of Wu's thesis. K near 1: the filter trusts the measurement; near 0: its \
-         prediction. Move motion-std (Q) and measurement-std (R) and watch K and the posterior.",
+    let title = format!(
+        "Kalman gain at step {} (the last door sighting): K = P_p / (P_p + R) = {:.3} / ({:.3} + {:.3}) = {:.3}",
+        sim.last_update_tick(),
+        u.prior_variance,
+        u.prior_variance,
+        u.measurement_variance,
+        u.gain
     );
-    ui.horizontal_wrapped(|ui| {
-        ui.colored_label(palette::BLUE, "- - prediction N(x̄, P̄)");
-        ui.colored_label(
-            palette::VERMILLION,
-            format!("— measurement N(z = door at {door} m, R)"),
-        );
-        ui.colored_label(truth, "— posterior N(x̄ + K(z − x̄), (1 − K) P̄)");
-    });
     let length = sim.corridor().length;
-    Plot::new("filters_gain")
-        .height(height.max(60.0))
-        .x_axis_label("position (m)")
-        .y_axis_label("density (1/m)")
-        .include_x(0.0)
-        .include_x(length)
-        .include_y(0.0)
-        .allow_scroll(false)
-        .show(ui, |plot_ui| {
+    let prediction = density_points(length, u.prior_mean, u.prior_variance);
+    let measurement = density_points(length, u.measurement, u.measurement_variance);
+    let posterior = density_points(length, u.posterior_mean, u.posterior_variance);
+    let figure = Figure {
+        title: &title,
+        hover: "Eq. 2.8 of Wu's thesis. K near 1: the filter trusts the measurement; near 0: \
+                its prediction. Move motion-std (Q) and measurement-std (R) and watch K and \
+                the posterior.",
+        key: vec![
+            KeyEntry::new("prediction N(x_p, P_p)", palette::BLUE, Mark::Dashed),
+            KeyEntry::new(
+                format!("measurement N(z = door at {door} m, R)"),
+                palette::VERMILLION,
+                Mark::Solid,
+            ),
+            KeyEntry::new(
+                "posterior N(x_p + K (z − x_p), (1 − K) P_p)",
+                truth,
+                Mark::Solid,
+            ),
+        ],
+        y_label: "density (1/m)",
+        height: height.max(90.0),
+    };
+    figure_ui(
+        ui,
+        &figure,
+        |height, y_label| {
+            figure_plot("filters_gain", "position (m)", y_label, height)
+                .include_x(0.0)
+                .include_x(length)
+                .include_y(0.0)
+        },
+        move |plot_ui| {
             plot_ui.line(
-                Line::new(
-                    "prediction",
-                    PlotPoints::new(density_points(length, u.prior_mean, u.prior_variance)),
-                )
-                .color(palette::BLUE)
-                .style(LineStyle::dashed_loose())
-                .width(2.0),
+                Line::new("prediction", PlotPoints::new(prediction))
+                    .color(palette::BLUE)
+                    .style(LineStyle::dashed_loose())
+                    .width(2.0),
             );
             plot_ui.line(
-                Line::new(
-                    "measurement",
-                    PlotPoints::new(density_points(
-                        length,
-                        u.measurement,
-                        u.measurement_variance,
-                    )),
-                )
-                .color(palette::VERMILLION)
-                .width(2.0),
+                Line::new("measurement", PlotPoints::new(measurement))
+                    .color(palette::VERMILLION)
+                    .width(2.0),
             );
             plot_ui.line(
-                Line::new(
-                    "posterior",
-                    PlotPoints::new(density_points(
-                        length,
-                        u.posterior_mean,
-                        u.posterior_variance,
-                    )),
-                )
-                .color(truth)
-                .width(2.5),
+                Line::new("posterior", PlotPoints::new(posterior))
+                    .color(truth)
+                    .width(2.5),
             );
-        });
+        },
+    );
 }

@@ -13,6 +13,28 @@ fn method_color(method: &str) -> egui::Color32 {
     }
 }
 
+/// The documents this lesson follows, as links to the Sources window.
+fn sources_line(ui: &mut egui::Ui) {
+    ui.horizontal_wrapped(|ui| {
+        ui.label("Sources:");
+        source_link(
+            ui,
+            "xiang",
+            "Xiang's thesis, ch. 2 (Bayes, EKF, UKF, particles)",
+        );
+        source_link(
+            ui,
+            "wu",
+            "Wu's thesis, ch. 2 (the Kalman filter's derivation)",
+        );
+        source_link(
+            ui,
+            "thrun",
+            "Probabilistic Robotics, ch. 2-4 (the corridor)",
+        );
+    });
+}
+
 /// The comparison table: each Gaussian against the samples' moments.
 pub fn table_ui(ui: &mut egui::Ui, result: Option<&OneStep>, compute_ms: f64) {
     let Some(r) = result else {
@@ -33,7 +55,7 @@ pub fn table_ui(ui: &mut egui::Ui, result: Option<&OneStep>, compute_ms: f64) {
                 "method",
                 "mean error",
                 "covariance error",
-                "KL(samples ‖ method)",
+                "KL(samples || method)",
                 "mean",
             ] {
                 ui.strong(title);
@@ -57,8 +79,8 @@ pub fn table_ui(ui: &mut egui::Ui, result: Option<&OneStep>, compute_ms: f64) {
         });
     ui.label(
         egui::RichText::new(
-            "mean error: ‖μ − μ_samples‖ in the output's units; covariance error: \
-             ‖Σ − Σ_samples‖_F / ‖Σ_samples‖_F; KL: the information lost when the method's \
+            "mean error: |μ − μ_samples| in the output's units; covariance error: \
+             ||Σ − Σ_samples||_F / ||Σ_samples||_F; KL: the information lost when the method's \
              Gaussian stands for the samples' Gaussian.",
         )
         .small(),
@@ -72,6 +94,7 @@ pub fn one_step_ui(ui: &mut egui::Ui, result: Option<&OneStep>, scenario: &Filte
         "The prior (left) goes through the function. The samples show the true result: \
          not a Gaussian. Each filter replaces it with a Gaussian, in its own way.",
     );
+    sources_line(ui);
     let Some(r) = result else {
         return;
     };
@@ -81,13 +104,14 @@ pub fn one_step_ui(ui: &mut egui::Ui, result: Option<&OneStep>, scenario: &Filte
         egui::RichText::new("EKF: linearize at the mean").strong(),
     );
     ui.horizontal_wrapped(|ui| {
-        ui.label("ȳ = f(x̄), Σ_y = J Σ_x Jᵀ (");
+        ui.label("μ_y = f(μ), Σ_y = J Σ J^T (");
         source_link(ui, "xiang", "Xiang Eq. 2.23-2.25");
         ui.label(";");
         source_link(ui, "wu", "Wu Eq. 2.15-2.18");
         ui.label("). The tangent plane's Jacobian at the mean:");
     });
-    let j = r.ekf.jacobian;
+    // + 0.0 writes −0 as 0.
+    let j = r.ekf.jacobian.map(|v| v + 0.0);
     ui.monospace(format!(
         "J = [{:>9.4} {:>9.4}]\n    [{:>9.4} {:>9.4}]",
         j[(0, 0)],
@@ -101,7 +125,7 @@ pub fn one_step_ui(ui: &mut egui::Ui, result: Option<&OneStep>, scenario: &Filte
         egui::RichText::new("UKF: five sigma points").strong(),
     );
     ui.horizontal_wrapped(|ui| {
-        ui.label("χ = x̄, x̄ ± √(n + λ) L eᵢ with λ = α²(n + κ) − n; the mean and covariance of their images (");
+        ui.label("χ = μ, μ ± √(n + λ) L e_i with λ = α²(n + κ) − n; the mean and covariance of their images (");
         source_link(ui, "xiang", "Xiang Eq. 2.26-2.28");
         ui.label(";");
         source_link(ui, "wu", "Wu Eq. 2.19-2.22");
@@ -109,13 +133,13 @@ pub fn one_step_ui(ui: &mut egui::Ui, result: Option<&OneStep>, scenario: &Filte
     });
     let w = r.ukf.weights;
     ui.monospace(format!(
-        "α = {}, β = {}, κ = {}, λ = {:.4}\nW₀ᵐ = {:.4}, W₀ᶜ = {:.4}, Wᵢ = {:.4} (i = 1…4)",
+        "α = {}, β = {}, κ = {}, λ = {:.4}\nW₀(m) = {:.4}, W₀(c) = {:.4}, W_i = {:.4} (i = 1…4)",
         scenario.alpha, scenario.beta, scenario.kappa, w.lambda, w.mean0, w.cov0, w.other
     ));
     if !r.ukf.is_positive_definite() {
         ui.colored_label(
             palette::VERMILLION,
-            "The UKF's covariance is not positive definite here (a negative W₀ᶜ): its ellipse \
+            "The UKF's covariance is not positive definite here (a negative W₀(c)): its ellipse \
              is drawn with the negative part clipped, and it has no KL divergence.",
         );
     }
@@ -148,6 +172,7 @@ pub fn corridor_ui(ui: &mut egui::Ui, stepper: &Stepper<CorridorSim>) {
         source_link(ui, "wu", "Wu §2.1.1");
         ui.label(") on the same motions and sensor readings.");
     });
+    sources_line(ui);
     ui.add_space(6.0);
     match stepper.last_phase() {
         None => {
@@ -159,15 +184,15 @@ pub fn corridor_ui(ui: &mut egui::Ui, stepper: &Stepper<CorridorSim>) {
         Some(p) if p.name() == "predict" => {
             ui.strong("predict");
             ui.label(
-                "The robot moved. Histogram: b̄el(x) = Σ p(x | u, x′) bel(x′), a convolution with \
-                 the motion kernel (Xiang Eq. 2.14): the belief shifts and blurs. Kalman: \
-                 x̄ = x + u (Wu Eq. 2.10), P̄ = P + Q (Eq. 2.18).",
+                "The robot moved. Histogram: bel_pred(x) = Σ p(x | u, x') bel(x'), a convolution \
+                 with the motion kernel (Xiang Eq. 2.14): the belief shifts and blurs. Kalman: \
+                 x_pred = x + u (Wu Eq. 2.10), P_pred = P + Q (Eq. 2.18).",
             );
         }
         Some(_) => {
             ui.strong("update");
             ui.label(
-                "The sensor said door or wall. Histogram: bel(x) = η p(z | x) b̄el(x) (Xiang \
+                "The sensor said door or wall. Histogram: bel(x) = η p(z | x) bel_pred(x) (Xiang \
                  Eq. 2.16): every cell times the likelihood, normalized; after one door it has \
                  a peak at every door. The Kalman filter can only hold one peak: a door becomes \
                  the position of the door nearest its mean, and if that is the wrong door, the \
@@ -188,13 +213,17 @@ pub fn corridor_ui(ui: &mut egui::Ui, stepper: &Stepper<CorridorSim>) {
     ));
     if let Some((u, door)) = sim.last_update() {
         ui.add_space(6.0);
-        ui.strong("The Kalman update, step by step (Wu Eq. 2.5-2.9)");
+        ui.strong(format!(
+            "The Kalman update of step {} (the last door sighting), step by step (Wu Eq. 2.5-2.10)",
+            sim.last_update_tick()
+        ));
         ui.monospace(format!(
-            "prediction  x̄ = {:.3} m, P̄ = {:.4} m²\nmeasurement z = {door:.3} m (door), R = {:.4} m²\n\
-             gain        K = P̄/(P̄+R) = {:.4}          (2.8)\n\
-             innovation  z − x̄ = {:.3} m\n\
-             mean        x = x̄ + K(z − x̄) = {:.3} m   (2.5)\n\
-             variance    P = (1 − K) P̄ = {:.4} m²     (2.9)",
+            "1 prediction   x_p = {:.3} m, P_p = {:.4} m²      (2.10, 2.18)\n\
+             2 measurement  z = {door:.3} m (door), R = {:.4} m²\n\
+             3 gain         K = P_p / (P_p + R) = {:.4}       (2.8)\n\
+             4 innovation   z − x_p = {:.3} m\n\
+             5 mean         x = x_p + K (z − x_p) = {:.3} m  (2.5)\n\
+             6 variance     P = (1 − K) P_p = {:.4} m²      (2.9)",
             u.prior_mean,
             u.prior_variance,
             u.measurement_variance,

@@ -12,6 +12,7 @@
 
 mod corridor;
 mod explain;
+mod marginal;
 mod one_step;
 
 use crate::lesson::{self, Lesson, LessonStart, PanelVisibility, StoredSettings};
@@ -46,6 +47,8 @@ pub enum Tab {
 pub struct FiltersView {
     /// The view in the centre.
     pub tab: Tab,
+    /// A narrow window's bottom panel: the error table instead of the marginal plot.
+    pub table: bool,
 }
 
 /// The parameters of the one-step view's panel.
@@ -95,7 +98,10 @@ pub struct FiltersLesson {
     output_view: MapView,
     density: one_step::Density,
     density_stale: bool,
-    grab: Option<one_step::Grab>,
+    /// The prior's handles: which is held, where they were drawn.
+    drag: one_step::DragState,
+    /// The samples' histogram of the first output and its range.
+    marginal: (Vec<[f64; 2]>, [f64; 2]),
     /// How long the last one-step computation took, milliseconds.
     last_compute_ms: f64,
 }
@@ -155,7 +161,8 @@ impl FiltersLesson {
             output_view: MapView::default(),
             density: one_step::Density::default(),
             density_stale: true,
-            grab: None,
+            drag: one_step::DragState::default(),
+            marginal: (Vec::new(), [0.0, 1.0]),
             last_compute_ms: 0.0,
         };
         lesson.recompute();
@@ -194,6 +201,17 @@ impl FiltersLesson {
         self.note.as_deref()
     }
 
+    /// Where the prior's handles were drawn in the last frame (mean, first and
+    /// second covariance handle), screen points; `None` off the one-step view.
+    pub fn handles_on_screen(&self) -> Option<[egui::Pos2; 3]> {
+        self.drag.on_screen
+    }
+
+    /// The view in the centre.
+    pub fn tab(&self) -> Tab {
+        self.view.tab
+    }
+
     /// The corridor run.
     pub fn corridor(&self) -> &CorridorSim {
         self.corridor.sim()
@@ -217,6 +235,7 @@ impl FiltersLesson {
         let start = web_time::Instant::now();
         match one_step(&self.scenario) {
             Ok(r) => {
+                self.marginal = marginal::histogram(&r);
                 self.result = Some(r);
                 self.note = None;
                 self.density_stale = true;
@@ -279,63 +298,67 @@ impl FiltersLesson {
             .result
             .as_ref()
             .map_or(self.scenario.prior(), |r| r.prior);
-        let width = ui.available_width();
-        let height = ui.available_height();
-        let horizontal = width > 1.2 * height;
-        let mut change = None;
-        let layout = |ui: &mut egui::Ui, this: &mut Self, first: bool| {
-            if first {
-                this.input_ui(ui, &prior, f.input_axes())
-            } else {
-                if let Some(r) = &this.result {
-                    one_step::output_ui(
-                        ui,
-                        &mut this.output_view,
-                        &this.density,
-                        r,
-                        f.output_axes(),
-                    );
-                }
-                None
-            }
-        };
-        if horizontal {
-            ui.columns(2, |c| {
-                change = layout(&mut c[0], self, true);
-                layout(&mut c[1], self, false);
-            });
+        // Two halves of exactly the room there is (side by side when the area is
+        // wide): nothing spills out of a small window. A short half drops the keys
+        // to a hover, so that the canvas keeps its room.
+        let full = ui.available_rect_before_wrap();
+        let horizontal = full.width() > 1.2 * full.height();
+        let gap = 8.0;
+        let (first, second) = if horizontal {
+            let w = 0.5 * (full.width() - gap);
+            (
+                egui::Rect::from_min_size(full.min, egui::vec2(w, full.height())),
+                egui::Rect::from_min_size(
+                    full.min + egui::vec2(w + gap, 0.0),
+                    egui::vec2(w, full.height()),
+                ),
+            )
         } else {
-            let half = (height * 0.5 - 4.0).max(80.0);
-            ui.allocate_ui(egui::vec2(width, half), |ui| {
-                change = layout(ui, self, true)
-            });
-            layout(ui, self, false);
-        }
+            let h = 0.5 * (full.height() - gap);
+            (
+                egui::Rect::from_min_size(full.min, egui::vec2(full.width(), h)),
+                egui::Rect::from_min_size(
+                    full.min + egui::vec2(0.0, h + gap),
+                    egui::vec2(full.width(), h),
+                ),
+            )
+        };
+        let compact = first.height() < 280.0 || first.width() < 330.0;
+        let mut change = None;
+        ui.scope_builder(egui::UiBuilder::new().max_rect(first), |ui| {
+            ui.set_clip_rect(first.intersect(ui.clip_rect()));
+            change = one_step::input_ui(
+                ui,
+                &mut self.input_view,
+                &prior,
+                self.result.as_ref(),
+                f.input_axes(),
+                &mut self.drag,
+                compact,
+            );
+        });
+        ui.scope_builder(egui::UiBuilder::new().max_rect(second), |ui| {
+            ui.set_clip_rect(second.intersect(ui.clip_rect()));
+            if let Some(r) = &self.result {
+                one_step::output_ui(
+                    ui,
+                    &mut self.output_view,
+                    &self.density,
+                    r,
+                    f.output_axes(),
+                    compact,
+                );
+            }
+        });
         if let Some((mean, std, rho)) = change {
             self.set_prior(mean, std, rho);
         }
     }
 
-    fn input_ui(
-        &mut self,
-        ui: &mut egui::Ui,
-        prior: &slamlab_core::filters::Gaussian2,
-        axes: [&'static str; 2],
-    ) -> Option<([f64; 2], [f64; 2], f64)> {
-        one_step::input_ui(
-            ui,
-            &mut self.input_view,
-            prior,
-            self.result.as_ref(),
-            axes,
-            &mut self.grab,
-        )
-    }
-
     /// The density image keeps its bounds while the student drags, so the
     /// picture does not jump; it takes new ones when nothing is grabbed.
     fn output_view_needs_bounds(&self) -> bool {
-        self.grab.is_none() || self.density.bounds == [0.0; 4]
+        self.drag.grab.is_none() || self.density.bounds == [0.0; 4]
     }
 
     fn parameters_panel_ui(&mut self, ui: &mut egui::Ui) {
@@ -352,7 +375,7 @@ impl FiltersLesson {
             Tab::OneStep => {
                 let mut chosen = self.scenario.function.name();
                 ui.horizontal(|ui| {
-                    ui.label("function");
+                    ui.label("Function");
                     egui::ComboBox::from_id_salt("filters_function")
                         .selected_text(chosen)
                         .show_ui(ui, |ui| {
@@ -419,9 +442,38 @@ fn corridor_part(s: &FiltersScenario) -> [f64; 8] {
 impl crate::widgets::layout::LessonPanels for FiltersLesson {
     fn plots_ui(&mut self, ui: &mut egui::Ui) {
         match self.view.tab {
-            Tab::OneStep => explain::table_ui(ui, self.result.as_ref(), self.last_compute_ms),
+            Tab::OneStep => {
+                let height = ui.available_height();
+                let Some(r) = &self.result else {
+                    ui.label("No valid belief yet.");
+                    return;
+                };
+                let (histogram, range) = (&self.marginal.0, self.marginal.1);
+                let compute_ms = self.last_compute_ms;
+                if ui.available_width() >= 900.0 {
+                    ui.columns(2, |c| {
+                        explain::table_ui(&mut c[0], Some(r), compute_ms);
+                        marginal::marginal_ui(&mut c[1], r, histogram, range, height);
+                    });
+                } else {
+                    // A narrow window: the plot or the table, one at a time.
+                    let top = ui.cursor().top();
+                    ui.horizontal(|ui| {
+                        ui.selectable_value(&mut self.view.table, false, "Marginal plot");
+                        ui.selectable_value(&mut self.view.table, true, "Error table");
+                    });
+                    let height = height - (ui.cursor().top() - top);
+                    if self.view.table {
+                        egui::ScrollArea::vertical()
+                            .id_salt("filters_table_scroll")
+                            .show(ui, |ui| explain::table_ui(ui, Some(r), compute_ms));
+                    } else {
+                        marginal::marginal_ui(ui, r, histogram, range, height);
+                    }
+                }
+            }
             Tab::Corridor => {
-                let h = ui.available_height() - 50.0;
+                let h = ui.available_height();
                 corridor::gain_ui(ui, self.corridor.sim(), h);
             }
         }
@@ -441,14 +493,21 @@ impl crate::widgets::layout::LessonPanels for FiltersLesson {
     fn map_ui(&mut self, ui: &mut egui::Ui) {
         match self.view.tab {
             Tab::OneStep => self.one_step_map_ui(ui),
-            Tab::Corridor => corridor::belief_ui(ui, self.corridor.sim()),
+            Tab::Corridor => {
+                self.drag.on_screen = None;
+                corridor::belief_ui(ui, self.corridor.sim());
+            }
         }
     }
 }
 
 impl Lesson for FiltersLesson {
     fn plot_series(&self) -> Vec<crate::export::PlotSeries> {
-        corridor::series(self.corridor.sim())
+        let mut all = corridor::series(self.corridor.sim());
+        if let Some(r) = &self.result {
+            all.extend(marginal::series(r, &self.marginal.0, self.marginal.1));
+        }
+        all
     }
 
     fn id(&self) -> &'static str {
@@ -560,8 +619,22 @@ impl Lesson for FiltersLesson {
             "function": self.scenario.function.name(),
             "note": self.note,
             "samples_mean": self.result.as_ref().map(|r| [r.truth.moments.mean[0], r.truth.moments.mean[1]]),
+            "samples": self.result.as_ref().map(|r| r.truth.points.len()),
+            "prior": {
+                "mean": self.scenario.mean,
+                "std": self.scenario.std,
+                "rho": self.scenario.rho,
+            },
+            "handles_px": self.drag.on_screen.map(|h| h.map(|p| [p.x, p.y])),
+            "jacobian": self.result.as_ref().map(|r| {
+                let j = r.ekf.jacobian;
+                [[j[(0, 0)], j[(0, 1)]], [j[(1, 0)], j[(1, 1)]]]
+            }),
+            "ukf_weights": self.result.as_ref().map(|r| {
+                let w = r.ukf.weights;
+                serde_json::json!({ "lambda": w.lambda, "mean0": w.mean0, "cov0": w.cov0, "other": w.other })
+            }),
             "density_inside": self.density.inside,
-            "compute_ms": self.last_compute_ms,
             "results": rows,
             "corridor": {
                 "histogram_mean": sim.histogram().mean(),
@@ -569,6 +642,7 @@ impl Lesson for FiltersLesson {
                 "kalman_mean": sim.kalman().mean,
                 "kalman_variance": sim.kalman().variance,
                 "gain": sim.last_update().map(|(u, _)| u.gain),
+                "gain_tick": sim.last_update().map(|_| sim.last_update_tick()),
             },
         })
     }

@@ -5,6 +5,7 @@
 
 use crate::palette;
 use crate::widgets::map_canvas::{self, CanvasColors, MapTransform, MapView};
+use crate::widgets::plots::{KeyEntry, Mark, key_ui};
 use egui::{Color32, ColorImage, Pos2, Stroke, TextureHandle, TextureOptions};
 use nalgebra::Vector2;
 use slamlab_core::filters::one_step::Gaussian2;
@@ -173,21 +174,25 @@ pub fn diamond(painter: &egui::Painter, at: Pos2, color: Color32, filled: bool) 
     painter.add(shape);
 }
 
-/// Axis names in the canvas's top-left corner.
-pub fn axis_names(
-    painter: &egui::Painter,
-    t: &MapTransform,
+/// The canvas's title, its axes' names and its key, on lines above it (never over
+/// the data); `compact`: the title alone on one line, the axes and the key on hover.
+pub fn heading_ui(
+    ui: &mut egui::Ui,
     title: &str,
     axes: [&str; 2],
-    colors: &CanvasColors,
+    key: &[KeyEntry],
+    compact: bool,
 ) {
-    painter.text(
-        t.rect.left_top() + egui::vec2(8.0, 6.0),
-        egui::Align2::LEFT_TOP,
-        format!("{title}\nhorizontal: {}\nvertical: {}", axes[0], axes[1]),
-        egui::FontId::proportional(12.0),
-        colors.weak_text,
-    );
+    let axes = format!("horizontal: {}; vertical: {}", axes[0], axes[1]);
+    if compact {
+        let names: Vec<&str> = key.iter().map(|k| k.name.as_str()).collect();
+        ui.add(egui::Label::new(egui::RichText::new(title).small().strong()).truncate())
+            .on_hover_text(format!("{axes}\nKey: {}", names.join("; ")));
+        return;
+    }
+    ui.label(egui::RichText::new(title).strong());
+    ui.label(egui::RichText::new(axes).small());
+    key_ui(ui, key);
 }
 
 /// What a drag on the input canvas does.
@@ -201,8 +206,18 @@ pub enum Grab {
     Column2,
 }
 
+/// The input canvas's drag: the handle held, and where the handles were drawn
+/// in the last frame (mean, first and second column; screen points).
+#[derive(Clone, Copy, Debug, Default)]
+pub struct DragState {
+    /// The handle being dragged.
+    pub grab: Option<Grab>,
+    /// The handles on screen.
+    pub on_screen: Option<[Pos2; 3]>,
+}
+
 /// The handles: the mean and the tips of the Cholesky factor's columns
-/// `x̄ + L e₁`, `x̄ + L e₂` (one standard deviation along each).
+/// `μ + L e₁`, `μ + L e₂` (one standard deviation along each).
 pub fn handles(prior: &Gaussian2) -> Option<[Vector2<f64>; 3]> {
     let l = prior.factor().ok()?;
     Some([
@@ -213,20 +228,28 @@ pub fn handles(prior: &Gaussian2) -> Option<[Vector2<f64>; 3]> {
 }
 
 /// The prior with the grabbed handle at `to`; returns `(mean, std, rho)`.
-/// Dragging a column to zero length makes the covariance singular: the lesson
-/// refuses it with a note and keeps the last valid belief.
-pub fn drag_prior(prior: &Gaussian2, grab: Grab, to: Vector2<f64>) -> ([f64; 2], [f64; 2], f64) {
+/// Dragging a column to zero length (within `snap`, the world length of a few
+/// screen points) makes the covariance singular: the lesson refuses it with a
+/// note and keeps the last valid belief.
+pub fn drag_prior(
+    prior: &Gaussian2,
+    grab: Grab,
+    to: Vector2<f64>,
+    snap: f64,
+) -> ([f64; 2], [f64; 2], f64) {
     let m = prior.mean;
     let (l11, l21, l22) = match prior.factor() {
         Ok(l) => (l[(0, 0)], l[(1, 0)], l[(1, 1)]),
         Err(_) => (1.0, 0.0, 1.0),
     };
+    let snapped = |v: f64| if v.abs() < snap { 0.0 } else { v };
     let (mean, l11, l21, l22) = match grab {
         Grab::Mean => (to, l11, l21, l22),
+        Grab::Column1 if (to - m).norm() < snap => (m, 0.0, 0.0, l22),
         Grab::Column1 => (m, to[0] - m[0], to[1] - m[1], l22),
-        Grab::Column2 => (m, l11, l21, to[1] - m[1]),
+        Grab::Column2 => (m, l11, l21, snapped(to[1] - m[1])),
     };
-    // Σ = L Lᵀ with L = [[l11, 0], [l21, l22]].
+    // Σ = L L^T with L = [[l11, 0], [l21, l22]].
     let s1 = l11.abs();
     let s2 = (l21 * l21 + l22 * l22).sqrt();
     let rho = if s1 > 0.0 && s2 > 0.0 {
@@ -244,30 +267,41 @@ pub fn input_ui(
     prior: &Gaussian2,
     result: Option<&OneStep>,
     axes: [&str; 2],
-    grab: &mut Option<Grab>,
+    drag: &mut DragState,
+    compact: bool,
 ) -> Option<([f64; 2], [f64; 2], f64)> {
     let colors = CanvasColors::of(ui);
+    heading_ui(
+        ui,
+        "Prior belief: drag the mean (cross) and the handles (dots)",
+        axes,
+        &[
+            KeyEntry::new("prior, 95% ellipse", colors.truth, Mark::Solid),
+            KeyEntry::new("covariance handles", palette::VERMILLION, Mark::Dots),
+            KeyEntry::new("sigma points", palette::ORANGE, Mark::Dots),
+        ],
+        compact,
+    );
     let (response, t) = map_canvas::canvas_ui(ui, view, input_bounds(prior), 0.0, &mut None, false);
     let painter = ui.painter_at(t.rect);
     painter.rect_filled(t.rect, 0.0, colors.background);
     map_canvas::draw_grid(&painter, &t, &colors);
-    axis_names(
-        &painter,
-        &t,
-        "Prior belief (drag the mean and the handles)",
-        axes,
-        &colors,
-    );
     ellipse(&painter, &t, prior, Stroke::new(2.0, colors.truth));
     let mut change = None;
+    drag.on_screen = None;
     if let Some(h) = handles(prior) {
+        drag.on_screen = Some([t.v(&h[0]), t.v(&h[1]), t.v(&h[2])]);
         cross(&painter, t.v(&h[0]), colors.truth);
         for tip in &h[1..] {
             painter.line_segment([t.v(&h[0]), t.v(tip)], Stroke::new(1.0, colors.truth));
             painter.circle_filled(t.v(tip), 6.0, palette::VERMILLION);
         }
+        // The handle nearest where the button went down (not where the pointer is
+        // when the drag is recognized, a few points later).
         if response.drag_started()
-            && let Some(p) = response.interact_pointer_pos()
+            && let Some(p) = ui
+                .input(|i| i.pointer.press_origin())
+                .or(response.interact_pointer_pos())
         {
             let nearest = [Grab::Mean, Grab::Column1, Grab::Column2]
                 .into_iter()
@@ -276,7 +310,7 @@ pub fn input_ui(
                 .fold((Grab::Mean, f32::INFINITY), |best, c| {
                     if c.1 < best.1 { c } else { best }
                 });
-            *grab = (nearest.1 < 24.0).then_some(nearest.0);
+            drag.grab = (nearest.1 < 24.0).then_some(nearest.0);
         }
     }
     if let Some(r) = result {
@@ -285,15 +319,15 @@ pub fn input_ui(
         }
     }
     if response.dragged()
-        && let (Some(g), Some(p)) = (*grab, response.interact_pointer_pos())
+        && let (Some(g), Some(p)) = (drag.grab, response.interact_pointer_pos())
     {
         let w = t.world_of(p);
-        change = Some(drag_prior(prior, g, Vector2::new(w[0], w[1])));
+        let snap = 3.0 / f64::from(t.scale);
+        change = Some(drag_prior(prior, g, Vector2::new(w[0], w[1]), snap));
     }
     if response.drag_stopped() {
-        *grab = None;
+        drag.grab = None;
     }
-    map_canvas::draw_scale_and_axes(&painter, &t, &colors);
     change
 }
 
@@ -305,20 +339,37 @@ pub fn output_ui(
     density: &Density,
     result: &OneStep,
     axes: [&str; 2],
+    compact: bool,
 ) {
     let colors = CanvasColors::of(ui);
+    heading_ui(
+        ui,
+        "After the function (drag to pan, scroll to zoom)",
+        axes,
+        &[
+            KeyEntry::new(
+                format!(
+                    "{} samples and their 95% ellipse",
+                    result.truth.points.len()
+                ),
+                colors.truth,
+                Mark::Solid,
+            ),
+            KeyEntry::new("EKF", palette::BLUE, Mark::Solid),
+            KeyEntry::new("UKF and sigma points", palette::ORANGE, Mark::Solid),
+            KeyEntry::new(
+                format!("{} particles", result.particles.points.len()),
+                palette::PURPLE,
+                Mark::Dots,
+            ),
+        ],
+        compact,
+    );
     let (_response, t) = map_canvas::canvas_ui(ui, view, density.bounds, 0.0, &mut None, true);
     let painter = ui.painter_at(t.rect);
     painter.rect_filled(t.rect, 0.0, colors.background);
     map_canvas::draw_grid(&painter, &t, &colors);
     density.draw(&painter, &t);
-    axis_names(
-        &painter,
-        &t,
-        "After the function (drag to pan, scroll to zoom)",
-        axes,
-        &colors,
-    );
     for p in &result.particles.points {
         painter.circle_filled(t.v(p), 1.8, palette::faded(palette::PURPLE, 0.7));
     }
@@ -351,30 +402,5 @@ pub fn output_ui(
     );
     for (i, p) in result.ukf.sigma_out.iter().enumerate() {
         diamond(&painter, t.v(p), palette::ORANGE, i == 0);
-    }
-    legend(&painter, &t, &colors);
-    map_canvas::draw_scale_and_axes(&painter, &t, &colors);
-}
-
-fn legend(painter: &egui::Painter, t: &MapTransform, colors: &CanvasColors) {
-    let entries = [
-        (
-            colors.truth,
-            "samples: density and their moments' 95% ellipse",
-        ),
-        (palette::BLUE, "EKF: linearized at the mean"),
-        (palette::ORANGE, "UKF: sigma points (◆) and their Gaussian"),
-        (palette::PURPLE, "particles and their Gaussian"),
-    ];
-    let mut at = t.rect.right_top() + egui::vec2(-8.0, 6.0);
-    for (color, text) in entries {
-        painter.text(
-            at,
-            egui::Align2::RIGHT_TOP,
-            text,
-            egui::FontId::proportional(12.0),
-            color,
-        );
-        at.y += 15.0;
     }
 }

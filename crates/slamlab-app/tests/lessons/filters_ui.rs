@@ -5,10 +5,17 @@
 
 use super::common::{count_pixels, harness, lesson_of, lesson_of_mut, render_or_skip};
 use egui_kittest::Harness;
+use egui_kittest::kittest::Queryable as _;
 use slamlab_app::SlamLabApp;
 use slamlab_app::filters::{FiltersLesson, Tab};
 use slamlab_app::lesson::Lesson as _;
 use slamlab_app::time_control::TimeAction;
+use slamlab_core::math;
+
+/// Where a screenshot goes: the tests' scratch folder in the target directory.
+fn shot(name: &str) -> std::path::PathBuf {
+    std::path::Path::new(env!("CARGO_TARGET_TMPDIR")).join(format!("{name}.png"))
+}
 
 fn lesson<'h>(h: &'h Harness<'_, SlamLabApp>) -> &'h FiltersLesson {
     lesson_of(h)
@@ -36,7 +43,7 @@ fn the_polar_banana_opens_by_url_and_the_ukf_beats_the_ekf() {
         return;
     };
     image
-        .save("target/filters_one_step.png")
+        .save(shot("filters_one_step"))
         .unwrap_or_else(|e| eprintln!("could not save the screenshot: {e}"));
     for (name, rgb) in [
         ("EKF blue", [0x00, 0x72, 0xB2]),
@@ -103,7 +110,7 @@ fn the_time_bar_steps_the_corridor_and_steps_back_exactly() {
         return;
     };
     image
-        .save("target/filters_corridor.png")
+        .save(shot("filters_corridor"))
         .unwrap_or_else(|e| eprintln!("could not save the screenshot: {e}"));
     let green = count_pixels(image.as_raw(), [0x00, 0x9E, 0x73], 30);
     assert!(green > 200, "histogram bars: {green} pixels");
@@ -111,3 +118,288 @@ fn the_time_bar_steps_the_corridor_and_steps_back_exactly() {
     assert!(blue > 50, "Kalman curve: {blue} pixels");
     lesson_mut(&mut h).set_tab(Tab::OneStep);
 }
+
+/// Presses the left button at `from`, moves to `to` in a few frames, releases.
+fn drag(h: &mut Harness<'_, SlamLabApp>, from: egui::Pos2, to: egui::Pos2) {
+    h.event(egui::Event::PointerMoved(from));
+    h.step();
+    h.event(egui::Event::PointerButton {
+        pos: from,
+        button: egui::PointerButton::Primary,
+        pressed: true,
+        modifiers: egui::Modifiers::NONE,
+    });
+    h.step();
+    for k in 1..=8 {
+        let p = from + (to - from) * (k as f32 / 8.0);
+        h.event(egui::Event::PointerMoved(p));
+        h.step();
+    }
+    h.event(egui::Event::PointerButton {
+        pos: to,
+        button: egui::PointerButton::Primary,
+        pressed: false,
+        modifiers: egui::Modifiers::NONE,
+    });
+    h.step();
+    h.run();
+}
+
+fn handles(h: &Harness<'_, SlamLabApp>) -> [egui::Pos2; 3] {
+    match lesson(h).handles_on_screen() {
+        Some(handles) => handles,
+        None => panic!("the prior's handles are not on screen"),
+    }
+}
+
+#[test]
+fn dragging_the_mean_and_a_handle_moves_the_prior_and_every_gaussian_follows() {
+    // The linear function y = [[1, 0.5], [0, 1]] x: the EKF and the UKF are exact.
+    let mut h = harness("lesson=filters&function=linear&samples=20000&seed=2");
+    h.run();
+    let s = lesson(&h).scenario().clone();
+    assert_eq!((s.mean, s.std, s.rho), ([0.0, 0.0], [1.0, 0.5], 0.3));
+    let [mean, col1, _] = handles(&h);
+    // The first handle is μ + L e₁ = (1, 0.15): one metre to the right of the mean.
+    let scale = col1.x - mean.x;
+    assert!(scale > 20.0, "{scale} points per unit");
+    drag(&mut h, mean, mean + egui::vec2(60.0, 0.0));
+    let moved = lesson(&h).scenario().mean;
+    let expected = f64::from(60.0 / scale);
+    assert!(
+        (moved[0] - expected).abs() < 0.03 * expected && moved[1].abs() < 0.03 * expected,
+        "mean {moved:?}, expected x {expected}"
+    );
+    assert!(lesson(&h).note().is_none(), "{:?}", lesson(&h).note());
+    let r = lesson(&h).result().expect("valid");
+    assert_eq!([r.prior.mean[0], r.prior.mean[1]], moved);
+    // Linear: the EKF's mean is A μ exactly, and the UKF agrees with it to 1e-12.
+    let (ekf, ukf) = (&r.rows[0].gaussian, &r.rows[1].gaussian);
+    assert!((ekf.mean[0] - (moved[0] + 0.5 * moved[1])).abs() < 1e-12);
+    assert!((ekf.mean - ukf.mean).norm() < 1e-12);
+    assert!((ekf.covariance - ukf.covariance).norm() < 1e-12);
+    let j = r.ekf.jacobian;
+    assert_eq!(
+        [j[(0, 0)], j[(0, 1)], j[(1, 0)], j[(1, 1)]],
+        [1.0, 0.5, 0.0, 1.0]
+    );
+    // The samples' moments are within sampling error of the exact ones.
+    assert!(
+        r.rows[0].comparison.covariance_error < 0.05,
+        "{:?}",
+        r.rows[0]
+    );
+    // Drag the first handle out: the first deviation grows, the mean stays.
+    let [mean, col1, _] = handles(&h);
+    drag(&mut h, col1, col1 + egui::vec2(col1.x - mean.x, 0.0));
+    let s = lesson(&h).scenario().clone();
+    assert_eq!(s.mean, moved);
+    assert!(s.std[0] > 1.8 && s.std[0] < 2.2, "{:?}", s.std);
+    // Drag the second handle onto the mean's height: the covariances on the way
+    // are taken, the singular one at the end is refused with a note, and the
+    // last valid belief (the one just before) stays, consistent with its setting.
+    let [mean, _, col2] = handles(&h);
+    drag(&mut h, col2, egui::pos2(col2.x, mean.y));
+    assert!(
+        lesson(&h)
+            .note()
+            .is_some_and(|n| n.contains("not positive definite")),
+        "{:?}",
+        lesson(&h).note()
+    );
+    let kept = lesson(&h).scenario().clone();
+    assert!(
+        kept.std[1] > 0.0 && kept.std[1] < 0.5 && kept.rho.abs() < 1.0,
+        "{kept:?}"
+    );
+    let r = lesson(&h).result().expect("kept");
+    assert_eq!(r.prior, kept.prior());
+    assert!(r.rows.iter().all(|row| row.gaussian.is_finite()));
+    // The share link reopens the dragged prior (to the link's six decimals).
+    let query = h.state().share_query(false);
+    let reopened = harness(&query);
+    let again = lesson(&reopened).scenario();
+    let close = |a: f64, b: f64| (a - b).abs() < 1e-5;
+    assert!(
+        close(again.mean[0], moved[0]) && close(again.mean[1], moved[1]),
+        "{query}"
+    );
+    assert!(
+        close(again.std[0], kept.std[0]) && close(again.std[1], kept.std[1]),
+        "{query}"
+    );
+    assert!(close(again.rho, kept.rho), "{query}");
+    assert!(lesson(&reopened).note().is_none(), "{query}");
+}
+
+#[test]
+fn the_function_menu_the_unscented_weights_and_overflow() {
+    let mut h = harness("lesson=filters&samples=5000&seed=1");
+    h.run();
+    h.get_by_label("function").click();
+    h.run();
+    h.get_by_label("motion").click();
+    h.run();
+    assert_eq!(lesson(&h).scenario().function.name(), "motion");
+    assert_eq!(lesson(&h).scenario().mean, [1.0, 0.5], "the motion prior");
+    let r = lesson(&h).result().expect("valid");
+    // The exact arc from the origin, heading 0, after dt = 1 s at v = 1 m/s,
+    // w = 0.5 rad/s: (v/w sin(w), v/w (1 − cos w)).
+    let (v, w) = (1.0_f64, 0.5_f64);
+    let arc = [v / w * math::sin(w), v / w * (1.0 - math::cos(w))];
+    assert!(
+        (r.ekf.gaussian.mean[0] - arc[0]).abs() < 1e-12,
+        "{:?}",
+        r.ekf.gaussian.mean
+    );
+    assert!((r.ekf.gaussian.mean[1] - arc[1]).abs() < 1e-12);
+    // ∂x/∂v = sin(w)/w.
+    assert!((r.ekf.jacobian[(0, 0)] - math::sin(w) / w).abs() < 1e-9);
+    // α = 0.5, β = 2, κ = 1, n = 2: λ = 0.25·3 − 2 = −1.25, W₀(m) = λ/(n + λ) = −5/3,
+    // W₀(c) = W₀(m) + 1 − α² + β = 13/12, W_i = 1/(2(n + λ)) = 2/3.
+    assert!(lesson_mut(&mut h).set_param("alpha", "0.5").is_none());
+    assert!(lesson_mut(&mut h).set_param("kappa", "1").is_none());
+    let wts = lesson(&h).result().expect("valid").ukf.weights;
+    assert!((wts.lambda + 1.25).abs() < 1e-12, "{wts:?}");
+    assert!((wts.mean0 + 5.0 / 3.0).abs() < 1e-12, "{wts:?}");
+    assert!((wts.cov0 - 13.0 / 12.0).abs() < 1e-12, "{wts:?}");
+    assert!((wts.other - 2.0 / 3.0).abs() < 1e-12, "{wts:?}");
+    // α²(n + κ) ≤ 0: refused, the weights stay.
+    lesson_mut(&mut h).set_param("kappa", "-3");
+    assert!(lesson(&h).note().is_some_and(|n| n.contains("unscented")));
+    assert_eq!(lesson(&h).scenario().kappa, 1.0);
+    assert_eq!(lesson(&h).result().expect("kept").ukf.weights, wts);
+    // Samples that overflow (e^(100 x₂) with x₂ spread over ±13): a note, the last
+    // valid belief, no NaN in the state.
+    lesson_mut(&mut h).set_param("function", "exp");
+    lesson_mut(&mut h).set_param("coefficient", "100");
+    let kept = lesson(&h).result().expect("valid").rows.clone();
+    lesson_mut(&mut h).set_param("std-2", "3");
+    let note = lesson(&h).note().unwrap_or_default().to_owned();
+    assert!(
+        note.contains("overflow") || note.contains("infinite"),
+        "{note}"
+    );
+    assert_eq!(lesson(&h).result().expect("kept").rows, kept);
+    h.run();
+    let state: serde_json::Value = serde_json::from_str(&h.state().test_state_json()).unwrap();
+    assert_eq!(state["lesson"], "filters");
+    // serde_json writes a NaN or an infinity as null: every number is a number.
+    for row in state["results"].as_array().unwrap() {
+        for key in ["mean_error", "covariance_error"] {
+            assert!(row[key].as_f64().is_some_and(f64::is_finite), "{row}");
+        }
+        assert!(
+            row["mean"].as_array().unwrap().iter().all(|v| v.is_f64()),
+            "{row}"
+        );
+    }
+}
+
+#[test]
+fn corridor_buttons_step_both_filters_and_the_gain_is_the_balance() {
+    let mut h = harness("lesson=filters&view=corridor&seed=1&samples=5000");
+    h.run();
+    for step in 0..28 {
+        h.get_by_label("Step phase").click();
+        h.run();
+        let b = lesson(&h).corridor().histogram().belief();
+        let total: f64 = b.iter().sum();
+        assert!((total - 1.0).abs() < 1e-12, "step {step}: {total}");
+        assert!(b.iter().all(|p| p.is_finite() && *p >= 0.0));
+    }
+    let sim = lesson(&h).corridor();
+    assert_eq!(slamlab_sim::stepper::Simulation::tick(sim), 14);
+    // Seed 1: after the doors at 3 m and 6 m the histogram has found the robot.
+    let hist = sim.histogram();
+    let mass = hist.mass_within(sim.truth() - 1.0, sim.truth() + 1.0);
+    assert!(
+        mass > 0.7 && (hist.mode() - sim.truth()).abs() < 0.25,
+        "{mass}"
+    );
+    let state: serde_json::Value = serde_json::from_str(&h.state().test_state_json()).unwrap();
+    assert_eq!(state["tick"], 14);
+    assert_eq!(state["view"], "corridor");
+    // K = P_p / (P_p + R) of the last door sighting, as the gain plot states.
+    if let Some((u, _)) = sim.last_update() {
+        let k = u.prior_variance / (u.prior_variance + u.measurement_variance);
+        assert!((u.gain - k).abs() < 1e-12);
+        assert!((u.posterior_variance - (1.0 - k) * u.prior_variance).abs() < 1e-12);
+    }
+    // A larger R lowers every gain: the corridor replays to the same step.
+    let gain = state["corridor"]["gain"].as_f64();
+    lesson_mut(&mut h).set_param("measurement-std", "2");
+    assert_eq!(
+        slamlab_sim::stepper::Simulation::tick(lesson(&h).corridor()),
+        14
+    );
+    let after = lesson(&h).corridor().last_update().map(|(u, _)| u.gain);
+    if let (Some(before), Some(after)) = (gain, after) {
+        assert!(after < before, "{after} vs {before}");
+    }
+    h.get_by_label("Step back").click();
+    h.run();
+    assert_eq!(
+        lesson(&h).time_info().last_phase.as_deref(),
+        Some("corridor predict")
+    );
+}
+
+#[test]
+fn the_lesson_renders_readably_at_800_by_500_and_full_size() {
+    use super::common::{harness_sized, harness_themed};
+    for (size, name) in [
+        (egui::vec2(800.0, 500.0), "filters_800x500"),
+        (egui::vec2(1400.0, 900.0), "filters_full"),
+    ] {
+        let mut h = harness_sized("lesson=filters&samples=20000&seed=1", size);
+        h.run();
+        assert!(
+            lesson(&h).handles_on_screen().is_some(),
+            "{name}: no prior on screen"
+        );
+        let Some(image) = render_or_skip(&mut h) else {
+            return;
+        };
+        image
+            .save(shot(name))
+            .unwrap_or_else(|e| eprintln!("could not save the screenshot: {e}"));
+        let blue = count_pixels(image.as_raw(), [0x00, 0x72, 0xB2], 30);
+        assert!(blue > 100, "{name}: EKF blue {blue} pixels");
+        let mut h = harness_themed(
+            "lesson=filters&view=corridor&seed=1",
+            size,
+            egui::Theme::Light,
+        );
+        for _ in 0..14 {
+            lesson_mut(&mut h).apply_time_action(TimeAction::StepTick);
+        }
+        h.run();
+        if let Some(image) = render_or_skip(&mut h) {
+            image
+                .save(shot(&format!("{name}_corridor")))
+                .unwrap_or_else(|e| eprintln!("could not save the screenshot: {e}"));
+        }
+    }
+}
+
+/// The seeded table the browser test repeats in wasm (`web/tests/browser.test.mjs`,
+/// `FILTERS_NATIVE`): the same bits natively and in the browser.
+#[test]
+fn the_seeded_table_has_these_exact_numbers() {
+    let json = SlamLabApp::headless_state("lesson=filters&samples=20000&seed=1", 0);
+    let state: serde_json::Value = serde_json::from_str(&json).unwrap();
+    let table: Vec<String> = state["results"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|r| format!("{}={}", r["method"].as_str().unwrap(), r["mean_error"]))
+        .collect();
+    assert_eq!(table, FILTERS_NATIVE, "{json}");
+}
+
+const FILTERS_NATIVE: [&str; 3] = [
+    "ekf=0.12957845707913004",
+    "ukf=0.001541246456905519",
+    "particles=0.021033324669198564",
+];

@@ -8,6 +8,7 @@
 mod common;
 
 mod exports_ui;
+mod filters_ui;
 mod fusion_ui;
 mod kidnap_ui;
 mod landmark_fastslam_ui;
