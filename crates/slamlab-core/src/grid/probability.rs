@@ -919,12 +919,10 @@ mod tests {
         assert!((hit - 0.9).abs() < 1e-12);
     }
 
-    #[test]
-    fn a_cell_is_updated_once_per_scan_and_hits_win_over_misses() {
-        // 90 beams all ending in the same cell, and one beam that crosses that
-        // cell on its way further out.
-        let mut g = ProbabilityGrid::new(0.1);
-        let pose = Pose2::new(0.05, 0.05, 0.0);
+    /// From the middle of cell (0, 0) of a 0.1 m grid, 90 beams ending in cell
+    /// 5 and one beam beyond, ending in cell 10; log odds, no free space for
+    /// max-range beams.
+    fn ninety_beams_and_one_beyond() -> (Pose2, Scan, InsertParams) {
         let mut angles = vec![0.0; 90];
         let mut ranges = vec![0.52; 90];
         angles.push(0.0);
@@ -939,6 +937,15 @@ mod tests {
             rule: UpdateRule::LOG_ODDS,
             max_range_free: 0.0,
         };
+        (Pose2::new(0.05, 0.05, 0.0), scan, params)
+    }
+
+    #[test]
+    fn a_cell_is_updated_once_per_scan_and_hits_win_over_misses() {
+        // 90 beams all ending in the same cell, and one beam that crosses that
+        // cell on its way further out.
+        let mut g = ProbabilityGrid::new(0.1);
+        let (pose, scan, params) = ninety_beams_and_one_beyond();
         let report = g.insert_scan(&pose, &scan, &params).unwrap();
         assert_eq!(report.hits, 2, "cells 5 and 10");
         assert_eq!(report.misses, 9, "cells 0-4 and 6-9");
@@ -958,21 +965,7 @@ mod tests {
         // 90 beams end, so cell 5 is a hit there, not a miss, and it is beam
         // 0's to update; cells 0-4 were crossed by beam 0 already.
         let mut g = ProbabilityGrid::new(0.1);
-        let pose = Pose2::new(0.05, 0.05, 0.0);
-        let mut angles = vec![0.0; 90];
-        let mut ranges = vec![0.52; 90];
-        angles.push(0.0);
-        ranges.push(1.02);
-        let scan = Scan {
-            angles,
-            ranges,
-            range_min: 0.0,
-            range_max: 10.0,
-        };
-        let params = InsertParams {
-            rule: UpdateRule::LOG_ODDS,
-            max_range_free: 0.0,
-        };
+        let (pose, scan, params) = ninety_beams_and_one_beyond();
         // A first scan so that "before" is not empty: cell 3 at -0.4.
         g.insert_scan(&pose, &one_beam(0.32, 0.0, 10.0), &params)
             .unwrap();
