@@ -520,19 +520,29 @@ impl SlamLabApp {
             ui.label(egui::RichText::new("SLAM Lab").strong());
             ui.menu_button("File", |ui| self.file_menu_ui(ui));
             ui.menu_button("Lessons", |ui| {
-                for info in registry::LESSONS {
-                    let selected = info.id == self.lesson.id();
-                    let response = ui
-                        .selectable_label(selected, info.title)
-                        .on_hover_text(info.summary);
-                    if response.clicked() {
-                        if !selected {
-                            self.switch_lesson(info.id);
+                // Each lesson's title and what it shows, in body-size text that
+                // wraps; in a short window the list scrolls.
+                ui.set_max_width(420.0);
+                let height = (ui.ctx().content_rect().height() - 80.0).max(120.0);
+                egui::ScrollArea::vertical()
+                    .max_height(height)
+                    .show(ui, |ui| {
+                        for info in registry::LESSONS {
+                            let selected = info.id == self.lesson.id();
+                            let title = egui::RichText::new(info.title).strong();
+                            let response = ui
+                                .selectable_label(selected, title)
+                                .on_hover_text(info.summary);
+                            if response.clicked() {
+                                if !selected {
+                                    self.switch_lesson(info.id);
+                                }
+                                ui.close();
+                            }
+                            ui.label(info.summary);
+                            ui.add_space(6.0);
                         }
-                        ui.close();
-                    }
-                    ui.label(egui::RichText::new(info.summary).small().weak());
-                }
+                    });
             });
             ui.menu_button("View", |ui| {
                 let panels = self.panels_mut();

@@ -608,3 +608,34 @@ fn esc_closes_the_windows_over_the_map_one_at_a_time() {
     let lesson = super::common::lesson_of::<slamlab_app::landmark_slam::LandmarkSlamLesson>(&h);
     assert!(!lesson.view.heatmap, "then the heatmap");
 }
+
+#[test]
+fn the_lessons_menu_names_every_lesson_in_readable_text_at_800_by_500() {
+    let mut h = harness("lesson=mapping", egui::vec2(800.0, 500.0));
+    h.run();
+    h.get_by_label("Lessons").click();
+    h.run();
+    for info in LESSONS {
+        assert!(
+            h.query_by_label(info.summary).is_some(),
+            "{}'s description is in the menu",
+            info.id
+        );
+    }
+    // The descriptions are body text, not small print: a line of one is as tall as
+    // a line of the menu's titles.
+    let title = h.get_by_label(LESSONS[0].title).rect();
+    let summary = h.get_by_label(LESSONS[0].summary).rect();
+    let lines = (summary.height() / title.height()).round();
+    assert!(
+        lines >= 1.0 && summary.height() >= lines * title.height() * 0.8,
+        "title {title:?}, description {summary:?}"
+    );
+    if let Some(image) = render_or_skip(&mut h) {
+        let _ = image.save(std::env::temp_dir().join("slamlab-lessons-menu-800.png"));
+    }
+    // Choosing one opens it.
+    h.get_by_label(LESSONS[1].title).click();
+    h.run();
+    assert_eq!(h.state().lesson_id(), LESSONS[1].id);
+}
