@@ -11,7 +11,7 @@ use egui_plot::{Line, PlotPoints, Points};
 use slamlab_core::Pose2;
 use slamlab_core::grid::{BeamCell, probability};
 use slamlab_core::scan::icp::PairStatus;
-use slamlab_sim::mapping::{MappingSession, PoseSource};
+use slamlab_sim::mapping::{IcpScanRecord, MappingSession, PoseSource};
 
 /// The colour of a kept ICP pair and of the cells a beam updates as free.
 const KEPT: Color32 = palette::SKY_BLUE;
@@ -20,10 +20,11 @@ const REJECTED: Color32 = Color32::from_rgb(0x9A, 0x9A, 0x9A);
 /// The reference scan's points (the previous scan).
 const REFERENCE: Color32 = palette::GREEN;
 
-/// The ICP iteration to draw for the current scan: the one being shown while
-/// stepping through a match, else the match's last one. `None` unless the pose
-/// source is ICP and the current scan was matched with it.
-fn iteration_to_draw(session: &MappingSession) -> Option<(usize, usize)> {
+/// The ICP match of the current scan, the iteration to draw (the one being
+/// shown while stepping through it, else its last) and whether it is being
+/// stepped through. `None` unless the pose source is ICP and the current scan
+/// was matched with it.
+fn iteration_to_draw(session: &MappingSession) -> Option<(&IcpScanRecord, usize, bool)> {
     let sim = session.sim();
     if !matches!(sim.source(), PoseSource::Icp | PoseSource::Plicp) {
         return None;
@@ -34,21 +35,19 @@ fn iteration_to_draw(session: &MappingSession) -> Option<(usize, usize)> {
         return None;
     }
     let i = shown.unwrap_or(record.iterations.len() - 1);
-    Some((i, record.iterations.len()))
+    Some((record, i, shown.is_some()))
 }
 
 /// Draws the current ICP iteration's correspondences: from each scan point
 /// (where the iteration started) to its nearest reference point, blue when the
 /// pair was kept, grey when gated or trimmed; the reference scan's points green.
 pub fn draw_correspondences(painter: &egui::Painter, t: &MapTransform, session: &MappingSession) {
-    let Some((i, _)) = iteration_to_draw(session) else {
+    let Some((record, i, _)) = iteration_to_draw(session) else {
         return;
     };
-    let sim = session.sim();
-    let Some((record, _)) = sim.icp_record() else {
-        return;
-    };
-    let reference = sim.input().scans[record.reference_scan].scan.points();
+    let reference = session.sim().input().scans[record.reference_scan]
+        .scan
+        .points();
     let world = |p: &Pose2, x: f64, y: f64| {
         let q = p.transform_point(&nalgebra::Vector2::new(x, y));
         t.xy(q.x, q.y)
@@ -78,12 +77,10 @@ pub fn draw_correspondences(painter: &egui::Painter, t: &MapTransform, session: 
 /// The ICP section of the explanation panel: the iteration shown, its numbers,
 /// and the error of every iteration of this match with the shown one marked.
 pub fn iteration_ui(ui: &mut egui::Ui, session: &MappingSession) {
-    let Some((i, of)) = iteration_to_draw(session) else {
+    let Some((record, i, stepping)) = iteration_to_draw(session) else {
         return;
     };
-    let Some((record, shown)) = session.sim().icp_record() else {
-        return;
-    };
+    let of = record.iterations.len();
     let it = &record.iterations[i];
     ui.separator();
     ui.strong(format!(
@@ -105,7 +102,7 @@ pub fn iteration_ui(ui: &mut egui::Ui, session: &MappingSession) {
             ""
         }
     ));
-    if shown.is_none() {
+    if !stepping {
         ui.label(
             "Tick \"ICP one iteration per phase\" and step phase by phase (.) to see the match \
              iteration by iteration.",
