@@ -112,7 +112,7 @@ pub struct MappingLesson {
     /// Replaying to this many scans after a change of pose source.
     catch_up: Option<usize>,
     /// Milliseconds each scan took (index = scan), as measured here.
-    scan_ms: Vec<f64>,
+    scan_ms: ScanTimes,
     /// The lesson's clock.
     pub time: TimeControl,
     /// What the map shows.
@@ -134,6 +134,33 @@ pub struct MappingLesson {
     /// A built-in map was chosen in place of a log or a loaded map: the next
     /// reset simulates anew.
     builtin_chosen: bool,
+}
+
+/// How long each scan took here: the sum of its phases' times, however they
+/// were stepped (phase by phase, a tick at once, or running).
+#[derive(Debug, Default)]
+struct ScanTimes {
+    /// Milliseconds per scan (index = scan; NaN where not measured).
+    ms: Vec<f64>,
+    /// The phases of the scan under way so far.
+    open: f64,
+}
+
+impl ScanTimes {
+    /// Runs `step` on the session and books its time to the scan under way;
+    /// a scan that finishes gets its total.
+    fn timed(&mut self, session: &mut MappingSession, step: impl FnOnce(&mut MappingSession)) {
+        let before = session.sim().scans_done();
+        let started = web_time::Instant::now();
+        step(session);
+        self.open += started.elapsed().as_secs_f64() * 1e3;
+        let after = session.sim().scans_done();
+        if after > before {
+            self.ms.resize(after, f64::NAN);
+            self.ms[after - 1] = self.open;
+            self.open = 0.0;
+        }
+    }
 }
 
 /// The lesson's start: the simulator's defaults.
@@ -202,7 +229,7 @@ impl MappingLesson {
             log_name: None,
             log_location: None,
             catch_up: None,
-            scan_ms: Vec::new(),
+            scan_ms: ScanTimes::default(),
             time: TimeControl::default(),
             view: MappingView::default(),
             canvas: MapView::default(),
@@ -332,7 +359,7 @@ impl MappingLesson {
         self.session = session;
         self.notices = notices;
         self.catch_up = catch_up.filter(|&n| n > 0);
-        self.scan_ms.clear();
+        self.scan_ms = ScanTimes::default();
         self.tiles.clear();
         if catch_up.is_none() {
             self.time.apply(TimeAction::Reset);
@@ -425,27 +452,15 @@ impl MappingLesson {
 
     /// Runs one phase (or catches up after a change of pose source).
     pub fn step_phase(&mut self) {
-        let before = self.session.sim().scans_done();
-        let started = web_time::Instant::now();
-        self.session.stepper_mut().step_phase();
-        self.record_time(before, started);
+        self.scan_ms.timed(&mut self.session, |s| {
+            s.stepper_mut().step_phase();
+        });
     }
 
     /// Finishes the scan, or runs a whole one.
     pub fn step_tick(&mut self) {
-        let before = self.session.sim().scans_done();
-        let started = web_time::Instant::now();
-        self.session.stepper_mut().step_tick();
-        self.record_time(before, started);
-    }
-
-    fn record_time(&mut self, before: usize, started: web_time::Instant) {
-        let after = self.session.sim().scans_done();
-        let ms = started.elapsed().as_secs_f64() * 1e3;
-        if after > before {
-            self.scan_ms.resize(after, f64::NAN);
-            self.scan_ms[after - 1] = ms;
-        }
+        self.scan_ms
+            .timed(&mut self.session, |s| s.stepper_mut().step_tick());
     }
 
     /// The built map as a ROS map (YAML and PGM), for download.
@@ -644,7 +659,7 @@ impl MappingLesson {
 
 impl crate::widgets::layout::LessonPanels for MappingLesson {
     fn plots_ui(&mut self, ui: &mut egui::Ui) {
-        plots::plots_ui(ui, &self.session, &self.scan_ms);
+        plots::plots_ui(ui, &self.session, &self.scan_ms.ms);
     }
 
     fn parameters_ui(&mut self, ui: &mut egui::Ui) {
@@ -743,6 +758,7 @@ impl Lesson for MappingLesson {
             TimeAction::StepTick => self.step_tick(),
             TimeAction::StepBack => {
                 self.catch_up = None;
+                self.scan_ms.open = 0.0;
                 self.session.stepper_mut().step_back();
             }
             TimeAction::Reset => {
@@ -797,27 +813,14 @@ impl Lesson for MappingLesson {
             self.time.running = false;
             return;
         }
-        let mut due = Vec::new();
-        {
-            let session = &mut self.session;
-            let scan_ms = &mut self.scan_ms;
-            lesson::advance_within_budget(&mut self.time, dt, || {
-                let before = session.sim().scans_done();
-                let started = web_time::Instant::now();
-                session.stepper_mut().step_phase();
-                let after = session.sim().scans_done();
-                if after > before {
-                    due.push((after - 1, started.elapsed().as_secs_f64() * 1e3));
-                }
-                !session.sim().is_mid_tick()
+        let session = &mut self.session;
+        let scan_ms = &mut self.scan_ms;
+        lesson::advance_within_budget(&mut self.time, dt, || {
+            scan_ms.timed(session, |s| {
+                s.stepper_mut().step_phase();
             });
-            for (k, ms) in due.drain(..) {
-                if scan_ms.len() <= k {
-                    scan_ms.resize(k + 1, f64::NAN);
-                }
-                scan_ms[k] = ms;
-            }
-        }
+            !session.sim().is_mid_tick()
+        });
     }
 
     fn wants_repaint(&self) -> bool {
@@ -864,7 +867,7 @@ impl Lesson for MappingLesson {
     }
 
     fn plot_series(&self) -> Vec<crate::export::PlotSeries> {
-        plots::series(&self.session, &self.scan_ms)
+        plots::series(&self.session, &self.scan_ms.ms)
     }
 
     fn take_request(&mut self) -> Option<LessonRequest> {
