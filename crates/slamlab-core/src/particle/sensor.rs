@@ -621,15 +621,29 @@ mod tests {
         }
     }
 
-    #[test]
-    fn amcl_aggregation_is_one_plus_the_sum_of_cubes() {
-        // amcl_laser.cpp LikelihoodFieldModel: p = 1 + Σ (z_hit e^{−d²/2σ²} +
-        // z_rand/z_max)³ over the hits; max-range readings skipped.
+    /// A 4 x 4 m free grid of 0.1 m cells with a wall along column 30, its
+    /// distance field, and three beams straight ahead: 2.0 m, 1.7 m and one at
+    /// max range (5 m).
+    fn wall_and_three_beams() -> (OccupancyGrid, DistanceField, Scan) {
         let mut g = OccupancyGrid::filled(40, 40, 0.1, Pose2::IDENTITY, Cell::Free).unwrap();
         for j in 0..40 {
             g.set(30, j, Cell::Occupied);
         }
         let field = DistanceField::new(&g, 2.0);
+        let scan = Scan {
+            angles: vec![0.0, 0.0, 0.0],
+            ranges: vec![2.0, 1.7, 5.0],
+            range_min: 0.0,
+            range_max: 5.0,
+        };
+        (g, field, scan)
+    }
+
+    #[test]
+    fn amcl_aggregation_is_one_plus_the_sum_of_cubes() {
+        // amcl_laser.cpp LikelihoodFieldModel: p = 1 + Σ (z_hit e^{−d²/2σ²} +
+        // z_rand/z_max)³ over the hits; max-range readings skipped.
+        let (g, field, scan) = wall_and_three_beams();
         let lf = LikelihoodFieldModel::default();
         let model = PreparedModel::new(
             MeasurementModel::LikelihoodField(lf),
@@ -637,12 +651,6 @@ mod tests {
             &field,
             5.0,
         );
-        let scan = Scan {
-            angles: vec![0.0, 0.0, 0.0],
-            ranges: vec![2.0, 1.7, 5.0],
-            range_min: 0.0,
-            range_max: 5.0,
-        };
         let beams = scan.subsample(0);
         let ends = beam_end_points(&scan, &beams);
         let pose = Pose2::new(1.05, 2.05, 0.0);
@@ -665,11 +673,7 @@ mod tests {
 
     #[test]
     fn likelihood_field_scores_end_points_and_skips_max_range() {
-        let mut g = OccupancyGrid::filled(40, 40, 0.1, Pose2::IDENTITY, Cell::Free).unwrap();
-        for j in 0..40 {
-            g.set(30, j, Cell::Occupied);
-        }
-        let field = DistanceField::new(&g, 2.0);
+        let (g, field, scan) = wall_and_three_beams();
         let lf = LikelihoodFieldModel::default();
         let model = PreparedModel::new(
             MeasurementModel::LikelihoodField(lf),
@@ -678,12 +682,6 @@ mod tests {
             5.0,
         );
         // From (1.05, 2.05) facing +x the wall's cell centres are at x = 3.05.
-        let scan = Scan {
-            angles: vec![0.0, 0.0, 0.0],
-            ranges: vec![2.0, 1.7, 5.0],
-            range_min: 0.0,
-            range_max: 5.0,
-        };
         let beams = scan.subsample(0);
         let ends = beam_end_points(&scan, &beams);
         assert_eq!(ends.len(), 2);
