@@ -940,13 +940,14 @@ impl crate::belief::ParticleBelief for Mcl {
 }
 
 #[cfg(test)]
-mod tests {
+pub(crate) mod tests {
     use super::*;
     use crate::grid::Cell;
     use crate::particle::sensor::BeamModel;
 
-    /// A 4 x 4 m room of 0.1 m cells with a wall all around and a pillar.
-    fn room() -> Arc<LocalizationMap> {
+    /// A 4 x 4 m room of 0.1 m cells with a wall all around and a pillar (also
+    /// the recovery filters' test room).
+    pub(crate) fn room() -> Arc<LocalizationMap> {
         let mut g = OccupancyGrid::filled(40, 40, 0.1, Pose2::IDENTITY, Cell::Free).unwrap();
         for k in 0..40 {
             g.set(k, 0, Cell::Occupied);
@@ -962,7 +963,8 @@ mod tests {
         Arc::new(LocalizationMap::new(g, 2.0).unwrap())
     }
 
-    fn scan_from(map: &LocalizationMap, pose: Pose2, beams: usize) -> Scan {
+    /// `beams` readings all around, raycast in `map` from `pose` (8 m range).
+    pub(crate) fn scan_from(map: &LocalizationMap, pose: Pose2, beams: usize) -> Scan {
         let angles: Vec<f64> = (0..beams)
             .map(|k| -std::f64::consts::PI + std::f64::consts::TAU * k as f64 / beams as f64)
             .collect();

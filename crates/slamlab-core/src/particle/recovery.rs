@@ -423,39 +423,12 @@ impl ParticleBelief for RecoveringMcl {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::grid::{Cell, OccupancyGrid};
 
-    /// A 4 x 4 m room of 0.1 m cells with a wall all around and a pillar.
-    fn room() -> Arc<LocalizationMap> {
-        let mut g = OccupancyGrid::filled(40, 40, 0.1, Pose2::IDENTITY, Cell::Free).unwrap();
-        for k in 0..40 {
-            g.set(k, 0, Cell::Occupied);
-            g.set(k, 39, Cell::Occupied);
-            g.set(0, k, Cell::Occupied);
-            g.set(39, k, Cell::Occupied);
-        }
-        for i in 25..30 {
-            for j in 8..12 {
-                g.set(i, j, Cell::Occupied);
-            }
-        }
-        Arc::new(LocalizationMap::new(g, 2.0).unwrap())
-    }
+    use crate::particle::mcl::tests::room;
 
+    /// 60 readings all around from `pose`.
     fn scan_from(map: &LocalizationMap, pose: Pose2) -> Scan {
-        let angles: Vec<f64> = (0..60)
-            .map(|k| -std::f64::consts::PI + std::f64::consts::TAU * k as f64 / 60.0)
-            .collect();
-        let ranges = angles
-            .iter()
-            .map(|a| map.grid().raycast(pose.x, pose.y, pose.theta + a, 8.0))
-            .collect();
-        Scan {
-            angles,
-            ranges,
-            range_min: 0.0,
-            range_max: 8.0,
-        }
+        crate::particle::mcl::tests::scan_from(map, pose, 60)
     }
 
     #[test]
