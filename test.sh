@@ -27,6 +27,10 @@ if ! command -v cargo >/dev/null && [[ -x "$HOME/.cargo/bin/cargo" ]]; then
 fi
 # The egui UI tests render with wgpu; without a GPU they use Mesa's software OpenGL.
 export WGPU_BACKEND="${WGPU_BACKEND:-gl}"
+# A fresh clone gains nothing from incremental compilation, and its files take gigabytes.
+if [[ -n "${CI:-}" ]]; then
+	export CARGO_INCREMENTAL="${CARGO_INCREMENTAL:-0}"
+fi
 
 started=$SECONDS
 summary=()
@@ -37,6 +41,8 @@ print_summary() {
 	local line
 	for line in "${summary[@]}"; do echo "  $line"; done
 	echo "  total: $((SECONDS - started)) s"
+	# The build directory's size: the tests' binaries are the largest part of it.
+	echo "  target: $(du -sh "${CARGO_TARGET_DIR:-$repo_root/target}" 2>/dev/null | cut -f1) used, $(df -h --output=avail . 2>/dev/null | tail -1 | tr -d ' ') free on this disk"
 }
 
 # What a step's output says about its tests (for the summary): cargo test's
