@@ -711,6 +711,23 @@ impl ProbabilityGrid {
             + self.tiles.len() * (std::mem::size_of::<Option<Arc<Tile>>>() + 8)
     }
 
+    /// Bytes of cell storage held by a set of grids that may share tiles
+    /// (grid FastSLAM's particles): each tile allocation counted once, plus
+    /// every grid's own table of tile slots. This is what the set really
+    /// occupies, where summing [`memory_bytes`](Self::memory_bytes) would
+    /// count a shared tile once per grid.
+    pub fn distinct_memory_bytes<'a>(
+        grids: impl IntoIterator<Item = &'a ProbabilityGrid>,
+    ) -> usize {
+        let mut seen: std::collections::HashSet<*const Tile> = std::collections::HashSet::new();
+        let mut slots = 0;
+        for grid in grids {
+            slots += grid.tiles.len() * (std::mem::size_of::<Option<Arc<Tile>>>() + 8);
+            seen.extend(grid.tiles.iter().flatten().map(Arc::as_ptr));
+        }
+        seen.len() * std::mem::size_of::<Tile>() + slots
+    }
+
     /// Tiles this grid shares with `other` (the same allocation), for
     /// copy-on-write accounting.
     pub fn shared_tiles_with(&self, other: &ProbabilityGrid) -> usize {

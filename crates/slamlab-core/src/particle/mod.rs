@@ -8,6 +8,7 @@
 
 pub mod cluster;
 pub mod fastslam;
+pub mod grid_fastslam;
 pub mod lab;
 pub mod mcl;
 pub mod recovery;
@@ -19,6 +20,10 @@ pub use cluster::{ClusterBins, PoseEstimate, heaviest_cluster};
 pub use fastslam::{
     FastSlam, FastSlamConfig, FastSlamError, FastSlamNoise, FastSlamVersion, LandmarkEkf,
     LandmarkObservation, ParticleUpdateReport, ParticleView, ResamplePolicy,
+};
+pub use grid_fastslam::{
+    GridFastSlam, GridFastSlamConfig, GridParticle, GridUpdateReport, MAX_GRID_PARTICLES, PathNode,
+    Proposal,
 };
 pub use lab::{CopyCountStats, ResamplingLab, WeightPreset, copy_counts, sanitize_weights};
 pub use mcl::{

@@ -754,4 +754,4 @@ pub fn align_scans(
 }
 
 #[cfg(test)]
-mod tests;
+pub(crate) mod tests;

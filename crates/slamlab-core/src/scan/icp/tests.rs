@@ -5,11 +5,11 @@ use rand::SeedableRng;
 use rand_chacha::ChaCha8Rng;
 use std::f64::consts::PI;
 
-type Segment = (Point2, Point2);
+pub(crate) type Segment = (Point2, Point2);
 
 /// A lidar on line segments: `beams` beams over 360° from `pose`, exact ranges
 /// (plus Gaussian noise of `noise` m if given), `range_max` where nothing is hit.
-fn ray_cast(
+pub(crate) fn ray_cast(
     walls: &[Segment],
     pose: Pose2,
     beams: usize,
@@ -53,7 +53,7 @@ fn ray_cast(
     }
 }
 
-fn rectangle(x0: f64, y0: f64, x1: f64, y1: f64) -> Vec<Segment> {
+pub(crate) fn rectangle(x0: f64, y0: f64, x1: f64, y1: f64) -> Vec<Segment> {
     vec![
         ([x0, y0], [x1, y0]),
         ([x1, y0], [x1, y1]),
@@ -63,7 +63,7 @@ fn rectangle(x0: f64, y0: f64, x1: f64, y1: f64) -> Vec<Segment> {
 }
 
 /// A 6 m × 4 m room with a cupboard and a pillar.
-fn room() -> Vec<Segment> {
+pub(crate) fn room() -> Vec<Segment> {
     let mut walls = rectangle(-3.0, -2.0, 3.0, 2.0);
     walls.extend(rectangle(1.8, 1.2, 2.6, 2.0));
     walls.extend(rectangle(-1.2, -0.9, -0.8, -0.5));
