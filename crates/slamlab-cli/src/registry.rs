@@ -29,6 +29,7 @@ pub static EXPERIMENTS: &[&dyn Experiment] = &[
     &experiments::ekf_vs_ukf::EkfVsUkf,
     &experiments::consistency::Consistency,
     &experiments::fastslam::FastSlam,
+    &experiments::grid_fastslam::GridFastSlam,
     &experiments::resampling::Resampling,
     &experiments::fusion::Fusion,
     &experiments::kidnap::Kidnap,

@@ -14,6 +14,7 @@ pub mod filters_lab;
 pub mod fusion;
 pub mod graph_io;
 pub mod grid;
+pub mod grid_fastslam;
 pub mod ideal_ekf;
 pub mod kidnap_session;
 pub mod landmark_params;

@@ -5,6 +5,7 @@ pub mod consistency;
 pub mod ekf_vs_ukf;
 pub mod fastslam;
 pub mod fusion;
+pub mod grid_fastslam;
 pub mod kidnap;
 pub mod pose_graph;
 pub mod resampling;

@@ -1,0 +1,161 @@
+//! `slamlab experiment grid-fastslam`: grid FastSLAM (gmapping) with the
+//! odometry and the improved proposal over particle counts, on a simulated
+//! drive through a grid map.
+//!
+//! ```text
+//! slamlab experiment grid-fastslam --map office --particles 5,30,100 \
+//!     --proposal odometry,scan-match --trials 5 --steps 3000 --seed 1 --json
+//! ```
+
+use super::fastslam::parse_counts;
+use crate::command::Experiment;
+use crate::map::{map_arg, read_map};
+use crate::output::{Output, progress_bar};
+use anyhow::{Result, bail};
+use clap::{Arg, ArgMatches, Command};
+use slamlab_core::particle::{GridFastSlamConfig, MAX_GRID_PARTICLES, Proposal};
+use slamlab_sim::grid_fastslam::{GridExperimentPlan, grid_fastslam_experiment};
+use std::io::Write;
+use std::sync::Arc;
+
+/// Grid FastSLAM's errors against its particle count and proposal.
+pub struct GridFastSlam;
+
+impl Experiment for GridFastSlam {
+    fn name(&self) -> &'static str {
+        "grid-fastslam"
+    }
+
+    fn about(&self) -> &'static str {
+        "grid FastSLAM (gmapping): trajectory RMSE, map agreement, resamplings, time and memory per particle count and proposal"
+    }
+
+    fn command(&self) -> Command {
+        Command::new(self.name())
+            .arg(map_arg())
+            .arg(
+                Arg::new("particles")
+                    .long("particles")
+                    .value_name("LIST")
+                    .default_value("5,30")
+                    .help(
+                        "comma-separated particle counts (1 .. 1000; each particle carries a map)",
+                    ),
+            )
+            .arg(
+                Arg::new("proposal")
+                    .long("proposal")
+                    .value_name("LIST")
+                    .default_value("odometry,scan-match")
+                    .help("comma-separated proposals: odometry, scan-match"),
+            )
+            .arg(
+                Arg::new("trials")
+                    .long("trials")
+                    .value_parser(clap::value_parser!(u64).range(1..=1000))
+                    .default_value("5")
+                    .help("simulated drives; trial i uses seed + i"),
+            )
+            .arg(
+                Arg::new("steps")
+                    .long("steps")
+                    .value_parser(clap::value_parser!(u64).range(1..=1_000_000))
+                    .default_value("3000")
+                    .help("scans per drive (0.1 s apart)"),
+            )
+            .arg(
+                Arg::new("seed")
+                    .long("seed")
+                    .value_parser(clap::value_parser!(u64))
+                    .default_value("1")
+                    .help("the first trial's seed"),
+            )
+    }
+
+    fn run(&self, m: &ArgMatches, out: &mut Output) -> Result<()> {
+        let spec = m.get_one::<String>("map").map_or("office", String::as_str);
+        let (grid, name) = read_map(spec, None)?;
+        let counts = parse_counts(
+            m.get_one::<String>("particles")
+                .map_or("5,30", String::as_str),
+        )?;
+        if let Some(n) = counts.iter().find(|n| **n > MAX_GRID_PARTICLES) {
+            bail!(
+                "--particles: {n} is more than the {MAX_GRID_PARTICLES} grid FastSLAM runs (each particle carries a map)"
+            );
+        }
+        let mut proposals = Vec::new();
+        for part in m
+            .get_one::<String>("proposal")
+            .map_or("odometry,scan-match", String::as_str)
+            .split(',')
+            .map(str::trim)
+            .filter(|p| !p.is_empty())
+        {
+            let Some(p) = Proposal::from_name(part) else {
+                bail!("--proposal: '{part}' is not a proposal (odometry, scan-match)");
+            };
+            proposals.push(p);
+        }
+        if proposals.is_empty() {
+            bail!("--proposal: give at least one of odometry, scan-match");
+        }
+        let trials = m.get_one::<u64>("trials").copied().unwrap_or(5) as usize;
+        let steps = m.get_one::<u64>("steps").copied().unwrap_or(3000) as usize;
+        let seed = m.get_one::<u64>("seed").copied().unwrap_or(1);
+        let result = grid_fastslam_experiment(
+            (Arc::new(grid), name),
+            GridFastSlamConfig::default(),
+            &GridExperimentPlan {
+                counts,
+                proposals,
+                trials,
+                steps,
+                seed,
+            },
+            progress_bar("grid-fastslam"),
+        )
+        .map_err(anyhow::Error::msg)?;
+        if out.print_json(&result)? {
+            return Ok(());
+        }
+        writeln!(
+            out,
+            "SLAM Lab experiment grid-fastslam: {} trials of {steps} scans in the {} map from seed {seed}",
+            trials, result.map
+        )?;
+        writeln!(out)?;
+        writeln!(
+            out,
+            "{:>9} {:>11} {:>22} {:>14} {:>12} {:>10} {:>10}",
+            "particles",
+            "proposal",
+            "trajectory RMSE (m)",
+            "map agreement",
+            "resamplings",
+            "ms/run",
+            "peak MB"
+        )?;
+        for r in &result.results {
+            writeln!(
+                out,
+                "{:>9} {:>11} {:>10.3} (p90 {:>5.3}) {:>14.3} {:>5.1} of {:<5.0} {:>10.0} {:>10.1}",
+                r.particles,
+                r.proposal,
+                r.trajectory_rmse.median,
+                r.trajectory_rmse.p90,
+                r.map_agreement.median,
+                r.resamplings,
+                r.updates,
+                r.time_ms,
+                r.memory_mb
+            )?;
+        }
+        writeln!(out)?;
+        writeln!(
+            out,
+            "medians over trials; the best particle's path at its updates against the truth, its map against the true map."
+        )?;
+        Ok(())
+    }
+}
