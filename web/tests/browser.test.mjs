@@ -719,6 +719,11 @@ async function main() {
         metrics.filters_drag_frame_cpu_ms_median = t.cpu_ms_median;
         metrics.filters_drag_frame_cpu_ms_p95 = t.cpu_ms_p95;
         metrics.filters_drag_frames_per_second = Number((1000 / t.interval_ms_median).toFixed(1));
+        // Frames whose prior did not move run no computation, so the median mixes both
+        // kinds: the frames drawn and the computations run say how many of each.
+        metrics.filters_drag_frames = during.frames - s0.frames;
+        metrics.filters_drag_computations = during.computations - s0.computations;
+        metrics.filters_drag_last_compute_ms = Number(during.compute_ms.toFixed(2));
         const headless = JSON.parse(
           await p.evaluate((q) => window.slamlab.slamlab_test_headless(q, 0), "lesson=filters&samples=20000&seed=1"),
         );
@@ -730,7 +735,9 @@ async function main() {
         return (
           `${MOVES} moves in ${seconds.toFixed(1)} s; frame CPU median ${t.cpu_ms_median.toFixed(2)} ms ` +
           `(p95 ${t.cpu_ms_p95?.toFixed(2)}), ` +
-          `${metrics.filters_drag_frames_per_second} frames/s; headless ${table.join(" ")}`
+          `${metrics.filters_drag_frames_per_second} frames/s, ${metrics.filters_drag_frames} frames and ` +
+          `${metrics.filters_drag_computations} computations (the last ${metrics.filters_drag_last_compute_ms} ms); ` +
+          `headless ${table.join(" ")}`
         );
       } finally {
         await context.close();

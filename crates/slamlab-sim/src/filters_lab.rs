@@ -511,14 +511,59 @@ pub struct OneStep {
 /// Runs the one-step comparison. Every stream is seeded from `scenario.seed`, so
 /// the same scenario gives the same numbers natively and in the browser.
 pub fn one_step(scenario: &FiltersScenario) -> Result<OneStep, OneStepError> {
+    one_step_with(scenario, &mut Draws::default())
+}
+
+/// The standard normal draws behind the samples and the particles, kept between
+/// recomputations. They depend only on the seed and the counts, not on the prior
+/// or the function, so a student dragging the prior needs only `x̄ + L n`, `f`
+/// and the moments of each sample, not 200,000 new draws
+/// ([`one_step::sample_from_normals`]).
+#[derive(Clone, Debug, Default)]
+pub struct Draws {
+    samples: Stream,
+    particles: Stream,
+}
+
+/// One stream's first draws. A seeded stream's first `n` draws are the same
+/// whatever is drawn after them, so fewer samples use the front of the kept ones.
+#[derive(Clone, Debug, Default)]
+struct Stream {
+    seed: u64,
+    normals: Vec<Vector2<f64>>,
+}
+
+impl Stream {
+    /// The first `count` draws of the stream seeded with `seed`, drawn only when
+    /// the seed changed or more are asked for than are kept.
+    fn first(&mut self, seed: u64, count: usize) -> &[Vector2<f64>] {
+        if seed != self.seed || count > self.normals.len() {
+            let mut rng = ChaCha8Rng::seed_from_u64(seed);
+            self.normals = one_step::standard_normals(count, &mut rng);
+            self.seed = seed;
+        }
+        &self.normals[..count]
+    }
+}
+
+/// [`one_step`] with the draws kept in `draws` (drawn first when the seed or a
+/// count changed): the same result, bit for bit, without drawing again.
+pub fn one_step_with(
+    scenario: &FiltersScenario,
+    draws: &mut Draws,
+) -> Result<OneStep, OneStepError> {
     let prior = scenario.prior();
     let function = scenario.step_function();
     let ekf = one_step::linearize(&prior, &function)?;
     let ukf = one_step::unscented(&prior, &function, &scenario.unscented())?;
-    let mut rng = ChaCha8Rng::seed_from_u64(scenario.seed ^ SAMPLES_STREAM);
-    let truth = one_step::sample(&prior, &function, scenario.samples, "samples", &mut rng)?;
-    let mut rng = ChaCha8Rng::seed_from_u64(scenario.seed ^ PARTICLES_STREAM);
-    let particles = one_step::sample(&prior, &function, scenario.particles, "particles", &mut rng)?;
+    let normals = draws
+        .samples
+        .first(scenario.seed ^ SAMPLES_STREAM, scenario.samples);
+    let truth = one_step::sample_from_normals(&prior, &function, normals, "samples")?;
+    let normals = draws
+        .particles
+        .first(scenario.seed ^ PARTICLES_STREAM, scenario.particles);
+    let particles = one_step::sample_from_normals(&prior, &function, normals, "particles")?;
     let rows = [
         ("ekf", ekf.gaussian),
         ("ukf", ukf.gaussian),
@@ -831,6 +876,81 @@ mod tests {
             ukf.covariance_error < ekf.covariance_error,
             "{ukf:?} {ekf:?}"
         );
+    }
+
+    /// Every number of a one-step result that the lesson shows, as bits.
+    fn bits(r: &OneStep) -> Vec<u64> {
+        let cloud = |c: &Cloud| {
+            c.points
+                .iter()
+                .flat_map(|p| p.iter().copied())
+                .chain(c.moments.mean.iter().copied())
+                .chain(c.moments.covariance.iter().copied())
+                .collect::<Vec<f64>>()
+        };
+        let mut v = cloud(&r.truth);
+        v.extend(cloud(&r.particles));
+        for row in &r.rows {
+            v.extend(
+                row.gaussian
+                    .mean
+                    .iter()
+                    .chain(row.gaussian.covariance.iter()),
+            );
+            v.extend([row.comparison.mean_error, row.comparison.covariance_error]);
+            v.extend(row.comparison.kl_divergence);
+        }
+        v.into_iter().map(f64::to_bits).collect()
+    }
+
+    #[test]
+    fn kept_draws_give_the_comparison_of_drawing_afresh_bit_for_bit() {
+        // A drag of the prior, then the changes that must draw again (seed, more
+        // samples, more particles) or may use the front of the kept draws (fewer),
+        // and a refused count in between: each equals a fresh `one_step`.
+        let base = FiltersScenario {
+            samples: 20_000,
+            ..Default::default()
+        };
+        let mut steps = Vec::new();
+        for k in 0..5 {
+            let d = 0.01 * f64::from(k);
+            steps.push(FiltersScenario {
+                mean: [base.mean[0] + d, base.mean[1] - 0.5 * d],
+                rho: 0.1 * f64::from(k),
+                ..base.clone()
+            });
+        }
+        steps.push(FiltersScenario {
+            seed: 2,
+            ..base.clone()
+        });
+        steps.push(FiltersScenario {
+            seed: 2,
+            samples: 5_000,
+            ..base.clone()
+        });
+        steps.push(FiltersScenario {
+            seed: 2,
+            samples: 30_000,
+            particles: 0,
+            ..base.clone()
+        });
+        steps.push(FiltersScenario {
+            seed: 2,
+            samples: 30_000,
+            particles: 500,
+            function: FunctionKind::Motion,
+            ..base.clone()
+        });
+        let mut draws = Draws::default();
+        for s in &steps {
+            match (one_step_with(s, &mut draws), one_step(s)) {
+                (Ok(kept), Ok(fresh)) => assert_eq!(bits(&kept), bits(&fresh), "{s:?}"),
+                (kept, fresh) => assert_eq!(kept.err(), fresh.err(), "{s:?}"),
+            }
+        }
+        assert!(one_step_with(&steps[7], &mut draws).is_err());
     }
 
     #[test]

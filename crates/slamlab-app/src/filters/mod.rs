@@ -22,7 +22,7 @@ use crate::widgets::map_canvas::MapView;
 use crate::widgets::params_panel::{self, PendingParams};
 use serde::{Deserialize, Serialize};
 use slamlab_sim::filters_lab::{
-    CorridorSim, FUNCTION_NAMES, FiltersScenario, FunctionKind, OneStep, one_step,
+    CorridorSim, Draws, FUNCTION_NAMES, FiltersScenario, FunctionKind, OneStep, one_step_with,
 };
 use slamlab_sim::params;
 use slamlab_sim::stepper::Stepper;
@@ -87,6 +87,8 @@ pub struct FiltersLesson {
     pending: PendingParams<FiltersScenario>,
     /// The last valid one-step comparison.
     result: Option<OneStep>,
+    /// The samples' and particles' standard normal draws, kept while the prior moves.
+    draws: Draws,
     /// Why the latest belief or setting was refused (the last valid one is kept).
     note: Option<String>,
     corridor: Stepper<CorridorSim>,
@@ -104,6 +106,8 @@ pub struct FiltersLesson {
     marginal: (Vec<[f64; 2]>, [f64; 2]),
     /// How long the last one-step computation took, milliseconds.
     last_compute_ms: f64,
+    /// One-step computations so far (a frame whose prior did not change runs none).
+    computations: u64,
 }
 
 /// Opens the lesson from the URL's pairs, with what it stored last time.
@@ -153,6 +157,7 @@ impl FiltersLesson {
             corridor: Stepper::new(CorridorSim::new(scenario.clone()), ()),
             scenario,
             result: None,
+            draws: Draws::default(),
             note: None,
             time,
             view: FiltersView::default(),
@@ -164,6 +169,7 @@ impl FiltersLesson {
             drag: one_step::DragState::default(),
             marginal: (Vec::new(), [0.0, 1.0]),
             last_compute_ms: 0.0,
+            computations: 0,
         };
         lesson.recompute();
         if lesson.result.is_none() {
@@ -233,7 +239,7 @@ impl FiltersLesson {
     /// last valid result and says why.
     fn recompute(&mut self) {
         let start = web_time::Instant::now();
-        match one_step(&self.scenario) {
+        match one_step_with(&self.scenario, &mut self.draws) {
             Ok(r) => {
                 self.marginal = marginal::histogram(&r);
                 self.result = Some(r);
@@ -243,12 +249,17 @@ impl FiltersLesson {
             Err(e) => self.note = Some(format!("{e}. The last valid belief is kept.")),
         }
         self.last_compute_ms = start.elapsed().as_secs_f64() * 1e3;
+        self.computations += 1;
     }
 
     /// Applies the panel's parameters: a new function refits the views, a changed
     /// corridor parameter replays the corridor to the same step.
     fn apply_pending(&mut self) {
         let new = self.pending.scenario.clone();
+        if new == self.scenario && self.note.is_none() && self.result.is_some() {
+            // Nothing changed (a held handle that did not move): the result stands.
+            return;
+        }
         let function_changed = new.function != self.scenario.function;
         let corridor_changed = corridor_part(&new) != corridor_part(&self.scenario);
         let last_valid = std::mem::replace(&mut self.scenario, new);
@@ -635,6 +646,8 @@ impl Lesson for FiltersLesson {
                 serde_json::json!({ "lambda": w.lambda, "mean0": w.mean0, "cov0": w.cov0, "other": w.other })
             }),
             "density_inside": self.density.inside,
+            "compute_ms": self.last_compute_ms,
+            "computations": self.computations,
             "results": rows,
             "corridor": {
                 "histogram_mean": sim.histogram().mean(),

@@ -428,6 +428,11 @@ pub fn moments(points: &[Vector2<f64>]) -> Option<Gaussian2> {
 /// them through `f` and takes their moments: the particle filter's prediction
 /// (thesis `000` Sec. 2.3, Algorithm 5 line 4) and, with many samples, the
 /// reference the Gaussians are measured against. `what` names them in errors.
+///
+/// The same as [`standard_normals`] followed by [`sample_from_normals`], which
+/// is how it is written: a caller that keeps the draws (they depend only on the
+/// rng and the count, not on the prior or `f`) moves the prior without drawing
+/// again and gets the same cloud, bit for bit.
 pub fn sample<R: Rng + ?Sized>(
     prior: &Gaussian2,
     f: &StepFunction,
@@ -435,14 +440,42 @@ pub fn sample<R: Rng + ?Sized>(
     what: &'static str,
     rng: &mut R,
 ) -> Result<Cloud, OneStepError> {
+    // Refused before anything is drawn, so the rng is untouched.
+    prior.factor()?;
+    if count < 2 {
+        return Err(OneStepError::TooFewSamples { what, count });
+    }
+    sample_from_normals(prior, f, &standard_normals(count, rng), what)
+}
+
+/// `count` draws `n ~ N(0, I)` in the plane: two standard normals each, first
+/// component first, in the order [`sample`] draws them.
+pub fn standard_normals<R: Rng + ?Sized>(count: usize, rng: &mut R) -> Vec<Vector2<f64>> {
+    (0..count)
+        .map(|_| {
+            let n1 = standard_normal(rng);
+            Vector2::new(n1, standard_normal(rng))
+        })
+        .collect()
+}
+
+/// [`sample`] on draws already made: each `n` of `normals` becomes
+/// `x = x̄ + L n` (`L` the prior's Cholesky factor), pushed through `f`; then the
+/// moments of the results.
+pub fn sample_from_normals(
+    prior: &Gaussian2,
+    f: &StepFunction,
+    normals: &[Vector2<f64>],
+    what: &'static str,
+) -> Result<Cloud, OneStepError> {
     let l = prior.factor()?;
+    let count = normals.len();
     if count < 2 {
         return Err(OneStepError::TooFewSamples { what, count });
     }
     let mut points = Vec::with_capacity(count);
     let mut bad = 0;
-    for _ in 0..count {
-        let n = Vector2::new(standard_normal(rng), standard_normal(rng));
+    for n in normals {
         let y = f.eval(&(prior.mean + l * n));
         if y.iter().all(|v| v.is_finite()) {
             points.push(y);
@@ -522,6 +555,63 @@ mod tests {
         let c = compare(&ekf.gaussian, &cloud.moments);
         assert!(c.covariance_error < 0.02, "{c:?}");
         assert!(c.kl_divergence.unwrap() < 1e-3, "{c:?}");
+    }
+
+    /// Every coordinate of `cloud`'s points and moments, as bits.
+    fn bits(cloud: &Cloud) -> Vec<u64> {
+        cloud
+            .points
+            .iter()
+            .flat_map(|p| p.iter())
+            .chain(cloud.moments.mean.iter())
+            .chain(cloud.moments.covariance.iter())
+            .map(|v| v.to_bits())
+            .collect()
+    }
+
+    #[test]
+    fn kept_draws_give_the_cloud_of_drawing_afresh_bit_for_bit() {
+        let functions = [
+            StepFunction::Polar,
+            StepFunction::RangeBearing,
+            StepFunction::Motion { dt: 1.0 },
+            StepFunction::Quadratic { c: 0.5 },
+            StepFunction::Exponential { c: 0.5 },
+        ];
+        let priors = [
+            Gaussian2::from_std([1.0, 0.0], [0.1, 30f64.to_radians()], 0.0),
+            Gaussian2::from_std([2.0, 0.5], [0.6, 0.6], -0.3),
+            Gaussian2::from_std([1.05, 0.01], [0.2, 0.4], 0.7),
+        ];
+        // Drawn once, used for every prior and function (as the lesson does while
+        // the student drags the prior).
+        let normals = standard_normals(5_000, &mut rng(9));
+        for f in &functions {
+            for prior in &priors {
+                let fresh = sample(prior, f, 5_000, "samples", &mut rng(9)).unwrap();
+                let kept = sample_from_normals(prior, f, &normals, "samples").unwrap();
+                assert_eq!(bits(&kept), bits(&fresh), "{f:?} {prior:?}");
+                // The first draws of a longer run are the draws of a shorter one.
+                let fewer = sample(prior, f, 300, "samples", &mut rng(9)).unwrap();
+                let front = sample_from_normals(prior, f, &normals[..300], "samples").unwrap();
+                assert_eq!(bits(&front), bits(&fewer), "{f:?} {prior:?}");
+            }
+        }
+        // The same refusals, and a refused prior leaves the rng untouched.
+        let singular = Gaussian2::from_std([1.0, 0.0], [0.1, 0.2], 1.0);
+        let mut r = rng(9);
+        assert!(matches!(
+            sample(&singular, &StepFunction::Polar, 10, "samples", &mut r),
+            Err(OneStepError::NotPositiveDefinite { .. })
+        ));
+        assert_eq!(standard_normals(3, &mut r), normals[..3]);
+        assert_eq!(
+            sample_from_normals(&priors[0], &StepFunction::Polar, &normals[..1], "particles"),
+            Err(OneStepError::TooFewSamples {
+                what: "particles",
+                count: 1
+            })
+        );
     }
 
     #[test]
