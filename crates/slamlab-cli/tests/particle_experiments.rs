@@ -112,6 +112,43 @@ fn resampling_reports_every_method_on_every_preset() {
 }
 
 #[test]
+fn grid_fastslam_reports_one_row_per_particle_count_and_proposal() {
+    let v = run_json(&[
+        "experiment",
+        "grid-fastslam",
+        "--map",
+        "maze",
+        "--particles",
+        "2",
+        "--proposal",
+        "odometry,scan-match",
+        "--trials",
+        "1",
+        "--steps",
+        "150",
+        "--json",
+    ]);
+    assert_eq!(v["experiment"], "grid-fastslam");
+    let results = v["results"].as_array().unwrap();
+    assert_eq!(results.len(), 2);
+    for (r, proposal) in results.iter().zip(["odometry", "scan-match"]) {
+        assert_eq!(r["particles"], 2);
+        assert_eq!(r["proposal"], proposal);
+        let rmse = r["trajectory_rmse"]["median"].as_f64().unwrap();
+        assert!(
+            rmse.is_finite()
+                && rmse >= 0.0
+                && rmse <= r["trajectory_rmse"]["p90"].as_f64().unwrap()
+        );
+        let agreement = r["map_agreement"]["median"].as_f64().unwrap();
+        assert!(agreement > 0.5 && agreement <= 1.0, "{agreement}");
+        for key in ["resamplings", "time_ms", "memory_mb"] {
+            assert!(r[key].as_f64().unwrap() >= 0.0, "{key}");
+        }
+    }
+}
+
+#[test]
 fn bad_input_is_refused_with_a_message() {
     for (args, expected) in [
         (
@@ -125,6 +162,14 @@ fn bad_input_is_refused_with_a_message() {
         (
             vec!["experiment", "fastslam", "--method", "all"],
             "does not belong",
+        ),
+        (
+            vec!["experiment", "grid-fastslam", "--particles", "5000"],
+            "each particle carries a map",
+        ),
+        (
+            vec!["experiment", "grid-fastslam", "--proposal", "fastslam2"],
+            "not a proposal",
         ),
         (
             vec!["experiment", "resampling", "--method", "systematic"],

@@ -134,6 +134,8 @@ pub struct GridExperimentRow {
 /// The experiment's result.
 #[derive(Clone, Debug, PartialEq, Serialize)]
 pub struct GridExperiment {
+    /// `"grid-fastslam"`.
+    pub experiment: &'static str,
     /// The map the robot drove in.
     pub map: String,
     /// Scans per trial.
@@ -234,6 +236,7 @@ pub fn grid_fastslam_experiment(
         }
     }
     Ok(GridExperiment {
+        experiment: "grid-fastslam",
         map: name,
         steps,
         trials,

@@ -5,17 +5,27 @@
 //! ```text
 //! slamlab experiment grid-fastslam --map office --particles 5,30,100 \
 //!     --proposal odometry,scan-match --trials 5 --steps 3000 --seed 1 --json
+//! slamlab experiment grid-fastslam --log intel.clf.bz2 --particles 30 \
+//!     --proposal scan-match --map-out intel.yaml
 //! ```
+//!
+//! With `--log` it runs once per particle count and proposal over a CARMEN
+//! log instead (no truth: time, resamplings and memory), and `--map-out`
+//! writes the best particle's map of the last run.
 
 use super::fastslam::parse_counts;
 use crate::command::Experiment;
 use crate::map::{map_arg, read_map};
 use crate::output::{Output, progress_bar};
-use anyhow::{Result, bail};
+use anyhow::{Context, Result, bail};
 use clap::{Arg, ArgMatches, Command};
 use slamlab_core::particle::{GridFastSlamConfig, MAX_GRID_PARTICLES, Proposal};
+use slamlab_sim::grid_fastslam::run_grid_fastslam;
 use slamlab_sim::grid_fastslam::{GridExperimentPlan, grid_fastslam_experiment};
+use slamlab_sim::laser_log::LaserLog;
+use slamlab_sim::mapping::{MappingScenario, log_input};
 use std::io::Write;
+use std::path::Path;
 use std::sync::Arc;
 
 /// Grid FastSLAM's errors against its particle count and proposal.
@@ -63,6 +73,15 @@ impl Experiment for GridFastSlam {
                     .default_value("3000")
                     .help("scans per drive (0.1 s apart)"),
             )
+            .arg(Arg::new("log").long("log").value_name("FILE").help(
+                "run over a CARMEN laser log (plain, .gz or .bz2) instead of simulated drives",
+            ))
+            .arg(
+                Arg::new("map-out")
+                    .long("map-out")
+                    .value_name("YAML")
+                    .help("with --log: write the best particle's map as a ROS map (YAML and PGM)"),
+            )
             .arg(
                 Arg::new("seed")
                     .long("seed")
@@ -99,6 +118,14 @@ impl Experiment for GridFastSlam {
         }
         if proposals.is_empty() {
             bail!("--proposal: give at least one of odometry, scan-match");
+        }
+        if let Some(log) = m.get_one::<String>("log") {
+            return run_log(Path::new(log), &counts, &proposals, m, out);
+        }
+        if m.get_one::<String>("map-out").is_some() {
+            bail!(
+                "--map-out writes the map of a --log run; a simulated drive's maps are not written"
+            );
         }
         let trials = m.get_one::<u64>("trials").copied().unwrap_or(5) as usize;
         let steps = m.get_one::<u64>("steps").copied().unwrap_or(3000) as usize;
@@ -158,4 +185,83 @@ impl Experiment for GridFastSlam {
         )?;
         Ok(())
     }
+}
+
+/// `--log`: one run per particle count and proposal over a laser log.
+fn run_log(
+    path: &Path,
+    counts: &[usize],
+    proposals: &[Proposal],
+    m: &ArgMatches,
+    out: &mut Output,
+) -> Result<()> {
+    let log = LaserLog::read_file(path).with_context(|| format!("reading {}", path.display()))?;
+    let name = path.file_name().map_or(path.display().to_string(), |n| {
+        n.to_string_lossy().into_owned()
+    });
+    let input = log_input(&log, &name);
+    if input.scans.is_empty() {
+        bail!("{name} has no laser scans");
+    }
+    let seed = m.get_one::<u64>("seed").copied().unwrap_or(1);
+    let insert = MappingScenario::default().insert_params();
+    let mut rows = Vec::new();
+    let mut last = None;
+    for &particles in counts {
+        for &proposal in proposals {
+            let config = GridFastSlamConfig {
+                particles,
+                proposal,
+                ..GridFastSlamConfig::default()
+            };
+            let (filter, summary) = run_grid_fastslam(&input, config, insert, seed);
+            rows.push(serde_json::json!({
+                "particles": particles,
+                "proposal": proposal.name(),
+                "scans": summary.scans,
+                "updates": summary.updates,
+                "resamplings": summary.resamplings,
+                "fallbacks": summary.fallbacks,
+                "time_ms": summary.time_ms,
+                "real_time_factor": input.duration() * 1e3 / summary.time_ms.max(1e-9),
+                "memory_mb": summary.peak_memory_bytes as f64 / 1e6,
+            }));
+            last = Some(filter);
+        }
+    }
+    if let (Some(path), Some(filter)) = (m.get_one::<String>("map-out"), &last)
+        && let Some(best) = filter.best()
+    {
+        crate::lessons::mapping::write_map(&best.map, Path::new(path))?;
+    }
+    if out.print_json(&serde_json::json!({
+        "experiment": "grid-fastslam",
+        "log": name,
+        "duration_s": input.duration(),
+        "seed": seed,
+        "results": rows,
+    }))? {
+        return Ok(());
+    }
+    writeln!(
+        out,
+        "SLAM Lab experiment grid-fastslam: {name}, {} scans ({:.0} s of data), seed {seed}",
+        input.scans.len(),
+        input.duration()
+    )?;
+    writeln!(out)?;
+    for r in &rows {
+        writeln!(
+            out,
+            "{:>4} particles, {:<10} {:>5} updates, {:>4} resamplings, {:>8.0} ms ({:.1}x real time), peak {:.1} MB",
+            r["particles"],
+            r["proposal"].as_str().unwrap_or(""),
+            r["updates"],
+            r["resamplings"],
+            r["time_ms"].as_f64().unwrap_or(f64::NAN),
+            r["real_time_factor"].as_f64().unwrap_or(f64::NAN),
+            r["memory_mb"].as_f64().unwrap_or(f64::NAN)
+        )?;
+    }
+    Ok(())
 }

@@ -135,7 +135,7 @@ impl RunLesson for Mapping {
 
 /// Writes `grid` as a ROS map: the YAML at `path`, the PGM beside it
 /// (occupied above probability 0.65, free below 0.196, as map_server reads).
-fn write_map(grid: &slamlab_core::grid::ProbabilityGrid, path: &Path) -> Result<()> {
+pub(crate) fn write_map(grid: &slamlab_core::grid::ProbabilityGrid, path: &Path) -> Result<()> {
     let Some(occupancy) = grid.to_occupancy_grid(0.65, 0.196) else {
         bail!("the map is empty: nothing to write");
     };
