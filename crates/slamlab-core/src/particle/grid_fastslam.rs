@@ -130,7 +130,7 @@ pub struct GridFastSlamConfig {
     /// grid is 5 × 5 × 7 poses (`K` = 175) reaching about 2.5 standard
     /// deviations of the likelihood's peak on a 5 cm grid, so the fitted
     /// Gaussian is not cut off (gmapping's ±1 cm grid is narrower than the
-    /// peak, and its covariance comes out about half the true one).
+    /// peak: a ±2 cm grid already gave under half the true variance in x).
     pub llsamplerange: f64,
     /// Its step, metres (`llsamplestep`; 0.02 here, gmapping 0.01).
     pub llsamplestep: f64,
