@@ -415,9 +415,9 @@ pub fn draw_from_motion<R: rand::Rng + ?Sized>(
     Pose2::new(p.x, p.y, wrap_angle(p.theta))
 }
 
-/// The scan's end points (sensor frame) and, for each, the offset from its
-/// end point to the point one cell back along the beam (gmapping's
-/// `freeDelta`, `√2` cells).
+/// The scan's end points in the sensor frame, taken once per update and
+/// read by every particle's likelihood ([`scan_log_likelihood`] finds the
+/// point one cell back along each beam, gmapping's `freeDelta`, itself).
 #[derive(Clone, Debug, Default, PartialEq)]
 pub struct LikelihoodPoints {
     points: Vec<Point2>,
