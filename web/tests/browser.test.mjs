@@ -678,6 +678,60 @@ async function main() {
       }
     });
 
+    // --- Grid FastSLAM in the mapping lesson. A short seeded run in this page's wasm
+    // ends with the heaviest particle exactly where the native run puts it
+    // (crates/slamlab-app/tests/lessons/mapping_ui.rs pins it); then 30 particles with
+    // the improved proposal run live on the office and the frame timing is recorded
+    // (metrics.json: grid_fastslam_*; reported, not asserted). Most frames only draw
+    // and skip scans; a frame that runs an update (every particle matches its scan)
+    // is longer, and the lesson's own median update time is recorded beside it.
+    await check("lesson=mapping with grid FastSLAM: native bits, and 30 particles running live", async () => {
+      const url = "index.html?lesson=mapping&map=office&seed=1&steps=3000&poses=grid-fastslam&particles=30";
+      const { context, page: p, log } = await openPage(browser, baseUrl, url, "grid-fastslam");
+      try {
+        await waitRunning(p);
+        const headless = JSON.parse(
+          await p.evaluate(
+            (q) => window.slamlab.slamlab_test_headless(q, 300),
+            "lesson=mapping&map=maze&steps=300&seed=2&poses=grid-fastslam&particles=10",
+          ),
+        );
+        const NATIVE = [2.2339493485723514, 5.709111183307648, 3.0152847451913276];
+        const best = headless.grid_fastslam?.best;
+        assert(
+          Array.isArray(best) && best.every((v, i) => v === NATIVE[i]),
+          `heaviest particle at ${JSON.stringify(best)} in the browser, ${JSON.stringify(NATIVE)} natively`,
+        );
+        const s0 = await waitState(p, (st) => st.lesson === "mapping" && st.frames > 2, "the mapping lesson");
+        assert(s0.poses === "grid-fastslam", `opened ${JSON.stringify(s0)}`);
+        await p.mouse.click(VIEWPORT.width / 2, VIEWPORT.height / 2);
+        await p.keyboard.press("Space");
+        const s1 = await waitState(p, (st) => st.grid_fastslam && st.grid_fastslam.updates >= 4, "four filter updates", 120_000);
+        await sleep(LOAD_RUN_MS);
+        const s2 = await testState(p);
+        const { stats } = await waitNotBlank(p, "grid-fastslam.png");
+        assertNotBlank(stats, "grid-fastslam.png");
+        const t = s2.frame_timing;
+        const g = s2.grid_fastslam;
+        assert(t && t.frames > 0 && Number.isFinite(t.cpu_ms_median), `no frame timing: ${JSON.stringify(s2)}`);
+        assert(g.particles === 30 && g.updates > s1.grid_fastslam.updates - 1, `particles ${JSON.stringify(g)}`);
+        metrics.grid_fastslam_frame_cpu_ms_median = t.cpu_ms_median;
+        metrics.grid_fastslam_frame_cpu_ms_p95 = t.cpu_ms_p95;
+        metrics.grid_fastslam_update_ms_median = g.update_ms_median;
+        metrics.grid_fastslam_update_scans = g.update_scans_timed;
+        metrics.grid_fastslam_scans = s2.scans;
+        await assertNoPanic(p);
+        assert(log.problems.length === 0, log.problems.join("; "));
+        return (
+          `heaviest particle bit-identical to native; 30 particles: ${s2.scans} scans, ${g.updates} updates, ` +
+          `${g.resamplings} resamplings; frame CPU median ${t.cpu_ms_median.toFixed(2)} ms (p95 ${t.cpu_ms_p95?.toFixed(2)}); ` +
+          `an update scan takes ${g.update_ms_median?.toFixed(1)} ms (median of ${g.update_scans_timed})`
+        );
+      } finally {
+        await context.close();
+      }
+    });
+
     // --- The filters lesson: the polar banana with 100,000 samples. Drag the prior's
     // mean with the mouse: every move recomputes the samples, the EKF, the UKF and the
     // particles and redraws the density image. The frame CPU median while dragging is
@@ -822,11 +876,19 @@ async function main() {
         await page.goto(new URL(relativeUrl, baseUrl).href, { waitUntil: "load" });
         return { context, page, log };
       };
-      for (const lesson of ["landmark-slam", "kidnap", "pose-graph", "resampling", "fusion"]) {
+      const LAYOUT_QUERIES = {
+        "landmark-slam": "lesson=landmark-slam&seed=7",
+        kidnap: "lesson=kidnap&seed=7",
+        "pose-graph": "lesson=pose-graph&seed=7",
+        resampling: "lesson=resampling&seed=7",
+        fusion: "lesson=fusion&seed=7",
+        "mapping-grid-fastslam": "lesson=mapping&seed=7&steps=300&poses=grid-fastslam&tick=120",
+      };
+      for (const [lesson, query] of Object.entries(LAYOUT_QUERIES)) {
         for (const size of SHELL_SIZES) {
           const name = `layout-${lesson}-${size.width}x${size.height}`;
           await check(`${lesson} at ${size.width} x ${size.height}: the map keeps ≥ ${(100 * size.minShare).toFixed(0)} % of the window`, async () => {
-            const { context, page, log } = await openSized(`index.html?lesson=${lesson}&seed=7`, { width: size.width, height: size.height }, name);
+            const { context, page, log } = await openSized(`index.html?${query}`, { width: size.width, height: size.height }, name);
             try {
               await waitRunning(page);
               const state = await waitState(page, (s) => s.frames >= 1 && Array.isArray(s.map_rect), "the map's rectangle");

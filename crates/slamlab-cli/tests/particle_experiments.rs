@@ -149,6 +149,58 @@ fn grid_fastslam_reports_one_row_per_particle_count_and_proposal() {
 }
 
 #[test]
+fn run_mapping_with_grid_fastslam_reports_its_particles() {
+    let v = run_json(&[
+        "run",
+        "mapping",
+        "--map",
+        "maze",
+        "--steps",
+        "120",
+        "--poses",
+        "grid-fastslam",
+        "--particles",
+        "4",
+        "--proposal",
+        "scan-match",
+        "--linear-update",
+        "0.5",
+        "--seed",
+        "2",
+        "--json",
+    ]);
+    assert_eq!(v["poses"], "grid-fastslam");
+    assert_eq!(v["scans"], 120);
+    let p = &v["particles"];
+    assert_eq!(p["particles"], 4);
+    assert_eq!(p["proposal"], "scan-match");
+    let updates = p["updates"].as_u64().unwrap();
+    assert!(updates > 3 && updates < 120, "{updates} updates");
+    assert!(p["peak_memory_bytes"].as_u64().unwrap() > 0);
+    assert_eq!(v["parameters"]["linear_update"], 0.5);
+    assert_eq!(v["parameters"]["poses"], "grid-fastslam");
+    let rmse = v["trajectory_rmse"].as_f64().unwrap();
+    assert!(rmse.is_finite() && rmse < 1.0, "{rmse}");
+    // A particle count out of range is clamped with a message.
+    let (ok, _, stderr) = slamlab(&[
+        "run",
+        "mapping",
+        "--steps",
+        "5",
+        "--poses",
+        "grid-fastslam",
+        "--particles",
+        "100000",
+        "--json",
+    ]);
+    assert!(ok, "{stderr}");
+    assert!(
+        stderr.contains("particles = 100000 is out of range; using 1000"),
+        "{stderr}"
+    );
+}
+
+#[test]
 fn bad_input_is_refused_with_a_message() {
     for (args, expected) in [
         (

@@ -86,6 +86,93 @@ pub fn explanation_ui(ui: &mut egui::Ui, session: &MappingSession) {
                 report.hits, report.misses, report.new_cells
             ));
         }
+        Some(MappingPhase::GridStart { scan, particles }) => {
+            ui.label(format!(
+                "Start, scan {scan}: the first scan makes one map at the first odometry pose; all \
+                 {particles} particles share it (one copy of its tiles until a particle writes)."
+            ));
+        }
+        Some(MappingPhase::GridSkip {
+            scan,
+            moved,
+            turned,
+        }) => {
+            let c = scenario.grid_fastslam_config();
+            ui.label(format!(
+                "Skip, scan {scan}: the robot has moved {moved:.2} m and turned {:.0}° since the last \
+                 update, less than linear-update = {} m and angular-update = {:.0}°: gmapping waits \
+                 (the estimate moves with the odometry until then).",
+                turned.to_degrees(),
+                c.linear_update,
+                c.angular_update.to_degrees()
+            ));
+        }
+        Some(MappingPhase::GridPropose {
+            scan,
+            proposal,
+            fallbacks,
+        }) => {
+            if *proposal == "scan-match" {
+                ui.label(format!(
+                    "Propose, scan {scan}: every particle matched the scan against its own map from \
+                     its odometry prediction, evaluated the scan likelihood times the motion prior at \
+                     K poses around the match, fitted a Gaussian to them (Eq. 14-16 of Grisetti 2007) \
+                     and drew its new pose from it; its weight is multiplied by the normalizer η \
+                     (Eq. 19).{}",
+                    if *fallbacks > 0 {
+                        format!(
+                            " {fallbacks} particle(s) could not match and took the odometry proposal."
+                        )
+                    } else {
+                        String::new()
+                    }
+                ));
+            } else {
+                ui.label(format!(
+                    "Propose, scan {scan}: every particle moved by a sample of the odometry motion \
+                     model (gmapping's srr, srt, str, stt); its weight is multiplied by the scan's \
+                     likelihood in its own map. Many samples land where the scan does not fit."
+                ));
+            }
+        }
+        Some(MappingPhase::GridWeight {
+            scan,
+            neff,
+            threshold,
+        }) => {
+            ui.label(format!(
+                "Weight, scan {scan}: the weights normalized (gmapping smooths them: \
+                 w_i ∝ exp(Δℓ_i / (ogain · M))); N_eff = 1 / Σ w_i² = {neff:.1}. {}",
+                if neff < threshold {
+                    format!("Below {threshold:.1}: the particles are resampled next.")
+                } else {
+                    format!("At or above {threshold:.1}: no resampling, every hypothesis lives on.")
+                }
+            ));
+        }
+        Some(MappingPhase::GridResample {
+            scan,
+            survivors,
+            of,
+        }) => {
+            ui.label(format!(
+                "Resample, scan {scan}: low-variance resampling kept {survivors} of {of} particles; \
+                 the others are copies. A copy shares its parent's map tiles until it writes, and its \
+                 path: paths that share an ancestor now merge on the map."
+            ));
+        }
+        Some(MappingPhase::GridUpdate {
+            scan,
+            cells,
+            memory_bytes,
+        }) => {
+            ui.label(format!(
+                "Update maps, scan {scan}: every particle inserted the scan at its own pose ({cells} \
+                 cells in the heaviest particle's map). All maps together hold {:.1} MB, each shared \
+                 tile counted once.",
+                *memory_bytes as f64 / 1e6
+            ));
+        }
         Some(MappingPhase::Done) => {
             ui.label("Every scan is in the map.");
         }
@@ -98,6 +185,9 @@ pub fn explanation_ui(ui: &mut egui::Ui, session: &MappingSession) {
         source_link(ui, "xiang", "Xiang's thesis, Sec. 5.2.1 (Eq. 5.3-5.5)");
         source_link(ui, "waslander", "Waslander's slides (occupancy grids, ICP)");
         source_link(ui, "thrun", "Probabilistic Robotics, Table 9.2");
+        if sim.source() == PoseSource::GridFastSlam {
+            source_link(ui, "grisetti", "Grisetti et al. 2007 (gmapping)");
+        }
     });
     ui.separator();
     ui.strong("The pose sources");
@@ -107,7 +197,9 @@ pub fn explanation_ui(ui: &mut egui::Ui, session: &MappingSession) {
          before (point-to-point: closed form; point-to-line: linearized least squares), so errors still \
          add up, only more slowly. Scan-to-map matches each scan against the whole map built so far \
          (Cartographer's local SLAM, Sec. 5.2.1 of Xiang's thesis): a correlative search over a small window, then \
-         Eq. 5.5, argmin Σ (1 − M_smooth(T_ξ h_k))², on the bicubic-interpolated grid.",
+         Eq. 5.5, argmin Σ (1 − M_smooth(T_ξ h_k))², on the bicubic-interpolated grid. Grid FastSLAM \
+         keeps many hypotheses at once: each particle has its own path and its own map, the weights say \
+         which fit the scans, and resampling drops the ones that do not (gmapping).",
     );
     ui.separator();
     ui.strong("The update rule");

@@ -104,6 +104,7 @@ pub fn source_color(source: PoseSource) -> Color32 {
         PoseSource::Icp => palette::ORANGE,
         PoseSource::Plicp => palette::VERMILLION,
         PoseSource::ScanToMap => palette::BLUE,
+        PoseSource::GridFastSlam => palette::GREEN,
     }
 }
 
@@ -134,7 +135,13 @@ fn bounds(session: &MappingSession) -> [f64; 4] {
     [p[0] - 5.0, p[1] - 5.0, p[0] + 5.0, p[1] + 5.0]
 }
 
-/// The map with its toolbar.
+/// The colour of the shown particle's path (grid FastSLAM).
+pub const SHOWN_PARTICLE: Color32 = palette::PURPLE;
+
+/// The map with its toolbar, showing `grid` (the run's map, or with grid
+/// FastSLAM the map the student chose) with `shown_particle`'s path
+/// highlighted. Returns the particle the student clicked, if any.
+#[allow(clippy::too_many_arguments)]
 pub fn map_ui(
     ui: &mut egui::Ui,
     session: &MappingSession,
@@ -142,7 +149,9 @@ pub fn map_ui(
     tiles: &mut GridTiles,
     view: &mut MappingView,
     beam: Option<usize>,
-) {
+    grid: &ProbabilityGrid,
+    shown_particle: Option<usize>,
+) -> Option<usize> {
     let sim = session.sim();
     let has_truth = sim.input().truth.is_some();
     ui.horizontal_wrapped(|ui| {
@@ -165,13 +174,29 @@ pub fn map_ui(
     });
     let source = sim.source();
     let color = source_color(source);
+    let filter = sim.grid_fastslam();
     if view.legend {
         ui.horizontal_wrapped(|ui| {
-            ui.label(
-                egui::RichText::new(format!("— path ({})", source.label()))
-                    .color(color)
-                    .strong(),
-            );
+            if filter.is_some() {
+                ui.label(
+                    egui::RichText::new("— · particles' paths and poses (darker: heavier)")
+                        .color(color)
+                        .strong(),
+                );
+                if shown_particle.is_some() {
+                    ui.label(
+                        egui::RichText::new("— the shown map's particle")
+                            .color(SHOWN_PARTICLE)
+                            .strong(),
+                    );
+                }
+            } else {
+                ui.label(
+                    egui::RichText::new(format!("— path ({})", source.label()))
+                        .color(color)
+                        .strong(),
+                );
+            }
             if has_truth && view.truth {
                 ui.label(egui::RichText::new("— true path").strong());
             }
@@ -190,7 +215,13 @@ pub fn map_ui(
         .then(|| current.map(|(_, _, p)| [p.x, p.y]))
         .flatten();
     let following = follow.is_some();
-    let (_response, t) = map_canvas::canvas_ui(ui, canvas, bounds(session), 0.0, &mut follow, true);
+    let (response, t) = map_canvas::canvas_ui(ui, canvas, bounds(session), 0.0, &mut follow, true);
+    let clicked = filter.and_then(|f| {
+        let at = response
+            .interact_pointer_pos()
+            .filter(|_| response.clicked())?;
+        super::particles::particle_at(&t, f, at, 12.0)
+    });
     if following {
         // Dragging the map stops following.
         view.follow_robot = follow.is_some();
@@ -224,7 +255,7 @@ pub fn map_ui(
         }
     }
     let mesh_color = Color32::WHITE;
-    for (texture, [x0, y0, x1, y1]) in tiles.update(ui.ctx(), sim.grid()) {
+    for (texture, [x0, y0, x1, y1]) in tiles.update(ui.ctx(), grid) {
         let rect = egui::Rect::from_two_pos(t.xy(x0, y1), t.xy(x1, y0));
         if rect.intersects(t.rect) {
             painter.image(
@@ -248,7 +279,18 @@ pub fn map_ui(
             1.2,
         );
     }
-    if view.path {
+    if view.path
+        && let Some(filter) = filter
+    {
+        super::particles::draw_particles(
+            &painter,
+            &t,
+            filter,
+            shown_particle,
+            color,
+            SHOWN_PARTICLE,
+        );
+    } else if view.path {
         draw_path(
             &painter,
             &t,
@@ -294,6 +336,7 @@ pub fn map_ui(
         painter.line_segment([centre, head], Stroke::new(2.0, color));
     }
     draw_scale_and_axes(&painter, &t, &colors);
+    clicked
 }
 
 /// A path as a polyline, thinned to at most a few thousand points.

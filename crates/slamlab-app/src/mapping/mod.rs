@@ -1,14 +1,17 @@
 //! The mapping lesson (`lesson=mapping`): a lidar's scans build an occupancy
 //! grid, scan by scan, with each scan's pose from the truth (simulation only),
-//! raw odometry, ICP against the previous scan, or matching against the map so
-//! far. The scans come from a simulated robot exploring a built-in map or from
+//! raw odometry, ICP against the previous scan, matching against the map so
+//! far, or grid FastSLAM's particles (each with its own map). The scans come from a simulated robot exploring a built-in map or from
 //! a real CARMEN log (dropped on the window, opened, or named by `log=`).
 //! Switching the pose source replays the same scans from the start.
 
 mod explain;
 mod inspect;
 mod map;
+mod particles;
 mod plots;
+
+pub use particles::ShownMap;
 
 use crate::lesson::{self, Lesson, LessonRequest, LessonStart, PanelVisibility, StoredSettings};
 use crate::palette;
@@ -52,6 +55,33 @@ const PANEL_PARAMS: &[&str] = &[
     "rotation-weight",
     "icp-max-distance",
     "icp-trim",
+    "beams",
+    "lidar-range",
+    "range-std",
+    "odometry-noise",
+];
+
+/// The parameters the panel shows with grid FastSLAM (gmapping's names).
+const GRID_FASTSLAM_PARAMS: &[&str] = &[
+    "seed",
+    "steps",
+    "particles",
+    "proposal",
+    "resample-threshold",
+    "srr",
+    "srt",
+    "str",
+    "stt",
+    "lstep",
+    "astep",
+    "iterations",
+    "lsigma",
+    "ogain",
+    "linear-update",
+    "angular-update",
+    "resolution",
+    "rule",
+    "max-range-free",
     "beams",
     "lidar-range",
     "range-std",
@@ -134,6 +164,9 @@ pub struct MappingLesson {
     /// A built-in map was chosen in place of a log or a loaded map: the next
     /// reset simulates anew.
     builtin_chosen: bool,
+    /// Grid FastSLAM: which particle's map is shown.
+    pub shown: ShownMap,
+    mean_map: particles::MeanMapCache,
 }
 
 /// How long each scan took here: the sum of its phases' times, however they
@@ -243,6 +276,8 @@ impl MappingLesson {
             beam: None,
             loaded_map: None,
             builtin_chosen: false,
+            shown: ShownMap::Best,
+            mean_map: particles::MeanMapCache::default(),
         })
     }
 
@@ -361,6 +396,10 @@ impl MappingLesson {
         self.catch_up = catch_up.filter(|&n| n > 0);
         self.scan_ms = ScanTimes::default();
         self.tiles.clear();
+        self.mean_map.clear();
+        if !matches!(self.shown, ShownMap::Mean) {
+            self.shown = ShownMap::Best;
+        }
         if catch_up.is_none() {
             self.time.apply(TimeAction::Reset);
             self.canvas.refit();
@@ -537,6 +576,10 @@ impl MappingLesson {
                 );
         });
         self.set_iteration_stepping(stepping);
+        if let Some(filter) = self.session.sim().grid_fastslam() {
+            ui.separator();
+            particles::particles_ui(ui, filter, &mut self.shown);
+        }
     }
 
     /// Shows ICP matches one iteration per phase (or whole); switching it on
@@ -619,7 +662,12 @@ impl MappingLesson {
             "path/to/intel.clf.bz2",
         );
         let running = self.session.scenario().clone();
-        params_panel::params_ui(ui, &mut self.pending, &running, PANEL_PARAMS);
+        let shown_params = if self.pending.scenario.poses == PoseSource::GridFastSlam {
+            GRID_FASTSLAM_PARAMS
+        } else {
+            PANEL_PARAMS
+        };
+        params_panel::params_ui(ui, &mut self.pending, &running, shown_params);
         ui.separator();
         let changed = params::to_pairs(&self.pending.scenario) != params::to_pairs(&running);
         if ui
@@ -641,6 +689,42 @@ impl MappingLesson {
             "index.html?… with these pairs opens exactly this run",
             None,
         );
+    }
+
+    /// Grid FastSLAM's numbers for the browser checks: the particles, the
+    /// heaviest one's pose (compared bit for bit with the native run), and
+    /// the time the update scans took here (`null` with another source).
+    fn grid_fastslam_state(&self) -> serde_json::Value {
+        let Some(filter) = self.session.sim().grid_fastslam() else {
+            return serde_json::Value::Null;
+        };
+        let records = self.session.stepper().records();
+        let mut update_ms: Vec<f64> = self
+            .scan_ms
+            .ms
+            .iter()
+            .zip(&records.neff)
+            .filter(|(t, n)| t.is_finite() && n.is_finite())
+            .map(|(t, _)| *t)
+            .collect();
+        update_ms.sort_by(f64::total_cmp);
+        let best = filter.best().map(|p| [p.pose.x, p.pose.y, p.pose.theta]);
+        serde_json::json!({
+            "particles": filter.particles().len(),
+            "proposal": filter.config().proposal.name(),
+            "updates": filter.updates(),
+            "resamplings": filter.resamplings(),
+            "neff": filter.neff(),
+            "memory_mb": filter.memory_bytes() as f64 / 1e6,
+            "best": best,
+            "shown": match self.shown {
+                ShownMap::Best => serde_json::json!("best"),
+                ShownMap::Mean => serde_json::json!("mean"),
+                ShownMap::Particle(i) => serde_json::json!(i),
+            },
+            "update_scans_timed": update_ms.len(),
+            "update_ms_median": update_ms.get(update_ms.len() / 2),
+        })
     }
 
     /// The pairs that reopen this setup.
@@ -696,14 +780,37 @@ impl crate::widgets::layout::LessonPanels for MappingLesson {
                 self.session.sim().scans_done()
             ));
         }
-        map::map_ui(
+        let sim = self.session.sim();
+        let mean = match sim.grid_fastslam() {
+            Some(filter) if self.shown == ShownMap::Mean => self
+                .mean_map
+                .get(filter, self.session.stepper().phases_run()),
+            _ => None,
+        };
+        let (grid, highlighted) = match sim.grid_fastslam() {
+            Some(filter) if !filter.particles().is_empty() => {
+                let highlighted = match self.shown {
+                    ShownMap::Best => Some(filter.best_index()),
+                    ShownMap::Particle(i) => Some(i.min(filter.particles().len() - 1)),
+                    ShownMap::Mean => None,
+                };
+                let grid = particles::shown_grid(filter, self.shown, mean.as_deref());
+                (grid.unwrap_or(sim.grid()), highlighted)
+            }
+            _ => (sim.grid(), None),
+        };
+        if let Some(clicked) = map::map_ui(
             ui,
             &self.session,
             &mut self.canvas,
             &mut self.tiles,
             &mut self.view,
             self.beam,
-        );
+            grid,
+            highlighted,
+        ) {
+            self.shown = ShownMap::Particle(clicked);
+        }
     }
 }
 
@@ -894,6 +1001,7 @@ impl Lesson for MappingLesson {
             "known_cells": summary.map.known_cells,
             "catching_up": self.catch_up.is_some(),
             "phase": self.session.stepper().last_phase().map(MappingPhase::label).unwrap_or_default(),
+            "grid_fastslam": self.grid_fastslam_state(),
         })
     }
 

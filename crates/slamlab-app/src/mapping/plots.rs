@@ -1,9 +1,11 @@
 //! The plots under the map, one point per scan: the position error against
-//! the truth (simulation only), the matcher's cost, and the time each scan
-//! took here.
+//! the truth (simulation only), the matcher's cost (grid FastSLAM: the
+//! effective sample size with its resamplings), and the time each scan took
+//! here.
 
 use super::map::source_color;
 use crate::export::PlotSeries;
+use crate::palette;
 use crate::widgets::plots::{
     Figure, Mark, Styled, draw_series, figure_plot, figure_ui, series_data, style_entries, title_ui,
 };
@@ -11,6 +13,7 @@ use slamlab_sim::mapping::MappingSession;
 
 const ERROR: &str = "Trajectory error";
 const COST: &str = "Matcher cost";
+const NEFF: &str = "Effective sample size";
 const TIME: &str = "Time per scan";
 
 /// Every plotted series, defined once for the plots and the CSV export.
@@ -33,7 +36,11 @@ fn plotted(session: &MappingSession, scan_ms: &[f64]) -> Vec<Styled> {
                 ERROR,
                 "scan",
                 "error (m)",
-                format!("{name} position error"),
+                if sim.grid_fastslam().is_some() {
+                    format!("{name} heaviest particle's error")
+                } else {
+                    format!("{name} position error")
+                },
                 error,
             ),
             color,
@@ -41,6 +48,59 @@ fn plotted(session: &MappingSession, scan_ms: &[f64]) -> Vec<Styled> {
             1.4,
         ));
     }
+    if let Some(filter) = sim.grid_fastslam() {
+        let neff: Vec<[f64; 2]> = records
+            .neff
+            .iter()
+            .enumerate()
+            .filter(|(_, n)| n.is_finite())
+            .map(|(k, n)| [k as f64, *n])
+            .collect();
+        let resampled = records
+            .neff
+            .iter()
+            .zip(&records.resampled)
+            .enumerate()
+            .filter(|(_, (n, r))| **r && n.is_finite())
+            .map(|(k, (n, _))| [k as f64, *n])
+            .collect();
+        let threshold = filter.config().resample_threshold * filter.config().particles as f64;
+        let line = match (neff.first(), neff.last()) {
+            (Some(a), Some(b)) => vec![[a[0], threshold], [b[0], threshold]],
+            _ => Vec::new(),
+        };
+        out.push(Styled::new(
+            PlotSeries::new(NEFF, "scan", "N_eff", format!("{name} N_eff"), neff),
+            color,
+            Mark::Solid,
+            1.2,
+        ));
+        out.push(Styled::new(
+            PlotSeries::new(
+                NEFF,
+                "scan",
+                "N_eff",
+                format!("{name} resampling"),
+                resampled,
+            ),
+            palette::VERMILLION,
+            Mark::Dots,
+            3.0,
+        ));
+        out.push(Styled::new(
+            PlotSeries::new(
+                NEFF,
+                "scan",
+                "N_eff",
+                format!("{name} resample threshold"),
+                line,
+            ),
+            color,
+            Mark::Dashed,
+            1.0,
+        ));
+    }
+    let matched = sim.grid_fastslam().is_none();
     let cost = records
         .costs
         .iter()
@@ -48,12 +108,14 @@ fn plotted(session: &MappingSession, scan_ms: &[f64]) -> Vec<Styled> {
         .filter(|(_, c)| c.is_finite())
         .map(|(k, c)| [k as f64, *c])
         .collect();
-    out.push(Styled::new(
-        PlotSeries::new(COST, "scan", "cost", format!("{name} cost"), cost),
-        color,
-        Mark::Solid,
-        1.2,
-    ));
+    if matched {
+        out.push(Styled::new(
+            PlotSeries::new(COST, "scan", "cost", format!("{name} cost"), cost),
+            color,
+            Mark::Solid,
+            1.2,
+        ));
+    }
     let time = scan_ms
         .iter()
         .enumerate()
@@ -93,9 +155,15 @@ pub fn plots_ui(ui: &mut egui::Ui, session: &MappingSession, scan_ms: &[f64]) {
         height,
     };
     ui.columns(3, |columns| {
-        let error_hover = "Distance from each scan's pose (as the pose source gave it) to the true pose, \
+        let error_hover = if sim.grid_fastslam().is_some() {
+            "Distance from the heaviest particle's pose at each scan to the true pose, metres \
+             (between updates its pose moves with the odometry). A jump down marks a new heaviest \
+             particle, often after a loop closes."
+        } else {
+            "Distance from each scan's pose (as the pose source gave it) to the true pose, \
              metres. Raw odometry drifts; a matcher holds the error down until it meets something it \
-             cannot match.";
+             cannot match."
+        };
         if has_truth {
             figure_ui(
                 &mut columns[0],
@@ -107,6 +175,21 @@ pub fn plots_ui(ui: &mut egui::Ui, session: &MappingSession, scan_ms: &[f64]) {
             title_ui(&mut columns[0], ERROR, error_hover);
             columns[0].label("A real log has no ground truth: no error to plot.");
         }
+        if sim.grid_fastslam().is_some() {
+            figure_ui(
+                &mut columns[1],
+                &figure(
+                    NEFF,
+                    "N_eff = 1 / Σ w_i² after each update's weighting (Grisetti 2007, Eq. 20): the \
+                     number of particles the weights are worth. Below the dashed threshold (resample-\
+                     threshold × particles) the filter resamples (dots). With the improved proposal it \
+                     stays high and resampling is rare; with odometry it drops at almost every update.",
+                    "N_eff",
+                ),
+                plot("mapping_neff"),
+                |p| draw_series(p, &all, NEFF),
+            );
+        } else {
         figure_ui(
             &mut columns[1],
             &figure(
@@ -119,6 +202,7 @@ pub fn plots_ui(ui: &mut egui::Ui, session: &MappingSession, scan_ms: &[f64]) {
             plot("mapping_cost"),
             |p| draw_series(p, &all, COST),
         );
+        }
         figure_ui(
             &mut columns[2],
             &figure(TIME, "How long each scan took here (predict, match and insert), milliseconds", "time (ms)"),

@@ -181,6 +181,32 @@ pub const SOURCES: &[Source] = &[
         sections: &[],
     },
     Source {
+        key: "grisetti",
+        short: "Grisetti et al. 2007 (gmapping)",
+        title: "Improved Techniques for Grid Mapping With Rao-Blackwellized Particle Filters",
+        author: "Giorgio Grisetti, Cyrill Stachniss and Wolfram Burgard",
+        publisher: "IEEE Transactions on Robotics 23(1); the gmapping package implements it",
+        year: "2007",
+        covers: "Grid FastSLAM in the mapping lesson: a map per particle, the improved proposal \
+                 (scan matching, then a Gaussian fitted to the likelihood times the motion \
+                 prior around the match), weights by its normalizer, and resampling only when \
+                 N_eff falls. The parameters keep gmapping's names (srr, srt, str, stt, lstep, \
+                 astep, lsigma, ogain, linearUpdate, angularUpdate, delta).",
+        sections: &[
+            (
+                "Eq. 14-16, 19",
+                "the improved proposal: K poses x_j around the scan match, τ_j = p(z | x_j, m) · \
+                 p(x_j | x_t−1, u), η = Σ τ_j, the Gaussian's mean and covariance from the τ_j, \
+                 and the weight update w_t = w_t−1 · η.",
+            ),
+            (
+                "Eq. 20",
+                "adaptive resampling: N_eff = 1 / Σ w_i², resample when it drops below half \
+                 the particle count.",
+            ),
+        ],
+    },
+    Source {
         key: "graph-optimizers",
         short: "g2o, TORO and GTSAM",
         title: "Graph optimizers and their file formats",

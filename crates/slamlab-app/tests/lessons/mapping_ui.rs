@@ -247,3 +247,93 @@ fn a_headless_office_run_ends_at_the_pose_the_browser_must_match() {
     eprintln!("pose {pose:?}, agreement {}", state["map_agreement"]);
     assert_eq!(pose, HEADLESS_OFFICE_POSE);
 }
+
+/// Grid FastSLAM in the mapping lesson: phase by phase (propose, weight,
+/// resample when N_eff is low, update maps), every particle drawn, the map
+/// switch (a particle's map, the weighted mean), and the rendered paths.
+#[test]
+fn grid_fastslam_steps_its_phases_and_shows_any_particles_map() {
+    let mut h =
+        harness("lesson=mapping&map=maze&seed=2&steps=200&poses=grid-fastslam&particles=12");
+    assert!(h.state().notices().is_empty(), "{:?}", h.state().notices());
+    assert_eq!(
+        lesson(&h).session().sim().source(),
+        PoseSource::GridFastSlam
+    );
+    // The first scan starts the particles; the next ones are skipped until
+    // the robot has moved linear-update = 1 m.
+    lesson_mut(&mut h).apply_time_action(slamlab_app::time_control::TimeAction::StepPhase);
+    let phase = |h: &Harness<'_, SlamLabApp>| lesson(h).time_info().last_phase.unwrap_or_default();
+    assert_eq!(phase(&h), "scan 0: 12 particles share its map");
+    let mut seen = Vec::new();
+    for _ in 0..400 {
+        lesson_mut(&mut h).apply_time_action(slamlab_app::time_control::TimeAction::StepPhase);
+        let p = phase(&h);
+        if p.contains("proposal") || p.contains("N_eff") || p.contains("maps") {
+            seen.push(p);
+        }
+        if seen.len() >= 3 {
+            break;
+        }
+    }
+    assert!(seen[0].contains("scan-match proposal"), "{seen:?}");
+    assert!(seen[1].contains("N_eff"), "{seen:?}");
+    assert!(seen[2].contains("every particle's map updated"), "{seen:?}");
+    for _ in 0..150 {
+        lesson_mut(&mut h).step_tick();
+    }
+    h.run();
+    let state = lesson(&h).test_state();
+    let g = &state["grid_fastslam"];
+    assert_eq!(g["particles"], 12);
+    assert!(g["updates"].as_u64().unwrap() >= 4, "{g}");
+    // Show particle 5's map, then the weighted mean.
+    lesson_mut(&mut h).shown = slamlab_app::mapping::ShownMap::Particle(5);
+    h.run();
+    assert_eq!(lesson(&h).test_state()["grid_fastslam"]["shown"], 5);
+    lesson_mut(&mut h).shown = slamlab_app::mapping::ShownMap::Mean;
+    h.run();
+    assert_eq!(lesson(&h).test_state()["grid_fastslam"]["shown"], "mean");
+    h.get_by_label("heaviest particle").click();
+    h.run();
+    assert_eq!(lesson(&h).test_state()["grid_fastslam"]["shown"], "best");
+    let Some(image) = render_or_skip(&mut h) else {
+        return;
+    };
+    let green = count_pixels(image.as_raw(), [0x00, 0x9E, 0x73], 40);
+    let purple = count_pixels(image.as_raw(), [0xCC, 0x79, 0xA7], 30);
+    let dark = count_pixels(image.as_raw(), [0, 0, 0], 40);
+    assert!(
+        green > 100,
+        "particle paths and poses: {green} green pixels"
+    );
+    assert!(
+        purple > 30,
+        "the shown particle's path: {purple} purple pixels"
+    );
+    assert!(dark > 300, "occupied cells: {dark} dark pixels");
+    let _ = image.save(std::env::temp_dir().join("slamlab-grid-fastslam.png"));
+}
+
+/// The headless grid FastSLAM run the browser repeats in wasm
+/// (web/tests/browser.test.mjs, "lesson=mapping with grid FastSLAM…"): the
+/// same seed gives the heaviest particle's pose to the bit.
+const HEADLESS_GRID: &str =
+    "lesson=mapping&map=maze&steps=300&seed=2&poses=grid-fastslam&particles=10";
+const HEADLESS_GRID_BEST: [f64; 3] = [2.2339493485723514, 5.709111183307648, 3.0152847451913276];
+
+#[test]
+fn a_headless_grid_fastslam_run_ends_at_the_pose_the_browser_must_match() {
+    let state: serde_json::Value =
+        serde_json::from_str(&SlamLabApp::headless_state(HEADLESS_GRID, 300)).unwrap();
+    assert_eq!(state["scans"], 300);
+    let g = &state["grid_fastslam"];
+    let best: Vec<f64> = g["best"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|v| v.as_f64().unwrap())
+        .collect();
+    eprintln!("best {best:?}, {g}, rmse {}", state["trajectory_rmse"]);
+    assert_eq!(best, HEADLESS_GRID_BEST);
+}

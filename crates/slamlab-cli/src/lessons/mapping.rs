@@ -3,6 +3,7 @@
 //! ```text
 //! slamlab run mapping --map office --steps 3000 --poses scan-to-map --seed 1 --json
 //! slamlab run mapping --log intel.clf.bz2 --poses scan-to-map --json --map-out intel.yaml
+//! slamlab run mapping --map office --poses grid-fastslam --particles 30 --proposal scan-match
 //! ```
 
 use crate::command::RunLesson;
@@ -29,7 +30,7 @@ impl RunLesson for Mapping {
     }
 
     fn about(&self) -> &'static str {
-        "occupancy-grid mapping with a lidar: a simulated robot's scans or a CARMEN log, posed by truth, odometry, ICP or scan-to-map matching"
+        "occupancy-grid mapping with a lidar: a simulated robot's scans or a CARMEN log, posed by truth, odometry, ICP, scan-to-map matching or grid FastSLAM's particles"
     }
 
     fn command(&self) -> Command {
@@ -100,6 +101,7 @@ impl RunLesson for Mapping {
                 "map_agreement": summary.map_agreement,
                 "map": summary.map,
                 "mean_iterations": summary.mean_iterations,
+                "particles": summary.particles,
                 "parameters": serde_json::to_value(session.scenario())?,
             }))?;
             return Ok(());
@@ -129,6 +131,19 @@ impl RunLesson for Mapping {
             summary.map.known_cells,
             summary.map.memory_bytes as f64 / 1e6
         )?;
+        if let Some(p) = summary.particles {
+            writeln!(
+                out,
+                "particles:       {} ({} proposal): {} updates, {} resamplings, {} fallbacks; maps {:.1} MB (peak {:.1} MB)",
+                p.particles,
+                p.proposal,
+                p.updates,
+                p.resamplings,
+                p.fallbacks,
+                p.memory_bytes as f64 / 1e6,
+                p.peak_memory_bytes as f64 / 1e6
+            )?;
+        }
         Ok(())
     }
 }

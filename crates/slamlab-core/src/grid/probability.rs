@@ -39,6 +39,18 @@ use crate::math;
 use crate::scan::Scan;
 use serde::{Deserialize, Serialize};
 use std::sync::Arc;
+use std::sync::atomic::{AtomicU64, Ordering};
+
+/// The next tile revision, shared by every grid in the process: a revision
+/// names one content of one tile, so a view that shows one grid of several
+/// (grid FastSLAM's particles, a mean map) can tell two grids' tiles apart
+/// even when both took the same number of scans.
+static NEXT_REVISION: AtomicU64 = AtomicU64::new(1);
+
+/// A revision no grid has used.
+fn new_revision() -> u64 {
+    NEXT_REVISION.fetch_add(1, Ordering::Relaxed)
+}
 
 /// Cells per tile side.
 pub const TILE: usize = 32;
@@ -306,11 +318,9 @@ pub struct ProbabilityGrid {
     /// `tiles_wide x tiles_high` tiles, row-major from the bottom; `None`
     /// where no scan has reached.
     tiles: Vec<Option<Arc<Tile>>>,
-    /// A revision per tile slot, raised whenever the tile changes (for a view
-    /// that redraws only what changed).
+    /// A revision per tile slot, new whenever the tile changes (for a view
+    /// that redraws only what changed); unique across grids.
     revisions: Vec<u64>,
-    /// Every revision ever handed out is below this.
-    next_revision: u64,
     /// The cells stamped during the scan being inserted, with the value each
     /// gets when the stamp comes off.
     stamped: Vec<(usize, usize, f32)>,
@@ -332,7 +342,6 @@ impl ProbabilityGrid {
             tiles_high: 0,
             tiles: Vec::new(),
             revisions: Vec::new(),
-            next_revision: 1,
             stamped: Vec::new(),
         }
     }
@@ -631,8 +640,7 @@ impl ProbabilityGrid {
     /// Removes the stamps of the scan just inserted and raises the revision of
     /// every tile it changed.
     fn finish_scan(&mut self) {
-        let revision = self.next_revision;
-        self.next_revision += 1;
+        let revision = new_revision();
         for &(slot, local, value) in &self.stamped {
             if let Some(tile) = self.tiles[slot].as_mut() {
                 Arc::make_mut(tile).cells[local] = value;
@@ -738,6 +746,65 @@ impl ProbabilityGrid {
             .flatten()
             .filter(|t| theirs.contains(&Arc::as_ptr(t)))
             .count()
+    }
+
+    /// The weighted mean of several grids of one resolution (grid FastSLAM's
+    /// particles weighted by their weights): each cell's occupancy
+    /// probability averaged over the grids that observed it, their weights
+    /// renormalized over those grids; unknown where none did. Grids of
+    /// another resolution than the first, and weights that are not finite and
+    /// positive, are left out. `None` when nothing is left.
+    pub fn weighted_mean<'a>(
+        grids: impl IntoIterator<Item = (&'a ProbabilityGrid, f64)>,
+    ) -> Option<ProbabilityGrid> {
+        use std::collections::BTreeMap;
+        // Per tile: Σ w·p and Σ w over the grids that know each cell.
+        type Sums = (Box<[f64; TILE_CELLS]>, Box<[f64; TILE_CELLS]>);
+        let mut sums: BTreeMap<(i64, i64), Sums> = BTreeMap::new();
+        let mut resolution = None;
+        for (grid, w) in grids {
+            if !(w.is_finite() && w > 0.0) {
+                continue;
+            }
+            let r = *resolution.get_or_insert(grid.resolution);
+            if grid.resolution != r {
+                continue;
+            }
+            for (slot, tile) in grid.tiles.iter().enumerate() {
+                let Some(tile) = tile else { continue };
+                let (wp, ws) = sums
+                    .entry(grid.slot_tile(slot))
+                    .or_insert_with(|| (Box::new([0.0; TILE_CELLS]), Box::new([0.0; TILE_CELLS])));
+                for (k, &l) in tile.cells.iter().enumerate() {
+                    if !l.is_nan() {
+                        wp[k] += w * probability(f64::from(l));
+                        ws[k] += w;
+                    }
+                }
+            }
+        }
+        let resolution = resolution?;
+        let mut mean = ProbabilityGrid::new(resolution);
+        let revision = new_revision();
+        for ((ti, tj), (wp, ws)) in sums {
+            let (i, j) = (ti * TILE as i64, tj * TILE as i64);
+            if !mean.ensure_cell(i, j) {
+                continue;
+            }
+            let Some((slot, _)) = mean.locate(i, j) else {
+                continue;
+            };
+            let mut tile = Tile::unknown();
+            for k in 0..TILE_CELLS {
+                if ws[k] > 0.0 {
+                    let p = (wp[k] / ws[k]).clamp(1e-9, 1.0 - 1e-9);
+                    tile.cells[k] = log_odds(p) as f32;
+                }
+            }
+            mean.tiles[slot] = Some(Arc::new(tile));
+            mean.revisions[slot] = revision;
+        }
+        Some(mean)
     }
 
     /// The probability grid as a three-state occupancy grid over its observed
@@ -853,6 +920,65 @@ mod tests {
             range_min: 0.0,
             range_max,
         }
+    }
+
+    #[test]
+    fn the_weighted_mean_averages_probabilities_over_the_grids_that_know_a_cell() {
+        let params = InsertParams {
+            rule: UpdateRule::LOG_ODDS,
+            max_range_free: 0.0,
+        };
+        // Grid a: one beam of 0.5 m along +x (cell 5 hit, 0..=4 free).
+        // Grid b: one beam of 0.3 m (cell 3 hit, 0..=2 free), and a beam along
+        // +y that only b knows.
+        let pose = Pose2::new(0.05, 0.05, 0.0);
+        let mut a = ProbabilityGrid::new(0.1);
+        a.insert_scan(&pose, &one_beam(0.5, 0.0, 10.0), &params)
+            .unwrap();
+        let mut b = ProbabilityGrid::new(0.1);
+        b.insert_scan(&pose, &one_beam(0.3, 0.0, 10.0), &params)
+            .unwrap();
+        b.insert_scan(
+            &pose,
+            &one_beam(0.4, std::f64::consts::FRAC_PI_2, 10.0),
+            &params,
+        )
+        .unwrap();
+        let (wa, wb) = (0.75, 0.25);
+        let mean = ProbabilityGrid::weighted_mean([(&a, wa), (&b, wb)]).unwrap();
+        let (p_hit, p_free) = (probability(0.85), probability(-0.4));
+        let p = |i, j| mean.probability_at(i, j).unwrap();
+        // Cell 3: free in a, hit in b; cell 5: hit in a, unknown in b.
+        assert!((p(3, 0) - (wa * p_free + wb * p_hit)).abs() < 1e-6);
+        assert!((p(5, 0) - p_hit).abs() < 1e-6);
+        assert!((p(1, 0) - p_free).abs() < 1e-6);
+        assert!((p(0, 4) - p_hit).abs() < 1e-6, "only b knows (0, 4)");
+        assert_eq!(mean.log_odds_at(6, 0), None);
+        assert_eq!(mean.known_cells(), 6 + 4);
+        // Weights that are not positive leave their grid out; none left: None.
+        let only_a = ProbabilityGrid::weighted_mean([(&a, 1.0), (&b, 0.0)]).unwrap();
+        assert!((only_a.probability_at(3, 0).unwrap() - p_free).abs() < 1e-6);
+        assert!(ProbabilityGrid::weighted_mean([(&a, f64::NAN)]).is_none());
+    }
+
+    #[test]
+    fn tile_revisions_tell_two_grids_apart_after_the_same_number_of_scans() {
+        let params = InsertParams {
+            rule: UpdateRule::LOG_ODDS,
+            max_range_free: 0.0,
+        };
+        let pose = Pose2::new(0.05, 0.05, 0.0);
+        let mut a = ProbabilityGrid::new(0.1);
+        a.insert_scan(&pose, &one_beam(0.5, 0.0, 10.0), &params)
+            .unwrap();
+        let mut b = a.clone();
+        let rev = |g: &ProbabilityGrid| g.tile_revisions().map(|(_, _, r)| r).collect::<Vec<_>>();
+        assert_eq!(rev(&a), rev(&b), "a copy shows the same tiles");
+        a.insert_scan(&pose, &one_beam(0.3, 0.0, 10.0), &params)
+            .unwrap();
+        b.insert_scan(&pose, &one_beam(0.2, 0.0, 10.0), &params)
+            .unwrap();
+        assert_ne!(rev(&a), rev(&b), "different contents, different revisions");
     }
 
     #[test]

@@ -758,6 +758,29 @@ impl GridFastSlam {
         self.peak_memory
     }
 
+    /// The odometry at the last update (`None` before the first scan).
+    pub fn last_odometry(&self) -> Option<Pose2> {
+        self.last_odometry
+    }
+
+    /// Whether [`resample_if_needed`](Self::resample_if_needed) would resample
+    /// now: `N_eff < resample_threshold · M`.
+    pub fn resample_due(&self) -> bool {
+        self.neff < self.config.resample_threshold * self.particles.len() as f64
+    }
+
+    /// The particles' maps averaged cell by cell, each weighted by its
+    /// particle's weight ([`ProbabilityGrid::weighted_mean`]); `None` before
+    /// the first scan.
+    pub fn mean_map(&self) -> Option<ProbabilityGrid> {
+        ProbabilityGrid::weighted_mean(
+            self.particles
+                .iter()
+                .zip(&self.weights)
+                .map(|(p, w)| (&p.map, *w)),
+        )
+    }
+
     /// Whether the robot has moved far enough since the last update for the
     /// scan taken at `odometry` to be processed (always for the first scan).
     pub fn update_due(&self, odometry: &Pose2) -> bool {
@@ -936,7 +959,7 @@ impl GridFastSlam {
     /// Returns whether it resampled and how many distinct particles survived.
     pub fn resample_if_needed(&mut self) -> (bool, usize) {
         let m = self.particles.len();
-        if !(self.neff < self.config.resample_threshold * m as f64) {
+        if !self.resample_due() {
             return (false, m);
         }
         let mut indices = Vec::with_capacity(m);

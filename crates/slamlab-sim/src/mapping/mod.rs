@@ -1,8 +1,8 @@
 //! Occupancy-grid mapping with a lidar (`lesson=mapping`, `slamlab run
 //! mapping`): a simulated robot's log or a real CARMEN log, each scan given a
 //! pose by the chosen source (the truth, odometry, ICP against the previous
-//! scan, or matching against the map so far) and inserted into a growing
-//! probability grid.
+//! scan, matching against the map so far, or grid FastSLAM's particles) and
+//! inserted into a growing probability grid.
 //!
 //! - [`scenario`]: the parameter table.
 //! - [`run`]: the run stepped phase by phase, and its metrics.
@@ -108,6 +108,29 @@ pub struct MappingSummary {
     pub map: MapSummary,
     /// Mean matcher iterations per scan (0 without a matcher).
     pub mean_iterations: f64,
+    /// Grid FastSLAM's particles (that source only).
+    pub particles: Option<ParticleSummary>,
+}
+
+/// What grid FastSLAM's particles did.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize)]
+pub struct ParticleSummary {
+    /// Particles.
+    pub particles: usize,
+    /// `"odometry"` or `"scan-match"`.
+    pub proposal: &'static str,
+    /// Filter updates (scans processed; the rest were skipped).
+    pub updates: usize,
+    /// Resamplings.
+    pub resamplings: usize,
+    /// Particle proposals that fell back to odometry.
+    pub fallbacks: usize,
+    /// `N_eff` after the last weighting.
+    pub neff: f64,
+    /// Map memory the particles hold now, bytes (shared tiles once).
+    pub memory_bytes: usize,
+    /// The most they held after any update, bytes.
+    pub peak_memory_bytes: usize,
 }
 
 /// The built map's size.
@@ -165,6 +188,8 @@ impl MappingSession {
                 trim_fraction: scenario.icp_trim,
                 ..IcpConfig::default()
             },
+            grid_fastslam: scenario.grid_fastslam_config(),
+            seed: scenario.seed,
         };
         let sim = MappingSim::new(
             input,
@@ -241,12 +266,20 @@ impl MappingSession {
             .scans
             .get(records.poses.len().saturating_sub(1))
             .map_or(0.0, |s| s.time);
+        let filter = sim.grid_fastslam();
+        // Grid FastSLAM: the heaviest particle's path as it stands now (its
+        // past corrected by later scans), at the scans it processed.
+        let rmse = match (filter.and_then(|f| f.best()), input.truth.as_deref()) {
+            (Some(best), Some(truth)) => crate::grid_fastslam::path_rmse(&best.path.path(), truth),
+            (None, truth) if filter.is_none() => trajectory_rmse(&records.poses, truth),
+            _ => None,
+        };
         MappingSummary {
             scans: records.poses.len(),
             poses: sim.source().name(),
             input: input.name.clone(),
             duration_s: duration,
-            trajectory_rmse: trajectory_rmse(&records.poses, input.truth.as_deref()),
+            trajectory_rmse: rmse,
             map_agreement: None,
             map: MapSummary {
                 width,
@@ -260,6 +293,16 @@ impl MappingSession {
             } else {
                 matched.iter().sum::<usize>() as f64 / matched.len() as f64
             },
+            particles: filter.map(|f| ParticleSummary {
+                particles: f.config().particles,
+                proposal: f.config().proposal.name(),
+                updates: f.updates(),
+                resamplings: f.resamplings(),
+                fallbacks: f.fallbacks(),
+                neff: f.neff(),
+                memory_bytes: f.memory_bytes(),
+                peak_memory_bytes: f.peak_memory_bytes(),
+            }),
         }
     }
 }

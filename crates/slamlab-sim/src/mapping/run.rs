@@ -6,6 +6,13 @@
 //! per phase (the alignment is computed at once; each phase reveals the next
 //! iteration's correspondences and pose).
 //!
+//! With grid FastSLAM as the pose source a scan takes gmapping's phases
+//! instead: *propose* (every particle's odometry sample, or its scan match and
+//! the Gaussian around it), *weight* (`N_eff`), *resample* (only when `N_eff`
+//! is low) and *update maps*; a scan taken before the robot has moved
+//! `linear_update` or `angular_update` is skipped in one phase, as gmapping
+//! skips it.
+//!
 //! The input is the same for every pose source (a simulated log or a real
 //! one), so switching the source replays the same scans. The truth of a
 //! simulated log travels beside the input and reaches only the metrics.
@@ -16,6 +23,7 @@ use slamlab_core::Pose2;
 use slamlab_core::grid::{
     BeamUpdate, Cell, InsertParams, InsertReport, OccupancyGrid, ProbabilityGrid,
 };
+use slamlab_core::particle::{GridFastSlam, GridFastSlamConfig};
 use slamlab_core::scan::icp::{IcpConfig, IcpIteration, IcpVariant, align};
 use slamlab_core::scan::scan_to_map::{
     ProbabilityLookup, ScanToMapParams, ScanToMapRecord, match_scan_to_map,
@@ -66,6 +74,11 @@ enum Stage {
     Match,
     /// Showing ICP iteration `i` (0-based) of the current scan's match.
     Iteration(usize),
+    /// Grid FastSLAM: the particles are proposed; next their weights.
+    Weight,
+    /// Grid FastSLAM: `N_eff` is low; next the resampling.
+    Resample,
+    /// Insert the scan (grid FastSLAM: into every particle's map).
     Insert,
 }
 
@@ -127,6 +140,59 @@ pub enum MappingPhase {
         /// Pairs kept.
         kept: usize,
     },
+    /// Grid FastSLAM's first scan: one map from it, shared by every particle.
+    GridStart {
+        /// Scan index.
+        scan: usize,
+        /// Particles.
+        particles: usize,
+    },
+    /// Grid FastSLAM skipped a scan: the robot has not moved far enough since
+    /// the last update.
+    GridSkip {
+        /// Scan index.
+        scan: usize,
+        /// Metres moved since the last update (by odometry).
+        moved: f64,
+        /// Radians turned since the last update.
+        turned: f64,
+    },
+    /// Grid FastSLAM moved every particle by its proposal.
+    GridPropose {
+        /// Scan index.
+        scan: usize,
+        /// `"odometry"` or `"scan-match"`.
+        proposal: &'static str,
+        /// Particles whose scan match failed and took the odometry proposal.
+        fallbacks: usize,
+    },
+    /// Grid FastSLAM weighted the particles.
+    GridWeight {
+        /// Scan index.
+        scan: usize,
+        /// The effective sample size after weighting.
+        neff: f64,
+        /// Resampling happens below this `N_eff`.
+        threshold: f64,
+    },
+    /// Grid FastSLAM resampled.
+    GridResample {
+        /// Scan index.
+        scan: usize,
+        /// Distinct particles that survived.
+        survivors: usize,
+        /// Particles.
+        of: usize,
+    },
+    /// Grid FastSLAM inserted the scan into every particle's map.
+    GridUpdate {
+        /// Scan index.
+        scan: usize,
+        /// Cells the scan updated in the heaviest particle's map.
+        cells: usize,
+        /// Map memory all particles hold, bytes (shared tiles once).
+        memory_bytes: usize,
+    },
     /// The scan went into the map.
     Insert {
         /// Scan index.
@@ -158,6 +224,57 @@ impl MappingPhase {
                 "insert scan {scan}: {} hit, {} crossed cells",
                 report.hits, report.misses
             ),
+            MappingPhase::GridStart { scan, particles } => {
+                format!("scan {scan}: {particles} particles share its map")
+            }
+            MappingPhase::GridSkip {
+                scan,
+                moved,
+                turned,
+            } => format!(
+                "scan {scan} skipped: {moved:.2} m, {:.0}° since the last update",
+                turned.to_degrees()
+            ),
+            MappingPhase::GridPropose {
+                scan,
+                proposal,
+                fallbacks,
+            } => {
+                if *fallbacks > 0 {
+                    format!("scan {scan}: {proposal} proposal ({fallbacks} fell back to odometry)")
+                } else {
+                    format!("scan {scan}: {proposal} proposal")
+                }
+            }
+            MappingPhase::GridWeight {
+                scan,
+                neff,
+                threshold,
+            } => {
+                let verdict = if *neff < *threshold {
+                    "resample next"
+                } else {
+                    "no resampling"
+                };
+                format!(
+                    "scan {scan}: weights, N_eff {neff:.1} (threshold {threshold:.1}): {verdict}"
+                )
+            }
+            MappingPhase::GridResample {
+                scan,
+                survivors,
+                of,
+            } => {
+                format!("scan {scan}: resampled, {survivors} of {of} particles survive")
+            }
+            MappingPhase::GridUpdate {
+                scan,
+                cells,
+                memory_bytes,
+            } => format!(
+                "scan {scan}: every particle's map updated ({cells} cells; maps {:.1} MB)",
+                *memory_bytes as f64 / 1e6
+            ),
             MappingPhase::Done => "every scan is in the map".to_owned(),
         }
     }
@@ -172,6 +289,11 @@ pub struct MappingRecords {
     pub costs: Vec<f64>,
     /// The matcher's iterations per scan.
     pub iterations: Vec<usize>,
+    /// Grid FastSLAM: `N_eff` after weighting, per scan (NaN where the scan
+    /// was skipped or another source runs).
+    pub neff: Vec<f64>,
+    /// Grid FastSLAM: whether the particles were resampled at each scan.
+    pub resampled: Vec<bool>,
 }
 
 impl Records for MappingRecords {
@@ -183,6 +305,8 @@ impl Records for MappingRecords {
         self.poses.truncate(*mark);
         self.costs.truncate(*mark);
         self.iterations.truncate(*mark);
+        self.neff.truncate(*mark);
+        self.resampled.truncate(*mark);
     }
 }
 
@@ -193,6 +317,10 @@ pub struct MatcherSettings {
     pub scan_to_map: ScanToMapParams,
     /// ICP (the variant is set by the pose source).
     pub icp: IcpConfig,
+    /// Grid FastSLAM.
+    pub grid_fastslam: GridFastSlamConfig,
+    /// Grid FastSLAM's seed.
+    pub seed: u64,
 }
 
 /// One mapping run. Cloning it is a checkpoint (the grid's tiles are shared
@@ -231,6 +359,8 @@ pub struct MappingSim {
     matched: Pose2,
     /// The last message about something that went wrong (a bad rule).
     note: Option<String>,
+    /// The particle filter, when grid FastSLAM is the pose source.
+    fastslam: Option<Box<GridFastSlam>>,
 }
 
 impl MappingSim {
@@ -267,7 +397,19 @@ impl MappingSim {
             keep_before: false,
             matched: Pose2::IDENTITY,
             note: None,
+            fastslam: (source == PoseSource::GridFastSlam).then(|| {
+                let config = GridFastSlamConfig {
+                    delta: resolution,
+                    ..matchers.grid_fastslam
+                };
+                Box::new(GridFastSlam::new(config, insert, matchers.seed).0)
+            }),
         }
+    }
+
+    /// The particle filter, when grid FastSLAM is the pose source.
+    pub fn grid_fastslam(&self) -> Option<&GridFastSlam> {
+        self.fastslam.as_deref()
     }
 
     /// The input.
@@ -280,9 +422,12 @@ impl MappingSim {
         self.source
     }
 
-    /// The map so far.
+    /// The map so far (grid FastSLAM: the heaviest particle's).
     pub fn grid(&self) -> &ProbabilityGrid {
-        &self.grid
+        self.fastslam
+            .as_ref()
+            .and_then(|f| f.best())
+            .map_or(&self.grid, |p| &p.map)
     }
 
     /// Scans inserted so far.
@@ -347,6 +492,10 @@ impl MappingSim {
     /// `None` before the first scan, or after an insertion made while
     /// [`keep_grid_before_insert`](Self::keep_grid_before_insert) was off.
     pub fn explain_beam(&self, beam: usize) -> Option<Result<BeamUpdate, String>> {
+        if self.fastslam.is_some() {
+            // Every particle inserts into its own map.
+            return None;
+        }
         let (grid, k, pose) = if self.next_is_insert() {
             (&self.grid, self.next, self.pose)
         } else {
@@ -431,7 +580,122 @@ impl MappingSim {
                     m.iterations,
                 ))
             }
-            PoseSource::Truth | PoseSource::Odometry => None,
+            PoseSource::Truth | PoseSource::Odometry | PoseSource::GridFastSlam => None,
+        }
+    }
+
+    /// The estimate at scan `k` between grid FastSLAM's updates: the
+    /// heaviest particle's pose moved by the odometry since the last update.
+    fn grid_estimate(filter: &GridFastSlam, odometry: Pose2) -> Pose2 {
+        let Some(best) = filter.best() else {
+            return odometry;
+        };
+        let Some(last) = filter.last_odometry() else {
+            return best.pose;
+        };
+        let p = best.pose.compose(&last.between(&odometry));
+        Pose2::new(p.x, p.y, wrap_angle(p.theta))
+    }
+
+    /// One grid FastSLAM phase of scan `k`.
+    fn step_grid(&mut self, k: usize, records: &mut MappingRecords) -> MappingPhase {
+        let Some(filter) = self.fastslam.as_deref_mut() else {
+            return MappingPhase::Done;
+        };
+        let input = &self.input.scans[k];
+        let odometry = input.odometry;
+        let scan = &input.scan;
+        let finish = |sim: &mut Self, records: &mut MappingRecords, pose: Pose2| {
+            records.poses.push(pose);
+            sim.pose = pose;
+            sim.last = Some((k, pose));
+            sim.next += 1;
+            sim.stage = Stage::Predict;
+        };
+        match self.stage {
+            Stage::Predict => {
+                records.costs.push(f64::NAN);
+                records.iterations.push(0);
+                records.neff.push(f64::NAN);
+                records.resampled.push(false);
+                if filter.particles().is_empty() || !odometry.is_finite() {
+                    if !odometry.is_finite() {
+                        // A scan without odometry is skipped.
+                        let pose = self.pose;
+                        finish(self, records, pose);
+                        return MappingPhase::GridSkip {
+                            scan: k,
+                            moved: f64::NAN,
+                            turned: f64::NAN,
+                        };
+                    }
+                    let particles = filter.config().particles;
+                    filter.initialize(k, odometry, scan);
+                    finish(self, records, odometry);
+                    return MappingPhase::GridStart { scan: k, particles };
+                }
+                if !filter.update_due(&odometry) {
+                    let d = filter
+                        .last_odometry()
+                        .map_or(Pose2::IDENTITY, |last| last.between(&odometry));
+                    let pose = Self::grid_estimate(filter, odometry);
+                    finish(self, records, pose);
+                    return MappingPhase::GridSkip {
+                        scan: k,
+                        moved: slamlab_core::math::hypot(d.x, d.y),
+                        turned: wrap_angle(d.theta).abs(),
+                    };
+                }
+                let fallbacks = filter.propose(odometry, scan);
+                self.pose = filter.best().map_or(odometry, |p| p.pose);
+                self.stage = Stage::Weight;
+                MappingPhase::GridPropose {
+                    scan: k,
+                    proposal: filter.config().proposal.name(),
+                    fallbacks,
+                }
+            }
+            Stage::Weight => {
+                let neff = filter.normalize();
+                if let Some(n) = records.neff.last_mut() {
+                    *n = neff;
+                }
+                self.pose = filter.best().map_or(odometry, |p| p.pose);
+                self.stage = if filter.resample_due() {
+                    Stage::Resample
+                } else {
+                    Stage::Insert
+                };
+                MappingPhase::GridWeight {
+                    scan: k,
+                    neff,
+                    threshold: filter.config().resample_threshold * filter.particles().len() as f64,
+                }
+            }
+            Stage::Resample => {
+                let (resampled, survivors) = filter.resample_if_needed();
+                if let Some(r) = records.resampled.last_mut() {
+                    *r = resampled;
+                }
+                self.pose = filter.best().map_or(odometry, |p| p.pose);
+                self.stage = Stage::Insert;
+                MappingPhase::GridResample {
+                    scan: k,
+                    survivors,
+                    of: filter.particles().len(),
+                }
+            }
+            Stage::Match | Stage::Iteration(_) | Stage::Insert => {
+                let cells = filter.update_maps(k, scan);
+                let memory_bytes = filter.memory_bytes();
+                let pose = filter.best().map_or(odometry, |p| p.pose);
+                finish(self, records, pose);
+                MappingPhase::GridUpdate {
+                    scan: k,
+                    cells,
+                    memory_bytes,
+                }
+            }
         }
     }
 }
@@ -496,6 +760,9 @@ impl Simulation for MappingSim {
         if k >= self.input.scans.len() {
             return MappingPhase::Done;
         }
+        if self.fastslam.is_some() {
+            return self.step_grid(k, records);
+        }
         match self.stage {
             Stage::Predict => {
                 self.pose = match (&self.input.truth, self.source) {
@@ -509,6 +776,8 @@ impl Simulation for MappingSim {
                 };
                 records.costs.push(f64::NAN);
                 records.iterations.push(0);
+                records.neff.push(f64::NAN);
+                records.resampled.push(false);
                 MappingPhase::Predict {
                     scan: k,
                     pose: self.pose,
@@ -549,7 +818,7 @@ impl Simulation for MappingSim {
                 }
             }
             Stage::Iteration(i) => self.show_iteration(k, i),
-            Stage::Insert => {
+            Stage::Insert | Stage::Weight | Stage::Resample => {
                 self.shown_iteration = None;
                 self.grid_before_insert = self.keep_before.then(|| self.grid.clone());
                 let scan = &self.input.scans[k].scan;
@@ -586,7 +855,11 @@ impl Simulation for MappingSim {
     fn checkpoint_bytes(&self) -> usize {
         // Tiles are shared with the live run until it writes them; count the
         // tile table and a share of the tiles.
-        self.grid.memory_bytes() / 8 + 1024
+        let particles = self
+            .fastslam
+            .as_ref()
+            .map_or(0, |f| f.memory_bytes() / 8 + f.particles().len() * 256);
+        self.grid.memory_bytes() / 8 + particles + 1024
     }
 }
 

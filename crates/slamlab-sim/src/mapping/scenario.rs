@@ -5,6 +5,8 @@
 use crate::params::{Param, Scenario, choose};
 use serde::{Deserialize, Serialize};
 use slamlab_core::grid::{InsertParams, UpdateRule};
+use slamlab_core::particle::MAX_GRID_PARTICLES;
+use slamlab_core::particle::{GridFastSlamConfig, Proposal};
 use slamlab_core::scan::scan_to_map::ScanToMapParams;
 
 /// Where each scan's pose comes from.
@@ -23,20 +25,31 @@ pub enum PoseSource {
     /// (Cartographer's local SLAM).
     #[default]
     ScanToMap,
+    /// Grid FastSLAM (gmapping): particles, each with its path and its own
+    /// map; the pose is the heaviest particle's.
+    #[serde(rename = "grid-fastslam")]
+    GridFastSlam,
 }
 
 impl PoseSource {
     /// Every source, in menu order.
-    pub const ALL: [PoseSource; 5] = [
+    pub const ALL: [PoseSource; 6] = [
         PoseSource::Truth,
         PoseSource::Odometry,
         PoseSource::Icp,
         PoseSource::Plicp,
         PoseSource::ScanToMap,
+        PoseSource::GridFastSlam,
     ];
     /// The names the URL and the CLI use.
-    pub const NAMES: &'static [&'static str] =
-        &["truth", "odometry", "icp", "plicp", "scan-to-map"];
+    pub const NAMES: &'static [&'static str] = &[
+        "truth",
+        "odometry",
+        "icp",
+        "plicp",
+        "scan-to-map",
+        "grid-fastslam",
+    ];
 
     /// The name the URL and the CLI use.
     pub fn name(self) -> &'static str {
@@ -59,6 +72,7 @@ impl PoseSource {
             PoseSource::Icp => "ICP scan-to-scan (point-to-point)",
             PoseSource::Plicp => "ICP scan-to-scan (point-to-line)",
             PoseSource::ScanToMap => "scan-to-map matching",
+            PoseSource::GridFastSlam => "grid FastSLAM (particles, gmapping)",
         }
     }
 }
@@ -130,11 +144,45 @@ pub struct MappingScenario {
     pub range_std: f64,
     /// Simulated odometry noise scale (1: the Monte Carlo lesson's α values).
     pub odometry_noise: f64,
+    /// Grid FastSLAM: particles (gmapping's `particles`).
+    pub particles: usize,
+    /// Grid FastSLAM: the proposal.
+    pub proposal: Proposal,
+    /// Grid FastSLAM: resample when `N_eff` falls below this share of the
+    /// particles (`resampleThreshold`).
+    pub resample_threshold: f64,
+    /// Grid FastSLAM: translation noise per metre of translation (`srr`).
+    pub srr: f64,
+    /// Grid FastSLAM: rotation noise per metre of translation (`srt`).
+    pub srt: f64,
+    /// Grid FastSLAM: translation noise per radian of rotation (`str`).
+    pub str: f64,
+    /// Grid FastSLAM: rotation noise per radian of rotation (`stt`).
+    pub stt: f64,
+    /// Grid FastSLAM: the matcher's search half-width in x and y, metres
+    /// (`lstep`).
+    pub lstep: f64,
+    /// Grid FastSLAM: the matcher's search half-width in heading, radians
+    /// (`astep`).
+    pub astep: f64,
+    /// Grid FastSLAM: the matcher's refinement iterations (`iterations`).
+    pub iterations: usize,
+    /// Grid FastSLAM: the scan likelihood's spread (`lsigma`).
+    pub lsigma: f64,
+    /// Grid FastSLAM: weight smoothing gain (`ogain`).
+    pub ogain: f64,
+    /// Grid FastSLAM: update after this much translation, metres
+    /// (`linearUpdate`).
+    pub linear_update: f64,
+    /// Grid FastSLAM: update after this much rotation, radians
+    /// (`angularUpdate`).
+    pub angular_update: f64,
 }
 
 impl Default for MappingScenario {
     fn default() -> Self {
         let s2m = ScanToMapParams::default();
+        let gm = GridFastSlamConfig::default();
         Self {
             seed: 1,
             map: "maze".to_owned(),
@@ -161,6 +209,20 @@ impl Default for MappingScenario {
             lidar_range: 12.0,
             range_std: 0.03,
             odometry_noise: 1.0,
+            particles: gm.particles,
+            proposal: gm.proposal,
+            resample_threshold: gm.resample_threshold,
+            srr: gm.srr,
+            srt: gm.srt,
+            str: gm.str,
+            stt: gm.stt,
+            lstep: gm.lstep,
+            astep: gm.astep,
+            iterations: gm.iterations,
+            lsigma: gm.lsigma,
+            ogain: gm.ogain,
+            linear_update: gm.linear_update,
+            angular_update: gm.angular_update,
         }
     }
 }
@@ -189,6 +251,30 @@ impl MappingScenario {
         InsertParams {
             rule: self.update_rule(),
             max_range_free: self.max_range_free,
+        }
+    }
+
+    /// Grid FastSLAM's configuration: this scenario's gmapping parameters,
+    /// its grid resolution as gmapping's `delta`, the rest gmapping's
+    /// defaults.
+    pub fn grid_fastslam_config(&self) -> GridFastSlamConfig {
+        GridFastSlamConfig {
+            particles: self.particles,
+            proposal: self.proposal,
+            resample_threshold: self.resample_threshold,
+            srr: self.srr,
+            srt: self.srt,
+            str: self.str,
+            stt: self.stt,
+            lstep: self.lstep,
+            astep: self.astep,
+            iterations: self.iterations,
+            lsigma: self.lsigma,
+            ogain: self.ogain,
+            linear_update: self.linear_update,
+            angular_update: self.angular_update,
+            delta: self.resolution,
+            ..GridFastSlamConfig::default()
         }
     }
 
@@ -258,7 +344,13 @@ pub static PARAMS: &[Param<MappingScenario>] = &[
         |s| Some(RULES[s.rule as usize].to_owned()),
         |s, v| choose(RULES, v).map(|i| s.rule = [RuleKind::LogOdds, RuleKind::Odds][i]),
     ),
-    field!("resolution", "m", "grid cell size", (0.01, 0.5), resolution),
+    field!(
+        "resolution",
+        "m",
+        "grid cell size (gmapping's delta)",
+        (0.01, 0.5),
+        resolution
+    ),
     field!(
         "max-range-free",
         "m",
@@ -381,7 +473,110 @@ pub static PARAMS: &[Param<MappingScenario>] = &[
         (0.0, 20.0),
         odometry_noise
     ),
+    Param::count(
+        "particles",
+        "",
+        "grid FastSLAM: particles, each with its own map",
+        (1, MAX_GRID_PARTICLES as u64),
+        |s| Some(s.particles as u64),
+        |s, v| s.particles = usize::try_from(v).unwrap_or(MAX_GRID_PARTICLES),
+    ),
+    Param::words(
+        "proposal",
+        "grid FastSLAM: odometry (the motion model) or scan-match (gmapping's improved proposal)",
+        PROPOSALS,
+        |s| Some(s.proposal.name().to_owned()),
+        |s, v| choose(PROPOSALS, v).map(|i| s.proposal = Proposal::ALL[i]),
+    ),
+    field!(
+        "resample-threshold",
+        "",
+        "grid FastSLAM: resample when N_eff falls below this share of the particles",
+        (0.0, 1.0),
+        resample_threshold
+    ),
+    field!(
+        "srr",
+        "",
+        "grid FastSLAM: translation noise per metre of translation",
+        (0.0, 2.0),
+        srr
+    ),
+    field!(
+        "srt",
+        "",
+        "grid FastSLAM: rotation noise per metre of translation (rad/m)",
+        (0.0, 2.0),
+        srt
+    ),
+    field!(
+        "str",
+        "",
+        "grid FastSLAM: translation noise per radian of rotation (m/rad)",
+        (0.0, 2.0),
+        str
+    ),
+    field!(
+        "stt",
+        "",
+        "grid FastSLAM: rotation noise per radian of rotation",
+        (0.0, 2.0),
+        stt
+    ),
+    field!(
+        "lstep",
+        "m",
+        "grid FastSLAM: the scan matcher's search half-width in x and y",
+        (0.0, 2.0),
+        lstep
+    ),
+    field!(
+        "astep",
+        "rad",
+        "grid FastSLAM: the scan matcher's search half-width in heading",
+        (0.0, 1.5),
+        astep
+    ),
+    Param::count(
+        "iterations",
+        "",
+        "grid FastSLAM: the scan matcher's refinement iterations",
+        (1, 100),
+        |s| Some(s.iterations as u64),
+        |s, v| s.iterations = usize::try_from(v).unwrap_or(100),
+    ),
+    field!(
+        "lsigma",
+        "",
+        "grid FastSLAM: the scan likelihood's spread",
+        (0.001, 10.0),
+        lsigma
+    ),
+    field!(
+        "ogain",
+        "",
+        "grid FastSLAM: weight smoothing gain (weights exp(Δℓ / (ogain · M)))",
+        (0.1, 1000.0),
+        ogain
+    ),
+    field!(
+        "linear-update",
+        "m",
+        "grid FastSLAM: update after this much translation",
+        (0.0, 20.0),
+        linear_update
+    ),
+    field!(
+        "angular-update",
+        "rad",
+        "grid FastSLAM: update after this much rotation",
+        (0.0, 6.3),
+        angular_update
+    ),
 ];
+
+/// The proposals' names, in [`Proposal`] order.
+const PROPOSALS: &[&str] = &["odometry", "scan-match"];
 
 impl Scenario for MappingScenario {
     const LESSON: &'static str = "mapping";
@@ -436,6 +631,11 @@ mod tests {
     fn pose_source_names_round_trip() {
         for p in PoseSource::ALL {
             assert_eq!(PoseSource::from_name(p.name()), Some(p));
+            // Scenario files spell it as the URL does.
+            assert_eq!(
+                serde_json::to_value(p).unwrap(),
+                serde_json::Value::from(p.name())
+            );
         }
     }
 }

@@ -221,3 +221,119 @@ fn a_beam_is_explained_before_and_after_its_scan_goes_in() {
     }
     assert!(s.sim().explain_beam(100_000).unwrap().is_err());
 }
+
+/// Grid FastSLAM in the lesson, phase by phase, is the filter the experiment
+/// runs scan by scan: the same seed gives the same heaviest particle to the
+/// bit, and every update takes propose, weight, (resample,) update maps.
+#[test]
+fn grid_fastslam_phase_by_phase_is_the_experiments_filter_to_the_bit() {
+    let scenario = MappingScenario {
+        map: "maze".to_owned(),
+        steps: 160,
+        seed: 4,
+        poses: PoseSource::GridFastSlam,
+        particles: 8,
+        ..MappingScenario::default()
+    };
+    let grid = Arc::new(builtin_map("maze").unwrap());
+    let input = Arc::new(simulated_input(&scenario, grid, "maze").unwrap());
+    let (mut s, notices) = MappingSession::new(scenario.clone(), input.clone());
+    assert!(notices.is_empty(), "{notices:?}");
+    let mut labels = Vec::new();
+    while !s.sim().is_done() {
+        let phase = s.stepper_mut().step_phase();
+        labels.push(phase.label());
+    }
+    let (filter, _) = crate::grid_fastslam::run_grid_fastslam(
+        &input,
+        scenario.grid_fastslam_config(),
+        scenario.insert_params(),
+        scenario.seed,
+    );
+    let lesson = s.sim().grid_fastslam().unwrap();
+    assert!(filter.updates() > 5, "{} updates", filter.updates());
+    assert_eq!(lesson.updates(), filter.updates());
+    assert_eq!(lesson.resamplings(), filter.resamplings());
+    let bits = |f: &slamlab_core::particle::GridFastSlam| {
+        f.particles()
+            .iter()
+            .map(|p| {
+                [
+                    p.pose.x.to_bits(),
+                    p.pose.y.to_bits(),
+                    p.pose.theta.to_bits(),
+                ]
+            })
+            .collect::<Vec<_>>()
+    };
+    assert_eq!(bits(lesson), bits(&filter));
+    // The phases: one per skipped scan, and 3 or 4 per update.
+    let count = |what: &str| labels.iter().filter(|l| l.contains(what)).count();
+    let updates = filter.updates() - 1;
+    assert_eq!(count("proposal"), updates);
+    assert_eq!(count("N_eff"), updates);
+    assert_eq!(count("resampled"), filter.resamplings());
+    assert_eq!(count("every particle's map updated"), updates);
+    assert_eq!(count("skipped"), 160 - updates - 1);
+    let records = s.stepper().records();
+    assert_eq!(records.poses.len(), 160);
+    assert_eq!(
+        records.neff.iter().filter(|n| n.is_finite()).count(),
+        updates
+    );
+    assert_eq!(
+        records.resampled.iter().filter(|r| **r).count(),
+        filter.resamplings()
+    );
+    let summary = s.summary();
+    let particles = summary.particles.unwrap();
+    assert_eq!(particles.particles, 8);
+    assert_eq!(particles.updates, filter.updates());
+    // The map shown is the heaviest particle's; its error is its path's.
+    assert_eq!(
+        s.sim().grid().known_cells(),
+        filter.best().unwrap().map.known_cells()
+    );
+    let rmse = summary.trajectory_rmse.unwrap();
+    assert!(rmse.is_finite() && rmse < 0.5, "{rmse}");
+}
+
+/// Stepping back through grid FastSLAM's phases and forward again lands on
+/// the same particles (the checkpoints hold the filter and its random
+/// stream).
+#[test]
+fn grid_fastslam_steps_back_and_replays_the_same_particles() {
+    let scenario = MappingScenario {
+        steps: 90,
+        seed: 6,
+        poses: PoseSource::GridFastSlam,
+        particles: 6,
+        ..MappingScenario::default()
+    };
+    let grid = Arc::new(builtin_map("maze").unwrap());
+    let input = Arc::new(simulated_input(&scenario, grid, "maze").unwrap());
+    let (mut s, _) = MappingSession::new(scenario, input);
+    for _ in 0..80 {
+        s.stepper_mut().step_tick();
+    }
+    let pose = |s: &MappingSession| {
+        let f = s.sim().grid_fastslam().unwrap();
+        f.particles()
+            .iter()
+            .map(|p| (p.pose.x.to_bits(), p.pose.y.to_bits()))
+            .collect::<Vec<_>>()
+    };
+    let before = pose(&s);
+    let neff = s.stepper().records().neff.clone();
+    for _ in 0..30 {
+        assert!(s.stepper_mut().step_back());
+    }
+    while s.stepper().records().poses.len() < 80 {
+        s.stepper_mut().step_phase();
+    }
+    assert_eq!(pose(&s), before);
+    assert_eq!(
+        format!("{:?}", s.stepper().records().neff),
+        format!("{neff:?}")
+    );
+}
