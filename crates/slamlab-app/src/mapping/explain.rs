@@ -135,6 +135,64 @@ pub fn explanation_ui(ui: &mut egui::Ui, session: &MappingSession) {
                 ));
             }
         }
+        Some(MappingPhase::GridParticle {
+            scan,
+            particle,
+            of,
+            fell_back,
+        }) => {
+            let proposal = sim
+                .grid_fastslam()
+                .and_then(|f| f.proposals().get(*particle));
+            let n = particle + 1;
+            match proposal {
+                Some(p) if !fell_back => {
+                    let cm = |v: f64| 100.0 * v.max(0.0).sqrt();
+                    let (matched, gaussian) = (p.matched, p.gaussian);
+                    ui.label(format!(
+                        "Propose, scan {scan}, particle {n} of {of}: its odometry prediction \
+                         ({:.3} m, {:.3} m, {:.1}°) (hollow circle on the map) was matched against its \
+                         own map{}.",
+                        p.predicted.x,
+                        p.predicted.y,
+                        p.predicted.theta.to_degrees(),
+                        matched.map_or(String::new(), |m| format!(
+                            " to ({:.3} m, {:.3} m, {:.1}°)",
+                            m.x,
+                            m.y,
+                            m.theta.to_degrees()
+                        )),
+                    ));
+                    if let Some(g) = gaussian {
+                        let c = g.covariance;
+                        ui.label(format!(
+                            "Around the match, τ_j = p(z | x_j, m) · p(x_j | x_t−1, u) at K = {} poses \
+                             gives the Gaussian μ = ({:.3} m, {:.3} m, {:.1}°), σ = ({:.1} cm, {:.1} cm, \
+                             {:.2}°) (Eq. 14-16 of Grisetti 2007). The new pose is drawn from it \
+                             ({:.3} m, {:.3} m, {:.1}°); the weight is multiplied by η, log η = {:.1} (Eq. 19).",
+                            g.samples,
+                            g.mean.x,
+                            g.mean.y,
+                            g.mean.theta.to_degrees(),
+                            cm(c[(0, 0)]),
+                            cm(c[(1, 1)]),
+                            c[(2, 2)].max(0.0).sqrt().to_degrees(),
+                            p.pose.x,
+                            p.pose.y,
+                            p.pose.theta.to_degrees(),
+                            g.log_eta
+                        ));
+                    }
+                }
+                _ => {
+                    ui.label(format!(
+                        "Propose, scan {scan}, particle {n} of {of}: the scan could not be matched \
+                         against this particle's map (no end point near an occupied cell), so it takes \
+                         the odometry proposal for this update and is weighted by the scan likelihood."
+                    ));
+                }
+            }
+        }
         Some(MappingPhase::GridWeight {
             scan,
             neff,

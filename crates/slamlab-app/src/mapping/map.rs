@@ -183,6 +183,16 @@ pub fn map_ui(
                         .color(color)
                         .strong(),
                 );
+                if matches!(
+                    session.stepper().last_phase(),
+                    Some(slamlab_sim::mapping::MappingPhase::GridParticle { .. })
+                ) {
+                    ui.label(
+                        egui::RichText::new("one particle's proposal: prediction (small circle) — scan match — pose drawn (ring)")
+                            .color(palette::ORANGE)
+                            .strong(),
+                    );
+                }
                 if shown_particle.is_some() {
                     ui.label(
                         egui::RichText::new("— the shown map's particle")
@@ -334,6 +344,14 @@ pub fn map_ui(
         );
         let head = centre + map_canvas::screen_dir(pose.theta) * radius * 1.6;
         painter.line_segment([centre, head], Stroke::new(2.0, color));
+    }
+    // One particle's proposal, on top of the robot (its moves are centimetres).
+    if view.path
+        && let Some(filter) = filter
+        && let Some(slamlab_sim::mapping::MappingPhase::GridParticle { particle, .. }) =
+            session.stepper().last_phase()
+    {
+        super::particles::draw_proposal(&painter, &t, filter, *particle, palette::ORANGE);
     }
     draw_scale_and_axes(&painter, &t, &colors);
     clicked

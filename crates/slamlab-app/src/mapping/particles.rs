@@ -160,6 +160,33 @@ pub fn draw_particles(
     }
 }
 
+/// The proposal of particle `i` in the update under way: its odometry
+/// prediction (a hollow circle), the scan match (a line from the
+/// prediction), and the pose drawn (a ring).
+pub fn draw_proposal(
+    painter: &egui::Painter,
+    t: &MapTransform,
+    filter: &GridFastSlam,
+    i: usize,
+    color: Color32,
+) {
+    let Some(p) = filter.proposals().get(i) else {
+        return;
+    };
+    let predicted = t.xy(p.predicted.x, p.predicted.y);
+    let stroke = Stroke::new(1.5, color);
+    painter.circle_stroke(predicted, 5.0, stroke);
+    let mut to = predicted;
+    if let Some(m) = p.matched {
+        let matched = t.xy(m.x, m.y);
+        painter.line_segment([predicted, matched], stroke);
+        to = matched;
+    }
+    let drawn = t.xy(p.pose.x, p.pose.y);
+    painter.line_segment([to, drawn], Stroke::new(1.0, color));
+    painter.circle_stroke(drawn, 8.0, stroke);
+}
+
 /// The particle whose pose is nearest the screen point `at`, within
 /// `radius` pixels.
 pub fn particle_at(

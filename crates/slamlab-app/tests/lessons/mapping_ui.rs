@@ -3,7 +3,9 @@
 //! scans, exports the map as a ROS map, hands the map to the Monte Carlo
 //! lesson, and the rendered map shows occupied cells and the scan.
 
-use super::common::{count_pixels, harness, lesson_of, lesson_of_mut, render_or_skip};
+use super::common::{
+    count_pixels, harness, harness_sized, lesson_of, lesson_of_mut, render_or_skip,
+};
 use egui_kittest::Harness;
 use egui_kittest::kittest::Queryable as _;
 use slamlab_app::SlamLabApp;
@@ -269,16 +271,22 @@ fn grid_fastslam_steps_its_phases_and_shows_any_particles_map() {
     for _ in 0..400 {
         lesson_mut(&mut h).apply_time_action(slamlab_app::time_control::TimeAction::StepPhase);
         let p = phase(&h);
-        if p.contains("proposal") || p.contains("N_eff") || p.contains("maps") {
+        if !p.contains("skipped") {
             seen.push(p);
         }
-        if seen.len() >= 3 {
+        if seen.len() >= 14 {
             break;
         }
     }
-    assert!(seen[0].contains("scan-match proposal"), "{seen:?}");
-    assert!(seen[1].contains("N_eff"), "{seen:?}");
-    assert!(seen[2].contains("every particle's map updated"), "{seen:?}");
+    // Each particle's scan match is a phase of its own, then the weights.
+    for (i, p) in seen[..12].iter().enumerate() {
+        assert!(p.contains(&format!("particle {} of 12", i + 1)), "{seen:?}");
+    }
+    assert!(seen[12].contains("N_eff"), "{seen:?}");
+    assert!(
+        seen[13].contains("every particle's map updated") || seen[13].contains("resampled"),
+        "{seen:?}"
+    );
     for _ in 0..150 {
         lesson_mut(&mut h).step_tick();
     }
@@ -336,4 +344,46 @@ fn a_headless_grid_fastslam_run_ends_at_the_pose_the_browser_must_match() {
         .collect();
     eprintln!("best {best:?}, {g}, rmse {}", state["trajectory_rmse"]);
     assert_eq!(best, HEADLESS_GRID_BEST);
+}
+
+/// At 800 x 500, in the middle of an update: one particle's proposal is drawn
+/// (its prediction, the scan match and the pose drawn, in orange) and the
+/// explanation gives its Gaussian.
+#[test]
+fn one_particles_proposal_is_drawn_and_explained_at_800_by_500() {
+    let mut h = harness_sized(
+        "lesson=mapping&map=maze&seed=2&steps=200&poses=grid-fastslam&particles=12&follow=1",
+        egui::vec2(800.0, 500.0),
+    );
+    // Up to the third particle of the first update.
+    let mut phases = 0;
+    while phases < 500 {
+        lesson_mut(&mut h).apply_time_action(slamlab_app::time_control::TimeAction::StepPhase);
+        phases += 1;
+        let last = lesson(&h).time_info().last_phase.unwrap_or_default();
+        if last.contains("particle 3 of 12") {
+            break;
+        }
+    }
+    assert!(phases < 500, "no proposal phase");
+    lesson_mut(&mut h).view.follow_robot = true;
+    h.run();
+    let Some(image) = render_or_skip(&mut h) else {
+        return;
+    };
+    let _ = image.save(std::env::temp_dir().join("slamlab-grid-fastslam-800x500.png"));
+    let orange = count_pixels(image.as_raw(), [0xE6, 0x9F, 0x00], 30);
+    assert!(orange > 40, "the proposal's marks: {orange} orange pixels");
+    // The same moment at full size, with the explanation open.
+    let mut h =
+        harness("lesson=mapping&map=maze&seed=2&steps=200&poses=grid-fastslam&particles=12");
+    for _ in 0..phases {
+        lesson_mut(&mut h).apply_time_action(slamlab_app::time_control::TimeAction::StepPhase);
+    }
+    h.run();
+    let explained = h.query_by_label_contains("gives the Gaussian").is_some();
+    assert!(explained, "the explanation names the proposal's Gaussian");
+    if let Some(image) = render_or_skip(&mut h) {
+        let _ = image.save(std::env::temp_dir().join("slamlab-grid-fastslam-proposal.png"));
+    }
 }

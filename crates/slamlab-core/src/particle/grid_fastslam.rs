@@ -660,6 +660,8 @@ pub struct GridFastSlam {
     last_odometry: Option<Pose2>,
     /// The last update's proposals, one per particle.
     proposals: Vec<ParticleProposal>,
+    /// The odometry increment of the update whose proposals are under way.
+    pending_delta: Option<Pose2>,
     updates: usize,
     resamplings: usize,
     fallbacks: usize,
@@ -683,6 +685,7 @@ impl GridFastSlam {
                 lookup: Arc::new(ProbabilityLookup::default()),
                 last_odometry: None,
                 proposals: Vec::new(),
+                pending_delta: None,
                 updates: 0,
                 resamplings: 0,
                 fallbacks: 0,
@@ -846,6 +849,7 @@ impl GridFastSlam {
         self.neff = m as f64;
         self.last_odometry = Some(odometry);
         self.proposals.clear();
+        self.pending_delta = None;
         self.updates = 1;
         self.note_memory();
         GridUpdateReport {
@@ -862,63 +866,96 @@ impl GridFastSlam {
     /// `odometry` and the scan, and adds its log weight factor. Returns how
     /// many fell back to the odometry proposal.
     pub fn propose(&mut self, odometry: Pose2, scan: &Scan) -> usize {
-        let Some(last) = self.last_odometry.replace(odometry) else {
+        if !self.begin_proposals(odometry) {
             return 0;
-        };
-        let delta = last.between(&odometry);
-        let delta = Pose2::new(delta.x, delta.y, wrap_angle(delta.theta));
-        let points = LikelihoodPoints::new(scan);
-        let matcher = self.config.matcher();
-        let mut fallbacks = 0;
-        self.proposals.clear();
-        for p in &mut self.particles {
-            let prior = MotionPrior::new(&self.config, p.pose, delta);
-            let improved = match self.config.proposal {
-                Proposal::ScanMatch => improved_proposal(
-                    &p.map,
-                    &self.lookup,
-                    &points,
-                    &prior,
-                    &matcher,
-                    &self.config,
-                ),
-                Proposal::Odometry => None,
-            };
-            let proposal = match improved {
-                Some((matched, gaussian)) => {
-                    let pose = draw_gaussian(&gaussian, &mut self.rng);
-                    ParticleProposal {
-                        predicted: prior.mean,
-                        matched: Some(matched),
-                        gaussian: Some(gaussian),
-                        pose,
-                        log_factor: gaussian.log_eta,
-                        fell_back: false,
-                    }
-                }
-                None => {
-                    let fell_back = self.config.proposal == Proposal::ScanMatch;
-                    fallbacks += usize::from(fell_back);
-                    let pose = draw_from_motion(&self.config, p.pose, delta, &mut self.rng);
-                    let (l, _) = scan_log_likelihood(&p.map, &points, &pose, &self.config);
-                    ParticleProposal {
-                        predicted: prior.mean,
-                        matched: None,
-                        gaussian: None,
-                        pose,
-                        log_factor: l,
-                        fell_back,
-                    }
-                }
-            };
-            p.pose = proposal.pose;
-            if proposal.log_factor.is_finite() {
-                p.log_weight += proposal.log_factor;
-            }
-            self.proposals.push(proposal);
         }
-        self.fallbacks += fallbacks;
+        let points = LikelihoodPoints::new(scan);
+        let mut fallbacks = 0;
+        while let Some(p) = self.propose_next(&points) {
+            fallbacks += usize::from(p.fell_back);
+        }
         fallbacks
+    }
+
+    /// Step 1 one particle at a time (the lesson shows each scan match):
+    /// starts an update for the scan taken at `odometry`. Returns false (and
+    /// changes nothing) before the first scan. Then
+    /// [`propose_next`](Self::propose_next) moves the particles in order.
+    pub fn begin_proposals(&mut self, odometry: Pose2) -> bool {
+        let Some(last) = self.last_odometry else {
+            return false;
+        };
+        self.last_odometry = Some(odometry);
+        let delta = last.between(&odometry);
+        self.pending_delta = Some(Pose2::new(delta.x, delta.y, wrap_angle(delta.theta)));
+        self.proposals.clear();
+        true
+    }
+
+    /// Moves the next particle (in index order) by its proposal for the scan
+    /// whose end points are `points`, and returns what it did; `None` when
+    /// every particle has moved (or no update was begun).
+    pub fn propose_next(&mut self, points: &LikelihoodPoints) -> Option<&ParticleProposal> {
+        let delta = self.pending_delta?;
+        let i = self.proposals.len();
+        let Some(p) = self.particles.get_mut(i) else {
+            self.pending_delta = None;
+            return None;
+        };
+        let prior = MotionPrior::new(&self.config, p.pose, delta);
+        let improved = match self.config.proposal {
+            Proposal::ScanMatch => improved_proposal(
+                &p.map,
+                &self.lookup,
+                points,
+                &prior,
+                &self.config.matcher(),
+                &self.config,
+            ),
+            Proposal::Odometry => None,
+        };
+        let proposal = match improved {
+            Some((matched, gaussian)) => {
+                let pose = draw_gaussian(&gaussian, &mut self.rng);
+                ParticleProposal {
+                    predicted: prior.mean,
+                    matched: Some(matched),
+                    gaussian: Some(gaussian),
+                    pose,
+                    log_factor: gaussian.log_eta,
+                    fell_back: false,
+                }
+            }
+            None => {
+                let fell_back = self.config.proposal == Proposal::ScanMatch;
+                let pose = draw_from_motion(&self.config, p.pose, delta, &mut self.rng);
+                let (l, _) = scan_log_likelihood(&p.map, points, &pose, &self.config);
+                ParticleProposal {
+                    predicted: prior.mean,
+                    matched: None,
+                    gaussian: None,
+                    pose,
+                    log_factor: l,
+                    fell_back,
+                }
+            }
+        };
+        p.pose = proposal.pose;
+        if proposal.log_factor.is_finite() {
+            p.log_weight += proposal.log_factor;
+        }
+        self.fallbacks += usize::from(proposal.fell_back);
+        if i + 1 == self.particles.len() {
+            self.pending_delta = None;
+        }
+        self.proposals.push(proposal);
+        self.proposals.last()
+    }
+
+    /// Whether an update's proposals are under way (begun, not every particle
+    /// moved yet).
+    pub fn proposing(&self) -> bool {
+        self.pending_delta.is_some()
     }
 
     /// Step 2: the normalized weights, gmapping's smoothing

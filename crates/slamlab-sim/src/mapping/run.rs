@@ -7,8 +7,9 @@
 //! iteration's correspondences and pose).
 //!
 //! With grid FastSLAM as the pose source a scan takes gmapping's phases
-//! instead: *propose* (every particle's odometry sample, or its scan match and
-//! the Gaussian around it), *weight* (`N_eff`), *resample* (only when `N_eff`
+//! instead: *propose* (every particle's odometry sample in one phase, or each
+//! particle's scan match and the Gaussian around it in a phase of its own),
+//! *weight* (`N_eff`), *resample* (only when `N_eff`
 //! is low) and *update maps*; a scan taken before the robot has moved
 //! `linear_update` or `angular_update` is skipped in one phase, as gmapping
 //! skips it.
@@ -23,7 +24,8 @@ use slamlab_core::Pose2;
 use slamlab_core::grid::{
     BeamUpdate, Cell, InsertParams, InsertReport, OccupancyGrid, ProbabilityGrid,
 };
-use slamlab_core::particle::{GridFastSlam, GridFastSlamConfig};
+use slamlab_core::particle::grid_fastslam::LikelihoodPoints;
+use slamlab_core::particle::{GridFastSlam, GridFastSlamConfig, Proposal};
 use slamlab_core::scan::icp::{IcpConfig, IcpIteration, IcpVariant, align};
 use slamlab_core::scan::scan_to_map::{
     ProbabilityLookup, ScanToMapParams, ScanToMapRecord, match_scan_to_map,
@@ -74,6 +76,9 @@ enum Stage {
     Match,
     /// Showing ICP iteration `i` (0-based) of the current scan's match.
     Iteration(usize),
+    /// Grid FastSLAM: the particles are being moved by the improved
+    /// proposal, one per phase.
+    Proposing,
     /// Grid FastSLAM: the particles are proposed; next their weights.
     Weight,
     /// Grid FastSLAM: `N_eff` is low; next the resampling.
@@ -166,6 +171,17 @@ pub enum MappingPhase {
         /// Particles whose scan match failed and took the odometry proposal.
         fallbacks: usize,
     },
+    /// Grid FastSLAM moved one particle by the improved proposal.
+    GridParticle {
+        /// Scan index.
+        scan: usize,
+        /// The particle (0-based).
+        particle: usize,
+        /// Particles.
+        of: usize,
+        /// Its scan could not be matched: it took the odometry proposal.
+        fell_back: bool,
+    },
     /// Grid FastSLAM weighted the particles.
     GridWeight {
         /// Scan index.
@@ -244,6 +260,19 @@ impl MappingPhase {
                     format!("scan {scan}: {proposal} proposal ({fallbacks} fell back to odometry)")
                 } else {
                     format!("scan {scan}: {proposal} proposal")
+                }
+            }
+            MappingPhase::GridParticle {
+                scan,
+                particle,
+                of,
+                fell_back,
+            } => {
+                let n = particle + 1;
+                if *fell_back {
+                    format!("scan {scan}: particle {n} of {of} could not match: odometry proposal")
+                } else {
+                    format!("scan {scan}: particle {n} of {of} scan-matched, pose drawn")
                 }
             }
             MappingPhase::GridWeight {
@@ -646,6 +675,12 @@ impl MappingSim {
                         turned: wrap_angle(d.theta).abs(),
                     };
                 }
+                if filter.config().proposal == Proposal::ScanMatch {
+                    // One particle per phase: each scan match can be seen.
+                    filter.begin_proposals(odometry);
+                    self.stage = Stage::Proposing;
+                    return self.step_grid(k, records);
+                }
                 let fallbacks = filter.propose(odometry, scan);
                 self.pose = filter.best().map_or(odometry, |p| p.pose);
                 self.stage = Stage::Weight;
@@ -653,6 +688,26 @@ impl MappingSim {
                     scan: k,
                     proposal: filter.config().proposal.name(),
                     fallbacks,
+                }
+            }
+            Stage::Proposing => {
+                let of = filter.particles().len();
+                let points = LikelihoodPoints::new(scan);
+                let Some(p) = filter.propose_next(&points) else {
+                    self.stage = Stage::Weight;
+                    return self.step_grid(k, records);
+                };
+                let (pose, fell_back) = (p.pose, p.fell_back);
+                let particle = filter.proposals().len() - 1;
+                if !filter.proposing() {
+                    self.stage = Stage::Weight;
+                }
+                self.pose = pose;
+                MappingPhase::GridParticle {
+                    scan: k,
+                    particle,
+                    of,
+                    fell_back,
                 }
             }
             Stage::Weight => {
@@ -818,7 +873,7 @@ impl Simulation for MappingSim {
                 }
             }
             Stage::Iteration(i) => self.show_iteration(k, i),
-            Stage::Insert | Stage::Weight | Stage::Resample => {
+            Stage::Insert | Stage::Proposing | Stage::Weight | Stage::Resample => {
                 self.shown_iteration = None;
                 self.grid_before_insert = self.keep_before.then(|| self.grid.clone());
                 let scan = &self.input.scans[k].scan;

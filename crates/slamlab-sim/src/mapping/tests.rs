@@ -224,7 +224,8 @@ fn a_beam_is_explained_before_and_after_its_scan_goes_in() {
 
 /// Grid FastSLAM in the lesson, phase by phase, is the filter the experiment
 /// runs scan by scan: the same seed gives the same heaviest particle to the
-/// bit, and every update takes propose, weight, (resample,) update maps.
+/// bit, and every update takes each particle's proposal, weight,
+/// (resample,) update maps.
 #[test]
 fn grid_fastslam_phase_by_phase_is_the_experiments_filter_to_the_bit() {
     let scenario = MappingScenario {
@@ -267,10 +268,12 @@ fn grid_fastslam_phase_by_phase_is_the_experiments_filter_to_the_bit() {
             .collect::<Vec<_>>()
     };
     assert_eq!(bits(lesson), bits(&filter));
-    // The phases: one per skipped scan, and 3 or 4 per update.
+    // The phases: one per skipped scan; per update one per particle's scan
+    // match, then weight, (resample,) update maps.
     let count = |what: &str| labels.iter().filter(|l| l.contains(what)).count();
     let updates = filter.updates() - 1;
-    assert_eq!(count("proposal"), updates);
+    assert_eq!(count(": particle "), 8 * updates);
+    assert_eq!(count("particle 8 of 8"), updates);
     assert_eq!(count("N_eff"), updates);
     assert_eq!(count("resampled"), filter.resamplings());
     assert_eq!(count("every particle's map updated"), updates);
