@@ -17,12 +17,18 @@ struct Sample {
     cpu_ms: Option<f32>,
     sim_ms: f32,
     interval_ms: f32,
+    /// Whether the frame `cpu_ms` measures ran a filter update (a lesson's
+    /// heavy step, such as grid FastSLAM's scan matching).
+    update: bool,
 }
 
 /// The last [`WINDOW`] frames' timings.
 #[derive(Clone, Debug, Default)]
 pub struct FrameStats {
     samples: VecDeque<Sample>,
+    /// Whether the last recorded frame ran a filter update (its CPU time
+    /// arrives with the next frame).
+    last_update: bool,
 }
 
 /// Medians and 95th percentiles over the recent frames, milliseconds.
@@ -40,11 +46,29 @@ pub struct FrameSummary {
     pub sim_ms_p95: f32,
     /// Time between frames; 1000 / this is the frame rate.
     pub interval_ms_median: f32,
+    /// Frames that ran a filter update (lessons that say so; 0 elsewhere).
+    pub update_frames: usize,
+    /// CPU time per frame over the frames without a filter update.
+    pub cpu_ms_median_outside_updates: Option<f32>,
+    /// CPU time per frame over the frames with one.
+    pub cpu_ms_median_update_frames: Option<f32>,
 }
 
 impl FrameStats {
     /// Records one frame. `cpu_ms` is eframe's CPU time of the previous frame.
     pub fn record(&mut self, cpu_ms: Option<f32>, sim_ms: f32, interval_ms: f32) {
+        self.record_frame(cpu_ms, sim_ms, interval_ms, false);
+    }
+
+    /// Records one frame that ran a filter update (`update`) or not.
+    pub fn record_frame(
+        &mut self,
+        cpu_ms: Option<f32>,
+        sim_ms: f32,
+        interval_ms: f32,
+        update: bool,
+    ) {
+        let measured_update = std::mem::replace(&mut self.last_update, update);
         if self.samples.len() == WINDOW {
             self.samples.pop_front();
         }
@@ -53,6 +77,7 @@ impl FrameStats {
             cpu_ms: cpu_ms.and_then(finite),
             sim_ms: finite(sim_ms).unwrap_or(0.0),
             interval_ms: finite(interval_ms).unwrap_or(0.0),
+            update: measured_update,
         });
     }
 
@@ -64,6 +89,13 @@ impl FrameStats {
         let cpu: Vec<f32> = self.samples.iter().filter_map(|s| s.cpu_ms).collect();
         let sim: Vec<f32> = self.samples.iter().map(|s| s.sim_ms).collect();
         let interval: Vec<f32> = self.samples.iter().map(|s| s.interval_ms).collect();
+        let cpu_where = |update: bool| -> Vec<f32> {
+            self.samples
+                .iter()
+                .filter(|s| s.update == update)
+                .filter_map(|s| s.cpu_ms)
+                .collect()
+        };
         Some(FrameSummary {
             frames: self.samples.len(),
             cpu_ms_median: quantile(cpu.clone(), 0.5),
@@ -71,6 +103,9 @@ impl FrameStats {
             sim_ms_median: quantile(sim.clone(), 0.5).unwrap_or(0.0),
             sim_ms_p95: quantile(sim, 0.95).unwrap_or(0.0),
             interval_ms_median: quantile(interval, 0.5).unwrap_or(0.0),
+            update_frames: self.samples.iter().filter(|s| s.update).count(),
+            cpu_ms_median_outside_updates: quantile(cpu_where(false), 0.5),
+            cpu_ms_median_update_frames: quantile(cpu_where(true), 0.5),
         })
     }
 
@@ -127,6 +162,26 @@ mod tests {
         assert_eq!(s.sim_ms_median, 70.0);
         assert_eq!(s.interval_ms_median, 20.0);
         assert!(stats.label().contains("50 fps"), "{}", stats.label());
+    }
+
+    #[test]
+    fn update_frames_are_told_apart_by_the_frame_their_cpu_time_measures() {
+        let mut stats = FrameStats::default();
+        // Every fourth frame runs an update costing 40 ms; the others 5 ms.
+        // eframe reports a frame's CPU time with the next frame.
+        let mut previous_cpu = None;
+        for i in 0..100 {
+            let update = i % 4 == 0;
+            stats.record_frame(previous_cpu, 1.0, 16.0, update);
+            previous_cpu = Some(if update { 40.0 } else { 5.0 });
+        }
+        let s = stats
+            .summary()
+            .unwrap_or_else(|| panic!("frames were recorded"));
+        assert_eq!(s.update_frames, 25);
+        assert_eq!(s.cpu_ms_median_outside_updates, Some(5.0));
+        assert_eq!(s.cpu_ms_median_update_frames, Some(40.0));
+        assert_eq!(s.cpu_ms_median, Some(5.0));
     }
 
     #[test]

@@ -197,6 +197,12 @@ pub trait Lesson: std::fmt::Debug {
     fn read_input(&mut self, _ctx: &egui::Context) {}
     /// Runs what the clock owes after `dt` seconds of real time, within the frame budget.
     fn advance(&mut self, dt: f64);
+    /// Did the last [`advance`](Self::advance) run a filter update (a heavy
+    /// step the frame timing reports apart, such as grid FastSLAM's scan
+    /// matching)? Lessons without heavy steps keep the default.
+    fn last_advance_updated(&self) -> bool {
+        false
+    }
     /// Does anything need another frame soon?
     fn wants_repaint(&self) -> bool {
         self.time().running
@@ -308,6 +314,9 @@ impl Lesson for WithNotice {
     }
     fn advance(&mut self, dt: f64) {
         self.inner.advance(dt);
+    }
+    fn last_advance_updated(&self) -> bool {
+        self.inner.last_advance_updated()
     }
     fn wants_repaint(&self) -> bool {
         self.inner.wants_repaint()

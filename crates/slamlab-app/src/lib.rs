@@ -412,8 +412,9 @@ impl SlamLabApp {
         self.lesson.advance(dt);
         let sim_ms = sim_start.elapsed().as_secs_f32() * 1000.0;
         let interval_ms = ctx.input(|i| i.unstable_dt) * 1000.0;
+        let update = self.lesson.last_advance_updated();
         self.frame_stats
-            .record(self.last_cpu_ms, sim_ms, interval_ms);
+            .record_frame(self.last_cpu_ms, sim_ms, interval_ms, update);
 
         self.narrow = widgets::layout::is_narrow(&ctx);
         self.screen = ctx.content_rect().size();

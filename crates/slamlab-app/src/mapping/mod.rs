@@ -167,6 +167,9 @@ pub struct MappingLesson {
     /// Grid FastSLAM: which particle's map is shown.
     pub shown: ShownMap,
     mean_map: particles::MeanMapCache,
+    /// Whether the last advance ran a grid FastSLAM update phase (or a
+    /// replay), for the frame timing.
+    advanced_an_update: bool,
 }
 
 /// How long each scan took here: the sum of its phases' times, however they
@@ -278,6 +281,7 @@ impl MappingLesson {
             builtin_chosen: false,
             shown: ShownMap::Best,
             mean_map: particles::MeanMapCache::default(),
+            advanced_an_update: false,
         })
     }
 
@@ -902,7 +906,9 @@ impl Lesson for MappingLesson {
     }
 
     fn advance(&mut self, dt: f64) {
+        self.advanced_an_update = false;
         if let Some(target) = self.catch_up {
+            self.advanced_an_update = true;
             // Replay after a change of pose source, within the frame budget.
             let started = web_time::Instant::now();
             while self.session.sim().scans_done() < target
@@ -922,12 +928,18 @@ impl Lesson for MappingLesson {
         }
         let session = &mut self.session;
         let scan_ms = &mut self.scan_ms;
+        let mut updated = false;
         lesson::advance_within_budget(&mut self.time, dt, || {
             scan_ms.timed(session, |s| {
-                s.stepper_mut().step_phase();
+                updated |= s.stepper_mut().step_phase().is_filter_update();
             });
             !session.sim().is_mid_tick()
         });
+        self.advanced_an_update = updated;
+    }
+
+    fn last_advance_updated(&self) -> bool {
+        self.advanced_an_update
     }
 
     fn wants_repaint(&self) -> bool {

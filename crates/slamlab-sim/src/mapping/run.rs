@@ -221,6 +221,21 @@ pub enum MappingPhase {
 }
 
 impl MappingPhase {
+    /// Whether the phase is part of a grid FastSLAM update (every particle's
+    /// proposal, the weights, resampling, the maps): the steps that cost
+    /// more than drawing a frame.
+    pub fn is_filter_update(&self) -> bool {
+        matches!(
+            self,
+            MappingPhase::GridStart { .. }
+                | MappingPhase::GridPropose { .. }
+                | MappingPhase::GridParticle { .. }
+                | MappingPhase::GridWeight { .. }
+                | MappingPhase::GridResample { .. }
+                | MappingPhase::GridUpdate { .. }
+        )
+    }
+
     /// A short name for the time bar.
     pub fn label(&self) -> String {
         match self {
