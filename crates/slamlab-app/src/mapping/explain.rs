@@ -182,6 +182,13 @@ pub fn explanation_ui(ui: &mut egui::Ui, session: &MappingSession) {
                             p.pose.theta.to_degrees(),
                             g.log_eta
                         ));
+                        if c[(0, 0)].max(c[(1, 1)]) < 1e-6 {
+                            ui.label(
+                                "Nearly all of τ sits on one of the K poses: the scan fits this map so \
+                                 well there that the Gaussian shrinks to a point, and the drawn pose is \
+                                 that pose.",
+                            );
+                        }
                     }
                 }
                 _ => {
