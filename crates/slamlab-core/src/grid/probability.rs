@@ -389,6 +389,25 @@ impl ProbabilityGrid {
         (!v.is_nan()).then_some(v as f64)
     }
 
+    /// The log odds of the `len` cells `(i, j)`, `(i + 1, j)`, … in one row,
+    /// NaN where never observed, when they lie in one tile column (a matcher
+    /// reading a small window of cells finds them in one place); `None` when
+    /// the run crosses a tile boundary or is longer than a tile.
+    #[inline]
+    pub fn row_in_tile(&self, i: i64, j: i64, len: usize) -> Option<&[f32]> {
+        static UNKNOWN: [f32; TILE] = [f32::NAN; TILE];
+        if len == 0 || len > TILE || i >> TILE_SHIFT != (i + len as i64 - 1) >> TILE_SHIFT {
+            return None;
+        }
+        let Some((slot, local)) = self.locate(i, j) else {
+            return Some(&UNKNOWN[..len]);
+        };
+        match &self.tiles[slot] {
+            Some(tile) => tile.cells.get(local..local + len),
+            None => Some(&UNKNOWN[..len]),
+        }
+    }
+
     /// The occupancy probability of cell `(i, j)`, or `None` if never observed.
     #[inline]
     pub fn probability_at(&self, i: i64, j: i64) -> Option<f64> {
@@ -641,11 +660,23 @@ impl ProbabilityGrid {
     /// every tile it changed.
     fn finish_scan(&mut self) {
         let revision = new_revision();
-        for &(slot, local, value) in &self.stamped {
+        // Stamps come ray by ray, so runs of them share a tile: one
+        // copy-on-write check per run instead of one per cell.
+        let mut k = 0;
+        while k < self.stamped.len() {
+            let slot = self.stamped[k].0;
+            let run = self.stamped[k..]
+                .iter()
+                .take_while(|(s, _, _)| *s == slot)
+                .count();
             if let Some(tile) = self.tiles[slot].as_mut() {
-                Arc::make_mut(tile).cells[local] = value;
+                let cells = &mut Arc::make_mut(tile).cells;
+                for &(_, local, value) in &self.stamped[k..k + run] {
+                    cells[local] = value;
+                }
             }
             self.revisions[slot] = revision;
+            k += run;
         }
         self.stamped.clear();
     }
@@ -959,6 +990,36 @@ mod tests {
         let only_a = ProbabilityGrid::weighted_mean([(&a, 1.0), (&b, 0.0)]).unwrap();
         assert!((only_a.probability_at(3, 0).unwrap() - p_free).abs() < 1e-6);
         assert!(ProbabilityGrid::weighted_mean([(&a, f64::NAN)]).is_none());
+    }
+
+    #[test]
+    fn a_row_in_one_tile_reads_the_same_cells_as_one_by_one() {
+        let params = InsertParams {
+            rule: UpdateRule::LOG_ODDS,
+            max_range_free: 0.0,
+        };
+        let mut g = ProbabilityGrid::new(0.1);
+        g.insert_scan(
+            &Pose2::new(0.05, 0.05, 0.0),
+            &one_beam(2.0, 0.0, 10.0),
+            &params,
+        )
+        .unwrap();
+        let same = |a: f32, b: Option<f64>| match b {
+            Some(v) => f64::from(a) == v,
+            None => a.is_nan(),
+        };
+        for (i, j, len) in [(0, 0, 5), (27, 0, 5), (-40, 3, 5), (100, 100, 3), (32, 0, 32)] {
+            let row = g.row_in_tile(i, j, len).unwrap();
+            assert_eq!(row.len(), len);
+            for (k, v) in row.iter().enumerate() {
+                assert!(same(*v, g.log_odds_at(i + k as i64, j)), "({i}, {j}) + {k}");
+            }
+        }
+        // A run across a tile boundary, or longer than a tile: read cell by cell.
+        assert!(g.row_in_tile(30, 0, 5).is_none());
+        assert!(g.row_in_tile(-2, 0, 5).is_none());
+        assert!(g.row_in_tile(0, 0, 33).is_none());
     }
 
     #[test]

@@ -135,6 +135,19 @@ impl ProbabilityLookup {
         }
     }
 
+    /// The probability of a cell whose stored log odds are `l` (NaN: never
+    /// seen), as [`cell`](Self::cell) gives it.
+    #[inline]
+    pub fn of_log_odds(&self, l: f32) -> f64 {
+        if l.is_nan() {
+            return UNKNOWN_PROBABILITY;
+        }
+        let l = f64::from(l);
+        let t = (l + LOOKUP_RANGE) / (2.0 * LOOKUP_RANGE) * (LOOKUP_SIZE - 1) as f64;
+        let k = (t + 0.5).clamp(0.0, (LOOKUP_SIZE - 1) as f64) as usize;
+        self.table[k]
+    }
+
     /// `M_smooth` at the world point `(x, y)` and its gradient: bicubic
     /// (Catmull-Rom) interpolation of the cell probabilities, the cell
     /// centres being the samples.
@@ -303,22 +316,40 @@ fn correlative_search(
     let inv_n = 1.0 / points.len() as f64;
     let mut best = (predicted, f64::NEG_INFINITY);
     let mut candidates = 0;
-    let mut cells: Vec<(i64, i64)> = Vec::with_capacity(points.len());
+    // Per heading, every candidate offset's sum of cell probabilities, built
+    // point by point (so each sum adds its points in order, as a sum per
+    // candidate would); a point's window is read a tile row at a time.
+    let side = (2 * n_cells + 1) as usize;
+    let mut sums = vec![0.0_f64; side * side];
     for a in -n_angles..=n_angles {
         let dtheta = a as f64 * step;
         let rotated = Pose2::new(predicted.x, predicted.y, predicted.theta + dtheta);
-        cells.clear();
-        cells.extend(points.iter().map(|p| {
+        sums.fill(0.0);
+        for p in points {
             let q = transform_point(&rotated, *p);
-            grid.cell_of(q[0], q[1])
-        }));
-        for dj in -n_cells..=n_cells {
-            for di in -n_cells..=n_cells {
+            let (ci, cj) = grid.cell_of(q[0], q[1]);
+            let i0 = ci - n_cells;
+            for (row, dj) in (-n_cells..=n_cells).enumerate() {
+                let j = cj + dj;
+                let out = &mut sums[row * side..(row + 1) * side];
+                match grid.row_in_tile(i0, j, side) {
+                    Some(cells) => {
+                        for (sum, &l) in out.iter_mut().zip(cells) {
+                            *sum += lookup.of_log_odds(l);
+                        }
+                    }
+                    None => {
+                        for (col, sum) in out.iter_mut().enumerate() {
+                            *sum += lookup.cell(grid, i0 + col as i64, j);
+                        }
+                    }
+                }
+            }
+        }
+        for (row, dj) in (-n_cells..=n_cells).enumerate() {
+            for (col, di) in (-n_cells..=n_cells).enumerate() {
                 candidates += 1;
-                let sum: f64 = cells
-                    .iter()
-                    .map(|&(i, j)| lookup.cell(grid, i + di, j + dj))
-                    .sum();
+                let sum = sums[row * side + col];
                 let (dx, dy) = (di as f64 * r, dj as f64 * r);
                 let penalty = math::exp(-(0.1 * (dx * dx + dy * dy) + 0.1 * dtheta * dtheta));
                 let score = sum * inv_n * penalty;
