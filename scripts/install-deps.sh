@@ -126,7 +126,7 @@ if ((want_web)); then
 	fi
 
 	# --- 4. Node modules from web/package-lock.json: playwright-core (drives the system
-	# Chromium; it downloads no browser) and binaryen (wasm-opt, for SLAMLAB_WASM_OPT=1).
+	# Chromium; it downloads no browser) and binaryen (the wasm-opt -Oz that web/build.sh runs).
 	if [[ -f web/node_modules/.package-lock.json && web/node_modules/.package-lock.json -nt web/package-lock.json ]]; then
 		say "web/node_modules: up to date"
 	else

@@ -12,8 +12,12 @@
 # Environment:
 #   SLAMLAB_WASM_TOOLCHAIN=rustup|debian  force a toolchain (default: rustup if it has the
 #                                         wasm32-unknown-unknown target, else Debian's rustc-web)
-#   SLAMLAB_WASM_OPT=1                    shrink the wasm with binaryen's wasm-opt -O from npm
-#                                         (web/node_modules; ~2 min, about -30 % raw, -10 % gzip)
+#   SLAMLAB_WASM_OPT=0                    skip binaryen's wasm-opt -Oz (from npm, web/node_modules),
+#                                         which runs by default (6 to 7 min on 2 cores; -25 % raw)
+#   SLAMLAB_WEB_PROFILE=release           build with the native release profile instead of `web`
+#                                         (opt-level "s" with 3 for the estimators and solvers, fat
+#                                         LTO, one codegen unit, no debug info: Cargo.toml's
+#                                         [profile.web]; sizes and timings in docs/web-build.md)
 #
 # Needs: scripts/install-deps.sh --web (Debian: rustc-web, cargo-web, rust-web-src,
 # rust-web-llvm, lld-22; the wasm-bindgen CLI is installed here on demand).
@@ -23,6 +27,8 @@ repo_root="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
 cd "$repo_root"
 
 crate=slamlab-app
+profile="${SLAMLAB_WEB_PROFILE:-web}"
+[[ "$profile" =~ ^[a-z][a-z0-9_-]*$ ]] || { printf 'web/build.sh: error: SLAMLAB_WEB_PROFILE must be a cargo profile name, not %s\n' "$profile" >&2; exit 1; }
 lib_name=slamlab_app # the crate's [lib] name: the wasm file and the JS glue are named after it
 dist="$repo_root/web/dist"
 tools_dir="$repo_root/.tools"
@@ -66,7 +72,7 @@ case "$toolchain" in
 rustup)
 	target_dir="${CARGO_TARGET_DIR:-$repo_root/target}"
 	say "Building $crate for wasm32 with rustup's $(rustc --version)"
-	cargo build --lib -p "$crate" --release --target wasm32-unknown-unknown --target-dir "$target_dir"
+	cargo build --lib -p "$crate" --profile "$profile" --target wasm32-unknown-unknown --target-dir "$target_dir"
 	;;
 debian)
 	[[ -x /usr/bin/rustc && -x /usr/bin/cargo && -d /usr/lib/rustlib/src/rust/library ]] ||
@@ -79,12 +85,12 @@ debian)
 	# CARGO_HOME is kept so the crates already downloaded for the native build are reused;
 	# --lib: building the bin for wasm too would overwrite the cdylib with an empty wasm.
 	env PATH=/usr/bin:/bin RUSTC=/usr/bin/rustc RUSTC_BOOTSTRAP=1 CARGO_HOME="${CARGO_HOME:-$HOME/.cargo}" \
-		/usr/bin/cargo build --lib -p "$crate" --release --target wasm32-unknown-unknown \
+		/usr/bin/cargo build --lib -p "$crate" --profile "$profile" --target wasm32-unknown-unknown \
 		--target-dir "$target_dir" -Zbuild-std=std,panic_abort
 	;;
 *) die "SLAMLAB_WASM_TOOLCHAIN must be rustup or debian, not '$toolchain'" ;;
 esac
-wasm_in="$target_dir/wasm32-unknown-unknown/release/$lib_name.wasm"
+wasm_in="$target_dir/wasm32-unknown-unknown/$profile/$lib_name.wasm"
 [[ -f "$wasm_in" ]] || die "the build produced no $wasm_in"
 
 # --- 3. wasm-bindgen turns the raw wasm into a module plus the JavaScript glue that
@@ -95,16 +101,26 @@ mkdir -p "$dist/pkg"
 "$wasm_bindgen" --target web --no-typescript --out-dir "$dist/pkg" "$wasm_in"
 wasm_out="$dist/pkg/${lib_name}_bg.wasm"
 
-# --- 4. Optional: binaryen's optimiser. Only the npm build (web/node_modules): Debian's
-# binaryen 108 writes a module that fails to load (WebAssembly.Table.set() ... invalid).
-if [[ "${SLAMLAB_WASM_OPT:-0}" == 1 ]]; then
+# --- 4. binaryen's optimiser, -Oz (by default; SLAMLAB_WASM_OPT=0 skips it). Only the npm
+# build (web/node_modules): Debian's binaryen 108 writes a module that fails to load
+# (WebAssembly.Table.set() ... invalid). The features are the ones rustc enables for
+# wasm32-unknown-unknown; wasm-opt must be told, since wasm-bindgen drops the
+# target_features section.
+if [[ "${SLAMLAB_WASM_OPT:-1}" != 0 ]]; then
 	wasm_opt="$repo_root/web/node_modules/.bin/wasm-opt"
-	[[ -x "$wasm_opt" ]] || die "SLAMLAB_WASM_OPT=1 needs npm's binaryen: run 'npm ci' in web/ (scripts/install-deps.sh --web)"
-	say "Optimising with wasm-opt -O ($("$wasm_opt" --version)); takes a minute or two"
+	if [[ ! -x "$wasm_opt" ]]; then
+		say "npm's binaryen is missing: npm ci in web/"
+		(cd web && npm ci --no-audit --no-fund)
+	fi
+	[[ -x "$wasm_opt" ]] || die "wasm-opt needs npm's binaryen: run 'npm ci' in web/ (scripts/install-deps.sh --web), or SLAMLAB_WASM_OPT=0"
+	say "Optimising with wasm-opt -Oz ($("$wasm_opt" --version))"
+	opt_started=$SECONDS
 	before=$(stat -c %s "$wasm_out")
-	"$wasm_opt" -O "$wasm_out" -o "$wasm_out.opt"
+	"$wasm_opt" -Oz --enable-bulk-memory --enable-nontrapping-float-to-int --enable-sign-ext \
+		--enable-mutable-globals --enable-reference-types --enable-multivalue \
+		"$wasm_out" -o "$wasm_out.opt"
 	mv "$wasm_out.opt" "$wasm_out"
-	echo "wasm-opt: $before -> $(stat -c %s "$wasm_out") bytes"
+	echo "wasm-opt: $before -> $(stat -c %s "$wasm_out") bytes in $((SECONDS - opt_started)) s"
 fi
 
 # --- 5. The pages. __BUILD_ID__ becomes a hash of the wasm, so after a new deployment
@@ -122,7 +138,7 @@ cp assets/maps/*.yaml assets/maps/*.png "$dist/maps/"
 wasm_bytes=$(stat -c %s "$wasm_out")
 wasm_gzip_bytes=$(gzip -9 -c "$wasm_out" | wc -c)
 js_bytes=$(stat -c %s "$dist/pkg/$lib_name.js")
-say "Built web/dist in $((SECONDS - started)) s ($toolchain toolchain, build id $build_id)"
+say "Built web/dist in $((SECONDS - started)) s ($toolchain toolchain, profile $profile, build id $build_id)"
 printf '  %-28s %10s bytes raw  %10s bytes gzip -9\n' "pkg/${lib_name}_bg.wasm" "$wasm_bytes" "$wasm_gzip_bytes"
 printf '  %-28s %10s bytes raw\n' "pkg/$lib_name.js" "$js_bytes"
 echo "  Serve it with web/serve.sh, or copy web/dist/ to any static web host."
