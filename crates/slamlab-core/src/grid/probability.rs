@@ -1009,7 +1009,13 @@ mod tests {
             Some(v) => f64::from(a) == v,
             None => a.is_nan(),
         };
-        for (i, j, len) in [(0, 0, 5), (27, 0, 5), (-40, 3, 5), (100, 100, 3), (32, 0, 32)] {
+        for (i, j, len) in [
+            (0, 0, 5),
+            (27, 0, 5),
+            (-40, 3, 5),
+            (100, 100, 3),
+            (32, 0, 32),
+        ] {
             let row = g.row_in_tile(i, j, len).unwrap();
             assert_eq!(row.len(), len);
             for (k, v) in row.iter().enumerate() {
