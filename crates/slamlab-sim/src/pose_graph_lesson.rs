@@ -257,6 +257,33 @@ pub fn solver_label(solver: SolverKind) -> &'static str {
     }
 }
 
+/// The block pattern of the information matrix `H = Σ JᵀΩJ` over every vertex,
+/// the fixed ones included, in the graph's order (both triangles): every diagonal
+/// block, and the pair of blocks `(a, b)`, `(b, a)` of every edge joining two
+/// vertices. A fixed vertex is no unknown (the solver drops its row and column),
+/// but drawing them shows the loop closures to it: on the thesis example all ten
+/// close at pose 0, the fixed one.
+pub fn information_pattern_of_every_vertex(graph: &PoseGraph) -> BlockPattern {
+    let vertices = graph.vertices();
+    let mut entries: Vec<(usize, usize)> = (0..vertices.len()).map(|k| (k, k)).collect();
+    for edge in graph.edges() {
+        if let (a, Some(b)) = edge.vertices()
+            && a != b
+        {
+            entries.push((a, b));
+            entries.push((b, a));
+        }
+    }
+    entries.sort_unstable();
+    entries.dedup();
+    BlockPattern {
+        vertex_ids: vertices.iter().map(|v| v.id).collect(),
+        dims: vertices.iter().map(|v| v.state.dim()).collect(),
+        fill_in: vec![false; entries.len()],
+        entries,
+    }
+}
+
 /// The largest file the lesson opens, bytes (the readers' own limit).
 pub const MAX_FILE_BYTES: usize = graph_io::MAX_FILE_BYTES;
 
@@ -828,15 +855,13 @@ impl PoseGraphSession {
         })
     }
 
-    /// The sparsity patterns of `H` (natural order) and of its Cholesky factor `L`
-    /// (elimination order, fill-in marked), and the non-zeros faer stores for `L`.
+    /// The sparsity patterns of `H` over every vertex in the graph's order (see
+    /// [`information_pattern_of_every_vertex`]) and of the Cholesky factor `L` of
+    /// the unknowns (elimination order, fill-in marked), and the non-zeros faer
+    /// stores for `L`.
     pub fn patterns(&mut self) -> Result<(BlockPattern, BlockPattern, usize), String> {
-        let h = self
-            .optimizer
-            .information_pattern()
-            .map_err(|e| e.to_string())?;
         let (l, nnz) = self.optimizer.factor_pattern().map_err(|e| e.to_string())?;
-        Ok((h, l, nnz))
+        Ok((information_pattern_of_every_vertex(self.graph()), l, nnz))
     }
 
     /// Marginal position covariances of at most `max` vertices, evenly spaced
@@ -1051,7 +1076,7 @@ mod tests {
         }
         assert!(session.is_converged());
         let (h, l, nnz) = session.patterns().unwrap();
-        assert_eq!(h.vertex_ids.len(), 200);
+        assert_eq!(h.vertex_ids.len(), 201, "every vertex, the fixed one too");
         assert!(nnz >= l.entries.len() && l.entries.len() >= h.vertex_ids.len());
         let marginals = session.marginals(50).unwrap();
         assert!(marginals.len() >= 40);
@@ -1062,11 +1087,12 @@ mod tests {
         );
     }
 
+    /// Vertex states, edge count, roles, cost history, report and notes, and cost.
+    type DrawnBits = (Vec<u64>, usize, Vec<EdgeRole>, Vec<[u64; 2]>, String, u64);
+
     /// Everything the lesson draws from a session, as bits: vertex states, edges,
     /// roles, the cost history, the last report, the cost and the notes.
-    fn drawn_bits(
-        s: &PoseGraphSession,
-    ) -> (Vec<u64>, usize, Vec<EdgeRole>, Vec<[u64; 2]>, String, u64) {
+    fn drawn_bits(s: &PoseGraphSession) -> DrawnBits {
         let states = s
             .graph()
             .vertices()
@@ -1160,6 +1186,24 @@ mod tests {
         assert_eq!(
             s.step_back_undoes(),
             Some(format!("first-order iteration {}", MAX_CHECKPOINTS + 5).as_str())
+        );
+    }
+
+    #[test]
+    fn the_information_pattern_shows_every_loop_closure_even_to_the_fixed_pose() {
+        let mut s = PoseGraphSession::from_scenario(PoseGraphScenario::default()).unwrap();
+        let (h, _, _) = s.patterns().unwrap();
+        // 201 poses: the diagonal, 200 odometry pairs and 10 loop-closure pairs.
+        assert_eq!(h.dims.len(), 201);
+        assert_eq!(h.entries.len(), 201 + 2 * 200 + 2 * 10);
+        let to_fixed = h.entries.iter().filter(|&&(r, c)| r == 0 && c > 1).count();
+        assert_eq!(to_fixed, 10, "the ten loop closures close at pose 0");
+        s.add_wrong_loop_closure().unwrap();
+        let (h2, _, _) = s.patterns().unwrap();
+        assert_eq!(
+            h2.entries.len(),
+            h.entries.len() + 2,
+            "a wrong loop closure is a pair"
         );
     }
 }

@@ -45,9 +45,18 @@ fn the_lesson_opens_by_url_and_one_iteration_lowers_the_cost() {
         "cost {before} -> {after}"
     );
     // The test hook reports the same numbers.
-    let state: serde_json::Value = serde_json::from_str(&h.state().test_state_json()).unwrap();
+    let state: serde_json::Value = match serde_json::from_str(&h.state().test_state_json()) {
+        Ok(state) => state,
+        Err(e) => panic!("the test hook's JSON does not parse: {e}"),
+    };
+    let Some(h_blocks) = state["h_blocks"].as_u64() else {
+        panic!("no h_blocks in {state}")
+    };
     assert_eq!(state["iterations"], 1);
     assert_eq!(state["cost"].as_f64(), Some(after));
+    // H over all 201 vertices: the diagonal, 200 odometry and 10 loop-closure pairs
+    // (all ten close at pose 0, the fixed one, so they are drawn in its row and column).
+    assert_eq!(h_blocks, 201 + 2 * 200 + 2 * 10);
     // Bad link values: a message and a safe value.
     let h = harness("lesson=pose-graph&solver=newton&kernel-width=-3");
     let notices = h.state().notices();
@@ -177,13 +186,19 @@ fn drawn(h: &Harness<'_, SlamLabApp>) -> (Vec<u64>, Vec<[u64; 2]>, u64, usize, u
         .iter()
         .map(|c| [c[0].to_bits(), c[1].to_bits()])
         .collect();
-    let state: serde_json::Value = serde_json::from_str(&h.state().test_state_json()).unwrap();
+    let state: serde_json::Value = match serde_json::from_str(&h.state().test_state_json()) {
+        Ok(state) => state,
+        Err(e) => panic!("the test hook's JSON does not parse: {e}"),
+    };
+    let Some(h_blocks) = state["h_blocks"].as_u64() else {
+        panic!("no h_blocks in {state}")
+    };
     (
         states,
         history,
         session.cost().to_bits(),
         session.graph().edges().len(),
-        state["h_blocks"].as_u64().unwrap(),
+        h_blocks,
     )
 }
 
