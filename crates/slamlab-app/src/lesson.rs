@@ -191,6 +191,11 @@ pub trait Lesson: std::fmt::Debug {
     fn time_mut(&mut self) -> &mut TimeControl;
     /// What the time bar shows.
     fn time_info(&self) -> TimeInfo;
+    /// Which step buttons the time bar shows: phases and ticks unless the lesson
+    /// has one kind of step.
+    fn step_controls(&self) -> crate::time_control::StepControls {
+        crate::time_control::StepControls::PhasesAndTicks
+    }
     /// Does what a time-bar button or shortcut asks.
     fn apply_time_action(&mut self, action: TimeAction);
     /// Reads the lesson's own input (drive keys) before the clock advances.
@@ -305,6 +310,9 @@ impl Lesson for WithNotice {
     }
     fn time_info(&self) -> TimeInfo {
         self.inner.time_info()
+    }
+    fn step_controls(&self) -> crate::time_control::StepControls {
+        self.inner.step_controls()
     }
     fn apply_time_action(&mut self, action: TimeAction) {
         self.inner.apply_time_action(action);

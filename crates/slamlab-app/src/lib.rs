@@ -425,7 +425,9 @@ impl SlamLabApp {
         }
         egui::Panel::top("slamlab_time_bar").show(ui, |ui| {
             let info = self.lesson.time_info();
-            let actions = time_control::time_bar_ui(ui, self.lesson.time_mut(), &info, self.embed);
+            let steps = self.lesson.step_controls();
+            let actions =
+                time_control::time_bar_ui(ui, self.lesson.time_mut(), &info, steps, self.embed);
             for action in actions {
                 self.apply_time_action(action);
             }

@@ -127,6 +127,24 @@ pub struct TimeInfo {
     pub can_step_back: bool,
 }
 
+/// Which step buttons a lesson's clock has.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum StepControls {
+    /// Phases within ticks: "Step phase" (naming the next phase) and "Step tick".
+    #[default]
+    PhasesAndTicks,
+    /// One kind of step only (a solver's iteration): one button named by the
+    /// lesson; `.` and `n` both run it, and the clock counts in `unit`s.
+    One {
+        /// The button ("Step iteration").
+        label: &'static str,
+        /// What one step does, for the button's tooltip.
+        hover: &'static str,
+        /// What a step is called in the counter and the speed ("iteration").
+        unit: &'static str,
+    },
+}
+
 /// The time bar's keys and what they do, for the Keys menu.
 pub const SHORTCUTS: &[(&str, &str)] = &[
     ("Space", "run / pause"),
@@ -170,14 +188,25 @@ pub fn shortcut_actions(ctx: &egui::Context) -> Vec<TimeAction> {
     actions
 }
 
-/// The time bar: Run/Pause, Step phase (naming the next phase), Step tick, Reset,
-/// speed, tick and simulated time. Returns what was clicked.
+/// The time bar: Run/Pause, Step back, Step phase (naming the next phase), Step
+/// tick, Reset, speed, tick and simulated time; a lesson with one kind of step
+/// ([`StepControls::One`]) shows one step button instead of the phase and tick
+/// buttons. Returns what was clicked.
 pub fn time_bar_ui(
     ui: &mut egui::Ui,
     time: &mut TimeControl,
     info: &TimeInfo,
+    steps: StepControls,
     compact: bool,
 ) -> Vec<TimeAction> {
+    let unit = match steps {
+        StepControls::PhasesAndTicks => "tick",
+        StepControls::One { unit, .. } => unit,
+    };
+    let back_hover = match steps {
+        StepControls::PhasesAndTicks => "Go back one phase (,)".to_owned(),
+        StepControls::One { unit, .. } => format!("Go back one {unit} or edit (,)"),
+    };
     let mut actions = Vec::new();
     ui.horizontal_wrapped(|ui| {
         let run_label = if time.running { "Pause" } else { "Run" };
@@ -190,7 +219,7 @@ pub fn time_bar_ui(
         }
         if ui
             .add_enabled(info.can_step_back, egui::Button::new("Step back"))
-            .on_hover_text("Go back one phase (,)")
+            .on_hover_text(back_hover)
             .on_disabled_hover_text(
                 "Nothing to go back to, or the run is too long to replay quickly",
             )
@@ -198,25 +227,40 @@ pub fn time_bar_ui(
         {
             actions.push(TimeAction::StepBack);
         }
-        if ui
-            .button("Step phase")
-            .on_hover_text(
-                "Run one phase of the filters: the prediction, or one landmark update (.)",
-            )
-            .clicked()
-        {
-            actions.push(TimeAction::StepPhase);
-        }
-        ui.label(egui::RichText::new(format!("Next phase: {}", info.next_phase)).strong())
-            .on_hover_text("What \"Step phase\" runs next");
-        if ui
-            .button("Step tick")
-            .on_hover_text(
-                "Finish the current tick, or run one whole tick: predict, then every update (n)",
-            )
-            .clicked()
-        {
-            actions.push(TimeAction::StepTick);
+        match steps {
+            StepControls::PhasesAndTicks => {
+                if ui
+                    .button("Step phase")
+                    .on_hover_text(
+                        "Run one phase of the filters: the prediction, or one landmark update (.)",
+                    )
+                    .clicked()
+                {
+                    actions.push(TimeAction::StepPhase);
+                }
+                ui.label(egui::RichText::new(format!("Next phase: {}", info.next_phase)).strong())
+                    .on_hover_text("What \"Step phase\" runs next");
+                if ui
+                    .button("Step tick")
+                    .on_hover_text(
+                        "Finish the current tick, or run one whole tick: predict, then every update (n)",
+                    )
+                    .clicked()
+                {
+                    actions.push(TimeAction::StepTick);
+                }
+            }
+            StepControls::One { label, hover, .. } => {
+                if ui
+                    .button(label)
+                    .on_hover_text(format!("{hover} (. or n)"))
+                    .clicked()
+                {
+                    actions.push(TimeAction::StepPhase);
+                }
+                ui.label(egui::RichText::new(format!("Next: {}", info.next_phase)).strong())
+                    .on_hover_text(format!("What \"{label}\" runs next"));
+            }
         }
         if ui
             .button("Reset")
@@ -231,10 +275,10 @@ pub fn time_bar_ui(
             egui::Slider::new(&mut time.speed_tps, SPEED_RANGE)
                 .logarithmic(true)
                 .integer()
-                .suffix(" ticks/s")
+                .suffix(format!(" {unit}s/s"))
                 .text("Speed"),
         )
-        .on_hover_text("Simulation speed while running, ticks per second");
+        .on_hover_text(format!("Speed while running, {unit}s per second"));
         ui.checkbox(&mut time.max_speed, "max")
             .on_hover_text("Run as fast as this computer can");
         ui.separator();
@@ -242,8 +286,8 @@ pub fn time_bar_ui(
             ui.label(format!("tick {}   t = {:.1} s", info.tick, info.time_s))
                 .on_hover_text("Ticks run so far and the simulated time");
         } else {
-            ui.label(format!("tick {}", info.tick))
-                .on_hover_text("Ticks run so far");
+            ui.label(format!("{unit} {}", info.tick))
+                .on_hover_text(format!("{unit}s run so far"));
         }
         if !compact {
             let last = info.last_phase.as_deref().unwrap_or("none yet");

@@ -7,6 +7,10 @@
 //! wrong), and the cost after every iteration. Edits (a dragged vertex, a wrong
 //! loop closure, another solver or kernel) apply to the running optimizer; the
 //! kernel comparison optimizes copies of the graph from its start.
+//!
+//! Before every iteration and every edit the session keeps a checkpoint (the
+//! vertex states and the solver's own state, no matrix), so "Step back" goes back
+//! one iteration or one edit exactly, within a bounded memory.
 
 use crate::graph_io;
 use crate::params::{Param, Scenario, choose};
@@ -15,8 +19,8 @@ use rand::{Rng as _, SeedableRng as _};
 use rand_chacha::ChaCha8Rng;
 use slamlab_core::Pose2;
 use slamlab_core::graph::{
-    BlockPattern, EdgeKind, MarginalCovariance, OptimizeError, Optimizer, OptimizerSettings,
-    PoseGraph, RobustKernel, SolverKind, StepReport, VertexState,
+    BlockPattern, EdgeKind, MarginalCovariance, OptimizeError, Optimizer, OptimizerCheckpoint,
+    OptimizerSettings, PoseGraph, RobustKernel, SolverKind, StepReport, VertexState,
 };
 use slamlab_core::math;
 
@@ -244,6 +248,42 @@ fn role_of(edge: &EdgeKind) -> EdgeRole {
     }
 }
 
+/// The solver's short label in phase names ("GN iteration 3").
+pub fn solver_label(solver: SolverKind) -> &'static str {
+    match solver {
+        SolverKind::GaussNewton => "GN",
+        SolverKind::LevenbergMarquardt => "LM",
+        SolverKind::GradientDescent => "first-order",
+    }
+}
+
+/// The block pattern of the information matrix `H = Σ JᵀΩJ` over every vertex,
+/// the fixed ones included, in the graph's order (both triangles): every diagonal
+/// block, and the pair of blocks `(a, b)`, `(b, a)` of every edge joining two
+/// vertices. A fixed vertex is no unknown (the solver drops its row and column),
+/// but drawing them shows the loop closures to it: on the thesis example all ten
+/// close at pose 0, the fixed one.
+pub fn information_pattern_of_every_vertex(graph: &PoseGraph) -> BlockPattern {
+    let vertices = graph.vertices();
+    let mut entries: Vec<(usize, usize)> = (0..vertices.len()).map(|k| (k, k)).collect();
+    for edge in graph.edges() {
+        if let (a, Some(b)) = edge.vertices()
+            && a != b
+        {
+            entries.push((a, b));
+            entries.push((b, a));
+        }
+    }
+    entries.sort_unstable();
+    entries.dedup();
+    BlockPattern {
+        vertex_ids: vertices.iter().map(|v| v.id).collect(),
+        dims: vertices.iter().map(|v| v.state.dim()).collect(),
+        fill_in: vec![false; entries.len()],
+        entries,
+    }
+}
+
 /// The largest file the lesson opens, bytes (the readers' own limit).
 pub const MAX_FILE_BYTES: usize = graph_io::MAX_FILE_BYTES;
 
@@ -264,6 +304,34 @@ pub struct KernelRun {
     pub error: Option<String>,
 }
 
+/// Checkpoints kept for "Step back" at most.
+pub const MAX_CHECKPOINTS: usize = 1000;
+
+/// Memory the checkpoints may hold, bytes: on M3500 (3500 poses, about 110 kB a
+/// checkpoint) the last few hundred iterations.
+pub const MAX_CHECKPOINT_BYTES: usize = 64 << 20;
+
+/// The session just before an iteration or an edit.
+#[derive(Clone, Debug)]
+struct SessionCheckpoint {
+    optimizer: OptimizerCheckpoint,
+    scenario: PoseGraphScenario,
+    start_edges: usize,
+    roles: usize,
+    history: usize,
+    last_report: Option<StepReport>,
+    notes: usize,
+    wrong_closures: u64,
+    /// What going back to this checkpoint undoes ("GN iteration 3", "a drag").
+    undoes: String,
+}
+
+impl SessionCheckpoint {
+    fn bytes(&self) -> usize {
+        self.optimizer.bytes() + std::mem::size_of::<Self>() + self.undoes.len()
+    }
+}
+
 /// The lesson's run: a graph, its optimizer and what happened to it.
 #[derive(Debug)]
 pub struct PoseGraphSession {
@@ -279,6 +347,11 @@ pub struct PoseGraphSession {
     last_report: Option<StepReport>,
     notes: Vec<String>,
     wrong_closures: u64,
+    /// Checkpoints, oldest first, for "Step back".
+    checkpoints: std::collections::VecDeque<SessionCheckpoint>,
+    checkpoint_bytes: usize,
+    /// A drag is under way (its first move took the checkpoint).
+    dragging: bool,
 }
 
 /// Holds the first vertex fixed unless a vertex is fixed or a prior holds the
@@ -376,6 +449,9 @@ impl PoseGraphSession {
             last_report: None,
             notes,
             wrong_closures: 0,
+            checkpoints: std::collections::VecDeque::new(),
+            checkpoint_bytes: 0,
+            dragging: false,
         })
     }
 
@@ -444,9 +520,87 @@ impl PoseGraphSession {
         self.optimizer.is_converged()
     }
 
+    fn checkpoint(&self, undoes: String) -> SessionCheckpoint {
+        SessionCheckpoint {
+            optimizer: self.optimizer.checkpoint(),
+            scenario: self.scenario.clone(),
+            start_edges: self.start.edges().len(),
+            roles: self.roles.len(),
+            history: self.history.len(),
+            last_report: self.last_report,
+            notes: self.notes.len(),
+            wrong_closures: self.wrong_closures,
+            undoes,
+        }
+    }
+
+    fn keep(&mut self, checkpoint: SessionCheckpoint) {
+        self.checkpoint_bytes += checkpoint.bytes();
+        self.checkpoints.push_back(checkpoint);
+        while self.checkpoints.len() > MAX_CHECKPOINTS
+            || (self.checkpoint_bytes > MAX_CHECKPOINT_BYTES && self.checkpoints.len() > 1)
+        {
+            match self.checkpoints.pop_front() {
+                Some(old) => {
+                    self.checkpoint_bytes = self.checkpoint_bytes.saturating_sub(old.bytes())
+                }
+                None => break,
+            }
+        }
+    }
+
+    /// Can "Step back" go back (an iteration or an edit is kept to undo)?
+    pub fn can_step_back(&self) -> bool {
+        !self.checkpoints.is_empty()
+    }
+
+    /// What "Step back" undoes next ("GN iteration 3", "wrong loop closure"), if anything.
+    pub fn step_back_undoes(&self) -> Option<&str> {
+        self.checkpoints.back().map(|c| c.undoes.as_str())
+    }
+
+    /// How many steps back are kept.
+    pub fn steps_back_kept(&self) -> usize {
+        self.checkpoints.len()
+    }
+
+    /// Goes back one iteration or one edit: the graph, the solver's state, the cost
+    /// history, the notes and the scenario's solver and kernel are as they were
+    /// before it, bit for bit. Returns what was undone.
+    pub fn step_back(&mut self) -> Result<String, String> {
+        let checkpoint = self
+            .checkpoints
+            .pop_back()
+            .ok_or("there is no earlier iteration kept to go back to")?;
+        self.checkpoint_bytes = self.checkpoint_bytes.saturating_sub(checkpoint.bytes());
+        if let Err(why) = self.optimizer.restore_checkpoint(&checkpoint.optimizer) {
+            return Err(format!("could not go back: {why}"));
+        }
+        while self.start.edges().len() > checkpoint.start_edges {
+            self.start.pop_edge();
+        }
+        self.scenario = checkpoint.scenario;
+        self.roles.truncate(checkpoint.roles);
+        self.history.truncate(checkpoint.history);
+        self.last_report = checkpoint.last_report;
+        self.notes.truncate(checkpoint.notes);
+        self.wrong_closures = checkpoint.wrong_closures;
+        self.dragging = false;
+        Ok(checkpoint.undoes)
+    }
+
     /// One solver iteration.
     pub fn step(&mut self) -> Result<StepReport, String> {
-        let report = self.optimizer.step().map_err(|e| e.to_string())?;
+        let checkpoint = self.checkpoint(format!(
+            "{} iteration {}",
+            solver_label(self.scenario.solver),
+            self.optimizer.iterations() + 1
+        ));
+        // Kept even when the iteration fails, so that going back undoes what it left.
+        let result = self.optimizer.step();
+        self.keep(checkpoint);
+        self.dragging = false;
+        let report = result.map_err(|e| e.to_string())?;
         self.last_report = Some(report);
         self.history
             .push([self.optimizer.iterations() as f64, report.cost]);
@@ -454,6 +608,7 @@ impl PoseGraphSession {
     }
 
     fn mark_edit(&mut self, note: String) {
+        self.dragging = false;
         self.last_report = None;
         self.history
             .push([self.optimizer.iterations() as f64, self.optimizer.cost()]);
@@ -463,6 +618,8 @@ impl PoseGraphSession {
     /// Switches the solver (live; the estimate stays).
     pub fn set_solver(&mut self, solver: SolverKind) {
         if self.scenario.solver != solver {
+            let checkpoint = self.checkpoint("the solver switch".to_owned());
+            self.keep(checkpoint);
             self.scenario.solver = solver;
             self.optimizer.set_solver(solver);
             self.mark_edit(format!("solver switched to {}", solver.short_name()));
@@ -479,6 +636,8 @@ impl PoseGraphSession {
             ));
         }
         if self.scenario.kernel != choice || self.scenario.kernel_width != width {
+            let checkpoint = self.checkpoint("the kernel switch".to_owned());
+            self.keep(checkpoint);
             self.scenario.kernel = choice;
             self.scenario.kernel_width = width;
             self.optimizer.set_kernel(kernel);
@@ -512,15 +671,22 @@ impl PoseGraphSession {
             VertexState::Pose(p) => VertexState::Pose(Pose2::new(x, y, p.theta)),
             VertexState::Point(_) => VertexState::Point(nalgebra::Vector2::new(x, y)),
         };
+        let checkpoint =
+            (!self.dragging).then(|| self.checkpoint(format!("the drag of vertex {}", vertex.id)));
         self.optimizer
             .move_vertex(vertex.id, state)
             .map_err(|e| e.to_string())?;
+        if let Some(checkpoint) = checkpoint {
+            self.keep(checkpoint);
+            self.dragging = true;
+        }
         self.last_report = None;
         Ok(())
     }
 
     /// Records the end of a drag in the history and the notes.
     pub fn finish_drag(&mut self, index: usize) {
+        self.dragging = false;
         let id = self.graph().vertices().get(index).map_or(0, |v| v.id);
         self.mark_edit(format!("vertex {id} dragged"));
     }
@@ -590,8 +756,13 @@ impl PoseGraphSession {
             measurement: Pose2::IDENTITY,
             information,
         };
+        let checkpoint = self.checkpoint("the wrong loop closure".to_owned());
         self.optimizer.add_edge(edge).map_err(|e| e.to_string())?;
-        self.start.add_edge(edge).map_err(|e| e.to_string())?;
+        if let Err(why) = self.start.add_edge(edge) {
+            self.optimizer.pop_edge();
+            return Err(why.to_string());
+        }
+        self.keep(checkpoint);
         self.roles.push(EdgeRole::WrongLoopClosure);
         self.wrong_closures += 1;
         let (a, b) = (self.graph().vertices()[i].id, self.graph().vertices()[j].id);
@@ -684,15 +855,13 @@ impl PoseGraphSession {
         })
     }
 
-    /// The sparsity patterns of `H` (natural order) and of its Cholesky factor `L`
-    /// (elimination order, fill-in marked), and the non-zeros faer stores for `L`.
+    /// The sparsity patterns of `H` over every vertex in the graph's order (see
+    /// [`information_pattern_of_every_vertex`]) and of the Cholesky factor `L` of
+    /// the unknowns (elimination order, fill-in marked), and the non-zeros faer
+    /// stores for `L`.
     pub fn patterns(&mut self) -> Result<(BlockPattern, BlockPattern, usize), String> {
-        let h = self
-            .optimizer
-            .information_pattern()
-            .map_err(|e| e.to_string())?;
         let (l, nnz) = self.optimizer.factor_pattern().map_err(|e| e.to_string())?;
-        Ok((h, l, nnz))
+        Ok((information_pattern_of_every_vertex(self.graph()), l, nnz))
     }
 
     /// Marginal position covariances of at most `max` vertices, evenly spaced
@@ -907,7 +1076,7 @@ mod tests {
         }
         assert!(session.is_converged());
         let (h, l, nnz) = session.patterns().unwrap();
-        assert_eq!(h.vertex_ids.len(), 200);
+        assert_eq!(h.vertex_ids.len(), 201, "every vertex, the fixed one too");
         assert!(nnz >= l.entries.len() && l.entries.len() >= h.vertex_ids.len());
         let marginals = session.marginals(50).unwrap();
         assert!(marginals.len() >= 40);
@@ -915,6 +1084,126 @@ mod tests {
             marginals
                 .iter()
                 .all(|(_, c)| c[(0, 0)] > 0.0 && c[(1, 1)] > 0.0)
+        );
+    }
+
+    /// Vertex states, edge count, roles, cost history, report and notes, and cost.
+    type DrawnBits = (Vec<u64>, usize, Vec<EdgeRole>, Vec<[u64; 2]>, String, u64);
+
+    /// Everything the lesson draws from a session, as bits: vertex states, edges,
+    /// roles, the cost history, the last report, the cost and the notes.
+    fn drawn_bits(s: &PoseGraphSession) -> DrawnBits {
+        let states = s
+            .graph()
+            .vertices()
+            .iter()
+            .flat_map(|v| match v.state {
+                VertexState::Pose(p) => vec![p.x.to_bits(), p.y.to_bits(), p.theta.to_bits()],
+                VertexState::Point(q) => vec![q[0].to_bits(), q[1].to_bits()],
+            })
+            .collect();
+        let history = s
+            .history()
+            .iter()
+            .map(|h| [h[0].to_bits(), h[1].to_bits()])
+            .collect();
+        (
+            states,
+            s.graph().edges().len(),
+            s.roles().to_vec(),
+            history,
+            format!("{:?} {:?} {:?}", s.last_report(), s.notes(), s.scenario()),
+            s.cost().to_bits(),
+        )
+    }
+
+    #[test]
+    fn step_back_restores_every_iteration_and_edit_bit_for_bit() {
+        for solver in [SolverKind::GaussNewton, SolverKind::LevenbergMarquardt] {
+            let scenario = PoseGraphScenario {
+                solver,
+                ..PoseGraphScenario::default()
+            };
+            let mut s = PoseGraphSession::from_scenario(scenario).unwrap();
+            assert!(!s.can_step_back());
+            assert!(s.step_back().is_err(), "nothing to go back to");
+            let mut seen = vec![drawn_bits(&s)];
+            s.step().unwrap();
+            seen.push(drawn_bits(&s));
+            s.step().unwrap();
+            seen.push(drawn_bits(&s));
+            s.add_wrong_loop_closure().unwrap();
+            seen.push(drawn_bits(&s));
+            s.set_kernel(KernelChoice::Cauchy, 1.0).unwrap();
+            seen.push(drawn_bits(&s));
+            s.move_vertex(40, 3.0, 4.0).unwrap();
+            s.move_vertex(40, 5.0, 6.0).unwrap();
+            s.finish_drag(40);
+            seen.push(drawn_bits(&s));
+            s.step().unwrap();
+            let label = if solver == SolverKind::GaussNewton {
+                "GN"
+            } else {
+                "LM"
+            };
+            assert_eq!(
+                s.step_back_undoes(),
+                Some(format!("{label} iteration 3").as_str())
+            );
+            assert_eq!(s.steps_back_kept(), 6, "a whole drag is one step back");
+            // Back through each moment, newest first: each the same bits as then.
+            for (k, expected) in seen.iter().enumerate().rev() {
+                s.step_back().unwrap();
+                assert!(
+                    drawn_bits(&s) == *expected,
+                    "{solver:?}: step back to moment {k}"
+                );
+            }
+            assert!(!s.can_step_back());
+            assert_eq!(s.wrong_closures(), 0);
+            assert_eq!(s.start_graph().edges().len(), 210);
+            // Forward again: the same iterations as the first time.
+            s.step().unwrap();
+            assert!(
+                drawn_bits(&s) == seen[1],
+                "{solver:?}: the first iteration again"
+            );
+        }
+    }
+
+    #[test]
+    fn the_checkpoints_stay_within_their_bounds() {
+        let mut s = PoseGraphSession::from_scenario(PoseGraphScenario {
+            solver: SolverKind::GradientDescent,
+            ..PoseGraphScenario::default()
+        })
+        .unwrap();
+        for _ in 0..(MAX_CHECKPOINTS + 5) {
+            s.step().unwrap();
+        }
+        assert_eq!(s.steps_back_kept(), MAX_CHECKPOINTS);
+        assert!(s.checkpoint_bytes <= MAX_CHECKPOINT_BYTES);
+        assert_eq!(
+            s.step_back_undoes(),
+            Some(format!("first-order iteration {}", MAX_CHECKPOINTS + 5).as_str())
+        );
+    }
+
+    #[test]
+    fn the_information_pattern_shows_every_loop_closure_even_to_the_fixed_pose() {
+        let mut s = PoseGraphSession::from_scenario(PoseGraphScenario::default()).unwrap();
+        let (h, _, _) = s.patterns().unwrap();
+        // 201 poses: the diagonal, 200 odometry pairs and 10 loop-closure pairs.
+        assert_eq!(h.dims.len(), 201);
+        assert_eq!(h.entries.len(), 201 + 2 * 200 + 2 * 10);
+        let to_fixed = h.entries.iter().filter(|&&(r, c)| r == 0 && c > 1).count();
+        assert_eq!(to_fixed, 10, "the ten loop closures close at pose 0");
+        s.add_wrong_loop_closure().unwrap();
+        let (h2, _, _) = s.patterns().unwrap();
+        assert_eq!(
+            h2.entries.len(),
+            h.entries.len() + 2,
+            "a wrong loop closure is a pair"
         );
     }
 }

@@ -175,8 +175,9 @@ pub fn explanation_ui(
             };
         }
         ui.label(
-            "Both start from the graph's first estimate; the orange path is the result without a \
-             kernel.",
+            "Both start from the graph's first estimate. On the map the result without a kernel \
+             is the broad orange band, the result with the kernel the reddish-purple line; where \
+             they agree the line runs inside the band.",
         );
     }
 }

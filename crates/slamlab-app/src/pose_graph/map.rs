@@ -1,7 +1,10 @@
 //! The graph drawn on the shared map canvas: odometry edges and vertices in blue,
 //! loop closures in vermillion (the wrong ones dashed and thicker), landmark edges
 //! and landmarks in green, the true path in black (white on dark), 95% ellipses
-//! from the marginals once converged, and the result without a kernel in orange.
+//! from the marginals once converged. The kernel comparison draws both results
+//! so that neither hides the other: without a kernel a broad faded orange band,
+//! with the robust kernel a reddish-purple line over it (where they agree the line
+//! runs inside the band), each with its error on the legend.
 //! A vertex dragged with the mouse moves; releasing it re-optimizes.
 
 use super::PoseGraphView;
@@ -21,8 +24,14 @@ pub const VERTEX: Color32 = palette::BLUE;
 pub const LOOP_CLOSURE: Color32 = palette::VERMILLION;
 /// Landmark edges and landmarks.
 pub const LANDMARK: Color32 = palette::GREEN;
-/// The optimized result without a kernel, in the comparison.
+/// The optimized result without a kernel, in the comparison (a broad band).
 pub const WITHOUT_KERNEL: Color32 = palette::ORANGE;
+/// The optimized result with the robust kernel, in the comparison (a line).
+pub const WITH_KERNEL: Color32 = palette::PURPLE;
+/// Width of the band of the result without a kernel, points.
+pub const WITHOUT_KERNEL_WIDTH: f32 = 7.0;
+/// Width of the line of the result with the kernel, points.
+pub const WITH_KERNEL_WIDTH: f32 = 2.5;
 /// Marginal covariance ellipses.
 pub const ELLIPSE: Color32 = palette::SKY_BLUE;
 
@@ -134,9 +143,24 @@ pub fn map_ui(
         painter.add(egui::Shape::line(points, Stroke::new(1.0, colors.truth)));
     }
     if let Some([plain, _]) = comparison {
-        draw_positions(&painter, &t, session, &plain.positions, WITHOUT_KERNEL);
+        draw_positions(
+            &painter,
+            &t,
+            session,
+            &plain.positions,
+            Stroke::new(WITHOUT_KERNEL_WIDTH, palette::faded(WITHOUT_KERNEL, 0.55)),
+        );
     }
     draw_graph(&painter, &t, session, &colors);
+    if let Some([_, robust]) = comparison {
+        draw_positions(
+            &painter,
+            &t,
+            session,
+            &robust.positions,
+            Stroke::new(WITH_KERNEL_WIDTH, WITH_KERNEL),
+        );
+    }
     if view.ellipses
         && let Some(marginals) = marginals
     {
@@ -154,7 +178,7 @@ pub fn map_ui(
     }
     draw_scale_and_axes(&painter, &t, &colors);
     if view.legend {
-        draw_legend(&painter, &t, session, &colors, comparison.is_some(), view);
+        draw_legend(&painter, &t, session, &colors, comparison, view);
     }
 
     let mut request = None;
@@ -284,7 +308,7 @@ fn draw_positions(
     t: &MapTransform,
     session: &PoseGraphSession,
     positions: &[[f64; 2]],
-    color: Color32,
+    stroke: Stroke,
 ) {
     let poses: Vec<Pos2> = positions
         .iter()
@@ -293,7 +317,7 @@ fn draw_positions(
         .map(|(p, _)| t.xy(p[0], p[1]))
         .filter(|p| finite(*p))
         .collect();
-    painter.add(egui::Shape::line(poses, Stroke::new(2.0, color)));
+    painter.add(egui::Shape::line(poses, stroke));
 }
 
 fn draw_legend(
@@ -301,13 +325,15 @@ fn draw_legend(
     t: &MapTransform,
     session: &PoseGraphSession,
     colors: &CanvasColors,
-    comparison: bool,
+    comparison: Option<&[KernelRun; 2]>,
     view: &PoseGraphView,
 ) {
     let count = |role: EdgeRole| session.roles().iter().filter(|r| **r == role).count();
-    let mut rows: Vec<(Color32, bool, String)> = vec![
+    // (colour, line width, dashed, text)
+    let mut rows: Vec<(Color32, f32, bool, String)> = vec![
         (
             VERTEX,
+            2.0,
             false,
             format!(
                 "poses ({}) and odometry ({})",
@@ -317,6 +343,7 @@ fn draw_legend(
         ),
         (
             LOOP_CLOSURE,
+            2.0,
             false,
             format!("loop closures ({})", count(EdgeRole::LoopClosure)),
         ),
@@ -324,6 +351,7 @@ fn draw_legend(
     if count(EdgeRole::WrongLoopClosure) > 0 {
         rows.push((
             LOOP_CLOSURE,
+            3.0,
             true,
             format!(
                 "wrong loop closures ({})",
@@ -334,6 +362,7 @@ fn draw_legend(
     if session.graph().point_count() > 0 {
         rows.push((
             LANDMARK,
+            2.0,
             false,
             format!(
                 "landmarks ({}) and their edges ({})",
@@ -342,9 +371,9 @@ fn draw_legend(
             ),
         ));
     }
-    rows.push((colors.truth, false, "fixed vertex (square)".to_owned()));
+    rows.push((colors.truth, 2.0, false, "fixed vertex (square)".to_owned()));
     if view.truth && session.truth().is_some() {
-        rows.push((colors.truth, false, "true path".to_owned()));
+        rows.push((colors.truth, 1.0, false, "true path".to_owned()));
     }
     if view.ellipses && session.is_converged() {
         let stride = session
@@ -355,6 +384,7 @@ fn draw_legend(
             .max(1);
         rows.push((
             ELLIPSE,
+            1.2,
             false,
             if stride > 1 {
                 format!("95% marginal ellipses (one vertex in {stride})")
@@ -363,22 +393,36 @@ fn draw_legend(
             },
         ));
     }
-    if comparison {
-        rows.push((
-            WITHOUT_KERNEL,
-            false,
-            "optimized without a kernel".to_owned(),
-        ));
+    if let Some(runs) = comparison {
+        for (run, color, width) in [
+            (
+                &runs[0],
+                palette::faded(WITHOUT_KERNEL, 0.55),
+                WITHOUT_KERNEL_WIDTH,
+            ),
+            (&runs[1], WITH_KERNEL, WITH_KERNEL_WIDTH),
+        ] {
+            rows.push((color, width, false, comparison_label(run)));
+        }
     }
     let font = egui::FontId::proportional(12.0);
     let origin = t.rect.left_top() + vec2(44.0, 28.0);
     let height = 18.0 * rows.len() as f32 + 8.0;
+    let text_width = rows
+        .iter()
+        .map(|(.., text)| {
+            painter
+                .layout_no_wrap(text.clone(), font.clone(), colors.weak_text)
+                .size()
+                .x
+        })
+        .fold(0.0_f32, f32::max);
     painter.rect_filled(
-        egui::Rect::from_min_size(origin, vec2(250.0, height)),
+        egui::Rect::from_min_size(origin, vec2((text_width + 50.0).max(250.0), height)),
         4.0,
         palette::faded(colors.background, 0.85),
     );
-    for (k, (color, dashed, text)) in rows.iter().enumerate() {
+    for (k, (color, width, dashed, text)) in rows.iter().enumerate() {
         let y = origin.y + 13.0 + 18.0 * k as f32;
         let a = pos2(origin.x + 8.0, y);
         let b = pos2(origin.x + 34.0, y);
@@ -390,7 +434,7 @@ fn draw_legend(
                 4.0,
             ));
         } else {
-            painter.line_segment([a, b], Stroke::new(2.0, *color));
+            painter.line_segment([a, b], Stroke::new(*width, *color));
         }
         painter.text(
             pos2(origin.x + 42.0, y),
@@ -399,5 +443,57 @@ fn draw_legend(
             font.clone(),
             colors.weak_text,
         );
+    }
+}
+
+/// The legend line of one result of the kernel comparison: its kernel, its
+/// position error against the truth (or its cost without one) and its iterations.
+pub fn comparison_label(run: &KernelRun) -> String {
+    let what = if run.kernel == "none" {
+        "optimized with no kernel".to_owned()
+    } else {
+        format!("optimized with {}", run.kernel)
+    };
+    match (&run.error, run.rmse) {
+        (Some(_), _) => format!("{what}: failed (see the explanation)"),
+        (None, Some(rmse)) => format!("{what}: RMSE {rmse:.3} m, {} iterations", run.iterations),
+        (None, None) => format!(
+            "{what}: cost {:.3e}, {} iterations",
+            run.cost, run.iterations
+        ),
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn the_legend_names_each_result_of_the_comparison_with_its_error() {
+        let mut run = KernelRun {
+            kernel: "none",
+            iterations: 7,
+            cost: 12.5,
+            rmse: Some(0.4851),
+            positions: Vec::new(),
+            error: None,
+        };
+        assert_eq!(
+            comparison_label(&run),
+            "optimized with no kernel: RMSE 0.485 m, 7 iterations"
+        );
+        run.kernel = "huber";
+        run.rmse = Some(0.15249);
+        assert_eq!(
+            comparison_label(&run),
+            "optimized with huber: RMSE 0.152 m, 7 iterations"
+        );
+        run.rmse = None;
+        assert_eq!(
+            comparison_label(&run),
+            "optimized with huber: cost 1.250e1, 7 iterations"
+        );
+        run.error = Some("indefinite".to_owned());
+        assert!(comparison_label(&run).ends_with("failed (see the explanation)"));
     }
 }

@@ -11,7 +11,7 @@ mod plots;
 
 use crate::lesson::{self, Lesson, LessonStart, PanelVisibility, StoredSettings};
 use crate::palette;
-use crate::time_control::{FRAME_BUDGET_MS, TimeAction, TimeControl, TimeInfo};
+use crate::time_control::{FRAME_BUDGET_MS, StepControls, TimeAction, TimeControl, TimeInfo};
 use crate::widgets::dropped_files::DropInbox;
 use crate::widgets::file_picker::FilePicker;
 use crate::widgets::map_canvas::MapView;
@@ -21,6 +21,7 @@ use slamlab_core::graph::SolverKind;
 use slamlab_sim::params;
 use slamlab_sim::pose_graph_lesson::{
     EdgeRole, KernelRun, MAX_FILE_BYTES, PoseGraphScenario, PoseGraphSession, kernel_name,
+    solver_label,
 };
 
 /// The lesson's id in URLs and the menu.
@@ -344,6 +345,31 @@ impl PoseGraphLesson {
         }
     }
 
+    /// Goes back one iteration or edit: the graph, the cost plot, the sparsity
+    /// images and the panel's solver and kernel are as they were before it.
+    pub fn step_back(&mut self) {
+        self.optimizing = None;
+        self.drag = None;
+        let edges = self.session.graph().edges().len();
+        match self.session.step_back() {
+            Ok(_) => {
+                self.note = None;
+                if self.session.graph().edges().len() != edges {
+                    self.comparison = None;
+                }
+                let s = self.session.scenario();
+                let (solver, kernel, width) = (s.solver, s.kernel, s.kernel_width);
+                let pending = &mut self.pending.scenario;
+                pending.solver = solver;
+                pending.kernel = kernel;
+                pending.kernel_width = width;
+            }
+            Err(why) => self.note = Some(why),
+        }
+        self.patterns.dirty = true;
+        self.marginals = None;
+    }
+
     /// One solver iteration.
     pub fn step_iteration(&mut self) {
         self.optimizing = None;
@@ -458,11 +484,7 @@ impl PoseGraphLesson {
     }
 
     fn solver_name(solver: SolverKind) -> &'static str {
-        match solver {
-            SolverKind::GaussNewton => "GN",
-            SolverKind::LevenbergMarquardt => "LM",
-            SolverKind::GradientDescent => "first-order",
-        }
+        solver_label(solver)
     }
 
     fn ensure_marginals(&mut self) {
@@ -504,13 +526,6 @@ impl PoseGraphLesson {
     fn parameters_panel_ui(&mut self, ui: &mut egui::Ui) {
         ui.heading("Pose-graph optimization");
         ui.horizontal_wrapped(|ui| {
-            if ui
-                .button("Step iteration")
-                .on_hover_text("Run one iteration of the solver (also '.' or 'n')")
-                .clicked()
-            {
-                self.step_iteration();
-            }
             let optimize = if self.optimizing.is_some() {
                 "Optimizing…"
             } else {
@@ -537,7 +552,7 @@ impl PoseGraphLesson {
             if ui
                 .button("Compare kernels")
                 .on_hover_text(
-                    "Optimize the graph from its start with no kernel and with the robust kernel (Huber if none is chosen); the plain result is drawn in orange",
+                    "Optimize the graph from its start with no kernel and with the robust kernel (Huber if none is chosen); both results are drawn on the map, with their errors on the legend",
                 )
                 .clicked()
             {
@@ -679,7 +694,15 @@ impl Lesson for PoseGraphLesson {
             time_s: f64::NAN,
             last_phase: (k > 0).then(|| format!("{solver} iteration {k}")),
             next_phase: format!("{solver} iteration {}", k + 1),
-            can_step_back: false,
+            can_step_back: self.session.can_step_back() && self.optimizing.is_none(),
+        }
+    }
+
+    fn step_controls(&self) -> StepControls {
+        StepControls::One {
+            label: "Step iteration",
+            hover: "Run one iteration of the solver",
+            unit: "iteration",
         }
     }
 
@@ -688,12 +711,7 @@ impl Lesson for PoseGraphLesson {
         match action {
             TimeAction::ToggleRun => self.optimizing = None,
             TimeAction::StepPhase | TimeAction::StepTick => self.step_iteration(),
-            TimeAction::StepBack => {
-                self.note = Some(
-                    "A solver iteration cannot be undone; \"Apply & reset\" starts the graph over"
-                        .to_owned(),
-                );
-            }
+            TimeAction::StepBack => self.step_back(),
             TimeAction::Reset => self.reset(),
         }
     }
@@ -784,6 +802,9 @@ impl Lesson for PoseGraphLesson {
             "optimizing": self.optimizing.is_some(),
             "optimize": self.last_optimize,
             "note": self.note,
+            "can_step_back": self.session.can_step_back(),
+            "h_blocks": self.patterns.h_blocks,
+            "step_back_undoes": self.session.step_back_undoes(),
         })
     }
 

@@ -37,17 +37,18 @@ pub fn plots_ui(ui: &mut egui::Ui, session: &mut PoseGraphSession, patterns: &mu
             ),
             &format!(
                 "H = Σ J^TΩJ in the graph's vertex order, one square per vertex block ({0} x {0} \
-                 scalars): a block is non-zero where an edge joins two vertices (Eq. 4.8 of \
-                 Xiang's thesis). Blue: non-zero; a loop closure is a square away from the \
-                 diagonal band, with its mirror across the diagonal.",
+                 scalars with the fixed vertex): a block is non-zero where an edge joins two \
+                 vertices (Eq. 4.8 of Xiang's thesis). Blue: non-zero; a loop closure is a \
+                 square away from the diagonal band, with its mirror across the diagonal.",
                 patterns.unknowns
             ),
         );
         ui.label(format!("{} non-zero blocks", patterns.h_blocks))
             .on_hover_text(
-                "The fixed vertex (the white square on the map) is not an unknown: an edge to \
-                 it adds only to its other vertex's diagonal block, so loop closures to the \
-                 fixed vertex leave no square off the diagonal.",
+                "The fixed vertex (the square on the map) is drawn in its place although it is \
+                 not an unknown: the solver drops its row and column, so an edge to it adds \
+                 only to its other vertex's diagonal block. Its row and column show the loop \
+                 closures that reach it.",
             );
         image_ui(ui, h.as_ref(), height - 20.0, "Information matrix H");
         let ui = &mut columns[2];

@@ -8,9 +8,10 @@ use super::common::{
     SIZE, count_pixels, harness, harness_themed, lesson_of, lesson_of_mut, render_or_skip,
 };
 use egui_kittest::Harness;
-use egui_kittest::kittest::Queryable as _;
+use egui_kittest::kittest::{NodeT as _, Queryable as _};
 use slamlab_app::SlamLabApp;
 use slamlab_app::pose_graph::PoseGraphLesson;
+use slamlab_sim::pose_graph_lesson::KernelChoice;
 
 fn lesson<'h>(h: &'h Harness<'_, SlamLabApp>) -> &'h PoseGraphLesson {
     lesson_of(h)
@@ -44,9 +45,18 @@ fn the_lesson_opens_by_url_and_one_iteration_lowers_the_cost() {
         "cost {before} -> {after}"
     );
     // The test hook reports the same numbers.
-    let state: serde_json::Value = serde_json::from_str(&h.state().test_state_json()).unwrap();
+    let state: serde_json::Value = match serde_json::from_str(&h.state().test_state_json()) {
+        Ok(state) => state,
+        Err(e) => panic!("the test hook's JSON does not parse: {e}"),
+    };
+    let Some(h_blocks) = state["h_blocks"].as_u64() else {
+        panic!("no h_blocks in {state}")
+    };
     assert_eq!(state["iterations"], 1);
     assert_eq!(state["cost"].as_f64(), Some(after));
+    // H over all 201 vertices: the diagonal, 200 odometry and 10 loop-closure pairs
+    // (all ten close at pose 0, the fixed one, so they are drawn in its row and column).
+    assert_eq!(h_blocks, 201 + 2 * 200 + 2 * 10);
     // Bad link values: a message and a safe value.
     let h = harness("lesson=pose-graph&solver=newton&kernel-width=-3");
     let notices = h.state().notices();
@@ -155,4 +165,218 @@ fn rendered_lesson_shows_poses_odometry_loop_closures_and_the_sparsity_images() 
         "pose_graph_lesson",
         &egui_kittest::SnapshotOptions::new().threshold(2.0),
     );
+}
+
+/// What the lesson draws, as bits: every vertex state, the cost history (the cost
+/// plot), the cost, the edge count and the non-zero blocks of H (the sparsity image).
+fn drawn(h: &Harness<'_, SlamLabApp>) -> (Vec<u64>, Vec<[u64; 2]>, u64, usize, u64) {
+    use slamlab_core::graph::VertexState;
+    let session = lesson(h).session();
+    let states = session
+        .graph()
+        .vertices()
+        .iter()
+        .flat_map(|v| match v.state {
+            VertexState::Pose(p) => vec![p.x.to_bits(), p.y.to_bits(), p.theta.to_bits()],
+            VertexState::Point(q) => vec![q[0].to_bits(), q[1].to_bits()],
+        })
+        .collect();
+    let history = session
+        .history()
+        .iter()
+        .map(|c| [c[0].to_bits(), c[1].to_bits()])
+        .collect();
+    let state: serde_json::Value = match serde_json::from_str(&h.state().test_state_json()) {
+        Ok(state) => state,
+        Err(e) => panic!("the test hook's JSON does not parse: {e}"),
+    };
+    let Some(h_blocks) = state["h_blocks"].as_u64() else {
+        panic!("no h_blocks in {state}")
+    };
+    (
+        states,
+        history,
+        session.cost().to_bits(),
+        session.graph().edges().len(),
+        h_blocks,
+    )
+}
+
+fn disabled(h: &Harness<'_, SlamLabApp>, label: &str) -> bool {
+    h.get_by_label(label).accesskit_node().is_disabled()
+}
+
+#[test]
+fn the_time_bar_steps_iterations_and_steps_back_through_them_bit_for_bit() {
+    let mut h = harness("lesson=pose-graph&example=thesis&seed=1");
+    h.run();
+    // One kind of step: "Step iteration"; no phases or ticks to step.
+    assert!(h.query_by_label("Step phase").is_none());
+    assert!(h.query_by_label("Step tick").is_none());
+    assert_eq!(h.query_all_by_label("Step iteration").count(), 1);
+    assert!(disabled(&h, "Step back"), "nothing to go back to yet");
+    let mut moments = vec![drawn(&h)];
+    h.get_by_label("Step iteration").click();
+    h.run();
+    moments.push(drawn(&h));
+    h.key_press(egui::Key::Period);
+    h.run();
+    moments.push(drawn(&h));
+    h.get_by_label("Add wrong loop closure").click();
+    h.run();
+    moments.push(drawn(&h));
+    h.key_press(egui::Key::N);
+    h.run();
+    moments.push(drawn(&h));
+    assert_eq!(
+        lesson(&h).session().iterations(),
+        3,
+        "'.' and 'n' step one iteration each"
+    );
+    assert_eq!(
+        moments[3].3,
+        moments[2].3 + 1,
+        "the wrong loop closure is an edge"
+    );
+    assert_eq!(
+        moments[3].4,
+        moments[2].4 + 2,
+        "and a pair of blocks in H: {} -> {}",
+        moments[2].4,
+        moments[3].4
+    );
+    assert!(!disabled(&h, "Step back"));
+    // Back through every iteration and the edit, by the button and by ','.
+    for (k, expected) in moments.iter().enumerate().rev().skip(1) {
+        if k % 2 == 0 {
+            h.get_by_label("Step back").click();
+        } else {
+            h.key_press(egui::Key::Comma);
+        }
+        h.run();
+        let now = drawn(&h);
+        assert!(now.0 == expected.0, "moment {k}: the vertices differ");
+        assert_eq!(now.1, expected.1, "moment {k}: the cost plot differs");
+        assert_eq!(
+            (now.2, now.3, now.4),
+            (expected.2, expected.3, expected.4),
+            "moment {k}"
+        );
+    }
+    assert_eq!(lesson(&h).session().iterations(), 0);
+    assert_eq!(lesson(&h).session().wrong_closures(), 0);
+    assert!(disabled(&h, "Step back"), "back at the start");
+    // Forward again: the first iteration is the same iteration.
+    h.get_by_label("Step iteration").click();
+    h.run();
+    assert!(drawn(&h) == moments[1]);
+}
+
+#[test]
+fn stepping_back_over_a_kernel_switch_restores_the_panels_kernel() {
+    let mut h = harness("lesson=pose-graph&example=manhattan&manhattan-poses=150&seed=3");
+    h.run();
+    h.get_by_label("Step iteration").click();
+    h.run();
+    lesson_mut(&mut h).set_param("kernel", "cauchy");
+    h.run();
+    assert_eq!(lesson(&h).session().scenario().kernel, KernelChoice::Cauchy);
+    h.get_by_label("Step back").click();
+    h.run();
+    assert_eq!(lesson(&h).session().scenario().kernel, KernelChoice::None);
+    assert_eq!(
+        lesson(&h).pending().kernel,
+        KernelChoice::None,
+        "the panel follows"
+    );
+    // The panel applying its (now equal) values does not switch again.
+    h.run();
+    assert_eq!(lesson(&h).session().history().len(), 2);
+    assert_eq!(lesson(&h).session().iterations(), 1);
+}
+
+/// Pixels of the faded orange band over the light map background.
+const BAND: [u8; 3] = [0xF1, 0xCA, 0x73];
+
+#[test]
+fn compare_kernels_draws_both_results_and_the_time_bar_fits_a_small_window() {
+    for (size, name) in [
+        (SIZE, "pose_graph_compare_1400x900.png"),
+        (egui::vec2(800.0, 500.0), "pose_graph_compare_800x500.png"),
+    ] {
+        let mut h = harness_themed(
+            "lesson=pose-graph&example=manhattan&manhattan-poses=300&seed=1",
+            size,
+            egui::Theme::Light,
+        );
+        h.run();
+        lesson_mut(&mut h).add_wrong_loop_closure();
+        h.run();
+        let before = render_or_skip(&mut h);
+        lesson_mut(&mut h).compare_kernels();
+        // The current graph optimized without a kernel: the plain result under it.
+        lesson_mut(&mut h).start_optimize();
+        lesson_mut(&mut h).advance_optimize(None);
+        h.run();
+        let Some([plain, robust]) = lesson(&h).comparison().cloned() else {
+            panic!("no comparison")
+        };
+        assert!(robust.rmse.unwrap() < 0.6 * plain.rmse.unwrap());
+        let Some(image) = render_or_skip(&mut h) else {
+            return;
+        };
+        let path = std::env::temp_dir().join(name);
+        let _ = image.save(&path);
+        eprintln!("saved {}", path.display());
+        let Some(before) = before else { return };
+        let purple = |img: &image::RgbaImage| count_pixels(img.as_raw(), [0xCC, 0x79, 0xA7], 24);
+        let band = |img: &image::RgbaImage| count_pixels(img.as_raw(), BAND, 20);
+        let (p0, p1) = (purple(&before), purple(&image));
+        let (b0, b1) = (band(&before), band(&image));
+        // Both results are visible: the kernel's line and the plain result's band
+        // (which the current graph, optimized the same way, runs along).
+        assert!(p1 > p0 + 400, "{name}: purple pixels {p0} -> {p1}");
+        assert!(b1 > b0 + 800, "{name}: band pixels {b0} -> {b1}");
+    }
+}
+
+#[test]
+fn the_thesis_graph_after_an_edit_renders_its_cost_line_and_block_image() {
+    for (size, name) in [
+        (SIZE, "pose_graph_thesis_1400x900.png"),
+        (egui::vec2(800.0, 500.0), "pose_graph_thesis_800x500.png"),
+    ] {
+        let mut h = harness_themed(
+            "lesson=pose-graph&example=thesis&seed=1",
+            size,
+            egui::Theme::Light,
+        );
+        h.run();
+        for _ in 0..3 {
+            lesson_mut(&mut h).step_iteration();
+        }
+        lesson_mut(&mut h).add_wrong_loop_closure();
+        for _ in 0..3 {
+            lesson_mut(&mut h).step_iteration();
+        }
+        h.run();
+        let history = lesson(&h).session().history().to_vec();
+        assert_eq!(
+            history.len(),
+            8,
+            "start, 3 iterations, the edit, 3 iterations"
+        );
+        assert_eq!(
+            history[3][0], history[4][0],
+            "the edit adds a point at the same iteration"
+        );
+        let Some(image) = render_or_skip(&mut h) else {
+            return;
+        };
+        let path = std::env::temp_dir().join(name);
+        let _ = image.save(&path);
+        eprintln!("saved {}", path.display());
+        let blue = count_pixels(image.as_raw(), [0x00, 0x72, 0xB2], 30);
+        assert!(blue > 1500, "{name}: blue pixels {blue}");
+    }
 }

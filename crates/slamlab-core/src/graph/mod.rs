@@ -22,8 +22,8 @@ mod tests;
 pub use gauge::FreeComponent;
 pub use kernel::RobustKernel;
 pub use solver::{
-    BlockPattern, MarginalCovariance, OptimizeError, Optimizer, OptimizerSettings, SolverKind,
-    StepReport, graph_cost, local_to_world_covariance,
+    BlockPattern, MarginalCovariance, OptimizeError, Optimizer, OptimizerCheckpoint,
+    OptimizerSettings, SolverKind, StepReport, graph_cost, local_to_world_covariance,
 };
 
 use crate::geometry::Pose2;

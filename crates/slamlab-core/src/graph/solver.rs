@@ -152,6 +152,10 @@ pub enum OptimizeError {
     /// The sparse factorization failed for a reason other than indefiniteness.
     #[error(transparent)]
     Cholesky(CholeskyError),
+    /// A checkpoint taken of another graph (other vertices, or more edges than the
+    /// graph has now) cannot be restored.
+    #[error("the checkpoint belongs to another graph: {0}")]
+    CheckpointMismatch(String),
 }
 
 fn free_gauge_message(components: &[FreeComponent], total: usize) -> String {
@@ -274,6 +278,40 @@ struct Linearization {
     values: Vec<f64>,
     b: Vec<f64>,
     cost: f64,
+}
+
+/// What the optimizer was at one moment (after an iteration or before an edit), to
+/// go back to it: the vertex states and fixed flags, how many edges the graph had,
+/// the settings and the solver's own state (LM's λ, the first-order method's step
+/// length, the iteration count, convergence). It holds no matrix, so a checkpoint
+/// of a 200-pose graph is a few kilobytes: restoring one linearizes again where
+/// the moment had a linearization, which gives the same `H`, `b` and cost bit for
+/// bit (the same states through the same arithmetic).
+#[derive(Clone, Debug, PartialEq)]
+pub struct OptimizerCheckpoint {
+    states: Vec<VertexState>,
+    fixed: Vec<bool>,
+    edges: usize,
+    settings: OptimizerSettings,
+    lambda: Option<f64>,
+    step_length: f64,
+    iteration: usize,
+    converged: bool,
+    linearized: bool,
+}
+
+impl OptimizerCheckpoint {
+    /// The memory the checkpoint holds, bytes (for a bounded history).
+    pub fn bytes(&self) -> usize {
+        std::mem::size_of::<Self>()
+            + self.states.len() * std::mem::size_of::<VertexState>()
+            + self.fixed.len()
+    }
+
+    /// Iterations the optimizer had run.
+    pub fn iterations(&self) -> usize {
+        self.iteration
+    }
 }
 
 /// Pose-graph optimizer: owns the graph and steps a solver one iteration at a time.
@@ -573,6 +611,71 @@ impl Optimizer {
         let e = self.graph.pop_edge();
         self.invalidate_structure();
         e
+    }
+
+    /// The optimizer's state now, to restore with [`Self::restore_checkpoint`].
+    pub fn checkpoint(&self) -> OptimizerCheckpoint {
+        OptimizerCheckpoint {
+            states: self.snapshot(),
+            fixed: self.graph.vertices().iter().map(|v| v.fixed).collect(),
+            edges: self.graph.edges().len(),
+            settings: self.settings,
+            lambda: self.lambda,
+            step_length: self.step_length,
+            iteration: self.iteration,
+            converged: self.converged,
+            linearized: self.linearization.is_some(),
+        }
+    }
+
+    /// Goes back to a checkpoint of this graph: edges added since are removed, the
+    /// vertices, settings and solver state are set back. Refuses a checkpoint of
+    /// another graph (other vertex count, or more edges than there are now) and
+    /// leaves the optimizer as it was then.
+    pub fn restore_checkpoint(
+        &mut self,
+        checkpoint: &OptimizerCheckpoint,
+    ) -> Result<(), OptimizeError> {
+        let (vertices, edges) = (self.graph.vertices().len(), self.graph.edges().len());
+        if checkpoint.states.len() != vertices || checkpoint.fixed.len() != vertices {
+            return Err(OptimizeError::CheckpointMismatch(format!(
+                "it has {} vertices, the graph {vertices}",
+                checkpoint.states.len()
+            )));
+        }
+        if checkpoint.edges > edges {
+            return Err(OptimizeError::CheckpointMismatch(format!(
+                "it has {} edges, the graph only {edges}",
+                checkpoint.edges
+            )));
+        }
+        let mut structure_changed = checkpoint.edges < edges;
+        while self.graph.edges().len() > checkpoint.edges {
+            self.graph.pop_edge();
+        }
+        for (v, (state, fixed)) in self
+            .graph
+            .vertices_mut()
+            .iter_mut()
+            .zip(checkpoint.states.iter().zip(&checkpoint.fixed))
+        {
+            v.state = *state;
+            structure_changed |= v.fixed != *fixed;
+            v.fixed = *fixed;
+        }
+        if structure_changed {
+            self.structure = None;
+        }
+        self.settings = checkpoint.settings;
+        self.linearization = None;
+        self.lambda = checkpoint.lambda;
+        self.step_length = checkpoint.step_length;
+        self.iteration = checkpoint.iteration;
+        self.converged = checkpoint.converged;
+        if checkpoint.linearized {
+            self.linearize()?;
+        }
+        Ok(())
     }
 
     fn invalidate_structure(&mut self) {

@@ -653,3 +653,84 @@ fn a_robust_kernel_limits_the_damage_of_a_wrong_loop_closure() {
     assert!(huber < 0.1 * plain, "huber {huber} vs plain {plain}");
     assert!(cauchy < 0.01 * plain, "cauchy {cauchy} vs plain {plain}");
 }
+
+/// Every vertex state's bits, to compare two estimates exactly.
+fn state_bits(opt: &Optimizer) -> Vec<u64> {
+    opt.graph()
+        .vertices()
+        .iter()
+        .flat_map(|v| match v.state {
+            VertexState::Pose(p) => vec![p.x.to_bits(), p.y.to_bits(), p.theta.to_bits()],
+            VertexState::Point(q) => vec![q[0].to_bits(), q[1].to_bits()],
+        })
+        .collect()
+}
+
+#[test]
+fn a_checkpoint_restores_the_estimate_and_the_next_iteration_bit_for_bit() {
+    for solver in [
+        SolverKind::GaussNewton,
+        SolverKind::LevenbergMarquardt,
+        SolverKind::GradientDescent,
+    ] {
+        let (g, _) = synthetic(1.0);
+        let mut opt = Optimizer::new(
+            g,
+            OptimizerSettings {
+                solver,
+                kernel: RobustKernel::Huber { delta: 1.0 },
+                ..Default::default()
+            },
+        )
+        .unwrap();
+        opt.step().unwrap();
+        opt.step().unwrap();
+        let checkpoint = opt.checkpoint();
+        let (bits, cost, lambda) = (state_bits(&opt), opt.cost(), opt.lambda());
+        assert_eq!(checkpoint.iterations(), 2);
+        let next = opt.step().unwrap();
+        let after_next = state_bits(&opt);
+        // An edit after the checkpoint: a wrong edge and another kernel.
+        opt.add_edge(EdgeKind::PosePose {
+            from: 2,
+            to: 11,
+            measurement: Pose2::new(3.0, 3.0, 1.0),
+            information: Matrix3::identity() * 100.0,
+        })
+        .unwrap();
+        opt.set_kernel(RobustKernel::None);
+        opt.step().unwrap();
+        assert_ne!(state_bits(&opt), bits);
+        opt.restore_checkpoint(&checkpoint).unwrap();
+        assert_eq!(opt.graph().edges().len(), 16 + 10 + 1, "{solver:?}");
+        assert_eq!(state_bits(&opt), bits, "{solver:?}");
+        assert_eq!(opt.cost().to_bits(), cost.to_bits(), "{solver:?}");
+        assert_eq!(opt.lambda(), lambda);
+        assert_eq!(opt.iterations(), 2);
+        assert_eq!(opt.settings().kernel, RobustKernel::Huber { delta: 1.0 });
+        // The iteration after the checkpoint is the same iteration again.
+        let again = opt.step().unwrap();
+        assert_eq!(again, next, "{solver:?}");
+        assert_eq!(state_bits(&opt), after_next, "{solver:?}");
+    }
+    // A checkpoint of another graph is refused and changes nothing.
+    let (g, _) = synthetic(1.0);
+    let mut small = Optimizer::new(g.clone(), OptimizerSettings::default()).unwrap();
+    let mut g2 = g;
+    g2.add_point(200, Vector2::new(1.0, 1.0)).unwrap();
+    g2.add_edge(EdgeKind::PosePoint {
+        pose: 1,
+        point: 18,
+        measurement: Vector2::new(0.0, 1.0),
+        information: Matrix2::identity(),
+    })
+    .unwrap();
+    let other = Optimizer::new(g2, OptimizerSettings::default()).unwrap();
+    let before = state_bits(&small);
+    let err = small.restore_checkpoint(&other.checkpoint()).unwrap_err();
+    assert!(
+        matches!(err, OptimizeError::CheckpointMismatch(_)),
+        "{err:?}"
+    );
+    assert_eq!(state_bits(&small), before);
+}
