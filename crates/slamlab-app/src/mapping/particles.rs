@@ -23,17 +23,6 @@ pub enum ShownMap {
     Mean,
 }
 
-impl ShownMap {
-    /// A label for the panel and the legend.
-    pub fn label(self, filter: &GridFastSlam) -> String {
-        match self {
-            ShownMap::Best => format!("heaviest particle's (#{})", filter.best_index()),
-            ShownMap::Particle(i) => format!("particle #{i}'s"),
-            ShownMap::Mean => "weighted mean of all particles'".to_owned(),
-        }
-    }
-}
-
 /// The weighted mean map, computed when asked and kept until the filter
 /// changes (it reads every particle's every tile).
 #[derive(Debug, Default)]

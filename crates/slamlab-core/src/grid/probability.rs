@@ -953,12 +953,17 @@ mod tests {
         }
     }
 
-    #[test]
-    fn the_weighted_mean_averages_probabilities_over_the_grids_that_know_a_cell() {
-        let params = InsertParams {
+    /// The log-odds rule, beams that return nothing marking nothing.
+    fn log_odds_without_free_run() -> InsertParams {
+        InsertParams {
             rule: UpdateRule::LOG_ODDS,
             max_range_free: 0.0,
-        };
+        }
+    }
+
+    #[test]
+    fn the_weighted_mean_averages_probabilities_over_the_grids_that_know_a_cell() {
+        let params = log_odds_without_free_run();
         // Grid a: one beam of 0.5 m along +x (cell 5 hit, 0..=4 free).
         // Grid b: one beam of 0.3 m (cell 3 hit, 0..=2 free), and a beam along
         // +y that only b knows.
@@ -994,10 +999,7 @@ mod tests {
 
     #[test]
     fn a_row_in_one_tile_reads_the_same_cells_as_one_by_one() {
-        let params = InsertParams {
-            rule: UpdateRule::LOG_ODDS,
-            max_range_free: 0.0,
-        };
+        let params = log_odds_without_free_run();
         let mut g = ProbabilityGrid::new(0.1);
         g.insert_scan(
             &Pose2::new(0.05, 0.05, 0.0),
@@ -1030,10 +1032,7 @@ mod tests {
 
     #[test]
     fn tile_revisions_tell_two_grids_apart_after_the_same_number_of_scans() {
-        let params = InsertParams {
-            rule: UpdateRule::LOG_ODDS,
-            max_range_free: 0.0,
-        };
+        let params = log_odds_without_free_run();
         let pose = Pose2::new(0.05, 0.05, 0.0);
         let mut a = ProbabilityGrid::new(0.1);
         a.insert_scan(&pose, &one_beam(0.5, 0.0, 10.0), &params)
