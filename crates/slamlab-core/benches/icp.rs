@@ -31,7 +31,34 @@ fn main() {
             Err(e) => println!("{variant:?}: {e}"),
         }
     }
+    cpu_times(&reference, &scan);
     divan::main();
+}
+
+/// The thread's CPU time per registration (median of 15 batches of 200), which
+/// other work on the machine does not inflate as it does the wall-clock times
+/// divan reports below.
+fn cpu_times(reference: &[Point2], scan: &[Point2]) {
+    for variant in [IcpVariant::PointToLine, IcpVariant::PointToPoint] {
+        let config = config(variant);
+        let mut batches: Vec<f64> = (0..15)
+            .map(|_| {
+                let started = cpu_time::ThreadTime::now();
+                for _ in 0..200 {
+                    std::hint::black_box(
+                        align(reference, scan, Pose2::IDENTITY, &config).map(|r| r.0),
+                    )
+                    .ok();
+                }
+                started.elapsed().as_secs_f64() * 1e3 / 200.0
+            })
+            .collect();
+        batches.sort_by(f64::total_cmp);
+        println!(
+            "{variant:?}: whole registration {:.3} ms of thread CPU time (median of 15 batches; fastest {:.3} ms)",
+            batches[7], batches[0]
+        );
+    }
 }
 
 type Segment = (Point2, Point2);

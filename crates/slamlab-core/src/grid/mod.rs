@@ -24,8 +24,9 @@ mod raycast;
 pub use costmap::{Costmap, FreeCells};
 pub use distance::{DistanceField, squared_distance_transform};
 pub use probability::{
-    BeamCell, BeamUpdate, InsertParams, InsertReport, LogOddsSteps, ProbabilityGrid, TILE,
-    UpdateRule, log_odds, probability, segment_cells,
+    BeamCell, BeamUpdate, InsertParams, InsertReport, LogOddsSteps, ProbabilityGrid, TABLE_ENTRIES,
+    TABLE_LOG_ODDS, TILE, UNKNOWN_ENTRY, UpdateRule, log_odds, probability, segment_cells,
+    table_entry, table_log_odds,
 };
 
 use crate::geometry::Pose2;

@@ -32,6 +32,13 @@
 //! Tiles are shared copy-on-write (`Arc`): a clone of the grid shares every
 //! tile until one of them writes to it, which copies that tile alone. Grid
 //! FastSLAM's particles and Cartographer's submaps rely on that.
+//!
+//! Beside its log odds each cell keeps its entry in the scan matchers' table
+//! of probabilities ([`table_entry`]): a matcher reads hundreds of thousands
+//! of cells per scan and never writes one, so the conversion from log odds to
+//! a table entry is made once when a scan writes the cell instead of at every
+//! read (Cartographer's grids likewise keep a 16-bit value per cell and a
+//! table that turns it into a probability). It costs 2 bytes a cell.
 
 use super::floor_to_i64;
 use crate::geometry::Pose2;
@@ -62,8 +69,34 @@ const TILE_SHIFT: u32 = 5;
 const UPDATE_MARK: f32 = 1.0e4;
 /// The largest clamp magnitude accepted, in log odds (p within 1e-22 of 0 or 1).
 const MAX_LOG_ODDS: f64 = 50.0;
-/// The largest grid, in tiles (a tile is 4 KiB): 4 GiB of cells is refused.
+/// The largest grid, in tiles (a tile is 6 KiB): 6 GiB of cells is refused.
 const MAX_TILES: usize = 1 << 20;
+
+/// Entries of the matchers' probability table for observed cells: log odds in
+/// `[−TABLE_LOG_ODDS, TABLE_LOG_ODDS]` at equal steps (`scan::scan_to_map`'s
+/// `ProbabilityLookup` holds the probabilities).
+pub const TABLE_ENTRIES: usize = 4096;
+/// The table entry of a cell never observed (one past the observed ones).
+pub const UNKNOWN_ENTRY: u16 = TABLE_ENTRIES as u16;
+/// The log odds the table spans on either side of 0.
+pub const TABLE_LOG_ODDS: f64 = 16.0;
+
+/// The table entry of log odds `l` (NaN: never observed): the nearest of
+/// [`TABLE_ENTRIES`] equal steps over `[−16, 16]`, clamped to the ends.
+#[inline]
+pub fn table_entry(l: f32) -> u16 {
+    if l.is_nan() {
+        return UNKNOWN_ENTRY;
+    }
+    let last = (TABLE_ENTRIES - 1) as f64;
+    let t = (f64::from(l) + TABLE_LOG_ODDS) / (2.0 * TABLE_LOG_ODDS) * last;
+    (t + 0.5).clamp(0.0, last) as u16
+}
+
+/// The log odds that table entry `k` stands for (`k` below [`TABLE_ENTRIES`]).
+pub fn table_log_odds(k: usize) -> f64 {
+    -TABLE_LOG_ODDS + 2.0 * TABLE_LOG_ODDS * k as f64 / (TABLE_ENTRIES - 1) as f64
+}
 
 /// `ln(p / (1 − p))`.
 pub fn log_odds(p: f64) -> f64 {
@@ -292,17 +325,33 @@ pub struct BeamUpdate {
     pub cells: Vec<BeamCell>,
 }
 
-/// One tile of cells: log odds, NaN where never observed.
+/// The index of cell `(i, j)` within its tile (row-major from the bottom).
+#[inline]
+fn local_index(i: i64, j: i64) -> usize {
+    ((j & (TILE as i64 - 1)) as usize) * TILE + (i & (TILE as i64 - 1)) as usize
+}
+
+/// One tile of cells: log odds, NaN where never observed, and each cell's
+/// [`table_entry`].
 #[derive(Clone, Debug, PartialEq)]
 struct Tile {
     cells: [f32; TILE_CELLS],
+    entries: [u16; TILE_CELLS],
 }
 
 impl Tile {
     fn unknown() -> Self {
         Self {
             cells: [f32::NAN; TILE_CELLS],
+            entries: [UNKNOWN_ENTRY; TILE_CELLS],
         }
+    }
+
+    /// Sets cell `local` to log odds `l` (and its table entry with it).
+    #[inline]
+    fn set(&mut self, local: usize, l: f32) {
+        self.cells[local] = l;
+        self.entries[local] = table_entry(l);
     }
 }
 
@@ -324,6 +373,8 @@ pub struct ProbabilityGrid {
     /// The cells stamped during the scan being inserted, with the value each
     /// gets when the stamp comes off.
     stamped: Vec<(usize, usize, f32)>,
+    /// The cells of one beam during an insertion (kept for its capacity).
+    scratch: Vec<(i64, i64)>,
 }
 
 impl ProbabilityGrid {
@@ -343,6 +394,7 @@ impl ProbabilityGrid {
             tiles: Vec::new(),
             revisions: Vec::new(),
             stamped: Vec::new(),
+            scratch: Vec::new(),
         }
     }
 
@@ -377,8 +429,7 @@ impl ProbabilityGrid {
             return None;
         }
         let slot = dj as usize * self.tiles_wide + di as usize;
-        let local = ((j & (TILE as i64 - 1)) as usize) * TILE + (i & (TILE as i64 - 1)) as usize;
-        Some((slot, local))
+        Some((slot, local_index(i, j)))
     }
 
     /// The log odds of cell `(i, j)`, or `None` if it was never observed.
@@ -389,13 +440,14 @@ impl ProbabilityGrid {
         (!v.is_nan()).then_some(v as f64)
     }
 
-    /// The log odds of the `len` cells `(i, j)`, `(i + 1, j)`, … in one row,
-    /// NaN where never observed, when they lie in one tile column (a matcher
-    /// reading a small window of cells finds them in one place); `None` when
-    /// the run crosses a tile boundary or is longer than a tile.
+    /// The [`table_entry`] of the `len` cells `(i, j)`, `(i + 1, j)`, … in one
+    /// row, [`UNKNOWN_ENTRY`] where never observed, when they lie in one tile
+    /// column (a matcher reading a small window of cells finds them in one
+    /// place); `None` when the run crosses a tile boundary or is longer than a
+    /// tile.
     #[inline]
-    pub fn row_in_tile(&self, i: i64, j: i64, len: usize) -> Option<&[f32]> {
-        static UNKNOWN: [f32; TILE] = [f32::NAN; TILE];
+    pub fn entries_in_row(&self, i: i64, j: i64, len: usize) -> Option<&[u16]> {
+        static UNKNOWN: [u16; TILE] = [UNKNOWN_ENTRY; TILE];
         if len == 0 || len > TILE || i >> TILE_SHIFT != (i + len as i64 - 1) >> TILE_SHIFT {
             return None;
         }
@@ -403,8 +455,20 @@ impl ProbabilityGrid {
             return Some(&UNKNOWN[..len]);
         };
         match &self.tiles[slot] {
-            Some(tile) => tile.cells.get(local..local + len),
+            Some(tile) => tile.entries.get(local..local + len),
             None => Some(&UNKNOWN[..len]),
+        }
+    }
+
+    /// The [`table_entry`] of cell `(i, j)` ([`UNKNOWN_ENTRY`] if never
+    /// observed).
+    #[inline]
+    pub fn entry_at(&self, i: i64, j: i64) -> u16 {
+        match self.locate(i, j) {
+            Some((slot, local)) => self.tiles[slot]
+                .as_ref()
+                .map_or(UNKNOWN_ENTRY, |tile| tile.entries[local]),
+            None => UNKNOWN_ENTRY,
         }
     }
 
@@ -473,25 +537,50 @@ impl ProbabilityGrid {
         true
     }
 
-    /// Updates cell `(i, j)` once in the scan being inserted (a stamped cell
-    /// is left alone). Returns whether it was updated and whether it was new.
-    fn update_cell(&mut self, i: i64, j: i64, steps: &LogOddsSteps, hit: bool) -> (bool, bool) {
-        if !self.ensure_cell(i, j) {
-            return (false, false);
+    /// Updates each of `cells` once in the scan being inserted (a stamped
+    /// cell is left alone), in order. Returns how many were updated and how
+    /// many of those were new. Consecutive cells in one tile (a ray crosses a
+    /// tile in a run of cells) share one look-up of the tile and one
+    /// copy-on-write check.
+    fn update_cells(
+        &mut self,
+        cells: &[(i64, i64)],
+        steps: &LogOddsSteps,
+        hit: bool,
+    ) -> (usize, usize) {
+        let (mut updated, mut new) = (0, 0);
+        let mut rest = cells;
+        while let Some(&(i, j)) = rest.first() {
+            let tile_of = |&(a, b): &(i64, i64)| (a >> TILE_SHIFT, b >> TILE_SHIFT);
+            let run = rest
+                .iter()
+                .take_while(|c| tile_of(c) == tile_of(&(i, j)))
+                .count();
+            let (run_cells, next) = rest.split_at(run);
+            rest = next;
+            if !self.ensure_cell(i, j) {
+                continue;
+            }
+            let Some((slot, _)) = self.locate(i, j) else {
+                continue;
+            };
+            let tile =
+                Arc::make_mut(self.tiles[slot].get_or_insert_with(|| Arc::new(Tile::unknown())));
+            for &(i, j) in run_cells {
+                let local = local_index(i, j);
+                let old = tile.cells[local];
+                if old > UPDATE_MARK / 2.0 {
+                    continue;
+                }
+                let was_new = old.is_nan();
+                let value = steps.apply((!was_new).then_some(old as f64), hit);
+                tile.cells[local] = value as f32 + UPDATE_MARK;
+                self.stamped.push((slot, local, value as f32));
+                updated += 1;
+                new += usize::from(was_new);
+            }
         }
-        let Some((slot, local)) = self.locate(i, j) else {
-            return (false, false);
-        };
-        let tile = self.tiles[slot].get_or_insert_with(|| Arc::new(Tile::unknown()));
-        let old = tile.cells[local];
-        if old > UPDATE_MARK / 2.0 {
-            return (false, false);
-        }
-        let was_new = old.is_nan();
-        let new = steps.apply((!was_new).then_some(old as f64), hit);
-        Arc::make_mut(tile).cells[local] = new as f32 + UPDATE_MARK;
-        self.stamped.push((slot, local, new as f32));
-        (true, was_new)
+        (updated, new)
     }
 
     /// Inserts one scan taken from `world_from_sensor` (Cartographer's
@@ -511,26 +600,26 @@ impl ProbabilityGrid {
         }
         let mut report = InsertReport::default();
         let n = scan.len();
+        let mut cells = std::mem::take(&mut self.scratch);
         // Hits first, so that the misses skip them.
-        for k in 0..n {
-            if let Some((i, j)) = self.hit_cell(world_from_sensor, scan, k) {
-                let (updated, new) = self.update_cell(i, j, &steps, true);
-                report.hits += updated as usize;
-                report.new_cells += new as usize;
-            }
-        }
+        cells.clear();
+        cells.extend((0..n).filter_map(|k| self.hit_cell(world_from_sensor, scan, k)));
+        let (updated, new) = self.update_cells(&cells, &steps, true);
+        report.hits += updated;
+        report.new_cells += new;
         for k in 0..n {
             let Some((from, to, include_end)) =
                 self.free_segment(world_from_sensor, scan, k, params)
             else {
                 continue;
             };
-            segment_cells(from, to, include_end, |i, j| {
-                let (updated, new) = self.update_cell(i, j, &steps, false);
-                report.misses += updated as usize;
-                report.new_cells += new as usize;
-            });
+            cells.clear();
+            segment_cells(from, to, include_end, |i, j| cells.push((i, j)));
+            let (updated, new) = self.update_cells(&cells, &steps, false);
+            report.misses += updated;
+            report.new_cells += new;
         }
+        self.scratch = cells;
         self.finish_scan();
         Ok(report)
     }
@@ -670,9 +759,9 @@ impl ProbabilityGrid {
                 .take_while(|(s, _, _)| *s == slot)
                 .count();
             if let Some(tile) = self.tiles[slot].as_mut() {
-                let cells = &mut Arc::make_mut(tile).cells;
+                let tile = Arc::make_mut(tile);
                 for &(_, local, value) in &self.stamped[k..k + run] {
-                    cells[local] = value;
+                    tile.set(local, value);
                 }
             }
             self.revisions[slot] = revision;
@@ -742,6 +831,9 @@ impl ProbabilityGrid {
         let (slot, _) = self.locate(ti * TILE as i64, tj * TILE as i64)?;
         self.tiles[slot].as_ref().map(|t| &t.cells)
     }
+
+    /// Bytes a tile of cells occupies: its log odds and table entries.
+    pub const TILE_BYTES: usize = std::mem::size_of::<Tile>();
 
     /// Bytes of cell storage in tiles this grid holds (shared tiles counted in
     /// full).
@@ -829,7 +921,7 @@ impl ProbabilityGrid {
             for k in 0..TILE_CELLS {
                 if ws[k] > 0.0 {
                     let p = (wp[k] / ws[k]).clamp(1e-9, 1.0 - 1e-9);
-                    tile.cells[k] = log_odds(p) as f32;
+                    tile.set(k, log_odds(p) as f32);
                 }
             }
             mean.tiles[slot] = Some(Arc::new(tile));
@@ -998,7 +1090,7 @@ mod tests {
     }
 
     #[test]
-    fn a_row_in_one_tile_reads_the_same_cells_as_one_by_one() {
+    fn a_row_in_one_tile_reads_the_same_entries_as_one_by_one() {
         let params = log_odds_without_free_run();
         let mut g = ProbabilityGrid::new(0.1);
         g.insert_scan(
@@ -1007,10 +1099,6 @@ mod tests {
             &params,
         )
         .unwrap();
-        let same = |a: f32, b: Option<f64>| match b {
-            Some(v) => f64::from(a) == v,
-            None => a.is_nan(),
-        };
         for (i, j, len) in [
             (0, 0, 5),
             (27, 0, 5),
@@ -1018,16 +1106,81 @@ mod tests {
             (100, 100, 3),
             (32, 0, 32),
         ] {
-            let row = g.row_in_tile(i, j, len).unwrap();
+            let row = g.entries_in_row(i, j, len).unwrap();
             assert_eq!(row.len(), len);
-            for (k, v) in row.iter().enumerate() {
-                assert!(same(*v, g.log_odds_at(i + k as i64, j)), "({i}, {j}) + {k}");
+            for (k, &entry) in row.iter().enumerate() {
+                assert_eq!(entry, g.entry_at(i + k as i64, j), "({i}, {j}) + {k}");
             }
         }
+        // The beam's cells are known, the rest of the row not.
+        assert_eq!(g.entries_in_row(0, 0, 5).unwrap()[0], table_entry(-0.4));
+        assert_eq!(g.entries_in_row(27, 0, 5).unwrap()[4], UNKNOWN_ENTRY);
         // A run across a tile boundary, or longer than a tile: read cell by cell.
-        assert!(g.row_in_tile(30, 0, 5).is_none());
-        assert!(g.row_in_tile(-2, 0, 5).is_none());
-        assert!(g.row_in_tile(0, 0, 33).is_none());
+        assert!(g.entries_in_row(30, 0, 5).is_none());
+        assert!(g.entries_in_row(-2, 0, 5).is_none());
+        assert!(g.entries_in_row(0, 0, 33).is_none());
+    }
+
+    /// Every cell's table entry is the entry of its log odds, after scans from
+    /// several poses (hits, misses, a grid that grew in every direction, cells
+    /// updated many times up to the clamp) and in a weighted mean of grids.
+    #[test]
+    fn every_cell_keeps_the_table_entry_of_its_log_odds() {
+        let params = InsertParams {
+            rule: UpdateRule::LOG_ODDS,
+            max_range_free: 3.0,
+        };
+        let beams = 90;
+        let scan = Scan {
+            angles: (0..beams)
+                .map(|k| {
+                    -std::f64::consts::PI + 2.0 * std::f64::consts::PI * k as f64 / beams as f64
+                })
+                .collect(),
+            ranges: (0..beams)
+                .map(|k| {
+                    if k % 7 == 0 {
+                        10.0
+                    } else {
+                        1.0 + 0.05 * (k % 13) as f64
+                    }
+                })
+                .collect(),
+            range_min: 0.0,
+            range_max: 10.0,
+        };
+        let mut a = ProbabilityGrid::new(0.1);
+        let mut b = ProbabilityGrid::new(0.1);
+        for step in 0..40 {
+            let pose = Pose2::new(
+                -2.0 + 0.1 * step as f64,
+                0.03 * step as f64,
+                0.05 * step as f64,
+            );
+            a.insert_scan(&pose, &scan, &params).unwrap();
+            if step % 3 == 0 {
+                b.insert_scan(&pose, &scan, &params).unwrap();
+            }
+        }
+        let mean = ProbabilityGrid::weighted_mean([(&a, 0.7), (&b, 0.3)]).unwrap();
+        for grid in [&a, &b, &mean] {
+            let mut known = 0;
+            // `tiles` gives each tile's lower-left cell.
+            for (ti, tj, cells) in grid.tiles() {
+                for (k, &l) in cells.iter().enumerate() {
+                    let (i, j) = (ti + (k % TILE) as i64, tj + (k / TILE) as i64);
+                    assert_eq!(grid.entry_at(i, j), table_entry(l), "cell ({i}, {j})");
+                    known += usize::from(!l.is_nan());
+                }
+            }
+            assert!(known > 500, "{known} known cells");
+        }
+        // Entries at the clamp and in between are distinct table entries.
+        assert_eq!(table_entry(f32::NAN), UNKNOWN_ENTRY);
+        assert_eq!(table_entry(-100.0), 0);
+        assert_eq!(table_entry(100.0), (TABLE_ENTRIES - 1) as u16);
+        assert_eq!(table_entry(0.0), 2048);
+        assert!((table_log_odds(2048) - 0.0039).abs() < 1e-4);
     }
 
     #[test]

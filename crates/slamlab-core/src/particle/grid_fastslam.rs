@@ -52,7 +52,7 @@ use crate::grid::{InsertParams, ProbabilityGrid};
 use crate::math;
 use crate::random::standard_normal;
 use crate::scan::scan_to_map::{ProbabilityLookup, ScanToMapParams, match_scan_to_map};
-use crate::scan::{Point2, Scan, transform_point};
+use crate::scan::{Point2, PointTransform, Scan};
 use nalgebra::{Matrix3, Vector3};
 use rand::SeedableRng;
 use rand_chacha::ChaCha8Rng;
@@ -461,15 +461,16 @@ pub fn scan_log_likelihood(
     let k = config.kernel_size as i64;
     let occupied = |i: i64, j: i64| map.log_odds_at(i, j).is_some_and(|l| l > 0.0);
     let (mut l, mut found) = (0.0, 0);
+    let transform = PointTransform::new(pose);
     for p in &points.points {
-        let hit = transform_point(pose, *p);
+        let hit = transform.apply(*p);
         let range = math::hypot(p[0], p[1]);
         let back = if range > free_delta {
             (range - free_delta) / range
         } else {
             0.0
         };
-        let free = transform_point(pose, [p[0] * back, p[1] * back]);
+        let free = transform.apply([p[0] * back, p[1] * back]);
         let (hi, hj) = map.cell_of(hit[0], hit[1]);
         let (fi, fj) = map.cell_of(free[0], free[1]);
         let (oi, oj) = (fi - hi, fj - hj);

@@ -23,9 +23,9 @@
 //! Cells never observed read as [`UNKNOWN_PROBABILITY`] (Cartographer reads
 //! them at its largest correspondence cost, probability 0.1).
 
-use super::{Point2, Scan, ScanMatch, ScanMatcher, transform_point};
+use super::{Point2, PointTransform, Scan, ScanMatch, ScanMatcher};
 use crate::geometry::{Pose2, wrap_angle};
-use crate::grid::{ProbabilityGrid, floor_to_i64};
+use crate::grid::{ProbabilityGrid, TABLE_ENTRIES, floor_to_i64, table_entry, table_log_odds};
 use crate::math;
 use nalgebra::{Matrix3, Vector3};
 use serde::{Deserialize, Serialize};
@@ -100,22 +100,19 @@ pub struct ScanToMapRecord {
 
 /// Probabilities of log-odds values from a table: the matcher reads cells
 /// hundreds of thousands of times per scan, and an exponential for each would
-/// dominate. 4096 entries over log odds in `[−16, 16]`, nearest entry.
+/// dominate. 4096 entries over log odds in `[−16, 16]`, nearest entry
+/// ([`table_entry`](crate::grid::table_entry), which the
+/// grid keeps for every cell), and one more for a cell never seen.
 #[derive(Clone, Debug)]
 pub struct ProbabilityLookup {
     table: Vec<f64>,
 }
 
-const LOOKUP_RANGE: f64 = 16.0;
-const LOOKUP_SIZE: usize = 4096;
-
 impl Default for ProbabilityLookup {
     fn default() -> Self {
-        let table = (0..LOOKUP_SIZE)
-            .map(|k| {
-                let l = -LOOKUP_RANGE + 2.0 * LOOKUP_RANGE * k as f64 / (LOOKUP_SIZE - 1) as f64;
-                crate::grid::probability(l)
-            })
+        let table = (0..TABLE_ENTRIES)
+            .map(|k| crate::grid::probability(table_log_odds(k)))
+            .chain([UNKNOWN_PROBABILITY])
             .collect();
         Self { table }
     }
@@ -125,27 +122,34 @@ impl ProbabilityLookup {
     /// The probability of cell `(i, j)`, [`UNKNOWN_PROBABILITY`] if never seen.
     #[inline]
     pub fn cell(&self, grid: &ProbabilityGrid, i: i64, j: i64) -> f64 {
-        match grid.log_odds_at(i, j) {
-            None => UNKNOWN_PROBABILITY,
-            Some(l) => {
-                let t = (l + LOOKUP_RANGE) / (2.0 * LOOKUP_RANGE) * (LOOKUP_SIZE - 1) as f64;
-                let k = (t + 0.5).clamp(0.0, (LOOKUP_SIZE - 1) as f64) as usize;
-                self.table[k]
-            }
-        }
+        self.of_entry(grid.entry_at(i, j))
     }
 
     /// The probability of a cell whose stored log odds are `l` (NaN: never
     /// seen), as [`cell`](Self::cell) gives it.
     #[inline]
     pub fn of_log_odds(&self, l: f32) -> f64 {
-        if l.is_nan() {
-            return UNKNOWN_PROBABILITY;
+        self.of_entry(table_entry(l))
+    }
+
+    /// The probability of table entry `k` (the grid's [`table_entry`] of a
+    /// cell).
+    #[inline]
+    pub fn of_entry(&self, k: u16) -> f64 {
+        self.table
+            .get(usize::from(k))
+            .copied()
+            .unwrap_or(UNKNOWN_PROBABILITY)
+    }
+
+    /// The probabilities of cells `(i, j)` to `(i + 3, j)`, as
+    /// [`cell`](Self::cell) gives them, read in one go when they share a tile.
+    #[inline]
+    fn row_of_four(&self, grid: &ProbabilityGrid, i: i64, j: i64) -> [f64; 4] {
+        match grid.entries_in_row(i, j, 4) {
+            Some(&[a, b, c, d]) => [a, b, c, d].map(|k| self.of_entry(k)),
+            _ => [0, 1, 2, 3].map(|di| self.cell(grid, i + di, j)),
         }
-        let l = f64::from(l);
-        let t = (l + LOOKUP_RANGE) / (2.0 * LOOKUP_RANGE) * (LOOKUP_SIZE - 1) as f64;
-        let k = (t + 0.5).clamp(0.0, (LOOKUP_SIZE - 1) as f64) as usize;
-        self.table[k]
     }
 
     /// `M_smooth` at the world point `(x, y)` and its gradient: bicubic
@@ -160,7 +164,7 @@ impl ProbabilityLookup {
         let mut rows = [0.0; 4];
         let mut rows_du = [0.0; 4];
         for (n, dj) in (-1..=2).enumerate() {
-            let p = [-1, 0, 1, 2].map(|di| self.cell(grid, i0 + di, j0 + dj));
+            let p = self.row_of_four(grid, i0 - 1, j0 + dj);
             let (f, df) = catmull_rom(p, tu);
             rows[n] = f;
             rows_du[n] = df;
@@ -323,19 +327,23 @@ fn correlative_search(
     let mut sums = vec![0.0_f64; side * side];
     for a in -n_angles..=n_angles {
         let dtheta = a as f64 * step;
-        let rotated = Pose2::new(predicted.x, predicted.y, predicted.theta + dtheta);
+        let rotated = PointTransform::new(&Pose2::new(
+            predicted.x,
+            predicted.y,
+            predicted.theta + dtheta,
+        ));
         sums.fill(0.0);
         for p in points {
-            let q = transform_point(&rotated, *p);
+            let q = rotated.apply(*p);
             let (ci, cj) = grid.cell_of(q[0], q[1]);
             let i0 = ci - n_cells;
             for (row, dj) in (-n_cells..=n_cells).enumerate() {
                 let j = cj + dj;
                 let out = &mut sums[row * side..(row + 1) * side];
-                match grid.row_in_tile(i0, j, side) {
-                    Some(cells) => {
-                        for (sum, &l) in out.iter_mut().zip(cells) {
-                            *sum += lookup.of_log_odds(l);
+                match grid.entries_in_row(i0, j, side) {
+                    Some(entries) => {
+                        for (sum, &k) in out.iter_mut().zip(entries) {
+                            *sum += lookup.of_entry(k);
                         }
                     }
                     None => {

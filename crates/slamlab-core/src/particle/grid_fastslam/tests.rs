@@ -166,15 +166,12 @@ fn resampled_copies_share_tiles_until_they_write_and_writing_one_cell_copies_one
         parent_tiles - 1
     );
     assert_eq!(f.particles[0].map.shared_tiles_with(&parent), parent_tiles);
-    assert_eq!(
-        f.memory_bytes() - before,
-        std::mem::size_of::<[f32; 1024]>()
-    );
+    assert_eq!(f.memory_bytes() - before, ProbabilityGrid::TILE_BYTES);
 }
 
 fn slot_bytes(grid: &ProbabilityGrid) -> usize {
     // What `memory_bytes` counts besides the tiles: the table of slots.
-    grid.memory_bytes() - grid.tiles().count() * std::mem::size_of::<[f32; 1024]>()
+    grid.memory_bytes() - grid.tiles().count() * ProbabilityGrid::TILE_BYTES
 }
 
 #[test]
