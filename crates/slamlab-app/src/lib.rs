@@ -621,10 +621,14 @@ impl SlamLabApp {
             .num_columns(2)
             .striped(true)
             .show(ui, |ui| {
-                for (key, what) in time_control::SHORTCUTS
-                    .iter()
-                    .copied()
-                    .chain(self.lesson.keys())
+                for (key, what) in time_control::shortcuts(self.lesson.step_controls())
+                    .into_iter()
+                    .chain(
+                        self.lesson
+                            .keys()
+                            .into_iter()
+                            .map(|(k, w)| (k, w.to_owned())),
+                    )
                 {
                     ui.label(egui::RichText::new(key).monospace().strong());
                     ui.label(what);

@@ -145,7 +145,8 @@ pub enum StepControls {
     },
 }
 
-/// The time bar's keys and what they do, for the Keys menu.
+/// The time bar's keys and what they do, for the Keys menu, as a lesson with
+/// phases and ticks has them.
 pub const SHORTCUTS: &[(&str, &str)] = &[
     ("Space", "run / pause"),
     (".", "step one phase (the time bar's Step phase)"),
@@ -153,6 +154,25 @@ pub const SHORTCUTS: &[(&str, &str)] = &[
     ("n", "step one whole tick"),
     ("r", "reset the run"),
 ];
+
+/// The time bar's keys and what they do in a lesson whose clock has `steps`: the
+/// [`SHORTCUTS`], or for one kind of step its own button and unit ("step one
+/// iteration (the time bar's Step iteration)").
+pub fn shortcuts(steps: StepControls) -> Vec<(&'static str, String)> {
+    match steps {
+        StepControls::PhasesAndTicks => SHORTCUTS
+            .iter()
+            .map(|(key, what)| (*key, (*what).to_owned()))
+            .collect(),
+        StepControls::One { label, unit, .. } => vec![
+            ("Space", "run / pause".to_owned()),
+            (".", format!("step one {unit} (the time bar's {label})")),
+            (",", format!("step back one {unit} or edit")),
+            ("n", format!("step one {unit}, as .")),
+            ("r", "reset the run".to_owned()),
+        ],
+    }
+}
 
 /// Reads the keyboard shortcuts (Space, `.`, `,`, `n`, `r`) unless a text field has the
 /// keyboard focus. The keys are consumed so that a focused button does not also react.
@@ -270,13 +290,24 @@ pub fn time_bar_ui(
             actions.push(TimeAction::Reset);
         }
         ui.separator();
+        // The label, slider and value are one group: it starts a new row when the
+        // rest of this one cannot hold it (a slider clips rather than wraps).
+        let group = text_width(ui, "Speed")
+            + ui.spacing().slider_width
+            + text_width(ui, &format!("1000 {unit}s/s"))
+            + 4.0 * ui.spacing().item_spacing.x
+            + 4.0 * ui.spacing().button_padding.x
+            + 16.0;
+        if room_left(ui) < group {
+            ui.end_row();
+        }
+        ui.label("Speed");
         ui.add_enabled(
             !time.max_speed,
             egui::Slider::new(&mut time.speed_tps, SPEED_RANGE)
                 .logarithmic(true)
                 .integer()
-                .suffix(format!(" {unit}s/s"))
-                .text("Speed"),
+                .suffix(format!(" {unit}s/s")),
         )
         .on_hover_text(format!("Speed while running, {unit}s per second"));
         ui.checkbox(&mut time.max_speed, "max")
@@ -291,16 +322,57 @@ pub fn time_bar_ui(
         }
         if !compact {
             let last = info.last_phase.as_deref().unwrap_or("none yet");
-            ui.label(format!("Last phase: {last}"))
+            let text = format!("Last phase: {last}");
+            // On a row of its own when little is left of this one; it wraps there.
+            if room_left(ui) < text_width(ui, &text).min(160.0) {
+                ui.end_row();
+            }
+            ui.add(egui::Label::new(text).wrap())
                 .on_hover_text("The phase shown on the map and in the explanation");
         }
     });
     actions
 }
 
+/// The width left on the current row up to the window's (or the panel's) right edge,
+/// points: a row that has overflowed before widens its `Ui`, not the window.
+fn room_left(ui: &egui::Ui) -> f32 {
+    ui.clip_rect().right().min(ui.max_rect().right()) - ui.cursor().min.x - 4.0
+}
+
+/// The width of `text` in the body font, points.
+fn text_width(ui: &egui::Ui, text: &str) -> f32 {
+    let font = egui::TextStyle::Body.resolve(ui.style());
+    ui.painter()
+        .layout_no_wrap(text.to_owned(), font, egui::Color32::WHITE)
+        .size()
+        .x
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn the_keys_name_the_lessons_own_step() {
+        let phases = shortcuts(StepControls::PhasesAndTicks);
+        assert_eq!(phases.len(), SHORTCUTS.len());
+        assert!(phases[1].1.contains("Step phase"));
+        let one = shortcuts(StepControls::One {
+            label: "Step iteration",
+            hover: "Run one iteration",
+            unit: "iteration",
+        });
+        let dot = one.iter().find(|(k, _)| *k == ".").map(|(_, w)| w.as_str());
+        assert_eq!(
+            dot,
+            Some("step one iteration (the time bar's Step iteration)")
+        );
+        assert!(
+            one.iter().all(|(_, what)| !what.contains("phase")),
+            "{one:?}"
+        );
+    }
 
     #[test]
     fn clock_owes_ticks_at_the_set_speed_and_drops_backlogs() {

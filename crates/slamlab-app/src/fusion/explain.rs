@@ -8,13 +8,20 @@ use crate::widgets::sources;
 use slamlab_core::kalman::fusion::{Outcome, StepReport};
 use slamlab_core::math;
 use slamlab_sim::fusion::lesson::{FusionPhase, FusionSim};
-use slamlab_sim::fusion::{FusionMode, SLAM};
+use slamlab_sim::fusion::{FusionMode, ModeRun, SLAM};
 
 /// The RMSE table's text for one value, as the panel shows it (metres or radians).
 pub fn rmse_text(value: f64) -> String {
     // A value that rounds to zero prints as 0.0000, never −0.0000.
     let shown = if value.abs() < 5e-5 { 0.0 } else { value };
     format!("{shown:.4}")
+}
+
+/// A vector entry of the explanation, signed with four decimals; one that rounds to
+/// zero prints as +0.0000, never −0.0000.
+pub fn signed_text(value: f64) -> String {
+    let shown = if value.abs() < 5e-5 { 0.0 } else { value };
+    format!("{shown:+.4}")
 }
 
 /// The panel for the phase that ran last.
@@ -64,37 +71,54 @@ pub fn explanation_ui(ui: &mut egui::Ui, sim: &FusionSim, last: Option<&FusionPh
         ));
         sources::source_link(ui, "wu", "Source: Wu's thesis");
     });
-    // A horizontal scroll keeps the six columns from widening the whole panel.
+    // One column per mode and a row per quantity: narrow enough for the drawer of
+    // an 800 x 500 window with three modes; a horizontal scroll beyond that.
     egui::ScrollArea::horizontal()
         .id_salt("fusion_rmse_scroll")
         .show(ui, |ui| {
             egui::Grid::new("fusion_rmse")
-                .num_columns(6)
+                .num_columns(1 + sim.runs().len())
+                .spacing([10.0, 2.0])
                 .striped(true)
                 .show(ui, |ui| {
-                    for head in [
-                        "mode",
-                        "x (m)",
-                        "y (m)",
-                        "yaw (rad)",
-                        "error now (m)",
-                        "largest jump (m)",
-                    ] {
-                        ui.label(egui::RichText::new(head).strong());
+                    ui.label("");
+                    for run in sim.runs() {
+                        ui.colored_label(
+                            mode_color(run.mode()),
+                            egui::RichText::new(run.mode().name()).strong(),
+                        );
                     }
                     ui.end_row();
-                    for run in sim.runs() {
-                        let e = run.rmse();
-                        ui.colored_label(mode_color(run.mode()), run.mode().name());
-                        ui.monospace(rmse_text(e.x));
-                        ui.monospace(rmse_text(e.y));
-                        ui.monospace(rmse_text(e.yaw));
-                        let now = run
-                            .samples()
-                            .last()
-                            .map_or(0.0, |s| math::hypot(s.error[0], s.error[1]));
-                        ui.monospace(format!("{now:.3}"));
-                        ui.monospace(format!("{:.3}", run.max_slam_jump()));
+                    type Cell<'c> = &'c dyn Fn(&ModeRun) -> String;
+                    let rows: [(&str, &str, Cell<'_>); 5] = [
+                        ("x (m)", "RMSE of x", &|run| rmse_text(run.rmse().x)),
+                        ("y (m)", "RMSE of y", &|run| rmse_text(run.rmse().y)),
+                        ("yaw (rad)", "RMSE of the heading", &|run| {
+                            rmse_text(run.rmse().yaw)
+                        }),
+                        (
+                            "error now (m)",
+                            "Distance from the estimate to the truth at the last output sample",
+                            &|run| {
+                                let now = run
+                                    .samples()
+                                    .last()
+                                    .map_or(0.0, |s| math::hypot(s.error[0], s.error[1]));
+                                format!("{now:.3}")
+                            },
+                        ),
+                        (
+                            "largest jump (m)",
+                            "The largest move of the position estimate at a SLAM update",
+                            &|run| format!("{:.3}", run.max_slam_jump()),
+                        ),
+                    ];
+                    for (head, hover, value) in rows {
+                        ui.label(egui::RichText::new(head).strong())
+                            .on_hover_text(hover);
+                        for run in sim.runs() {
+                            ui.monospace(value(run));
+                        }
                         ui.end_row();
                     }
                 });
@@ -197,7 +221,7 @@ fn report_ui(ui: &mut egui::Ui, mode: FusionMode, report: &StepReport, color: eg
             let list = |values: &[f64]| {
                 values
                     .iter()
-                    .map(|v| format!("{v:+.4}"))
+                    .map(|v| signed_text(*v))
                     .collect::<Vec<_>>()
                     .join(", ")
             };

@@ -189,6 +189,11 @@ impl FusionLesson {
         self.stepper.sim()
     }
 
+    /// The map's view (its centre and scale): it fits the room, never the ellipses.
+    pub fn map_view(&self) -> &MapView {
+        &self.canvas
+    }
+
     /// The setup being edited in the parameter panel (applied on reset).
     pub fn pending(&self) -> &FusionLessonScenario {
         &self.pending.scenario

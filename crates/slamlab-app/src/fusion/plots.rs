@@ -4,7 +4,7 @@
 use super::mode_color;
 use crate::export::PlotSeries;
 use crate::widgets::plots::{
-    Figure, Mark, Styled, draw_series, figure_ui, line_width, series_data, series_key_ui,
+    Figure, Mark, Styled, draw_series, figure_ui, line_width, plot_row, series_data, series_key_ui,
     style_entries, time_plot,
 };
 use slamlab_sim::fusion::lesson::FusionSim;
@@ -93,10 +93,11 @@ pub fn plots_ui(ui: &mut egui::Ui, sim: &FusionSim) {
                 .include_y(0.0)
         }
     };
-    ui.columns(4, |columns| {
-        for (k, (title, axis, id)) in ERROR_PLOTS.into_iter().enumerate() {
+    // An embed shows the first two: the x error and the y error.
+    plot_row(ui, ERROR_PLOTS.len() + 1, |k, ui| {
+        if let Some((title, axis, id)) = ERROR_PLOTS.get(k).copied() {
             figure_ui(
-                &mut columns[k],
+                ui,
                 &Figure {
                     title,
                     hover: "Estimate minus truth at the output rate (solid) and the filter's own \
@@ -109,21 +110,22 @@ pub fn plots_ui(ui: &mut egui::Ui, sim: &FusionSim) {
                 plot(id),
                 |plot_ui| draw_series(plot_ui, &all, title),
             );
+        } else {
+            figure_ui(
+                ui,
+                &Figure {
+                    title: JUMPS,
+                    hover: "How far each fused SLAM pose moved the position estimate at its update: \
+                            relative and absolute correct the position itself (jumps), differential \
+                            only a velocity (millimetres)",
+                    key: style_entries(&all, JUMPS, text),
+                    y_label: "jump (m)",
+                    height,
+                },
+                plot("fusion_jumps"),
+                |plot_ui| draw_series(plot_ui, &all, JUMPS),
+            );
         }
-        figure_ui(
-            &mut columns[3],
-            &Figure {
-                title: JUMPS,
-                hover: "How far each fused SLAM pose moved the position estimate at its update: \
-                        relative and absolute correct the position itself (jumps), differential \
-                        only a velocity (millimetres)",
-                key: style_entries(&all, JUMPS, text),
-                y_label: "jump (m)",
-                height,
-            },
-            plot("fusion_jumps"),
-            |plot_ui| draw_series(plot_ui, &all, JUMPS),
-        );
     });
 }
 

@@ -35,6 +35,9 @@ pub fn explanation_ui(ui: &mut egui::Ui, run: &MclRun, last: Option<MclPhase>) {
             ));
         }
     }
+    if run.kidnap_tick().is_some() {
+        recovery_note_ui(ui, run);
+    }
     ui.separator();
     ui.heading("What just happened");
     match last {
@@ -179,6 +182,93 @@ pub fn explanation_ui(ui: &mut egui::Ui, run: &MclRun, last: Option<MclPhase>) {
          reports it; its ellipse is 95% of that cluster's spread.",
     );
     sources::source_link(ui, "ros", "Source: ROS amcl");
+}
+
+/// After a kidnap, what Augmented MCL's averages did, in the filter's own numbers:
+/// w_fast against w_slow now, w_fast before the kidnap, and so whether it injects.
+pub fn recovery_lines(run: &MclRun) -> Vec<String> {
+    let Some(kidnap) = run.kidnap_tick() else {
+        return Vec::new();
+    };
+    let mut lines = Vec::new();
+    for f in run.filters() {
+        let (Some(slow), Some(fast)) = (f.recovery().log_w_slow, f.recovery().log_w_fast) else {
+            continue;
+        };
+        let before = f
+            .updates
+            .iter()
+            .rev()
+            .find(|u| u.tick < kidnap)
+            .and_then(|u| u.log_w_fast);
+        let since = match before {
+            Some(b) => format!(
+                "w_fast is {:.2} times what it was before the kidnap",
+                slamlab_core::math::exp(fast - b)
+            ),
+            None => "no update before the kidnap".to_owned(),
+        };
+        let verdict = if fast < slow {
+            format!(
+                "w_fast is below w_slow: it injects with probability {:.3}",
+                1.0 - slamlab_core::math::exp(fast - slow)
+            )
+        } else {
+            "w_fast is above w_slow: it injects nothing".to_owned()
+        };
+        let injected: usize = f
+            .updates
+            .iter()
+            .filter(|u| u.tick >= kidnap && u.randomized > 0.0)
+            .count();
+        lines.push(format!(
+            "{}: {since}; {verdict}; {injected} updates since the kidnap drew new particles",
+            f.name.to_uppercase()
+        ));
+    }
+    lines
+}
+
+/// How Augmented MCL notices a kidnap, and why in this lesson it often does not.
+fn recovery_note_ui(ui: &mut egui::Ui, run: &MclRun) {
+    let lines = recovery_lines(run);
+    if lines.is_empty() {
+        return;
+    }
+    ui.label(egui::RichText::new("Does Augmented MCL notice the kidnap?").strong());
+    ui.label(
+        "w_slow and w_fast follow the particles' mean weight, slowly (recovery-alpha-slow) and \
+         fast (recovery-alpha-fast). Random particles are injected with probability \
+         1 − w_fast/w_slow, so only while w_fast is below w_slow: right after the mean weight \
+         has dropped (Algorithm 9 of Xiang's thesis).",
+    );
+    let scoring = match run.scenario().laser_likelihood_aggregation {
+        slamlab_core::particle::ScanAggregation::Product => format!(
+            "Here each scan's likelihood is raised to the power laser-likelihood-exponent = {} \
+             (it keeps global localization from locking onto a wrong place). That flattens it: \
+             a lost filter's mean weight stays within a small factor of a tracking one's, while \
+             w_slow, which moves by only recovery-alpha-slow per update, still remembers the \
+             lower weights of the global localization at the start. So w_fast stays above \
+             w_slow and AMCL injects nothing (its line below says what it does now): it finds \
+             the robot again only if a particle happens to be near it. ACMCL regenerates the \
+             particles its costmap rules out instead, at every update. preset=amcl-ros1 scores \
+             scans as ROS amcl does (1 + Σ p³ over the beams).",
+            run.scenario().laser_likelihood_exponent
+        ),
+        slamlab_core::particle::ScanAggregation::AmclCubes => {
+            "Here scans are scored as ROS amcl does, 1 + Σ p³ over the beams: after a kidnap the \
+             mean weight drops and AMCL injects a burst, but like amcl it restarts both averages \
+             after every resampling that injected, so injection stops until the mean weight \
+             drops again."
+                .to_owned()
+        }
+    };
+    ui.label(format!(
+        "{scoring} docs/kidnap-tables.md compares both scorings over many kidnaps."
+    ));
+    for line in lines {
+        ui.monospace(line);
+    }
 }
 
 fn beams_ui(ui: &mut egui::Ui, label: &str, beams: &[BeamLikelihood]) {

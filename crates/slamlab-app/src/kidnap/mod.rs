@@ -216,6 +216,9 @@ pub fn open(start: &LessonStart<'_>) -> Box<dyn Lesson> {
     }
     // An embed keeps the legend on: without it a lecture figure's particle clouds,
     // rays and ellipses are unexplained (`legend=0` hides it).
+    if start.embed {
+        lesson.view.legend = true;
+    }
     if let Some(location) = location {
         lesson.note = Some(format!("Loading the map {location}…"));
         lesson.map_location = Some(MapFetch {

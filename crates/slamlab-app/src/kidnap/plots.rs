@@ -6,7 +6,7 @@
 use super::filter_color;
 use crate::export::PlotSeries;
 use crate::widgets::plots::{
-    Figure, Mark, Styled, draw_series, figure_ui, line_width, series_data, series_key_ui,
+    Figure, Mark, Styled, draw_series, figure_ui, line_width, plot_row, series_data, series_key_ui,
     style_entries, time_plot, title_ui,
 };
 use slamlab_sim::localization::{MclRun, UpdateRecord};
@@ -132,63 +132,72 @@ pub fn plots_ui(ui: &mut egui::Ui, run: &MclRun) {
         y_label,
         height,
     };
-    ui.columns(4, |columns| {
-        figure_ui(
-            &mut columns[0],
-            &figure(
-                "Position error",
-                "Distance from the estimate (the heaviest cluster's weighted mean) to the true \
-                 robot, and the estimate's own 2σ bound along its longest axis",
-                "error (m)",
-            ),
-            plot("kidnap_error"),
-            |plot_ui| draw_series(plot_ui, &all, "Position error"),
-        );
-
-        let ui = &mut columns[1];
-        let hover = "Augmented MCL's short-term (w_fast, solid) and long-term (w_slow, dashed) \
-             averages of the particle weights, as log10 (Algorithm 9 of Xiang's thesis, §5.1.2). \
-             After a kidnap the weights drop and w_fast falls below w_slow first: that gap is the \
-             injection probability. Filters without recovery (MCL, CMCL) have none.";
-        if run.filters().iter().any(|f| f.filter.kind().injects()) {
+    let wslow_hover = "Augmented MCL's short-term (w_fast, solid) and long-term (w_slow, dashed) \
+         averages of the particles' mean weight, as log10 (Algorithm 9 of Xiang's thesis, \
+         §5.1.2). When the mean weight drops, w_fast falls faster than w_slow; once it is below \
+         w_slow, the gap is the injection probability 1 − w_fast/w_slow. With the lesson's \
+         tempered likelihood (laser-likelihood-exponent) a kidnap lowers the mean weight only \
+         a little and w_slow still remembers the global localization's low weights: w_fast \
+         stays above w_slow and AMCL injects nothing (the explanation says more). Filters \
+         without recovery (MCL, CMCL) have none.";
+    // An embed shows the first two: the error and w_slow against w_fast.
+    plot_row(ui, 4, |k, ui| match k {
+        0 => {
             figure_ui(
                 ui,
-                &figure("w_slow and w_fast", hover, "log10 w"),
-                plot("kidnap_wslow"),
-                |plot_ui| draw_series(plot_ui, &all, "w_slow and w_fast"),
-            );
-        } else {
-            title_ui(ui, "w_slow and w_fast", hover);
-            ui.label(
-                "Only Augmented MCL keeps these averages: choose amcl or acmcl as the \
-                 estimator to see w_fast fall below w_slow after a kidnap.",
+                &figure(
+                    "Position error",
+                    "Distance from the estimate (the heaviest cluster's weighted mean) to the true \
+                     robot, and the estimate's own 2σ bound along its longest axis",
+                    "error (m)",
+                ),
+                plot("kidnap_error"),
+                |plot_ui| draw_series(plot_ui, &all, "Position error"),
             );
         }
-
-        figure_ui(
-            &mut columns[2],
-            &figure(
-                "Particles and N_eff",
-                "How many particles each filter carries (solid; KLD-sampling adapts it) and the \
-                 effective sample size N_eff = 1 / Σ w² after weighting (dashed): the particle \
-                 count when all weights are equal, 1 when one particle holds all the weight",
-                "particles",
-            ),
-            plot("kidnap_count"),
-            |plot_ui| draw_series(plot_ui, &all, "Particles and N_eff"),
-        );
-
-        figure_ui(
-            &mut columns[3],
-            &figure(
-                "Recovery",
-                "Augmented MCL's injection probability max(0, 1 − w_fast/w_slow) (solid) and \
-                 the fraction of particles injected or regenerated in each update (dashed)",
-                "fraction",
-            ),
-            |h, y| plot("kidnap_recovery")(h, y).include_y(1.0),
-            |plot_ui| draw_series(plot_ui, &all, "Recovery"),
-        );
+        1 => {
+            if run.filters().iter().any(|f| f.filter.kind().injects()) {
+                figure_ui(
+                    ui,
+                    &figure("w_slow and w_fast", wslow_hover, "log10 w"),
+                    plot("kidnap_wslow"),
+                    |plot_ui| draw_series(plot_ui, &all, "w_slow and w_fast"),
+                );
+            } else {
+                title_ui(ui, "w_slow and w_fast", wslow_hover);
+                ui.label(
+                    "Only Augmented MCL keeps these averages: choose amcl or acmcl as the \
+                     estimator to see them.",
+                );
+            }
+        }
+        2 => {
+            figure_ui(
+                ui,
+                &figure(
+                    "Particles and N_eff",
+                    "How many particles each filter carries (solid; KLD-sampling adapts it) and the \
+                     effective sample size N_eff = 1 / Σ w² after weighting (dashed): the particle \
+                     count when all weights are equal, 1 when one particle holds all the weight",
+                    "particles",
+                ),
+                plot("kidnap_count"),
+                |plot_ui| draw_series(plot_ui, &all, "Particles and N_eff"),
+            );
+        }
+        _ => {
+            figure_ui(
+                ui,
+                &figure(
+                    "Recovery",
+                    "Augmented MCL's injection probability max(0, 1 − w_fast/w_slow) (solid) and \
+                     the fraction of particles injected or regenerated in each update (dashed)",
+                    "fraction",
+                ),
+                |h, y| plot("kidnap_recovery")(h, y).include_y(1.0),
+                |plot_ui| draw_series(plot_ui, &all, "Recovery"),
+            );
+        }
     });
 }
 

@@ -44,6 +44,8 @@ fn number_ui(ui: &mut egui::Ui, lesson: &mut LandmarkSlamLesson, name: &str, lab
     let Some(mut value) = pending_number(lesson, name) else {
         return;
     };
+    // The name above its slider, so that a narrow panel does not cut it.
+    let name_label = ui.label(label);
     ui.horizontal(|ui| {
         let logarithmic = min > 0.0 && max / min >= 100.0;
         let suffix = if spec.unit.is_empty() {
@@ -55,9 +57,9 @@ fn number_ui(ui: &mut egui::Ui, lesson: &mut LandmarkSlamLesson, name: &str, lab
             .add(
                 egui::Slider::new(&mut value, min..=max)
                     .logarithmic(logarithmic)
-                    .suffix(suffix)
-                    .text(label),
+                    .suffix(suffix),
             )
+            .labelled_by(name_label.id)
             .on_hover_text(format!("{} ({name})", spec.help));
         if response.changed() {
             let _issue = lesson.set_param_live(name, &format!("{value}"));

@@ -4,8 +4,8 @@
 use crate::export::PlotSeries;
 use crate::palette;
 use crate::widgets::plots::{
-    Figure, Mark, Styled, draw_series, figure_ui, plot_values, series_data, series_key_ui,
-    time_plot_without_legend,
+    Figure, Mark, Styled, draw_series, figure_ui, plot_row, plot_values, series_data,
+    series_key_ui, time_plot_without_legend,
 };
 pub(super) use crate::widgets::plots::{line_width, thin, time_plot};
 use egui_plot::{HLine, LineStyle, Plot, Span};
@@ -103,7 +103,7 @@ pub fn coincidence_note(session: &LandmarkSession, pairs: &[(usize, f64)]) -> Op
     ))
 }
 
-/// The four plots side by side.
+/// The four plots side by side (two in an embed).
 pub fn plots_ui(ui: &mut egui::Ui, session: &LandmarkSession) {
     if let Some(note) = coincidence_note(session, &coinciding_series(session)) {
         ui.label(egui::RichText::new(note).color(ui.visuals().warn_fg_color));
@@ -134,64 +134,70 @@ pub fn plots_ui(ui: &mut egui::Ui, session: &LandmarkSession) {
         y_label,
         height,
     };
-    ui.columns(4, |columns| {
+    // In the lesson's order: an embed shows the first two.
+    plot_row(ui, 4, |k, ui| match k {
         // 1. Robot position error and the 2σ bound.
-        figure_ui(
-            &mut columns[0],
-            &figure(
-                ROBOT_ERROR,
-                "|true − estimated position| and the filter's own 2σ bound 2√(σx² + σy²)",
-                "error (m)",
-            ),
-            |h, y| plot("plot_robot_error", y, h),
-            |plot_ui| draw_series(plot_ui, &all, ROBOT_ERROR),
-        );
-
+        0 => {
+            figure_ui(
+                ui,
+                &figure(
+                    ROBOT_ERROR,
+                    "|true − estimated position| and the filter's own 2σ bound 2√(σx² + σy²)",
+                    "error (m)",
+                ),
+                |h, y| plot("plot_robot_error", y, h),
+                |plot_ui| draw_series(plot_ui, &all, ROBOT_ERROR),
+            );
+        }
         // 2. Landmark RMS error.
-        figure_ui(
-            &mut columns[1],
-            &figure(
-                LANDMARK_ERROR,
-                "Root mean square position error over the landmarks in each filter's state",
-                "RMS error (m)",
-            ),
-            |h, y| plot("plot_landmark_rmse", y, h),
-            |plot_ui| draw_series(plot_ui, &all, LANDMARK_ERROR),
-        );
-
+        1 => {
+            figure_ui(
+                ui,
+                &figure(
+                    LANDMARK_ERROR,
+                    "Root mean square position error over the landmarks in each filter's state",
+                    "RMS error (m)",
+                ),
+                |h, y| plot("plot_landmark_rmse", y, h),
+                |plot_ui| draw_series(plot_ui, &all, LANDMARK_ERROR),
+            );
+        }
         // 3. Robot-pose NEES with the 3-dof band.
-        let (lo, hi) = band_95(3.0);
-        let nees_max = consistency_y_max(plot_values(&all, NEES), hi);
-        figure_ui(
-            &mut columns[2],
-            &figure(
-                NEES,
-                "e^T P_RR^-1 e of the robot pose each tick. Above the band: overconfident; below: conservative.",
-                "NEES",
-            ),
-            |h, y| plot("plot_nees", y, h).default_y_bounds(0.0, nees_max),
-            |plot_ui| {
-                band_ui(plot_ui, lo, hi);
-                draw_series(plot_ui, &all, NEES);
-            },
-        );
-
+        2 => {
+            let (lo, hi) = band_95(3.0);
+            let nees_max = consistency_y_max(plot_values(&all, NEES), hi);
+            figure_ui(
+                ui,
+                &figure(
+                    NEES,
+                    "e^T P_RR^-1 e of the robot pose each tick. Above the band: overconfident; below: conservative.",
+                    "NEES",
+                ),
+                |h, y| plot("plot_nees", y, h).default_y_bounds(0.0, nees_max),
+                |plot_ui| {
+                    band_ui(plot_ui, lo, hi);
+                    draw_series(plot_ui, &all, NEES);
+                },
+            );
+        }
         // 4. NIS of every update with the 2-dof band.
-        let (lo, hi) = band_95(2.0);
-        let nis_max = consistency_y_max(plot_values(&all, NIS), hi);
-        figure_ui(
-            &mut columns[3],
-            &figure(
-                NIS,
-                "ν^T S^-1 ν of every landmark update. Above the band: the innovations are larger than the filter expects.",
-                "NIS",
-            ),
-            |h, y| plot("plot_nis", y, h).default_y_bounds(0.0, nis_max),
-            |plot_ui| {
-                band_ui(plot_ui, lo, hi);
-                draw_series(plot_ui, &all, NIS);
-            },
-        );
+        _ => {
+            let (lo, hi) = band_95(2.0);
+            let nis_max = consistency_y_max(plot_values(&all, NIS), hi);
+            figure_ui(
+                ui,
+                &figure(
+                    NIS,
+                    "ν^T S^-1 ν of every landmark update. Above the band: the innovations are larger than the filter expects.",
+                    "NIS",
+                ),
+                |h, y| plot("plot_nis", y, h).default_y_bounds(0.0, nis_max),
+                |plot_ui| {
+                    band_ui(plot_ui, lo, hi);
+                    draw_series(plot_ui, &all, NIS);
+                },
+            );
+        }
     });
 }
 

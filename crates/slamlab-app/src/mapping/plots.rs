@@ -7,7 +7,8 @@ use super::map::source_color;
 use crate::export::PlotSeries;
 use crate::palette;
 use crate::widgets::plots::{
-    Figure, Mark, Styled, draw_series, figure_plot, figure_ui, series_data, style_entries, title_ui,
+    Figure, Mark, Styled, draw_series, figure_plot, figure_ui, plot_row, series_data,
+    style_entries, title_ui,
 };
 use slamlab_sim::mapping::MappingSession;
 
@@ -154,30 +155,32 @@ pub fn plots_ui(ui: &mut egui::Ui, session: &MappingSession, scan_ms: &[f64]) {
         y_label,
         height,
     };
-    ui.columns(3, |columns| {
-        let error_hover = if sim.grid_fastslam().is_some() {
-            "Distance from the heaviest particle's pose at each scan to the true pose, metres \
-             (between updates its pose moves with the odometry). A jump down marks a new heaviest \
-             particle, often after a loop closes."
-        } else {
-            "Distance from each scan's pose (as the pose source gave it) to the true pose, \
-             metres. Raw odometry drifts; a matcher holds the error down until it meets something it \
-             cannot match."
-        };
-        if has_truth {
+    let error_hover = if sim.grid_fastslam().is_some() {
+        "Distance from the heaviest particle's pose at each scan to the true pose, metres \
+         (between updates its pose moves with the odometry). A jump down marks a new heaviest \
+         particle, often after a loop closes."
+    } else {
+        "Distance from each scan's pose (as the pose source gave it) to the true pose, \
+         metres. Raw odometry drifts; a matcher holds the error down until it meets something it \
+         cannot match."
+    };
+    // An embed shows the first two: the error and the filter's or matcher's own plot.
+    plot_row(ui, 3, |k, ui| match k {
+        0 if has_truth => {
             figure_ui(
-                &mut columns[0],
+                ui,
                 &figure(ERROR, error_hover, "error (m)"),
                 plot("mapping_error"),
                 |p| draw_series(p, &all, ERROR),
             );
-        } else {
-            title_ui(&mut columns[0], ERROR, error_hover);
-            columns[0].label("A real log has no ground truth: no error to plot.");
         }
-        if sim.grid_fastslam().is_some() {
+        0 => {
+            title_ui(ui, ERROR, error_hover);
+            ui.label("A real log has no ground truth: no error to plot.");
+        }
+        1 if sim.grid_fastslam().is_some() => {
             figure_ui(
-                &mut columns[1],
+                ui,
                 &figure(
                     NEFF,
                     "N_eff = 1 / Σ w_i² after each update's weighting (Grisetti 2007, Eq. 20): the \
@@ -189,26 +192,33 @@ pub fn plots_ui(ui: &mut egui::Ui, session: &MappingSession, scan_ms: &[f64]) {
                 plot("mapping_neff"),
                 |p| draw_series(p, &all, NEFF),
             );
-        } else {
-        figure_ui(
-            &mut columns[1],
-            &figure(
-                COST,
-                "The matcher's final cost per scan: scan-to-map, the sum of squared residuals of Eq. 5.5 \
-                 of Xiang's thesis with its two pulls; ICP, the mean squared distance of the kept pairs \
-                 (m²). A jump marks a scan the matcher found hard.",
-                "cost",
-            ),
-            plot("mapping_cost"),
-            |p| draw_series(p, &all, COST),
-        );
         }
-        figure_ui(
-            &mut columns[2],
-            &figure(TIME, "How long each scan took here (predict, match and insert), milliseconds", "time (ms)"),
-            plot("mapping_time"),
-            |p| draw_series(p, &all, TIME),
-        );
+        1 => {
+            figure_ui(
+                ui,
+                &figure(
+                    COST,
+                    "The matcher's final cost per scan: scan-to-map, the sum of squared residuals of \
+                     Eq. 5.5 of Xiang's thesis with its two pulls; ICP, the mean squared distance of \
+                     the kept pairs (m²). A jump marks a scan the matcher found hard.",
+                    "cost",
+                ),
+                plot("mapping_cost"),
+                |p| draw_series(p, &all, COST),
+            );
+        }
+        _ => {
+            figure_ui(
+                ui,
+                &figure(
+                    TIME,
+                    "How long each scan took here (predict, match and insert), milliseconds",
+                    "time (ms)",
+                ),
+                plot("mapping_time"),
+                |p| draw_series(p, &all, TIME),
+            );
+        }
     });
 }
 

@@ -4,7 +4,8 @@
 //! from the marginals once converged. The kernel comparison draws both results
 //! so that neither hides the other: without a kernel a broad faded orange band,
 //! with the robust kernel a reddish-purple line over it (where they agree the line
-//! runs inside the band), each with its error on the legend.
+//! runs inside the band), each with its error in the key. The key is a line above
+//! the map, never over the graph.
 //! A vertex dragged with the mouse moves; releasing it re-optimizes.
 
 use super::PoseGraphView;
@@ -12,7 +13,8 @@ use crate::palette;
 use crate::widgets::map_canvas::{
     self, CanvasColors, MapTransform, MapView, draw_grid, draw_scale_and_axes, finite,
 };
-use egui::{Color32, Pos2, Stroke, pos2, vec2};
+use crate::widgets::plots::{KeyEntry, Mark, key_ui};
+use egui::{Color32, Pos2, Stroke, vec2};
 use slamlab_core::geometry::CHI2_2DOF_95;
 use slamlab_core::graph::{EdgeKind, VertexState};
 use slamlab_core::{CovarianceEllipse, math};
@@ -118,12 +120,17 @@ pub fn map_ui(
     {
         *drag = nearest_vertex(session, t, origin);
     }
+    if view.legend {
+        // The key on a line above the map, never over the graph.
+        let colors = CanvasColors::of(ui);
+        key_ui(ui, &legend_entries(session, &colors, comparison, view));
+    }
     let mut follow = None;
     let (response, t) = map_canvas::canvas_ui(
         ui,
         canvas,
         bounds(session),
-        if view.legend { 200.0 } else { 0.0 },
+        0.0,
         &mut follow,
         drag.is_none(),
     );
@@ -177,9 +184,6 @@ pub fn map_ui(
         }
     }
     draw_scale_and_axes(&painter, &t, &colors);
-    if view.legend {
-        draw_legend(&painter, &t, session, &colors, comparison, view);
-    }
 
     let mut request = None;
     if let Some(i) = *drag {
@@ -320,60 +324,59 @@ fn draw_positions(
     painter.add(egui::Shape::line(poses, stroke));
 }
 
-fn draw_legend(
-    painter: &egui::Painter,
-    t: &MapTransform,
+/// The map's key, one entry per kind of thing drawn (with counts), and each
+/// result of a kernel comparison with its error.
+fn legend_entries(
     session: &PoseGraphSession,
     colors: &CanvasColors,
     comparison: Option<&[KernelRun; 2]>,
     view: &PoseGraphView,
-) {
+) -> Vec<KeyEntry> {
     let count = |role: EdgeRole| session.roles().iter().filter(|r| **r == role).count();
-    // (colour, line width, dashed, text)
-    let mut rows: Vec<(Color32, f32, bool, String)> = vec![
-        (
-            VERTEX,
-            2.0,
-            false,
+    let mut rows = vec![
+        KeyEntry::new(
             format!(
                 "poses ({}) and odometry ({})",
                 session.graph().pose_count(),
                 count(EdgeRole::Odometry)
             ),
+            VERTEX,
+            Mark::Solid,
         ),
-        (
-            LOOP_CLOSURE,
-            2.0,
-            false,
+        KeyEntry::new(
             format!("loop closures ({})", count(EdgeRole::LoopClosure)),
+            LOOP_CLOSURE,
+            Mark::Solid,
         ),
     ];
     if count(EdgeRole::WrongLoopClosure) > 0 {
-        rows.push((
-            LOOP_CLOSURE,
-            3.0,
-            true,
+        rows.push(KeyEntry::new(
             format!(
                 "wrong loop closures ({})",
                 count(EdgeRole::WrongLoopClosure)
             ),
+            LOOP_CLOSURE,
+            Mark::Dashed,
         ));
     }
     if session.graph().point_count() > 0 {
-        rows.push((
-            LANDMARK,
-            2.0,
-            false,
+        rows.push(KeyEntry::new(
             format!(
                 "landmarks ({}) and their edges ({})",
                 session.graph().point_count(),
                 count(EdgeRole::Landmark)
             ),
+            LANDMARK,
+            Mark::Solid,
         ));
     }
-    rows.push((colors.truth, 2.0, false, "fixed vertex (square)".to_owned()));
+    rows.push(KeyEntry::new(
+        "fixed vertex (square)",
+        colors.truth,
+        Mark::Dots,
+    ));
     if view.truth && session.truth().is_some() {
-        rows.push((colors.truth, 1.0, false, "true path".to_owned()));
+        rows.push(KeyEntry::new("true path", colors.truth, Mark::Solid));
     }
     if view.ellipses && session.is_converged() {
         let stride = session
@@ -382,68 +385,25 @@ fn draw_legend(
             .len()
             .div_ceil(super::MAX_ELLIPSES)
             .max(1);
-        rows.push((
-            ELLIPSE,
-            1.2,
-            false,
+        rows.push(KeyEntry::new(
             if stride > 1 {
                 format!("95% marginal ellipses (one vertex in {stride})")
             } else {
                 "95% marginal ellipses".to_owned()
             },
+            ELLIPSE,
+            Mark::Solid,
         ));
     }
     if let Some(runs) = comparison {
-        for (run, color, width) in [
-            (
-                &runs[0],
-                palette::faded(WITHOUT_KERNEL, 0.55),
-                WITHOUT_KERNEL_WIDTH,
-            ),
-            (&runs[1], WITH_KERNEL, WITH_KERNEL_WIDTH),
+        for (run, color) in [
+            (&runs[0], palette::faded(WITHOUT_KERNEL, 0.55)),
+            (&runs[1], WITH_KERNEL),
         ] {
-            rows.push((color, width, false, comparison_label(run)));
+            rows.push(KeyEntry::new(comparison_label(run), color, Mark::Solid));
         }
     }
-    let font = egui::FontId::proportional(12.0);
-    let origin = t.rect.left_top() + vec2(44.0, 28.0);
-    let height = 18.0 * rows.len() as f32 + 8.0;
-    let text_width = rows
-        .iter()
-        .map(|(.., text)| {
-            painter
-                .layout_no_wrap(text.clone(), font.clone(), colors.weak_text)
-                .size()
-                .x
-        })
-        .fold(0.0_f32, f32::max);
-    painter.rect_filled(
-        egui::Rect::from_min_size(origin, vec2((text_width + 50.0).max(250.0), height)),
-        4.0,
-        palette::faded(colors.background, 0.85),
-    );
-    for (k, (color, width, dashed, text)) in rows.iter().enumerate() {
-        let y = origin.y + 13.0 + 18.0 * k as f32;
-        let a = pos2(origin.x + 8.0, y);
-        let b = pos2(origin.x + 34.0, y);
-        if *dashed {
-            painter.extend(egui::Shape::dashed_line(
-                &[a, b],
-                Stroke::new(3.0, *color),
-                6.0,
-                4.0,
-            ));
-        } else {
-            painter.line_segment([a, b], Stroke::new(*width, *color));
-        }
-        painter.text(
-            pos2(origin.x + 42.0, y),
-            egui::Align2::LEFT_CENTER,
-            text,
-            font.clone(),
-            colors.weak_text,
-        );
-    }
+    rows
 }
 
 /// The legend line of one result of the kernel comparison: its kernel, its

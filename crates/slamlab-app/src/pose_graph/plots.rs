@@ -6,7 +6,7 @@ use super::Patterns;
 use crate::export::PlotSeries;
 use crate::palette;
 use crate::widgets::plots::{
-    Figure, KeyEntry, Mark, figure_plot, figure_ui, marker_radius, thin, title_ui,
+    Figure, KeyEntry, Mark, figure_plot, figure_ui, marker_radius, plot_row, thin, title_ui,
 };
 use egui::{Color32, ColorImage, TextureOptions};
 use egui_plot::{Line, LineStyle, PlotPoints, Points, VLine};
@@ -25,47 +25,51 @@ pub fn plots_ui(ui: &mut egui::Ui, session: &mut PoseGraphSession, patterns: &mu
     if patterns.dirty || patterns.dark != dark {
         rebuild(ui.ctx(), session, patterns, dark);
     }
-    ui.columns(3, |columns| {
-        cost_plot(&mut columns[0], session, height);
-        let (h, l) = (patterns.h.clone(), patterns.l.clone());
-        let ui = &mut columns[1];
-        title_ui(
-            ui,
-            &format!(
-                "Information matrix H ({0} x {0} vertex blocks)",
-                patterns.vertices
-            ),
-            &format!(
-                "H = Σ J^TΩJ in the graph's vertex order, one square per vertex block ({0} x {0} \
-                 scalars with the fixed vertex): a block is non-zero where an edge joins two \
-                 vertices (Eq. 4.8 of Xiang's thesis). Blue: non-zero; a loop closure is a \
-                 square away from the diagonal band, with its mirror across the diagonal.",
-                patterns.unknowns
-            ),
-        );
-        ui.label(format!("{} non-zero blocks", patterns.h_blocks))
-            .on_hover_text(
-                "The fixed vertex (the square on the map) is drawn in its place although it is \
-                 not an unknown: the solver drops its row and column, so an edge to it adds \
-                 only to its other vertex's diagonal block. Its row and column show the loop \
-                 closures that reach it.",
+    let (h, l) = (patterns.h.clone(), patterns.l.clone());
+    let patterns = &*patterns;
+    // An embed shows the first two: the cost and H.
+    plot_row(ui, 3, |k, ui| match k {
+        0 => cost_plot(ui, session, height),
+        1 => {
+            title_ui(
+                ui,
+                &format!(
+                    "Information matrix H ({0} x {0} vertex blocks)",
+                    patterns.vertices
+                ),
+                &format!(
+                    "H = Σ J^TΩJ in the graph's vertex order, one square per vertex block ({0} x {0} \
+                     scalars with the fixed vertex): a block is non-zero where an edge joins two \
+                     vertices (Eq. 4.8 of Xiang's thesis). Blue: non-zero; a loop closure is a \
+                     square away from the diagonal band, with its mirror across the diagonal.",
+                    patterns.unknowns
+                ),
             );
-        image_ui(ui, h.as_ref(), height - 20.0, "Information matrix H");
-        let ui = &mut columns[2];
-        title_ui(
-            ui,
-            "Cholesky factor L",
-            "L L^T = H after a fill-reducing reordering of the vertices: blue where H was already non-zero, vermillion where elimination created fill-in.",
-        );
-        ui.label(format!(
-            "{} blocks, {} of them fill-in; {} scalar non-zeros",
-            patterns.l_blocks, patterns.fill_blocks, patterns.l_nonzeros
-        ));
-        image_ui(ui, l.as_ref(), height - 20.0, "Cholesky factor L");
-        if let Some(e) = &patterns.error {
-            ui.colored_label(palette::VERMILLION, e);
+            ui.label(format!("{} non-zero blocks", patterns.h_blocks))
+                .on_hover_text(
+                    "The fixed vertex (the square on the map) is drawn in its place although it is \
+                     not an unknown: the solver drops its row and column, so an edge to it adds \
+                     only to its other vertex's diagonal block. Its row and column show the loop \
+                     closures that reach it.",
+                );
+            image_ui(ui, h.as_ref(), height - 20.0, "Information matrix H");
+        }
+        _ => {
+            title_ui(
+                ui,
+                "Cholesky factor L",
+                "L L^T = H after a fill-reducing reordering of the vertices: blue where H was already non-zero, vermillion where elimination created fill-in.",
+            );
+            ui.label(format!(
+                "{} blocks, {} of them fill-in; {} scalar non-zeros",
+                patterns.l_blocks, patterns.fill_blocks, patterns.l_nonzeros
+            ));
+            image_ui(ui, l.as_ref(), height - 20.0, "Cholesky factor L");
         }
     });
+    if let Some(e) = &patterns.error {
+        ui.colored_label(palette::VERMILLION, e);
+    }
 }
 
 /// The cost history split at the edits: one polyline per stretch of iterations

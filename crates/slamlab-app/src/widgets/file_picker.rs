@@ -53,7 +53,8 @@ impl FilePicker {
         #[cfg(not(target_arch = "wasm32"))]
         {
             let _ = accept;
-            ui.horizontal(|ui| {
+            // Wrapped: in a narrow panel the button goes below the field.
+            ui.horizontal_wrapped(|ui| {
                 let path_label = ui.label("path");
                 let field = ui
                     .add(

@@ -62,6 +62,8 @@ pub fn lesson_panels_ui(
 ) {
     let area = ui.available_rect_before_wrap();
     let narrow = is_narrow(ui.ctx());
+    // An embed's plot row shows fewer plots, each tall enough to read.
+    crate::widgets::plots::set_embed_layout(ui.ctx(), compact);
     let tiny = area.width() < TINY_WIDTH || area.height() < TINY_HEIGHT;
     if tiny {
         // The plots become a drawer, closed when the window first gets this small.
@@ -85,8 +87,10 @@ pub fn lesson_panels_ui(
         .data_mut(|d| d.insert_temp(egui::Id::unique(("slamlab_was_tiny", id)), false));
     // The plots shrink with the window so that the map keeps at least 60% of it.
     let plots_max = (PLOTS_MAX_SHARE * area.height()).max(60.0);
-    let plot_height: f32 = if compact { 150.0 } else { 230.0 };
-    let plot_height = plot_height.min(0.3 * area.height()).max(60.0);
+    // An embed's row holds two plots (`plots::EMBED_PLOTS`): a little taller than
+    // the app's share, so that each is at least 90 points tall at 900 x 600.
+    let (plot_height, share): (f32, f32) = if compact { (185.0, 0.34) } else { (230.0, 0.3) };
+    let plot_height = plot_height.min(share * area.height()).max(60.0);
     egui::Panel::bottom(format!("{id}_plots"))
         .resizable(true)
         .default_size(plot_height)

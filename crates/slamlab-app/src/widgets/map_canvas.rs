@@ -319,6 +319,15 @@ pub fn canvas_ui(
     let size = ui.available_size().max(vec2(120.0, 120.0));
     let (rect, response) = ui.allocate_exact_size(size, Sense::click_and_drag());
     response.widget_info(|| egui::WidgetInfo::labeled(egui::Role::Canvas, true, "Map"));
+    crate::widgets::plots::record(
+        ui.ctx(),
+        crate::widgets::plots::FigureRecord {
+            title: "map".to_owned(),
+            data: None,
+            key: None,
+            map: Some(rect),
+        },
+    );
     let resized = (rect.size() - view.fitted_size).length() > 1.0;
     if !view.fitted || (resized && !view.adjusted) {
         view.fit(rect, bounds, legend_space);

@@ -431,6 +431,7 @@ pub fn key_ui(ui: &mut egui::Ui, entries: &[KeyEntry]) -> egui::Rect {
             title: String::new(),
             data: None,
             key: Some(response.rect),
+            map: None,
         },
     );
     response.rect
@@ -495,6 +496,7 @@ pub fn series_key_ui(ui: &mut egui::Ui, filters: &[(String, egui::Color32)], sty
             title: String::new(),
             data: None,
             key: Some(response.rect),
+            map: None,
         },
     );
 }
@@ -557,6 +559,7 @@ pub fn figure_ui<'a, R>(
             title: figure.title.to_owned(),
             data: Some(response.response.rect),
             key: None,
+            map: None,
         },
     );
     response
@@ -646,8 +649,8 @@ pub fn y_label_fits(ui: &egui::Ui, y_label: &str, plot_height: f32) -> bool {
     width + 8.0 <= plot_height
 }
 
-/// Where a plot or a plot's key was drawn in the last frame (for the shell's render
-/// tests: tick labels in the axis strip, no key over any plot's data).
+/// Where a plot, a plot's key or a map was drawn in the last frame (for the shell's
+/// render tests: tick labels in the axis strip, no key over any plot's data or map).
 #[derive(Clone, Debug, PartialEq)]
 pub struct FigureRecord {
     /// The plot's title (empty for a key).
@@ -656,6 +659,49 @@ pub struct FigureRecord {
     pub data: Option<egui::Rect>,
     /// A key's rectangle.
     pub key: Option<egui::Rect>,
+    /// A map canvas's rectangle (no key lies on a map either).
+    pub map: Option<egui::Rect>,
+}
+
+/// How many plots an embedded figure (`embed=1`, a lecture page's iframe) shows side
+/// by side: the lesson's first ones, each tall enough to read, and the map keeps the
+/// rest of the height. The full app shows them all.
+pub const EMBED_PLOTS: usize = 2;
+
+fn embed_layout_id() -> egui::Id {
+    egui::Id::unique("slamlab_embed_plots")
+}
+
+/// Tells this frame's plots whether they are an embed's ([`plot_row`] shows fewer
+/// then); the shared layout sets it before the plots are drawn.
+pub fn set_embed_layout(ctx: &egui::Context, embed: bool) {
+    ctx.data_mut(|d| d.insert_temp(embed_layout_id(), embed));
+}
+
+/// Are this frame's plots an embed's?
+pub fn is_embed_layout(ctx: &egui::Context) -> bool {
+    ctx.data(|d| d.get_temp(embed_layout_id()).unwrap_or(false))
+}
+
+/// How many of a row's `count` plots show: all of them, or in an embed the first
+/// [`EMBED_PLOTS`].
+pub fn shown_plots(count: usize, embed: bool) -> usize {
+    if embed { count.min(EMBED_PLOTS) } else { count }
+}
+
+/// A lesson's row of `count` plots side by side, `add(k, ui)` drawing the `k`-th
+/// (in the lesson's order of importance) into its column. An embed shows only the
+/// first [`EMBED_PLOTS`] ([`shown_plots`]), each in a wider column.
+pub fn plot_row(ui: &mut egui::Ui, count: usize, mut add: impl FnMut(usize, &mut egui::Ui)) {
+    let shown = shown_plots(count, is_embed_layout(ui.ctx()));
+    if shown == 0 {
+        return;
+    }
+    ui.columns(shown, |columns| {
+        for (k, column) in columns.iter_mut().enumerate() {
+            add(k, column);
+        }
+    });
 }
 
 fn records_id() -> egui::Id {

@@ -283,6 +283,23 @@ fn at_800_by_500_nothing_stray_at_the_start_and_the_wide_ellipse_is_explained() 
     let p = run.filter().pose_covariance();
     let across = 2.0 * (slamlab_core::geometry::CHI2_2DOF_95 * p[(0, 0)].max(p[(1, 1)])).sqrt();
     assert!(across > 4.0, "differential's ellipse {across} m across");
+    // The view stays on the room: the whole room shows, and it fills the canvas in
+    // one direction at least (the view does not zoom out to the ellipse).
+    let records = slamlab_app::widgets::plots::figure_records(&h.ctx);
+    let Some(map) = records.iter().find_map(|r| r.map) else {
+        panic!("no map canvas recorded");
+    };
+    let (x0, x1, y0, y1) = lesson(&h).map_view().transform(map).visible();
+    let room = lesson(&h).sim().setup().scenario.drive.room;
+    assert!(
+        x0 <= -0.5 * room[0] && x1 >= 0.5 * room[0] && y0 <= -0.5 * room[1] && y1 >= 0.5 * room[1],
+        "the room {room:?} in view x {x0:.2}..{x1:.2}, y {y0:.2}..{y1:.2}"
+    );
+    let fill = ((x1 - x0) / room[0]).min((y1 - y0) / room[1]);
+    assert!(
+        fill < 1.5,
+        "the view is {fill:.1} times the room ({across:.1} m ellipse)"
+    );
     let Some(image) = render_or_skip(&mut h) else {
         return;
     };
@@ -293,4 +310,45 @@ fn at_800_by_500_nothing_stray_at_the_start_and_the_wide_ellipse_is_explained() 
         .filter(|(x, y, p)| *x > 500 && *y > 120 && *y < 170 && p.0[..3] == [0x00, 0x72, 0xB2])
         .count();
     assert!(frame > 100, "the note's frame: {frame} blue pixels");
+}
+
+/// The RMSE table at 800 x 500 (in the explanation drawer): no value reads
+/// "−0.0000", and every column fits the drawer.
+#[test]
+fn the_rmse_table_fits_the_drawer_at_800_by_500() {
+    let mut h = harness_sized(
+        "lesson=fusion&seed=1&duration=120&modes=differential,relative,absolute&tick=20",
+        egui::vec2(800.0, 500.0),
+    );
+    h.run();
+    h.get_by_label("Explain").click();
+    h.run();
+    assert!(h.query_by_label("RMSE so far").is_some(), "the table shows");
+    for minus in ["-0.0000", "\u{2212}0.0000", "-0.000", "\u{2212}0.000"] {
+        let found: Vec<String> = h
+            .query_all_by_label_contains(minus)
+            .map(|n| format!("{n:?}").chars().take(200).collect())
+            .collect();
+        assert!(found.is_empty(), "a value reads {minus}: {found:?}");
+    }
+    let Some(drawer_right) = h
+        .query_all_by_label("Close")
+        .map(|n| n.rect().right())
+        .reduce(f32::max)
+    else {
+        panic!("the drawer's Close button");
+    };
+    // The row names and the last column's head (the table has a column per mode).
+    for head in ["largest jump (m)", "absolute"] {
+        let Some(cell) = h.query_all_by_label(head).map(|n| n.rect()).next() else {
+            panic!("no cell '{head}'");
+        };
+        assert!(
+            cell.right() <= drawer_right + 1.0 && cell.right() <= 800.0,
+            "'{head}' {cell:?} past the drawer's edge {drawer_right}"
+        );
+    }
+    if let Some(image) = render_or_skip(&mut h) {
+        let _ = image.save(std::env::temp_dir().join("slamlab-fusion-800-rmse.png"));
+    }
 }

@@ -380,3 +380,30 @@ fn the_thesis_graph_after_an_edit_renders_its_cost_line_and_block_image() {
         assert!(blue > 1500, "{name}: blue pixels {blue}");
     }
 }
+
+/// With a kernel comparison (the longest key) at 800 x 500, the key is a line above
+/// the map: no key rectangle overlaps the map canvas.
+#[test]
+fn the_comparison_key_stays_off_the_graph_at_800_by_500() {
+    let mut h = super::common::harness_sized("lesson=pose-graph", egui::vec2(800.0, 500.0));
+    h.run();
+    lesson_mut(&mut h).compare_kernels();
+    h.run();
+    let records = slamlab_app::widgets::plots::figure_records(&h.ctx);
+    let Some(map) = records.iter().find_map(|r| r.map) else {
+        panic!("no map canvas recorded");
+    };
+    let keys: Vec<egui::Rect> = records.iter().filter_map(|r| r.key).collect();
+    assert!(
+        keys.iter().any(|k| k.bottom() <= map.top() + 0.5),
+        "a key above the map: {keys:?}, map {map:?}"
+    );
+    for key in keys {
+        let overlap = key.intersect(map);
+        assert!(
+            !(overlap.width() > 0.5 && overlap.height() > 0.5),
+            "the key {key:?} lies on the map {map:?}"
+        );
+    }
+    assert!(super::common::label_visible(&h, "optimized with no kernel"));
+}

@@ -497,6 +497,87 @@ fn texts(h: &Harness<'_, SlamLabApp>) -> Vec<(String, egui::Rect)> {
     out
 }
 
+/// Every text of the last frame that its clip rectangle cuts at the left or right
+/// (a line running past a panel's edge), with its rectangle and its clip.
+fn texts_cut_sideways(h: &Harness<'_, SlamLabApp>) -> Vec<(String, egui::Rect, egui::Rect)> {
+    fn walk(
+        shape: &egui::Shape,
+        clip: egui::Rect,
+        out: &mut Vec<(String, egui::Rect, egui::Rect)>,
+    ) {
+        match shape {
+            egui::Shape::Text(t) => {
+                let rect = t.visual_bounding_rect();
+                let visible = rect.intersect(clip);
+                // Shown in part: cut at a side, not scrolled out of view.
+                let shown = visible.width() > 0.5 && visible.height() > 0.5;
+                if shown && (rect.right() > clip.right() + 1.5 || rect.left() < clip.left() - 1.5) {
+                    out.push((t.galley.text().to_owned(), rect, clip));
+                }
+            }
+            egui::Shape::Vec(shapes) => shapes.iter().for_each(|s| walk(s, clip, out)),
+            _ => {}
+        }
+    }
+    let mut out = Vec::new();
+    for clipped in &h.output().shapes {
+        walk(&clipped.shape, clipped.clip_rect, &mut out);
+    }
+    out
+}
+
+/// Every lesson's side panels (open, as drawers at 800 x 500 and 360 x 480) and
+/// time bar wrap their text: no line runs past a panel's edge.
+#[test]
+fn no_text_runs_past_a_panel_edge() {
+    let mut failures = Vec::new();
+    for entry in LESSONS {
+        for (w, h_px) in [(360.0, 480.0), (800.0, 500.0), (1280.0, 800.0)] {
+            let drawers: &[&str] = if w < 1000.0 {
+                &["Parameters", "Explain"]
+            } else {
+                &["panels"]
+            };
+            for drawer in drawers {
+                let query = format!("lesson={}&tick=40", entry.id);
+                let mut h = harness(&query, egui::vec2(w, h_px));
+                h.run();
+                if w < 1000.0 {
+                    h.get_by_label(drawer).click();
+                    h.run();
+                }
+                if std::env::var_os("SLAMLAB_SCREENSHOTS").is_some()
+                    && let Some(image) = render_or_skip(&mut h)
+                {
+                    save_screenshot(
+                        &image,
+                        &format!("{}_{}x{}_{drawer}", entry.id, w as u32, h_px as u32),
+                    );
+                }
+                // A map's own labels (axis values at its edge) are cut by the map.
+                let maps: Vec<egui::Rect> = slamlab_app::widgets::plots::figure_records(&h.ctx)
+                    .iter()
+                    .filter_map(|r| r.map)
+                    .collect();
+                for (text, rect, clip) in texts_cut_sideways(&h) {
+                    if maps.iter().any(|m| m.expand(1.0).contains_rect(clip)) {
+                        continue;
+                    }
+                    failures.push(format!(
+                        "{query} at {w}x{h_px} ({drawer}): '{text}' {rect:?} cut by {clip:?}"
+                    ));
+                }
+            }
+        }
+    }
+    assert!(
+        failures.is_empty(),
+        "{} cut:\n{}",
+        failures.len(),
+        failures.join("\n")
+    );
+}
+
 /// Saves `image` as `name`.png in `SLAMLAB_SCREENSHOTS` when that folder is set (to
 /// look at every lesson at every size).
 fn save_screenshot(image: &image::RgbaImage, name: &str) {
@@ -540,6 +621,16 @@ fn every_plot_shows_its_values_and_no_key_sits_on_data() {
                     .collect();
                 let keys: Vec<egui::Rect> = records.iter().filter_map(|r| r.key).collect();
                 assert!(!plots.is_empty(), "{query} at {w}x{h_px}: no plot drawn");
+                // No key on a map either (the pose graph's key is a line above it).
+                for map in records.iter().filter_map(|r| r.map) {
+                    for key in &keys {
+                        let overlap = key.intersect(map);
+                        assert!(
+                            !(overlap.width() > 0.5 && overlap.height() > 0.5),
+                            "{query} at {w}x{h_px}: a key {key:?} lies on the map {map:?}"
+                        );
+                    }
+                }
                 let texts = texts(&h);
                 for (record, data) in &plots {
                     // Room for two tick labels (13 points apart) and the data.
@@ -576,6 +667,40 @@ fn every_plot_shows_its_values_and_no_key_sits_on_data() {
                 }
             }
         }
+    }
+}
+
+/// A lecture figure (`embed=1` in a 900 x 600 iframe, as web/lecture.html has
+/// them) shows at most two plots, each at least 90 points tall, and the map the
+/// rest: at least half the window.
+#[test]
+fn an_embedded_figure_has_few_tall_plots_and_a_large_map() {
+    let size = egui::vec2(900.0, 600.0);
+    for entry in LESSONS {
+        let query = format!("lesson={}&tick=40&embed=1", entry.id);
+        let mut h = harness(&query, size);
+        h.run();
+        if std::env::var_os("SLAMLAB_SCREENSHOTS").is_some()
+            && let Some(image) = render_or_skip(&mut h)
+        {
+            save_screenshot(&image, &format!("{}_900x600_embed", entry.id));
+        }
+        let records = slamlab_app::widgets::plots::figure_records(&h.ctx);
+        let plots: Vec<_> = records.iter().filter_map(|r| r.data).collect();
+        assert!(
+            (1..=slamlab_app::widgets::plots::EMBED_PLOTS).contains(&plots.len()),
+            "{query}: {} plots",
+            plots.len()
+        );
+        for data in &plots {
+            assert!(
+                data.height() >= 90.0,
+                "{query}: a plot {data:?} is {:.0} points tall",
+                data.height()
+            );
+        }
+        let share = map_share(&h, size);
+        assert!(share >= 0.5, "{query}: the map has {:.0}%", 100.0 * share);
     }
 }
 
@@ -660,4 +785,22 @@ fn without_clock(state: &str) -> serde_json::Value {
     let mut v: serde_json::Value = serde_json::from_str(state).unwrap_or_default();
     strip(&mut v);
     v
+}
+
+#[test]
+fn the_keys_menu_names_each_lessons_own_step() {
+    let mut h = harness("lesson=pose-graph", egui::vec2(1280.0, 800.0));
+    h.run();
+    h.get_by_label("Keys").click();
+    h.run();
+    assert!(label_visible(&h, "the time bar's Step iteration"));
+    assert!(
+        !label_visible(&h, "Step phase"),
+        "the pose graph has no phases"
+    );
+    let mut h = harness("lesson=kidnap", egui::vec2(1280.0, 800.0));
+    h.run();
+    h.get_by_label("Keys").click();
+    h.run();
+    assert!(label_visible(&h, "the time bar's Step phase"));
 }
