@@ -21,6 +21,7 @@ pub static LESSONS: &[&dyn RunLesson] = &[
     &lessons::landmark::LandmarkSlam,
     &lessons::kidnap::Kidnap,
     &lessons::mapping::Mapping,
+    &lessons::cartographer::Cartographer,
     &lessons::visual_odometry::VisualOdometry,
 ];
 

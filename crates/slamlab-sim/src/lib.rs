@@ -7,6 +7,7 @@
 //! commanded controls and the noisy measurements; metrics compare their output
 //! with the truth afterwards.
 
+pub mod cartographer;
 pub mod consistency;
 pub mod experiments;
 pub mod fastslam;

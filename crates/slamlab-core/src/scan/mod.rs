@@ -11,8 +11,10 @@
 //! final cost and how it got there, so a lesson can step through the
 //! iterations.
 
+pub mod branch_and_bound;
 pub mod icp;
 pub mod kdtree;
+pub mod kidnap_detector;
 
 pub use crate::particle::Scan;
 

@@ -1,0 +1,252 @@
+//! `slamlab run cartographer`: submaps, branch-and-bound loop closure and the
+//! kidnapped robot during mapping (thesis `000` Sec. 5.2), headless.
+//!
+//! ```text
+//! slamlab run cartographer --map maze --steps 600 --kidnap-at 152 --seed 1 --json
+//! slamlab run cartographer --map maze --steps 600 --kidnap-at 152 --detection off
+//! slamlab run cartographer --log intel.clf.bz2 --json
+//! ```
+
+use crate::command::RunLesson;
+use crate::map::{map_arg, read_map};
+use crate::output::{Output, progress_bar};
+use anyhow::{Context, Result, bail};
+use clap::{Arg, ArgMatches, Command};
+use serde_json::json;
+use slamlab_sim::cartographer::input::kidnap_input;
+use slamlab_sim::cartographer::{CartographerParams, CartographerSim};
+use slamlab_sim::laser_log::{LaserLog, SimulatedLogConfig};
+use slamlab_sim::mapping::log_input;
+use std::io::Write;
+use std::path::Path;
+use std::sync::Arc;
+use std::time::Instant;
+
+/// The Cartographer run.
+pub struct Cartographer;
+
+fn number(name: &'static str, help: &'static str) -> Arg {
+    Arg::new(name)
+        .long(name)
+        .value_parser(clap::value_parser!(f64))
+        .help(help)
+}
+
+fn count(name: &'static str, help: &'static str) -> Arg {
+    Arg::new(name)
+        .long(name)
+        .value_parser(clap::value_parser!(usize))
+        .help(help)
+}
+
+impl RunLesson for Cartographer {
+    fn id(&self) -> &'static str {
+        "cartographer"
+    }
+
+    fn about(&self) -> &'static str {
+        "submaps, branch-and-bound loop closure and the kidnapped robot (Cartographer-style SLAM): local SLAM into submaps, a pose graph with loop closures, kidnap detection by an average filter on the matching cost, recovery by merging a new map"
+    }
+
+    fn command(&self) -> Command {
+        Command::new(self.id())
+            .arg(map_arg())
+            .arg(
+                Arg::new("log").long("log").value_name("FILE").help(
+                    "map a CARMEN laser log (plain, .gz or .bz2) instead of a simulated robot",
+                ),
+            )
+            .arg(count("steps", "scans to simulate (default 600)"))
+            .arg(
+                Arg::new("seed")
+                    .long("seed")
+                    .value_parser(clap::value_parser!(u64))
+                    .help("the simulation's seed (default 1)"),
+            )
+            .arg(count(
+                "kidnap-at",
+                "carry the robot elsewhere just before this scan (0-based)",
+            ))
+            .arg(
+                Arg::new("detection")
+                    .long("detection")
+                    .value_parser(["on", "off"])
+                    .help("kidnap detection (Algorithm 13): on (default) or off, the original behaviour"),
+            )
+            .arg(count("num_range_data", "scans per submap (default 30)"))
+            .arg(number("resolution", "submap cell size, metres (default 0.05)"))
+            .arg(number("hit_probability", "default 0.55"))
+            .arg(number("miss_probability", "default 0.49"))
+            .arg(number(
+                "linear_search_window",
+                "loop-closure search half-width, metres (default 7)",
+            ))
+            .arg(number(
+                "angular_search_window",
+                "loop-closure search half-width, degrees (default 30)",
+            ))
+            .arg(number("min_score", "a loop closure must score above this (default 0.55)"))
+            .arg(number(
+                "global_min_score",
+                "a match between maps must score above this (default 0.6)",
+            ))
+            .arg(count("optimize_every_n_nodes", "default 30"))
+            .arg(number("huber_scale", "default 10"))
+            .arg(number("T", "kidnap trigger threshold (default 1.5)"))
+            .arg(count("f_size", "kidnap average filter size (default 5)"))
+    }
+
+    fn run(&self, m: &ArgMatches, out: &mut Output) -> Result<()> {
+        let mut params = CartographerParams::default();
+        let f = |name: &str| m.get_one::<f64>(name).copied();
+        let n = |name: &str| m.get_one::<usize>(name).copied();
+        if let Some(v) = n("num_range_data") {
+            params.num_range_data = v;
+        }
+        if let Some(v) = f("resolution") {
+            params.resolution = v;
+        }
+        if let Some(v) = f("hit_probability") {
+            params.hit_probability = v;
+        }
+        if let Some(v) = f("miss_probability") {
+            params.miss_probability = v;
+        }
+        if let Some(v) = f("linear_search_window") {
+            params.linear_search_window = v;
+        }
+        if let Some(v) = f("angular_search_window") {
+            params.angular_search_window = v.to_radians();
+        }
+        if let Some(v) = f("min_score") {
+            params.min_score = v;
+        }
+        if let Some(v) = f("global_min_score") {
+            params.global_min_score = v;
+        }
+        if let Some(v) = n("optimize_every_n_nodes") {
+            params.optimize_every_n_nodes = v;
+        }
+        if let Some(v) = f("huber_scale") {
+            params.huber_scale = v;
+        }
+        if let Some(v) = f("T") {
+            params.kidnap.threshold = v;
+        }
+        if let Some(v) = n("f_size") {
+            params.kidnap.filter_size = v;
+        }
+        params.detection = m.get_one::<String>("detection").is_none_or(|d| d == "on");
+        let steps = n("steps").unwrap_or(600);
+        let seed = m.get_one::<u64>("seed").copied().unwrap_or(1);
+        let mut kidnap_at = n("kidnap-at");
+        let input = if let Some(log_path) = m.get_one::<String>("log") {
+            let log = LaserLog::read_file(Path::new(log_path))
+                .with_context(|| format!("reading {log_path}"))?;
+            let name = Path::new(log_path)
+                .file_name()
+                .map_or(log_path.clone(), |n| n.to_string_lossy().into_owned());
+            if kidnap_at.take().is_some() {
+                eprintln!(
+                    "warning: --kidnap-at applies to a simulated robot; a log is replayed as recorded"
+                );
+            }
+            log_input(&log, &name)
+        } else {
+            let spec = m.get_one::<String>("map").map_or("maze", String::as_str);
+            let (grid, name) = read_map(spec, None)?;
+            if kidnap_at.is_some_and(|k| k >= steps) {
+                eprintln!("warning: --kidnap-at is past the last scan: no kidnap");
+                kidnap_at = None;
+            }
+            kidnap_input(
+                Arc::new(grid),
+                &name,
+                steps,
+                seed,
+                kidnap_at,
+                &SimulatedLogConfig::default(),
+            )
+            .map_err(anyhow::Error::msg)?
+        };
+        if input.scans.is_empty() {
+            bail!("the input has no laser scans");
+        }
+        let (mut sim, notices) = CartographerSim::new(Arc::new(input), params);
+        for note in &notices {
+            eprintln!("warning: {note}");
+        }
+        let total = sim.input().scans.len();
+        let mut progress = progress_bar("cartographer");
+        let started = Instant::now();
+        while sim.step() {
+            let done = sim.scans_done();
+            if done % 100 == 0 || done == total {
+                progress(done, total);
+            }
+        }
+        let time_ms = started.elapsed().as_secs_f64() * 1e3;
+        let summary = sim.summary(kidnap_at, time_ms);
+        for note in summary.notes.iter().take(5) {
+            eprintln!("warning: {note}");
+        }
+        if out.json() {
+            out.print_json(&json!({
+                "scans": summary.scans,
+                "input": sim.input().name,
+                "kidnap_at": summary.kidnap_at,
+                "kidnap_detected_at": summary.kidnap_detected_at,
+                "detections": summary.detections,
+                "false_alarms": summary.false_alarms,
+                "recovered_at": summary.recovered_at,
+                "loop_closures": summary.loop_closures,
+                "trajectory_rmse": summary.trajectory_rmse,
+                "map_agreement": summary.map_agreement,
+                "bbs": summary.bbs,
+                "nodes": summary.nodes,
+                "submaps": summary.submaps,
+                "trajectories": summary.trajectories,
+                "optimizations": summary.optimizations,
+                "time_ms": time_ms,
+                "parameters": serde_json::to_value(sim.params())?,
+            }))?;
+            return Ok(());
+        }
+        let opt = |v: Option<usize>| v.map_or("none".to_owned(), |v| v.to_string());
+        let g = |v: Option<f64>| v.map_or("- (no truth)".to_owned(), |v| format!("{v:.4}"));
+        writeln!(
+            out,
+            "SLAM Lab: Cartographer-style SLAM on {} — {} scans, {} nodes, {} submaps, {} trajectories",
+            sim.input().name,
+            summary.scans,
+            summary.nodes,
+            summary.submaps,
+            summary.trajectories
+        )?;
+        writeln!(
+            out,
+            "kidnap:          at {}, detected at {}, {} false alarms, recovered (maps merged) at {}",
+            opt(summary.kidnap_at),
+            opt(summary.kidnap_detected_at),
+            summary.false_alarms,
+            opt(summary.recovered_at)
+        )?;
+        writeln!(
+            out,
+            "loop closures:   {} ({} optimizations)",
+            summary.loop_closures, summary.optimizations
+        )?;
+        writeln!(
+            out,
+            "branch & bound:  {} searches, {} candidates scored of {} an exhaustive search scores ({:.0}x fewer)",
+            summary.bbs.searches,
+            summary.bbs.nodes_evaluated,
+            summary.bbs.exhaustive_candidates,
+            summary.bbs.exhaustive_candidates as f64 / summary.bbs.nodes_evaluated.max(1) as f64
+        )?;
+        writeln!(out, "trajectory RMSE: {} m", g(summary.trajectory_rmse))?;
+        writeln!(out, "map agreement:   {}", g(summary.map_agreement))?;
+        writeln!(out, "time:            {time_ms:.0} ms")?;
+        Ok(())
+    }
+}

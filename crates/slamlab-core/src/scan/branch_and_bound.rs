@@ -1,0 +1,978 @@
+//! Branch-and-bound scan matching (thesis `000` Sec. 5.2.1, Algorithm 12,
+//! Eq. 5.10-5.14; Hess et al. 2016, "Real-time loop closure in 2D LIDAR SLAM";
+//! Cartographer's `FastCorrelativeScanMatcher2D`): the pose in a search window
+//! that puts the most scan points on likely-occupied cells of a finished
+//! submap,
+//!
+//! ```text
+//! ξ* = argmax_{ξ ∈ W} Σ_k M_nearest(T_ξ h_k)                      (5.10)
+//! ```
+//!
+//! over a discretization of the window: translations one cell `r` apart and
+//! headings `δθ = acos(1 − r² / (2 d_max²))` apart (Eq. 5.11-5.12), `d_max` the
+//! farthest point (at least `3 r`, as Cartographer). A naive search scores
+//! every one of those candidates. Branch and bound scores a candidate of height
+//! `h` (a `2^h x 2^h` block of translations at one heading) with the
+//! precomputed grid
+//!
+//! ```text
+//! M^h_precomp(x, y) = max_{x' ∈ [x, x + r(2^h − 1)], y' ∈ [y, y + r(2^h − 1)]} M_nearest(x', y')   (5.13)
+//! score(c) = Σ_k M^h_precomp(T_ξc h_k)                                                             (5.14)
+//! ```
+//!
+//! which bounds the score of every translation in the block from above. It
+//! walks the tree depth first, best-scored child first, and cuts every branch
+//! whose bound is no better than the best leaf found so far; the answer is the
+//! exhaustive search's answer (the bound never underestimates), found with a
+//! small fraction of its work.
+//!
+//! Scores here are mean probabilities (the sum of Eq. 5.10 divided by the
+//! number of points), as Cartographer's `min_score` reads them; cells never
+//! observed, and cells outside the submap, read as
+//! [`UNKNOWN_PROBABILITY`](super::scan_to_map::UNKNOWN_PROBABILITY).
+//!
+//! The precomputed grids are built as Cartographer builds them: a sliding
+//! window maximum (a deque of non-ascending maxima) along each row, then along
+//! each column of the result. Each grid covers the submap's known cells
+//! widened by `2^h − 1` cells below and to the left, so that a box that only
+//! overlaps the submap still has its value.
+
+use super::scan_to_map::{UNKNOWN_PROBABILITY, angular_step};
+use super::{Point2, transform_point};
+use crate::geometry::{Pose2, wrap_angle};
+use crate::grid::ProbabilityGrid;
+use crate::math;
+use serde::{Deserialize, Serialize};
+use std::collections::VecDeque;
+use thiserror::Error;
+
+/// The tallest tree accepted: boxes of `2^10 = 1024` cells a side.
+pub const MAX_HEIGHT: u32 = 10;
+
+/// One precomputed grid: the maximum over the `2^h x 2^h` box of cells whose
+/// lower-left cell is `(i, j)`, for every `(i, j)` whose box touches the
+/// submap's known cells.
+#[derive(Clone, Debug, PartialEq)]
+struct MaxGrid {
+    /// Lower-left cell held.
+    i0: i64,
+    j0: i64,
+    width: usize,
+    height: usize,
+    cells: Vec<f32>,
+}
+
+impl MaxGrid {
+    #[inline]
+    fn value(&self, i: i64, j: i64) -> f32 {
+        let (di, dj) = (i - self.i0, j - self.j0);
+        if di < 0 || dj < 0 || di >= self.width as i64 || dj >= self.height as i64 {
+            return UNKNOWN_PROBABILITY as f32;
+        }
+        self.cells[dj as usize * self.width + di as usize]
+    }
+}
+
+/// The maxima of every window of `side` values of `values` padded with `pad`
+/// on both sides: `out[p] = max(padded[p .. p + side])` for `p` in
+/// `0 .. values.len() + side − 1` (Cartographer's `SlidingWindowMaximum`: a
+/// deque holding the window's non-ascending maxima, front the largest).
+fn sliding_max(values: &[f32], side: usize, pad: f32, out: &mut Vec<f32>) {
+    out.clear();
+    let n = values.len();
+    let at = |q: usize| -> f32 {
+        // Position q of the padded row (side − 1 pads, values, side − 1 pads).
+        if q + 1 < side || q + 1 - side >= n {
+            pad
+        } else {
+            values[q + 1 - side]
+        }
+    };
+    let total = n + 2 * (side - 1);
+    let mut maxima: VecDeque<f32> = VecDeque::with_capacity(side);
+    for q in 0..total {
+        let v = at(q);
+        while maxima.back().is_some_and(|&b| v > b) {
+            maxima.pop_back();
+        }
+        maxima.push_back(v);
+        if q + 1 >= side {
+            // The window [q + 1 − side, q] is full.
+            out.push(*maxima.front().unwrap_or(&pad));
+            let leaving = at(q + 1 - side);
+            if maxima.front() == Some(&leaving) {
+                maxima.pop_front();
+            }
+        }
+    }
+}
+
+/// The precomputed max grids of heights `0..=max_height` of one finished
+/// submap (thesis Eq. 5.13, Fig. 5.7). Height 0 is the submap itself.
+#[derive(Clone, Debug, PartialEq)]
+pub struct PrecomputedGrids {
+    resolution: f64,
+    /// The submap's known cells `(i_min, j_min, i_max, j_max)`, inclusive.
+    bounds: (i64, i64, i64, i64),
+    grids: Vec<MaxGrid>,
+}
+
+impl PrecomputedGrids {
+    /// The grids of heights `0..=max_height` (clamped to [`MAX_HEIGHT`]) of
+    /// `grid`'s known cells, each cell its occupancy probability
+    /// ([`UNKNOWN_PROBABILITY`] where never observed). `None` for a grid with
+    /// no known cell.
+    pub fn new(grid: &ProbabilityGrid, max_height: u32) -> Option<Self> {
+        let bounds = grid.known_bounds()?;
+        let (i_min, j_min, i_max, j_max) = bounds;
+        let (w, h) = ((i_max - i_min + 1) as usize, (j_max - j_min + 1) as usize);
+        let unknown = UNKNOWN_PROBABILITY as f32;
+        let mut base = vec![unknown; w * h];
+        for (dj, row) in base.chunks_mut(w).enumerate() {
+            for (di, cell) in row.iter_mut().enumerate() {
+                if let Some(p) = grid.probability_at(i_min + di as i64, j_min + dj as i64) {
+                    *cell = p as f32;
+                }
+            }
+        }
+        let max_height = max_height.min(MAX_HEIGHT);
+        let mut grids = Vec::with_capacity(max_height as usize + 1);
+        let mut row_out = Vec::new();
+        let mut column = Vec::new();
+        let mut col_out = Vec::new();
+        for height in 0..=max_height {
+            let side = 1usize << height;
+            let wide_w = w + side - 1;
+            let wide_h = h + side - 1;
+            // Rows first: intermediate[j][p] = max of row j over [p − (side − 1), p].
+            let mut intermediate = vec![unknown; wide_w * h];
+            for j in 0..h {
+                sliding_max(&base[j * w..(j + 1) * w], side, unknown, &mut row_out);
+                // row_out has w + side − 1 entries: box starts x = −(side−1) .. w−1.
+                intermediate[j * wide_w..(j + 1) * wide_w].copy_from_slice(&row_out[..wide_w]);
+            }
+            let mut cells = vec![unknown; wide_w * wide_h];
+            for p in 0..wide_w {
+                column.clear();
+                column.extend((0..h).map(|j| intermediate[j * wide_w + p]));
+                sliding_max(&column, side, unknown, &mut col_out);
+                for (q, &v) in col_out.iter().take(wide_h).enumerate() {
+                    cells[q * wide_w + p] = v;
+                }
+            }
+            grids.push(MaxGrid {
+                i0: i_min - (side as i64 - 1),
+                j0: j_min - (side as i64 - 1),
+                width: wide_w,
+                height: wide_h,
+                cells,
+            });
+        }
+        Some(Self {
+            resolution: grid.resolution(),
+            bounds,
+            grids,
+        })
+    }
+
+    /// Metres per cell.
+    pub fn resolution(&self) -> f64 {
+        self.resolution
+    }
+
+    /// The tallest height held (`branch_and_bound_depth − 1` in
+    /// Cartographer's terms).
+    pub fn max_height(&self) -> u32 {
+        self.grids.len() as u32 - 1
+    }
+
+    /// The submap's known cells `(i_min, j_min, i_max, j_max)`, inclusive.
+    pub fn bounds(&self) -> (i64, i64, i64, i64) {
+        self.bounds
+    }
+
+    /// `M^h_precomp` at cell `(i, j)`: the largest probability in the
+    /// `2^h x 2^h` box whose lower-left cell is `(i, j)` (Eq. 5.13). Heights
+    /// above [`max_height`](Self::max_height) read the tallest grid.
+    #[inline]
+    pub fn value(&self, height: u32, i: i64, j: i64) -> f64 {
+        let h = (height as usize).min(self.grids.len() - 1);
+        f64::from(self.grids[h].value(i, j))
+    }
+
+    /// The grid of height `h` over its held cells, for drawing Fig. 5.7:
+    /// `(i0, j0, width, height, values)`, row-major from the bottom.
+    pub fn grid(&self, height: u32) -> Option<(i64, i64, usize, usize, &[f32])> {
+        let g = self.grids.get(height as usize)?;
+        Some((g.i0, g.j0, g.width, g.height, &g.cells))
+    }
+
+    /// Bytes the grids hold.
+    pub fn memory_bytes(&self) -> usize {
+        self.grids.iter().map(|g| g.cells.len() * 4).sum()
+    }
+}
+
+/// Where branch and bound looks.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(tag = "mode", rename_all = "kebab-case")]
+pub enum SearchWindow {
+    /// Around an initial pose (constraints near the current estimate):
+    /// Cartographer's `linear_search_window` (half-width in x and y, metres;
+    /// default 7 m) and `angular_search_window` (half-width, radians; default
+    /// 30°).
+    Around {
+        /// The initial pose, `submap_from_scan`.
+        initial: Pose2,
+        /// Half-width in x and y, metres.
+        linear: f64,
+        /// Half-width in heading, radians.
+        angular: f64,
+    },
+    /// The whole submap at every heading (a global search, Cartographer's
+    /// `MatchFullSubmap`).
+    WholeSubmap,
+}
+
+/// Cartographer's default linear search window for constraints, metres.
+pub const DEFAULT_LINEAR_WINDOW: f64 = 7.0;
+/// Cartographer's default angular search window for constraints, radians (30°).
+pub const DEFAULT_ANGULAR_WINDOW: f64 = std::f64::consts::PI / 6.0;
+
+/// The angular step of Eq. 5.12 for `points` (sensor frame) on a grid of
+/// `resolution`: `δθ = acos(1 − r² / (2 d_max²))`, `d_max` the farthest point
+/// (Eq. 5.11), at least `3 r` as Cartographer takes it.
+pub fn search_angular_step(resolution: f64, points: &[Point2]) -> f64 {
+    let d_max = points
+        .iter()
+        .map(|p| math::hypot(p[0], p[1]))
+        .filter(|d| d.is_finite())
+        .fold(3.0 * resolution, f64::max);
+    angular_step(resolution, d_max)
+}
+
+/// A candidate of the search tree: a `2^height x 2^height` block of cell
+/// offsets `[di, di + 2^h) x [dj, dj + 2^h)` at heading index `angle`.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+pub struct SearchNode {
+    /// The height (0: a leaf, one pose).
+    pub height: u32,
+    /// The heading index (0 is the window's first heading).
+    pub angle: usize,
+    /// Cell offset in x of the block's lower-left candidate.
+    pub di: i64,
+    /// Cell offset in y.
+    pub dj: i64,
+    /// Its score: the bound of Eq. 5.14 (exact at a leaf), a mean probability.
+    pub score: f64,
+    /// Whether it was branched (or, a leaf, taken as the new best); false:
+    /// pruned, its bound no better than the best so far.
+    pub expanded: bool,
+}
+
+/// What a search did, for a lesson to draw.
+#[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
+pub struct SearchRecord {
+    /// Candidates scored at each height (index = height; index 0: leaves).
+    pub evaluated_per_height: Vec<usize>,
+    /// Candidates at each height cut without being branched (their bound no
+    /// better than the best leaf so far), with the whole subtrees under them.
+    pub pruned_per_height: Vec<usize>,
+    /// The best score as it improved: `(candidates evaluated so far, score)`.
+    pub best_history: Vec<(usize, f64)>,
+    /// Candidates an exhaustive search over the same discretization scores.
+    pub exhaustive_candidates: usize,
+    /// Headings searched.
+    pub angles: usize,
+    /// The angular step, radians (Eq. 5.12).
+    pub angular_step: f64,
+    /// The first window heading, radians.
+    pub first_angle: f64,
+    /// The translation the offsets are relative to (the window's centre).
+    pub center: (f64, f64),
+    /// The tree's first nodes in the order they were scored (at most
+    /// [`BranchAndBoundParams::recorded_nodes`]).
+    pub nodes: Vec<SearchNode>,
+}
+
+impl SearchRecord {
+    /// Candidates scored at every height.
+    pub fn evaluated(&self) -> usize {
+        self.evaluated_per_height.iter().sum()
+    }
+}
+
+/// Branch-and-bound parameters (Cartographer's names).
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(default)]
+pub struct BranchAndBoundParams {
+    /// A match must score above this mean probability (`min_score`; 0.55 for
+    /// constraints, `global_localization_min_score` 0.6 for global searches).
+    pub min_score: f64,
+    /// Tree nodes kept in the record for drawing (0: none).
+    pub recorded_nodes: usize,
+}
+
+impl Default for BranchAndBoundParams {
+    fn default() -> Self {
+        Self {
+            min_score: 0.55,
+            recorded_nodes: 0,
+        }
+    }
+}
+
+/// The search's answer.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+pub struct BbsMatch {
+    /// `submap_from_scan`.
+    pub pose: Pose2,
+    /// Its score: the mean probability of the points' cells (Eq. 5.10 / K).
+    pub score: f64,
+}
+
+/// Why a search found no match.
+#[derive(Clone, Debug, PartialEq, Error)]
+pub enum NoMatch {
+    /// The scan has no finite point.
+    #[error("the scan has no usable point to match")]
+    NoPoints,
+    /// The initial pose or a window is not a finite number.
+    #[error("the search window is not finite")]
+    BadWindow,
+    /// No candidate scored above `min_score`.
+    #[error(
+        "no pose scored above the minimum score {min_score:.3} (none can score more than {best_bound:.3}): no loop closure"
+    )]
+    BelowMinScore {
+        /// The threshold.
+        min_score: f64,
+        /// No candidate scores more than this: branch and bound's best bound
+        /// at the top of the tree, the exhaustive search's best score. NaN
+        /// when the window holds no candidate.
+        best_bound: f64,
+    },
+}
+
+/// The discretized search: each heading's points as cells, and the offsets
+/// allowed at each heading.
+struct Discretized {
+    /// Per heading: the points' cells at zero offset.
+    scans: Vec<Vec<(i64, i64)>>,
+    /// Per heading: `(di_min, di_max, dj_min, dj_max)` inclusive, or `None`
+    /// when no offset keeps any point on the submap.
+    bounds: Vec<Option<(i64, i64, i64, i64)>>,
+    first_angle: f64,
+    step: f64,
+    center: (f64, f64),
+}
+
+impl Discretized {
+    fn new(
+        grids: &PrecomputedGrids,
+        points: &[Point2],
+        window: &SearchWindow,
+    ) -> Result<Self, NoMatch> {
+        let points: Vec<Point2> = points
+            .iter()
+            .copied()
+            .filter(|p| p[0].is_finite() && p[1].is_finite())
+            .collect();
+        if points.is_empty() {
+            return Err(NoMatch::NoPoints);
+        }
+        let r = grids.resolution;
+        let (bi0, bj0, bi1, bj1) = grids.bounds;
+        let step = search_angular_step(r, &points);
+        let (initial, linear, angular) = match *window {
+            SearchWindow::Around {
+                initial,
+                linear,
+                angular,
+            } => {
+                if !initial.is_finite() || !linear.is_finite() || !angular.is_finite() {
+                    return Err(NoMatch::BadWindow);
+                }
+                (
+                    initial,
+                    linear.max(0.0),
+                    angular.clamp(0.0, std::f64::consts::PI),
+                )
+            }
+            SearchWindow::WholeSubmap => {
+                // The submap's centre, a window that covers it all (shrunk to
+                // the submap below) and every heading.
+                let cx = (bi0 + bi1 + 1) as f64 * 0.5 * r;
+                let cy = (bj0 + bj1 + 1) as f64 * 0.5 * r;
+                let span = ((bi1 - bi0 + 1).max(bj1 - bj0 + 1)) as f64 * r;
+                (Pose2::new(cx, cy, 0.0), span, std::f64::consts::PI)
+            }
+        };
+        // A window bigger than any submap can use is cut to the submap below;
+        // cap the cell count first so that the arithmetic stays small.
+        let n_lin = (linear / r).ceil().min(1.0e6) as i64;
+        let mut n_ang = (angular / step).ceil() as i64;
+        // A full turn: do not search the same heading twice.
+        if (2 * n_ang + 1) as f64 * step > std::f64::consts::TAU {
+            n_ang = ((std::f64::consts::TAU / step).floor() as i64 - 1) / 2;
+        }
+        let mut scans = Vec::with_capacity((2 * n_ang + 1) as usize);
+        let mut bounds = Vec::with_capacity(scans.capacity());
+        for a in -n_ang..=n_ang {
+            let pose = Pose2::new(initial.x, initial.y, initial.theta + a as f64 * step);
+            let cells: Vec<(i64, i64)> = points
+                .iter()
+                .map(|p| {
+                    let q = transform_point(&pose, *p);
+                    (
+                        crate::grid::floor_to_i64(q[0] / r),
+                        crate::grid::floor_to_i64(q[1] / r),
+                    )
+                })
+                .collect();
+            // Offsets that keep at least one point on the submap
+            // (Cartographer's `ShrinkToFit`), within the window.
+            let (mut lo_i, mut hi_i, mut lo_j, mut hi_j) = (i64::MAX, i64::MIN, i64::MAX, i64::MIN);
+            for &(ci, cj) in &cells {
+                lo_i = lo_i.min(bi0 - ci);
+                hi_i = hi_i.max(bi1 - ci);
+                lo_j = lo_j.min(bj0 - cj);
+                hi_j = hi_j.max(bj1 - cj);
+            }
+            let b = (
+                lo_i.max(-n_lin),
+                hi_i.min(n_lin),
+                lo_j.max(-n_lin),
+                hi_j.min(n_lin),
+            );
+            bounds.push((b.0 <= b.1 && b.2 <= b.3).then_some(b));
+            scans.push(cells);
+        }
+        Ok(Self {
+            scans,
+            bounds,
+            first_angle: initial.theta - n_ang as f64 * step,
+            step,
+            center: (initial.x, initial.y),
+        })
+    }
+
+    fn exhaustive_count(&self) -> usize {
+        self.bounds
+            .iter()
+            .flatten()
+            .map(|b| ((b.1 - b.0 + 1) * (b.3 - b.2 + 1)) as usize)
+            .sum()
+    }
+
+    /// Score of a candidate at `height`: the mean of `M^h` over the points.
+    #[inline]
+    fn score(&self, grids: &PrecomputedGrids, height: u32, angle: usize, di: i64, dj: i64) -> f64 {
+        let grid = &grids.grids[height as usize];
+        let cells = &self.scans[angle];
+        let mut sum = 0.0f64;
+        for &(ci, cj) in cells {
+            sum += f64::from(grid.value(ci + di, cj + dj));
+        }
+        sum / cells.len() as f64
+    }
+
+    fn pose(&self, r: f64, angle: usize, di: i64, dj: i64) -> Pose2 {
+        Pose2::new(
+            self.center.0 + di as f64 * r,
+            self.center.1 + dj as f64 * r,
+            wrap_angle(self.first_angle + angle as f64 * self.step),
+        )
+    }
+
+    fn record(&self, height_count: usize) -> SearchRecord {
+        SearchRecord {
+            evaluated_per_height: vec![0; height_count],
+            pruned_per_height: vec![0; height_count],
+            best_history: Vec::new(),
+            exhaustive_candidates: self.exhaustive_count(),
+            angles: self.scans.len(),
+            angular_step: self.step,
+            first_angle: self.first_angle,
+            center: self.center,
+            nodes: Vec::new(),
+        }
+    }
+}
+
+#[derive(Clone, Copy, Debug)]
+struct Candidate {
+    angle: usize,
+    di: i64,
+    dj: i64,
+    score: f64,
+}
+
+/// The depth-first search of Algorithm 12 (Cartographer's `BranchAndBound`).
+struct Search<'a> {
+    grids: &'a PrecomputedGrids,
+    disc: &'a Discretized,
+    record: SearchRecord,
+    recorded_nodes: usize,
+    best: Option<Candidate>,
+    best_score: f64,
+}
+
+impl Search<'_> {
+    fn note(&mut self, height: u32, c: &Candidate, expanded: bool) {
+        if self.record.nodes.len() < self.recorded_nodes {
+            self.record.nodes.push(SearchNode {
+                height,
+                angle: c.angle,
+                di: c.di,
+                dj: c.dj,
+                score: c.score,
+                expanded,
+            });
+        }
+    }
+
+    /// Scores `candidates` at `height`, best first.
+    fn score_all(&mut self, height: u32, candidates: &mut [Candidate]) {
+        for c in candidates.iter_mut() {
+            c.score = self.disc.score(self.grids, height, c.angle, c.di, c.dj);
+        }
+        self.record.evaluated_per_height[height as usize] += candidates.len();
+        // Best first; ties in a fixed order so that a run is repeatable.
+        candidates.sort_by(|a, b| {
+            b.score
+                .total_cmp(&a.score)
+                .then(a.angle.cmp(&b.angle))
+                .then(a.di.cmp(&b.di))
+                .then(a.dj.cmp(&b.dj))
+        });
+    }
+
+    /// Branches `candidates` (scored at `height`, best first).
+    fn branch(&mut self, height: u32, candidates: &[Candidate]) {
+        for (k, c) in candidates.iter().enumerate() {
+            if c.score <= self.best_score {
+                // Sorted: every candidate from here on is cut.
+                self.record.pruned_per_height[height as usize] += candidates.len() - k;
+                for rest in &candidates[k..] {
+                    self.note(height, rest, false);
+                }
+                return;
+            }
+            if height == 0 {
+                self.note(0, c, true);
+                self.best = Some(*c);
+                self.best_score = c.score;
+                let evaluated = self.record.evaluated();
+                self.record.best_history.push((evaluated, c.score));
+                continue;
+            }
+            self.note(height, c, true);
+            let half = 1i64 << (height - 1);
+            let Some(b) = self.disc.bounds[c.angle] else {
+                continue;
+            };
+            let mut children = Vec::with_capacity(4);
+            for dx in [0, half] {
+                if c.di + dx > b.1 {
+                    break;
+                }
+                for dy in [0, half] {
+                    if c.dj + dy > b.3 {
+                        break;
+                    }
+                    children.push(Candidate {
+                        angle: c.angle,
+                        di: c.di + dx,
+                        dj: c.dj + dy,
+                        score: 0.0,
+                    });
+                }
+            }
+            self.score_all(height - 1, &mut children);
+            self.branch(height - 1, &children);
+        }
+    }
+}
+
+/// Branch-and-bound search (Algorithm 12) of `points` (sensor frame) against
+/// a submap's precomputed grids within `window`. Returns the best pose and
+/// its score, or why there is none, and what the search did.
+pub fn branch_and_bound(
+    grids: &PrecomputedGrids,
+    points: &[Point2],
+    window: &SearchWindow,
+    params: &BranchAndBoundParams,
+) -> (Result<BbsMatch, NoMatch>, SearchRecord) {
+    let height_count = grids.grids.len();
+    let disc = match Discretized::new(grids, points, window) {
+        Ok(d) => d,
+        Err(e) => {
+            let record = SearchRecord {
+                evaluated_per_height: vec![0; height_count],
+                pruned_per_height: vec![0; height_count],
+                ..SearchRecord::default()
+            };
+            return (Err(e), record);
+        }
+    };
+    let top = grids.max_height();
+    let stride = 1i64 << top;
+    // The lowest-resolution candidates: every heading, offsets from each
+    // heading's lower bound in steps of 2^top.
+    let mut initial = Vec::new();
+    for (angle, b) in disc.bounds.iter().enumerate() {
+        let Some(b) = *b else { continue };
+        let mut di = b.0;
+        while di <= b.1 {
+            let mut dj = b.2;
+            while dj <= b.3 {
+                initial.push(Candidate {
+                    angle,
+                    di,
+                    dj,
+                    score: 0.0,
+                });
+                dj += stride;
+            }
+            di += stride;
+        }
+    }
+    let min_score = if params.min_score.is_finite() {
+        params.min_score
+    } else {
+        0.0
+    };
+    let mut search = Search {
+        grids,
+        disc: &disc,
+        record: disc.record(height_count),
+        recorded_nodes: params.recorded_nodes,
+        best: None,
+        best_score: min_score,
+    };
+    search.score_all(top, &mut initial);
+    search.branch(top, &initial);
+    let best = search.best;
+    let record = search.record;
+    let result = match best {
+        Some(c) => Ok(BbsMatch {
+            pose: disc.pose(grids.resolution, c.angle, c.di, c.dj),
+            score: c.score,
+        }),
+        None => Err(NoMatch::BelowMinScore {
+            min_score,
+            best_bound: initial.first().map_or(f64::NAN, |c| c.score),
+        }),
+    };
+    (result, record)
+}
+
+/// The naive search over the same discretization: every heading, every cell
+/// offset, scored on the height-0 grid. Returns the best (the first found of
+/// equal scores, in heading, x, y order) if it scores above `min_score`, and
+/// the number of candidates scored. The yardstick branch and bound is tested
+/// against.
+pub fn exhaustive_search(
+    grids: &PrecomputedGrids,
+    points: &[Point2],
+    window: &SearchWindow,
+    min_score: f64,
+) -> (Result<BbsMatch, NoMatch>, usize) {
+    let disc = match Discretized::new(grids, points, window) {
+        Ok(d) => d,
+        Err(e) => return (Err(e), 0),
+    };
+    let mut best: Option<Candidate> = None;
+    let mut count = 0;
+    for (angle, b) in disc.bounds.iter().enumerate() {
+        let Some(b) = *b else { continue };
+        for di in b.0..=b.1 {
+            for dj in b.2..=b.3 {
+                count += 1;
+                let score = disc.score(grids, 0, angle, di, dj);
+                if best.is_none_or(|c| score > c.score) {
+                    best = Some(Candidate {
+                        angle,
+                        di,
+                        dj,
+                        score,
+                    });
+                }
+            }
+        }
+    }
+    let result = match best {
+        Some(c) if c.score > min_score => Ok(BbsMatch {
+            pose: disc.pose(grids.resolution, c.angle, c.di, c.dj),
+            score: c.score,
+        }),
+        other => Err(NoMatch::BelowMinScore {
+            min_score,
+            best_bound: other.map_or(f64::NAN, |c| c.score),
+        }),
+    };
+    (result, count)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::grid::{InsertParams, UpdateRule};
+    use crate::scan::Scan;
+    use rand::{Rng, SeedableRng};
+    use rand_chacha::ChaCha8Rng;
+
+    /// A submap of random walls seen from a few poses, and a scan function.
+    fn random_world(seed: u64) -> (ProbabilityGrid, impl Fn(&Pose2) -> Scan) {
+        let mut rng = ChaCha8Rng::seed_from_u64(seed);
+        let mut walls: Vec<[f64; 4]> = vec![
+            [-5.0, -4.0, 6.0, -4.0],
+            [6.0, -4.0, 6.0, 5.0],
+            [6.0, 5.0, -5.0, 5.0],
+            [-5.0, 5.0, -5.0, -4.0],
+        ];
+        for _ in 0..8 {
+            let x = rng.random_range(-4.0..5.0);
+            let y = rng.random_range(-3.0..4.0);
+            let a: f64 = rng.random_range(0.0..std::f64::consts::TAU);
+            let l = rng.random_range(0.5..2.0);
+            walls.push([x, y, x + l * math::cos(a), y + l * math::sin(a)]);
+        }
+        let scan_at = move |pose: &Pose2| {
+            let n = 180;
+            let angles: Vec<f64> = (0..n)
+                .map(|k| -std::f64::consts::PI + std::f64::consts::TAU * k as f64 / n as f64)
+                .collect();
+            let ranges = angles
+                .iter()
+                .map(|a| {
+                    let (s, c) = math::sin_cos(pose.theta + a);
+                    let mut best = 12.0;
+                    for w in &walls {
+                        let (ex, ey) = (w[2] - w[0], w[3] - w[1]);
+                        let den = c * ey - s * ex;
+                        if den.abs() < 1e-12 {
+                            continue;
+                        }
+                        let (qx, qy) = (w[0] - pose.x, w[1] - pose.y);
+                        let t = (qx * ey - qy * ex) / den;
+                        let u = (qx * s - qy * c) / den;
+                        if t > 0.0 && (0.0..=1.0).contains(&u) && t < best {
+                            best = t;
+                        }
+                    }
+                    best
+                })
+                .collect();
+            Scan {
+                angles,
+                ranges,
+                range_min: 0.0,
+                range_max: 12.0,
+            }
+        };
+        let mut grid = ProbabilityGrid::new(0.1);
+        let params = InsertParams {
+            rule: UpdateRule::CARTOGRAPHER,
+            max_range_free: 0.0,
+        };
+        for k in 0..6 {
+            let pose = Pose2::new(
+                rng.random_range(-2.0..3.0),
+                rng.random_range(-2.0..2.0),
+                k as f64,
+            );
+            for _ in 0..3 {
+                grid.insert_scan(&pose, &scan_at(&pose), &params).unwrap();
+            }
+        }
+        (grid, scan_at)
+    }
+
+    #[test]
+    fn the_height_h_grid_is_the_maximum_over_its_box() {
+        let (grid, _) = random_world(3);
+        let grids = PrecomputedGrids::new(&grid, 4).unwrap();
+        let (i0, j0, i1, j1) = grids.bounds();
+        let cell = |i: i64, j: i64| {
+            grid.probability_at(i, j)
+                .map_or(UNKNOWN_PROBABILITY as f32, |p| p as f32)
+        };
+        let mut checked = 0;
+        for h in 0..=4u32 {
+            let side = 1i64 << h;
+            // Every box start that touches the submap, and a margin beyond.
+            for j in (j0 - side - 1..=j1 + 2).step_by(3) {
+                for i in (i0 - side - 1..=i1 + 2).step_by(2) {
+                    let mut m = f32::NEG_INFINITY;
+                    for dj in 0..side {
+                        for di in 0..side {
+                            m = m.max(cell(i + di, j + dj));
+                        }
+                    }
+                    assert_eq!(grids.value(h, i, j), f64::from(m), "h {h} at ({i}, {j})");
+                    checked += 1;
+                }
+            }
+        }
+        assert!(checked > 10_000, "{checked}");
+        // Height 0 is the submap itself.
+        assert_eq!(
+            grids.value(0, i0 + 5, j0 + 7),
+            f64::from(cell(i0 + 5, j0 + 7))
+        );
+    }
+
+    #[test]
+    fn the_angular_step_is_eq_5_12_by_hand() {
+        // r = 0.05 m, d_max = 10 m: acos(1 − 0.0025 / 200) = acos(0.9999875)
+        // = 0.00500000520833 rad (sqrt(2 · 1.25e-5) to first order).
+        let step = search_angular_step(0.05, &[[6.0, 8.0], [1.0, 0.0]]);
+        assert!((step - 0.005_000_005_208_3).abs() < 1e-12, "{step}");
+        // Points nearer than 3 r count as 3 r: r = 0.1, d = 0.3:
+        // acos(1 − 0.01 / 0.18) = acos(0.94444) = 0.33489 rad.
+        let near = search_angular_step(0.1, &[[0.05, 0.0]]);
+        assert!((near - 0.334_896_6).abs() < 1e-6, "{near}");
+    }
+
+    #[test]
+    fn branch_and_bound_equals_exhaustive_search_with_far_fewer_candidates() {
+        let mut ratios = Vec::new();
+        for seed in 1..=6u64 {
+            let (grid, scan_at) = random_world(seed);
+            let grids = PrecomputedGrids::new(&grid, 5).unwrap();
+            let mut rng = ChaCha8Rng::seed_from_u64(100 + seed);
+            let truth = Pose2::new(
+                rng.random_range(-1.5..2.5),
+                rng.random_range(-1.5..1.5),
+                rng.random_range(-3.0..3.0),
+            );
+            let points = scan_at(&truth).points();
+            let initial = Pose2::new(truth.x + 0.7, truth.y - 0.5, truth.theta + 0.1);
+            let window = SearchWindow::Around {
+                initial,
+                linear: 3.0,
+                angular: 0.3,
+            };
+            let params = BranchAndBoundParams {
+                min_score: 0.5,
+                recorded_nodes: 100,
+            };
+            let (bbs, record) = branch_and_bound(&grids, &points, &window, &params);
+            let (naive, count) = exhaustive_search(&grids, &points, &window, 0.5);
+            let bbs = bbs.unwrap();
+            let naive = naive.unwrap();
+            assert_eq!(bbs.score, naive.score, "seed {seed}");
+            assert_eq!(bbs.pose, naive.pose, "seed {seed}");
+            assert_eq!(record.exhaustive_candidates, count);
+            // It is found where the scan was taken (to a cell and a step).
+            assert!(math::hypot(bbs.pose.x - truth.x, bbs.pose.y - truth.y) < 0.15);
+            assert!(wrap_angle(bbs.pose.theta - truth.theta).abs() < 0.03);
+            // The best score only grew, and the record adds up.
+            assert!(record.best_history.windows(2).all(|w| w[1].1 > w[0].1));
+            assert_eq!(record.best_history.last().unwrap().1, bbs.score);
+            assert_eq!(record.nodes.len(), 100);
+            let ratio = count as f64 / record.evaluated() as f64;
+            ratios.push(ratio);
+            assert!(
+                ratio > 50.0,
+                "seed {seed}: {count} / {} = {ratio}",
+                record.evaluated()
+            );
+        }
+        eprintln!("exhaustive / branch-and-bound candidates: {ratios:?}");
+    }
+
+    #[test]
+    fn a_global_search_finds_the_scan_anywhere_in_the_submap() {
+        let (grid, scan_at) = random_world(9);
+        let grids = PrecomputedGrids::new(&grid, 6).unwrap();
+        let truth = Pose2::new(1.2, -0.8, 2.5);
+        let points = scan_at(&truth).points();
+        let (m, record) = branch_and_bound(
+            &grids,
+            &points,
+            &SearchWindow::WholeSubmap,
+            &BranchAndBoundParams::default(),
+        );
+        let m = m.unwrap();
+        assert!(
+            math::hypot(m.pose.x - truth.x, m.pose.y - truth.y) < 0.15,
+            "{m:?}"
+        );
+        assert!(wrap_angle(m.pose.theta - truth.theta).abs() < 0.03);
+        let ratio = record.exhaustive_candidates as f64 / record.evaluated() as f64;
+        assert!(ratio > 100.0, "{ratio}");
+    }
+
+    #[test]
+    fn a_window_larger_than_the_map_and_an_unreachable_min_score_behave() {
+        let (grid, scan_at) = random_world(4);
+        let grids = PrecomputedGrids::new(&grid, 3).unwrap();
+        let truth = Pose2::new(0.5, 0.5, 0.3);
+        let points = scan_at(&truth).points();
+        // A 1 km window is cut to the offsets that keep a point on the map.
+        let huge = SearchWindow::Around {
+            initial: truth,
+            linear: 1000.0,
+            angular: 0.05,
+        };
+        let (m, record) =
+            branch_and_bound(&grids, &points, &huge, &BranchAndBoundParams::default());
+        let (i0, j0, i1, j1) = grids.bounds();
+        let cells = ((i1 - i0 + 1) * (j1 - j0 + 1)) as usize;
+        // (The scan spans up to 24 m, the map about 11 m: at most three
+        // map widths of offsets per axis keep a point on it.)
+        assert!(record.exhaustive_candidates <= 9 * cells * record.angles);
+        assert!(record.exhaustive_candidates < 20_001 * 20_001);
+        let m = m.unwrap();
+        assert!(math::hypot(m.pose.x - truth.x, m.pose.y - truth.y) < 0.15);
+        // A minimum score of 1 (certain occupancy under every point) is
+        // never reached: no match, said as such, and nothing branched past
+        // the top.
+        let strict = BranchAndBoundParams {
+            min_score: 1.0,
+            recorded_nodes: 0,
+        };
+        let (none, record) = branch_and_bound(&grids, &points, &huge, &strict);
+        match none {
+            Err(NoMatch::BelowMinScore {
+                min_score,
+                best_bound,
+            }) => {
+                assert_eq!(min_score, 1.0);
+                assert!(best_bound <= 0.9 + 1e-6, "{best_bound}");
+            }
+            other => panic!("{other:?}"),
+        }
+        assert!(record.best_history.is_empty());
+        let top = grids.max_height() as usize;
+        assert_eq!(record.evaluated(), record.evaluated_per_height[top]);
+        assert_eq!(
+            record.pruned_per_height[top],
+            record.evaluated_per_height[top]
+        );
+        let message = branch_and_bound(&grids, &points, &huge, &strict)
+            .0
+            .unwrap_err()
+            .to_string();
+        assert!(message.contains("no loop closure"), "{message}");
+        // No points, a NaN window.
+        assert_eq!(
+            branch_and_bound(&grids, &[], &huge, &strict).0,
+            Err(NoMatch::NoPoints)
+        );
+        let nan = SearchWindow::Around {
+            initial: Pose2::new(f64::NAN, 0.0, 0.0),
+            linear: 1.0,
+            angular: 0.1,
+        };
+        assert_eq!(
+            branch_and_bound(&grids, &points, &nan, &strict).0,
+            Err(NoMatch::BadWindow)
+        );
+        // An empty grid has no precomputed grids.
+        assert!(PrecomputedGrids::new(&ProbabilityGrid::new(0.05), 3).is_none());
+    }
+}

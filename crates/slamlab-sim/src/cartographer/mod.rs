@@ -1,0 +1,1116 @@
+//! Submaps, branch-and-bound loop closure and the kidnapped robot during
+//! mapping (thesis `000` Sec. 5.2, Cartographer's 2-D SLAM; `slamlab run
+//! cartographer`).
+//!
+//! - **Local SLAM** ([`CartographerSim::step`]): each scan's pose in its
+//!   trajectory's local frame from the odometry prediction and scan-to-submap
+//!   matching against the older of the two active submaps (correlative
+//!   search, then thesis Eq. 5.5); every scan's matching cost is kept. A
+//!   motion filter skips scans that barely moved; the others become nodes and
+//!   go into both active submaps (Eq. 5.3-5.4). A submap is finished after
+//!   `2 · num_range_data` scans, a new one started every `num_range_data`, as
+//!   Cartographer's `ActiveSubmaps2D` does.
+//! - **Global SLAM**: a pose graph of submap and node poses; an
+//!   intra-submap constraint for every node and submap it went into, and loop
+//!   closures from branch-and-bound against finished submaps (Algorithm 12)
+//!   in a window around the current estimate (Eq. 5.6-5.7: the constraint is
+//!   the node's pose in the submap's frame, `ξ_ij = ξ_mᵢ⁻¹ ξ_sⱼ`, whose
+//!   translation is `R_mᵀ (t_s − t_m)`), solved with the Huber kernel
+//!   (Eq. 5.8-5.9) every `optimize_every_n_nodes` nodes by the project's
+//!   sparse Levenberg-Marquardt solver.
+//! - **The kidnapped robot** (Algorithm 13, Figs. 5.8-5.12): the average
+//!   filter over the local matching cost declares a kidnap; the trajectory
+//!   ends and a new one starts at the origin with its own submaps and its own
+//!   unanchored graph; branch and bound searches the new trajectory's nodes
+//!   against the old trajectory's finished submaps, each submap whole and at
+//!   every heading; the first match above `global_min_score` adds the
+//!   inter-trajectory constraint, the new trajectory is moved onto the first
+//!   and the optimization merges the maps. With detection off the run maps on
+//!   in one corrupted map (Fig. 5.10).
+//!
+//! The input is [`MappingInput`] (a simulated log from [`input::kidnap_input`]
+//! or a CARMEN log); the truth reaches only [`CartographerSim::summary`].
+
+pub mod input;
+#[cfg(test)]
+mod tests;
+
+use crate::mapping::{MappingInput, map_agreement};
+use nalgebra::Matrix3;
+use serde::{Deserialize, Serialize};
+use slamlab_core::Pose2;
+use slamlab_core::graph::{
+    EdgeKind, Optimizer, OptimizerSettings, PoseGraph, RobustKernel, SolverKind,
+};
+use slamlab_core::grid::{InsertParams, ProbabilityGrid, UpdateRule};
+use slamlab_core::scan::branch_and_bound::{
+    BranchAndBoundParams, NoMatch, PrecomputedGrids, SearchRecord, SearchWindow, branch_and_bound,
+};
+use slamlab_core::scan::kidnap_detector::{KidnapDetector, KidnapDetectorParams};
+use slamlab_core::scan::scan_to_map::{
+    ProbabilityLookup, ScanToMapParams, match_scan_to_map, spread_points,
+};
+use slamlab_core::scan::{Point2, Scan};
+use slamlab_core::wrap_angle;
+use std::sync::Arc;
+
+/// The parameters, with Cartographer's names where it has them.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(default)]
+pub struct CartographerParams {
+    /// Metres per submap cell (`resolution`).
+    pub resolution: f64,
+    /// Scans per submap before the next one starts (`num_range_data`); each
+    /// submap takes twice as many before it is finished.
+    pub num_range_data: usize,
+    /// Probability of a hit cell (`hit_probability`).
+    pub hit_probability: f64,
+    /// Probability of a missed cell (`miss_probability`).
+    pub miss_probability: f64,
+    /// Free space marked along a beam that returned nothing, metres
+    /// (`missing_data_ray_length`).
+    pub missing_data_ray_length: f64,
+    /// The motion filter: a scan becomes a node when the robot moved this far
+    /// since the last node (`max_distance_meters`)...
+    pub motion_filter_distance: f64,
+    /// ... or turned this far, radians (`max_angle_radians`) ...
+    pub motion_filter_angle: f64,
+    /// ... or this much time passed, seconds (`max_time_seconds`).
+    pub motion_filter_time: f64,
+    /// Local scan matching (correlative search and Eq. 5.5).
+    pub local: ScanToMapParams,
+    /// Half-width of the loop-closure search in x and y, metres
+    /// (`linear_search_window`).
+    pub linear_search_window: f64,
+    /// Half-width of the loop-closure search in heading, radians
+    /// (`angular_search_window`).
+    pub angular_search_window: f64,
+    /// A loop closure must score above this (`min_score`).
+    pub min_score: f64,
+    /// A global match between trajectories must score above this
+    /// (`global_localization_min_score`).
+    pub global_min_score: f64,
+    /// A loop closure within one map is kept only if it moves the node at
+    /// most this far from its current estimate, metres (a gate SLAM Lab adds:
+    /// in the maze's repeating corridors a 7 m window finds matches one
+    /// corridor over that score above `min_score`; 0 or less: no gate).
+    pub loop_closure_gate: f64,
+    /// Height of the tallest precomputed grid (`branch_and_bound_depth − 1`).
+    pub max_height: u32,
+    /// Loop closures are searched for every n-th node (Cartographer samples
+    /// with `sampling_ratio`).
+    pub constraint_every_n_nodes: usize,
+    /// At most this many scan points go into a branch-and-bound search.
+    pub bbs_max_points: usize,
+    /// Optimize the pose graph every n nodes (`optimize_every_n_nodes`).
+    pub optimize_every_n_nodes: usize,
+    /// Huber scale on the constraints' weighted error (`huber_scale`).
+    pub huber_scale: f64,
+    /// Weight of an intra-submap constraint's translation
+    /// (`matcher_translation_weight`): information `w²`.
+    pub matcher_translation_weight: f64,
+    /// ... and rotation (`matcher_rotation_weight`).
+    pub matcher_rotation_weight: f64,
+    /// Weight of a loop closure's translation
+    /// (`loop_closure_translation_weight`).
+    pub loop_closure_translation_weight: f64,
+    /// ... and rotation (`loop_closure_rotation_weight`).
+    pub loop_closure_rotation_weight: f64,
+    /// Kidnap detection (Algorithm 13) on or off.
+    pub detection: bool,
+    /// The thesis's `T` and `f_size`.
+    pub kidnap: KidnapDetectorParams,
+}
+
+impl Default for CartographerParams {
+    fn default() -> Self {
+        Self {
+            resolution: 0.05,
+            num_range_data: 30,
+            hit_probability: 0.55,
+            miss_probability: 0.49,
+            missing_data_ray_length: 5.0,
+            motion_filter_distance: 0.2,
+            motion_filter_angle: 1f64.to_radians(),
+            motion_filter_time: 5.0,
+            local: ScanToMapParams::default(),
+            linear_search_window: 7.0,
+            angular_search_window: 30f64.to_radians(),
+            min_score: 0.55,
+            global_min_score: 0.6,
+            loop_closure_gate: 0.5,
+            max_height: 6,
+            constraint_every_n_nodes: 3,
+            bbs_max_points: 150,
+            optimize_every_n_nodes: 30,
+            huber_scale: 10.0,
+            matcher_translation_weight: 500.0,
+            matcher_rotation_weight: 1600.0,
+            loop_closure_translation_weight: 1.1e4,
+            loop_closure_rotation_weight: 1e5,
+            detection: true,
+            kidnap: KidnapDetectorParams::default(),
+        }
+    }
+}
+
+impl CartographerParams {
+    /// The parameters made usable (a clamp or a default for each bad value),
+    /// with a note for each change.
+    pub fn sanitized(mut self) -> (Self, Vec<String>) {
+        let d = Self::default();
+        let mut notes = Vec::new();
+        let fix = |ok: bool, name: &str, shown: String, notes: &mut Vec<String>| {
+            if !ok {
+                notes.push(format!(
+                    "{name} = {shown} cannot be used; the default applies"
+                ));
+            }
+            ok
+        };
+        if !fix(
+            self.resolution.is_finite() && (0.01..=1.0).contains(&self.resolution),
+            "resolution",
+            self.resolution.to_string(),
+            &mut notes,
+        ) {
+            self.resolution = d.resolution;
+        }
+        if self.num_range_data == 0 || self.num_range_data > 10_000 {
+            notes.push(format!(
+                "num_range_data = {} must be 1 to 10000; {} is used",
+                self.num_range_data,
+                self.num_range_data.clamp(1, 10_000)
+            ));
+            self.num_range_data = self.num_range_data.clamp(1, 10_000);
+        }
+        let rule = UpdateRule::Odds {
+            p_hit: self.hit_probability,
+            p_miss: self.miss_probability,
+            p_min: 0.1,
+            p_max: 0.9,
+        };
+        if let Err(why) = rule.log_odds_steps() {
+            notes.push(format!(
+                "the hit and miss probabilities cannot be used ({why}); the defaults apply"
+            ));
+            self.hit_probability = d.hit_probability;
+            self.miss_probability = d.miss_probability;
+        }
+        for (value, default, name, max) in [
+            (
+                &mut self.linear_search_window,
+                d.linear_search_window,
+                "linear_search_window",
+                1e4,
+            ),
+            (
+                &mut self.angular_search_window,
+                d.angular_search_window,
+                "angular_search_window",
+                std::f64::consts::PI,
+            ),
+            (&mut self.min_score, d.min_score, "min_score", 1.0),
+            (
+                &mut self.global_min_score,
+                d.global_min_score,
+                "global_min_score",
+                1.0,
+            ),
+            (&mut self.huber_scale, d.huber_scale, "huber_scale", 1e9),
+            (
+                &mut self.motion_filter_distance,
+                d.motion_filter_distance,
+                "max_distance_meters",
+                1e3,
+            ),
+            (
+                &mut self.motion_filter_angle,
+                d.motion_filter_angle,
+                "max_angle_radians",
+                10.0,
+            ),
+            (
+                &mut self.motion_filter_time,
+                d.motion_filter_time,
+                "max_time_seconds",
+                1e6,
+            ),
+            (
+                &mut self.missing_data_ray_length,
+                d.missing_data_ray_length,
+                "missing_data_ray_length",
+                1e3,
+            ),
+        ] {
+            if !(value.is_finite() && *value >= 0.0 && *value <= max) {
+                notes.push(format!(
+                    "{name} = {value} must be 0 to {max}; {default} is used"
+                ));
+                *value = default;
+            }
+        }
+        if !(self.huber_scale > 0.0) {
+            self.huber_scale = d.huber_scale;
+        }
+        for (value, default, name) in [
+            (
+                &mut self.matcher_translation_weight,
+                d.matcher_translation_weight,
+                "matcher_translation_weight",
+            ),
+            (
+                &mut self.matcher_rotation_weight,
+                d.matcher_rotation_weight,
+                "matcher_rotation_weight",
+            ),
+            (
+                &mut self.loop_closure_translation_weight,
+                d.loop_closure_translation_weight,
+                "loop_closure_translation_weight",
+            ),
+            (
+                &mut self.loop_closure_rotation_weight,
+                d.loop_closure_rotation_weight,
+                "loop_closure_rotation_weight",
+            ),
+        ] {
+            if !(value.is_finite() && *value > 0.0 && *value < 1e7) {
+                notes.push(format!(
+                    "{name} = {value} must be a positive number below 1e7; {default} is used"
+                ));
+                *value = default;
+            }
+        }
+        self.max_height = self.max_height.min(10);
+        self.constraint_every_n_nodes = self.constraint_every_n_nodes.max(1);
+        self.optimize_every_n_nodes = self.optimize_every_n_nodes.max(1);
+        self.bbs_max_points = self.bbs_max_points.max(1);
+        let (kidnap, kidnap_notes) = self.kidnap.sanitized();
+        self.kidnap = kidnap;
+        notes.extend(kidnap_notes);
+        (self, notes)
+    }
+
+    fn insert_params(&self) -> InsertParams {
+        InsertParams {
+            rule: UpdateRule::Odds {
+                p_hit: self.hit_probability,
+                p_miss: self.miss_probability,
+                p_min: 0.1,
+                p_max: 0.9,
+            },
+            max_range_free: self.missing_data_ray_length,
+        }
+    }
+}
+
+/// A submap: a probability grid in its trajectory's local frame.
+#[derive(Clone, Debug)]
+pub struct Submap {
+    /// The trajectory it belongs to.
+    pub trajectory: usize,
+    /// Its origin in the trajectory's local frame (the position of its first
+    /// scan, heading 0, as Cartographer places it).
+    pub local_pose: Pose2,
+    /// Its origin in the global frame (the pose graph's estimate).
+    pub global_pose: Pose2,
+    /// The grid, cells in the local frame.
+    pub grid: ProbabilityGrid,
+    /// Scans inserted.
+    pub num_range_data: usize,
+    /// Whether it takes no more scans.
+    pub finished: bool,
+    /// Its precomputed grids, once finished.
+    pub precomputed: Option<Arc<PrecomputedGrids>>,
+}
+
+/// A node: a scan that went into the submaps.
+#[derive(Clone, Debug)]
+pub struct Node {
+    /// The trajectory it belongs to.
+    pub trajectory: usize,
+    /// The scan's index in the input.
+    pub scan: usize,
+    /// Its pose in the trajectory's local frame (local SLAM).
+    pub local_pose: Pose2,
+    /// Its pose in the global frame (the pose graph's estimate).
+    pub global_pose: Pose2,
+    /// The points branch and bound matches (sensor frame, at most
+    /// `bbs_max_points`).
+    pub points: Arc<Vec<Point2>>,
+}
+
+/// What a constraint is.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(rename_all = "kebab-case")]
+pub enum ConstraintKind {
+    /// The node went into the submap (local SLAM).
+    IntraSubmap,
+    /// Branch and bound matched the node in a finished submap of its own
+    /// trajectory, or of one already joined to it.
+    LoopClosure,
+    /// Branch and bound matched a node of a trajectory not yet joined to the
+    /// submap's: the match that merges the maps.
+    InterTrajectory,
+}
+
+/// A constraint: node `node` seen from submap `submap`.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+pub struct Constraint {
+    /// Submap index.
+    pub submap: usize,
+    /// Node index.
+    pub node: usize,
+    /// `submap_from_node` (Eq. 5.7's `ξ_ij`).
+    pub relative: Pose2,
+    /// What made it.
+    pub kind: ConstraintKind,
+    /// Branch and bound's score (1 for an intra-submap constraint).
+    pub score: f64,
+}
+
+/// A trajectory: one continuous stretch of local SLAM.
+#[derive(Clone, Debug)]
+pub struct Trajectory {
+    /// The first scan.
+    pub first_scan: usize,
+    /// The kidnap detection that started it (`None` for the first).
+    pub started_by_detection: bool,
+    /// The trajectory whose frame it has been joined to (itself until a
+    /// match joins it; the first trajectory's frame is the global frame).
+    pub joined_to: usize,
+    /// `global_from_local`: where its local frame sits in the global frame.
+    pub global_from_local: Pose2,
+    /// Its active submaps (indices), oldest first.
+    active: Vec<usize>,
+    /// The last scan matched: `(scan, local pose)`.
+    last_scan: Option<(usize, Pose2)>,
+    /// The last node: `(local pose, time)`.
+    last_node: Option<(Pose2, f64)>,
+    /// Nodes made.
+    nodes: usize,
+}
+
+/// What happened to one scan.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+pub struct ScanRecord {
+    /// The scan's index in the input.
+    pub scan: usize,
+    /// The trajectory it belongs to.
+    pub trajectory: usize,
+    /// The local matching cost (Eq. 5.5 with the pulls; NaN where nothing
+    /// was matched: a trajectory's first scan).
+    pub cost: f64,
+    /// The average filter's value `y_t` (NaN until `f_size` costs are in).
+    pub filtered: f64,
+    /// The level it had to exceed, `T · y_{t−1}` (NaN without one).
+    pub trigger_level: f64,
+    /// Whether the detector declared a kidnap here.
+    pub detected: bool,
+    /// Whether the scan became a node.
+    pub node: bool,
+    /// Its pose in the global frame (the estimate when it was taken).
+    pub global_pose: Pose2,
+}
+
+/// One branch-and-bound search and what came of it.
+#[derive(Clone, Debug, PartialEq)]
+pub struct SearchEvent {
+    /// Scan of the node searched.
+    pub scan: usize,
+    /// Node index.
+    pub node: usize,
+    /// Submap index.
+    pub submap: usize,
+    /// Whether it searched the whole submap at every heading.
+    pub global: bool,
+    /// The score found (None: below the minimum).
+    pub score: Option<f64>,
+    /// What the search did.
+    pub record: SearchRecord,
+}
+
+/// Totals of the branch-and-bound searches.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Serialize, Deserialize)]
+pub struct BbsTotals {
+    /// Searches run.
+    pub searches: usize,
+    /// Candidates scored at every height.
+    pub nodes_evaluated: usize,
+    /// Candidates an exhaustive search would have scored.
+    pub exhaustive_candidates: usize,
+}
+
+/// One run of Cartographer-style SLAM over an input.
+#[derive(Clone, Debug)]
+pub struct CartographerSim {
+    input: Arc<MappingInput>,
+    params: CartographerParams,
+    insert: InsertParams,
+    lookup: Arc<ProbabilityLookup>,
+    /// Every submap of every trajectory.
+    pub submaps: Vec<Submap>,
+    /// Every node.
+    pub nodes: Vec<Node>,
+    /// Every constraint.
+    pub constraints: Vec<Constraint>,
+    /// Every trajectory.
+    pub trajectories: Vec<Trajectory>,
+    /// One record per scan processed.
+    pub records: Vec<ScanRecord>,
+    /// Scans where the detector declared a kidnap.
+    pub detections: Vec<usize>,
+    /// Scans whose node's match merged a trajectory into the first.
+    pub merges: Vec<usize>,
+    /// The last branch-and-bound search (for drawing).
+    pub last_search: Option<Arc<SearchEvent>>,
+    /// The totals of every search.
+    pub bbs: BbsTotals,
+    /// Optimizations run.
+    pub optimizations: usize,
+    /// Loop closures found but refused by the gate.
+    pub rejected_closures: usize,
+    /// Notes for the user (an optimization that failed, ...).
+    pub notes: Vec<String>,
+    detector: KidnapDetector,
+    /// A match between maps waiting for a second one that agrees.
+    pending_merge: Option<(Pose2, Constraint)>,
+    nodes_since_optimization: usize,
+    next: usize,
+}
+
+impl CartographerSim {
+    /// A run of `input` with `params` (sanitized; the notes say what changed).
+    pub fn new(input: Arc<MappingInput>, params: CartographerParams) -> (Self, Vec<String>) {
+        let (params, notes) = params.sanitized();
+        let sim = Self {
+            input,
+            insert: params.insert_params(),
+            lookup: Arc::new(ProbabilityLookup::default()),
+            submaps: Vec::new(),
+            nodes: Vec::new(),
+            constraints: Vec::new(),
+            trajectories: Vec::new(),
+            records: Vec::new(),
+            detections: Vec::new(),
+            merges: Vec::new(),
+            last_search: None,
+            bbs: BbsTotals::default(),
+            optimizations: 0,
+            rejected_closures: 0,
+            notes: Vec::new(),
+            detector: KidnapDetector::new(params.kidnap),
+            pending_merge: None,
+            nodes_since_optimization: 0,
+            next: 0,
+            params,
+        };
+        (sim, notes)
+    }
+
+    /// The parameters in use.
+    pub fn params(&self) -> &CartographerParams {
+        &self.params
+    }
+
+    /// The input.
+    pub fn input(&self) -> &Arc<MappingInput> {
+        &self.input
+    }
+
+    /// Scans processed.
+    pub fn scans_done(&self) -> usize {
+        self.next
+    }
+
+    /// Whether every scan is in.
+    pub fn is_done(&self) -> bool {
+        self.next >= self.input.scans.len()
+    }
+
+    /// Runs every remaining scan.
+    pub fn run_to_end(&mut self) {
+        while self.step() {}
+    }
+
+    /// The root trajectory of `t` (the one whose frame it is in).
+    pub fn root(&self, mut t: usize) -> usize {
+        while self.trajectories[t].joined_to != t {
+            t = self.trajectories[t].joined_to;
+        }
+        t
+    }
+
+    fn start_trajectory(&mut self, scan: usize, by_detection: bool) -> usize {
+        let id = self.trajectories.len();
+        self.trajectories.push(Trajectory {
+            first_scan: scan,
+            started_by_detection: by_detection,
+            joined_to: id,
+            global_from_local: Pose2::IDENTITY,
+            active: Vec::new(),
+            last_scan: None,
+            last_node: None,
+            nodes: 0,
+        });
+        self.detector.reset();
+        self.pending_merge = None;
+        id
+    }
+
+    /// Finishes the active submaps of trajectory `t` (the trajectory ends).
+    fn finish_trajectory(&mut self, t: usize) {
+        let active = std::mem::take(&mut self.trajectories[t].active);
+        for s in active {
+            self.finish_submap(s);
+        }
+    }
+
+    fn finish_submap(&mut self, s: usize) {
+        let submap = &mut self.submaps[s];
+        if submap.finished {
+            return;
+        }
+        submap.finished = true;
+        submap.precomputed =
+            PrecomputedGrids::new(&submap.grid, self.params.max_height).map(Arc::new);
+    }
+
+    /// Processes the next scan. Returns false when every scan is in.
+    pub fn step(&mut self) -> bool {
+        let Some(input_scan) = self.input.scans.get(self.next) else {
+            return false;
+        };
+        let k = self.next;
+        self.next += 1;
+        let scan = input_scan.scan.clone();
+        let odometry = input_scan.odometry;
+        let time = input_scan.time;
+        if self.trajectories.is_empty() {
+            self.start_trajectory(k, false);
+        }
+        let mut t = self.trajectories.len() - 1;
+        // Predict: the last pose moved by the odometry since then; the first
+        // trajectory starts at the first odometry pose, a later one at the
+        // origin of its own frame.
+        let predicted = match self.trajectories[t].last_scan {
+            Some((j, last)) => {
+                let increment = self.input.scans[j].odometry.between(&odometry);
+                let p = last.compose(&increment);
+                Pose2::new(p.x, p.y, p.theta)
+            }
+            None if t == 0 && odometry.is_finite() => odometry,
+            None => Pose2::IDENTITY,
+        };
+        let predicted = if predicted.is_finite() {
+            predicted
+        } else {
+            self.trajectories[t]
+                .last_scan
+                .map_or(Pose2::IDENTITY, |(_, p)| p)
+        };
+        // Match against the oldest active submap.
+        let points = scan.points();
+        let matched = self.trajectories[t]
+            .active
+            .first()
+            .and_then(|&s| {
+                match_scan_to_map(
+                    &self.submaps[s].grid,
+                    &self.lookup,
+                    &points,
+                    predicted,
+                    &self.params.local,
+                )
+            })
+            .map(|(m, _)| m);
+        let (mut local, cost) = matched.map_or((predicted, f64::NAN), |m| (m.pose, m.cost));
+        let mut record = ScanRecord {
+            scan: k,
+            trajectory: t,
+            cost,
+            filtered: f64::NAN,
+            trigger_level: f64::NAN,
+            detected: false,
+            node: false,
+            global_pose: Pose2::IDENTITY,
+        };
+        if self.params.detection && cost.is_finite() {
+            let step = self.detector.push(cost);
+            record.filtered = step.filtered.unwrap_or(f64::NAN);
+            record.trigger_level = step.trigger_level.unwrap_or(f64::NAN);
+            if step.triggered {
+                // Kidnapped: this trajectory ends before the scan goes in;
+                // a new one starts with it at its origin.
+                record.detected = true;
+                self.detections.push(k);
+                self.finish_trajectory(t);
+                t = self.start_trajectory(k, true);
+                record.trajectory = t;
+                local = Pose2::IDENTITY;
+            }
+        }
+        let traj = &mut self.trajectories[t];
+        traj.last_scan = Some((k, local));
+        let global = traj.global_from_local.compose(&local);
+        record.global_pose = Pose2::new(global.x, global.y, global.theta);
+        // The motion filter.
+        let moves = match traj.last_node {
+            None => true,
+            Some((p, t0)) => {
+                let d = p.between(&local);
+                slamlab_core::math::hypot(d.x, d.y) > self.params.motion_filter_distance
+                    || wrap_angle(d.theta).abs() > self.params.motion_filter_angle
+                    || time - t0 > self.params.motion_filter_time
+            }
+        };
+        if moves && !points.is_empty() {
+            record.node = true;
+            self.add_node(t, k, local, &scan, &points);
+        }
+        self.records.push(record);
+        true
+    }
+
+    /// Inserts scan `k` at `local` into trajectory `t`'s active submaps and
+    /// makes it a node with its constraints; searches for loop closures and
+    /// optimizes when due.
+    fn add_node(&mut self, t: usize, k: usize, local: Pose2, scan: &Scan, points: &[Point2]) {
+        let time = self.input.scans[k].time;
+        let n = self.params.num_range_data;
+        // A new submap when there is none or the newest has num_range_data.
+        let needs_new = match self.trajectories[t].active.last() {
+            None => true,
+            Some(&s) => self.submaps[s].num_range_data >= n,
+        };
+        if needs_new {
+            let origin = Pose2::new(local.x, local.y, 0.0);
+            let g = self.trajectories[t].global_from_local.compose(&origin);
+            self.submaps.push(Submap {
+                trajectory: t,
+                local_pose: origin,
+                global_pose: g,
+                grid: ProbabilityGrid::new(self.params.resolution),
+                num_range_data: 0,
+                finished: false,
+                precomputed: None,
+            });
+            self.trajectories[t].active.push(self.submaps.len() - 1);
+        }
+        let node = self.nodes.len();
+        let global = self.trajectories[t].global_from_local.compose(&local);
+        self.nodes.push(Node {
+            trajectory: t,
+            scan: k,
+            local_pose: local,
+            global_pose: global,
+            points: Arc::new(spread_points(points, self.params.bbs_max_points)),
+        });
+        let active = self.trajectories[t].active.clone();
+        for &s in &active {
+            let submap = &mut self.submaps[s];
+            if let Err(why) = submap.grid.insert_scan(&local, scan, &self.insert) {
+                self.notes.push(format!("scan {k}: {why}"));
+            }
+            submap.num_range_data += 1;
+            let relative = submap.local_pose.between(&local);
+            self.constraints.push(Constraint {
+                submap: s,
+                node,
+                relative,
+                kind: ConstraintKind::IntraSubmap,
+                score: 1.0,
+            });
+        }
+        // The oldest is finished at 2 · num_range_data.
+        if let Some(&front) = active.first()
+            && self.submaps[front].num_range_data >= 2 * n
+        {
+            self.finish_submap(front);
+            self.trajectories[t].active.remove(0);
+        }
+        let traj = &mut self.trajectories[t];
+        traj.last_node = Some((local, time));
+        traj.nodes += 1;
+        let every = self.params.constraint_every_n_nodes;
+        if traj.nodes.is_multiple_of(every) {
+            self.search_loop_closures(node);
+        }
+        self.nodes_since_optimization += 1;
+        if self.nodes_since_optimization >= self.params.optimize_every_n_nodes {
+            self.optimize();
+        }
+    }
+
+    /// Searches node `node` against the finished submaps: in a window around
+    /// its estimate in its own map, and whole-submap against trajectories not
+    /// yet joined to its own.
+    fn search_loop_closures(&mut self, node: usize) {
+        let t = self.nodes[node].trajectory;
+        let root = self.root(t);
+        let candidates: Vec<usize> = (0..self.submaps.len())
+            .filter(|&s| self.submaps[s].finished && self.submaps[s].precomputed.is_some())
+            .filter(|&s| {
+                !self
+                    .constraints
+                    .iter()
+                    .any(|c| c.submap == s && c.node == node)
+            })
+            .collect();
+        let mut merged = false;
+        for s in candidates {
+            let submap_root = self.root(self.submaps[s].trajectory);
+            let same_map = submap_root == root;
+            if !same_map && merged {
+                continue;
+            }
+            let Some(grids) = self.submaps[s].precomputed.clone() else {
+                continue;
+            };
+            let submap_local = self.submaps[s].local_pose;
+            let submap_global = self.submaps[s].global_pose;
+            let node_global = self.nodes[node].global_pose;
+            let node_scan = self.nodes[node].scan;
+            let points = Arc::clone(&self.nodes[node].points);
+            let (window, min_score) = if same_map {
+                // The node's estimate in the submap's grid frame.
+                let in_submap = submap_global.between(&node_global);
+                let initial = submap_local.compose(&in_submap);
+                // A submap far beyond the window cannot match.
+                let reach = self.params.linear_search_window + 15.0;
+                if slamlab_core::math::hypot(in_submap.x, in_submap.y) > reach {
+                    continue;
+                }
+                (
+                    SearchWindow::Around {
+                        initial,
+                        linear: self.params.linear_search_window,
+                        angular: self.params.angular_search_window,
+                    },
+                    self.params.min_score,
+                )
+            } else {
+                (SearchWindow::WholeSubmap, self.params.global_min_score)
+            };
+            let params = BranchAndBoundParams {
+                min_score,
+                recorded_nodes: 0,
+            };
+            let (result, record) = branch_and_bound(&grids, &points, &window, &params);
+            self.bbs.searches += 1;
+            self.bbs.nodes_evaluated += record.evaluated();
+            self.bbs.exhaustive_candidates += record.exhaustive_candidates;
+            let score = result.as_ref().ok().map(|m| m.score);
+            self.last_search = Some(Arc::new(SearchEvent {
+                scan: node_scan,
+                node,
+                submap: s,
+                global: !same_map,
+                score,
+                record,
+            }));
+            let m = match result {
+                Ok(m) => m,
+                Err(NoMatch::BelowMinScore { .. } | NoMatch::NoPoints | NoMatch::BadWindow) => {
+                    continue;
+                }
+            };
+            // The constraint: the node in the submap's frame (Eq. 5.7).
+            let relative = submap_local.between(&m.pose);
+            let relative = Pose2::new(relative.x, relative.y, relative.theta);
+            if same_map && self.params.loop_closure_gate > 0.0 {
+                let moved = submap_global.compose(&relative);
+                let shift =
+                    slamlab_core::math::hypot(moved.x - node_global.x, moved.y - node_global.y);
+                if shift > self.params.loop_closure_gate {
+                    self.rejected_closures += 1;
+                    continue;
+                }
+            }
+            let kind = if same_map {
+                ConstraintKind::LoopClosure
+            } else {
+                ConstraintKind::InterTrajectory
+            };
+            let constraint = Constraint {
+                submap: s,
+                node,
+                relative,
+                kind,
+                score: m.score,
+            };
+            if same_map {
+                self.constraints.push(constraint);
+                continue;
+            }
+            // A match between maps: the correction that would move the
+            // node's map onto the submap's. It is taken when a second match
+            // (of another node) agrees with it within the gate, so
+            // that one aliased match in a repeating corridor cannot merge
+            // the maps wrongly.
+            let target = submap_global.compose(&relative);
+            let correction = target.compose(&node_global.inverse());
+            let agrees = self.pending_merge.as_ref().is_some_and(|(c, first)| {
+                first.node != node
+                    && slamlab_core::math::hypot(c.x - correction.x, c.y - correction.y)
+                        <= self.params.loop_closure_gate.max(0.1)
+                    && wrap_angle(c.theta - correction.theta).abs() <= 0.1
+            });
+            if !agrees {
+                self.pending_merge = Some((correction, constraint));
+                continue;
+            }
+            if let Some((_, first)) = self.pending_merge.take() {
+                self.constraints.push(first);
+            }
+            self.constraints.push(constraint);
+            self.move_map(root, &correction, submap_root);
+            self.merges.push(node_scan);
+            merged = true;
+        }
+        if merged {
+            self.optimize();
+        }
+    }
+
+    /// Moves every submap and node of the map rooted at `root` by
+    /// `correction` (applied on the left) and joins it to `onto`.
+    fn move_map(&mut self, root: usize, correction: &Pose2, onto: usize) {
+        let members: Vec<usize> = (0..self.trajectories.len())
+            .filter(|&t| self.root(t) == root)
+            .collect();
+        for s in &mut self.submaps {
+            if members.contains(&s.trajectory) {
+                s.global_pose = correction.compose(&s.global_pose);
+            }
+        }
+        for n in &mut self.nodes {
+            if members.contains(&n.trajectory) {
+                n.global_pose = correction.compose(&n.global_pose);
+            }
+        }
+        for &t in &members {
+            let g = correction.compose(&self.trajectories[t].global_from_local);
+            self.trajectories[t].global_from_local = Pose2::new(g.x, g.y, g.theta);
+        }
+        self.trajectories[root].joined_to = onto;
+    }
+
+    /// Solves the pose graph (Eq. 5.8 with the Huber kernel) and writes the
+    /// estimates back. The first submap of each map that nothing joins is
+    /// held fixed (each map's own gauge).
+    pub fn optimize(&mut self) {
+        self.nodes_since_optimization = 0;
+        if self.nodes.is_empty() {
+            return;
+        }
+        let mut graph = PoseGraph::new();
+        let node_base = self.submaps.len() as u64;
+        for (s, submap) in self.submaps.iter().enumerate() {
+            if graph.add_pose(s as u64, submap.global_pose).is_err() {
+                self.notes.push(format!("submap {s}'s pose is not finite"));
+                return;
+            }
+        }
+        for (n, node) in self.nodes.iter().enumerate() {
+            if graph
+                .add_pose(node_base + n as u64, node.global_pose)
+                .is_err()
+            {
+                self.notes.push(format!("node {n}'s pose is not finite"));
+                return;
+            }
+        }
+        let p = &self.params;
+        for c in &self.constraints {
+            let (wt, wr) = match c.kind {
+                ConstraintKind::IntraSubmap => {
+                    (p.matcher_translation_weight, p.matcher_rotation_weight)
+                }
+                _ => (
+                    p.loop_closure_translation_weight,
+                    p.loop_closure_rotation_weight,
+                ),
+            };
+            let information =
+                Matrix3::from_diagonal(&nalgebra::Vector3::new(wt * wt, wt * wt, wr * wr));
+            let edge = EdgeKind::PosePose {
+                from: c.submap,
+                to: self.submaps.len() + c.node,
+                measurement: c.relative,
+                information,
+            };
+            if let Err(e) = graph.add_edge(edge) {
+                self.notes.push(format!("a constraint was refused: {e}"));
+            }
+        }
+        // Each map's anchor: the first submap of its root trajectory.
+        for t in 0..self.trajectories.len() {
+            if self.root(t) != t {
+                continue;
+            }
+            if let Some(s) = self.submaps.iter().position(|s| s.trajectory == t) {
+                let _ = graph.set_fixed(s as u64, true);
+            }
+        }
+        // Nodes in no constraint (none, by construction) would be free; a
+        // submap with no node cannot exist. Optimize.
+        let settings = OptimizerSettings {
+            solver: SolverKind::LevenbergMarquardt,
+            kernel: RobustKernel::Huber {
+                delta: p.huber_scale,
+            },
+            ..OptimizerSettings::default()
+        };
+        let mut optimizer = match Optimizer::new(graph, settings) {
+            Ok(o) => o,
+            Err(e) => {
+                self.notes
+                    .push(format!("the pose graph cannot be optimized: {e}"));
+                return;
+            }
+        };
+        if let Err(e) = optimizer.optimize(50, |_| true) {
+            self.notes.push(format!("the optimization stopped: {e}"));
+        }
+        self.optimizations += 1;
+        let graph = optimizer.into_graph();
+        for (i, v) in graph.vertices().iter().enumerate() {
+            let slamlab_core::graph::VertexState::Pose(pose) = v.state else {
+                continue;
+            };
+            if i < self.submaps.len() {
+                self.submaps[i].global_pose = pose;
+            } else if let Some(node) = self.nodes.get_mut(i - self.submaps.len()) {
+                node.global_pose = pose;
+            }
+        }
+        // Each trajectory's frame follows its newest node.
+        for t in 0..self.trajectories.len() {
+            if let Some(node) = self.nodes.iter().rev().find(|n| n.trajectory == t) {
+                let g = node.global_pose.compose(&node.local_pose.inverse());
+                self.trajectories[t].global_from_local = Pose2::new(g.x, g.y, g.theta);
+            }
+        }
+    }
+
+    /// The map of every node in the first trajectory's frame (the first
+    /// trajectory and every one joined to it), each node's scan inserted at
+    /// its global pose into one grid.
+    pub fn global_map(&self) -> ProbabilityGrid {
+        let mut grid = ProbabilityGrid::new(self.params.resolution);
+        for n in &self.nodes {
+            if self.root(n.trajectory) != 0 {
+                continue;
+            }
+            let _ = grid.insert_scan(&n.global_pose, &self.input.scans[n.scan].scan, &self.insert);
+        }
+        grid
+    }
+
+    /// The metrics of the run so far (`kidnap_at`: the scan of the
+    /// simulated kidnap, if any).
+    pub fn summary(&self, kidnap_at: Option<usize>, time_ms: f64) -> CartographerSummary {
+        let detected = kidnap_at.and_then(|k| {
+            self.detections
+                .iter()
+                .copied()
+                .find(|&d| d >= k && d <= k + DETECTION_WINDOW)
+        });
+        let false_alarms = self
+            .detections
+            .iter()
+            .filter(|&&d| kidnap_at.is_none_or(|k| d < k || d > k + DETECTION_WINDOW))
+            .count();
+        let loop_closures = self
+            .constraints
+            .iter()
+            .filter(|c| c.kind != ConstraintKind::IntraSubmap)
+            .count();
+        let truth = self.input.truth.as_deref();
+        let trajectory_rmse = truth.and_then(|truth| {
+            let (mut sum, mut n) = (0.0, 0usize);
+            for node in &self.nodes {
+                if self.root(node.trajectory) != 0 {
+                    continue;
+                }
+                if let Some(t) = truth.get(node.scan) {
+                    let (dx, dy) = (node.global_pose.x - t.x, node.global_pose.y - t.y);
+                    sum += dx * dx + dy * dy;
+                    n += 1;
+                }
+            }
+            (n > 0).then(|| (sum / n as f64).sqrt())
+        });
+        let map_agreement = self
+            .input
+            .true_map
+            .as_ref()
+            .and_then(|m| map_agreement(&self.global_map(), m));
+        CartographerSummary {
+            scans: self.records.len(),
+            nodes: self.nodes.len(),
+            submaps: self.submaps.len(),
+            trajectories: self.trajectories.len(),
+            kidnap_at,
+            kidnap_detected_at: detected,
+            detections: self.detections.clone(),
+            false_alarms,
+            recovered_at: self.merges.first().copied(),
+            loop_closures,
+            optimizations: self.optimizations,
+            rejected_closures: self.rejected_closures,
+            trajectory_rmse,
+            map_agreement,
+            bbs: self.bbs,
+            time_ms,
+            notes: self.notes.clone(),
+        }
+    }
+}
+
+/// A detection counts for a kidnap when it comes within this many scans
+/// after it; any other is a false alarm.
+pub const DETECTION_WINDOW: usize = 10;
+
+/// What `slamlab run cartographer --json` prints.
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct CartographerSummary {
+    /// Scans processed.
+    pub scans: usize,
+    /// Nodes (scans past the motion filter).
+    pub nodes: usize,
+    /// Submaps of every trajectory.
+    pub submaps: usize,
+    /// Trajectories (one more for each detection).
+    pub trajectories: usize,
+    /// The simulated kidnap's scan.
+    pub kidnap_at: Option<usize>,
+    /// The first detection within [`DETECTION_WINDOW`] scans after it.
+    pub kidnap_detected_at: Option<usize>,
+    /// Every detection.
+    pub detections: Vec<usize>,
+    /// Detections not within [`DETECTION_WINDOW`] scans after a kidnap.
+    pub false_alarms: usize,
+    /// The scan whose match merged a later map into the first.
+    pub recovered_at: Option<usize>,
+    /// Loop-closure constraints (inter-trajectory ones included).
+    pub loop_closures: usize,
+    /// Pose-graph optimizations.
+    pub optimizations: usize,
+    /// Loop closures refused by the gate.
+    pub rejected_closures: usize,
+    /// RMS position error of the nodes in the first map's frame against
+    /// the truth, metres (simulation only).
+    pub trajectory_rmse: Option<f64>,
+    /// Agreement of the first map (with what was merged into it) with the
+    /// true map, as the mapping lesson measures it (simulation only).
+    pub map_agreement: Option<f64>,
+    /// Branch-and-bound totals.
+    pub bbs: BbsTotals,
+    /// Wall time, milliseconds (measured by the caller).
+    pub time_ms: f64,
+    /// What went wrong along the way.
+    pub notes: Vec<String>,
+}
