@@ -13,9 +13,9 @@
 #   SLAMLAB_WASM_TOOLCHAIN=rustup|debian  force a toolchain (default: rustup if it has the
 #                                         wasm32-unknown-unknown target, else Debian's rustc-web)
 #   SLAMLAB_WASM_OPT=0                    skip binaryen's wasm-opt -Oz (from npm, web/node_modules),
-#                                         which runs by default (6 to 7 min on 2 cores; -25 % raw)
+#                                         which runs by default (6 to 7 min on 2 cores; -30 % raw)
 #   SLAMLAB_WEB_PROFILE=release           build with the native release profile instead of `web`
-#                                         (opt-level "s" with 3 for the estimators and solvers, fat
+#                                         (opt-level "z" with 3 for the estimators and solvers, fat
 #                                         LTO, one codegen unit, no debug info: Cargo.toml's
 #                                         [profile.web]; sizes and timings in docs/web-build.md)
 #
