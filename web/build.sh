@@ -13,9 +13,9 @@
 #   SLAMLAB_WASM_TOOLCHAIN=rustup|debian  force a toolchain (default: rustup if it has the
 #                                         wasm32-unknown-unknown target, else Debian's rustc-web)
 #   SLAMLAB_WASM_OPT=0                    skip binaryen's wasm-opt -Oz (from npm, web/node_modules),
-#                                         which runs by default (6 to 7 min on 2 cores; -25 % raw)
+#                                         which runs by default (6 to 7 min on 2 cores; -30 % raw)
 #   SLAMLAB_WEB_PROFILE=release           build with the native release profile instead of `web`
-#                                         (opt-level "s" with 3 for the estimators and solvers, fat
+#                                         (opt-level "z" with 3 for the estimators and solvers, fat
 #                                         LTO, one codegen unit, no debug info: Cargo.toml's
 #                                         [profile.web]; sizes and timings in docs/web-build.md)
 #
@@ -68,6 +68,13 @@ if [[ -z "$toolchain" ]]; then
 	fi
 fi
 
+# WebAssembly SIMD (simd128): the text rasterizer (vello_cpu, through fearless_simd) then
+# compiles its SIMD kernels instead of a much larger scalar fallback (docs/web-build.md).
+# Every current browser runs it: Chrome and Edge 91+, Firefox 89+, Safari 16.4+. Added to
+# any RUSTFLAGS already set; both toolchains below get it (with -Zbuild-std, std too).
+# With --target, cargo gives RUSTFLAGS to the wasm code only, not to build scripts.
+export RUSTFLAGS="${RUSTFLAGS:+$RUSTFLAGS }-C target-feature=+simd128"
+
 case "$toolchain" in
 rustup)
 	target_dir="${CARGO_TARGET_DIR:-$repo_root/target}"
@@ -104,8 +111,8 @@ wasm_out="$dist/pkg/${lib_name}_bg.wasm"
 # --- 4. binaryen's optimiser, -Oz (by default; SLAMLAB_WASM_OPT=0 skips it). Only the npm
 # build (web/node_modules): Debian's binaryen 108 writes a module that fails to load
 # (WebAssembly.Table.set() ... invalid). The features are the ones rustc enables for
-# wasm32-unknown-unknown; wasm-opt must be told, since wasm-bindgen drops the
-# target_features section.
+# wasm32-unknown-unknown, plus simd128 (above); wasm-opt must be told, since wasm-bindgen
+# drops the target_features section.
 if [[ "${SLAMLAB_WASM_OPT:-1}" != 0 ]]; then
 	wasm_opt="$repo_root/web/node_modules/.bin/wasm-opt"
 	if [[ ! -x "$wasm_opt" ]]; then
@@ -117,7 +124,7 @@ if [[ "${SLAMLAB_WASM_OPT:-1}" != 0 ]]; then
 	opt_started=$SECONDS
 	before=$(stat -c %s "$wasm_out")
 	"$wasm_opt" -Oz --enable-bulk-memory --enable-nontrapping-float-to-int --enable-sign-ext \
-		--enable-mutable-globals --enable-reference-types --enable-multivalue \
+		--enable-mutable-globals --enable-reference-types --enable-multivalue --enable-simd \
 		"$wasm_out" -o "$wasm_out.opt"
 	mv "$wasm_out.opt" "$wasm_out"
 	echo "wasm-opt: $before -> $(stat -c %s "$wasm_out") bytes in $((SECONDS - opt_started)) s"
