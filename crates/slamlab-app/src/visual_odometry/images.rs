@@ -174,10 +174,14 @@ pub fn centre_ui(
     }
     // In the right image, each match's flow: from where the feature was in
     // the left image to where it is now.
+    // A rejected match's flow crosses the image: drawn faint, so that the
+    // inliers' short, consistent flow stays readable.
     for (i, m) in matches.iter().enumerate() {
+        let c = colour_of(i);
+        let alpha = if c == OUTLIER { 0.15 } else { 0.6 };
         painter.line_segment(
             [right.to_screen(&m.left), right.to_screen(&m.right)],
-            Stroke::new(0.8, colour_of(i).gamma_multiply(0.6)),
+            Stroke::new(0.8, c.gamma_multiply(alpha)),
         );
     }
     for (i, m) in matches.iter().enumerate() {

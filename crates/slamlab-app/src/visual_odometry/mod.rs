@@ -44,7 +44,7 @@ const PANEL_PARAMS: &[&str] = &[
 ];
 
 /// What the images show; saved with the user's settings.
-#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
 #[serde(default)]
 pub struct VoView {
     /// Mark the matches that are truly wrong (the simulator's truth).
@@ -52,15 +52,6 @@ pub struct VoView {
     /// Lines across the two images for every match (thesis Fig. 4.14), not
     /// only for the sample drawn.
     pub match_lines: bool,
-}
-
-impl Default for VoView {
-    fn default() -> Self {
-        Self {
-            true_outliers: false,
-            match_lines: false,
-        }
-    }
 }
 
 /// The visual-odometry lesson.

@@ -27,7 +27,9 @@ fn lesson_mut<'h>(h: &'h mut Harness<'_, SlamLabApp>) -> &'h mut VisualOdometryL
 /// What a step back must restore: every report, the bound, the best inliers,
 /// the inlier mask and the best F to the bit.
 fn snapshot(l: &VisualOdometryLesson) -> (String, usize, usize, Vec<bool>, Vec<u64>) {
-    let s = l.session().expect("a session");
+    let Some(s) = l.session() else {
+        panic!("a session");
+    };
     (
         format!("{:?}", s.reports()),
         s.bound(),
