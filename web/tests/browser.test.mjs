@@ -835,6 +835,49 @@ async function main() {
       }
     });
 
+    // --- The visual-odometry lesson by URL: Space runs RANSAC one sample per tick until
+    // its adaptive bound stops it; the frame CPU time while it runs is recorded in
+    // metrics.json (visual_odometry_*; the issue asks for under 16 ms), and a seeded
+    // headless run in wasm gives the native counts (crates/slamlab-app/tests/lessons/
+    // visual_odometry_ui.rs pins them).
+    await check("lesson=visual-odometry runs RANSAC to its bound and matches native", async () => {
+      const url = "index.html?lesson=visual-odometry&seed=3";
+      const { context, page: p, log } = await openPage(browser, baseUrl, url, "visual-odometry");
+      try {
+        await waitRunning(p);
+        const s0 = await waitState(p, (st) => st.lesson === "visual-odometry" && st.frames > 2, "the visual-odometry lesson");
+        assert(s0.seed === 3 && s0.iteration === 0 && s0.matches > 100 && s0.vo_steps === 39, `opened ${JSON.stringify(s0)}`);
+        await p.mouse.click(VIEWPORT.width / 2, VIEWPORT.height / 2); // gives the canvas keyboard focus
+        await p.keyboard.press("Space");
+        const s1 = await waitState(p, (st) => st.done && st.estimate, "RANSAC at its bound", 60_000);
+        assert(s1.iteration === s1.bound, `stopped at ${s1.iteration} of ${s1.bound}`);
+        const e = s1.estimate;
+        assert(e.motion === "general" && e.in_front[e.chosen] === Math.max(...e.in_front), `estimate ${JSON.stringify(e)}`);
+        await sleep(300);
+        const { stats } = await waitNotBlank(p, "visual-odometry.png");
+        assertNotBlank(stats, "visual-odometry.png");
+        const t = s1.frame_timing;
+        assert(t && t.frames > 0 && Number.isFinite(t.cpu_ms_median), `no frame timing: ${JSON.stringify(s1)}`);
+        metrics.visual_odometry_frame_cpu_ms_median = t.cpu_ms_median;
+        metrics.visual_odometry_frame_cpu_ms_p95 = t.cpu_ms_p95;
+        metrics.visual_odometry_frames_per_second = Number((1000 / t.interval_ms_median).toFixed(1));
+        const headless = JSON.parse(
+          await p.evaluate((q) => window.slamlab.slamlab_test_headless(q, 10), "lesson=visual-odometry&seed=3"),
+        );
+        const got = `best_inliers=${headless.best_inliers} bound=${headless.bound} rmse=${headless.trajectory_rmse.visual_odometry}`;
+        const NATIVE = "best_inliers=488 bound=37 rmse=0.7064413836485328";
+        assert(got === NATIVE, `${got} in the browser, ${NATIVE} natively`);
+        await assertNoPanic(p);
+        assert(log.problems.length === 0, log.problems.join("; "));
+        return (
+          `${s1.iteration} samples to the bound, ${e.inliers} inliers, candidate ${e.chosen} chosen (${e.in_front}); ` +
+          `frame CPU median ${t.cpu_ms_median.toFixed(2)} ms (p95 ${t.cpu_ms_p95?.toFixed(2)}); headless ${got}`
+        );
+      } finally {
+        await context.close();
+      }
+    });
+
     // --- The teaching shell: every lesson keeps its map at small and large
     // windows; an embedded figure lets the lecture page scroll until it is clicked; a
     // figure opened with tick= shows the run mid-lap with its plots drawn.
@@ -888,6 +931,7 @@ async function main() {
         "pose-graph": "lesson=pose-graph&seed=7",
         resampling: "lesson=resampling&seed=7",
         fusion: "lesson=fusion&seed=7",
+        "visual-odometry": "lesson=visual-odometry&seed=7",
         "mapping-grid-fastslam": "lesson=mapping&seed=7&steps=300&poses=grid-fastslam&tick=120",
       };
       for (const [lesson, query] of Object.entries(LAYOUT_QUERIES)) {

@@ -24,6 +24,7 @@ pub mod query;
 pub mod registry;
 pub mod resampling;
 pub mod time_control;
+pub mod visual_odometry;
 pub mod widgets;
 
 #[cfg(target_arch = "wasm32")]

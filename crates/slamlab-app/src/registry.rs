@@ -74,6 +74,15 @@ pub const LESSONS: &[LessonEntry] = &[
                   Kalman filter in a corridor with doors.",
         open: crate::filters::open,
     },
+    LessonEntry {
+        id: crate::visual_odometry::LESSON_ID,
+        title: "Visual odometry",
+        summary: "A camera on a vehicle docking at a station: matched features, the essential \
+                  matrix by the eight-point or five-point method inside RANSAC, stepped one \
+                  sample at a time, R and t by cheirality, and the trajectory scaled by the \
+                  wheel speeds.",
+        open: crate::visual_odometry::open,
+    },
 ];
 
 /// The lesson that opens when none (or an unknown one) is asked for.

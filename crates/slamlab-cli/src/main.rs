@@ -64,6 +64,10 @@ const PARAM_TABLES: &[(&str, Describe)] = &[
         params::describe::<slamlab_sim::resampling_lab::LabScenario>,
     ),
     (
+        "visual-odometry",
+        params::describe::<slamlab_sim::vision::VoScenario>,
+    ),
+    (
         "fusion",
         params::describe::<slamlab_sim::fusion::params::FusionLessonScenario>,
     ),

@@ -18,3 +18,4 @@ mod pose_graph_ui;
 mod resampling_ui;
 mod shell_ui;
 mod sources_ui;
+mod visual_odometry_ui;

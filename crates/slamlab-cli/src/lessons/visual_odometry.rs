@@ -3,15 +3,19 @@
 //!
 //! ```text
 //! slamlab run visual-odometry --frames 200 --seed 1 --json
+//! slamlab run visual-odometry --method eight-point --normalize off --pure-rotation on
 //! ```
+//!
+//! The flags are the lesson's parameter table (`slamlab params --lesson
+//! visual-odometry`), with the URL's names.
 
 use crate::command::RunLesson;
+use crate::flags;
 use crate::output::Output;
-use anyhow::{Result, bail};
-use clap::{Arg, ArgAction, ArgMatches, Command};
+use anyhow::Result;
+use clap::{ArgMatches, Command};
 use serde_json::json;
-use slamlab_core::vision::Method;
-use slamlab_sim::vision::{VoSettings, run_visual_odometry};
+use slamlab_sim::vision::{VoScenario, run_visual_odometry};
 use std::io::Write;
 
 /// The visual-odometry lesson's run.
@@ -27,94 +31,15 @@ impl RunLesson for VisualOdometry {
     }
 
     fn command(&self) -> Command {
-        Command::new(self.id())
-            .arg(
-                Arg::new("frames")
-                    .long("frames")
-                    .value_parser(clap::value_parser!(u64).range(2..=100_000))
-                    .default_value("200")
-                    .help("frames of 0.1 s"),
-            )
-            .arg(
-                Arg::new("seed")
-                    .long("seed")
-                    .value_parser(clap::value_parser!(u64))
-                    .default_value("1")
-                    .help("seed of the world, the noise and RANSAC"),
-            )
-            .arg(
-                Arg::new("method")
-                    .long("method")
-                    .default_value("five-point")
-                    .help("eight-point or five-point"),
-            )
-            .arg(
-                Arg::new("noise-px")
-                    .long("noise-px")
-                    .value_parser(clap::value_parser!(f64))
-                    .default_value("1")
-                    .help("pixel noise standard deviation, pixels (0 .. 20)"),
-            )
-            .arg(
-                Arg::new("outliers")
-                    .long("outliers")
-                    .value_parser(clap::value_parser!(f64))
-                    .default_value("0.3")
-                    .help("share of wrong matches (0 .. 1)"),
-            )
-            .arg(
-                Arg::new("stride")
-                    .long("stride")
-                    .value_parser(clap::value_parser!(u64).range(1..=1000))
-                    .default_value("5")
-                    .help("frames between the two images of a VO step"),
-            )
-            .arg(
-                Arg::new("no-normalize")
-                    .long("no-normalize")
-                    .action(ArgAction::SetTrue)
-                    .help("eight-point without Hartley normalization"),
-            )
-            .arg(
-                Arg::new("pure-rotation")
-                    .long("pure-rotation")
-                    .action(ArgAction::SetTrue)
-                    .help("a 20-frame turn on the spot a third of the way"),
-            )
-            .arg(
-                Arg::new("planar")
-                    .long("planar")
-                    .action(ArgAction::SetTrue)
-                    .help("the middle third sees only the facade (a planar scene)"),
-            )
+        // The lesson's table (the URL's names, ranges and defaults), but the
+        // step the app shows in its two images.
+        Command::new(self.id()).args(flags::table_args::<VoScenario>(|name| name != "pair"))
     }
 
     fn run(&self, m: &ArgMatches, out: &mut Output) -> Result<()> {
-        let method_name = m
-            .get_one::<String>("method")
-            .map_or("five-point", String::as_str);
-        let Some(method) = Method::from_name(method_name) else {
-            bail!("--method: '{method_name}' is not a method (eight-point, five-point)");
-        };
-        let noise_px = m.get_one::<f64>("noise-px").copied().unwrap_or(1.0);
-        if !(noise_px.is_finite() && (0.0..=20.0).contains(&noise_px)) {
-            bail!("--noise-px: {noise_px} is outside 0 .. 20");
-        }
-        let outliers = m.get_one::<f64>("outliers").copied().unwrap_or(0.3);
-        if !(outliers.is_finite() && (0.0..=1.0).contains(&outliers)) {
-            bail!("--outliers: {outliers} is outside 0 .. 1");
-        }
-        let settings = VoSettings {
-            frames: m.get_one::<u64>("frames").copied().unwrap_or(200) as usize,
-            seed: m.get_one::<u64>("seed").copied().unwrap_or(1),
-            method,
-            normalize: !m.get_flag("no-normalize"),
-            noise_px,
-            outliers,
-            stride: m.get_one::<u64>("stride").copied().unwrap_or(5) as usize,
-            pure_rotation_segment: m.get_flag("pure-rotation"),
-            planar_segment: m.get_flag("planar"),
-        };
+        let scenario: VoScenario = flags::scenario_from(m, &["pair"])?;
+        let settings = scenario.settings;
+        let method = settings.method;
         let start = std::time::Instant::now();
         let run = run_visual_odometry(settings);
         let time_ms = start.elapsed().as_secs_f64() * 1000.0;

@@ -2,15 +2,20 @@
 //! Sec. 4.3, Figs. 4.11-4.14): a pinhole camera on a ground vehicle driving a
 //! docking approach toward a station in front of a white facade, the features
 //! it sees (projections with pixel noise, a share of wrong matches), the
-//! two-view experiment and the headless visual-odometry run.
+//! two-view experiment, the headless visual-odometry run, the lesson's
+//! parameter table and its RANSAC stepped one sample at a time.
 //!
 //! Only this module holds the truth; the estimators in
 //! `slamlab_core::vision` see pixel matches and the intrinsics.
 
 pub mod experiment;
 pub mod odometry;
+pub mod params;
+pub mod session;
 pub mod world;
 
 pub use experiment::{TwoViewReport, TwoViewResult, TwoViewSettings, two_view_experiment};
-pub use odometry::{VoRun, VoSettings, run_visual_odometry};
+pub use odometry::{VoPair, VoRun, VoSettings, run_visual_odometry};
+pub use params::VoScenario;
+pub use session::TwoViewSession;
 pub use world::{CameraWorld, Frame, SceneKind, WorldPoint};

@@ -9,7 +9,8 @@ use serde::{Deserialize, Serialize};
 use slamlab_core::math;
 use slamlab_core::random::standard_normal;
 use slamlab_core::vision::{
-    Method, Motion, RansacConfig, angle_between, estimate_two_view, rotation_angle,
+    Correspondence, Method, Motion, RansacConfig, RelativePose, angle_between, estimate_two_view,
+    rotation_angle,
 };
 
 use super::world::{CameraWorld, FRAME_DT, Frame, arc, relative_pose, world_from_camera};
@@ -97,6 +98,22 @@ pub struct TrajectoryRmse {
     pub visual_odometry_unit_scale: f64,
 }
 
+/// What a VO step saw, kept for the lesson to replay its RANSAC one sample at
+/// a time: the matches, which are wrong (truth, for drawing only), the true
+/// motion and the random generator as RANSAC found it, so that a replay draws
+/// the same samples as the run did.
+#[derive(Debug, Clone, PartialEq)]
+pub struct VoPair {
+    /// The matches offered to RANSAC.
+    pub matches: Vec<Correspondence>,
+    /// Which matches are wrong (the truth: metrics and drawing only).
+    pub wrong: Vec<bool>,
+    /// The true motion between the two camera frames.
+    pub truth: RelativePose,
+    /// RANSAC's random generator before this step.
+    pub ransac_rng: ChaCha8Rng,
+}
+
 /// The result of [`run_visual_odometry`].
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct VoRun {
@@ -114,6 +131,15 @@ pub struct VoRun {
     pub steps: Vec<VoStep>,
     /// The RMSEs.
     pub trajectory_rmse: TrajectoryRmse,
+    /// Each step's matches and RANSAC generator, for replaying it.
+    #[serde(skip)]
+    pub pairs: Vec<VoPair>,
+    /// The camera.
+    #[serde(skip)]
+    pub camera: Option<slamlab_core::vision::Intrinsics>,
+    /// The RANSAC settings every step used.
+    #[serde(skip)]
+    pub config: Option<RansacConfig>,
 }
 
 /// Wheel-speed noise: 5 % of v and 0.03 rad/s on ω, plus a 0.01 rad/s bias.
@@ -156,7 +182,18 @@ fn rmse(a: &[TopPose], b: &[TopPose]) -> f64 {
 /// Runs VO along the docking approach. Bad settings are clamped: at least 2
 /// frames, stride at least 1, noise and outlier share into their ranges.
 pub fn run_visual_odometry(settings: VoSettings) -> VoRun {
-    let mut settings = settings;
+    let settings = clamped(settings);
+    let world = CameraWorld::new(
+        settings.seed,
+        settings.frames,
+        settings.pure_rotation_segment,
+    );
+    run_in_world(settings, &world)
+}
+
+/// The settings as a run uses them: at least 2 frames, stride at least 1,
+/// noise and outlier share into their ranges (NaN to their defaults).
+pub fn clamped(mut settings: VoSettings) -> VoSettings {
     settings.frames = settings.frames.clamp(2, 100_000);
     settings.stride = settings.stride.clamp(1, settings.frames - 1);
     settings.noise_px = if settings.noise_px.is_finite() {
@@ -169,11 +206,12 @@ pub fn run_visual_odometry(settings: VoSettings) -> VoRun {
     } else {
         0.0
     };
-    let world = CameraWorld::new(
-        settings.seed,
-        settings.frames,
-        settings.pure_rotation_segment,
-    );
+    settings
+}
+
+/// [`run_visual_odometry`] in a world already built for these settings.
+pub fn run_in_world(settings: VoSettings, world: &CameraWorld) -> VoRun {
+    let settings = clamped(settings);
     let mut noise_rng = ChaCha8Rng::seed_from_u64(settings.seed ^ 0x5eed_0001);
     let mut wheel_rng = ChaCha8Rng::seed_from_u64(settings.seed ^ 0x5eed_0002);
     let mut ransac_rng = ChaCha8Rng::seed_from_u64(settings.seed ^ 0x5eed_0003);
@@ -209,10 +247,13 @@ pub fn run_visual_odometry(settings: VoSettings) -> VoRun {
             visual_odometry: 0.0,
             visual_odometry_unit_scale: 0.0,
         },
+        pairs: Vec::new(),
+        camera: Some(world.camera),
+        config: Some(config),
     };
     for pair in keyframes.windows(2) {
         let (a, b) = (pair[0], pair[1]);
-        let (matches, _) = world.matches(
+        let (matches, wrong) = world.matches(
             a,
             b,
             settings.noise_px,
@@ -222,6 +263,12 @@ pub fn run_visual_odometry(settings: VoSettings) -> VoRun {
         );
         let truth = relative_pose(&world.frames[a], &world.frames[b]);
         let step_length = distance[b] - distance[a];
+        let pair = VoPair {
+            matches: Vec::new(),
+            wrong: Vec::new(),
+            truth,
+            ransac_rng: ransac_rng.clone(),
+        };
         let mut step = VoStep {
             from: a,
             to: b,
@@ -273,6 +320,11 @@ pub fn run_visual_odometry(settings: VoSettings) -> VoRun {
         run.visual_odometry_unit_scale
             .push(top_of_camera(&r_unit, &p_unit));
         run.steps.push(step);
+        run.pairs.push(VoPair {
+            matches,
+            wrong,
+            ..pair
+        });
     }
     run.trajectory_rmse = TrajectoryRmse {
         wheel_odometry: rmse(&run.wheel_odometry, &run.truth),

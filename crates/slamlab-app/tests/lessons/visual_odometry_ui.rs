@@ -1,0 +1,272 @@
+//! Headless UI tests of the visual-odometry lesson through egui_kittest: it
+//! opens by URL with its parameters, a RANSAC step changes the iteration count
+//! and the best inlier count exactly as core computes them, stepping back
+//! restores the state bit for bit, the decomposition table's chosen candidate
+//! has the most points in front, bad URL values fall back with a notice, and
+//! the rendered images show inliers, outliers and the sample drawn.
+
+use super::common::{
+    SIZE, count_pixels, harness, harness_sized, harness_themed, label_visible, lesson_of,
+    lesson_of_mut, render_or_skip,
+};
+use egui_kittest::Harness;
+use egui_kittest::kittest::Queryable as _;
+use slamlab_app::SlamLabApp;
+use slamlab_app::lesson::Lesson as _;
+use slamlab_app::visual_odometry::VisualOdometryLesson;
+use slamlab_core::vision::{Method, Ransac};
+
+fn lesson<'h>(h: &'h Harness<'_, SlamLabApp>) -> &'h VisualOdometryLesson {
+    lesson_of(h)
+}
+
+fn lesson_mut<'h>(h: &'h mut Harness<'_, SlamLabApp>) -> &'h mut VisualOdometryLesson {
+    lesson_of_mut(h)
+}
+
+/// What a step back must restore: every report, the bound, the best inliers,
+/// the inlier mask and the best F to the bit.
+fn snapshot(l: &VisualOdometryLesson) -> (String, usize, usize, Vec<bool>, Vec<u64>) {
+    let Some(s) = l.session() else {
+        panic!("a session");
+    };
+    (
+        format!("{:?}", s.reports()),
+        s.bound(),
+        s.best_inlier_count(),
+        s.inlier_mask().to_vec(),
+        s.fundamental()
+            .map(|f| f.iter().map(|v| v.to_bits()).collect())
+            .unwrap_or_default(),
+    )
+}
+
+#[test]
+fn the_lesson_opens_by_url_with_its_parameters() {
+    let h = harness(
+        "lesson=visual-odometry&seed=3&method=eight-point&normalize=off&outliers=0.4&noise-px=2&pair=7",
+    );
+    assert_eq!(h.state().lesson_id(), "visual-odometry");
+    assert!(h.state().notices().is_empty(), "{:?}", h.state().notices());
+    let l = lesson(&h);
+    let s = &l.run().settings;
+    assert_eq!(s.seed, 3);
+    assert_eq!(s.method, Method::EightPoint);
+    assert!(!s.normalize);
+    assert_eq!((s.outliers, s.noise_px), (0.4, 2.0));
+    assert_eq!(l.pair(), 7);
+    assert_eq!(l.run().steps.len(), 39, "200 frames, stride 5");
+    assert_eq!(l.session().map(|s| s.iteration()), Some(0));
+    let query = l.share_query(false);
+    for pair in [
+        "seed=3",
+        "method=eight-point",
+        "normalize=off",
+        "outliers=0.4",
+        "pair=7",
+    ] {
+        assert!(query.contains(pair), "{query}");
+    }
+}
+
+#[test]
+fn a_ransac_step_counts_as_core_does_and_step_back_is_exact() {
+    let mut h = harness("lesson=visual-odometry&seed=3");
+    h.run();
+    // Core's own RANSAC on the same matches, from the same generator.
+    let (pair, camera, config) = {
+        let run = lesson(&h).run();
+        let k = lesson(&h).pair();
+        (
+            run.pairs[k].clone(),
+            run.camera.expect("camera"),
+            run.config.expect("config"),
+        )
+    };
+    let mut core = Ransac::new(&pair.matches, &camera, config).expect("enough matches");
+    let mut rng = pair.ransac_rng.clone();
+    let before = snapshot(lesson(&h));
+    h.get_by_label("Step sample").click();
+    h.run();
+    let first = core.step(&mut rng).expect("a sample");
+    {
+        let s = lesson(&h).session().expect("a session");
+        assert_eq!(s.iteration(), 1);
+        assert_eq!(s.last_report(), Some(&first));
+        assert_eq!(s.best_inlier_count(), core.best_inliers());
+        assert_eq!(s.bound(), core.bound());
+        assert!(first.best_inliers > 0, "{first:?}");
+    }
+    for _ in 0..4 {
+        h.get_by_label("Step sample").click();
+        h.run();
+        core.step(&mut rng);
+    }
+    assert_eq!(lesson(&h).session().map(|s| s.iteration()), Some(5));
+    assert_eq!(
+        lesson(&h).session().map(|s| s.best_inlier_count()),
+        Some(core.best_inliers())
+    );
+    assert_eq!(lesson(&h).time_info().tick, 5);
+    let at_four = {
+        lesson_mut(&mut h).apply_time_action(slamlab_app::time_control::TimeAction::StepBack);
+        let s = snapshot(lesson(&h));
+        lesson_mut(&mut h).step_sample();
+        s
+    };
+    h.get_by_label("Step back").click();
+    h.run();
+    assert_eq!(snapshot(lesson(&h)), at_four, "one step back, bit for bit");
+    for _ in 0..4 {
+        h.get_by_label("Step back").click();
+        h.run();
+    }
+    assert_eq!(snapshot(lesson(&h)), before, "back to the start");
+}
+
+#[test]
+fn the_chosen_decomposition_has_the_most_points_in_front() {
+    let mut h = harness("lesson=visual-odometry&seed=3");
+    h.run();
+    h.get_by_label("Run RANSAC to the end").click();
+    h.run();
+    let l = lesson(&h);
+    let s = l.session().expect("a session");
+    assert!(s.is_done());
+    let Some(Ok(estimate)) = s.estimate() else {
+        panic!("an estimate: {:?}", s.estimate());
+    };
+    let d = &estimate.decomposition;
+    let most = d.in_front.iter().copied().max().unwrap_or(0);
+    assert_eq!(d.in_front[d.best], most, "{:?}", d.in_front);
+    assert!(
+        d.in_front.iter().filter(|&&n| n == most).count() == 1,
+        "{:?}",
+        d.in_front
+    );
+    // Measured (seed 3, step 5): 0, 6, 50 and 437 of the inliers in front; the
+    // rest are far facade points whose rays barely cross.
+    let mut sorted = d.in_front;
+    sorted.sort_unstable();
+    assert!(sorted[3] > 4 * sorted[2], "{:?}", d.in_front);
+    assert!(most as f64 > 0.5 * estimate.inlier_count as f64, "{d:?}");
+    // The run made the same estimate for this step.
+    let step = &l.run().steps[l.pair()];
+    assert_eq!(estimate.iterations, step.iterations);
+    assert_eq!(s.iteration(), s.bound(), "stopped by its bound");
+    // An essential matrix: two equal singular values and a zero one.
+    let sv = d.singular_values;
+    assert!((sv.x - sv.y).abs() < 1e-9 && sv.z.abs() < 1e-9, "{sv}");
+    // The table shows it.
+    assert!(label_visible(&h, "chosen"));
+    assert!(label_visible(
+        &h,
+        &format!("{} of {}", most, estimate.inlier_count)
+    ));
+}
+
+#[test]
+fn bad_url_values_fall_back_with_a_notice() {
+    let h = harness("lesson=visual-odometry&outliers=abc&method=nine-point&noise-px=99&pair=500");
+    let notices = h.state().notices();
+    assert_eq!(notices.len(), 4, "{notices:?}");
+    assert!(
+        notices
+            .iter()
+            .any(|n| n.contains("outliers") && n.contains("0.3"))
+    );
+    assert!(
+        notices
+            .iter()
+            .any(|n| n.contains("method") && n.contains("five-point"))
+    );
+    assert!(
+        notices
+            .iter()
+            .any(|n| n.contains("noise-px") && n.contains("out of range"))
+    );
+    assert!(notices.iter().any(|n| n.contains("past the last VO step")));
+    let l = lesson(&h);
+    assert_eq!(l.run().settings.outliers, 0.3);
+    assert_eq!(l.run().settings.method, Method::FivePoint);
+    assert_eq!(l.run().settings.noise_px, 20.0);
+    assert_eq!(l.pair(), l.run().steps.len() - 1);
+}
+
+#[test]
+fn the_turn_on_the_spot_is_reported_as_a_pure_rotation() {
+    let mut h = harness("lesson=visual-odometry&seed=1&pure-rotation=on");
+    h.run();
+    h.get_by_label("Go to the turn on the spot").click();
+    h.run();
+    h.get_by_label("Run RANSAC to the end").click();
+    h.run();
+    let l = lesson(&h);
+    let step = &l.run().steps[l.pair()];
+    assert!(step.from >= 66 && step.to <= 86, "{step:?}");
+    let state = l.test_state();
+    assert_eq!(state["estimate"]["motion"], "pure-rotation", "{state}");
+    assert!(label_visible(&h, "Pure rotation: translation unobservable"));
+}
+
+#[test]
+fn the_rendered_images_show_inliers_outliers_and_the_sample() {
+    for (size, name) in [
+        (SIZE, "visual_odometry_1400x900.png"),
+        (egui::vec2(1280.0, 800.0), "visual_odometry_1280x800.png"),
+        (egui::vec2(800.0, 500.0), "visual_odometry_800x500.png"),
+    ] {
+        let mut h = harness_themed(
+            "lesson=visual-odometry&seed=3&outliers=0.4",
+            size,
+            egui::Theme::Light,
+        );
+        h.run();
+        for _ in 0..3 {
+            lesson_mut(&mut h).step_sample();
+        }
+        lesson_mut(&mut h).view.true_outliers = true;
+        h.run();
+        let Some(image) = render_or_skip(&mut h) else {
+            return;
+        };
+        let path = std::env::temp_dir().join(name);
+        let _ = image.save(&path);
+        eprintln!("saved {}", path.display());
+        if size == SIZE {
+            let green = count_pixels(image.as_raw(), [0x00, 0x9E, 0x73], 30);
+            let red = count_pixels(image.as_raw(), [0xD5, 0x5E, 0x00], 30);
+            let orange = count_pixels(image.as_raw(), [0xE6, 0x9F, 0x00], 30);
+            assert!(green > 800, "inlier pixels {green}");
+            assert!(red > 800, "outlier pixels {red}");
+            assert!(orange > 100, "sample pixels {orange}");
+        }
+    }
+    // Embedded, as a lecture page shows it.
+    let mut h = harness_sized(
+        "lesson=visual-odometry&seed=3&embed=1",
+        egui::vec2(900.0, 600.0),
+    );
+    h.run();
+    lesson_mut(&mut h).run_ransac_to_end();
+    h.run();
+    if let Some(image) = render_or_skip(&mut h) {
+        let path = std::env::temp_dir().join("visual_odometry_embed_900x600.png");
+        let _ = image.save(&path);
+        eprintln!("saved {}", path.display());
+    }
+}
+
+/// The seeded samples the browser test repeats in wasm (`web/tests/browser.test.mjs`).
+#[test]
+fn seeded_samples_give_these_exact_counts() {
+    let json = SlamLabApp::headless_state("lesson=visual-odometry&seed=3", 10);
+    let state: serde_json::Value = serde_json::from_str(&json).expect("json");
+    assert_eq!(state["iteration"], 10, "{json}");
+    eprintln!("{json}");
+    assert_eq!(state["best_inliers"], GOLDEN_BEST, "{json}");
+    assert_eq!(state["bound"], GOLDEN_BOUND, "{json}");
+}
+
+const GOLDEN_BEST: u64 = 488;
+const GOLDEN_BOUND: u64 = 37;

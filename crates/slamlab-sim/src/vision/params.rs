@@ -1,0 +1,192 @@
+//! The visual-odometry lesson's parameter table (`lesson=visual-odometry`): one
+//! list of names, units, ranges and defaults for the URL, the app's panel,
+//! `slamlab run visual-odometry` and `slamlab params --lesson visual-odometry`.
+
+use serde::{Deserialize, Serialize};
+use slamlab_core::vision::Method;
+
+use super::odometry::VoSettings;
+use crate::params::{self, Param, Scenario};
+
+/// The lesson's parameters: the run's settings and the VO step shown in the
+/// two images.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(default)]
+pub struct VoScenario {
+    /// The run's settings.
+    pub settings: VoSettings,
+    /// The VO step shown in the two images (0 = the first).
+    pub pair: usize,
+}
+
+impl Default for VoScenario {
+    fn default() -> Self {
+        Self {
+            settings: VoSettings::default(),
+            pair: DEFAULT_PAIR,
+        }
+    }
+}
+
+/// The step shown first: frames 25 → 30 with the default stride, on the
+/// straight at 1.5 m/s (0.75 m between the images).
+pub const DEFAULT_PAIR: usize = 5;
+
+const METHODS: &[&str] = &["five-point", "eight-point"];
+const ON_OFF: &[&str] = &["on", "off"];
+
+fn on_off(on: bool) -> String {
+    if on { "on" } else { "off" }.to_owned()
+}
+
+fn read_on_off(value: &str) -> Result<bool, String> {
+    params::choose(ON_OFF, value).map(|i| i == 0)
+}
+
+/// The lesson's parameter table.
+pub static PARAMS: &[Param<VoScenario>] = &[
+    Param::count(
+        "seed",
+        "",
+        "seed of the world, the pixel noise, the wrong matches, the wheels and RANSAC",
+        (0, u64::MAX),
+        |s| Some(s.settings.seed),
+        |s, v| s.settings.seed = v,
+    ),
+    Param::words(
+        "method",
+        "the minimal solver inside RANSAC: five-point (calibrated, Eq. 4.22-4.25) or eight-point (Eq. 4.18-4.21)",
+        METHODS,
+        |s| Some(s.settings.method.name().to_owned()),
+        |s, v| {
+            params::choose(METHODS, v)?;
+            s.settings.method = Method::from_name(v).unwrap_or(Method::FivePoint);
+            Ok(())
+        },
+    ),
+    Param::words(
+        "normalize",
+        "Hartley normalization in the eight-point solver (pixels moved to mean 0, mean distance √2)",
+        ON_OFF,
+        |s| Some(on_off(s.settings.normalize)),
+        |s, v| read_on_off(v).map(|on| s.settings.normalize = on),
+    ),
+    Param::number(
+        "outliers",
+        "",
+        "share of wrong matches (a random pixel in the second image)",
+        (0.0, 1.0),
+        |s| Some(s.settings.outliers),
+        |s, v| {
+            s.settings.outliers = v;
+            Ok(())
+        },
+    ),
+    Param::number(
+        "noise-px",
+        "px",
+        "pixel noise, standard deviation on each axis of both images",
+        (0.0, 20.0),
+        |s| Some(s.settings.noise_px),
+        |s, v| {
+            s.settings.noise_px = v;
+            Ok(())
+        },
+    ),
+    Param::words(
+        "pure-rotation",
+        "a 20-frame turn on the spot a third of the way (no translation: a degenerate case)",
+        ON_OFF,
+        |s| Some(on_off(s.settings.pure_rotation_segment)),
+        |s, v| read_on_off(v).map(|on| s.settings.pure_rotation_segment = on),
+    ),
+    Param::words(
+        "planar",
+        "the middle third of the run sees only the facade (a planar scene: a degenerate case for the eight-point method)",
+        ON_OFF,
+        |s| Some(on_off(s.settings.planar_segment)),
+        |s, v| read_on_off(v).map(|on| s.settings.planar_segment = on),
+    ),
+    Param::count(
+        "frames",
+        "",
+        "frames of the docking approach, 0.1 s each",
+        (10, 2000),
+        |s| Some(s.settings.frames as u64),
+        |s, v| s.settings.frames = v as usize,
+    ),
+    Param::count(
+        "stride",
+        "",
+        "frames between the two images of a VO step",
+        (1, 50),
+        |s| Some(s.settings.stride as u64),
+        |s, v| s.settings.stride = v as usize,
+    ),
+    Param::count(
+        "pair",
+        "",
+        "the VO step shown in the two images (0 = the first); beyond the last, the last",
+        (0, 2000),
+        |s| Some(s.pair as u64),
+        |s, v| s.pair = v as usize,
+    ),
+];
+
+impl Scenario for VoScenario {
+    const LESSON: &'static str = "visual-odometry";
+
+    fn params() -> &'static [Param<Self>] {
+        PARAMS
+    }
+
+    fn seed(&self) -> u64 {
+        self.settings.seed
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn the_table_round_trips_and_bad_values_get_messages() {
+        let mut s = VoScenario::default();
+        let pairs = [
+            ("method", "eight-point"),
+            ("normalize", "off"),
+            ("outliers", "0.5"),
+            ("noise-px", "2"),
+            ("pure-rotation", "on"),
+            ("planar", "on"),
+            ("pair", "14"),
+            ("seed", "3"),
+        ];
+        assert!(params::apply_pairs(&mut s, pairs, &[]).is_empty());
+        assert_eq!(s.settings.method, Method::EightPoint);
+        assert!(!s.settings.normalize);
+        assert!(s.settings.pure_rotation_segment && s.settings.planar_segment);
+        assert_eq!((s.pair, s.settings.seed), (14, 3));
+        let back = params::to_pairs(&s);
+        let mut again = VoScenario::default();
+        let texts: Vec<(&str, &str)> = back.iter().map(|(k, v)| (*k, v.as_str())).collect();
+        assert!(params::apply_pairs(&mut again, texts, &[]).is_empty());
+        assert_eq!(again, s);
+
+        let mut s = VoScenario::default();
+        let issues = params::apply_pairs(
+            &mut s,
+            [
+                ("outliers", "2"),
+                ("method", "seven-point"),
+                ("noise-px", "x"),
+            ],
+            &[],
+        );
+        assert_eq!(issues.len(), 3, "{issues:?}");
+        assert_eq!(s.settings.outliers, 1.0, "clamped to the range");
+        assert_eq!(s.settings.method, Method::FivePoint, "kept");
+        assert_eq!(s.settings.noise_px, 1.0, "kept");
+        assert!(issues[1].to_string().contains("five-point, eight-point"));
+    }
+}
