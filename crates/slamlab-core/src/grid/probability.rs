@@ -460,6 +460,38 @@ impl ProbabilityGrid {
         }
     }
 
+    /// The [`table_entry`] of every cell of the tile that holds the whole
+    /// `side` x `side` window of cells with its lower-left cell at `(i, j)`,
+    /// and the index in it of cell `(i, j)` (row `r` of the window starts
+    /// [`TILE`] `* r` entries later); `None` when the window crosses a tile
+    /// boundary. A tile never reached reads as all [`UNKNOWN_ENTRY`]. A
+    /// matcher reading a small window around each point finds it in one tile
+    /// most of the time, with one look-up instead of one per row.
+    #[inline]
+    pub fn entries_window(
+        &self,
+        i: i64,
+        j: i64,
+        side: usize,
+    ) -> Option<(&[u16; TILE_CELLS], usize)> {
+        static UNKNOWN: [u16; TILE_CELLS] = [UNKNOWN_ENTRY; TILE_CELLS];
+        let last = side as i64 - 1;
+        if side == 0
+            || side > TILE
+            || i >> TILE_SHIFT != (i + last) >> TILE_SHIFT
+            || j >> TILE_SHIFT != (j + last) >> TILE_SHIFT
+        {
+            return None;
+        }
+        let Some((slot, local)) = self.locate(i, j) else {
+            return Some((&UNKNOWN, local_index(i, j)));
+        };
+        Some(match &self.tiles[slot] {
+            Some(tile) => (&tile.entries, local),
+            None => (&UNKNOWN, local),
+        })
+    }
+
     /// The [`table_entry`] of cell `(i, j)` ([`UNKNOWN_ENTRY`] if never
     /// observed).
     #[inline]
@@ -1115,6 +1147,20 @@ mod tests {
         // The beam's cells are known, the rest of the row not.
         assert_eq!(g.entries_in_row(0, 0, 5).unwrap()[0], table_entry(-0.4));
         assert_eq!(g.entries_in_row(27, 0, 5).unwrap()[4], UNKNOWN_ENTRY);
+        // A window in one tile holds the same entries, row by row.
+        for (i, j) in [(0, 0), (27, 2), (-40, 3), (100, 100)] {
+            let (entries, base) = g.entries_window(i, j, 5).unwrap();
+            for (r, c) in (0..5).flat_map(|r| (0..5).map(move |c| (r, c))) {
+                assert_eq!(
+                    entries[base + r * TILE + c],
+                    g.entry_at(i + c as i64, j + r as i64),
+                    "({i}, {j}) + ({c}, {r})"
+                );
+            }
+        }
+        assert!(g.entries_window(30, 0, 5).is_none());
+        assert!(g.entries_window(0, 30, 5).is_none());
+        assert!(g.entries_window(0, 0, 33).is_none());
         // A run across a tile boundary, or longer than a tile: read cell by cell.
         assert!(g.entries_in_row(30, 0, 5).is_none());
         assert!(g.entries_in_row(-2, 0, 5).is_none());

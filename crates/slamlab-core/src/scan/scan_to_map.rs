@@ -25,7 +25,9 @@
 
 use super::{Point2, PointTransform, Scan, ScanMatch, ScanMatcher};
 use crate::geometry::{Pose2, wrap_angle};
-use crate::grid::{ProbabilityGrid, TABLE_ENTRIES, floor_to_i64, table_entry, table_log_odds};
+use crate::grid::{
+    ProbabilityGrid, TABLE_ENTRIES, TILE, floor_to_i64, table_entry, table_log_odds,
+};
 use crate::math;
 use nalgebra::{Matrix3, Vector3};
 use serde::{Deserialize, Serialize};
@@ -163,8 +165,16 @@ impl ProbabilityLookup {
         let (tu, tv) = (u - i0 as f64, v - j0 as f64);
         let mut rows = [0.0; 4];
         let mut rows_du = [0.0; 4];
+        // The 4 x 4 cells around the point, from one tile when they share one.
+        let window = grid.entries_window(i0 - 1, j0 - 1, 4);
         for (n, dj) in (-1..=2).enumerate() {
-            let p = self.row_of_four(grid, i0 - 1, j0 + dj);
+            let p = match window {
+                Some((entries, base)) => {
+                    let start = base + n * TILE;
+                    [0, 1, 2, 3].map(|di| self.of_entry(entries[start + di]))
+                }
+                None => self.row_of_four(grid, i0 - 1, j0 + dj),
+            };
             let (f, df) = catmull_rom(p, tu);
             rows[n] = f;
             rows_du[n] = df;
@@ -337,6 +347,17 @@ fn correlative_search(
             let q = rotated.apply(*p);
             let (ci, cj) = grid.cell_of(q[0], q[1]);
             let i0 = ci - n_cells;
+            // The point's window in one tile (most points): its rows are
+            // slices of that tile's entries.
+            if let Some((entries, base)) = grid.entries_window(i0, cj - n_cells, side) {
+                for (row, out) in sums.chunks_exact_mut(side).enumerate() {
+                    let start = base + row * TILE;
+                    for (sum, &k) in out.iter_mut().zip(&entries[start..start + side]) {
+                        *sum += lookup.of_entry(k);
+                    }
+                }
+                continue;
+            }
             for (row, dj) in (-n_cells..=n_cells).enumerate() {
                 let j = cj + dj;
                 let out = &mut sums[row * side..(row + 1) * side];
