@@ -66,10 +66,7 @@ pub fn explanation_ui(
                     ui.label("sample");
                     ui.colored_label(
                         SAMPLE,
-                        format!(
-                            "{} of at most {}: matches {:?}",
-                            report.iteration, report.bound, report.sample
-                        ),
+                        format!("{} of at most {}", report.iteration, report.bound),
                     );
                     ui.end_row();
                     ui.label("wrong matches in it")
@@ -111,6 +108,7 @@ pub fn explanation_ui(
                     ));
                     ui.end_row();
                 });
+            ui.colored_label(SAMPLE, format!("matches drawn: {:?}", report.sample));
             ui.label(
                 "A new best is refitted at once on all its inliers (local optimization), so \
                  the best share jumps close to the true one and the bound falls steeply.",

@@ -92,11 +92,13 @@ pub fn centre_ui(
     };
     let camera = *session.camera();
     let gap = 12.0;
-    let image_width = ((available.x - gap) / 2.0).max(40.0);
+    let widest = ((available.x - gap) / 2.0).max(40.0);
     let aspect = (camera.height / camera.width) as f32;
-    // The images take at most 55% of the height; the top view the rest.
-    let image_height = (image_width * aspect).min(0.55 * available.y).max(30.0);
-    let image_width = image_height / aspect;
+    // The images take at most 45% of the height, and never more than half the
+    // width each; the top view the rest.
+    let image_height = (widest * aspect).min(0.45 * available.y).max(30.0);
+    let image_width = (image_height / aspect).min(widest);
+    let image_height = image_width * aspect;
     let dark = ui.visuals().dark_mode;
     let text = ui.visuals().text_color();
     let truth = palette::truth_color(dark);
@@ -109,18 +111,19 @@ pub fn centre_ui(
         KeyEntry::new("epipolar line (hover a feature)", EPIPOLAR, Mark::Solid),
     ];
     let step = run.steps.get(pair);
-    ui.horizontal_wrapped(|ui| {
-        if let Some(step) = step {
-            ui.label(
+    if let Some(step) = step {
+        ui.add(
+            egui::Label::new(
                 egui::RichText::new(format!(
                     "VO step {pair}: frame {} (left) and frame {} (right)",
                     step.from, step.to
                 ))
                 .strong(),
-            );
-        }
-        key_ui(ui, &key);
-    });
+            )
+            .wrap(),
+        );
+    }
+    key_ui(ui, &key);
     let total_width = 2.0 * image_width + gap;
     let (area, response) = ui.allocate_exact_size(
         vec2(available.x.max(total_width), image_height + 4.0),

@@ -353,14 +353,22 @@ impl crate::widgets::layout::LessonPanels for VisualOdometryLesson {
     }
 
     fn map_ui(&mut self, ui: &mut egui::Ui) {
-        let hovered = images::centre_ui(
-            ui,
-            &self.run,
-            self.pair,
-            self.session.as_ref(),
-            &self.view,
-            self.hovered,
-        );
+        // In a small window the images, the top view and their keys may need more
+        // room than there is: they scroll instead of running past the window.
+        let hovered = egui::ScrollArea::vertical()
+            .id_salt("vo_centre_scroll")
+            .auto_shrink([false, false])
+            .show(ui, |ui| {
+                images::centre_ui(
+                    ui,
+                    &self.run,
+                    self.pair,
+                    self.session.as_ref(),
+                    &self.view,
+                    self.hovered,
+                )
+            })
+            .inner;
         self.hovered = hovered;
     }
 }

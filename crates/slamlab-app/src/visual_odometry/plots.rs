@@ -7,7 +7,8 @@ use super::images::{INLIER, OUTLIER, SAMPLE};
 use crate::export::PlotSeries;
 use crate::palette;
 use crate::widgets::plots::{
-    Figure, Mark, Styled, draw_series, figure_plot, figure_ui, key_entries, series_data,
+    Figure, Mark, Styled, draw_series, figure_plot, figure_ui, is_embed_layout, key_entries,
+    plot_row, series_data,
 };
 use slamlab_sim::vision::{TwoViewSession, VoRun};
 
@@ -160,32 +161,32 @@ pub fn plots_ui(ui: &mut egui::Ui, run: &VoRun, pair: usize, session: Option<&Tw
             );
         }
     };
-    ui.columns(4, |columns| {
-        for (column, (title, y, hover)) in [
-            (
-                ROTATION,
-                "error (°)",
-                "The angle of R_estimated^-1 R_true for every VO step; the orange line is the \
+    let specs = [
+        (
+            ROTATION,
+            "error (°)",
+            "The angle of R_estimated^-1 R_true for every VO step; the orange line is the \
                  step shown above.",
-            ),
-            (
-                TRANSLATION,
-                "error (°)",
-                "The angle between the estimated and the true translation direction. A pure \
+        ),
+        (
+            TRANSLATION,
+            "error (°)",
+            "The angle between the estimated and the true translation direction. A pure \
                  rotation has none to give (orange dots at 0: reported as unobservable); red \
                  dots at 0: RANSAC found no estimate.",
-            ),
-            (
-                RATIO,
-                "inliers / matches",
-                "The share of matches the final E keeps, against the share of good matches \
+        ),
+        (
+            RATIO,
+            "inliers / matches",
+            "The share of matches the final E keeps, against the share of good matches \
                  the simulator made (dashed).",
-            ),
-        ]
-        .into_iter()
-        .enumerate()
-        {
-            let ui = &mut columns[column];
+        ),
+    ];
+    // An embed shows the rotation error alone: with the top view above, that
+    // makes the two plots an embed holds.
+    let count = if is_embed_layout(ui.ctx()) { 1 } else { 4 };
+    plot_row(ui, count, |column, ui| {
+        if let Some(&(title, y, hover)) = specs.get(column) {
             figure_ui(
                 ui,
                 &Figure {
@@ -207,8 +208,8 @@ pub fn plots_ui(ui: &mut egui::Ui, run: &VoRun, pair: usize, session: Option<&Tw
                     draw_series(plot_ui, &all, title);
                 },
             );
+            return;
         }
-        let ui = &mut columns[3];
         let bound = bound_series(session);
         let drawn = session.map_or(0, TwoViewSession::iteration);
         let title = format!(
