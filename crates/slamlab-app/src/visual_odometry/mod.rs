@@ -540,7 +540,7 @@ impl Lesson for VisualOdometryLesson {
             "seed": self.run.settings.seed,
             "method": self.run.settings.method.name(),
             "pair": self.pair,
-            "frames": [step.map(|s| s.from), step.map(|s| s.to)],
+            "step_frames": [step.map(|s| s.from), step.map(|s| s.to)],
             "matches": session.map_or(0, |s| s.matches().len()),
             "iteration": session.map_or(0, TwoViewSession::iteration),
             "bound": session.map_or(0, TwoViewSession::bound),
