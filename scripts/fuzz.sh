@@ -32,9 +32,10 @@ FILTERS=(survive_mutations survives_mutations survive_mutations_together)
 started=$SECONDS
 echo "==> Fuzzing every reader with $SLAMLAB_FUZZ_INPUTS inputs (seed ${SLAMLAB_FUZZ_SEED:-2026})"
 for crate in slamlab-sim slamlab-app; do
-	# --nocapture: the per-reader counts are the result. One test thread per core.
+	# --nocapture: the per-reader counts are the result. One test thread per core. (With
+	# one thread libtest prints "test NAME ... " before a count on the same line.)
 	cargo test --release -p "$crate" --lib -- "${FILTERS[@]}" --nocapture 2>&1 |
-		grep -E '^fuzz |test result|panicked|FAILED|failed' || true
+		grep -E '(^|\.\.\. )fuzz |test result|panicked|FAILED|failed' || true
 	[[ "${PIPESTATUS[0]}" == 0 ]] || {
 		echo "scripts/fuzz.sh: $crate's fuzz tests failed (above)" >&2
 		exit 1
