@@ -25,9 +25,7 @@
 
 use super::{Point2, PointTransform, Scan, ScanMatch, ScanMatcher};
 use crate::geometry::{Pose2, wrap_angle};
-use crate::grid::{
-    ProbabilityGrid, TABLE_ENTRIES, TILE, floor_to_i64, table_entry, table_log_odds,
-};
+use crate::grid::{ProbabilityGrid, TABLE_ENTRIES, TILE, floor_to_i64, table_log_odds};
 use crate::math;
 use nalgebra::{Matrix3, Vector3};
 use serde::{Deserialize, Serialize};
@@ -127,14 +125,7 @@ impl ProbabilityLookup {
         self.of_entry(grid.entry_at(i, j))
     }
 
-    /// The probability of a cell whose stored log odds are `l` (NaN: never
-    /// seen), as [`cell`](Self::cell) gives it.
-    #[inline]
-    pub fn of_log_odds(&self, l: f32) -> f64 {
-        self.of_entry(table_entry(l))
-    }
-
-    /// The probability of table entry `k` (the grid's [`table_entry`] of a
+    /// The probability of table entry `k` (the grid's [`table_entry`](crate::grid::table_entry) of a
     /// cell).
     #[inline]
     pub fn of_entry(&self, k: u16) -> f64 {
