@@ -24,6 +24,9 @@ import { decodePng, imageStats, changedShare } from "./png.mjs";
 
 const webDir = path.resolve(path.dirname(fileURLToPath(import.meta.url)), "..");
 const distDir = path.join(webDir, "dist");
+// The external data sets beside the repository (README: ../shared/data); checks that
+// need them skip with a message when they are absent.
+const sharedDataDir = path.resolve(webDir, "..", "..", "shared", "data");
 const outDir = path.join(webDir, "test-output");
 const chromiumPath = process.env.SLAMLAB_CHROMIUM || "/usr/bin/chromium";
 
@@ -71,8 +74,13 @@ function startServer(root) {
   const server = createServer(async (req, res) => {
     try {
       const url = new URL(req.url, "http://localhost");
-      let file = path.normalize(path.join(root, decodeURIComponent(url.pathname)));
-      if (!file.startsWith(root)) throw new Error("outside the root");
+      // /shared-data/ serves ../shared/data (the Intel log), as an instructor would host
+      // a log beside the site; everything else comes from web/dist.
+      const shared = url.pathname.startsWith("/shared-data/");
+      const base = shared ? sharedDataDir : root;
+      const rel = shared ? url.pathname.slice("/shared-data".length) : url.pathname;
+      let file = path.normalize(path.join(base, decodeURIComponent(rel)));
+      if (!file.startsWith(base)) throw new Error("outside the root");
       if ((await stat(file)).isDirectory()) file = path.join(file, "index.html");
       const body = await readFile(file);
       res.writeHead(200, {
@@ -673,6 +681,47 @@ async function main() {
         await assertNoPanic(p);
         assert(log.problems.length === 0, log.problems.join("; "));
         return `${s1.scans} scans: map agreement ${s1.map_agreement.toFixed(3)}, trajectory RMSE ${s1.trajectory_rmse.toFixed(3)} m, ${s1.known_cells} known cells; office headless: 600 scans (60 s of data, simulation included) in ${seconds.toFixed(1)} s = ${(60 / seconds).toFixed(1)}x real time, pose ${same ? "bit-identical to native" : `${(apart * 1000).toFixed(2)} mm from native`}`;
+      } finally {
+        await context.close();
+      }
+    });
+
+    // --- A real laser log in the browser: the Intel Research Lab log (13,631 scans, about
+    // 45 minutes of data) opened by `log=` from the same host, then mapped whole with
+    // scan-to-map poses in this page's wasm without drawing, timed for the real-time
+    // factor (the issue asks at least 20x in Chromium; natively it is about 250x, see
+    // docs/mapping.md). The end pose must be the native run's, bit for bit
+    // (crates/slamlab-app/tests/lessons/mapping_ui.rs pins it).
+    await check("the Intel log opens by log= and maps whole at 20x real time or faster", async () => {
+      const rel = "laser/intel.clf.bz2";
+      const file = path.join(sharedDataDir, rel);
+      const found = await stat(file).then(() => true, () => false);
+      if (!found) return `skipped: ${file} is absent (the shared data sets are not beside the repository)`;
+      const url = `index.html?lesson=mapping&log=shared-data/${rel}`;
+      const { context, page: p, log } = await openPage(browser, baseUrl, url, "mapping-intel");
+      try {
+        await waitRunning(p);
+        const s0 = await waitState(p, (st) => st.lesson === "mapping" && st.total_scans === 13631, "the Intel log loaded by log=", 120_000);
+        assert(s0.poses === "scan-to-map" && s0.log === "intel.clf.bz2", `opened ${JSON.stringify({ poses: s0.poses, log: s0.log, note: s0.note })}`);
+        const took = await p.evaluate(async (r) => {
+          const bytes = new Uint8Array(await (await fetch(`shared-data/${r}`)).arrayBuffer());
+          const started = performance.now();
+          const state = window.slamlab.slamlab_test_headless_log("lesson=mapping", "intel.clf.bz2", bytes, 13631);
+          return { state, ms: performance.now() - started };
+        }, rel);
+        const headless = JSON.parse(took.state);
+        const seconds = took.ms / 1000;
+        const factor = headless.input_seconds / seconds;
+        const NATIVE = [-2.751285284132404, 1.482646573714355, -0.043476162369528115];
+        const same = headless.pose.every((v, i) => v === NATIVE[i]);
+        metrics.mapping_intel_log_s = Number(seconds.toFixed(2));
+        metrics.mapping_intel_real_time_factor = Number(factor.toFixed(1));
+        assert(headless.scans === 13631, `mapped ${headless.scans} scans: ${headless.note}`);
+        assert(same, `ended at ${JSON.stringify(headless.pose)}, natively ${JSON.stringify(NATIVE)}`);
+        assert(factor >= 20, `${headless.input_seconds.toFixed(0)} s of data in ${seconds.toFixed(1)} s = ${factor.toFixed(1)}x real time`);
+        await assertNoPanic(p);
+        assert(log.problems.length === 0, log.problems.join("; "));
+        return `${headless.scans} scans (${headless.input_seconds.toFixed(0)} s of data, decompression and parsing included) in ${seconds.toFixed(1)} s = ${factor.toFixed(1)}x real time, end pose bit-identical to native`;
       } finally {
         await context.close();
       }

@@ -372,6 +372,23 @@ impl SlamLabApp {
         app.test_state_json()
     }
 
+    /// Like [`headless_state`](Self::headless_state), with a CARMEN log (`bytes`, plain
+    /// or compressed, named `name`) opened in the mapping lesson first, as if it had
+    /// been dropped on the window. The browser test maps the Intel log this way and
+    /// times it. A query for another lesson, or a log that cannot be read, gives the
+    /// state with the lesson's note saying why.
+    pub fn headless_log_state(query: &str, name: &str, bytes: &[u8], ticks: u64) -> String {
+        let mut app = Self::from_query(query);
+        match app.lesson_as_mut::<mapping::MappingLesson>() {
+            Some(lesson) => lesson.load_log(name, bytes),
+            None => return r#"{"error":"the query does not open the mapping lesson"}"#.to_owned(),
+        }
+        for _ in 0..ticks.min(100_000) {
+            app.apply_time_action(TimeAction::StepTick);
+        }
+        app.test_state_json()
+    }
+
     fn apply_theme(&self, ctx: &egui::Context) {
         match self.dark_mode {
             Some(true) => ctx.set_theme(egui::Theme::Dark),

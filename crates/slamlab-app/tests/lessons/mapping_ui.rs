@@ -250,6 +250,47 @@ fn a_headless_office_run_ends_at_the_pose_the_browser_must_match() {
     assert_eq!(pose, HEADLESS_OFFICE_POSE);
 }
 
+/// The whole Intel Research Lab log mapped with scan-to-map poses through the
+/// lesson, as the browser check does in wasm ("the Intel log opens by log= …", which
+/// times it and must end at this pose to the bit). Ignored in `./test.sh`: at the
+/// test profile's optimisation it takes about 35 s; run it with
+/// `cargo test -p slamlab-app --test lessons intel -- --ignored` after a change to
+/// the matcher, and update the pose here and in web/tests/browser.test.mjs.
+const INTEL_END_POSE: [f64; 3] = [-2.751285284132404, 1.482646573714355, -0.043476162369528115];
+
+#[test]
+#[ignore = "maps the whole Intel log (about 35 s in the test profile); the browser check uses its pose"]
+fn the_intel_log_mapped_through_the_lesson_ends_at_the_pose_the_browser_must_match() {
+    let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR"))
+        .join("../../../shared/data/laser/intel.clf.bz2");
+    let Ok(bytes) = std::fs::read(&path) else {
+        eprintln!(
+            "skipped: {} is absent (the shared data sets are not beside the repository)",
+            path.display()
+        );
+        return;
+    };
+    let state: serde_json::Value = serde_json::from_str(&SlamLabApp::headless_log_state(
+        "lesson=mapping",
+        "intel.clf.bz2",
+        &bytes,
+        13_631,
+    ))
+    .unwrap();
+    assert_eq!(state["scans"], 13_631, "{}", state["note"]);
+    let pose: Vec<f64> = state["pose"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|v| v.as_f64().unwrap())
+        .collect();
+    eprintln!(
+        "pose {pose:?}, {} s of data, {} known cells",
+        state["input_seconds"], state["known_cells"]
+    );
+    assert_eq!(pose, INTEL_END_POSE);
+}
+
 /// Grid FastSLAM in the mapping lesson: phase by phase (propose, weight,
 /// resample when N_eff is low, update maps), every particle drawn, the map
 /// switch (a particle's map, the weighted mean), and the rendered paths.
