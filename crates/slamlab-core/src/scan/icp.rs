@@ -6,7 +6,8 @@
 //! Each iteration does what the slides list:
 //! 1. transform the scan's points into the reference frame with the current pose;
 //! 2. pair each with its nearest reference point, found with a k-d tree
-//!    ([`super::kdtree::PointTree`]);
+//!    ([`super::kdtree::PointTree`]); a point that has moved too little since its
+//!    last query for the answer to change skips the query (`NearestCache`);
 //! 3. reject doubtful pairs: a **distance gate** (pairs farther apart than
 //!    [`IcpConfig::max_correspondence_distance`]) and **trimming**, keeping only
 //!    the best [`IcpConfig::trim_fraction`] of the pairs that pass the gate, as in
@@ -271,6 +272,45 @@ pub struct IcpState {
     // Reused between iterations.
     pairs: Vec<Pair>,
     order: Vec<usize>,
+    /// Per scan point, what its last k-d tree query found (see [`NearestCache`]).
+    cache: Vec<Option<NearestCache>>,
+    neighbours: Vec<Neighbour>,
+}
+
+/// What a scan point's last k-d tree query found, so that the next iteration can
+/// skip the query when the answer cannot have changed (Nüchter, Lingemann and
+/// Hertzberg, "Cached k-d tree search for ICP algorithms", 3DIM 2007, in an exact
+/// form). The query was made with the point at `at`; its nearest reference point
+/// was `reference` and every other reference point was at least `second` away. If
+/// the point has since moved by `m`, every other reference point is still at
+/// least `second − m` away (triangle inequality), so if the old nearest point is
+/// now closer than that, it is still the nearest and the tree need not be asked.
+/// The pairs are the ones a query per point and iteration gives; after the first
+/// iterations the steps are small and most queries are skipped.
+#[derive(Clone, Copy, Debug)]
+struct NearestCache {
+    at: Point2,
+    reference: usize,
+    second: f64,
+}
+
+impl NearestCache {
+    /// The cached nearest reference point if it is certainly still the nearest
+    /// to `q`, with its squared distance.
+    fn still_nearest(&self, q: Point2, reference: &[Point2]) -> Option<Neighbour> {
+        let r = reference[self.reference];
+        let distance_squared = squared_distance(q, r);
+        let moved = math::hypot(q[0] - self.at[0], q[1] - self.at[1]);
+        // A margin of a nanometre absorbs the rounding of the square roots.
+        (distance_squared.sqrt() + moved + 1e-9 < self.second).then_some(Neighbour {
+            index: self.reference,
+            distance_squared,
+        })
+    }
+}
+
+fn squared_distance(a: Point2, b: Point2) -> f64 {
+    (a[0] - b[0]) * (a[0] - b[0]) + (a[1] - b[1]) * (a[1] - b[1])
 }
 
 /// Finite points and their original indices.
@@ -495,6 +535,31 @@ impl IcpState {
             pose,
             iterations: 0,
             converged: false,
+            cache: Vec::new(),
+            neighbours: Vec::with_capacity(2),
+        })
+    }
+
+    /// The reference point nearest to `q`, the `i`-th scan point at the current
+    /// pose: from the cache when it cannot have changed, else from the tree (its
+    /// two nearest, the second kept as the cache's bound).
+    fn nearest(&mut self, i: usize, q: Point2) -> Option<Neighbour> {
+        if let Some(found) = self.cache[i].and_then(|c| c.still_nearest(q, &self.reference)) {
+            return Some(found);
+        }
+        self.tree.nearest_k(q, 2, &mut self.neighbours);
+        let first = *self.neighbours.first()?;
+        self.cache[i] = Some(NearestCache {
+            at: q,
+            reference: first.index,
+            second: self
+                .neighbours
+                .get(1)
+                .map_or(f64::INFINITY, |n| n.distance_squared.sqrt()),
+        });
+        Some(Neighbour {
+            index: first.index,
+            distance_squared: squared_distance(q, self.reference[first.index]),
         })
     }
 
@@ -539,12 +604,14 @@ impl IcpState {
         let point_to_line = self.config.variant == IcpVariant::PointToLine;
         self.pairs.clear();
         self.order.clear();
+        self.cache.resize(self.scan.len(), None);
         // `transform_point` without a sine and cosine per point.
         let (sin, cos) = math::sin_cos(self.pose.theta);
         let (tx, ty) = (self.pose.x, self.pose.y);
-        for (i, &p) in self.scan.iter().enumerate() {
+        for i in 0..self.scan.len() {
+            let p = self.scan[i];
             let q = [cos * p[0] - sin * p[1] + tx, sin * p[0] + cos * p[1] + ty];
-            let Some(nearest) = self.tree.nearest(q) else {
+            let Some(nearest) = self.nearest(i, q) else {
                 continue;
             };
             let r = self.reference[nearest.index];
