@@ -462,9 +462,12 @@ impl crate::widgets::layout::LessonPanels for FiltersLesson {
                 let (histogram, range) = (&self.marginal.0, self.marginal.1);
                 let compute_ms = self.last_compute_ms;
                 if ui.available_width() >= 900.0 {
-                    ui.columns(2, |c| {
-                        explain::table_ui(&mut c[0], Some(r), compute_ms);
-                        marginal::marginal_ui(&mut c[1], r, histogram, range, height);
+                    crate::widgets::plots::columns_ui(ui, 2, |k, ui| {
+                        if k == 0 {
+                            explain::table_ui(ui, Some(r), compute_ms);
+                        } else {
+                            marginal::marginal_ui(ui, r, histogram, range, height);
+                        }
                     });
                 } else {
                     // A narrow window: the plot or the table, one at a time.
