@@ -213,6 +213,11 @@ impl FiltersLesson {
         self.drag.on_screen
     }
 
+    /// The output canvas's zoom, pixels per unit (for the tests of its Reset view).
+    pub fn output_scale(&self) -> f32 {
+        self.output_view.scale()
+    }
+
     /// The view in the centre.
     pub fn tab(&self) -> Tab {
         self.view.tab

@@ -489,11 +489,11 @@ const MIN_MAGNIFICATION: f32 = 2.0;
 /// Largest magnification: a millimetre ellipse stays a millimetre ellipse.
 const MAX_MAGNIFICATION: f32 = 50.0;
 
-/// The magnification shown: the largest of 2, 5, 10, 20 and 50 that is not above
+/// The magnification shown: the largest of 2, 2.5, 5, 10, 20 and 50 that is not above
 /// `wanted`, so that it holds while stepping (predict grows √det P by a few percent,
 /// which a continuous magnification would undo, keeping the picture the same).
 fn steady_magnification(wanted: f32) -> f32 {
-    [50.0, 20.0, 10.0, 5.0, MIN_MAGNIFICATION]
+    [50.0, 20.0, 10.0, 5.0, 2.5, MIN_MAGNIFICATION]
         .into_iter()
         .find(|&m| m <= wanted)
         .unwrap_or(wanted)
@@ -1188,8 +1188,9 @@ mod tests {
 
     #[test]
     fn the_magnification_holds_on_steps_of_two() {
-        assert_eq!(steady_magnification(3.0), 2.0);
-        assert_eq!(steady_magnification(4.2), 2.0);
+        assert_eq!(steady_magnification(3.0), 2.5);
+        assert_eq!(steady_magnification(4.2), 2.5);
+        assert_eq!(steady_magnification(2.2), 2.0);
         assert_eq!(steady_magnification(9.9), 5.0);
         assert_eq!(steady_magnification(10.0), 10.0);
         assert_eq!(steady_magnification(50.0), 50.0);

@@ -573,8 +573,10 @@ pub fn log_y_axis(plot: Plot<'_>) -> Plot<'_> {
 }
 
 /// The labelled marks of a logarithmic axis showing `bounds` (decimal logarithms),
-/// where `base_step` is the logarithm 8 screen points span: every n-th decade
-/// (`preferred` points apart) when two or more show; otherwise 1, 2 and 5 times
+/// where `base_step` is the logarithm 8 screen points span: 1, 2 and 5 times each
+/// power of ten when fewer than three decades show and those stand nearly
+/// `preferred` points apart; else every n-th decade (`preferred` points apart)
+/// when two or more show; otherwise 1, 2 and 5 times
 /// each power of ten, or 1 and 3 times, or 1 to 9 times, when two or more show at
 /// least `least` points apart; otherwise round values of the range itself (a cost from 1.02e3
 /// to 1.07e3). Each mark's `step_size` is the smallest gap between two marks, so
@@ -616,11 +618,28 @@ pub fn log_axis_marks(
             e => 2.0 * e,
         };
     }
-    for step in [every, 1.0] {
-        let decades: Vec<f64> = ((lo / step).ceil() as i64..=(hi / step).floor() as i64)
+    let decades_of = |step: f64| -> Vec<f64> {
+        ((lo / step).ceil() as i64..=(hi / step).floor() as i64)
             .map(|k| k as f64 * step)
-            .collect();
-        if let Some(marks) = marks_of(decades) {
+            .collect()
+    };
+    // Two decades alone leave most values far from a label: 1, 2 and 5 times each
+    // power of ten instead where they stand nearly as far apart as the plot prefers.
+    if decades_of(1.0).len() < 3 {
+        let values = round_multiples(lo, hi, &[1.0, 2.0, 5.0]);
+        let gap = values
+            .windows(2)
+            .map(|w| w[1] - w[0])
+            .fold(f64::INFINITY, f64::min);
+        if values.len() >= 3
+            && gap * points_per_unit >= 0.8 * preferred
+            && let Some(marks) = marks_of(values)
+        {
+            return marks;
+        }
+    }
+    for step in [every, 1.0] {
+        if let Some(marks) = marks_of(decades_of(step)) {
             return marks;
         }
     }
@@ -630,11 +649,7 @@ pub fn log_axis_marks(
         &[1.0, 3.0],
         &[1.0, 2.0, 3.0, 4.0, 5.0, 6.0, 7.0, 8.0, 9.0],
     ] {
-        let values: Vec<f64> = (lo.floor() as i64..=hi.ceil() as i64)
-            .flat_map(|k| mantissas.iter().map(move |m| k as f64 + math::log10(*m)))
-            .filter(|v| *v >= lo - 1e-12 && *v <= hi + 1e-12)
-            .collect();
-        if let Some(marks) = marks_of(values) {
+        if let Some(marks) = marks_of(round_multiples(lo, hi, mantissas)) {
             return marks;
         }
     }
@@ -658,6 +673,15 @@ pub fn log_axis_marks(
         }
     }
     marks_of(values).unwrap_or_default()
+}
+
+/// The logarithms of `mantissas` times each power of ten that lie in `lo..=hi`, in
+/// order.
+fn round_multiples(lo: f64, hi: f64, mantissas: &[f64]) -> Vec<f64> {
+    (lo.floor() as i64..=hi.ceil() as i64)
+        .flat_map(|k| mantissas.iter().map(move |m| k as f64 + math::log10(*m)))
+        .filter(|v| *v >= lo - 1e-12 && *v <= hi + 1e-12)
+        .collect()
 }
 
 /// The label of a mark of a logarithmic axis ([`log_axis_marks`]): the value
@@ -1035,6 +1059,11 @@ mod tests {
         };
         // Decades when two fit; 1-2-5 within one decade; round values in between.
         assert_eq!(labels(0.0, 3.2, 200.0), ["1e0", "1e1", "1e2", "1e3"]);
+        // A cost from 1e3 down to 43 on 140 points: not only 1e2 and 1e3.
+        assert_eq!(
+            labels(1.6, 3.05, 140.0),
+            ["5e1", "1e2", "2e2", "5e2", "1e3"]
+        );
         assert_eq!(labels(-0.5, 0.5, 60.0), ["5e-1", "1e0", "2e0"]);
         assert_eq!(labels(2.31, 2.52, 43.0), ["2.5e2", "3e2"]);
         let narrow = labels(3.01, 3.03, 43.0);
