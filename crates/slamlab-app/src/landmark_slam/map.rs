@@ -965,11 +965,11 @@ fn legend_entries(
                 (Symbol::TruthRobot, colors.truth),
                 (Symbol::Line { dashed: false }, colors.truth),
             ],
-            "true robot, heading and path",
+            "true robot and path",
         ),
         LegendEntry::new(
             vec![(Symbol::Line { dashed: true }, palette::DEAD_RECKONING)],
-            "dead reckoning (commands only)",
+            "dead reckoning",
         ),
         LegendEntry::new(
             vec![(Symbol::TrueLandmark, colors.truth)],
@@ -986,7 +986,7 @@ fn legend_entries(
                 (Symbol::Line { dashed: secondary }, color),
                 (Symbol::EstimatedLandmark { secondary }, color),
             ],
-            format!("{name}: robot (95% ellipse, ±2σθ wedge), path, landmarks"),
+            format!("{name}: robot (95% ellipse, ±2σθ), path, landmarks"),
         ));
         if sigma_points_shown && !super::robot_sigma_points(run.filter()).is_empty() {
             entries.push(LegendEntry::new(
@@ -998,13 +998,13 @@ fn legend_entries(
     if opts.rays {
         entries.push(LegendEntry::new(
             vec![(Symbol::Ray, palette::faded(colors.truth, 0.6))],
-            "observation (measured point)",
+            "observation",
         ));
     }
     if opts.fov {
         entries.push(LegendEntry::new(
             vec![(Symbol::FieldOfView, colors.truth)],
-            "sensor field of view and range",
+            "field of view",
         ));
         if coming_reach(session).is_some() {
             entries.push(LegendEntry::new(
@@ -1012,13 +1012,13 @@ fn legend_entries(
                     Symbol::Line { dashed: true },
                     palette::faded(colors.truth, 0.6),
                 )],
-                "sensor reach from the next tick",
+                "reach from the next tick",
             ));
         }
     }
     entries.push(LegendEntry {
         symbols: vec![(Symbol::Highlight, palette::VERMILLION)],
-        text: "landmark of the current update".to_owned(),
+        text: "current update".to_owned(),
         highlight: true,
     });
     entries
