@@ -213,6 +213,11 @@ impl FiltersLesson {
         self.drag.on_screen
     }
 
+    /// The output canvas's zoom, pixels per unit (for the tests of its Reset view).
+    pub fn output_scale(&self) -> f32 {
+        self.output_view.scale()
+    }
+
     /// The view in the centre.
     pub fn tab(&self) -> Tab {
         self.view.tab
@@ -462,9 +467,12 @@ impl crate::widgets::layout::LessonPanels for FiltersLesson {
                 let (histogram, range) = (&self.marginal.0, self.marginal.1);
                 let compute_ms = self.last_compute_ms;
                 if ui.available_width() >= 900.0 {
-                    ui.columns(2, |c| {
-                        explain::table_ui(&mut c[0], Some(r), compute_ms);
-                        marginal::marginal_ui(&mut c[1], r, histogram, range, height);
+                    crate::widgets::plots::columns_ui(ui, 2, |k, ui| {
+                        if k == 0 {
+                            explain::table_ui(ui, Some(r), compute_ms);
+                        } else {
+                            marginal::marginal_ui(ui, r, histogram, range, height);
+                        }
                     });
                 } else {
                     // A narrow window: the plot or the table, one at a time.

@@ -182,15 +182,32 @@ pub fn heading_ui(
     axes: [&str; 2],
     key: &[KeyEntry],
     compact: bool,
+    view: &mut MapView,
 ) {
     let axes = format!("horizontal: {}; vertical: {}", axes[0], axes[1]);
+    // The canvas zooms on scroll (and the output pans): a way back on the title's line.
+    let reset = |ui: &mut egui::Ui, view: &mut MapView| {
+        if ui
+            .small_button("Reset view")
+            .on_hover_text("Back to the view that fits the whole belief")
+            .clicked()
+        {
+            view.refit();
+        }
+    };
     if compact {
         let names: Vec<&str> = key.iter().map(|k| k.name.as_str()).collect();
-        ui.add(egui::Label::new(egui::RichText::new(title).small().strong()).truncate())
-            .on_hover_text(format!("{axes}\nKey: {}", names.join("; ")));
+        ui.horizontal(|ui| {
+            reset(ui, view);
+            ui.add(egui::Label::new(egui::RichText::new(title).small().strong()).truncate())
+                .on_hover_text(format!("{axes}\nKey: {}", names.join("; ")));
+        });
         return;
     }
-    ui.label(egui::RichText::new(title).strong());
+    ui.horizontal(|ui| {
+        reset(ui, view);
+        ui.add(egui::Label::new(egui::RichText::new(title).strong()).truncate());
+    });
     ui.label(egui::RichText::new(axes).small());
     key_ui(ui, key);
 }
@@ -281,6 +298,7 @@ pub fn input_ui(
             KeyEntry::new("sigma points", palette::ORANGE, Mark::Dots),
         ],
         compact,
+        view,
     );
     let (response, t) = map_canvas::canvas_ui(ui, view, input_bounds(prior), 0.0, &mut None, false);
     let painter = ui.painter_at(t.rect);
@@ -364,6 +382,7 @@ pub fn output_ui(
             ),
         ],
         compact,
+        view,
     );
     let (_response, t) = map_canvas::canvas_ui(ui, view, density.bounds, 0.0, &mut None, true);
     let painter = ui.painter_at(t.rect);

@@ -8,7 +8,8 @@ use crate::widgets::map_canvas::{
     self, CanvasColors, EstimateStyle, MapTransform, MapView, draw_estimate, draw_grid,
     draw_scale_and_axes, finite, screen_dir,
 };
-use egui::{Color32, Pos2, Shape, Stroke, pos2, vec2};
+use crate::widgets::plots::{KeyEntry, Mark, key_ui};
+use egui::{Color32, Pos2, Shape, Stroke, pos2};
 use slamlab_core::Pose2;
 use slamlab_sim::fusion::lesson::FusionSim;
 
@@ -35,6 +36,10 @@ pub fn map_ui(ui: &mut egui::Ui, sim: &FusionSim, canvas: &mut MapView, view: &m
         0.5 * room[0] + 0.3,
         0.5 * room[1] + 0.3,
     ];
+    if view.legend {
+        // The key on a line above the map, never over the room.
+        key_ui(ui, &legend_entries(sim, &CanvasColors::of(ui)));
+    }
     let mut follow = None;
     let (_response, t) = map_canvas::canvas_ui(ui, canvas, bounds, 0.0, &mut follow, true);
     let colors = CanvasColors::of(ui);
@@ -123,9 +128,6 @@ pub fn map_ui(ui: &mut egui::Ui, sim: &FusionSim, canvas: &mut MapView, view: &m
         );
     }
     draw_scale_and_axes(&painter, &t, &colors);
-    if view.legend {
-        draw_legend(&painter, &t, sim, &colors);
-    }
     if view.ellipses {
         draw_wide_ellipse_notes(&painter, &t, sim, room);
     }
@@ -209,59 +211,23 @@ fn polyline(
     }
 }
 
-fn draw_legend(painter: &egui::Painter, t: &MapTransform, sim: &FusionSim, colors: &CanvasColors) {
-    let mut rows: Vec<(Color32, String, bool)> = vec![
-        (colors.truth, "true robot and path".to_owned(), false),
-        (
+/// The map's key: the truth, the raw odometry, the SLAM poses and each mode.
+fn legend_entries(sim: &FusionSim, colors: &CanvasColors) -> Vec<KeyEntry> {
+    let mut rows = vec![
+        KeyEntry::new("true robot and path", colors.truth, Mark::Solid),
+        KeyEntry::new(
+            "raw wheel odometry (dead reckoning)",
             palette::DEAD_RECKONING,
-            "raw wheel odometry (dead reckoning)".to_owned(),
-            true,
+            Mark::Dashed,
         ),
-        (palette::VERMILLION, "SLAM poses (dots)".to_owned(), false),
+        KeyEntry::new("SLAM poses", palette::VERMILLION, Mark::Dots),
     ];
     for run in sim.runs() {
-        rows.push((
-            mode_color(run.mode()),
+        rows.push(KeyEntry::new(
             format!("{}: fused path, estimate, 95% ellipse", run.mode().name()),
-            false,
+            mode_color(run.mode()),
+            Mark::Solid,
         ));
     }
-    let font = egui::FontId::proportional(12.5);
-    let origin = t.rect.left_top() + vec2(10.0, 26.0);
-    let width = rows
-        .iter()
-        .map(|(_, text, _)| {
-            painter
-                .layout_no_wrap(text.clone(), font.clone(), colors.truth)
-                .size()
-                .x
-        })
-        .fold(0.0_f32, f32::max)
-        + 34.0;
-    let height = rows.len() as f32 * 18.0 + 8.0;
-    let frame = egui::Rect::from_min_size(origin, vec2(width, height));
-    painter.rect_filled(frame, 4.0, colors.background.gamma_multiply(0.9));
-    for (i, (color, text, dashed)) in rows.iter().enumerate() {
-        let y = origin.y + 13.0 + i as f32 * 18.0;
-        let (a, b) = (pos2(origin.x + 6.0, y), pos2(origin.x + 22.0, y));
-        if *dashed {
-            painter.extend(Shape::dashed_line(
-                &[a, b],
-                Stroke::new(2.0, *color),
-                4.0,
-                3.0,
-            ));
-        } else if *color == palette::VERMILLION {
-            painter.circle_filled(pos2(origin.x + 14.0, y), 3.5, *color);
-        } else {
-            painter.line_segment([a, b], Stroke::new(3.0, *color));
-        }
-        painter.text(
-            pos2(origin.x + 28.0, y),
-            egui::Align2::LEFT_CENTER,
-            text,
-            font.clone(),
-            colors.truth,
-        );
-    }
+    rows
 }

@@ -10,7 +10,8 @@ use crate::widgets::map_canvas::{
     draw_scale_and_axes, finite, screen_dir,
 };
 use crate::widgets::particles::ParticleMesh;
-use egui::{Color32, Pos2, Shape, Stroke, pos2, vec2};
+use crate::widgets::plots::{KeyEntry, Mark, key_ui};
+use egui::{Color32, Pos2, Shape, Stroke, pos2};
 use slamlab_core::grid::{Cell, Costmap, OccupancyGrid};
 use slamlab_core::particle::ParticleFlag;
 use slamlab_core::{Pose2, math};
@@ -170,21 +171,12 @@ pub fn map_ui(
     let bounds = grid_bounds(grid);
     let truth = run.robot().pose;
     let mut follow = view.follow_robot.then_some([truth.x, truth.y]);
-    // The fitted map leaves room on the left for the legend where the panel has it
-    // (the legend's width from the last frame), so the legend sits off the map.
-    let legend_space = if view.legend {
-        canvas.legend_space
-    } else {
-        0.0
-    };
-    let (response, t) = map_canvas::canvas_ui(
-        ui,
-        canvas,
-        bounds,
-        legend_space,
-        &mut follow,
-        !view.click_kidnap,
-    );
+    if view.legend {
+        // The key on a line above the map, never over the maze.
+        key_ui(ui, &legend_entries(run, &CanvasColors::of(ui)));
+    }
+    let (response, t) =
+        map_canvas::canvas_ui(ui, canvas, bounds, 0.0, &mut follow, !view.click_kidnap);
     view.follow_robot = follow.is_some();
     let colors = CanvasColors::of(ui);
     let painter = ui.painter_at(t.rect);
@@ -231,10 +223,6 @@ pub fn map_ui(
         colors.background,
     );
     draw_scale_and_axes(&painter, &t, &colors);
-    if view.legend {
-        let legend = draw_legend(&painter, &t, run, &colors);
-        canvas.legend_space = legend.right() - t.rect.left() + 8.0;
-    }
 
     // Click-kidnap: press where, drag for the heading, release to teleport.
     let mut request = None;
@@ -452,66 +440,45 @@ fn draw_robot(
     );
 }
 
-/// The legend in the map's top-left corner; returns its rectangle.
-fn draw_legend(
-    painter: &egui::Painter,
-    t: &MapTransform,
-    run: &MclRun,
-    colors: &CanvasColors,
-) -> egui::Rect {
-    let mut rows: Vec<(Color32, String)> = vec![
-        (colors.truth, "true robot and path".to_owned()),
-        (palette::VERMILLION, "lidar rays and hits".to_owned()),
+/// The map's key: the truth, the lidar, each filter's particles and estimate,
+/// and (with Augmented or costmap-aware filters) the costmap and the particles
+/// drawn anew.
+fn legend_entries(run: &MclRun, colors: &CanvasColors) -> Vec<KeyEntry> {
+    let mut rows = vec![
+        KeyEntry::new("true robot and path", colors.truth, Mark::Solid),
+        KeyEntry::new("lidar rays and hits", palette::VERMILLION, Mark::Solid),
     ];
     for (k, f) in run.filters().iter().enumerate() {
-        rows.push((
-            filter_color(k, f.name),
+        rows.push(KeyEntry::new(
             format!(
                 "{}: particles, estimate, 95% ellipse",
                 f.name.to_uppercase()
             ),
+            filter_color(k, f.name),
+            Mark::Dots,
         ));
     }
-    rows.push((colors.weak_text, "a darker particle weighs more".to_owned()));
+    rows.push(KeyEntry::new(
+        "a darker particle weighs more",
+        colors.weak_text,
+        Mark::Dots,
+    ));
     if run.filters().iter().any(|f| f.name != "mcl") {
-        rows.push((
+        rows.push(KeyEntry::new(
+            "costmap: too close to a wall (toggle)",
             Color32::from_rgb(0xFF, 0x69, 0xB4),
-            "costmap: too close to a wall (toggle)".to_owned(),
+            Mark::Solid,
         ));
-        rows.push((palette::VERMILLION, "injected particles (AMCL)".to_owned()));
-        rows.push((
+        rows.push(KeyEntry::new(
+            "injected particles (AMCL)",
+            palette::VERMILLION,
+            Mark::Dots,
+        ));
+        rows.push(KeyEntry::new(
+            "regenerated particles (CMCL, ACMCL)",
             palette::SKY_BLUE,
-            "regenerated particles (CMCL, ACMCL)".to_owned(),
+            Mark::Dots,
         ));
     }
-    let font = egui::FontId::proportional(12.5);
-    let origin = t.rect.left_top() + vec2(10.0, 26.0);
-    let width = rows
-        .iter()
-        .map(|(_, text)| {
-            painter
-                .layout_no_wrap(text.clone(), font.clone(), colors.truth)
-                .size()
-                .x
-        })
-        .fold(0.0_f32, f32::max)
-        + 34.0;
-    let height = rows.len() as f32 * 18.0 + 8.0;
-    let frame = egui::Rect::from_min_size(origin, vec2(width, height));
-    painter.rect_filled(frame, 4.0, colors.background.gamma_multiply(0.9));
-    for (i, (color, text)) in rows.iter().enumerate() {
-        let y = origin.y + 13.0 + i as f32 * 18.0;
-        painter.line_segment(
-            [pos2(origin.x + 6.0, y), pos2(origin.x + 22.0, y)],
-            Stroke::new(3.0, *color),
-        );
-        painter.text(
-            pos2(origin.x + 28.0, y),
-            egui::Align2::LEFT_CENTER,
-            text,
-            font.clone(),
-            colors.truth,
-        );
-    }
-    frame
+    rows
 }

@@ -140,8 +140,15 @@ pub fn plots_ui(ui: &mut egui::Ui, run: &MclRun) {
          a little and w_slow still remembers the global localization's low weights: w_fast \
          stays above w_slow and AMCL injects nothing (the explanation says more). Filters \
          without recovery (MCL, CMCL) have none.";
-    // An embed shows the first two: the error and w_slow against w_fast.
-    plot_row(ui, 4, |k, ui| match k {
+    // An embed shows the first two: the error and w_slow against w_fast, or (with no
+    // Augmented MCL, which alone keeps those averages) the particle count and N_eff.
+    let augmented = run.filters().iter().any(|f| f.filter.kind().injects());
+    let order = if augmented {
+        [0, 1, 2, 3]
+    } else {
+        [0, 2, 1, 3]
+    };
+    plot_row(ui, 4, |k, ui| match order[k] {
         0 => {
             figure_ui(
                 ui,
@@ -156,7 +163,7 @@ pub fn plots_ui(ui: &mut egui::Ui, run: &MclRun) {
             );
         }
         1 => {
-            if run.filters().iter().any(|f| f.filter.kind().injects()) {
+            if augmented {
                 figure_ui(
                     ui,
                     &figure("w_slow and w_fast", wslow_hover, "log10 w"),

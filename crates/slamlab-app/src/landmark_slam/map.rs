@@ -12,7 +12,7 @@ use crate::widgets::map_canvas::{
     format_metres, screen_dir,
 };
 use crate::widgets::particles::ParticleMesh;
-use egui::{Color32, Pos2, Rect, Shape, Stroke, pos2, vec2};
+use egui::{Color32, Pos2, Rect, Shape, Stroke, vec2};
 use nalgebra::{Matrix2, Vector2};
 use slamlab_core::Pose2;
 use slamlab_core::geometry::{CHI2_2DOF_95, CovarianceEllipse};
@@ -55,17 +55,20 @@ pub fn map_ui(
         ui.label(egui::RichText::new(note).color(ui.visuals().warn_fg_color));
     }
     let half = 0.5 * session.world().size;
-    let legend_space = if opts.legend { view.legend_space } else { 0.0 };
+    if opts.legend {
+        // The key on a line above the map, never over the world.
+        let colors = CanvasColors::of(ui);
+        // Sigma points show in the key once they are drawn (last frame's map).
+        let sigma_points_shown = ui
+            .data(|d| d.get_temp::<bool>(sigma_points_id()))
+            .unwrap_or(false);
+        let entries = legend_entries(session, &colors, opts, sigma_points_shown);
+        map_key_ui(ui, &entries, colors.background);
+    }
     let truth = session.truth();
     let mut follow = opts.follow_robot.then_some([truth.x, truth.y]);
-    let (response, t) = map_canvas::canvas_ui(
-        ui,
-        view,
-        [-half, -half, half, half],
-        legend_space,
-        &mut follow,
-        true,
-    );
+    let (response, t) =
+        map_canvas::canvas_ui(ui, view, [-half, -half, half, half], 0.0, &mut follow, true);
     opts.follow_robot = follow.is_some();
     let rect = t.rect;
     let colors = CanvasColors::of(ui);
@@ -82,29 +85,10 @@ pub fn map_ui(
         colors.background,
     );
     let sigma_points_shown = draw_filters(&painter, &t, session, opts, &colors);
+    ui.data_mut(|d| d.insert_temp(sigma_points_id(), sigma_points_shown));
     draw_scale_and_axes(&painter, &t, &colors);
-    let mut legend_rect = None;
-    if opts.legend {
-        let placement = LegendPlacement {
-            transform: &t,
-            preferred: view.legend_corner,
-        };
-        let (legend, corner) = draw_legend(
-            &painter,
-            &placement,
-            session,
-            &colors,
-            opts,
-            sigma_points_shown,
-        );
-        view.legend_corner = corner;
-        if corner == 0 {
-            view.legend_space = legend.right() - rect.left() + 8.0;
-        }
-        legend_rect = Some(legend);
-    }
     if opts.magnifier {
-        draw_magnifier(&painter, &t, session, opts, &colors, legend_rect);
+        draw_magnifier(&painter, &t, session, opts, &colors, None);
     }
     if let Some(pointer) = response.hover_pos()
         && !response.dragged()
@@ -501,15 +485,15 @@ fn draw_filters(
 
 /// Smallest magnification worth an inset: below it the robot's ellipses are already
 /// readable on the map.
-const MIN_MAGNIFICATION: f32 = 2.5;
+const MIN_MAGNIFICATION: f32 = 2.0;
 /// Largest magnification: a millimetre ellipse stays a millimetre ellipse.
 const MAX_MAGNIFICATION: f32 = 50.0;
 
-/// The magnification shown: the largest of 2.5, 5, 10, 20 and 50 that is not above
+/// The magnification shown: the largest of 2, 2.5, 5, 10, 20 and 50 that is not above
 /// `wanted`, so that it holds while stepping (predict grows √det P by a few percent,
 /// which a continuous magnification would undo, keeping the picture the same).
 fn steady_magnification(wanted: f32) -> f32 {
-    [50.0, 20.0, 10.0, 5.0, MIN_MAGNIFICATION]
+    [50.0, 20.0, 10.0, 5.0, 2.5, MIN_MAGNIFICATION]
         .into_iter()
         .find(|&m| m <= wanted)
         .unwrap_or(wanted)
@@ -843,22 +827,14 @@ fn legend_ellipse(
 #[derive(Clone, Copy)]
 enum Symbol {
     TruthRobot,
-    Line {
-        dashed: bool,
-    },
-    EstimatedRobot {
-        secondary: bool,
-    },
+    Line { dashed: bool },
+    EstimatedRobot { secondary: bool },
     TrueLandmark,
-    EstimatedLandmark {
-        secondary: bool,
-    },
+    EstimatedLandmark { secondary: bool },
     Ray,
     FieldOfView,
     Highlight,
     SigmaPoints,
-    /// No symbol: a note row.
-    None,
 }
 
 fn draw_symbol(
@@ -870,7 +846,6 @@ fn draw_symbol(
 ) {
     let c = rect.center();
     match symbol {
-        Symbol::None => {}
         Symbol::TruthRobot => {
             painter.circle(c, 6.0, Color32::TRANSPARENT, Stroke::new(2.0, color));
             painter.line_segment([c, c + vec2(11.0, 0.0)], Stroke::new(2.0, color));
@@ -955,206 +930,154 @@ fn filter_label(name: &str) -> String {
     name.to_uppercase()
 }
 
-/// Where the legend may go: the corner it had, and what it must not cover.
-struct LegendPlacement<'a> {
-    transform: &'a MapTransform,
-    preferred: usize,
+fn sigma_points_id() -> egui::Id {
+    egui::Id::unique("slamlab_landmark_sigma_points_shown")
 }
 
-/// Picks the legend's corner: the one covering the fewest robots (heavily weighted)
-/// and landmarks, keeping the current corner on ties so the legend does not jump.
-fn legend_corner(
-    placement: &LegendPlacement<'_>,
-    session: &LandmarkSession,
-    size: egui::Vec2,
-) -> (usize, Rect) {
-    let t = placement.transform;
-    let map = t.rect;
-    let corners = [
-        Rect::from_min_size(map.left_top() + vec2(48.0, 26.0), size),
-        Rect::from_min_size(map.right_top() + vec2(-size.x - 10.0, 26.0), size),
-        Rect::from_min_size(map.left_bottom() + vec2(48.0, -size.y - 48.0), size),
-        Rect::from_min_size(
-            map.right_bottom() + vec2(-size.x - 10.0, -size.y - 30.0),
-            size,
-        ),
-    ];
-    let mut robots: Vec<Pos2> = vec![t.pose(&session.truth())];
-    robots.extend(
-        session
-            .filters()
-            .iter()
-            .map(|run| t.pose(&run.filter().robot_pose())),
-    );
-    let score = |rect: &Rect| {
-        let area = rect.expand(12.0);
-        let robots_inside = robots.iter().filter(|p| area.contains(**p)).count();
-        let landmarks_inside = session
-            .world()
-            .landmarks
-            .iter()
-            .filter(|l| area.contains(t.v(&l.position)))
-            .count();
-        100 * robots_inside + landmarks_inside
-    };
-    let allowed = |k: usize| map.contains_rect(corners[k]);
-    let preferred = placement.preferred.min(3);
-    let mut best = (preferred, score(&corners[preferred]));
-    if !allowed(preferred) {
-        best = (0, score(&corners[0]));
-    }
-    for (k, rect) in corners.iter().enumerate() {
-        if allowed(k) {
-            let value = score(rect);
-            if value < best.1 {
-                best = (k, value);
-            }
+/// One entry of the map's key: its symbols (each in its colour) and its text.
+struct LegendEntry {
+    symbols: Vec<(Symbol, Color32)>,
+    text: String,
+    highlight: bool,
+}
+
+impl LegendEntry {
+    fn new(symbols: Vec<(Symbol, Color32)>, text: impl Into<String>) -> Self {
+        Self {
+            symbols,
+            text: text.into(),
+            highlight: false,
         }
     }
-    (best.0, corners[best.0])
 }
 
-fn draw_legend(
-    painter: &egui::Painter,
-    placement: &LegendPlacement<'_>,
+/// The map's key, one entry per kind of thing drawn; a filter's robot, path and
+/// landmarks share one entry.
+fn legend_entries(
     session: &LandmarkSession,
     colors: &CanvasColors,
     opts: &ViewOptions,
     sigma_points_shown: bool,
-) -> (Rect, usize) {
-    let map_rect = placement.transform.rect;
-    let mut entries: Vec<(Symbol, Color32, String)> = vec![
-        (
-            Symbol::TruthRobot,
-            colors.truth,
-            "true robot and heading".to_owned(),
+) -> Vec<LegendEntry> {
+    let mut entries = vec![
+        LegendEntry::new(
+            vec![
+                (Symbol::TruthRobot, colors.truth),
+                (Symbol::Line { dashed: false }, colors.truth),
+            ],
+            "true robot and path",
         ),
-        (
-            Symbol::Line { dashed: false },
-            colors.truth,
-            "true path".to_owned(),
+        LegendEntry::new(
+            vec![(Symbol::Line { dashed: true }, palette::DEAD_RECKONING)],
+            "dead reckoning",
         ),
-        (
-            Symbol::Line { dashed: true },
-            palette::DEAD_RECKONING,
-            "dead reckoning (commands only)".to_owned(),
-        ),
-        (
-            Symbol::TrueLandmark,
-            colors.truth,
-            "true landmark (id)".to_owned(),
+        LegendEntry::new(
+            vec![(Symbol::TrueLandmark, colors.truth)],
+            "true landmark (id)",
         ),
     ];
     for (index, run) in session.filters().iter().enumerate() {
         let secondary = index > 0;
         let color = palette::estimator_color(run.kind.name());
         let name = filter_label(run.kind.name());
-        entries.push((
-            Symbol::EstimatedRobot { secondary },
-            color,
-            format!("{name} robot: 95% ellipse, ±2σθ wedge"),
-        ));
-        entries.push((
-            Symbol::Line { dashed: secondary },
-            color,
-            format!("{name} path"),
-        ));
-        entries.push((
-            Symbol::EstimatedLandmark { secondary },
-            color,
-            format!("{name} landmark, 95% ellipse"),
+        entries.push(LegendEntry::new(
+            vec![
+                (Symbol::EstimatedRobot { secondary }, color),
+                (Symbol::Line { dashed: secondary }, color),
+                (Symbol::EstimatedLandmark { secondary }, color),
+            ],
+            format!("{name}: robot (95% ellipse, ±2σθ), path, landmarks"),
         ));
         if sigma_points_shown && !super::robot_sigma_points(run.filter()).is_empty() {
-            entries.push((Symbol::SigmaPoints, color, format!("{name} sigma points")));
-        }
-    }
-    if opts.rays {
-        entries.push((
-            Symbol::Ray,
-            palette::faded(colors.truth, 0.6),
-            "observation (measured point)".to_owned(),
-        ));
-    }
-    if opts.fov {
-        entries.push((
-            Symbol::FieldOfView,
-            colors.truth,
-            "sensor field of view and range".to_owned(),
-        ));
-        if coming_reach(session).is_some() {
-            entries.push((
-                Symbol::Line { dashed: true },
-                palette::faded(colors.truth, 0.6),
-                "sensor reach from the next tick".to_owned(),
+            entries.push(LegendEntry::new(
+                vec![(Symbol::SigmaPoints, color)],
+                format!("{name} sigma points"),
             ));
         }
     }
-    entries.push((
-        Symbol::Highlight,
-        palette::VERMILLION,
-        "landmark of the current update".to_owned(),
-    ));
-
-    // Small maps (an embedded lecture figure) get a smaller legend.
-    let compact = map_rect.height() < 420.0;
-    let font = egui::FontId::proportional(if compact { 10.5 } else { 12.0 });
-    let row_height = if compact { 14.0 } else { 18.0 };
-    // A map too short for every row (a small iframe) shows the rows that fit and
-    // says how many are left out, rather than running off the map's bottom.
-    let fitting = ((map_rect.height() - 26.0 - 48.0 - 12.0) / row_height)
-        .floor()
-        .max(2.0) as usize;
-    if entries.len() > fitting {
-        let hidden = entries.len() - (fitting - 1);
-        entries.truncate(fitting - 1);
-        entries.push((
-            Symbol::None,
-            colors.weak_text,
-            format!("… {hidden} more in a taller window"),
+    if opts.rays {
+        entries.push(LegendEntry::new(
+            vec![(Symbol::Ray, palette::faded(colors.truth, 0.6))],
+            "observation",
         ));
     }
-    let symbol_width = 26.0;
-    let text_width = entries
-        .iter()
-        .map(|(_, _, text)| {
-            painter
-                .layout_no_wrap(text.clone(), font.clone(), colors.truth)
-                .size()
-                .x
-        })
-        .fold(0.0_f32, f32::max);
-    let size = vec2(
-        symbol_width + 8.0 + text_width + 16.0,
-        row_height * entries.len() as f32 + 12.0,
-    );
-    let (corner, rect) = legend_corner(placement, session, size);
-    painter.rect(
-        rect,
-        5.0,
-        palette::faded(colors.background, 0.9),
-        Stroke::new(1.0, colors.grid),
-        egui::StrokeKind::Inside,
-    );
-    for (i, (symbol, color, text)) in entries.iter().enumerate() {
-        let top = rect.top() + 6.0 + row_height * i as f32;
-        let symbol_rect = Rect::from_min_size(
-            pos2(rect.left() + 8.0, top + 2.0),
-            vec2(symbol_width, row_height - 4.0),
-        );
-        draw_symbol(painter, symbol_rect, *symbol, *color, colors.background);
-        painter.text(
-            pos2(symbol_rect.right() + 8.0, top + row_height / 2.0),
-            egui::Align2::LEFT_CENTER,
-            text,
-            font.clone(),
-            if matches!(symbol, Symbol::Highlight) {
-                palette::VERMILLION
-            } else {
-                colors.truth
-            },
-        );
+    if opts.fov {
+        entries.push(LegendEntry::new(
+            vec![(Symbol::FieldOfView, colors.truth)],
+            "field of view",
+        ));
+        if coming_reach(session).is_some() {
+            entries.push(LegendEntry::new(
+                vec![(
+                    Symbol::Line { dashed: true },
+                    palette::faded(colors.truth, 0.6),
+                )],
+                "reach from the next tick",
+            ));
+        }
     }
-    (rect, corner)
+    entries.push(LegendEntry {
+        symbols: vec![(Symbol::Highlight, palette::VERMILLION)],
+        text: "current update".to_owned(),
+        highlight: true,
+    });
+    entries
+}
+
+/// Draws the map's key on lines above the map (wrapped when needed): each entry's
+/// symbols, then its name. Records its rectangle as a key for the render tests.
+fn map_key_ui(ui: &mut egui::Ui, entries: &[LegendEntry], background: Color32) {
+    let response = ui
+        .horizontal_wrapped(|ui| {
+            ui.spacing_mut().item_spacing.x = 3.0;
+            let height = ui.text_style_height(&egui::TextStyle::Small).max(14.0);
+            let font = egui::TextStyle::Small.resolve(ui.style());
+            let row_width = ui.max_rect().width();
+            for (k, entry) in entries.iter().enumerate() {
+                // An entry's symbols and its text start a new line together when
+                // they do not fit on this one.
+                let text_width = ui
+                    .painter()
+                    .layout_no_wrap(entry.text.clone(), font.clone(), Color32::WHITE)
+                    .size()
+                    .x;
+                let width = entry.symbols.len() as f32 * 27.0 + text_width + 3.0;
+                let left = ui.available_size_before_wrap().x;
+                if width + 8.0 > left && left < row_width - 1.0 {
+                    ui.end_row();
+                } else if k > 0 {
+                    ui.add_space(8.0);
+                }
+                for (symbol, color) in &entry.symbols {
+                    let (rect, _) =
+                        ui.allocate_exact_size(vec2(24.0, height), egui::Sense::hover());
+                    draw_symbol(
+                        &ui.painter_at(rect.expand(2.0)),
+                        rect,
+                        *symbol,
+                        *color,
+                        background,
+                    );
+                }
+                let text = egui::RichText::new(&entry.text).small();
+                ui.label(if entry.highlight {
+                    text.color(palette::VERMILLION)
+                } else {
+                    text
+                });
+            }
+        })
+        .response;
+    crate::widgets::plots::record(
+        ui.ctx(),
+        crate::widgets::plots::FigureRecord {
+            title: String::new(),
+            data: None,
+            key: Some(response.rect),
+            map: None,
+            image: None,
+        },
+    );
 }
 
 fn format_xy(v: &Vector2<f64>) -> String {
@@ -1261,11 +1184,13 @@ fn hover_text(t: &MapTransform, session: &LandmarkSession, pointer: Pos2) -> Opt
 #[cfg(test)]
 mod tests {
     use super::*;
+    use egui::pos2;
 
     #[test]
     fn the_magnification_holds_on_steps_of_two() {
         assert_eq!(steady_magnification(3.0), 2.5);
         assert_eq!(steady_magnification(4.2), 2.5);
+        assert_eq!(steady_magnification(2.2), 2.0);
         assert_eq!(steady_magnification(9.9), 5.0);
         assert_eq!(steady_magnification(10.0), 10.0);
         assert_eq!(steady_magnification(50.0), 50.0);
@@ -1296,34 +1221,5 @@ mod tests {
         // A map too small for any corner: no magnifier.
         let tiny = Rect::from_min_size(pos2(0.0, 0.0), vec2(150.0, 120.0));
         assert!(magnifier_rect(tiny, None, far).is_none());
-    }
-
-    #[test]
-    fn the_legend_moves_off_the_robot() {
-        let session = LandmarkSession::new(super::super::default_scenario());
-        let rect = Rect::from_min_size(pos2(0.0, 0.0), vec2(800.0, 600.0));
-        let mut view = MapView::default();
-        let size = vec2(200.0, 150.0);
-        // Away from everything: the top-left corner stays.
-        view.center = [1000.0, 1000.0];
-        let placement = LegendPlacement {
-            transform: &view.transform(rect),
-            preferred: 0,
-        };
-        assert_eq!(legend_corner(&placement, &session, size).0, 0);
-        // The true robot under the top-left legend: it moves.
-        view.center = [0.0, 0.0];
-        let under = view.transform(rect).world_of(pos2(150.0, 100.0));
-        let truth = session.truth();
-        view.center = [truth.x - under[0], truth.y - under[1]];
-        let t = view.transform(rect);
-        assert!(t.pose(&truth).distance(pos2(150.0, 100.0)) < 1.0);
-        let placement = LegendPlacement {
-            transform: &t,
-            preferred: 0,
-        };
-        let (corner, legend) = legend_corner(&placement, &session, size);
-        assert_ne!(corner, 0);
-        assert!(!legend.contains(t.pose(&truth)));
     }
 }

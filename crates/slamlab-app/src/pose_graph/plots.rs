@@ -6,7 +6,8 @@ use super::Patterns;
 use crate::export::PlotSeries;
 use crate::palette;
 use crate::widgets::plots::{
-    Figure, KeyEntry, Mark, figure_plot, figure_ui, marker_radius, plot_row, thin, title_ui,
+    Figure, FigureRecord, KeyEntry, Mark, figure_plot, log_figure_ui, marker_radius, plot_row,
+    record, thin, title_ui,
 };
 use egui::{Color32, ColorImage, TextureOptions};
 use egui_plot::{Line, LineStyle, PlotPoints, Points, VLine};
@@ -33,10 +34,7 @@ pub fn plots_ui(ui: &mut egui::Ui, session: &mut PoseGraphSession, patterns: &mu
         1 => {
             title_ui(
                 ui,
-                &format!(
-                    "Information matrix H ({0} x {0} vertex blocks)",
-                    patterns.vertices
-                ),
+                "Information matrix H",
                 &format!(
                     "H = Σ J^TΩJ in the graph's vertex order, one square per vertex block ({0} x {0} \
                      scalars with the fixed vertex): a block is non-zero where an edge joins two \
@@ -45,14 +43,17 @@ pub fn plots_ui(ui: &mut egui::Ui, session: &mut PoseGraphSession, patterns: &mu
                     patterns.unknowns
                 ),
             );
-            ui.label(format!("{} non-zero blocks", patterns.h_blocks))
-                .on_hover_text(
-                    "The fixed vertex (the square on the map) is drawn in its place although it is \
+            ui.label(format!(
+                "{0} x {0} vertex blocks, {1} non-zero",
+                patterns.vertices, patterns.h_blocks
+            ))
+            .on_hover_text(
+                "The fixed vertex (the square on the map) is drawn in its place although it is \
                      not an unknown: the solver drops its row and column, so an edge to it adds \
                      only to its other vertex's diagonal block. Its row and column show the loop \
                      closures that reach it.",
-                );
-            image_ui(ui, h.as_ref(), height - 20.0, "Information matrix H");
+            );
+            image_ui(ui, h.as_ref(), "Information matrix H");
         }
         _ => {
             title_ui(
@@ -64,7 +65,7 @@ pub fn plots_ui(ui: &mut egui::Ui, session: &mut PoseGraphSession, patterns: &mu
                 "{} blocks, {} of them fill-in; {} scalar non-zeros",
                 patterns.l_blocks, patterns.fill_blocks, patterns.l_nonzeros
             ));
-            image_ui(ui, l.as_ref(), height - 20.0, "Cholesky factor L");
+            image_ui(ui, l.as_ref(), "Cholesky factor L");
         }
     });
     if let Some(e) = &patterns.error {
@@ -103,15 +104,31 @@ pub fn cost_segments(history: &[[f64; 2]]) -> (Vec<Vec<[f64; 2]>>, Vec<[f64; 2]>
 
 fn cost_plot(ui: &mut egui::Ui, session: &PoseGraphSession, height: f32) {
     let (segments, edits) = cost_segments(session.history());
-    let mut key = vec![KeyEntry::new(
-        "cost after each iteration",
-        palette::BLUE,
-        Mark::Solid,
-    )];
-    if !edits.is_empty() {
-        key.push(KeyEntry::new("edit", palette::VERMILLION, Mark::Dots));
-    }
-    figure_ui(
+    // The title names the one line; a key only once edits mark it.
+    let key = if edits.is_empty() {
+        Vec::new()
+    } else {
+        vec![
+            KeyEntry::new("cost after each iteration", palette::BLUE, Mark::Solid),
+            KeyEntry::new("edit", palette::VERMILLION, Mark::Dots),
+        ]
+    };
+    // At least a decade of range around the costs (one cost at iteration 0, a
+    // converged run), so that the axis has round values to label.
+    let (low, high) = segments
+        .iter()
+        .flatten()
+        .map(|p| p[1])
+        .fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), v| {
+            (a.min(v), b.max(v))
+        });
+    let span = if high - low < 1.0 {
+        let middle = 0.5 * (low + high);
+        Some((middle - 0.5, middle + 0.5))
+    } else {
+        None
+    };
+    log_figure_ui(
         ui,
         &Figure {
             title: "Cost per iteration (log scale)",
@@ -123,11 +140,13 @@ fn cost_plot(ui: &mut egui::Ui, session: &PoseGraphSession, height: f32) {
             height,
         },
         |h, y| {
-            figure_plot("pose_graph_cost", "iteration", y, h)
-                .y_axis_formatter(|mark, _| format!("1e{:.0}", mark.value))
-                .y_grid_spacer(egui_plot::uniform_grid_spacer(|_| [1.0, 1.0, 10.0]))
+            let plot = figure_plot("pose_graph_cost", "iteration", y, h)
                 .include_x(0.0)
-                .include_x(5.0)
+                .include_x(5.0);
+            match span {
+                Some((a, b)) if a.is_finite() && b.is_finite() => plot.include_y(a).include_y(b),
+                _ => plot,
+            }
         },
         move |plot_ui| {
             let radius = marker_radius(4.0, plot_ui.response().rect.height());
@@ -140,6 +159,15 @@ fn cost_plot(ui: &mut egui::Ui, session: &PoseGraphSession, height: f32) {
                 );
             }
             for segment in segments {
+                if let [single] = segment[..] {
+                    // One cost (iteration 0, or right after an edit): a point.
+                    plot_ui.points(
+                        Points::new("cost", PlotPoints::new(vec![single]))
+                            .color(palette::BLUE)
+                            .radius(radius),
+                    );
+                    continue;
+                }
                 plot_ui.line(
                     Line::new("cost", PlotPoints::new(thin(segment)))
                         .color(palette::BLUE)
@@ -157,13 +185,30 @@ fn cost_plot(ui: &mut egui::Ui, session: &PoseGraphSession, height: f32) {
     );
 }
 
-fn image_ui(ui: &mut egui::Ui, texture: Option<&egui::TextureHandle>, height: f32, name: &str) {
+/// A sparsity image as large as the space left under its title allows (every
+/// block of it on screen, none cut at the panel's foot), recorded as `name`'s
+/// image in the figure records.
+fn image_ui(ui: &mut egui::Ui, texture: Option<&egui::TextureHandle>, name: &str) {
     let Some(texture) = texture else {
         return;
     };
-    let side = height.min(ui.available_width()).max(40.0);
-    ui.add(egui::Image::new((texture.id(), egui::vec2(side, side))))
+    // The panel's foot, not the column's reach: a column may run past a short panel.
+    let bottom = ui.clip_rect().bottom().min(ui.max_rect().bottom());
+    let room = bottom - ui.cursor().top() - ui.spacing().item_spacing.y;
+    let side = room.min(ui.available_width()).max(24.0);
+    let response = ui
+        .add(egui::Image::new((texture.id(), egui::vec2(side, side))))
         .on_hover_text(name);
+    record(
+        ui.ctx(),
+        FigureRecord {
+            title: name.to_owned(),
+            data: None,
+            key: None,
+            map: None,
+            image: Some(response.rect),
+        },
+    );
 }
 
 fn rebuild(

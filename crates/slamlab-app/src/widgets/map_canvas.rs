@@ -19,15 +19,11 @@ pub struct MapView {
     pub(crate) center: [f64; 2],
     pub(crate) scale: f32,
     pub(crate) fitted: bool,
-    /// Width kept free for the legend at the map's left edge when fitting, points.
-    pub(crate) legend_space: f32,
     /// The map's size at the last fit; the fit follows size changes until the user
     /// pans or zooms.
     pub(crate) fitted_size: egui::Vec2,
     /// Has the user panned or zoomed since the last fit?
     pub(crate) adjusted: bool,
-    /// The legend's corner: 0 top left, 1 top right, 2 bottom left, 3 bottom right.
-    pub(crate) legend_corner: usize,
     /// A zoom factor on the first fit (the URL's `zoom=`), applied once.
     pub(crate) pending_zoom: Option<f32>,
 }
@@ -38,10 +34,8 @@ impl Default for MapView {
             center: [0.0, 0.0],
             scale: 30.0,
             fitted: false,
-            legend_space: 300.0,
             fitted_size: egui::Vec2::ZERO,
             adjusted: false,
-            legend_corner: 0,
             pending_zoom: None,
         }
     }
@@ -326,6 +320,7 @@ pub fn canvas_ui(
             data: None,
             key: None,
             map: Some(rect),
+            image: None,
         },
     );
     let resized = (rect.size() - view.fitted_size).length() > 1.0;

@@ -418,10 +418,19 @@ pub fn key_ui(ui: &mut egui::Ui, entries: &[KeyEntry]) -> egui::Rect {
     let response = ui
         .horizontal_wrapped(|ui| {
             ui.spacing_mut().item_spacing.x = 4.0;
-            for entry in entries {
+            let row_width = ui.max_rect().width();
+            for (k, entry) in entries.iter().enumerate() {
+                // A sample and its name start a new line together when they do not
+                // fit on this one; the gap between entries never runs past the edge.
+                let width = 18.0 + 4.0 + text_width(ui, &entry.name, egui::TextStyle::Small);
+                let left = ui.available_size_before_wrap().x;
+                if k > 0 && width + 10.0 > left && left < row_width - 1.0 {
+                    ui.end_row();
+                } else if k > 0 {
+                    ui.add_space(6.0);
+                }
                 mark_sample_ui(ui, entry.color, entry.mark);
                 ui.label(egui::RichText::new(&entry.name).small());
-                ui.add_space(6.0);
             }
         })
         .response;
@@ -432,6 +441,7 @@ pub fn key_ui(ui: &mut egui::Ui, entries: &[KeyEntry]) -> egui::Rect {
             data: None,
             key: Some(response.rect),
             map: None,
+            image: None,
         },
     );
     response.rect
@@ -497,6 +507,7 @@ pub fn series_key_ui(ui: &mut egui::Ui, filters: &[(String, egui::Color32)], sty
             data: None,
             key: Some(response.rect),
             map: None,
+            image: None,
         },
     );
 }
@@ -529,6 +540,183 @@ pub fn figure_ui<'a, R>(
     plot: impl FnOnce(f32, &str) -> Plot<'a>,
     add: impl FnOnce(&mut PlotUi<'a>) -> R + 'a,
 ) -> egui_plot::PlotResponse<R> {
+    figure_scaled_ui(ui, figure, false, plot, add)
+}
+
+/// [`figure_ui`] for a plot whose y values are decimal logarithms (a cost over
+/// orders of magnitude): the y axis is labelled with the values themselves
+/// ([`log_axis_marks`], [`log_axis_label`]): decades when two or more fit,
+/// otherwise 1-2-5 or 1..9 times a power of ten, otherwise round values in
+/// between, so that a short plot or a cost that barely changes still shows two
+/// values or more.
+pub fn log_figure_ui<'a, R>(
+    ui: &mut egui::Ui,
+    figure: &Figure<'_>,
+    plot: impl FnOnce(f32, &str) -> Plot<'a>,
+    add: impl FnOnce(&mut PlotUi<'a>) -> R + 'a,
+) -> egui_plot::PlotResponse<R> {
+    figure_scaled_ui(ui, figure, true, |h, y| log_y_axis(plot(h, y)), add)
+}
+
+/// `plot` with a logarithmic y axis: its y values are decimal logarithms, its
+/// marks and labels those of [`log_axis_marks`] and [`log_axis_label`].
+pub fn log_y_axis(plot: Plot<'_>) -> Plot<'_> {
+    plot.y_grid_spacer(|input| {
+        log_axis_marks(
+            input.bounds,
+            input.base_step_size,
+            Y_LABEL_POINTS,
+            f64::from(LEAST_Y_LABEL_POINTS),
+        )
+    })
+    .y_axis_formatter(|mark, _range| log_axis_label(mark))
+}
+
+/// The labelled marks of a logarithmic axis showing `bounds` (decimal logarithms),
+/// where `base_step` is the logarithm 8 screen points span: 1, 2 and 5 times each
+/// power of ten when fewer than three decades show and those stand nearly
+/// `preferred` points apart; else every n-th decade (`preferred` points apart)
+/// when two or more show; otherwise 1, 2 and 5 times
+/// each power of ten, or 1 and 3 times, or 1 to 9 times, when two or more show at
+/// least `least` points apart; otherwise round values of the range itself (a cost from 1.02e3
+/// to 1.07e3). Each mark's `step_size` is the smallest gap between two marks, so
+/// that every mark is labelled.
+pub fn log_axis_marks(
+    bounds: (f64, f64),
+    base_step: f64,
+    preferred: f64,
+    least: f64,
+) -> Vec<egui_plot::GridMark> {
+    let (lo, hi) = (bounds.0.min(bounds.1), bounds.0.max(bounds.1));
+    let points_per_unit = 8.0 / base_step.abs();
+    if !(lo.is_finite() && hi.is_finite() && points_per_unit.is_finite() && hi > lo)
+        || hi - lo > 600.0
+    {
+        return Vec::new();
+    }
+    let marks_of = |values: Vec<f64>| -> Option<Vec<egui_plot::GridMark>> {
+        let gap = values
+            .windows(2)
+            .map(|w| w[1] - w[0])
+            .fold(f64::INFINITY, f64::min);
+        (values.len() >= 2 && gap * points_per_unit >= least - 1e-9).then(|| {
+            values
+                .iter()
+                .map(|&value| egui_plot::GridMark {
+                    value,
+                    step_size: gap,
+                })
+                .collect()
+        })
+    };
+    // Whole decades, every n-th of them so that labels stand `preferred` apart.
+    let mut every = 1.0_f64;
+    while every * points_per_unit < preferred && every < 100.0 {
+        every = match every {
+            e if e < 2.0 => 2.0,
+            e if e < 5.0 => 5.0,
+            e => 2.0 * e,
+        };
+    }
+    let decades_of = |step: f64| -> Vec<f64> {
+        ((lo / step).ceil() as i64..=(hi / step).floor() as i64)
+            .map(|k| k as f64 * step)
+            .collect()
+    };
+    // Two decades alone leave most values far from a label: 1, 2 and 5 times each
+    // power of ten instead where they stand nearly as far apart as the plot prefers.
+    if decades_of(1.0).len() < 3 {
+        let values = round_multiples(lo, hi, &[1.0, 2.0, 5.0]);
+        let gap = values
+            .windows(2)
+            .map(|w| w[1] - w[0])
+            .fold(f64::INFINITY, f64::min);
+        if values.len() >= 3
+            && gap * points_per_unit >= 0.8 * preferred
+            && let Some(marks) = marks_of(values)
+        {
+            return marks;
+        }
+    }
+    for step in [every, 1.0] {
+        if let Some(marks) = marks_of(decades_of(step)) {
+            return marks;
+        }
+    }
+    // Round multiples of each power of ten.
+    for mantissas in [
+        &[1.0, 2.0, 5.0][..],
+        &[1.0, 3.0],
+        &[1.0, 2.0, 3.0, 4.0, 5.0, 6.0, 7.0, 8.0, 9.0],
+    ] {
+        if let Some(marks) = marks_of(round_multiples(lo, hi, mantissas)) {
+            return marks;
+        }
+    }
+    // A range within one step of 1..9: round values in between, by the linear
+    // axis's rule (near enough to evenly spaced over so small a range).
+    let (a, b) = (math::powf(10.0, lo), math::powf(10.0, hi));
+    let height = (hi - lo) * points_per_unit;
+    let linear = value_axis_marks((a, b), (b - a) / height * 8.0, preferred, least);
+    // The logarithm squeezes the upper marks together: keep those `least` apart.
+    let mut values: Vec<f64> = Vec::new();
+    for value in linear
+        .iter()
+        .filter(|m| m.value > 0.0)
+        .map(|m| math::log10(m.value))
+    {
+        if values
+            .last()
+            .is_none_or(|last| (value - last) * points_per_unit >= least - 1e-9)
+        {
+            values.push(value);
+        }
+    }
+    marks_of(values).unwrap_or_default()
+}
+
+/// The logarithms of `mantissas` times each power of ten that lie in `lo..=hi`, in
+/// order.
+fn round_multiples(lo: f64, hi: f64, mantissas: &[f64]) -> Vec<f64> {
+    (lo.floor() as i64..=hi.ceil() as i64)
+        .flat_map(|k| mantissas.iter().map(move |m| k as f64 + math::log10(*m)))
+        .filter(|v| *v >= lo - 1e-12 && *v <= hi + 1e-12)
+        .collect()
+}
+
+/// The label of a mark of a logarithmic axis ([`log_axis_marks`]): the value
+/// itself, as a mantissa and a power of ten with the digits the gap to the next
+/// mark needs ("1e3", "2e3", "1.05e3").
+pub fn log_axis_label(mark: egui_plot::GridMark) -> String {
+    if !(mark.value.is_finite() && mark.step_size.is_finite() && mark.step_size > 0.0) {
+        return String::new();
+    }
+    // The relative gap between neighbouring marks sets the significant digits.
+    let relative = math::powf(10.0, mark.step_size) - 1.0;
+    let digits = ((-math::log10(relative)).ceil() + 2.0).clamp(1.0, 6.0) as i32;
+    let mut exponent = mark.value.floor();
+    let scale = math::powf(10.0, f64::from(digits - 1));
+    let mut mantissa = (math::powf(10.0, mark.value - exponent) * scale).round() / scale;
+    if mantissa >= 10.0 {
+        mantissa /= 10.0;
+        exponent += 1.0;
+    }
+    let text = format!("{mantissa:.*}", (digits - 1) as usize);
+    let text = if text.contains('.') {
+        text.trim_end_matches('0').trim_end_matches('.').to_owned()
+    } else {
+        text
+    };
+    format!("{text}e{exponent:.0}")
+}
+
+fn figure_scaled_ui<'a, R>(
+    ui: &mut egui::Ui,
+    figure: &Figure<'_>,
+    log: bool,
+    plot: impl FnOnce(f32, &str) -> Plot<'a>,
+    add: impl FnOnce(&mut PlotUi<'a>) -> R + 'a,
+) -> egui_plot::PlotResponse<R> {
     let top = ui.cursor().top();
     // Below the title and key: the x axis (labels and name) takes about 34 points.
     let estimated_plot = figure.height - 2.0 * ui.text_style_height(&egui::TextStyle::Body) - 34.0;
@@ -552,7 +740,7 @@ pub fn figure_ui<'a, R>(
     let used = ui.cursor().top() - top;
     let height = (figure.height - used).max(MIN_PLOT_HEIGHT);
     let response = plot(height, if fits { figure.y_label } else { "" }).show(ui, add);
-    edge_values_ui(ui, &response);
+    edge_values_ui(ui, &response, log);
     record(
         ui.ctx(),
         FigureRecord {
@@ -560,6 +748,7 @@ pub fn figure_ui<'a, R>(
             data: Some(response.response.rect),
             key: None,
             map: None,
+            image: None,
         },
     );
     response
@@ -593,12 +782,16 @@ pub fn unit_of(axis: &str) -> Option<&str> {
 /// Where the plot is too short for two labelled y values (a value axis's marks
 /// need [`LEAST_Y_LABEL_POINTS`] between them), writes the values of its top and
 /// bottom edges beside the axis instead, so that its scale can still be read.
-fn edge_values_ui<R>(ui: &egui::Ui, response: &egui_plot::PlotResponse<R>) {
+fn edge_values_ui<R>(ui: &egui::Ui, response: &egui_plot::PlotResponse<R>, log: bool) {
     let rect = response.response.rect;
     let bounds = response.transform.bounds();
     let (lo, hi) = (bounds.min()[1], bounds.max()[1]);
     let base = (hi - lo) / f64::from(rect.height().max(1.0)) * 8.0;
-    let marks = value_axis_marks(
+    let marks = if log {
+        log_axis_marks
+    } else {
+        value_axis_marks
+    }(
         (lo, hi),
         base,
         Y_LABEL_POINTS,
@@ -607,6 +800,18 @@ fn edge_values_ui<R>(ui: &egui::Ui, response: &egui_plot::PlotResponse<R>) {
     if marks.len() >= 2 || !(lo.is_finite() && hi.is_finite()) {
         return;
     }
+    // A logarithmic axis's edges are written as the values themselves ("5.6e5"),
+    // three significant digits at most.
+    let label = |value: f64| {
+        if log {
+            log_axis_label(egui_plot::GridMark {
+                value,
+                step_size: 0.05,
+            })
+        } else {
+            two_significant(value)
+        }
+    };
     let painter = ui.painter();
     let font = egui::FontId::proportional(TICK_FONT_SIZE);
     let color = ui.visuals().text_color();
@@ -617,7 +822,7 @@ fn edge_values_ui<R>(ui: &egui::Ui, response: &egui_plot::PlotResponse<R>) {
         painter.text(
             egui::pos2(rect.left() - 3.0, y),
             align,
-            two_significant(value),
+            label(value),
             font.clone(),
             color,
         );
@@ -661,6 +866,9 @@ pub struct FigureRecord {
     pub key: Option<egui::Rect>,
     /// A map canvas's rectangle (no key lies on a map either).
     pub map: Option<egui::Rect>,
+    /// An image figure's rectangle (the pose graph's sparsity images), all of it on
+    /// screen.
+    pub image: Option<egui::Rect>,
 }
 
 /// How many plots an embedded figure (`embed=1`, a lecture page's iframe) shows side
@@ -692,14 +900,25 @@ pub fn shown_plots(count: usize, embed: bool) -> usize {
 /// A lesson's row of `count` plots side by side, `add(k, ui)` drawing the `k`-th
 /// (in the lesson's order of importance) into its column. An embed shows only the
 /// first [`EMBED_PLOTS`] ([`shown_plots`]), each in a wider column.
-pub fn plot_row(ui: &mut egui::Ui, count: usize, mut add: impl FnMut(usize, &mut egui::Ui)) {
+pub fn plot_row(ui: &mut egui::Ui, count: usize, add: impl FnMut(usize, &mut egui::Ui)) {
     let shown = shown_plots(count, is_embed_layout(ui.ctx()));
     if shown == 0 {
         return;
     }
-    ui.columns(shown, |columns| {
+    columns_ui(ui, shown, add);
+}
+
+/// `count` columns side by side, `add(k, ui)` drawing the `k`-th: egui's
+/// `ui.columns`, but each column lays out top-down without justifying, since egui
+/// justifies the words of a wrapped label in a justified column (a plot's title
+/// spread out word by word).
+pub fn columns_ui(ui: &mut egui::Ui, count: usize, mut add: impl FnMut(usize, &mut egui::Ui)) {
+    if count == 0 {
+        return;
+    }
+    ui.columns(count, |columns| {
         for (k, column) in columns.iter_mut().enumerate() {
-            add(k, column);
+            column.with_layout(egui::Layout::top_down(egui::Align::LEFT), |ui| add(k, ui));
         }
     });
 }
@@ -801,6 +1020,65 @@ mod tests {
         assert_eq!(step_down(5.0), 2.5);
         assert_eq!(step_down(0.2), 0.1);
         assert_eq!(step_down(1.0), 0.5);
+    }
+
+    #[test]
+    fn a_log_axis_shows_two_values_or_more_at_every_size() {
+        // (log10 bounds, data height in points): three decades on a tall plot, one
+        // cost at iteration 0 (egui widens a single value's range), a cost that
+        // barely changes, tiny plots of an 800 x 500 window.
+        for ((lo, hi), height) in [
+            ((0.0, 3.2), 200.0),
+            ((-1.0, 12.0), 40.0),
+            ((-0.5, 0.5), 30.0),
+            ((2.31, 2.52), 43.0),
+            ((3.01, 3.03), 43.0),
+            ((3.0101, 3.0102), 60.0),
+            ((-6.2, -5.9), 35.0),
+        ] {
+            let base = (hi - lo) / height * 8.0;
+            let marks = log_axis_marks((lo, hi), base, 30.0, 13.0);
+            assert!(marks.len() >= 2, "{lo}..{hi} on {height}: {marks:?}");
+            let labels: Vec<String> = marks.iter().map(|m| log_axis_label(*m)).collect();
+            for (w, m) in marks.windows(2).zip(&marks) {
+                assert!(
+                    (w[1].value - w[0].value) / (hi - lo) * height >= 13.0 - 1e-6,
+                    "{lo}..{hi}: {labels:?}"
+                );
+                assert!(m.value >= lo - 1e-9 && m.value <= hi + 1e-9);
+            }
+            let mut unique = labels.clone();
+            unique.dedup();
+            assert_eq!(unique, labels, "{lo}..{hi}: distinct labels");
+        }
+        let labels = |lo: f64, hi: f64, height: f64| -> Vec<String> {
+            log_axis_marks((lo, hi), (hi - lo) / height * 8.0, 30.0, 13.0)
+                .into_iter()
+                .map(log_axis_label)
+                .collect()
+        };
+        // Decades when two fit; 1-2-5 within one decade; round values in between.
+        assert_eq!(labels(0.0, 3.2, 200.0), ["1e0", "1e1", "1e2", "1e3"]);
+        // A cost from 1e3 down to 43 on 140 points: not only 1e2 and 1e3.
+        assert_eq!(
+            labels(1.6, 3.05, 140.0),
+            ["5e1", "1e2", "2e2", "5e2", "1e3"]
+        );
+        assert_eq!(labels(-0.5, 0.5, 60.0), ["5e-1", "1e0", "2e0"]);
+        assert_eq!(labels(2.31, 2.52, 43.0), ["2.5e2", "3e2"]);
+        let narrow = labels(3.01, 3.03, 43.0);
+        assert!(
+            narrow.len() >= 2 && narrow.iter().all(|l| l.starts_with("1.0")),
+            "{narrow:?}"
+        );
+        assert!(log_axis_marks((f64::NAN, 1.0), 0.1, 30.0, 13.0).is_empty());
+        assert!(log_axis_marks((1.0, 1.0), 0.1, 30.0, 13.0).is_empty());
+        let label = |value, step_size| log_axis_label(egui_plot::GridMark { value, step_size });
+        assert_eq!(label(3.0, 1.0), "1e3");
+        assert_eq!(label(math::log10(2000.0), 0.3), "2e3");
+        assert_eq!(label(math::log10(1050.0), 0.004), "1.05e3");
+        assert_eq!(label(math::log10(999.999_999), 0.3), "1e3");
+        assert_eq!(label(f64::NAN, 1.0), "");
     }
 
     #[test]

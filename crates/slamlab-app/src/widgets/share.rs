@@ -50,12 +50,23 @@ pub fn share_ui(
         ui.checkbox(&mut embed, "for embedding (embed=1)");
     });
     let mut shown: &str = &link;
+    let mut layouter = |ui: &egui::Ui, text: &dyn egui::TextBuffer, wrap_width: f32| {
+        let mut job = egui::text::LayoutJob::simple(
+            link_for_wrapping(text.as_str()),
+            egui::TextStyle::Monospace.resolve(ui.style()),
+            ui.visuals().widgets.inactive.text_color(),
+            wrap_width,
+        );
+        job.keep_trailing_whitespace = true;
+        ui.fonts_mut(|f| f.layout_job(job))
+    };
     ui.add(
         egui::TextEdit::multiline(&mut shown)
             .desired_rows(2)
             .desired_width(f32::INFINITY)
             .code_editor()
             .interactive(true)
+            .layouter(&mut layouter)
             .hint_text("share link"),
     )
     .on_hover_text(hover);
@@ -63,4 +74,27 @@ pub fn share_ui(
         ui.label(note);
     }
     ui.data_mut(|d| d.insert_temp(id, embed));
+}
+
+/// The link as it is drawn: its hyphens as non-breaking hyphens (U+2011, the same
+/// glyph), so that a narrow panel wraps the link at its punctuation (after an `&`,
+/// a `,` or an `=`) and never inside a lesson's name ("landmark-" / "slam"). One
+/// character for one, so the text field's cursor and copy (of the link itself)
+/// are unchanged.
+pub fn link_for_wrapping(link: &str) -> String {
+    link.replace('-', "\u{2011}")
+}
+
+#[cfg(test)]
+mod wrapping_tests {
+    use super::*;
+
+    #[test]
+    fn a_link_keeps_its_characters_and_its_lesson_names_whole() {
+        let link = "?lesson=landmark-slam&estimator=ekf,ukf";
+        let shown = link_for_wrapping(link);
+        assert_eq!(shown.chars().count(), link.chars().count());
+        assert!(!shown.contains('-'));
+        assert!(shown.starts_with("?lesson=landmark\u{2011}slam&"));
+    }
 }

@@ -403,3 +403,44 @@ const FILTERS_NATIVE: [&str; 3] = [
     "ukf=0.001541246456905519",
     "particles=0.021033324669198564",
 ];
+
+/// The output canvas zooms on scroll; its *Reset view* brings back the fitted view.
+#[test]
+fn reset_view_undoes_a_zoom_of_the_output() {
+    let mut h = super::common::harness_sized("lesson=filters", egui::vec2(1280.0, 800.0));
+    h.run();
+    let fitted = lesson(&h).output_scale();
+    let maps: Vec<egui::Rect> = slamlab_app::widgets::plots::figure_records(&h.ctx)
+        .iter()
+        .filter_map(|r| r.map)
+        .collect();
+    let Some(output) = maps.last().copied() else {
+        panic!("no canvas recorded");
+    };
+    h.event(egui::Event::PointerMoved(output.center()));
+    for _ in 0..10 {
+        h.event(egui::Event::MouseWheel {
+            unit: egui::MouseWheelUnit::Point,
+            delta: egui::vec2(0.0, 60.0),
+            phase: egui::TouchPhase::Move,
+            source: egui::MouseWheelSource::Unknown,
+            modifiers: egui::Modifiers::NONE,
+        });
+        h.step();
+    }
+    h.run();
+    let zoomed = lesson(&h).output_scale();
+    assert!(
+        (zoomed / fitted - 1.0).abs() > 0.05,
+        "scrolling zooms: {fitted} -> {zoomed}"
+    );
+    let buttons: Vec<_> = h.get_all_by_label("Reset view").collect();
+    assert_eq!(buttons.len(), 2, "one per canvas");
+    buttons[1].click();
+    h.run();
+    let back = lesson(&h).output_scale();
+    assert!(
+        (back / fitted - 1.0).abs() < 1e-3,
+        "{fitted} -> {zoomed} -> {back}"
+    );
+}

@@ -537,3 +537,29 @@ fn measure_recovery_after_a_kidnap() {
         }
     }
 }
+
+/// A lecture figure shows the error and a second plot with data: w_slow against
+/// w_fast with Augmented MCL, the particle count and N_eff without it (plain MCL
+/// keeps no such averages).
+#[test]
+fn an_embedded_figures_second_plot_has_data() {
+    for (query, second) in [
+        (
+            "lesson=kidnap&estimator=mcl&embed=1&tick=20",
+            "Particles and N_eff",
+        ),
+        (
+            "lesson=kidnap&estimator=amcl&embed=1&tick=20",
+            "w_slow and w_fast",
+        ),
+    ] {
+        let mut h = super::common::harness_sized(query, egui::vec2(900.0, 600.0));
+        h.run();
+        let titles: Vec<String> = slamlab_app::widgets::plots::figure_records(&h.ctx)
+            .into_iter()
+            .filter(|r| r.data.is_some())
+            .map(|r| r.title)
+            .collect();
+        assert_eq!(titles, ["Position error", second], "{query}");
+    }
+}

@@ -407,3 +407,83 @@ fn the_comparison_key_stays_off_the_graph_at_800_by_500() {
     }
     assert!(super::common::label_visible(&h, "optimized with no kernel"));
 }
+
+/// The cost plot's log axis shows two values or more at iteration 0 (one cost, a
+/// range under a decade), after a few iterations and after the solver converged,
+/// in the app at 800 x 500 and 1280 x 800 and embedded at 900 x 600; and both
+/// sparsity images are on screen whole.
+#[test]
+fn the_cost_plot_reads_at_every_iteration_and_size() {
+    for (query, size) in [
+        ("lesson=pose-graph&tick=0", egui::vec2(800.0, 500.0)),
+        ("lesson=pose-graph&tick=1", egui::vec2(800.0, 500.0)),
+        ("lesson=pose-graph&tick=3", egui::vec2(800.0, 500.0)),
+        ("lesson=pose-graph&tick=0", egui::vec2(1280.0, 800.0)),
+        ("lesson=pose-graph&tick=40", egui::vec2(1280.0, 800.0)),
+        ("lesson=pose-graph&tick=0&embed=1", egui::vec2(900.0, 600.0)),
+    ] {
+        let mut h = super::common::harness_sized(query, size);
+        h.run();
+        if let Some(dir) = std::env::var_os("SLAMLAB_SCREENSHOTS")
+            && let Some(image) = render_or_skip(&mut h)
+        {
+            let name = format!(
+                "{}_{}x{}.png",
+                query.replace(['=', '&'], "_"),
+                size.x as u32,
+                size.y as u32
+            );
+            let _ = image.save(std::path::Path::new(&dir).join(name));
+        }
+        let records = slamlab_app::widgets::plots::figure_records(&h.ctx);
+        let Some(data) = records
+            .iter()
+            .find(|r| r.title.starts_with("Cost per iteration"))
+            .and_then(|r| r.data)
+        else {
+            panic!("{query}: no cost plot");
+        };
+        let mut texts: Vec<(String, egui::Rect)> = Vec::new();
+        fn walk(shape: &egui::Shape, out: &mut Vec<(String, egui::Rect)>) {
+            match shape {
+                egui::Shape::Text(t) => {
+                    out.push((t.galley.text().to_owned(), t.visual_bounding_rect()))
+                }
+                egui::Shape::Vec(shapes) => shapes.iter().for_each(|s| walk(s, out)),
+                _ => {}
+            }
+        }
+        for clipped in &h.output().shapes {
+            walk(&clipped.shape, &mut texts);
+        }
+        let values: Vec<&String> = texts
+            .iter()
+            .filter(|(text, rect)| {
+                text.contains('e')
+                    && text.chars().any(|c| c.is_ascii_digit())
+                    && rect.right() <= data.left() + 1.0
+                    && rect.left() >= data.left() - 80.0
+                    && rect.center().y >= data.top() - 2.0
+                    && rect.center().y <= data.bottom() + 2.0
+            })
+            .map(|(text, _)| text)
+            .collect();
+        let near: Vec<&(String, egui::Rect)> = texts
+            .iter()
+            .filter(|(_, rect)| rect.intersects(data.expand(60.0)))
+            .collect();
+        assert!(
+            values.len() >= 2,
+            "{query} at {size:?}: the cost axis {data:?} shows {values:?}; texts near: {near:?}"
+        );
+        let images: Vec<egui::Rect> = records.iter().filter_map(|r| r.image).collect();
+        let expected = if query.contains("embed") { 1 } else { 2 };
+        assert_eq!(images.len(), expected, "{query}: {images:?}");
+        for image in images {
+            assert!(
+                image.max.y <= size.y + 0.5 && image.height() >= 40.0,
+                "{query} at {size:?}: image {image:?}"
+            );
+        }
+    }
+}

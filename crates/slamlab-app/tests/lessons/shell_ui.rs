@@ -367,6 +367,55 @@ fn every_lessons_share_link_carries_the_figure_keys() {
     }
 }
 
+/// The share link wraps at its punctuation, never inside a lesson's name: in every
+/// lesson's parameter panel at 1280 x 800 the link's first row holds the whole
+/// `?lesson=ID`, and no row ends in a hyphen.
+#[test]
+fn the_share_link_wraps_between_its_parameters() {
+    for entry in LESSONS {
+        // 1280 points wide (the panel's width there), tall enough to show the link.
+        let mut h = harness(
+            &format!("lesson={}&seed=3&tick=12", entry.id),
+            egui::vec2(1280.0, 2400.0),
+        );
+        h.run();
+        let mut rows_of_links: Vec<Vec<String>> = Vec::new();
+        fn walk(shape: &egui::Shape, out: &mut Vec<Vec<String>>) {
+            match shape {
+                egui::Shape::Text(t) if t.galley.text().starts_with("?lesson=") => {
+                    out.push(
+                        t.galley
+                            .rows
+                            .iter()
+                            .map(|r| r.glyphs.iter().map(|g| g.chr).collect())
+                            .collect(),
+                    );
+                }
+                egui::Shape::Vec(shapes) => shapes.iter().for_each(|s| walk(s, out)),
+                _ => {}
+            }
+        }
+        for clipped in &h.output().shapes {
+            walk(&clipped.shape, &mut rows_of_links);
+        }
+        assert!(!rows_of_links.is_empty(), "{}: no link drawn", entry.id);
+        let id: String = entry.id.replace('-', "\u{2011}");
+        for rows in &rows_of_links {
+            assert!(
+                rows[0].starts_with(&format!("?lesson={id}")),
+                "{}: {rows:?}",
+                entry.id
+            );
+            assert!(
+                rows.iter()
+                    .all(|r| !r.ends_with('-') && !r.ends_with('\u{2011}')),
+                "{}: {rows:?}",
+                entry.id
+            );
+        }
+    }
+}
+
 /// Every lesson rendered at 1280 x 800, 800 x 500 and 360 x 480 after 40 ticks draws a picture
 /// (hundreds of colours, not a blank frame). With `SLAMLAB_SCREENSHOTS=DIR` the PNGs
 /// are saved there for a look.
@@ -489,6 +538,25 @@ fn texts(h: &Harness<'_, SlamLabApp>) -> Vec<(String, egui::Rect)> {
         match shape {
             egui::Shape::Text(t) => {
                 out.push((t.galley.text().to_owned(), t.visual_bounding_rect()))
+            }
+            egui::Shape::Vec(shapes) => shapes.iter().for_each(|s| walk(s, out)),
+            _ => {}
+        }
+    }
+    let mut out = Vec::new();
+    for clipped in &h.output().shapes {
+        walk(&clipped.shape, &mut out);
+    }
+    out
+}
+
+/// Every text of the last frame laid out justified over two rows or more (its
+/// words spread apart to fill the width, as egui does in a justified column).
+fn justified_texts(h: &Harness<'_, SlamLabApp>) -> Vec<String> {
+    fn walk(shape: &egui::Shape, out: &mut Vec<String>) {
+        match shape {
+            egui::Shape::Text(t) if t.galley.job.justify && t.galley.rows.len() > 1 => {
+                out.push(t.galley.text().to_owned());
             }
             egui::Shape::Vec(shapes) => shapes.iter().for_each(|s| walk(s, out)),
             _ => {}
@@ -635,6 +703,24 @@ fn every_plot_shows_its_values_and_no_key_sits_on_data() {
                         );
                     }
                 }
+                // An image figure (the pose graph's sparsity images) is on screen
+                // whole: none of its blocks cut at the panel's foot.
+                for image in records.iter().filter_map(|r| r.image) {
+                    assert!(
+                        image.min.x >= -0.5
+                            && image.min.y >= -0.5
+                            && image.max.x <= w + 0.5
+                            && image.max.y <= h_px + 0.5
+                            && image.height() >= 40.0,
+                        "{query} at {w}x{h_px}: an image {image:?} is cut or tiny"
+                    );
+                }
+                // No title or note spread out word by word to the column's width.
+                let spread = justified_texts(&h);
+                assert!(
+                    spread.is_empty(),
+                    "{query} at {w}x{h_px}: justified text {spread:?}"
+                );
                 let texts = texts(&h);
                 for (record, data) in &plots {
                     // Room for two tick labels (13 points apart) and the data.
