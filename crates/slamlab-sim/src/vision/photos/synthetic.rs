@@ -39,15 +39,14 @@ pub fn texture(plane: u64, a: f64, b: f64) -> f64 {
 /// camera's frame: x right, y down, z forward) and its grey level.
 pub fn cast(origin: &Vector3<f64>, direction: &Vector3<f64>) -> Option<(Vector3<f64>, f64)> {
     let mut best: Option<(f64, Vector3<f64>, f64)> = None;
-    let mut consider =
-        |s: f64, plane: u64, coords: PlaneCoordinates<'_>| {
-            if s > 1e-6 && best.as_ref().is_none_or(|b| s < b.0) {
-                let p = origin + direction * s;
-                if let Some((a, b)) = coords(&p) {
-                    best = Some((s, p, texture(plane, a, b)));
-                }
+    let mut consider = |s: f64, plane: u64, coords: PlaneCoordinates<'_>| {
+        if s > 1e-6 && best.as_ref().is_none_or(|b| s < b.0) {
+            let p = origin + direction * s;
+            if let Some((a, b)) = coords(&p) {
+                best = Some((s, p, texture(plane, a, b)));
             }
-        };
+        }
+    };
     // The facade at z = 9 m.
     consider((9.0 - origin.z) / direction.z, 1, &|p| Some((p.x, p.y)));
     // A box face at z = 5 m, 2 m wide, 1.6 m high.
