@@ -35,6 +35,24 @@ fn main() {
             ),
             Err(e) => println!("{}: {e}", method.name()),
         }
+        // The estimating thread's CPU time, less sensitive to other load than
+        // divan's wall-clock times.
+        let runs = 30;
+        let started = cpu_time::ThreadTime::now();
+        for _ in 0..runs {
+            let mut rng = ChaCha8Rng::seed_from_u64(7);
+            let _ = divan::black_box(estimate_two_view(
+                &matches,
+                &camera,
+                config(method),
+                &mut rng,
+            ));
+        }
+        println!(
+            "{}: {:.2} ms thread CPU per estimate (mean of {runs})",
+            method.name(),
+            started.elapsed().as_secs_f64() * 1e3 / runs as f64
+        );
     }
     divan::main();
 }

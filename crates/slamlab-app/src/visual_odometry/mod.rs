@@ -15,6 +15,7 @@
 
 mod explain;
 mod images;
+mod photos;
 mod plots;
 
 use crate::lesson::{self, Lesson, LessonStart, PanelVisibility, StoredSettings};
@@ -71,6 +72,8 @@ pub struct VisualOdometryLesson {
     notices: Vec<String>,
     /// The feature under the pointer: (right image?, match index).
     hovered: Option<(bool, usize)>,
+    /// The student's own photos.
+    photos: photos::PhotoPair,
 }
 
 /// Opens the lesson from the URL's pairs, with what it stored last time.
@@ -118,6 +121,7 @@ impl VisualOdometryLesson {
             view: VoView::default(),
             notices: Vec::new(),
             hovered: None,
+            photos: photos::PhotoPair::default(),
         };
         let wanted = lesson.scenario.pair;
         lesson.show_pair(wanted);
@@ -190,6 +194,12 @@ impl VisualOdometryLesson {
             self.scenario = wanted;
         }
         self.show_pair(pair);
+    }
+
+    /// Loads photos as if picked or dropped (one: the next empty place; two:
+    /// both).
+    pub fn load_photos(&mut self, files: Vec<(String, Result<Vec<u8>, String>)>) {
+        self.photos.load_batch(files);
     }
 
     /// One RANSAC sample.
@@ -336,6 +346,7 @@ impl VisualOdometryLesson {
              not in it (add tick=N for N samples)",
             changed.then_some("Parameters not applied yet are not in the link."),
         );
+        self.photos.controls_ui(ui);
     }
 }
 
@@ -353,6 +364,14 @@ impl crate::widgets::layout::LessonPanels for VisualOdometryLesson {
     }
 
     fn map_ui(&mut self, ui: &mut egui::Ui) {
+        self.photos.poll(ui.ctx());
+        if self.photos.showing() {
+            egui::ScrollArea::vertical()
+                .id_salt("vo_photos_scroll")
+                .auto_shrink([false, false])
+                .show(ui, |ui| self.photos.centre_ui(ui));
+            return;
+        }
         // In a small window the images, the top view and their keys may need more
         // room than there is: they scroll instead of running past the window.
         let hovered = egui::ScrollArea::vertical()
@@ -548,6 +567,7 @@ impl Lesson for VisualOdometryLesson {
             "done": session.is_none_or(TwoViewSession::is_done),
             "estimate": estimate,
             "vo_steps": self.run.steps.len(),
+            "photos": self.photos.test_state(),
             "trajectory_rmse": {
                 "wheel_odometry": r.wheel_odometry,
                 "visual_odometry": r.visual_odometry,

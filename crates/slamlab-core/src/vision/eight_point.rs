@@ -57,8 +57,11 @@ pub fn constraint_row(left: &Vector3<f64>, right: &Vector3<f64>) -> [f64; 9] {
 /// The unit vector `f` minimizing `‖A f‖` (Eq. 4.21): the right singular vector
 /// of the smallest singular value, as a 3x3 matrix row by row.
 pub(crate) fn smallest_right_singular(rows: &[[f64; 9]]) -> Result<Matrix3<f64>, VisionError> {
+    if let Ok(minimal) = <&[[f64; 9]; EIGHT]>::try_from(rows) {
+        return null_vector_of_eight(minimal);
+    }
     let last_row = if rows.len() <= 9 {
-        // A minimal sample: pad with zero rows to 9x9 so the SVD returns all of V.
+        // Pad with zero rows to 9x9 so the SVD returns all of V.
         let mut a = SMatrix::<f64, 9, 9>::zeros();
         for (i, row) in rows.iter().enumerate() {
             for (j, v) in row.iter().enumerate() {
@@ -90,7 +93,12 @@ pub(crate) fn smallest_right_singular(rows: &[[f64; 9]]) -> Result<Matrix3<f64>,
         // Sorted descending: the last row of Vᵀ belongs to the smallest value.
         SVector::<f64, 9>::from_iterator(v_t.row(8).iter().copied())
     };
-    let f = last_row;
+    as_matrix(&last_row)
+}
+
+/// The 3x3 matrix of a 9-vector read row by row; an error if a value is not
+/// finite.
+fn as_matrix(f: &SVector<f64, 9>) -> Result<Matrix3<f64>, VisionError> {
     if f.iter().any(|v| !v.is_finite()) {
         return Err(VisionError::Degenerate(
             "the SVD returned non-finite values",
@@ -99,6 +107,74 @@ pub(crate) fn smallest_right_singular(rows: &[[f64; 9]]) -> Result<Matrix3<f64>,
     Ok(Matrix3::new(
         f[0], f[1], f[2], f[3], f[4], f[5], f[6], f[7], f[8],
     ))
+}
+
+/// The null vector of a minimal sample's 8x9 matrix `A` (Eq. 4.21 with eight
+/// rows: `A f = 0` exactly, so the smallest right singular vector is the null
+/// vector), by Gaussian elimination with full pivoting and back-substitution,
+/// about ten times cheaper than an SVD inside RANSAC's loop. The rank test is
+/// the elimination's: a pivot below `1e-9` times the largest entry of `A` means
+/// rank below 8 (the matches fit more than one F), the counterpart of
+/// [`check_rank`]'s test on the singular values.
+fn null_vector_of_eight(rows: &[[f64; 9]; EIGHT]) -> Result<Matrix3<f64>, VisionError> {
+    let mut a = *rows;
+    let mut columns: [usize; 9] = std::array::from_fn(|j| j);
+    let largest = a
+        .iter()
+        .flat_map(|row| row.iter())
+        .fold(0.0f64, |m, v| m.max(v.abs()));
+    if !(largest > 0.0 && largest.is_finite()) {
+        return Err(VisionError::Degenerate(
+            "the matches are all zero or not finite",
+        ));
+    }
+    for k in 0..EIGHT {
+        let (mut pr, mut pc, mut pivot) = (k, k, 0.0f64);
+        for (i, row) in a.iter().enumerate().skip(k) {
+            for (j, v) in row.iter().enumerate().skip(k) {
+                if v.abs() > pivot {
+                    (pr, pc, pivot) = (i, j, v.abs());
+                }
+            }
+        }
+        if !(pivot > 1e-9 * largest) {
+            return Err(VisionError::Degenerate(
+                "the matches fit more than one F (all scene points on one plane, or repeated matches)",
+            ));
+        }
+        a.swap(k, pr);
+        if pc != k {
+            for row in a.iter_mut() {
+                row.swap(k, pc);
+            }
+            columns.swap(k, pc);
+        }
+        let head = a[k];
+        for row in a.iter_mut().skip(k + 1) {
+            let factor = row[k] / head[k];
+            if factor != 0.0 {
+                for j in k..9 {
+                    row[j] -= factor * head[j];
+                }
+            }
+        }
+    }
+    // Upper triangular in the permuted columns: the free (last) unknown is 1.
+    let mut x = [0.0; 9];
+    x[8] = 1.0;
+    for k in (0..EIGHT).rev() {
+        let sum: f64 = (k + 1..9).map(|j| a[k][j] * x[j]).sum();
+        x[k] = -sum / a[k][k];
+    }
+    let mut f = SVector::<f64, 9>::zeros();
+    for (j, &column) in columns.iter().enumerate() {
+        f[column] = x[j];
+    }
+    let norm = f.norm();
+    if !(norm > 0.0 && norm.is_finite()) {
+        return Err(VisionError::Degenerate("the null vector vanished"));
+    }
+    as_matrix(&(f / norm))
 }
 
 /// `A` must have rank 8 for a unique F: a second zero singular value means the
@@ -172,15 +248,18 @@ pub fn fundamental_eight_point(
     } else {
         (Matrix3::identity(), Matrix3::identity())
     };
-    let rows: Vec<[f64; 9]> = matches
-        .iter()
-        .map(|m| {
-            let l = t_left * Vector3::new(m.left.x, m.left.y, 1.0);
-            let r = t_right * Vector3::new(m.right.x, m.right.y, 1.0);
-            constraint_row(&l, &r)
-        })
-        .collect();
-    let f_hat = project_to_rank_two(&smallest_right_singular(&rows)?);
+    let row = |m: &Correspondence| {
+        let l = t_left * Vector3::new(m.left.x, m.left.y, 1.0);
+        let r = t_right * Vector3::new(m.right.x, m.right.y, 1.0);
+        constraint_row(&l, &r)
+    };
+    let f_hat = if let Ok(minimal) = <&[Correspondence; EIGHT]>::try_from(matches) {
+        // A minimal sample (RANSAC's inner loop): no allocation.
+        project_to_rank_two(&null_vector_of_eight(&minimal.map(|m| row(&m)))?)
+    } else {
+        let rows: Vec<[f64; 9]> = matches.iter().map(row).collect();
+        project_to_rank_two(&smallest_right_singular(&rows)?)
+    };
     let f = t_right.transpose() * f_hat * t_left;
     let norm = f.norm();
     if !(norm > 0.0 && norm.is_finite()) {

@@ -329,9 +329,9 @@ fn five_point_ransac_survives_half_outliers() {
         median(translation.clone()),
         within_bound
     );
-    // Measured (seed 21): median 0.363 deg, 85 of 100 below 1 deg, translation
-    // median 1.06 deg, every run stopped by its adaptive bound, 179 wrong
-    // matches among 9284 inliers. The 99 % below 1 deg of the specification
+    // Measured (seed 21): median 0.425 deg, 84 of 100 below 1 deg, translation
+    // median 1.01 deg, every run stopped by its adaptive bound, 176 wrong
+    // matches among 9327 inliers. The 99 % below 1 deg of the specification
     // does not reproduce with 1 px noise in this geometry (60 deg field of
     // view, depths 4-12 m, 2 m baseline); see docs/visual-odometry.md.
     assert!(
@@ -357,10 +357,10 @@ fn eight_point_ransac_survives_half_outliers() {
         median(translation.clone()),
         within_bound
     );
-    // Measured (seed 22): median 0.311 deg, 91 of 100 below 1 deg, translation
-    // median 0.96 deg, 199 wrong matches among 9289 inliers. With s = 8 and
-    // w ≈ 0.45 the bound log(0.01)/log(1 − w⁸) is in the thousands: some runs
-    // reach the 5000 cap.
+    // Measured (seed 22): median 0.358 deg, 95 of 100 below 1 deg, translation
+    // median 1.13 deg, 90 of 100 runs stopped by the bound, 205 wrong matches
+    // among 9369 inliers. With s = 8 and w ≈ 0.45 the bound
+    // log(0.01)/log(1 − w⁸) is in the thousands: some runs reach the 5000 cap.
     assert!(
         share_below(&rotation, 1.0) >= 85,
         "{}",
@@ -368,7 +368,8 @@ fn eight_point_ransac_survives_half_outliers() {
     );
     assert!(median(rotation) < 0.5);
     assert!(median(translation) < 1.5);
-    assert!(within_bound >= 50, "{within_bound}");
+    // 85 of 100 when local optimization stopped after three refits.
+    assert!(within_bound >= 88, "{within_bound}");
     assert!(kept_outliers * 33 < kept, "{kept_outliers} of {kept}");
 }
 
@@ -485,4 +486,35 @@ fn sampson_distance_is_the_pixel_distance_for_a_horizontal_epipolar_geometry() {
     let line = epipolar_line(&f, &m.left).unwrap();
     // Line v = 20 in the right image: distance of (40, 23) is 3 pixels.
     assert!((line.dot(&Vector3::new(40.0, 23.0, 1.0)).abs() - 3.0).abs() < 1e-12);
+}
+
+/// `run` stops counting a hypothesis's inliers once it cannot beat the best;
+/// the best hypothesis, its inliers and the bound are those of stepping.
+#[test]
+fn running_gives_what_stepping_gives() {
+    let mut rng = ChaCha8Rng::seed_from_u64(5);
+    let k = camera();
+    let pose = random_pose(&mut rng, 10.0, 2.0);
+    let s = scene(&mut rng, pose, 300, 1.0, 0.5, false);
+    for method in [Method::EightPoint, Method::FivePoint] {
+        let config = RansacConfig {
+            method,
+            max_iterations: 5000,
+            ..RansacConfig::default()
+        };
+        let mut stepped = Ransac::new(&s.matches, &k, config).unwrap();
+        let mut rng_a = ChaCha8Rng::seed_from_u64(9);
+        while stepped.step(&mut rng_a).is_some() {}
+        let mut run = Ransac::new(&s.matches, &k, config).unwrap();
+        let mut rng_b = ChaCha8Rng::seed_from_u64(9);
+        run.run(&mut rng_b);
+        assert_eq!(run.iteration(), stepped.iteration(), "{method:?}");
+        assert_eq!(run.bound(), stepped.bound(), "{method:?}");
+        assert_eq!(
+            run.best_fundamental(),
+            stepped.best_fundamental(),
+            "{method:?}"
+        );
+        assert!(run.iteration() < 5000, "{method:?} stopped by the cap");
+    }
 }

@@ -3,7 +3,8 @@
 //! docking approach toward a station in front of a white facade, the features
 //! it sees (projections with pixel noise, a share of wrong matches), the
 //! two-view experiment, the headless visual-odometry run, the lesson's
-//! parameter table and its RANSAC stepped one sample at a time.
+//! parameter table and its RANSAC stepped one sample at a time, and two real
+//! photos matched by FAST corners and BRIEF descriptors ([`photos`]).
 //!
 //! Only this module holds the truth; the estimators in
 //! `slamlab_core::vision` see pixel matches and the intrinsics.
@@ -11,6 +12,7 @@
 pub mod experiment;
 pub mod odometry;
 pub mod params;
+pub mod photos;
 pub mod session;
 pub mod world;
 

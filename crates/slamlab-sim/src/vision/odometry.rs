@@ -343,13 +343,23 @@ mod tests {
         let run = run_visual_odometry(VoSettings::default());
         let r = run.trajectory_rmse;
         eprintln!("{r:?}");
-        assert_eq!(run.truth.len(), 40);
+        let rotation: Vec<f64> = run
+            .steps
+            .iter()
+            .filter_map(|s| s.rotation_error_deg)
+            .collect();
+        let mean_rotation = rotation.iter().sum::<f64>() / rotation.len().max(1) as f64;
+        eprintln!("mean rotation error per step {mean_rotation:.4} deg");
         // Measured (seed 1): wheel odometry 0.47 m, VO scaled by the wheel
-        // speeds 0.66 m, unit-scale VO 7.5 m. Over 20 m with a 0.01 rad/s gyro
-        // bias the wheels still win: each VO step's rotation error (0.1-0.5 deg
-        // with 1 px noise) accumulates into heading drift as fast.
+        // speeds 0.87 m, unit-scale VO 6.6 m; a mean rotation error of 0.161 deg
+        // per step. Over 20 m with a 0.01 rad/s gyro bias the wheels still win:
+        // each VO step's rotation error accumulates into heading drift as fast.
+        // (With local optimization stopped after three refits the
+        // steps' mean rotation error was 0.196 deg, the chained RMSE 0.66 m by
+        // the luck of how the errors cancelled along this one run.)
+        assert!(mean_rotation < 0.17, "{mean_rotation}");
         assert!((r.wheel_odometry - 0.473).abs() < 0.01, "{r:?}");
-        assert!((r.visual_odometry - 0.662).abs() < 0.01, "{r:?}");
+        assert!((r.visual_odometry - 0.871).abs() < 0.01, "{r:?}");
         // Unit steps are 1 m where the vehicle moved 0.2-0.75 m: the scale is lost.
         assert!(
             r.visual_odometry_unit_scale > 3.0 * r.visual_odometry,
