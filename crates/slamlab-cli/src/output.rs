@@ -132,14 +132,19 @@ impl Write for Output<'_> {
 /// terminal; in a log (stderr not a terminal) a line every tenth of the way
 /// instead. Safe to share between threads.
 pub fn trials_bar(label: &'static str, total: usize) -> indicatif::ProgressBar {
+    units_bar(label, total, "trials")
+}
+
+/// A progress bar like [`trials_bar`] that counts `unit` (scans, steps, ...).
+pub fn units_bar(label: &'static str, total: usize, unit: &str) -> indicatif::ProgressBar {
     let bar = if std::io::stderr().is_terminal() {
         indicatif::ProgressBar::new(total as u64)
     } else {
         indicatif::ProgressBar::hidden()
     };
-    if let Ok(style) = indicatif::ProgressStyle::with_template(
-        "{prefix} [{bar:30}] {pos}/{len} trials, {elapsed} (about {eta} left)",
-    ) {
+    if let Ok(style) = indicatif::ProgressStyle::with_template(&format!(
+        "{{prefix}} [{{bar:30}}] {{pos}}/{{len}} {unit}, {{elapsed}} (about {{eta}} left)"
+    )) {
         bar.set_style(style.progress_chars("=> "));
     }
     bar.set_prefix(label);
@@ -150,12 +155,23 @@ pub fn trials_bar(label: &'static str, total: usize) -> indicatif::ProgressBar {
 /// Advances `bar` to `done` of `total`, and in a log writes a line every tenth
 /// of the way.
 pub fn trials_progress(bar: &indicatif::ProgressBar, label: &str, done: usize, total: usize) {
+    units_progress(bar, label, done, total, "trials");
+}
+
+/// [`trials_progress`] for a bar that counts `unit`.
+pub fn units_progress(
+    bar: &indicatif::ProgressBar,
+    label: &str,
+    done: usize,
+    total: usize,
+    unit: &str,
+) {
     bar.set_position(done as u64);
     if bar.is_hidden()
         && done > 0
         && (done == total || (done * 10 / total.max(1)) != ((done - 1) * 10 / total.max(1)))
     {
-        eprintln!("{label}: {done}/{total} trials");
+        eprintln!("{label}: {done}/{total} {unit}");
     }
     if done == total {
         bar.finish();

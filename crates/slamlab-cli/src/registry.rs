@@ -34,6 +34,7 @@ pub static EXPERIMENTS: &[&dyn Experiment] = &[
     &experiments::resampling::Resampling,
     &experiments::fusion::Fusion,
     &experiments::kidnap::Kidnap,
+    &experiments::krp::Krp,
     &experiments::pose_graph::PoseGraph,
     &experiments::unscented::Unscented,
     &experiments::two_view::TwoView,

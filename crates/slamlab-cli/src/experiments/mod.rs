@@ -7,6 +7,7 @@ pub mod fastslam;
 pub mod fusion;
 pub mod grid_fastslam;
 pub mod kidnap;
+pub mod krp;
 pub mod pose_graph;
 pub mod resampling;
 pub mod two_view;

@@ -9,7 +9,7 @@
 
 use crate::command::RunLesson;
 use crate::map::{map_arg, read_map};
-use crate::output::{Output, progress_bar};
+use crate::output::{Output, units_bar, units_progress};
 use anyhow::{Context, Result, bail};
 use clap::{Arg, ArgMatches, Command};
 use serde_json::json;
@@ -93,7 +93,7 @@ impl RunLesson for Cartographer {
             .arg(count("optimize_every_n_nodes", "default 30"))
             .arg(number("huber_scale", "default 10"))
             .arg(number("T", "kidnap trigger threshold (default 1.5)"))
-            .arg(count("f_size", "kidnap average filter size (default 5)"))
+            .arg(count("f_size", "kidnap average filter size (default 4)"))
     }
 
     fn run(&self, m: &ArgMatches, out: &mut Output) -> Result<()> {
@@ -177,13 +177,10 @@ impl RunLesson for Cartographer {
             eprintln!("warning: {note}");
         }
         let total = sim.input().scans.len();
-        let mut progress = progress_bar("cartographer");
+        let bar = units_bar("cartographer", total, "scans");
         let started = Instant::now();
         while sim.step() {
-            let done = sim.scans_done();
-            if done % 100 == 0 || done == total {
-                progress(done, total);
-            }
+            units_progress(&bar, "cartographer", sim.scans_done(), total, "scans");
         }
         let time_ms = started.elapsed().as_secs_f64() * 1e3;
         let summary = sim.summary(kidnap_at, time_ms);

@@ -36,7 +36,7 @@ impl Default for KidnapDetectorParams {
     fn default() -> Self {
         Self {
             threshold: 1.5,
-            filter_size: 5,
+            filter_size: 4,
         }
     }
 }

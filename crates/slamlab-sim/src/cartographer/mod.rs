@@ -95,6 +95,18 @@ pub struct CartographerParams {
     /// in the maze's repeating corridors a 7 m window finds matches one
     /// corridor over that score above `min_score`; 0 or less: no gate).
     pub loop_closure_gate: f64,
+    /// A merge of two maps is taken only when the new map's scans, moved by
+    /// the proposed correction, put at least this share of their points
+    /// that land on cells the old map knows on cells it holds occupied (a
+    /// check SLAM Lab adds: a single scan's match over a whole submap at
+    /// every heading is often one corridor or one room over).
+    pub merge_min_occupied_share: f64,
+    /// ... and at least this many of their points land on cells the old map
+    /// knows.
+    pub merge_min_known_points: usize,
+    /// Refine each branch-and-bound match with Eq. 5.5 (Cartographer's Ceres
+    /// refinement after the fast correlative search).
+    pub refine_matches: bool,
     /// Height of the tallest precomputed grid (`branch_and_bound_depth − 1`).
     pub max_height: u32,
     /// Loop closures are searched for every n-th node (Cartographer samples
@@ -139,6 +151,9 @@ impl Default for CartographerParams {
             min_score: 0.55,
             global_min_score: 0.6,
             loop_closure_gate: 0.5,
+            merge_min_occupied_share: 0.945,
+            merge_min_known_points: 450,
+            refine_matches: true,
             max_height: 6,
             constraint_every_n_nodes: 3,
             bbs_max_points: 150,
@@ -281,6 +296,15 @@ impl CartographerParams {
                 ));
                 *value = default;
             }
+        }
+        if !(self.merge_min_occupied_share.is_finite()
+            && (0.0..=1.0).contains(&self.merge_min_occupied_share))
+        {
+            notes.push(format!(
+                "merge_min_occupied_share = {} must be 0 to 1; {} is used",
+                self.merge_min_occupied_share, d.merge_min_occupied_share
+            ));
+            self.merge_min_occupied_share = d.merge_min_occupied_share;
         }
         self.max_height = self.max_height.min(10);
         self.constraint_every_n_nodes = self.constraint_every_n_nodes.max(1);
@@ -442,6 +466,29 @@ pub struct BbsTotals {
     pub exhaustive_candidates: usize,
 }
 
+/// The check of one proposed merge of two maps: the new map's scans moved
+/// by the correction a global match proposes, looked up in the old map.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+pub struct MergeCheck {
+    /// Scan of the node whose global match proposed it.
+    pub scan: usize,
+    /// The old map's submap it matched.
+    pub submap: usize,
+    /// Branch and bound's score of the match.
+    pub score: f64,
+    /// The node's pose in the old map's frame the match implies.
+    pub node_pose: Pose2,
+    /// Nodes of the new map checked.
+    pub nodes: usize,
+    /// Their points that land on cells the old map knows.
+    pub known_points: usize,
+    /// The share of those on cells the old map holds occupied (1 when none
+    /// land on known cells).
+    pub occupied_share: f64,
+    /// Whether the maps were merged on it.
+    pub accepted: bool,
+}
+
 /// One run of Cartographer-style SLAM over an input.
 #[derive(Clone, Debug)]
 pub struct CartographerSim {
@@ -473,9 +520,9 @@ pub struct CartographerSim {
     pub rejected_closures: usize,
     /// Notes for the user (an optimization that failed, ...).
     pub notes: Vec<String>,
+    /// Every proposed merge of two maps and its check.
+    pub merge_checks: Vec<MergeCheck>,
     detector: KidnapDetector,
-    /// A match between maps waiting for a second one that agrees.
-    pending_merge: Option<(Pose2, Constraint)>,
     nodes_since_optimization: usize,
     next: usize,
 }
@@ -500,8 +547,8 @@ impl CartographerSim {
             optimizations: 0,
             rejected_closures: 0,
             notes: Vec::new(),
+            merge_checks: Vec::new(),
             detector: KidnapDetector::new(params.kidnap),
-            pending_merge: None,
             nodes_since_optimization: 0,
             next: 0,
             params,
@@ -555,7 +602,6 @@ impl CartographerSim {
             nodes: 0,
         });
         self.detector.reset();
-        self.pending_merge = None;
         id
     }
 
@@ -816,8 +862,15 @@ impl CartographerSim {
                     continue;
                 }
             };
+            // Cartographer refines the fast correlative match with its Ceres
+            // scan matcher (Eq. 5.5) before the constraint is made.
+            let pose = if self.params.refine_matches {
+                self.refine(s, &points, m.pose)
+            } else {
+                m.pose
+            };
             // The constraint: the node in the submap's frame (Eq. 5.7).
-            let relative = submap_local.between(&m.pose);
+            let relative = submap_local.between(&pose);
             let relative = Pose2::new(relative.x, relative.y, relative.theta);
             if same_map && self.params.loop_closure_gate > 0.0 {
                 let moved = submap_global.compose(&relative);
@@ -845,24 +898,25 @@ impl CartographerSim {
                 continue;
             }
             // A match between maps: the correction that would move the
-            // node's map onto the submap's. It is taken when a second match
-            // (of another node) agrees with it within the gate, so
-            // that one aliased match in a repeating corridor cannot merge
-            // the maps wrongly.
+            // node's map onto the submap's. It is taken only when the new
+            // map's scans, moved by it, agree with the old map (their
+            // points on its occupied cells, not in its free space), so that
+            // one aliased match in a repeating corridor cannot merge the
+            // maps wrongly.
             let target = submap_global.compose(&relative);
             let correction = target.compose(&node_global.inverse());
-            let agrees = self.pending_merge.as_ref().is_some_and(|(c, first)| {
-                first.node != node
-                    && slamlab_core::math::hypot(c.x - correction.x, c.y - correction.y)
-                        <= self.params.loop_closure_gate.max(0.1)
-                    && wrap_angle(c.theta - correction.theta).abs() <= 0.1
-            });
-            if !agrees {
-                self.pending_merge = Some((correction, constraint));
+            let correction = Pose2::new(correction.x, correction.y, correction.theta);
+            let mut check = self.check_merge(root, submap_root, &correction);
+            check.scan = node_scan;
+            check.submap = s;
+            check.score = m.score;
+            check.node_pose = Pose2::new(target.x, target.y, target.theta);
+            check.accepted = check.occupied_share >= self.params.merge_min_occupied_share
+                && check.known_points >= self.params.merge_min_known_points;
+            self.merge_checks.push(check);
+            if !check.accepted {
+                self.rejected_closures += 1;
                 continue;
-            }
-            if let Some((_, first)) = self.pending_merge.take() {
-                self.constraints.push(first);
             }
             self.constraints.push(constraint);
             self.move_map(root, &correction, submap_root);
@@ -871,6 +925,102 @@ impl CartographerSim {
         }
         if merged {
             self.optimize();
+        }
+    }
+
+    /// Refines a branch-and-bound match of `points` in submap `s` (grid
+    /// frame) with Eq. 5.5, pulled towards the match as Cartographer's
+    /// loop-closure Ceres matcher is (translation weight 10, rotation 1, ten
+    /// iterations); the match itself when the refinement fails or wanders
+    /// off by more than a cell.
+    fn refine(&self, s: usize, points: &[Point2], pose: Pose2) -> Pose2 {
+        let params = ScanToMapParams {
+            correlative: false,
+            translation_weight: 10.0,
+            rotation_weight: 1.0,
+            occupied_space_weight: 20.0,
+            max_iterations: 10,
+            ..self.params.local
+        };
+        let r = self.params.resolution;
+        match match_scan_to_map(&self.submaps[s].grid, &self.lookup, points, pose, &params) {
+            Some((m, _))
+                if m.pose.is_finite()
+                    && slamlab_core::math::hypot(m.pose.x - pose.x, m.pose.y - pose.y) <= r
+                    && wrap_angle(m.pose.theta - pose.theta).abs() <= 0.05 =>
+            {
+                m.pose
+            }
+            _ => pose,
+        }
+    }
+
+    /// Looks the scans of the map rooted at `new_root`, moved by
+    /// `correction`, up in the submaps of the map rooted at `old_root`: how
+    /// many of their points land on cells the old map knows, and the share
+    /// of those on or next to cells it holds occupied (a point counts as
+    /// on a wall when any old submap holds its cell or one of the eight
+    /// around it occupied). At most 100 nodes, evenly
+    /// spread over the new map.
+    fn check_merge(&self, new_root: usize, old_root: usize, correction: &Pose2) -> MergeCheck {
+        let new_nodes: Vec<usize> = (0..self.nodes.len())
+            .filter(|&n| self.root(self.nodes[n].trajectory) == new_root)
+            .collect();
+        let old_submaps: Vec<usize> = (0..self.submaps.len())
+            .filter(|&s| self.root(self.submaps[s].trajectory) == old_root)
+            .collect();
+        // Each old submap's grid frame from the global frame.
+        let frames: Vec<Pose2> = old_submaps
+            .iter()
+            .map(|&s| {
+                let sm = &self.submaps[s];
+                sm.local_pose.compose(&sm.global_pose.inverse())
+            })
+            .collect();
+        let take = new_nodes.len().min(100);
+        let (mut known, mut occupied) = (0usize, 0usize);
+        for k in 0..take {
+            let n = new_nodes[k * new_nodes.len() / take];
+            let pose = correction.compose(&self.nodes[n].global_pose);
+            for p in self.nodes[n].points.iter() {
+                let q = slamlab_core::scan::transform_point(&pose, *p);
+                let mut seen = false;
+                let mut hit = false;
+                for (&s, frame) in old_submaps.iter().zip(&frames) {
+                    let g = slamlab_core::scan::transform_point(frame, q);
+                    let grid = &self.submaps[s].grid;
+                    let (i, j) = grid.cell_of(g[0], g[1]);
+                    if grid.probability_at(i, j).is_none() {
+                        continue;
+                    }
+                    seen = true;
+                    // A wall one cell over still counts (a scan's points
+                    // straddle the cells of the wall it hits).
+                    if (-1..=1).any(|di| {
+                        (-1..=1)
+                            .any(|dj| grid.probability_at(i + di, j + dj).is_some_and(|p| p > 0.5))
+                    }) {
+                        hit = true;
+                        break;
+                    }
+                }
+                known += usize::from(seen);
+                occupied += usize::from(hit);
+            }
+        }
+        MergeCheck {
+            scan: 0,
+            submap: 0,
+            score: 0.0,
+            node_pose: Pose2::IDENTITY,
+            nodes: take,
+            known_points: known,
+            occupied_share: if known == 0 {
+                1.0
+            } else {
+                occupied as f64 / known as f64
+            },
+            accepted: false,
         }
     }
 
