@@ -315,6 +315,7 @@ pub fn max_grids_window(
         .open(open)
         .default_width(520.0)
         .resizable(true)
+        .vscroll(true)
         .show(ctx, |ui| {
             let Some(s) = cache.submap else {
                 ui.label(

@@ -130,6 +130,9 @@ pub struct CartographerLesson {
     log_fetch: Option<LogFetch>,
     /// A click on the map kidnaps the robot there.
     pub click_kidnap: bool,
+    /// A built-in map was chosen in place of a log or a loaded map: the
+    /// next reset simulates in it.
+    builtin_chosen: bool,
     advanced: bool,
 }
 
@@ -221,6 +224,7 @@ impl CartographerLesson {
             picker: FilePicker::multiple(),
             log_fetch: None,
             click_kidnap: false,
+            builtin_chosen: false,
             advanced: false,
         })
     }
@@ -283,7 +287,8 @@ impl CartographerLesson {
     /// Starts over with the pending parameters (same seed: same scans).
     pub fn reset(&mut self) {
         let mut scenario = self.pending.scenario.clone();
-        if scenario.map != self.scenario.map {
+        if self.builtin_chosen || scenario.map != self.scenario.map {
+            self.builtin_chosen = false;
             let name = if scenario.map == "office" {
                 "office"
             } else {
@@ -381,6 +386,7 @@ impl CartographerLesson {
         self.source = Source::Log(name.to_owned(), location);
         let scenario = CartographerScenario {
             kidnap_at: None,
+            kidnap_to: None,
             ..self.pending.scenario.clone()
         };
         self.restart_on(scenario, Arc::new(input), None);
@@ -446,6 +452,9 @@ impl CartographerLesson {
 
     /// Runs one scan, timed.
     pub fn step_scan(&mut self) {
+        if self.sim().is_done() {
+            return;
+        }
         let started = web_time::Instant::now();
         self.stepper.step_phase();
         let ms = started.elapsed().as_secs_f64() * 1e3;
@@ -520,7 +529,7 @@ impl CartographerLesson {
                         if ui.selectable_label(current == name, name).clicked() {
                             self.pending.set("map", name);
                             // A log or a loaded map gives way on the next reset.
-                            self.scenario.map = String::new();
+                            self.builtin_chosen = true;
                         }
                     }
                 })
@@ -544,7 +553,10 @@ impl CartographerLesson {
         ui.separator();
         let changed = params::to_pairs(&self.pending.scenario) != params::to_pairs(&running);
         if ui
-            .add_enabled(changed, egui::Button::new("Apply & reset"))
+            .add_enabled(
+                changed || self.builtin_chosen,
+                egui::Button::new("Apply & reset"),
+            )
             .on_hover_text("Start over with these parameters (same seed: same scans)")
             .clicked()
         {

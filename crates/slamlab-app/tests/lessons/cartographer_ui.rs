@@ -52,6 +52,7 @@ fn a_kidnap_at_152_is_detected_there_and_the_maps_merge() {
     assert_eq!(sim.merges.first(), Some(&179));
     assert_eq!(sim.trajectories[1].joined_to, 0);
     let state = lesson(&h).test_state();
+    eprintln!("cartographer state at scan 200: {state}");
     assert_eq!(state["kidnap_detected_at"], 152);
     assert_eq!(state["recovered_at"], 179);
     // Step back replays to the scan before, exactly.
@@ -116,42 +117,55 @@ fn the_kidnap_button_carries_the_robot_and_the_share_link_reproduces_it() {
     );
 }
 
+/// At 800 x 500, 1280 x 800 and embedded at 900 x 600 (web/lecture.html): Step
+/// scan, Run and Kidnap in the top rows, no plot key on a plot's data or the map.
 #[test]
-fn at_800_by_500_the_main_actions_are_in_reach_and_keys_are_off_the_data() {
-    let mut h = harness_sized(
-        "lesson=cartographer&map=maze&kidnap-at=152&seed=3",
-        egui::vec2(800.0, 500.0),
-    );
-    lesson_mut(&mut h).run_to(160);
-    h.run();
-    let screen = egui::Rect::from_min_size(egui::Pos2::ZERO, egui::vec2(800.0, 500.0));
-    for label in ["Step scan", "Run", "Kidnap", "Detection"] {
-        let node = h
-            .query_all_by_label_contains(label)
-            .next()
-            .unwrap_or_else(|| panic!("{label} is not on screen"));
-        let rect = node.rect();
-        assert!(screen.contains_rect(rect), "{label} at {rect:?}");
-        assert!(
-            rect.top() < 120.0,
-            "{label} at {rect:?} is not in the top rows"
+fn at_every_size_the_main_actions_are_in_reach_and_keys_are_off_the_data() {
+    for (w, hgt, embed) in [
+        (800.0, 500.0, false),
+        (1280.0, 800.0, false),
+        (900.0, 600.0, true),
+    ] {
+        let query = format!(
+            "lesson=cartographer&map=maze&kidnap-at=152&seed=3{}",
+            if embed { "&embed=1" } else { "" }
         );
-    }
-    let records = slamlab_app::widgets::plots::figure_records(&h.ctx);
-    let keys: Vec<egui::Rect> = records.iter().filter_map(|r| r.key).collect();
-    for r in &records {
-        for data in r.data.iter().chain(r.map.iter()) {
-            for key in &keys {
-                let overlap = key.intersect(*data);
-                assert!(
-                    !(overlap.width() > 0.5 && overlap.height() > 0.5),
-                    "a key {key:?} lies on '{}' {data:?}",
-                    r.title
-                );
+        let mut h = harness_sized(&query, egui::vec2(w, hgt));
+        lesson_mut(&mut h).run_to(185);
+        h.run();
+        let screen = egui::Rect::from_min_size(egui::Pos2::ZERO, egui::vec2(w, hgt));
+        for label in ["Step scan", "Run", "Kidnap"] {
+            let node = h
+                .query_all_by_label_contains(label)
+                .next()
+                .unwrap_or_else(|| panic!("{label} is not on screen at {w}x{hgt}"));
+            let rect = node.rect();
+            assert!(
+                screen.contains_rect(rect),
+                "{label} at {rect:?} ({w}x{hgt})"
+            );
+            assert!(
+                rect.top() < 130.0,
+                "{label} at {rect:?} is not in the top rows ({w}x{hgt})"
+            );
+        }
+        let records = slamlab_app::widgets::plots::figure_records(&h.ctx);
+        let keys: Vec<egui::Rect> = records.iter().filter_map(|r| r.key).collect();
+        for r in &records {
+            for data in r.data.iter().chain(r.map.iter()) {
+                for key in &keys {
+                    let overlap = key.intersect(*data);
+                    assert!(
+                        !(overlap.width() > 0.5 && overlap.height() > 0.5),
+                        "a key {key:?} lies on '{}' {data:?} ({w}x{hgt})",
+                        r.title
+                    );
+                }
             }
         }
-    }
-    if let Some(image) = render_or_skip(&mut h) {
-        let _ = image.save(std::env::temp_dir().join("slamlab-cartographer-800.png"));
+        if let Some(image) = render_or_skip(&mut h) {
+            let name = format!("slamlab-cartographer-{}x{}.png", w as u32, hgt as u32);
+            let _ = image.save(std::env::temp_dir().join(name));
+        }
     }
 }
