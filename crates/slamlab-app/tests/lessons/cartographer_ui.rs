@@ -55,6 +55,15 @@ fn a_kidnap_at_152_is_detected_there_and_the_maps_merge() {
     eprintln!("cartographer state at scan 200: {state}");
     assert_eq!(state["kidnap_detected_at"], 152);
     assert_eq!(state["recovered_at"], 179);
+    // As `slamlab run cartographer --map maze --steps 200 --kidnap-at 152 --seed 3`
+    // counts them (the first 200 scans of the 600 are the same bits).
+    assert_eq!(state["submaps"], 5);
+    assert_eq!(state["nodes"], 144);
+    assert_eq!(state["loop_closures"], 12);
+    assert_eq!(state["optimizations"], 5);
+    assert_eq!(state["bbs"]["searches"], 57);
+    assert_eq!(state["bbs"]["nodes_evaluated"], 4_626_714);
+    assert_eq!(state["bbs"]["exhaustive_candidates"], 1_022_478_656_u64);
     // Step back replays to the scan before, exactly.
     let pose = state["pose"].clone();
     h.get_by_label("Step back").click();
@@ -77,7 +86,7 @@ fn a_kidnap_at_152_is_detected_there_and_the_maps_merge() {
 }
 
 #[test]
-fn the_full_run_has_13_submaps_and_detection_off_keeps_one_map() {
+fn detection_off_keeps_one_map_and_switching_it_on_replays_to_the_detection() {
     let mut h =
         harness("lesson=cartographer&map=maze&kidnap-at=152&seed=3&detection=off&steps=200");
     lesson_mut(&mut h).run_to(200);
