@@ -120,7 +120,7 @@ pub fn map_ui(
                 let joined = sim.trajectories.get(t).is_some_and(|tr| tr.joined_to != t);
                 ui.label(
                     egui::RichText::new(format!(
-                        "● trajectory {t}{}",
+                        "· trajectory {t}{}",
                         if joined { " (merged)" } else { "" }
                     ))
                     .color(trajectory_color(t))
