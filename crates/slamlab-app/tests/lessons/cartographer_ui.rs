@@ -146,7 +146,7 @@ fn at_every_size_the_main_actions_are_in_reach_and_keys_are_off_the_data() {
         let screen = egui::Rect::from_min_size(egui::Pos2::ZERO, egui::vec2(w, hgt));
         for label in ["Step scan", "Run", "Kidnap"] {
             let node = h
-                .query_all_by_label_contains(label)
+                .query_all_by_label(label)
                 .next()
                 .unwrap_or_else(|| panic!("{label} is not on screen at {w}x{hgt}"));
             let rect = node.rect();
