@@ -793,6 +793,59 @@ async function main() {
     // recorded in metrics.json (filters_drag_*), not asserted: the issue asks for under
     // 16 ms, and the README states what was measured where. A seeded headless run in
     // wasm gives the native table (crates/slamlab-app/tests/lessons/filters_ui.rs pins it).
+    // --- Submaps, loop closure and the kidnapped robot: the thesis's case, a kidnap
+    // before scan 152 of a run with none before, on the maze with seed 3. Running live,
+    // the detector fires at scan 152 and the second trajectory's maps merge into the
+    // first at scan 179 (crates/slamlab-app/tests/lessons/cartographer_ui.rs pins the
+    // same scans natively); a headless run in this page's wasm to scan 200 gives the
+    // native counts exactly (`slamlab run cartographer --map maze --steps 200 --kidnap-at
+    // 152 --seed 3 --json`): branch and bound's candidate count moves with any bit of any
+    // pose. The merge at 179 is a wrong one (docs/cartographer.md): asserted because it
+    // is what the run does.
+    await check("lesson=cartographer detects the kidnap at 152 and merges the maps", async () => {
+      const url = "index.html?lesson=cartographer&map=maze&kidnap-at=152&seed=3";
+      const { context, page: p, log } = await openPage(browser, baseUrl, url, "cartographer");
+      try {
+        await waitRunning(p);
+        const s0 = await waitState(p, (st) => st.lesson === "cartographer" && st.frames > 2, "the cartographer lesson");
+        assert(s0.total_scans === 600 && s0.kidnap_at === 152 && s0.scans === 0, `opened ${JSON.stringify(s0)}`);
+        await p.mouse.click(VIEWPORT.width / 2, VIEWPORT.height / 2); // gives the canvas keyboard focus
+        await p.keyboard.press("Space");
+        const s1 = await waitState(p, (st) => st.recovered_at !== null, "the maps merged", 240_000);
+        assert(JSON.stringify(s1.detections) === "[152]", `detections ${JSON.stringify(s1.detections)}`);
+        assert(s1.kidnap_detected_at === 152 && s1.recovered_at === 179, `detected ${s1.kidnap_detected_at}, merged ${s1.recovered_at}`);
+        assert(s1.trajectories === 2, `${s1.trajectories} trajectories`);
+        await sleep(300);
+        const { stats } = await waitNotBlank(p, "cartographer.png");
+        assertNotBlank(stats, "cartographer.png");
+        const started = Date.now();
+        const headless = JSON.parse(
+          await p.evaluate((q) => window.slamlab.slamlab_test_headless(q, 200), "lesson=cartographer&map=maze&kidnap-at=152&seed=3"),
+        );
+        const seconds = (Date.now() - started) / 1000;
+        const NATIVE = { submaps: 5, nodes: 144, loop_closures: 12, optimizations: 5, searches: 57, nodes_evaluated: 4626714, exhaustive_candidates: 1022478656 };
+        const got = {
+          submaps: headless.submaps,
+          nodes: headless.nodes,
+          loop_closures: headless.loop_closures,
+          optimizations: headless.optimizations,
+          searches: headless.bbs.searches,
+          nodes_evaluated: headless.bbs.nodes_evaluated,
+          exhaustive_candidates: headless.bbs.exhaustive_candidates,
+        };
+        assert(JSON.stringify(got) === JSON.stringify(NATIVE), `headless ${JSON.stringify(got)}, natively ${JSON.stringify(NATIVE)}`);
+        assert(headless.scans === 200 && headless.recovered_at === 179 && JSON.stringify(headless.detections) === "[152]", `headless ${JSON.stringify(headless)}`);
+        metrics.cartographer_maze_200_scans_s = Number(seconds.toFixed(2));
+        metrics.cartographer_scan_ms_median = s1.scan_ms_median;
+        metrics.cartographer_scan_ms_max = s1.scan_ms_max;
+        await assertNoPanic(p);
+        assert(log.problems.length === 0, log.problems.join("; "));
+        return `detected at ${s1.kidnap_detected_at}, merged at ${s1.recovered_at} (${s1.submaps} submaps, ${s1.loop_closures} loop closures); scan median ${s1.scan_ms_median?.toFixed(1)} ms, max ${s1.scan_ms_max?.toFixed(1)} ms; headless 200 scans in ${seconds.toFixed(1)} s, counts identical to native`;
+      } finally {
+        await context.close();
+      }
+    });
+
     await check("lesson=filters drags the prior over 100,000 samples and matches native", async () => {
       const url = "index.html?lesson=filters&function=polar&seed=1";
       const { context, page: p, log } = await openPage(browser, baseUrl, url, "filters");

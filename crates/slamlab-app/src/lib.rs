@@ -9,6 +9,7 @@
 //! An embedded figure has no menu bar: a one-line header (title, panel toggles, a
 //! link that opens the same setup in the full app) above the time bar.
 
+pub mod cartographer;
 pub mod export;
 pub mod filters;
 pub mod frame_stats;

@@ -67,6 +67,14 @@ pub const LESSONS: &[LessonEntry] = &[
         open: crate::mapping::open,
     },
     LessonEntry {
+        id: crate::cartographer::LESSON_ID,
+        title: "Submaps, loop closure and the kidnapped robot",
+        summary: "Cartographer-style SLAM: scans into submaps, a pose graph with branch-and-bound \
+                  loop closures; kidnap the robot while it maps, watch the matching cost give it \
+                  away, a new map start and merge into the first.",
+        open: crate::cartographer::open,
+    },
+    LessonEntry {
         id: crate::filters::LESSON_ID,
         title: "Filters: from Bayes to particles",
         summary: "One Gaussian through one nonlinear step by the EKF, the unscented transform \

@@ -56,6 +56,10 @@ const PARAM_TABLES: &[(&str, Describe)] = &[
         params::describe::<slamlab_sim::mapping::MappingScenario>,
     ),
     (
+        "cartographer",
+        params::describe::<slamlab_sim::cartographer_lesson::CartographerScenario>,
+    ),
+    (
         "pose-graph",
         params::describe::<slamlab_sim::pose_graph_lesson::PoseGraphScenario>,
     ),

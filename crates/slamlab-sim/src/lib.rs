@@ -8,6 +8,7 @@
 //! with the truth afterwards.
 
 pub mod cartographer;
+pub mod cartographer_lesson;
 pub mod consistency;
 pub mod experiments;
 pub mod fastslam;

@@ -5,96 +5,12 @@
 
 use super::MappingView;
 use crate::palette;
+pub use crate::widgets::grid_tiles::GridTiles;
+use crate::widgets::grid_tiles::{draw_path, draw_scan_and_robot};
 use crate::widgets::map_canvas::{self, CanvasColors, MapView, draw_grid, draw_scale_and_axes};
-use egui::{Color32, Pos2, Stroke};
-use slamlab_core::grid::{ProbabilityGrid, TILE, probability};
-use slamlab_core::math;
+use egui::{Color32, Pos2};
+use slamlab_core::grid::ProbabilityGrid;
 use slamlab_sim::mapping::{MappingSession, PoseSource};
-use std::collections::HashMap;
-
-/// Textures of the grid's tiles, each with the revision it shows.
-#[derive(Default)]
-pub struct GridTiles {
-    tiles: HashMap<(i64, i64), (egui::TextureHandle, u64)>,
-}
-
-impl std::fmt::Debug for GridTiles {
-    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
-        write!(f, "GridTiles({} textures)", self.tiles.len())
-    }
-}
-
-impl GridTiles {
-    /// Forgets every texture (a new map).
-    pub fn clear(&mut self) {
-        self.tiles.clear();
-    }
-
-    /// Brings the textures up to date with `grid` (only tiles whose revision
-    /// changed are redrawn) and returns each tile's texture and world square.
-    fn update(
-        &mut self,
-        ctx: &egui::Context,
-        grid: &ProbabilityGrid,
-    ) -> Vec<(egui::TextureId, [f64; 4])> {
-        let r = grid.resolution();
-        let side = TILE as f64 * r;
-        let mut out = Vec::new();
-        let mut live = std::collections::HashSet::new();
-        for (ti, tj, revision) in grid.tile_revisions() {
-            live.insert((ti, tj));
-            let stale = self
-                .tiles
-                .get(&(ti, tj))
-                .is_none_or(|(_, rev)| *rev != revision);
-            if stale && let Some(cells) = grid.tile_cells(ti, tj) {
-                let image = tile_image(cells);
-                match self.tiles.get_mut(&(ti, tj)) {
-                    Some((handle, rev)) => {
-                        handle.set(image, egui::TextureOptions::NEAREST);
-                        *rev = revision;
-                    }
-                    None => {
-                        let handle = ctx.load_texture(
-                            format!("mapping-tile-{ti}-{tj}"),
-                            image,
-                            egui::TextureOptions::NEAREST,
-                        );
-                        self.tiles.insert((ti, tj), (handle, revision));
-                    }
-                }
-            }
-            if let Some((handle, _)) = self.tiles.get(&(ti, tj)) {
-                let (x0, y0) = (ti as f64 * side, tj as f64 * side);
-                out.push((handle.id(), [x0, y0, x0 + side, y0 + side]));
-            }
-        }
-        // After a step back or a restart some tiles are gone.
-        self.tiles.retain(|k, _| live.contains(k));
-        out
-    }
-}
-
-/// A tile's cells as an image: unknown transparent, free white, occupied
-/// black, greys between (the probability of occupancy).
-fn tile_image(cells: &[f32]) -> egui::ColorImage {
-    let mut pixels = Vec::with_capacity(TILE * TILE);
-    // Image rows run top down; grid rows bottom up.
-    for row in 0..TILE {
-        let j = TILE - 1 - row;
-        for i in 0..TILE {
-            let l = cells[j * TILE + i];
-            pixels.push(if l.is_nan() {
-                Color32::TRANSPARENT
-            } else {
-                let p = probability(f64::from(l));
-                let v = (255.0 * (1.0 - p)).round().clamp(0.0, 255.0) as u8;
-                Color32::from_gray(v)
-            });
-        }
-    }
-    egui::ColorImage::new([TILE, TILE], pixels)
-}
 
 /// The colour of a pose source's path.
 pub fn source_color(source: PoseSource) -> Color32 {
@@ -312,38 +228,8 @@ pub fn map_ui(
     super::inspect::draw_beam(&painter, &t, session, beam);
     super::inspect::draw_correspondences(&painter, &t, session);
     if let Some((_, scan, pose)) = current {
-        if view.scan && beam.is_none() {
-            let origin = t.xy(pose.x, pose.y);
-            let ray = Color32::from_rgba_unmultiplied(0xD5, 0x5E, 0x00, 40);
-            for k in 0..scan.scan.len() {
-                let hit = scan.scan.is_end_point(k);
-                if !hit && !scan.scan.is_max_range(k) {
-                    continue;
-                }
-                let range = if hit {
-                    scan.scan.ranges[k]
-                } else {
-                    scan.scan.range_max.min(30.0)
-                };
-                let (s, c) = math::sin_cos(pose.theta + scan.scan.angles[k]);
-                let end = t.xy(pose.x + range * c, pose.y + range * s);
-                painter.line_segment([origin, end], Stroke::new(0.6, ray));
-                if hit {
-                    painter.circle_filled(end, 1.6, palette::VERMILLION);
-                }
-            }
-        }
-        // The robot: a disc with a heading line.
-        let centre = t.xy(pose.x, pose.y);
-        let radius = (0.2 * t.scale).max(4.0);
-        painter.circle(
-            centre,
-            radius,
-            Color32::from_rgba_unmultiplied(0x00, 0x72, 0xB2, 60),
-            Stroke::new(1.5, color),
-        );
-        let head = centre + map_canvas::screen_dir(pose.theta) * radius * 1.6;
-        painter.line_segment([centre, head], Stroke::new(2.0, color));
+        let shown = (view.scan && beam.is_none()).then_some(&scan.scan);
+        draw_scan_and_robot(&painter, &t, shown, &pose, color);
     }
     // One particle's proposal, on top of the robot (its moves are centimetres).
     if view.path
@@ -355,25 +241,4 @@ pub fn map_ui(
     }
     draw_scale_and_axes(&painter, &t, &colors);
     clicked
-}
-
-/// A path as a polyline, thinned to at most a few thousand points.
-fn draw_path(
-    painter: &egui::Painter,
-    t: &map_canvas::MapTransform,
-    points: impl ExactSizeIterator<Item = [f64; 2]>,
-    color: Color32,
-    width: f32,
-) {
-    let n = points.len();
-    let step = (n / 4000).max(1);
-    let line: Vec<Pos2> = points
-        .enumerate()
-        .filter(|(k, _)| k % step == 0 || *k + 1 == n)
-        .map(|(_, p)| t.xy(p[0], p[1]))
-        .filter(|p| map_canvas::finite(*p))
-        .collect();
-    if line.len() >= 2 {
-        painter.add(egui::Shape::line(line, Stroke::new(width, color)));
-    }
 }

@@ -6,6 +6,7 @@ pub mod drive;
 pub mod dropped_files;
 pub mod fetch;
 pub mod file_picker;
+pub mod grid_tiles;
 pub mod layout;
 pub mod map_canvas;
 pub mod params_panel;

@@ -7,6 +7,7 @@
 
 mod common;
 
+mod cartographer_ui;
 mod exports_ui;
 mod filters_ui;
 mod fusion_ui;

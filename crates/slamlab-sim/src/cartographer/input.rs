@@ -12,6 +12,7 @@ use crate::localization::run::stream_seed;
 use crate::mapping::{InputScan, MappingInput};
 use rand::SeedableRng;
 use rand_chacha::ChaCha8Rng;
+use slamlab_core::Pose2;
 use slamlab_core::grid::{Costmap, OccupancyGrid};
 use std::sync::Arc;
 
@@ -33,11 +34,33 @@ pub fn kidnap_input(
     kidnap_at: Option<usize>,
     config: &SimulatedLogConfig,
 ) -> Result<MappingInput, String> {
+    kidnap_input_to(map, map_name, steps, seed, kidnap_at, None, config)
+}
+
+/// [`kidnap_input`] with the robot carried to `to` (a place chosen on the
+/// map) instead of a random one; a place the robot does not fit refused.
+pub fn kidnap_input_to(
+    map: Arc<OccupancyGrid>,
+    map_name: &str,
+    steps: usize,
+    seed: u64,
+    kidnap_at: Option<usize>,
+    to: Option<Pose2>,
+    config: &SimulatedLogConfig,
+) -> Result<MappingInput, String> {
     if steps > MAX_STEPS {
         return Err(format!("{steps} steps is over the limit of {MAX_STEPS}"));
     }
     let radius = config.robot_radius.max(0.0);
     let collision = Costmap::inflate(&map, radius);
+    if let Some(p) = to
+        && !(p.is_finite() && collision.is_valid_at(p.x, p.y))
+    {
+        return Err(format!(
+            "the robot does not fit at ({:.2}, {:.2}): a wall or outside the map",
+            p.x, p.y
+        ));
+    }
     let roomy = Costmap::inflate(&map, radius + 0.1).valid_cells();
     let cells = if roomy.is_empty() {
         collision.valid_cells()
@@ -67,7 +90,12 @@ pub fn kidnap_input(
         }
         let after = robot.pose;
         odometry.record(&before, &after, &mut odom_rng);
-        if kidnap_at == Some(k) {
+        if kidnap_at == Some(k)
+            && let Some(p) = to
+        {
+            robot.pose = p;
+            explorer.replan();
+        } else if kidnap_at == Some(k) {
             // Up to 100 draws for a place far enough away; the last one
             // otherwise.
             for _ in 0..100 {

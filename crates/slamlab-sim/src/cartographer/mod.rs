@@ -34,6 +34,7 @@
 pub mod input;
 #[cfg(test)]
 mod tests;
+mod view;
 
 use crate::mapping::{MappingInput, map_agreement};
 use nalgebra::Matrix3;

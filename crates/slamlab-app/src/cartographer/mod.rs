@@ -1,0 +1,893 @@
+//! The Cartographer lesson (`lesson=cartographer`, thesis `000` Sec. 5.2):
+//! submaps built by local SLAM, a pose graph with branch-and-bound loop
+//! closures, and the kidnapped robot during mapping. The kidnap detector's
+//! cost, filtered value and threshold are plotted live (Figs. 5.8-5.9); after
+//! a detection the new trajectory maps on in its own colour until an
+//! inter-trajectory loop closure merges it into the first map (Figs.
+//! 5.10-5.12). The last branch-and-bound search and the precomputed max grids
+//! of a finished submap (Fig. 5.7) are shown beside the map.
+//!
+//! One tick is one scan (`CartographerSim::step`); step back restores the
+//! latest checkpoint and replays (the run is deterministic from its seed).
+
+mod explain;
+mod map;
+mod plots;
+
+use crate::lesson::{self, Lesson, LessonStart, PanelVisibility, StoredSettings};
+use crate::palette;
+use crate::time_control::{StepControls, TimeAction, TimeControl, TimeInfo};
+use crate::widgets::dropped_files::DropInbox;
+use crate::widgets::fetch::Fetch;
+use crate::widgets::file_picker::{FilePicker, PickedFile};
+use crate::widgets::map_canvas::MapView;
+use crate::widgets::params_panel::{self, PendingParams};
+use serde::{Deserialize, Serialize};
+use slamlab_core::Pose2;
+use slamlab_core::grid::OccupancyGrid;
+use slamlab_sim::cartographer::CartographerSim;
+use slamlab_sim::cartographer_lesson::{CartographerEvent, CartographerRun, CartographerScenario};
+use slamlab_sim::laser_log::LaserLog;
+use slamlab_sim::mapping::{MappingInput, builtin_map, log_input};
+use slamlab_sim::params;
+use slamlab_sim::stepper::{CheckpointPolicy, Stepper};
+use std::sync::Arc;
+
+/// The lesson's id in URLs and the menu.
+pub const LESSON_ID: &str = "cartographer";
+
+/// The parameters the panel shows (all of the table but the map).
+const PANEL_PARAMS: &[&str] = &[
+    "seed",
+    "steps",
+    "kidnap-at",
+    "detection",
+    "num_range_data",
+    "resolution",
+    "hit_probability",
+    "miss_probability",
+    "linear_search_window",
+    "angular_search_window",
+    "min_score",
+    "global_min_score",
+    "optimize_every_n_nodes",
+    "huber_scale",
+    "T",
+    "f_size",
+];
+
+/// What the map shows; saved with the user's settings.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(default)]
+pub struct CartographerView {
+    /// The legend line above the map.
+    pub legend: bool,
+    /// The current scan's rays and hit points.
+    pub scan: bool,
+    /// Intra-submap constraints (node to submap origin).
+    pub intra: bool,
+    /// The true robot (simulation only).
+    pub truth: bool,
+    /// Keep the robot in the middle.
+    pub follow_robot: bool,
+    /// The precomputed grids window (Fig. 5.7).
+    pub grids_window: bool,
+}
+
+impl Default for CartographerView {
+    fn default() -> Self {
+        Self {
+            legend: true,
+            scan: true,
+            intra: true,
+            truth: true,
+            follow_robot: false,
+            grids_window: false,
+        }
+    }
+}
+
+/// A log being read from `log=`.
+#[derive(Debug)]
+struct LogFetch {
+    location: String,
+    started: bool,
+    fetch: Fetch,
+}
+
+/// Where the scans come from.
+#[derive(Clone, Debug)]
+enum Source {
+    /// The simulated robot in a map (built-in or loaded): its name and grid.
+    Simulated(String, Arc<OccupancyGrid>),
+    /// A CARMEN log: its name and, from `log=`, its location.
+    Log(String, Option<String>),
+}
+
+/// The Cartographer lesson.
+#[derive(Debug)]
+pub struct CartographerLesson {
+    stepper: Stepper<CartographerRun>,
+    /// The scenario of the run (the kidnap scan follows the Kidnap button).
+    scenario: CartographerScenario,
+    pending: PendingParams<CartographerScenario>,
+    source: Source,
+    /// Replaying to this many scans (after a change of the detection switch).
+    catch_up: Option<usize>,
+    /// Milliseconds each scan took here (index = scan; NaN: not measured).
+    scan_ms: Vec<f64>,
+    /// The lesson's clock.
+    pub time: TimeControl,
+    /// What the map shows.
+    pub view: CartographerView,
+    canvas: MapView,
+    tiles: map::SubmapTiles,
+    grids: map::MaxGridTextures,
+    notices: Vec<String>,
+    note: Option<String>,
+    inbox: DropInbox,
+    picker: FilePicker,
+    log_fetch: Option<LogFetch>,
+    /// A click on the map kidnaps the robot there.
+    pub click_kidnap: bool,
+    /// A built-in map was chosen in place of a log or a loaded map: the
+    /// next reset simulates in it.
+    builtin_chosen: bool,
+    advanced: bool,
+}
+
+/// The lesson's start: the simulator's defaults.
+pub fn default_scenario() -> CartographerScenario {
+    CartographerScenario::default()
+}
+
+/// Opens the lesson from the URL's pairs, with what it stored last time.
+pub fn open(start: &LessonStart<'_>) -> Box<dyn Lesson> {
+    let stored = StoredSettings::<CartographerView>::from_start(start);
+    let location = start
+        .pairs
+        .iter()
+        .rev()
+        .find(|(k, _)| k == "log")
+        .map(|(_, v)| v.clone());
+    let pairs: Vec<(String, String)> = start
+        .pairs
+        .iter()
+        .filter(|(k, _)| k != "log")
+        .cloned()
+        .collect();
+    let start = &LessonStart {
+        pairs: &pairs,
+        ..*start
+    };
+    let (scenario, link_notices) = lesson::scenario_from_start(
+        start,
+        default_scenario(),
+        stored.as_ref().map(|s| s.params.as_slice()),
+    );
+    let mut lesson = match CartographerLesson::new(scenario) {
+        Ok(lesson) => lesson,
+        Err(why) => {
+            return lesson::open_instead(start, format!("Cartographer could not open: {why}"));
+        }
+    };
+    lesson.notices.splice(0..0, link_notices);
+    if let Some(stored) = stored {
+        lesson.view = stored.view.clone();
+        stored.restore_clock(&mut lesson.time);
+    }
+    if let Some(location) = location {
+        lesson.note = Some(format!("Loading the log {location}…"));
+        lesson.log_fetch = Some(LogFetch {
+            location,
+            started: false,
+            fetch: Fetch::default(),
+        });
+    }
+    Box::new(lesson)
+}
+
+fn policy() -> CheckpointPolicy {
+    CheckpointPolicy {
+        every_ticks: 20,
+        max_checkpoints: 40,
+        budget_bytes: 96 << 20,
+    }
+}
+
+impl CartographerLesson {
+    /// Starts the lesson on `scenario`: a simulated robot in its built-in map.
+    pub fn new(scenario: CartographerScenario) -> Result<Self, String> {
+        let name = if scenario.map == "office" {
+            "office"
+        } else {
+            "maze"
+        };
+        let grid = Arc::new(builtin_map(name)?);
+        let input = Arc::new(scenario.simulate(grid.clone(), name)?);
+        let (run, notices) = CartographerRun::new(&scenario, input);
+        Ok(Self {
+            stepper: Stepper::with_policy(run, (), policy()),
+            pending: PendingParams::new(scenario.clone()),
+            scenario,
+            source: Source::Simulated(name.to_owned(), grid),
+            catch_up: None,
+            scan_ms: Vec::new(),
+            time: TimeControl::default(),
+            view: CartographerView::default(),
+            canvas: MapView::default(),
+            tiles: map::SubmapTiles::default(),
+            grids: map::MaxGridTextures::default(),
+            notices,
+            note: None,
+            inbox: DropInbox::default(),
+            picker: FilePicker::multiple(),
+            log_fetch: None,
+            click_kidnap: false,
+            builtin_chosen: false,
+            advanced: false,
+        })
+    }
+
+    /// The mapper.
+    pub fn sim(&self) -> &CartographerSim {
+        self.stepper.sim().sim()
+    }
+
+    /// The scenario of the run.
+    pub fn scenario(&self) -> &CartographerScenario {
+        &self.scenario
+    }
+
+    /// The latest note under the map toolbar.
+    pub fn note(&self) -> Option<&str> {
+        self.note.as_deref()
+    }
+
+    /// Sets a parameter of the pending scenario from text, as the panel does.
+    pub fn set_param(&mut self, name: &str, value: &str) -> Option<params::ParamIssue> {
+        self.pending.set(name, value)
+    }
+
+    /// Whether the scans come from a simulated robot (which can be kidnapped).
+    pub fn is_simulated(&self) -> bool {
+        matches!(self.source, Source::Simulated(..))
+    }
+
+    /// A new run of `scenario` on `input`, replaying to `catch_up` scans.
+    fn restart_on(
+        &mut self,
+        scenario: CartographerScenario,
+        input: Arc<MappingInput>,
+        catch_up: Option<usize>,
+    ) {
+        let (run, notices) = CartographerRun::new(&scenario, input);
+        self.stepper = Stepper::with_policy(run, (), policy());
+        self.pending = PendingParams::new(scenario.clone());
+        self.scenario = scenario;
+        self.notices = notices;
+        self.scan_ms.clear();
+        self.tiles.clear();
+        self.grids.clear();
+        self.catch_up = catch_up.filter(|&n| n > 0);
+        if catch_up.is_none() {
+            self.time.apply(TimeAction::Reset);
+            self.canvas.refit();
+        }
+    }
+
+    /// The input of `scenario` from the current source.
+    fn input_of(&self, scenario: &CartographerScenario) -> Result<Arc<MappingInput>, String> {
+        match &self.source {
+            Source::Simulated(name, grid) => scenario.simulate(grid.clone(), name).map(Arc::new),
+            Source::Log(..) => Ok(self.sim().input().clone()),
+        }
+    }
+
+    /// Starts over with the pending parameters (same seed: same scans).
+    pub fn reset(&mut self) {
+        let mut scenario = self.pending.scenario.clone();
+        if self.builtin_chosen || scenario.map != self.scenario.map {
+            self.builtin_chosen = false;
+            let name = if scenario.map == "office" {
+                "office"
+            } else {
+                "maze"
+            };
+            match builtin_map(name) {
+                Ok(grid) => self.source = Source::Simulated(name.to_owned(), Arc::new(grid)),
+                Err(why) => {
+                    self.note = Some(format!("Could not open the map {name}: {why}"));
+                    scenario.map = self.scenario.map.clone();
+                }
+            }
+        }
+        match self.input_of(&scenario) {
+            Ok(input) => self.restart_on(scenario, input, None),
+            Err(why) => self.note = Some(format!("Could not start over: {why}; the run goes on")),
+        }
+    }
+
+    /// Switches kidnap detection on or off: the same scans replay from the
+    /// start up to where the run was.
+    pub fn set_detection(&mut self, on: bool) {
+        if on == self.scenario.detection {
+            return;
+        }
+        let done = self.sim().scans_done();
+        let scenario = CartographerScenario {
+            detection: on,
+            ..self.scenario.clone()
+        };
+        let input = self.sim().input().clone();
+        self.restart_on(scenario, input, Some(done));
+        self.note = Some(format!(
+            "Kidnap detection {}: mapping the same scans again up to scan {done}",
+            if on { "on" } else { "off" }
+        ));
+    }
+
+    /// Carries the simulated robot elsewhere before the next scan: to `to`
+    /// (a click), or to a random free place at least 2 m away.
+    pub fn kidnap(&mut self, to: Option<Pose2>) {
+        let Source::Simulated(name, grid) = &self.source else {
+            self.note = Some(
+                "A log is replayed as recorded: only a simulated robot can be kidnapped".to_owned(),
+            );
+            return;
+        };
+        let k = self.sim().scans_done();
+        if self.sim().is_done() {
+            self.note = Some("Every scan is in: reset to kidnap the robot".to_owned());
+            return;
+        }
+        if let Some(at) = self.scenario.kidnap_at.filter(|&at| at < k) {
+            self.note = Some(format!(
+                "The robot was kidnapped at scan {at} already: one kidnap per run (reset to kidnap it elsewhere)"
+            ));
+            return;
+        }
+        let scenario = CartographerScenario {
+            kidnap_at: Some(k),
+            kidnap_to: to.map(|p| [p.x, p.y]),
+            ..self.scenario.clone()
+        };
+        let input = scenario.simulate(grid.clone(), name);
+        match input {
+            Ok(input) => {
+                self.stepper
+                    .apply(CartographerEvent::Kidnap(Arc::new(input)));
+                self.pending.scenario.kidnap_at = Some(k);
+                self.pending.scenario.kidnap_to = scenario.kidnap_to;
+                self.scenario = scenario;
+                self.note = Some(format!(
+                    "Kidnapped before scan {k}: the odometry does not see it; watch the matching cost"
+                ));
+            }
+            Err(why) => self.note = Some(format!("Could not kidnap the robot: {why}")),
+        }
+    }
+
+    /// Maps a laser log (bytes of a CARMEN file, plain or compressed).
+    pub fn load_log(&mut self, name: &str, bytes: &[u8], location: Option<String>) {
+        let log = match LaserLog::from_bytes(bytes) {
+            Ok(log) => log,
+            Err(why) => {
+                self.note = Some(format!("Could not read the log {name}: {why}"));
+                return;
+            }
+        };
+        if log.scans.is_empty() {
+            self.note = Some(format!("{name} has no laser scans"));
+            return;
+        }
+        let input = log_input(&log, name);
+        let (count, span) = (input.scans.len(), input.duration());
+        self.source = Source::Log(name.to_owned(), location);
+        let scenario = CartographerScenario {
+            kidnap_at: None,
+            kidnap_to: None,
+            ..self.pending.scenario.clone()
+        };
+        self.restart_on(scenario, Arc::new(input), None);
+        self.note = Some(format!(
+            "Loaded {name}: {count} scans over {span:.0} s; no ground truth, no kidnap button"
+        ));
+    }
+
+    /// Lets the simulated robot explore a ROS map instead of a built-in one.
+    pub fn load_map_files(&mut self, files: &[(String, Vec<u8>)]) {
+        let (name, grid, notes) = match slamlab_sim::kidnap_session::load_dropped_map(files) {
+            Ok(loaded) => loaded,
+            Err(why) => {
+                self.note = Some(format!("Could not load the map: {why}; the run goes on"));
+                return;
+            }
+        };
+        let grid = Arc::new(grid);
+        let scenario = self.pending.scenario.clone();
+        match scenario.simulate(grid.clone(), &name) {
+            Ok(input) => {
+                self.source = Source::Simulated(name.clone(), grid);
+                self.restart_on(scenario, Arc::new(input), None);
+                self.note = Some(format!(
+                    "The robot explores {name}{}",
+                    if notes.is_empty() {
+                        String::new()
+                    } else {
+                        format!(" ({})", notes.join("; "))
+                    }
+                ));
+            }
+            Err(why) => self.note = Some(format!("Could not drive in {name}: {why}")),
+        }
+    }
+
+    fn poll_log_fetch(&mut self, ctx: &egui::Context) {
+        let Some(state) = self.log_fetch.as_mut() else {
+            return;
+        };
+        if !state.started {
+            state.started = true;
+            state.fetch = Fetch::start(&state.location, ctx);
+            return;
+        }
+        let Some(result) = state.fetch.poll() else {
+            return;
+        };
+        let location = state.location.clone();
+        self.log_fetch = None;
+        match result {
+            Ok(bytes) => {
+                let name = location.rsplit('/').next().unwrap_or(&location).to_owned();
+                self.load_log(&name, &bytes, Some(location));
+            }
+            Err(why) => {
+                self.note = Some(format!(
+                    "Could not load the log {location}: {why}; the simulated robot maps instead"
+                ));
+            }
+        }
+    }
+
+    /// Runs one scan, timed.
+    pub fn step_scan(&mut self) {
+        if self.sim().is_done() {
+            return;
+        }
+        let started = web_time::Instant::now();
+        self.stepper.step_phase();
+        let ms = started.elapsed().as_secs_f64() * 1e3;
+        let done = self.sim().scans_done();
+        if done > 0 {
+            self.scan_ms.resize(done, f64::NAN);
+            self.scan_ms[done - 1] = ms;
+        }
+    }
+
+    /// Runs scans until `n` are in (or every scan), however long it takes.
+    pub fn run_to(&mut self, n: usize) {
+        while self.sim().scans_done() < n && !self.sim().is_done() {
+            self.step_scan();
+        }
+    }
+
+    fn subtitle_text(&self) -> String {
+        let name = match &self.source {
+            Source::Simulated(name, _) => format!("simulated {name}"),
+            Source::Log(name, _) => name.clone(),
+        };
+        let kidnap = self
+            .scenario
+            .kidnap_at
+            .map_or(String::new(), |k| format!(", kidnap at scan {k}"));
+        format!("{name}, seed {}{kidnap}", self.scenario.seed)
+    }
+
+    /// The lesson's main actions, in the row above the map at every size.
+    fn actions_ui(&mut self, ui: &mut egui::Ui) {
+        ui.horizontal_wrapped(|ui| {
+            let simulated = self.is_simulated();
+            if ui
+                .add_enabled(simulated, egui::Button::new("Kidnap"))
+                .on_hover_text(
+                    "Carry the robot to a random free place at least 2 m away before the next \
+                     scan; the odometry does not see it",
+                )
+                .clicked()
+            {
+                self.kidnap(None);
+            }
+            ui.add_enabled_ui(simulated, |ui| {
+                ui.toggle_value(&mut self.click_kidnap, "Kidnap by click")
+                    .on_hover_text("Then click on the map: the robot is carried there (heading 0)");
+            });
+            let mut detection = self.scenario.detection;
+            ui.checkbox(&mut detection, "Detection").on_hover_text(
+                "Kidnap detection (thesis Algorithm 13): off, the same scans map on into one \
+                 corrupted map (Fig. 5.10). Switching replays the run to this scan",
+            );
+            self.set_detection(detection);
+            ui.toggle_value(&mut self.view.grids_window, "Max grids")
+                .on_hover_text("The precomputed grids of a finished submap (thesis Fig. 5.7)");
+        });
+    }
+
+    fn parameters_panel(&mut self, ui: &mut egui::Ui) {
+        ui.heading("Cartographer: submaps and loop closure");
+        ui.label("Kidnap, detection and the max grids are above the map.");
+        ui.horizontal(|ui| {
+            ui.label("map");
+            let current = self.pending.scenario.map.clone();
+            let shown = match &self.source {
+                Source::Simulated(name, _) | Source::Log(name, _) => name.clone(),
+            };
+            egui::ComboBox::from_id_salt("cartographer_map")
+                .selected_text(shown)
+                .show_ui(ui, |ui| {
+                    for name in ["maze", "office"] {
+                        if ui.selectable_label(current == name, name).clicked() {
+                            self.pending.set("map", name);
+                            // A log or a loaded map gives way on the next reset.
+                            self.builtin_chosen = true;
+                        }
+                    }
+                })
+                .response
+                .on_hover_text("The built-in maps; press \"Apply & reset\"")
+                .widget_info(|| egui::WidgetInfo::labeled(egui::Role::ComboBox, true, "map"));
+        });
+        ui.label(
+            "Or open a CARMEN laser log (.clf, .gz, .bz2) or a ROS map (its YAML with the \
+             image); or drop either on the window:",
+        );
+        self.picker.ui(
+            ui,
+            "Open log or map…",
+            ".clf,.log,.gz,.bz2,.txt,.yaml,.yml,.pgm,.png",
+            256 << 20,
+            "path/to/intel.clf.bz2",
+        );
+        let running = self.scenario.clone();
+        params_panel::params_ui(ui, &mut self.pending, &running, PANEL_PARAMS);
+        ui.separator();
+        let changed = params::to_pairs(&self.pending.scenario) != params::to_pairs(&running);
+        if ui
+            .add_enabled(
+                changed || self.builtin_chosen,
+                egui::Button::new("Apply & reset"),
+            )
+            .on_hover_text("Start over with these parameters (same seed: same scans)")
+            .clicked()
+        {
+            self.reset();
+        }
+        ui.separator();
+        crate::widgets::share::share_ui(
+            ui,
+            |embed| lesson::Lesson::share_query(self, embed),
+            "index.html?… with these pairs opens exactly this run",
+            None,
+        );
+    }
+
+    /// The pairs that reopen this setup.
+    pub fn share_pairs(&self) -> Vec<(String, String)> {
+        let mut pairs = params::changed_pairs(&self.scenario, &default_scenario());
+        if !pairs.iter().any(|(name, _)| name == "seed") {
+            pairs.insert(0, ("seed".to_owned(), self.scenario.seed.to_string()));
+        }
+        if let Source::Log(_, Some(location)) = &self.source {
+            pairs.push(("log".to_owned(), location.clone()));
+        }
+        pairs
+    }
+}
+
+impl crate::widgets::layout::LessonPanels for CartographerLesson {
+    fn plots_ui(&mut self, ui: &mut egui::Ui) {
+        plots::plots_ui(ui, self.sim(), &self.scan_ms);
+    }
+
+    fn parameters_ui(&mut self, ui: &mut egui::Ui) {
+        self.parameters_panel(ui);
+    }
+
+    fn explanation_ui(&mut self, ui: &mut egui::Ui) {
+        explain::explanation_ui(ui, self.sim(), &self.scenario);
+    }
+
+    fn map_ui(&mut self, ui: &mut egui::Ui) {
+        self.actions_ui(ui);
+        if let Some(note) = &self.note {
+            ui.label(egui::RichText::new(note).color(palette::VERMILLION));
+        }
+        if let Some(target) = self.catch_up {
+            ui.label(format!(
+                "Mapping again: scan {} of {target}…",
+                self.sim().scans_done()
+            ));
+        }
+        if self.view.grids_window {
+            let mut open = true;
+            map::max_grids_window(
+                ui.ctx(),
+                self.stepper.sim().sim(),
+                &mut self.grids,
+                &mut open,
+            );
+            self.view.grids_window = open;
+        }
+        let clicked = map::map_ui(
+            ui,
+            self.stepper.sim().sim(),
+            &mut self.canvas,
+            &mut self.tiles,
+            &mut self.view,
+            self.click_kidnap,
+        );
+        if let Some(pose) = clicked {
+            self.click_kidnap = false;
+            self.kidnap(Some(pose));
+        }
+    }
+}
+
+impl Lesson for CartographerLesson {
+    fn id(&self) -> &'static str {
+        LESSON_ID
+    }
+
+    fn subtitle(&self) -> String {
+        self.subtitle_text()
+    }
+
+    fn notices(&self) -> Vec<String> {
+        let mut all = self.notices.clone();
+        all.extend(self.sim().notes.iter().take(3).cloned());
+        all
+    }
+
+    fn time(&self) -> &TimeControl {
+        &self.time
+    }
+
+    fn time_mut(&mut self) -> &mut TimeControl {
+        &mut self.time
+    }
+
+    fn time_info(&self) -> TimeInfo {
+        let sim = self.sim();
+        let done = sim.scans_done();
+        TimeInfo {
+            tick: done as u64,
+            time_s: done
+                .checked_sub(1)
+                .and_then(|k| sim.input().scans.get(k))
+                .map_or(0.0, |s| s.time),
+            last_phase: done.checked_sub(1).map(|k| format!("scan {k}")),
+            next_phase: if sim.is_done() {
+                "done: every scan is in".to_owned()
+            } else {
+                format!("scan {done}")
+            },
+            can_step_back: self.stepper.phases_run() > 0,
+        }
+    }
+
+    fn step_controls(&self) -> StepControls {
+        StepControls::One {
+            label: "Step scan",
+            hover: "Run one scan: local matching, insertion into the submaps, the loop-closure \
+                    searches and, when due, the optimization",
+            unit: "scan",
+        }
+    }
+
+    fn apply_time_action(&mut self, action: TimeAction) {
+        self.time.apply(action);
+        match action {
+            TimeAction::ToggleRun => {}
+            TimeAction::StepPhase | TimeAction::StepTick => {
+                self.catch_up = None;
+                self.step_scan();
+            }
+            TimeAction::StepBack => {
+                self.catch_up = None;
+                self.stepper.step_back();
+                let done = self.sim().scans_done();
+                self.scan_ms.truncate(done);
+            }
+            TimeAction::Reset => {
+                let scenario = self.scenario.clone();
+                let input = self.input_of(&scenario);
+                match input {
+                    Ok(input) => self.restart_on(scenario, input, None),
+                    Err(why) => self.note = Some(format!("Could not start over: {why}")),
+                }
+            }
+        }
+    }
+
+    fn read_input(&mut self, ctx: &egui::Context) {
+        self.poll_log_fetch(ctx);
+        let picked = self.picker.poll_all();
+        if let Some(batch) = self.inbox.poll(ctx).or(picked) {
+            let batch: Vec<PickedFile> = batch;
+            let is_map_file = |name: &str| {
+                let lower = name.to_ascii_lowercase();
+                [".yaml", ".yml", ".pgm", ".png"]
+                    .iter()
+                    .any(|e| lower.ends_with(e))
+            };
+            let mut files = Vec::new();
+            for (name, bytes) in batch {
+                match bytes {
+                    Ok(bytes) => files.push((name, bytes)),
+                    Err(why) => self.note = Some(format!("Could not read {name}: {why}")),
+                }
+            }
+            if files.iter().any(|(name, _)| is_map_file(name)) {
+                self.load_map_files(&files);
+            } else if let Some((name, bytes)) = files.first() {
+                self.load_log(name, bytes, None);
+            }
+        }
+    }
+
+    fn advance(&mut self, dt: f64) {
+        self.advanced = false;
+        if let Some(target) = self.catch_up {
+            self.advanced = true;
+            let started = web_time::Instant::now();
+            while self.sim().scans_done() < target
+                && !self.sim().is_done()
+                && started.elapsed().as_millis() < 12
+            {
+                self.step_scan();
+            }
+            if self.sim().scans_done() >= target || self.sim().is_done() {
+                self.catch_up = None;
+            }
+            return;
+        }
+        if self.sim().is_done() {
+            self.time.running = false;
+            return;
+        }
+        let mut stepped = false;
+        let lesson = &mut *self;
+        let mut time = lesson.time.clone();
+        lesson::advance_within_budget(&mut time, dt, || {
+            lesson.step_scan();
+            stepped = true;
+            true
+        });
+        self.time = time;
+        self.advanced = stepped;
+    }
+
+    fn last_advance_updated(&self) -> bool {
+        self.advanced
+    }
+
+    fn wants_repaint(&self) -> bool {
+        self.time.running || self.catch_up.is_some() || self.log_fetch.is_some()
+    }
+
+    fn panels_ui(&mut self, ui: &mut egui::Ui, panels: &mut PanelVisibility, compact: bool) {
+        crate::widgets::layout::lesson_panels_ui(self, ui, panels, compact, LESSON_ID);
+    }
+
+    fn view_menu_ui(&mut self, ui: &mut egui::Ui) {
+        ui.checkbox(&mut self.view.legend, "Map legend");
+        ui.checkbox(&mut self.view.scan, "Current scan");
+        ui.checkbox(&mut self.view.intra, "Intra-submap constraints");
+        ui.checkbox(&mut self.view.truth, "True robot");
+        ui.checkbox(
+            &mut self.view.grids_window,
+            "Precomputed max grids (Fig. 5.7)",
+        );
+    }
+
+    fn stored_settings(&self) -> serde_json::Value {
+        StoredSettings {
+            view: self.view.clone(),
+            time: self.time.clone(),
+            params: params::changed_pairs(&self.pending.scenario, &default_scenario()),
+        }
+        .to_value()
+    }
+
+    fn share_query(&self, embed: bool) -> String {
+        crate::query::build(LESSON_ID, &self.share_pairs(), embed)
+    }
+
+    fn map_view_mut(&mut self) -> Option<&mut MapView> {
+        Some(&mut self.canvas)
+    }
+
+    fn set_legend(&mut self, on: bool) -> bool {
+        self.view.legend = on;
+        true
+    }
+
+    fn set_follow(&mut self, on: bool) -> bool {
+        self.view.follow_robot = on;
+        true
+    }
+
+    fn plot_series(&self) -> Vec<crate::export::PlotSeries> {
+        plots::series(self.sim(), &self.scan_ms)
+    }
+
+    fn test_state(&self) -> serde_json::Value {
+        let sim = self.sim();
+        // Counted here, not by `summary` (which builds the global map for its
+        // agreement metric: too slow for a state read every frame).
+        let kidnap_at = self.scenario.kidnap_at;
+        let detected = kidnap_at.and_then(|k| {
+            sim.detections
+                .iter()
+                .copied()
+                .find(|&d| d >= k && d <= k + slamlab_sim::cartographer::DETECTION_WINDOW)
+        });
+        let loop_closures = sim
+            .constraints
+            .iter()
+            .filter(|c| c.kind != slamlab_sim::cartographer::ConstraintKind::IntraSubmap)
+            .count();
+        let pose = sim
+            .records
+            .last()
+            .map(|r| [r.global_pose.x, r.global_pose.y, r.global_pose.theta]);
+        let mut timed: Vec<f64> = self
+            .scan_ms
+            .iter()
+            .copied()
+            .filter(|t| t.is_finite())
+            .collect();
+        timed.sort_by(f64::total_cmp);
+        let search = sim.last_search.as_ref().map(|s| {
+            serde_json::json!({
+                "scan": s.scan,
+                "submap": s.submap,
+                "global": s.global,
+                "score": s.score,
+                "evaluated": s.record.evaluated(),
+                "exhaustive": s.record.exhaustive_candidates,
+            })
+        });
+        serde_json::json!({
+            "tick": sim.scans_done(),
+            "scans": sim.scans_done(),
+            "total_scans": sim.input().scans.len(),
+            "seed": self.scenario.seed,
+            "kidnap_at": kidnap_at,
+            "detection": self.scenario.detection,
+            "detections": sim.detections,
+            "kidnap_detected_at": detected,
+            "recovered_at": sim.merges.first(),
+            "merges": sim.merges,
+            "submaps": sim.submaps.len(),
+            "nodes": sim.nodes.len(),
+            "trajectories": sim.trajectories.len(),
+            "loop_closures": loop_closures,
+            "optimizations": sim.optimizations,
+            "bbs": sim.bbs,
+            "pose": pose,
+            "catching_up": self.catch_up.is_some(),
+            "last_search": search,
+            "scan_ms_median": timed.get(timed.len() / 2),
+            "scan_ms_max": timed.last(),
+        })
+    }
+
+    fn as_any(&self) -> &dyn std::any::Any {
+        self
+    }
+
+    fn as_any_mut(&mut self) -> &mut dyn std::any::Any {
+        self
+    }
+}

@@ -1,0 +1,220 @@
+//! The plots under the map: the kidnap detector's input and output per scan
+//! (thesis Figs. 5.8-5.9: the local matching cost, its average-filtered value,
+//! the level `T · y_{t−1}` it must exceed and the detections), the last
+//! branch-and-bound search's best score as it improved, and the time each
+//! scan took here.
+
+use super::map::LOOP_CLOSURE;
+use crate::export::PlotSeries;
+use crate::palette;
+use crate::widgets::plots::{
+    Figure, Mark, Styled, draw_series, figure_plot, figure_ui, key_entries, plot_row, series_data,
+};
+use slamlab_sim::cartographer::CartographerSim;
+
+const DETECTION: &str = "Kidnap detection";
+const SEARCH: &str = "Last branch-and-bound search";
+const TIME: &str = "Time per scan";
+
+/// Every plotted series, defined once for the plots and the CSV export.
+fn plotted(sim: &CartographerSim, scan_ms: &[f64]) -> Vec<Styled> {
+    let per_scan = |pick: &dyn Fn(&slamlab_sim::cartographer::ScanRecord) -> f64| {
+        sim.records
+            .iter()
+            .map(|r| [r.scan as f64, pick(r)])
+            .filter(|p| p[1].is_finite())
+            .collect::<Vec<_>>()
+    };
+    let mut out = vec![
+        Styled::new(
+            PlotSeries::new(
+                DETECTION,
+                "scan",
+                "cost",
+                "matching cost",
+                per_scan(&|r| r.cost),
+            ),
+            palette::BLUE,
+            Mark::Solid,
+            1.0,
+        ),
+        Styled::new(
+            PlotSeries::new(
+                DETECTION,
+                "scan",
+                "cost",
+                "filtered (f_size)",
+                per_scan(&|r| r.filtered),
+            ),
+            palette::ORANGE,
+            Mark::Solid,
+            1.8,
+        ),
+        Styled::new(
+            PlotSeries::new(
+                DETECTION,
+                "scan",
+                "cost",
+                "threshold T·y",
+                per_scan(&|r| r.trigger_level),
+            ),
+            palette::VERMILLION,
+            Mark::Dashed,
+            1.2,
+        ),
+        Styled::new(
+            PlotSeries::new(
+                DETECTION,
+                "scan",
+                "cost",
+                "detection",
+                sim.records
+                    .iter()
+                    .filter(|r| r.detected)
+                    .map(|r| {
+                        let y = if r.filtered.is_finite() {
+                            r.filtered
+                        } else {
+                            0.0
+                        };
+                        [r.scan as f64, y]
+                    })
+                    .collect(),
+            ),
+            palette::VERMILLION,
+            Mark::Dots,
+            5.0,
+        ),
+    ];
+    if let Some(search) = &sim.last_search {
+        let mut best: Vec<[f64; 2]> = search
+            .record
+            .best_history
+            .iter()
+            .map(|&(n, s)| [n as f64, s])
+            .collect();
+        if let Some(&[_, s]) = best.last() {
+            best.push([search.record.evaluated() as f64, s]);
+        }
+        let min = if search.global {
+            sim.params().global_min_score
+        } else {
+            sim.params().min_score
+        };
+        let end = search.record.evaluated().max(1) as f64;
+        out.push(Styled::new(
+            PlotSeries::new(SEARCH, "candidates scored", "score", "best score", best),
+            LOOP_CLOSURE,
+            Mark::Solid,
+            1.6,
+        ));
+        out.push(Styled::new(
+            PlotSeries::new(
+                SEARCH,
+                "candidates scored",
+                "score",
+                "min score",
+                vec![[0.0, min], [end, min]],
+            ),
+            palette::DEAD_RECKONING,
+            Mark::Dashed,
+            1.0,
+        ));
+    }
+    out.push(Styled::new(
+        PlotSeries::new(
+            TIME,
+            "scan",
+            "time (ms)",
+            "time per scan",
+            scan_ms
+                .iter()
+                .enumerate()
+                .filter(|(_, t)| t.is_finite())
+                .map(|(k, t)| [k as f64, *t])
+                .collect(),
+        ),
+        palette::BLUE,
+        Mark::Solid,
+        1.0,
+    ));
+    out
+}
+
+/// The plots side by side, each with its key on a line above it.
+pub fn plots_ui(ui: &mut egui::Ui, sim: &CartographerSim, scan_ms: &[f64]) {
+    let all = plotted(sim, scan_ms);
+    let height = ui.available_height().max(80.0);
+    let figure = |title: &'static str, hover: &'static str, y_label: &'static str| Figure {
+        title,
+        hover,
+        key: key_entries(&all, title),
+        y_label,
+        height,
+    };
+    plot_row(ui, 3, |k, ui| match k {
+        0 => {
+            figure_ui(
+                ui,
+                &figure(
+                    DETECTION,
+                    "Thesis Algorithm 13 (Figs. 5.8-5.9): each scan's local matching cost (Eq. 5.5), \
+                     its average over the last f_size scans y_t, and the level T · y_(t−1) it must \
+                     exceed. A kidnap makes the scan disagree with the submap: the cost jumps, the \
+                     filtered value crosses the threshold and the detector ends the trajectory \
+                     (dot); a new one starts at the origin with a fresh submap.",
+                    "cost",
+                ),
+                |h, y| {
+                    figure_plot("cartographer_detection", "scan", y, h)
+                        .include_x(0.0)
+                        .include_y(0.0)
+                },
+                |p| draw_series(p, &all, DETECTION),
+            );
+        }
+        1 => {
+            figure_ui(
+                ui,
+                &figure(
+                    SEARCH,
+                    "The last branch-and-bound search (thesis Algorithm 12): the best leaf's \
+                     score (mean probability under the scan's points, Eq. 5.10) each time it \
+                     improved, against the candidates scored so far at every height. Branches \
+                     whose bound (Eq. 5.14) is not above the best are pruned; the explanation \
+                     panel counts them per height beside what exhaustive search would score.",
+                    "score",
+                ),
+                |h, y| {
+                    figure_plot("cartographer_search", "candidates scored", y, h)
+                        .include_x(0.0)
+                        .include_y(0.0)
+                        .include_y(1.0)
+                },
+                |p| draw_series(p, &all, SEARCH),
+            );
+        }
+        _ => {
+            figure_ui(
+                ui,
+                &figure(
+                    TIME,
+                    "How long each scan took here: local matching, insertion, the loop-closure \
+                     searches and, every optimize_every_n_nodes nodes, the optimization (ms)",
+                    "time (ms)",
+                ),
+                |h, y| {
+                    figure_plot("cartographer_time", "scan", y, h)
+                        .include_x(0.0)
+                        .include_y(0.0)
+                },
+                |p| draw_series(p, &all, TIME),
+            );
+        }
+    });
+}
+
+/// Every plot's series, unthinned, for the CSV export.
+pub fn series(sim: &CartographerSim, scan_ms: &[f64]) -> Vec<PlotSeries> {
+    series_data(plotted(sim, scan_ms))
+}

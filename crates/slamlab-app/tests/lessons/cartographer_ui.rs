@@ -1,0 +1,181 @@
+//! Headless UI tests of the Cartographer lesson through egui_kittest: it opens
+//! by URL (with `kidnap-at=`), the detector fires at the kidnap scan, a new
+//! trajectory starts and merges into the first map; the Kidnap button and the
+//! detection switch do what they say; the main actions stay in reach at 800
+//! x 500; the rendered map has its submaps, walls and green loop closures.
+
+use super::common::{
+    count_pixels, harness, harness_sized, lesson_of, lesson_of_mut, render_or_skip,
+};
+use egui_kittest::Harness;
+use egui_kittest::kittest::Queryable as _;
+use slamlab_app::SlamLabApp;
+use slamlab_app::cartographer::CartographerLesson;
+use slamlab_app::lesson::Lesson as _;
+
+fn lesson<'h>(h: &'h Harness<'_, SlamLabApp>) -> &'h CartographerLesson {
+    lesson_of(h)
+}
+
+fn lesson_mut<'h>(h: &'h mut Harness<'_, SlamLabApp>) -> &'h mut CartographerLesson {
+    lesson_of_mut(h)
+}
+
+#[test]
+fn the_lesson_opens_by_url_and_bad_values_get_a_message() {
+    let h = harness("lesson=cartographer&map=maze&kidnap-at=152&seed=3&T=2&f_size=7");
+    assert_eq!(h.state().lesson_id(), "cartographer");
+    let s = lesson(&h).scenario();
+    assert_eq!((s.seed, s.kidnap_at, s.t, s.f_size), (3, Some(152), 2.0, 7));
+    assert_eq!(lesson(&h).sim().input().scans.len(), 600);
+    assert!(h.state().notices().is_empty(), "{:?}", h.state().notices());
+    let h = harness("lesson=cartographer&num_range_data=0&min_score=NaN&detection=maybe");
+    let notices = h.state().notices();
+    assert_eq!(notices.len(), 3, "{notices:?}");
+    assert_eq!(lesson(&h).scenario().num_range_data, 1);
+    assert!(lesson(&h).scenario().detection);
+}
+
+/// The browser check's run (web/tests/browser.test.mjs asserts the same
+/// numbers in wasm): maze, seed 3, kidnapped before scan 152.
+#[test]
+fn a_kidnap_at_152_is_detected_there_and_the_maps_merge() {
+    let mut h = harness("lesson=cartographer&map=maze&kidnap-at=152&seed=3");
+    lesson_mut(&mut h).run_to(151);
+    assert!(lesson(&h).sim().detections.is_empty());
+    assert_eq!(lesson(&h).sim().trajectories.len(), 1);
+    lesson_mut(&mut h).run_to(153);
+    assert_eq!(lesson(&h).sim().detections, vec![152]);
+    assert_eq!(lesson(&h).sim().trajectories.len(), 2);
+    lesson_mut(&mut h).run_to(200);
+    let sim = lesson(&h).sim();
+    assert_eq!(sim.merges.first(), Some(&179));
+    assert_eq!(sim.trajectories[1].joined_to, 0);
+    let state = lesson(&h).test_state();
+    eprintln!("cartographer state at scan 200: {state}");
+    assert_eq!(state["kidnap_detected_at"], 152);
+    assert_eq!(state["recovered_at"], 179);
+    // As `slamlab run cartographer --map maze --steps 200 --kidnap-at 152 --seed 3`
+    // counts them (the first 200 scans of the 600 are the same bits).
+    assert_eq!(state["submaps"], 5);
+    assert_eq!(state["nodes"], 144);
+    assert_eq!(state["loop_closures"], 12);
+    assert_eq!(state["optimizations"], 5);
+    assert_eq!(state["bbs"]["searches"], 57);
+    assert_eq!(state["bbs"]["nodes_evaluated"], 4_626_714);
+    assert_eq!(state["bbs"]["exhaustive_candidates"], 1_022_478_656_u64);
+    // Step back replays to the scan before, exactly.
+    let pose = state["pose"].clone();
+    h.get_by_label("Step back").click();
+    h.run();
+    assert_eq!(lesson(&h).sim().scans_done(), 199);
+    h.get_by_label("Step scan").click();
+    h.run();
+    assert_eq!(lesson(&h).sim().scans_done(), 200);
+    assert_eq!(lesson(&h).test_state()["pose"], pose);
+    let Some(image) = render_or_skip(&mut h) else {
+        return;
+    };
+    let _ = image.save(std::env::temp_dir().join("slamlab-cartographer.png"));
+    let walls = count_pixels(image.as_raw(), [0, 0, 0], 40);
+    let green = count_pixels(image.as_raw(), [0x00, 0x9E, 0x73], 20);
+    let orange = count_pixels(image.as_raw(), [0xE6, 0x9F, 0x00], 20);
+    assert!(walls > 500, "walls: {walls} dark pixels");
+    assert!(green > 40, "loop closures: {green} green pixels");
+    assert!(orange > 30, "the second trajectory: {orange} orange pixels");
+}
+
+#[test]
+fn detection_off_keeps_one_map_and_switching_it_on_replays_to_the_detection() {
+    let mut h =
+        harness("lesson=cartographer&map=maze&kidnap-at=152&seed=3&detection=off&steps=200");
+    lesson_mut(&mut h).run_to(200);
+    let sim = lesson(&h).sim();
+    assert!(sim.detections.is_empty());
+    assert_eq!(sim.trajectories.len(), 1);
+    // The switch replays the same scans with detection on.
+    lesson_mut(&mut h).set_detection(true);
+    for _ in 0..2000 {
+        h.step();
+        if lesson(&h).sim().scans_done() >= 200 {
+            break;
+        }
+    }
+    assert_eq!(lesson(&h).sim().scans_done(), 200);
+    assert_eq!(lesson(&h).sim().detections, vec![152]);
+}
+
+#[test]
+fn the_kidnap_button_carries_the_robot_and_the_share_link_reproduces_it() {
+    let mut h = harness("lesson=cartographer&map=maze&seed=3&steps=200");
+    lesson_mut(&mut h).run_to(100);
+    h.get_by_label("Kidnap").click();
+    h.run();
+    assert_eq!(lesson(&h).scenario().kidnap_at, Some(100));
+    lesson_mut(&mut h).run_to(120);
+    let live = lesson(&h).test_state();
+    eprintln!("kidnapped by the button before scan 100: {live}");
+    assert_eq!(live["kidnap_at"], 100, "{live}");
+    let query = lesson(&h).share_query(false);
+    assert!(query.contains("kidnap-at=100"), "{query}");
+    let mut again = harness(&query);
+    lesson_mut(&mut again).run_to(120);
+    assert_eq!(lesson(&again).test_state()["pose"], live["pose"]);
+    assert_eq!(
+        lesson(&again).test_state()["detections"],
+        live["detections"]
+    );
+}
+
+/// At 800 x 500, 1280 x 800 and embedded at 900 x 600 (web/lecture.html): Step
+/// scan, Run and Kidnap in the top rows, no plot key on a plot's data or the map.
+#[test]
+fn at_every_size_the_main_actions_are_in_reach_and_keys_are_off_the_data() {
+    for (w, hgt, embed) in [
+        (800.0, 500.0, false),
+        (1280.0, 800.0, false),
+        (900.0, 600.0, true),
+    ] {
+        let query = format!(
+            "lesson=cartographer&map=maze&kidnap-at=152&seed=3{}",
+            if embed { "&embed=1" } else { "" }
+        );
+        let mut h = harness_sized(&query, egui::vec2(w, hgt));
+        lesson_mut(&mut h).run_to(185);
+        h.run();
+        let screen = egui::Rect::from_min_size(egui::Pos2::ZERO, egui::vec2(w, hgt));
+        for label in ["Step scan", "Run", "Kidnap"] {
+            let node = h
+                .query_all_by_label(label)
+                .next()
+                .unwrap_or_else(|| panic!("{label} is not on screen at {w}x{hgt}"));
+            let rect = node.rect();
+            assert!(
+                screen.contains_rect(rect),
+                "{label} at {rect:?} ({w}x{hgt})"
+            );
+            assert!(
+                rect.top() < 130.0,
+                "{label} at {rect:?} is not in the top rows ({w}x{hgt})"
+            );
+        }
+        let records = slamlab_app::widgets::plots::figure_records(&h.ctx);
+        let keys: Vec<egui::Rect> = records.iter().filter_map(|r| r.key).collect();
+        for r in &records {
+            for data in r.data.iter().chain(r.map.iter()) {
+                for key in &keys {
+                    let overlap = key.intersect(*data);
+                    assert!(
+                        !(overlap.width() > 0.5 && overlap.height() > 0.5),
+                        "a key {key:?} lies on '{}' {data:?} ({w}x{hgt})",
+                        r.title
+                    );
+                }
+            }
+        }
+        if let Some(image) = render_or_skip(&mut h) {
+            let name = format!("slamlab-cartographer-{}x{}.png", w as u32, hgt as u32);
+            let _ = image.save(std::env::temp_dir().join(name));
+        }
+    }
+}

@@ -1,0 +1,416 @@
+//! The Cartographer lesson's scenario, its parameter table and its run under
+//! the generic [`Stepper`] (`lesson=cartographer`, thesis `000` Sec. 5.2):
+//! a simulated robot in a built-in or loaded map (or a CARMEN log), mapped
+//! scan by scan by [`CartographerSim`], with a kidnap at a chosen scan (the
+//! URL's `kidnap-at=`, the lesson's Kidnap button, a click on the map).
+//!
+//! The parameters keep Cartographer's names (`num_range_data`,
+//! `hit_probability`, `min_score`, ...) and the thesis's `T` and `f_size`,
+//! the same names `slamlab run cartographer` takes as flags.
+//!
+//! [`Stepper`]: crate::stepper::Stepper
+
+use crate::cartographer::input::kidnap_input_to;
+use crate::cartographer::{CartographerParams, CartographerSim};
+use crate::laser_log::SimulatedLogConfig;
+use crate::mapping::MappingInput;
+use crate::params::{Param, Scenario, choose};
+use crate::stepper::Simulation;
+use serde::{Deserialize, Serialize};
+use slamlab_core::Pose2;
+use slamlab_core::grid::OccupancyGrid;
+use std::sync::Arc;
+
+/// The lesson's id.
+pub const LESSON: &str = "cartographer";
+
+/// The lesson's scenario: where the scans come from and Cartographer's
+/// parameters.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(default)]
+pub struct CartographerScenario {
+    /// Seed of every random stream.
+    pub seed: u64,
+    /// Built-in map name (`maze`, `office`) or a map file's location.
+    pub map: String,
+    /// Scans the simulated robot records.
+    pub steps: usize,
+    /// The scan before which the robot is carried elsewhere (None: never).
+    pub kidnap_at: Option<usize>,
+    /// Where the kidnap carries the robot (heading 0), metres; None: a random
+    /// free place at least 2 m away.
+    pub kidnap_to: Option<[f64; 2]>,
+    /// Kidnap detection (Algorithm 13) on or off.
+    pub detection: bool,
+    /// Scans per submap before the next one starts.
+    pub num_range_data: usize,
+    /// Submap cell size, metres.
+    pub resolution: f64,
+    /// Probability of a hit cell.
+    pub hit_probability: f64,
+    /// Probability of a missed cell.
+    pub miss_probability: f64,
+    /// Loop-closure search half-width in x and y, metres.
+    pub linear_search_window: f64,
+    /// Loop-closure search half-width in heading, degrees.
+    pub angular_search_window: f64,
+    /// A loop closure must score above this.
+    pub min_score: f64,
+    /// A match between maps must score above this.
+    pub global_min_score: f64,
+    /// Optimize the pose graph every n nodes.
+    pub optimize_every_n_nodes: usize,
+    /// Huber scale of the optimization.
+    pub huber_scale: f64,
+    /// The thesis's trigger threshold `T`.
+    pub t: f64,
+    /// The thesis's average filter size `f_size`.
+    pub f_size: usize,
+}
+
+impl Default for CartographerScenario {
+    fn default() -> Self {
+        let p = CartographerParams::default();
+        Self {
+            seed: 1,
+            map: "maze".to_owned(),
+            steps: 600,
+            kidnap_at: None,
+            kidnap_to: None,
+            detection: p.detection,
+            num_range_data: p.num_range_data,
+            resolution: p.resolution,
+            hit_probability: p.hit_probability,
+            miss_probability: p.miss_probability,
+            linear_search_window: p.linear_search_window,
+            angular_search_window: p.angular_search_window.to_degrees(),
+            min_score: p.min_score,
+            global_min_score: p.global_min_score,
+            optimize_every_n_nodes: p.optimize_every_n_nodes,
+            huber_scale: p.huber_scale,
+            t: p.kidnap.threshold,
+            f_size: p.kidnap.filter_size,
+        }
+    }
+}
+
+impl CartographerScenario {
+    /// The run's parameters: this scenario's over Cartographer's defaults.
+    pub fn params(&self) -> CartographerParams {
+        let mut p = CartographerParams {
+            detection: self.detection,
+            num_range_data: self.num_range_data,
+            resolution: self.resolution,
+            hit_probability: self.hit_probability,
+            miss_probability: self.miss_probability,
+            linear_search_window: self.linear_search_window,
+            angular_search_window: self.angular_search_window.to_radians(),
+            min_score: self.min_score,
+            global_min_score: self.global_min_score,
+            optimize_every_n_nodes: self.optimize_every_n_nodes,
+            huber_scale: self.huber_scale,
+            ..CartographerParams::default()
+        };
+        p.kidnap.threshold = self.t;
+        p.kidnap.filter_size = self.f_size;
+        p
+    }
+
+    /// The simulated input on `map`: `steps` scans with this scenario's seed
+    /// and kidnap (one past the last scan: none).
+    pub fn simulate(&self, map: Arc<OccupancyGrid>, name: &str) -> Result<MappingInput, String> {
+        let kidnap = self.kidnap_at.filter(|&k| k < self.steps);
+        let to = self.kidnap_to.map(|[x, y]| Pose2::new(x, y, 0.0));
+        kidnap_input_to(
+            map,
+            name,
+            self.steps,
+            self.seed,
+            kidnap,
+            to,
+            &SimulatedLogConfig::default(),
+        )
+    }
+}
+
+/// A real-valued field in the parameter's unit.
+macro_rules! field {
+    ($($args:tt)*) => {
+        crate::params::number_field!(CartographerScenario, $($args)*)
+    };
+}
+
+const ON_OFF: &[&str] = &["on", "off"];
+
+/// Every parameter of the lesson, in the order `slamlab params --lesson
+/// cartographer` lists them: Cartographer's names and the thesis's `T` and
+/// `f_size`, as `slamlab run cartographer` takes them.
+pub static PARAMS: &[Param<CartographerScenario>] = &[
+    Param::count(
+        "seed",
+        "",
+        "seed of every random stream",
+        (0, u64::MAX),
+        |s| Some(s.seed),
+        |s, v| s.seed = v,
+    ),
+    Param::words(
+        "map",
+        "built-in map the simulated robot explores (or drop a ROS map or a laser log on the app's window)",
+        &["maze", "office"],
+        |s| Some(s.map.clone()),
+        |s, v| {
+            if v.ends_with(".yaml") || v.ends_with(".yml") {
+                s.map = v.to_owned();
+                Ok(())
+            } else {
+                choose(&["maze", "office"], v).map(|i| s.map = ["maze", "office"][i].to_owned())
+            }
+        },
+    ),
+    Param::count(
+        "steps",
+        "",
+        "scans the simulated robot records (0.1 s apart)",
+        (1, 20_000),
+        |s| Some(s.steps as u64),
+        |s, v| s.steps = usize::try_from(v).unwrap_or(20_000),
+    ),
+    Param::count(
+        "kidnap-at",
+        "",
+        "carry the robot elsewhere just before this scan (0-based; absent: never)",
+        (0, 20_000),
+        |s| s.kidnap_at.map(|k| k as u64),
+        |s, v| s.kidnap_at = usize::try_from(v).ok(),
+    ),
+    Param::number(
+        "kidnap-x",
+        "m",
+        "where the kidnap carries the robot, x (absent: a random free place)",
+        (-1e4, 1e4),
+        |s| s.kidnap_to.map(|p| p[0]),
+        |s, v| {
+            s.kidnap_to = Some([v, s.kidnap_to.map_or(0.0, |p| p[1])]);
+            Ok(())
+        },
+    ),
+    Param::number(
+        "kidnap-y",
+        "m",
+        "where the kidnap carries the robot, y",
+        (-1e4, 1e4),
+        |s| s.kidnap_to.map(|p| p[1]),
+        |s, v| {
+            s.kidnap_to = Some([s.kidnap_to.map_or(0.0, |p| p[0]), v]);
+            Ok(())
+        },
+    ),
+    Param::words(
+        "detection",
+        "kidnap detection (thesis Algorithm 13): on, or off for the original behaviour (one corrupted map)",
+        ON_OFF,
+        |s| Some(ON_OFF[usize::from(!s.detection)].to_owned()),
+        |s, v| choose(ON_OFF, v).map(|i| s.detection = i == 0),
+    ),
+    Param::count(
+        "num_range_data",
+        "",
+        "scans per submap before the next starts (each takes twice as many)",
+        (1, 10_000),
+        |s| Some(s.num_range_data as u64),
+        |s, v| s.num_range_data = usize::try_from(v).unwrap_or(10_000),
+    ),
+    field!(
+        "resolution",
+        "m",
+        "submap cell size",
+        (0.02, 0.5),
+        resolution
+    ),
+    field!(
+        "hit_probability",
+        "",
+        "probability of a hit cell (thesis Eq. 5.4)",
+        (0.501, 0.999),
+        hit_probability
+    ),
+    field!(
+        "miss_probability",
+        "",
+        "probability of a missed cell (thesis Eq. 5.4)",
+        (0.001, 0.499),
+        miss_probability
+    ),
+    field!(
+        "linear_search_window",
+        "m",
+        "loop-closure search half-width in x and y",
+        (0.0, 50.0),
+        linear_search_window
+    ),
+    field!(
+        "angular_search_window",
+        "°",
+        "loop-closure search half-width in heading",
+        (0.0, 180.0),
+        angular_search_window
+    ),
+    field!(
+        "min_score",
+        "",
+        "a loop closure must score above this",
+        (0.0, 1.0),
+        min_score
+    ),
+    field!(
+        "global_min_score",
+        "",
+        "a match between maps (after a kidnap) must score above this",
+        (0.0, 1.0),
+        global_min_score
+    ),
+    Param::count(
+        "optimize_every_n_nodes",
+        "",
+        "solve the pose graph every n nodes",
+        (1, 10_000),
+        |s| Some(s.optimize_every_n_nodes as u64),
+        |s, v| s.optimize_every_n_nodes = usize::try_from(v).unwrap_or(10_000),
+    ),
+    field!(
+        "huber_scale",
+        "",
+        "Huber kernel's scale on a constraint's weighted error (thesis Eq. 5.9)",
+        (0.001, 1e6),
+        huber_scale
+    ),
+    field!(
+        "T",
+        "",
+        "kidnap trigger: the filtered cost exceeds T times its previous value (thesis Algorithm 13)",
+        (1.0, 100.0),
+        t
+    ),
+    Param::count(
+        "f_size",
+        "",
+        "kidnap average filter size, scans (thesis Algorithm 13)",
+        (1, 1000),
+        |s| Some(s.f_size as u64),
+        |s, v| s.f_size = usize::try_from(v).unwrap_or(1000),
+    ),
+];
+
+impl Scenario for CartographerScenario {
+    const LESSON: &'static str = LESSON;
+    fn params() -> &'static [Param<Self>] {
+        PARAMS
+    }
+    fn seed(&self) -> u64 {
+        self.seed
+    }
+}
+
+/// A live change to the run.
+#[derive(Clone, Debug)]
+pub enum CartographerEvent {
+    /// From the next scan on, the scans of `input` (which agrees with the
+    /// current input on every scan processed so far): a kidnap made live.
+    Kidnap(Arc<MappingInput>),
+}
+
+/// The lesson's run: the mapper, cloned as a checkpoint; one tick is one
+/// scan.
+#[derive(Clone, Debug)]
+pub struct CartographerRun {
+    sim: CartographerSim,
+}
+
+impl CartographerRun {
+    /// A run of `input` with `scenario`'s parameters (and the notes on what
+    /// had to be changed).
+    pub fn new(scenario: &CartographerScenario, input: Arc<MappingInput>) -> (Self, Vec<String>) {
+        let (sim, notes) = CartographerSim::new(input, scenario.params());
+        (Self { sim }, notes)
+    }
+
+    /// The mapper.
+    pub fn sim(&self) -> &CartographerSim {
+        &self.sim
+    }
+
+    /// The mapper, to change what it records (not its results).
+    pub fn sim_mut(&mut self) -> &mut CartographerSim {
+        &mut self.sim
+    }
+}
+
+impl Simulation for CartographerRun {
+    type Phase = usize;
+    type Event = CartographerEvent;
+    type Records = ();
+
+    fn step_phase(&mut self, _records: &mut ()) -> usize {
+        let k = self.sim.scans_done();
+        self.sim.step();
+        k
+    }
+
+    fn is_mid_tick(&self) -> bool {
+        false
+    }
+
+    fn tick(&self) -> u64 {
+        self.sim.scans_done() as u64
+    }
+
+    fn apply_event(&mut self, event: &CartographerEvent) {
+        match event {
+            CartographerEvent::Kidnap(input) => {
+                self.sim.replace_input(input.clone());
+            }
+        }
+    }
+
+    fn checkpoint_bytes(&self) -> usize {
+        let cells: usize = self.sim.submaps.iter().map(|s| s.grid.memory_bytes()).sum();
+        cells + self.sim.nodes.len() * 1600 + self.sim.records.len() * 80
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::params;
+
+    #[test]
+    fn the_table_round_trips() {
+        let mut s = CartographerScenario {
+            kidnap_at: Some(152),
+            detection: false,
+            t: 2.0,
+            f_size: 7,
+            ..CartographerScenario::default()
+        };
+        s.seed = 3;
+        let pairs = params::to_pairs(&s);
+        let mut back = CartographerScenario::default();
+        let issues =
+            params::apply_pairs(&mut back, pairs.iter().map(|(k, v)| (*k, v.as_str())), &[]);
+        assert!(issues.is_empty(), "{issues:?}");
+        assert_eq!(back, s);
+        assert_eq!(params::to_pairs(&back), pairs);
+    }
+
+    #[test]
+    fn bad_values_are_clamped_with_a_message() {
+        let mut s = CartographerScenario::default();
+        let pairs = [("num_range_data", "0"), ("T", "nan"), ("min_score", "7")];
+        let issues = params::apply_pairs(&mut s, pairs, &[]);
+        assert_eq!(issues.len(), 3, "{issues:?}");
+        assert_eq!(s.num_range_data, 1);
+        assert_eq!(s.t, CartographerScenario::default().t);
+        assert_eq!(s.min_score, 1.0);
+    }
+}
