@@ -794,16 +794,17 @@ async function main() {
     // 16 ms, and the README states what was measured where. A seeded headless run in
     // wasm gives the native table (crates/slamlab-app/tests/lessons/filters_ui.rs pins it).
     // --- Submaps, loop closure and the kidnapped robot: the thesis's case, a kidnap
-    // before scan 152 of a run with none before, on the maze with seed 3. Running live,
-    // the detector fires at scan 152 and the second trajectory's maps merge into the
-    // first at scan 179 (crates/slamlab-app/tests/lessons/cartographer_ui.rs pins the
+    // before scan 152 of a run with none before, on the maze with seed 2. Running live,
+    // the detector fires at scan 152 and the second trajectory's map merges into the
+    // first at scan 154 (crates/slamlab-app/tests/lessons/cartographer_ui.rs pins the
     // same scans natively); a headless run in this page's wasm to scan 200 gives the
     // native counts exactly (`slamlab run cartographer --map maze --steps 200 --kidnap-at
-    // 152 --seed 3 --json`): branch and bound's candidate count moves with any bit of any
-    // pose. The merge at 179 is a wrong one (docs/cartographer.md): asserted because it
-    // is what the run does.
+    // 152 --seed 2 --json`): branch and bound's candidate count moves with any bit of any
+    // pose. (Seed 3 is detected at 152 as well but never merges: every match its new map
+    // proposes lies in a wrong corridor, and the merge check refuses them all;
+    // docs/cartographer.md.)
     await check("lesson=cartographer detects the kidnap at 152 and merges the maps", async () => {
-      const url = "index.html?lesson=cartographer&map=maze&kidnap-at=152&seed=3";
+      const url = "index.html?lesson=cartographer&map=maze&kidnap-at=152&seed=2";
       const { context, page: p, log } = await openPage(browser, baseUrl, url, "cartographer");
       try {
         await waitRunning(p);
@@ -813,17 +814,17 @@ async function main() {
         await p.keyboard.press("Space");
         const s1 = await waitState(p, (st) => st.recovered_at !== null, "the maps merged", 240_000);
         assert(JSON.stringify(s1.detections) === "[152]", `detections ${JSON.stringify(s1.detections)}`);
-        assert(s1.kidnap_detected_at === 152 && s1.recovered_at === 179, `detected ${s1.kidnap_detected_at}, merged ${s1.recovered_at}`);
+        assert(s1.kidnap_detected_at === 152 && s1.recovered_at === 154, `detected ${s1.kidnap_detected_at}, merged ${s1.recovered_at}`);
         assert(s1.trajectories === 2, `${s1.trajectories} trajectories`);
         await sleep(300);
         const { stats } = await waitNotBlank(p, "cartographer.png");
         assertNotBlank(stats, "cartographer.png");
         const started = Date.now();
         const headless = JSON.parse(
-          await p.evaluate((q) => window.slamlab.slamlab_test_headless(q, 200), "lesson=cartographer&map=maze&kidnap-at=152&seed=3"),
+          await p.evaluate((q) => window.slamlab.slamlab_test_headless(q, 200), "lesson=cartographer&map=maze&kidnap-at=152&seed=2"),
         );
         const seconds = (Date.now() - started) / 1000;
-        const NATIVE = { submaps: 5, nodes: 144, loop_closures: 12, optimizations: 5, searches: 57, nodes_evaluated: 4626714, exhaustive_candidates: 1022478656 };
+        const NATIVE = { submaps: 7, nodes: 166, loop_closures: 49, optimizations: 6, searches: 100, nodes_evaluated: 1426541, exhaustive_candidates: 547962111 };
         const got = {
           submaps: headless.submaps,
           nodes: headless.nodes,
@@ -834,7 +835,7 @@ async function main() {
           exhaustive_candidates: headless.bbs.exhaustive_candidates,
         };
         assert(JSON.stringify(got) === JSON.stringify(NATIVE), `headless ${JSON.stringify(got)}, natively ${JSON.stringify(NATIVE)}`);
-        assert(headless.scans === 200 && headless.recovered_at === 179 && JSON.stringify(headless.detections) === "[152]", `headless ${JSON.stringify(headless)}`);
+        assert(headless.scans === 200 && headless.recovered_at === 154 && JSON.stringify(headless.detections) === "[152]", `headless ${JSON.stringify(headless)}`);
         metrics.cartographer_maze_200_scans_s = Number(seconds.toFixed(2));
         metrics.cartographer_scan_ms_median = s1.scan_ms_median;
         metrics.cartographer_scan_ms_max = s1.scan_ms_max;
