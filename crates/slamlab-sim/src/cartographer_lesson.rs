@@ -83,7 +83,9 @@ impl Default for CartographerScenario {
             hit_probability: p.hit_probability,
             miss_probability: p.miss_probability,
             linear_search_window: p.linear_search_window,
-            angular_search_window: p.angular_search_window.to_degrees(),
+            // Rounded to a nanodegree, so that 30° (stored in radians) reads 30, not
+            // 29.999999999999996, in the panel and in share links.
+            angular_search_window: (p.angular_search_window.to_degrees() * 1e9).round() / 1e9,
             min_score: p.min_score,
             global_min_score: p.global_min_score,
             optimize_every_n_nodes: p.optimize_every_n_nodes,
@@ -208,7 +210,7 @@ pub static PARAMS: &[Param<CartographerScenario>] = &[
     ),
     Param::words(
         "detection",
-        "kidnap detection (thesis Algorithm 13): on, or off for the original behaviour (one corrupted map)",
+        "kidnap detection (Xiang's thesis Algorithm 13): on, or off for the original behaviour (one corrupted map)",
         ON_OFF,
         |s| Some(ON_OFF[usize::from(!s.detection)].to_owned()),
         |s, v| choose(ON_OFF, v).map(|i| s.detection = i == 0),
@@ -231,14 +233,14 @@ pub static PARAMS: &[Param<CartographerScenario>] = &[
     field!(
         "hit_probability",
         "",
-        "probability of a hit cell (thesis Eq. 5.4)",
+        "probability of a hit cell (Xiang's thesis Eq. 5.4)",
         (0.501, 0.999),
         hit_probability
     ),
     field!(
         "miss_probability",
         "",
-        "probability of a missed cell (thesis Eq. 5.4)",
+        "probability of a missed cell (Xiang's thesis Eq. 5.4)",
         (0.001, 0.499),
         miss_probability
     ),
@@ -281,21 +283,21 @@ pub static PARAMS: &[Param<CartographerScenario>] = &[
     field!(
         "huber_scale",
         "",
-        "Huber kernel's scale on a constraint's weighted error (thesis Eq. 5.9)",
+        "Huber kernel's scale on a constraint's weighted error (Xiang's thesis Eq. 5.9)",
         (0.001, 1e6),
         huber_scale
     ),
     field!(
         "T",
         "",
-        "kidnap trigger: the filtered cost exceeds T times its previous value (thesis Algorithm 13)",
+        "kidnap trigger: the filtered cost exceeds T times its previous value (Xiang's thesis Algorithm 13)",
         (1.0, 100.0),
         t
     ),
     Param::count(
         "f_size",
         "",
-        "kidnap average filter size, scans (thesis Algorithm 13)",
+        "kidnap average filter size, scans (Xiang's thesis Algorithm 13)",
         (1, 1000),
         |s| Some(s.f_size as u64),
         |s, v| s.f_size = usize::try_from(v).unwrap_or(1000),

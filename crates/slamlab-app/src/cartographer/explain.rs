@@ -17,6 +17,14 @@ pub fn explanation_ui(ui: &mut egui::Ui, sim: &CartographerSim, scenario: &Carto
          constraints from local SLAM, loop closures from branch and bound against finished \
          submaps (Algorithm 12), solved with a Huber loss every optimize_every_n_nodes nodes.",
     );
+    ui.horizontal_wrapped(|ui| {
+        ui.label("Sources:");
+        crate::widgets::sources::source_link(
+            ui,
+            "xiang",
+            "Xiang's thesis, Sec. 5.2 (Eq. 5.3-5.14, Algorithms 12-13)",
+        );
+    });
     ui.separator();
     let finished = sim.submaps.iter().filter(|s| s.finished).count();
     let closures = sim

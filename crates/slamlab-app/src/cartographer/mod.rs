@@ -504,7 +504,7 @@ impl CartographerLesson {
             });
             let mut detection = self.scenario.detection;
             ui.checkbox(&mut detection, "Detection").on_hover_text(
-                "Kidnap detection (thesis Algorithm 13): off, the same scans map on into one \
+                "Kidnap detection (Xiang's thesis, Algorithm 13): off, the same scans map on into one \
                  corrupted map (Fig. 5.10). Switching replays the run to this scan",
             );
             self.set_detection(detection);

@@ -178,7 +178,7 @@ pub fn plots_ui(ui: &mut egui::Ui, sim: &CartographerSim, scan_ms: &[f64]) {
                 ui,
                 &figure(
                     SEARCH,
-                    "The last branch-and-bound search (thesis Algorithm 12): the best leaf's \
+                    "The last branch-and-bound search (Xiang's thesis, Algorithm 12): the best leaf's \
                      score (mean probability under the scan's points, Eq. 5.10) each time it \
                      improved, against the candidates scored so far at every height. Branches \
                      whose bound (Eq. 5.14) is not above the best are pruned; the explanation \
