@@ -10,7 +10,7 @@
 //!
 //! [`Stepper`]: crate::stepper::Stepper
 
-use crate::cartographer::input::kidnap_input_to;
+use crate::cartographer::input::{KidnapPlace, kidnap_input_to};
 use crate::cartographer::{CartographerParams, CartographerSim};
 use crate::laser_log::SimulatedLogConfig;
 use crate::mapping::MappingInput;
@@ -38,8 +38,11 @@ pub struct CartographerScenario {
     /// The scan before which the robot is carried elsewhere (None: never).
     pub kidnap_at: Option<usize>,
     /// Where the kidnap carries the robot (heading 0), metres; None: a random
-    /// free place at least 2 m away.
+    /// place chosen by `kidnap_place`.
     pub kidnap_to: Option<[f64; 2]>,
+    /// Where a random kidnap goes: `mapped` (a place on the robot's path so
+    /// far) or `anywhere` (any free place).
+    pub kidnap_place: String,
     /// Kidnap detection (Algorithm 13) on or off.
     pub detection: bool,
     /// Scans per submap before the next one starts.
@@ -77,6 +80,7 @@ impl Default for CartographerScenario {
             steps: 600,
             kidnap_at: None,
             kidnap_to: None,
+            kidnap_place: KidnapPlace::Mapped.name().to_owned(),
             detection: p.detection,
             num_range_data: p.num_range_data,
             resolution: p.resolution,
@@ -122,14 +126,16 @@ impl CartographerScenario {
     /// and kidnap (one past the last scan: none).
     pub fn simulate(&self, map: Arc<OccupancyGrid>, name: &str) -> Result<MappingInput, String> {
         let kidnap = self.kidnap_at.filter(|&k| k < self.steps);
-        let to = self.kidnap_to.map(|[x, y]| Pose2::new(x, y, 0.0));
+        let place = match self.kidnap_to {
+            Some([x, y]) => KidnapPlace::At(Pose2::new(x, y, 0.0)),
+            None => KidnapPlace::from_name(&self.kidnap_place).unwrap_or_default(),
+        };
         kidnap_input_to(
             map,
             name,
             self.steps,
             self.seed,
-            kidnap,
-            to,
+            kidnap.map(|k| (k, place)),
             &SimulatedLogConfig::default(),
         )
     }
@@ -189,7 +195,7 @@ pub static PARAMS: &[Param<CartographerScenario>] = &[
     Param::number(
         "kidnap-x",
         "m",
-        "where the kidnap carries the robot, x (absent: a random free place)",
+        "where the kidnap carries the robot, x (absent: a random place, see kidnap-place)",
         (-1e4, 1e4),
         |s| s.kidnap_to.map(|p| p[0]),
         |s, v| {
@@ -206,6 +212,16 @@ pub static PARAMS: &[Param<CartographerScenario>] = &[
         |s, v| {
             s.kidnap_to = Some([s.kidnap_to.map_or(0.0, |p| p[0]), v]);
             Ok(())
+        },
+    ),
+    Param::words(
+        "kidnap-place",
+        "where a kidnap carries the robot: mapped (a random place on its path so far, where the maps can merge) or anywhere (any free place, often one it never maps again)",
+        &KidnapPlace::NAMES,
+        |s| Some(s.kidnap_place.clone()),
+        |s, v| {
+            choose(&KidnapPlace::NAMES, v)
+                .map(|i| s.kidnap_place = KidnapPlace::NAMES[i].to_owned())
         },
     ),
     Param::words(

@@ -1,9 +1,13 @@
 //! The explanation beside the map: what the run has (submaps, nodes,
 //! trajectories, loop closures), the kidnap detector's state, and the last
 //! branch-and-bound search: candidates scored and pruned per height beside
-//! what exhaustive search would score.
+//! what exhaustive search would score, and the search tree as it was
+//! walked.
 
-use super::map::trajectory_color;
+use super::map::{LOOP_CLOSURE, trajectory_color};
+use crate::palette;
+use egui::{Color32, Pos2, Rect, Sense, Stroke, Vec2};
+use slamlab_core::scan::branch_and_bound::SearchNode;
 use slamlab_sim::cartographer::CartographerSim;
 use slamlab_sim::cartographer_lesson::CartographerScenario;
 
@@ -154,4 +158,145 @@ pub fn explanation_ui(ui: &mut egui::Ui, sim: &CartographerSim, scenario: &Carto
         "Every search so far: {} searches, {} scored of {} exhaustive.",
         sim.bbs.searches, sim.bbs.nodes_evaluated, sim.bbs.exhaustive_candidates
     ));
+    if !r.nodes.is_empty() {
+        ui.add_space(4.0);
+        ui.label(format!(
+            "The tree, its first {} nodes in the order the depth-first search visited them \
+             (rows: height, top: boxes of {} cells; lines: parent to child):",
+            r.nodes.len(),
+            1u64 << (r.evaluated_per_height.len().saturating_sub(1))
+        ));
+        search_tree_ui(ui, &r.nodes, r.evaluated_per_height.len());
+        ui.horizontal_wrapped(|ui| {
+            for (color, what) in [
+                (palette::BLUE, "branched"),
+                (LOOP_CLOSURE, "leaf, new best"),
+                (palette::DEAD_RECKONING, "pruned (bound not above the best)"),
+            ] {
+                let (rect, _) = ui.allocate_exact_size(Vec2::splat(10.0), Sense::hover());
+                ui.painter().circle_filled(rect.center(), 4.0, color);
+                ui.label(what);
+            }
+        });
+    }
+}
+
+/// The parent of each recorded node: the latest earlier node one height up,
+/// at the same heading, branched, whose box holds the node's (the search is
+/// depth-first, so that is the box it was branched from); None for a node at
+/// the top.
+pub fn tree_parents(nodes: &[SearchNode]) -> Vec<Option<usize>> {
+    nodes
+        .iter()
+        .enumerate()
+        .map(|(k, n)| {
+            let size = 1i64 << (n.height + 1);
+            nodes[..k].iter().rposition(|p| {
+                p.height == n.height + 1
+                    && p.expanded
+                    && p.angle == n.angle
+                    && (p.di..p.di + size).contains(&n.di)
+                    && (p.dj..p.dj + size).contains(&n.dj)
+            })
+        })
+        .collect()
+}
+
+/// Draws the search tree: one row per height (the tallest on top), nodes
+/// left to right in the order visited, a line from each to its parent.
+fn search_tree_ui(ui: &mut egui::Ui, nodes: &[SearchNode], heights: usize) {
+    let row = 16.0;
+    let width = ui.available_width().max(120.0);
+    let (rect, _) = ui.allocate_exact_size(
+        Vec2::new(width, row * heights.max(1) as f32 + 6.0),
+        Sense::hover(),
+    );
+    let painter = ui.painter_at(rect);
+    painter.rect_filled(rect, 2.0, ui.visuals().extreme_bg_color);
+    let label_w = 28.0;
+    let inner = Rect::from_min_max(
+        Pos2::new(rect.left() + label_w, rect.top() + 3.0),
+        Pos2::new(rect.right() - 4.0, rect.bottom() - 3.0),
+    );
+    let top = heights.saturating_sub(1) as f32;
+    let y_of = |h: u32| inner.top() + row * (top - h as f32) + row / 2.0;
+    let step = inner.width() / nodes.len().max(1) as f32;
+    let x_of = |k: usize| inner.left() + step * (k as f32 + 0.5);
+    let text = ui.visuals().text_color();
+    for h in 0..heights {
+        painter.text(
+            Pos2::new(rect.left() + 3.0, y_of(h as u32)),
+            egui::Align2::LEFT_CENTER,
+            format!("h{h}"),
+            egui::FontId::proportional(10.0),
+            text,
+        );
+    }
+    let parents = tree_parents(nodes);
+    let line = Stroke::new(0.6, Color32::from_gray(150));
+    for (k, parent) in parents.iter().enumerate() {
+        if let Some(p) = *parent {
+            painter.line_segment(
+                [
+                    Pos2::new(x_of(p), y_of(nodes[p].height)),
+                    Pos2::new(x_of(k), y_of(nodes[k].height)),
+                ],
+                line,
+            );
+        }
+    }
+    let radius = (step * 0.45).clamp(1.2, 3.5);
+    for (k, n) in nodes.iter().enumerate() {
+        let color = match (n.expanded, n.height) {
+            (false, _) => palette::DEAD_RECKONING,
+            (true, 0) => LOOP_CLOSURE,
+            (true, _) => palette::BLUE,
+        };
+        painter.circle_filled(Pos2::new(x_of(k), y_of(n.height)), radius, color);
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn node(height: u32, angle: usize, di: i64, dj: i64, expanded: bool) -> SearchNode {
+        SearchNode {
+            height,
+            angle,
+            di,
+            dj,
+            score: 0.5,
+            expanded,
+        }
+    }
+
+    /// A dive from height 2 to a leaf, a pruned sibling, and a second top
+    /// box at another heading: each node finds the box it was branched from.
+    #[test]
+    fn each_tree_node_finds_the_box_it_was_branched_from() {
+        let nodes = [
+            node(2, 0, 0, 0, true),  // 0: top
+            node(1, 0, 2, 0, true),  // 1: child of 0
+            node(0, 0, 3, 1, true),  // 2: leaf under 1
+            node(0, 0, 2, 0, false), // 3: pruned leaf under 1
+            node(1, 0, 0, 2, false), // 4: pruned child of 0
+            node(2, 1, 0, 0, true),  // 5: top, other heading
+            node(1, 1, 0, 0, true),  // 6: child of 5, not of 0
+            node(2, 0, 4, 0, false), // 7: pruned top
+        ];
+        assert_eq!(
+            tree_parents(&nodes),
+            vec![
+                None,
+                Some(0),
+                Some(1),
+                Some(1),
+                Some(0),
+                None,
+                Some(5),
+                None
+            ]
+        );
+    }
 }

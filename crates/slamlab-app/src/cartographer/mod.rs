@@ -41,6 +41,7 @@ const PANEL_PARAMS: &[&str] = &[
     "seed",
     "steps",
     "kidnap-at",
+    "kidnap-place",
     "detection",
     "num_range_data",
     "resolution",

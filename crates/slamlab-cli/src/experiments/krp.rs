@@ -13,7 +13,7 @@ use crate::output::{Output, trials_bar, trials_progress};
 use anyhow::{Result, bail};
 use clap::{Arg, ArgMatches, Command};
 use serde_json::json;
-use slamlab_sim::cartographer::input::{MAX_STEPS, kidnap_input};
+use slamlab_sim::cartographer::input::{KidnapPlace, MAX_STEPS, kidnap_input_to};
 use slamlab_sim::cartographer::{CartographerParams, CartographerSim, CartographerSummary};
 use slamlab_sim::laser_log::SimulatedLogConfig;
 use std::io::Write;
@@ -136,6 +136,13 @@ impl Experiment for Krp {
                     .default_value("152")
                     .help("the scan (0-based) before which the robot is carried elsewhere"),
             )
+            .arg(
+                Arg::new("kidnap-place")
+                    .long("kidnap-place")
+                    .value_parser(KidnapPlace::NAMES)
+                    .default_value("mapped")
+                    .help("where the kidnap carries the robot: mapped (a random place on its path so far) or anywhere (any free place)"),
+            )
     }
 
     fn run(&self, m: &ArgMatches, out: &mut Output) -> Result<()> {
@@ -149,6 +156,10 @@ impl Experiment for Krp {
         if steps == 0 || steps > MAX_STEPS {
             bail!("--steps {steps} must be 1 to {MAX_STEPS}");
         }
+        let place = m
+            .get_one::<String>("kidnap-place")
+            .and_then(|p| KidnapPlace::from_name(p))
+            .unwrap_or_default();
         if kidnap_at >= steps {
             bail!("--kidnap-at {kidnap_at} must come before the last scan ({steps} steps)");
         }
@@ -167,12 +178,12 @@ impl Experiment for Krp {
             jobs.par_iter()
                 .map(|&(s, kidnapped, detection)| {
                     let kidnap = kidnapped.then_some(kidnap_at);
-                    let input = kidnap_input(
+                    let input = kidnap_input_to(
                         Arc::clone(&grid),
                         &name,
                         steps,
                         s,
-                        kidnap,
+                        kidnap.map(|k| (k, place)),
                         &SimulatedLogConfig::default(),
                     )?;
                     let params = CartographerParams {
@@ -223,6 +234,7 @@ impl Experiment for Krp {
             "map": {"name": name, "width": grid.width(), "height": grid.height(), "resolution": grid.resolution()},
             "steps": steps,
             "kidnap_at": kidnap_at,
+            "kidnap_place": place.name(),
             "trials": trials,
             "seeds": format!("{seed} .. {}", seed + trials - 1),
             "detection_on": on,
@@ -238,7 +250,8 @@ impl Experiment for Krp {
         };
         writeln!(
             out,
-            "SLAM Lab: the kidnapped robot during mapping on {name}, {trials} seeds, {steps} scans, kidnap at scan {kidnap_at}"
+            "SLAM Lab: the kidnapped robot during mapping on {name}, {trials} seeds, {steps} scans, kidnap at scan {kidnap_at}, kidnap-place {}",
+            place.name()
         )?;
         writeln!(
             out,

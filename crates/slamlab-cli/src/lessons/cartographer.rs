@@ -13,7 +13,7 @@ use crate::output::{Output, units_bar, units_progress};
 use anyhow::{Context, Result, bail};
 use clap::{Arg, ArgMatches, Command};
 use serde_json::json;
-use slamlab_sim::cartographer::input::kidnap_input;
+use slamlab_sim::cartographer::input::{KidnapPlace, kidnap_input_to};
 use slamlab_sim::cartographer::{CartographerParams, CartographerSim};
 use slamlab_sim::laser_log::{LaserLog, SimulatedLogConfig};
 use slamlab_sim::mapping::log_input;
@@ -67,6 +67,12 @@ impl RunLesson for Cartographer {
                 "kidnap-at",
                 "carry the robot elsewhere just before this scan (0-based)",
             ))
+            .arg(
+                Arg::new("kidnap-place")
+                    .long("kidnap-place")
+                    .value_parser(KidnapPlace::NAMES)
+                    .help("where the kidnap carries the robot: mapped (default; a random place on its path so far) or anywhere (any free place)"),
+            )
             .arg(
                 Arg::new("detection")
                     .long("detection")
@@ -159,12 +165,16 @@ impl RunLesson for Cartographer {
                 eprintln!("warning: --kidnap-at is past the last scan: no kidnap");
                 kidnap_at = None;
             }
-            kidnap_input(
+            let place = m
+                .get_one::<String>("kidnap-place")
+                .and_then(|p| KidnapPlace::from_name(p))
+                .unwrap_or_default();
+            kidnap_input_to(
                 Arc::new(grid),
                 &name,
                 steps,
                 seed,
-                kidnap_at,
+                kidnap_at.map(|k| (k, place)),
                 &SimulatedLogConfig::default(),
             )
             .map_err(anyhow::Error::msg)?

@@ -1,19 +1,22 @@
 //! A simulated log with a kidnap: the explorer drives the robot through a map
 //! as `laser_log::simulate_log` does (the same random streams), and at scan
-//! `kidnap_at` the robot is carried to a random free place at least
-//! [`MIN_KIDNAP_DISTANCE`] away with a random heading. Odometry does not see
-//! the jump (its pose moves only by the wheels), so the log looks like a
-//! robot that drove on.
+//! `kidnap_at` the robot is carried at least [`MIN_KIDNAP_DISTANCE`] away
+//! with a random heading ([`KidnapPlace`]): by default to a place it has
+//! already been (as the thesis's cropped log lands the robot where it had
+//! mapped before, so that the two maps can be merged), or to any free place
+//! (in a large building often one the robot never comes back to: then no
+//! merge exists). Odometry does not see the jump (its pose moves only by the
+//! wheels), so the log looks like a robot that drove on.
 
 use crate::grid::explorer::Explorer;
 use crate::grid::robot::{GridRobot, OdometrySensor};
 use crate::laser_log::SimulatedLogConfig;
 use crate::localization::run::stream_seed;
 use crate::mapping::{InputScan, MappingInput};
-use rand::SeedableRng;
+use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
 use slamlab_core::Pose2;
-use slamlab_core::grid::{Costmap, OccupancyGrid};
+use slamlab_core::grid::{Costmap, FreeCells, OccupancyGrid};
 use std::sync::Arc;
 
 /// The kidnap carries the robot at least this far, metres.
@@ -22,10 +25,49 @@ pub const MIN_KIDNAP_DISTANCE: f64 = 2.0;
 /// The most scans a simulated run may have.
 pub const MAX_STEPS: usize = 50_000;
 
+/// Where a kidnap carries the robot.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub enum KidnapPlace {
+    /// A random place on the robot's own path so far (so inside the part of
+    /// the map it has mapped), at least [`MIN_KIDNAP_DISTANCE`] from where it
+    /// is, with a random heading; [`KidnapPlace::Anywhere`] when no such place
+    /// exists.
+    #[default]
+    Mapped,
+    /// A random free place of the whole map, at least
+    /// [`MIN_KIDNAP_DISTANCE`] away, with a random heading.
+    Anywhere,
+    /// This pose (refused when the robot does not fit there).
+    At(Pose2),
+}
+
+impl KidnapPlace {
+    /// The names `kidnap-place=` and `--kidnap-place` take.
+    pub const NAMES: [&str; 2] = ["mapped", "anywhere"];
+
+    /// `mapped` or `anywhere` (a chosen pose has no name).
+    pub fn name(&self) -> &'static str {
+        match self {
+            KidnapPlace::Anywhere => "anywhere",
+            KidnapPlace::Mapped | KidnapPlace::At(_) => "mapped",
+        }
+    }
+
+    /// The place named `name` (`mapped` or `anywhere`).
+    pub fn from_name(name: &str) -> Option<KidnapPlace> {
+        match name {
+            "mapped" => Some(KidnapPlace::Mapped),
+            "anywhere" => Some(KidnapPlace::Anywhere),
+            _ => None,
+        }
+    }
+}
+
 /// Simulates `steps` scans in `map` (a 360-beam, 12 m lidar at 10 Hz and the
 /// default odometry noise of `config`), with the robot carried elsewhere just
-/// before scan `kidnap_at` (0-based; `None`: never). The truth and the map
-/// travel beside the scans for the metrics.
+/// before scan `kidnap_at` (0-based; `None`: never) to a place on its path so
+/// far ([`KidnapPlace::Mapped`]). The truth and the map travel beside the
+/// scans for the metrics.
 pub fn kidnap_input(
     map: Arc<OccupancyGrid>,
     map_name: &str,
@@ -34,26 +76,34 @@ pub fn kidnap_input(
     kidnap_at: Option<usize>,
     config: &SimulatedLogConfig,
 ) -> Result<MappingInput, String> {
-    kidnap_input_to(map, map_name, steps, seed, kidnap_at, None, config)
+    kidnap_input_to(
+        map,
+        map_name,
+        steps,
+        seed,
+        kidnap_at.map(|k| (k, KidnapPlace::Mapped)),
+        config,
+    )
 }
 
-/// [`kidnap_input`] with the robot carried to `to` (a place chosen on the
-/// map) instead of a random one; a place the robot does not fit refused.
+/// [`kidnap_input`] with the kidnap's scan and place chosen: `kidnap` is
+/// `(scan, place)`; a chosen pose the robot does not fit refused.
 pub fn kidnap_input_to(
     map: Arc<OccupancyGrid>,
     map_name: &str,
     steps: usize,
     seed: u64,
-    kidnap_at: Option<usize>,
-    to: Option<Pose2>,
+    kidnap: Option<(usize, KidnapPlace)>,
     config: &SimulatedLogConfig,
 ) -> Result<MappingInput, String> {
+    let kidnap_at = kidnap.map(|(k, _)| k);
+    let place = kidnap.map_or(KidnapPlace::Mapped, |(_, p)| p);
     if steps > MAX_STEPS {
         return Err(format!("{steps} steps is over the limit of {MAX_STEPS}"));
     }
     let radius = config.robot_radius.max(0.0);
     let collision = Costmap::inflate(&map, radius);
-    if let Some(p) = to
+    if let KidnapPlace::At(p) = place
         && !(p.is_finite() && collision.is_valid_at(p.x, p.y))
     {
         return Err(format!(
@@ -90,23 +140,13 @@ pub fn kidnap_input_to(
         }
         let after = robot.pose;
         odometry.record(&before, &after, &mut odom_rng);
-        if kidnap_at == Some(k)
-            && let Some(p) = to
-        {
-            robot.pose = p;
-            explorer.replan();
-        } else if kidnap_at == Some(k) {
-            // Up to 100 draws for a place far enough away; the last one
-            // otherwise.
-            for _ in 0..100 {
-                let Some(p) = cells.sample(&mut kidnap_rng) else {
-                    break;
-                };
-                robot.pose = p;
-                if slamlab_core::math::hypot(p.x - after.x, p.y - after.y) >= MIN_KIDNAP_DISTANCE {
-                    break;
-                }
-            }
+        if kidnap_at == Some(k) {
+            robot.pose = match place {
+                KidnapPlace::At(p) => p,
+                KidnapPlace::Mapped => on_path(&truth, &after, &mut kidnap_rng)
+                    .unwrap_or_else(|| anywhere(&cells, &after, &mut kidnap_rng)),
+                KidnapPlace::Anywhere => anywhere(&cells, &after, &mut kidnap_rng),
+            };
             explorer.replan();
         }
         let scan = config.lidar.scan(&map, &robot.pose, &mut lidar_rng);
@@ -117,11 +157,47 @@ pub fn kidnap_input_to(
         });
         truth.push(robot.pose);
     }
-    let kidnap = kidnap_at.map_or(String::new(), |k| format!(", kidnapped at scan {k}"));
+    let kidnap = kidnap.map_or(String::new(), |(k, place)| match place {
+        KidnapPlace::Anywhere => format!(", kidnapped at scan {k} to anywhere"),
+        _ => format!(", kidnapped at scan {k}"),
+    });
     Ok(MappingInput {
         name: format!("simulated {map_name}, seed {seed}{kidnap}"),
         scans,
         truth: Some(truth),
         true_map: Some(map),
     })
+}
+
+/// A random pose of `path` at least [`MIN_KIDNAP_DISTANCE`] from `from`,
+/// with a random heading (the robot stood there, so it fits); None when the
+/// path never went that far.
+fn on_path(path: &[Pose2], from: &Pose2, rng: &mut ChaCha8Rng) -> Option<Pose2> {
+    let far: Vec<&Pose2> = path
+        .iter()
+        .filter(|p| slamlab_core::math::hypot(p.x - from.x, p.y - from.y) >= MIN_KIDNAP_DISTANCE)
+        .collect();
+    if far.is_empty() {
+        return None;
+    }
+    let p = far[rng.random_range(0..far.len())];
+    let heading = rng.random_range(-std::f64::consts::PI..std::f64::consts::PI);
+    Some(Pose2::new(p.x, p.y, heading))
+}
+
+/// A random free cell of `cells` at least [`MIN_KIDNAP_DISTANCE`] from
+/// `from` (up to 100 draws; the last one otherwise), with a random heading;
+/// `from` itself when no cell is free.
+fn anywhere(cells: &FreeCells, from: &Pose2, rng: &mut ChaCha8Rng) -> Pose2 {
+    let mut pose = *from;
+    for _ in 0..100 {
+        let Some(p) = cells.sample(rng) else {
+            break;
+        };
+        pose = p;
+        if slamlab_core::math::hypot(p.x - from.x, p.y - from.y) >= MIN_KIDNAP_DISTANCE {
+            break;
+        }
+    }
+    pose
 }

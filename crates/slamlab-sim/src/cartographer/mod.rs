@@ -146,7 +146,13 @@ impl Default for CartographerParams {
             motion_filter_distance: 0.2,
             motion_filter_angle: 1f64.to_radians(),
             motion_filter_time: 5.0,
-            local: ScanToMapParams::default(),
+            // Cartographer pulls the position towards the odometry
+            // prediction (see `scan_to_map`: without it, corridors swallow
+            // the motion).
+            local: ScanToMapParams {
+                pull_to_prediction: true,
+                ..ScanToMapParams::default()
+            },
             linear_search_window: 7.0,
             angular_search_window: 30f64.to_radians(),
             min_score: 0.55,
@@ -842,7 +848,7 @@ impl CartographerSim {
             };
             let params = BranchAndBoundParams {
                 min_score,
-                recorded_nodes: 0,
+                recorded_nodes: RECORDED_TREE_NODES,
             };
             let (result, record) = branch_and_bound(&grids, &points, &window, &params);
             self.bbs.searches += 1;
@@ -1220,6 +1226,10 @@ impl CartographerSim {
         }
     }
 }
+
+/// Tree nodes each branch-and-bound search keeps for the lesson to draw
+/// (the first ones in the order the depth-first search visits them).
+pub const RECORDED_TREE_NODES: usize = 400;
 
 /// A detection counts for a kidnap when it comes within this many scans
 /// after it; any other is a false alarm.
