@@ -21,6 +21,7 @@
 pub mod decompose;
 pub mod eight_point;
 pub mod five_point;
+mod linear;
 mod poly;
 pub mod ransac;
 #[cfg(test)]
