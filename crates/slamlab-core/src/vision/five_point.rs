@@ -27,7 +27,7 @@
 use nalgebra::{Matrix3, SMatrix, Vector3};
 
 use super::linear::null_space;
-use super::poly::Poly;
+use super::poly::PRODUCT;
 use super::sturm::{Polynomial, real_roots};
 
 /// Minimal number of matches of the five-point algorithm.
@@ -230,52 +230,72 @@ fn null_vector_at(b: &[[InZ; 3]; 3], z: f64) -> Option<(f64, f64)> {
     Some((v.x / v.z, v.y / v.z))
 }
 
-/// The ten cubic constraints as a 10x20 coefficient matrix over [`super::poly::MONOMIALS`].
+/// The coefficients of a polynomial of degree 1 in `x, y, z` over the first
+/// four [`super::poly::MONOMIALS`] (`1, x, y, z`).
+type Linear = [f64; 4];
+
+/// `out += s · a · b`, with `a` of degree 1 or 2 (its first 4 or 10
+/// coefficients) and `b` linear; `out` holds the product's degree (10 or 20
+/// coefficients). [`PRODUCT`] says where each pair of monomials lands.
+fn add_product(out: &mut [f64], a: &[f64], b: &Linear, s: f64) {
+    for (i, ai) in a.iter().enumerate() {
+        let sa = s * ai;
+        for (j, bj) in b.iter().enumerate() {
+            out[PRODUCT[i][j] as usize] += sa * bj;
+        }
+    }
+}
+
+/// The ten cubic constraints as a 10x20 coefficient matrix over
+/// [`super::poly::MONOMIALS`]: rows 0-8 the entries of `E Eᵀ E − ½ tr(E Eᵀ) E`
+/// (Eq. 4.16), row 9 `det E` (Eq. 4.15), with `E = x X + y Y + z Z + W`.
 fn constraint_matrix(basis: &[Matrix3<f64>; 4]) -> SMatrix<f64, 10, 20> {
     let [x, y, z, w] = basis;
-    let e: [[Poly; 3]; 3] = std::array::from_fn(|r| {
-        std::array::from_fn(|c| Poly::linear(w[(r, c)], x[(r, c)], y[(r, c)], z[(r, c)]))
+    let e: [[Linear; 3]; 3] = std::array::from_fn(|r| {
+        std::array::from_fn(|c| [w[(r, c)], x[(r, c)], y[(r, c)], z[(r, c)]])
     });
-    // E Eᵀ (degree 2) and its trace.
-    let eet: [[Poly; 3]; 3] = std::array::from_fn(|i| {
-        std::array::from_fn(|j| {
-            e[i][0]
-                .mul(&e[j][0])
-                .add_scaled(&e[i][1].mul(&e[j][1]), 1.0)
-                .add_scaled(&e[i][2].mul(&e[j][2]), 1.0)
-        })
-    });
-    let trace = eet[0][0]
-        .add_scaled(&eet[1][1], 1.0)
-        .add_scaled(&eet[2][2], 1.0);
-    let mut rows: Vec<Poly> = Vec::with_capacity(10);
+    // E Eᵀ (degree 2, symmetric) and its trace.
+    let mut eet = [[[0.0; 10]; 3]; 3];
+    for i in 0..3 {
+        for j in i..3 {
+            let mut q = [0.0; 10];
+            for k in 0..3 {
+                add_product(&mut q, &e[i][k], &e[j][k], 1.0);
+            }
+            eet[i][j] = q;
+            eet[j][i] = q;
+        }
+    }
+    let trace: [f64; 10] = std::array::from_fn(|m| eet[0][0][m] + eet[1][1][m] + eet[2][2][m]);
+    let mut a = SMatrix::<f64, 10, 20>::zeros();
+    let mut set_row = |row: usize, cubic: &[f64; 20]| {
+        for (k, c) in cubic.iter().enumerate() {
+            a[(row, k)] = *c;
+        }
+    };
     // E Eᵀ E − ½ tr(E Eᵀ) E = 0 (Eq. 4.16): nine equations.
     for i in 0..3 {
         for j in 0..3 {
-            let mut p = eet[i][0].mul(&e[0][j]);
-            p = p.add_scaled(&eet[i][1].mul(&e[1][j]), 1.0);
-            p = p.add_scaled(&eet[i][2].mul(&e[2][j]), 1.0);
-            p = p.add_scaled(&trace.mul(&e[i][j]), -0.5);
-            rows.push(p);
+            let mut cubic = [0.0; 20];
+            for k in 0..3 {
+                add_product(&mut cubic, &eet[i][k], &e[k][j], 1.0);
+            }
+            add_product(&mut cubic, &trace, &e[i][j], -0.5);
+            set_row(3 * i + j, &cubic);
         }
     }
     // det E = 0 (Eq. 4.15), by cofactors along the first row.
-    let minor = |a: usize, b: usize, c: usize, d: usize| {
-        e[1][a]
-            .mul(&e[2][b])
-            .add_scaled(&e[1][c].mul(&e[2][d]), -1.0)
+    let minor = |p: usize, q: usize, r: usize, s: usize| {
+        let mut m = [0.0; 10];
+        add_product(&mut m, &e[1][p], &e[2][q], 1.0);
+        add_product(&mut m, &e[1][r], &e[2][s], -1.0);
+        m
     };
-    let det = e[0][0]
-        .mul(&minor(1, 2, 2, 1))
-        .add_scaled(&e[0][1].mul(&minor(0, 2, 2, 0)), -1.0)
-        .add_scaled(&e[0][2].mul(&minor(0, 1, 1, 0)), 1.0);
-    rows.push(det);
-    let mut a = SMatrix::<f64, 10, 20>::zeros();
-    for (i, p) in rows.iter().enumerate() {
-        for k in 0..20 {
-            a[(i, k)] = p.coefficients[k];
-        }
-    }
+    let mut det = [0.0; 20];
+    add_product(&mut det, &minor(1, 2, 2, 1), &e[0][0], 1.0);
+    add_product(&mut det, &minor(0, 2, 2, 0), &e[0][1], -1.0);
+    add_product(&mut det, &minor(0, 1, 1, 0), &e[0][2], 1.0);
+    set_row(9, &det);
     a
 }
 
@@ -289,13 +309,62 @@ mod tests {
     /// matrix, here as the reference for Nistér's polynomial.
     mod action_matrix_reference {
         use super::super::*;
-        use crate::vision::poly::PRODUCT;
+        use crate::vision::poly::{PRODUCT, Poly};
+
+        /// The constraint matrix expanded with the general polynomial type.
+        pub(super) fn constraint_matrix_by_poly(basis: &[Matrix3<f64>; 4]) -> SMatrix<f64, 10, 20> {
+            let [x, y, z, w] = basis;
+            let e: [[Poly; 3]; 3] = std::array::from_fn(|r| {
+                std::array::from_fn(|c| Poly::linear(w[(r, c)], x[(r, c)], y[(r, c)], z[(r, c)]))
+            });
+            // E Eᵀ (degree 2) and its trace.
+            let eet: [[Poly; 3]; 3] = std::array::from_fn(|i| {
+                std::array::from_fn(|j| {
+                    e[i][0]
+                        .mul(&e[j][0])
+                        .add_scaled(&e[i][1].mul(&e[j][1]), 1.0)
+                        .add_scaled(&e[i][2].mul(&e[j][2]), 1.0)
+                })
+            });
+            let trace = eet[0][0]
+                .add_scaled(&eet[1][1], 1.0)
+                .add_scaled(&eet[2][2], 1.0);
+            let mut rows: Vec<Poly> = Vec::with_capacity(10);
+            // E Eᵀ E − ½ tr(E Eᵀ) E = 0 (Eq. 4.16): nine equations.
+            for i in 0..3 {
+                for j in 0..3 {
+                    let mut p = eet[i][0].mul(&e[0][j]);
+                    p = p.add_scaled(&eet[i][1].mul(&e[1][j]), 1.0);
+                    p = p.add_scaled(&eet[i][2].mul(&e[2][j]), 1.0);
+                    p = p.add_scaled(&trace.mul(&e[i][j]), -0.5);
+                    rows.push(p);
+                }
+            }
+            // det E = 0 (Eq. 4.15), by cofactors along the first row.
+            let minor = |a: usize, b: usize, c: usize, d: usize| {
+                e[1][a]
+                    .mul(&e[2][b])
+                    .add_scaled(&e[1][c].mul(&e[2][d]), -1.0)
+            };
+            let det = e[0][0]
+                .mul(&minor(1, 2, 2, 1))
+                .add_scaled(&e[0][1].mul(&minor(0, 2, 2, 0)), -1.0)
+                .add_scaled(&e[0][2].mul(&minor(0, 1, 1, 0)), 1.0);
+            rows.push(det);
+            let mut a = SMatrix::<f64, 10, 20>::zeros();
+            for (i, p) in rows.iter().enumerate() {
+                for k in 0..20 {
+                    a[(i, k)] = p.coefficients[k];
+                }
+            }
+            a
+        }
 
         /// The action matrix of multiplication by `x` on `b = [1, x, y, z, x², xy, xz,
         /// y², yz, z²]`: row j expresses `x · b_j` in `b`, using the eliminated
         /// constraints for the cubic monomials. `None` if the elimination is singular.
         pub(super) fn action_matrix(basis: &[Matrix3<f64>; 4]) -> Option<Matrix10> {
-            let a = constraint_matrix(basis);
+            let a = constraint_matrix_by_poly(basis);
             let cubic: Matrix10 = a.fixed_columns::<10>(10).into_owned();
             let lower: Matrix10 = a.fixed_columns::<10>(0).into_owned();
             // cubic · m₃ + lower · b = 0  ⇒  m₃ = −cubic⁻¹ lower · b (Gauss-Jordan).
@@ -377,6 +446,22 @@ mod tests {
 
     fn sign_free_distance(a: &Matrix3<f64>, b: &Matrix3<f64>) -> f64 {
         (a - b).norm().min((a + b).norm())
+    }
+
+    #[test]
+    fn constraint_matrix_matches_the_general_polynomial_expansion() {
+        let mut rng = ChaCha8Rng::seed_from_u64(23);
+        for _ in 0..20 {
+            let basis: [Matrix3<f64>; 4] =
+                std::array::from_fn(|_| Matrix3::from_fn(|_, _| rng.random_range(-1.0..1.0)));
+            let fast = constraint_matrix(&basis);
+            let general = action_matrix_reference::constraint_matrix_by_poly(&basis);
+            assert!(
+                (fast - general).amax() < 1e-13,
+                "{}",
+                (fast - general).amax()
+            );
+        }
     }
 
     #[test]

@@ -21,6 +21,11 @@ const TERMS: usize = MAX_DEGREE + 1;
 /// degree-10 polynomial needs a few dozen.
 const MAX_EVALUATIONS: usize = 400;
 
+/// Polishing stops when a Newton step is below this share of the root: the
+/// five-point solver polishes its solutions once more on the equations they
+/// come from ([`super::five_point`]), which squares the remaining error.
+const RELATIVE_TOLERANCE: f64 = 1e-9;
+
 /// A polynomial `c₀ + c₁ t + … + c_d t^d` (coefficients in ascending powers).
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub(crate) struct Polynomial {
@@ -265,6 +270,11 @@ fn polish(p: &Polynomial, chain: &SturmChain, mut lo: f64, mut hi: f64, v_lo: us
     }
     let lo_negative = f_lo < 0.0;
     let mut t = 0.5 * (lo + hi);
+    // The step before last: Newton's step is taken only while it at least
+    // halves it, so a far start (where Newton crawls by a tenth of the
+    // distance per step on a degree-10 polynomial) is bisected instead.
+    let mut older_step = hi - lo;
+    let mut step = older_step;
     for _ in 0..100 {
         let (f, df) = p.eval_with_derivative(t);
         if f == 0.0 {
@@ -276,14 +286,15 @@ fn polish(p: &Polynomial, chain: &SturmChain, mut lo: f64, mut hi: f64, v_lo: us
             hi = t;
         }
         let newton = t - f / df;
-        let next = if newton > lo && newton < hi {
+        let next = if newton > lo && newton < hi && (2.0 * (newton - t)).abs() <= older_step.abs() {
             newton
         } else {
             0.5 * (lo + hi)
         };
-        let step = (next - t).abs();
+        older_step = step;
+        step = next - t;
         t = next;
-        if step <= 4.0 * f64::EPSILON * t.abs() || !(hi - lo > 2.0 * f64::EPSILON * t.abs()) {
+        if step.abs() <= RELATIVE_TOLERANCE * t.abs() || !(hi - lo > 2.0 * f64::EPSILON * t.abs()) {
             break;
         }
     }
