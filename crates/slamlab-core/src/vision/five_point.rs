@@ -124,9 +124,9 @@ fn hidden_variable_matrix(basis: &[Matrix3<f64>; 4]) -> Option<[[InZ; 3]; 3]> {
     let a = constraint_matrix(basis);
     let c = Matrix10::from_fn(|i, j| a[(i, ELIMINATED[j])]);
     let d = Matrix10::from_fn(|i, j| a[(i, KEPT[j])]);
-    // Gauss-Jordan with partial pivoting (Nistér: "Gauss-Jordan elimination
-    // with partial pivoting"), as an LU solve of C G = D.
-    let g = c.full_piv_lu().solve(&d)?;
+    // Gauss-Jordan elimination with partial pivoting (Nistér), as an LU
+    // solve of C G = D.
+    let g = c.lu().solve(&d)?;
     if g.iter().any(|v| !v.is_finite()) {
         return None;
     }

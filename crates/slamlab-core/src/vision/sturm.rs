@@ -21,9 +21,9 @@ const TERMS: usize = MAX_DEGREE + 1;
 /// degree-10 polynomial needs a few dozen.
 const MAX_EVALUATIONS: usize = 400;
 
-/// Polishing stops when a Newton step is below this share of the root: the
-/// five-point solver polishes its solutions once more on the equations they
-/// come from ([`super::five_point`]), which squares the remaining error.
+/// Polishing takes one last Newton step once a step is below this share of
+/// the root (converging quadratically, that step leaves an error near
+/// rounding).
 const RELATIVE_TOLERANCE: f64 = 1e-9;
 
 /// A polynomial `c₀ + c₁ t + … + c_d t^d` (coefficients in ascending powers).
@@ -171,21 +171,32 @@ impl SturmChain {
 
 /// Fujiwara's bound: every root has `|t| < 2 max_i |c_{d-i} / c_d|^{1/i}` (the
 /// last term with `c₀ / 2`), tighter than Cauchy's `1 + max |cᵢ / c_d|` when
-/// the coefficients differ widely in size.
+/// the coefficients differ widely in size. Each i-th root is rounded up to a
+/// power of two from the ratio's binary exponent (`ratio < 2^(e+1)`, so its
+/// i-th root is below `2^⌈(e+1)/i⌉`), which needs no `powf`: at most twice
+/// the exact bound, and the bisection's midpoints are then exact.
 fn root_bound(p: &Polynomial) -> f64 {
     let d = p.degree;
     let lead = p.coefficients[d].abs();
-    let mut bound = 0.0f64;
+    let mut exponent = i32::MIN;
     for i in 1..=d {
-        let mut c = p.coefficients[d - i].abs() / lead;
+        let mut ratio = p.coefficients[d - i].abs() / lead;
         if i == d {
-            c /= 2.0;
+            ratio /= 2.0;
         }
-        if c > 0.0 {
-            bound = bound.max(crate::math::powf(c, 1.0 / i as f64));
+        if ratio > 0.0 {
+            // The IEEE 754 exponent field: floor(log2(ratio)) for normal numbers.
+            let e = ((ratio.to_bits() >> 52) & 0x7ff) as i32 - 1023;
+            let i = i as i32;
+            let ceil_div = (e + 1).div_euclid(i) + i32::from((e + 1).rem_euclid(i) != 0);
+            exponent = exponent.max(ceil_div);
         }
     }
-    2.0 * bound
+    if exponent == i32::MIN {
+        // Only the leading coefficient: every root is 0.
+        return f64::MIN_POSITIVE;
+    }
+    2.0f64.powi(exponent.saturating_add(1))
 }
 
 /// The distinct real roots of p in ascending order, in the first `count`
@@ -197,7 +208,7 @@ pub(crate) fn real_roots(p: &Polynomial) -> ([f64; MAX_DEGREE], usize) {
         return (roots, 0);
     }
     let chain = SturmChain::new(p);
-    let bound = root_bound(p).max(1e-300) * 1.01;
+    let bound = root_bound(p);
     if !bound.is_finite() {
         return (roots, 0);
     }
@@ -294,7 +305,16 @@ fn polish(p: &Polynomial, chain: &SturmChain, mut lo: f64, mut hi: f64, v_lo: us
         older_step = step;
         step = next - t;
         t = next;
-        if step.abs() <= RELATIVE_TOLERANCE * t.abs() || !(hi - lo > 2.0 * f64::EPSILON * t.abs()) {
+        if !(hi - lo > 2.0 * f64::EPSILON * t.abs()) {
+            break;
+        }
+        if step.abs() <= RELATIVE_TOLERANCE * t.abs() {
+            // Close: one more Newton step squares the error.
+            let (f, df) = p.eval_with_derivative(t);
+            let newton = t - f / df;
+            if newton >= lo && newton <= hi {
+                t = newton;
+            }
             break;
         }
     }
