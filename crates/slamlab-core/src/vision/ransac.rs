@@ -449,21 +449,45 @@ impl Ransac {
         let n = self.matches.len();
         let (sample, size) = distinct_indices(rng, n, self.config.method.sample_size());
         let (hypotheses, count) = self.hypotheses_array(&sample[..size]);
-        let mut sample_best = 0;
-        let mut improved = false;
+        // The sample's best hypothesis: the most inliers, a tie broken by the
+        // lower truncated cost. Only it is locally optimized, and only if it
+        // beats the best so far (LO-RANSAC), so the outcome does not depend on
+        // the order in which the solver returns its (up to ten) hypotheses.
+        let best = self.best_inliers();
+        let mut sample_best: usize = 0;
+        let mut chosen: Option<&Matrix3<f64>> = None;
         for f in &hypotheses[..count] {
-            let best = self.best_inliers();
-            let count = self.count_inliers(f, if exact { 0 } else { best });
-            sample_best = sample_best.max(count);
-            if count > best {
-                let (inliers, count) = self.classify(f);
-                self.best = Some(self.locally_optimized(Best {
-                    fundamental: *f,
-                    inliers,
-                    count,
-                }));
-                improved = true;
+            // A count above `beat` is exact; below it a hypothesis can neither
+            // beat the best so far nor tie this sample's best.
+            let beat = if exact {
+                0
+            } else {
+                best.max(sample_best.saturating_sub(1))
+            };
+            let inliers = self.count_inliers(f, beat);
+            if inliers > best {
+                let wins = match chosen {
+                    None => true,
+                    Some(g) => {
+                        inliers > sample_best
+                            || (inliers == sample_best
+                                && self.truncated_cost(f) < self.truncated_cost(g))
+                    }
+                };
+                if wins {
+                    chosen = Some(f);
+                }
             }
+            sample_best = sample_best.max(inliers);
+        }
+        let improved = chosen.is_some();
+        if let Some(f) = chosen {
+            let (inliers, count) = self.classify(f);
+            self.best = Some(self.locally_optimized(Best {
+                fundamental: *f,
+                inliers,
+                count,
+            }));
         }
         if improved {
             let w = self.best_inliers() as f64 / n as f64;
