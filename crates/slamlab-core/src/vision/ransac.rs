@@ -438,9 +438,10 @@ impl Ransac {
     }
 
     /// One sample. With `exact`, every hypothesis's inliers are counted (the
-    /// lesson shows them); without, a hypothesis's count stops once it cannot
-    /// beat the best so far ([`Ransac::count_inliers`]), which changes neither
-    /// the best hypothesis nor the bound, only [`IterationReport::inliers`].
+    /// lesson shows them); without, a hypothesis's count stops once it can
+    /// neither beat the best so far nor tie the sample's best
+    /// ([`Ransac::count_inliers`]), which changes neither the best hypothesis
+    /// nor the bound, only [`IterationReport::inliers`].
     fn draw<R: Rng + ?Sized>(&mut self, rng: &mut R, exact: bool) -> Option<Drawn> {
         if self.is_done() {
             return None;
