@@ -3,6 +3,7 @@
 
 use nalgebra::{DMatrix, Matrix3, SMatrix, SVector, Vector2, Vector3};
 
+use super::linear::{null_space, smallest_right_singular_vector3};
 use super::{Correspondence, Intrinsics, VisionError, check_finite};
 
 /// Minimal number of matches of the eight-point algorithm.
@@ -111,70 +112,19 @@ fn as_matrix(f: &SVector<f64, 9>) -> Result<Matrix3<f64>, VisionError> {
 
 /// The null vector of a minimal sample's 8x9 matrix `A` (Eq. 4.21 with eight
 /// rows: `A f = 0` exactly, so the smallest right singular vector is the null
-/// vector), by Gaussian elimination with full pivoting and back-substitution,
-/// about ten times cheaper than an SVD inside RANSAC's loop. The rank test is
-/// the elimination's: a pivot below `1e-9` times the largest entry of `A` means
-/// rank below 8 (the matches fit more than one F), the counterpart of
-/// [`check_rank`]'s test on the singular values.
+/// vector), by a Householder QR factorization ([`null_space`]), about ten
+/// times cheaper than an SVD inside RANSAC's loop. The rank test is the
+/// factorization's: a diagonal entry of R below `1e-9` times the largest row
+/// of `A` means rank below 8 (the matches fit more than one F), the
+/// counterpart of [`check_rank`]'s test on the singular values.
 fn null_vector_of_eight(rows: &[[f64; 9]; EIGHT]) -> Result<Matrix3<f64>, VisionError> {
-    let mut a = *rows;
-    let mut columns: [usize; 9] = std::array::from_fn(|j| j);
-    let largest = a
-        .iter()
-        .flat_map(|row| row.iter())
-        .fold(0.0f64, |m, v| m.max(v.abs()));
-    if !(largest > 0.0 && largest.is_finite()) {
+    let ([f], rank) = null_space::<EIGHT, 1>(rows);
+    if !(rank > 1e-9) {
         return Err(VisionError::Degenerate(
-            "the matches are all zero or not finite",
+            "the matches fit more than one F (all scene points on one plane, or repeated matches)",
         ));
     }
-    for k in 0..EIGHT {
-        let (mut pr, mut pc, mut pivot) = (k, k, 0.0f64);
-        for (i, row) in a.iter().enumerate().skip(k) {
-            for (j, v) in row.iter().enumerate().skip(k) {
-                if v.abs() > pivot {
-                    (pr, pc, pivot) = (i, j, v.abs());
-                }
-            }
-        }
-        if !(pivot > 1e-9 * largest) {
-            return Err(VisionError::Degenerate(
-                "the matches fit more than one F (all scene points on one plane, or repeated matches)",
-            ));
-        }
-        a.swap(k, pr);
-        if pc != k {
-            for row in a.iter_mut() {
-                row.swap(k, pc);
-            }
-            columns.swap(k, pc);
-        }
-        let head = a[k];
-        for row in a.iter_mut().skip(k + 1) {
-            let factor = row[k] / head[k];
-            if factor != 0.0 {
-                for j in k..9 {
-                    row[j] -= factor * head[j];
-                }
-            }
-        }
-    }
-    // Upper triangular in the permuted columns: the free (last) unknown is 1.
-    let mut x = [0.0; 9];
-    x[8] = 1.0;
-    for k in (0..EIGHT).rev() {
-        let sum: f64 = (k + 1..9).map(|j| a[k][j] * x[j]).sum();
-        x[k] = -sum / a[k][k];
-    }
-    let mut f = SVector::<f64, 9>::zeros();
-    for (j, &column) in columns.iter().enumerate() {
-        f[column] = x[j];
-    }
-    let norm = f.norm();
-    if !(norm > 0.0 && norm.is_finite()) {
-        return Err(VisionError::Degenerate("the null vector vanished"));
-    }
-    as_matrix(&(f / norm))
+    as_matrix(&SVector::<f64, 9>::from_row_slice(&f))
 }
 
 /// `A` must have rank 8 for a unique F: a second zero singular value means the
@@ -204,6 +154,22 @@ pub fn project_to_rank_two(m: &Matrix3<f64>) -> Matrix3<f64> {
     match svd3(m) {
         Some((u, s, v_t)) => u * Matrix3::from_diagonal(&Vector3::new(s[0], s[1], 0.0)) * v_t,
         _ => *m,
+    }
+}
+
+/// [`project_to_rank_two`] for a minimal sample's F inside RANSAC's loop,
+/// without the iterative SVD. With `M = U diag(σ₁, σ₂, σ₃) Vᵀ` the closest
+/// rank-2 matrix is `M - σ₃ u₃ v₃ᵀ = M (I - v₃ v₃ᵀ)` (since `M v₃ = σ₃ u₃`), so
+/// only `v₃` is needed, in closed form ([`smallest_right_singular_vector3`]).
+/// That goes through `MᵀM`, which squares M's condition: fine for a
+/// hypothesis (Hartley-normalized, or drowned in pixel noise without
+/// normalization), while refits and final estimates keep the SVD, which
+/// stays exact to 1e-10 on an unnormalized F whose entries span six orders
+/// of magnitude.
+fn project_to_rank_two_fast(m: &Matrix3<f64>) -> Matrix3<f64> {
+    match smallest_right_singular_vector3(m) {
+        Some(v) => m - (m * v) * v.transpose(),
+        None => project_to_rank_two(m),
     }
 }
 
@@ -255,7 +221,7 @@ pub fn fundamental_eight_point(
     };
     let f_hat = if let Ok(minimal) = <&[Correspondence; EIGHT]>::try_from(matches) {
         // A minimal sample (RANSAC's inner loop): no allocation.
-        project_to_rank_two(&null_vector_of_eight(&minimal.map(|m| row(&m)))?)
+        project_to_rank_two_fast(&null_vector_of_eight(&minimal.map(|m| row(&m)))?)
     } else {
         let rows: Vec<[f64; 9]> = matches.iter().map(row).collect();
         project_to_rank_two(&smallest_right_singular(&rows)?)

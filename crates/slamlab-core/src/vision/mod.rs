@@ -11,7 +11,8 @@
 //! - [`eight_point`]: Hartley's normalized eight-point algorithm (Eq. 4.18-4.21)
 //!   with the rank-2 projection, for F in pixels and E from it;
 //! - [`five_point`]: the calibrated five-point solver (Eq. 4.22-4.25,
-//!   Stewénius' action-matrix form of Nistér's problem), up to 10 candidates;
+//!   Nistér's degree-10 polynomial with Sturm-sequence root finding), up to
+//!   10 candidates;
 //! - [`decompose`]: the four `(R, t)` in an essential matrix (Eq. 4.26-4.28) and
 //!   the choice by cheirality;
 //! - [`ransac`]: RANSAC with the adaptive iteration bound and the Sampson
@@ -21,8 +22,10 @@
 pub mod decompose;
 pub mod eight_point;
 pub mod five_point;
+mod linear;
 mod poly;
 pub mod ransac;
+mod sturm;
 #[cfg(test)]
 mod tests;
 

@@ -30,6 +30,7 @@ pub const MONOMIALS: [(u8, u8, u8); 20] = [
 ];
 
 /// Number of monomials of degree at most d.
+#[cfg(test)]
 const TERMS: [usize; 4] = [1, 4, 10, 20];
 
 /// Marks a product of degree above 3 in [`PRODUCT`].
@@ -65,7 +66,9 @@ const fn product_table() -> [[u8; 20]; 20] {
 /// `PRODUCT[i][j]`: the index of monomial i times monomial j (or `NONE`).
 pub const PRODUCT: [[u8; 20]; 20] = product_table();
 
-/// A polynomial of degree at most 3 in `x, y, z`.
+/// A polynomial of degree at most 3 in `x, y, z` (the tests' reference for
+/// the five-point solver's fixed-size expansion).
+#[cfg(test)]
 #[derive(Debug, Clone, Copy)]
 pub struct Poly {
     /// Coefficients in [`MONOMIALS`] order.
@@ -73,6 +76,7 @@ pub struct Poly {
     degree: usize,
 }
 
+#[cfg(test)]
 impl Poly {
     /// `w + x·a + y·b + z·c`.
     pub fn linear(w: f64, a: f64, b: f64, c: f64) -> Self {

@@ -16,7 +16,7 @@ use serde::{Deserialize, Serialize};
 
 use super::decompose::{Decomposition, choose_by_cheirality};
 use super::eight_point::{EIGHT, essential_from_fundamental, fundamental_eight_point, svd3};
-use super::five_point::{FIVE, essential_five_point};
+use super::five_point::{FIVE, MAX_SOLUTIONS, essential_five_point_array};
 use super::{
     Correspondence, Intrinsics, VisionError, check_finite, fundamental_from_essential,
     sampson_squared,
@@ -320,27 +320,40 @@ impl Ransac {
     /// essential matrices moves it off most inliers. The five-point method
     /// returns essential matrices, scored through `F = K⁻ᵀ E K⁻¹`.
     pub fn hypotheses(&self, sample: &[usize]) -> Vec<Matrix3<f64>> {
+        let (hypotheses, count) = self.hypotheses_array(sample);
+        hypotheses[..count].to_vec()
+    }
+
+    /// [`Ransac::hypotheses`] in a fixed array (the first `count` entries), so
+    /// RANSAC's loop allocates nothing per sample.
+    fn hypotheses_array(&self, sample: &[usize]) -> ([Matrix3<f64>; MAX_SOLUTIONS], usize) {
+        let mut out = [Matrix3::zeros(); MAX_SOLUTIONS];
         match self.config.method {
             Method::EightPoint => {
                 if sample.len() != EIGHT {
-                    return Vec::new();
+                    return (out, 0);
                 }
                 let chosen: [Correspondence; EIGHT] =
                     std::array::from_fn(|i| self.matches[sample[i]]);
-                fundamental_eight_point(&chosen, self.config.normalize)
-                    .map(|f| vec![f])
-                    .unwrap_or_default()
+                match fundamental_eight_point(&chosen, self.config.normalize) {
+                    Ok(f) => {
+                        out[0] = f;
+                        (out, 1)
+                    }
+                    Err(_) => (out, 0),
+                }
             }
             Method::FivePoint => {
                 if sample.len() != FIVE {
-                    return Vec::new();
+                    return (out, 0);
                 }
                 let left: [Vector3<f64>; 5] = std::array::from_fn(|i| self.left[sample[i]]);
                 let right: [Vector3<f64>; 5] = std::array::from_fn(|i| self.right[sample[i]]);
-                essential_five_point(&left, &right)
-                    .iter()
-                    .map(|e| fundamental_from_essential(e, &self.k))
-                    .collect()
+                let (essentials, count) = essential_five_point_array(&left, &right);
+                for (f, e) in out.iter_mut().zip(&essentials[..count]) {
+                    *f = fundamental_from_essential(e, &self.k);
+                }
+                (out, count)
             }
         }
     }
@@ -412,36 +425,70 @@ impl Ransac {
     /// Draws one sample, scores its hypotheses, keeps the best and lowers the
     /// bound. `None` once the bound is reached.
     pub fn step<R: Rng + ?Sized>(&mut self, rng: &mut R) -> Option<IterationReport> {
-        self.draw(rng, true)
+        let drawn = self.draw(rng, true)?;
+        Some(IterationReport {
+            iteration: self.iteration,
+            sample: drawn.sample[..drawn.size].to_vec(),
+            hypotheses: drawn.hypotheses,
+            inliers: drawn.inliers,
+            best_inliers: self.best_inliers(),
+            bound: self.bound,
+            improved: drawn.improved,
+        })
     }
 
     /// One sample. With `exact`, every hypothesis's inliers are counted (the
-    /// lesson shows them); without, a hypothesis's count stops once it cannot
-    /// beat the best so far ([`Ransac::count_inliers`]), which changes neither
-    /// the best hypothesis nor the bound, only [`IterationReport::inliers`].
-    fn draw<R: Rng + ?Sized>(&mut self, rng: &mut R, exact: bool) -> Option<IterationReport> {
+    /// lesson shows them); without, a hypothesis's count stops once it can
+    /// neither beat the best so far nor tie the sample's best
+    /// ([`Ransac::count_inliers`]), which changes neither the best hypothesis
+    /// nor the bound, only [`IterationReport::inliers`].
+    fn draw<R: Rng + ?Sized>(&mut self, rng: &mut R, exact: bool) -> Option<Drawn> {
         if self.is_done() {
             return None;
         }
         self.iteration += 1;
         let n = self.matches.len();
-        let sample = distinct_indices(rng, n, self.config.method.sample_size());
-        let hypotheses = self.hypotheses(&sample);
-        let mut sample_best = 0;
-        let mut improved = false;
-        for f in &hypotheses {
-            let best = self.best_inliers();
-            let count = self.count_inliers(f, if exact { 0 } else { best });
-            sample_best = sample_best.max(count);
-            if count > best {
-                let (inliers, count) = self.classify(f);
-                self.best = Some(self.locally_optimized(Best {
-                    fundamental: *f,
-                    inliers,
-                    count,
-                }));
-                improved = true;
+        let (sample, size) = distinct_indices(rng, n, self.config.method.sample_size());
+        let (hypotheses, count) = self.hypotheses_array(&sample[..size]);
+        // The sample's best hypothesis: the most inliers, a tie broken by the
+        // lower truncated cost. Only it is locally optimized, and only if it
+        // beats the best so far (LO-RANSAC), so the outcome does not depend on
+        // the order in which the solver returns its (up to ten) hypotheses.
+        let best = self.best_inliers();
+        let mut sample_best: usize = 0;
+        let mut chosen: Option<&Matrix3<f64>> = None;
+        for f in &hypotheses[..count] {
+            // A count above `beat` is exact; below it a hypothesis can neither
+            // beat the best so far nor tie this sample's best.
+            let beat = if exact {
+                0
+            } else {
+                best.max(sample_best.saturating_sub(1))
+            };
+            let inliers = self.count_inliers(f, beat);
+            if inliers > best {
+                let wins = match chosen {
+                    None => true,
+                    Some(g) => {
+                        inliers > sample_best
+                            || (inliers == sample_best
+                                && self.truncated_cost(f) < self.truncated_cost(g))
+                    }
+                };
+                if wins {
+                    chosen = Some(f);
+                }
             }
+            sample_best = sample_best.max(inliers);
+        }
+        let improved = chosen.is_some();
+        if let Some(f) = chosen {
+            let (inliers, count) = self.classify(f);
+            self.best = Some(self.locally_optimized(Best {
+                fundamental: *f,
+                inliers,
+                count,
+            }));
         }
         if improved {
             let w = self.best_inliers() as f64 / n as f64;
@@ -453,13 +500,11 @@ impl Ransac {
             );
             self.bound = self.bound.min(bound);
         }
-        Some(IterationReport {
-            iteration: self.iteration,
+        Some(Drawn {
             sample,
-            hypotheses: hypotheses.len(),
+            size,
+            hypotheses: count,
             inliers: sample_best,
-            best_inliers: self.best_inliers(),
-            bound: self.bound,
             improved,
         })
     }
@@ -467,21 +512,26 @@ impl Ransac {
     /// Local optimization (Chum, Matas and Kittler, "Locally optimized
     /// RANSAC", 2003): a new best hypothesis from a minimal sample carries that
     /// sample's noise, so it is refitted by the eight-point algorithm on all its
-    /// inliers, re-scored, and refitted again while the inlier count grows (at
-    /// most three times). Without it the best minimal hypothesis keeps only part
+    /// inliers, re-scored, and refitted again while the truncated cost falls
+    /// (at most [`LO_MAX_ROUNDS`] times). It runs only when a sample gives a
+    /// new best, as in LO-RANSAC. Without it the best minimal hypothesis keeps only part
     /// of the true inliers and the adaptive bound, computed from that share,
     /// stays far too high.
     fn locally_optimized(&self, mut best: Best) -> Best {
+        let mut best_cost = self.truncated_cost(&best.fundamental);
         for _ in 0..LO_MAX_ROUNDS {
             let Some(refit) = self.refit(&best.inliers) else {
                 break;
             };
             let (inliers, count) = self.classify(&refit);
-            if count < best.count
-                || self.truncated_cost(&refit) >= self.truncated_cost(&best.fundamental)
-            {
+            if count < best.count {
                 break;
             }
+            let cost = self.truncated_cost(&refit);
+            if cost >= best_cost {
+                break;
+            }
+            best_cost = cost;
             best = Best {
                 fundamental: refit,
                 inliers,
@@ -610,19 +660,38 @@ pub fn estimate_two_view<R: Rng + ?Sized>(
 }
 
 /// `count` distinct indices below `n`, by rejection (`count` is 5 or 8, `n` at
-/// least `count`).
-fn distinct_indices<R: Rng + ?Sized>(rng: &mut R, n: usize, count: usize) -> Vec<usize> {
-    let mut out: Vec<usize> = Vec::with_capacity(count);
+/// least `count`), in the first `size` entries of an array: no allocation.
+fn distinct_indices<R: Rng + ?Sized>(
+    rng: &mut R,
+    n: usize,
+    count: usize,
+) -> ([usize; EIGHT], usize) {
+    let mut out = [0; EIGHT];
+    let count = count.min(EIGHT);
     if n < count {
-        return (0..n).collect();
+        for (i, slot) in out.iter_mut().enumerate().take(n) {
+            *slot = i;
+        }
+        return (out, n);
     }
-    while out.len() < count {
+    let mut size = 0;
+    while size < count {
         let i = rng.random_range(0..n);
-        if !out.contains(&i) {
-            out.push(i);
+        if !out[..size].contains(&i) {
+            out[size] = i;
+            size += 1;
         }
     }
-    out
+    (out, size)
+}
+
+/// What [`Ransac::draw`] did with one sample.
+struct Drawn {
+    sample: [usize; EIGHT],
+    size: usize,
+    hypotheses: usize,
+    inliers: usize,
+    improved: bool,
 }
 
 fn select(points: &[Vector3<f64>], mask: &[bool]) -> Vec<Vector3<f64>> {

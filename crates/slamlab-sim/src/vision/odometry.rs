@@ -351,22 +351,26 @@ mod tests {
         let mean_rotation = rotation.iter().sum::<f64>() / rotation.len().max(1) as f64;
         eprintln!("mean rotation error per step {mean_rotation:.4} deg");
         // Measured (seed 1): wheel odometry 0.47 m, VO scaled by the wheel
-        // speeds 0.87 m, unit-scale VO 6.6 m; a mean rotation error of 0.161 deg
+        // speeds 0.91 m, unit-scale VO 6.5 m; a mean rotation error of 0.185 deg
         // per step. Over 20 m with a 0.01 rad/s gyro bias the wheels still win:
         // each VO step's rotation error accumulates into heading drift as fast.
-        // (With local optimization stopped after three refits the
-        // steps' mean rotation error was 0.196 deg, the chained RMSE 0.66 m by
-        // the luck of how the errors cancelled along this one run.)
-        assert!(mean_rotation < 0.17, "{mean_rotation}");
+        // (When RANSAC locally optimized the first of a sample's hypotheses to
+        // beat the best, in the order the five-point solver returned them, this
+        // seed gave 0.161 deg and 0.87 m; over 48 seeds the two rules give a
+        // mean of 0.193 and 0.195 deg, per-seed differences either way. With
+        // local optimization stopped after three refits the steps' mean
+        // rotation error was 0.196 deg, the chained RMSE 0.66 m by the luck of
+        // how the errors cancelled along this one run.)
+        assert!(mean_rotation < 0.19, "{mean_rotation}");
         assert!((r.wheel_odometry - 0.473).abs() < 0.01, "{r:?}");
-        assert!((r.visual_odometry - 0.871).abs() < 0.01, "{r:?}");
+        assert!((r.visual_odometry - 0.906).abs() < 0.01, "{r:?}");
         // Unit steps are 1 m where the vehicle moved 0.2-0.75 m: the scale is lost.
         assert!(
             r.visual_odometry_unit_scale > 3.0 * r.visual_odometry,
             "{r:?}"
         );
         let general = run.steps.iter().filter(|s| s.outcome == "general").count();
-        // Measured: 33 of 39; the slow steps near the station (0.2 m) have too
+        // Measured: 31 of 39; the slow steps near the station (0.2 m) have too
         // little parallax and are reported as pure rotations.
         assert!(general >= 30, "{general} of {}", run.steps.len());
     }
