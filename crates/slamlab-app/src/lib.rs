@@ -12,6 +12,7 @@
 pub mod cartographer;
 pub mod export;
 pub mod filters;
+pub mod fonts;
 pub mod frame_stats;
 pub mod fusion;
 pub mod kidnap;
@@ -40,6 +41,30 @@ use time_control::TimeAction;
 
 /// The eframe storage key of [`Settings`].
 const SETTINGS_KEY: &str = "slamlab_settings";
+
+/// Reads the stored [`Settings`]: JSON (what SLAM Lab writes). The desktop also reads
+/// the RON an earlier version wrote. A value that neither reads is ignored (defaults).
+fn load_settings(storage: &dyn eframe::Storage) -> Option<Settings> {
+    let text = storage.get_string(SETTINGS_KEY)?;
+    match serde_json::from_str(&text) {
+        Ok(settings) => Some(settings),
+        #[cfg(not(target_arch = "wasm32"))]
+        Err(_) => eframe::get_value(storage, SETTINGS_KEY),
+        #[cfg(target_arch = "wasm32")]
+        Err(err) => {
+            log::warn!("ignoring the stored settings: {err}");
+            None
+        }
+    }
+}
+
+/// Stores the [`Settings`] as JSON (the browser build links no RON: docs/web-build.md).
+fn store_settings(storage: &mut dyn eframe::Storage, settings: &Settings) {
+    match serde_json::to_string(settings) {
+        Ok(text) => storage.set_string(SETTINGS_KEY, text),
+        Err(err) => log::warn!("could not store the settings: {err}"),
+    }
+}
 
 /// What SLAM Lab remembers between visits (eframe storage: a file natively, local
 /// storage in the browser). Parameters given in the URL always win over these.
@@ -110,10 +135,9 @@ impl SlamLabApp {
     /// Creates the app from the page's query string (without the leading `?`), with
     /// the settings eframe stored last time.
     pub fn new(cc: &eframe::CreationContext<'_>, query: &str) -> Self {
-        let settings: Option<Settings> = cc
-            .storage
-            .and_then(|storage| eframe::get_value(storage, SETTINGS_KEY));
+        let settings = cc.storage.and_then(load_settings);
         let app = Self::with_settings(query, settings);
+        fonts::install(&cc.egui_ctx);
         app.apply_theme(&cc.egui_ctx);
         app
     }
@@ -912,7 +936,7 @@ impl eframe::App for SlamLabApp {
     }
 
     fn save(&mut self, storage: &mut dyn eframe::Storage) {
-        eframe::set_value(storage, SETTINGS_KEY, &self.settings());
+        store_settings(storage, &self.settings());
     }
 }
 
@@ -973,6 +997,45 @@ mod tests {
         let text = serde_json::to_string(&settings).unwrap_or_default();
         let back: Settings = serde_json::from_str(&text).unwrap_or_default();
         assert_eq!(back, settings);
+    }
+
+    /// eframe's storage, in memory.
+    #[derive(Default)]
+    struct MemoryStorage(BTreeMap<String, String>);
+
+    impl eframe::Storage for MemoryStorage {
+        fn get_string(&self, key: &str) -> Option<String> {
+            self.0.get(key).cloned()
+        }
+        fn set_string(&mut self, key: &str, value: String) {
+            self.0.insert(key.to_owned(), value);
+        }
+        fn remove_string(&mut self, key: &str) {
+            self.0.remove(key);
+        }
+        fn flush(&mut self) {}
+    }
+
+    #[test]
+    fn settings_are_stored_as_json_and_read_back() {
+        use eframe::Storage as _;
+        let settings = stored_landmarks("33");
+        let mut storage = MemoryStorage::default();
+        store_settings(&mut storage, &settings);
+        let text = storage.get_string(SETTINGS_KEY).unwrap_or_default();
+        assert!(text.starts_with('{'), "not JSON: {text}");
+        assert_eq!(load_settings(&storage), Some(settings));
+        storage.set_string(SETTINGS_KEY, "not settings".to_owned());
+        assert_eq!(load_settings(&storage), None);
+    }
+
+    /// The desktop still reads the RON an earlier SLAM Lab stored.
+    #[test]
+    fn settings_stored_as_ron_are_read_on_the_desktop() {
+        let settings = stored_landmarks("33");
+        let mut storage = MemoryStorage::default();
+        eframe::set_value(&mut storage, SETTINGS_KEY, &settings);
+        assert_eq!(load_settings(&storage), Some(settings));
     }
 
     #[test]
