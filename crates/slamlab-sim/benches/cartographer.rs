@@ -19,10 +19,12 @@
 
 #![allow(clippy::panic)] // a benchmark whose input does not load cannot run
 
+mod common;
+
 use cpu_time::ThreadTime;
 use slamlab_sim::cartographer::input::kidnap_input;
 use slamlab_sim::cartographer::{CartographerParams, CartographerSim};
-use slamlab_sim::laser_log::{LaserLog, SimulatedLogConfig};
+use slamlab_sim::laser_log::SimulatedLogConfig;
 use slamlab_sim::mapping::{builtin_map, log_input};
 use std::sync::Arc;
 use std::time::Instant;
@@ -94,20 +96,8 @@ fn office(kidnap_at: Option<usize>, params: CartographerParams, label: &str) {
 }
 
 fn intel() {
-    let shared = std::env::var_os("SLAMLAB_SHARED").map_or_else(
-        || std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../../../shared"),
-        std::path::PathBuf::from,
-    );
-    let path = shared.join("data/laser/intel.clf.bz2");
-    let log = match LaserLog::read_file(&path) {
-        Ok(log) => log,
-        Err(e) => {
-            eprintln!(
-                "skipped: the Intel log is not readable at {} ({e})",
-                path.display()
-            );
-            return;
-        }
+    let Some(log) = common::intel_log() else {
+        return;
     };
     let input = Arc::new(log_input(&log, "intel.clf.bz2"));
     let (sim, _) = CartographerSim::new(input, CartographerParams::default());

@@ -7,6 +7,8 @@
 
 #![allow(clippy::panic)] // a benchmark whose input does not read cannot run
 
+mod common;
+
 use slamlab_sim::laser_log::LaserLog;
 use std::io::Read;
 
@@ -15,11 +17,7 @@ fn main() {
 }
 
 fn intel_bytes() -> Option<Vec<u8>> {
-    let shared = std::env::var_os("SLAMLAB_SHARED").map_or_else(
-        || std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../../../shared"),
-        std::path::PathBuf::from,
-    );
-    let path = shared.join("data/laser/intel.clf.bz2");
+    let path = common::intel_log_path();
     match std::fs::read(&path) {
         Ok(bytes) => Some(bytes),
         Err(e) => {

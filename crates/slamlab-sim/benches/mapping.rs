@@ -17,8 +17,9 @@
 
 #![allow(clippy::panic)] // a benchmark whose input does not load cannot run
 
+mod common;
+
 use cpu_time::ThreadTime;
-use slamlab_sim::laser_log::LaserLog;
 use slamlab_sim::mapping::{
     MappingPhase, MappingScenario, MappingSession, PoseSource, builtin_map, log_input,
     simulated_input,
@@ -95,20 +96,8 @@ fn office(poses: PoseSource) {
 }
 
 fn intel(poses: PoseSource) {
-    let shared = std::env::var_os("SLAMLAB_SHARED").map_or_else(
-        || std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../../../shared"),
-        std::path::PathBuf::from,
-    );
-    let path = shared.join("data/laser/intel.clf.bz2");
-    let log = match LaserLog::read_file(&path) {
-        Ok(log) => log,
-        Err(e) => {
-            eprintln!(
-                "skipped: the Intel log is not readable at {} ({e})",
-                path.display()
-            );
-            return;
-        }
+    let Some(log) = common::intel_log() else {
+        return;
     };
     let input = Arc::new(log_input(&log, "intel.clf.bz2"));
     let duration = input.duration();

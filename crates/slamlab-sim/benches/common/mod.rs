@@ -1,0 +1,32 @@
+//! What the benchmarks share: where the shared data sets are.
+
+use slamlab_sim::laser_log::LaserLog;
+use std::path::PathBuf;
+
+/// The Intel Research Lab log: `../shared/data/laser/intel.clf.bz2` beside
+/// the repository, or under `$SLAMLAB_SHARED`.
+pub fn intel_log_path() -> PathBuf {
+    std::env::var_os("SLAMLAB_SHARED")
+        .map_or_else(
+            || std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../../../shared"),
+            PathBuf::from,
+        )
+        .join("data/laser/intel.clf.bz2")
+}
+
+/// The Intel log read and parsed, or None (with a message saying where it
+/// was looked for) when it cannot be read.
+#[allow(dead_code)] // not every benchmark reads the log whole
+pub fn intel_log() -> Option<LaserLog> {
+    let path = intel_log_path();
+    match LaserLog::read_file(&path) {
+        Ok(log) => Some(log),
+        Err(e) => {
+            eprintln!(
+                "skipped: the Intel log is not readable at {} ({e})",
+                path.display()
+            );
+            None
+        }
+    }
+}
