@@ -17,9 +17,11 @@ fn main() {
     // Print what is being timed once, so the numbers can be read with it.
     let (reference, scan) = room_scans();
     for variant in [IcpVariant::PointToLine, IcpVariant::PointToPoint] {
-        match align(&reference, &scan, Pose2::IDENTITY, &config(variant)) {
-            Ok((m, _)) => println!(
-                "{variant:?}: {} + {} points, {} iterations, converged {}, pose ({:.4} m, {:.4} m, {:.3}°), truth (0.1 m, 0 m, 3°)",
+        let run = IcpState::new(&reference, &scan, Pose2::IDENTITY, config(variant))
+            .and_then(|mut icp| Ok((icp.run()?.0, icp.query_counts())));
+        match run {
+            Ok((m, (certified, asked))) => println!(
+                "{variant:?}: {} + {} points, {} iterations, converged {}, pose ({:.4} m, {:.4} m, {:.3}°), truth (0.1 m, 0 m, 3°); nearest neighbours: {certified} certified, {asked} asked of the tree",
                 reference.len(),
                 scan.len(),
                 m.iterations,

@@ -6,8 +6,9 @@
 //! Each iteration does what the slides list:
 //! 1. transform the scan's points into the reference frame with the current pose;
 //! 2. pair each with its nearest reference point, found with a k-d tree
-//!    ([`super::kdtree::PointTree`]); a point that has moved too little since its
-//!    last query for the answer to change skips the query (`NearestCache`);
+//!    ([`super::kdtree::PointTree`]); when the nearest point is provably among a
+//!    few candidates (the point's previous partner and that partner's
+//!    neighbours) the tree is not asked (`Neighbourhoods`);
 //! 3. reject doubtful pairs: a **distance gate** (pairs farther apart than
 //!    [`IcpConfig::max_correspondence_distance`]) and **trimming**, keeping only
 //!    the best [`IcpConfig::trim_fraction`] of the pairs that pass the gate, as in
@@ -271,41 +272,124 @@ pub struct IcpState {
     converged: bool,
     // Reused between iterations.
     pairs: Vec<Pair>,
+    /// The kept pairs' indices in `pairs`, in scan order.
     order: Vec<usize>,
-    /// Per scan point, what its last k-d tree query found (see [`NearestCache`]).
-    cache: Vec<Option<NearestCache>>,
+    /// Scratch for trimming's selection.
+    errors: Vec<f64>,
+    /// Per scan point, its partner in the last iteration (the certificate's
+    /// guess, see [`Neighbourhoods`]).
+    partner: Vec<Option<usize>>,
+    neighbourhoods: Neighbourhoods,
+    /// Nearest-neighbour answers so far: certified, and asked of the tree.
+    certified: usize,
+    tree_queries: usize,
     neighbours: Vec<Neighbour>,
 }
 
-/// What a scan point's last k-d tree query found, so that the next iteration can
-/// skip the query when the answer cannot have changed (Nüchter, Lingemann and
-/// Hertzberg, "Cached k-d tree search for ICP algorithms", 3DIM 2007, in an exact
-/// form). The query was made with the point at `at`; its nearest reference point
-/// was `reference` and every other reference point was at least `second` away. If
-/// the point has since moved by `m`, every other reference point is still at
-/// least `second − m` away (triangle inequality), so if the old nearest point is
-/// now closer than that, it is still the nearest and the tree need not be asked.
-/// The pairs are the ones a query per point and iteration gives; after the first
-/// iterations the steps are small and most queries are skipped.
-#[derive(Clone, Copy, Debug)]
-struct NearestCache {
-    at: Point2,
-    reference: usize,
-    second: f64,
+/// How many guesses a nearest-neighbour search tries before it asks the tree.
+const CERTIFICATE_WALK: usize = 3;
+
+/// Each reference point's nearest fellow reference points, which let most
+/// nearest-neighbour queries be answered without the tree, exactly.
+///
+/// The **certificate**: let `N(c)` be reference point `c`'s `k` nearest fellows
+/// and `ρ(c)` the distance to the farthest of them, so every reference point
+/// outside `N(c)` lies at least `ρ(c)` from `c`. For a query point `q` at `d_c`
+/// from `c`, every such point lies at least `ρ(c) − d_c` from `q` (triangle
+/// inequality). So if the nearest of `{c} ∪ N(c)` to `q` is closer than
+/// `ρ(c) − d_c`, it is the nearest reference point of all. As a *guess* `c` we
+/// take the scan point's partner in the previous iteration, or in the first
+/// iteration the previous scan point's partner (consecutive beams hit
+/// neighbouring places). Along a wall sampled every few centimetres, with `k = 4`
+/// and points a centimetre off the wall, the certificate holds for nearly every
+/// point; where it fails (corners, gaps, the first point) the tree is asked.
+///
+/// This is the idea of Nüchter, Lingemann and Hertzberg's cached k-d tree search
+/// for ICP ("Cached k-d tree search for ICP algorithms", 3DIM 2007) made exact:
+/// the pairs are the ones a tree query per point and iteration gives.
+/// A guess the certificate cannot prove is replaced by the nearest point of its
+/// list, which is closer to the query, for up to [`CERTIFICATE_WALK`] guesses.
+/// A reference point's list is found (one k-d tree query, with its normal for
+/// point-to-line) the first time it is a guess or a partner.
+#[derive(Debug)]
+struct Neighbourhoods {
+    /// How many fellows each list holds (`k`).
+    k: usize,
+    /// `k` fellows per reference point, nearest first; `u32::MAX` pads lists of
+    /// a reference with fewer than `k + 1` points.
+    fellows: Vec<u32>,
+    /// `ρ(c)` per reference point: infinite when the list holds every other
+    /// point, negative while the list is not yet known.
+    reach: Vec<f64>,
+    /// The most recently found `ρ`, a guess of the next one.
+    last_reach: f64,
 }
 
-impl NearestCache {
-    /// The cached nearest reference point if it is certainly still the nearest
-    /// to `q`, with its squared distance.
-    fn still_nearest(&self, q: Point2, reference: &[Point2]) -> Option<Neighbour> {
-        let r = reference[self.reference];
-        let distance_squared = squared_distance(q, r);
-        let moved = math::hypot(q[0] - self.at[0], q[1] - self.at[1]);
-        // A margin of a nanometre absorbs the rounding of the square roots.
-        (distance_squared.sqrt() + moved + 1e-9 < self.second).then_some(Neighbour {
-            index: self.reference,
-            distance_squared,
-        })
+impl Neighbourhoods {
+    fn new(points: usize, k: usize) -> Self {
+        Self {
+            k,
+            fellows: vec![u32::MAX; points * k],
+            reach: vec![-1.0; points],
+            last_reach: f64::NAN,
+        }
+    }
+
+    fn is_known(&self, c: usize) -> bool {
+        self.reach[c] >= 0.0
+    }
+
+    /// Records reference point `c`'s neighbours as a k-d tree query at `c`
+    /// returned them, nearest first (`c` itself, or a copy of it, among them).
+    fn set(&mut self, c: usize, neighbours: &[Neighbour], reference_len: usize) {
+        let list = &mut self.fellows[c * self.k..(c + 1) * self.k];
+        list.fill(u32::MAX);
+        let mut fellows = neighbours.iter().filter(|n| n.index != c);
+        for (slot, n) in list.iter_mut().zip(fellows.by_ref()) {
+            *slot = n.index as u32;
+        }
+        // Every point outside the list is at least as far as the first returned
+        // point that did not fit in it, or else as the farthest point returned;
+        // if the query returned every point, none is outside.
+        self.reach[c] = match fellows.next() {
+            Some(n) => n.distance_squared.sqrt(),
+            None if neighbours.len() >= reference_len => f64::INFINITY,
+            None => neighbours
+                .last()
+                .map_or(f64::INFINITY, |n| n.distance_squared.sqrt()),
+        };
+        self.last_reach = self.reach[c];
+    }
+
+    /// The nearest of `{c} ∪ N(c)` to `q`, and whether the certificate around
+    /// the guess `c` proves it the nearest of all.
+    fn nearest(&self, c: usize, q: Point2, reference: &[Point2]) -> (Neighbour, bool) {
+        let reach = self.reach[c];
+        let d_c_squared = squared_distance(q, reference[c]);
+        let mut best = Neighbour {
+            index: c,
+            distance_squared: d_c_squared,
+        };
+        for &f in &self.fellows[c * self.k..(c + 1) * self.k] {
+            let Some(r) = reference.get(f as usize) else {
+                break;
+            };
+            let d = squared_distance(q, *r);
+            if d < best.distance_squared {
+                best = Neighbour {
+                    index: f as usize,
+                    distance_squared: d,
+                };
+            }
+        }
+        // A nanometre absorbs the square roots' rounding. The best is no farther
+        // than `c`, so `2 d_c < ρ(c)` proves it without a square root (the
+        // usual case); else the exact test `d_best < ρ(c) − d_c`.
+        let reach = reach - 1e-9;
+        let proven = reach > 0.0
+            && (4.0 * d_c_squared < reach * reach
+                || best.distance_squared.sqrt() + d_c_squared.sqrt() < reach);
+        (best, proven)
     }
 }
 
@@ -321,6 +405,18 @@ fn finite_points(points: &[Point2]) -> (Vec<Point2>, Vec<usize>) {
         .filter(|(_, p)| p[0].is_finite() && p[1].is_finite())
         .map(|(i, p)| (*p, i))
         .unzip()
+}
+
+/// The unit normal at a reference point from its nearest `neighbours` (itself
+/// among them): those within [`IcpConfig::normal_radius`] define the line.
+fn normal_from(
+    points: &[Point2],
+    neighbours: &mut Vec<Neighbour>,
+    config: &IcpConfig,
+) -> Option<Point2> {
+    let radius_squared = config.normal_radius * config.normal_radius;
+    neighbours.retain(|n| n.distance_squared <= radius_squared);
+    line_normal(points, neighbours)
 }
 
 /// The unit normal of the line through `neighbours` (total least squares: the
@@ -506,26 +602,21 @@ impl IcpState {
             });
         }
         let tree = PointTree::new(&reference)?;
+        // The certificate's lists (see `Neighbourhoods`) hold the normals'
+        // neighbours less the point itself; both are found when a reference
+        // point is first needed, so points nothing pairs with cost nothing.
+        let neighbourhoods =
+            Neighbourhoods::new(reference.len(), config.normal_neighbours.max(2) - 1);
         let normals = match config.variant {
             IcpVariant::PointToPoint => Vec::new(),
-            IcpVariant::PointToLine => {
-                let radius_squared = config.normal_radius * config.normal_radius;
-                let mut neighbours = Vec::with_capacity(config.normal_neighbours);
-                reference
-                    .iter()
-                    .map(|&p| {
-                        tree.nearest_k(p, config.normal_neighbours, &mut neighbours);
-                        neighbours.retain(|n| n.distance_squared <= radius_squared);
-                        line_normal(&reference, &neighbours)
-                    })
-                    .collect()
-            }
+            IcpVariant::PointToLine => vec![None; reference.len()],
         };
         let pose = Pose2::new(initial.x, initial.y, initial.theta);
         Ok(Self {
             config,
             pairs: Vec::with_capacity(scan.len()),
             order: Vec::with_capacity(scan.len()),
+            errors: Vec::with_capacity(scan.len()),
             reference,
             reference_index,
             normals,
@@ -535,32 +626,68 @@ impl IcpState {
             pose,
             iterations: 0,
             converged: false,
-            cache: Vec::new(),
-            neighbours: Vec::with_capacity(2),
+            partner: Vec::new(),
+            neighbourhoods,
+            certified: 0,
+            tree_queries: 0,
+            neighbours: Vec::new(),
         })
     }
 
     /// The reference point nearest to `q`, the `i`-th scan point at the current
-    /// pose: from the cache when it cannot have changed, else from the tree (its
-    /// two nearest, the second kept as the cache's bound).
+    /// pose: certified around a guess when possible, else from the tree (see
+    /// [`Neighbourhoods`]).
     fn nearest(&mut self, i: usize, q: Point2) -> Option<Neighbour> {
-        if let Some(found) = self.cache[i].and_then(|c| c.still_nearest(q, &self.reference)) {
-            return Some(found);
+        let mut guess = self.partner[i].or(if i > 0 { self.partner[i - 1] } else { None });
+        // A guess that cannot be proven is replaced by the nearest of its
+        // neighbours, which is closer to `q`: a short walk towards the answer.
+        for _ in 0..CERTIFICATE_WALK {
+            let Some(c) = guess else { break };
+            self.know_neighbourhood(c);
+            let (found, proven) = self.neighbourhoods.nearest(c, q, &self.reference);
+            if proven {
+                self.certified += 1;
+                self.partner[i] = Some(found.index);
+                self.know_neighbourhood(found.index);
+                return Some(found);
+            }
+            guess = (found.index != c).then_some(found.index);
         }
-        self.tree.nearest_k(q, 2, &mut self.neighbours);
-        let first = *self.neighbours.first()?;
-        self.cache[i] = Some(NearestCache {
-            at: q,
-            reference: first.index,
-            second: self
-                .neighbours
-                .get(1)
-                .map_or(f64::INFINITY, |n| n.distance_squared.sqrt()),
-        });
+        self.tree_queries += 1;
+        let found = self.tree.nearest(q)?;
+        self.partner[i] = Some(found.index);
+        self.know_neighbourhood(found.index);
         Some(Neighbour {
-            index: first.index,
-            distance_squared: squared_distance(q, self.reference[first.index]),
+            index: found.index,
+            distance_squared: squared_distance(q, self.reference[found.index]),
         })
+    }
+
+    /// Finds reference point `c`'s neighbours (the certificate's list and, for
+    /// point-to-line, its normal) unless already known: one k-d tree query.
+    fn know_neighbourhood(&mut self, c: usize) {
+        if self.neighbourhoods.is_known(c) {
+            return;
+        }
+        let k = self.neighbourhoods.k + 1;
+        // The last neighbourhood's size is a good guess of this one's.
+        self.tree.nearest_k_near(
+            self.reference[c],
+            k,
+            1.25 * self.neighbourhoods.last_reach,
+            &mut self.neighbours,
+        );
+        self.neighbourhoods
+            .set(c, &self.neighbours, self.reference.len());
+        if let Some(normal) = self.normals.get_mut(c) {
+            *normal = normal_from(&self.reference, &mut self.neighbours, &self.config);
+        }
+    }
+
+    /// How many nearest-neighbour answers so far were certified without the
+    /// tree, and how many were asked of it (see [`Neighbourhoods`]).
+    pub fn query_counts(&self) -> (usize, usize) {
+        (self.certified, self.tree_queries)
     }
 
     /// The settings.
@@ -592,8 +719,20 @@ impl IcpState {
     /// the slice given to [`IcpState::new`]), if it has one. Always `None`
     /// for point-to-point.
     pub fn reference_normal(&self, index: usize) -> Option<Point2> {
-        let k = self.reference_index.binary_search(&index).ok()?;
-        self.normals.get(k).copied().flatten()
+        let c = self.reference_index.binary_search(&index).ok()?;
+        if self.config.variant == IcpVariant::PointToPoint {
+            return None;
+        }
+        if self.neighbourhoods.is_known(c) {
+            return self.normals.get(c).copied().flatten();
+        }
+        let mut neighbours = Vec::new();
+        self.tree.nearest_k(
+            self.reference[c],
+            self.config.normal_neighbours,
+            &mut neighbours,
+        );
+        normal_from(&self.reference, &mut neighbours, &self.config)
     }
 
     /// Pairs every scan point at the current pose, applies the gate and
@@ -604,7 +743,7 @@ impl IcpState {
         let point_to_line = self.config.variant == IcpVariant::PointToLine;
         self.pairs.clear();
         self.order.clear();
-        self.cache.resize(self.scan.len(), None);
+        self.partner.resize(self.scan.len(), None);
         // `transform_point` without a sine and cosine per point.
         let (sin, cos) = math::sin_cos(self.pose.theta);
         let (tx, ty) = (self.pose.x, self.pose.y);
@@ -641,24 +780,39 @@ impl IcpState {
             });
         }
         // Trimming (Chetverikov et al. 2002): keep the ⌈ξ N⌉ candidates with
-        // the smallest error (ties by scan order, so the kept set is
-        // deterministic). A selection, not a sort: O(N).
+        // the smallest error, ties by scan order (so the kept set is
+        // deterministic). The `keep`-th smallest error is found by selection,
+        // not a sort (O(N)); pairs below it are kept, then pairs equal to it in
+        // scan order until `keep` are.
         let candidates = self.order.len();
         let keep =
             ((self.config.trim_fraction * candidates as f64).ceil() as usize).min(candidates);
         if keep > 0 && keep < candidates {
-            let pairs = &self.pairs;
-            self.order.select_nth_unstable_by(keep - 1, |&a, &b| {
-                pairs[a]
-                    .error_squared
-                    .total_cmp(&pairs[b].error_squared)
-                    .then(a.cmp(&b))
-            });
+            self.errors.clear();
+            self.errors
+                .extend(self.order.iter().map(|&k| self.pairs[k].error_squared));
+            let (_, &mut threshold, _) =
+                self.errors.select_nth_unstable_by(keep - 1, f64::total_cmp);
+            let below = self
+                .errors
+                .iter()
+                .filter(|e| e.total_cmp(&threshold).is_lt())
+                .count();
+            let mut ties_kept = 0;
+            let pairs = &mut self.pairs;
+            self.order
+                .retain(|&k| match pairs[k].error_squared.total_cmp(&threshold) {
+                    std::cmp::Ordering::Less => true,
+                    std::cmp::Ordering::Equal if below + ties_kept < keep => {
+                        ties_kept += 1;
+                        true
+                    }
+                    _ => {
+                        pairs[k].status = PairStatus::Trimmed;
+                        false
+                    }
+                });
         }
-        for &k in &self.order[keep..] {
-            self.pairs[k].status = PairStatus::Trimmed;
-        }
-        self.order.truncate(keep);
         if keep < self.config.min_correspondences {
             return Err(IcpError::TooFewCorrespondences {
                 kept: keep,

@@ -127,6 +127,55 @@ impl PointTree {
         })
     }
 
+    /// [`PointTree::nearest_k`] with a guess of how far the `k`-th nearest point
+    /// lies: the tree is asked for every point within `radius` (a cheaper query
+    /// than `k` nearest); if there are at least `k`, the `k` nearest of them
+    /// are the answer, else [`PointTree::nearest_k`] is. Same answer either way
+    /// (between points at exactly the same distance, the lower index first).
+    pub fn nearest_k_near(&self, query: Point2, k: usize, radius: f64, out: &mut Vec<Neighbour>) {
+        out.clear();
+        let Some(tree) = self.tree.as_ref() else {
+            return;
+        };
+        if k > 0
+            && radius > 0.0
+            && radius.is_finite()
+            && query[0].is_finite()
+            && query[1].is_finite()
+        {
+            let found = tree
+                .query(&query)
+                .within::<SquaredEuclidean<f64>>(radius * radius)
+                .unsorted()
+                .execute();
+            if found.len() >= k {
+                out.extend(
+                    found
+                        .into_iter()
+                        .map(|n| Neighbour {
+                            index: n.item as usize,
+                            distance_squared: n.distance,
+                        })
+                        .filter(|n| n.index < self.len),
+                );
+                let order = |a: &Neighbour, b: &Neighbour| {
+                    a.distance_squared
+                        .total_cmp(&b.distance_squared)
+                        .then(a.index.cmp(&b.index))
+                };
+                if out.len() > k {
+                    out.select_nth_unstable_by(k - 1, order);
+                    out.truncate(k);
+                }
+                out.sort_unstable_by(order);
+                if out.len() == k {
+                    return;
+                }
+            }
+        }
+        self.nearest_k(query, k, out);
+    }
+
     /// The `k` points nearest to `query`, nearest first, written into `out`
     /// (cleared first; fewer if the tree holds fewer). Nothing for an empty
     /// tree, `k = 0` or a non-finite query.
@@ -201,6 +250,13 @@ mod tests {
             assert_eq!(got, want, "query {q:?}");
             for (g, w) in out.iter().zip(&expected) {
                 assert_eq!(g.distance_squared, w.distance_squared);
+            }
+            // With a radius guess too small (fallback), about right, and far
+            // too large, or not a number: the same answer.
+            for radius in [0.01, 0.2, 0.4, 30.0, f64::NAN] {
+                tree.nearest_k_near(q, 5, radius, &mut out);
+                let got: Vec<usize> = out.iter().map(|n| n.index).collect();
+                assert_eq!(got, want, "query {q:?}, radius {radius}");
             }
         }
     }
