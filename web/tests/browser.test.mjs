@@ -727,6 +727,41 @@ async function main() {
       }
     });
 
+    // --- The Intel log through the Cartographer lesson, loop closures and all, in this
+    // page's wasm: the issue asks for faster than real time in Chromium. It takes many
+    // minutes, so it runs only when SLAMLAB_LONG=1 (docs/cartographer.md records the
+    // measured factor); natively `slamlab run cartographer --log` gives the same counts.
+    await check("the Intel log maps through the Cartographer lesson faster than real time (SLAMLAB_LONG=1)", async () => {
+      if (process.env.SLAMLAB_LONG !== "1") return "skipped: set SLAMLAB_LONG=1 to run it (many minutes)";
+      const rel = "laser/intel.clf.bz2";
+      const file = path.join(sharedDataDir, rel);
+      const found = await stat(file).then(() => true, () => false);
+      if (!found) return `skipped: ${file} is absent (the shared data sets are not beside the repository)`;
+      const { context, page: p, log } = await openPage(browser, baseUrl, "index.html?lesson=cartographer&steps=10", "cartographer-intel");
+      try {
+        await waitRunning(p);
+        const took = await p.evaluate(async (r) => {
+          const bytes = new Uint8Array(await (await fetch(`shared-data/${r}`)).arrayBuffer());
+          const started = performance.now();
+          const state = window.slamlab.slamlab_test_headless_log("lesson=cartographer", "intel.clf.bz2", bytes, 13631);
+          return { state, ms: performance.now() - started };
+        }, rel);
+        const headless = JSON.parse(took.state);
+        const seconds = took.ms / 1000;
+        const factor = headless.input_seconds / seconds;
+        metrics.cartographer_intel_log_s = Number(seconds.toFixed(1));
+        metrics.cartographer_intel_real_time_factor = Number(factor.toFixed(2));
+        metrics.cartographer_intel_counts = { nodes: headless.nodes, submaps: headless.submaps, loop_closures: headless.loop_closures, searches: headless.bbs?.searches };
+        assert(headless.scans === 13631, `mapped ${headless.scans} scans: ${took.state.slice(0, 300)}`);
+        assert(factor > 1, `${headless.input_seconds.toFixed(0)} s of data in ${seconds.toFixed(1)} s = ${factor.toFixed(2)}x real time`);
+        await assertNoPanic(p);
+        assert(log.problems.length === 0, log.problems.join("; "));
+        return `${headless.scans} scans (${headless.input_seconds.toFixed(0)} s of data) in ${seconds.toFixed(1)} s = ${factor.toFixed(2)}x real time; ${headless.nodes} nodes, ${headless.submaps} submaps, ${headless.loop_closures} loop closures, ${headless.bbs?.searches} searches`;
+      } finally {
+        await context.close();
+      }
+    });
+
     // --- Grid FastSLAM in the mapping lesson. A short seeded run in this page's wasm
     // ends with the heaviest particle exactly where the native run puts it
     // (crates/slamlab-app/tests/lessons/mapping_ui.rs pins it); then 30 particles with
@@ -823,7 +858,7 @@ async function main() {
           await p.evaluate((q) => window.slamlab.slamlab_test_headless(q, 200), "lesson=cartographer&map=maze&kidnap-at=152&seed=3"),
         );
         const seconds = (Date.now() - started) / 1000;
-        const NATIVE = { submaps: 7, nodes: 163, loop_closures: 44, optimizations: 6, searches: 96, nodes_evaluated: 710205, exhaustive_candidates: 194308605 };
+        const NATIVE = { submaps: 7, nodes: 163, loop_closures: 44, optimizations: 6, searches: 96, nodes_evaluated: 703585, exhaustive_candidates: 194308605 };
         const got = {
           submaps: headless.submaps,
           nodes: headless.nodes,

@@ -398,15 +398,19 @@ impl SlamLabApp {
     }
 
     /// Like [`headless_state`](Self::headless_state), with a CARMEN log (`bytes`, plain
-    /// or compressed, named `name`) opened in the mapping lesson first, as if it had
-    /// been dropped on the window. The browser test maps the Intel log this way and
-    /// times it. A query for another lesson, or a log that cannot be read, gives the
-    /// state with the lesson's note saying why.
+    /// or compressed, named `name`) opened in the mapping or Cartographer lesson first,
+    /// as if it had been dropped on the window. The browser test maps the Intel log
+    /// this way and times it. A query for another lesson gives an error; a log that
+    /// cannot be read gives the state with the lesson's note saying why.
     pub fn headless_log_state(query: &str, name: &str, bytes: &[u8], ticks: u64) -> String {
         let mut app = Self::from_query(query);
-        match app.lesson_as_mut::<mapping::MappingLesson>() {
-            Some(lesson) => lesson.load_log(name, bytes),
-            None => return r#"{"error":"the query does not open the mapping lesson"}"#.to_owned(),
+        if let Some(lesson) = app.lesson_as_mut::<mapping::MappingLesson>() {
+            lesson.load_log(name, bytes);
+        } else if let Some(lesson) = app.lesson_as_mut::<cartographer::CartographerLesson>() {
+            lesson.load_log(name, bytes, None);
+        } else {
+            return r#"{"error":"the query opens neither the mapping nor the Cartographer lesson"}"#
+                .to_owned();
         }
         for _ in 0..ticks.min(100_000) {
             app.apply_time_action(TimeAction::StepTick);

@@ -112,8 +112,8 @@ pub fn slamlab_test_headless(query: &str, ticks: u32) -> String {
     SlamLabApp::headless_state(query, u64::from(ticks))
 }
 
-/// Opens `query`'s mapping lesson headless with the CARMEN log `bytes` (named
-/// `name`), maps `ticks` scans and returns the test state (see
+/// Opens `query`'s mapping or Cartographer lesson headless with the CARMEN log
+/// `bytes` (named `name`), maps `ticks` scans and returns the test state (see
 /// `SlamLabApp::headless_log_state`): the browser test times the Intel log with it.
 #[wasm_bindgen]
 pub fn slamlab_test_headless_log(query: &str, name: &str, bytes: &[u8], ticks: u32) -> String {

@@ -57,6 +57,9 @@ pub struct CartographerScenario {
     pub linear_search_window: f64,
     /// Loop-closure search half-width in heading, degrees.
     pub angular_search_window: f64,
+    /// Submaps whose origin is farther than this from a node are not
+    /// searched for loop closures with it, metres.
+    pub max_constraint_distance: f64,
     /// A loop closure must score above this.
     pub min_score: f64,
     /// A match between maps must score above this.
@@ -90,6 +93,7 @@ impl Default for CartographerScenario {
             // Rounded to a nanodegree, so that 30° (stored in radians) reads 30, not
             // 29.999999999999996, in the panel and in share links.
             angular_search_window: (p.angular_search_window.to_degrees() * 1e9).round() / 1e9,
+            max_constraint_distance: p.max_constraint_distance,
             min_score: p.min_score,
             global_min_score: p.global_min_score,
             optimize_every_n_nodes: p.optimize_every_n_nodes,
@@ -111,6 +115,7 @@ impl CartographerScenario {
             miss_probability: self.miss_probability,
             linear_search_window: self.linear_search_window,
             angular_search_window: self.angular_search_window.to_radians(),
+            max_constraint_distance: self.max_constraint_distance,
             min_score: self.min_score,
             global_min_score: self.global_min_score,
             optimize_every_n_nodes: self.optimize_every_n_nodes,
@@ -273,6 +278,13 @@ pub static PARAMS: &[Param<CartographerScenario>] = &[
         "loop-closure search half-width in heading",
         (0.0, 180.0),
         angular_search_window
+    ),
+    field!(
+        "max_constraint_distance",
+        "m",
+        "search only submaps whose origin is this near a node",
+        (0.0, 1000.0),
+        max_constraint_distance
     ),
     field!(
         "min_score",

@@ -10,6 +10,7 @@ use crate::widgets::grid_tiles::{GridTiles, draw_scan_and_robot};
 use crate::widgets::map_canvas::{self, CanvasColors, MapView, draw_grid, draw_scale_and_axes};
 use egui::{Color32, Stroke};
 use slamlab_core::Pose2;
+use slamlab_core::scan::branch_and_bound::cell_probability;
 use slamlab_sim::cartographer::{CartographerSim, ConstraintKind};
 
 /// The colour of trajectory `t` (the first blue, the one after a kidnap
@@ -295,7 +296,7 @@ pub fn max_grids_window(
                     .rev()
                     .flat_map(|j| (0..w).map(move |i| (i, j)))
                     .map(|(i, j)| {
-                        let p = f64::from(cells[j * w + i]);
+                        let p = cell_probability(cells[j * w + i]);
                         Color32::from_gray((255.0 * (1.0 - p)).round().clamp(0.0, 255.0) as u8)
                     })
                     .collect();

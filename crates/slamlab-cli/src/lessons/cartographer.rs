@@ -56,7 +56,10 @@ impl RunLesson for Cartographer {
                     "map a CARMEN laser log (plain, .gz or .bz2) instead of a simulated robot",
                 ),
             )
-            .arg(count("steps", "scans to simulate (default 600)"))
+            .arg(count(
+                "steps",
+                "scans to simulate (default 600); with --log, map only the log's first scans",
+            ))
             .arg(
                 Arg::new("seed")
                     .long("seed")
@@ -91,6 +94,10 @@ impl RunLesson for Cartographer {
                 "angular_search_window",
                 "loop-closure search half-width, degrees (default 30)",
             ))
+            .arg(number(
+                "max_constraint_distance",
+                "search only submaps whose origin is this near a node, metres (default 15)",
+            ))
             .arg(number("min_score", "a loop closure must score above this (default 0.55)"))
             .arg(number(
                 "global_min_score",
@@ -123,6 +130,9 @@ impl RunLesson for Cartographer {
         }
         if let Some(v) = f("angular_search_window") {
             params.angular_search_window = v.to_radians();
+        }
+        if let Some(v) = f("max_constraint_distance") {
+            params.max_constraint_distance = v;
         }
         if let Some(v) = f("min_score") {
             params.min_score = v;
@@ -157,7 +167,11 @@ impl RunLesson for Cartographer {
                     "warning: --kidnap-at applies to a simulated robot; a log is replayed as recorded"
                 );
             }
-            log_input(&log, &name)
+            let mut input = log_input(&log, &name);
+            if let Some(first) = n("steps") {
+                input.scans.truncate(first);
+            }
+            input
         } else {
             let spec = m.get_one::<String>("map").map_or("maze", String::as_str);
             let (grid, name) = read_map(spec, None)?;

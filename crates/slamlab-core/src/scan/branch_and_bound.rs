@@ -31,6 +31,14 @@
 //! observed, and cells outside the submap, read as
 //! [`UNKNOWN_PROBABILITY`](super::scan_to_map::UNKNOWN_PROBABILITY).
 //!
+//! The precomputed grids hold each probability as a byte, as Cartographer's
+//! `PrecomputationGrid2D` does: `v = round((p − 0.1) · 255 / 0.8)` for `p` in
+//! Cartographer's range [0.1, 0.9] ([`cell_value`], [`cell_probability`]). A
+//! candidate's score is then an integer sum over its points, exact in any order
+//! and fast, and the maximum of bytes is the byte of the maximum; what a
+//! student reads as a score is the mean probability the bytes stand for
+//! (to 0.8/255 ≈ 0.003 per cell).
+//!
 //! The precomputed grids are built as Cartographer builds them: a sliding
 //! window maximum (a deque of non-ascending maxima) along each row, then along
 //! each column of the result. Each grid covers the submap's known cells
@@ -49,6 +57,27 @@ use thiserror::Error;
 /// The tallest tree accepted: boxes of `2^10 = 1024` cells a side.
 pub const MAX_HEIGHT: u32 = 10;
 
+/// The lowest and highest probability a precomputed grid's byte stands for
+/// (Cartographer's `kMinProbability` and `kMaxProbability`).
+const P_MIN: f64 = 0.1;
+const P_MAX: f64 = 0.9;
+
+/// The byte a precomputed grid stores for probability `p` (clamped to
+/// [0.1, 0.9]; Cartographer's `ComputeCellValue`): 0 for 0.1, 255 for 0.9.
+pub fn cell_value(p: f64) -> u8 {
+    let p = if p.is_nan() {
+        P_MIN
+    } else {
+        p.clamp(P_MIN, P_MAX)
+    };
+    ((p - P_MIN) * 255.0 / (P_MAX - P_MIN)).round() as u8
+}
+
+/// The probability a precomputed grid's byte `v` stands for.
+pub fn cell_probability(v: u8) -> f64 {
+    P_MIN + f64::from(v) * (P_MAX - P_MIN) / 255.0
+}
+
 /// One precomputed grid: the maximum over the `2^h x 2^h` box of cells whose
 /// lower-left cell is `(i, j)`, for every `(i, j)` whose box touches the
 /// submap's known cells.
@@ -59,15 +88,16 @@ struct MaxGrid {
     j0: i64,
     width: usize,
     height: usize,
-    cells: Vec<f32>,
+    /// [`cell_value`]s, row-major from the bottom.
+    cells: Vec<u8>,
 }
 
 impl MaxGrid {
     #[inline]
-    fn value(&self, i: i64, j: i64) -> f32 {
+    fn value(&self, i: i64, j: i64) -> u8 {
         let (di, dj) = (i - self.i0, j - self.j0);
         if di < 0 || dj < 0 || di >= self.width as i64 || dj >= self.height as i64 {
-            return UNKNOWN_PROBABILITY as f32;
+            return cell_value(UNKNOWN_PROBABILITY);
         }
         self.cells[dj as usize * self.width + di as usize]
     }
@@ -77,10 +107,10 @@ impl MaxGrid {
 /// on both sides: `out[p] = max(padded[p .. p + side])` for `p` in
 /// `0 .. values.len() + side − 1` (Cartographer's `SlidingWindowMaximum`: a
 /// deque holding the window's non-ascending maxima, front the largest).
-fn sliding_max(values: &[f32], side: usize, pad: f32, out: &mut Vec<f32>) {
+fn sliding_max(values: &[u8], side: usize, pad: u8, out: &mut Vec<u8>) {
     out.clear();
     let n = values.len();
-    let at = |q: usize| -> f32 {
+    let at = |q: usize| -> u8 {
         // Position q of the padded row (side − 1 pads, values, side − 1 pads).
         if q + 1 < side || q + 1 - side >= n {
             pad
@@ -89,7 +119,7 @@ fn sliding_max(values: &[f32], side: usize, pad: f32, out: &mut Vec<f32>) {
         }
     };
     let total = n + 2 * (side - 1);
-    let mut maxima: VecDeque<f32> = VecDeque::with_capacity(side);
+    let mut maxima: VecDeque<u8> = VecDeque::with_capacity(side);
     for q in 0..total {
         let v = at(q);
         while maxima.back().is_some_and(|&b| v > b) {
@@ -126,12 +156,12 @@ impl PrecomputedGrids {
         let bounds = grid.known_bounds()?;
         let (i_min, j_min, i_max, j_max) = bounds;
         let (w, h) = ((i_max - i_min + 1) as usize, (j_max - j_min + 1) as usize);
-        let unknown = UNKNOWN_PROBABILITY as f32;
+        let unknown = cell_value(UNKNOWN_PROBABILITY);
         let mut base = vec![unknown; w * h];
         for (dj, row) in base.chunks_mut(w).enumerate() {
             for (di, cell) in row.iter_mut().enumerate() {
                 if let Some(p) = grid.probability_at(i_min + di as i64, j_min + dj as i64) {
-                    *cell = p as f32;
+                    *cell = cell_value(p);
                 }
             }
         }
@@ -197,19 +227,20 @@ impl PrecomputedGrids {
     #[inline]
     pub fn value(&self, height: u32, i: i64, j: i64) -> f64 {
         let h = (height as usize).min(self.grids.len() - 1);
-        f64::from(self.grids[h].value(i, j))
+        cell_probability(self.grids[h].value(i, j))
     }
 
     /// The grid of height `h` over its held cells, for drawing Fig. 5.7:
-    /// `(i0, j0, width, height, values)`, row-major from the bottom.
-    pub fn grid(&self, height: u32) -> Option<(i64, i64, usize, usize, &[f32])> {
+    /// `(i0, j0, width, height, bytes)`, row-major from the bottom; each byte
+    /// a [`cell_value`] ([`cell_probability`] reads it).
+    pub fn grid(&self, height: u32) -> Option<(i64, i64, usize, usize, &[u8])> {
         let g = self.grids.get(height as usize)?;
         Some((g.i0, g.j0, g.width, g.height, &g.cells))
     }
 
     /// Bytes the grids hold.
     pub fn memory_bytes(&self) -> usize {
-        self.grids.iter().map(|g| g.cells.len() * 4).sum()
+        self.grids.iter().map(|g| g.cells.len()).sum()
     }
 }
 
@@ -359,6 +390,10 @@ pub enum NoMatch {
 struct Discretized {
     /// Per heading: the points' cells at zero offset.
     scans: Vec<Vec<(i64, i64)>>,
+    /// Per heading: the smallest and largest cell `(i_min, i_max, j_min,
+    /// j_max)` of its points, to score a candidate whose points all fall on a
+    /// grid without checking each.
+    extents: Vec<(i64, i64, i64, i64)>,
     /// Per heading: `(di_min, di_max, dj_min, dj_max)` inclusive, or `None`
     /// when no offset keeps any point on the submap.
     bounds: Vec<Option<(i64, i64, i64, i64)>>,
@@ -418,6 +453,7 @@ impl Discretized {
         }
         let mut scans = Vec::with_capacity((2 * n_ang + 1) as usize);
         let mut bounds = Vec::with_capacity(scans.capacity());
+        let mut extents = Vec::with_capacity(scans.capacity());
         for a in -n_ang..=n_ang {
             let pose = Pose2::new(initial.x, initial.y, initial.theta + a as f64 * step);
             let cells: Vec<(i64, i64)> = points
@@ -446,10 +482,18 @@ impl Discretized {
                 hi_j.min(n_lin),
             );
             bounds.push((b.0 <= b.1 && b.2 <= b.3).then_some(b));
+            extents.push(
+                cells
+                    .iter()
+                    .fold((i64::MAX, i64::MIN, i64::MAX, i64::MIN), |e, &(ci, cj)| {
+                        (e.0.min(ci), e.1.max(ci), e.2.min(cj), e.3.max(cj))
+                    }),
+            );
             scans.push(cells);
         }
         Ok(Self {
             scans,
+            extents,
             bounds,
             first_angle: initial.theta - n_ang as f64 * step,
             step,
@@ -465,16 +509,36 @@ impl Discretized {
             .sum()
     }
 
-    /// Score of a candidate at `height`: the mean of `M^h` over the points.
+    /// Score of a candidate at `height`: the mean of `M^h` over the points,
+    /// as the probability the grid's bytes stand for. The bytes are summed as
+    /// integers (exact, so every order gives the same score); when every point
+    /// falls on the grid, without checking each.
     #[inline]
     fn score(&self, grids: &PrecomputedGrids, height: u32, angle: usize, di: i64, dj: i64) -> f64 {
         let grid = &grids.grids[height as usize];
         let cells = &self.scans[angle];
-        let mut sum = 0.0f64;
-        for &(ci, cj) in cells {
-            sum += f64::from(grid.value(ci + di, cj + dj));
+        let (si, sj) = (di - grid.i0, dj - grid.j0);
+        let e = self.extents[angle];
+        let (w, h) = (grid.width as i64, grid.height as i64);
+        let values = grid.cells.as_slice();
+        let mut sum = 0u64;
+        if e.0 + si >= 0 && e.1 + si < w && e.2 + sj >= 0 && e.3 + sj < h {
+            for &(ci, cj) in cells {
+                sum += u64::from(values[((cj + sj) * w + ci + si) as usize]);
+            }
+        } else {
+            // Points off the grid read as never observed: probability 0.1,
+            // byte 0, nothing to add. (A negative index turns into a huge
+            // unsigned one, so one comparison per axis checks both ends.)
+            let (uw, uh) = (w as u64, h as u64);
+            for &(ci, cj) in cells {
+                let (x, y) = ((ci + si) as u64, (cj + sj) as u64);
+                if x < uw && y < uh {
+                    sum += u64::from(values[(y * uw + x) as usize]);
+                }
+            }
         }
-        sum / cells.len() as f64
+        P_MIN + (P_MAX - P_MIN) * sum as f64 / (255.0 * cells.len() as f64)
     }
 
     fn pose(&self, r: f64, angle: usize, di: i64, dj: i64) -> Pose2 {
@@ -795,23 +859,25 @@ mod tests {
         let (grid, _) = random_world(3);
         let grids = PrecomputedGrids::new(&grid, 4).unwrap();
         let (i0, j0, i1, j1) = grids.bounds();
-        let cell = |i: i64, j: i64| {
-            grid.probability_at(i, j)
-                .map_or(UNKNOWN_PROBABILITY as f32, |p| p as f32)
-        };
+        let cell =
+            |i: i64, j: i64| cell_value(grid.probability_at(i, j).unwrap_or(UNKNOWN_PROBABILITY));
         let mut checked = 0;
         for h in 0..=4u32 {
             let side = 1i64 << h;
             // Every box start that touches the submap, and a margin beyond.
             for j in (j0 - side - 1..=j1 + 2).step_by(3) {
                 for i in (i0 - side - 1..=i1 + 2).step_by(2) {
-                    let mut m = f32::NEG_INFINITY;
+                    let mut m = 0u8;
                     for dj in 0..side {
                         for di in 0..side {
                             m = m.max(cell(i + di, j + dj));
                         }
                     }
-                    assert_eq!(grids.value(h, i, j), f64::from(m), "h {h} at ({i}, {j})");
+                    assert_eq!(
+                        grids.value(h, i, j),
+                        cell_probability(m),
+                        "h {h} at ({i}, {j})"
+                    );
                     checked += 1;
                 }
             }
@@ -820,8 +886,31 @@ mod tests {
         // Height 0 is the submap itself.
         assert_eq!(
             grids.value(0, i0 + 5, j0 + 7),
-            f64::from(cell(i0 + 5, j0 + 7))
+            cell_probability(cell(i0 + 5, j0 + 7))
         );
+    }
+
+    /// Cartographer's byte encoding: 0.1 is 0, 0.9 is 255, 0.5 is 128
+    /// (127.5 rounded away from zero), outside values and NaN clamp; a byte
+    /// reads back within half a step (0.8 / 510) of the probability.
+    #[test]
+    fn probabilities_are_stored_as_cartographer_bytes() {
+        assert_eq!(cell_value(0.1), 0);
+        // Scoring skips points off the grid: they must read as byte 0.
+        assert_eq!(cell_value(UNKNOWN_PROBABILITY), 0);
+        assert_eq!(cell_value(0.9), 255);
+        assert_eq!(cell_value(0.5), 128);
+        assert_eq!(cell_value(0.0), 0);
+        assert_eq!(cell_value(1.0), 255);
+        assert_eq!(cell_value(f64::NAN), 0);
+        for k in 0..=800 {
+            let p = 0.1 + f64::from(k) * 0.001;
+            assert!(
+                (cell_probability(cell_value(p)) - p).abs() <= 0.8 / 510.0 + 1e-12,
+                "{p}"
+            );
+        }
+        assert_eq!(cell_probability(255), 0.9);
     }
 
     #[test]

@@ -86,6 +86,9 @@ pub struct CartographerParams {
     /// Half-width of the loop-closure search in heading, radians
     /// (`angular_search_window`).
     pub angular_search_window: f64,
+    /// A node is searched only against submaps whose origin lies within this
+    /// distance of it in the same map, metres (`max_constraint_distance`).
+    pub max_constraint_distance: f64,
     /// A loop closure must score above this (`min_score`).
     pub min_score: f64,
     /// A global match between trajectories must score above this
@@ -155,6 +158,7 @@ impl Default for CartographerParams {
             },
             linear_search_window: 7.0,
             angular_search_window: 30f64.to_radians(),
+            max_constraint_distance: 15.0,
             min_score: 0.55,
             global_min_score: 0.6,
             loop_closure_gate: 0.5,
@@ -231,6 +235,12 @@ impl CartographerParams {
                 d.angular_search_window,
                 "angular_search_window",
                 std::f64::consts::PI,
+            ),
+            (
+                &mut self.max_constraint_distance,
+                d.max_constraint_distance,
+                "max_constraint_distance",
+                1e4,
             ),
             (&mut self.min_score, d.min_score, "min_score", 1.0),
             (
@@ -830,9 +840,11 @@ impl CartographerSim {
                 // The node's estimate in the submap's grid frame.
                 let in_submap = submap_global.between(&node_global);
                 let initial = submap_local.compose(&in_submap);
-                // A submap far beyond the window cannot match.
-                let reach = self.params.linear_search_window + 15.0;
-                if slamlab_core::math::hypot(in_submap.x, in_submap.y) > reach {
+                // Cartographer searches only submaps whose origin is near the
+                // node (`max_constraint_distance`).
+                if slamlab_core::math::hypot(in_submap.x, in_submap.y)
+                    > self.params.max_constraint_distance
+                {
                     continue;
                 }
                 (
