@@ -329,3 +329,110 @@ fn two_photos_are_matched_and_drawn() {
         assert!(green > 800, "inlier pixels {green}");
     }
 }
+
+/// `early-rejection=sprt` from the URL: the share link keeps it, each step's
+/// report says which hypotheses the SPRT rejected and after how many matches,
+/// as core computes them, and the explanation panel says so.
+#[test]
+fn the_sprt_switch_shows_each_early_rejection() {
+    let mut h = harness_sized(
+        "lesson=visual-odometry&seed=3&early-rejection=sprt",
+        egui::vec2(1280.0, 800.0),
+    );
+    h.run();
+    assert!(h.state().notices().is_empty(), "{:?}", h.state().notices());
+    assert!(
+        lesson(&h)
+            .share_query(false)
+            .contains("early-rejection=sprt"),
+        "{}",
+        lesson(&h).share_query(false)
+    );
+    let (pair, camera, config) = {
+        let run = lesson(&h).run();
+        let k = lesson(&h).pair();
+        (
+            run.pairs[k].clone(),
+            run.camera.expect("camera"),
+            run.config.expect("config"),
+        )
+    };
+    assert_eq!(
+        config.early_rejection,
+        slamlab_core::vision::EarlyRejection::Sprt
+    );
+    let mut core = Ransac::new(&pair.matches, &camera, config).expect("enough matches");
+    let mut rng = pair.ransac_rng.clone();
+    let mut rejected_seen = false;
+    for _ in 0..6 {
+        h.get_by_label("Step sample").click();
+        h.run();
+        let expected = core.step(&mut rng).expect("a sample");
+        let report = lesson(&h)
+            .session()
+            .and_then(|s| s.last_report().cloned())
+            .expect("a report");
+        assert_eq!(report, expected);
+        let sprt = report.sprt.expect("the SPRT's checks");
+        if let Some(check) = sprt.checks.iter().find(|c| c.rejected) {
+            rejected_seen = true;
+            assert!(check.evaluated < 60, "{check:?}");
+            let n = pair.matches.len();
+            assert!(
+                label_visible(&h, &format!("rejected after {} of {n}", check.evaluated)),
+                "{check:?}"
+            );
+        }
+    }
+    assert!(rejected_seen, "six samples without an early rejection");
+    let state = lesson(&h).test_state();
+    assert_eq!(state["early_rejection"], "sprt", "{state}");
+    if let Some(image) = render_or_skip(&mut h) {
+        let path = std::env::temp_dir().join("visual_odometry_sprt_1280x800.png");
+        let _ = image.save(&path);
+        eprintln!("saved {}", path.display());
+    }
+    // Run to the end: the bound is reached with the SPRT as well.
+    lesson_mut(&mut h).run_ransac_to_end();
+    h.run();
+    let state = lesson(&h).test_state();
+    assert_eq!(state["done"], true, "{state}");
+    assert!(
+        state["estimate"]["rotation_error_deg"]
+            .as_f64()
+            .unwrap_or(f64::NAN)
+            < 1.0,
+        "{state}"
+    );
+}
+
+/// The SPRT's rows in the explanation panel at 800 x 500 and embedded at
+/// 900 x 600 (for looking at: the rows fit).
+#[test]
+fn the_sprt_rows_render_small_and_embedded() {
+    for (query, size, name) in [
+        (
+            "lesson=visual-odometry&seed=3&early-rejection=sprt",
+            egui::vec2(800.0, 500.0),
+            "visual_odometry_sprt_800x500.png",
+        ),
+        (
+            "lesson=visual-odometry&seed=3&early-rejection=sprt&embed=1",
+            egui::vec2(900.0, 600.0),
+            "visual_odometry_sprt_embed_900x600.png",
+        ),
+    ] {
+        let mut h = harness_sized(query, size);
+        h.run();
+        for _ in 0..6 {
+            lesson_mut(&mut h).step_sample();
+        }
+        h.run();
+        let Some(image) = render_or_skip(&mut h) else {
+            return;
+        };
+        let path = std::env::temp_dir().join(name);
+        let _ = image.save(&path);
+        eprintln!("saved {}", path.display());
+    }
+}
