@@ -436,3 +436,74 @@ fn the_sprt_rows_render_small_and_embedded() {
         eprintln!("saved {}", path.display());
     }
 }
+
+/// The same photo twice is reported as a pure rotation with no translation,
+/// and says why; two photos of unrelated scenes give a message; neither
+/// panics, and the simulated lesson underneath keeps its state.
+#[test]
+fn identical_and_unrelated_photos_get_a_message() {
+    let (left, _) = slamlab_sim::vision::photos::synthetic::photo_pair();
+    let mut h = harness_sized("lesson=visual-odometry&seed=3", egui::vec2(1280.0, 800.0));
+    h.run();
+    for _ in 0..3 {
+        lesson_mut(&mut h).step_sample();
+    }
+    let before = snapshot(lesson(&h));
+    lesson_mut(&mut h).load_photos(vec![
+        ("same.png".to_owned(), Ok(left.clone())),
+        ("same-again.png".to_owned(), Ok(left.clone())),
+    ]);
+    h.run();
+    let state = lesson(&h).test_state();
+    let photos = &state["photos"];
+    assert_eq!(photos["showing"], true, "{photos}");
+    assert_eq!(photos["motion"], "pure-rotation", "{photos}");
+    assert!(
+        photos["parallax_px"].as_f64().unwrap_or(f64::NAN) < 0.01,
+        "{photos}"
+    );
+    assert!(
+        label_visible(&h, "t unobservable (median parallax 0.00 px"),
+        "no pure-rotation message"
+    );
+    assert_eq!(
+        snapshot(lesson(&h)),
+        before,
+        "the simulated step is untouched"
+    );
+    if let Some(image) = render_or_skip(&mut h) {
+        let path = std::env::temp_dir().join("visual_odometry_photos_identical_1280x800.png");
+        let _ = image.save(&path);
+        eprintln!("saved {}", path.display());
+    }
+
+    // Two unrelated textures: too few matches, a message and no estimate.
+    let noise = |seed: u64| {
+        let image = image::GrayImage::from_fn(320, 240, |x, y| {
+            image::Luma([slamlab_sim::vision::photos::synthetic::cell_value(
+                seed,
+                i64::from(x / 6),
+                i64::from(y / 6),
+            ) as u8])
+        });
+        slamlab_sim::vision::photos::synthetic::png_bytes(&image)
+    };
+    lesson_mut(&mut h).load_photos(vec![
+        ("a.png".to_owned(), Ok(noise(11))),
+        ("b.png".to_owned(), Ok(noise(12))),
+    ]);
+    h.run();
+    let state = lesson(&h).test_state();
+    let photos = &state["photos"];
+    let error = photos["error"].as_str().unwrap_or("");
+    assert!(
+        error.contains("at least 16 are needed") || error.contains("RANSAC"),
+        "{photos}"
+    );
+    assert!(photos["inliers"].is_null(), "{photos}");
+    assert_eq!(
+        snapshot(lesson(&h)),
+        before,
+        "the simulated step is untouched"
+    );
+}
