@@ -981,6 +981,45 @@ async function main() {
       }
     });
 
+    // --- The visual-odometry lesson with early-rejection=sprt from the URL: the share link
+    // keeps it, stepping shows hypotheses rejected after a few matches, and a seeded
+    // headless run in wasm gives the native counts (visual_odometry_ui.rs pins them).
+    await check("lesson=visual-odometry&early-rejection=sprt: steps show early rejections and match native", async () => {
+      const url = "index.html?lesson=visual-odometry&seed=3&early-rejection=sprt";
+      const { context, page: p, log } = await openPage(browser, baseUrl, url, "visual-odometry sprt");
+      try {
+        await waitRunning(p);
+        const s0 = await waitState(p, (st) => st.lesson === "visual-odometry" && st.frames > 2, "the visual-odometry lesson");
+        assert(s0.early_rejection === "sprt" && s0.iteration === 0, `opened ${JSON.stringify(s0)}`);
+        await p.mouse.click(VIEWPORT.width / 2, VIEWPORT.height / 2); // keyboard focus
+        let rejected = [];
+        for (let i = 1; i <= 6; i++) {
+          await p.keyboard.press(".");
+          const s = await waitState(p, (st) => st.iteration === i, `sample ${i}`);
+          rejected = rejected.concat((s.last_sample_checks || []).filter((c) => c.rejected));
+        }
+        // Before the first accepted hypothesis the test is weak (ε = 0.1, δ = 0.05): the
+        // first rejections take up to about a hundred matches; then a dozen or so.
+        const checked = rejected.map((c) => c.evaluated).sort((a, b) => a - b);
+        const median = checked[Math.floor(checked.length / 2)];
+        assert(rejected.length > 0 && median < 30 && checked[checked.length - 1] < s0.matches / 2, `rejections ${JSON.stringify(rejected)}`);
+        await sleep(300);
+        const { stats } = await waitNotBlank(p, "visual-odometry-sprt.png");
+        assertNotBlank(stats, "visual-odometry-sprt.png");
+        const headless = JSON.parse(
+          await p.evaluate((q) => window.slamlab.slamlab_test_headless(q, 10), "lesson=visual-odometry&seed=3&early-rejection=sprt"),
+        );
+        const got = `best_inliers=${headless.best_inliers} bound=${headless.bound} rmse=${headless.trajectory_rmse.visual_odometry}`;
+        const NATIVE = "best_inliers=467 bound=46 rmse=0.7262349495763661";
+        assert(got === NATIVE, `${got} in the browser, ${NATIVE} natively`);
+        await assertNoPanic(p);
+        assert(log.problems.length === 0, log.problems.join("; "));
+        return `${rejected.length} hypotheses rejected early in 6 samples, after ${rejected.map((c) => c.evaluated).join(", ")} matches; headless ${got}`;
+      } finally {
+        await context.close();
+      }
+    });
+
     // --- The visual-odometry lesson with two photos dropped on the page (the same path as
     // a drag from the desktop: DataTransfer files on the canvas): FAST corners, BRIEF,
     // Hamming matching and five-point RANSAC in wasm; the matches and the estimate appear,

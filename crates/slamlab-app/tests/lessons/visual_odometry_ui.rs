@@ -507,3 +507,22 @@ fn identical_and_unrelated_photos_get_a_message() {
         "the simulated step is untouched"
     );
 }
+
+/// The SPRT's seeded samples, which the browser test repeats in wasm: the
+/// same counts natively and in the browser (libm's logarithms in both).
+#[test]
+fn seeded_sprt_samples_give_these_exact_counts() {
+    let json = SlamLabApp::headless_state("lesson=visual-odometry&seed=3&early-rejection=sprt", 10);
+    let state: serde_json::Value = serde_json::from_str(&json).expect("json");
+    eprintln!("{json}");
+    assert_eq!(state["iteration"], 10, "{json}");
+    assert_eq!(state["early_rejection"], "sprt", "{json}");
+    assert_eq!(state["best_inliers"], SPRT_BEST, "{json}");
+    assert_eq!(state["bound"], SPRT_BOUND, "{json}");
+}
+
+// Step 5 of seed 3 after ten samples with the SPRT (its generator also draws
+// the shuffle and each hypothesis's starting point, so the samples differ from
+// GOLDEN_BEST's); the run's VO RMSE is 0.7262349495763661 m.
+const SPRT_BEST: u64 = 467;
+const SPRT_BOUND: u64 = 46;
