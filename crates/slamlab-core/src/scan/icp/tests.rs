@@ -506,14 +506,8 @@ fn certified_pairs_are_the_true_nearest_points() {
     let mut asked = 0;
     for trial in 0..12 {
         let beams = if trial % 4 == 3 { 45 } else { 360 };
-        let mut reference = ray_cast(
-            &room(),
-            Pose2::IDENTITY,
-            beams,
-            10.0,
-            Some((0.01, &mut rng)),
-        )
-        .points();
+        let mut reference =
+            ray_cast(&room(), Pose2::IDENTITY, beams, 10.0, Some((0.01, &mut rng))).points();
         if trial % 4 == 2 {
             let copies: Vec<Point2> = reference.iter().step_by(3).copied().collect();
             reference.extend(copies);
