@@ -21,6 +21,7 @@ import path from "node:path";
 import { fileURLToPath } from "node:url";
 import { chromium } from "playwright-core";
 import { decodePng, imageStats, changedShare } from "./png.mjs";
+import { photoPair } from "./photos.mjs";
 
 const webDir = path.resolve(path.dirname(fileURLToPath(import.meta.url)), "..");
 const distDir = path.join(webDir, "dist");
@@ -1014,6 +1015,147 @@ async function main() {
         await context.close();
       }
     });
+
+    // --- The visual-odometry lesson with early-rejection=sprt from the URL: the share link
+    // keeps it, stepping shows hypotheses rejected after a few matches, and a seeded
+    // headless run in wasm gives the native counts (visual_odometry_ui.rs pins them).
+    await check("lesson=visual-odometry&early-rejection=sprt: steps show early rejections and match native", async () => {
+      const url = "index.html?lesson=visual-odometry&seed=3&early-rejection=sprt";
+      const { context, page: p, log } = await openPage(browser, baseUrl, url, "visual-odometry sprt");
+      try {
+        await waitRunning(p);
+        const s0 = await waitState(p, (st) => st.lesson === "visual-odometry" && st.frames > 2, "the visual-odometry lesson");
+        assert(s0.early_rejection === "sprt" && s0.iteration === 0, `opened ${JSON.stringify(s0)}`);
+        await p.mouse.click(VIEWPORT.width / 2, VIEWPORT.height / 2); // keyboard focus
+        let rejected = [];
+        for (let i = 1; i <= 6; i++) {
+          await p.keyboard.press(".");
+          const s = await waitState(p, (st) => st.iteration === i, `sample ${i}`);
+          rejected = rejected.concat((s.last_sample_checks || []).filter((c) => c.rejected));
+        }
+        // Before the first accepted hypothesis the test is weak (ε = 0.1, δ = 0.05): the
+        // first rejections take up to about a hundred matches; then a dozen or so.
+        const checked = rejected.map((c) => c.evaluated).sort((a, b) => a - b);
+        const median = checked[Math.floor(checked.length / 2)];
+        assert(rejected.length > 0 && median < 30 && checked[checked.length - 1] < s0.matches / 2, `rejections ${JSON.stringify(rejected)}`);
+        await sleep(300);
+        const { stats } = await waitNotBlank(p, "visual-odometry-sprt.png");
+        assertNotBlank(stats, "visual-odometry-sprt.png");
+        const headless = JSON.parse(
+          await p.evaluate((q) => window.slamlab.slamlab_test_headless(q, 10), "lesson=visual-odometry&seed=3&early-rejection=sprt"),
+        );
+        const got = `best_inliers=${headless.best_inliers} bound=${headless.bound} rmse=${headless.trajectory_rmse.visual_odometry}`;
+        const NATIVE = "best_inliers=467 bound=46 rmse=0.7262349495763661";
+        assert(got === NATIVE, `${got} in the browser, ${NATIVE} natively`);
+        await assertNoPanic(p);
+        assert(log.problems.length === 0, log.problems.join("; "));
+        return `${rejected.length} hypotheses rejected early in 6 samples, after ${rejected.map((c) => c.evaluated).join(", ")} matches; headless ${got}`;
+      } finally {
+        await context.close();
+      }
+    });
+
+    // --- The visual-odometry lesson with two photos dropped on the page (the same path as
+    // a drag from the desktop: DataTransfer files on the canvas): FAST corners, BRIEF,
+    // Hamming matching and five-point RANSAC in wasm; the matches and the estimate appear,
+    // at 1280 x 800, at 800 x 500 and embedded at 900 x 600 in web/lecture.html. Then a file
+    // that is not an image and the same photo twice: a message, the pair kept, no panic.
+    {
+      const pair = photoPair();
+      const asFile = (name, bytes, type) => ({ name, type, b64: Buffer.from(bytes).toString("base64") });
+      const dropFiles = (frame, files) =>
+        frame.evaluate((list) => {
+          const dt = new DataTransfer();
+          for (const f of list) {
+            const bytes = Uint8Array.from(atob(f.b64), (c) => c.charCodeAt(0));
+            dt.items.add(new File([bytes], f.name, { type: f.type }));
+          }
+          const canvas = document.getElementById("the_canvas_id");
+          for (const type of ["dragenter", "dragover", "drop"]) {
+            canvas.dispatchEvent(new DragEvent(type, { dataTransfer: dt, bubbles: true, cancelable: true }));
+          }
+        }, files);
+      const photoFiles = [asFile("left.png", pair.left, "image/png"), asFile("right.png", pair.right, "image/png")];
+      const checkPhotos = (photos, where) => {
+        assert(photos.showing === true && photos.left === "left.png" && photos.right === "right.png", `${where}: ${JSON.stringify(photos)}`);
+        assert(photos.matches >= 150 && photos.inliers >= 0.8 * photos.matches, `${where}: matches ${JSON.stringify(photos)}`);
+        assert(Math.abs(photos.rotation_deg - pair.rotationDeg) < 0.3, `${where}: rotation ${photos.rotation_deg} deg, truth ${pair.rotationDeg.toFixed(3)}`);
+      };
+      await check("lesson=visual-odometry: two dropped photos are matched and RANSAC's estimate appears", async () => {
+        const notes = [];
+        for (const viewport of [VIEWPORT, { width: 800, height: 500 }]) {
+          const context = await browser.newContext({ viewport, deviceScaleFactor: 1 });
+          const p = await context.newPage();
+          const log = { label: `visual-odometry photos ${viewport.width}x${viewport.height}`, url: "", console: [], problems: [] };
+          pageLogs.push(log);
+          p.on("pageerror", (err) => log.problems.push(`uncaught exception: ${err.message}`));
+          try {
+            await p.goto(new URL("index.html?lesson=visual-odometry&seed=3", baseUrl).href, { waitUntil: "load" });
+            await p.waitForFunction(() => document.getElementById("status")?.dataset.state === "running", null, { timeout: START_TIMEOUT_MS });
+            await waitState(p, (st) => st.lesson === "visual-odometry" && st.frames > 2, "the visual-odometry lesson");
+            await dropFiles(p, photoFiles);
+            const s = await waitState(p, (st) => st.photos && st.photos.inliers > 0, "the photos' estimate", 60_000);
+            checkPhotos(s.photos, `${viewport.width} x ${viewport.height}`);
+            await sleep(300);
+            const name = `visual-odometry-photos-${viewport.width}x${viewport.height}.png`;
+            const { stats } = await waitNotBlank(p, name);
+            assertNotBlank(stats, name);
+            notes.push(
+              `${viewport.width} x ${viewport.height}: ${s.photos.matches} matches, ${s.photos.inliers} inliers, ` +
+                `rotation ${s.photos.rotation_deg.toFixed(3)} deg (truth ${pair.rotationDeg.toFixed(3)})`,
+            );
+            if (viewport === VIEWPORT) {
+              // Not an image: a message, the pair kept.
+              await dropFiles(p, [{ name: "notes.txt", type: "text/plain", b64: Buffer.from("not a photo").toString("base64") }]);
+              const bad = await waitState(p, (st) => st.photos && st.photos.message, "a message for notes.txt");
+              assert(/notes\.txt is not an image/.test(bad.photos.message), `message ${bad.photos.message}`);
+              checkPhotos(bad.photos, "after notes.txt");
+              // The same photo twice: a pure rotation, no translation.
+              await dropFiles(p, [asFile("left.png", pair.left, "image/png"), asFile("left-again.png", pair.left, "image/png")]);
+              const same = await waitState(p, (st) => st.photos && st.photos.right === "left-again.png" && st.photos.inliers > 0, "the same photo twice");
+              assert(same.photos.rotation_deg < 0.01, `the same photo twice: ${JSON.stringify(same.photos)}`);
+              if ("motion" in same.photos) assert(same.photos.motion === "pure-rotation", `the same photo twice: ${JSON.stringify(same.photos)}`);
+              await sleep(300);
+              await screenshot(p, "visual-odometry-photos-identical.png");
+              notes.push(`notes.txt refused; the same photo twice: rotation ${same.photos.rotation_deg.toFixed(4)} deg, ${same.photos.motion ?? "?"}`);
+            }
+            await assertNoPanic(p);
+            assert(log.problems.length === 0, log.problems.join("; "));
+          } finally {
+            await context.close();
+          }
+        }
+        // Embedded in the lecture page at 900 x 600, as a lecturer would add it.
+        const { context, page: lecture, log } = await openPage(browser, baseUrl, "lecture.html", "lecture (visual odometry)");
+        try {
+          await lecture.evaluate(() => {
+            const iframe = document.createElement("iframe");
+            iframe.className = "slamlab-vo";
+            iframe.width = "900";
+            iframe.height = "600";
+            iframe.style.border = "0";
+            iframe.src = "index.html?lesson=visual-odometry&seed=3&embed=1";
+            document.body.prepend(iframe);
+          });
+          const element = lecture.locator("iframe.slamlab-vo");
+          const frame = await (await element.elementHandle()).contentFrame();
+          await waitRunning(frame);
+          await waitState(frame, (st) => st.lesson === "visual-odometry" && st.frames > 2, "the embedded lesson");
+          await dropFiles(frame, photoFiles);
+          const s = await waitState(frame, (st) => st.photos && st.photos.inliers > 0, "the photos' estimate (embedded)", 60_000);
+          checkPhotos(s.photos, "embedded 900 x 600");
+          await sleep(300);
+          const stats = imageStats(await screenshot(element, "visual-odometry-photos-lecture-900x600.png"));
+          assertNotBlank(stats, "the embedded lesson with photos");
+          await assertNoPanic(frame);
+          assert(log.problems.length === 0, log.problems.join("; "));
+          notes.push(`embedded 900 x 600 in lecture.html: ${s.photos.inliers} inliers`);
+        } finally {
+          await context.close();
+        }
+        return notes.join("; ");
+      });
+    }
 
     // --- The teaching shell: every lesson keeps its map at small and large
     // windows; an embedded figure lets the lecture page scroll until it is clicked; a

@@ -82,8 +82,53 @@ pub fn explanation_ui(
                     );
                     ui.label(report.hypotheses.to_string());
                     ui.end_row();
+                    if let Some(sprt) = &report.sprt {
+                        ui.label("SPRT").on_hover_text(
+                            "Matas and Chum's sequential probability ratio test: the matches \
+                             are checked in a random order; each that agrees multiplies λ by \
+                             δ/ε, each that does not by (1 − δ)/(1 − ε); the hypothesis is \
+                             rejected once λ > A",
+                        );
+                        ui.label(if sprt.threshold.is_finite() {
+                            format!(
+                                "ε {:.3}, δ {:.4}, A {:.0}",
+                                sprt.epsilon, sprt.delta, sprt.threshold
+                            )
+                        } else {
+                            format!("ε {:.3} ≤ δ {:.4}: no test", sprt.epsilon, sprt.delta)
+                        });
+                        ui.end_row();
+                        for (i, check) in sprt.checks.iter().enumerate() {
+                            ui.label(if sprt.checks.len() > 1 {
+                                format!("hypothesis {}", i + 1)
+                            } else {
+                                "the hypothesis".to_owned()
+                            });
+                            if check.rejected {
+                                ui.colored_label(
+                                    OUTLIER,
+                                    format!("rejected after {} of {n}", check.evaluated),
+                                )
+                                .on_hover_text(format!(
+                                    "λ passed A after {} matches, {} of them agreeing",
+                                    check.evaluated, check.consistent
+                                ));
+                            } else {
+                                ui.colored_label(
+                                    INLIER,
+                                    format!("accepted: {} of {n} agree", check.consistent),
+                                );
+                            }
+                            ui.end_row();
+                        }
+                    }
                     ui.label("its inliers");
-                    ui.label(format!("{} of {n}", report.inliers));
+                    ui.label(match &report.sprt {
+                        Some(sprt) if sprt.checks.iter().all(|c| c.rejected) => {
+                            "not counted: all rejected".to_owned()
+                        }
+                        _ => format!("{} of {n}", report.inliers),
+                    });
                     ui.end_row();
                     ui.label("best so far");
                     ui.colored_label(
@@ -96,10 +141,14 @@ pub fn explanation_ui(
                         ),
                     );
                     ui.end_row();
-                    ui.label("bound N").on_hover_text(
+                    ui.label("bound N").on_hover_text(if report.sprt.is_some() {
+                        "With the SPRT a good hypothesis is rejected with probability about \
+                         1/A, so N is the sample count at which η = Π (1 − w^s (1 − 1/A_i))^k_i \
+                         falls to 1 − p (each test i used for k_i samples)"
+                    } else {
                         "N = log(1 − p) / log(1 − w^s) with p = 0.99 and w the best inlier \
-                         share: after N samples one was all inliers with probability p",
-                    );
+                         share: after N samples one was all inliers with probability p"
+                    });
                     ui.label(format!(
                         "{} (w = {:.2}, s = {s}, p = {})",
                         report.bound,
@@ -113,6 +162,16 @@ pub fn explanation_ui(
                 "A new best is refitted at once on all its inliers (local optimization), so \
                  the best share jumps close to the true one and the bound falls steeply.",
             );
+            if report.sprt.is_some() {
+                ui.label(
+                    "Early rejection (SPRT): a hypothesis from a sample with a wrong match \
+                     agrees with almost no match, so a dozen or two checked in a random order \
+                     are enough evidence to drop it; only hypotheses that survive every match \
+                     get an inlier count. ε is the best inlier share so far, δ the mean share \
+                     of the rejected hypotheses; A is chosen to minimise the run's time and \
+                     changes with them.",
+                );
+            }
         }
     }
     ui.separator();
@@ -135,7 +194,9 @@ pub fn explanation_ui(
     });
     ui.label(
         "Decomposition: Hartley and Zisserman, Result 9.19; RANSAC's bound: Fischler and \
-         Bolles (1981); Sampson distance: Hartley and Zisserman, Eq. 11.9.",
+         Bolles (1981); Sampson distance: Hartley and Zisserman, Eq. 11.9; early rejection: \
+         Matas and Chum, Randomized RANSAC with SPRT (ICCV 2005), Chum and Matas, Optimal \
+         Randomized RANSAC (PAMI 2008).",
     );
 }
 

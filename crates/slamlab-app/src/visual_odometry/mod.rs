@@ -35,6 +35,7 @@ pub const LESSON_ID: &str = "visual-odometry";
 const PANEL_PARAMS: &[&str] = &[
     "method",
     "normalize",
+    "early-rejection",
     "outliers",
     "noise-px",
     "pure-rotation",
@@ -558,6 +559,20 @@ impl Lesson for VisualOdometryLesson {
             "tick": session.map_or(0, TwoViewSession::iteration),
             "seed": self.run.settings.seed,
             "method": self.run.settings.method.name(),
+            "early_rejection": self.run.settings.early_rejection.name(),
+            "last_sample_checks": session
+                .and_then(TwoViewSession::last_report)
+                .and_then(|r| r.sprt.as_ref())
+                .map(|s| {
+                    s.checks
+                        .iter()
+                        .map(|c| serde_json::json!({
+                            "evaluated": c.evaluated,
+                            "consistent": c.consistent,
+                            "rejected": c.rejected,
+                        }))
+                        .collect::<Vec<_>>()
+                }),
             "pair": self.pair,
             "step_frames": [step.map(|s| s.from), step.map(|s| s.to)],
             "matches": session.map_or(0, |s| s.matches().len()),

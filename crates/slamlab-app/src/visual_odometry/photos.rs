@@ -199,7 +199,12 @@ impl PhotoPair {
                     (Motion::General, Some(t)) => {
                         format!("t direction ({:.2}, {:.2}, {:.2})", t.x, t.y, t.z)
                     }
-                    _ => "a pure rotation: t unobservable".to_owned(),
+                    _ => format!(
+                        "a pure rotation: t unobservable (median parallax {:.2} px, below {} px: \
+                         the same photo twice, or both taken from one place)",
+                        e.parallax_px,
+                        slamlab_core::vision::RansacConfig::default().min_parallax_px
+                    ),
                 };
                 ui.label(format!(
                     "{} and {} corners, {} matches ({} dropped by the ratio test), {} inliers after {} samples; \
@@ -280,6 +285,11 @@ impl PhotoPair {
             "ambiguous": result.and_then(|r| r.as_ref().ok()).map(|r| r.matched.ambiguous),
             "inliers": result.and_then(|r| r.as_ref().ok()).map(|r| r.estimate.inlier_count),
             "rotation_deg": result.and_then(|r| r.as_ref().ok()).map(|r| rotation_angle(&r.estimate.rotation).to_degrees()),
+            "motion": result.and_then(|r| r.as_ref().ok()).map(|r| match r.estimate.motion {
+                Motion::General => "general",
+                Motion::PureRotation => "pure-rotation",
+            }),
+            "parallax_px": result.and_then(|r| r.as_ref().ok()).map(|r| r.estimate.parallax_px),
             "error": result.and_then(|r| r.as_ref().err()).cloned(),
             "message": self.message.clone(),
         })

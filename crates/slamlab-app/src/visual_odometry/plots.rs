@@ -10,6 +10,7 @@ use crate::widgets::plots::{
     Figure, Mark, Styled, draw_series, figure_plot, figure_ui, is_embed_layout, key_entries,
     plot_row, series_data,
 };
+use slamlab_core::vision::EarlyRejection;
 use slamlab_sim::vision::{TwoViewSession, VoRun};
 
 const ROTATION: &str = "Rotation error per step";
@@ -125,6 +126,13 @@ fn plotted(run: &VoRun, session: Option<&TwoViewSession>) -> Vec<Styled> {
                 "this sample's inlier share",
                 reports
                     .iter()
+                    // With the SPRT a sample whose hypotheses were all rejected
+                    // has no count: it is drawn in the series below instead.
+                    .filter(|r| {
+                        r.sprt
+                            .as_ref()
+                            .is_none_or(|s| s.checks.iter().any(|c| !c.rejected))
+                    })
                     .map(|r| [r.iteration as f64, r.inliers as f64 / n])
                     .collect(),
             ),
@@ -132,6 +140,29 @@ fn plotted(run: &VoRun, session: Option<&TwoViewSession>) -> Vec<Styled> {
             Mark::Dots,
             2.0,
         ));
+        if session.config().early_rejection == EarlyRejection::Sprt {
+            out.push(Styled::new(
+                PlotSeries::new(
+                    RANSAC,
+                    "sample",
+                    "share of matches",
+                    "SPRT: share checked before rejecting",
+                    reports
+                        .iter()
+                        .filter_map(|r| Some((r.iteration, r.sprt.as_ref()?)))
+                        .flat_map(|(i, s)| {
+                            s.checks
+                                .iter()
+                                .filter(|c| c.rejected)
+                                .map(move |c| [i as f64, c.evaluated as f64 / n])
+                        })
+                        .collect(),
+                ),
+                OUTLIER,
+                Mark::Dots,
+                2.0,
+            ));
+        }
     }
     out
 }

@@ -3,13 +3,14 @@
 //!
 //! ```text
 //! slamlab experiment two-view --method eight-point,five-point --outliers 0,0.3,0.5 --noise-px 1 --points 200 --trials 200 --seed 1 --json
+//! slamlab experiment two-view --outliers 0.5 --points 500 --sprt
 //! ```
 
 use crate::command::Experiment;
 use crate::output::{Output, progress_bar};
 use anyhow::{Result, bail};
 use clap::{Arg, ArgAction, ArgMatches, Command};
-use slamlab_core::vision::Method;
+use slamlab_core::vision::{EarlyRejection, Method};
 use slamlab_sim::vision::{TwoViewSettings, two_view_experiment};
 use std::io::Write;
 
@@ -103,6 +104,20 @@ impl Experiment for TwoView {
                     .help("first seed"),
             )
             .arg(
+                Arg::new("early-rejection")
+                    .long("early-rejection")
+                    .value_name("none|sprt")
+                    .value_parser(["none", "sprt"])
+                    .default_value("none")
+                    .help("none: every hypothesis checked against every match; sprt: Matas and Chum's sequential probability ratio test rejects bad hypotheses early"),
+            )
+            .arg(
+                Arg::new("sprt")
+                    .long("sprt")
+                    .action(ArgAction::SetTrue)
+                    .help("short for --early-rejection sprt"),
+            )
+            .arg(
                 Arg::new("no-normalize")
                     .long("no-normalize")
                     .action(ArgAction::SetTrue)
@@ -129,6 +144,13 @@ impl Experiment for TwoView {
             trials: m.get_one::<u64>("trials").copied().unwrap_or(200) as usize,
             seed: m.get_one::<u64>("seed").copied().unwrap_or(1),
             normalize: !m.get_flag("no-normalize"),
+            early_rejection: if m.get_flag("sprt") {
+                EarlyRejection::Sprt
+            } else {
+                m.get_one::<String>("early-rejection")
+                    .and_then(|name| EarlyRejection::from_name(name))
+                    .unwrap_or_default()
+            },
         };
         let report = two_view_experiment(&settings, progress_bar("two-view"));
         if out.print_json(&report)? {
@@ -136,12 +158,13 @@ impl Experiment for TwoView {
         }
         writeln!(
             out,
-            "SLAM Lab experiment two-view: {} trials of {} matches, {} px noise, seed {}, normalization {}",
+            "SLAM Lab experiment two-view: {} trials of {} matches, {} px noise, seed {}, normalization {}, early rejection {}",
             settings.trials,
             settings.points,
             settings.noise_px,
             settings.seed,
-            if settings.normalize { "on" } else { "off" }
+            if settings.normalize { "on" } else { "off" },
+            settings.early_rejection.name()
         )?;
         writeln!(out, "scene: {}", report.scene)?;
         writeln!(out)?;
@@ -172,6 +195,36 @@ impl Experiment for TwoView {
                 r.inlier_recall,
                 r.failures
             )?;
+        }
+        let with_sprt: Vec<_> = report
+            .results
+            .iter()
+            .filter_map(|r| r.sprt.map(|s| (r, s)))
+            .collect();
+        if !with_sprt.is_empty() {
+            writeln!(out)?;
+            writeln!(
+                out,
+                "{:<12} {:>8} {:>11} {:>9} {:>21} {:>20}",
+                "method",
+                "outliers",
+                "hypotheses",
+                "rejected",
+                "checked if rejected",
+                "checked per hyp."
+            )?;
+            for (r, s) in with_sprt {
+                writeln!(
+                    out,
+                    "{:<12} {:>8.2} {:>11} {:>8.1}% {:>21.1} {:>20.1}",
+                    r.method,
+                    r.outliers,
+                    s.hypotheses,
+                    100.0 * s.rejected_share,
+                    s.matches_checked_when_rejected,
+                    s.matches_checked_per_hypothesis
+                )?;
+            }
         }
         Ok(())
     }

@@ -36,7 +36,8 @@ pub use decompose::{Decomposition, RelativePose, decompose_essential, triangulat
 pub use eight_point::{essential_eight_point, fundamental_eight_point, project_to_essential};
 pub use five_point::essential_five_point;
 pub use ransac::{
-    IterationReport, Method, Motion, Ransac, RansacConfig, TwoViewEstimate, estimate_two_view,
+    EarlyRejection, IterationReport, Method, Motion, Ransac, RansacConfig, Sprt, SprtCheck,
+    SprtSample, SprtSettings, SprtStats, TwoViewEstimate, estimate_two_view, sprt_threshold,
 };
 
 /// Why a two-view estimate could not be made.

@@ -9,6 +9,13 @@
 //! stops when `N = log(1 − p) / log(1 − wˢ)` samples have been drawn, with `w`
 //! the best inlier share so far (Fischler and Bolles 1981; Hartley and
 //! Zisserman Sec. 4.7.1), so it needs no guess of the outlier share.
+//!
+//! Optionally ([`EarlyRejection::Sprt`]) each hypothesis is verified by Wald's
+//! sequential probability ratio test as Matas and Chum ("Randomized RANSAC with
+//! Sequential Probability Ratio Test", ICCV 2005; Chum and Matas, "Optimal
+//! Randomized RANSAC", PAMI 2008) do it: the matches are checked in a random
+//! order and a hypothesis is rejected as soon as the evidence says it is bad,
+//! usually after a dozen matches instead of all of them. See [`Sprt`].
 
 use nalgebra::{Matrix3, Vector3};
 use rand::Rng;
@@ -155,6 +162,101 @@ pub struct RansacConfig {
     pub min_parallax_px: f64,
     /// Fewer inliers than this share of the matches is no consensus.
     pub min_inlier_ratio: f64,
+    /// Whether a hypothesis may be rejected before all matches are checked.
+    #[serde(default)]
+    pub early_rejection: EarlyRejection,
+    /// The SPRT's costs and starting guesses (used with [`EarlyRejection::Sprt`]).
+    #[serde(default)]
+    pub sprt: SprtSettings,
+}
+
+/// How a hypothesis is verified.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize)]
+pub enum EarlyRejection {
+    /// Every hypothesis is checked against every match (the thesis's RANSAC).
+    #[default]
+    None,
+    /// Wald's sequential probability ratio test (Matas and Chum 2005): a
+    /// hypothesis is rejected once the likelihood ratio of "bad" to "good"
+    /// exceeds the threshold A.
+    Sprt,
+}
+
+impl EarlyRejection {
+    /// The name used in URLs, flags and JSON.
+    pub fn name(self) -> &'static str {
+        match self {
+            EarlyRejection::None => "none",
+            EarlyRejection::Sprt => "sprt",
+        }
+    }
+
+    /// Parses [`EarlyRejection::name`].
+    pub fn from_name(name: &str) -> Option<Self> {
+        match name {
+            "none" => Some(EarlyRejection::None),
+            "sprt" => Some(EarlyRejection::Sprt),
+            _ => None,
+        }
+    }
+}
+
+/// The SPRT's parameters (Chum and Matas 2008, Sec. 3): the two costs that fix
+/// the threshold A and the starting guesses of ε and δ, which the run then
+/// estimates.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[serde(default)]
+pub struct SprtSettings {
+    /// `t_M`: the time to compute one sample's hypotheses, in units of the
+    /// time to check one match against one hypothesis. `None`: the method's
+    /// measured default ([`SprtSettings::model_time_for`]).
+    pub model_time: Option<f64>,
+    /// `m_S`: hypotheses per sample on average. `None`: the method's default.
+    pub models_per_sample: Option<f64>,
+    /// ε before the first hypothesis is accepted: the share of matches a good
+    /// hypothesis agrees with (then the best consensus share).
+    pub initial_inlier_ratio: f64,
+    /// δ before the first rejection: the share of matches a bad hypothesis
+    /// agrees with (then the mean over the rejected hypotheses).
+    pub initial_bad_agreement: f64,
+}
+
+impl Default for SprtSettings {
+    fn default() -> Self {
+        Self {
+            model_time: None,
+            models_per_sample: None,
+            initial_inlier_ratio: 0.1,
+            initial_bad_agreement: 0.05,
+        }
+    }
+}
+
+impl SprtSettings {
+    /// `t_M` for `method`: the given value or the measured default. One
+    /// eight-point sample's solver takes about 1 µs and one Sampson check
+    /// about 3 ns (2-core Xeon VM, 2026-11-26: `docs/visual-odometry.md`), so
+    /// 330; one five-point sample's solver about 8 µs, so 2,700.
+    pub fn model_time_for(&self, method: Method) -> f64 {
+        self.model_time
+            .filter(|t| t.is_finite() && *t > 0.0)
+            .unwrap_or(match method {
+                Method::EightPoint => 330.0,
+                Method::FivePoint => 2700.0,
+            })
+    }
+
+    /// `m_S` for `method`: the given value or the default: 1 for the
+    /// eight-point solver, 4 for the five-point (its mean number of real
+    /// solutions on the benchmark's scene is 3.9).
+    pub fn models_per_sample_for(&self, method: Method) -> f64 {
+        self.models_per_sample
+            .filter(|m| m.is_finite() && *m > 0.0)
+            .unwrap_or(match method {
+                Method::EightPoint => 1.0,
+                Method::FivePoint => 4.0,
+            })
+    }
 }
 
 impl Default for RansacConfig {
@@ -167,6 +269,8 @@ impl Default for RansacConfig {
             max_iterations: 2000,
             min_parallax_px: 2.0,
             min_inlier_ratio: 0.1,
+            early_rejection: EarlyRejection::None,
+            sprt: SprtSettings::default(),
         }
     }
 }
@@ -207,6 +311,276 @@ pub struct IterationReport {
     pub bound: usize,
     /// Whether this sample gave a new best.
     pub improved: bool,
+    /// With [`EarlyRejection::Sprt`]: the test this sample's hypotheses went
+    /// through and what it decided for each.
+    pub sprt: Option<SprtSample>,
+}
+
+/// One sample under the SPRT: the test's design and each hypothesis's check.
+#[derive(Debug, Clone, PartialEq)]
+pub struct SprtSample {
+    /// ε of the test: the share of matches a good hypothesis agrees with.
+    pub epsilon: f64,
+    /// δ of the test: the share of matches a bad hypothesis agrees with.
+    pub delta: f64,
+    /// The threshold A (infinite when ε ≤ δ: the test cannot tell).
+    pub threshold: f64,
+    /// Each hypothesis's check, in the solver's order.
+    pub checks: Vec<SprtCheck>,
+}
+
+/// What the SPRT did with one hypothesis.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub struct SprtCheck {
+    /// Matches checked before the decision (all of them when accepted).
+    pub evaluated: usize,
+    /// Of those, how many agree with the hypothesis (its inliers when accepted).
+    pub consistent: usize,
+    /// Whether the hypothesis was rejected before the last match.
+    pub rejected: bool,
+}
+
+/// Counts over one run of the SPRT.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub struct SprtStats {
+    /// Hypotheses tested.
+    pub tested: usize,
+    /// Of those, rejected early.
+    pub rejected: usize,
+    /// Matches checked by the rejected hypotheses, summed.
+    pub evaluated_in_rejected: usize,
+    /// Matches checked by every hypothesis, summed.
+    pub evaluated: usize,
+    /// Tests designed (a new A each time ε or δ changed).
+    pub designs: usize,
+}
+
+impl SprtStats {
+    /// Mean matches checked by a rejected hypothesis (0 without rejections).
+    pub fn mean_evaluated_when_rejected(&self) -> f64 {
+        if self.rejected == 0 {
+            0.0
+        } else {
+            self.evaluated_in_rejected as f64 / self.rejected as f64
+        }
+    }
+}
+
+/// The SPRT's threshold A (Matas and Chum 2005, the optimal A; Chum and Matas
+/// 2008): the A that minimises the expected time of the whole run satisfies
+/// `A = K₁/K₂ + 1 + ln A` with `K₁/K₂ = t_M · C / m_S`, where
+/// `C = (1 − δ) ln((1 − δ)/(1 − ε)) + δ ln(δ/ε)` is the expected gain of
+/// `ln λ` per match checked against a bad hypothesis (the Kullback-Leibler
+/// divergence of the two Bernoulli distributions). Solved by the fixed-point
+/// iteration `A₀ = K₁/K₂ + 1`, `Aₙ₊₁ = K₁/K₂ + 1 + ln Aₙ` (its slope `1/A` is
+/// below 1, so it converges in a few steps). Infinite (no rejection) when
+/// `ε ≤ δ`: then agreeing with a match is no evidence of a good hypothesis.
+pub fn sprt_threshold(epsilon: f64, delta: f64, model_time: f64, models_per_sample: f64) -> f64 {
+    let epsilon = epsilon.clamp(1e-9, 1.0 - 1e-9);
+    let delta = delta.clamp(1e-9, 1.0 - 1e-9);
+    if !(epsilon > delta) || !(model_time > 0.0) || !(models_per_sample > 0.0) {
+        return f64::INFINITY;
+    }
+    let c = (1.0 - delta) * crate::math::ln((1.0 - delta) / (1.0 - epsilon))
+        + delta * crate::math::ln(delta / epsilon);
+    let k = model_time * c / models_per_sample;
+    if !k.is_finite() {
+        return f64::INFINITY;
+    }
+    let mut a = k + 1.0;
+    for _ in 0..100 {
+        let next = k + 1.0 + crate::math::ln(a);
+        let converged = (next - a).abs() < 1e-9 * a;
+        a = next;
+        if converged {
+            break;
+        }
+    }
+    a
+}
+
+/// The SPRT's state during one run (Matas and Chum 2005, Alg. 1; Chum and
+/// Matas 2008, R-RANSAC with SPRT).
+///
+/// A hypothesis is checked against the matches in a random order (one
+/// shuffle per run, a random starting point per hypothesis). After each match
+/// the likelihood ratio of "the hypothesis is bad" to "it is good" is updated,
+///
+/// `λⱼ = λⱼ₋₁ · δ/ε` when match j agrees with it, `λⱼ = λⱼ₋₁ · (1 − δ)/(1 − ε)`
+/// when not,
+///
+/// where ε is the share of matches a good hypothesis agrees with (estimated
+/// as the best consensus share so far) and δ the share a bad one agrees with
+/// (estimated as the mean share among the hypotheses rejected so far). The
+/// hypothesis is rejected once `λⱼ > A` ([`sprt_threshold`]); one that
+/// survives every match is accepted, and its count is exact. A good
+/// hypothesis is rejected with probability about `1/A`, which the stopping
+/// rule pays for: after `kᵢ` samples under tests with thresholds `Aᵢ`, no
+/// all-inlier sample has been accepted with probability
+///
+/// `η = Πᵢ (1 − P_g (1 − 1/Aᵢ))^kᵢ`, `P_g = εˢ`,
+///
+/// and RANSAC stops when `η ≤ 1 − p` (Chum and Matas 2008, the stopping rule
+/// with a test redesigned whenever ε or δ changes; with no rejection,
+/// `1/A = 0`, it is the adaptive bound of [`adaptive_bound`]).
+/// SLAM Lab computes `ln λ`, adding `ln(δ/ε)` or `ln((1 − δ)/(1 − ε))`.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Sprt {
+    epsilon: f64,
+    delta: f64,
+    threshold: f64,
+    log_threshold: f64,
+    log_consistent: f64,
+    log_inconsistent: f64,
+    model_time: f64,
+    models_per_sample: f64,
+    /// `(Aᵢ, kᵢ)` of the tests before the current one.
+    history: Vec<(f64, usize)>,
+    /// Samples drawn before the current test was designed.
+    design_start: usize,
+    /// The sum and number of the consistent shares of rejected hypotheses: δ̂.
+    delta_sum: f64,
+    delta_count: usize,
+    stats: SprtStats,
+}
+
+/// δ is re-estimated after every rejection; a new test is designed when the
+/// estimate moves by more than this share of the δ in use (Matas and Chum
+/// 2005 use 5 %).
+const DELTA_CHANGE: f64 = 0.05;
+
+impl Sprt {
+    fn new(settings: &SprtSettings, method: Method) -> Self {
+        let mut sprt = Self {
+            epsilon: settings.initial_inlier_ratio,
+            delta: settings.initial_bad_agreement,
+            threshold: f64::INFINITY,
+            log_threshold: f64::INFINITY,
+            log_consistent: 0.0,
+            log_inconsistent: 0.0,
+            model_time: settings.model_time_for(method),
+            models_per_sample: settings.models_per_sample_for(method),
+            history: Vec::new(),
+            design_start: 0,
+            delta_sum: 0.0,
+            delta_count: 0,
+            stats: SprtStats::default(),
+        };
+        sprt.design(
+            finite_or(settings.initial_inlier_ratio, 0.1),
+            finite_or(settings.initial_bad_agreement, 0.05),
+        );
+        sprt
+    }
+
+    /// ε in use.
+    pub fn epsilon(&self) -> f64 {
+        self.epsilon
+    }
+
+    /// δ in use.
+    pub fn delta(&self) -> f64 {
+        self.delta
+    }
+
+    /// The threshold A in use.
+    pub fn threshold(&self) -> f64 {
+        self.threshold
+    }
+
+    /// The counts so far.
+    pub fn stats(&self) -> SprtStats {
+        self.stats
+    }
+
+    /// A new test for ε and δ: A and the two steps of `ln λ`.
+    fn design(&mut self, epsilon: f64, delta: f64) {
+        self.epsilon = epsilon.clamp(1e-6, 1.0 - 1e-6);
+        self.delta = delta.clamp(1e-3, 0.5);
+        self.threshold = sprt_threshold(
+            self.epsilon,
+            self.delta,
+            self.model_time,
+            self.models_per_sample,
+        );
+        self.log_threshold = crate::math::ln(self.threshold);
+        self.log_consistent = crate::math::ln(self.delta / self.epsilon);
+        self.log_inconsistent = crate::math::ln((1.0 - self.delta) / (1.0 - self.epsilon));
+        self.stats.designs += 1;
+    }
+
+    /// Closes the current test after `iteration` samples and designs the next.
+    fn redesign(&mut self, iteration: usize, epsilon: f64, delta: f64) {
+        self.history
+            .push((self.threshold, iteration - self.design_start));
+        self.design_start = iteration;
+        self.design(epsilon, delta);
+    }
+
+    /// Counts one check and updates δ̂ with a rejected hypothesis's share.
+    fn record(&mut self, check: &SprtCheck) {
+        self.stats.tested += 1;
+        self.stats.evaluated += check.evaluated;
+        if check.rejected {
+            self.stats.rejected += 1;
+            self.stats.evaluated_in_rejected += check.evaluated;
+            self.delta_sum += check.consistent as f64 / check.evaluated.max(1) as f64;
+            self.delta_count += 1;
+        }
+    }
+
+    /// After sample `iteration`: a new ε when a new best was found (its
+    /// consensus share `best_share`), a new δ when δ̂ moved by more than 5 %.
+    fn after_sample(&mut self, iteration: usize, best_share: Option<f64>) {
+        let mut epsilon = self.epsilon;
+        let mut delta = self.delta;
+        let mut changed = false;
+        if let Some(w) = best_share {
+            epsilon = w;
+            changed = true;
+        }
+        if self.delta_count > 0 {
+            let estimate = self.delta_sum / self.delta_count as f64;
+            if (estimate - self.delta).abs() > DELTA_CHANGE * self.delta {
+                delta = estimate;
+                changed = true;
+            }
+        }
+        if changed {
+            self.redesign(iteration, epsilon, delta);
+        }
+    }
+
+    /// The number of samples after which `η ≤ 1 − p` for a consensus share
+    /// `w` (so `P_g = wˢ`), capped at `max`.
+    fn bound(&self, w: f64, sample_size: usize, confidence: f64, max: usize) -> usize {
+        let p_good = crate::math::powf(w.clamp(0.0, 1.0), sample_size as f64);
+        let p = confidence.clamp(0.0, 1.0 - 1e-12);
+        let per_sample = |a: f64| crate::math::ln_1p(-p_good * (1.0 - 1.0 / a));
+        let spent: f64 = self
+            .history
+            .iter()
+            .map(|&(a, k)| k as f64 * per_sample(a))
+            .sum();
+        let step = per_sample(self.threshold);
+        if !(step < 0.0) {
+            return max;
+        }
+        let remaining = (crate::math::ln(1.0 - p) - spent) / step;
+        if !remaining.is_finite() {
+            return max;
+        }
+        let total = self.design_start as f64 + remaining.max(0.0).ceil();
+        if total > max as f64 {
+            max
+        } else {
+            (total as usize).max(1)
+        }
+    }
+}
+
+fn finite_or(value: f64, default: f64) -> f64 {
+    if value.is_finite() { value } else { default }
 }
 
 /// Upper limit on the refits of one local optimization. It stops earlier, as
@@ -240,6 +614,11 @@ pub struct Ransac {
     iteration: usize,
     bound: usize,
     best: Option<Best>,
+    /// The SPRT's state, with [`EarlyRejection::Sprt`].
+    sprt: Option<Sprt>,
+    /// The order in which the SPRT checks matches: the pixels (left x, left
+    /// y, right x, right y), shuffled by the run's generator at its first sample.
+    shuffled: Vec<[f64; 4]>,
 }
 
 impl Ransac {
@@ -273,7 +652,75 @@ impl Ransac {
             iteration: 0,
             bound: config.max_iterations.max(1),
             best: None,
+            sprt: match config.early_rejection {
+                EarlyRejection::None => None,
+                EarlyRejection::Sprt => Some(Sprt::new(&config.sprt, config.method)),
+            },
+            shuffled: Vec::new(),
         })
+    }
+
+    /// The SPRT's state, with [`EarlyRejection::Sprt`].
+    pub fn sprt(&self) -> Option<&Sprt> {
+        self.sprt.as_ref()
+    }
+
+    /// The SPRT's check of `f`, starting at position `start` of the shuffled
+    /// order and going round: `ln λ` grows by `ln((1 − δ)/(1 − ε))` for a
+    /// match that disagrees and by `ln(δ/ε)` (negative) for one that agrees;
+    /// the hypothesis is rejected as soon as `ln λ > ln A`. Without the SPRT
+    /// (or before the first sample has shuffled the matches) every match is
+    /// checked.
+    pub fn sprt_check(&self, f: &Matrix3<f64>, start: usize) -> SprtCheck {
+        let test = SampsonTest::new(f, self.config.threshold_px);
+        let (Some(sprt), false) = (&self.sprt, self.shuffled.is_empty()) else {
+            let (_, consistent) = self.classify(f);
+            return SprtCheck {
+                evaluated: self.matches.len(),
+                consistent,
+                rejected: false,
+            };
+        };
+        let n = self.shuffled.len();
+        let start = start % n;
+        let (after, before) = self.shuffled.split_at(start);
+        let mut log_lambda = 0.0;
+        let mut consistent = 0;
+        for (j, &[x, y, u, v]) in before.iter().chain(after).enumerate() {
+            let agrees = test.inlier_at(x, y, u, v);
+            consistent += usize::from(agrees);
+            log_lambda += if agrees {
+                sprt.log_consistent
+            } else {
+                sprt.log_inconsistent
+            };
+            if log_lambda > sprt.log_threshold {
+                return SprtCheck {
+                    evaluated: j + 1,
+                    consistent,
+                    rejected: true,
+                };
+            }
+        }
+        SprtCheck {
+            evaluated: n,
+            consistent,
+            rejected: false,
+        }
+    }
+
+    /// Shuffles the matches for the SPRT (Fisher-Yates with the run's generator).
+    fn shuffle_for_sprt<R: Rng + ?Sized>(&mut self, rng: &mut R) {
+        let mut order: Vec<[f64; 4]> = self
+            .matches
+            .iter()
+            .map(|m| [m.left.x, m.left.y, m.right.x, m.right.y])
+            .collect();
+        for i in (1..order.len()).rev() {
+            let j = rng.random_range(0..=i);
+            order.swap(i, j);
+        }
+        self.shuffled = order;
     }
 
     /// Samples drawn so far.
@@ -434,6 +881,12 @@ impl Ransac {
             best_inliers: self.best_inliers(),
             bound: self.bound,
             improved: drawn.improved,
+            sprt: drawn.design.map(|(epsilon, delta, threshold)| SprtSample {
+                epsilon,
+                delta,
+                threshold,
+                checks: drawn.checks[..drawn.hypotheses].to_vec(),
+            }),
         })
     }
 
@@ -446,10 +899,18 @@ impl Ransac {
         if self.is_done() {
             return None;
         }
+        if self.sprt.is_some() && self.shuffled.is_empty() {
+            self.shuffle_for_sprt(rng);
+        }
         self.iteration += 1;
         let n = self.matches.len();
         let (sample, size) = distinct_indices(rng, n, self.config.method.sample_size());
         let (hypotheses, count) = self.hypotheses_array(&sample[..size]);
+        let design = self
+            .sprt
+            .as_ref()
+            .map(|sprt| (sprt.epsilon, sprt.delta, sprt.threshold));
+        let mut checks = [SprtCheck::default(); MAX_SOLUTIONS];
         // The sample's best hypothesis: the most inliers, a tie broken by the
         // lower truncated cost. Only it is locally optimized, and only if it
         // beats the best so far (LO-RANSAC), so the outcome does not depend on
@@ -457,15 +918,25 @@ impl Ransac {
         let best = self.best_inliers();
         let mut sample_best: usize = 0;
         let mut chosen: Option<&Matrix3<f64>> = None;
-        for f in &hypotheses[..count] {
-            // A count above `beat` is exact; below it a hypothesis can neither
-            // beat the best so far nor tie this sample's best.
-            let beat = if exact {
-                0
+        for (f, check) in hypotheses[..count].iter().zip(&mut checks) {
+            let inliers = if self.sprt.is_some() {
+                // The SPRT decides alone, in both modes: a hypothesis it
+                // accepts has seen every match, so its count is exact.
+                *check = self.sprt_check(f, rng.random_range(0..n));
+                if check.rejected {
+                    continue;
+                }
+                check.consistent
             } else {
-                best.max(sample_best.saturating_sub(1))
+                // A count above `beat` is exact; below it a hypothesis can
+                // neither beat the best so far nor tie this sample's best.
+                let beat = if exact {
+                    0
+                } else {
+                    best.max(sample_best.saturating_sub(1))
+                };
+                self.count_inliers(f, beat)
             };
-            let inliers = self.count_inliers(f, beat);
             if inliers > best {
                 let wins = match chosen {
                     None => true,
@@ -490,14 +961,21 @@ impl Ransac {
                 count,
             }));
         }
-        if improved {
-            let w = self.best_inliers() as f64 / n as f64;
-            let bound = adaptive_bound(
-                w,
-                self.config.method.sample_size(),
-                self.config.confidence,
-                self.config.max_iterations.max(1),
-            );
+        let w = self.best_inliers() as f64 / n as f64;
+        let max = self.config.max_iterations.max(1);
+        let s = self.config.method.sample_size();
+        if let Some(sprt) = &mut self.sprt {
+            for check in &checks[..count] {
+                sprt.record(check);
+            }
+            sprt.after_sample(self.iteration, improved.then_some(w));
+            if self.best.is_some() {
+                // A changes with ε and δ, so the bound is recomputed after
+                // every sample and may rise as well as fall.
+                self.bound = sprt.bound(w, s, self.config.confidence, max);
+            }
+        } else if improved {
+            let bound = adaptive_bound(w, s, self.config.confidence, max);
             self.bound = self.bound.min(bound);
         }
         Some(Drawn {
@@ -506,6 +984,8 @@ impl Ransac {
             hypotheses: count,
             inliers: sample_best,
             improved,
+            design,
+            checks,
         })
     }
 
@@ -601,6 +1081,7 @@ impl Ransac {
             rotation,
             translation,
             parallax_px,
+            sprt: self.sprt.as_ref().map(Sprt::stats),
         })
     }
 }
@@ -645,6 +1126,8 @@ pub struct TwoViewEstimate {
     /// Median angle in pixels between a right bearing and its left bearing
     /// rotated by the best rotation-only fit.
     pub parallax_px: f64,
+    /// The SPRT's counts, with [`EarlyRejection::Sprt`].
+    pub sprt: Option<SprtStats>,
 }
 
 /// RANSAC to the bound, then [`Ransac::finish`].
@@ -692,6 +1175,9 @@ struct Drawn {
     hypotheses: usize,
     inliers: usize,
     improved: bool,
+    /// `(ε, δ, A)` of the SPRT this sample went through.
+    design: Option<(f64, f64, f64)>,
+    checks: [SprtCheck; MAX_SOLUTIONS],
 }
 
 fn select(points: &[Vector3<f64>], mask: &[bool]) -> Vec<Vector3<f64>> {

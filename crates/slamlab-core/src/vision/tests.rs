@@ -275,16 +275,31 @@ fn ransac_trials(
     trials: usize,
     seed: u64,
 ) -> (Vec<f64>, Vec<f64>, usize, usize, usize) {
+    let (rotation, translation, within_bound, kept_outliers, kept, _) =
+        ransac_trials_with(method, EarlyRejection::None, trials, seed);
+    (rotation, translation, within_bound, kept_outliers, kept)
+}
+
+/// [`ransac_trials`] with a choice of early rejection; also the SPRT's
+/// counts summed over the trials and the samples drawn.
+fn ransac_trials_with(
+    method: Method,
+    early_rejection: EarlyRejection,
+    trials: usize,
+    seed: u64,
+) -> (Vec<f64>, Vec<f64>, usize, usize, usize, (SprtStats, usize)) {
     let mut rng = ChaCha8Rng::seed_from_u64(seed);
     let k = camera();
     let (mut rotation_errors, mut translation_errors) = (Vec::new(), Vec::new());
     let (mut within_bound, mut kept_outliers, mut kept) = (0, 0, 0);
+    let (mut sprt, mut samples) = (SprtStats::default(), 0);
     for _ in 0..trials {
         let pose = random_pose(&mut rng, 10.0, 2.0);
         let s = scene(&mut rng, pose, 200, 1.0, 0.5, false);
         let config = RansacConfig {
             method,
             max_iterations: 5000,
+            early_rejection,
             ..RansacConfig::default()
         };
         let mut ransac = Ransac::new(&s.matches, &k, config).unwrap();
@@ -304,6 +319,14 @@ fn ransac_trials(
             .filter(|(i, o)| **i && **o)
             .count();
         kept += estimate.inlier_count;
+        samples += estimate.iterations;
+        if let Some(stats) = estimate.sprt {
+            sprt.tested += stats.tested;
+            sprt.rejected += stats.rejected;
+            sprt.evaluated += stats.evaluated;
+            sprt.evaluated_in_rejected += stats.evaluated_in_rejected;
+            sprt.designs += stats.designs;
+        }
     }
     (
         rotation_errors,
@@ -311,6 +334,7 @@ fn ransac_trials(
         within_bound,
         kept_outliers,
         kept,
+        (sprt, samples),
     )
 }
 
@@ -515,6 +539,154 @@ fn running_gives_what_stepping_gives() {
             stepped.best_fundamental(),
             "{method:?}"
         );
+        assert!(run.iteration() < 5000, "{method:?} stopped by the cap");
+    }
+}
+
+/// The SPRT keeps RANSAC's accuracy at half outliers: on the same seeded
+/// trials as [`five_point_ransac_survives_half_outliers`] and
+/// [`eight_point_ransac_survives_half_outliers`] as many runs end within 1°
+/// (give or take a few), while a rejected hypothesis is checked against a
+/// handful of the 200 matches.
+#[test]
+fn sprt_keeps_the_accuracy_and_checks_few_matches() {
+    for (method, seed) in [(Method::FivePoint, 21), (Method::EightPoint, 22)] {
+        let (plain, _, _, _, _, (_, plain_samples)) =
+            ransac_trials_with(method, EarlyRejection::None, 100, seed);
+        let (rotation, translation, within_bound, kept_outliers, kept, (stats, samples)) =
+            ransac_trials_with(method, EarlyRejection::Sprt, 100, seed);
+        eprintln!(
+            "{} with SPRT: rotation median {:.3} deg, {} of 100 below 1 deg (without: {}); translation median {:.3} deg; {within_bound} within bound; {kept_outliers} outliers in {kept} inliers; {samples} samples (without: {plain_samples}); {} hypotheses, {} rejected after {:.2} matches on average, {:.2} matches per hypothesis, {} designs",
+            method.name(),
+            median(rotation.clone()),
+            share_below(&rotation, 1.0),
+            share_below(&plain, 1.0),
+            median(translation.clone()),
+            stats.tested,
+            stats.rejected,
+            stats.mean_evaluated_when_rejected(),
+            stats.evaluated as f64 / stats.tested as f64,
+            stats.designs,
+        );
+        assert!(
+            share_below(&rotation, 1.0) + 3 >= share_below(&plain, 1.0),
+            "{} against {}",
+            share_below(&rotation, 1.0),
+            share_below(&plain, 1.0)
+        );
+        assert!(median(rotation) < 0.5);
+        assert!(median(translation) < 1.5);
+        assert!(kept_outliers * 33 < kept, "{kept_outliers} of {kept}");
+        assert!(stats.mean_evaluated_when_rejected() < 30.0);
+        assert!(stats.rejected * 100 >= stats.tested * 90);
+    }
+}
+
+/// A good hypothesis is rarely rejected: the final model of a seeded SPRT run
+/// (219 of 500 matches agree) checked from every starting point of the
+/// shuffled order with the run's last test, and the hypotheses of samples
+/// drawn from the true inliers alone that agree with at least 80 % of them.
+/// Matas and Chum's test rejects a good model with probability about `1/A`.
+#[test]
+fn sprt_rarely_rejects_a_good_model() {
+    let k = camera();
+    for (method, seed) in [(Method::EightPoint, 31), (Method::FivePoint, 32)] {
+        let mut rng = ChaCha8Rng::seed_from_u64(seed);
+        let pose = random_pose(&mut rng, 10.0, 2.0);
+        let s = scene(&mut rng, pose, 500, 1.0, 0.5, false);
+        let config = RansacConfig {
+            method,
+            max_iterations: 5000,
+            early_rejection: EarlyRejection::Sprt,
+            ..RansacConfig::default()
+        };
+        let mut ransac = Ransac::new(&s.matches, &k, config).unwrap();
+        ransac.run(&mut rng);
+        let best = ransac.best_fundamental().unwrap();
+        let sprt = ransac.sprt().unwrap().clone();
+        let n = s.matches.len();
+        let final_rejected = (0..n)
+            .filter(|&start| ransac.sprt_check(&best, start).rejected)
+            .count();
+        // Hypotheses from samples of true inliers only.
+        let inliers: Vec<usize> = (0..n).filter(|&i| !s.outlier[i]).collect();
+        let (mut good, mut good_rejected) = (0, 0);
+        let (mut any, mut any_rejected) = (0, 0);
+        for _ in 0..1000 {
+            let mut sample = Vec::new();
+            while sample.len() < method.sample_size() {
+                let i = inliers[rng.random_range(0..inliers.len())];
+                if !sample.contains(&i) {
+                    sample.push(i);
+                }
+            }
+            for f in ransac.hypotheses(&sample) {
+                let rejected = ransac.sprt_check(&f, rng.random_range(0..n)).rejected;
+                any += 1;
+                any_rejected += usize::from(rejected);
+                if ransac.classify(&f).1 * 5 >= inliers.len() * 4 {
+                    good += 1;
+                    good_rejected += usize::from(rejected);
+                }
+            }
+        }
+        eprintln!(
+            "{}: {} inliers of the best, eps {:.3}, delta {:.4}, A {:.1}; the best rejected from {final_rejected} of {n} starts; hypotheses of all-inlier samples rejected {any_rejected} of {any}, of those with 80 % of the inliers {good_rejected} of {good}",
+            method.name(),
+            ransac.best_inliers(),
+            sprt.epsilon(),
+            sprt.delta(),
+            sprt.threshold()
+        );
+        assert!(final_rejected * 100 <= n, "{final_rejected} of {n}");
+        assert!(good >= 50, "{good}");
+        assert!(good_rejected * 20 <= good, "{good_rejected} of {good}");
+    }
+}
+
+/// The threshold A solves `A = t_M C / m_S + 1 + ln A`; no test when ε ≤ δ.
+#[test]
+fn sprt_threshold_solves_its_equation() {
+    let (epsilon, delta) = (0.44, 0.02);
+    let a = sprt_threshold(epsilon, delta, 330.0, 1.0);
+    let ln = crate::math::ln;
+    let c = (1.0 - delta) * ln((1.0 - delta) / (1.0 - epsilon)) + delta * ln(delta / epsilon);
+    assert!((a - (330.0 * c + 1.0 + ln(a))).abs() < 1e-6, "{a}");
+    assert!(a > 150.0 && a < 250.0, "{a}");
+    assert_eq!(sprt_threshold(0.05, 0.05, 330.0, 1.0), f64::INFINITY);
+    assert_eq!(sprt_threshold(f64::NAN, 0.05, 330.0, 1.0), f64::INFINITY);
+}
+
+/// With the SPRT, stepping and running give the same run (the SPRT alone
+/// decides when a hypothesis's check stops, in both).
+#[test]
+fn running_gives_what_stepping_gives_with_sprt() {
+    let mut rng = ChaCha8Rng::seed_from_u64(5);
+    let k = camera();
+    let pose = random_pose(&mut rng, 10.0, 2.0);
+    let s = scene(&mut rng, pose, 300, 1.0, 0.5, false);
+    for method in [Method::EightPoint, Method::FivePoint] {
+        let config = RansacConfig {
+            method,
+            max_iterations: 5000,
+            early_rejection: EarlyRejection::Sprt,
+            ..RansacConfig::default()
+        };
+        let mut stepped = Ransac::new(&s.matches, &k, config).unwrap();
+        let mut rng_a = ChaCha8Rng::seed_from_u64(9);
+        let mut rejected_in_reports = 0;
+        while let Some(report) = stepped.step(&mut rng_a) {
+            let sample = report.sprt.unwrap();
+            assert_eq!(sample.checks.len(), report.hypotheses);
+            rejected_in_reports += sample.checks.iter().filter(|c| c.rejected).count();
+        }
+        let mut run = Ransac::new(&s.matches, &k, config).unwrap();
+        let mut rng_b = ChaCha8Rng::seed_from_u64(9);
+        run.run(&mut rng_b);
+        assert_eq!(run.iteration(), stepped.iteration(), "{method:?}");
+        assert_eq!(run.bound(), stepped.bound(), "{method:?}");
+        assert_eq!(run.best_fundamental(), stepped.best_fundamental());
+        assert_eq!(rejected_in_reports, run.sprt().unwrap().stats().rejected);
         assert!(run.iteration() < 5000, "{method:?} stopped by the cap");
     }
 }

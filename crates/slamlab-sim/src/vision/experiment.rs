@@ -7,7 +7,7 @@ use rand_chacha::ChaCha8Rng;
 use serde::{Deserialize, Serialize};
 use slamlab_core::random::standard_normal;
 use slamlab_core::vision::{
-    Correspondence, Intrinsics, Method, RansacConfig, RelativePose, angle_between,
+    Correspondence, EarlyRejection, Intrinsics, Method, RansacConfig, RelativePose, angle_between,
     estimate_two_view, rotation_angle,
 };
 
@@ -28,6 +28,9 @@ pub struct TwoViewSettings {
     pub seed: u64,
     /// Hartley normalization in the eight-point solver.
     pub normalize: bool,
+    /// Early rejection of hypotheses (none, or Matas and Chum's SPRT).
+    #[serde(default)]
+    pub early_rejection: EarlyRejection,
 }
 
 /// Median and 90th percentile.
@@ -65,6 +68,22 @@ pub struct TwoViewResult {
     pub inlier_recall: f64,
     /// Trials without an estimate (counted with 180 degree errors).
     pub failures: usize,
+    /// With the SPRT: how early it rejected, over every trial.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub sprt: Option<SprtSummary>,
+}
+
+/// The SPRT's counts summed over the trials of one method and share.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+pub struct SprtSummary {
+    /// Hypotheses tested.
+    pub hypotheses: usize,
+    /// Share of them rejected before the last match.
+    pub rejected_share: f64,
+    /// Mean matches checked by a rejected hypothesis.
+    pub matches_checked_when_rejected: f64,
+    /// Mean matches checked by a hypothesis (rejected or accepted).
+    pub matches_checked_per_hypothesis: f64,
 }
 
 /// The experiment's output.
@@ -166,6 +185,8 @@ pub fn two_view_experiment(
             let (mut rot, mut trans, mut iters) = (Vec::new(), Vec::new(), Vec::new());
             let (mut kept, mut kept_true, mut true_total, mut failures) =
                 (0usize, 0usize, 0usize, 0usize);
+            let (mut tested, mut rejected, mut checked, mut checked_rejected) =
+                (0usize, 0usize, 0usize, 0usize);
             for trial in 0..settings.trials {
                 let mut rng = ChaCha8Rng::seed_from_u64(settings.seed.wrapping_add(trial as u64));
                 // The same scene for every method at this share.
@@ -181,10 +202,17 @@ pub fn two_view_experiment(
                     method,
                     normalize: settings.normalize,
                     max_iterations: 5000,
+                    early_rejection: settings.early_rejection,
                     ..RansacConfig::default()
                 };
                 match estimate_two_view(&matches, &camera, config, &mut rng) {
                     Ok(e) => {
+                        if let Some(stats) = e.sprt {
+                            tested += stats.tested;
+                            rejected += stats.rejected;
+                            checked += stats.evaluated;
+                            checked_rejected += stats.evaluated_in_rejected;
+                        }
                         rot.push(
                             rotation_angle(&(e.rotation.transpose() * pose.rotation)).to_degrees(),
                         );
@@ -234,6 +262,12 @@ pub fn two_view_experiment(
                     0.0
                 },
                 failures,
+                sprt: (settings.early_rejection == EarlyRejection::Sprt).then(|| SprtSummary {
+                    hypotheses: tested,
+                    rejected_share: rejected as f64 / tested.max(1) as f64,
+                    matches_checked_when_rejected: checked_rejected as f64 / rejected.max(1) as f64,
+                    matches_checked_per_hypothesis: checked as f64 / tested.max(1) as f64,
+                }),
             });
         }
     }
@@ -258,6 +292,7 @@ mod tests {
             trials: 10,
             seed: 1,
             normalize: true,
+            early_rejection: EarlyRejection::None,
         };
         let report = two_view_experiment(&settings, |_, _| {});
         let get = |m: &str, o: f64| {
@@ -282,5 +317,41 @@ mod tests {
             get("five-point", 0.5).ransac_iterations.median
                 < get("eight-point", 0.5).ransac_iterations.median
         );
+    }
+
+    /// With the SPRT the same scenes give the same accuracy while a rejected
+    /// hypothesis is checked against a few dozen of the 200 matches.
+    #[test]
+    fn the_sprt_reports_how_early_it_rejects() {
+        let settings = TwoViewSettings {
+            methods: vec![Method::EightPoint, Method::FivePoint],
+            outliers: vec![0.5],
+            noise_px: 1.0,
+            points: 200,
+            trials: 10,
+            seed: 1,
+            normalize: true,
+            early_rejection: EarlyRejection::Sprt,
+        };
+        let report = two_view_experiment(&settings, |_, _| {});
+        for r in &report.results {
+            let sprt = r.sprt.unwrap();
+            eprintln!(
+                "{}: {sprt:?}, rotation {:?}",
+                r.method, r.rotation_error_deg
+            );
+            assert_eq!(r.failures, 0);
+            assert!(r.rotation_error_deg.median < 1.0, "{r:?}");
+            assert!(sprt.rejected_share > 0.9, "{sprt:?}");
+            assert!(sprt.matches_checked_when_rejected < 30.0, "{sprt:?}");
+        }
+        let plain = two_view_experiment(
+            &TwoViewSettings {
+                early_rejection: EarlyRejection::None,
+                ..settings
+            },
+            |_, _| {},
+        );
+        assert!(plain.results.iter().all(|r| r.sprt.is_none()));
     }
 }

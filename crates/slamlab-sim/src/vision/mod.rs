@@ -16,7 +16,9 @@ pub mod photos;
 pub mod session;
 pub mod world;
 
-pub use experiment::{TwoViewReport, TwoViewResult, TwoViewSettings, two_view_experiment};
+pub use experiment::{
+    SprtSummary, TwoViewReport, TwoViewResult, TwoViewSettings, two_view_experiment,
+};
 pub use odometry::{VoPair, VoRun, VoSettings, run_visual_odometry};
 pub use params::VoScenario;
 pub use session::TwoViewSession;

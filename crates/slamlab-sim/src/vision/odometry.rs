@@ -9,8 +9,8 @@ use serde::{Deserialize, Serialize};
 use slamlab_core::math;
 use slamlab_core::random::standard_normal;
 use slamlab_core::vision::{
-    Correspondence, Method, Motion, RansacConfig, RelativePose, angle_between, estimate_two_view,
-    rotation_angle,
+    Correspondence, EarlyRejection, Method, Motion, RansacConfig, RelativePose, angle_between,
+    estimate_two_view, rotation_angle,
 };
 
 use super::world::{CameraWorld, FRAME_DT, Frame, arc, relative_pose, world_from_camera};
@@ -36,6 +36,9 @@ pub struct VoSettings {
     pub pure_rotation_segment: bool,
     /// The middle third sees only the facade (a planar scene).
     pub planar_segment: bool,
+    /// Early rejection of RANSAC's hypotheses (none, or Matas and Chum's SPRT).
+    #[serde(default)]
+    pub early_rejection: EarlyRejection,
 }
 
 impl Default for VoSettings {
@@ -50,6 +53,7 @@ impl Default for VoSettings {
             stride: 5,
             pure_rotation_segment: false,
             planar_segment: false,
+            early_rejection: EarlyRejection::None,
         }
     }
 }
@@ -218,6 +222,7 @@ pub fn run_in_world(settings: VoSettings, world: &CameraWorld) -> VoRun {
     let config = RansacConfig {
         method: settings.method,
         normalize: settings.normalize,
+        early_rejection: settings.early_rejection,
         ..RansacConfig::default()
     };
     // Wheel odometry for every frame.

@@ -3,7 +3,7 @@
 //! `slamlab run visual-odometry` and `slamlab params --lesson visual-odometry`.
 
 use serde::{Deserialize, Serialize};
-use slamlab_core::vision::Method;
+use slamlab_core::vision::{EarlyRejection, Method};
 
 use super::odometry::VoSettings;
 use crate::params::{self, Param, Scenario};
@@ -34,6 +34,7 @@ pub const DEFAULT_PAIR: usize = 5;
 
 const METHODS: &[&str] = &["five-point", "eight-point"];
 const ON_OFF: &[&str] = &["on", "off"];
+const EARLY_REJECTION: &[&str] = &["none", "sprt"];
 
 fn on_off(on: bool) -> String {
     if on { "on" } else { "off" }.to_owned()
@@ -70,6 +71,17 @@ pub static PARAMS: &[Param<VoScenario>] = &[
         ON_OFF,
         |s| Some(on_off(s.settings.normalize)),
         |s, v| read_on_off(v).map(|on| s.settings.normalize = on),
+    ),
+    Param::words(
+        "early-rejection",
+        "none: every hypothesis is checked against every match; sprt: Matas and Chum's sequential probability ratio test rejects a bad hypothesis after a few matches",
+        EARLY_REJECTION,
+        |s| Some(s.settings.early_rejection.name().to_owned()),
+        |s, v| {
+            params::choose(EARLY_REJECTION, v)?;
+            s.settings.early_rejection = EarlyRejection::from_name(v).unwrap_or_default();
+            Ok(())
+        },
     ),
     Param::number(
         "outliers",
@@ -155,6 +167,7 @@ mod tests {
         let pairs = [
             ("method", "eight-point"),
             ("normalize", "off"),
+            ("early-rejection", "sprt"),
             ("outliers", "0.5"),
             ("noise-px", "2"),
             ("pure-rotation", "on"),
@@ -165,6 +178,7 @@ mod tests {
         assert!(params::apply_pairs(&mut s, pairs, &[]).is_empty());
         assert_eq!(s.settings.method, Method::EightPoint);
         assert!(!s.settings.normalize);
+        assert_eq!(s.settings.early_rejection, EarlyRejection::Sprt);
         assert!(s.settings.pure_rotation_segment && s.settings.planar_segment);
         assert_eq!((s.pair, s.settings.seed), (14, 3));
         let back = params::to_pairs(&s);
@@ -180,10 +194,12 @@ mod tests {
                 ("outliers", "2"),
                 ("method", "seven-point"),
                 ("noise-px", "x"),
+                ("early-rejection", "wald"),
             ],
             &[],
         );
-        assert_eq!(issues.len(), 3, "{issues:?}");
+        assert_eq!(issues.len(), 4, "{issues:?}");
+        assert_eq!(s.settings.early_rejection, EarlyRejection::None, "kept");
         assert_eq!(s.settings.outliers, 1.0, "clamped to the range");
         assert_eq!(s.settings.method, Method::FivePoint, "kept");
         assert_eq!(s.settings.noise_px, 1.0, "kept");

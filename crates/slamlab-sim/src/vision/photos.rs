@@ -84,6 +84,9 @@ pub enum PhotoError {
     /// RANSAC found no estimate.
     #[error("RANSAC: {0}")]
     Estimate(String),
+    /// RANSAC's best motion is backed by too few matches to be believed.
+    #[error("{0}")]
+    NoConsensus(String),
 }
 
 /// A decoded photo, grey and scaled to [`WORKING_WIDTH`].
@@ -334,6 +337,17 @@ pub fn estimate_photos(
     let mut rng = ChaCha8Rng::seed_from_u64(1);
     let estimate = estimate_two_view(&matched.matches, &camera, config, &mut rng)
         .map_err(|e| PhotoError::Estimate(e.to_string()))?;
+    // RANSAC accepts a consensus of a tenth of the matches (at least ten); among a few
+    // dozen matches of two unrelated photos, chance alone puts a dozen within 2 px of
+    // some epipolar geometry. Photos ask for as many inliers as they ask for matches.
+    if estimate.inlier_count < MIN_MATCHES {
+        return Err(PhotoError::NoConsensus(format!(
+            "only {} of {} matches agree with one motion; at least {MIN_MATCHES} are needed: \
+             two photos of the same scene from nearby places",
+            estimate.inlier_count,
+            matched.matches.len()
+        )));
+    }
     Ok(PhotoEstimate {
         matched,
         camera,

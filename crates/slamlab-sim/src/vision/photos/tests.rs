@@ -136,3 +136,66 @@ fn bad_photos_get_a_message() {
     let small = decode_photo("tiny.png", &png_bytes(&GrayImage::new(20, 20))).unwrap_err();
     assert!(matches!(small, PhotoError::TooSmall { .. }), "{small}");
 }
+
+/// Bad pairs the lesson must explain rather than estimate from: the same photo
+/// twice (no translation: every match has zero parallax), two photos of
+/// unrelated scenes (too few matches), a file over the byte cap.
+#[test]
+fn degenerate_pairs_and_oversized_files_get_a_message() {
+    let (left, _) = rendered_pair();
+    // The same photo twice: a pure rotation by 0°, no translation reported.
+    let same = estimate_photos(&left, &left, focal_for_fov(640.0, 60.0)).expect("an estimate");
+    eprintln!(
+        "identical photos: {} matches, {} inliers, parallax {:.3} px, motion {:?}",
+        same.matched.matches.len(),
+        same.estimate.inlier_count,
+        same.estimate.parallax_px,
+        same.estimate.motion
+    );
+    assert_eq!(
+        same.estimate.motion,
+        slamlab_core::vision::Motion::PureRotation
+    );
+    assert!(same.estimate.translation.is_none());
+    assert!(rotation_angle(&same.estimate.rotation).to_degrees() < 0.01);
+    assert!(
+        same.estimate.parallax_px < 0.01,
+        "{}",
+        same.estimate.parallax_px
+    );
+
+    // Unrelated textures: corners in both, fewer than 16 matches kept by the ratio test.
+    let noise = |seed: u64| {
+        GrayImage::from_fn(320, 240, |x, y| {
+            image::Luma([
+                super::synthetic::cell_value(seed, i64::from(x / 6), i64::from(y / 6)) as u8,
+            ])
+        })
+    };
+    let a = decode_photo("a.png", &png_bytes(&noise(11))).expect("a");
+    let b = decode_photo("b.png", &png_bytes(&noise(12))).expect("b");
+    match estimate_photos(&a, &b, focal_for_fov(320.0, 60.0)) {
+        Err(PhotoError::TooFew(why)) => {
+            eprintln!("unrelated photos: {why}");
+            assert!(why.contains("at least 16 are needed"), "{why}");
+        }
+        Err(PhotoError::NoConsensus(why)) => {
+            // Measured: 55 matches kept by the ratio test, 12 of them agree with
+            // RANSAC's best motion (enough for RANSAC's own 10 % / 2s rule).
+            eprintln!("unrelated photos: {why}");
+            assert!(why.contains("agree with one motion"), "{why}");
+        }
+        Err(other) => panic!("unrelated photos: {other}"),
+        Ok(e) => panic!(
+            "unrelated photos gave {} inliers of {} matches",
+            e.estimate.inlier_count,
+            e.matched.matches.len()
+        ),
+    }
+
+    // Over the byte cap: refused unread.
+    let huge = vec![0u8; MAX_PHOTO_BYTES + 1];
+    let error = decode_photo("huge.jpg", &huge).unwrap_err();
+    assert!(matches!(error, PhotoError::TooLarge { .. }), "{error}");
+    assert!(error.to_string().contains("huge.jpg"), "{error}");
+}
