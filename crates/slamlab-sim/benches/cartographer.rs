@@ -11,7 +11,8 @@
 //! 3. The Intel Research Lab log (`../shared/data/laser/intel.clf.bz2`, or
 //!    `$SLAMLAB_SHARED/data/laser/...`; 13,631 scans of 180 beams, 44.9
 //!    minutes) end to end with loop closures: seconds and the real-time
-//!    factor. Skipped with a message when the log is absent.
+//!    factor. Skipped with a message when the log is absent, or when
+//!    `SLAMLAB_BENCH_QUICK=1` (it takes a quarter of an hour).
 //!
 //! Times are the thread's CPU time (other work on a shared machine inflates
 //! wall-clock time far more) beside wall time. Results with date and machine
@@ -96,6 +97,10 @@ fn office(kidnap_at: Option<usize>, params: CartographerParams, label: &str) {
 }
 
 fn intel() {
+    if std::env::var("SLAMLAB_BENCH_QUICK").is_ok_and(|v| v == "1") {
+        println!("intel: skipped (SLAMLAB_BENCH_QUICK=1)");
+        return;
+    }
     let Some(log) = common::intel_log() else {
         return;
     };
