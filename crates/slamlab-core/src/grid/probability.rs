@@ -626,34 +626,68 @@ impl ProbabilityGrid {
         scan: &Scan,
         params: &InsertParams,
     ) -> Result<InsertReport, String> {
+        let reports = Self::insert_scan_into_all(&mut [self], world_from_sensor, scan, params)?;
+        Ok(reports.first().copied().unwrap_or_default())
+    }
+
+    /// [`insert_scan`](Self::insert_scan) into several grids at once, as
+    /// Cartographer inserts each scan into both active submaps: the beams'
+    /// cells are traced once and each grid is updated with them exactly as its
+    /// own `insert_scan` would update it (cells depend only on the resolution).
+    /// One report per grid, in order. Grids whose resolution differs from the
+    /// first one's get their own `insert_scan`.
+    pub fn insert_scan_into_all(
+        grids: &mut [&mut ProbabilityGrid],
+        world_from_sensor: &Pose2,
+        scan: &Scan,
+        params: &InsertParams,
+    ) -> Result<Vec<InsertReport>, String> {
         let steps = params.rule.log_odds_steps()?;
         if !world_from_sensor.is_finite() {
             return Err("the scan's pose is not finite".to_owned());
         }
-        let mut report = InsertReport::default();
+        let Some(resolution) = grids.first().map(|g| g.resolution) else {
+            return Ok(Vec::new());
+        };
+        if grids.iter().any(|g| g.resolution != resolution) {
+            return grids
+                .iter_mut()
+                .map(|g| {
+                    Self::insert_scan_into_all(&mut [&mut **g], world_from_sensor, scan, params)
+                })
+                .map(|r| r.map(|v| v.first().copied().unwrap_or_default()))
+                .collect();
+        }
+        let mut reports = vec![InsertReport::default(); grids.len()];
         let n = scan.len();
-        let mut cells = std::mem::take(&mut self.scratch);
+        let mut cells = std::mem::take(&mut grids[0].scratch);
         // Hits first, so that the misses skip them.
         cells.clear();
-        cells.extend((0..n).filter_map(|k| self.hit_cell(world_from_sensor, scan, k)));
-        let (updated, new) = self.update_cells(&cells, &steps, true);
-        report.hits += updated;
-        report.new_cells += new;
+        cells.extend((0..n).filter_map(|k| grids[0].hit_cell(world_from_sensor, scan, k)));
+        for (grid, report) in grids.iter_mut().zip(&mut reports) {
+            let (updated, new) = grid.update_cells(&cells, &steps, true);
+            report.hits += updated;
+            report.new_cells += new;
+        }
         for k in 0..n {
             let Some((from, to, include_end)) =
-                self.free_segment(world_from_sensor, scan, k, params)
+                grids[0].free_segment(world_from_sensor, scan, k, params)
             else {
                 continue;
             };
             cells.clear();
             segment_cells(from, to, include_end, |i, j| cells.push((i, j)));
-            let (updated, new) = self.update_cells(&cells, &steps, false);
-            report.misses += updated;
-            report.new_cells += new;
+            for (grid, report) in grids.iter_mut().zip(&mut reports) {
+                let (updated, new) = grid.update_cells(&cells, &steps, false);
+                report.misses += updated;
+                report.new_cells += new;
+            }
         }
-        self.scratch = cells;
-        self.finish_scan();
-        Ok(report)
+        grids[0].scratch = cells;
+        for grid in grids.iter_mut() {
+            grid.finish_scan();
+        }
+        Ok(reports)
     }
 
     /// The cell of beam `k`'s end point, if the beam has one.
@@ -1119,6 +1153,89 @@ mod tests {
         let only_a = ProbabilityGrid::weighted_mean([(&a, 1.0), (&b, 0.0)]).unwrap();
         assert!((only_a.probability_at(3, 0).unwrap() - p_free).abs() < 1e-6);
         assert!(ProbabilityGrid::weighted_mean([(&a, f64::NAN)]).is_none());
+    }
+
+    /// Inserting into several grids at once leaves each exactly as its own
+    /// `insert_scan` would (every cell's log-odds to the bit, the reports
+    /// equal): two grids with different histories at one resolution, and a
+    /// third at another resolution (its own insertion).
+    #[test]
+    fn inserting_into_several_grids_at_once_equals_one_by_one() {
+        let params = InsertParams {
+            rule: UpdateRule::CARTOGRAPHER,
+            max_range_free: 3.0,
+        };
+        let scan_at = |phase: f64| {
+            let n = 360;
+            let angles: Vec<f64> = (0..n)
+                .map(|k| -std::f64::consts::PI + std::f64::consts::TAU * k as f64 / n as f64)
+                .collect();
+            // Some beams past range_max (max-range readings), some NaN.
+            let ranges = angles
+                .iter()
+                .enumerate()
+                .map(|(k, a)| match k % 37 {
+                    0 => f64::NAN,
+                    1 | 2 => 9.0,
+                    _ => 2.0 + 1.5 * (3.0 * a + phase).sin(),
+                })
+                .collect();
+            Scan {
+                angles,
+                ranges,
+                range_min: 0.1,
+                range_max: 8.0,
+            }
+        };
+        let mut a = ProbabilityGrid::new(0.05);
+        let mut b = ProbabilityGrid::new(0.05);
+        let mut c = ProbabilityGrid::new(0.1);
+        a.insert_scan(&Pose2::new(0.3, 0.1, 0.2), &scan_at(0.0), &params)
+            .unwrap();
+        b.insert_scan(&Pose2::new(-0.4, 0.2, -0.3), &scan_at(1.0), &params)
+            .unwrap();
+        let pose = Pose2::new(0.123, -0.456, 0.789);
+        let scan = scan_at(2.0);
+        let (mut a1, mut b1, mut c1) = (a.clone(), b.clone(), c.clone());
+        let expected = [
+            a1.insert_scan(&pose, &scan, &params).unwrap(),
+            b1.insert_scan(&pose, &scan, &params).unwrap(),
+            c1.insert_scan(&pose, &scan, &params).unwrap(),
+        ];
+        let got =
+            ProbabilityGrid::insert_scan_into_all(&mut [&mut a, &mut b], &pose, &scan, &params)
+                .unwrap();
+        assert_eq!(got, expected[..2]);
+        let alone =
+            ProbabilityGrid::insert_scan_into_all(&mut [&mut c], &pose, &scan, &params).unwrap();
+        assert_eq!(alone, expected[2..]);
+        for (together, one_by_one) in [(&a, &a1), (&b, &b1), (&c, &c1)] {
+            assert_eq!(together.known_cells(), one_by_one.known_cells());
+            let (i0, j0, i1, j1) = one_by_one.known_bounds().unwrap();
+            for j in j0 - 1..=j1 + 1 {
+                for i in i0 - 1..=i1 + 1 {
+                    assert_eq!(
+                        together.log_odds_at(i, j).map(f64::to_bits),
+                        one_by_one.log_odds_at(i, j).map(f64::to_bits),
+                        "cell ({i}, {j})"
+                    );
+                }
+            }
+        }
+        // Mixed resolutions: each grid gets its own insertion.
+        let (mut a2, mut c2) = (a1.clone(), c1.clone());
+        let mixed =
+            ProbabilityGrid::insert_scan_into_all(&mut [&mut a2, &mut c2], &pose, &scan, &params)
+                .unwrap();
+        assert_eq!(
+            mixed,
+            vec![
+                a1.insert_scan(&pose, &scan, &params).unwrap(),
+                c1.insert_scan(&pose, &scan, &params).unwrap()
+            ]
+        );
+        assert_eq!(a2.known_cells(), a1.known_cells());
+        assert_eq!(c2.known_cells(), c1.known_cells());
     }
 
     #[test]

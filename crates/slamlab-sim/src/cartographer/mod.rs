@@ -771,11 +771,21 @@ impl CartographerSim {
             points: Arc::new(spread_points(points, self.params.bbs_max_points)),
         });
         let active = self.trajectories[t].active.clone();
+        // Into both active submaps, the beams traced once.
+        let mut grids: Vec<&mut ProbabilityGrid> = self
+            .submaps
+            .iter_mut()
+            .enumerate()
+            .filter(|(s, _)| active.contains(s))
+            .map(|(_, submap)| &mut submap.grid)
+            .collect();
+        if let Err(why) =
+            ProbabilityGrid::insert_scan_into_all(&mut grids, &local, scan, &self.insert)
+        {
+            self.notes.push(format!("scan {k}: {why}"));
+        }
         for &s in &active {
             let submap = &mut self.submaps[s];
-            if let Err(why) = submap.grid.insert_scan(&local, scan, &self.insert) {
-                self.notes.push(format!("scan {k}: {why}"));
-            }
             submap.num_range_data += 1;
             let relative = submap.local_pose.between(&local);
             self.constraints.push(Constraint {
