@@ -1177,7 +1177,7 @@ mod tests {
                 .map(|(k, a)| match k % 37 {
                     0 => f64::NAN,
                     1 | 2 => 9.0,
-                    _ => 2.0 + 1.5 * (3.0 * a + phase).sin(),
+                    _ => 2.0 + 1.5 * crate::math::sin(3.0 * a + phase),
                 })
                 .collect();
             Scan {
