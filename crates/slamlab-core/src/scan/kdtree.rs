@@ -152,11 +152,7 @@ impl PointTree {
                 out.extend(
                     found
                         .into_iter()
-                        .map(|n| Neighbour {
-                            index: n.item as usize,
-                            distance_squared: n.distance,
-                        })
-                        .filter(|n| n.index < self.len),
+                        .filter_map(|n| self.neighbour(n.item, n.distance)),
                 );
                 let order = |a: &Neighbour, b: &Neighbour| {
                     a.distance_squared
@@ -194,12 +190,17 @@ impl PointTree {
         out.extend(
             found
                 .into_iter()
-                .map(|n| Neighbour {
-                    index: n.item as usize,
-                    distance_squared: n.distance,
-                })
-                .filter(|n| n.index < self.len),
+                .filter_map(|n| self.neighbour(n.item, n.distance)),
         );
+    }
+
+    /// A query result as a [`Neighbour`], if its index is one of this tree's.
+    fn neighbour(&self, item: u32, distance_squared: f64) -> Option<Neighbour> {
+        let index = item as usize;
+        (index < self.len).then_some(Neighbour {
+            index,
+            distance_squared,
+        })
     }
 }
 
