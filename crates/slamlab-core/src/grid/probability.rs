@@ -1165,37 +1165,38 @@ mod tests {
             rule: UpdateRule::CARTOGRAPHER,
             max_range_free: 3.0,
         };
-        let scan_at = |phase: f64| {
-            let n = 360;
-            let angles: Vec<f64> = (0..n)
-                .map(|k| -std::f64::consts::PI + std::f64::consts::TAU * k as f64 / n as f64)
-                .collect();
-            // Some beams past range_max (max-range readings), some NaN.
-            let ranges = angles
-                .iter()
-                .enumerate()
-                .map(|(k, a)| match k % 37 {
-                    0 => f64::NAN,
-                    1 | 2 => 9.0,
-                    _ => 2.0 + 1.5 * crate::math::sin(3.0 * a + phase),
-                })
-                .collect();
-            Scan {
-                angles,
-                ranges,
-                range_min: 0.1,
-                range_max: 8.0,
+        // The ICP tests' room, seen to 2.5 m (so many beams are max-range
+        // readings), every 37th range NaN.
+        let scan_at = |pose: Pose2| {
+            let mut scan = crate::scan::icp::tests::ray_cast(
+                &crate::scan::icp::tests::room(),
+                pose,
+                360,
+                2.5,
+                None,
+            );
+            for k in (0..scan.len()).step_by(37) {
+                scan.ranges[k] = f64::NAN;
             }
+            scan
         };
         let mut a = ProbabilityGrid::new(0.05);
         let mut b = ProbabilityGrid::new(0.05);
         let mut c = ProbabilityGrid::new(0.1);
-        a.insert_scan(&Pose2::new(0.3, 0.1, 0.2), &scan_at(0.0), &params)
-            .unwrap();
-        b.insert_scan(&Pose2::new(-0.4, 0.2, -0.3), &scan_at(1.0), &params)
-            .unwrap();
+        a.insert_scan(
+            &Pose2::new(0.3, 0.1, 0.2),
+            &scan_at(Pose2::new(0.3, 0.1, 0.2)),
+            &params,
+        )
+        .unwrap();
+        b.insert_scan(
+            &Pose2::new(-0.4, 0.2, -0.3),
+            &scan_at(Pose2::new(-0.4, 0.2, -0.3)),
+            &params,
+        )
+        .unwrap();
         let pose = Pose2::new(0.123, -0.456, 0.789);
-        let scan = scan_at(2.0);
+        let scan = scan_at(pose);
         let (mut a1, mut b1, mut c1) = (a.clone(), b.clone(), c.clone());
         let expected = [
             a1.insert_scan(&pose, &scan, &params).unwrap(),
