@@ -479,6 +479,24 @@ pub struct SearchEvent {
     pub record: SearchRecord,
 }
 
+/// What one optimization of the pose graph did (Eq. 5.8 with the Huber
+/// kernel, Eq. 5.9).
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+pub struct OptimizationReport {
+    /// The scan after which it ran.
+    pub scan: usize,
+    /// Levenberg-Marquardt iterations.
+    pub iterations: usize,
+    /// The cost `Σ ρ(eᵀΩe)` before the first iteration (NaN: none ran).
+    pub cost_before: f64,
+    /// ... and after the last.
+    pub cost_after: f64,
+    /// How far it moved the nodes on average, metres.
+    pub mean_node_move: f64,
+    /// ... and the node it moved farthest.
+    pub max_node_move: f64,
+}
+
 /// Totals of the branch-and-bound searches.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Serialize, Deserialize)]
 pub struct BbsTotals {
@@ -538,6 +556,9 @@ pub struct CartographerSim {
     pub last_search: Option<Arc<SearchEvent>>,
     /// The totals of every search.
     pub bbs: BbsTotals,
+    /// The last optimization: its cost before and after, how far it moved
+    /// the nodes.
+    pub last_optimization: Option<OptimizationReport>,
     /// Optimizations run.
     pub optimizations: usize,
     /// Loop closures found but refused by the gate.
@@ -663,6 +684,7 @@ impl CartographerSim {
             merges: Vec::new(),
             last_search: None,
             bbs: BbsTotals::default(),
+            last_optimization: None,
             optimizations: 0,
             rejected_closures: 0,
             notes: Vec::new(),
@@ -1485,8 +1507,24 @@ impl CartographerSim {
                 return;
             }
         };
-        if let Err(e) = optimizer.optimize(50, |_| true) {
-            self.notes.push(format!("the optimization stopped: {e}"));
+        let before: Vec<Pose2> = self.nodes.iter().map(|n| n.global_pose).collect();
+        let mut report = OptimizationReport {
+            scan: self.next.saturating_sub(1),
+            iterations: 0,
+            cost_before: f64::NAN,
+            cost_after: f64::NAN,
+            mean_node_move: 0.0,
+            max_node_move: 0.0,
+        };
+        match optimizer.optimize(50, |_| true) {
+            Ok(reports) => {
+                report.iterations = reports.len();
+                if let (Some(first), Some(last)) = (reports.first(), reports.last()) {
+                    report.cost_before = first.cost_before;
+                    report.cost_after = last.cost;
+                }
+            }
+            Err(e) => self.notes.push(format!("the optimization stopped: {e}")),
         }
         self.optimizations += 1;
         let graph = optimizer.into_graph();
@@ -1507,6 +1545,17 @@ impl CartographerSim {
                 self.trajectories[t].global_from_local = Pose2::new(g.x, g.y, g.theta);
             }
         }
+        let moves: Vec<f64> = self
+            .nodes
+            .iter()
+            .zip(&before)
+            .map(|(n, b)| slamlab_core::math::hypot(n.global_pose.x - b.x, n.global_pose.y - b.y))
+            .collect();
+        if !moves.is_empty() {
+            report.mean_node_move = moves.iter().sum::<f64>() / moves.len() as f64;
+            report.max_node_move = moves.iter().copied().fold(0.0, f64::max);
+        }
+        self.last_optimization = Some(report);
     }
 
     /// The map of every node in the first trajectory's frame (the first
