@@ -136,7 +136,8 @@ fn the_kidnap_button_carries_the_robot_and_the_share_link_reproduces_it() {
 }
 
 /// At 800 x 500, 1280 x 800 and embedded at 900 x 600 (web/lecture.html): Step
-/// scan, Run and Kidnap in the top rows, no plot key on a plot's data or the map.
+/// scan, Run, Kidnap, Step search and Step optimization in the top rows, no
+/// plot key on a plot's data or the map.
 #[test]
 fn at_every_size_the_main_actions_are_in_reach_and_keys_are_off_the_data() {
     for (w, hgt, embed) in [
@@ -152,7 +153,13 @@ fn at_every_size_the_main_actions_are_in_reach_and_keys_are_off_the_data() {
         lesson_mut(&mut h).run_to(185);
         h.run();
         let screen = egui::Rect::from_min_size(egui::Pos2::ZERO, egui::vec2(w, hgt));
-        for label in ["Step scan", "Run", "Kidnap"] {
+        for label in [
+            "Step scan",
+            "Run",
+            "Kidnap",
+            "Step search",
+            "Step optimization",
+        ] {
             let node = h
                 .query_all_by_label(label)
                 .next()
@@ -194,7 +201,10 @@ fn at_every_size_the_main_actions_are_in_reach_and_keys_are_off_the_data() {
 /// search.
 #[test]
 fn step_search_and_step_optimization_each_run_exactly_one() {
-    let mut h = harness("lesson=cartographer&map=maze&kidnap-at=152&seed=3");
+    let mut h = harness_sized(
+        "lesson=cartographer&map=maze&kidnap-at=152&seed=3",
+        egui::vec2(800.0, 500.0),
+    );
     lesson_mut(&mut h).run_to(100);
     h.run();
     let count = |h: &Harness<'_, SlamLabApp>| {
@@ -227,6 +237,9 @@ fn step_search_and_step_optimization_each_run_exactly_one() {
         "the time bar shows {next}"
     );
     assert!(lesson(&h).sim().is_mid_scan());
+    if let Some(image) = render_or_skip(&mut h) {
+        let _ = image.save(std::env::temp_dir().join("slamlab-cartographer-step-search.png"));
+    }
     let o = lesson(&h).sim().outlook();
     assert!(o.searches_pending >= 1 && o.searches_pending < o.searches_planned);
     // The search's tree is drawn as the last search's.
