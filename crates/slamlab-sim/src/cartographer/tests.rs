@@ -336,8 +336,13 @@ fn stepping_by_phases_gives_exactly_what_stepping_by_scans_gives() {
     let (mut phased, _) = CartographerSim::new(input, CartographerParams::default());
     let (mut scans, mut searches, mut global, mut optimizations) = (0, 0, 0, 0);
     let mut most_searches = 0;
+    // Scans whose outlook promised an optimization, and scans that ran one.
+    let (mut promised, mut optimized) = (Vec::new(), Vec::new());
     while !phased.is_done() {
         let outlook = phased.outlook();
+        if outlook.optimization_pending && promised.last() != Some(&outlook.scan) {
+            promised.push(outlook.scan);
+        }
         let before = (phased.bbs.searches, phased.optimizations);
         let phase = phased.step_phase();
         match (outlook.next, phase) {
@@ -354,8 +359,11 @@ fn stepping_by_phases_gives_exactly_what_stepping_by_scans_gives() {
                 assert_eq!(phased.bbs.searches, before.0 + 1);
                 assert_eq!(phased.optimizations, before.1);
             }
-            (NextPhase::Optimization, CartographerPhase::Optimization { .. }) => {
+            (NextPhase::Optimization, CartographerPhase::Optimization { scan }) => {
                 optimizations += 1;
+                if optimized.last() != Some(&scan) {
+                    optimized.push(scan);
+                }
                 assert_eq!(phased.optimizations, before.1 + 1);
                 assert_eq!(phased.bbs.searches, before.0);
             }
@@ -363,6 +371,18 @@ fn stepping_by_phases_gives_exactly_what_stepping_by_scans_gives() {
         }
     }
     assert_eq!(phased.step_phase(), CartographerPhase::Done);
+    // "then optimization" held every time it was said (and a merge's
+    // optimization, which no outlook can promise before the match, is the
+    // only one not announced with the scan's searches).
+    assert!(
+        promised.iter().all(|k| optimized.contains(k)),
+        "{promised:?} {optimized:?}"
+    );
+    assert!(
+        optimized
+            .iter()
+            .all(|k| promised.contains(k) || whole.merges.contains(k))
+    );
     assert_eq!(fingerprint(&phased), fingerprint(&whole));
     assert_eq!(scans, 240);
     assert_eq!(searches, whole.bbs.searches);
