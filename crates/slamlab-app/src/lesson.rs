@@ -383,9 +383,20 @@ impl Lesson for WithNotice {
 pub fn advance_within_budget(
     time: &mut TimeControl,
     dt: f64,
+    step_phase: impl FnMut() -> bool,
+) -> u64 {
+    advance_within_ms(time, dt, crate::time_control::FRAME_BUDGET_MS, step_phase)
+}
+
+/// As [`advance_within_budget`], with a budget of `budget_ms` milliseconds (a
+/// lesson whose drawing needs more of the frame spends less on its phases).
+pub fn advance_within_ms(
+    time: &mut TimeControl,
+    dt: f64,
+    budget_ms: u128,
     mut step_phase: impl FnMut() -> bool,
 ) -> u64 {
-    use crate::time_control::{FRAME_BUDGET_MS, TicksDue};
+    use crate::time_control::TicksDue;
     let due = time.ticks_due(dt);
     if due == TicksDue::Count(0) {
         return 0;
@@ -398,7 +409,7 @@ pub fn advance_within_budget(
         {
             break;
         }
-        if start.elapsed().as_millis() >= FRAME_BUDGET_MS {
+        if start.elapsed().as_millis() >= budget_ms {
             break;
         }
         if step_phase() {

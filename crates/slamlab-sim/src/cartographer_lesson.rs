@@ -11,7 +11,7 @@
 //! [`Stepper`]: crate::stepper::Stepper
 
 use crate::cartographer::input::{KidnapPlace, kidnap_input_to};
-use crate::cartographer::{CartographerParams, CartographerSim};
+use crate::cartographer::{CartographerParams, CartographerPhase, CartographerSim};
 use crate::laser_log::SimulatedLogConfig;
 use crate::mapping::MappingInput;
 use crate::params::{Param, Scenario, choose};
@@ -351,7 +351,8 @@ pub enum CartographerEvent {
 }
 
 /// The lesson's run: the mapper, cloned as a checkpoint; one tick is one
-/// scan.
+/// scan, its phases local SLAM, each branch-and-bound search and each
+/// optimization ([`CartographerSim::step_phase`]).
 #[derive(Clone, Debug)]
 pub struct CartographerRun {
     sim: CartographerSim,
@@ -377,18 +378,16 @@ impl CartographerRun {
 }
 
 impl Simulation for CartographerRun {
-    type Phase = usize;
+    type Phase = CartographerPhase;
     type Event = CartographerEvent;
     type Records = ();
 
-    fn step_phase(&mut self, _records: &mut ()) -> usize {
-        let k = self.sim.scans_done();
-        self.sim.step();
-        k
+    fn step_phase(&mut self, _records: &mut ()) -> CartographerPhase {
+        self.sim.step_phase()
     }
 
     fn is_mid_tick(&self) -> bool {
-        false
+        self.sim.is_mid_scan()
     }
 
     fn tick(&self) -> u64 {
@@ -431,6 +430,73 @@ mod tests {
         assert!(issues.is_empty(), "{issues:?}");
         assert_eq!(back, s);
         assert_eq!(params::to_pairs(&back), pairs);
+    }
+
+    /// The office runs with a kidnap at scan 152 (seeds 1 and 3) under the
+    /// lesson's stepper, frame by frame as fast as the budget allows: before,
+    /// whole scans until 25 ms were spent (a frame ends only after its last
+    /// scan); now, phases until 12 ms were spent. Prints the worst frame and
+    /// the longest scan and phase (docs/cartographer.md has the numbers).
+    #[test]
+    #[ignore = "a measurement: cargo test --release -p slamlab-sim --lib frame_times -- --ignored --nocapture"]
+    fn frame_times_of_the_office_kidnap_runs() {
+        use crate::stepper::{CheckpointPolicy, Stepper};
+        use std::time::Instant;
+        let policy = CheckpointPolicy {
+            every_ticks: 20,
+            max_checkpoints: 40,
+            budget_bytes: 96 << 20,
+        };
+        for seed in [1, 3] {
+            let scenario = CartographerScenario {
+                seed,
+                map: "office".to_owned(),
+                kidnap_at: Some(152),
+                ..CartographerScenario::default()
+            };
+            let grid = Arc::new(crate::mapping::builtin_map("office").unwrap());
+            let input = Arc::new(scenario.simulate(grid, "office").unwrap());
+            for (by_phase, budget_ms) in [(false, 25.0), (true, 12.0)] {
+                let (run, _) = CartographerRun::new(&scenario, input.clone());
+                let mut stepper = Stepper::with_policy(run, (), policy);
+                let (mut worst_frame, mut longest_step, mut frames) = (0.0f64, 0.0f64, 0);
+                let mut longest = String::new();
+                let started = Instant::now();
+                while !stepper.sim().sim().is_done() {
+                    let frame = Instant::now();
+                    while !stepper.sim().sim().is_done()
+                        && frame.elapsed().as_secs_f64() * 1e3 < budget_ms
+                    {
+                        let step = Instant::now();
+                        let phase = if by_phase {
+                            Some(stepper.step_phase())
+                        } else {
+                            stepper.step_tick();
+                            None
+                        };
+                        let ms = step.elapsed().as_secs_f64() * 1e3;
+                        if ms > longest_step {
+                            longest_step = ms;
+                            longest = format!("{phase:?}");
+                        }
+                    }
+                    worst_frame = worst_frame.max(frame.elapsed().as_secs_f64() * 1e3);
+                    frames += 1;
+                }
+                let total = started.elapsed().as_secs_f64();
+                eprintln!(
+                    "office seed {seed}, {}: worst frame {worst_frame:.1} ms, longest {} \
+                     {longest_step:.1} ms ({longest}), {frames} frames, {total:.2} s",
+                    if by_phase {
+                        "phases, 12 ms"
+                    } else {
+                        "whole scans, 25 ms"
+                    },
+                    if by_phase { "phase" } else { "scan" },
+                );
+                assert_eq!(stepper.sim().sim().scans_done(), 600);
+            }
+        }
     }
 
     #[test]

@@ -107,6 +107,27 @@ pub fn explanation_ui(ui: &mut egui::Ui, sim: &CartographerSim, scenario: &Carto
         }
     }
     ui.separator();
+    ui.strong("The last optimization");
+    match &sim.last_optimization {
+        None => {
+            ui.label(format!(
+                "None yet: the pose graph is solved every {} nodes and after a merge.",
+                sim.params().optimize_every_n_nodes
+            ));
+        }
+        Some(o) => {
+            ui.label(format!(
+                "After scan {}: cost Σ ρ(e^T Ω e) {} → {} in {} Levenberg-Marquardt iterations                  (Eq. 5.8, Huber Eq. 5.9); the nodes moved {:.3} m on average, {:.3} m at most.",
+                o.scan,
+                cost_text(o.cost_before),
+                cost_text(o.cost_after),
+                o.iterations,
+                o.mean_node_move,
+                o.max_node_move
+            ));
+        }
+    }
+    ui.separator();
     ui.strong("The last branch-and-bound search");
     let Some(search) = &sim.last_search else {
         ui.label("None yet: searches begin once a submap is finished.");
@@ -124,9 +145,7 @@ pub fn explanation_ui(ui: &mut egui::Ui, sim: &CartographerSim, scenario: &Carto
         },
         search
             .score
-            .map_or("no match above the minimum score".to_owned(), |s| format!(
-                "best score {s:.3}"
-            ))
+            .map_or_else(|| no_match_text(search), |s| format!("best score {s:.3}"))
     ));
     ui.label(format!(
         "{} headings {:.2}° apart (Eq. 5.12).",
@@ -253,6 +272,34 @@ fn search_tree_ui(ui: &mut egui::Ui, nodes: &[SearchNode], heights: usize) {
             (true, _) => palette::BLUE,
         };
         painter.circle_filled(Pos2::new(x_of(k), y_of(n.height)), radius, color);
+    }
+}
+
+/// A cost as the notes write it ("–" for none).
+pub fn cost_text(cost: f64) -> String {
+    if !cost.is_finite() {
+        "–".to_owned()
+    } else if cost != 0.0 && (cost.abs() >= 1e5 || cost.abs() < 1e-2) {
+        format!("{cost:.2e}")
+    } else if cost.abs() >= 100.0 {
+        format!("{cost:.0}")
+    } else {
+        format!("{cost:.3}")
+    }
+}
+
+/// What a search without a match found: its best leaf, or the bound no
+/// leaf could beat, against the minimum.
+pub fn no_match_text(search: &slamlab_sim::cartographer::SearchEvent) -> String {
+    let min = search.min_score;
+    match (search.record.best_leaf_score, search.best_bound) {
+        (Some(leaf), _) => {
+            format!("no match above min_score: the best leaf scored {leaf:.3}, not above {min:.3}")
+        }
+        (None, Some(bound)) => format!(
+            "no match above min_score: no branch could score above {bound:.3} (Eq. 5.14),              not above {min:.3}"
+        ),
+        (None, None) => format!("no match above min_score {min:.3}"),
     }
 }
 

@@ -7,8 +7,14 @@
 //! 5.10-5.12). The last branch-and-bound search and the precomputed max grids
 //! of a finished submap (Fig. 5.7) are shown beside the map.
 //!
-//! One tick is one scan (`CartographerSim::step`); step back restores the
-//! latest checkpoint and replays (the run is deterministic from its seed).
+//! One tick is one scan, run in phases (`CartographerSim::step_phase`): local
+//! SLAM, then each branch-and-bound search the scan's node is due, then the
+//! optimization when one is due. "Step scan" finishes a scan, "Step search"
+//! and "Step optimization" run up to and including the next search or
+//! optimization, and a running lesson spends at most [`PHASE_BUDGET_MS`] a
+//! frame on phases, so a scan with many searches spreads over frames. Step
+//! back goes back one phase: it restores the latest checkpoint and replays
+//! (the run is deterministic from its seed).
 
 mod explain;
 mod map;
@@ -25,7 +31,7 @@ use crate::widgets::params_panel::{self, PendingParams};
 use serde::{Deserialize, Serialize};
 use slamlab_core::Pose2;
 use slamlab_core::grid::OccupancyGrid;
-use slamlab_sim::cartographer::CartographerSim;
+use slamlab_sim::cartographer::{CartographerPhase, CartographerSim, NextPhase};
 use slamlab_sim::cartographer_lesson::{CartographerEvent, CartographerRun, CartographerScenario};
 use slamlab_sim::laser_log::LaserLog;
 use slamlab_sim::mapping::{MappingInput, builtin_map, log_input};
@@ -35,6 +41,10 @@ use std::sync::Arc;
 
 /// The lesson's id in URLs and the menu.
 pub const LESSON_ID: &str = "cartographer";
+
+/// Milliseconds a frame may spend on the run's phases while it runs or
+/// catches up (the rest of a 16 ms frame draws the submaps and plots).
+pub const PHASE_BUDGET_MS: u128 = 12;
 
 /// The parameters the panel shows (all of the table but the map).
 const PANEL_PARAMS: &[&str] = &[
@@ -116,8 +126,13 @@ pub struct CartographerLesson {
     source: Source,
     /// Replaying to this many scans (after a change of the detection switch).
     catch_up: Option<usize>,
-    /// Milliseconds each scan took here (index = scan; NaN: not measured).
+    /// Milliseconds each scan took here, its phases summed (index = scan;
+    /// NaN: not measured).
     scan_ms: Vec<f64>,
+    /// The longest single phase here, milliseconds.
+    phase_ms_max: f64,
+    /// The most time one frame spent on phases, milliseconds.
+    frame_ms_max: f64,
     /// The lesson's clock.
     pub time: TimeControl,
     /// What the map shows.
@@ -215,6 +230,8 @@ impl CartographerLesson {
             source: Source::Simulated(name.to_owned(), grid),
             catch_up: None,
             scan_ms: Vec::new(),
+            phase_ms_max: 0.0,
+            frame_ms_max: 0.0,
             time: TimeControl::default(),
             view: CartographerView::default(),
             canvas: MapView::default(),
@@ -269,6 +286,8 @@ impl CartographerLesson {
         self.scenario = scenario;
         self.notices = notices;
         self.scan_ms.clear();
+        self.phase_ms_max = 0.0;
+        self.frame_ms_max = 0.0;
         self.tiles.clear();
         self.grids.clear();
         self.catch_up = catch_up.filter(|&n| n > 0);
@@ -452,26 +471,133 @@ impl CartographerLesson {
         }
     }
 
-    /// Runs one scan, timed.
+    /// Runs the next phase, timed (its time goes to its scan's).
+    fn run_phase(&mut self) -> CartographerPhase {
+        let started = web_time::Instant::now();
+        let phase = self.stepper.step_phase();
+        let ms = started.elapsed().as_secs_f64() * 1e3;
+        self.phase_ms_max = self.phase_ms_max.max(ms);
+        let (scan, first) = match phase {
+            CartographerPhase::LocalSlam { scan } => (scan, true),
+            CartographerPhase::Search { scan, .. }
+            | CartographerPhase::Optimization { scan }
+            | CartographerPhase::Settled { scan } => (scan, false),
+            CartographerPhase::Done => return phase,
+        };
+        if self.scan_ms.len() <= scan {
+            self.scan_ms.resize(scan + 1, f64::NAN);
+        }
+        let slot = &mut self.scan_ms[scan];
+        *slot = if first || !slot.is_finite() {
+            ms
+        } else {
+            *slot + ms
+        };
+        phase
+    }
+
+    /// Finishes the current scan, or runs a whole new one, timed.
     pub fn step_scan(&mut self) {
         if self.sim().is_done() {
             return;
         }
-        let started = web_time::Instant::now();
-        self.stepper.step_phase();
-        let ms = started.elapsed().as_secs_f64() * 1e3;
-        let done = self.sim().scans_done();
-        if done > 0 {
-            self.scan_ms.resize(done, f64::NAN);
-            self.scan_ms[done - 1] = ms;
+        loop {
+            self.run_phase();
+            if !self.sim().is_mid_scan() {
+                break;
+            }
+        }
+    }
+
+    /// Runs phases up to and including the next one `wanted` picks (through
+    /// as many scans as it takes); false when every scan went in first.
+    fn step_until(&mut self, wanted: impl Fn(&CartographerPhase) -> bool) -> bool {
+        while !self.sim().is_done() {
+            let phase = self.run_phase();
+            if wanted(&phase) {
+                return true;
+            }
+        }
+        false
+    }
+
+    /// "Step search": runs up to and including the next branch-and-bound
+    /// search (its tree is the one drawn).
+    pub fn step_search(&mut self) {
+        self.catch_up = None;
+        self.time.apply(TimeAction::StepPhase);
+        if self.step_until(|p| matches!(p, CartographerPhase::Search { .. })) {
+            if let Some(search) = &self.sim().last_search {
+                let result = search.score.map_or_else(
+                    || "no match above min_score".to_owned(),
+                    |s| format!("best score {s:.3}"),
+                );
+                self.note = Some(format!(
+                    "Searched scan {}'s node in submap {}{}: {result}",
+                    search.scan,
+                    search.submap,
+                    if search.global { " (whole submap)" } else { "" },
+                ));
+            }
+        } else {
+            self.note = Some("No search left: every scan is in".to_owned());
+        }
+    }
+
+    /// "Step optimization": runs up to and including the next optimization
+    /// of the pose graph.
+    pub fn step_optimization(&mut self) {
+        self.catch_up = None;
+        self.time.apply(TimeAction::StepPhase);
+        if self.step_until(|p| matches!(p, CartographerPhase::Optimization { .. })) {
+            self.note = self.sim().last_optimization.map(|o| {
+                format!(
+                    "Optimized after scan {}: cost {} → {} in {} iterations; nodes moved {:.3} m \
+                     on average, {:.3} m at most",
+                    o.scan,
+                    explain::cost_text(o.cost_before),
+                    explain::cost_text(o.cost_after),
+                    o.iterations,
+                    o.mean_node_move,
+                    o.max_node_move
+                )
+            });
+        } else {
+            self.note = Some("No optimization left: every scan is in".to_owned());
+        }
+    }
+
+    /// What runs next: "scan 153: 4 of 12 searches pending, then
+    /// optimization".
+    pub fn next_phase_text(&self) -> String {
+        let o = self.sim().outlook();
+        let then = if o.optimization_pending {
+            ", then optimization"
+        } else {
+            ""
+        };
+        match o.next {
+            NextPhase::Done => "done: every scan is in".to_owned(),
+            NextPhase::LocalSlam => format!("scan {}", o.scan),
+            NextPhase::Search => format!(
+                "scan {}: {} of {} searches pending{then}",
+                o.scan, o.searches_pending, o.searches_planned
+            ),
+            NextPhase::Optimization => format!("scan {}: optimization", o.scan),
         }
     }
 
     /// Runs scans until `n` are in (or every scan), however long it takes.
     pub fn run_to(&mut self, n: usize) {
-        while self.sim().scans_done() < n && !self.sim().is_done() {
+        while (self.sim().scans_done() < n || self.sim().is_mid_scan()) && !self.sim().is_done() {
             self.step_scan();
         }
+    }
+
+    /// Keeps the most time one frame spent on phases.
+    fn note_frame(&mut self, started: web_time::Instant) {
+        let ms = started.elapsed().as_secs_f64() * 1e3;
+        self.frame_ms_max = self.frame_ms_max.max(ms);
     }
 
     fn subtitle_text(&self) -> String {
@@ -489,6 +615,26 @@ impl CartographerLesson {
     /// The lesson's main actions, in the row above the map at every size.
     fn actions_ui(&mut self, ui: &mut egui::Ui) {
         ui.horizontal_wrapped(|ui| {
+            let more = !self.sim().is_done();
+            if ui
+                .add_enabled(more, egui::Button::new("Step search"))
+                .on_hover_text(
+                    "Run up to and including the next branch-and-bound search (through as                      many scans as it takes); its tree is drawn in the explanation panel",
+                )
+                .clicked()
+            {
+                self.step_search();
+            }
+            if ui
+                .add_enabled(more, egui::Button::new("Step optimization"))
+                .on_hover_text(
+                    "Run up to and including the next optimization of the pose graph; the note                      says its cost before and after and how far it moved the nodes",
+                )
+                .clicked()
+            {
+                self.step_optimization();
+            }
+            ui.separator();
             let simulated = self.is_simulated();
             if ui
                 .add_enabled(simulated, egui::Button::new("Kidnap"))
@@ -667,12 +813,8 @@ impl Lesson for CartographerLesson {
                 .checked_sub(1)
                 .and_then(|k| sim.input().scans.get(k))
                 .map_or(0.0, |s| s.time),
-            last_phase: done.checked_sub(1).map(|k| format!("scan {k}")),
-            next_phase: if sim.is_done() {
-                "done: every scan is in".to_owned()
-            } else {
-                format!("scan {done}")
-            },
+            last_phase: self.stepper.last_phase().map(phase_text),
+            next_phase: self.next_phase_text(),
             can_step_back: self.stepper.phases_run() > 0,
         }
     }
@@ -680,8 +822,10 @@ impl Lesson for CartographerLesson {
     fn step_controls(&self) -> StepControls {
         StepControls::One {
             label: "Step scan",
-            hover: "Run one scan: local matching, insertion into the submaps, the loop-closure \
-                    searches and, when due, the optimization",
+            hover: "Finish the current scan, or run a whole new one: local matching, insertion \
+                    into the submaps, the loop-closure searches and, when due, the optimization. \
+                    \"Step search\" and \"Step optimization\" above the map run one search or one \
+                    optimization; Step back goes back one of these phases",
             unit: "scan",
         }
     }
@@ -695,6 +839,7 @@ impl Lesson for CartographerLesson {
                 self.step_scan();
             }
             TimeAction::StepBack => {
+                // One phase back: the last search, optimization or local SLAM.
                 self.catch_up = None;
                 self.stepper.step_back();
                 let done = self.sim().scans_done();
@@ -739,18 +884,20 @@ impl Lesson for CartographerLesson {
 
     fn advance(&mut self, dt: f64) {
         self.advanced = false;
+        let started = web_time::Instant::now();
         if let Some(target) = self.catch_up {
             self.advanced = true;
-            let started = web_time::Instant::now();
-            while self.sim().scans_done() < target
+            let reached = |sim: &CartographerSim| sim.scans_done() >= target && !sim.is_mid_scan();
+            while !reached(self.sim())
                 && !self.sim().is_done()
-                && started.elapsed().as_millis() < 12
+                && started.elapsed().as_millis() < PHASE_BUDGET_MS
             {
-                self.step_scan();
+                self.run_phase();
             }
-            if self.sim().scans_done() >= target || self.sim().is_done() {
+            if reached(self.sim()) || self.sim().is_done() {
                 self.catch_up = None;
             }
+            self.note_frame(started);
             return;
         }
         if self.sim().is_done() {
@@ -760,13 +907,21 @@ impl Lesson for CartographerLesson {
         let mut stepped = false;
         let lesson = &mut *self;
         let mut time = lesson.time.clone();
-        lesson::advance_within_budget(&mut time, dt, || {
-            lesson.step_scan();
+        // Phase by phase within the budget: a scan with many searches
+        // spreads over frames; a tick is counted when its scan is finished.
+        lesson::advance_within_ms(&mut time, dt, PHASE_BUDGET_MS, || {
+            if lesson.sim().is_done() {
+                return true;
+            }
+            lesson.run_phase();
             stepped = true;
-            true
+            !lesson.sim().is_mid_scan()
         });
         self.time = time;
         self.advanced = stepped;
+        if stepped {
+            self.note_frame(started);
+        }
     }
 
     fn last_advance_updated(&self) -> bool {
@@ -884,6 +1039,11 @@ impl Lesson for CartographerLesson {
             "last_search": search,
             "scan_ms_median": timed.get(timed.len() / 2),
             "scan_ms_max": timed.last(),
+            "phase_ms_max": self.phase_ms_max,
+            "frame_ms_max": self.frame_ms_max,
+            "mid_scan": sim.is_mid_scan(),
+            "next_phase": self.next_phase_text(),
+            "phases_run": self.stepper.phases_run(),
         })
     }
 
@@ -893,5 +1053,23 @@ impl Lesson for CartographerLesson {
 
     fn as_any_mut(&mut self) -> &mut dyn std::any::Any {
         self
+    }
+}
+
+/// A phase as the time bar names it ("scan 153: search in submap 4").
+fn phase_text(phase: &CartographerPhase) -> String {
+    match *phase {
+        CartographerPhase::LocalSlam { scan } => format!("scan {scan}: local SLAM"),
+        CartographerPhase::Search {
+            scan,
+            submap,
+            global,
+        } => format!(
+            "scan {scan}: {}search in submap {submap}",
+            if global { "global " } else { "" }
+        ),
+        CartographerPhase::Optimization { scan } => format!("scan {scan}: optimization"),
+        CartographerPhase::Settled { scan } => format!("scan {scan}"),
+        CartographerPhase::Done => "every scan is in".to_owned(),
     }
 }

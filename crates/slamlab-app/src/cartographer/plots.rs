@@ -1,8 +1,8 @@
 //! The plots under the map: the kidnap detector's input and output per scan
 //! (thesis Figs. 5.8-5.9: the local matching cost, its average-filtered value,
 //! the level `T · y_{t−1}` it must exceed and the detections), the last
-//! branch-and-bound search's best score as it improved, and the time each
-//! scan took here.
+//! branch-and-bound search's best score as it improved (or, with no match,
+//! its best leaf against `min_score`), and the time each scan took here.
 
 use super::map::LOOP_CLOSURE;
 use crate::export::PlotSeries;
@@ -87,33 +87,58 @@ fn plotted(sim: &CartographerSim, scan_ms: &[f64]) -> Vec<Styled> {
         ),
     ];
     if let Some(search) = &sim.last_search {
-        let mut best: Vec<[f64; 2]> = search
-            .record
-            .best_history
-            .iter()
-            .map(|&(n, s)| [n as f64, s])
-            .collect();
-        if let Some(&[_, s]) = best.last() {
-            best.push([search.record.evaluated() as f64, s]);
-        }
-        let min = if search.global {
-            sim.params().global_min_score
-        } else {
-            sim.params().min_score
-        };
+        let min = search.min_score;
         let end = search.record.evaluated().max(1) as f64;
-        out.push(Styled::new(
-            PlotSeries::new(SEARCH, "candidates scored", "score", "best score", best),
-            LOOP_CLOSURE,
-            Mark::Solid,
-            1.6,
-        ));
+        if search.score.is_some() {
+            let mut best: Vec<[f64; 2]> = search
+                .record
+                .best_history
+                .iter()
+                .map(|&(n, s)| [n as f64, s])
+                .collect();
+            if let Some(&[_, s]) = best.last() {
+                best.push([search.record.evaluated() as f64, s]);
+            }
+            out.push(Styled::new(
+                PlotSeries::new(SEARCH, "candidates scored", "score", "best score", best),
+                LOOP_CLOSURE,
+                Mark::Solid,
+                1.6,
+            ));
+        } else {
+            // No leaf above min_score: the best leaf scored anyway, or the
+            // bound that kept every branch from the leaves, against it.
+            let (name, value, mark) = match (search.record.best_leaf_score, search.best_bound) {
+                (Some(leaf), _) => (
+                    format!("best leaf {leaf:.3}: no match above min_score"),
+                    leaf,
+                    Mark::Solid,
+                ),
+                (None, Some(bound)) => (
+                    format!("highest bound {bound:.3}: no match above min_score"),
+                    bound,
+                    Mark::Dotted,
+                ),
+                (None, None) => ("no match above min_score".to_owned(), f64::NAN, Mark::Solid),
+            };
+            let points = if value.is_finite() {
+                vec![[0.0, value], [end, value]]
+            } else {
+                Vec::new()
+            };
+            out.push(Styled::new(
+                PlotSeries::new(SEARCH, "candidates scored", "score", name, points),
+                palette::VERMILLION,
+                mark,
+                1.6,
+            ));
+        }
         out.push(Styled::new(
             PlotSeries::new(
                 SEARCH,
                 "candidates scored",
                 "score",
-                "min score",
+                format!("min score {min:.3}"),
                 vec![[0.0, min], [end, min]],
             ),
             palette::DEAD_RECKONING,
@@ -182,7 +207,9 @@ pub fn plots_ui(ui: &mut egui::Ui, sim: &CartographerSim, scan_ms: &[f64]) {
                      score (mean probability under the scan's points, Eq. 5.10) each time it \
                      improved, against the candidates scored so far at every height. Branches \
                      whose bound (Eq. 5.14) is not above the best are pruned; the explanation \
-                     panel counts them per height beside what exhaustive search would score.",
+                     panel counts them per height beside what exhaustive search would score. \
+                     With no match the red line is the best leaf scored (or, when no branch \
+                     reached a leaf, the highest bound), under the dashed min score.",
                     "score",
                 ),
                 |h, y| {

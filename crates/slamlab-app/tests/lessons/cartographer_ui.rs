@@ -68,15 +68,19 @@ fn a_kidnap_at_152_is_detected_there_and_the_maps_merge() {
     assert_eq!(state["bbs"]["searches"], 96);
     assert_eq!(state["bbs"]["nodes_evaluated"], 703_585);
     assert_eq!(state["bbs"]["exhaustive_candidates"], 194_308_605_u64);
-    // Step back replays to the scan before, exactly.
+    // Step back goes back one phase (replayed exactly); Step scan finishes
+    // the scan again, to the same pose.
     let pose = state["pose"].clone();
+    let phases = lesson(&h).test_state()["phases_run"].as_u64().unwrap();
     h.get_by_label("Step back").click();
     h.run();
-    assert_eq!(lesson(&h).sim().scans_done(), 199);
+    assert_eq!(lesson(&h).test_state()["phases_run"], phases - 1);
     h.get_by_label("Step scan").click();
     h.run();
     assert_eq!(lesson(&h).sim().scans_done(), 200);
+    assert!(!lesson(&h).sim().is_mid_scan());
     assert_eq!(lesson(&h).test_state()["pose"], pose);
+    assert_eq!(lesson(&h).test_state()["bbs"], state["bbs"]);
     let Some(image) = render_or_skip(&mut h) else {
         return;
     };
@@ -132,7 +136,8 @@ fn the_kidnap_button_carries_the_robot_and_the_share_link_reproduces_it() {
 }
 
 /// At 800 x 500, 1280 x 800 and embedded at 900 x 600 (web/lecture.html): Step
-/// scan, Run and Kidnap in the top rows, no plot key on a plot's data or the map.
+/// scan, Run, Kidnap, Step search and Step optimization in the top rows, no
+/// plot key on a plot's data or the map.
 #[test]
 fn at_every_size_the_main_actions_are_in_reach_and_keys_are_off_the_data() {
     for (w, hgt, embed) in [
@@ -148,7 +153,13 @@ fn at_every_size_the_main_actions_are_in_reach_and_keys_are_off_the_data() {
         lesson_mut(&mut h).run_to(185);
         h.run();
         let screen = egui::Rect::from_min_size(egui::Pos2::ZERO, egui::vec2(w, hgt));
-        for label in ["Step scan", "Run", "Kidnap"] {
+        for label in [
+            "Step scan",
+            "Run",
+            "Kidnap",
+            "Step search",
+            "Step optimization",
+        ] {
             let node = h
                 .query_all_by_label(label)
                 .next()
@@ -182,4 +193,83 @@ fn at_every_size_the_main_actions_are_in_reach_and_keys_are_off_the_data() {
             let _ = image.save(std::env::temp_dir().join(name));
         }
     }
+}
+
+/// "Step search" runs exactly one more branch-and-bound search and
+/// "Step optimization" exactly one more optimization; the time bar says
+/// what is next ("scan 153: 2 of 3 searches pending"); Step back undoes one
+/// search.
+#[test]
+fn step_search_and_step_optimization_each_run_exactly_one() {
+    let mut h = harness_sized(
+        "lesson=cartographer&map=maze&kidnap-at=152&seed=3",
+        egui::vec2(800.0, 500.0),
+    );
+    lesson_mut(&mut h).run_to(100);
+    h.run();
+    let count = |h: &Harness<'_, SlamLabApp>| {
+        let s = lesson(h).test_state();
+        (
+            s["bbs"]["searches"].as_u64().unwrap(),
+            s["optimizations"].as_u64().unwrap(),
+        )
+    };
+    // Search by search until one is left pending in the middle of a scan.
+    let mut pending = None;
+    for _ in 0..40 {
+        let (searches, optimizations) = count(&h);
+        h.get_by_label("Step search").click();
+        h.run();
+        assert_eq!(count(&h).0, searches + 1, "one search per press");
+        assert!(count(&h).1 <= optimizations + 1);
+        let next = lesson(&h).next_phase_text();
+        if next.contains("searches pending") {
+            pending = Some(next);
+            break;
+        }
+    }
+    let next = pending.expect("a scan with more than one search");
+    eprintln!("next: {next}");
+    assert!(
+        h.query_all_by_label(&format!("Next: {next}"))
+            .next()
+            .is_some(),
+        "the time bar shows {next}"
+    );
+    assert!(lesson(&h).sim().is_mid_scan());
+    if let Some(image) = render_or_skip(&mut h) {
+        let _ = image.save(std::env::temp_dir().join("slamlab-cartographer-step-search.png"));
+    }
+    let o = lesson(&h).sim().outlook();
+    assert!(o.searches_pending >= 1 && o.searches_pending < o.searches_planned);
+    // The search's tree is drawn as the last search's.
+    let drawn = lesson(&h).test_state()["last_search"].clone();
+    // Step back undoes that one search; Step search runs it again, the same.
+    let (searches, _) = count(&h);
+    h.get_by_label("Step back").click();
+    h.run();
+    assert_eq!(count(&h).0, searches - 1);
+    h.get_by_label("Step search").click();
+    h.run();
+    assert_eq!(count(&h).0, searches);
+    assert_eq!(lesson(&h).test_state()["last_search"], drawn);
+    // One optimization, with its cost before and after in the note.
+    let (_, optimizations) = count(&h);
+    h.get_by_label("Step optimization").click();
+    h.run();
+    assert_eq!(count(&h).1, optimizations + 1);
+    let report = lesson(&h).sim().last_optimization.unwrap();
+    assert!(report.cost_after <= report.cost_before, "{report:?}");
+    let note = lesson(&h).note().unwrap_or_default().to_owned();
+    assert!(note.starts_with("Optimized after scan"), "{note}");
+    h.get_by_label("Step optimization").click();
+    h.run();
+    assert_eq!(count(&h).1, optimizations + 2);
+    // Stepping by phases left the run where whole scans leave it.
+    lesson_mut(&mut h).run_to(200);
+    let state = lesson(&h).test_state();
+    assert_eq!(state["bbs"]["searches"], 96);
+    assert_eq!(state["bbs"]["nodes_evaluated"], 703_585);
+    assert_eq!(state["optimizations"], 6);
+    assert_eq!(state["recovered_at"], MERGED_AT);
 }

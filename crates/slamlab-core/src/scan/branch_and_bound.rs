@@ -311,6 +311,9 @@ pub struct SearchRecord {
     pub pruned_per_height: Vec<usize>,
     /// The best score as it improved: `(candidates evaluated so far, score)`.
     pub best_history: Vec<(usize, f64)>,
+    /// The highest score of any leaf scored, above `min_score` or not
+    /// (None: the bounds pruned every branch before a leaf).
+    pub best_leaf_score: Option<f64>,
     /// Candidates an exhaustive search over the same discretization scores.
     pub exhaustive_candidates: usize,
     /// Headings searched.
@@ -554,6 +557,7 @@ impl Discretized {
             evaluated_per_height: vec![0; height_count],
             pruned_per_height: vec![0; height_count],
             best_history: Vec::new(),
+            best_leaf_score: None,
             exhaustive_candidates: self.exhaustive_count(),
             angles: self.scans.len(),
             angular_step: self.step,
@@ -602,6 +606,13 @@ impl Search<'_> {
             c.score = self.disc.score(self.grids, height, c.angle, c.di, c.dj);
         }
         self.record.evaluated_per_height[height as usize] += candidates.len();
+        if height == 0 {
+            let best = candidates.iter().map(|c| c.score).fold(f64::NAN, f64::max);
+            if best.is_finite() {
+                let seen = self.record.best_leaf_score.unwrap_or(best);
+                self.record.best_leaf_score = Some(seen.max(best));
+            }
+        }
         // Best first; ties in a fixed order so that a run is repeatable.
         candidates.sort_by(|a, b| {
             b.score
@@ -961,7 +972,20 @@ mod tests {
             // The best score only grew, and the record adds up.
             assert!(record.best_history.windows(2).all(|w| w[1].1 > w[0].1));
             assert_eq!(record.best_history.last().unwrap().1, bbs.score);
+            assert_eq!(record.best_leaf_score, Some(bbs.score));
             assert_eq!(record.nodes.len(), 100);
+            // Asked for more than the best scores, the search finds no
+            // match but says the best leaf it scored, which is no better
+            // than the match (and none of it is above the minimum).
+            let above = BranchAndBoundParams {
+                min_score: bbs.score,
+                recorded_nodes: 0,
+            };
+            let (none, below) = branch_and_bound(&grids, &points, &window, &above);
+            assert!(none.is_err(), "seed {seed}");
+            assert!(below.best_history.is_empty());
+            let leaf = below.best_leaf_score.unwrap_or(f64::NAN);
+            assert!(leaf <= bbs.score && leaf > 0.5, "seed {seed}: {leaf}");
             let ratio = count as f64 / record.evaluated() as f64;
             ratios.push(ratio);
             assert!(
@@ -1036,6 +1060,7 @@ mod tests {
             other => panic!("{other:?}"),
         }
         assert!(record.best_history.is_empty());
+        assert_eq!(record.best_leaf_score, None);
         let top = grids.max_height() as usize;
         assert_eq!(record.evaluated(), record.evaluated_per_height[top]);
         assert_eq!(

@@ -53,6 +53,7 @@ use slamlab_core::scan::scan_to_map::{
 };
 use slamlab_core::scan::{Point2, Scan};
 use slamlab_core::wrap_angle;
+use std::collections::VecDeque;
 use std::sync::Arc;
 
 /// The parameters, with Cartographer's names where it has them.
@@ -468,8 +469,32 @@ pub struct SearchEvent {
     pub global: bool,
     /// The score found (None: below the minimum).
     pub score: Option<f64>,
+    /// The minimum a match had to score (`min_score`, or
+    /// `global_min_score` for a search between maps).
+    pub min_score: f64,
+    /// With no match: the highest bound at the top of the tree (Eq. 5.14),
+    /// which no candidate in the window can score above.
+    pub best_bound: Option<f64>,
     /// What the search did.
     pub record: SearchRecord,
+}
+
+/// What one optimization of the pose graph did (Eq. 5.8 with the Huber
+/// kernel, Eq. 5.9).
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+pub struct OptimizationReport {
+    /// The scan after which it ran.
+    pub scan: usize,
+    /// Levenberg-Marquardt iterations.
+    pub iterations: usize,
+    /// The cost `Σ ρ(eᵀΩe)` before the first iteration (NaN: none ran).
+    pub cost_before: f64,
+    /// ... and after the last.
+    pub cost_after: f64,
+    /// How far it moved the nodes on average, metres.
+    pub mean_node_move: f64,
+    /// ... and the node it moved farthest.
+    pub max_node_move: f64,
 }
 
 /// Totals of the branch-and-bound searches.
@@ -531,6 +556,9 @@ pub struct CartographerSim {
     pub last_search: Option<Arc<SearchEvent>>,
     /// The totals of every search.
     pub bbs: BbsTotals,
+    /// The last optimization: its cost before and after, how far it moved
+    /// the nodes.
+    pub last_optimization: Option<OptimizationReport>,
     /// Optimizations run.
     pub optimizations: usize,
     /// Loop closures found but refused by the gate.
@@ -542,6 +570,101 @@ pub struct CartographerSim {
     detector: KidnapDetector,
     nodes_since_optimization: usize,
     next: usize,
+    /// The scan part way through its phases.
+    pending: Option<PendingScan>,
+}
+
+/// What one [`CartographerSim::step_phase`] ran.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum CartographerPhase {
+    /// Local SLAM of scan `scan`: matched into its submap, the kidnap
+    /// detector fed and, past the motion filter, inserted as a node.
+    LocalSlam {
+        /// The scan.
+        scan: usize,
+    },
+    /// One branch-and-bound search of scan `scan`'s node against `submap`.
+    Search {
+        /// The scan whose node was searched.
+        scan: usize,
+        /// The submap searched.
+        submap: usize,
+        /// Whole submap at every heading (against another map), not a
+        /// window around the estimate.
+        global: bool,
+    },
+    /// One optimization of the pose graph, after scan `scan`.
+    Optimization {
+        /// The scan it followed.
+        scan: usize,
+    },
+    /// Scan `scan` had nothing left to run.
+    Settled {
+        /// The scan.
+        scan: usize,
+    },
+    /// Every scan is in.
+    Done,
+}
+
+/// What [`CartographerSim::step_phase`] runs next.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum NextPhase {
+    /// Local SLAM of the next scan.
+    LocalSlam,
+    /// A branch-and-bound search of the current scan's node.
+    Search,
+    /// An optimization of the pose graph.
+    Optimization,
+    /// Nothing: every scan is in.
+    Done,
+}
+
+/// Where the current scan stands among its phases.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct PhaseOutlook {
+    /// The current scan (part way through), or the next one.
+    pub scan: usize,
+    /// What runs next.
+    pub next: NextPhase,
+    /// Searches of the current scan still to run.
+    pub searches_pending: usize,
+    /// Searches planned for it when its node was made (a merge drops the
+    /// rest).
+    pub searches_planned: usize,
+    /// Whether an optimization is due after its searches.
+    pub optimization_pending: bool,
+}
+
+/// Where a scan is among its phases.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+enum Stage {
+    /// Its node's branch-and-bound searches.
+    Searches,
+    /// The optimization after a merge of two maps.
+    MergeOptimization,
+    /// The node to count towards `optimize_every_n_nodes` (no phase).
+    CountNode,
+    /// The optimization every `optimize_every_n_nodes` nodes.
+    DueOptimization,
+    /// Nothing left.
+    Finished,
+}
+
+/// A scan part way through its phases.
+#[derive(Clone, Debug)]
+struct PendingScan {
+    scan: usize,
+    /// Its node, if it became one.
+    node: Option<usize>,
+    /// The root trajectory of the node's map when its searches were planned.
+    root: usize,
+    /// Submaps still to consider for a search, in order.
+    candidates: VecDeque<usize>,
+    searches_planned: usize,
+    /// A search merged the node's map into another.
+    merged: bool,
+    stage: Stage,
 }
 
 impl CartographerSim {
@@ -561,6 +684,7 @@ impl CartographerSim {
             merges: Vec::new(),
             last_search: None,
             bbs: BbsTotals::default(),
+            last_optimization: None,
             optimizations: 0,
             rejected_closures: 0,
             notes: Vec::new(),
@@ -568,6 +692,7 @@ impl CartographerSim {
             detector: KidnapDetector::new(params.kidnap),
             nodes_since_optimization: 0,
             next: 0,
+            pending: None,
             params,
         };
         (sim, notes)
@@ -583,14 +708,15 @@ impl CartographerSim {
         &self.input
     }
 
-    /// Scans processed.
+    /// Scans begun: local SLAM has run for each (the last may still have
+    /// searches or an optimization to run, see [`is_mid_scan`](Self::is_mid_scan)).
     pub fn scans_done(&self) -> usize {
         self.next
     }
 
-    /// Whether every scan is in.
+    /// Whether every scan is in, with every phase of the last one.
     pub fn is_done(&self) -> bool {
-        self.next >= self.input.scans.len()
+        self.next >= self.input.scans.len() && self.pending.is_none()
     }
 
     /// Runs every remaining scan.
@@ -640,10 +766,110 @@ impl CartographerSim {
             PrecomputedGrids::new(&submap.grid, self.params.max_height).map(Arc::new);
     }
 
-    /// Processes the next scan. Returns false when every scan is in.
+    /// Processes the next scan whole: local SLAM, then every
+    /// branch-and-bound search and optimization it leads to (or, in the
+    /// middle of a scan stepped by [`step_phase`](Self::step_phase), the
+    /// rest of that scan). Returns false when every scan is in.
     pub fn step(&mut self) -> bool {
-        let Some(input_scan) = self.input.scans.get(self.next) else {
+        if self.is_done() {
             return false;
+        }
+        loop {
+            self.step_phase();
+            if self.pending.is_none() {
+                return true;
+            }
+        }
+    }
+
+    /// Runs the next phase of the current scan, or local SLAM of the next
+    /// scan when the current one is finished, and says which phase ran. A
+    /// scan's phases run in the order [`step`](Self::step) runs them, so
+    /// stepping by phases gives exactly what stepping by scans gives.
+    pub fn step_phase(&mut self) -> CartographerPhase {
+        let Some(pending) = self.pending.as_ref() else {
+            return self.local_slam();
+        };
+        let scan = pending.scan;
+        let phase = match pending.stage {
+            Stage::Searches => self.run_next_search(),
+            Stage::MergeOptimization => {
+                self.optimize();
+                if let Some(p) = self.pending.as_mut() {
+                    p.stage = Stage::CountNode;
+                }
+                CartographerPhase::Optimization { scan }
+            }
+            Stage::DueOptimization => {
+                self.optimize();
+                if let Some(p) = self.pending.as_mut() {
+                    p.stage = Stage::Finished;
+                }
+                CartographerPhase::Optimization { scan }
+            }
+            // Not left pending by `settle`; finished here all the same.
+            Stage::CountNode | Stage::Finished => CartographerPhase::Settled { scan },
+        };
+        self.settle();
+        phase
+    }
+
+    /// Whether a scan is part way through its phases (its searches or
+    /// optimization still to run).
+    pub fn is_mid_scan(&self) -> bool {
+        self.pending.is_some()
+    }
+
+    /// What the next [`step_phase`](Self::step_phase) runs and what the
+    /// current scan has left.
+    pub fn outlook(&self) -> PhaseOutlook {
+        let Some(p) = self.pending.as_ref() else {
+            let next = if self.is_done() {
+                NextPhase::Done
+            } else {
+                NextPhase::LocalSlam
+            };
+            return PhaseOutlook {
+                scan: self.next,
+                next,
+                searches_pending: 0,
+                searches_planned: 0,
+                optimization_pending: false,
+            };
+        };
+        let searches_pending = if p.stage == Stage::Searches {
+            self.searches_left(p)
+        } else {
+            0
+        };
+        let next = match p.stage {
+            Stage::Searches => NextPhase::Search,
+            Stage::MergeOptimization | Stage::DueOptimization => NextPhase::Optimization,
+            Stage::CountNode | Stage::Finished => NextPhase::LocalSlam,
+        };
+        let due = p.node.is_some()
+            && self.nodes_since_optimization + 1 >= self.params.optimize_every_n_nodes;
+        let optimization_pending = match p.stage {
+            Stage::Searches => p.merged || due,
+            Stage::MergeOptimization | Stage::DueOptimization => true,
+            Stage::CountNode => due,
+            Stage::Finished => false,
+        };
+        PhaseOutlook {
+            scan: p.scan,
+            next,
+            searches_pending,
+            searches_planned: p.searches_planned,
+            optimization_pending,
+        }
+    }
+
+    /// Local SLAM of the next scan: the prediction, scan-to-submap matching,
+    /// the kidnap detector and, past the motion filter, the insertion into
+    /// the submaps; its searches and optimization are left pending.
+    fn local_slam(&mut self) -> CartographerPhase {
+        let Some(input_scan) = self.input.scans.get(self.next) else {
+            return CartographerPhase::Done;
         };
         let k = self.next;
         self.next += 1;
@@ -728,18 +954,87 @@ impl CartographerSim {
                     || time - t0 > self.params.motion_filter_time
             }
         };
+        let mut pending = PendingScan {
+            scan: k,
+            node: None,
+            root: 0,
+            candidates: VecDeque::new(),
+            searches_planned: 0,
+            merged: false,
+            stage: Stage::Finished,
+        };
         if moves && !points.is_empty() {
             record.node = true;
-            self.add_node(t, k, local, &scan, &points);
+            let node = self.add_node(t, k, local, &scan, &points);
+            pending.node = Some(node);
+            pending.stage = Stage::CountNode;
+            if self.trajectories[t]
+                .nodes
+                .is_multiple_of(self.params.constraint_every_n_nodes)
+            {
+                self.plan_searches(node, &mut pending);
+                pending.stage = Stage::Searches;
+            }
         }
         self.records.push(record);
-        true
+        self.pending = Some(pending);
+        self.settle();
+        CartographerPhase::LocalSlam { scan: k }
+    }
+
+    /// Moves the current scan past the stages that need no phase of their
+    /// own: searches none of which is left to run, the count of nodes
+    /// towards the next optimization, the end of the scan.
+    fn settle(&mut self) {
+        loop {
+            let Some(p) = self.pending.as_ref() else {
+                return;
+            };
+            match p.stage {
+                Stage::Searches => {
+                    if self.searches_left(p) > 0 {
+                        return;
+                    }
+                    let merged = p.merged;
+                    if let Some(p) = self.pending.as_mut() {
+                        p.candidates.clear();
+                        p.stage = if merged {
+                            Stage::MergeOptimization
+                        } else {
+                            Stage::CountNode
+                        };
+                    }
+                }
+                Stage::MergeOptimization | Stage::DueOptimization => return,
+                Stage::CountNode => {
+                    self.nodes_since_optimization += 1;
+                    let due = self.nodes_since_optimization >= self.params.optimize_every_n_nodes;
+                    if let Some(p) = self.pending.as_mut() {
+                        p.stage = if due {
+                            Stage::DueOptimization
+                        } else {
+                            Stage::Finished
+                        };
+                    }
+                }
+                Stage::Finished => {
+                    self.pending = None;
+                    return;
+                }
+            }
+        }
     }
 
     /// Inserts scan `k` at `local` into trajectory `t`'s active submaps and
-    /// makes it a node with its constraints; searches for loop closures and
-    /// optimizes when due.
-    fn add_node(&mut self, t: usize, k: usize, local: Pose2, scan: &Scan, points: &[Point2]) {
+    /// makes it a node with its constraints; returns the node.
+    fn add_node(
+        &mut self,
+        t: usize,
+        k: usize,
+        local: Pose2,
+        scan: &Scan,
+        points: &[Point2],
+    ) -> usize {
         let time = self.input.scans[k].time;
         let n = self.params.num_range_data;
         // A new submap when there is none or the newest has num_range_data.
@@ -806,23 +1101,14 @@ impl CartographerSim {
         let traj = &mut self.trajectories[t];
         traj.last_node = Some((local, time));
         traj.nodes += 1;
-        let every = self.params.constraint_every_n_nodes;
-        if traj.nodes.is_multiple_of(every) {
-            self.search_loop_closures(node);
-        }
-        self.nodes_since_optimization += 1;
-        if self.nodes_since_optimization >= self.params.optimize_every_n_nodes {
-            self.optimize();
-        }
+        node
     }
 
-    /// Searches node `node` against the finished submaps: in a window around
-    /// its estimate in its own map, and whole-submap against trajectories not
-    /// yet joined to its own.
-    fn search_loop_closures(&mut self, node: usize) {
-        let t = self.nodes[node].trajectory;
-        let root = self.root(t);
-        let candidates: Vec<usize> = (0..self.submaps.len())
+    /// The submaps node `node` is to be searched against: the finished ones
+    /// it has no constraint with yet, in order.
+    fn plan_searches(&self, node: usize, pending: &mut PendingScan) {
+        pending.root = self.root(self.nodes[node].trajectory);
+        pending.candidates = (0..self.submaps.len())
             .filter(|&s| self.submaps[s].finished && self.submaps[s].precomputed.is_some())
             .filter(|&s| {
                 !self
@@ -831,130 +1117,201 @@ impl CartographerSim {
                     .any(|c| c.submap == s && c.node == node)
             })
             .collect();
-        let mut merged = false;
-        for s in candidates {
-            let submap_root = self.root(self.submaps[s].trajectory);
-            let same_map = submap_root == root;
-            if !same_map && merged {
+        pending.searches_planned = pending
+            .candidates
+            .iter()
+            .filter(|&&s| self.search_window(pending, s).is_some())
+            .count();
+    }
+
+    /// The searches still to run for the current scan.
+    fn searches_left(&self, p: &PendingScan) -> usize {
+        p.candidates
+            .iter()
+            .filter(|&&s| self.search_window(p, s).is_some())
+            .count()
+    }
+
+    /// Whether the current scan's node is searched against submap `s`, and
+    /// how: in a window around its estimate in its own map (with
+    /// `min_score`), or the whole submap at every heading against a map not
+    /// yet joined to its own (with `global_min_score`), unless a match
+    /// merged its map already. `None`: not searched.
+    fn search_window(&self, p: &PendingScan, s: usize) -> Option<(SearchWindow, f64, bool)> {
+        let node = p.node?;
+        let submap = self.submaps.get(s)?;
+        let same_map = self.root(submap.trajectory) == p.root;
+        if !same_map && p.merged {
+            return None;
+        }
+        submap.precomputed.as_ref()?;
+        if !same_map {
+            return Some((
+                SearchWindow::WholeSubmap,
+                self.params.global_min_score,
+                false,
+            ));
+        }
+        // The node's estimate in the submap's grid frame.
+        let in_submap = submap.global_pose.between(&self.nodes[node].global_pose);
+        let initial = submap.local_pose.compose(&in_submap);
+        // Cartographer searches only submaps whose origin is near the node
+        // (`max_constraint_distance`).
+        if slamlab_core::math::hypot(in_submap.x, in_submap.y) > self.params.max_constraint_distance
+        {
+            return None;
+        }
+        Some((
+            SearchWindow::Around {
+                initial,
+                linear: self.params.linear_search_window,
+                angular: self.params.angular_search_window,
+            },
+            self.params.min_score,
+            true,
+        ))
+    }
+
+    /// Runs the current scan's next branch-and-bound search (the submaps it
+    /// is not searched against are passed over) and what comes of it: a
+    /// loop closure, or a merge of two maps.
+    fn run_next_search(&mut self) -> CartographerPhase {
+        let Some(mut p) = self.pending.take() else {
+            return CartographerPhase::Done;
+        };
+        let scan = p.scan;
+        let mut phase = CartographerPhase::Settled { scan };
+        while let Some(s) = p.candidates.pop_front() {
+            let Some((window, min_score, same_map)) = self.search_window(&p, s) else {
                 continue;
+            };
+            if let Some(node) = p.node {
+                self.search(node, s, p.root, window, min_score, same_map, &mut p.merged);
             }
-            let Some(grids) = self.submaps[s].precomputed.clone() else {
-                continue;
-            };
-            let submap_local = self.submaps[s].local_pose;
-            let submap_global = self.submaps[s].global_pose;
-            let node_global = self.nodes[node].global_pose;
-            let node_scan = self.nodes[node].scan;
-            let points = Arc::clone(&self.nodes[node].points);
-            let (window, min_score) = if same_map {
-                // The node's estimate in the submap's grid frame.
-                let in_submap = submap_global.between(&node_global);
-                let initial = submap_local.compose(&in_submap);
-                // Cartographer searches only submaps whose origin is near the
-                // node (`max_constraint_distance`).
-                if slamlab_core::math::hypot(in_submap.x, in_submap.y)
-                    > self.params.max_constraint_distance
-                {
-                    continue;
-                }
-                (
-                    SearchWindow::Around {
-                        initial,
-                        linear: self.params.linear_search_window,
-                        angular: self.params.angular_search_window,
-                    },
-                    self.params.min_score,
-                )
-            } else {
-                (SearchWindow::WholeSubmap, self.params.global_min_score)
-            };
-            let params = BranchAndBoundParams {
-                min_score,
-                recorded_nodes: RECORDED_TREE_NODES,
-            };
-            let (result, record) = branch_and_bound(&grids, &points, &window, &params);
-            self.bbs.searches += 1;
-            self.bbs.nodes_evaluated += record.evaluated();
-            self.bbs.exhaustive_candidates += record.exhaustive_candidates;
-            let score = result.as_ref().ok().map(|m| m.score);
-            self.last_search = Some(Arc::new(SearchEvent {
-                scan: node_scan,
-                node,
+            phase = CartographerPhase::Search {
+                scan,
                 submap: s,
                 global: !same_map,
-                score,
-                record,
-            }));
-            let m = match result {
-                Ok(m) => m,
-                Err(NoMatch::BelowMinScore { .. } | NoMatch::NoPoints | NoMatch::BadWindow) => {
-                    continue;
-                }
             };
-            // Cartographer refines the fast correlative match with its Ceres
-            // scan matcher (Eq. 5.5) before the constraint is made.
-            let pose = if self.params.refine_matches {
-                self.refine(s, &points, m.pose)
-            } else {
-                m.pose
-            };
-            // The constraint: the node in the submap's frame (Eq. 5.7).
-            let relative = submap_local.between(&pose);
-            let relative = Pose2::new(relative.x, relative.y, relative.theta);
-            if same_map && self.params.loop_closure_gate > 0.0 {
-                let moved = submap_global.compose(&relative);
-                let shift =
-                    slamlab_core::math::hypot(moved.x - node_global.x, moved.y - node_global.y);
-                if shift > self.params.loop_closure_gate {
-                    self.rejected_closures += 1;
-                    continue;
-                }
+            break;
+        }
+        self.pending = Some(p);
+        phase
+    }
+
+    /// One branch-and-bound search of node `node` against submap `s` in
+    /// `window`; a match above `min_score` becomes a loop closure within
+    /// the node's map (`same_map`), or merges the node's map (rooted at
+    /// `root`) into the submap's when the check agrees (`merged` is set).
+    #[allow(clippy::too_many_arguments)]
+    fn search(
+        &mut self,
+        node: usize,
+        s: usize,
+        root: usize,
+        window: SearchWindow,
+        min_score: f64,
+        same_map: bool,
+        merged: &mut bool,
+    ) {
+        let Some(grids) = self.submaps[s].precomputed.clone() else {
+            return;
+        };
+        let submap_root = self.root(self.submaps[s].trajectory);
+        let submap_local = self.submaps[s].local_pose;
+        let submap_global = self.submaps[s].global_pose;
+        let node_global = self.nodes[node].global_pose;
+        let node_scan = self.nodes[node].scan;
+        let points = Arc::clone(&self.nodes[node].points);
+        let params = BranchAndBoundParams {
+            min_score,
+            recorded_nodes: RECORDED_TREE_NODES,
+        };
+        let (result, record) = branch_and_bound(&grids, &points, &window, &params);
+        self.bbs.searches += 1;
+        self.bbs.nodes_evaluated += record.evaluated();
+        self.bbs.exhaustive_candidates += record.exhaustive_candidates;
+        let score = result.as_ref().ok().map(|m| m.score);
+        let best_bound = match &result {
+            Err(NoMatch::BelowMinScore { best_bound, .. }) if best_bound.is_finite() => {
+                Some(*best_bound)
             }
-            let kind = if same_map {
-                ConstraintKind::LoopClosure
-            } else {
-                ConstraintKind::InterTrajectory
-            };
-            let constraint = Constraint {
-                submap: s,
-                node,
-                relative,
-                kind,
-                score: m.score,
-            };
-            if same_map {
-                self.constraints.push(constraint);
-                continue;
+            _ => None,
+        };
+        self.last_search = Some(Arc::new(SearchEvent {
+            scan: node_scan,
+            node,
+            submap: s,
+            global: !same_map,
+            score,
+            min_score,
+            best_bound,
+            record,
+        }));
+        let m = match result {
+            Ok(m) => m,
+            Err(NoMatch::BelowMinScore { .. } | NoMatch::NoPoints | NoMatch::BadWindow) => {
+                return;
             }
-            // A match between maps: the correction that would move the
-            // node's map onto the submap's. It is taken only when the new
-            // map's scans, moved by it, agree with the old map (their
-            // points on its occupied cells, not in its free space), so that
-            // one aliased match in a repeating corridor cannot merge the
-            // maps wrongly.
-            let target = submap_global.compose(&relative);
-            let correction = target.compose(&node_global.inverse());
-            let correction = Pose2::new(correction.x, correction.y, correction.theta);
-            let mut check = self.check_merge(root, submap_root, &correction);
-            check.scan = node_scan;
-            check.submap = s;
-            check.score = m.score;
-            check.node_pose = Pose2::new(target.x, target.y, target.theta);
-            check.accepted = check.occupied_share >= self.params.merge_min_occupied_share
-                && check.known_points >= self.params.merge_min_known_points;
-            self.merge_checks.push(check);
-            if !check.accepted {
+        };
+        // Cartographer refines the fast correlative match with its Ceres
+        // scan matcher (Eq. 5.5) before the constraint is made.
+        let pose = if self.params.refine_matches {
+            self.refine(s, &points, m.pose)
+        } else {
+            m.pose
+        };
+        // The constraint: the node in the submap's frame (Eq. 5.7).
+        let relative = submap_local.between(&pose);
+        let relative = Pose2::new(relative.x, relative.y, relative.theta);
+        if same_map && self.params.loop_closure_gate > 0.0 {
+            let moved = submap_global.compose(&relative);
+            let shift = slamlab_core::math::hypot(moved.x - node_global.x, moved.y - node_global.y);
+            if shift > self.params.loop_closure_gate {
                 self.rejected_closures += 1;
-                continue;
+                return;
             }
+        }
+        let kind = if same_map {
+            ConstraintKind::LoopClosure
+        } else {
+            ConstraintKind::InterTrajectory
+        };
+        let constraint = Constraint {
+            submap: s,
+            node,
+            relative,
+            kind,
+            score: m.score,
+        };
+        if same_map {
             self.constraints.push(constraint);
-            self.move_map(root, &correction, submap_root);
-            self.merges.push(node_scan);
-            merged = true;
+            return;
         }
-        if merged {
-            self.optimize();
+        // A match between maps: the correction that would move the node's
+        // map onto the submap's. It is taken only when the new map's scans,
+        // moved by it, agree with the old map (their points on its occupied
+        // cells, not in its free space), so that one aliased match in a
+        // repeating corridor cannot merge the maps wrongly.
+        let target = submap_global.compose(&relative);
+        let correction = target.compose(&node_global.inverse());
+        let correction = Pose2::new(correction.x, correction.y, correction.theta);
+        let mut check = self.check_merge(root, submap_root, &correction);
+        check.scan = node_scan;
+        check.submap = s;
+        check.score = m.score;
+        check.node_pose = Pose2::new(target.x, target.y, target.theta);
+        check.accepted = check.occupied_share >= self.params.merge_min_occupied_share
+            && check.known_points >= self.params.merge_min_known_points;
+        self.merge_checks.push(check);
+        if !check.accepted {
+            self.rejected_closures += 1;
+            return;
         }
+        self.constraints.push(constraint);
+        self.move_map(root, &correction, submap_root);
+        self.merges.push(node_scan);
+        *merged = true;
     }
 
     /// Refines a branch-and-bound match of `points` in submap `s` (grid
@@ -1150,8 +1507,24 @@ impl CartographerSim {
                 return;
             }
         };
-        if let Err(e) = optimizer.optimize(50, |_| true) {
-            self.notes.push(format!("the optimization stopped: {e}"));
+        let before: Vec<Pose2> = self.nodes.iter().map(|n| n.global_pose).collect();
+        let mut report = OptimizationReport {
+            scan: self.next.saturating_sub(1),
+            iterations: 0,
+            cost_before: f64::NAN,
+            cost_after: f64::NAN,
+            mean_node_move: 0.0,
+            max_node_move: 0.0,
+        };
+        match optimizer.optimize(50, |_| true) {
+            Ok(reports) => {
+                report.iterations = reports.len();
+                if let (Some(first), Some(last)) = (reports.first(), reports.last()) {
+                    report.cost_before = first.cost_before;
+                    report.cost_after = last.cost;
+                }
+            }
+            Err(e) => self.notes.push(format!("the optimization stopped: {e}")),
         }
         self.optimizations += 1;
         let graph = optimizer.into_graph();
@@ -1172,6 +1545,17 @@ impl CartographerSim {
                 self.trajectories[t].global_from_local = Pose2::new(g.x, g.y, g.theta);
             }
         }
+        let moves: Vec<f64> = self
+            .nodes
+            .iter()
+            .zip(&before)
+            .map(|(n, b)| slamlab_core::math::hypot(n.global_pose.x - b.x, n.global_pose.y - b.y))
+            .collect();
+        if !moves.is_empty() {
+            report.mean_node_move = moves.iter().sum::<f64>() / moves.len() as f64;
+            report.max_node_move = moves.iter().copied().fold(0.0, f64::max);
+        }
+        self.last_optimization = Some(report);
     }
 
     /// The map of every node in the first trajectory's frame (the first

@@ -272,3 +272,126 @@ fn a_log_with_a_gap_bad_odometry_and_a_huge_window_runs_to_its_end() {
     );
     assert_eq!(s.scans, 180);
 }
+
+/// Everything a run produced, exactly (`{:?}` of an `f64` round-trips, so
+/// equal strings mean equal bits, NaN aside).
+fn fingerprint(sim: &CartographerSim) -> String {
+    let submaps: Vec<_> = sim
+        .submaps
+        .iter()
+        .map(|s| {
+            (
+                s.trajectory,
+                s.local_pose,
+                s.global_pose,
+                s.num_range_data,
+                s.finished,
+            )
+        })
+        .collect();
+    let nodes: Vec<_> = sim
+        .nodes
+        .iter()
+        .map(|n| (n.trajectory, n.scan, n.local_pose, n.global_pose))
+        .collect();
+    let trajectories: Vec<_> = sim
+        .trajectories
+        .iter()
+        .map(|t| (t.first_scan, t.joined_to, t.global_from_local))
+        .collect();
+    format!(
+        "{:?}\n{submaps:?}\n{nodes:?}\n{:?}\n{trajectories:?}\n{:?}\n{:?}\n{:?}\n{} {} {:?}\n{:?}",
+        sim.records,
+        sim.constraints,
+        sim.detections,
+        sim.merges,
+        sim.bbs,
+        sim.optimizations,
+        sim.rejected_closures,
+        sim.merge_checks,
+        sim.last_search,
+    )
+}
+
+/// The office, seed 1, kidnapped at scan 152 (detected there, merged at
+/// scan 157 by a global search): run phase by phase, every scan, node,
+/// submap, constraint, count and the last search are exactly what whole
+/// scans give; each phase is what it says (one search, one optimization).
+#[test]
+fn stepping_by_phases_gives_exactly_what_stepping_by_scans_gives() {
+    let grid = Arc::new(builtin_map("office").unwrap());
+    let input = Arc::new(
+        kidnap_input(
+            grid,
+            "office",
+            240,
+            1,
+            Some(152),
+            &SimulatedLogConfig::default(),
+        )
+        .unwrap(),
+    );
+    let (mut whole, _) = CartographerSim::new(input.clone(), CartographerParams::default());
+    whole.run_to_end();
+    let (mut phased, _) = CartographerSim::new(input, CartographerParams::default());
+    let (mut scans, mut searches, mut global, mut optimizations) = (0, 0, 0, 0);
+    let mut most_searches = 0;
+    // Scans whose outlook promised an optimization, and scans that ran one.
+    let (mut promised, mut optimized) = (Vec::new(), Vec::new());
+    while !phased.is_done() {
+        let outlook = phased.outlook();
+        if outlook.optimization_pending && promised.last() != Some(&outlook.scan) {
+            promised.push(outlook.scan);
+        }
+        let before = (phased.bbs.searches, phased.optimizations);
+        let phase = phased.step_phase();
+        match (outlook.next, phase) {
+            (NextPhase::LocalSlam, CartographerPhase::LocalSlam { scan }) => {
+                assert_eq!(scan, scans);
+                scans += 1;
+                assert_eq!(before, (phased.bbs.searches, phased.optimizations));
+                most_searches = most_searches.max(phased.outlook().searches_planned);
+            }
+            (NextPhase::Search, CartographerPhase::Search { global: g, .. }) => {
+                assert!(outlook.searches_pending > 0);
+                searches += 1;
+                global += usize::from(g);
+                assert_eq!(phased.bbs.searches, before.0 + 1);
+                assert_eq!(phased.optimizations, before.1);
+            }
+            (NextPhase::Optimization, CartographerPhase::Optimization { scan }) => {
+                optimizations += 1;
+                if optimized.last() != Some(&scan) {
+                    optimized.push(scan);
+                }
+                assert_eq!(phased.optimizations, before.1 + 1);
+                assert_eq!(phased.bbs.searches, before.0);
+            }
+            other => panic!("announced and ran: {other:?}"),
+        }
+    }
+    assert_eq!(phased.step_phase(), CartographerPhase::Done);
+    // "then optimization" held every time it was said (and a merge's
+    // optimization, which no outlook can promise before the match, is the
+    // only one not announced with the scan's searches).
+    assert!(
+        promised.iter().all(|k| optimized.contains(k)),
+        "{promised:?} {optimized:?}"
+    );
+    assert!(
+        optimized
+            .iter()
+            .all(|k| promised.contains(k) || whole.merges.contains(k))
+    );
+    assert_eq!(fingerprint(&phased), fingerprint(&whole));
+    assert_eq!(scans, 240);
+    assert_eq!(searches, whole.bbs.searches);
+    assert_eq!(optimizations, whole.optimizations);
+    // What the run holds: the detection, the merge by a global search, loop
+    // closures and several optimizations (63 searches, 5 of them global,
+    // 5 optimizations, at most 4 searches planned for one scan).
+    assert_eq!(whole.detections, vec![152]);
+    assert_eq!(whole.merges, vec![157]);
+    assert_eq!((searches, global, optimizations), (63, 5, 5));
+    assert_eq!(most_searches, 4);
+}
