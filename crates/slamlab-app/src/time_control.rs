@@ -142,6 +142,9 @@ pub enum StepControls {
         hover: &'static str,
         /// What a step is called in the counter and the speed ("iteration").
         unit: &'static str,
+        /// What Step back undoes: `unit`, or a finer step where the lesson has
+        /// buttons for parts of a step ("phase").
+        back_unit: &'static str,
     },
 }
 
@@ -164,10 +167,15 @@ pub fn shortcuts(steps: StepControls) -> Vec<(&'static str, String)> {
             .iter()
             .map(|(key, what)| (*key, (*what).to_owned()))
             .collect(),
-        StepControls::One { label, unit, .. } => vec![
+        StepControls::One {
+            label,
+            unit,
+            back_unit,
+            ..
+        } => vec![
             ("Space", "run / pause".to_owned()),
             (".", format!("step one {unit} (the time bar's {label})")),
-            (",", format!("step back one {unit} or edit")),
+            (",", format!("step back one {back_unit} or edit")),
             ("n", format!("step one {unit}, as .")),
             ("r", "reset the run".to_owned()),
         ],
@@ -225,7 +233,7 @@ pub fn time_bar_ui(
     };
     let back_hover = match steps {
         StepControls::PhasesAndTicks => "Go back one phase (,)".to_owned(),
-        StepControls::One { unit, .. } => format!("Go back one {unit} or edit (,)"),
+        StepControls::One { back_unit, .. } => format!("Go back one {back_unit} or edit (,)"),
     };
     let mut actions = Vec::new();
     ui.horizontal_wrapped(|ui| {
@@ -362,6 +370,7 @@ mod tests {
             label: "Step iteration",
             hover: "Run one iteration",
             unit: "iteration",
+            back_unit: "iteration",
         });
         let dot = one.iter().find(|(k, _)| *k == ".").map(|(_, w)| w.as_str());
         assert_eq!(

@@ -827,6 +827,7 @@ impl Lesson for CartographerLesson {
                     \"Step search\" and \"Step optimization\" above the map run one search or one \
                     optimization; Step back goes back one of these phases",
             unit: "scan",
+            back_unit: "phase",
         }
     }
 

@@ -703,6 +703,7 @@ impl Lesson for PoseGraphLesson {
             label: "Step iteration",
             hover: "Run one iteration of the solver",
             unit: "iteration",
+            back_unit: "iteration",
         }
     }
 

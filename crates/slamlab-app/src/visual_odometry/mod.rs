@@ -461,6 +461,7 @@ impl Lesson for VisualOdometryLesson {
             label: "Step sample",
             hover: "Draw one RANSAC sample, fit its hypotheses and count their inliers",
             unit: "sample",
+            back_unit: "sample",
         }
     }
 
