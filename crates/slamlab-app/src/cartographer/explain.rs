@@ -117,7 +117,8 @@ pub fn explanation_ui(ui: &mut egui::Ui, sim: &CartographerSim, scenario: &Carto
         }
         Some(o) => {
             ui.label(format!(
-                "After scan {}: cost Σ ρ(e^T Ω e) {} → {} in {} Levenberg-Marquardt iterations                  (Eq. 5.8, Huber Eq. 5.9); the nodes moved {:.3} m on average, {:.3} m at most.",
+                "After scan {}: cost Σ ρ(e^T Ω e) {} → {} in {} Levenberg-Marquardt iterations \
+                 (Eq. 5.8, Huber Eq. 5.9); the nodes moved {:.3} m on average, {:.3} m at most.",
                 o.scan,
                 cost_text(o.cost_before),
                 cost_text(o.cost_after),
@@ -297,7 +298,8 @@ pub fn no_match_text(search: &slamlab_sim::cartographer::SearchEvent) -> String 
             format!("no match above min_score: the best leaf scored {leaf:.3}, not above {min:.3}")
         }
         (None, Some(bound)) => format!(
-            "no match above min_score: no branch could score above {bound:.3} (Eq. 5.14),              not above {min:.3}"
+            "no match above min_score: no branch could score above {bound:.3} (Eq. 5.14), \
+             not above {min:.3}"
         ),
         (None, None) => format!("no match above min_score {min:.3}"),
     }

@@ -619,7 +619,8 @@ impl CartographerLesson {
             if ui
                 .add_enabled(more, egui::Button::new("Step search"))
                 .on_hover_text(
-                    "Run up to and including the next branch-and-bound search (through as                      many scans as it takes); its tree is drawn in the explanation panel",
+                    "Run up to and including the next branch-and-bound search (through as \
+                     many scans as it takes); its tree is drawn in the explanation panel",
                 )
                 .clicked()
             {
@@ -628,7 +629,8 @@ impl CartographerLesson {
             if ui
                 .add_enabled(more, egui::Button::new("Step optimization"))
                 .on_hover_text(
-                    "Run up to and including the next optimization of the pose graph; the note                      says its cost before and after and how far it moved the nodes",
+                    "Run up to and including the next optimization of the pose graph; the note \
+                     says its cost before and after and how far it moved the nodes",
                 )
                 .clicked()
             {
@@ -646,10 +648,17 @@ impl CartographerLesson {
             {
                 self.kidnap(None);
             }
-            ui.add_enabled_ui(simulated, |ui| {
-                ui.toggle_value(&mut self.click_kidnap, "Kidnap by click")
-                    .on_hover_text("Then click on the map: the robot is carried there (heading 0)");
-            });
+            // A button of its own (not a child ui), so that it wraps as one piece.
+            if ui
+                .add_enabled(
+                    simulated,
+                    egui::Button::selectable(self.click_kidnap, "Kidnap by click"),
+                )
+                .on_hover_text("Then click on the map: the robot is carried there (heading 0)")
+                .clicked()
+            {
+                self.click_kidnap = !self.click_kidnap;
+            }
             let mut detection = self.scenario.detection;
             ui.checkbox(&mut detection, "Detection").on_hover_text(
                 "Kidnap detection (Xiang's thesis, Algorithm 13): off, the same scans map on into one \

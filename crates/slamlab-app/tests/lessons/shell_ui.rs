@@ -869,6 +869,8 @@ fn without_clock(state: &str) -> serde_json::Value {
                 // The Cartographer lesson's wall-clock time per scan.
                 map.remove("scan_ms_median");
                 map.remove("scan_ms_max");
+                map.remove("phase_ms_max");
+                map.remove("frame_ms_max");
                 map.values_mut().for_each(strip);
             }
             serde_json::Value::Array(items) => items.iter_mut().for_each(strip),
