@@ -229,6 +229,29 @@ fn estimate_ui(ui: &mut egui::Ui, run: &VoRun, pair: usize, session: &TwoViewSes
             ""
         }
     ));
+    if let Some(r) = &estimate.refinement {
+        let text = format!(
+            "Refined by Levenberg-Marquardt on (R, t) (3 + 2 parameters), minimizing the \
+             Sampson distances: RMS {:.3} px over {} inliers before, {:.3} px over {} after \
+             ({} steps in {} rounds){}.",
+            r.rms_before_px,
+            r.inliers_before,
+            r.rms_after_px,
+            r.inliers_after,
+            r.steps,
+            r.rounds,
+            if r.applied {
+                ""
+            } else {
+                "; not kept, its truncated cost was not lower"
+            }
+        );
+        ui.label(text).on_hover_text(
+            "The linear refit minimizes an algebraic error and is then projected onto the \
+             essential matrices; the refinement minimizes the distances in pixels, first on \
+             the matches within 3τ, then 2.5τ, 2τ, 1.5τ and τ (refine=off skips it).",
+        );
+    }
     egui::Grid::new("vo_essential")
         .num_columns(3)
         .show(ui, |ui| {

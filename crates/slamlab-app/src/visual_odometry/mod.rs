@@ -35,6 +35,7 @@ pub const LESSON_ID: &str = "visual-odometry";
 const PANEL_PARAMS: &[&str] = &[
     "method",
     "normalize",
+    "refine",
     "early-rejection",
     "outliers",
     "noise-px",
