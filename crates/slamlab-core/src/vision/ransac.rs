@@ -463,6 +463,11 @@ pub struct Sprt {
     models_per_sample: f64,
     /// `(Aᵢ, kᵢ)` of the tests before the current one.
     history: Vec<(f64, usize)>,
+    /// The last [`Sprt::bound`] and what it was computed from (`w`'s bits,
+    /// `s`, `p`'s bits, the cap, the tests closed): the bound changes only
+    /// when one of them does, and its sum over the closed tests costs a
+    /// logarithm per test, so it is not recomputed after every sample.
+    bound_cache: Option<(BoundKey, usize)>,
     /// Samples drawn before the current test was designed.
     design_start: usize,
     /// The sum and number of the consistent shares of rejected hypotheses: δ̂.
@@ -488,6 +493,7 @@ impl Sprt {
             model_time: settings.model_time_for(method),
             models_per_sample: settings.models_per_sample_for(method),
             history: Vec::new(),
+            bound_cache: None,
             design_start: 0,
             delta_sum: 0.0,
             delta_count: 0,
@@ -580,7 +586,26 @@ impl Sprt {
 
     /// The number of samples after which `η ≤ 1 − p` for a consensus share
     /// `w` (so `P_g = wˢ`), capped at `max`.
-    fn bound(&self, w: f64, sample_size: usize, confidence: f64, max: usize) -> usize {
+    fn bound(&mut self, w: f64, sample_size: usize, confidence: f64, max: usize) -> usize {
+        let key = (
+            w.to_bits(),
+            sample_size,
+            confidence.to_bits(),
+            max,
+            self.history.len(),
+        );
+        if let Some((cached, bound)) = self.bound_cache
+            && cached == key
+        {
+            return bound;
+        }
+        let bound = self.bound_uncached(w, sample_size, confidence, max);
+        self.bound_cache = Some((key, bound));
+        bound
+    }
+
+    /// [`Sprt::bound`] computed.
+    fn bound_uncached(&self, w: f64, sample_size: usize, confidence: f64, max: usize) -> usize {
         let p_good = crate::math::powf(w.clamp(0.0, 1.0), sample_size as f64);
         let p = confidence.clamp(0.0, 1.0 - 1e-12);
         let per_sample = |a: f64| crate::math::ln_1p(-p_good * (1.0 - 1.0 / a));
@@ -605,6 +630,10 @@ impl Sprt {
         }
     }
 }
+
+/// What [`Sprt::bound`] depends on: `w`'s bits, `s`, `p`'s bits, the cap and
+/// the number of closed tests (a new test changes A and the design's start).
+type BoundKey = (u64, usize, u64, usize, usize);
 
 fn finite_or(value: f64, default: f64) -> f64 {
     if value.is_finite() { value } else { default }
