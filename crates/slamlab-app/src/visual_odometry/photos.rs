@@ -298,12 +298,10 @@ impl PhotoPair {
     pub fn phase(&self) -> Option<String> {
         match self.result.as_ref()? {
             Ok(r) => Some(format!(
-                "the photos' RANSAC ran to its bound: {} samples (N = {}); hide the photos to step the simulated pair",
+                "the photos' RANSAC is done: {} samples (N = {})",
                 r.estimate.iterations, r.estimate.bound
             )),
-            Err(_) => {
-                Some("no estimate for the photos; hide them to step the simulated pair".to_owned())
-            }
+            Err(_) => Some("no estimate for the photos".to_owned()),
         }
     }
 
