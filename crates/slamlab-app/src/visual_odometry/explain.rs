@@ -11,10 +11,10 @@ use slamlab_sim::vision::{TwoViewSession, VoRun};
 
 /// The names of the four candidates, in [`slamlab_core::vision::Decomposition`]'s order.
 pub const CANDIDATES: [&str; 4] = [
-    "R1 = U W V^T, t = +u3",
-    "R1 = U W V^T, t = −u3",
-    "R2 = U W^T V^T, t = +u3",
-    "R2 = U W^T V^T, t = −u3",
+    "R1 = U W V^T, +u3",
+    "R1 = U W V^T, −u3",
+    "R2 = U W^T V^T, +u3",
+    "R2 = U W^T V^T, −u3",
 ];
 
 /// The panel.
@@ -69,12 +69,15 @@ pub fn explanation_ui(
                         format!("{} of at most {}", report.iteration, report.bound),
                     );
                     ui.end_row();
-                    ui.label("wrong matches in it")
-                        .on_hover_text("The simulator's truth: RANSAC cannot see it");
+                    ui.label("truly wrong").on_hover_text(
+                        "Wrong matches in the sample: the simulator's truth, RANSAC cannot see it",
+                    );
+                    // Short values: a grid cell does not wrap, and a wide one
+                    // would push the panel's text past its right edge.
                     ui.label(if wrong_in_sample == 0 {
-                        "none: an all-inlier sample".to_owned()
+                        "none".to_owned()
                     } else {
-                        format!("{wrong_in_sample}: its hypotheses fit few matches")
+                        wrong_in_sample.to_string()
                     });
                     ui.end_row();
                     ui.label("hypotheses").on_hover_text(
@@ -149,14 +152,19 @@ pub fn explanation_ui(
                         "N = log(1 − p) / log(1 − w^s) with p = 0.99 and w the best inlier \
                          share: after N samples one was all inliers with probability p"
                     });
-                    ui.label(format!(
-                        "{} (w = {:.2}, s = {s}, p = {})",
-                        report.bound,
-                        report.best_inliers as f64 / n.max(1) as f64,
-                        session.config().confidence
-                    ));
+                    ui.label(report.bound.to_string());
                     ui.end_row();
                 });
+            ui.label(format!(
+                "{} N from w = {:.2} (the best share), s = {s}, p = {}.",
+                if wrong_in_sample == 0 {
+                    "An all-inlier sample: its best hypothesis fits the true motion."
+                } else {
+                    "A wrong match in the sample: its hypotheses fit few matches."
+                },
+                report.best_inliers as f64 / n.max(1) as f64,
+                session.config().confidence
+            ));
             ui.colored_label(SAMPLE, format!("matches drawn: {:?}", report.sample));
             ui.label(
                 "A new best is refitted at once on all its inliers (local optimization), so \
@@ -229,6 +237,29 @@ fn estimate_ui(ui: &mut egui::Ui, run: &VoRun, pair: usize, session: &TwoViewSes
             ""
         }
     ));
+    if let Some(r) = &estimate.refinement {
+        let text = format!(
+            "Refined by Levenberg-Marquardt on (R, t) (3 + 2 parameters), minimizing the \
+             Sampson distances: RMS {:.3} px over {} inliers before, {:.3} px over {} after \
+             ({} steps in {} rounds){}.",
+            r.rms_before_px,
+            r.inliers_before,
+            r.rms_after_px,
+            r.inliers_after,
+            r.steps,
+            r.rounds,
+            if r.applied {
+                ""
+            } else {
+                "; not kept, its truncated cost was not lower"
+            }
+        );
+        ui.label(text).on_hover_text(
+            "The linear refit minimizes an algebraic error and is then projected onto the \
+             essential matrices; the refinement minimizes the distances in pixels, first on \
+             the matches within 3τ, then 2.5τ, 2τ, 1.5τ and τ (refine=off skips it).",
+        );
+    }
     egui::Grid::new("vo_essential")
         .num_columns(3)
         .show(ui, |ui| {
@@ -257,8 +288,8 @@ fn estimate_ui(ui: &mut egui::Ui, run: &VoRun, pair: usize, session: &TwoViewSes
         .num_columns(3)
         .striped(true)
         .show(ui, |ui| {
-            ui.label("candidate");
-            ui.label("in front of both")
+            ui.label("candidate (R, t)");
+            ui.label("in front")
                 .on_hover_text("inliers that triangulate with positive depth in both cameras");
             ui.label("");
             ui.end_row();

@@ -35,6 +35,7 @@ pub const LESSON_ID: &str = "visual-odometry";
 const PANEL_PARAMS: &[&str] = &[
     "method",
     "normalize",
+    "refine",
     "early-rejection",
     "outliers",
     "noise-px",
@@ -403,6 +404,9 @@ impl Lesson for VisualOdometryLesson {
     }
 
     fn subtitle(&self) -> String {
+        if let Some(photos) = self.photos.subtitle() {
+            return photos;
+        }
         let s = &self.run.settings;
         format!(
             "{}, {:.0}% wrong matches, {} px noise, step {}",
@@ -430,6 +434,15 @@ impl Lesson for VisualOdometryLesson {
     }
 
     fn time_info(&self) -> TimeInfo {
+        if self.photos.showing()
+            && let Some(phase) = self.photos.phase()
+        {
+            return TimeInfo {
+                time_s: f64::NAN,
+                next_phase: phase,
+                ..TimeInfo::default()
+            };
+        }
         let Some(session) = &self.session else {
             return TimeInfo {
                 time_s: f64::NAN,

@@ -274,6 +274,37 @@ impl PhotoPair {
         }
     }
 
+    /// The header's line while the photos are shown: their file names, the
+    /// matches and RANSAC's inliers (or why there is no estimate).
+    pub fn subtitle(&self) -> Option<String> {
+        if !self.showing() {
+            return None;
+        }
+        let (left, right) = (self.left.as_ref()?, self.right.as_ref()?);
+        let names = format!("photos {} and {}", left.name, right.name);
+        Some(match &self.result {
+            Some(Ok(r)) => format!(
+                "{names}: {} matches, {} inliers (five-point RANSAC)",
+                r.matched.matches.len(),
+                r.estimate.inlier_count
+            ),
+            Some(Err(why)) => format!("{names}: {why}"),
+            None => names,
+        })
+    }
+
+    /// The time bar's line while the photos are shown: RANSAC ran to its
+    /// bound when they were loaded.
+    pub fn phase(&self) -> Option<String> {
+        match self.result.as_ref()? {
+            Ok(r) => Some(format!(
+                "the photos' RANSAC is done: {} samples (N = {})",
+                r.estimate.iterations, r.estimate.bound
+            )),
+            Err(_) => Some("no estimate for the photos".to_owned()),
+        }
+    }
+
     /// For the UI tests.
     pub fn test_state(&self) -> serde_json::Value {
         let result = self.result.as_ref();

@@ -123,6 +123,12 @@ impl Experiment for TwoView {
                     .action(ArgAction::SetTrue)
                     .help("eight-point without Hartley normalization"),
             )
+            .arg(
+                Arg::new("no-refine")
+                    .long("no-refine")
+                    .action(ArgAction::SetTrue)
+                    .help("end with the linear eight-point refit, without the Levenberg-Marquardt refinement of (R, t) on the Sampson distances"),
+            )
     }
 
     fn run(&self, m: &ArgMatches, out: &mut Output) -> Result<()> {
@@ -144,6 +150,7 @@ impl Experiment for TwoView {
             trials: m.get_one::<u64>("trials").copied().unwrap_or(200) as usize,
             seed: m.get_one::<u64>("seed").copied().unwrap_or(1),
             normalize: !m.get_flag("no-normalize"),
+            refine: !m.get_flag("no-refine"),
             early_rejection: if m.get_flag("sprt") {
                 EarlyRejection::Sprt
             } else {
@@ -158,13 +165,14 @@ impl Experiment for TwoView {
         }
         writeln!(
             out,
-            "SLAM Lab experiment two-view: {} trials of {} matches, {} px noise, seed {}, normalization {}, early rejection {}",
+            "SLAM Lab experiment two-view: {} trials of {} matches, {} px noise, seed {}, normalization {}, early rejection {}, refinement {}",
             settings.trials,
             settings.points,
             settings.noise_px,
             settings.seed,
             if settings.normalize { "on" } else { "off" },
-            settings.early_rejection.name()
+            settings.early_rejection.name(),
+            if settings.refine { "on" } else { "off" },
         )?;
         writeln!(out, "scene: {}", report.scene)?;
         writeln!(out)?;

@@ -17,7 +17,9 @@
 //!   the choice by cheirality;
 //! - [`ransac`]: RANSAC with the adaptive iteration bound and the Sampson
 //!   distance, stepped one iteration at a time, with the final refit and the
-//!   pure-rotation test.
+//!   pure-rotation test;
+//! - [`refine`]: Levenberg-Marquardt on the Sampson distances over the five
+//!   degrees of freedom of `(R, t)`, which ends RANSAC's estimate.
 
 pub mod decompose;
 pub mod eight_point;
@@ -25,6 +27,7 @@ pub mod five_point;
 mod linear;
 mod poly;
 pub mod ransac;
+pub mod refine;
 mod sturm;
 #[cfg(test)]
 mod tests;
@@ -36,9 +39,11 @@ pub use decompose::{Decomposition, RelativePose, decompose_essential, triangulat
 pub use eight_point::{essential_eight_point, fundamental_eight_point, project_to_essential};
 pub use five_point::essential_five_point;
 pub use ransac::{
-    EarlyRejection, IterationReport, Method, Motion, Ransac, RansacConfig, Sprt, SprtCheck,
-    SprtSample, SprtSettings, SprtStats, TwoViewEstimate, estimate_two_view, sprt_threshold,
+    EarlyRejection, IterationReport, Method, Motion, Ransac, RansacConfig, RefinementSummary, Sprt,
+    SprtCheck, SprtSample, SprtSettings, SprtStats, TwoViewEstimate, estimate_two_view,
+    sprt_threshold,
 };
+pub use refine::{Refinement, refine_pose};
 
 /// Why a two-view estimate could not be made.
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]

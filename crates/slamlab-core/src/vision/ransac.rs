@@ -21,9 +21,11 @@ use nalgebra::{Matrix3, Vector3};
 use rand::Rng;
 use serde::{Deserialize, Serialize};
 
+use super::decompose::RelativePose;
 use super::decompose::{Decomposition, choose_by_cheirality};
 use super::eight_point::{EIGHT, essential_from_fundamental, fundamental_eight_point, svd3};
 use super::five_point::{FIVE, MAX_SOLUTIONS, essential_five_point_array};
+use super::refine::{essential_of_pose, refine_pose};
 use super::{
     Correspondence, Intrinsics, VisionError, check_finite, fundamental_from_essential,
     sampson_squared,
@@ -168,7 +170,32 @@ pub struct RansacConfig {
     /// The SPRT's costs and starting guesses (used with [`EarlyRejection::Sprt`]).
     #[serde(default)]
     pub sprt: SprtSettings,
+    /// After the linear refit, refine `(R, t)` by Levenberg-Marquardt on the
+    /// Sampson distances of the inliers ([`super::refine`]), with the inlier
+    /// band narrowed from 3τ to τ ([`REFINE_BANDS`]). On by default.
+    #[serde(default = "default_refine")]
+    pub refine: bool,
 }
+
+fn default_refine() -> bool {
+    true
+}
+
+/// The inlier bands of the refinement, as multiples of the threshold τ: the
+/// pose is refined on the matches within 3τ, then 2.5τ, 2τ, 1.5τ, and within
+/// τ until the inliers stop changing (at most [`REFINE_FINAL_ROUNDS`] times).
+/// This is the "iterative" local optimization of Chum, Matas and Kittler
+/// ("Locally optimized RANSAC", 2003: least squares on the matches within
+/// K·θ, K falling to 1). On the seeded trials of
+/// `docs/visual-odometry.md` a refinement on the τ-inliers alone stays in the
+/// basin of the linear estimate, whose inliers exclude a tenth of the right
+/// matches: one pass leaves 96 of 100 five-point runs and 92 of 100
+/// eight-point runs within 1°, repeated until the τ-inliers settle 100 and
+/// 95; with the wider bands first, 100 and 99.
+pub const REFINE_BANDS: [f64; 4] = [3.0, 2.5, 2.0, 1.5];
+
+/// At most this many refinements within τ after [`REFINE_BANDS`].
+pub const REFINE_FINAL_ROUNDS: usize = 5;
 
 /// How a hypothesis is verified.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize)]
@@ -271,6 +298,7 @@ impl Default for RansacConfig {
             min_inlier_ratio: 0.1,
             early_rejection: EarlyRejection::None,
             sprt: SprtSettings::default(),
+            refine: true,
         }
     }
 }
@@ -436,6 +464,11 @@ pub struct Sprt {
     models_per_sample: f64,
     /// `(Aᵢ, kᵢ)` of the tests before the current one.
     history: Vec<(f64, usize)>,
+    /// The last [`Sprt::bound`] and what it was computed from (`w`'s bits,
+    /// `s`, `p`'s bits, the cap, the tests closed): the bound changes only
+    /// when one of them does, and its sum over the closed tests costs a
+    /// logarithm per test, so it is not recomputed after every sample.
+    bound_cache: Option<(BoundKey, usize)>,
     /// Samples drawn before the current test was designed.
     design_start: usize,
     /// The sum and number of the consistent shares of rejected hypotheses: δ̂.
@@ -461,6 +494,7 @@ impl Sprt {
             model_time: settings.model_time_for(method),
             models_per_sample: settings.models_per_sample_for(method),
             history: Vec::new(),
+            bound_cache: None,
             design_start: 0,
             delta_sum: 0.0,
             delta_count: 0,
@@ -553,7 +587,26 @@ impl Sprt {
 
     /// The number of samples after which `η ≤ 1 − p` for a consensus share
     /// `w` (so `P_g = wˢ`), capped at `max`.
-    fn bound(&self, w: f64, sample_size: usize, confidence: f64, max: usize) -> usize {
+    fn bound(&mut self, w: f64, sample_size: usize, confidence: f64, max: usize) -> usize {
+        let key = (
+            w.to_bits(),
+            sample_size,
+            confidence.to_bits(),
+            max,
+            self.history.len(),
+        );
+        if let Some((cached, bound)) = self.bound_cache
+            && cached == key
+        {
+            return bound;
+        }
+        let bound = self.bound_uncached(w, sample_size, confidence, max);
+        self.bound_cache = Some((key, bound));
+        bound
+    }
+
+    /// [`Sprt::bound`] computed.
+    fn bound_uncached(&self, w: f64, sample_size: usize, confidence: f64, max: usize) -> usize {
         let p_good = crate::math::powf(w.clamp(0.0, 1.0), sample_size as f64);
         let p = confidence.clamp(0.0, 1.0 - 1e-12);
         let per_sample = |a: f64| crate::math::ln_1p(-p_good * (1.0 - 1.0 / a));
@@ -578,6 +631,10 @@ impl Sprt {
         }
     }
 }
+
+/// What [`Sprt::bound`] depends on: `w`'s bits, `s`, `p`'s bits, the cap and
+/// the number of closed tests (a new test changes A and the design's start).
+type BoundKey = (u64, usize, u64, usize, usize);
 
 fn finite_or(value: f64, default: f64) -> f64 {
     if value.is_finite() { value } else { default }
@@ -1021,6 +1078,86 @@ impl Ransac {
         best
     }
 
+    /// The Sampson RMS (pixels) of `f` over its τ-inliers, and how many.
+    fn inlier_rms(&self, f: &Matrix3<f64>) -> (f64, usize) {
+        let limit = self.config.threshold_px * self.config.threshold_px;
+        let (sum, count) = self
+            .matches
+            .iter()
+            .map(|m| sampson_squared(f, m))
+            .filter(|d| *d <= limit)
+            .fold((0.0, 0), |(sum, count), d| (sum + d, count + 1));
+        ((sum / count.max(1) as f64).sqrt(), count)
+    }
+
+    /// The nonlinear refinement of `start` ([`super::refine::refine_pose`]):
+    /// Levenberg-Marquardt on the matches within each band of
+    /// [`REFINE_BANDS`] in turn, then within τ until the inliers stop
+    /// changing. The refined pose is applied only when its truncated cost
+    /// `Σ min(d², τ²)` over all matches is lower than the linear estimate's
+    /// (as an essential matrix). `None` when a band holds fewer than five
+    /// matches.
+    fn refined(&self, start: &RelativePose) -> Option<(RelativePose, RefinementSummary)> {
+        let fundamental_of =
+            |pose: &RelativePose| fundamental_from_essential(&essential_of_pose(pose), &self.k);
+        let linear = fundamental_of(start);
+        let (rms_before_px, inliers_before) = self.inlier_rms(&linear);
+        let tau = self.config.threshold_px;
+        let bands = REFINE_BANDS
+            .iter()
+            .copied()
+            .chain(std::iter::repeat_n(1.0, REFINE_FINAL_ROUNDS));
+        let mut pose = *start;
+        let (mut steps, mut rounds) = (0, 0);
+        let mut previous: Option<Vec<bool>> = None;
+        let mut chosen = Vec::with_capacity(self.matches.len());
+        for band in bands {
+            let f = fundamental_of(&pose);
+            let limit = (band * tau) * (band * tau);
+            let mask: Vec<bool> = self
+                .matches
+                .iter()
+                .map(|m| sampson_squared(&f, m) <= limit)
+                .collect();
+            if band == 1.0 && previous.as_ref() == Some(&mask) {
+                break;
+            }
+            chosen.clear();
+            chosen.extend(
+                self.matches
+                    .iter()
+                    .zip(&mask)
+                    .filter(|(_, inside)| **inside)
+                    .map(|(m, _)| *m),
+            );
+            if chosen.len() < FIVE {
+                return None;
+            }
+            let result = refine_pose(&pose, &chosen, &self.k);
+            pose = result.pose;
+            steps += result.accepted_steps;
+            rounds += 1;
+            if band == 1.0 {
+                previous = Some(mask);
+            }
+        }
+        let refined = fundamental_of(&pose);
+        let (rms_after_px, inliers_after) = self.inlier_rms(&refined);
+        let applied = self.truncated_cost(&refined) < self.truncated_cost(&linear);
+        Some((
+            pose,
+            RefinementSummary {
+                rms_before_px,
+                rms_after_px,
+                inliers_before,
+                inliers_after,
+                steps,
+                rounds,
+                applied,
+            },
+        ))
+    }
+
     /// Steps until the bound is reached. The same samples, best hypothesis and
     /// bound as [`Ransac::step`] repeated, faster: hypotheses that cannot beat
     /// the best stop being scored early.
@@ -1056,16 +1193,33 @@ impl Ransac {
             fundamental = refit;
             refitted = true;
         }
-        let essential = essential_from_fundamental(&fundamental, &self.k);
-        let left: Vec<Vector3<f64>> = select(&self.left, &inliers);
-        let right: Vec<Vector3<f64>> = select(&self.right, &inliers);
-        let decomposition = choose_by_cheirality(&essential, &left, &right)
+        let mut essential = essential_from_fundamental(&fundamental, &self.k);
+        let mut left: Vec<Vector3<f64>> = select(&self.left, &inliers);
+        let mut right: Vec<Vector3<f64>> = select(&self.right, &inliers);
+        let mut decomposition = choose_by_cheirality(&essential, &left, &right)
             .ok_or(VisionError::Degenerate("the essential matrix has no SVD"))?;
         let (rotation_only, parallax_px) = rotation_only_fit(&left, &right, self.k.fx);
+        let mut refinement = None;
         let (motion, rotation, translation) = if parallax_px < self.config.min_parallax_px {
             (Motion::PureRotation, rotation_only, None)
         } else {
-            let pose = decomposition.pose();
+            let mut pose = decomposition.pose();
+            if self.config.refine
+                && let Some((refined, summary)) = self.refined(&pose)
+            {
+                refinement = Some(summary);
+                if summary.applied {
+                    pose = refined;
+                    essential = essential_of_pose(&refined);
+                    fundamental = fundamental_from_essential(&essential, &self.k);
+                    (inliers, count) = self.classify(&fundamental);
+                    left = select(&self.left, &inliers);
+                    right = select(&self.right, &inliers);
+                    if let Some(d) = choose_by_cheirality(&essential, &left, &right) {
+                        decomposition = d;
+                    }
+                }
+            }
             (Motion::General, pose.rotation, Some(pose.translation))
         };
         Ok(TwoViewEstimate {
@@ -1081,6 +1235,7 @@ impl Ransac {
             rotation,
             translation,
             parallax_px,
+            refinement,
             sprt: self.sprt.as_ref().map(Sprt::stats),
         })
     }
@@ -1102,8 +1257,8 @@ pub struct TwoViewEstimate {
     /// The essential matrix, `‖E‖_F = 1`.
     pub essential: Matrix3<f64>,
     /// The fundamental matrix in pixels that classified the inliers (for the
-    /// eight-point method the estimated F, for the five-point `K⁻ᵀ E K⁻¹`),
-    /// for epipolar lines.
+    /// eight-point method the estimated F, for the five-point `K⁻ᵀ E K⁻¹`;
+    /// after a nonlinear refinement `K⁻ᵀ E K⁻¹` for both), for epipolar lines.
     pub fundamental: Matrix3<f64>,
     /// Which matches are inliers of the final E.
     pub inliers: Vec<bool>,
@@ -1128,6 +1283,31 @@ pub struct TwoViewEstimate {
     pub parallax_px: f64,
     /// The SPRT's counts, with [`EarlyRejection::Sprt`].
     pub sprt: Option<SprtStats>,
+    /// What the nonlinear refinement did ([`RansacConfig::refine`]); `None`
+    /// when it is off, for a pure rotation, or when too few matches were
+    /// left to refine on.
+    pub refinement: Option<RefinementSummary>,
+}
+
+/// The nonlinear refinement of [`Ransac::finish`], before and after.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct RefinementSummary {
+    /// Sampson RMS (pixels) over the τ-inliers of the linear estimate (its
+    /// E as F in pixels).
+    pub rms_before_px: f64,
+    /// The same for the refined pose.
+    pub rms_after_px: f64,
+    /// τ-inliers of the linear estimate's E.
+    pub inliers_before: usize,
+    /// τ-inliers of the refined pose's E.
+    pub inliers_after: usize,
+    /// Levenberg-Marquardt steps that lowered the cost, over all rounds.
+    pub steps: usize,
+    /// Refinements run (one per band).
+    pub rounds: usize,
+    /// Whether the refined pose replaced the linear one (its truncated cost
+    /// over all matches is lower).
+    pub applied: bool,
 }
 
 /// RANSAC to the bound, then [`Ransac::finish`].

@@ -276,15 +276,17 @@ fn ransac_trials(
     seed: u64,
 ) -> (Vec<f64>, Vec<f64>, usize, usize, usize) {
     let (rotation, translation, within_bound, kept_outliers, kept, _) =
-        ransac_trials_with(method, EarlyRejection::None, trials, seed);
+        ransac_trials_with(method, EarlyRejection::None, true, trials, seed);
     (rotation, translation, within_bound, kept_outliers, kept)
 }
 
-/// [`ransac_trials`] with a choice of early rejection; also the SPRT's
-/// counts summed over the trials and the samples drawn.
+/// [`ransac_trials`] with a choice of early rejection and of the nonlinear
+/// refinement; also the SPRT's counts summed over the trials and the samples
+/// drawn.
 fn ransac_trials_with(
     method: Method,
     early_rejection: EarlyRejection,
+    refine: bool,
     trials: usize,
     seed: u64,
 ) -> (Vec<f64>, Vec<f64>, usize, usize, usize, (SprtStats, usize)) {
@@ -300,6 +302,7 @@ fn ransac_trials_with(
             method,
             max_iterations: 5000,
             early_rejection,
+            refine,
             ..RansacConfig::default()
         };
         let mut ransac = Ransac::new(&s.matches, &k, config).unwrap();
@@ -342,6 +345,10 @@ fn share_below(values: &[f64], limit: f64) -> usize {
     values.iter().filter(|v| **v < limit).count()
 }
 
+/// The specification's accuracy test: RANSAC with half the matches wrong
+/// ends within 1° of the true rotation in at least 99 % of seeded trials,
+/// within its adaptive bound. Five-point with the nonlinear refinement (the
+/// default): 100 of 100 on seed 21, all stopped by the bound.
 #[test]
 fn five_point_ransac_survives_half_outliers() {
     let (rotation, translation, within_bound, kept_outliers, kept) =
@@ -353,23 +360,26 @@ fn five_point_ransac_survives_half_outliers() {
         median(translation.clone()),
         within_bound
     );
-    // Measured (seed 21): median 0.425 deg, 84 of 100 below 1 deg, translation
-    // median 1.01 deg, every run stopped by its adaptive bound, 176 wrong
-    // matches among 9327 inliers. The 99 % below 1 deg of the specification
-    // does not reproduce with 1 px noise in this geometry (60 deg field of
-    // view, depths 4-12 m, 2 m baseline); see docs/visual-odometry.md.
+    // Measured (seed 21): rotation median 0.186 deg, 100 of 100 below 1 deg,
+    // translation median 0.459 deg, every run stopped by its adaptive bound,
+    // 199 wrong matches among 9798 inliers. Over 1,000 trials (seeds
+    // 100-109) 996 (docs/visual-odometry.md).
     assert!(
-        share_below(&rotation, 1.0) >= 80,
+        share_below(&rotation, 1.0) >= 99,
         "{}",
         share_below(&rotation, 1.0)
     );
-    assert!(share_below(&rotation, 3.0) == 100);
-    assert!(median(rotation) < 0.5);
-    assert!(median(translation) < 1.5);
+    assert_eq!(share_below(&rotation, 3.0), 100);
+    assert!(median(rotation) < 0.3);
+    assert!(median(translation) < 0.7);
     assert_eq!(within_bound, 100);
     assert!(kept_outliers * 33 < kept, "{kept_outliers} of {kept}");
 }
 
+/// The same for the eight-point method: 99 of 100 on seed 22, but only 985
+/// of 1,000 over seeds 100-109 (docs/visual-odometry.md): the misses are
+/// mostly runs that reach the 5,000-sample cap with half the right matches
+/// as their consensus.
 #[test]
 fn eight_point_ransac_survives_half_outliers() {
     let (rotation, translation, within_bound, kept_outliers, kept) =
@@ -381,20 +391,51 @@ fn eight_point_ransac_survives_half_outliers() {
         median(translation.clone()),
         within_bound
     );
-    // Measured (seed 22): median 0.358 deg, 95 of 100 below 1 deg, translation
-    // median 1.13 deg, 90 of 100 runs stopped by the bound, 205 wrong matches
-    // among 9369 inliers. With s = 8 and w ≈ 0.45 the bound
-    // log(0.01)/log(1 − w⁸) is in the thousands: some runs reach the 5000 cap.
+    // Measured (seed 22): rotation median 0.244 deg, 99 of 100 below 1 deg,
+    // translation median 0.559 deg, 90 of 100 runs stopped by the bound (with
+    // s = 8 and w ≈ 0.45 the bound log(0.01)/log(1 − w⁸) is in the thousands:
+    // some runs reach the 5000 cap), 213 wrong matches among 9648 inliers.
     assert!(
-        share_below(&rotation, 1.0) >= 85,
+        share_below(&rotation, 1.0) >= 99,
         "{}",
         share_below(&rotation, 1.0)
     );
-    assert!(median(rotation) < 0.5);
-    assert!(median(translation) < 1.5);
+    assert!(median(rotation) < 0.3);
+    assert!(median(translation) < 0.7);
     // 85 of 100 when local optimization stopped after three refits.
     assert!(within_bound >= 88, "{within_bound}");
     assert!(kept_outliers * 33 < kept, "{kept_outliers} of {kept}");
+}
+
+/// The nonlinear refinement is what lifts the share within 1°: the same
+/// seeded trials without it (the linear refit alone) end within 1° in 84
+/// (five-point) and 95 (eight-point) of 100, with it in 100 and 99; the
+/// medians of the rotation and translation errors fall as well.
+#[test]
+fn refinement_lifts_the_share_within_one_degree() {
+    for (method, seed, without, with) in [
+        (Method::FivePoint, 21, 84, 100),
+        (Method::EightPoint, 22, 95, 99),
+    ] {
+        let (linear, linear_t, ..) =
+            ransac_trials_with(method, EarlyRejection::None, false, 100, seed);
+        let (refined, refined_t, ..) =
+            ransac_trials_with(method, EarlyRejection::None, true, 100, seed);
+        eprintln!(
+            "{}: without refinement {} of 100 below 1 deg (medians {:.3} deg, t {:.3} deg); with {} ({:.3} deg, t {:.3} deg)",
+            method.name(),
+            share_below(&linear, 1.0),
+            median(linear.clone()),
+            median(linear_t.clone()),
+            share_below(&refined, 1.0),
+            median(refined.clone()),
+            median(refined_t.clone()),
+        );
+        assert_eq!(share_below(&linear, 1.0), without);
+        assert_eq!(share_below(&refined, 1.0), with);
+        assert!(median(refined) < median(linear));
+        assert!(median(refined_t) < median(linear_t));
+    }
 }
 
 #[test]
@@ -572,9 +613,9 @@ fn running_gives_what_stepping_gives() {
 fn sprt_keeps_the_accuracy_and_checks_few_matches() {
     for (method, seed) in [(Method::FivePoint, 21), (Method::EightPoint, 22)] {
         let (plain, _, _, _, _, (_, plain_samples)) =
-            ransac_trials_with(method, EarlyRejection::None, 100, seed);
+            ransac_trials_with(method, EarlyRejection::None, true, 100, seed);
         let (rotation, translation, within_bound, kept_outliers, kept, (stats, samples)) =
-            ransac_trials_with(method, EarlyRejection::Sprt, 100, seed);
+            ransac_trials_with(method, EarlyRejection::Sprt, true, 100, seed);
         eprintln!(
             "{} with SPRT: rotation median {:.3} deg, {} of 100 below 1 deg (without: {}); translation median {:.3} deg; {within_bound} within bound; {kept_outliers} outliers in {kept} inliers; {samples} samples (without: {plain_samples}); {} hypotheses, {} rejected after {:.2} matches on average, {:.2} matches per hypothesis, {} designs",
             method.name(),

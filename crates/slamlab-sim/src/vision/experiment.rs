@@ -31,6 +31,13 @@ pub struct TwoViewSettings {
     /// Early rejection of hypotheses (none, or Matas and Chum's SPRT).
     #[serde(default)]
     pub early_rejection: EarlyRejection,
+    /// Levenberg-Marquardt refinement of `(R, t)` after RANSAC.
+    #[serde(default = "refine_by_default")]
+    pub refine: bool,
+}
+
+fn refine_by_default() -> bool {
+    true
 }
 
 /// Median and 90th percentile.
@@ -203,6 +210,7 @@ pub fn two_view_experiment(
                     normalize: settings.normalize,
                     max_iterations: 5000,
                     early_rejection: settings.early_rejection,
+                    refine: settings.refine,
                     ..RansacConfig::default()
                 };
                 match estimate_two_view(&matches, &camera, config, &mut rng) {
@@ -293,6 +301,7 @@ mod tests {
             seed: 1,
             normalize: true,
             early_rejection: EarlyRejection::None,
+            refine: true,
         };
         let report = two_view_experiment(&settings, |_, _| {});
         let get = |m: &str, o: f64| {
@@ -332,6 +341,7 @@ mod tests {
             seed: 1,
             normalize: true,
             early_rejection: EarlyRejection::Sprt,
+            refine: true,
         };
         let report = two_view_experiment(&settings, |_, _| {});
         for r in &report.results {

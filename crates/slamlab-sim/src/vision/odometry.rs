@@ -39,6 +39,14 @@ pub struct VoSettings {
     /// Early rejection of RANSAC's hypotheses (none, or Matas and Chum's SPRT).
     #[serde(default)]
     pub early_rejection: EarlyRejection,
+    /// Levenberg-Marquardt refinement of each step's `(R, t)` on the Sampson
+    /// distances of its inliers (`RansacConfig::refine`).
+    #[serde(default = "refine_by_default")]
+    pub refine: bool,
+}
+
+fn refine_by_default() -> bool {
+    true
 }
 
 impl Default for VoSettings {
@@ -54,6 +62,7 @@ impl Default for VoSettings {
             pure_rotation_segment: false,
             planar_segment: false,
             early_rejection: EarlyRejection::None,
+            refine: true,
         }
     }
 }
@@ -223,6 +232,7 @@ pub fn run_in_world(settings: VoSettings, world: &CameraWorld) -> VoRun {
         method: settings.method,
         normalize: settings.normalize,
         early_rejection: settings.early_rejection,
+        refine: settings.refine,
         ..RansacConfig::default()
     };
     // Wheel odometry for every frame.

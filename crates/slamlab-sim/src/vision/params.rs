@@ -73,6 +73,13 @@ pub static PARAMS: &[Param<VoScenario>] = &[
         |s, v| read_on_off(v).map(|on| s.settings.normalize = on),
     ),
     Param::words(
+        "refine",
+        "after RANSAC, Levenberg-Marquardt on (R, t) over the Sampson distances of the inliers (on), or the linear eight-point refit alone (off)",
+        ON_OFF,
+        |s| Some(on_off(s.settings.refine)),
+        |s, v| read_on_off(v).map(|on| s.settings.refine = on),
+    ),
+    Param::words(
         "early-rejection",
         "none: every hypothesis is checked against every match; sprt: Matas and Chum's sequential probability ratio test rejects a bad hypothesis after a few matches",
         EARLY_REJECTION,
