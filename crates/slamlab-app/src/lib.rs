@@ -107,6 +107,9 @@ pub struct SlamLabApp {
     narrow_panels: PanelVisibility,
     /// Was the window narrow in the last frame?
     narrow: bool,
+    /// The header's title and the time bar's next phase in the last frame (a
+    /// change asks for one more frame, see `update`).
+    last_bar_text: String,
     /// How the figure opened (the URL's figure keys), for links.
     figure: query::FigureOptions,
     /// The map's (central panel's) rectangle and the window's size, last frame.
@@ -204,6 +207,7 @@ impl SlamLabApp {
             panels,
             narrow_panels,
             narrow: false,
+            last_bar_text: String::new(),
             figure: parsed.figure,
             map_rect: None,
             screen: egui::Vec2::ZERO,
@@ -469,6 +473,15 @@ impl SlamLabApp {
             egui::Panel::top("slamlab_embed_header").show(ui, |ui| self.embed_header_ui(ui));
         } else {
             egui::Panel::top("slamlab_menu").show(ui, |ui| self.menu_bar_ui(ui));
+        }
+        // The header and the time bar wrap their text: when it changes (a lesson
+        // names new photos, the next phase), the panels take a new height, which
+        // egui settles on the next frame. Ask for it, or an idle lesson would
+        // leave the old layout on screen with a gap between the panels.
+        let bar_text = format!("{}\n{}", self.title(), self.lesson.time_info().next_phase);
+        if bar_text != self.last_bar_text {
+            self.last_bar_text = bar_text;
+            ctx.request_repaint();
         }
         egui::Panel::top("slamlab_time_bar").show(ui, |ui| {
             let info = self.lesson.time_info();
