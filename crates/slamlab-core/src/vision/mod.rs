@@ -233,16 +233,43 @@ pub fn fundamental_from_essential(essential: &Matrix3<f64>, k: &Intrinsics) -> M
 /// `(x_rᵀ F x_l)² / ((F x_l)₁² + (F x_l)₂² + (Fᵀ x_r)₁² + (Fᵀ x_r)₂²)`
 /// (Hartley and Zisserman, Eq. 11.9).
 pub fn sampson_squared(fundamental: &Matrix3<f64>, m: &Correspondence) -> f64 {
-    let xl = Vector3::new(m.left.x, m.left.y, 1.0);
-    let xr = Vector3::new(m.right.x, m.right.y, 1.0);
-    let f_xl = fundamental * xl;
-    let ft_xr = fundamental.tr_mul(&xr);
-    let algebraic = xr.dot(&f_xl);
-    let denominator = f_xl.x * f_xl.x + f_xl.y * f_xl.y + ft_xr.x * ft_xr.x + ft_xr.y * ft_xr.y;
-    if !(denominator > 0.0) {
+    let t = SampsonTerms::new(fundamental, m);
+    if !(t.denominator > 0.0) {
         return f64::INFINITY;
     }
-    algebraic * algebraic / denominator
+    t.algebraic * t.algebraic / t.denominator
+}
+
+/// The pieces of the Sampson distance of a match under `F` (see
+/// [`sampson_squared`]): the homogeneous points, the epipolar lines `F x_l`
+/// and `Fᵀ x_r`, the algebraic error `x_rᵀ F x_l` and the denominator
+/// `(F x_l)₁² + (F x_l)₂² + (Fᵀ x_r)₁² + (Fᵀ x_r)₂²`. The refinement
+/// differentiates them.
+#[derive(Debug, Clone, Copy)]
+pub(crate) struct SampsonTerms {
+    pub xl: Vector3<f64>,
+    pub xr: Vector3<f64>,
+    pub f_xl: Vector3<f64>,
+    pub ft_xr: Vector3<f64>,
+    pub algebraic: f64,
+    pub denominator: f64,
+}
+
+impl SampsonTerms {
+    pub(crate) fn new(fundamental: &Matrix3<f64>, m: &Correspondence) -> Self {
+        let xl = Vector3::new(m.left.x, m.left.y, 1.0);
+        let xr = Vector3::new(m.right.x, m.right.y, 1.0);
+        let f_xl = fundamental * xl;
+        let ft_xr = fundamental.tr_mul(&xr);
+        Self {
+            xl,
+            xr,
+            f_xl,
+            ft_xr,
+            algebraic: xr.dot(&f_xl),
+            denominator: f_xl.x * f_xl.x + f_xl.y * f_xl.y + ft_xr.x * ft_xr.x + ft_xr.y * ft_xr.y,
+        }
+    }
 }
 
 /// The angle in radians of the rotation `R`: `atan2(‖vee(R − Rᵀ)‖ / 2, (tr R − 1) / 2)`,

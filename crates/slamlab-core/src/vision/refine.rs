@@ -37,7 +37,7 @@
 use nalgebra::{Matrix3, SMatrix, SVector, Vector3};
 
 use super::decompose::RelativePose;
-use super::{Correspondence, Intrinsics, skew};
+use super::{Correspondence, Intrinsics, SampsonTerms, skew};
 
 /// Parameters of the refinement: 3 for the rotation, 2 for the direction of t.
 pub const POSE_DOF: usize = 5;
@@ -110,15 +110,11 @@ fn apply_step(pose: &RelativePose, step: &SVector<f64, POSE_DOF>) -> RelativePos
 /// The Sampson residual (pixels, signed) of one match under F, or `None`
 /// when its denominator vanishes.
 fn residual(f: &Matrix3<f64>, m: &Correspondence) -> Option<f64> {
-    let xl = Vector3::new(m.left.x, m.left.y, 1.0);
-    let xr = Vector3::new(m.right.x, m.right.y, 1.0);
-    let f_xl = f * xl;
-    let ft_xr = f.tr_mul(&xr);
-    let d = f_xl.x * f_xl.x + f_xl.y * f_xl.y + ft_xr.x * ft_xr.x + ft_xr.y * ft_xr.y;
-    if !(d > 0.0) {
+    let t = SampsonTerms::new(f, m);
+    if !(t.denominator > 0.0) {
         return None;
     }
-    Some(xr.dot(&f_xl) / d.sqrt())
+    Some(t.algebraic / t.denominator.sqrt())
 }
 
 /// The signed Sampson residuals (pixels) of `matches` under `pose` and their
@@ -147,12 +143,14 @@ pub fn residuals_and_jacobian(
     let mut residuals = Vec::with_capacity(matches.len());
     let mut jacobian = Vec::with_capacity(matches.len());
     for m in matches {
-        let xl = Vector3::new(m.left.x, m.left.y, 1.0);
-        let xr = Vector3::new(m.right.x, m.right.y, 1.0);
-        let f_xl = f * xl;
-        let ft_xr = f.tr_mul(&xr);
-        let a = xr.dot(&f_xl);
-        let d = f_xl.x * f_xl.x + f_xl.y * f_xl.y + ft_xr.x * ft_xr.x + ft_xr.y * ft_xr.y;
+        let SampsonTerms {
+            xl,
+            xr,
+            f_xl,
+            ft_xr,
+            algebraic: a,
+            denominator: d,
+        } = SampsonTerms::new(&f, m);
         if !(d > 0.0) {
             residuals.push(0.0);
             jacobian.push([0.0; POSE_DOF]);
