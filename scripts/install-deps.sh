@@ -5,8 +5,8 @@
 # sudo when it is available.
 #
 #   scripts/install-deps.sh              everything (what ./test.sh needs)
-#   scripts/install-deps.sh --web        the WebAssembly build: rustup's wasm32 target (tried
-#                                        first), else Debian's rustc-web toolchain; the wasm-bindgen
+#   scripts/install-deps.sh --web        the WebAssembly build: rustup's wasm32 target and
+#                                        rust-src (tried first), else Debian's rustc-web toolchain; the wasm-bindgen
 #                                        CLI, web/node_modules
 #   scripts/install-deps.sh --browser    Chromium for the headless browser tests
 #   scripts/install-deps.sh --desktop    Xvfb, ImageMagick, xdotool, Mesa: run the native app
@@ -57,6 +57,16 @@ if ((want_web)) && ! rustup_has_wasm32 && [[ "${SLAMLAB_WASM_TOOLCHAIN:-}" != de
 	say "rustup target add wasm32-unknown-unknown"
 	if ! timeout 600 rustup target add wasm32-unknown-unknown; then
 		say "rustup could not add the wasm32 target; using Debian's rustc-web instead"
+	fi
+fi
+# The standard library's sources: web/build.sh then compiles std for the browser with the
+# web profile's size settings (0.27 MB smaller than the prebuilt std; docs/web-build.md).
+# Without them the build links rustup's prebuilt std and still works.
+if ((want_web)) && rustup_has_wasm32 && [[ "${SLAMLAB_WASM_TOOLCHAIN:-}" != debian ]] &&
+	[[ ! -f "$(rustc --print sysroot)/lib/rustlib/src/rust/library/sysroot/Cargo.toml" ]]; then
+	say "rustup component add rust-src"
+	if ! timeout 600 rustup component add rust-src; then
+		say "rustup could not add rust-src; the web build links the prebuilt standard library"
 	fi
 fi
 

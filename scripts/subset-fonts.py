@@ -14,15 +14,18 @@ in crates/slamlab-app/src/fonts.rs fails and names it):
 Needs fontTools (Debian: python3-fonttools; the committed fonts were made with 4.68).
 
 What is kept, of each font's characters:
-- the ranges below: ASCII, Latin-1 and Latin Extended-A, spacing modifier letters and
-  combining marks, Greek, and U+2000-2BFF (punctuation, super- and subscripts,
-  currency, letterlike symbols, number forms, arrows, mathematical operators,
-  technical symbols, geometric shapes, dingbats, mathematical brackets);
+- the ranges below, for what students type or load (file names): ASCII, Latin-1 and
+  Latin Extended-A, spacing modifier letters and combining marks (decomposed accents),
+  Greek, and general punctuation (dashes, quotes, ellipsis);
 - every other character that appears in the Rust sources of slamlab-app, slamlab-sim
-  and slamlab-core (string literals, `\\u{...}` escapes; comments too, to be safe);
-- the glyphs those reach through the fonts' substitution tables (ligatures), the
-  hinting instructions, kerning and every layout feature: text renders as before.
-Left out: Cyrillic, Latin Extended-B and Additional, box drawing, private use.
+  and slamlab-core (string literals, `\\u{...}` escapes; comments too, to be safe): the
+  arrows, operators and symbols the lessons draw;
+- the glyphs those reach through the fonts' substitution tables (ligatures), kerning
+  and every layout feature.
+Left out: the TrueType hinting instructions, half of each font's bytes (egui hints the
+outlines with skrifa's autohinter instead, which it links anyway; text stays sharp),
+other arrows, operators and symbols, Cyrillic, Latin Extended-B and Additional, box
+drawing, private use.
 
 Licences (assets/fonts/README.md): a subset is a Modified Version that is not
 "Substantially Changed" (its glyphs are the original's), which the Ubuntu Font Licence
@@ -50,9 +53,7 @@ RANGES = [
     (0x00A0, 0x017F),  # Latin-1 Supplement, Latin Extended-A
     (0x02B0, 0x036F),  # spacing modifier letters, combining diacritical marks
     (0x0370, 0x03FF),  # Greek
-    (0x2000, 0x24FF),  # punctuation ... enclosed alphanumerics (arrows, maths)
-    (0x25A0, 0x25FF),  # geometric shapes
-    (0x2600, 0x2BFF),  # symbols, dingbats, mathematical brackets, arrows
+    (0x2000, 0x206F),  # general punctuation (dashes, quotes, ellipsis)
 ]
 
 # (upstream file, new family, new PostScript name and file name, style)
@@ -128,7 +129,9 @@ def main():
         options.name_languages = ["*"]
         options.name_legacy = True
         options.notdef_outline = True
-        options.hinting = True  # egui hints glyphs with the fonts' own instructions
+        # No TrueType instructions: egui then hints the outlines with skrifa's autohinter
+        # (FreeType's), which it links anyway. The instructions were half of each font.
+        options.hinting = False
         options.drop_tables += ["hdmx", "VDMX", "DSIG", "TTFA"]  # unused by egui's reader
         subsetter = subset.Subsetter(options)
         subsetter.populate(unicodes=sorted(wanted & has))
