@@ -183,12 +183,39 @@ fn cost(pose: &RelativePose, matches: &[Correspondence], k: &Intrinsics) -> f64 
         .sum()
 }
 
+/// When [`refine_pose_until`] stops: after a step that lowers the cost by
+/// less than `relative_decrease` of it, or after `max_iterations` iterations
+/// (accepted or not), or when λ exceeds 1e12.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Stop {
+    /// A step that lowers the cost by less than this share of it ends the run.
+    pub relative_decrease: f64,
+    /// Iterations at most, accepted or undone.
+    pub max_iterations: usize,
+}
+
+/// [`refine_pose`]'s rule: a relative decrease of 1e-12, [`MAX_ITERATIONS`].
+pub const FULL: Stop = Stop {
+    relative_decrease: 1e-12,
+    max_iterations: MAX_ITERATIONS,
+};
+
 /// Levenberg-Marquardt on the squared Sampson distances of `matches` (the
 /// inliers), starting from `pose` (any length of t; the result has unit t).
 /// Stops when a step lowers the cost by less than a relative 1e-12, when λ
-/// exceeds 1e12, or after [`MAX_ITERATIONS`]. With no matches, or a
-/// non-finite start, the pose comes back unchanged.
+/// exceeds 1e12, or after [`MAX_ITERATIONS`] ([`FULL`]). With no matches, or
+/// a non-finite start, the pose comes back unchanged.
 pub fn refine_pose(pose: &RelativePose, matches: &[Correspondence], k: &Intrinsics) -> Refinement {
+    refine_pose_until(pose, matches, k, FULL)
+}
+
+/// [`refine_pose`] with its own stopping rule.
+pub fn refine_pose_until(
+    pose: &RelativePose,
+    matches: &[Correspondence],
+    k: &Intrinsics,
+    stop: Stop,
+) -> Refinement {
     let norm = pose.translation.norm();
     let mut current = RelativePose {
         rotation: pose.rotation,
@@ -216,7 +243,7 @@ pub fn refine_pose(pose: &RelativePose, matches: &[Correspondence], k: &Intrinsi
     let mut relinearize = true;
     let mut normal = SMatrix::<f64, POSE_DOF, POSE_DOF>::zeros();
     let mut gradient = SVector::<f64, POSE_DOF>::zeros();
-    while iterations < MAX_ITERATIONS && lambda < 1e12 {
+    while iterations < stop.max_iterations && lambda < 1e12 {
         iterations += 1;
         if relinearize {
             let (residuals, jacobian) = residuals_and_jacobian(&current, matches, k);
@@ -247,7 +274,7 @@ pub fn refine_pose(pose: &RelativePose, matches: &[Correspondence], k: &Intrinsi
             accepted_steps += 1;
             lambda = (lambda / 10.0).max(1e-12);
             relinearize = true;
-            if decrease <= 1e-12 * current_cost {
+            if decrease <= stop.relative_decrease * current_cost {
                 break;
             }
         } else {
