@@ -125,24 +125,41 @@ pub fn residuals_and_jacobian(
     matches: &[Correspondence],
     k: &Intrinsics,
 ) -> (Vec<f64>, Vec<[f64; POSE_DOF]>) {
-    let k_inv = k.inverse_matrix();
-    let k_inv_t = k_inv.transpose();
-    let to_pixels = |e: &Matrix3<f64>| k_inv_t * e * k_inv;
-    let t = pose.translation;
-    let r = pose.rotation;
-    let f = to_pixels(&(skew(&t) * r));
-    let (b1, b2) = tangent_basis(&t);
-    let skew_t = skew(&t);
-    let derivatives: [Matrix3<f64>; POSE_DOF] = [
-        to_pixels(&(skew_t * skew(&Vector3::x()) * r)),
-        to_pixels(&(skew_t * skew(&Vector3::y()) * r)),
-        to_pixels(&(skew_t * skew(&Vector3::z()) * r)),
-        to_pixels(&(skew(&b1) * r)),
-        to_pixels(&(skew(&b2) * r)),
-    ];
-    let mut residuals = Vec::with_capacity(matches.len());
-    let mut jacobian = Vec::with_capacity(matches.len());
-    for m in matches {
+    let linearization = Linearization::new(pose, k);
+    matches.iter().map(|m| linearization.row(m)).unzip()
+}
+
+/// F in pixels at a pose and its derivatives `∂F = K⁻ᵀ ∂E K⁻¹` with respect
+/// to `(ω, α, β)` (the module's formulas), for the residual and Jacobian row
+/// of each match.
+struct Linearization {
+    f: Matrix3<f64>,
+    derivatives: [Matrix3<f64>; POSE_DOF],
+}
+
+impl Linearization {
+    fn new(pose: &RelativePose, k: &Intrinsics) -> Self {
+        let k_inv = k.inverse_matrix();
+        let k_inv_t = k_inv.transpose();
+        let to_pixels = |e: &Matrix3<f64>| k_inv_t * e * k_inv;
+        let t = pose.translation;
+        let r = pose.rotation;
+        let f = to_pixels(&(skew(&t) * r));
+        let (b1, b2) = tangent_basis(&t);
+        let skew_t = skew(&t);
+        let derivatives: [Matrix3<f64>; POSE_DOF] = [
+            to_pixels(&(skew_t * skew(&Vector3::x()) * r)),
+            to_pixels(&(skew_t * skew(&Vector3::y()) * r)),
+            to_pixels(&(skew_t * skew(&Vector3::z()) * r)),
+            to_pixels(&(skew(&b1) * r)),
+            to_pixels(&(skew(&b2) * r)),
+        ];
+        Self { f, derivatives }
+    }
+
+    /// The signed Sampson residual of one match and its Jacobian row; 0 and
+    /// a zero row when its denominator vanishes.
+    fn row(&self, m: &Correspondence) -> (f64, [f64; POSE_DOF]) {
         let SampsonTerms {
             xl,
             xr,
@@ -150,15 +167,13 @@ pub fn residuals_and_jacobian(
             ft_xr,
             algebraic: a,
             denominator: d,
-        } = SampsonTerms::new(&f, m);
+        } = SampsonTerms::new(&self.f, m);
         if !(d > 0.0) {
-            residuals.push(0.0);
-            jacobian.push([0.0; POSE_DOF]);
-            continue;
+            return (0.0, [0.0; POSE_DOF]);
         }
         let root = d.sqrt();
         let mut row = [0.0; POSE_DOF];
-        for (slot, df) in row.iter_mut().zip(&derivatives) {
+        for (slot, df) in row.iter_mut().zip(&self.derivatives) {
             let df_xl = df * xl;
             let dft_xr = df.tr_mul(&xr);
             let da = xr.dot(&df_xl);
@@ -166,10 +181,27 @@ pub fn residuals_and_jacobian(
                 * (f_xl.x * df_xl.x + f_xl.y * df_xl.y + ft_xr.x * dft_xr.x + ft_xr.y * dft_xr.y);
             *slot = da / root - 0.5 * a * dd / (d * root);
         }
-        residuals.push(a / root);
-        jacobian.push(row);
+        (a / root, row)
     }
-    (residuals, jacobian)
+}
+
+/// `JᵀJ` and `Jᵀr` of [`residuals_and_jacobian`], summed match by match in
+/// the same order, without keeping the residuals and rows.
+fn normal_equations(
+    pose: &RelativePose,
+    matches: &[Correspondence],
+    k: &Intrinsics,
+) -> (SMatrix<f64, POSE_DOF, POSE_DOF>, SVector<f64, POSE_DOF>) {
+    let linearization = Linearization::new(pose, k);
+    let mut normal = SMatrix::<f64, POSE_DOF, POSE_DOF>::zeros();
+    let mut gradient = SVector::<f64, POSE_DOF>::zeros();
+    for m in matches {
+        let (r, row) = linearization.row(m);
+        let j = SVector::<f64, POSE_DOF>::from_column_slice(&row);
+        normal += j * j.transpose();
+        gradient += j * r;
+    }
+    (normal, gradient)
 }
 
 /// `Σ rᵢ²` over the matches, pixels².
@@ -246,14 +278,7 @@ pub fn refine_pose_until(
     while iterations < stop.max_iterations && lambda < 1e12 {
         iterations += 1;
         if relinearize {
-            let (residuals, jacobian) = residuals_and_jacobian(&current, matches, k);
-            normal = SMatrix::zeros();
-            gradient = SVector::zeros();
-            for (r, row) in residuals.iter().zip(&jacobian) {
-                let j = SVector::<f64, POSE_DOF>::from_column_slice(row);
-                normal += j * j.transpose();
-                gradient += j * *r;
-            }
+            (normal, gradient) = normal_equations(&current, matches, k);
             relinearize = false;
         }
         let mut damped = normal;
