@@ -166,10 +166,25 @@ pub fn explanation_ui(
                 session.config().confidence
             ));
             ui.colored_label(SAMPLE, format!("matches drawn: {:?}", report.sample));
-            ui.label(
-                "A new best is refitted at once on all its inliers (local optimization), so \
-                 the best share jumps close to the true one and the bound falls steeply.",
-            );
+            ui.label(match (session.config().method, session.config().refine) {
+                (Method::FivePoint, _) => {
+                    "A new best is refitted at once on all its inliers (local optimization), so \
+                     the best share jumps close to the true one and the bound falls steeply."
+                }
+                (Method::EightPoint, true) => {
+                    "A sample whose F has more inliers than any sample's before is optimized \
+                     locally: F refitted on its inliers, then E refined by Levenberg-Marquardt \
+                     on the Sampson distances of the matches within 3τ, 2τ and τ. It becomes \
+                     the best when it has more inliers, so the best share jumps close to the \
+                     true one and the bound falls steeply."
+                }
+                (Method::EightPoint, false) => {
+                    "A sample whose F has more inliers than any sample's before is refitted on \
+                     its inliers (local optimization); it becomes the best when it has more \
+                     inliers, so the best share jumps close to the true one and the bound \
+                     falls steeply."
+                }
+            });
             if report.sprt.is_some() {
                 ui.label(
                     "Early rejection (SPRT): a hypothesis from a sample with a wrong match \

@@ -255,6 +255,11 @@ fn the_rendered_images_show_inliers_outliers_and_the_sample() {
             egui::vec2(1280.0, 800.0),
             "visual_odometry_done_1280x800.png",
         ),
+        (
+            "lesson=visual-odometry&seed=3&method=eight-point",
+            egui::vec2(1280.0, 800.0),
+            "visual_odometry_eight_point_done_1280x800.png",
+        ),
     ] {
         let mut h = harness_sized(query, size);
         h.run();
@@ -262,6 +267,10 @@ fn the_rendered_images_show_inliers_outliers_and_the_sample() {
         h.run();
         if !query.contains("embed") {
             assert!(label_visible(&h, "Refined by Levenberg-Marquardt"));
+        }
+        if query.contains("eight-point") {
+            // Its local optimization, as the explanation tells it.
+            assert!(label_visible(&h, "then E refined by Levenberg-Marquardt"));
         }
         if let Some(image) = render_or_skip(&mut h) {
             let path = std::env::temp_dir().join(name);

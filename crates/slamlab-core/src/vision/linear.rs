@@ -34,34 +34,41 @@ pub(crate) fn null_space<const R: usize, const K: usize>(
         .fold(0.0f64, f64::max);
     let mut smallest_diagonal = f64::INFINITY;
     for k in 0..R {
-        let norm = a[k][k..].iter().map(|v| v * v).sum::<f64>().sqrt();
+        // v = x - alpha e_0 with alpha = -sign(x_0) ‖x‖ (no cancellation), so
+        // that H x = alpha e_0. v is kept as a full 9-vector, zero above entry
+        // k, and the loops run over all nine entries (fixed bounds the
+        // compiler unrolls): the zeros add exact zeros in front of each sum
+        // and subtract exact zeros from the entries above k, so the result has
+        // the bits of loops over k..9.
+        let mut v = [0.0f64; 9];
+        for (i, slot) in v.iter_mut().enumerate() {
+            if i >= k {
+                *slot = a[k][i];
+            }
+        }
+        let norm = dot9(&v, &v).sqrt();
         smallest_diagonal = smallest_diagonal.min(norm);
         if !(norm > 0.0) {
             // A zero column: nothing to reflect (A has rank below R).
             continue;
         }
-        // v = x - alpha e_0 with alpha = -sign(x_0) ‖x‖ (no cancellation), so
-        // that H x = alpha e_0.
         let alpha = if a[k][k] >= 0.0 { -norm } else { norm };
-        let mut v = [0.0f64; 9];
-        v[k..].copy_from_slice(&a[k][k..]);
         v[k] -= alpha;
-        let v_norm2: f64 = v[k..].iter().map(|x| x * x).sum();
+        let v_norm2 = dot9(&v, &v);
         if !(v_norm2 > 0.0) {
             continue;
         }
         // Apply H_k to the remaining columns of Aᵀ.
         for column in a.iter_mut().skip(k + 1) {
-            let dot: f64 = (k..9).map(|i| v[i] * column[i]).sum();
-            let s = 2.0 * dot / v_norm2;
-            for i in k..9 {
-                column[i] -= s * v[i];
+            let s = 2.0 * dot9(&v, column) / v_norm2;
+            for (c, vi) in column.iter_mut().zip(&v) {
+                *c -= s * vi;
             }
         }
         // Kept scaled so that H_k = I - v vᵀ.
         let scale = (2.0 / v_norm2).sqrt();
-        for i in k..9 {
-            reflections[k][i] = v[i] * scale;
+        for (r, vi) in reflections[k].iter_mut().zip(&v) {
+            *r = vi * scale;
         }
     }
     let null = std::array::from_fn(|j| {
@@ -69,7 +76,7 @@ pub(crate) fn null_space<const R: usize, const K: usize>(
         let mut q = [0.0f64; 9];
         q[R + j] = 1.0;
         for v in reflections.iter().rev() {
-            let dot: f64 = v.iter().zip(&q).map(|(a, b)| a * b).sum();
+            let dot = dot9(v, &q);
             for (qi, vi) in q.iter_mut().zip(v) {
                 *qi -= dot * vi;
             }
@@ -82,6 +89,17 @@ pub(crate) fn null_space<const R: usize, const K: usize>(
         0.0
     };
     (null, rank_measure)
+}
+
+/// `Σ aᵢ bᵢ` over nine entries, summed in order from the first (from +0.0:
+/// a leading exact zero changes no bit of a sum).
+#[inline(always)]
+fn dot9(a: &[f64; 9], b: &[f64; 9]) -> f64 {
+    let mut sum = 0.0;
+    for i in 0..9 {
+        sum += a[i] * b[i];
+    }
+    sum
 }
 
 /// The right singular vector `v` of the smallest singular value of a 3x3

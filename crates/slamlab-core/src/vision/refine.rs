@@ -125,24 +125,41 @@ pub fn residuals_and_jacobian(
     matches: &[Correspondence],
     k: &Intrinsics,
 ) -> (Vec<f64>, Vec<[f64; POSE_DOF]>) {
-    let k_inv = k.inverse_matrix();
-    let k_inv_t = k_inv.transpose();
-    let to_pixels = |e: &Matrix3<f64>| k_inv_t * e * k_inv;
-    let t = pose.translation;
-    let r = pose.rotation;
-    let f = to_pixels(&(skew(&t) * r));
-    let (b1, b2) = tangent_basis(&t);
-    let skew_t = skew(&t);
-    let derivatives: [Matrix3<f64>; POSE_DOF] = [
-        to_pixels(&(skew_t * skew(&Vector3::x()) * r)),
-        to_pixels(&(skew_t * skew(&Vector3::y()) * r)),
-        to_pixels(&(skew_t * skew(&Vector3::z()) * r)),
-        to_pixels(&(skew(&b1) * r)),
-        to_pixels(&(skew(&b2) * r)),
-    ];
-    let mut residuals = Vec::with_capacity(matches.len());
-    let mut jacobian = Vec::with_capacity(matches.len());
-    for m in matches {
+    let linearization = Linearization::new(pose, k);
+    matches.iter().map(|m| linearization.row(m)).unzip()
+}
+
+/// F in pixels at a pose and its derivatives `∂F = K⁻ᵀ ∂E K⁻¹` with respect
+/// to `(ω, α, β)` (the module's formulas), for the residual and Jacobian row
+/// of each match.
+struct Linearization {
+    f: Matrix3<f64>,
+    derivatives: [Matrix3<f64>; POSE_DOF],
+}
+
+impl Linearization {
+    fn new(pose: &RelativePose, k: &Intrinsics) -> Self {
+        let k_inv = k.inverse_matrix();
+        let k_inv_t = k_inv.transpose();
+        let to_pixels = |e: &Matrix3<f64>| k_inv_t * e * k_inv;
+        let t = pose.translation;
+        let r = pose.rotation;
+        let f = to_pixels(&(skew(&t) * r));
+        let (b1, b2) = tangent_basis(&t);
+        let skew_t = skew(&t);
+        let derivatives: [Matrix3<f64>; POSE_DOF] = [
+            to_pixels(&(skew_t * skew(&Vector3::x()) * r)),
+            to_pixels(&(skew_t * skew(&Vector3::y()) * r)),
+            to_pixels(&(skew_t * skew(&Vector3::z()) * r)),
+            to_pixels(&(skew(&b1) * r)),
+            to_pixels(&(skew(&b2) * r)),
+        ];
+        Self { f, derivatives }
+    }
+
+    /// The signed Sampson residual of one match and its Jacobian row; 0 and
+    /// a zero row when its denominator vanishes.
+    fn row(&self, m: &Correspondence) -> (f64, [f64; POSE_DOF]) {
         let SampsonTerms {
             xl,
             xr,
@@ -150,15 +167,13 @@ pub fn residuals_and_jacobian(
             ft_xr,
             algebraic: a,
             denominator: d,
-        } = SampsonTerms::new(&f, m);
+        } = SampsonTerms::new(&self.f, m);
         if !(d > 0.0) {
-            residuals.push(0.0);
-            jacobian.push([0.0; POSE_DOF]);
-            continue;
+            return (0.0, [0.0; POSE_DOF]);
         }
         let root = d.sqrt();
         let mut row = [0.0; POSE_DOF];
-        for (slot, df) in row.iter_mut().zip(&derivatives) {
+        for (slot, df) in row.iter_mut().zip(&self.derivatives) {
             let df_xl = df * xl;
             let dft_xr = df.tr_mul(&xr);
             let da = xr.dot(&df_xl);
@@ -166,10 +181,27 @@ pub fn residuals_and_jacobian(
                 * (f_xl.x * df_xl.x + f_xl.y * df_xl.y + ft_xr.x * dft_xr.x + ft_xr.y * dft_xr.y);
             *slot = da / root - 0.5 * a * dd / (d * root);
         }
-        residuals.push(a / root);
-        jacobian.push(row);
+        (a / root, row)
     }
-    (residuals, jacobian)
+}
+
+/// `JᵀJ` and `Jᵀr` of [`residuals_and_jacobian`], summed match by match in
+/// the same order, without keeping the residuals and rows.
+fn normal_equations(
+    pose: &RelativePose,
+    matches: &[Correspondence],
+    k: &Intrinsics,
+) -> (SMatrix<f64, POSE_DOF, POSE_DOF>, SVector<f64, POSE_DOF>) {
+    let linearization = Linearization::new(pose, k);
+    let mut normal = SMatrix::<f64, POSE_DOF, POSE_DOF>::zeros();
+    let mut gradient = SVector::<f64, POSE_DOF>::zeros();
+    for m in matches {
+        let (r, row) = linearization.row(m);
+        let j = SVector::<f64, POSE_DOF>::from_column_slice(&row);
+        normal += j * j.transpose();
+        gradient += j * r;
+    }
+    (normal, gradient)
 }
 
 /// `Σ rᵢ²` over the matches, pixels².
@@ -183,12 +215,39 @@ fn cost(pose: &RelativePose, matches: &[Correspondence], k: &Intrinsics) -> f64 
         .sum()
 }
 
+/// When [`refine_pose_until`] stops: after a step that lowers the cost by
+/// less than `relative_decrease` of it, or after `max_iterations` iterations
+/// (accepted or not), or when λ exceeds 1e12.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Stop {
+    /// A step that lowers the cost by less than this share of it ends the run.
+    pub relative_decrease: f64,
+    /// Iterations at most, accepted or undone.
+    pub max_iterations: usize,
+}
+
+/// [`refine_pose`]'s rule: a relative decrease of 1e-12, [`MAX_ITERATIONS`].
+pub const FULL: Stop = Stop {
+    relative_decrease: 1e-12,
+    max_iterations: MAX_ITERATIONS,
+};
+
 /// Levenberg-Marquardt on the squared Sampson distances of `matches` (the
 /// inliers), starting from `pose` (any length of t; the result has unit t).
 /// Stops when a step lowers the cost by less than a relative 1e-12, when λ
-/// exceeds 1e12, or after [`MAX_ITERATIONS`]. With no matches, or a
-/// non-finite start, the pose comes back unchanged.
+/// exceeds 1e12, or after [`MAX_ITERATIONS`] ([`FULL`]). With no matches, or
+/// a non-finite start, the pose comes back unchanged.
 pub fn refine_pose(pose: &RelativePose, matches: &[Correspondence], k: &Intrinsics) -> Refinement {
+    refine_pose_until(pose, matches, k, FULL)
+}
+
+/// [`refine_pose`] with its own stopping rule.
+pub fn refine_pose_until(
+    pose: &RelativePose,
+    matches: &[Correspondence],
+    k: &Intrinsics,
+    stop: Stop,
+) -> Refinement {
     let norm = pose.translation.norm();
     let mut current = RelativePose {
         rotation: pose.rotation,
@@ -216,17 +275,10 @@ pub fn refine_pose(pose: &RelativePose, matches: &[Correspondence], k: &Intrinsi
     let mut relinearize = true;
     let mut normal = SMatrix::<f64, POSE_DOF, POSE_DOF>::zeros();
     let mut gradient = SVector::<f64, POSE_DOF>::zeros();
-    while iterations < MAX_ITERATIONS && lambda < 1e12 {
+    while iterations < stop.max_iterations && lambda < 1e12 {
         iterations += 1;
         if relinearize {
-            let (residuals, jacobian) = residuals_and_jacobian(&current, matches, k);
-            normal = SMatrix::zeros();
-            gradient = SVector::zeros();
-            for (r, row) in residuals.iter().zip(&jacobian) {
-                let j = SVector::<f64, POSE_DOF>::from_column_slice(row);
-                normal += j * j.transpose();
-                gradient += j * *r;
-            }
+            (normal, gradient) = normal_equations(&current, matches, k);
             relinearize = false;
         }
         let mut damped = normal;
@@ -247,7 +299,7 @@ pub fn refine_pose(pose: &RelativePose, matches: &[Correspondence], k: &Intrinsi
             accepted_steps += 1;
             lambda = (lambda / 10.0).max(1e-12);
             relinearize = true;
-            if decrease <= 1e-12 * current_cost {
+            if decrease <= stop.relative_decrease * current_cost {
                 break;
             }
         } else {

@@ -376,9 +376,12 @@ fn five_point_ransac_survives_half_outliers() {
     assert!(kept_outliers * 33 < kept, "{kept_outliers} of {kept}");
 }
 
-/// The same for the eight-point method: 99 of 100 on seed 22, but only 985
-/// of 1,000 over seeds 100-109 (docs/visual-odometry.md): the misses are
-/// mostly runs that reach the 5,000-sample cap with half the right matches
+/// The same for the eight-point method: 100 of 100 on seed 22, 996 of 1,000
+/// over seeds 100-109 ([`thousand_trials_within_one_degree`],
+/// docs/visual-odometry.md). Before its local optimization ended on the
+/// essential constraint, and was triggered by the best sample hypothesis
+/// rather than the best model, 99 of 100 and 985 of 1,000: the misses were
+/// mostly runs that reached the 5,000-sample cap with half the right matches
 /// as their consensus.
 #[test]
 fn eight_point_ransac_survives_half_outliers() {
@@ -391,10 +394,12 @@ fn eight_point_ransac_survives_half_outliers() {
         median(translation.clone()),
         within_bound
     );
-    // Measured (seed 22): rotation median 0.244 deg, 99 of 100 below 1 deg,
-    // translation median 0.559 deg, 90 of 100 runs stopped by the bound (with
+    // Measured (seed 22): rotation median 0.236 deg, 100 of 100 below 1 deg,
+    // translation median 0.542 deg, 97 of 100 runs stopped by the bound (with
     // s = 8 and w ≈ 0.45 the bound log(0.01)/log(1 − w⁸) is in the thousands:
-    // some runs reach the 5000 cap), 213 wrong matches among 9648 inliers.
+    // a run with few right matches reaches the 5000 cap), 206 wrong matches
+    // among 9720 inliers. Before the local optimization on the essential
+    // constraint: 0.244 deg, 99 of 100, 0.559 deg, 90 by the bound.
     assert!(
         share_below(&rotation, 1.0) >= 99,
         "{}",
@@ -402,20 +407,23 @@ fn eight_point_ransac_survives_half_outliers() {
     );
     assert!(median(rotation) < 0.3);
     assert!(median(translation) < 0.7);
-    // 85 of 100 when local optimization stopped after three refits.
-    assert!(within_bound >= 88, "{within_bound}");
+    // 85 of 100 when local optimization stopped after three refits, 90 with
+    // the eight-point refits alone.
+    assert!(within_bound >= 95, "{within_bound}");
     assert!(kept_outliers * 33 < kept, "{kept_outliers} of {kept}");
 }
 
 /// The nonlinear refinement is what lifts the share within 1°: the same
-/// seeded trials without it (the linear refit alone) end within 1° in 84
-/// (five-point) and 95 (eight-point) of 100, with it in 100 and 99; the
-/// medians of the rotation and translation errors fall as well.
+/// seeded trials without it (the linear refits alone) end within 1° in 84
+/// (five-point) and 99 (eight-point) of 100, with it in 100 and 100; the
+/// medians of the rotation and translation errors fall as well. (The
+/// eight-point method also refines inside its local optimization when the
+/// refinement is on; over 1,000 trials 973 without, 996 with.)
 #[test]
 fn refinement_lifts_the_share_within_one_degree() {
     for (method, seed, without, with) in [
         (Method::FivePoint, 21, 84, 100),
-        (Method::EightPoint, 22, 95, 99),
+        (Method::EightPoint, 22, 99, 100),
     ] {
         let (linear, linear_t, ..) =
             ransac_trials_with(method, EarlyRejection::None, false, 100, seed);
@@ -723,4 +731,40 @@ fn sprt_threshold_solves_its_equation() {
 #[test]
 fn running_gives_what_stepping_gives_with_sprt() {
     assert_running_gives_what_stepping_gives(EarlyRejection::Sprt);
+}
+
+/// The 1,000-trial measurement of `docs/visual-odometry.md` ("The 99 %
+/// accuracy criterion"): seeds 100-109, ten runs of 100 trials each of
+/// [`ransac_trials_with`], for both methods, with and without the SPRT and
+/// the refinement. Prints how many of the 1,000 runs end within 1° of the
+/// true rotation, how many stopped by their bound, and the samples drawn.
+/// Slow in a debug build: `cargo test --release -p slamlab-core --lib
+/// thousand_trials -- --ignored --nocapture`.
+#[test]
+#[ignore = "the 1,000-trial measurement of docs/visual-odometry.md; minutes in a debug build"]
+fn thousand_trials_within_one_degree() {
+    for method in [Method::EightPoint, Method::FivePoint] {
+        for early_rejection in [EarlyRejection::None, EarlyRejection::Sprt] {
+            for refine in [false, true] {
+                let (mut within, mut translation_within, mut bound, mut samples) = (0, 0, 0, 0);
+                let mut misses = Vec::new();
+                for seed in 100..110 {
+                    let (rotation, translation, within_bound, _, _, (_, drawn)) =
+                        ransac_trials_with(method, early_rejection, refine, 100, seed);
+                    within += share_below(&rotation, 1.0);
+                    translation_within += share_below(&translation, 1.0);
+                    bound += within_bound;
+                    samples += drawn;
+                    misses.extend(rotation.iter().filter(|e| **e >= 1.0).copied());
+                }
+                misses.sort_by(f64::total_cmp);
+                eprintln!(
+                    "{} {} refine {refine}: {within} of 1000 within 1 deg (translation {translation_within}), {bound} stopped by the bound, {samples} samples; misses {:.2?}",
+                    method.name(),
+                    early_rejection.name(),
+                    misses
+                );
+            }
+        }
+    }
 }

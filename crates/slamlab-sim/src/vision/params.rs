@@ -74,7 +74,7 @@ pub static PARAMS: &[Param<VoScenario>] = &[
     ),
     Param::words(
         "refine",
-        "after RANSAC, Levenberg-Marquardt on (R, t) over the Sampson distances of the inliers (on), or the linear eight-point refit alone (off)",
+        "Levenberg-Marquardt on (R, t) over the Sampson distances of the inliers, after RANSAC and (eight-point) inside its local optimization (on), or the linear eight-point refits alone (off)",
         ON_OFF,
         |s| Some(on_off(s.settings.refine)),
         |s, v| read_on_off(v).map(|on| s.settings.refine = on),
