@@ -95,7 +95,7 @@ fn export_writes_a_ros_map_and_localize_opens_the_monte_carlo_lesson() {
     h.run();
     let yaml = std::fs::read_to_string(dir.join("slamlab-map.yaml")).unwrap();
     let pgm = std::fs::read(dir.join("slamlab-map.pgm")).unwrap();
-    let (grid, _) = slamlab_sim::grid::map_io::load_map(&yaml, &pgm).unwrap();
+    let (grid, _) = slamlab_sim::io::ros_map::load_map(&yaml, &pgm).unwrap();
     let (free, occupied, _) = grid.counts();
     assert!(
         free > 1000 && occupied > 100,

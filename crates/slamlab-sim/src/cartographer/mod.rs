@@ -32,6 +32,7 @@
 //! or a CARMEN log); the truth reaches only [`CartographerSim::summary`].
 
 pub mod input;
+pub mod session;
 #[cfg(test)]
 mod tests;
 mod view;

@@ -12,7 +12,7 @@
 
 use crate::cartographer::input::{KidnapPlace, kidnap_input_to};
 use crate::cartographer::{CartographerParams, CartographerPhase, CartographerSim};
-use crate::laser_log::SimulatedLogConfig;
+use crate::grid::SimulatedLogConfig;
 use crate::mapping::MappingInput;
 use crate::params::{Param, Scenario, choose};
 use crate::stepper::Simulation;

@@ -1,6 +1,6 @@
 use super::input::{KidnapPlace, kidnap_input, kidnap_input_to};
 use super::*;
-use crate::laser_log::SimulatedLogConfig;
+use crate::grid::SimulatedLogConfig;
 use crate::mapping::builtin_map;
 
 fn run_with(

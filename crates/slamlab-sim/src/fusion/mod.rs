@@ -17,11 +17,11 @@
 
 mod experiment;
 mod landmark_pose;
-pub mod lesson;
 pub mod params;
 mod runner;
 mod scenario;
 mod sensors;
+pub mod session;
 #[cfg(test)]
 mod tests;
 

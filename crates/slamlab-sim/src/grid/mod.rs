@@ -5,11 +5,11 @@
 pub mod builtin;
 pub mod explorer;
 pub mod lidar;
-pub mod map_io;
 pub mod robot;
+pub mod simulated_log;
 
 pub use builtin::BuiltinMap;
 pub use explorer::Explorer;
 pub use lidar::Lidar;
-pub use map_io::{ImageFormat, MapError, MapYaml};
 pub use robot::{GridRobot, OdometrySensor};
+pub use simulated_log::{SimLogError, SimulatedLogConfig, simulate_log};

@@ -8,11 +8,11 @@
 //! stream 2, odometry noise from stream 3, the explorer's goals from stream 4,
 //! each derived from the seed.
 
-use super::{LaserKind, LaserLog, LogOdometry, LogScan, TruePose};
 use crate::grid::explorer::{Explorer, ExplorerConfig};
 use crate::grid::lidar::Lidar;
 use crate::grid::robot::{GridRobot, OdometrySensor};
-use crate::localization::run::stream_seed;
+use crate::io::laser_log::{LaserKind, LaserLog, LogOdometry, LogScan, TruePose};
+use crate::kidnap::run::stream_seed;
 use rand::SeedableRng;
 use rand_chacha::ChaCha8Rng;
 use slamlab_core::grid::{Costmap, OccupancyGrid};
@@ -98,11 +98,11 @@ pub fn simulate_log(
         )));
     }
     let lidar = config.lidar;
-    if lidar.beams == 0 || lidar.beams > super::MAX_BEAMS {
+    if lidar.beams == 0 || lidar.beams > crate::io::laser_log::MAX_BEAMS {
         return Err(SimLogError::BadConfig(format!(
             "{} beams: the lidar needs 1 to {} beams",
             lidar.beams,
-            super::MAX_BEAMS
+            crate::io::laser_log::MAX_BEAMS
         )));
     }
     if !(lidar.max_range > 0.0 && lidar.max_range.is_finite()) {
@@ -177,4 +177,70 @@ pub fn simulate_log(
         });
     }
     Ok((log, truth))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::io::laser_log::tests::{assert_same_to_printed_precision, read};
+    use crate::io::laser_log::{read_truth, write_carmen, write_truth};
+    use std::f64::consts::PI;
+
+    #[test]
+    fn a_simulated_log_reads_back_as_recorded() {
+        let map = crate::grid::BuiltinMap::Maze.load().unwrap();
+        let config = SimulatedLogConfig::default();
+        let (log, truth) = simulate_log(&map, 150, 3, &config).unwrap();
+        assert_eq!(log.scans.len(), 150);
+        assert_eq!(truth.len(), 150);
+        assert_eq!(log.beams(), Some(360));
+        let s = &log.scans[0].scan;
+        assert_eq!(s.range_max, 12.0);
+        assert!(
+            (s.angles[0] + PI).abs() < 1e-15 && (s.angles[359] - PI * 179.0 / 180.0).abs() < 1e-12
+        );
+        assert_eq!(log.time_span(), Some((0.1, 15.0)));
+        // The same seed gives the same log; another seed does not.
+        let (again, truth_again) = simulate_log(&map, 150, 3, &config).unwrap();
+        assert_eq!(again, log);
+        assert_eq!(truth_again, truth);
+        let (other, _) = simulate_log(&map, 150, 4, &config).unwrap();
+        assert_ne!(other.scans[0].scan.ranges, log.scans[0].scan.ranges);
+        // The robot moved (about 0.5 m/s for 15 s) and the odometry drifted from
+        // the truth, but not wildly.
+        let first = truth[0].pose;
+        let last = truth[149].pose;
+        let moved: f64 = truth
+            .windows(2)
+            .map(|w| {
+                slamlab_core::math::hypot(w[1].pose.x - w[0].pose.x, w[1].pose.y - w[0].pose.y)
+            })
+            .sum();
+        assert!(moved > 2.0 && moved < 7.6, "{moved}");
+        let odom_last = log.scans[149].odometry;
+        let drift = slamlab_core::math::hypot(odom_last.x - last.x, odom_last.y - last.y);
+        assert!(drift > 1e-4 && drift < 1.0, "drift {drift}");
+        assert!(first != last);
+        // Through the file and back.
+        let text = write_carmen(&log).unwrap();
+        let back = read(&text).unwrap();
+        assert_same_to_printed_precision(&log, &back);
+        let truth_back = read_truth(&write_truth(&truth)).unwrap();
+        for (a, b) in truth.iter().zip(&truth_back) {
+            assert!((a.timestamp - b.timestamp).abs() <= 5e-7);
+            assert!((a.pose.x - b.pose.x).abs() <= 5e-7 && (a.pose.y - b.pose.y).abs() <= 5e-7);
+        }
+        // Bad configurations are refused with a message.
+        assert!(simulate_log(&map, MAX_SIMULATED_STEPS_PLUS_ONE, 1, &config).is_err());
+        let bad = SimulatedLogConfig {
+            dt: f64::NAN,
+            ..config
+        };
+        assert!(matches!(
+            simulate_log(&map, 10, 1, &bad),
+            Err(SimLogError::BadConfig(_))
+        ));
+    }
+
+    const MAX_SIMULATED_STEPS_PLUS_ONE: usize = MAX_SIMULATED_STEPS + 1;
 }

@@ -6,6 +6,7 @@ pub mod experiment;
 pub mod params;
 pub mod run;
 pub mod scenario;
+pub mod session;
 
 pub use run::{FilterRun, FilterSummary, MclPhase, MclRun, MclRunError, TickError, UpdateRecord};
 pub use scenario::{InitMode, LaserModelType, LocalizationEstimator, MclScenario};

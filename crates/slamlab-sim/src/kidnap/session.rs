@@ -7,8 +7,8 @@
 //! [`Stepper`]: crate::stepper::Stepper
 
 use crate::grid::builtin::BuiltinMap;
-use crate::grid::map_io::{load_lone_image, load_map, parse_map_yaml};
-use crate::localization::{MclPhase, MclRun, MclScenario};
+use crate::io::ros_map::{load_lone_image, load_map, parse_map_yaml};
+use crate::kidnap::{MclPhase, MclRun, MclScenario};
 use crate::params;
 use crate::stepper::Simulation;
 use slamlab_core::Pose2;
@@ -251,7 +251,7 @@ pub fn load_dropped_map(
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::localization::InitMode;
+    use crate::kidnap::InitMode;
     use crate::stepper::Stepper;
 
     fn lesson_run(seed: u64) -> Stepper<KidnapSim> {

@@ -13,9 +13,9 @@
 //! app can show the average building up without stalling a frame; the command
 //! line and the tests run it to the end.
 
-use crate::experiments::{DIVERGED_ERROR, has_diverged};
-use crate::scenario::{ControllerKind, EstimatorKind, LandmarkScenario};
-use crate::session::LandmarkSession;
+use crate::landmark_slam::experiment::{DIVERGED_ERROR, has_diverged};
+use crate::world::landmark_scenario::{ControllerKind, EstimatorKind, LandmarkScenario};
+use crate::world::landmark_session::LandmarkSession;
 use serde::Serialize;
 use slamlab_core::Control;
 use slamlab_core::stats::chi2_band_95;
@@ -249,7 +249,7 @@ impl ConsistencyStudy {
                 }
             })
             .collect();
-        let mut parameters = crate::metrics::parameters_json(&self.template);
+        let mut parameters = crate::landmark_slam::summary::parameters_json(&self.template);
         parameters.insert("trials".into(), self.trials.into());
         parameters.insert("steps".into(), self.steps.into());
         parameters.insert(
@@ -343,7 +343,7 @@ pub struct ConsistencyResult {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::metrics::run_headless;
+    use crate::landmark_slam::summary::run_headless;
 
     #[test]
     fn the_average_is_over_trials_tick_by_tick() {

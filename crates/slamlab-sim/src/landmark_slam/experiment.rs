@@ -7,9 +7,9 @@
 //! 200 iterations), a 20 m square with uniformly random landmarks, and a sensor
 //! that sees all around to 8 m. Every parameter is printed with the results.
 
-use crate::scenario::{ControllerKind, EstimatorKind, LandmarkScenario};
-use crate::session::{FilterRun, LandmarkSession};
-use crate::world::LandmarkLayout;
+use crate::world::landmark_scenario::{ControllerKind, EstimatorKind, LandmarkScenario};
+use crate::world::landmark_session::{FilterRun, LandmarkSession};
+use crate::world::landmarks::LandmarkLayout;
 use serde::Serialize;
 use std::f64::consts::PI;
 
@@ -209,7 +209,7 @@ pub fn ekf_vs_ukf(
                 .collect(),
         })
         .collect();
-    let mut parameters = crate::metrics::parameters_json(&template);
+    let mut parameters = crate::landmark_slam::summary::parameters_json(&template);
     parameters.remove("seed");
     parameters.insert("seed".into(), seed.into());
     parameters.insert("trials".into(), trials.into());

@@ -14,10 +14,10 @@
 //! assumes exactly the noise the world injects.
 
 use crate::noise::{Stream, stream_rng};
-use crate::scenario::{ControllerKind, LandmarkScenario};
-use crate::session::Observation;
-use crate::session::sim::{executed_command, measure_landmarks};
-use crate::world::LandmarkWorld;
+use crate::world::landmark_scenario::{ControllerKind, LandmarkScenario};
+use crate::world::landmark_session::Observation;
+use crate::world::landmark_session::sim::{executed_command, measure_landmarks};
+use crate::world::landmarks::LandmarkWorld;
 use rand_chacha::ChaCha8Rng;
 use serde::Serialize;
 use slamlab_core::association::AssociationMode;
@@ -416,7 +416,7 @@ pub fn fastslam_experiment(
         settings,
         // The world's parameters; the lesson's estimator list and UKF settings do
         // not apply here.
-        parameters: crate::metrics::parameters_json(scenario)
+        parameters: crate::landmark_slam::summary::parameters_json(scenario)
             .into_iter()
             .filter(|(k, _)| k != "estimator" && !k.starts_with("ukf-"))
             .collect(),

@@ -3,9 +3,9 @@
 //! the seed; parameters given beside it (`?preset=thesis-exp2&landmarks=30`,
 //! `--preset thesis-exp2 --landmarks 30`) apply on top, whatever their order.
 
-use crate::experiments::ekf_vs_ukf_scenario;
+use crate::landmark_slam::experiment::ekf_vs_ukf_scenario;
 use crate::params::Preset;
-use crate::scenario::{EstimatorKind, LandmarkScenario};
+use crate::world::landmark_scenario::{EstimatorKind, LandmarkScenario};
 
 /// Every preset, in menu order.
 pub static PRESETS: &[Preset<LandmarkScenario>] = &[

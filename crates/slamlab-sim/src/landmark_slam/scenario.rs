@@ -2,10 +2,12 @@
 //! unit, range, help, getter and setter. The URL, share links, the CLI flags,
 //! `slamlab params` and the app's panel all read it through [`crate::params`].
 
+use crate::landmark_slam::presets;
 use crate::params::{self, Param, ParamIssue, Preset, Scenario, choose, choose_list};
-use crate::presets;
-use crate::scenario::{Association, ControllerKind, EstimatorKind, LandmarkScenario};
-use crate::world::LandmarkLayout;
+use crate::world::landmark_scenario::{
+    Association, ControllerKind, EstimatorKind, LandmarkScenario,
+};
+use crate::world::landmarks::LandmarkLayout;
 use slamlab_core::MotionModel;
 use slamlab_core::particle::Resampler;
 

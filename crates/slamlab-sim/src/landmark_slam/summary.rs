@@ -1,8 +1,8 @@
 //! Whole-run metrics and the headless runner behind the CLI and the tests.
 
 use crate::params;
-use crate::scenario::LandmarkScenario;
-use crate::session::{FilterRun, LandmarkSession};
+use crate::world::landmark_scenario::LandmarkScenario;
+use crate::world::landmark_session::{FilterRun, LandmarkSession};
 use serde::Serialize;
 
 /// The summary of one estimator over one run.

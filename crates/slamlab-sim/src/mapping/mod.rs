@@ -9,6 +9,7 @@
 //! - [`MappingSession`]: the lesson's face on a [`Stepper`], opened from a
 //!   scenario and an input.
 
+pub mod grid_fastslam;
 pub mod run;
 pub mod scenario;
 #[cfg(test)]
@@ -21,7 +22,8 @@ pub use run::{
 pub use scenario::{MappingScenario, PoseSource, RuleKind};
 
 use crate::grid::builtin::BuiltinMap;
-use crate::laser_log::{LaserLog, SimulatedLogConfig, simulate_log};
+use crate::grid::{SimulatedLogConfig, simulate_log};
+use crate::io::laser_log::LaserLog;
 use crate::params;
 use crate::stepper::{CheckpointPolicy, Stepper};
 use serde::Serialize;
@@ -270,7 +272,9 @@ impl MappingSession {
         // Grid FastSLAM: the heaviest particle's path as it stands now (its
         // past corrected by later scans), at the scans it processed.
         let rmse = match (filter.and_then(|f| f.best()), input.truth.as_deref()) {
-            (Some(best), Some(truth)) => crate::grid_fastslam::path_rmse(&best.path.path(), truth),
+            (Some(best), Some(truth)) => {
+                crate::mapping::grid_fastslam::path_rmse(&best.path.path(), truth)
+            }
             (None, truth) if filter.is_none() => trajectory_rmse(&records.poses, truth),
             _ => None,
         };

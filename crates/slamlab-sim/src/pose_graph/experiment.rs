@@ -6,9 +6,9 @@
 //! graph is then optimized. The result compares the position RMSE of dead
 //! reckoning, EKF-SLAM and the optimized graph against the truth.
 
-use crate::experiments::ekf_vs_ukf_scenario;
-use crate::scenario::{EstimatorKind, LandmarkScenario};
-use crate::session::LandmarkSession;
+use crate::landmark_slam::experiment::ekf_vs_ukf_scenario;
+use crate::world::landmark_scenario::{EstimatorKind, LandmarkScenario};
+use crate::world::landmark_session::LandmarkSession;
 use nalgebra::{Matrix3, Vector3};
 use rand::SeedableRng;
 use rand::seq::index::sample;

@@ -12,9 +12,9 @@
 //! vertex states and the solver's own state, no matrix), so "Step back" goes back
 //! one iteration or one edit exactly, within a bounded memory.
 
-use crate::graph_io;
+use crate::io;
 use crate::params::{Param, Scenario, choose};
-use crate::pose_graph_experiment::{PoseGraphExperimentConfig, manhattan_graph, thesis_graph};
+use crate::pose_graph::experiment::{PoseGraphExperimentConfig, manhattan_graph, thesis_graph};
 use rand::{Rng as _, SeedableRng as _};
 use rand_chacha::ChaCha8Rng;
 use slamlab_core::Pose2;
@@ -285,7 +285,7 @@ pub fn information_pattern_of_every_vertex(graph: &PoseGraph) -> BlockPattern {
 }
 
 /// The largest file the lesson opens, bytes (the readers' own limit).
-pub const MAX_FILE_BYTES: usize = graph_io::MAX_FILE_BYTES;
+pub const MAX_FILE_BYTES: usize = io::graph::MAX_FILE_BYTES;
 
 /// One solver's result in the kernel comparison.
 #[derive(Clone, Debug, PartialEq)]
@@ -415,7 +415,7 @@ impl PoseGraphSession {
                 e.valid_up_to()
             )
         })?;
-        let mut graph = graph_io::read_graph(text).map_err(|e| format!("{name}: {e}"))?;
+        let mut graph = io::graph::read_graph(text).map_err(|e| format!("{name}: {e}"))?;
         let notes = fix_gauge(&mut graph).into_iter().collect();
         Self::new(scenario, graph, None, name.to_owned(), notes).map_err(|e| format!("{name}: {e}"))
     }
@@ -969,7 +969,7 @@ mod tests {
     fn the_thesis_example_is_the_experiments_graph() {
         let session = PoseGraphSession::from_scenario(PoseGraphScenario::default()).unwrap();
         let result =
-            crate::pose_graph_experiment::run(PoseGraphExperimentConfig::default()).unwrap();
+            crate::pose_graph::experiment::run(PoseGraphExperimentConfig::default()).unwrap();
         assert_eq!(session.graph().vertices().len(), result.poses);
         assert_eq!(session.graph().edges().len(), result.edges);
         assert_eq!(session.cost(), result.initial_cost);

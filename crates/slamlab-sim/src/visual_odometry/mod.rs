@@ -11,8 +11,8 @@
 
 pub mod experiment;
 pub mod odometry;
-pub mod params;
 pub mod photos;
+pub mod scenario;
 pub mod session;
 pub mod world;
 
@@ -20,6 +20,6 @@ pub use experiment::{
     SprtSummary, TwoViewReport, TwoViewResult, TwoViewSettings, two_view_experiment,
 };
 pub use odometry::{VoPair, VoRun, VoSettings, run_visual_odometry};
-pub use params::VoScenario;
+pub use scenario::VoScenario;
 pub use session::TwoViewSession;
 pub use world::{CameraWorld, Frame, SceneKind, WorldPoint};

@@ -190,7 +190,7 @@ impl TwoViewSession {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::vision::{VoSettings, run_visual_odometry};
+    use crate::visual_odometry::{VoSettings, run_visual_odometry};
 
     #[test]
     fn stepping_to_the_end_gives_the_runs_estimate_and_back_is_exact() {

@@ -1,7 +1,7 @@
 //! The landmark-SLAM scenario: plain data that runs the same headless, in the
 //! app and from a URL.
 
-use crate::world::{LandmarkLayout, LandmarkWorld};
+use crate::world::landmarks::{LandmarkLayout, LandmarkWorld};
 use serde::{Deserialize, Serialize};
 use slamlab_core::association::DEFAULT_GATE;
 use slamlab_core::kalman::{FilterConfig, FilterNoise, UnscentedParams};

@@ -51,12 +51,10 @@
 //! checked while decompressing.
 
 mod compression;
-mod simulate;
 mod truth;
 mod write;
 
 pub use compression::Compression;
-pub use simulate::{SimLogError, SimulatedLogConfig, simulate_log};
 pub use truth::{TruePose, TruthError, read_truth, write_truth};
 pub use write::{WriteError, write_carmen};
 
@@ -718,4 +716,4 @@ fn check_beams(
 }
 
 #[cfg(test)]
-mod tests;
+pub(crate) mod tests;

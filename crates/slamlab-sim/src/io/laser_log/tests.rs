@@ -20,7 +20,7 @@ TRUEPOS 1 2 3 1 2 3 100.6 nohost 0.6
 NMEA-GGA 1 2 3 100.7 nohost 0.7
 ";
 
-fn read(text: &str) -> Result<LaserLog, LogError> {
+pub(crate) fn read(text: &str) -> Result<LaserLog, LogError> {
     LaserLog::from_bytes(text.as_bytes())
 }
 
@@ -404,7 +404,7 @@ fn sample_log() -> LaserLog {
 }
 
 /// `a` equals `b` to the precision [`write_carmen`] prints.
-fn assert_same_to_printed_precision(a: &LaserLog, b: &LaserLog) {
+pub(crate) fn assert_same_to_printed_precision(a: &LaserLog, b: &LaserLog) {
     assert_eq!(a.scans.len(), b.scans.len());
     assert_eq!(a.odometry.len(), b.odometry.len());
     let pose_close = |p: &Pose2, q: &Pose2| {
@@ -495,60 +495,6 @@ fn truth_files_round_trip_and_name_bad_lines() {
     assert!(read_truth("0.1 1 2 nan\n").is_err());
     assert!(read_truth("0.1 1 2 3 4\n").is_err());
 }
-
-#[test]
-fn a_simulated_log_reads_back_as_recorded() {
-    let map = crate::grid::BuiltinMap::Maze.load().unwrap();
-    let config = SimulatedLogConfig::default();
-    let (log, truth) = simulate_log(&map, 150, 3, &config).unwrap();
-    assert_eq!(log.scans.len(), 150);
-    assert_eq!(truth.len(), 150);
-    assert_eq!(log.beams(), Some(360));
-    let s = &log.scans[0].scan;
-    assert_eq!(s.range_max, 12.0);
-    assert!((s.angles[0] + PI).abs() < 1e-15 && (s.angles[359] - PI * 179.0 / 180.0).abs() < 1e-12);
-    assert_eq!(log.time_span(), Some((0.1, 15.0)));
-    // The same seed gives the same log; another seed does not.
-    let (again, truth_again) = simulate_log(&map, 150, 3, &config).unwrap();
-    assert_eq!(again, log);
-    assert_eq!(truth_again, truth);
-    let (other, _) = simulate_log(&map, 150, 4, &config).unwrap();
-    assert_ne!(other.scans[0].scan.ranges, log.scans[0].scan.ranges);
-    // The robot moved (about 0.5 m/s for 15 s) and the odometry drifted from
-    // the truth, but not wildly.
-    let first = truth[0].pose;
-    let last = truth[149].pose;
-    let moved: f64 = truth
-        .windows(2)
-        .map(|w| slamlab_core::math::hypot(w[1].pose.x - w[0].pose.x, w[1].pose.y - w[0].pose.y))
-        .sum();
-    assert!(moved > 2.0 && moved < 7.6, "{moved}");
-    let odom_last = log.scans[149].odometry;
-    let drift = slamlab_core::math::hypot(odom_last.x - last.x, odom_last.y - last.y);
-    assert!(drift > 1e-4 && drift < 1.0, "drift {drift}");
-    assert!(first != last);
-    // Through the file and back.
-    let text = write_carmen(&log).unwrap();
-    let back = read(&text).unwrap();
-    assert_same_to_printed_precision(&log, &back);
-    let truth_back = read_truth(&write_truth(&truth)).unwrap();
-    for (a, b) in truth.iter().zip(&truth_back) {
-        assert!((a.timestamp - b.timestamp).abs() <= 5e-7);
-        assert!((a.pose.x - b.pose.x).abs() <= 5e-7 && (a.pose.y - b.pose.y).abs() <= 5e-7);
-    }
-    // Bad configurations are refused with a message.
-    assert!(simulate_log(&map, MAX_SIMULATED_STEPS_PLUS_ONE, 1, &config).is_err());
-    let bad = SimulatedLogConfig {
-        dt: f64::NAN,
-        ..config
-    };
-    assert!(matches!(
-        simulate_log(&map, 10, 1, &bad),
-        Err(SimLogError::BadConfig(_))
-    ));
-}
-
-const MAX_SIMULATED_STEPS_PLUS_ONE: usize = simulate::MAX_SIMULATED_STEPS + 1;
 
 /// The Intel Research Lab log from `shared/data/laser` (beside the
 /// repository, or in `$SLAMLAB_SHARED`), when present.

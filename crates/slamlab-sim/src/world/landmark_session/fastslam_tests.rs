@@ -2,8 +2,8 @@
 
 use super::tests::shown;
 use super::*;
-use crate::particle_estimator::OWN_LABELS;
-use crate::scenario::Association;
+use crate::world::landmark_scenario::Association;
+use crate::world::landmark_session::particle_estimator::OWN_LABELS;
 
 fn ekf_and_fastslam(seed: u64) -> LandmarkScenario {
     LandmarkScenario {
@@ -179,7 +179,7 @@ fn unknown_association_runs_nearest_neighbour_and_maximum_likelihood() {
 #[test]
 fn zero_particles_and_a_threshold_outside_0_1_are_repaired_with_a_notice() {
     let mut s = LandmarkSession::new(LandmarkScenario {
-        fastslam: crate::scenario::FastSlamSettings {
+        fastslam: crate::world::landmark_scenario::FastSlamSettings {
             particles: 0,
             resample_threshold: 3.0,
             ..Default::default()

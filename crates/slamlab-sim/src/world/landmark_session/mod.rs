@@ -24,6 +24,8 @@
 
 #[cfg(test)]
 mod fastslam_tests;
+pub mod ideal_ekf;
+pub mod particle_estimator;
 mod records;
 pub(crate) mod sim;
 #[cfg(test)]
@@ -37,9 +39,9 @@ pub use sim::{
     fastslam_config,
 };
 
-use crate::scenario::{ControllerKind, EstimatorKind, LandmarkScenario};
 use crate::stepper::Stepper;
-use crate::world::LandmarkWorld;
+use crate::world::landmark_scenario::{ControllerKind, EstimatorKind, LandmarkScenario};
+use crate::world::landmarks::LandmarkWorld;
 use slamlab_core::kalman::{LandmarkSlam, PredictReport, UpdateReport};
 use slamlab_core::particle::fastslam::ResampleReport;
 use slamlab_core::range_bearing::RangeBearingSensor;

@@ -8,7 +8,7 @@
 //! ([`tick_metrics`]).
 
 use crate::stepper::Records;
-use crate::world::LandmarkWorld;
+use crate::world::landmarks::LandmarkWorld;
 use nalgebra::{DMatrix, DVector};
 use slamlab_core::kalman::LandmarkSlam;
 use slamlab_core::stats::normalized_squared_error;

@@ -18,13 +18,15 @@
 
 use super::records::{LandmarkRecords, NeffSample, NisSample, TickMetrics};
 use super::records::{nearest_landmark_rmse, tick_metrics};
-use crate::ideal_ekf::IdealEkf;
 use crate::noise::{Stream, gaussian, stream_rng};
 use crate::params::{self, ParamIssue};
-use crate::particle_estimator::{FastSlamEstimator, OWN_LABELS};
-use crate::scenario::{Association, ControllerKind, EstimatorKind, LandmarkScenario};
 use crate::stepper::Simulation;
-use crate::world::LandmarkWorld;
+use crate::world::landmark_scenario::{
+    Association, ControllerKind, EstimatorKind, LandmarkScenario,
+};
+use crate::world::landmark_session::ideal_ekf::IdealEkf;
+use crate::world::landmark_session::particle_estimator::{FastSlamEstimator, OWN_LABELS};
+use crate::world::landmarks::LandmarkWorld;
 use nalgebra::Vector2;
 use rand_chacha::ChaCha8Rng;
 use slamlab_core::association::{

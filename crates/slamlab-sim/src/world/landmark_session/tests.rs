@@ -317,7 +317,7 @@ fn the_sensor_reach_changes_from_the_next_tick_and_replays_exactly() {
 #[test]
 fn stepping_back_restores_the_state_before_the_last_phase() {
     let scenario = LandmarkScenario {
-        controller: crate::scenario::ControllerKind::Manual,
+        controller: crate::world::landmark_scenario::ControllerKind::Manual,
         estimators: vec![EstimatorKind::Ekf, EstimatorKind::Ukf],
         ..Default::default()
     };
@@ -360,7 +360,7 @@ fn stepping_back_restores_the_state_before_the_last_phase() {
 #[test]
 fn a_stopped_manual_robot_stays_put() {
     let mut s = LandmarkSession::new(LandmarkScenario {
-        controller: crate::scenario::ControllerKind::Manual,
+        controller: crate::world::landmark_scenario::ControllerKind::Manual,
         ..Default::default()
     });
     let start = s.truth();
