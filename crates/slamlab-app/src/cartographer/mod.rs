@@ -35,8 +35,8 @@ use slamlab_sim::cartographer::session::{
     CartographerEvent, CartographerRun, CartographerScenario,
 };
 use slamlab_sim::cartographer::{CartographerPhase, CartographerSim, NextPhase};
+use slamlab_sim::grid::{MappingInput, builtin_map, log_input};
 use slamlab_sim::io::laser_log::LaserLog;
-use slamlab_sim::mapping::{MappingInput, builtin_map, log_input};
 use slamlab_sim::params;
 use slamlab_sim::stepper::{CheckpointPolicy, Stepper};
 use std::sync::Arc;

@@ -22,10 +22,10 @@ use crate::widgets::file_picker::{FilePicker, PickedFile};
 use crate::widgets::map_canvas::MapView;
 use crate::widgets::params_panel::{self, PendingParams};
 use serde::{Deserialize, Serialize};
+use slamlab_sim::grid::{MappingInput, builtin_map, log_input};
 use slamlab_sim::io::laser_log::LaserLog;
 use slamlab_sim::mapping::{
-    MappingEvent, MappingInput, MappingPhase, MappingScenario, MappingSession, PoseSource,
-    builtin_map, log_input, simulated_input,
+    MappingEvent, MappingPhase, MappingScenario, MappingSession, PoseSource, simulated_input,
 };
 use slamlab_sim::params;
 use slamlab_sim::stepper::Simulation;

@@ -206,7 +206,7 @@ fn a_dropped_ros_map_is_explored_and_a_broken_one_leaves_the_run() {
     let input = lesson(&h).session().sim().input().clone();
     assert!(input.name.contains("office.yaml"), "{}", input.name);
     assert_eq!(input.scans.len(), 60);
-    let office = slamlab_sim::mapping::builtin_map("office").unwrap();
+    let office = slamlab_sim::grid::builtin_map("office").unwrap();
     assert_eq!(input.true_map.as_ref().unwrap().width(), office.width());
     for _ in 0..60 {
         lesson_mut(&mut h).step_tick();

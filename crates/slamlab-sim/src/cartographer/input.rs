@@ -11,8 +11,8 @@
 use crate::grid::SimulatedLogConfig;
 use crate::grid::explorer::Explorer;
 use crate::grid::robot::{GridRobot, OdometrySensor};
-use crate::kidnap::run::stream_seed;
-use crate::mapping::{InputScan, MappingInput};
+use crate::grid::{InputScan, MappingInput};
+use crate::noise::stream_seed;
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
 use slamlab_core::Pose2;

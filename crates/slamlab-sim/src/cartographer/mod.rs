@@ -37,7 +37,7 @@ pub mod session;
 mod tests;
 mod view;
 
-use crate::mapping::{MappingInput, map_agreement};
+use crate::grid::{MappingInput, map_agreement};
 use nalgebra::Matrix3;
 use serde::{Deserialize, Serialize};
 use slamlab_core::Pose2;

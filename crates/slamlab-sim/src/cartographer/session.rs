@@ -12,8 +12,8 @@
 
 use crate::cartographer::input::{KidnapPlace, kidnap_input_to};
 use crate::cartographer::{CartographerParams, CartographerPhase, CartographerSim};
+use crate::grid::MappingInput;
 use crate::grid::SimulatedLogConfig;
-use crate::mapping::MappingInput;
 use crate::params::{Param, Scenario, choose};
 use crate::stepper::Simulation;
 use serde::{Deserialize, Serialize};
@@ -454,7 +454,7 @@ mod tests {
                 kidnap_at: Some(152),
                 ..CartographerScenario::default()
             };
-            let grid = Arc::new(crate::mapping::builtin_map("office").unwrap());
+            let grid = Arc::new(crate::grid::builtin_map("office").unwrap());
             let input = Arc::new(scenario.simulate(grid, "office").unwrap());
             for (by_phase, budget_ms) in [(false, 25.0), (true, 12.0)] {
                 let (run, _) = CartographerRun::new(&scenario, input.clone());

@@ -1,7 +1,7 @@
 //! The SLAM pose taken from the landmark lesson's EKF-SLAM on the same drive,
 //! instead of the white-noise-and-drift model.
 
-use super::sensors::{Arrival, SLAM, SensorLog};
+use super::log::{Arrival, SLAM, SensorLog};
 use crate::world::landmark_scenario::{ControllerKind, EstimatorKind, LandmarkScenario};
 use crate::world::landmark_session::LandmarkSession;
 use crate::world::landmarks::LandmarkLayout;

@@ -9,10 +9,11 @@
 //! (NaN, zero noise, a stamp before the start or from the past) that the filters
 //! skip, name and count.
 
+use super::log::{Arrival, IMU, ODOMETRY, SLAM, SensorLog};
 use super::params::FusionLessonScenario;
 use super::runner::{FusionMode, ModeRun};
 use super::scenario::FusionScenario;
-use super::sensors::{Arrival, IMU, ODOMETRY, SLAM, SensorLog, simulate};
+use super::sensors::simulate;
 use crate::stepper::Simulation;
 use nalgebra::{Matrix3, Vector3};
 use slamlab_core::geometry::Pose2;

@@ -12,7 +12,7 @@ use crate::grid::explorer::{Explorer, ExplorerConfig};
 use crate::grid::lidar::Lidar;
 use crate::grid::robot::{GridRobot, OdometrySensor};
 use crate::io::laser_log::{LaserKind, LaserLog, LogOdometry, LogScan, TruePose};
-use crate::kidnap::run::stream_seed;
+use crate::noise::stream_seed;
 use rand::SeedableRng;
 use rand_chacha::ChaCha8Rng;
 use slamlab_core::grid::{Costmap, OccupancyGrid};

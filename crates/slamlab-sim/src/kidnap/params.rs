@@ -465,6 +465,32 @@ impl Scenario for MclScenario {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use slamlab_core::odometry::OdometryModel;
+    use slamlab_core::particle::ScanAggregation;
+
+    #[test]
+    fn presets_exist_and_differ() {
+        for name in PRESETS.iter().map(|p| p.id) {
+            let p = MclScenario::preset(name).unwrap();
+            assert_ne!(p, MclScenario::default(), "{name}");
+            assert_eq!(p.recovery_alpha_slow, 0.001);
+            assert_eq!(p.recovery_alpha_fast, 0.1);
+        }
+        let nav2 = MclScenario::preset("nav2").unwrap();
+        assert_eq!((nav2.min_particles, nav2.max_particles), (500, 2000));
+        assert!(nav2.mcl_config().kld.is_some());
+        assert!(MclScenario::preset("nope").is_none());
+        for name in ["amcl-ros1", "nav2"] {
+            let c = MclScenario::preset(name).unwrap().mcl_config();
+            assert_eq!(c.aggregation, ScanAggregation::AmclCubes, "{name}");
+        }
+        assert_eq!(
+            MclScenario::preset("amcl-ros1").unwrap().odom_model_type,
+            OdometryModel::Diff
+        );
+        assert_eq!(nav2.odom_model_type, OdometryModel::DiffCorrected);
+    }
+
     use crate::params::{apply_pairs, get, sanitize, set, to_pairs};
 
     #[test]

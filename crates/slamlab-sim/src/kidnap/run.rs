@@ -14,6 +14,7 @@
 use super::scenario::{InitMode, MclScenario};
 use crate::grid::explorer::Explorer;
 use crate::grid::robot::{GridRobot, OdometrySensor};
+use crate::noise::stream_seed;
 use rand::SeedableRng;
 use rand_chacha::ChaCha8Rng;
 use serde::{Deserialize, Serialize};
@@ -239,16 +240,6 @@ pub struct FilterSummary {
     pub heading_error_final: Option<f64>,
     /// Root mean square position error over the ticks from `converged_tick` on.
     pub position_rmse_converged: Option<f64>,
-}
-
-/// SplitMix64: derives independent stream seeds from the master seed.
-pub(crate) fn stream_seed(seed: u64, stream: u64) -> u64 {
-    let mut z = seed
-        .wrapping_add(stream.wrapping_mul(0x9E37_79B9_7F4A_7C15))
-        .wrapping_add(0x9E37_79B9_7F4A_7C15);
-    z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
-    z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
-    z ^ (z >> 31)
 }
 
 /// A running Monte Carlo localization scenario. Cloning it is a checkpoint.

@@ -7,11 +7,10 @@
 //! 200 iterations), a 20 m square with uniformly random landmarks, and a sensor
 //! that sees all around to 8 m. Every parameter is printed with the results.
 
-use crate::world::landmark_scenario::{ControllerKind, EstimatorKind, LandmarkScenario};
 use crate::world::landmark_session::{FilterRun, LandmarkSession};
-use crate::world::landmarks::LandmarkLayout;
 use serde::Serialize;
-use std::f64::consts::PI;
+
+pub use crate::world::landmark_scenario::ekf_vs_ukf_scenario;
 
 /// Iterations per trial, as in the thesis.
 pub const STEPS: u64 = 200;
@@ -24,30 +23,6 @@ pub const DIVERGED_ERROR: f64 = 5.0;
 pub(crate) fn has_diverged(run: &FilterRun) -> bool {
     run.latest()
         .is_some_and(|m| !(m.position_error <= DIVERGED_ERROR))
-}
-
-/// The scenario of thesis Experiment 1 with the control noise multiplied by
-/// `noise_scale` (2 gives Experiment 2), for one trial's seed.
-pub fn ekf_vs_ukf_scenario(noise_scale: f64, seed: u64) -> LandmarkScenario {
-    LandmarkScenario {
-        seed,
-        dt: 0.1,
-        world_size: 20.0,
-        landmarks: 20,
-        layout: LandmarkLayout::Random,
-        v_std: 0.1 * noise_scale,
-        w_std: PI / 18.0 * noise_scale,
-        range_std: 2.0,
-        bearing_std: PI / 18.0,
-        fov: 2.0 * PI,
-        max_range: 8.0,
-        controller: ControllerKind::Circle {
-            v: 1.0,
-            w: PI / 10.0,
-        },
-        estimators: vec![EstimatorKind::Ekf, EstimatorKind::Ukf],
-        ..LandmarkScenario::default()
-    }
 }
 
 /// Mean and sample standard deviation.

@@ -3,8 +3,8 @@
 //! the seed; parameters given beside it (`?preset=thesis-exp2&landmarks=30`,
 //! `--preset thesis-exp2 --landmarks 30`) apply on top, whatever their order.
 
-use crate::landmark_slam::experiment::ekf_vs_ukf_scenario;
 use crate::params::Preset;
+use crate::world::landmark_scenario::ekf_vs_ukf_scenario;
 use crate::world::landmark_scenario::{EstimatorKind, LandmarkScenario};
 
 /// Every preset, in menu order.

@@ -7,7 +7,8 @@
 //! the metrics: the best particle's path at its update scans against the true
 //! poses, and its map against the true map.
 
-use crate::mapping::{MappingInput, MappingScenario, builtin_map, map_agreement, simulated_input};
+use super::scenario::{MappingScenario, simulated_input};
+use crate::grid::{MappingInput, builtin_map, map_agreement};
 use serde::Serialize;
 use slamlab_core::Pose2;
 use slamlab_core::grid::{InsertParams, OccupancyGrid};

@@ -1,4 +1,5 @@
 use super::*;
+use crate::grid::builtin_map;
 use crate::stepper::Simulation;
 
 fn session(map: &str, steps: usize, seed: u64, poses: PoseSource) -> MappingSession {

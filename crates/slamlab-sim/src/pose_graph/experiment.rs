@@ -6,7 +6,7 @@
 //! graph is then optimized. The result compares the position RMSE of dead
 //! reckoning, EKF-SLAM and the optimized graph against the truth.
 
-use crate::landmark_slam::experiment::ekf_vs_ukf_scenario;
+use crate::world::landmark_scenario::ekf_vs_ukf_scenario;
 use crate::world::landmark_scenario::{EstimatorKind, LandmarkScenario};
 use crate::world::landmark_session::LandmarkSession;
 use nalgebra::{Matrix3, Vector3};

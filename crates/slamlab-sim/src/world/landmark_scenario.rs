@@ -287,3 +287,26 @@ impl LandmarkScenario {
         }
     }
 }
+/// The scenario of thesis Experiment 1 with the control noise multiplied by
+/// `noise_scale` (2 gives Experiment 2), for one trial's seed.
+pub fn ekf_vs_ukf_scenario(noise_scale: f64, seed: u64) -> LandmarkScenario {
+    LandmarkScenario {
+        seed,
+        dt: 0.1,
+        world_size: 20.0,
+        landmarks: 20,
+        layout: LandmarkLayout::Random,
+        v_std: 0.1 * noise_scale,
+        w_std: PI / 18.0 * noise_scale,
+        range_std: 2.0,
+        bearing_std: PI / 18.0,
+        fov: 2.0 * PI,
+        max_range: 8.0,
+        controller: ControllerKind::Circle {
+            v: 1.0,
+            w: PI / 10.0,
+        },
+        estimators: vec![EstimatorKind::Ekf, EstimatorKind::Ukf],
+        ..LandmarkScenario::default()
+    }
+}
