@@ -15,7 +15,7 @@ use nalgebra::{DMatrix, DVector};
 use slamlab_core::MotionModel;
 use slamlab_core::math;
 use slamlab_core::range_bearing::MIN_RANGE;
-use slamlab_sim::world::LandmarkLayout;
+use slamlab_sim::world::landmarks::LandmarkLayout;
 use slamlab_sim::{EstimatorKind, LandmarkScenario, LandmarkSession};
 use std::f64::consts::PI;
 

@@ -5,7 +5,9 @@
 
 #![allow(clippy::panic, clippy::unwrap_used, clippy::expect_used)] // a failing test stops
 
-use slamlab_sim::experiments::{ExperimentResult, FilterResult, ekf_vs_ukf, series_csv};
+use slamlab_sim::landmark_slam::experiment::{
+    ExperimentResult, FilterResult, ekf_vs_ukf, series_csv,
+};
 
 fn run(noise_scale: f64) -> ExperimentResult {
     ekf_vs_ukf(noise_scale, 50, 1, |_, _| {})

@@ -4,7 +4,7 @@
 
 use nalgebra::SymmetricEigen;
 use slamlab_core::stats::chi2_band_95;
-use slamlab_sim::consistency::{ConsistencyStudy, FilterConsistency};
+use slamlab_sim::landmark_slam::consistency::{ConsistencyStudy, FilterConsistency};
 use slamlab_sim::{EstimatorKind, LandmarkScenario, LandmarkSession};
 
 const RUNS: usize = 50;

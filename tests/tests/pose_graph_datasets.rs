@@ -6,7 +6,7 @@
 #![allow(clippy::panic, clippy::unwrap_used, clippy::expect_used)] // a failing test stops
 
 use slamlab_core::graph::{EdgeKind, Optimizer, OptimizerSettings, SolverKind};
-use slamlab_sim::graph_io::read_graph;
+use slamlab_sim::io::graph::read_graph;
 
 fn load(file: &str) -> Option<slamlab_core::graph::PoseGraph> {
     let path = format!(

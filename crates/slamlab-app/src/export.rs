@@ -7,7 +7,7 @@
 //! GTK or portal libraries in).
 
 use crate::query::{self, APP_KEYS};
-use slamlab_sim::scenario_file::ScenarioFile;
+use slamlab_sim::io::scenario_file::ScenarioFile;
 use std::sync::{Arc, Mutex};
 
 /// One plotted series, for the CSV export.

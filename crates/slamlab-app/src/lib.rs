@@ -822,7 +822,7 @@ impl SlamLabApp {
         for (name, bytes) in files {
             let opened = bytes
                 .and_then(|b| String::from_utf8(b).map_err(|_| "it is not text".to_owned()))
-                .and_then(|text| slamlab_sim::scenario_file::ScenarioFile::parse(&text));
+                .and_then(|text| slamlab_sim::io::scenario_file::ScenarioFile::parse(&text));
             match opened {
                 Ok(file) => self.open_scenario(&file, &name),
                 Err(e) => self.app_notices.push(format!("{name}: {e}")),
@@ -832,7 +832,11 @@ impl SlamLabApp {
 
     /// Opens a scenario file's lesson with its parameters and view, as a link with
     /// the same pairs would (its problems become notices).
-    pub fn open_scenario(&mut self, file: &slamlab_sim::scenario_file::ScenarioFile, name: &str) {
+    pub fn open_scenario(
+        &mut self,
+        file: &slamlab_sim::io::scenario_file::ScenarioFile,
+        name: &str,
+    ) {
         if registry::find(&file.lesson).is_none() {
             self.app_notices.push(format!(
                 "{name}: no lesson '{}' in this SLAM Lab; the current lesson stays",

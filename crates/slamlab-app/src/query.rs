@@ -436,9 +436,9 @@ mod tests {
         }
         let mut seeds = vec![
             link::<slamlab_sim::LandmarkScenario>("landmark-slam"),
-            link::<slamlab_sim::localization::MclScenario>("kidnap"),
-            link::<slamlab_sim::pose_graph_lesson::PoseGraphScenario>("pose-graph"),
-            link::<slamlab_sim::resampling_lab::LabScenario>("resampling"),
+            link::<slamlab_sim::kidnap::MclScenario>("kidnap"),
+            link::<slamlab_sim::pose_graph::session::PoseGraphScenario>("pose-graph"),
+            link::<slamlab_sim::resampling::session::LabScenario>("resampling"),
             link::<slamlab_sim::fusion::params::FusionLessonScenario>("fusion"),
             link::<slamlab_sim::mapping::MappingScenario>("mapping"),
         ];
@@ -463,7 +463,7 @@ mod tests {
     /// and `parse(build(pairs))` gives the pairs back.
     #[test]
     fn query_strings_survive_mutations() {
-        use slamlab_sim::{fusion, localization, mapping, pose_graph_lesson, resampling_lab};
+        use slamlab_sim::{fusion, kidnap, mapping, pose_graph, resampling};
         let report = slamlab_fuzz::Target::new("URL query string", query_seeds(), 16 << 20)
             .run_checked(
                 |bytes| {
@@ -479,9 +479,9 @@ mod tests {
                     }
                     let mut issues = q.issues.clone();
                     issues.extend(apply::<slamlab_sim::LandmarkScenario>(&q.pairs));
-                    issues.extend(apply::<localization::MclScenario>(&q.pairs));
-                    issues.extend(apply::<pose_graph_lesson::PoseGraphScenario>(&q.pairs));
-                    issues.extend(apply::<resampling_lab::LabScenario>(&q.pairs));
+                    issues.extend(apply::<kidnap::MclScenario>(&q.pairs));
+                    issues.extend(apply::<pose_graph::PoseGraphScenario>(&q.pairs));
+                    issues.extend(apply::<resampling::LabScenario>(&q.pairs));
                     issues.extend(apply::<fusion::params::FusionLessonScenario>(&q.pairs));
                     issues.extend(apply::<mapping::MappingScenario>(&q.pairs));
                     if let Some(short) = issues

@@ -8,7 +8,8 @@ use slamlab_core::graph::{
     EdgeKind, OptimizeError, Optimizer, OptimizerSettings, PoseGraph, RobustKernel, SolverKind,
     StepReport,
 };
-use slamlab_sim::graph_io::{self, MAX_FILE_BYTES};
+use slamlab_sim::io;
+use slamlab_sim::io::graph::MAX_FILE_BYTES;
 use std::path::{Path, PathBuf};
 use std::time::Instant;
 
@@ -100,7 +101,7 @@ pub fn read_graph_file(path: &Path) -> Result<PoseGraph> {
     let bytes = std::fs::read(path).with_context(|| format!("reading {}", path.display()))?;
     let text = String::from_utf8(bytes)
         .map_err(|e| anyhow::anyhow!("{}: not a text file ({e})", path.display()))?;
-    graph_io::read_graph(&text).with_context(|| format!("{}", path.display()))
+    io::graph::read_graph(&text).with_context(|| format!("{}", path.display()))
 }
 
 /// Fixes the gauge like the gtsam reference run: unless the graph already has a
@@ -218,7 +219,7 @@ fn optimize(m: &ArgMatches) -> Result<()> {
         step_norms: reports.iter().map(|r| r.step_norm).collect(),
     };
     if let Some(out) = m.get_one::<PathBuf>("out") {
-        let text = graph_io::write_g2o(optimizer.graph())?;
+        let text = io::graph::write_g2o(optimizer.graph())?;
         std::fs::write(out, text).with_context(|| format!("writing {}", out.display()))?;
         eprintln!("wrote {}", out.display());
     }
@@ -266,7 +267,7 @@ fn convert(m: &ArgMatches) -> Result<()> {
         );
     }
     let graph = read_graph_file(input)?;
-    let text = graph_io::write_g2o(&graph).with_context(|| format!("{}", input.display()))?;
+    let text = io::graph::write_g2o(&graph).with_context(|| format!("{}", input.display()))?;
     std::fs::write(output, text).with_context(|| format!("writing {}", output.display()))?;
     eprintln!(
         "wrote {} ({} vertices, {} edges)",
@@ -320,7 +321,7 @@ mod tests {
 
     #[test]
     fn the_gauge_is_fixed_at_the_first_vertex_unless_the_file_anchors_it() {
-        let mut g = slamlab_sim::graph_io::read_graph(
+        let mut g = slamlab_sim::io::graph::read_graph(
             "VERTEX_SE2 4 0 0 0\nVERTEX_SE2 1 1 0 0\nEDGE_SE2 4 1 1 0 0 1 0 0 1 0 1\n",
         )
         .unwrap();

@@ -5,9 +5,8 @@ use crate::map::{map_arg, read_map, resolution_arg};
 use anyhow::{Context, Result, bail};
 use clap::{Arg, ArgAction, ArgMatches, Command};
 use serde_json::json;
-use slamlab_sim::laser_log::{
-    LaserLog, SimulatedLogConfig, simulate_log, write_carmen, write_truth,
-};
+use slamlab_sim::grid::{SimulatedLogConfig, simulate_log};
+use slamlab_sim::io::laser_log::{LaserLog, write_carmen, write_truth};
 use std::io::Write;
 use std::path::{Path, PathBuf};
 

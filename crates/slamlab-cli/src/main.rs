@@ -49,7 +49,7 @@ const PARAM_TABLES: &[(&str, Describe)] = &[
     ),
     (
         "kidnap",
-        params::describe::<slamlab_sim::localization::MclScenario>,
+        params::describe::<slamlab_sim::kidnap::MclScenario>,
     ),
     (
         "mapping",
@@ -57,19 +57,19 @@ const PARAM_TABLES: &[(&str, Describe)] = &[
     ),
     (
         "cartographer",
-        params::describe::<slamlab_sim::cartographer_lesson::CartographerScenario>,
+        params::describe::<slamlab_sim::cartographer::session::CartographerScenario>,
     ),
     (
         "pose-graph",
-        params::describe::<slamlab_sim::pose_graph_lesson::PoseGraphScenario>,
+        params::describe::<slamlab_sim::pose_graph::session::PoseGraphScenario>,
     ),
     (
         "resampling",
-        params::describe::<slamlab_sim::resampling_lab::LabScenario>,
+        params::describe::<slamlab_sim::resampling::session::LabScenario>,
     ),
     (
         "visual-odometry",
-        params::describe::<slamlab_sim::vision::VoScenario>,
+        params::describe::<slamlab_sim::visual_odometry::VoScenario>,
     ),
     (
         "fusion",
@@ -77,7 +77,7 @@ const PARAM_TABLES: &[(&str, Describe)] = &[
     ),
     (
         "filters",
-        params::describe::<slamlab_sim::filters_lab::FiltersScenario>,
+        params::describe::<slamlab_sim::filters::session::FiltersScenario>,
     ),
 ];
 

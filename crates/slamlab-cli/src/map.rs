@@ -5,7 +5,7 @@ use anyhow::{Context, Result, bail};
 use clap::{Arg, ArgMatches, Command};
 use slamlab_core::grid::OccupancyGrid;
 use slamlab_sim::grid::BuiltinMap;
-use slamlab_sim::grid::map_io::{
+use slamlab_sim::io::ros_map::{
     ImageFormat, export_map, load_lone_image, load_map, parse_map_yaml,
 };
 use std::io::Write;

@@ -3,7 +3,7 @@
 
 use crate::registry::{self, LESSONS};
 use anyhow::{Context, Result, bail};
-use slamlab_sim::scenario_file::ScenarioFile;
+use slamlab_sim::io::scenario_file::ScenarioFile;
 use std::ffi::OsString;
 use std::path::PathBuf;
 

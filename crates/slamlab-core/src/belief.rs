@@ -72,7 +72,7 @@ pub trait ParticleBelief {
     /// resampling"): the particle count for uniform weights, 1 when one particle
     /// carries all the weight.
     fn n_eff(&self) -> f64 {
-        crate::particle::effective_sample_size(
+        crate::stats::effective_sample_size(
             &(0..self.particle_count())
                 .map(|i| self.particle_weight(i))
                 .collect::<Vec<_>>(),
@@ -167,57 +167,5 @@ mod tests {
         assert!((Cloud(vec![0.25; 4]).n_eff() - 4.0).abs() < 1e-12);
         assert!((Cloud(vec![1.0, 0.0, 0.0]).n_eff() - 1.0).abs() < 1e-12);
         assert!((Cloud(vec![0.5, 0.5, 0.0, 0.0]).n_eff() - 2.0).abs() < 1e-12);
-    }
-
-    /// The particle filters' beliefs agree with their own accessors: the pose is
-    /// the estimate they report, the weights are normalized, `N_eff` is theirs.
-    #[test]
-    fn particle_filters_show_their_own_estimates() {
-        use crate::grid::{Cell, OccupancyGrid};
-        use crate::particle::{FastSlam, FastSlamConfig, LocalizationMap, Mcl, MclConfig};
-        use nalgebra::Vector3;
-        use std::sync::Arc;
-
-        let mut grid = OccupancyGrid::filled(40, 40, 0.1, Pose2::IDENTITY, Cell::Free).unwrap();
-        for k in 0..40 {
-            grid.set(k, 0, Cell::Occupied);
-            grid.set(0, k, Cell::Occupied);
-        }
-        let map = Arc::new(LocalizationMap::new(grid, 1.0).unwrap());
-        let mut mcl = Mcl::new(
-            MclConfig {
-                particles: 300,
-                ..Default::default()
-            },
-            map,
-            4,
-        );
-        mcl.init_tracking(Pose2::new(2.0, 2.0, 0.3), [0.2, 0.2, 0.1]);
-        let Some(estimate) = mcl.estimate().copied() else {
-            panic!("a tracking cloud has an estimate");
-        };
-        assert_eq!(PoseBelief::robot_pose(&mcl), estimate.pose);
-        assert_eq!(PoseBelief::robot_covariance(&mcl), estimate.covariance);
-        assert_eq!(ParticleBelief::particle_count(&mcl), 300);
-        let total: f64 = (0..300).map(|i| mcl.particle_weight(i)).sum();
-        assert!((total - 1.0).abs() < 1e-12);
-        assert_eq!(ParticleBelief::n_eff(&mcl), mcl.n_eff());
-        assert_eq!(mcl.particle_pose(300), None);
-        assert_eq!(mcl.particle_weight(300), 0.0);
-
-        let fast = FastSlam::new(
-            FastSlamConfig {
-                particles: 50,
-                ..Default::default()
-            },
-            Pose2::new(1.0, -1.0, 0.5),
-        )
-        .unwrap();
-        // Every particle starts at the pose: the mean is it, with no spread.
-        let mean = PoseBelief::robot_pose(&fast);
-        assert!((mean.to_vector() - Vector3::new(1.0, -1.0, 0.5)).norm() < 1e-12);
-        assert!(PoseBelief::robot_covariance(&fast).norm() < 1e-24);
-        assert!((ParticleBelief::n_eff(&fast) - 50.0).abs() < 1e-9);
-        assert_eq!(fast.particle_pose(0), Some(Pose2::new(1.0, -1.0, 0.5)));
     }
 }

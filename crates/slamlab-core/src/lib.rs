@@ -16,6 +16,7 @@ pub mod geometry;
 pub mod graph;
 pub mod grid;
 pub mod kalman;
+pub mod laser;
 pub mod linalg;
 pub mod math;
 pub mod motion;

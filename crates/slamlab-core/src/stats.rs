@@ -144,6 +144,15 @@ pub fn normalized_squared_error(error: &DVector<f64>, covariance: &DMatrix<f64>)
     value.is_finite().then_some(value)
 }
 
+/// The effective sample size `N_eff = 1 / Σ wᵢ²` of normalized weights: `M` for
+/// uniform weights, 1 when one particle holds all the weight (slides, "adaptive
+/// resampling"). Zero for an empty set. Takes any sequence of weights (a
+/// slice, or the weights of a particle set) in order.
+pub fn effective_sample_size<'a>(weights: impl IntoIterator<Item = &'a f64>) -> f64 {
+    let sum_sq: f64 = weights.into_iter().map(|w| w * w).sum();
+    if sum_sq > 0.0 { 1.0 / sum_sq } else { 0.0 }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

@@ -25,8 +25,8 @@ mod common;
 use cpu_time::ThreadTime;
 use slamlab_sim::cartographer::input::kidnap_input;
 use slamlab_sim::cartographer::{CartographerParams, CartographerSim};
-use slamlab_sim::laser_log::SimulatedLogConfig;
-use slamlab_sim::mapping::{builtin_map, log_input};
+use slamlab_sim::grid::SimulatedLogConfig;
+use slamlab_sim::grid::{builtin_map, log_input};
 use std::sync::Arc;
 use std::time::Instant;
 

@@ -7,8 +7,8 @@
 use slamlab_core::association::AssociationMode;
 use slamlab_core::particle::{FastSlam, FastSlamVersion, LandmarkObservation};
 use slamlab_sim::LandmarkScenario;
-use slamlab_sim::fastslam::{FastSlamSettings, LandmarkTruth, fastslam_config};
-use slamlab_sim::world::LandmarkLayout;
+use slamlab_sim::landmark_slam::fastslam::{FastSlamSettings, LandmarkTruth, fastslam_config};
+use slamlab_sim::world::landmarks::LandmarkLayout;
 
 fn main() {
     divan::main();

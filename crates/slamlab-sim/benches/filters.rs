@@ -10,7 +10,7 @@
 //! browser (about 1.5-2x slower) stays interactive while dragging.
 
 use slamlab_core::filters::one_step;
-use slamlab_sim::filters_lab::{
+use slamlab_sim::filters::session::{
     Draws, FUNCTION_NAMES, FiltersScenario, FunctionKind, one_step, one_step_with,
 };
 

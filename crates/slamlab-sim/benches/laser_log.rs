@@ -9,7 +9,7 @@
 
 mod common;
 
-use slamlab_sim::laser_log::LaserLog;
+use slamlab_sim::io::laser_log::LaserLog;
 use std::io::Read;
 
 fn main() {

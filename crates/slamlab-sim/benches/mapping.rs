@@ -20,9 +20,9 @@
 mod common;
 
 use cpu_time::ThreadTime;
+use slamlab_sim::grid::{builtin_map, log_input};
 use slamlab_sim::mapping::{
-    MappingPhase, MappingScenario, MappingSession, PoseSource, builtin_map, log_input,
-    simulated_input,
+    MappingPhase, MappingScenario, MappingSession, PoseSource, simulated_input,
 };
 use std::sync::Arc;
 use std::time::Instant;

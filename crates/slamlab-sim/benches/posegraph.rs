@@ -5,7 +5,7 @@
 //! data sets is `scripts/bench-posegraph.sh` (docs/pose-graph.md, "Pose-graph SLAM").
 
 use slamlab_core::graph::{Optimizer, OptimizerSettings};
-use slamlab_sim::pose_graph_experiment::manhattan_graph;
+use slamlab_sim::pose_graph::experiment::manhattan_graph;
 
 fn main() {
     divan::main();

@@ -4,7 +4,7 @@
 //! Targets (docs/landmark-slam.md, "Speed"): EKF-SLAM with 100 landmarks ≤ 1 ms; UKF-SLAM with
 //! 50 landmarks ≤ 5 ms.
 
-use slamlab_sim::world::LandmarkLayout;
+use slamlab_sim::world::landmarks::LandmarkLayout;
 use slamlab_sim::{EstimatorKind, LandmarkScenario, LandmarkSession};
 
 fn main() {

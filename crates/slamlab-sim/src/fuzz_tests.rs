@@ -6,9 +6,10 @@
 //! (`../shared/data`, when present) and the built-in maps. See the `slamlab-fuzz`
 //! crate for what is checked and how to add a reader.
 
-use crate::graph_io::{self, GraphFormat};
-use crate::grid::map_io::{self, ImageFormat};
-use crate::scenario_file::ScenarioFile;
+use crate::io;
+use crate::io::graph::GraphFormat;
+use crate::io::ros_map::ImageFormat;
+use crate::io::scenario_file::ScenarioFile;
 use slamlab_core::Pose2;
 use slamlab_core::graph::PoseGraph;
 use slamlab_core::grid::{Cell, OccupancyGrid};
@@ -30,19 +31,19 @@ fn image_seeds() -> Vec<Vec<u8>> {
     let mut seeds = vec![asset("maze.png"), asset("office.png")];
     let mut grids = Vec::new();
     for bytes in shared_file_seeds("maps", &["pgm", "png"], usize::MAX) {
-        if let Ok(image) = map_io::decode_image(&bytes) {
-            let yaml = map_io::MapYaml {
+        if let Ok(image) = io::ros_map::decode_image(&bytes) {
+            let yaml = io::ros_map::MapYaml {
                 resolution: 0.05,
-                ..map_io::MapYaml::default()
+                ..io::ros_map::MapYaml::default()
             };
-            if let Ok(grid) = map_io::grid_from_image(&image, &yaml) {
+            if let Ok(grid) = io::ros_map::grid_from_image(&image, &yaml) {
                 grids.push(crop(&grid, 48));
             }
         }
     }
     for grid in grids.iter().flatten() {
         for format in [ImageFormat::Pgm, ImageFormat::Png] {
-            if let Ok(bytes) = map_io::encode_image(grid, format) {
+            if let Ok(bytes) = io::ros_map::encode_image(grid, format) {
                 seeds.push(bytes);
             }
         }
@@ -84,7 +85,7 @@ fn map_yaml_survives_mutations() {
     seeds.retain(|s| !s.is_empty());
     let report = Target::new("map YAML", seeds, CAP).run_checked(
         |bytes| {
-            map_io::parse_map_yaml(&String::from_utf8_lossy(bytes))
+            io::ros_map::parse_map_yaml(&String::from_utf8_lossy(bytes))
                 .map(drop)
                 .map_err(|e| e.to_string())
         },
@@ -111,7 +112,7 @@ fn map_images_survive_mutations() {
     assert!(seeds.len() >= 4, "only {} image seeds", seeds.len());
     let report = Target::new("map image (PGM/PNG)", seeds, CAP).run_checked(
         |bytes| {
-            map_io::decode_image(bytes)
+            io::ros_map::decode_image(bytes)
                 .map(drop)
                 .map_err(|e| e.to_string())
         },
@@ -150,7 +151,7 @@ fn map_files_survive_mutations_together() {
         let split = bytes.iter().position(|&b| b == 0).unwrap_or(bytes.len());
         let (text, image) = bytes.split_at(split);
         let image = image.get(1..).unwrap_or(&[]);
-        map_io::load_map(&String::from_utf8_lossy(text), image)
+        io::ros_map::load_map(&String::from_utf8_lossy(text), image)
             .map(drop)
             .map_err(|e| e.to_string())
     });
@@ -213,7 +214,7 @@ fn graph_seeds(format: GraphFormat) -> Vec<Vec<u8>> {
 fn fuzz_graph(
     name: &str,
     format: GraphFormat,
-    read: fn(&str) -> Result<PoseGraph, graph_io::GraphFileError>,
+    read: fn(&str) -> Result<PoseGraph, io::graph::GraphFileError>,
 ) {
     let seeds = graph_seeds(format);
     assert!(!seeds.is_empty(), "no {name} seeds");
@@ -243,17 +244,17 @@ fn fuzz_graph(
 
 #[test]
 fn g2o_graphs_survive_mutations() {
-    fuzz_graph("g2o graph", GraphFormat::G2o, graph_io::read_g2o);
+    fuzz_graph("g2o graph", GraphFormat::G2o, io::graph::read_g2o);
 }
 
 #[test]
 fn toro_graphs_survive_mutations() {
-    fuzz_graph("TORO graph", GraphFormat::Toro, graph_io::read_toro);
+    fuzz_graph("TORO graph", GraphFormat::Toro, io::graph::read_toro);
 }
 
 #[test]
 fn isam_graphs_survive_mutations() {
-    fuzz_graph("iSAM graph", GraphFormat::Isam, graph_io::read_isam);
+    fuzz_graph("iSAM graph", GraphFormat::Isam, io::graph::read_isam);
 }
 
 #[test]
@@ -268,7 +269,7 @@ fn any_graph_file_survives_mutations() {
 
 fn fuzz_graph_any(seeds: Vec<Vec<u8>>) {
     let report = Target::new("pose-graph file (any format)", seeds, CAP).run(|bytes| {
-        graph_io::read_graph(&String::from_utf8_lossy(bytes))
+        io::graph::read_graph(&String::from_utf8_lossy(bytes))
             .map(drop)
             .map_err(|e| e.to_string())
     });
@@ -322,7 +323,8 @@ fn scenario_files_survive_mutations() {
 /// ones, so mutations also hit the decompressors' headers and streams.
 #[test]
 fn carmen_logs_survive_mutations() {
-    use crate::laser_log::{LaserLog, LogLimits, SimulatedLogConfig, simulate_log, write_carmen};
+    use crate::grid::{SimulatedLogConfig, simulate_log};
+    use crate::io::laser_log::{LaserLog, LogLimits, write_carmen};
     use std::io::{Read as _, Write as _};
     let mut text_seeds: Vec<Vec<u8>> = vec![
         b"PARAM robot_frontlaser_offset 0.0 nohost 0

@@ -33,6 +33,17 @@ pub fn gaussian(rng: &mut ChaCha8Rng, std: f64) -> f64 {
     std * z
 }
 
+/// SplitMix64: derives independent stream seeds from the master seed (the grid
+/// world's streams: start pose, lidar, odometry, explorer, kidnaps, filters).
+pub fn stream_seed(seed: u64, stream: u64) -> u64 {
+    let mut z = seed
+        .wrapping_add(stream.wrapping_mul(0x9E37_79B9_7F4A_7C15))
+        .wrapping_add(0x9E37_79B9_7F4A_7C15);
+    z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
+    z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
+    z ^ (z >> 31)
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

@@ -11,7 +11,7 @@ use rand_chacha::ChaCha8Rng;
 use slamlab_core::Pose2;
 use slamlab_core::grid::{Cell, OccupancyGrid};
 use slamlab_sim::grid::BuiltinMap;
-use slamlab_sim::grid::map_io::{ImageFormat, export_map};
+use slamlab_sim::io::ros_map::{ImageFormat, export_map};
 
 /// Fills the cell rectangle `[i0, i1) x [j0, j1)`.
 fn fill(g: &mut OccupancyGrid, i0: i64, j0: i64, i1: i64, j1: i64, c: Cell) {

@@ -4,8 +4,8 @@
 
 use slamlab_core::particle::ParticleFlag;
 use slamlab_sim::grid::BuiltinMap;
-use slamlab_sim::localization::experiment::{KidnapProtocol, KidnapTrial, kidnap_trial, summarize};
-use slamlab_sim::localization::{InitMode, LocalizationEstimator, MclPhase, MclRun, MclScenario};
+use slamlab_sim::kidnap::experiment::{KidnapProtocol, KidnapTrial, kidnap_trial, summarize};
+use slamlab_sim::kidnap::{InitMode, LocalizationEstimator, MclPhase, MclRun, MclScenario};
 
 fn scenario(est: Vec<LocalizationEstimator>, particles: usize, seed: u64) -> MclScenario {
     MclScenario {

@@ -5,8 +5,8 @@
 
 use slamlab_core::wrap_angle;
 use slamlab_sim::grid::BuiltinMap;
-use slamlab_sim::grid::map_io::{load_lone_image, load_map};
-use slamlab_sim::localization::{InitMode, MclRun, MclScenario};
+use slamlab_sim::io::ros_map::{load_lone_image, load_map};
+use slamlab_sim::kidnap::{InitMode, MclRun, MclScenario};
 use std::path::PathBuf;
 
 fn run(

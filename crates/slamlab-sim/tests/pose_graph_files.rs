@@ -6,10 +6,8 @@
 use nalgebra::{Matrix2, Matrix3, Vector2};
 use slamlab_core::Pose2;
 use slamlab_core::graph::{EdgeKind, PoseGraph, VertexState};
-use slamlab_sim::graph_io::{
-    self, GraphFileError, GraphFormat, MAX_FILE_BYTES, read_graph, write_g2o,
-};
-use slamlab_sim::pose_graph_experiment::{self, PoseGraphExperimentConfig};
+use slamlab_sim::io::graph::{GraphFileError, GraphFormat, MAX_FILE_BYTES, read_graph, write_g2o};
+use slamlab_sim::pose_graph::experiment::{self, PoseGraphExperimentConfig};
 
 fn shared(file: &str) -> Option<String> {
     let path = format!(
@@ -91,7 +89,10 @@ fn g2o_write_then_read_gives_the_same_graph() {
 fn toro_information_order_is_mapped() {
     // Ixx Ixy Iyy Itt Ixt Iyt = 1 2 30 400 5 6
     let text = "# hand-made TORO file\nVERTEX2 0 0 0 0\nVERTEX2 1 1 0 0.5\nEDGE2 0 1 1 0 0.5 1 2 30 400 5 6\n";
-    assert_eq!(graph_io::detect_format(text).unwrap(), GraphFormat::Toro);
+    assert_eq!(
+        slamlab_sim::io::graph::detect_format(text).unwrap(),
+        GraphFormat::Toro
+    );
     let g = read_graph(text).unwrap();
     let EdgeKind::PosePose { information, .. } = g.edges()[0] else {
         panic!("pose-pose edge expected")
@@ -216,7 +217,7 @@ fn victoria_park_loads_with_its_151_landmarks() {
 #[test]
 fn thesis_simulation_converges_in_a_few_iterations_and_lands_closest_to_the_truth() {
     for noise_scale in [1.0, 2.0] {
-        let r = pose_graph_experiment::run(PoseGraphExperimentConfig {
+        let r = experiment::run(PoseGraphExperimentConfig {
             noise_scale,
             ..PoseGraphExperimentConfig::default()
         })
@@ -235,7 +236,7 @@ fn thesis_simulation_converges_in_a_few_iterations_and_lands_closest_to_the_trut
 
 #[test]
 fn manhattan_graph_has_loop_closures_and_optimizes_close_to_the_truth() {
-    let (g, truth) = pose_graph_experiment::manhattan_graph(400, 10, 3);
+    let (g, truth) = experiment::manhattan_graph(400, 10, 3);
     assert_eq!(g.pose_count(), 400);
     let closures = g.edges().len() - 399;
     assert!(closures > 50, "{closures} loop closures");

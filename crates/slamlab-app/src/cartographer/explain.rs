@@ -9,7 +9,7 @@ use crate::palette;
 use egui::{Color32, Pos2, Rect, Sense, Stroke, Vec2};
 use slamlab_core::scan::branch_and_bound::SearchNode;
 use slamlab_sim::cartographer::CartographerSim;
-use slamlab_sim::cartographer_lesson::CartographerScenario;
+use slamlab_sim::cartographer::session::CartographerScenario;
 
 /// The explanation panel.
 pub fn explanation_ui(ui: &mut egui::Ui, sim: &CartographerSim, scenario: &CartographerScenario) {

@@ -31,10 +31,12 @@ use crate::widgets::params_panel::{self, PendingParams};
 use serde::{Deserialize, Serialize};
 use slamlab_core::Pose2;
 use slamlab_core::grid::OccupancyGrid;
+use slamlab_sim::cartographer::session::{
+    CartographerEvent, CartographerRun, CartographerScenario,
+};
 use slamlab_sim::cartographer::{CartographerPhase, CartographerSim, NextPhase};
-use slamlab_sim::cartographer_lesson::{CartographerEvent, CartographerRun, CartographerScenario};
-use slamlab_sim::laser_log::LaserLog;
-use slamlab_sim::mapping::{MappingInput, builtin_map, log_input};
+use slamlab_sim::grid::{MappingInput, builtin_map, log_input};
+use slamlab_sim::io::laser_log::LaserLog;
 use slamlab_sim::params;
 use slamlab_sim::stepper::{CheckpointPolicy, Stepper};
 use std::sync::Arc;
@@ -418,7 +420,7 @@ impl CartographerLesson {
 
     /// Lets the simulated robot explore a ROS map instead of a built-in one.
     pub fn load_map_files(&mut self, files: &[(String, Vec<u8>)]) {
-        let (name, grid, notes) = match slamlab_sim::kidnap_session::load_dropped_map(files) {
+        let (name, grid, notes) = match slamlab_sim::kidnap::session::load_dropped_map(files) {
             Ok(loaded) => loaded,
             Err(why) => {
                 self.note = Some(format!("Could not load the map: {why}; the run goes on"));

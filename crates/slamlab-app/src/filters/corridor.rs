@@ -7,7 +7,7 @@ use crate::palette;
 use crate::widgets::plots::{Figure, KeyEntry, Mark, figure_plot, figure_ui, title_ui};
 use egui_plot::{Bar, BarChart, Line, LineStyle, PlotPoints, Polygon, VLine};
 use slamlab_core::math;
-use slamlab_sim::filters_lab::CorridorSim;
+use slamlab_sim::filters::session::CorridorSim;
 
 /// `N(x; mean, variance)`.
 fn normal(x: f64, mean: f64, variance: f64) -> f64 {

@@ -2,7 +2,7 @@
 
 use crate::palette;
 use crate::widgets::sources::source_link;
-use slamlab_sim::filters_lab::{CorridorSim, FiltersScenario, OneStep};
+use slamlab_sim::filters::session::{CorridorSim, FiltersScenario, OneStep};
 use slamlab_sim::stepper::Stepper;
 
 fn method_color(method: &str) -> egui::Color32 {

@@ -8,7 +8,7 @@ use crate::widgets::plots::{
     Figure, Mark, Styled, draw_series, figure_plot, figure_ui, key_entries, series_data,
 };
 use slamlab_core::math;
-use slamlab_sim::filters_lab::OneStep;
+use slamlab_sim::filters::session::OneStep;
 
 /// The plot's title (and its key in the series list).
 const TITLE: &str = "Marginal of the first output";

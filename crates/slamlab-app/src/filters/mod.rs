@@ -21,7 +21,7 @@ use crate::time_control::{TimeAction, TimeControl, TimeInfo};
 use crate::widgets::map_canvas::MapView;
 use crate::widgets::params_panel::{self, PendingParams};
 use serde::{Deserialize, Serialize};
-use slamlab_sim::filters_lab::{
+use slamlab_sim::filters::session::{
     CorridorSim, Draws, FUNCTION_NAMES, FiltersScenario, FunctionKind, OneStep, one_step_with,
 };
 use slamlab_sim::params;

@@ -9,7 +9,7 @@ use crate::widgets::plots::{KeyEntry, Mark, key_ui};
 use egui::{Color32, ColorImage, Pos2, Stroke, TextureHandle, TextureOptions};
 use nalgebra::Vector2;
 use slamlab_core::filters::one_step::Gaussian2;
-use slamlab_sim::filters_lab::OneStep;
+use slamlab_sim::filters::session::OneStep;
 
 /// Cells per side of the density image.
 const DENSITY_CELLS: usize = 160;

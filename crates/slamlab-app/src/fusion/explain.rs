@@ -7,7 +7,7 @@ use crate::palette;
 use crate::widgets::sources;
 use slamlab_core::kalman::fusion::{Outcome, StepReport};
 use slamlab_core::math;
-use slamlab_sim::fusion::lesson::{FusionPhase, FusionSim};
+use slamlab_sim::fusion::session::{FusionPhase, FusionSim};
 use slamlab_sim::fusion::{FusionMode, ModeRun, SLAM};
 
 /// The RMSE table's text for one value, as the panel shows it (metres or radians).

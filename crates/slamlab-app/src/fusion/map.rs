@@ -11,7 +11,7 @@ use crate::widgets::map_canvas::{
 use crate::widgets::plots::{KeyEntry, Mark, key_ui};
 use egui::{Color32, Pos2, Shape, Stroke, pos2};
 use slamlab_core::Pose2;
-use slamlab_sim::fusion::lesson::FusionSim;
+use slamlab_sim::fusion::session::FusionSim;
 
 /// Longest polyline drawn, in points.
 const MAX_POINTS: usize = 4000;

@@ -7,7 +7,7 @@ use crate::widgets::plots::{
     Figure, Mark, Styled, draw_series, figure_ui, line_width, plot_row, series_data, series_key_ui,
     style_entries, time_plot,
 };
-use slamlab_sim::fusion::lesson::FusionSim;
+use slamlab_sim::fusion::session::FusionSim;
 
 /// The three error plots: title, y axis, plot id.
 const ERROR_PLOTS: [(&str, &str, &str); 3] = [

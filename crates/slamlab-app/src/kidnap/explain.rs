@@ -4,7 +4,7 @@
 use crate::widgets::sources;
 use slamlab_core::particle::BeamLikelihood;
 use slamlab_core::wrap_angle;
-use slamlab_sim::localization::{MclPhase, MclRun};
+use slamlab_sim::kidnap::{MclPhase, MclRun};
 
 /// The panel for the phase that ran last.
 pub fn explanation_ui(ui: &mut egui::Ui, run: &MclRun, last: Option<MclPhase>) {

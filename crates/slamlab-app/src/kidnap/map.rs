@@ -15,7 +15,7 @@ use egui::{Color32, Pos2, Shape, Stroke, pos2};
 use slamlab_core::grid::{Cell, Costmap, OccupancyGrid};
 use slamlab_core::particle::ParticleFlag;
 use slamlab_core::{Pose2, math};
-use slamlab_sim::localization::MclRun;
+use slamlab_sim::kidnap::MclRun;
 
 /// The occupancy grid as a texture, made once per map.
 #[derive(Default)]

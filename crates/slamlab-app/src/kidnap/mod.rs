@@ -21,8 +21,8 @@ use crate::widgets::params_panel::{self, PendingParams};
 use egui::Color32;
 use serde::{Deserialize, Serialize};
 use slamlab_core::grid::OccupancyGrid;
-use slamlab_sim::kidnap_session::{KidnapEvent, KidnapSim};
-use slamlab_sim::localization::{MclPhase, MclScenario};
+use slamlab_sim::kidnap::session::{KidnapEvent, KidnapSim};
+use slamlab_sim::kidnap::{MclPhase, MclScenario};
 use slamlab_sim::params;
 use slamlab_sim::stepper::{Simulation, Stepper};
 
@@ -357,14 +357,14 @@ impl KidnapLesson {
             self.lone_image = Some(LoneImage {
                 name: name.clone(),
                 bytes: bytes.clone(),
-                resolution: slamlab_sim::kidnap_session::LONE_IMAGE_RESOLUTION,
+                resolution: slamlab_sim::kidnap::session::LONE_IMAGE_RESOLUTION,
             });
             self.note = Some(format!(
                 "{name} has no YAML: give its resolution (metres per pixel) above the map and press Load"
             ));
             return;
         }
-        match slamlab_sim::kidnap_session::load_dropped_map(files) {
+        match slamlab_sim::kidnap::session::load_dropped_map(files) {
             Ok((name, grid, notes)) => self.use_loaded_map(name, grid, &notes),
             Err(why) => self.note = Some(format!("Could not load the map: {why}")),
         }
@@ -383,7 +383,7 @@ impl KidnapLesson {
         let Some(image) = self.lone_image.take() else {
             return;
         };
-        match slamlab_sim::grid::map_io::load_lone_image(&image.bytes, resolution) {
+        match slamlab_sim::io::ros_map::load_lone_image(&image.bytes, resolution) {
             Ok(grid) => self.use_loaded_map(
                 image.name,
                 grid,
@@ -433,7 +433,7 @@ impl KidnapLesson {
                     .ok()
                     .and_then(|b| std::str::from_utf8(b).ok())?;
                 (lower.ends_with(".yaml") || lower.ends_with(".yml"))
-                    .then(|| slamlab_sim::grid::map_io::parse_map_yaml(text).ok())
+                    .then(|| slamlab_sim::io::ros_map::parse_map_yaml(text).ok())
                     .flatten()
                     .map(|yaml| yaml.image)
             });
@@ -500,7 +500,7 @@ impl KidnapLesson {
                 let image = std::str::from_utf8(&bytes)
                     .map_err(|_| "it is not text".to_owned())
                     .and_then(|text| {
-                        slamlab_sim::grid::map_io::parse_map_yaml(text).map_err(|e| e.to_string())
+                        slamlab_sim::io::ros_map::parse_map_yaml(text).map_err(|e| e.to_string())
                     });
                 match image {
                     Ok(parsed) => {
@@ -515,7 +515,7 @@ impl KidnapLesson {
                 // The image: load both as if they had been dropped together.
                 let image_name = {
                     let text = String::from_utf8_lossy(&yaml);
-                    slamlab_sim::grid::map_io::parse_map_yaml(&text)
+                    slamlab_sim::io::ros_map::parse_map_yaml(&text)
                         .map(|p| p.image.rsplit('/').next().unwrap_or(&p.image).to_owned())
                         .unwrap_or_default()
                 };

@@ -9,7 +9,7 @@ use crate::widgets::plots::{
     Figure, Mark, Styled, draw_series, figure_ui, line_width, plot_row, series_data, series_key_ui,
     style_entries, time_plot, title_ui,
 };
-use slamlab_sim::localization::{MclRun, UpdateRecord};
+use slamlab_sim::kidnap::{MclRun, UpdateRecord};
 
 /// Every plotted series, defined once: the plots draw them, the CSV export
 /// writes them unthinned.

@@ -7,7 +7,7 @@ use crate::widgets::sources;
 use slamlab_core::kalman::UpdateReport;
 use slamlab_core::range_bearing::{self, RangeBearing};
 use slamlab_core::stats::chi2_quantile;
-use slamlab_sim::session::FilterRun;
+use slamlab_sim::world::landmark_session::FilterRun;
 use slamlab_sim::{LandmarkSession, Phase};
 
 /// What a phase does, in two or three sentences, for an estimator family.

@@ -12,7 +12,7 @@ use crate::palette;
 use crate::query::MANY_RUNS_RANGE;
 use crate::widgets::plots::{KeyEntry, Mark, key_ui};
 use egui_plot::{Line, PlotPoints};
-use slamlab_sim::consistency::{ConsistencyResult, ConsistencyStudy};
+use slamlab_sim::landmark_slam::consistency::{ConsistencyResult, ConsistencyStudy};
 use slamlab_sim::params;
 use slamlab_sim::{ControllerKind, LandmarkScenario, LandmarkSession};
 use std::f64::consts::PI;

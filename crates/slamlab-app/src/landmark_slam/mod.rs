@@ -20,7 +20,7 @@ use serde::{Deserialize, Serialize};
 use slamlab_core::Pose2;
 use slamlab_core::kalman::LandmarkSlam;
 use slamlab_sim::params::{self, ParamIssue};
-use slamlab_sim::scenario::ControllerKind;
+use slamlab_sim::world::landmark_scenario::ControllerKind;
 use slamlab_sim::{LandmarkScenario, LandmarkSession};
 use std::collections::BTreeMap;
 
@@ -83,7 +83,7 @@ pub fn robot_sigma_points(filter: &dyn LandmarkSlam) -> Vec<Pose2> {
 /// with EKF-SLAM and UKF-SLAM side by side (the FEJ-EKF is one checkbox away).
 pub fn default_scenario() -> LandmarkScenario {
     let seed = LandmarkScenario::default().seed;
-    slamlab_sim::presets::scenario("lesson", seed).unwrap_or_default()
+    slamlab_sim::landmark_slam::presets::scenario("lesson", seed).unwrap_or_default()
 }
 
 /// The parameters of `scenario` that differ from the lesson's start, in table order.

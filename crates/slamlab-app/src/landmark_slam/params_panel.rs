@@ -8,7 +8,7 @@ use crate::widgets::sources;
 use slamlab_sim::EstimatorKind;
 use slamlab_sim::LandmarkScenario;
 use slamlab_sim::params::{self, ParamKind, Scenario};
-use slamlab_sim::scenario::{Association, ControllerKind};
+use slamlab_sim::world::landmark_scenario::{Association, ControllerKind};
 
 /// The parameter's current pending value as a number.
 fn pending_number(lesson: &LandmarkSlamLesson, name: &str) -> Option<f64> {
@@ -293,7 +293,7 @@ fn preset_ui(ui: &mut egui::Ui, lesson: &mut LandmarkSlamLesson) {
             .selected_text("open a preset…")
             .width(ui.available_width() - 60.0)
             .show_ui(ui, |ui| {
-                for preset in slamlab_sim::presets::PRESETS {
+                for preset in slamlab_sim::landmark_slam::presets::PRESETS {
                     if ui
                         .selectable_label(false, preset.title)
                         .on_hover_text(preset.summary)

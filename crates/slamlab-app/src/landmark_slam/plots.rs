@@ -62,7 +62,7 @@ pub fn coinciding_series(session: &LandmarkSession) -> Vec<(usize, f64)> {
     if first.history.len() < 10 {
         return Vec::new();
     }
-    let range = |f: &dyn Fn(&slamlab_sim::session::TickMetrics) -> Option<f64>| {
+    let range = |f: &dyn Fn(&slamlab_sim::world::landmark_session::TickMetrics) -> Option<f64>| {
         runs.iter()
             .flat_map(|run| run.history.iter().filter_map(f))
             .filter(|v| v.is_finite())
@@ -215,12 +215,13 @@ fn plotted(session: &LandmarkSession) -> Vec<Styled> {
     for (index, run) in session.filters().iter().enumerate() {
         let name = run.kind.name().to_uppercase();
         let color = palette::estimator_color(run.kind.name());
-        let over_time = |pick: &dyn Fn(&slamlab_sim::session::TickMetrics) -> Option<f64>| {
-            run.history
-                .iter()
-                .filter_map(|m| pick(m).map(|v| [m.time, v]))
-                .collect::<Vec<_>>()
-        };
+        let over_time =
+            |pick: &dyn Fn(&slamlab_sim::world::landmark_session::TickMetrics) -> Option<f64>| {
+                run.history
+                    .iter()
+                    .filter_map(|m| pick(m).map(|v| [m.time, v]))
+                    .collect::<Vec<_>>()
+            };
         let mut push = |plot: &str, axis: &str, series: &str, points, mark, width| {
             out.push(Styled::new(
                 PlotSeries::new(plot, "time (s)", axis, format!("{name} {series}"), points),

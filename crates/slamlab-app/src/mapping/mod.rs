@@ -22,10 +22,10 @@ use crate::widgets::file_picker::{FilePicker, PickedFile};
 use crate::widgets::map_canvas::MapView;
 use crate::widgets::params_panel::{self, PendingParams};
 use serde::{Deserialize, Serialize};
-use slamlab_sim::laser_log::LaserLog;
+use slamlab_sim::grid::{MappingInput, builtin_map, log_input};
+use slamlab_sim::io::laser_log::LaserLog;
 use slamlab_sim::mapping::{
-    MappingEvent, MappingInput, MappingPhase, MappingScenario, MappingSession, PoseSource,
-    builtin_map, log_input, simulated_input,
+    MappingEvent, MappingPhase, MappingScenario, MappingSession, PoseSource, simulated_input,
 };
 use slamlab_sim::params;
 use slamlab_sim::stepper::Simulation;
@@ -308,7 +308,7 @@ impl MappingLesson {
     /// PGM or PNG image) instead of a built-in one. On any problem the current
     /// run stays, with a note that names it.
     pub fn load_map_files(&mut self, files: &[(String, Vec<u8>)]) {
-        let (name, grid, notes) = match slamlab_sim::kidnap_session::load_dropped_map(files) {
+        let (name, grid, notes) = match slamlab_sim::kidnap::session::load_dropped_map(files) {
             Ok(loaded) => loaded,
             Err(why) => {
                 self.note = Some(format!("Could not load the map: {why}; the run goes on"));
@@ -512,10 +512,10 @@ impl MappingLesson {
             self.note = Some("The map is empty: nothing to export yet".to_owned());
             return;
         };
-        match slamlab_sim::grid::map_io::export_map(
+        match slamlab_sim::io::ros_map::export_map(
             &grid,
             "slamlab-map.pgm",
-            slamlab_sim::grid::map_io::ImageFormat::Pgm,
+            slamlab_sim::io::ros_map::ImageFormat::Pgm,
         ) {
             Ok((yaml, image)) => {
                 self.request = Some(LessonRequest::Save(vec![

@@ -5,7 +5,7 @@ use super::OptimizeTiming;
 use crate::palette;
 use crate::widgets::sources;
 use slamlab_core::graph::SolverKind;
-use slamlab_sim::pose_graph_lesson::{EdgeRole, KernelRun, PoseGraphSession, kernel_name};
+use slamlab_sim::pose_graph::session::{EdgeRole, KernelRun, PoseGraphSession, kernel_name};
 
 /// The panel.
 pub fn explanation_ui(
@@ -58,7 +58,7 @@ pub fn explanation_ui(
             sources::source_link(ui, "wu", "Source: Wu's thesis §4.4.1, TORO");
         }
     }
-    if s.kernel != slamlab_sim::pose_graph_lesson::KernelChoice::None {
+    if s.kernel != slamlab_sim::pose_graph::session::KernelChoice::None {
         ui.add_space(4.0);
         ui.label(format!(
             "Robust kernel {} (width {}): every edge is weighted by ρ'(e^TΩe), so an edge whose \

@@ -18,7 +18,7 @@ use egui::{Color32, Pos2, Stroke, vec2};
 use slamlab_core::geometry::CHI2_2DOF_95;
 use slamlab_core::graph::{EdgeKind, VertexState};
 use slamlab_core::{CovarianceEllipse, math};
-use slamlab_sim::pose_graph_lesson::{EdgeRole, KernelRun, PoseGraphSession};
+use slamlab_sim::pose_graph::session::{EdgeRole, KernelRun, PoseGraphSession};
 
 /// Odometry edges and pose vertices.
 pub const VERTEX: Color32 = palette::BLUE;

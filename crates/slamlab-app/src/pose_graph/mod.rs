@@ -19,7 +19,7 @@ use crate::widgets::params_panel::{self, PendingParams};
 use serde::{Deserialize, Serialize};
 use slamlab_core::graph::SolverKind;
 use slamlab_sim::params;
-use slamlab_sim::pose_graph_lesson::{
+use slamlab_sim::pose_graph::session::{
     EdgeRole, KernelRun, MAX_FILE_BYTES, PoseGraphScenario, PoseGraphSession, kernel_name,
     solver_label,
 };

@@ -13,7 +13,7 @@ use egui::{Color32, ColorImage, TextureOptions};
 use egui_plot::{Line, LineStyle, PlotPoints, Points, VLine};
 use slamlab_core::graph::BlockPattern;
 use slamlab_core::math;
-use slamlab_sim::pose_graph_lesson::PoseGraphSession;
+use slamlab_sim::pose_graph::session::PoseGraphSession;
 
 /// Largest side of a sparsity image, pixels (larger matrices are scaled down; a
 /// pixel is set if any entry it covers is non-zero).

@@ -5,7 +5,7 @@ use super::method_color;
 use crate::widgets::sources;
 use slamlab_core::particle::Resampler;
 use slamlab_core::particle::lab::multinomial_variance;
-use slamlab_sim::resampling_lab::LabRun;
+use slamlab_sim::resampling::session::LabRun;
 
 /// What `method` does, in two sentences.
 pub fn method_text(method: Resampler) -> &'static str {

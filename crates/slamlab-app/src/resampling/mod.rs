@@ -21,7 +21,7 @@ use egui::Color32;
 use serde::{Deserialize, Serialize};
 use slamlab_core::particle::Resampler;
 use slamlab_sim::params;
-use slamlab_sim::resampling_lab::{LabRun, LabScenario, LabWeights};
+use slamlab_sim::resampling::session::{LabRun, LabScenario, LabWeights};
 
 /// The lesson's id in URLs and the menu.
 pub const LESSON_ID: &str = "resampling";

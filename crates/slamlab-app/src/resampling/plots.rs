@@ -11,7 +11,7 @@ use crate::widgets::plots::{
     Figure, KeyEntry, Mark, columns_ui, figure_plot, figure_ui, line_width, marker_radius,
 };
 use egui_plot::{Bar, BarChart, Line, LineStyle, PlotPoints, Points};
-use slamlab_sim::resampling_lab::LabRun;
+use slamlab_sim::resampling::session::LabRun;
 
 /// The two plots side by side.
 pub fn plots_ui(ui: &mut egui::Ui, run: &LabRun) {

@@ -7,7 +7,7 @@
 use super::method_color;
 use crate::palette;
 use egui::{Align2, Color32, FontId, Pos2, Rect, Sense, Stroke, StrokeKind, vec2};
-use slamlab_sim::resampling_lab::LabRun;
+use slamlab_sim::resampling::session::LabRun;
 
 /// What the student asked for on the row.
 #[derive(Clone, Copy, Debug, PartialEq)]

@@ -7,7 +7,7 @@ use super::images::{INLIER, OUTLIER, SAMPLE};
 use crate::palette;
 use crate::widgets::sources;
 use slamlab_core::vision::{Method, Motion, angle_between, rotation_angle};
-use slamlab_sim::vision::{TwoViewSession, VoRun};
+use slamlab_sim::visual_odometry::{TwoViewSession, VoRun};
 
 /// The names of the four candidates, in [`slamlab_core::vision::Decomposition`]'s order.
 pub const CANDIDATES: [&str; 4] = [

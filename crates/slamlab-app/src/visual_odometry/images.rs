@@ -12,7 +12,7 @@ use egui::{Color32, Pos2, Rect, Sense, Stroke, pos2, vec2};
 use egui_plot::{Line, LineStyle, PlotPoints, Points};
 use nalgebra::{Matrix3, Vector2, Vector3};
 use slamlab_core::vision::{Intrinsics, epipolar_line, sampson_squared};
-use slamlab_sim::vision::{TwoViewSession, VoRun};
+use slamlab_sim::visual_odometry::{TwoViewSession, VoRun};
 
 /// Colour of a match RANSAC keeps.
 pub const INLIER: Color32 = palette::GREEN;
@@ -294,7 +294,7 @@ pub fn centre_ui(
 /// with unit steps, the station, and the step shown.
 fn top_view_ui(ui: &mut egui::Ui, run: &VoRun, pair: usize, truth: Color32) {
     let height = ui.available_height().max(80.0);
-    let xy = |poses: &[slamlab_sim::vision::odometry::TopPose]| -> Vec<[f64; 2]> {
+    let xy = |poses: &[slamlab_sim::visual_odometry::odometry::TopPose]| -> Vec<[f64; 2]> {
         poses.iter().map(|p| [p.x, p.y]).collect()
     };
     let key = vec![
@@ -324,7 +324,7 @@ fn top_view_ui(ui: &mut egui::Ui, run: &VoRun, pair: usize, truth: Color32) {
                 .include_y(4.0)
         },
         |plot_ui| {
-            let station = slamlab_sim::vision::world::STATION_X;
+            let station = slamlab_sim::visual_odometry::world::STATION_X;
             plot_ui.line(
                 Line::new(
                     "docking station",

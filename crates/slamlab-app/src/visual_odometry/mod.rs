@@ -24,7 +24,7 @@ use crate::widgets::params_panel::{self, PendingParams};
 use serde::{Deserialize, Serialize};
 use slamlab_core::vision::{Motion, rotation_angle};
 use slamlab_sim::params;
-use slamlab_sim::vision::{
+use slamlab_sim::visual_odometry::{
     TwoViewSession, VoRun, VoScenario, odometry::run_in_world, world::CameraWorld,
 };
 
@@ -97,7 +97,7 @@ pub fn open(start: &LessonStart<'_>) -> Box<dyn Lesson> {
 
 /// The run of a scenario (the world rebuilt from its seed).
 fn make_run(scenario: &VoScenario) -> VoRun {
-    let settings = slamlab_sim::vision::odometry::clamped(scenario.settings);
+    let settings = slamlab_sim::visual_odometry::odometry::clamped(scenario.settings);
     let world = CameraWorld::new(
         settings.seed,
         settings.frames,
@@ -289,7 +289,7 @@ impl VisualOdometryLesson {
                     "frames {} to {} ({:.1} s apart), {} matches",
                     step.from,
                     step.to,
-                    (step.to - step.from) as f64 * slamlab_sim::vision::world::FRAME_DT,
+                    (step.to - step.from) as f64 * slamlab_sim::visual_odometry::world::FRAME_DT,
                     step.matches
                 ));
             }

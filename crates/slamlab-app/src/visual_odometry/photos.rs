@@ -7,7 +7,7 @@
 
 use egui::{Color32, Pos2, Rect, Stroke, TextureOptions, Vec2};
 use slamlab_core::vision::{Motion, rotation_angle};
-use slamlab_sim::vision::photos::{self, Photo, PhotoEstimate};
+use slamlab_sim::visual_odometry::photos::{self, Photo, PhotoEstimate};
 
 use super::images::{INLIER, OUTLIER};
 use crate::widgets::dropped_files::DropInbox;

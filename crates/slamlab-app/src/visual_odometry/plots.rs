@@ -11,7 +11,7 @@ use crate::widgets::plots::{
     plot_row, series_data,
 };
 use slamlab_core::vision::EarlyRejection;
-use slamlab_sim::vision::{TwoViewSession, VoRun};
+use slamlab_sim::visual_odometry::{TwoViewSession, VoRun};
 
 const ROTATION: &str = "Rotation error per step";
 const TRANSLATION: &str = "Translation-direction error per step";
@@ -22,12 +22,13 @@ const RANSAC: &str = "RANSAC on this step";
 /// writes them unthinned. x is the later frame of each step.
 fn plotted(run: &VoRun, session: Option<&TwoViewSession>) -> Vec<Styled> {
     let mut out = Vec::new();
-    let per_step = |pick: &dyn Fn(&slamlab_sim::vision::odometry::VoStep) -> Option<f64>| {
-        run.steps
-            .iter()
-            .filter_map(|s| pick(s).map(|v| [s.to as f64, v]))
-            .collect::<Vec<_>>()
-    };
+    let per_step =
+        |pick: &dyn Fn(&slamlab_sim::visual_odometry::odometry::VoStep) -> Option<f64>| {
+            run.steps
+                .iter()
+                .filter_map(|s| pick(s).map(|v| [s.to as f64, v]))
+                .collect::<Vec<_>>()
+        };
     out.push(Styled::new(
         PlotSeries::new(
             ROTATION,

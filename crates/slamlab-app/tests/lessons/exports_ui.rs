@@ -7,7 +7,7 @@ use egui_kittest::Harness;
 use egui_kittest::kittest::Queryable as _;
 use slamlab_app::SlamLabApp;
 use slamlab_app::registry::LESSONS;
-use slamlab_sim::scenario_file::ScenarioFile;
+use slamlab_sim::io::scenario_file::ScenarioFile;
 use std::path::PathBuf;
 
 fn temp_dir(name: &str) -> PathBuf {

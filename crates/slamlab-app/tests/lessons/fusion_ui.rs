@@ -9,7 +9,7 @@ use egui_kittest::kittest::Queryable as _;
 use slamlab_app::SlamLabApp;
 use slamlab_app::fusion::FusionLesson;
 use slamlab_app::lesson::Lesson as _;
-use slamlab_sim::fusion::lesson::{BadReading, FusionEvent};
+use slamlab_sim::fusion::session::{BadReading, FusionEvent};
 use slamlab_sim::fusion::{FusionMode, SLAM, run_modes, simulate};
 
 const SIZE: egui::Vec2 = egui::vec2(1500.0, 950.0);

@@ -137,7 +137,7 @@ fn a_dropped_map_replaces_the_run_and_a_bad_one_keeps_it() {
     use slamlab_app::lesson::Lesson as _;
     use slamlab_sim::grid::BuiltinMap;
     let mut h = harness("lesson=kidnap&particles=200&seed=1");
-    let image_name = slamlab_sim::grid::map_io::parse_map_yaml(BuiltinMap::Office.yaml())
+    let image_name = slamlab_sim::io::ros_map::parse_map_yaml(BuiltinMap::Office.yaml())
         .map(|y| y.image)
         .unwrap();
     let lesson = lesson_mut(&mut h);
@@ -178,7 +178,7 @@ fn status_goes_from_tracking_to_lost_or_recovering_after_a_kidnap() {
     }
     let status = explain_status(lesson);
     assert!(status.iter().all(|s| s.contains("tracking")), "{status:?}");
-    lesson.apply_event(slamlab_sim::kidnap_session::KidnapEvent::KidnapRandom);
+    lesson.apply_event(slamlab_sim::kidnap::session::KidnapEvent::KidnapRandom);
     for _ in 0..12 {
         lesson.step_tick();
     }
@@ -204,7 +204,7 @@ fn rendered_side_by_side_with_the_costmap_after_a_kidnap() {
     for _ in 0..60 {
         lesson.step_tick();
     }
-    lesson.apply_event(slamlab_sim::kidnap_session::KidnapEvent::KidnapRandom);
+    lesson.apply_event(slamlab_sim::kidnap::session::KidnapEvent::KidnapRandom);
     for _ in 0..25 {
         lesson.step_tick();
     }
@@ -372,7 +372,7 @@ fn a_lone_image_asks_for_its_resolution() {
     h.run();
     assert_eq!(lesson(&h).map_name(), "plan.png");
     let (w, _) = lesson(&h).sim().run().map().grid().size_m();
-    let office = slamlab_sim::grid::map_io::parse_map_yaml(BuiltinMap::Office.yaml())
+    let office = slamlab_sim::io::ros_map::parse_map_yaml(BuiltinMap::Office.yaml())
         .map(|y| y.resolution)
         .unwrap_or(0.05);
     assert!(w > 50.0 * 0.1 / office, "{w} m wide");
@@ -434,7 +434,7 @@ fn right_after_a_kidnap_the_status_reads_the_estimates_error_now() {
     for _ in 0..30 {
         lesson_mut(&mut h).step_tick();
     }
-    lesson_mut(&mut h).apply_event(slamlab_sim::kidnap_session::KidnapEvent::KidnapRandom);
+    lesson_mut(&mut h).apply_event(slamlab_sim::kidnap::session::KidnapEvent::KidnapRandom);
     h.run();
     let state: serde_json::Value =
         serde_json::from_str(&h.state().test_state_json()).unwrap_or_default();
@@ -493,14 +493,14 @@ fn measure_recovery_after_a_kidnap() {
             .iter()
             .map(|f| f.updates.last().map_or(f64::NAN, |u| u.position_error))
             .collect();
-        lesson.apply_event(slamlab_sim::kidnap_session::KidnapEvent::KidnapRandom);
+        lesson.apply_event(slamlab_sim::kidnap::session::KidnapEvent::KidnapRandom);
         for _ in 0..400 {
             lesson.step_tick();
         }
         for (k, f) in lesson.sim().run().filters().iter().enumerate() {
             let pre = &f.updates[before[k] - 1];
             let post = &f.updates[before[k]..];
-            let w = |u: &slamlab_sim::localization::UpdateRecord| {
+            let w = |u: &slamlab_sim::kidnap::UpdateRecord| {
                 (
                     u.log_w_fast.unwrap_or(f64::NAN),
                     u.log_w_slow.unwrap_or(f64::NAN),

@@ -9,7 +9,7 @@ use egui_kittest::Harness;
 use egui_kittest::kittest::Queryable as _;
 use slamlab_app::SlamLabApp;
 use slamlab_sim::Phase;
-use slamlab_sim::landmark_params::PARAMS;
+use slamlab_sim::landmark_slam::scenario::PARAMS;
 use slamlab_sim::params::{self, ParamIssue, ParamKind};
 
 fn session<'h>(h: &'h Harness<'_, SlamLabApp>) -> &'h slamlab_sim::LandmarkSession {
@@ -469,7 +469,7 @@ fn a_preset_opens_the_thesis_experiment_with_the_same_seed() {
     assert_eq!(s.seed, 7, "the seed stays");
     assert_eq!(
         s,
-        &slamlab_sim::experiments::ekf_vs_ukf_scenario(2.0, 7),
+        &slamlab_sim::landmark_slam::experiment::ekf_vs_ukf_scenario(2.0, 7),
         "the run is the CLI's Experiment 2 trial"
     );
     assert_eq!(session(&h).tick(), 0, "the run restarted");
@@ -518,8 +518,11 @@ fn many_runs_averages_each_filters_nees_over_seeded_runs() {
         .and_then(|l| l.many_runs.result())
         .unwrap_or_else(|| panic!("a result"));
     // The same numbers as the study itself: one lap, seeds 7..15.
-    let mut direct =
-        slamlab_sim::consistency::ConsistencyStudy::new(session(&h).scenario().clone(), 8, 200);
+    let mut direct = slamlab_sim::landmark_slam::consistency::ConsistencyStudy::new(
+        session(&h).scenario().clone(),
+        8,
+        200,
+    );
     direct.run_to_end(|_, _| {});
     assert_eq!(result, direct.result());
     assert_eq!(result.filters[0].name, "ekf");

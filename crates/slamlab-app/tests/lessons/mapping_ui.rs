@@ -95,7 +95,7 @@ fn export_writes_a_ros_map_and_localize_opens_the_monte_carlo_lesson() {
     h.run();
     let yaml = std::fs::read_to_string(dir.join("slamlab-map.yaml")).unwrap();
     let pgm = std::fs::read(dir.join("slamlab-map.pgm")).unwrap();
-    let (grid, _) = slamlab_sim::grid::map_io::load_map(&yaml, &pgm).unwrap();
+    let (grid, _) = slamlab_sim::io::ros_map::load_map(&yaml, &pgm).unwrap();
     let (free, occupied, _) = grid.counts();
     assert!(
         free > 1000 && occupied > 100,
@@ -206,7 +206,7 @@ fn a_dropped_ros_map_is_explored_and_a_broken_one_leaves_the_run() {
     let input = lesson(&h).session().sim().input().clone();
     assert!(input.name.contains("office.yaml"), "{}", input.name);
     assert_eq!(input.scans.len(), 60);
-    let office = slamlab_sim::mapping::builtin_map("office").unwrap();
+    let office = slamlab_sim::grid::builtin_map("office").unwrap();
     assert_eq!(input.true_map.as_ref().unwrap().width(), office.width());
     for _ in 0..60 {
         lesson_mut(&mut h).step_tick();

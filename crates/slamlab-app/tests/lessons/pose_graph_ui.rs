@@ -11,7 +11,7 @@ use egui_kittest::Harness;
 use egui_kittest::kittest::{NodeT as _, Queryable as _};
 use slamlab_app::SlamLabApp;
 use slamlab_app::pose_graph::PoseGraphLesson;
-use slamlab_sim::pose_graph_lesson::KernelChoice;
+use slamlab_sim::pose_graph::session::KernelChoice;
 
 fn lesson<'h>(h: &'h Harness<'_, SlamLabApp>) -> &'h PoseGraphLesson {
     lesson_of(h)

@@ -302,8 +302,8 @@ const GOLDEN_BOUND: u64 = 35;
 /// that is not an image leaves a message and the photos as they were.
 #[test]
 fn two_photos_are_matched_and_drawn() {
-    let (left, right) = slamlab_sim::vision::photos::synthetic::photo_pair();
-    let (rotation, _) = slamlab_sim::vision::photos::synthetic::pose();
+    let (left, right) = slamlab_sim::visual_odometry::photos::synthetic::photo_pair();
+    let (rotation, _) = slamlab_sim::visual_odometry::photos::synthetic::pose();
     let truth_deg = slamlab_core::vision::rotation_angle(&rotation).to_degrees();
     for (size, name) in [
         (
@@ -475,7 +475,7 @@ fn the_sprt_rows_render_small_and_embedded() {
 /// panics, and the simulated lesson underneath keeps its state.
 #[test]
 fn identical_and_unrelated_photos_get_a_message() {
-    let (left, _) = slamlab_sim::vision::photos::synthetic::photo_pair();
+    let (left, _) = slamlab_sim::visual_odometry::photos::synthetic::photo_pair();
     let mut h = harness_sized("lesson=visual-odometry&seed=3", egui::vec2(1280.0, 800.0));
     h.run();
     for _ in 0..3 {
@@ -513,13 +513,15 @@ fn identical_and_unrelated_photos_get_a_message() {
     // Two unrelated textures: too few matches, a message and no estimate.
     let noise = |seed: u64| {
         let image = image::GrayImage::from_fn(320, 240, |x, y| {
-            image::Luma([slamlab_sim::vision::photos::synthetic::cell_value(
-                seed,
-                i64::from(x / 6),
-                i64::from(y / 6),
-            ) as u8])
+            image::Luma(
+                [slamlab_sim::visual_odometry::photos::synthetic::cell_value(
+                    seed,
+                    i64::from(x / 6),
+                    i64::from(y / 6),
+                ) as u8],
+            )
         });
-        slamlab_sim::vision::photos::synthetic::png_bytes(&image)
+        slamlab_sim::visual_odometry::photos::synthetic::png_bytes(&image)
     };
     lesson_mut(&mut h).load_photos(vec![
         ("a.png".to_owned(), Ok(noise(11))),

@@ -11,8 +11,8 @@ use crate::lessons::landmark::{check_runnable, scenario_from};
 use crate::output::{Output, csv_arg, progress_bar};
 use anyhow::Result;
 use clap::{ArgMatches, Command};
-use slamlab_sim::consistency::ConsistencyStudy;
-use slamlab_sim::experiments;
+use slamlab_sim::landmark_slam::consistency::ConsistencyStudy;
+use slamlab_sim::landmark_slam::experiment;
 use std::io::Write;
 
 /// Filter consistency over seeded trials.
@@ -121,7 +121,7 @@ impl Experiment for Consistency {
         writeln!(
             out,
             "NIS: mean over every landmark update (2 dof: expected 2). Diverged: final robot error > {} m (kept in the averages).",
-            experiments::DIVERGED_ERROR
+            experiment::DIVERGED_ERROR
         )?;
         Ok(())
     }

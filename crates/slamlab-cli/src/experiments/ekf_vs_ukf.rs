@@ -10,7 +10,7 @@ use crate::lessons::landmark::scenario_from;
 use crate::output::{Output, csv_arg, progress_bar};
 use anyhow::{Result, bail};
 use clap::{ArgMatches, Command};
-use slamlab_sim::experiments;
+use slamlab_sim::landmark_slam::experiment;
 use std::io::Write;
 
 /// EKF against UKF on the thesis's fixed scenario.
@@ -51,7 +51,7 @@ impl Experiment for EkfVsUkf {
                 reason: |_| {
                     format!(
                         "--steps belongs to consistency; ekf-vs-ukf runs the thesis's {} iterations",
-                        experiments::STEPS
+                        experiment::STEPS
                     )
                 },
             },
@@ -73,12 +73,12 @@ impl Experiment for EkfVsUkf {
             );
         }
         let trials = matches.get_one::<u64>("trials").copied().unwrap_or(50) as usize;
-        let result = experiments::ekf_vs_ukf(noise_scale, trials, seed, progress_bar("ekf-vs-ukf"));
+        let result = experiment::ekf_vs_ukf(noise_scale, trials, seed, progress_bar("ekf-vs-ukf"));
         out.write_csv(
             &format!("ekf-vs-ukf-noise{noise_scale}-seed{seed}-trials{trials}.csv"),
             || {
-                let dt = experiments::ekf_vs_ukf_scenario(noise_scale, seed).dt;
-                experiments::series_csv(&result, dt)
+                let dt = experiment::ekf_vs_ukf_scenario(noise_scale, seed).dt;
+                experiment::series_csv(&result, dt)
             },
         )?;
         if out.print_json(&result)? {
@@ -122,7 +122,7 @@ impl Experiment for EkfVsUkf {
         writeln!(
             out,
             "MSE: mean over trials of the time-averaged squared position error (± std across trials). Diverged: final robot error > {} m; worst final: the largest final robot error of any trial.",
-            experiments::DIVERGED_ERROR
+            experiment::DIVERGED_ERROR
         )?;
         Ok(())
     }

@@ -11,7 +11,7 @@ use crate::output::{Output, csv_arg, progress_bar};
 use anyhow::{Result, bail};
 use clap::{Arg, ArgMatches, Command};
 use slamlab_core::particle::FastSlamVersion;
-use slamlab_sim::fastslam::fastslam_experiment;
+use slamlab_sim::landmark_slam::fastslam::fastslam_experiment;
 use std::io::Write;
 
 /// The largest particle count the particle experiments accept.

@@ -11,8 +11,8 @@ use crate::output::{Output, csv_arg, trials_bar, trials_progress};
 use anyhow::{Context, Result, bail};
 use clap::{Arg, ArgMatches, Command};
 use serde_json::json;
-use slamlab_sim::localization::experiment::{KidnapProtocol, KidnapTrial, kidnap_trial, summarize};
-use slamlab_sim::localization::{LocalizationEstimator, MclScenario};
+use slamlab_sim::kidnap::experiment::{KidnapProtocol, KidnapTrial, kidnap_trial, summarize};
+use slamlab_sim::kidnap::{LocalizationEstimator, MclScenario};
 use std::io::Write;
 
 /// What `experiment kidnap` sets itself (lists, the protocol's tracking start and

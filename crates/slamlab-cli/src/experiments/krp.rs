@@ -15,7 +15,7 @@ use clap::{Arg, ArgMatches, Command};
 use serde_json::json;
 use slamlab_sim::cartographer::input::{KidnapPlace, MAX_STEPS, kidnap_input_to};
 use slamlab_sim::cartographer::{CartographerParams, CartographerSim, CartographerSummary};
-use slamlab_sim::laser_log::SimulatedLogConfig;
+use slamlab_sim::grid::SimulatedLogConfig;
 use std::io::Write;
 use std::sync::Arc;
 

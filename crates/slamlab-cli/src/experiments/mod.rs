@@ -14,7 +14,7 @@ pub mod two_view;
 pub mod unscented;
 
 use clap::Arg;
-use slamlab_sim::landmark_params::PARAMS;
+use slamlab_sim::landmark_slam::scenario::PARAMS;
 
 /// `--trials N` (1 ..= 100000) with the experiment's default.
 fn trials_arg(default: &'static str) -> Arg {

@@ -11,7 +11,7 @@ use crate::output::Output;
 use anyhow::{Result, bail};
 use clap::{Arg, ArgMatches, Command};
 use slamlab_core::graph::SolverKind;
-use slamlab_sim::pose_graph_experiment::{self, PoseGraphExperimentConfig};
+use slamlab_sim::pose_graph::experiment::{self, PoseGraphExperimentConfig};
 use std::io::Write;
 
 /// Dead reckoning, EKF-SLAM and the optimized graph against the truth.
@@ -60,7 +60,7 @@ impl Experiment for PoseGraph {
                 reason: |flag| {
                     format!(
                         "--{flag} does not apply to pose-graph (one seeded run of {} ticks)",
-                        pose_graph_experiment::STEPS
+                        experiment::STEPS
                     )
                 },
             },
@@ -96,7 +96,7 @@ impl Experiment for PoseGraph {
                 .unwrap_or(SolverKind::GaussNewton),
             max_iterations: m.get_one::<u64>("max-iterations").copied().unwrap_or(20) as usize,
         };
-        let result = pose_graph_experiment::run(config).map_err(crate::graph_cmd::explain)?;
+        let result = experiment::run(config).map_err(crate::graph_cmd::explain)?;
         if out.print_json(&result)? {
             return Ok(());
         }

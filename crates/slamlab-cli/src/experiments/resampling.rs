@@ -13,7 +13,7 @@ use crate::output::{Output, progress_bar};
 use anyhow::{Result, bail};
 use clap::{Arg, ArgMatches, Command};
 use slamlab_core::particle::{Resampler, WeightPreset};
-use slamlab_sim::resampling::{self, resampling_experiment};
+use slamlab_sim::resampling::experiment::{self, resampling_experiment};
 use std::io::Write;
 
 /// The resamplers compared.
@@ -43,7 +43,7 @@ impl Experiment for Resampling {
                     .value_name("COUNT")
                     .help(format!(
                         "particles per weight set (1 .. 10000); default {}",
-                        resampling::DEFAULT_PARTICLES
+                        experiment::DEFAULT_PARTICLES
                     )),
             )
             .arg(trials_arg("10000"))
@@ -83,7 +83,7 @@ impl Experiment for Resampling {
             }
         };
         let particles = match matches.get_one::<String>("particles") {
-            None => resampling::DEFAULT_PARTICLES,
+            None => experiment::DEFAULT_PARTICLES,
             Some(text) => match parse_counts(text)?[..] {
                 [n] => n,
                 _ => bail!("--particles: the resampling experiment takes one count"),

@@ -11,7 +11,7 @@ use crate::output::{Output, progress_bar};
 use anyhow::{Result, bail};
 use clap::{Arg, ArgAction, ArgMatches, Command};
 use slamlab_core::vision::{EarlyRejection, Method};
-use slamlab_sim::vision::{TwoViewSettings, two_view_experiment};
+use slamlab_sim::visual_odometry::{TwoViewSettings, two_view_experiment};
 use std::io::Write;
 
 /// The two-view experiment.

@@ -12,7 +12,7 @@ use crate::flags::{scenario_from, table_args};
 use crate::output::Output;
 use anyhow::{Result, anyhow};
 use clap::{ArgMatches, Command};
-use slamlab_sim::filters_lab::{FiltersScenario, one_step};
+use slamlab_sim::filters::session::{FiltersScenario, one_step};
 use std::io::Write;
 
 /// The table's parameters this experiment takes (the one-step comparison's).

@@ -14,7 +14,7 @@ use crate::output::Output;
 use anyhow::{Context, Result};
 use clap::{Arg, ArgMatches, Command};
 use serde_json::json;
-use slamlab_sim::localization::{MclRun, MclScenario};
+use slamlab_sim::kidnap::{MclRun, MclScenario};
 use std::io::Write;
 
 /// The kidnapped-robot lesson's run.

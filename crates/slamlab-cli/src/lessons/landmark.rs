@@ -9,7 +9,7 @@ use crate::flags;
 use crate::output::Output;
 use anyhow::{Context, Result, bail};
 use clap::{Arg, ArgMatches, Command};
-use slamlab_sim::metrics::{RunSummary, run_headless};
+use slamlab_sim::landmark_slam::summary::{RunSummary, run_headless};
 use slamlab_sim::{LandmarkScenario, LandmarkSession};
 use std::io::Write;
 

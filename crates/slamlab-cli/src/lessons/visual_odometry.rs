@@ -15,7 +15,7 @@ use crate::output::Output;
 use anyhow::Result;
 use clap::{ArgMatches, Command};
 use serde_json::json;
-use slamlab_sim::vision::{VoScenario, run_visual_odometry};
+use slamlab_sim::visual_odometry::{VoScenario, run_visual_odometry};
 use std::io::Write;
 
 /// The visual-odometry lesson's run.

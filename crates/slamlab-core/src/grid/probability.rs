@@ -42,8 +42,8 @@
 
 use super::floor_to_i64;
 use crate::geometry::Pose2;
+use crate::laser::Scan;
 use crate::math;
-use crate::scan::Scan;
 use serde::{Deserialize, Serialize};
 use std::sync::Arc;
 use std::sync::atomic::{AtomicU64, Ordering};
@@ -1168,8 +1168,8 @@ mod tests {
         // The ICP tests' room, seen to 2.5 m (so many beams are max-range
         // readings), every 37th range NaN.
         let scan_at = |pose: Pose2| {
-            let mut scan = crate::scan::icp::tests::ray_cast(
-                &crate::scan::icp::tests::room(),
+            let mut scan = crate::laser::test_room::ray_cast(
+                &crate::laser::test_room::room(),
                 pose,
                 360,
                 2.5,

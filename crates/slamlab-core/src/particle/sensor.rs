@@ -45,43 +45,10 @@ use crate::math;
 use serde::{Deserialize, Serialize};
 use std::sync::Arc;
 
+pub use crate::laser::Scan;
+
 /// `ln(1 / sqrt(2π))`.
 const LN_INV_SQRT_2PI: f64 = -0.918_938_533_204_672_7;
-
-/// A laser scan in the robot frame: the sensor sits at the robot's centre
-/// facing forward; beam `k` points at `angles[k]` (radians, counter-clockwise)
-/// and measured `ranges[k]` metres. A reading at or beyond `range_max` means
-/// "nothing within range"; NaN or negative readings are ignored.
-#[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
-pub struct Scan {
-    /// Beam angles in the robot frame, radians.
-    pub angles: Vec<f64>,
-    /// Measured ranges, metres.
-    pub ranges: Vec<f64>,
-    /// Shortest valid reading, metres.
-    pub range_min: f64,
-    /// Maximum range, metres.
-    pub range_max: f64,
-}
-
-impl Scan {
-    /// The indices of at most `max_beams` beams, evenly spread as amcl picks them
-    /// (`laser_max_beams`: every `(n − 1)/(max_beams − 1)`-th beam); all beams if
-    /// `max_beams` is 0 or at least the beam count.
-    pub fn subsample(&self, max_beams: usize) -> Vec<usize> {
-        let n = self.ranges.len().min(self.angles.len());
-        if max_beams == 0 || max_beams >= n {
-            return (0..n).collect();
-        }
-        if max_beams == 1 {
-            return vec![0];
-        }
-        let step = (n - 1) as f64 / (max_beams - 1) as f64;
-        (0..max_beams)
-            .map(|k| ((k as f64 * step).round() as usize).min(n - 1))
-            .collect()
-    }
-}
 
 /// How the beams' likelihoods combine into a scan's (amcl has the sum of cubes
 /// only; Probabilistic Robotics the product).

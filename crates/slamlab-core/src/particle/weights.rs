@@ -75,14 +75,7 @@ fn largest_log_weight(log_weights: &[f64]) -> Result<f64, WeightError> {
     Ok(max)
 }
 
-/// The effective sample size `N_eff = 1 / Σ wᵢ²` of normalized weights: `M` for
-/// uniform weights, 1 when one particle holds all the weight (slides, "adaptive
-/// resampling"). Zero for an empty set. Takes any sequence of weights (a
-/// slice, or the weights of a particle set) in order.
-pub fn effective_sample_size<'a>(weights: impl IntoIterator<Item = &'a f64>) -> f64 {
-    let sum_sq: f64 = weights.into_iter().map(|w| w * w).sum();
-    if sum_sq > 0.0 { 1.0 / sum_sq } else { 0.0 }
-}
+pub use crate::stats::effective_sample_size;
 
 #[cfg(test)]
 mod tests {

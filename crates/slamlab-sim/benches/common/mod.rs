@@ -1,6 +1,6 @@
 //! What the benchmarks share: where the shared data sets are.
 
-use slamlab_sim::laser_log::LaserLog;
+use slamlab_sim::io::laser_log::LaserLog;
 use std::path::PathBuf;
 
 /// The Intel Research Lab log: `../shared/data/laser/intel.clf.bz2` beside

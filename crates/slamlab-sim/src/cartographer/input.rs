@@ -1,5 +1,5 @@
 //! A simulated log with a kidnap: the explorer drives the robot through a map
-//! as `laser_log::simulate_log` does (the same random streams), and at scan
+//! as `grid::simulate_log` does (the same random streams), and at scan
 //! `kidnap_at` the robot is carried at least [`MIN_KIDNAP_DISTANCE`] away
 //! with a random heading ([`KidnapPlace`]): by default to a place it has
 //! already been (as the thesis's cropped log lands the robot where it had
@@ -8,11 +8,11 @@
 //! merge exists). Odometry does not see the jump (its pose moves only by the
 //! wheels), so the log looks like a robot that drove on.
 
+use crate::grid::SimulatedLogConfig;
 use crate::grid::explorer::Explorer;
 use crate::grid::robot::{GridRobot, OdometrySensor};
-use crate::laser_log::SimulatedLogConfig;
-use crate::localization::run::stream_seed;
-use crate::mapping::{InputScan, MappingInput};
+use crate::grid::{InputScan, MappingInput};
+use crate::noise::stream_seed;
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
 use slamlab_core::Pose2;

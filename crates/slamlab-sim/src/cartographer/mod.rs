@@ -32,11 +32,12 @@
 //! or a CARMEN log); the truth reaches only [`CartographerSim::summary`].
 
 pub mod input;
+pub mod session;
 #[cfg(test)]
 mod tests;
 mod view;
 
-use crate::mapping::{MappingInput, map_agreement};
+use crate::grid::{MappingInput, map_agreement};
 use nalgebra::Matrix3;
 use serde::{Deserialize, Serialize};
 use slamlab_core::Pose2;

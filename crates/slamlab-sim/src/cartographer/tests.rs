@@ -1,7 +1,7 @@
 use super::input::{KidnapPlace, kidnap_input, kidnap_input_to};
 use super::*;
-use crate::laser_log::SimulatedLogConfig;
-use crate::mapping::builtin_map;
+use crate::grid::SimulatedLogConfig;
+use crate::grid::builtin_map;
 
 fn run_with(
     map: &str,

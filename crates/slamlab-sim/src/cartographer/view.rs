@@ -3,7 +3,7 @@
 //! processed).
 
 use super::CartographerSim;
-use crate::mapping::MappingInput;
+use crate::grid::MappingInput;
 use std::sync::Arc;
 
 impl CartographerSim {

@@ -1,10 +1,10 @@
 //! The SLAM pose taken from the landmark lesson's EKF-SLAM on the same drive,
 //! instead of the white-noise-and-drift model.
 
-use super::sensors::{Arrival, SLAM, SensorLog};
-use crate::scenario::{ControllerKind, EstimatorKind, LandmarkScenario};
-use crate::session::LandmarkSession;
-use crate::world::LandmarkLayout;
+use super::log::{Arrival, SLAM, SensorLog};
+use crate::world::landmark_scenario::{ControllerKind, EstimatorKind, LandmarkScenario};
+use crate::world::landmark_session::LandmarkSession;
+use crate::world::landmarks::LandmarkLayout;
 use nalgebra::Matrix3;
 use slamlab_core::geometry::Pose2;
 use slamlab_core::kalman::fusion::{Measurement, Reading};

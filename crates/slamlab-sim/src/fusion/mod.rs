@@ -17,11 +17,12 @@
 
 mod experiment;
 mod landmark_pose;
-pub mod lesson;
+mod log;
 pub mod params;
 mod runner;
 mod scenario;
 mod sensors;
+pub mod session;
 #[cfg(test)]
 mod tests;
 
@@ -29,9 +30,10 @@ pub use experiment::{
     FusionAverage, FusionExperiment, FusionTrial, THESIS_TABLE_5_3, fusion_experiment,
     parameters_json,
 };
+pub use log::{Arrival, IMU, ODOMETRY, SLAM, SensorLog, TruthSample};
 pub use runner::{FusionMode, ModeRun, Rmse, SENSORS, Sample, SlamJump, filter_for, run_modes};
 pub use scenario::{
     DriveKind, DriveParams, FusionScenario, ImuParams, MAX_TRUTH_TICKS, OdometryParams,
     ScenarioError, SlamParams, SlamSource,
 };
-pub use sensors::{Arrival, IMU, ODOMETRY, SLAM, SensorLog, TruthSample, simulate};
+pub use sensors::simulate;

@@ -1,7 +1,7 @@
 //! Fusing one drive's sensor data in each mode, and the metrics against the truth.
 
+use super::log::{IMU, ODOMETRY, SLAM, SensorLog};
 use super::scenario::{FusionScenario, ScenarioError};
-use super::sensors::{IMU, ODOMETRY, SLAM, SensorLog};
 use nalgebra::{Matrix3, Vector3};
 use serde::Serialize;
 use slamlab_core::geometry::{Pose2, wrap_angle};

@@ -1,8 +1,7 @@
-//! The drive and the three simulated sensors: wheel odometry, IMU and SLAM pose.
-//!
-//! One [`SensorLog`] holds the truth and every reading of one seeded drive, so
-//! every fusion mode runs on exactly the same data.
+//! The drive and the three simulated sensors: wheel odometry, IMU and SLAM pose,
+//! recorded in one [`SensorLog`].
 
+use super::log::{Arrival, IMU, ODOMETRY, SLAM, SensorLog, TruthSample};
 use super::scenario::{DriveKind, FusionScenario, ScenarioError, SlamSource};
 use nalgebra::{Matrix3, Vector3};
 use rand::{Rng, SeedableRng};
@@ -11,13 +10,6 @@ use slamlab_core::geometry::{Pose2, wrap_angle};
 use slamlab_core::kalman::fusion::{Measurement, Reading};
 use slamlab_core::math;
 use slamlab_core::motion::{Control, MotionModel};
-
-/// The wheel odometry's sensor index in every fusion filter.
-pub const ODOMETRY: usize = 0;
-/// The IMU's sensor index.
-pub const IMU: usize = 1;
-/// The SLAM pose's sensor index.
-pub const SLAM: usize = 2;
 
 /// The random streams of a fusion scenario: one per source, so changing one
 /// sensor's parameters never changes another's noise.
@@ -37,74 +29,6 @@ fn stream(seed: u64, which: FusionStream) -> ChaCha8Rng {
 
 fn normal(rng: &mut ChaCha8Rng) -> f64 {
     slamlab_core::random::standard_normal(rng)
-}
-
-/// The true state at one tick.
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub struct TruthSample {
-    /// Time, seconds.
-    pub t: f64,
-    /// The robot's pose.
-    pub pose: Pose2,
-    /// Forward speed, m/s.
-    pub v: f64,
-    /// Yaw rate, rad/s.
-    pub w: f64,
-}
-
-/// A reading with the time it reaches the filter (its stamp plus any latency).
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub struct Arrival {
-    /// When the filter receives it, seconds.
-    pub arrival: f64,
-    /// The stamped reading.
-    pub measurement: Measurement,
-}
-
-/// The truth and every sensor reading of one drive.
-#[derive(Clone, Debug, PartialEq)]
-pub struct SensorLog {
-    /// The truth at every tick, `truth[k].t = k · truth_dt`.
-    pub truth: Vec<TruthSample>,
-    /// The truth's tick, seconds.
-    pub truth_dt: f64,
-    /// Every reading of every sensor, in order of arrival (equal arrivals in
-    /// stamp order).
-    pub measurements: Vec<Arrival>,
-    /// The raw odometry integrated alone (dead reckoning), at each odometry reading.
-    pub odometry_path: Vec<(f64, Pose2)>,
-    /// The SLAM poses as reported, with their stamps.
-    pub slam_poses: Vec<(f64, Pose2)>,
-    /// When the SLAM map relocalized (its drift reset: a jump).
-    pub relocalizations: Vec<f64>,
-    /// The gyroscope bias at each IMU reading, rad/s (for plots).
-    pub gyro_bias: Vec<(f64, f64)>,
-}
-
-impl SensorLog {
-    /// The true pose at time `t`, interpolated between ticks (clamped to the drive).
-    pub fn truth_at(&self, t: f64) -> Pose2 {
-        let Some(last) = self.truth.last() else {
-            return Pose2::IDENTITY;
-        };
-        let u = (t / self.truth_dt).max(0.0);
-        let k = u.floor() as usize;
-        if k + 1 >= self.truth.len() {
-            return last.pose;
-        }
-        let (a, b) = (self.truth[k].pose, self.truth[k + 1].pose);
-        let f = u - k as f64;
-        Pose2::new(
-            a.x + f * (b.x - a.x),
-            a.y + f * (b.y - a.y),
-            a.theta + f * wrap_angle(b.theta - a.theta),
-        )
-    }
-
-    /// The drive's length, seconds.
-    pub fn duration(&self) -> f64 {
-        self.truth.last().map_or(0.0, |s| s.t)
-    }
 }
 
 /// A sensor's sample clock: fires at `k / rate`.
@@ -263,7 +187,7 @@ pub fn simulate(scenario: &FusionScenario) -> Result<SensorLog, ScenarioError> {
             log.measurements.push(Arrival {
                 arrival: t + s.latency,
                 measurement: Measurement {
-                    sensor: super::sensors::SLAM,
+                    sensor: SLAM,
                     stamp: t,
                     reading: Reading::Pose {
                         pose: reported,

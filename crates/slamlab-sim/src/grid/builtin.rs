@@ -11,7 +11,7 @@
 //!
 //! Both are ROS map_server files under `assets/maps/`, compiled in.
 
-use super::map_io::{MapError, load_map};
+use crate::io::ros_map::{MapError, load_map};
 use slamlab_core::grid::OccupancyGrid;
 
 /// A built-in map.

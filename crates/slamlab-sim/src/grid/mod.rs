@@ -1,15 +1,18 @@
-//! The grid world of the Monte Carlo localization lessons: ROS map files, the
-//! built-in maps, the simulated lidar, the round robot that cannot drive through
-//! walls, and the explorer that tours any map.
+//! The grid world of the lidar lessons (Monte Carlo localization, mapping,
+//! Cartographer): the built-in maps, the simulated lidar, the round robot that
+//! cannot drive through walls, the explorer that tours any map, simulated laser
+//! logs, and the scans every mapping run takes as its input.
 
 pub mod builtin;
 pub mod explorer;
 pub mod lidar;
-pub mod map_io;
 pub mod robot;
+pub mod scans;
+pub mod simulated_log;
 
 pub use builtin::BuiltinMap;
 pub use explorer::Explorer;
 pub use lidar::Lidar;
-pub use map_io::{ImageFormat, MapError, MapYaml};
 pub use robot::{GridRobot, OdometrySensor};
+pub use scans::{InputScan, MappingInput, builtin_map, log_input, map_agreement, trajectory_rmse};
+pub use simulated_log::{SimLogError, SimulatedLogConfig, simulate_log};

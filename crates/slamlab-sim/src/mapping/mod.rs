@@ -9,83 +9,23 @@
 //! - [`MappingSession`]: the lesson's face on a [`Stepper`], opened from a
 //!   scenario and an input.
 
+pub mod grid_fastslam;
 pub mod run;
 pub mod scenario;
 #[cfg(test)]
 mod tests;
 
 pub use run::{
-    IcpScanRecord, InputScan, MappingEvent, MappingInput, MappingPhase, MappingRecords, MappingSim,
-    MatcherSettings, map_agreement, trajectory_rmse,
+    IcpScanRecord, MappingEvent, MappingPhase, MappingRecords, MappingSim, MatcherSettings,
 };
-pub use scenario::{MappingScenario, PoseSource, RuleKind};
+pub use scenario::{MappingScenario, PoseSource, RuleKind, simulated_input};
 
-use crate::grid::builtin::BuiltinMap;
-use crate::laser_log::{LaserLog, SimulatedLogConfig, simulate_log};
+use crate::grid::{MappingInput, map_agreement, trajectory_rmse};
 use crate::params;
 use crate::stepper::{CheckpointPolicy, Stepper};
 use serde::Serialize;
-use slamlab_core::grid::OccupancyGrid;
 use slamlab_core::scan::icp::IcpConfig;
 use std::sync::Arc;
-
-/// The simulated input of a scenario: the explorer drives the robot through
-/// `map` for `scenario.steps` scans (0.1 s apart) with the scenario's lidar and
-/// odometry noise. The true poses and the map travel beside the scans for the
-/// metrics.
-pub fn simulated_input(
-    scenario: &MappingScenario,
-    map: Arc<OccupancyGrid>,
-    map_name: &str,
-) -> Result<MappingInput, String> {
-    let mut config = SimulatedLogConfig::default();
-    config.lidar.beams = scenario.beams;
-    config.lidar.max_range = scenario.lidar_range;
-    config.lidar.range_std = scenario.range_std;
-    let k = scenario.odometry_noise.max(0.0);
-    config.odom_noise.alpha1 *= k;
-    config.odom_noise.alpha2 *= k;
-    config.odom_noise.alpha3 *= k;
-    config.odom_noise.alpha4 *= k;
-    let (log, truth) =
-        simulate_log(&map, scenario.steps, scenario.seed, &config).map_err(|e| e.to_string())?;
-    let mut input = log_input(
-        &log,
-        &format!("simulated {map_name}, seed {}", scenario.seed),
-    );
-    input.truth = Some(truth.iter().map(|t| t.pose).collect());
-    input.true_map = Some(map);
-    Ok(input)
-}
-
-/// The input of a laser log: its scans with the odometry pose of each, times
-/// from the first scan. The laser is taken to sit at the robot's centre (the
-/// Intel log's `robot_frontlaser_offset` is 0).
-pub fn log_input(log: &LaserLog, name: &str) -> MappingInput {
-    let t0 = log.scans.first().map_or(0.0, |s| s.timestamp);
-    MappingInput {
-        name: name.to_owned(),
-        scans: log
-            .scans
-            .iter()
-            .map(|s| InputScan {
-                time: s.timestamp - t0,
-                scan: s.scan.clone(),
-                odometry: s.odometry,
-            })
-            .collect(),
-        truth: None,
-        true_map: None,
-    }
-}
-
-/// The built-in map a scenario names (the maze for anything else).
-pub fn builtin_map(name: &str) -> Result<OccupancyGrid, String> {
-    BuiltinMap::from_name(name)
-        .unwrap_or(BuiltinMap::Maze)
-        .load()
-        .map_err(|e| e.to_string())
-}
 
 /// What a finished (or paused) run says about itself: `slamlab run mapping
 /// --json` prints it.
@@ -270,7 +210,9 @@ impl MappingSession {
         // Grid FastSLAM: the heaviest particle's path as it stands now (its
         // past corrected by later scans), at the scans it processed.
         let rmse = match (filter.and_then(|f| f.best()), input.truth.as_deref()) {
-            (Some(best), Some(truth)) => crate::grid_fastslam::path_rmse(&best.path.path(), truth),
+            (Some(best), Some(truth)) => {
+                crate::mapping::grid_fastslam::path_rmse(&best.path.path(), truth)
+            }
             (None, truth) if filter.is_none() => trajectory_rmse(&records.poses, truth),
             _ => None,
         };

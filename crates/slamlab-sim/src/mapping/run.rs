@@ -19,55 +19,19 @@
 //! simulated log travels beside the input and reaches only the metrics.
 
 use super::scenario::PoseSource;
+use crate::grid::{InputScan, MappingInput};
 use crate::stepper::{Records, Simulation};
 use slamlab_core::Pose2;
-use slamlab_core::grid::{
-    BeamUpdate, Cell, InsertParams, InsertReport, OccupancyGrid, ProbabilityGrid,
-};
+use slamlab_core::grid::{BeamUpdate, InsertParams, InsertReport, ProbabilityGrid};
 use slamlab_core::particle::grid_fastslam::LikelihoodPoints;
 use slamlab_core::particle::{GridFastSlam, GridFastSlamConfig, Proposal};
+use slamlab_core::scan::Point2;
 use slamlab_core::scan::icp::{IcpConfig, IcpIteration, IcpVariant, align};
 use slamlab_core::scan::scan_to_map::{
     ProbabilityLookup, ScanToMapParams, ScanToMapRecord, match_scan_to_map,
 };
-use slamlab_core::scan::{Point2, Scan};
 use slamlab_core::wrap_angle;
 use std::sync::Arc;
-
-/// One scan of the input.
-#[derive(Clone, Debug, PartialEq)]
-pub struct InputScan {
-    /// Seconds since the log's start.
-    pub time: f64,
-    /// The scan, in the sensor frame (the sensor at the robot's centre).
-    pub scan: Scan,
-    /// The odometry pose when it was taken.
-    pub odometry: Pose2,
-}
-
-/// What a run maps: scans with odometry, and for a simulated log the truth
-/// (metrics only).
-#[derive(Clone, Debug, Default, PartialEq)]
-pub struct MappingInput {
-    /// What the input is ("simulated maze, seed 3", "intel.clf.bz2").
-    pub name: String,
-    /// The scans in time order.
-    pub scans: Vec<InputScan>,
-    /// The true pose at each scan (simulation only).
-    pub truth: Option<Vec<Pose2>>,
-    /// The map the simulated robot drove in (simulation only).
-    pub true_map: Option<Arc<OccupancyGrid>>,
-}
-
-impl MappingInput {
-    /// Seconds from the first scan to the last.
-    pub fn duration(&self) -> f64 {
-        match (self.scans.first(), self.scans.last()) {
-            (Some(a), Some(b)) => (b.time - a.time).max(0.0),
-            _ => 0.0,
-        }
-    }
-}
 
 /// The phase a run is at.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -931,50 +895,4 @@ impl Simulation for MappingSim {
             .map_or(0, |f| f.memory_bytes() / 8 + f.particles().len() * 256);
         self.grid.memory_bytes() / 8 + particles + 1024
     }
-}
-
-/// The root-mean-square position error of `poses` against `truth` (the first
-/// `poses.len()` true poses), metres; `None` without truth or poses.
-pub fn trajectory_rmse(poses: &[Pose2], truth: Option<&[Pose2]>) -> Option<f64> {
-    let truth = truth?;
-    let n = poses.len().min(truth.len());
-    if n == 0 {
-        return None;
-    }
-    let sum: f64 = poses
-        .iter()
-        .zip(truth)
-        .take(n)
-        .map(|(p, t)| (p.x - t.x) * (p.x - t.x) + (p.y - t.y) * (p.y - t.y))
-        .sum();
-    Some((sum / n as f64).sqrt())
-}
-
-/// The share of the true map's free and occupied cells that the built map
-/// classifies the same (occupied above probability 0.5, free below), over the
-/// cells the built map knows (looked up at each true cell's centre). `None`
-/// when the built map knows none of them.
-pub fn map_agreement(built: &ProbabilityGrid, truth: &OccupancyGrid) -> Option<f64> {
-    let (mut known, mut same) = (0usize, 0usize);
-    for j in 0..truth.height() as i64 {
-        for i in 0..truth.width() as i64 {
-            let Some(cell) = truth.get(i, j) else {
-                continue;
-            };
-            if cell == Cell::Unknown {
-                continue;
-            }
-            let (x, y) = truth.cell_center(i, j);
-            let (bi, bj) = built.cell_of(x, y);
-            let Some(l) = built.log_odds_at(bi, bj) else {
-                continue;
-            };
-            if l == 0.0 {
-                continue;
-            }
-            known += 1;
-            same += usize::from((l > 0.0) == (cell == Cell::Occupied));
-        }
-    }
-    (known > 0).then(|| same as f64 / known as f64)
 }

@@ -2,12 +2,14 @@
 //! where the scans come from (a simulated robot in a built-in or loaded map,
 //! or a laser log), which poses build the map, and how scans change it.
 
+use crate::grid::{MappingInput, SimulatedLogConfig, log_input, simulate_log};
 use crate::params::{Param, Scenario, choose};
 use serde::{Deserialize, Serialize};
-use slamlab_core::grid::{InsertParams, UpdateRule};
+use slamlab_core::grid::{InsertParams, OccupancyGrid, UpdateRule};
 use slamlab_core::particle::MAX_GRID_PARTICLES;
 use slamlab_core::particle::{GridFastSlamConfig, Proposal};
 use slamlab_core::scan::scan_to_map::ScanToMapParams;
+use std::sync::Arc;
 
 /// Where each scan's pose comes from.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash, Serialize, Deserialize)]
@@ -588,6 +590,35 @@ impl Scenario for MappingScenario {
     fn seed(&self) -> u64 {
         self.seed
     }
+}
+
+/// The simulated input of a scenario: the explorer drives the robot through
+/// `map` for `scenario.steps` scans (0.1 s apart) with the scenario's lidar and
+/// odometry noise. The true poses and the map travel beside the scans for the
+/// metrics.
+pub fn simulated_input(
+    scenario: &MappingScenario,
+    map: Arc<OccupancyGrid>,
+    map_name: &str,
+) -> Result<MappingInput, String> {
+    let mut config = SimulatedLogConfig::default();
+    config.lidar.beams = scenario.beams;
+    config.lidar.max_range = scenario.lidar_range;
+    config.lidar.range_std = scenario.range_std;
+    let k = scenario.odometry_noise.max(0.0);
+    config.odom_noise.alpha1 *= k;
+    config.odom_noise.alpha2 *= k;
+    config.odom_noise.alpha3 *= k;
+    config.odom_noise.alpha4 *= k;
+    let (log, truth) =
+        simulate_log(&map, scenario.steps, scenario.seed, &config).map_err(|e| e.to_string())?;
+    let mut input = log_input(
+        &log,
+        &format!("simulated {map_name}, seed {}", scenario.seed),
+    );
+    input.truth = Some(truth.iter().map(|t| t.pose).collect());
+    input.true_map = Some(map);
+    Ok(input)
 }
 
 #[cfg(test)]

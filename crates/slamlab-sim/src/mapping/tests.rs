@@ -1,4 +1,5 @@
 use super::*;
+use crate::grid::builtin_map;
 use crate::stepper::Simulation;
 
 fn session(map: &str, steps: usize, seed: u64, poses: PoseSource) -> MappingSession {
@@ -245,7 +246,7 @@ fn grid_fastslam_phase_by_phase_is_the_experiments_filter_to_the_bit() {
         let phase = s.stepper_mut().step_phase();
         labels.push(phase.label());
     }
-    let (filter, _) = crate::grid_fastslam::run_grid_fastslam(
+    let (filter, _) = crate::mapping::grid_fastslam::run_grid_fastslam(
         &input,
         scenario.grid_fastslam_config(),
         scenario.insert_params(),

@@ -1,6 +1,6 @@
 use super::*;
+use crate::laser::test_room::{Segment, ray_cast, room};
 use crate::random::gaussian;
-use crate::scan::icp::tests::{Segment, ray_cast, room};
 
 const RANGE_MAX: f64 = 8.0;
 

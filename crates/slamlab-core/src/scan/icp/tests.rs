@@ -1,74 +1,9 @@
 use super::*;
-use crate::random::gaussian;
+use crate::laser::test_room::{ray_cast, rectangle, room};
 use crate::scan::transform_point;
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
 use std::f64::consts::PI;
-
-pub(crate) type Segment = (Point2, Point2);
-
-/// A lidar on line segments: `beams` beams over 360° from `pose`, exact ranges
-/// (plus Gaussian noise of `noise` m if given), `range_max` where nothing is hit.
-pub(crate) fn ray_cast(
-    walls: &[Segment],
-    pose: Pose2,
-    beams: usize,
-    range_max: f64,
-    noise: Option<(f64, &mut ChaCha8Rng)>,
-) -> Scan {
-    let mut angles = Vec::with_capacity(beams);
-    let mut ranges = Vec::with_capacity(beams);
-    let mut noise = noise;
-    for k in 0..beams {
-        let angle = -PI + 2.0 * PI * k as f64 / beams as f64;
-        let (s, c) = math::sin_cos(pose.theta + angle);
-        let mut best = range_max;
-        for &(a, b) in walls {
-            // pose + r d = a + u (b − a), 0 ≤ u ≤ 1, r > 0.
-            let (ex, ey) = (b[0] - a[0], b[1] - a[1]);
-            let den = c * ey - s * ex;
-            if den.abs() < 1e-12 {
-                continue;
-            }
-            let (wx, wy) = (a[0] - pose.x, a[1] - pose.y);
-            let r = (wx * ey - wy * ex) / den;
-            let u = (wx * s - wy * c) / den;
-            if r > 1e-9 && (0.0..=1.0).contains(&u) && r < best {
-                best = r;
-            }
-        }
-        if best < range_max
-            && let Some((sigma, rng)) = noise.as_mut()
-        {
-            best += gaussian(*rng, *sigma);
-        }
-        angles.push(angle);
-        ranges.push(best);
-    }
-    Scan {
-        angles,
-        ranges,
-        range_min: 0.0,
-        range_max,
-    }
-}
-
-pub(crate) fn rectangle(x0: f64, y0: f64, x1: f64, y1: f64) -> Vec<Segment> {
-    vec![
-        ([x0, y0], [x1, y0]),
-        ([x1, y0], [x1, y1]),
-        ([x1, y1], [x0, y1]),
-        ([x0, y1], [x0, y0]),
-    ]
-}
-
-/// A 6 m × 4 m room with a cupboard and a pillar.
-pub(crate) fn room() -> Vec<Segment> {
-    let mut walls = rectangle(-3.0, -2.0, 3.0, 2.0);
-    walls.extend(rectangle(1.8, 1.2, 2.6, 2.0));
-    walls.extend(rectangle(-1.2, -0.9, -0.8, -0.5));
-    walls
-}
 
 fn pose_error(a: Pose2, b: Pose2) -> (f64, f64) {
     (

@@ -1,0 +1,10 @@
+//! The pose-graph lesson (`lesson=pose-graph`): a graph of poses, odometry and
+//! loop closures optimized one solver iteration at a time.
+//!
+//! - [`session`]: the scenario, its parameter table and the stepped session.
+//! - [`experiment`]: the graph-based SLAM simulation of thesis Sec. 4.2.
+
+pub mod experiment;
+pub mod session;
+
+pub use session::{PoseGraphScenario, PoseGraphSession};
