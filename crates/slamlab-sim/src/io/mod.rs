@@ -8,3 +8,4 @@ pub mod graph;
 pub mod laser_log;
 pub mod ros_map;
 pub mod scenario_file;
+pub mod trajectory;
