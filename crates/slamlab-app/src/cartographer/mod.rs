@@ -777,6 +777,10 @@ impl crate::widgets::layout::LessonPanels for CartographerLesson {
 impl Lesson for CartographerLesson {
     crate::lesson::frame_accessors!();
 
+    fn trajectories(&self) -> Vec<slamlab_sim::metrics::NamedTrajectory> {
+        slamlab_sim::cartographer::export::trajectories(self.sim())
+    }
+
     fn share_pairs(&self) -> Vec<(String, String)> {
         let mut pairs = lesson::with_seed(
             params::changed_pairs(&self.scenario, &default_scenario()),

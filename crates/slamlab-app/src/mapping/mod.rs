@@ -799,6 +799,10 @@ impl crate::widgets::layout::LessonPanels for MappingLesson {
 impl Lesson for MappingLesson {
     crate::lesson::frame_accessors!();
 
+    fn trajectories(&self) -> Vec<slamlab_sim::metrics::NamedTrajectory> {
+        slamlab_sim::mapping::export::trajectories(&self.session)
+    }
+
     fn share_pairs(&self) -> Vec<(String, String)> {
         let scenario = self.session.scenario();
         let mut pairs = lesson::with_seed(
