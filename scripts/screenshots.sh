@@ -3,8 +3,10 @@
 # headless Chromium, with the browser tests' own machinery (web/tests/screenshots.mjs):
 #
 #   docs/images/slamlab.png               the README's picture (the whole app, 960 x 600)
-#   docs/images/lesson-ID.png             each lesson as a lecture figure, 800 x 500
-#   docs/images/lesson-ID-small.png       the same, 320 x 200, for the README's table
+#   docs/images/lesson-ID.png             each lesson as a lecture figure, 800 x 600, for its
+#                                         document
+#   docs/images/lesson-ID-small.png       the telling part of it, 240 x 180, for the README's
+#                                         table
 #
 # Each lesson opens at a fixed URL with its seed and tick= (LESSON_SHOTS in
 # web/tests/screenshots.mjs), so the same build gives the same pictures.
