@@ -521,7 +521,7 @@ async function main() {
     // --- The heaviest landmark setting: 50 landmarks, EKF and UKF side by
     // side. Its frame timing (the app's CPU time per frame, the simulation's share, the
     // frame rate) is recorded in metrics.json, never asserted: wall-clock numbers
-    // belong in the README's benchmark table, not in a pass/fail test.
+    // belong in docs/results.md, not in a pass/fail test.
     await check(
       "50 landmarks with EKF and UKF: runs, draws and reports its frame timing",
       timedRun("index.html?lesson=landmark-slam&seed=1&landmarks=50&estimator=ekf,ukf", "lm50", "ekf,ukf"),
@@ -666,7 +666,7 @@ async function main() {
 
     // --- The Monte Carlo lesson at 5,000 particles, one filter (MCL) and two side by side
     // (AMCL and ACMCL): the lesson runs, draws, and reports its frame timing (recorded in
-    // metrics.json, not asserted: the README's table has the numbers with the machine and date).
+    // metrics.json, not asserted: docs/results.md has the numbers with the machine and date).
     for (const [key, estimator, what] of [
       ["mcl5000", "mcl", "MCL with 5,000 particles"],
       ["mcl2x5000", "amcl,acmcl", "AMCL and ACMCL with 5,000 particles each"],
@@ -868,7 +868,7 @@ async function main() {
     // mean with the mouse: every move recomputes the samples, the EKF, the UKF and the
     // particles and redraws the density image. The frame CPU median while dragging is
     // recorded in metrics.json (filters_drag_*), not asserted: the issue asks for under
-    // 16 ms, and the README states what was measured where. A seeded headless run in
+    // 16 ms, and docs/results.md states what was measured where. A seeded headless run in
     // wasm gives the native table (crates/slamlab-app/tests/lessons/filters_ui.rs pins it).
     // --- Submaps, loop closure and the kidnapped robot: the thesis's case, a kidnap
     // before scan 152 of a run with none before, on the maze with seed 3 (the robot
