@@ -9,7 +9,8 @@ with the line's odometry pose; /tf_static holds `base_link -> laser` (identity).
 The beam layout is SLAM Lab's reading of a FLASER record: n beams from -90°,
 180°/n apart; range_max 50 m (SLAM Lab's default for FLASER), range_min 0.
 
-usage: carmen_to_ros2_bag.py LOG OUT_DIR MAX_SCANS   (0: every scan)
+usage: carmen_to_ros2_bag.py LOG OUT_DIR MAX_SCANS [big-endian]   (MAX_SCANS 0: every scan)
+With `big-endian`, every message is serialized in big-endian CDR.
 prints: {"scans": N, "bag": "OUT_DIR/OUT_DIR.mcap"}
 """
 
@@ -25,6 +26,7 @@ from rosbags.rosbag2.enums import CompressionFormat, CompressionMode
 from rosbags.typesys import Stores, get_typestore
 
 src, dst, max_scans = sys.argv[1], Path(sys.argv[2]), int(sys.argv[3])
+little_endian = not (len(sys.argv) > 4 and sys.argv[4] == 'big-endian')
 ts = get_typestore(Stores.ROS2_HUMBLE)
 T = ts.types
 Time = T['builtin_interfaces/msg/Time']
@@ -81,7 +83,7 @@ with opener(src, 'rt') as log, writer as w:
                     translation=Vector3(x=0.0, y=0.0, z=0.0), rotation=quaternion(0.0)
                 ),
             )
-            w.write(static_conn, ns, ts.serialize_cdr(TFMessage(transforms=[mount]), TFMessage.__msgtype__))
+            w.write(static_conn, ns, ts.serialize_cdr(TFMessage(transforms=[mount]), TFMessage.__msgtype__, little_endian=little_endian))
         angle_min = -math.pi / 2
         increment = math.pi / n
         scan = LaserScan(
@@ -96,7 +98,7 @@ with opener(src, 'rt') as log, writer as w:
             ranges=ranges,
             intensities=np.array([], dtype=np.float32),
         )
-        w.write(scan_conn, ns, ts.serialize_cdr(scan, LaserScan.__msgtype__))
+        w.write(scan_conn, ns, ts.serialize_cdr(scan, LaserScan.__msgtype__, little_endian=little_endian))
         odom = Odometry(
             header=Header(stamp=st, frame_id='odom'),
             child_frame_id='base_link',
@@ -109,7 +111,7 @@ with opener(src, 'rt') as log, writer as w:
                 covariance=np.zeros(36, dtype=np.float64),
             ),
         )
-        w.write(odom_conn, ns, ts.serialize_cdr(odom, Odometry.__msgtype__))
+        w.write(odom_conn, ns, ts.serialize_cdr(odom, Odometry.__msgtype__, little_endian=little_endian))
         scans += 1
         if max_scans and scans >= max_scans:
             break

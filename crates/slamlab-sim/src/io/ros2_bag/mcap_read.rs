@@ -124,6 +124,12 @@ impl State {
         ) {
             return Ok(());
         }
+        // The crate's parser sizes a string's buffer from its length field:
+        // every length is checked against the record first.
+        check_lengths(opcode, body).map_err(|message| BagError::Damaged {
+            records: self.records,
+            message: format!("record {} (opcode {opcode:#04x}): {message}", self.records),
+        })?;
         let record = mcap::parse_record(opcode, body).map_err(|e| BagError::Damaged {
             records: self.records,
             message: format!("record {} (opcode {opcode:#04x}): {e}", self.records),
@@ -277,4 +283,68 @@ impl State {
         }
         Ok(out)
     }
+}
+
+/// Checks that every length-prefixed field of a Header, Schema, Channel or
+/// Chunk record (strings, the channel's metadata map, the schema's data) lies
+/// within the record, before the `mcap` crate's parser allocates a buffer of
+/// that length (mcap.dev specification, "Records": a string is a `u32` byte
+/// length and UTF-8 bytes; a map a `u32` byte length and key-value strings).
+fn check_lengths(opcode: u8, body: &[u8]) -> Result<(), String> {
+    let mut at = 0usize;
+    let skip = |n: usize, what: &str, at: &mut usize| -> Result<(), String> {
+        match at.checked_add(n) {
+            Some(end) if end <= body.len() => {
+                *at = end;
+                Ok(())
+            }
+            _ => Err(format!(
+                "its {what} runs past the record's end ({} bytes)",
+                body.len()
+            )),
+        }
+    };
+    let length = |at: &mut usize, what: &str| -> Result<usize, String> {
+        let bytes = body
+            .get(*at..*at + 4)
+            .ok_or_else(|| format!("it ends before its {what}"))?;
+        *at += 4;
+        Ok(u32::from_le_bytes([bytes[0], bytes[1], bytes[2], bytes[3]]) as usize)
+    };
+    let string = |at: &mut usize, what: &str| -> Result<(), String> {
+        let n = length(at, what)?;
+        skip(n, what, at)
+    };
+    match opcode {
+        op::HEADER => {
+            string(&mut at, "profile")?;
+            string(&mut at, "library")?;
+        }
+        op::SCHEMA => {
+            at = 2;
+            string(&mut at, "name")?;
+            string(&mut at, "encoding")?;
+            string(&mut at, "data")?;
+        }
+        op::CHANNEL => {
+            at = 4;
+            string(&mut at, "topic")?;
+            string(&mut at, "message encoding")?;
+            let n = length(&mut at, "metadata")?;
+            let end = at
+                .checked_add(n)
+                .filter(|&e| e <= body.len())
+                .ok_or_else(|| "its metadata runs past the record's end".to_owned())?;
+            while at < end {
+                string(&mut at, "metadata key")?;
+                string(&mut at, "metadata value")?;
+            }
+        }
+        op::CHUNK => {
+            at = 28;
+            string(&mut at, "compression")?;
+        }
+        _ => {}
+    }
+    Ok(())
 }

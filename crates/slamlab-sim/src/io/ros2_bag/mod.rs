@@ -30,7 +30,7 @@ pub mod msgs;
 pub mod write;
 
 #[cfg(test)]
-mod tests;
+pub(crate) mod tests;
 
 pub use frames::{BagLog, OdometrySource, TopicChoice};
 pub use mcap_read::{ChannelInfo, McapHeader};
