@@ -9,3 +9,4 @@ pub mod laser_log;
 pub mod ros2_bag;
 pub mod ros_map;
 pub mod scenario_file;
+pub mod trajectory;
