@@ -249,7 +249,7 @@ fn intel_bag_maps_like_the_log(scans: usize) {
     assert_eq!(v["scans"], log.scans.len());
     let bag_path = PathBuf::from(v["bag"].as_str().unwrap());
     let bag = LaserFile::read_file(&bag_path, &TopicChoice::default()).unwrap();
-    assert_eq!(bag.format, "ROS 2 bag (MCAP, zstd chunks)");
+    assert_eq!(bag.format, "ROS 2 bag, MCAP with zstd chunks");
     assert_eq!(bag.input.scans.len(), log.scans.len());
 
     // What a LaserScan and an Odometry message make of each scan.

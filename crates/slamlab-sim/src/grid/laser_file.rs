@@ -16,7 +16,7 @@ use std::sync::Arc;
 pub struct LaserFile {
     /// The scans with their odometry (and a simulated bag's truth).
     pub input: MappingInput,
-    /// What the file is: `CARMEN log (bzip2)`, `ROS 2 bag (MCAP, zstd chunks)`.
+    /// What the file is: `CARMEN log (bzip2)`, `ROS 2 bag, MCAP with zstd chunks`.
     pub format: String,
     /// What the reader assumed or dropped, one sentence each.
     pub notices: Vec<String>,
@@ -128,9 +128,9 @@ impl LaserFile {
         Ok(Self {
             input,
             format: if chunks.is_empty() {
-                "ROS 2 bag (MCAP, unchunked)".to_owned()
+                "ROS 2 bag, MCAP unchunked".to_owned()
             } else {
-                format!("ROS 2 bag (MCAP, {} chunks)", chunks.join(" and "))
+                format!("ROS 2 bag, MCAP with {} chunks", chunks.join(" and "))
             },
             notices,
             topics: Some(topics),
@@ -225,7 +225,7 @@ mod tests {
         let (log, truth) = simulate_log(&map, 150, 2, &SimulatedLogConfig::default()).unwrap();
         let bag = write_bag(&log, Some(&truth), &BagWriteOptions::default()).unwrap();
         let file = LaserFile::from_bytes("run.mcap", &bag, &TopicChoice::default()).unwrap();
-        assert_eq!(file.format, "ROS 2 bag (MCAP, uncompressed chunks)");
+        assert_eq!(file.format, "ROS 2 bag, MCAP with uncompressed chunks");
         assert_eq!(file.describe(), "run.mcap (/scan, odometry /odom)");
         assert!(file.notices.is_empty(), "{:?}", file.notices);
         let topics = file.topics.clone().unwrap();
