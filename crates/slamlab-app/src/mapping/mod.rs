@@ -1018,6 +1018,7 @@ impl Lesson for MappingLesson {
             "total_scans": self.input.scans.len(),
             "input_seconds": self.input.duration(),
             "log": self.log_name,
+            "topics": self.laser.topics().map(|t| [t.scan.clone(), t.odometry.clone()]),
             "note": self.note,
             "seed": self.session.scenario().seed,
             "poses": summary.poses,

@@ -576,3 +576,32 @@ fn a_ros2_bag_maps_with_the_topics_chosen_and_a_ros1_bag_leaves_the_run() {
         let _ = image.save(std::env::temp_dir().join("slamlab-mapping-bag-800x500.png"));
     }
 }
+
+/// The bag rosbags wrote from the Intel log's first 300 scans (zstd chunks),
+/// mapped with scan-to-map poses through the lesson: the browser check ("a ROS
+/// 2 bag opens by log= and maps") must end at this pose to the bit, in wasm.
+const ROSBAGS_END_POSE: [f64; 3] = [2.1332476175095056, 0.02236945271272885, -0.11727858044618644];
+
+#[test]
+fn a_rosbags_bag_mapped_through_the_lesson_ends_at_the_pose_the_browser_must_match() {
+    let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR"))
+        .join("../slamlab-sim/tests/data/ros2_bags/rosbags-intel-300-scans.mcap");
+    let bytes = std::fs::read(&path).unwrap();
+    let state: serde_json::Value = serde_json::from_str(&SlamLabApp::headless_log_state(
+        "lesson=mapping",
+        "rosbags-intel-300-scans.mcap",
+        &bytes,
+        300,
+    ))
+    .unwrap();
+    assert_eq!(state["scans"], 300, "{state}");
+    assert_eq!(state["topics"], serde_json::json!(["/scan", "/odom"]));
+    let pose: Vec<f64> = state["pose"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|v| v.as_f64().unwrap())
+        .collect();
+    eprintln!("pose {pose:?}");
+    assert_eq!(pose, ROSBAGS_END_POSE);
+}
