@@ -580,7 +580,11 @@ fn a_ros2_bag_maps_with_the_topics_chosen_and_a_ros1_bag_leaves_the_run() {
 /// The bag rosbags wrote from the Intel log's first 300 scans (zstd chunks),
 /// mapped with scan-to-map poses through the lesson: the browser check ("a ROS
 /// 2 bag opens by log= and maps") must end at this pose to the bit, in wasm.
-const ROSBAGS_END_POSE: [f64; 3] = [2.1332476175095056, 0.02236945271272885, -0.11727858044618644];
+const ROSBAGS_END_POSE: [f64; 3] = [
+    2.1332476175095056,
+    0.02236945271272885,
+    -0.11727858044618644,
+];
 
 #[test]
 fn a_rosbags_bag_mapped_through_the_lesson_ends_at_the_pose_the_browser_must_match() {

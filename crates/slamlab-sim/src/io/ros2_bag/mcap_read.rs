@@ -84,10 +84,14 @@ pub(crate) fn read_mcap(
 /// A damaged file's message: where reading stopped and what the crate said.
 fn mcap_error(e: &mcap::McapError, len: usize, records: usize) -> BagError {
     match e {
-        mcap::McapError::UnexpectedEof => BagError::Truncated {
-            bytes: len as u64,
-            records,
-        },
+        // The reader's record limit is the file's length: a record longer than
+        // that runs past the end of the file.
+        mcap::McapError::UnexpectedEof | mcap::McapError::RecordTooLarge { .. } => {
+            BagError::Truncated {
+                bytes: len as u64,
+                records,
+            }
+        }
         mcap::McapError::BadMagic if records == 0 => BagError::NotMcap,
         other => BagError::Damaged {
             records,
