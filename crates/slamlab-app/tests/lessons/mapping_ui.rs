@@ -407,7 +407,7 @@ fn one_particles_proposal_is_drawn_and_explained_at_800_by_500() {
         }
     }
     assert!(phases < 500, "no proposal phase");
-    lesson_mut(&mut h).view.follow_robot = true;
+    lesson_mut(&mut h).frame.view.follow_robot = true;
     h.run();
     let Some(image) = render_or_skip(&mut h) else {
         return;
@@ -431,7 +431,8 @@ fn one_particles_proposal_is_drawn_and_explained_at_800_by_500() {
 
 /// A ROS 2 bag of a simulated run with a second LaserScan topic (the same
 /// scans, each beam 10 cm shorter) and the run's odometry, as a robot records
-/// it: `/scan`, `/scan_rear`, `/odom`, `/tf_static`.
+/// it: `/scan`, `/scan_rear`, `/odom` (no `/tf_static`: the mounting is assumed).
+#[allow(clippy::unwrap_used)] // a test's fixture: a failure stops the test
 fn two_laser_bag() -> Vec<u8> {
     use slamlab_sim::io::ros2_bag::msgs::{self, Header, LaserScan, Odometry, Time, Transform3};
     use std::collections::BTreeMap;

@@ -203,9 +203,11 @@ fn bag_topics(log: &BagLog) -> BagTopics {
 mod tests {
     use super::*;
     use crate::grid::{BuiltinMap, SimulatedLogConfig, simulate_log};
+    use crate::io::laser_log::TruePose;
     use crate::io::laser_log::write_carmen;
     use crate::io::ros2_bag::msgs::Transform3;
-    use crate::io::ros2_bag::{BagWriteOptions, write_bag};
+    use crate::io::ros2_bag::msgs::{LASER_SCAN, ODOMETRY, POSE_STAMPED, TF_MESSAGE};
+    use crate::io::ros2_bag::{BagWriteOptions, Ros2Bag, write_bag};
     use crate::mapping::{MappingScenario, MappingSession};
     use slamlab_core::Pose2;
 
@@ -273,5 +275,97 @@ mod tests {
         let e = LaserFile::from_bytes("old.bag", b"#ROSBAG V2.0\n", &TopicChoice::default())
             .unwrap_err();
         assert!(e.to_string().starts_with("this is a ROS 1 bag"), "{e}");
+    }
+
+    // SLAM Lab's own bags, read back by the bag reader.
+
+    fn small_simulated_log() -> (LaserLog, Vec<TruePose>) {
+        let map = BuiltinMap::Maze.load().unwrap();
+        simulate_log(&map, 60, 3, &SimulatedLogConfig::default()).unwrap()
+    }
+
+    #[test]
+    fn a_bag_written_by_slam_lab_reads_back_to_the_same_run() {
+        let (log, truth) = small_simulated_log();
+        let bytes = write_bag(&log, Some(&truth), &BagWriteOptions::default()).unwrap();
+        let bag = Ros2Bag::from_bytes(&bytes).unwrap();
+        assert_eq!(bag.header.profile, "ros2");
+        assert!(
+            bag.header.library.starts_with("slamlab "),
+            "{}",
+            bag.header.library
+        );
+        assert!(bag.header.has_summary);
+        let counts: Vec<(&str, &str, usize)> = bag
+            .topics
+            .iter()
+            .map(|t| (t.topic.as_str(), t.type_name.as_str(), t.messages))
+            .collect();
+        assert_eq!(
+            counts,
+            [
+                ("/ground_truth", POSE_STAMPED, 60),
+                ("/odom", ODOMETRY, 60),
+                ("/scan", LASER_SCAN, 60),
+                ("/tf", TF_MESSAGE, 60),
+                ("/tf_static", TF_MESSAGE, 1)
+            ]
+        );
+        let back = bag.laser_log(&TopicChoice::default()).unwrap();
+        assert!(back.notices.is_empty(), "{:?}", back.notices);
+        assert_eq!(back.log.scans.len(), log.scans.len());
+        for (a, b) in log.scans.iter().zip(&back.log.scans) {
+            // Times to the nanosecond, ranges and angles to float32 as LaserScan
+            // stores them, poses through the quaternion to 1e-15 rad.
+            assert!((a.timestamp - b.timestamp).abs() < 1e-9);
+            assert_eq!(a.scan.ranges.len(), b.scan.ranges.len());
+            for (ra, rb) in a.scan.ranges.iter().zip(&b.scan.ranges) {
+                assert_eq!(f64::from(*ra as f32).to_bits(), rb.to_bits());
+            }
+            for (k, ab) in b.scan.angles.iter().enumerate() {
+                let expected = f64::from(a.scan.angles[0] as f32)
+                    + k as f64
+                        * f64::from(((a.scan.angles[359] - a.scan.angles[0]) / 359.0) as f32);
+                assert_eq!(ab.to_bits(), expected.to_bits());
+                assert!((ab - a.scan.angles[k]).abs() < 1e-5);
+            }
+            assert_eq!(b.scan.range_max, a.scan.range_max);
+            assert_eq!((a.odometry.x, a.odometry.y), (b.odometry.x, b.odometry.y));
+            assert!((a.odometry.theta - b.odometry.theta).abs() < 1e-15);
+        }
+        let back_truth = back.truth.unwrap();
+        for (a, b) in truth.iter().zip(&back_truth) {
+            assert_eq!((a.pose.x, a.pose.y), (b.pose.x, b.pose.y));
+            assert!((a.pose.theta - b.pose.theta).abs() < 1e-15);
+        }
+        // The twist of each Odometry message is the ODOM record's.
+        let odom = &bag.odometry["/odom"];
+        assert_eq!(odom[10].message.linear[0], log.odometry[10].tv);
+        assert_eq!(odom[10].message.angular[2], log.odometry[10].rv);
+        // /tf_static's QoS is transient-local, as tf2 publishes it.
+        assert!(qos_of(&bytes, "/tf_static").contains("durability: 1"));
+    }
+
+    /// The `offered_qos_profiles` of a topic in a written bag.
+    fn qos_of(bytes: &[u8], topic: &str) -> String {
+        let summary = mcap::Summary::read(bytes).unwrap().unwrap();
+        summary
+            .channels
+            .values()
+            .find(|c| c.topic == topic)
+            .map(|c| c.metadata["offered_qos_profiles"].clone())
+            .unwrap()
+    }
+
+    #[test]
+    fn uneven_beams_are_refused_when_writing() {
+        let (mut log, _) = small_simulated_log();
+        log.scans[5].scan.angles[7] += 0.01;
+        let e = write_bag(&log, None, &BagWriteOptions::default()).unwrap_err();
+        assert!(
+            e.to_string()
+                .starts_with("scan 6: its beams are not evenly spaced (beam 7"),
+            "{e}"
+        );
     }
 }

@@ -4,6 +4,7 @@
 //! ROS 2 bags (MCAP) and scenario files. What a reader returns is plain data; the lessons and the
 //! command line decide what to do with it.
 
+pub mod archive;
 pub mod graph;
 pub mod laser_log;
 pub mod ros2_bag;
