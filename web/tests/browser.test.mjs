@@ -29,6 +29,8 @@ const distDir = path.join(webDir, "dist");
 // The external data sets beside the repository (README: ../shared/data); checks that
 // need them skip with a message when they are absent.
 const sharedDataDir = path.resolve(webDir, "..", "..", "shared", "data");
+// Small test files kept in the repository (a ROS 2 bag written by rosbags).
+const repoDataDir = path.resolve(webDir, "..", "crates", "slamlab-sim", "tests", "data");
 const outDir = path.join(webDir, "test-output");
 const chromiumPath = process.env.SLAMLAB_CHROMIUM || "/usr/bin/chromium";
 
@@ -78,9 +80,15 @@ function startServer(root) {
       const url = new URL(req.url, "http://localhost");
       // /shared-data/ serves ../shared/data (the Intel log), as an instructor would host
       // a log beside the site; everything else comes from web/dist.
+      // /repo-data/ serves the repository's small test files the same way.
       const shared = url.pathname.startsWith("/shared-data/");
-      const base = shared ? sharedDataDir : root;
-      const rel = shared ? url.pathname.slice("/shared-data".length) : url.pathname;
+      const repo = url.pathname.startsWith("/repo-data/");
+      const base = shared ? sharedDataDir : repo ? repoDataDir : root;
+      const rel = shared
+        ? url.pathname.slice("/shared-data".length)
+        : repo
+          ? url.pathname.slice("/repo-data".length)
+          : url.pathname;
       let file = path.normalize(path.join(base, decodeURIComponent(rel)));
       if (!file.startsWith(base)) throw new Error("outside the root");
       if ((await stat(file)).isDirectory()) file = path.join(file, "index.html");
@@ -764,6 +772,44 @@ async function main() {
         await assertNoPanic(p);
         assert(log.problems.length === 0, log.problems.join("; "));
         return `${headless.scans} scans (${headless.input_seconds.toFixed(0)} s of data, decompression and parsing included) in ${seconds.toFixed(1)} s = ${factor.toFixed(1)}x real time, end pose bit-identical to native`;
+      } finally {
+        await context.close();
+      }
+    });
+
+    // --- A ROS 2 bag (MCAP with zstd chunks, written by PyPI's rosbags from the Intel
+    // log's first 300 scans: crates/slamlab-sim/tests/data/ros2_bags) opened by `log=`
+    // with `scan-topic=`, then mapped by the lesson as it runs and by the page's wasm
+    // without drawing: the end pose must be the native run's to the bit
+    // (mapping_ui::a_rosbags_bag_mapped_through_the_lesson_ends_at_the_pose_the_browser_must_match).
+    await check("a ROS 2 bag opens by log= and maps, ending on the native pose", async () => {
+      const rel = "ros2_bags/rosbags-intel-300-scans.mcap";
+      const url = `index.html?lesson=mapping&log=repo-data/${rel}&scan-topic=/scan&odom-topic=/odom`;
+      const { context, page: p, log } = await openPage(browser, baseUrl, url, "mapping-ros2-bag");
+      try {
+        await waitRunning(p);
+        const s0 = await waitState(p, (st) => st.lesson === "mapping" && st.total_scans === 300, "the bag loaded by log=", 60_000);
+        assert(s0.log === "rosbags-intel-300-scans.mcap", `opened ${JSON.stringify({ log: s0.log, note: s0.note })}`);
+        assert(JSON.stringify(s0.topics) === JSON.stringify(["/scan", "/odom"]), `topics ${JSON.stringify(s0.topics)}`);
+        assert(/^Loaded rosbags-intel-300-scans\.mcap \(ROS 2 bag, MCAP with zstd chunks\): 300 scans/.test(s0.note), `note ${s0.note}`);
+        // Run the lesson itself for a while and look at it.
+        await p.mouse.click(VIEWPORT.width / 2, VIEWPORT.height / 2); // gives the canvas keyboard focus
+        await p.keyboard.press("Space");
+        const s1 = await waitState(p, (st) => st.scans >= 40, "40 scans mapped from the bag", 60_000);
+        const image = await screenshot(p, "mapping-ros2-bag.png");
+        const stats = imageStats(image);
+        assert(stats.distinctColours > 50, `the page looks blank: ${describe(stats)}`);
+        const headless = JSON.parse(await p.evaluate(async (r) => {
+          const bytes = new Uint8Array(await (await fetch(`repo-data/${r}`)).arrayBuffer());
+          return window.slamlab.slamlab_test_headless_log("lesson=mapping", "rosbags-intel-300-scans.mcap", bytes, 300);
+        }, rel));
+        const NATIVE = [2.1332476175095056, 0.02236945271272885, -0.11727858044618644];
+        const same = headless.pose.every((v, i) => v === NATIVE[i]);
+        assert(headless.scans === 300, `mapped ${headless.scans} scans: ${headless.note}`);
+        assert(same, `ended at ${JSON.stringify(headless.pose)}, natively ${JSON.stringify(NATIVE)}`);
+        await assertNoPanic(p);
+        assert(log.problems.length === 0, log.problems.join("; "));
+        return `300 scans from /scan with /odom; ${s1.scans} mapped live; the whole bag in wasm ends bit-identical to native`;
       } finally {
         await context.close();
       }
