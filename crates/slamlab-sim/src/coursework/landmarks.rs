@@ -265,9 +265,8 @@ impl LandmarkRun {
             "The run: {} steps of dt = {} s ({} s), {} landmarks with ids 1 to {}.\n\
              Frames: ROS REP-103 (x forward, y left, angles counter-clockwise), metres,\n\
              radians, seconds. The world frame is the map's; the robot starts at the pose\n\
-             in start_pose.txt (x y theta), known exactly; run.txt gives dt and the\n\
-             number of steps: start your filter there with\n\
-             zero robot covariance.\n",
+             in start_pose.txt (x y theta), known exactly: start your filter there\n\
+             with zero robot covariance. run.txt gives dt and the number of steps.\n",
             self.controls.len(),
             number(s.dt),
             number(self.controls.len() as f64 * s.dt),

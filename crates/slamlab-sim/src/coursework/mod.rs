@@ -296,26 +296,28 @@ impl Prepared {
             a.title,
             "=".repeat(a.title.chars().count())
         );
-        let _ = writeln!(
-            out,
-            "Assignment {}, variant {} (student {:?}, seed {}). SLAM Lab made these\n\
-             inputs for this student alone: another student's files have other noise and\n\
-             another length, and an estimate made from them is refused.\n",
+        let intro = format!(
+            "Assignment {}, variant {} (student {:?}, seed {}). SLAM Lab made these \
+             inputs for this student alone: another student's files have other noise and \
+             another length, and an estimate made from them is refused.",
             a.id, self.variant.code, self.variant.student, self.variant.seed
         );
-        let _ = writeln!(out, "{}\n", a.task.trim());
+        let _ = writeln!(out, "{}\n", wrap(&intro, 78));
+        for paragraph in a.task.trim().split("\n\n") {
+            let _ = writeln!(out, "{}\n", wrap(paragraph, 78));
+        }
         let _ = writeln!(out, "What to hand in\n---------------");
         let _ = writeln!(
             out,
             "{}: one pose per step, for t = 0 and every step's time (the times of the\n\
              inputs), as TUM ('t x y z qx qy qz qw', z = 0 and a rotation about z:\n\
-             qz = sin(theta/2), qw = cos(theta/2)) or CSV ('t,x,y,theta'). Drop it on the\n\
-             assignment's page, or: slamlab grade {} --student '{}' --estimate {}\n",
+             qz = sin(theta/2), qw = cos(theta/2)) or CSV ('t,x,y,theta'). Check it with\n\
+             slamlab grade {} --student '{}' --estimate {}\n",
             a.output.file, a.id, self.variant.student, a.output.file
         );
         let _ = writeln!(
             out,
-            "It is scored against the true trajectory{} (poses paired by time within\n\
+            "It is scored against the true trajectory{}\n(poses paired by time within \
              0.01 s):",
             match a.alignment() {
                 crate::metrics::Alignment::None => ", in the map's frame, without alignment",
@@ -343,4 +345,24 @@ impl Prepared {
         let _ = writeln!(out, "The files\n---------\n{body}");
         out
     }
+}
+
+/// `text` with its whitespace runs made single spaces and its lines broken
+/// before `width` characters (a word longer than that gets its own line).
+pub fn wrap(text: &str, width: usize) -> String {
+    let mut out = String::new();
+    let mut line = 0;
+    for word in text.split_whitespace() {
+        let n = word.chars().count();
+        if line > 0 && line + 1 + n > width {
+            out.push('\n');
+            line = 0;
+        } else if line > 0 {
+            out.push(' ');
+            line += 1;
+        }
+        out.push_str(word);
+        line += n;
+    }
+    out
 }

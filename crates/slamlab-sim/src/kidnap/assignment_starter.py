@@ -3,8 +3,9 @@
 
 Reads the map and the CARMEN log of this folder and writes a correctly
 formatted, deliberately naive estimate: the wheel odometry as it is, one pose
-per scan, ignoring the map and every scan. Drop its output on the assignment's
-page (or run `slamlab grade`) to see where odometry stands; then replace
+per scan, ignoring the map and every scan. Grade its output
+(`slamlab grade ASSIGNMENT --student ID --estimate estimate.tum`) to see
+where odometry stands; then replace
 `estimate()` with your particle filter: move the particles by each odometry
 increment, weigh them by how well the scan fits the map, resample.
 

@@ -3,8 +3,9 @@
 
 Reads the inputs of this folder and writes a correctly formatted, deliberately
 naive estimate: dead reckoning, the commands integrated along the exact arc from
-the start pose, ignoring every measurement. Drop its output on the assignment's
-page (or run `slamlab grade`) to see where dead reckoning stands; then replace
+the start pose, ignoring every measurement. Grade its output
+(`slamlab grade ASSIGNMENT --student ID --estimate estimate.tum`) to see
+where dead reckoning stands; then replace
 `estimate()` with your filter: predict with each step's control, correct with
 that step's measurements.
 
