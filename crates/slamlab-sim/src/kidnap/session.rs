@@ -156,7 +156,10 @@ impl Simulation for KidnapSim {
                 }
             }
             KidnapEvent::ResetAroundTruth => {
-                let truth = self.run.robot().pose;
+                // A log without truth has nothing to reset around.
+                let Some(truth) = self.run.truth_now() else {
+                    return;
+                };
                 let s = self.run.scenario().clone();
                 let sd = |v: f64| {
                     if v > 0.0 && v.is_finite() {
