@@ -15,6 +15,14 @@ use slamlab_sim::kidnap::{MclRun, UpdateRecord};
 /// writes them unthinned.
 fn plotted(run: &MclRun) -> Vec<Styled> {
     let dt = run.scenario().dt;
+    // The simulated robot's ticks are dt apart; a log's scans have their own times.
+    let time = |tick: u64| {
+        if run.log().is_some() {
+            run.tick_time(tick as usize)
+        } else {
+            tick as f64 * dt
+        }
+    };
     let log10 = |l: f64| l / std::f64::consts::LN_10;
     let mut out = Vec::new();
     for (k, f) in run.filters().iter().enumerate() {
@@ -23,7 +31,7 @@ fn plotted(run: &MclRun) -> Vec<Styled> {
         let over_time = |pick: &dyn Fn(&UpdateRecord) -> Option<f64>| {
             f.updates
                 .iter()
-                .filter_map(|u| pick(u).map(|v| [u.tick as f64 * dt, v]))
+                .filter_map(|u| pick(u).filter(|v| !v.is_nan()).map(|v| [time(u.tick), v]))
                 .collect::<Vec<_>>()
         };
         // Per plot: the solid series, then the dashed one.
@@ -161,6 +169,12 @@ pub fn plots_ui(ui: &mut egui::Ui, run: &MclRun) {
                 plot("kidnap_error"),
                 |plot_ui| draw_series(plot_ui, &all, "Position error"),
             );
+            if !run.has_truth() {
+                ui.label(
+                    "No truth in this log: nothing to measure the error against. The dashed \
+                     lines are each estimate's own 2σ bound.",
+                );
+            }
         }
         1 => {
             if augmented {

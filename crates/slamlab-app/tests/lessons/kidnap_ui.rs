@@ -563,3 +563,126 @@ fn an_embedded_figures_second_plot_has_data() {
         assert_eq!(titles, ["Position error", second], "{query}");
     }
 }
+
+/// A simulated run in the maze (400 scans, seed 3) as a ROS 2 bag with its truth,
+/// and as the CARMEN log SLAM Lab writes (no truth).
+fn recorded_run() -> (Vec<u8>, String, Vec<slamlab_core::Pose2>) {
+    use slamlab_sim::grid::{BuiltinMap, SimulatedLogConfig, simulate_log};
+    use slamlab_sim::io::ros2_bag::{BagWriteOptions, write_bag};
+    let map = BuiltinMap::Maze.load().unwrap();
+    let (log, truth) = simulate_log(&map, 400, 3, &SimulatedLogConfig::default()).unwrap();
+    let bag = write_bag(&log, Some(&truth), &BagWriteOptions::default()).unwrap();
+    let text = slamlab_sim::io::laser_log::write_carmen(&log).unwrap();
+    (bag, text, truth.iter().map(|t| t.pose).collect())
+}
+
+/// The lesson localizes a recorded robot: a bag with its truth (errors measured),
+/// its CARMEN copy without (the status and the error plot say why there is no
+/// error), a bag in a map it was not recorded in (a notice), a ROS 1 bag
+/// (refused; the run stays), and back to the simulated robot.
+#[test]
+fn a_bag_or_a_log_is_localized_in_the_map_with_or_without_truth() {
+    use slamlab_app::lesson::Lesson as _;
+    let (bag, text, truth) = recorded_run();
+    let mut h = harness("lesson=kidnap&seed=1&estimator=mcl,acmcl");
+    lesson_mut(&mut h).load_log("run.mcap", &bag);
+    h.run();
+    let note = lesson(&h).note().unwrap_or_default().to_owned();
+    assert!(
+        note.starts_with("Loaded run.mcap (ROS 2 bag, MCAP with uncompressed chunks): 400 scans")
+            && note.contains("with its true poses")
+            && note.ends_with("localizing in maze"),
+        "{note}"
+    );
+    assert!(h.state().notices().is_empty(), "{:?}", h.state().notices());
+    for _ in 0..450 {
+        lesson_mut(&mut h).step_tick();
+    }
+    h.run();
+    let state = lesson(&h).test_state();
+    assert_eq!(state["log_progress"], serde_json::json!([400, 400]));
+    assert_eq!(state["tick"], 400, "the run stops at the log's end");
+    let last = truth[399];
+    assert_eq!(
+        state["truth"],
+        serde_json::json!([last.x, last.y, last.theta])
+    );
+    // The numbers of the sim's and the CLI's replay tests: the same bag and seed.
+    let run = lesson(&h).sim().run();
+    let converged: Vec<_> = run.summaries().iter().map(|s| s.converged_tick).collect();
+    assert_eq!(converged, [Some(86), Some(71)]);
+    for f in state["filters"].as_array().unwrap() {
+        assert!(f["position_error"].as_f64().unwrap() < 0.12, "{f}");
+        assert!(f["status"].as_str().unwrap().starts_with("tracking"), "{f}");
+    }
+    // A recorded robot is not kidnapped.
+    lesson_mut(&mut h).apply_event(slamlab_sim::kidnap::session::KidnapEvent::KidnapRandom);
+    assert_eq!(lesson(&h).sim().run().kidnap_tick(), None);
+    if let Some(image) = render_or_skip(&mut h) {
+        let _ = image.save(std::env::temp_dir().join("slamlab-kidnap-bag.png"));
+    }
+
+    // The CARMEN copy, at 800 x 500: no truth.
+    let mut h = super::common::harness_sized(
+        "lesson=kidnap&seed=1&estimator=mcl,acmcl",
+        egui::vec2(800.0, 500.0),
+    );
+    lesson_mut(&mut h).load_log("run.clf", text.as_bytes());
+    for _ in 0..400 {
+        lesson_mut(&mut h).step_tick();
+    }
+    h.run();
+    let state = lesson(&h).test_state();
+    assert!(state["truth"].is_null());
+    for f in state["filters"].as_array().unwrap() {
+        assert!(f["position_error"].is_null(), "{f}");
+        assert!(
+            f["status"]
+                .as_str()
+                .unwrap()
+                .starts_with("no truth in this log: estimate ("),
+            "{f}"
+        );
+        // Found all the same, against the truth the bag carried.
+        let e = f["estimate_now"].as_array().unwrap();
+        let d =
+            (e[0].as_f64().unwrap() - truth[399].x).hypot(e[1].as_f64().unwrap() - truth[399].y);
+        assert!(d < 0.15, "{f}: {d}");
+    }
+    assert!(super::common::label_visible(
+        &h,
+        "No truth in this log: nothing to measure the error against. The dashed lines are each estimate's own 2σ bound."
+    ));
+    if let Some(image) = render_or_skip(&mut h) {
+        let _ = image.save(std::env::temp_dir().join("slamlab-kidnap-log-800x500.png"));
+    }
+
+    // The bag in the office: its true poses are not the office's free space.
+    let mut h = harness("lesson=kidnap&map=office&seed=1");
+    lesson_mut(&mut h).load_log("run.mcap", &bag);
+    h.run();
+    let notices = h.state().notices().join("\n");
+    assert!(
+        notices
+            .contains("true poses are outside the map's free space: was it recorded in this map?"),
+        "{notices}"
+    );
+    // A ROS 1 bag: refused with how to convert it; the bag's run stays.
+    lesson_mut(&mut h).step_tick();
+    lesson_mut(&mut h).load_log("old.bag", b"#ROSBAG V2.0\nE\x00\x00\x00");
+    let l = lesson(&h);
+    assert!(
+        l.note()
+            .unwrap_or_default()
+            .starts_with("Could not read the log old.bag: this is a ROS 1 bag"),
+        "{:?}",
+        l.note()
+    );
+    assert_eq!(l.log_name(), Some("run.mcap"));
+    assert_eq!(l.sim().run().tick_count(), 1);
+    // Back to the simulated robot, in the same map.
+    lesson_mut(&mut h).close_log();
+    let l = lesson(&h);
+    assert!(l.log_name().is_none() && l.sim().run().log().is_none());
+    assert_eq!(l.map_name(), "office");
+}
