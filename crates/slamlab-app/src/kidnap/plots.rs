@@ -105,6 +105,9 @@ fn plotted(run: &MclRun) -> Vec<Styled> {
     out
 }
 
+/// What the error plot says when the log has no truth.
+pub const NO_TRUTH: &str = "No truth in this log: 2σ bounds only";
+
 /// The plots side by side, each with its key on a line above it.
 pub fn plots_ui(ui: &mut egui::Ui, run: &MclRun) {
     let all = plotted(run);
@@ -158,23 +161,24 @@ pub fn plots_ui(ui: &mut egui::Ui, run: &MclRun) {
     };
     plot_row(ui, 4, |k, ui| match order[k] {
         0 => {
-            figure_ui(
-                ui,
-                &figure(
-                    "Position error",
-                    "Distance from the estimate (the heaviest cluster's weighted mean) to the true \
-                     robot, and the estimate's own 2σ bound along its longest axis",
-                    "error (m)",
-                ),
-                plot("kidnap_error"),
-                |plot_ui| draw_series(plot_ui, &all, "Position error"),
+            let mut error_figure = figure(
+                "Position error",
+                "Distance from the estimate (the heaviest cluster's weighted mean) to the true \
+                 robot, and the estimate's own 2σ bound along its longest axis",
+                "error (m)",
             );
             if !run.has_truth() {
-                ui.label(
-                    "No truth in this log: nothing to measure the error against. The dashed \
-                     lines are each estimate's own 2σ bound.",
+                // Above the plot, so that it is read before the empty error lines.
+                let said = ui.label(NO_TRUTH).on_hover_text(
+                    "The log has no true poses (only a bag SLAM Lab simulated carries them, \
+                         on /ground_truth): nothing to measure the error against. The dashed \
+                         lines are each estimate's own 2σ bound.",
                 );
+                error_figure.height -= said.rect.height() + ui.spacing().item_spacing.y;
             }
+            figure_ui(ui, &error_figure, plot("kidnap_error"), |plot_ui| {
+                draw_series(plot_ui, &all, "Position error")
+            });
         }
         1 => {
             if augmented {
