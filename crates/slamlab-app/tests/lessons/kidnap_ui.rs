@@ -566,6 +566,7 @@ fn an_embedded_figures_second_plot_has_data() {
 
 /// A simulated run in the maze (400 scans, seed 3) as a ROS 2 bag with its truth,
 /// and as the CARMEN log SLAM Lab writes (no truth).
+#[allow(clippy::unwrap_used)] // a test's fixture: a failure stops the test
 fn recorded_run() -> (Vec<u8>, String, Vec<slamlab_core::Pose2>) {
     use slamlab_sim::grid::{BuiltinMap, SimulatedLogConfig, simulate_log};
     use slamlab_sim::io::ros2_bag::{BagWriteOptions, write_bag};
@@ -645,8 +646,10 @@ fn a_bag_or_a_log_is_localized_in_the_map_with_or_without_truth() {
         );
         // Found all the same, against the truth the bag carried.
         let e = f["estimate_now"].as_array().unwrap();
-        let d =
-            (e[0].as_f64().unwrap() - truth[399].x).hypot(e[1].as_f64().unwrap() - truth[399].y);
+        let d = slamlab_core::math::hypot(
+            e[0].as_f64().unwrap() - truth[399].x,
+            e[1].as_f64().unwrap() - truth[399].y,
+        );
         assert!(d < 0.15, "{f}: {d}");
     }
     assert!(super::common::label_visible(
