@@ -140,7 +140,7 @@ pub struct KidnapLesson {
     inbox: DropInbox,
     /// A lone image dropped or opened without its YAML, waiting for its resolution.
     lone_image: Option<LoneImage>,
-    /// "Open map…": a map's YAML with its image.
+    /// "Open map, log or bag…": a map's YAML with its image, or a CARMEN log or a ROS 2 bag.
     map_picker: FilePicker,
     /// `map=` named a ROS map YAML (a URL beside the site, a path on the
     /// desktop): where it is, and its reading, stage by stage.

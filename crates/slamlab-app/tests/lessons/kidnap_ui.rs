@@ -309,7 +309,7 @@ fn driving_by_hand_with_the_keys_moves_the_robot_and_stops_it() {
     assert!(!lesson(&h).driving_by_hand());
 }
 
-/// "Open map…" natively: the path of a map's YAML; its image is read beside it and
+/// "Open map, log or bag…" natively: the path of a map's YAML; its image is read beside it and
 /// the lesson restarts on the loaded map. A missing file leaves the map and a note.
 #[test]
 fn open_map_reads_the_yaml_and_its_image() {
@@ -319,12 +319,12 @@ fn open_map_reads_the_yaml_and_its_image() {
     );
     let mut h = harness("lesson=kidnap&seed=2");
     h.run();
-    h.get_by_label("Open map…").scroll_to_me();
+    h.get_by_label("Open map, log or bag…").scroll_to_me();
     h.run();
     h.get_by_label("path").focus();
     h.get_by_label("path").type_text("/nonexistent/map.yaml");
     h.run();
-    h.get_by_label("Open map…").click();
+    h.get_by_label("Open map, log or bag…").click();
     h.run();
     assert_eq!(lesson(&h).map_name(), "maze");
     let notes = lesson(&h).note().unwrap_or_default().to_owned();
@@ -337,7 +337,7 @@ fn open_map_reads_the_yaml_and_its_image() {
     }
     h.get_by_label("path").type_text(&yaml);
     h.run();
-    h.get_by_label("Open map…").click();
+    h.get_by_label("Open map, log or bag…").click();
     h.run();
     assert_eq!(lesson(&h).map_name(), "office.yaml");
     let notes = lesson(&h).note().unwrap_or_default().to_owned();
