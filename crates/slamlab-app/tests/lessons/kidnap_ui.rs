@@ -689,3 +689,50 @@ fn a_bag_or_a_log_is_localized_in_the_map_with_or_without_truth() {
     assert!(l.log_name().is_none() && l.sim().run().log().is_none());
     assert_eq!(l.map_name(), "office");
 }
+
+/// `log=` (on the desktop a path) opens a bag in the lesson, with `scan-topic=`,
+/// and travels in share links; a real robot's bag has no truth.
+#[test]
+fn log_in_the_url_opens_a_bag_and_stays_in_the_share_link() {
+    use slamlab_app::lesson::Lesson as _;
+    let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR"))
+        .join("../slamlab-sim/tests/data/ros2_bags/rosbags-intel-300-scans.mcap");
+    let path = path.to_string_lossy().into_owned();
+    let mut h = harness(&format!(
+        "lesson=kidnap&particles=300&log={path}&scan-topic=/scan"
+    ));
+    for _ in 0..5 {
+        h.run();
+    }
+    let l = lesson(&h);
+    assert_eq!(
+        l.log_name(),
+        Some("rosbags-intel-300-scans.mcap"),
+        "{:?}",
+        l.note()
+    );
+    assert!(!l.sim().run().has_truth());
+    assert_eq!(l.sim().run().log_progress(), Some((0, 300)));
+    let pairs = l.share_pairs();
+    assert!(
+        pairs.contains(&("log".to_owned(), path.clone())),
+        "{pairs:?}"
+    );
+    assert!(
+        pairs.contains(&("scan-topic".to_owned(), "/scan".to_owned())),
+        "{pairs:?}"
+    );
+    for _ in 0..20 {
+        lesson_mut(&mut h).step_tick();
+    }
+    assert!(lesson(&h).test_state()["truth"].is_null());
+    assert!(
+        lesson(&h)
+            .sim()
+            .run()
+            .status_of(0)
+            .starts_with("no truth in this log"),
+        "{}",
+        lesson(&h).sim().run().status_of(0)
+    );
+}
