@@ -225,6 +225,23 @@ fn a_log_that_does_not_fit_the_map_says_so() {
     .unwrap();
     assert!(!run.has_truth());
     assert!(run.notes()[0].starts_with("the log's truth has 3 poses for 400 scans"));
+    // Scans whose odometry is not a number are left out, with a note.
+    let mut input = log_input(&log, "run");
+    input.scans[7].odometry.x = f64::NAN;
+    input.scans[9].odometry.theta = f64::INFINITY;
+    let run = MclRun::from_log(
+        scenario(InitMode::Global),
+        BuiltinMap::Maze.load().unwrap(),
+        input,
+    )
+    .unwrap();
+    assert_eq!(run.log_progress(), Some((0, 398)));
+    assert!(
+        run.notes()
+            .contains(&"2 scans whose odometry pose is not a number were left out".to_owned()),
+        "{:?}",
+        run.notes()
+    );
     // An empty log is refused; a kidnap of a recorded robot too.
     let e =
         MclRun::from_log(scenario(InitMode::Global), office, MappingInput::default()).unwrap_err();

@@ -332,9 +332,6 @@ impl MclRun {
         grid: OccupancyGrid,
         mut input: MappingInput,
     ) -> Result<Self, MclRunError> {
-        let Some(first) = input.scans.first().map(|s| s.odometry) else {
-            return Err(MclRunError::EmptyLog);
-        };
         let mut notes = Vec::new();
         if let Some(truth) = &input.truth
             && truth.len() != input.scans.len()
@@ -346,6 +343,26 @@ impl MclRun {
             ));
             input.truth = None;
         }
+        // An odometry pose that is not a number would spread NaN through every
+        // particle: those scans are dropped (with their truth), and counted.
+        let finite: Vec<bool> = input.scans.iter().map(|s| s.odometry.is_finite()).collect();
+        let dropped = finite.iter().filter(|&&ok| !ok).count();
+        if dropped > 0 {
+            let mut keep = finite.iter();
+            input
+                .scans
+                .retain(|_| keep.next().copied().unwrap_or(false));
+            if let Some(truth) = &mut input.truth {
+                let mut keep = finite.iter();
+                truth.retain(|_| keep.next().copied().unwrap_or(false));
+            }
+            notes.push(format!(
+                "{dropped} scans whose odometry pose is not a number were left out"
+            ));
+        }
+        let Some(first) = input.scans.first().map(|s| s.odometry) else {
+            return Err(MclRunError::EmptyLog);
+        };
         notes.extend(log_notes(&grid, &input));
         let radius = robot_radius(&scenario);
         let collision = Arc::new(Costmap::inflate(&grid, radius));
