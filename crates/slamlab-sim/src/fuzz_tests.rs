@@ -696,3 +696,29 @@ fn trajectory_files_survive_mutations() {
     );
     report.assert_clean();
 }
+
+/// Assignment JSON files through the reader the app and the command line use
+/// ([`crate::assignments::read`]: size cap, serde, then the checks against the
+/// lesson's task kind and parameter table). Seeds: the built-in assignments.
+#[test]
+fn assignment_files_survive_mutations() {
+    let seeds: Vec<Vec<u8>> = crate::coursework::BUILTIN
+        .iter()
+        .map(|(_, text)| text.as_bytes().to_vec())
+        .collect();
+    let report = Target::new("assignment JSON", seeds, CAP).run_checked(
+        |bytes| {
+            crate::assignments::read("fuzz.json", bytes)
+                .map(drop)
+                .map_err(|e| e.to_string())
+        },
+        |message| {
+            if message.starts_with("fuzz.json: ") {
+                Ok(())
+            } else {
+                Err(format!("'{message}' does not name the assignment file"))
+            }
+        },
+    );
+    report.assert_clean();
+}

@@ -2,6 +2,7 @@
 //! that steps the world and the filters phase by phase, and the metrics the CLI
 //! and the experiments report.
 
+pub mod assignment;
 pub mod experiment;
 pub mod export;
 pub mod params;
