@@ -24,7 +24,11 @@
 //! walks the tree depth first, best-scored child first, and cuts every branch
 //! whose bound is no better than the best leaf found so far; the answer is the
 //! exhaustive search's answer (the bound never underestimates), found with a
-//! small fraction of its work.
+//! small fraction of its work. The tree starts at the lowest height whose
+//! boxes hold each heading's offsets in one box (at most the tallest grid):
+//! Cartographer always starts at `branch_and_bound_depth − 1`, where a small
+//! window's box has one child that is the same box again, so the answer is the
+//! same and the repeated scoring is saved.
 //!
 //! Scores here are mean probabilities (the sum of Eq. 5.10 divided by the
 //! number of points), as Cartographer's `min_score` reads them; cells never
@@ -46,7 +50,7 @@
 //! overlaps the submap still has its value.
 
 use super::scan_to_map::{UNKNOWN_PROBABILITY, angular_step};
-use super::{Point2, transform_point};
+use super::{Point2, PointTransform};
 use crate::geometry::{Pose2, wrap_angle};
 use crate::grid::ProbabilityGrid;
 use crate::math;
@@ -459,10 +463,13 @@ impl Discretized {
         let mut extents = Vec::with_capacity(scans.capacity());
         for a in -n_ang..=n_ang {
             let pose = Pose2::new(initial.x, initial.y, initial.theta + a as f64 * step);
+            // The heading's sine and cosine once for all points (the same
+            // bits as `transform_point`).
+            let transform = PointTransform::new(&pose);
             let cells: Vec<(i64, i64)> = points
                 .iter()
                 .map(|p| {
-                    let q = transform_point(&pose, *p);
+                    let q = transform.apply(*p);
                     (
                         crate::grid::floor_to_i64(q[0] / r),
                         crate::grid::floor_to_i64(q[1] / r),
@@ -502,6 +509,21 @@ impl Discretized {
             step,
             center: (initial.x, initial.y),
         })
+    }
+
+    /// The lowest height (at most `max_height`) whose `2^h x 2^h` boxes
+    /// hold every heading's offsets in one box.
+    fn top_height(&self, max_height: u32) -> u32 {
+        let span = self
+            .bounds
+            .iter()
+            .flatten()
+            .map(|b| (b.1 - b.0 + 1).max(b.3 - b.2 + 1))
+            .max()
+            .unwrap_or(1);
+        (0..=max_height)
+            .find(|&h| (1i64 << h) >= span)
+            .unwrap_or(max_height)
     }
 
     fn exhaustive_count(&self) -> usize {
@@ -691,7 +713,11 @@ pub fn branch_and_bound(
             return (Err(e), record);
         }
     };
-    let top = grids.max_height();
+    // The tree starts at the lowest height whose boxes cover every
+    // heading's offsets: a taller box has a single child that is its own
+    // box again, and scoring it only repeats work (a small window, such as
+    // a loop-closure search around a good estimate, needs few heights).
+    let top = disc.top_height(grids.max_height());
     let stride = 1i64 << top;
     // The lowest-resolution candidates: every heading, offsets from each
     // heading's lower bound in steps of 2^top.
@@ -995,6 +1021,46 @@ mod tests {
             );
         }
         eprintln!("exhaustive / branch-and-bound candidates: {ratios:?}");
+    }
+
+    /// A window of ±0.3 m at 0.1 m cells holds 7 offsets a side: the tree
+    /// starts at height 3 (boxes of 8), the heights above score nothing, and
+    /// the answer is still the exhaustive search's.
+    #[test]
+    fn a_small_window_starts_low_in_the_tree_with_the_exhaustive_answer() {
+        for seed in 1..=6u64 {
+            let (grid, scan_at) = random_world(seed);
+            let grids = PrecomputedGrids::new(&grid, 6).unwrap();
+            let truth = Pose2::new(0.4, -0.3, 0.2 * seed as f64);
+            let points = scan_at(&truth).points();
+            let window = SearchWindow::Around {
+                initial: Pose2::new(truth.x + 0.15, truth.y - 0.12, truth.theta + 0.05),
+                linear: 0.3,
+                angular: 0.1,
+            };
+            let params = BranchAndBoundParams {
+                min_score: 0.5,
+                recorded_nodes: 0,
+            };
+            let (bbs, record) = branch_and_bound(&grids, &points, &window, &params);
+            let (naive, count) = exhaustive_search(&grids, &points, &window, 0.5);
+            let (bbs, naive) = (bbs.unwrap(), naive.unwrap());
+            assert_eq!(
+                (bbs.score, bbs.pose),
+                (naive.score, naive.pose),
+                "seed {seed}"
+            );
+            assert_eq!(record.exhaustive_candidates, count);
+            assert_eq!(record.evaluated_per_height.len(), 7);
+            assert!(record.evaluated_per_height[3] > 0, "{record:?}");
+            assert!(
+                record.evaluated_per_height[4..].iter().all(|&n| n == 0),
+                "seed {seed}: {:?}",
+                record.evaluated_per_height
+            );
+            // One box per heading at the top.
+            assert_eq!(record.evaluated_per_height[3], record.angles);
+        }
     }
 
     #[test]
