@@ -10,3 +10,4 @@ pub mod laser_log;
 pub mod laser_reference;
 pub mod ros_map;
 pub mod scenario_file;
+pub mod trajectory;
