@@ -43,11 +43,13 @@
 //! student reads as a score is the mean probability the bytes stand for
 //! (to 0.8/255 ≈ 0.003 per cell).
 //!
-//! The precomputed grids are built as Cartographer builds them: a sliding
-//! window maximum (a deque of non-ascending maxima) along each row, then along
-//! each column of the result. Each grid covers the submap's known cells
-//! widened by `2^h − 1` cells below and to the left, so that a box that only
-//! overlaps the submap still has its value.
+//! The precomputed grids hold what Cartographer's `PrecomputationGrid2D` holds,
+//! built by doubling rather than by its sliding-window maximum: a box of side
+//! `2^h` is four boxes of side `2^(h−1)`, so each height is the maximum of two
+//! cells of the height below along the rows, then two along the columns (the
+//! same bytes; two comparisons a cell). Each grid covers the submap's known
+//! cells widened by `2^h − 1` cells below and to the left, so that a box that
+//! only overlaps the submap still has its value.
 
 use super::scan_to_map::{UNKNOWN_PROBABILITY, angular_step};
 use super::{Point2, PointTransform};
@@ -55,7 +57,6 @@ use crate::geometry::{Pose2, wrap_angle};
 use crate::grid::ProbabilityGrid;
 use crate::math;
 use serde::{Deserialize, Serialize};
-use std::collections::VecDeque;
 use thiserror::Error;
 
 /// The tallest tree accepted: boxes of `2^10 = 1024` cells a side.
@@ -107,40 +108,6 @@ impl MaxGrid {
     }
 }
 
-/// The maxima of every window of `side` values of `values` padded with `pad`
-/// on both sides: `out[p] = max(padded[p .. p + side])` for `p` in
-/// `0 .. values.len() + side − 1` (Cartographer's `SlidingWindowMaximum`: a
-/// deque holding the window's non-ascending maxima, front the largest).
-fn sliding_max(values: &[u8], side: usize, pad: u8, out: &mut Vec<u8>) {
-    out.clear();
-    let n = values.len();
-    let at = |q: usize| -> u8 {
-        // Position q of the padded row (side − 1 pads, values, side − 1 pads).
-        if q + 1 < side || q + 1 - side >= n {
-            pad
-        } else {
-            values[q + 1 - side]
-        }
-    };
-    let total = n + 2 * (side - 1);
-    let mut maxima: VecDeque<u8> = VecDeque::with_capacity(side);
-    for q in 0..total {
-        let v = at(q);
-        while maxima.back().is_some_and(|&b| v > b) {
-            maxima.pop_back();
-        }
-        maxima.push_back(v);
-        if q + 1 >= side {
-            // The window [q + 1 − side, q] is full.
-            out.push(*maxima.front().unwrap_or(&pad));
-            let leaving = at(q + 1 - side);
-            if maxima.front() == Some(&leaving) {
-                maxima.pop_front();
-            }
-        }
-    }
-}
-
 /// The precomputed max grids of heights `0..=max_height` of one finished
 /// submap (thesis Eq. 5.13, Fig. 5.7). Height 0 is the submap itself.
 #[derive(Clone, Debug, PartialEq)]
@@ -171,42 +138,67 @@ impl PrecomputedGrids {
         }
         let max_height = max_height.min(MAX_HEIGHT);
         let mut grids = Vec::with_capacity(max_height as usize + 1);
-        let mut row_out = Vec::new();
-        let mut column = Vec::new();
-        let mut col_out = Vec::new();
-        for height in 0..=max_height {
-            let side = 1usize << height;
-            let wide_w = w + side - 1;
-            let wide_h = h + side - 1;
-            // Rows first: intermediate[j][p] = max of row j over [p − (side − 1), p].
-            let mut intermediate = vec![unknown; wide_w * h];
-            for j in 0..h {
-                sliding_max(&base[j * w..(j + 1) * w], side, unknown, &mut row_out);
-                // row_out has w + side − 1 entries: box starts x = −(side−1) .. w−1.
-                intermediate[j * wide_w..(j + 1) * wide_w].copy_from_slice(&row_out[..wide_w]);
+        grids.push(MaxGrid {
+            i0: i_min,
+            j0: j_min,
+            width: w,
+            height: h,
+            cells: base,
+        });
+        for height in 1..=max_height {
+            if let Some(prev) = grids.last() {
+                let next = Self::doubled(prev, height, unknown);
+                grids.push(next);
             }
-            let mut cells = vec![unknown; wide_w * wide_h];
-            for p in 0..wide_w {
-                column.clear();
-                column.extend((0..h).map(|j| intermediate[j * wide_w + p]));
-                sliding_max(&column, side, unknown, &mut col_out);
-                for (q, &v) in col_out.iter().take(wide_h).enumerate() {
-                    cells[q * wide_w + p] = v;
-                }
-            }
-            grids.push(MaxGrid {
-                i0: i_min - (side as i64 - 1),
-                j0: j_min - (side as i64 - 1),
-                width: wide_w,
-                height: wide_h,
-                cells,
-            });
         }
         Some(Self {
             resolution: grid.resolution(),
             bounds,
             grids,
         })
+    }
+
+    /// The grid of height `height` from the one below it: a box of side
+    /// `2^h` is four boxes of side `2^(h−1)`, so its maximum is the largest of
+    /// theirs, taken along the rows and then along the columns (the same
+    /// values as a sliding-window maximum over the submap, with two
+    /// comparisons a cell instead of a window's worth).
+    fn doubled(prev: &MaxGrid, height: u32, unknown: u8) -> MaxGrid {
+        let half = 1usize << (height - 1);
+        let (pw, ph) = (prev.width, prev.height);
+        let (w, h) = (pw + half, ph + half);
+        // Columns of the new grid p read the previous grid's columns p − half
+        // and p (each box's left and right halves); rows likewise.
+        let mut rows = vec![unknown; w * ph];
+        for (q, row) in rows.chunks_mut(w).enumerate() {
+            let src = &prev.cells[q * pw..(q + 1) * pw];
+            for (p, cell) in row.iter_mut().enumerate() {
+                let left = if p >= half { src[p - half] } else { unknown };
+                let right = if p < pw { src[p] } else { unknown };
+                *cell = left.max(right);
+            }
+        }
+        let mut cells = vec![unknown; w * h];
+        for (q, row) in cells.chunks_mut(w).enumerate() {
+            let below = (q >= half).then(|| &rows[(q - half) * w..(q - half + 1) * w]);
+            let above = (q < ph).then(|| &rows[q * w..(q + 1) * w]);
+            match (below, above) {
+                (Some(b), Some(a)) => {
+                    for ((cell, &x), &y) in row.iter_mut().zip(b).zip(a) {
+                        *cell = x.max(y);
+                    }
+                }
+                (Some(only), None) | (None, Some(only)) => row.copy_from_slice(only),
+                (None, None) => {}
+            }
+        }
+        MaxGrid {
+            i0: prev.i0 - half as i64,
+            j0: prev.j0 - half as i64,
+            width: w,
+            height: h,
+            cells,
+        }
     }
 
     /// Metres per cell.
