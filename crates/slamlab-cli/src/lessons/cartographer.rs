@@ -12,11 +12,13 @@ use crate::map::{map_arg, read_map};
 use crate::output::{Output, units_bar, units_progress};
 use anyhow::{Context, Result, bail};
 use clap::{Arg, ArgMatches, Command};
+use cpu_time::ThreadTime;
 use serde_json::json;
 use slamlab_sim::cartographer::input::{KidnapPlace, kidnap_input_to};
 use slamlab_sim::cartographer::{CartographerParams, CartographerSim};
 use slamlab_sim::grid::SimulatedLogConfig;
 use slamlab_sim::grid::log_input;
+use slamlab_sim::grid::reference::{self, LogReference};
 use slamlab_sim::io::laser_log::LaserLog;
 use std::io::Write;
 use std::path::Path;
@@ -57,6 +59,9 @@ impl RunLesson for Cartographer {
                     "map a CARMEN laser log (plain, .gz or .bz2) instead of a simulated robot",
                 ),
             )
+            .arg(Arg::new("reference").long("reference").value_name("FILE").help(
+                "with --log: its corrected log (e.g. intel-corrected.log.gz); the trajectory is scored against it (ATE, relative errors)",
+            ))
             .arg(count(
                 "steps",
                 "scans to simulate (default 600); with --log, map only the log's first scans",
@@ -99,6 +104,14 @@ impl RunLesson for Cartographer {
                 "max_constraint_distance",
                 "search only submaps whose origin is this near a node, metres (default 15)",
             ))
+            .arg(number(
+                "sampling_ratio",
+                "share of node-submap pairs searched for loop closures, sampled per submap (default 0.3)",
+            ))
+            .arg(count(
+                "max_closures_per_submap_pair",
+                "loop closures tying a node's submap to another before their pairs are searched no more (default 0: no limit)",
+            ))
             .arg(number("min_score", "a loop closure must score above this (default 0.55)"))
             .arg(number(
                 "global_min_score",
@@ -134,6 +147,12 @@ impl RunLesson for Cartographer {
         }
         if let Some(v) = f("max_constraint_distance") {
             params.max_constraint_distance = v;
+        }
+        if let Some(v) = f("sampling_ratio") {
+            params.sampling_ratio = v;
+        }
+        if let Some(v) = n("max_closures_per_submap_pair") {
+            params.max_closures_per_submap_pair = v;
         }
         if let Some(v) = f("min_score") {
             params.min_score = v;
@@ -172,6 +191,16 @@ impl RunLesson for Cartographer {
             if let Some(first) = n("steps") {
                 input.scans.truncate(first);
             }
+            if let Some(path) = m.get_one::<String>("reference") {
+                match std::fs::read(path)
+                    .map_err(|e| format!("cannot read {path}: {e}"))
+                    .and_then(|bytes| {
+                        LogReference::read(&bytes, path, &log).map_err(|e| format!("{path}: {e}"))
+                    }) {
+                    Ok(r) => input.reference = Some(Arc::new(r)),
+                    Err(e) => eprintln!("warning: {e}; the run goes on without a score"),
+                }
+            }
             input
         } else {
             let spec = m.get_one::<String>("map").map_or("maze", String::as_str);
@@ -204,11 +233,18 @@ impl RunLesson for Cartographer {
         let total = sim.input().scans.len();
         let bar = units_bar("cartographer", total, "scans");
         let started = Instant::now();
+        let cpu_started = ThreadTime::now();
         while sim.step() {
             units_progress(&bar, "cartographer", sim.scans_done(), total, "scans");
         }
         let time_ms = started.elapsed().as_secs_f64() * 1e3;
+        let cpu_s = cpu_started.elapsed().as_secs_f64();
         let summary = sim.summary(kidnap_at, time_ms);
+        let score = sim
+            .input()
+            .reference
+            .as_deref()
+            .and_then(|r| reference::score(r, &sim.scan_poses()));
         for note in summary.notes.iter().take(5) {
             eprintln!("warning: {note}");
         }
@@ -222,6 +258,7 @@ impl RunLesson for Cartographer {
                 "false_alarms": summary.false_alarms,
                 "recovered_at": summary.recovered_at,
                 "loop_closures": summary.loop_closures,
+                "rejected_closures": summary.rejected_closures,
                 "trajectory_rmse": summary.trajectory_rmse,
                 "map_agreement": summary.map_agreement,
                 "bbs": summary.bbs,
@@ -230,6 +267,9 @@ impl RunLesson for Cartographer {
                 "trajectories": summary.trajectories,
                 "optimizations": summary.optimizations,
                 "time_ms": time_ms,
+                "cpu_s": cpu_s,
+                "real_time_factor": sim.input().duration() / cpu_s.max(1e-9),
+                "score": score,
                 "parameters": serde_json::to_value(sim.params())?,
             }))?;
             return Ok(());
@@ -268,7 +308,18 @@ impl RunLesson for Cartographer {
         )?;
         writeln!(out, "trajectory RMSE: {} m", g(summary.trajectory_rmse))?;
         writeln!(out, "map agreement:   {}", g(summary.map_agreement))?;
-        writeln!(out, "time:            {time_ms:.0} ms")?;
+        if let Some(s) = &score {
+            writeln!(
+                out,
+                "reference:       ATE {:.3} m after SE(2) alignment at {} reference scans",
+                s.ate_m, s.pairs
+            )?;
+        }
+        writeln!(
+            out,
+            "time:            {time_ms:.0} ms ({cpu_s:.1} s of CPU, {:.0}x real time)",
+            sim.input().duration() / cpu_s.max(1e-9)
+        )?;
         Ok(())
     }
 }

@@ -166,6 +166,7 @@ pub fn kidnap_input_to(
         scans,
         truth: Some(truth),
         true_map: Some(map),
+        reference: None,
     })
 }
 

@@ -1,11 +1,13 @@
 //! The grid world of the lidar lessons (Monte Carlo localization, mapping,
 //! Cartographer): the built-in maps, the simulated lidar, the round robot that
 //! cannot drive through walls, the explorer that tours any map, simulated laser
-//! logs, and the scans every mapping run takes as its input.
+//! logs, the scans every mapping run takes as its input, and a log's reference
+//! trajectory (a corrected log) with the score of a trajectory against it.
 
 pub mod builtin;
 pub mod explorer;
 pub mod lidar;
+pub mod reference;
 pub mod robot;
 pub mod scans;
 pub mod simulated_log;
@@ -13,6 +15,7 @@ pub mod simulated_log;
 pub use builtin::BuiltinMap;
 pub use explorer::Explorer;
 pub use lidar::Lidar;
+pub use reference::{LogReference, TrajectoryScore};
 pub use robot::{GridRobot, OdometrySensor};
 pub use scans::{InputScan, MappingInput, builtin_map, log_input, map_agreement, trajectory_rmse};
 pub use simulated_log::{SimLogError, SimulatedLogConfig, simulate_log};
