@@ -996,7 +996,7 @@ mod tests {
             }),
         );
         let app = SlamLabApp::with_settings("embed=1&landmarks=5", Some(stored.clone()));
-        let view = app.landmark_lesson().map(|l| l.view.clone());
+        let view = app.landmark_lesson().map(|l| l.frame.view.clone());
         assert!(
             view.is_some_and(|v| !v.legend && !v.heatmap && !v.follow_robot),
             "an embedded figure does not take the stored view"
@@ -1004,7 +1004,7 @@ mod tests {
         assert_eq!(app.settings(), stored);
         // The full app does.
         let app = SlamLabApp::with_settings("", Some(stored.clone()));
-        assert!(app.landmark_lesson().is_some_and(|l| l.view.heatmap));
+        assert!(app.landmark_lesson().is_some_and(|l| l.frame.view.heatmap));
     }
 
     #[test]

@@ -121,6 +121,7 @@ impl RunLesson for Cartographer {
             .arg(number("huber_scale", "default 10"))
             .arg(number("T", "kidnap trigger threshold (default 1.5)"))
             .arg(count("f_size", "kidnap average filter size (default 4)"))
+            .arg(crate::trajectory_out::arg())
     }
 
     fn run(&self, m: &ArgMatches, out: &mut Output) -> Result<()> {
@@ -245,6 +246,12 @@ impl RunLesson for Cartographer {
             .reference
             .as_deref()
             .and_then(|r| reference::score(r, &sim.scan_poses()));
+        crate::trajectory_out::write(
+            m,
+            self.id(),
+            &slamlab_sim::cartographer::export::trajectories(&sim),
+            &[],
+        )?;
         for note in summary.notes.iter().take(5) {
             eprintln!("warning: {note}");
         }

@@ -9,6 +9,7 @@ use crate::flags;
 use crate::output::Output;
 use anyhow::{Context, Result, bail};
 use clap::{Arg, ArgMatches, Command};
+use slamlab_sim::landmark_slam::export;
 use slamlab_sim::landmark_slam::summary::{RunSummary, run_headless};
 use slamlab_sim::{LandmarkScenario, LandmarkSession};
 use std::io::Write;
@@ -35,13 +36,20 @@ impl RunLesson for LandmarkSlam {
                     .help("number of simulation ticks"),
             )
             .args(scenario_args(&[]))
+            .arg(crate::trajectory_out::arg())
     }
 
     fn run(&self, matches: &ArgMatches, out: &mut Output) -> Result<()> {
         let steps = matches.get_one::<u64>("steps").copied().unwrap_or(200);
         let scenario = scenario_from(matches, &[])?;
         check_runnable(&scenario)?;
-        let (_, summary) = run_headless(scenario, steps);
+        let (session, summary) = run_headless(scenario, steps);
+        crate::trajectory_out::write(
+            matches,
+            self.id(),
+            &export::trajectories(&session),
+            &export::landmarks(&session),
+        )?;
         if out.json() {
             let first = summary.filters.first();
             let mut value = serde_json::to_value(&summary).context("serializing the summary")?;

@@ -12,6 +12,7 @@
 
 pub mod consistency;
 pub mod experiment;
+pub mod export;
 pub mod fastslam;
 pub mod presets;
 pub mod scenario;

@@ -25,6 +25,8 @@ pub struct TickMetrics {
     pub error: [f64; 3],
     /// The filter's standard deviations of `[x, y, θ]`.
     pub sigma: [f64; 3],
+    /// The filter's robot-pose covariance `P_RR` (what [`Self::nees`] inverts).
+    pub covariance: nalgebra::Matrix3<f64>,
     /// Robot position error `‖(e_x, e_y)‖`, metres.
     pub position_error: f64,
     /// The filter's 2-sigma bound on that error: `2 √(σ_x² + σ_y²)`, metres.
@@ -197,6 +199,7 @@ pub fn tick_metrics(
         time,
         error,
         sigma,
+        covariance: p,
         position_error: (error[0] * error[0] + error[1] * error[1]).sqrt(),
         position_bound_2sigma: 2.0 * (p[(0, 0)] + p[(1, 1)]).max(0.0).sqrt(),
         nees,
