@@ -167,6 +167,7 @@ pub fn kidnap_input_to(
         truth: Some(truth),
         true_map: Some(map),
         reference: None,
+        time_origin: 0.0,
     })
 }
 

@@ -36,6 +36,9 @@ pub struct MappingInput {
     /// A laser log's reference trajectory (a corrected log), when one came
     /// with it (metrics only, as the truth).
     pub reference: Option<Arc<crate::grid::reference::LogReference>>,
+    /// A laser log's clock at its first scan (`time` counts from it),
+    /// seconds: what a reference is matched by.
+    pub time_origin: f64,
 }
 
 impl MappingInput {
@@ -67,6 +70,7 @@ pub fn log_input(log: &LaserLog, name: &str) -> MappingInput {
         truth: None,
         true_map: None,
         reference: None,
+        time_origin: t0,
     }
 }
 

@@ -198,21 +198,33 @@ impl Association {
 /// Matches each reference scan to the raw `FLASER` scan of `log` at its time
 /// with the same ranges (module docs). Indices are into `log.scans`.
 pub fn associate(reference: &ReferenceLog, log: &LaserLog) -> Result<Association, ReferenceError> {
-    let front: Vec<usize> = (0..log.scans.len())
-        .filter(|&i| log.scans[i].kind == LaserKind::Front)
-        .collect();
-    check_times("log", front.iter().map(|&i| log.scans[i].timestamp))?;
-    let first = front.first().map_or(0.0, |&i| log.scans[i].timestamp);
-    // Raw scans sorted by time (the raw times are not in file order).
-    let mut by_time: Vec<(f64, usize)> = front
+    let front: Vec<(usize, f64, &[f64])> = log
+        .scans
         .iter()
-        .map(|&i| (log.scans[i].timestamp, i))
+        .enumerate()
+        .filter(|(_, s)| s.kind == LaserKind::Front)
+        .map(|(i, s)| (i, s.timestamp, s.scan.ranges.as_slice()))
+        .collect();
+    associate_scans(reference, &front)
+}
+
+/// [`associate`] against any scans: `(index, time, ranges)` each, the time in
+/// the raw log's clock (UNIX seconds for a CARMEN log).
+pub fn associate_scans(
+    reference: &ReferenceLog,
+    scans: &[(usize, f64, &[f64])],
+) -> Result<Association, ReferenceError> {
+    check_times("log", scans.iter().map(|s| s.1))?;
+    let first = scans.first().map_or(0.0, |s| s.1);
+    // Raw scans sorted by time (the raw times are not in file order).
+    let mut by_time: Vec<(f64, usize)> = (0..scans.len())
+        .map(|k| (scans[k].1, k))
         .filter(|(t, _)| t.is_finite())
         .collect();
     by_time.sort_by(|a, b| a.0.total_cmp(&b.0).then(a.1.cmp(&b.1)));
     let mut best: Option<Association> = None;
     for shift in [first, 0.0] {
-        let a = associate_with_shift(reference, log, &by_time, shift);
+        let a = associate_with_shift(reference, scans, &by_time, shift);
         let better = best.as_ref().is_none_or(|b| a.pairs.len() > b.pairs.len());
         if better {
             best = Some(a);
@@ -225,7 +237,7 @@ pub fn associate(reference: &ReferenceLog, log: &LaserLog) -> Result<Association
         Some(a) if !a.pairs.is_empty() => Ok(a),
         _ => Err(ReferenceError::NoMatch {
             reference: reference.scans.len(),
-            log: front.len(),
+            log: scans.len(),
             tolerance: TIME_TOLERANCE,
         }),
     }
@@ -233,7 +245,7 @@ pub fn associate(reference: &ReferenceLog, log: &LaserLog) -> Result<Association
 
 fn associate_with_shift(
     reference: &ReferenceLog,
-    log: &LaserLog,
+    scans: &[(usize, f64, &[f64])],
     by_time: &[(f64, usize)],
     shift: f64,
 ) -> Association {
@@ -254,10 +266,11 @@ fn associate_with_shift(
         }
         let found = near
             .iter()
-            .filter(|(_, i)| same_ranges(&log.scans[*i].scan.ranges, &r.ranges))
+            .filter(|(_, j)| same_ranges(scans[*j].2, &r.ranges))
             .min_by(|a, b| (a.0 - t).abs().total_cmp(&(b.0 - t).abs()));
         match found {
-            Some(&(rt, i)) => {
+            Some(&(rt, j)) => {
+                let i = scans[j].0;
                 let time_error = rt - t;
                 out.max_time_error = out.max_time_error.max(time_error.abs());
                 out.pairs.push(ReferencePair {
@@ -282,7 +295,7 @@ fn same_ranges(a: &[f64], b: &[f64]) -> bool {
 }
 
 #[cfg(test)]
-mod tests {
+pub(crate) mod tests {
     use super::*;
 
     fn line(ranges: &[f64], pose: (f64, f64, f64), time: f64) -> String {
@@ -329,9 +342,9 @@ mod tests {
         assert_eq!(reference.scans[1].pose, Pose2::new(5.5, 1.0, 0.1));
         assert_eq!(reference.scans[0].line, 3);
         let a = associate(&reference, &log).unwrap();
-        let scans: Vec<usize> = a.pairs.iter().map(|p| p.scan).collect();
+        let scans: Vec<(usize, usize)> = a.pairs.iter().map(|p| (p.reference, p.scan)).collect();
         // Scan 3 has scan 2's ranges; time picks 3.
-        assert_eq!(scans, vec![1, 3, 7]);
+        assert_eq!(scans, vec![(0, 1), (1, 3), (2, 7)]);
         assert_eq!(a.time_shift, 1000.0);
         assert!(
             (a.max_time_error - 0.004).abs() < 1e-9,
@@ -463,6 +476,7 @@ mod tests {
         assert!(a.max_time_error < 0.0055, "{}", a.max_time_error);
         // In order, and each a different raw scan.
         assert!(a.pairs.windows(2).all(|w| w[0].scan < w[1].scan));
+        assert!(a.pairs.iter().enumerate().all(|(k, p)| p.reference == k));
         assert_eq!(a.time_shift, log.scans[0].timestamp);
     }
 }
