@@ -62,11 +62,11 @@ fn mapping(input: &Arc<MappingInput>, source: PoseSource) -> Vec<Option<Pose2>> 
 }
 
 fn cartographer(input: &Arc<MappingInput>, loop_closures: bool) -> Vec<Option<Pose2>> {
-    let mut params = CartographerParams::default();
-    if !loop_closures {
-        params.sampling_ratio = 0.0;
-        params.global_search_every_n_nodes = usize::MAX;
-    }
+    let params = if loop_closures {
+        CartographerParams::default()
+    } else {
+        CartographerParams::default().without_loop_closures()
+    };
     let (mut sim, notes) = CartographerSim::new(Arc::clone(input), params);
     assert!(notes.is_empty(), "{notes:?}");
     sim.run_to_end();

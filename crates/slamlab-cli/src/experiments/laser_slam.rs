@@ -79,8 +79,7 @@ pub fn run_source(
         "cartographer" | "cartographer-local" => {
             let mut params = CartographerParams::default();
             if source == "cartographer-local" {
-                params.sampling_ratio = 0.0;
-                params.global_search_every_n_nodes = usize::MAX;
+                params = params.without_loop_closures();
             }
             let (mut sim, _) = CartographerSim::new(Arc::clone(input), params);
             sim.run_to_end();

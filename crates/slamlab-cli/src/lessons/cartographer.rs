@@ -5,6 +5,7 @@
 //! slamlab run cartographer --map maze --steps 600 --kidnap-at 152 --seed 1 --json
 //! slamlab run cartographer --map maze --steps 600 --kidnap-at 152 --detection off
 //! slamlab run cartographer --log intel.clf.bz2 --json
+//! slamlab run cartographer --log intel.clf.bz2 --reference intel-corrected.log.gz --loop-closures off
 //! ```
 
 use crate::command::RunLesson;
@@ -88,17 +89,23 @@ impl RunLesson for Cartographer {
                     .value_parser(["on", "off"])
                     .help("kidnap detection (Algorithm 13): on (default) or off, the original behaviour"),
             )
+            .arg(
+                Arg::new("loop-closures")
+                    .long("loop-closures")
+                    .value_parser(["on", "off"])
+                    .help("loop closures: on (default), or off for local SLAM alone (no branch-and-bound search; the lesson's switch)"),
+            )
             .arg(count("num_range_data", "scans per submap (default 30)"))
             .arg(number("resolution", "submap cell size, metres (default 0.05)"))
             .arg(number("hit_probability", "default 0.55"))
             .arg(number("miss_probability", "default 0.49"))
             .arg(number(
                 "linear_search_window",
-                "loop-closure search half-width, metres (default 7)",
+                "loop-closure search half-width, metres (default 0.6)",
             ))
             .arg(number(
                 "angular_search_window",
-                "loop-closure search half-width, degrees (default 30)",
+                "loop-closure search half-width, degrees (default 5)",
             ))
             .arg(number(
                 "max_constraint_distance",
@@ -106,7 +113,7 @@ impl RunLesson for Cartographer {
             ))
             .arg(number(
                 "sampling_ratio",
-                "share of node-submap pairs searched for loop closures, sampled per submap (default 0.3)",
+                "share of node-submap pairs searched for loop closures, sampled per submap (default 0.1)",
             ))
             .arg(count(
                 "max_closures_per_submap_pair",
@@ -174,6 +181,11 @@ impl RunLesson for Cartographer {
             params.kidnap.filter_size = v;
         }
         params.detection = m.get_one::<String>("detection").is_none_or(|d| d == "on");
+        if m.get_one::<String>("loop-closures")
+            .is_some_and(|v| v == "off")
+        {
+            params = params.without_loop_closures();
+        }
         let steps = n("steps").unwrap_or(600);
         let seed = m.get_one::<u64>("seed").copied().unwrap_or(1);
         let mut kidnap_at = n("kidnap-at");

@@ -205,6 +205,19 @@ impl Default for CartographerParams {
 }
 
 impl CartographerParams {
+    /// The same parameters with loop closures off: no node-submap pair is
+    /// sampled for a search (`sampling_ratio` 0) and no global search runs
+    /// after a kidnap detection, so no branch and bound at all; local SLAM
+    /// alone (the lesson's switch, `--loop-closures off`).
+    #[must_use]
+    pub fn without_loop_closures(self) -> Self {
+        Self {
+            sampling_ratio: 0.0,
+            global_search_every_n_nodes: usize::MAX,
+            ..self
+        }
+    }
+
     /// The parameters made usable (a clamp or a default for each bad value),
     /// with a note for each change.
     pub fn sanitized(mut self) -> (Self, Vec<String>) {

@@ -45,6 +45,9 @@ pub struct CartographerScenario {
     pub kidnap_place: String,
     /// Kidnap detection (Algorithm 13) on or off.
     pub detection: bool,
+    /// Loop closures on, or off: no branch-and-bound search at all, local
+    /// SLAM alone (the open, doubled corridors of a long log).
+    pub loop_closures: bool,
     /// Scans per submap before the next one starts.
     pub num_range_data: usize,
     /// Submap cell size, metres.
@@ -91,6 +94,7 @@ impl Default for CartographerScenario {
             kidnap_to: None,
             kidnap_place: KidnapPlace::Mapped.name().to_owned(),
             detection: p.detection,
+            loop_closures: true,
             num_range_data: p.num_range_data,
             resolution: p.resolution,
             hit_probability: p.hit_probability,
@@ -134,7 +138,11 @@ impl CartographerScenario {
         };
         p.kidnap.threshold = self.t;
         p.kidnap.filter_size = self.f_size;
-        p
+        if self.loop_closures {
+            p
+        } else {
+            p.without_loop_closures()
+        }
     }
 
     /// The simulated input on `map`: `steps` scans with this scenario's seed
@@ -245,6 +253,13 @@ pub static PARAMS: &[Param<CartographerScenario>] = &[
         ON_OFF,
         |s| Some(ON_OFF[usize::from(!s.detection)].to_owned()),
         |s, v| choose(ON_OFF, v).map(|i| s.detection = i == 0),
+    ),
+    Param::words(
+        "loop-closures",
+        "loop closures: on, or off for local SLAM alone (no branch-and-bound search)",
+        ON_OFF,
+        |s| Some(ON_OFF[usize::from(!s.loop_closures)].to_owned()),
+        |s, v| choose(ON_OFF, v).map(|i| s.loop_closures = i == 0),
     ),
     Param::count(
         "num_range_data",
