@@ -192,6 +192,24 @@ fn identity(n: usize) -> metrics::Association {
     }
 }
 
+/// The SE(2) transform that moves `poses` (one per input scan) onto the
+/// reference at the reference scans they cover (Umeyama's method), with the
+/// ATE after it and the scans it rests on; `None` with fewer than two.
+pub fn alignment(
+    reference: &LogReference,
+    poses: &[Option<Pose2>],
+) -> Option<(metrics::Similarity, f64, usize)> {
+    let (est, refs) = paired(reference, poses);
+    let n = est.len();
+    if n < 2 {
+        return None;
+    }
+    let xy = |t: &Trajectory| -> Vec<[f64; 2]> { t.poses().iter().map(|p| [p.x, p.y]).collect() };
+    let similarity = metrics::umeyama(&xy(&est), &xy(&refs), false).ok()?;
+    let errors = metrics::absolute_errors(&refs, &est, &identity(n), &similarity)?;
+    Some((similarity, errors.translation.rmse, n))
+}
+
 /// The ATE (RMS and largest position error after the SE(2) alignment) of
 /// `poses` (one per input scan) at the reference scans they cover; `None`
 /// with fewer than two such scans (nothing fixes the alignment).
@@ -321,7 +339,7 @@ mod tests {
     fn a_trajectory_in_another_frame_scores_zero_and_an_error_is_measured() {
         let (reference, truth) = square();
         // The truth moved by 30° and (3, -2): the alignment takes it back.
-        let moved = Pose2::new(3.0, -2.0, 0.5236);
+        let moved = Pose2::new(3.0, -2.0, std::f64::consts::FRAC_PI_6);
         let poses: Vec<Option<Pose2>> = truth.iter().map(|p| Some(moved.compose(p))).collect();
         let s = score(&reference, &poses).unwrap();
         assert_eq!(s.pairs, 20);
