@@ -246,6 +246,8 @@ pub struct LessonFrame<V> {
     /// The lesson started over on a file the URL named
     /// ([`Lesson::take_restarted_from_link`]).
     pub restarted_from_link: bool,
+    /// A student's own estimates, scored beside the lesson's estimators.
+    pub estimates: crate::widgets::estimates::Estimates,
 }
 
 impl<V: LessonView> LessonFrame<V> {
@@ -261,6 +263,7 @@ impl<V: LessonView> LessonFrame<V> {
             note: None,
             request: None,
             restarted_from_link: false,
+            estimates: crate::widgets::estimates::Estimates::default(),
         }
     }
 
@@ -318,6 +321,12 @@ pub trait Frame {
     fn take_request(&mut self) -> Option<LessonRequest>;
     /// Whether the lesson started over on a linked file, taken.
     fn take_restarted_from_link(&mut self) -> bool;
+    /// The student's estimates.
+    fn estimates(&self) -> &crate::widgets::estimates::Estimates;
+    /// The student's estimates, to add to.
+    fn estimates_mut(&mut self) -> &mut crate::widgets::estimates::Estimates;
+    /// The note under the map, to set.
+    fn note_mut(&mut self) -> &mut Option<String>;
 }
 
 impl<V: LessonView> Frame for LessonFrame<V> {
@@ -353,6 +362,15 @@ impl<V: LessonView> Frame for LessonFrame<V> {
     }
     fn take_restarted_from_link(&mut self) -> bool {
         std::mem::take(&mut self.restarted_from_link)
+    }
+    fn estimates(&self) -> &crate::widgets::estimates::Estimates {
+        &self.estimates
+    }
+    fn estimates_mut(&mut self) -> &mut crate::widgets::estimates::Estimates {
+        &mut self.estimates
+    }
+    fn note_mut(&mut self) -> &mut Option<String> {
+        &mut self.note
     }
 }
 
@@ -507,6 +525,22 @@ pub trait Lesson: crate::widgets::layout::LessonPanels + AsAny + std::fmt::Debug
     /// (`tick=`, `run=`, `zoom=`, …) again, so that the link opens as shared.
     fn take_restarted_from_link(&mut self) -> bool {
         self.frame_mut().take_restarted_from_link()
+    }
+    /// The run's trajectories so far: the truth (where there is one), odometry,
+    /// and each estimator's estimate, for File → Export trajectories and for
+    /// scoring a student's estimate beside them; none for a lesson without poses.
+    fn trajectories(&self) -> Vec<slamlab_sim::metrics::NamedTrajectory> {
+        Vec::new()
+    }
+    /// The time a student's estimate is drawn and scored up to, seconds: the time
+    /// bar's; `None` for a lesson whose trajectories are not in time (a pose
+    /// graph's vertices), drawn whole.
+    fn estimate_clock(&self) -> Option<f64> {
+        Some(self.time_info().time_s)
+    }
+    /// The landmark maps now: the true one (named `truth`) and each estimator's.
+    fn landmark_maps(&self) -> Vec<(String, Vec<slamlab_sim::io::trajectory::LandmarkRow>)> {
+        Vec::new()
     }
     /// Every plot's data, unthinned, for "Export plot data as CSV".
     fn plot_series(&self) -> Vec<crate::export::PlotSeries> {

@@ -764,6 +764,10 @@ impl crate::widgets::layout::LessonPanels for KidnapLesson {
 impl Lesson for KidnapLesson {
     crate::lesson::frame_accessors!();
 
+    fn trajectories(&self) -> Vec<slamlab_sim::metrics::NamedTrajectory> {
+        slamlab_sim::kidnap::export::trajectories(self.sim().run())
+    }
+
     fn share_pairs(&self) -> Vec<(String, String)> {
         let scenario = self.sim().run().scenario();
         let mut pairs = lesson::with_seed(

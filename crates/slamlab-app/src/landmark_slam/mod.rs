@@ -470,6 +470,14 @@ impl crate::widgets::layout::LessonPanels for LandmarkSlamLesson {
 impl Lesson for LandmarkSlamLesson {
     crate::lesson::frame_accessors!();
 
+    fn trajectories(&self) -> Vec<slamlab_sim::metrics::NamedTrajectory> {
+        slamlab_sim::landmark_slam::export::trajectories(&self.session)
+    }
+
+    fn landmark_maps(&self) -> Vec<(String, Vec<slamlab_sim::io::trajectory::LandmarkRow>)> {
+        slamlab_sim::landmark_slam::export::landmarks(&self.session)
+    }
+
     fn changed_params(&self) -> Vec<(String, String)> {
         self.pending_pairs()
     }

@@ -641,6 +641,20 @@ impl crate::widgets::layout::LessonPanels for PoseGraphLesson {
 impl Lesson for PoseGraphLesson {
     crate::lesson::frame_accessors!();
 
+    fn trajectories(&self) -> Vec<slamlab_sim::metrics::NamedTrajectory> {
+        use slamlab_sim::metrics::TrajectoryRole;
+        use slamlab_sim::pose_graph::export::pose_trajectory;
+        vec![pose_trajectory(
+            self.session.graph(),
+            "graph",
+            TrajectoryRole::Estimate,
+        )]
+    }
+
+    fn estimate_clock(&self) -> Option<f64> {
+        None
+    }
+
     fn share_pairs(&self) -> Vec<(String, String)> {
         let scenario = self.session.scenario();
         lesson::with_seed(

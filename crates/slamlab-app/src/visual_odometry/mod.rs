@@ -394,6 +394,14 @@ impl crate::widgets::layout::LessonPanels for VisualOdometryLesson {
 impl Lesson for VisualOdometryLesson {
     crate::lesson::frame_accessors!();
 
+    fn trajectories(&self) -> Vec<slamlab_sim::metrics::NamedTrajectory> {
+        slamlab_sim::visual_odometry::export::trajectories(&self.run)
+    }
+
+    fn estimate_clock(&self) -> Option<f64> {
+        None
+    }
+
     fn plot_series(&self) -> Vec<crate::export::PlotSeries> {
         plots::series(&self.run, self.session.as_ref())
     }

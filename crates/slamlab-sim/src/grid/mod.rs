@@ -1,11 +1,13 @@
 //! The grid world of the lidar lessons (Monte Carlo localization, mapping,
 //! Cartographer): the built-in maps, the simulated lidar, the round robot that
 //! cannot drive through walls, the explorer that tours any map, simulated laser
-//! logs, the scans every mapping run takes as its input, and a log's reference
+//! logs, the scans every mapping run takes as its input (from a simulated
+//! robot, a CARMEN log or a ROS 2 bag: [`laser_file`]), and a log's reference
 //! trajectory (a corrected log) with the score of a trajectory against it.
 
 pub mod builtin;
 pub mod explorer;
+pub mod laser_file;
 pub mod lidar;
 pub mod reference;
 pub mod robot;
@@ -14,6 +16,7 @@ pub mod simulated_log;
 
 pub use builtin::BuiltinMap;
 pub use explorer::Explorer;
+pub use laser_file::{BagTopics, LaserFile, LaserFileError};
 pub use lidar::Lidar;
 pub use reference::{LogReference, TrajectoryScore};
 pub use robot::{GridRobot, OdometrySensor};
