@@ -35,6 +35,7 @@ pub static EXPERIMENTS: &[&dyn Experiment] = &[
     &experiments::fusion::Fusion,
     &experiments::kidnap::Kidnap,
     &experiments::krp::Krp,
+    &experiments::laser_slam::LaserSlam,
     &experiments::pose_graph::PoseGraph,
     &experiments::unscented::Unscented,
     &experiments::two_view::TwoView,

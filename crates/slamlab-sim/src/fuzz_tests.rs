@@ -1,7 +1,7 @@
 //! Fuzz tests of every reader in this crate a user can feed: ROS map YAML, PGM and
 //! PNG images, g2o/TORO/iSAM pose graphs, scenario JSON and CARMEN laser logs (plain,
-//! gzip and bzip2), ROS 2 bags (MCAP) and the ROS 2 messages in them (CDR).
-//! Each runs
+//! gzip and bzip2) with their corrected versions (reference trajectories), ROS 2
+//! bags (MCAP) and the ROS 2 messages in them (CDR). Each runs
 //! [`slamlab_fuzz::inputs_per_reader`] mutated inputs (10,000 in `./test.sh`,
 //! 1,000,000 in `scripts/fuzz.sh`) from real files: the shared data sets
 //! (`../shared/data`, when present) and the built-in maps. See the `slamlab-fuzz`
@@ -717,6 +717,75 @@ fn assignment_files_survive_mutations() {
                 Ok(())
             } else {
                 Err(format!("'{message}' does not name the assignment file"))
+            }
+        },
+    );
+    report.assert_clean();
+}
+
+/// Corrected CARMEN logs (the reference trajectories of laser logs) through
+/// the path the lessons and `slamlab experiment laser-slam` take: read, then
+/// matched to a raw log's scans by time and ranges
+/// ([`crate::grid::reference::LogReference::for_input`]). Seeds: a small
+/// reference of a small raw log (its scans 1, 3 and 7, one of them matching),
+/// the same gzip-compressed, and the head of the Intel log's corrected version.
+#[test]
+fn corrected_logs_survive_mutations() {
+    use crate::grid::log_input;
+    use crate::grid::reference::LogReference;
+    use crate::io::laser_log::LaserLog;
+    use std::io::{Read as _, Write as _};
+    let flaser = |ranges: &[f64], time: f64| -> String {
+        let r: Vec<String> = ranges.iter().map(|v| v.to_string()).collect();
+        format!(
+            "FLASER {} {} 0.5 0.25 0.1 0.5 0.25 0.1 {time} pippo {time}\n",
+            ranges.len(),
+            r.join(" ")
+        )
+    };
+    let mut raw = String::new();
+    for k in 0..10 {
+        let base = k as f64;
+        raw += &flaser(&[base, base + 1.0, base + 2.0], 1000.0 + 0.2 * k as f64);
+    }
+    let input = LaserLog::from_bytes(raw.as_bytes())
+        .map(|log| log_input(&log, "raw"))
+        .unwrap_or_default();
+    let mut reference = String::from("# corrected\nODOM 0 0 0 0 0 0 0.0 pippo 0.0\n");
+    reference += &flaser(&[1.0, 2.0, 3.0], 0.203);
+    reference += &flaser(&[3.0, 4.0, 5.0], 0.598);
+    reference += &flaser(&[7.0, 8.0, 9.0], 1.404);
+    reference += "NEFF 30 0.0 pippo 0.0\n";
+    let mut seeds = vec![reference.clone().into_bytes()];
+    let mut gz = flate2::write::GzEncoder::new(Vec::new(), flate2::Compression::default());
+    if gz.write_all(reference.as_bytes()).is_ok()
+        && let Ok(bytes) = gz.finish()
+    {
+        seeds.push(bytes);
+    }
+    for bytes in shared_file_seeds("laser", &["gz"], usize::MAX) {
+        let mut text = Vec::new();
+        if flate2::read::MultiGzDecoder::new(&bytes[..])
+            .take(64 << 10)
+            .read_to_end(&mut text)
+            .is_ok()
+        {
+            seeds.push(head(&text, 4096));
+        }
+    }
+    let report = Target::new("corrected CARMEN log", seeds, CAP).run_checked(
+        |bytes| {
+            LogReference::for_input(bytes, "fuzz", &input)
+                .map(drop)
+                .map_err(|e| e.to_string())
+        },
+        |message| {
+            if message.contains("reference") || message.contains("log") {
+                Ok(())
+            } else {
+                Err(format!(
+                    "'{message}' does not say what is wrong with the reference"
+                ))
             }
         },
     );

@@ -8,6 +8,7 @@ pub mod fusion;
 pub mod grid_fastslam;
 pub mod kidnap;
 pub mod krp;
+pub mod laser_slam;
 pub mod pose_graph;
 pub mod resampling;
 pub mod two_view;
