@@ -5,6 +5,7 @@
 //! command line decide what to do with it.
 
 pub mod graph;
+pub mod landmark_data;
 pub mod laser_log;
 pub mod ros_map;
 pub mod scenario_file;
