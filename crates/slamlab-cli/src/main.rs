@@ -21,6 +21,7 @@
 //! there.
 
 mod command;
+mod evaluate_cmd;
 mod experiments;
 mod flags;
 mod graph_cmd;
@@ -94,6 +95,7 @@ fn cli() -> Command {
         .subcommand(map::command())
         .subcommand(graph_cmd::command())
         .subcommand(log_cmd::command())
+        .subcommand(evaluate_cmd::command())
         .subcommand(
             Command::new("params")
                 .about("List a lesson's parameters (the URL's and the flags' names) with their units, ranges and defaults")
@@ -146,6 +148,7 @@ fn main() -> std::process::ExitCode {
         Some(("map", m)) => map::run(m),
         Some(("graph", m)) => graph_cmd::run(m),
         Some(("log", m)) => log_cmd::run(m),
+        Some(("evaluate", m)) => evaluate_cmd::run(m, &mut std::io::stdout().lock()),
         Some(("run", m)) => registry::run_lesson(m, &mut std::io::stdout().lock()),
         Some(("experiment", m)) => registry::run_experiment(m, &mut std::io::stdout().lock()),
         Some(("params", m)) => list_params(m),

@@ -414,3 +414,90 @@ NMEA-GGA 1 2 3 100.7 nohost 0.7
     );
     report.assert_clean();
 }
+
+/// Trajectory files (TUM and CSV, with and without covariances) and landmark CSVs,
+/// through the readers a dropped estimate and `slamlab evaluate` use: every
+/// refusal names a line or says what the file is instead.
+#[test]
+fn trajectory_files_survive_mutations() {
+    use crate::io::trajectory::{
+        LandmarkRow, read_landmarks, read_trajectory, write_csv, write_landmarks, write_tum,
+    };
+    use crate::metrics::Trajectory;
+    use nalgebra::{Matrix2, Matrix3};
+    let stamps: Vec<f64> = (0..12).map(|k| 0.1 * f64::from(k)).collect();
+    let poses: Vec<Pose2> = (0..12)
+        .map(|k| {
+            let t = f64::from(k);
+            Pose2::new(0.5 * t, 0.1 * t * t, 0.05 * t - 0.3)
+        })
+        .collect();
+    let plain = Trajectory::new(stamps, poses);
+    let with_cov = plain.clone().with_covariances(
+        (0..12)
+            .map(|k| {
+                Matrix3::new(
+                    0.01,
+                    1e-4,
+                    0.0,
+                    1e-4,
+                    0.02,
+                    0.0,
+                    0.0,
+                    0.0,
+                    1e-3 * f64::from(k + 1),
+                )
+            })
+            .collect(),
+    );
+    let landmarks = write_landmarks(&[
+        LandmarkRow {
+            id: 1,
+            x: 2.0,
+            y: -1.5,
+            covariance: Some(Matrix2::new(0.1, 0.0, 0.0, 0.2)),
+        },
+        LandmarkRow {
+            id: 4,
+            x: 0.25,
+            y: 3.0,
+            covariance: Some(Matrix2::new(0.3, 0.01, 0.01, 0.1)),
+        },
+    ]);
+    let seeds: Vec<Vec<u8>> = vec![
+        write_tum(&plain).into_bytes(),
+        write_csv(&plain).into_bytes(),
+        write_csv(&with_cov).into_bytes(),
+        b"yaw,time,y,x\n0.5,0,2,1\n0.6,0.1,2.1,1.1\n".to_vec(),
+        b"# t x y z qx qy qz qw\n1.0 2 3 0.5 0.1 0.2 0.3 0.9\n1.1 2 3 0.5 0.1 0.2 0.3 0.9\n"
+            .to_vec(),
+    ];
+    let line_or_what = |message: &str| {
+        if message.starts_with("line ") || message.contains("file") {
+            Ok(())
+        } else {
+            Err(format!(
+                "'{message}' names neither a line nor what the file is"
+            ))
+        }
+    };
+    let report = Target::new("trajectory file (TUM or CSV)", seeds, CAP).run_checked(
+        |bytes| {
+            read_trajectory("fuzz", bytes)
+                .map(drop)
+                .map_err(|e| e.to_string())
+        },
+        line_or_what,
+    );
+    report.assert_clean();
+    let seeds = vec![
+        landmarks.into_bytes(),
+        b"1,2,3\n2,4,5\n".to_vec(),
+        b"id,x,y\n7,1e3,-2\n".to_vec(),
+    ];
+    let report = Target::new("landmark CSV", seeds, CAP).run_checked(
+        |bytes| read_landmarks(bytes).map(drop).map_err(|e| e.to_string()),
+        line_or_what,
+    );
+    report.assert_clean();
+}

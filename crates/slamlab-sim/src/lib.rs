@@ -28,6 +28,7 @@ pub mod io;
 pub mod kidnap;
 pub mod landmark_slam;
 pub mod mapping;
+pub mod metrics;
 pub mod noise;
 pub mod params;
 pub mod pose_graph;

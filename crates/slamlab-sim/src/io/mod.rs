@@ -9,3 +9,4 @@ pub mod landmark_data;
 pub mod laser_log;
 pub mod ros_map;
 pub mod scenario_file;
+pub mod trajectory;

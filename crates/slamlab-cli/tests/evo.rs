@@ -1,0 +1,353 @@
+//! `slamlab evaluate` against evo itself: the same TUM files through `evo_ape` and
+//! `evo_rpe` (PyPI's evo, installed in a throwaway virtual environment) and
+//! through SLAM Lab give the same statistics to 1e-6 relative, with and without
+//! alignment, with a scale error, with missing and jittered times, and with an
+//! estimate at another rate than its reference.
+//!
+//! Skipped with a message when the virtual environment cannot be made (no
+//! network, no `python3 -m venv`). `SLAMLAB_EVO_PYTHON=/path/to/python` uses a
+//! Python that already has evo.
+#![allow(clippy::panic, clippy::unwrap_used, clippy::expect_used)] // a failing test stops
+
+use slamlab_core::{Pose2, math};
+use slamlab_sim::io::trajectory::write_tum;
+use slamlab_sim::metrics::{Similarity, Trajectory};
+use std::path::{Path, PathBuf};
+use std::process::Command;
+
+/// The evo release the numbers were checked against.
+const EVO: &str = "evo==1.38.1";
+
+/// Runs one `evo_ape`/`evo_rpe` command line and prints its statistics as JSON.
+const EVO_STATS: &str = r#"
+import json, subprocess, sys, tempfile, zipfile, os
+out = os.path.join(tempfile.mkdtemp(), "r.zip")
+cmd = sys.argv[1:] + ["--save_results", out, "--no_warnings"]
+subprocess.run(cmd, check=True, stdout=subprocess.DEVNULL)
+with zipfile.ZipFile(out) as z:
+    print(json.dumps(json.loads(z.read("stats.json"))))
+"#;
+
+struct Evo {
+    python: PathBuf,
+    bin: PathBuf,
+    script: PathBuf,
+}
+
+/// A Python with evo: `$SLAMLAB_EVO_PYTHON`, or a new virtual environment.
+fn evo(dir: &Path) -> Option<Evo> {
+    let script = dir.join("evo_stats.py");
+    std::fs::write(&script, EVO_STATS).ok()?;
+    if let Some(python) = std::env::var_os("SLAMLAB_EVO_PYTHON") {
+        let python = PathBuf::from(python);
+        let bin = python.parent()?.to_path_buf();
+        return Some(Evo {
+            python,
+            bin,
+            script,
+        });
+    }
+    let venv = dir.join("venv");
+    let made = Command::new("python3")
+        .args(["-m", "venv"])
+        .arg(&venv)
+        .status()
+        .is_ok_and(|s| s.success());
+    if !made {
+        eprintln!("skipped: `python3 -m venv` failed, so evo cannot be installed");
+        return None;
+    }
+    let bin = venv.join("bin");
+    let installed = Command::new(bin.join("pip"))
+        .args(["install", "-q", "--disable-pip-version-check", EVO])
+        .status()
+        .is_ok_and(|s| s.success());
+    if !installed {
+        eprintln!(
+            "skipped: `pip install {EVO}` failed (no network?), so there is no evo to compare with"
+        );
+        return None;
+    }
+    Some(Evo {
+        python: bin.join("python"),
+        bin,
+        script,
+    })
+}
+
+impl Evo {
+    /// `evo_ape`/`evo_rpe` with `args`, its statistics.
+    fn stats(&self, tool: &str, args: &[&str]) -> serde_json::Value {
+        let output = Command::new(&self.python)
+            .arg(&self.script)
+            .arg(self.bin.join(tool))
+            .args(args)
+            .output()
+            .unwrap();
+        assert!(
+            output.status.success(),
+            "{tool} {args:?}: {}",
+            String::from_utf8_lossy(&output.stderr)
+        );
+        serde_json::from_slice(&output.stdout).unwrap()
+    }
+}
+
+/// `slamlab evaluate --json` with `args`.
+fn slamlab(args: &[&str]) -> serde_json::Value {
+    let output = Command::new(env!("CARGO_BIN_EXE_slamlab"))
+        .arg("evaluate")
+        .args(args)
+        .arg("--json")
+        .output()
+        .unwrap();
+    assert!(
+        output.status.success(),
+        "slamlab evaluate {args:?}: {}",
+        String::from_utf8_lossy(&output.stderr)
+    );
+    serde_json::from_slice(&output.stdout).unwrap()
+}
+
+fn close(a: f64, b: f64) -> bool {
+    (a - b).abs() <= 1e-6 * a.abs().max(b.abs()) + 1e-12
+}
+
+/// The statistics evo and SLAM Lab share agree to 1e-6 relative.
+fn assert_same(what: &str, evo: &serde_json::Value, ours: &serde_json::Value) {
+    for key in ["rmse", "mean", "median", "std", "min", "max", "sse"] {
+        let (a, b) = (evo[key].as_f64().unwrap(), ours[key].as_f64().unwrap());
+        assert!(
+            close(a, b),
+            "{what}: {key} is {b} in SLAM Lab and {a} in evo"
+        );
+    }
+}
+
+/// A reference drive (curves, a loop) sampled at `rate` Hz for `seconds`.
+fn reference(rate: f64, seconds: f64) -> Trajectory {
+    let n = (rate * seconds) as usize;
+    let stamps: Vec<f64> = (0..n).map(|k| 1_000.0 + k as f64 / rate).collect();
+    let poses = (0..n)
+        .map(|k| {
+            let t = k as f64 / rate;
+            let (x, y) = (
+                6.0 * math::sin(0.11 * t),
+                4.0 * math::sin(0.17 * t) + 0.02 * t,
+            );
+            let (dx, dy) = (
+                0.66 * math::cos(0.11 * t),
+                0.68 * math::cos(0.17 * t) + 0.02,
+            );
+            Pose2::new(x, y, math::atan2(dy, dx))
+        })
+        .collect();
+    Trajectory::new(stamps, poses)
+}
+
+/// `truth` seen by an estimator in its own frame: moved by `frame`, with a slow
+/// drift and a wobble, at the truth's times.
+fn estimate_of(truth: &Trajectory, frame: Similarity, seed: f64) -> Trajectory {
+    let poses = truth
+        .poses()
+        .iter()
+        .enumerate()
+        .map(|(k, p)| {
+            let t = k as f64;
+            let wobble = 0.04 * math::sin(seed * t) + 0.01 * math::cos(3.1 * t);
+            let drift = 0.0004 * t;
+            frame.apply(&Pose2::new(
+                p.x + wobble + drift,
+                p.y - 0.7 * wobble,
+                p.theta + 0.02 * math::sin(0.7 * t + seed) + 0.0002 * t,
+            ))
+        })
+        .collect();
+    Trajectory::new(truth.stamps().to_vec(), poses)
+}
+
+fn write(dir: &Path, name: &str, t: &Trajectory) -> String {
+    let path = dir.join(name);
+    std::fs::write(&path, write_tum(t)).unwrap();
+    path.display().to_string()
+}
+
+#[test]
+fn slamlab_evaluate_equals_evo() {
+    let dir = std::env::temp_dir().join(format!("slamlab-evo-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let Some(evo) = evo(&dir) else {
+        let _ = std::fs::remove_dir_all(&dir);
+        return;
+    };
+    let frame = Similarity {
+        rotation: 0.9,
+        translation: [3.0, -2.0],
+        scale: 1.0,
+    };
+    let truth = reference(10.0, 120.0);
+    let reference_file = write(&dir, "reference.txt", &truth);
+
+    // 1. An estimate in its own frame, at the reference's times.
+    let plain = write(&dir, "plain.txt", &estimate_of(&truth, frame, 0.3));
+
+    // 2. The same with its own scale (a monocular estimate).
+    let scaled_frame = Similarity {
+        scale: 0.55,
+        ..frame
+    };
+    let scaled = write(&dir, "scaled.txt", &estimate_of(&truth, scaled_frame, 0.5));
+
+    // 3. Missing and jittered times: every 7th pose dropped, the rest up to ±6 ms off.
+    let base = estimate_of(&truth, frame, 0.7);
+    let (mut stamps, mut poses) = (Vec::new(), Vec::new());
+    for (k, (t, p)) in base.stamps().iter().zip(base.poses()).enumerate() {
+        if k % 7 == 3 {
+            continue;
+        }
+        stamps.push(t + 0.006 * math::sin(1.7 * k as f64));
+        poses.push(*p);
+    }
+    let jittered = write(&dir, "jittered.txt", &Trajectory::new(stamps, poses));
+
+    // 4. An estimate at 30 Hz against the 10 Hz reference (evo then pairs the
+    //    reference's poses with the estimate's), offset by 20 ms.
+    let fast_truth = reference(30.0, 120.0);
+    let fast = estimate_of(&fast_truth, frame, 0.9);
+    let fast = Trajectory::new(
+        fast.stamps().iter().map(|t| t - 0.02).collect(),
+        fast.poses().to_vec(),
+    );
+    let fast = write(&dir, "fast.txt", &fast);
+
+    struct Case<'a> {
+        what: &'a str,
+        estimate: &'a str,
+        evo: Vec<&'a str>,
+        ours: Vec<&'a str>,
+        /// The key of our JSON: ape or rpe, translation or rotation.
+        metric: (&'a str, &'a str),
+    }
+    let cases = [
+        Case {
+            what: "APE, SE(2)",
+            estimate: &plain,
+            evo: vec!["evo_ape", "-a"],
+            ours: vec!["--align", "se2"],
+            metric: ("ape", "translation"),
+        },
+        Case {
+            what: "APE, not aligned",
+            estimate: &plain,
+            evo: vec!["evo_ape"],
+            ours: vec!["--align", "none"],
+            metric: ("ape", "translation"),
+        },
+        Case {
+            what: "APE rotation, SE(2)",
+            estimate: &plain,
+            evo: vec!["evo_ape", "-a", "-r", "angle_deg"],
+            ours: vec!["--align", "se2"],
+            metric: ("ape", "rotation"),
+        },
+        Case {
+            what: "RPE, 1 frame",
+            estimate: &plain,
+            evo: vec!["evo_rpe", "-a"],
+            ours: vec!["--align", "se2"],
+            metric: ("rpe", "translation"),
+        },
+        Case {
+            what: "RPE rotation, 10 frames",
+            estimate: &plain,
+            evo: vec!["evo_rpe", "-a", "-r", "angle_deg", "--delta", "10"],
+            ours: vec!["--delta", "10"],
+            metric: ("rpe", "rotation"),
+        },
+        Case {
+            what: "RPE, 2 m",
+            estimate: &plain,
+            evo: vec!["evo_rpe", "-a", "--delta", "2", "--delta_unit", "m"],
+            ours: vec!["--delta", "2", "--delta-unit", "m"],
+            metric: ("rpe", "translation"),
+        },
+        Case {
+            what: "RPE, all pairs 5 frames",
+            estimate: &plain,
+            evo: vec!["evo_rpe", "-a", "--delta", "5", "--all_pairs"],
+            ours: vec!["--delta", "5", "--all-pairs"],
+            metric: ("rpe", "translation"),
+        },
+        Case {
+            what: "APE, Sim(2)",
+            estimate: &scaled,
+            evo: vec!["evo_ape", "-a", "-s"],
+            ours: vec!["--align", "sim2"],
+            metric: ("ape", "translation"),
+        },
+        Case {
+            what: "APE, SE(2) with a scale error",
+            estimate: &scaled,
+            evo: vec!["evo_ape", "-a"],
+            ours: vec!["--align", "se2"],
+            metric: ("ape", "translation"),
+        },
+        Case {
+            what: "RPE, Sim(2), 3 m",
+            estimate: &scaled,
+            evo: vec!["evo_rpe", "-a", "-s", "--delta", "3", "--delta_unit", "m"],
+            ours: vec!["--align", "sim2", "--delta", "3", "--delta-unit", "m"],
+            metric: ("rpe", "translation"),
+        },
+        Case {
+            what: "APE, jittered times",
+            estimate: &jittered,
+            evo: vec!["evo_ape", "-a", "--t_max_diff", "0.01"],
+            ours: vec!["--max-diff", "0.01"],
+            metric: ("ape", "translation"),
+        },
+        Case {
+            what: "APE, jittered times, 5 ms",
+            estimate: &jittered,
+            evo: vec!["evo_ape", "-a", "--t_max_diff", "0.005"],
+            ours: vec!["--max-diff", "0.005"],
+            metric: ("ape", "translation"),
+        },
+        Case {
+            what: "RPE, jittered times",
+            estimate: &jittered,
+            evo: vec!["evo_rpe", "-a", "-r", "angle_deg"],
+            ours: vec![],
+            metric: ("rpe", "rotation"),
+        },
+        Case {
+            what: "APE, 30 Hz against 10 Hz, offset",
+            estimate: &fast,
+            evo: vec![
+                "evo_ape",
+                "-a",
+                "--t_offset",
+                "0.02",
+                "--t_max_diff",
+                "0.004",
+            ],
+            ours: vec!["--offset", "0.02", "--max-diff", "0.004"],
+            metric: ("ape", "translation"),
+        },
+    ];
+    for case in &cases {
+        let mut evo_args: Vec<&str> = vec![case.evo[0], "tum", &reference_file, case.estimate];
+        evo_args.extend(&case.evo[1..]);
+        let theirs = evo.stats(evo_args[0], &evo_args[1..]);
+        let mut ours_args = vec!["--estimate", case.estimate, "--reference", &reference_file];
+        ours_args.extend(&case.ours);
+        let ours = slamlab(&ours_args);
+        let (metric, part) = case.metric;
+        assert_same(case.what, &theirs, &ours[metric][part]);
+        eprintln!(
+            "{}: rmse {} (evo) and {} (SLAM Lab), {} pairs",
+            case.what, theirs["rmse"], ours[metric][part]["rmse"], ours["pairing"]["pairs"]
+        );
+    }
+    let _ = std::fs::remove_dir_all(&dir);
+}
