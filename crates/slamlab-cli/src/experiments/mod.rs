@@ -9,6 +9,7 @@ pub mod grid_fastslam;
 pub mod kidnap;
 pub mod krp;
 pub mod pose_graph;
+pub mod real_data;
 pub mod resampling;
 pub mod two_view;
 pub mod unscented;

@@ -296,9 +296,16 @@ pub static PARAMS: &[Param<LandmarkScenario>] = &[
     field!(
         "new-landmark-threshold",
         "",
-        "FastSLAM starts a new landmark beyond this squared Mahalanobis distance (unknown association)",
+        "a new landmark starts beyond this squared Mahalanobis distance (unknown association); EKF/UKF drop a measurement between the gate and it as ambiguous",
         (0.1, 100.0),
         fastslam.new_landmark_threshold
+    ),
+    field!(
+        "outlier-gate",
+        "",
+        "EKF/UKF refuse a known landmark's measurement beyond this squared Mahalanobis distance (chi-square, 2 dof; 13.8 = 99.9 %); 0 is off",
+        (0.0, 1000.0),
+        outlier_gate
     ),
     Param::words(
         "mode",

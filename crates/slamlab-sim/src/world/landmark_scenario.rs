@@ -138,7 +138,9 @@ pub struct FastSlamSettings {
     /// at nearly every step, 0 never).
     pub resample_threshold: f64,
     /// The squared Mahalanobis distance beyond which a particle starts a new
-    /// landmark (unknown association).
+    /// landmark (unknown association). The Gaussian filters start one beyond the
+    /// larger of it and their gate, and drop a measurement between the two as
+    /// ambiguous.
     pub new_landmark_threshold: f64,
 }
 
@@ -226,6 +228,10 @@ pub struct LandmarkScenario {
     /// The Mahalanobis gate (χ², 2 degrees of freedom) of the Gaussian filters'
     /// nearest-neighbour association.
     pub gate: f64,
+    /// The outlier gate of the Gaussian filters with known ids: a measurement
+    /// whose squared Mahalanobis distance from its landmark exceeds it (χ², 2
+    /// degrees of freedom) is refused (a misread barcode). 0 switches it off.
+    pub outlier_gate: f64,
     /// SLAM, or localization with the true landmarks given as the map.
     pub mode: MapMode,
     /// The robot of a recorded MRCLAM data set whose files are replayed (1 to 5
@@ -263,6 +269,7 @@ impl Default for LandmarkScenario {
             fastslam: FastSlamSettings::default(),
             association: Association::Known,
             gate: DEFAULT_GATE,
+            outlier_gate: 0.0,
             mode: MapMode::Slam,
             robot: 1,
             // The Freiburg course's FastSLAM exercise: noise = [0.005, 0.01, 0.005].

@@ -32,11 +32,12 @@ pub(crate) mod sim;
 mod tests;
 
 pub use records::{
-    FilterRecords, LandmarkRecords, NeffSample, NisSample, RecordLengths, TickMetrics, tick_metrics,
+    FilterRecords, LandmarkRecords, NeffSample, NisSample, RecordLengths, TickMetrics,
+    nearest_landmark_rmse, tick_metrics,
 };
 pub use sim::{
     FilterState, LandmarkEvent, LandmarkSim, LandmarkSlamDebug, Mislabel, Observation,
-    OtherSighting, Phase, Replay, TickMotion, fastslam_config,
+    OtherSighting, Phase, Rejection, Replay, TickMotion, fastslam_config,
 };
 
 use crate::stepper::Stepper;
@@ -65,6 +66,12 @@ pub struct FilterRun<'a> {
     pub last_update: Option<UpdateReport>,
     /// The latest error, if the latest phase failed (the state is then unchanged).
     pub last_error: Option<String>,
+    /// Measurements the outlier gate refused so far.
+    pub rejected: u64,
+    /// The latest measurement the outlier gate refused.
+    pub last_rejection: Option<Rejection>,
+    /// Measurements dropped as ambiguous (between the gate and the new-landmark threshold).
+    pub ambiguous: u64,
 }
 
 impl<'a> FilterRun<'a> {
@@ -254,6 +261,9 @@ impl LandmarkSession {
                 last_predict: state.last_predict,
                 last_update: state.last_update,
                 last_error: state.last_error.clone(),
+                rejected: state.rejected,
+                last_rejection: state.last_rejection,
+                ambiguous: state.ambiguous,
             })
             .collect()
     }

@@ -145,10 +145,7 @@ impl Records for LandmarkRecords {
 
 /// Landmark RMS error when the estimator labels its landmarks itself: each
 /// estimate against the nearest true landmark.
-pub(crate) fn nearest_landmark_rmse(
-    world: &LandmarkWorld,
-    filter: &dyn LandmarkSlam,
-) -> Option<f64> {
+pub fn nearest_landmark_rmse(world: &LandmarkWorld, filter: &dyn LandmarkSlam) -> Option<f64> {
     let squared: Vec<f64> = filter
         .landmarks()
         .iter()

@@ -31,7 +31,8 @@ use crate::world::recorded::{RecordedWorld, Sighting, StepMotion};
 use nalgebra::{Matrix2, Vector2};
 use rand_chacha::ChaCha8Rng;
 use slamlab_core::association::{
-    AssociationMode, GaussianMap, NearestNeighbour, nearest_neighbour,
+    AssociationMode, GaussianLandmark, GaussianMap, NearestNeighbour, landmark_distance,
+    nearest_neighbour,
 };
 use slamlab_core::kalman::{
     EkfSlam, LandmarkSlam, Linearization, PredictReport, UkfSlam, UpdateReport,
@@ -190,6 +191,24 @@ pub struct FilterState {
     pub last_update: Option<UpdateReport>,
     /// The latest error, if the latest phase failed (the state is then unchanged).
     pub last_error: Option<String>,
+    /// Measurements the outlier gate refused so far.
+    pub rejected: u64,
+    /// The latest measurement the outlier gate refused.
+    pub last_rejection: Option<Rejection>,
+    /// Measurements dropped as ambiguous (unknown association, between the gate
+    /// and the new-landmark threshold).
+    pub ambiguous: u64,
+}
+
+/// A measurement of a known landmark that the outlier gate refused.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Rejection {
+    /// The tick.
+    pub tick: u64,
+    /// The landmark the measurement claimed.
+    pub id: usize,
+    /// Its squared Mahalanobis distance `νᵀ S⁻¹ ν`, beyond the gate.
+    pub mahalanobis_squared: f64,
 }
 
 impl Clone for FilterState {
@@ -202,6 +221,9 @@ impl Clone for FilterState {
             last_predict: self.last_predict,
             last_update: self.last_update,
             last_error: self.last_error.clone(),
+            rejected: self.rejected,
+            last_rejection: self.last_rejection,
+            ambiguous: self.ambiguous,
         }
     }
 }
@@ -343,7 +365,8 @@ impl LandmarkSim {
 
     /// The run of a recorded world: its steps instead of the simulated robot and
     /// sensor, from its start pose. The scenario gives the estimators and the
-    /// noise they assume; a world whose data names no landmarks (Victoria Park)
+    /// noise they assume, and its `max-range` the reach beyond which recorded
+    /// measurements are not used; a world whose data names no landmarks (Victoria Park)
     /// runs with unknown association whatever the scenario says, and the ideal
     /// EKF (which needs the true state) does not run.
     pub fn start_recorded(
@@ -550,6 +573,11 @@ impl LandmarkSim {
             return;
         };
         self.tick += 1;
+        if let Some((fov, max_range)) = self.next_reach.take() {
+            self.sensor.fov = fov;
+            self.sensor.max_range = max_range;
+        }
+        let max_range = self.sensor.max_range;
         let noise = self.scenario.recorded_noise();
         let step = replay.world.steps.get(replay.next).cloned();
         replay.next += 1;
@@ -602,6 +630,11 @@ impl LandmarkSim {
         };
         let mut unlabelled = 0;
         for o in &step.observations {
+            // Beyond the sensor's reach (the scenario's max-range) a recorded
+            // measurement is not used.
+            if o.measurement.range > max_range {
+                continue;
+            }
             let id = match o.sighting {
                 Sighting::Landmark(id) => id,
                 Sighting::Unlabelled => {
@@ -702,6 +735,10 @@ impl LandmarkSim {
                     let z = self.observations[index - 1].measurement;
                     // Without the sensor's ids a Gaussian filter picks the nearest
                     // neighbour inside the gate, or starts a landmark of its own.
+                    // Between the gate and the new-landmark threshold (when that is
+                    // the larger) a measurement is too far to match and too near to
+                    // be another landmark: it is dropped as ambiguous (the two gates
+                    // of Bailey's EKF-SLAM toolbox).
                     let gaussian = run.filter.gaussian();
                     let id = if unknown && let Some(g) = gaussian {
                         let decision = GaussianMap::from_joint(
@@ -714,6 +751,14 @@ impl LandmarkSim {
                         });
                         match decision {
                             Some(NearestNeighbour::Matched { id, .. }) => id,
+                            Some(NearestNeighbour::New {
+                                nearest: Some((_, d2)),
+                            }) if d2 <= self.scenario.fastslam.new_landmark_threshold => {
+                                run.ambiguous += 1;
+                                run.last_update = None;
+                                run.last_error = None;
+                                continue;
+                            }
                             _ => {
                                 run.next_label += 1;
                                 run.next_label - 1
@@ -722,6 +767,30 @@ impl LandmarkSim {
                     } else {
                         id
                     };
+                    // The outlier gate: a known id whose measurement lies beyond the
+                    // gate (a misread barcode) is refused before it can pull the state.
+                    if !unknown
+                        && self.scenario.outlier_gate > 0.0
+                        && let Some(g) = gaussian
+                        && let Some(d2) = known_distance(
+                            g,
+                            run.filter.landmark_ids(),
+                            id,
+                            &z,
+                            &measurement_covariance,
+                        )
+                        && d2 > self.scenario.outlier_gate
+                    {
+                        run.rejected += 1;
+                        run.last_rejection = Some(Rejection {
+                            tick: self.tick,
+                            id,
+                            mahalanobis_squared: d2,
+                        });
+                        run.last_update = None;
+                        run.last_error = None;
+                        continue;
+                    }
                     run.filter.update(id, &z).map(|r| {
                         if let UpdateReport::Corrected { nis, .. } = r {
                             rec.nis.push(NisSample {
@@ -792,9 +861,9 @@ impl Simulation for LandmarkSim {
     }
 
     fn apply_event(&mut self, event: &LandmarkEvent) {
-        // A recorded world has no one to drive, no simulated sensor to reach
-        // farther and no sensor to mislabel.
-        if self.replay.is_some() {
+        // A recorded world has no one to drive and no sensor to mislabel; its
+        // sensor's reach decides which recorded measurements the filters get.
+        if self.replay.is_some() && !matches!(event, LandmarkEvent::SensorReach { .. }) {
             return;
         }
         match *event {
@@ -849,6 +918,37 @@ impl Simulation for LandmarkSim {
     }
 }
 
+/// The squared Mahalanobis distance of `z` from landmark `id` of a joint
+/// Gaussian ([`landmark_distance`]); `None` when `id` is not in it yet.
+fn known_distance(
+    g: &dyn slamlab_core::belief::JointGaussian,
+    ids: &[usize],
+    id: usize,
+    z: &RangeBearing,
+    noise: &nalgebra::Matrix2<f64>,
+) -> Option<f64> {
+    let slot = ids.iter().position(|&i| i == id)?;
+    let (mean, covariance) = (g.mean(), g.covariance());
+    let j = 3 + 2 * slot;
+    if mean.len() < j + 2 || covariance.nrows() < j + 2 {
+        return None;
+    }
+    let landmark = GaussianLandmark {
+        id,
+        mean: Vector2::new(mean[j], mean[j + 1]),
+        covariance: covariance.fixed_view::<2, 2>(j, j).into_owned(),
+        cross_covariance: covariance.fixed_view::<3, 2>(0, j).into_owned(),
+    };
+    let robot = Pose2::new(mean[0], mean[1], mean[2]);
+    landmark_distance(
+        &robot,
+        &covariance.fixed_view::<3, 3>(0, 0).into_owned(),
+        &landmark,
+        z,
+        noise,
+    )
+}
+
 /// Every estimator of `scenario`, starting at `start` with the landmarks of
 /// `map` (id, position, covariance) given; one that cannot start is left out
 /// with a notice saying why.
@@ -900,6 +1000,9 @@ fn build_filters(
                 last_predict: None,
                 last_update: None,
                 last_error: None,
+                rejected: 0,
+                last_rejection: None,
+                ambiguous: 0,
             }),
             Err(e) => notices.push(format!(
                 "{} could not start: {e}; change the parameter and reset",
