@@ -508,7 +508,9 @@ fn trajectory_files_survive_mutations() {
 fn landmark_files() -> Vec<io::landmark_data::DataFile> {
     use io::landmark_data::{DataFile, unzip};
     let Some(root) = slamlab_fuzz::shared_data() else {
-        eprintln!("slamlab-fuzz: ../shared/data is absent; fuzzing the landmark data sets with the built-in seeds only");
+        eprintln!(
+            "slamlab-fuzz: ../shared/data is absent; fuzzing the landmark data sets with the built-in seeds only"
+        );
         return Vec::new();
     };
     let dir = root.join("landmarks");
@@ -539,19 +541,43 @@ fn landmark_files() -> Vec<io::landmark_data::DataFile> {
 
 /// A small data set of each kind, written by hand, as `(name, text)`.
 const SMALL_MRCLAM: [(&str, &str); 5] = [
-    ("Barcodes.dat", "# 4 comment lines\n#\n#\n#\n  1 \t  5 \n  6 \t 63 \n  7 \t 81 \n"),
-    ("Landmark_Groundtruth.dat", "  6 \t 1.0 \t 2.0 \t 0.0001 \t 0.0002 \n  7 \t -1.0 \t 3.0 \t 0.0001 \t 0.0001 \n"),
-    ("Robot1_Odometry.dat", "100.00 \t 0.1 \t 0.0 \n100.01 \t 0.1 \t 0.05 \n100.02 \t 0.0 \t 0.0 \n"),
-    ("Robot1_Measurement.dat", "100.005 \t 63 \t 2.2 \t 1.1 \n100.005 \t 81 \t 3.2 \t 1.9 \n100.015 \t 43 \t 1.0 \t 0.0 \n"),
-    ("Robot1_Groundtruth.dat", "99.99 \t 0.0 \t 0.0 \t 0.0 \n100.02 \t 0.002 \t 0.0 \t 0.001 \n"),
+    (
+        "Barcodes.dat",
+        "# 4 comment lines\n#\n#\n#\n  1 \t  5 \n  6 \t 63 \n  7 \t 81 \n",
+    ),
+    (
+        "Landmark_Groundtruth.dat",
+        "  6 \t 1.0 \t 2.0 \t 0.0001 \t 0.0002 \n  7 \t -1.0 \t 3.0 \t 0.0001 \t 0.0001 \n",
+    ),
+    (
+        "Robot1_Odometry.dat",
+        "100.00 \t 0.1 \t 0.0 \n100.01 \t 0.1 \t 0.05 \n100.02 \t 0.0 \t 0.0 \n",
+    ),
+    (
+        "Robot1_Measurement.dat",
+        "100.005 \t 63 \t 2.2 \t 1.1 \n100.005 \t 81 \t 3.2 \t 1.9 \n100.015 \t 43 \t 1.0 \t 0.0 \n",
+    ),
+    (
+        "Robot1_Groundtruth.dat",
+        "99.99 \t 0.0 \t 0.0 \t 0.0 \n100.02 \t 0.002 \t 0.0 \t 0.001 \n",
+    ),
 ];
 const SMALL_FREIBURG: [(&str, &str); 2] = [
     ("world.dat", "1 2 1\n2 0 4\n"),
-    ("sensor_data.dat", "ODOMETRY 0.1 0.1 0.0\nSENSOR 1 1.9 0.37\nSENSOR 2 -0.035 3.15\nODOMETRY 0.1 0.1 -0.0002\n"),
+    (
+        "sensor_data.dat",
+        "ODOMETRY 0.1 0.1 0.0\nSENSOR 1 1.9 0.37\nSENSOR 2 -0.035 3.15\nODOMETRY 0.1 0.1 -0.0002\n",
+    ),
 ];
 const SMALL_VICTORIA_PARK: [(&str, &str); 3] = [
-    ("inputs.dat", "     0.973      0.000    -0.0035\n     0.998      1.500    -0.0042\n"),
-    ("measurements.dat", "     0.852   20.46202    0.88575    0.35404\n     0.852   29.59859    1.02102    0.25717\n     1.052    9.5    3.1    0.2\n"),
+    (
+        "inputs.dat",
+        "     0.973      0.000    -0.0035\n     0.998      1.500    -0.0042\n",
+    ),
+    (
+        "measurements.dat",
+        "     0.852   20.46202    0.88575    0.35404\n     0.852   29.59859    1.02102    0.25717\n     1.052    9.5    3.1    0.2\n",
+    ),
     ("gps.dat", "     0.000     -2.023     -1.923\n"),
 ];
 
@@ -579,7 +605,11 @@ fn fuzz_landmark_set(name: &str, small: &[(&str, &str)]) {
                 let files: Vec<DataFile> = small
                     .iter()
                     .map(|(n, t)| {
-                        let content = if n == role { bytes.to_vec() } else { t.as_bytes().to_vec() };
+                        let content = if n == role {
+                            bytes.to_vec()
+                        } else {
+                            t.as_bytes().to_vec()
+                        };
                         DataFile::new(*n, content)
                     })
                     .collect();
@@ -653,7 +683,9 @@ fn mrclam_zips_survive_mutations() {
         let mut writer = zip::ZipWriter::new(std::io::Cursor::new(Vec::new()));
         let options = zip::write::SimpleFileOptions::default().compression_method(method);
         for (name, bytes) in files {
-            if writer.start_file(format!("MRCLAM_Dataset6/{name}"), options).is_err()
+            if writer
+                .start_file(format!("MRCLAM_Dataset6/{name}"), options)
+                .is_err()
                 || writer.write_all(bytes).is_err()
             {
                 return Vec::new();
@@ -667,7 +699,10 @@ fn mrclam_zips_survive_mutations() {
         .collect();
     let real: Vec<(String, Vec<u8>)> = landmark_files()
         .into_iter()
-        .filter(|f| io::landmark_data::DataSetKind::of_file(&f.name) == Some(io::landmark_data::DataSetKind::Mrclam))
+        .filter(|f| {
+            io::landmark_data::DataSetKind::of_file(&f.name)
+                == Some(io::landmark_data::DataSetKind::Mrclam)
+        })
         .map(|f| (f.name, head(&f.bytes, 1024)))
         .collect();
     let mut seeds = vec![
@@ -688,7 +723,9 @@ fn mrclam_zips_survive_mutations() {
             if message.contains(".zip") || message.contains(".dat") || message.contains("files") {
                 Ok(())
             } else {
-                Err(format!("'{message}' does not name the zip or the file in it"))
+                Err(format!(
+                    "'{message}' does not name the zip or the file in it"
+                ))
             }
         },
     );
