@@ -3,6 +3,10 @@
 #
 #   web/test.sh                  build web/dist (web/build.sh), then run web/tests/browser.test.mjs
 #   SLAMLAB_NO_BUILD=1 web/test.sh   test the web/dist that is already there
+#   SLAMLAB_ONLY=text web/test.sh    run only the checks whose name contains the text
+#   SLAMLAB_LONG=1 web/test.sh       also map the whole Intel log in the Cartographer lesson
+#   SLAMLAB_SCREENSHOTS=DIR web/test.sh   make every picture of the README and the lesson
+#                                    documents into DIR (what scripts/screenshots.sh runs)
 #
 # Screenshots, metrics.json (time to first frame, wasm size) and result.json (every check
 # and every console message) are written to web/test-output/. Look at the screenshots!

@@ -22,6 +22,7 @@ import { fileURLToPath } from "node:url";
 import { chromium } from "playwright-core";
 import { decodePng, imageStats, changedShare } from "./png.mjs";
 import { photoPair } from "./photos.mjs";
+import { HERO, LESSON_SHOTS, pictureSize, takePictures } from "./screenshots.mjs";
 
 const webDir = path.resolve(path.dirname(fileURLToPath(import.meta.url)), "..");
 const distDir = path.join(webDir, "dist");
@@ -162,8 +163,8 @@ const sleep = (ms) => new Promise((resolve) => setTimeout(resolve, ms));
 const pageLogs = [];
 
 /** Opens `url` in a fresh browser context (no shared cache or local storage). */
-async function openPage(browser, baseUrl, relativeUrl, label) {
-  const context = await browser.newContext({ viewport: VIEWPORT, deviceScaleFactor: 1 });
+async function openPage(browser, baseUrl, relativeUrl, label, viewport = VIEWPORT) {
+  const context = await browser.newContext({ viewport, deviceScaleFactor: 1 });
   const page = await context.newPage();
   const log = { label, url: relativeUrl, console: [], problems: [] };
   pageLogs.push(log);
@@ -520,7 +521,7 @@ async function main() {
     // --- The heaviest landmark setting: 50 landmarks, EKF and UKF side by
     // side. Its frame timing (the app's CPU time per frame, the simulation's share, the
     // frame rate) is recorded in metrics.json, never asserted: wall-clock numbers
-    // belong in the README's benchmark table, not in a pass/fail test.
+    // belong in docs/results.md, not in a pass/fail test.
     await check(
       "50 landmarks with EKF and UKF: runs, draws and reports its frame timing",
       timedRun("index.html?lesson=landmark-slam&seed=1&landmarks=50&estimator=ekf,ukf", "lm50", "ekf,ukf"),
@@ -665,7 +666,7 @@ async function main() {
 
     // --- The Monte Carlo lesson at 5,000 particles, one filter (MCL) and two side by side
     // (AMCL and ACMCL): the lesson runs, draws, and reports its frame timing (recorded in
-    // metrics.json, not asserted: the README's table has the numbers with the machine and date).
+    // metrics.json, not asserted: docs/results.md has the numbers with the machine and date).
     for (const [key, estimator, what] of [
       ["mcl5000", "mcl", "MCL with 5,000 particles"],
       ["mcl2x5000", "amcl,acmcl", "AMCL and ACMCL with 5,000 particles each"],
@@ -867,7 +868,7 @@ async function main() {
     // mean with the mouse: every move recomputes the samples, the EKF, the UKF and the
     // particles and redraws the density image. The frame CPU median while dragging is
     // recorded in metrics.json (filters_drag_*), not asserted: the issue asks for under
-    // 16 ms, and the README states what was measured where. A seeded headless run in
+    // 16 ms, and docs/results.md states what was measured where. A seeded headless run in
     // wasm gives the native table (crates/slamlab-app/tests/lessons/filters_ui.rs pins it).
     // --- Submaps, loop closure and the kidnapped robot: the thesis's case, a kidnap
     // before scan 152 of a run with none before, on the maze with seed 3 (the robot
@@ -1553,6 +1554,47 @@ async function main() {
       } finally {
         await context.close();
       }
+    });
+
+    // --- The pictures of the README and the lesson documents (web/tests/screenshots.mjs,
+    // which scripts/screenshots.sh runs for every picture): one lesson's in every run, so
+    // that the script cannot stop working unnoticed. SLAMLAB_SCREENSHOTS=DIR makes them all
+    // into DIR.
+    const picturesCheck = "screenshots: a lesson's pictures for the README and its document are drawn";
+    await check(picturesCheck, async () => {
+      // The script selects this check by name (SLAMLAB_ONLY): a rename must not leave it
+      // running no check at all.
+      const script = await readFile(path.join(webDir, "..", "scripts", "screenshots.sh"), "utf8");
+      const only = script.match(/SLAMLAB_ONLY="([^"]+)"/)?.[1];
+      assert(only && picturesCheck.includes(only) && script.includes("SLAMLAB_SCREENSHOTS="), `scripts/screenshots.sh does not select this check (SLAMLAB_ONLY="${only}")`);
+      const into = process.env.SLAMLAB_SCREENSHOTS;
+      const shots = into ? [HERO, ...LESSON_SHOTS] : LESSON_SHOTS.filter((shot) => shot.id === "landmark-slam");
+      const dir = into ? path.resolve(into) : outDir;
+      await mkdir(dir, { recursive: true });
+      const notes = [];
+      for (const shot of shots) {
+        const { context, page, log } = await openPage(browser, baseUrl, `index.html?${shot.query}`, shot.name, shot.viewport);
+        try {
+          await waitRunning(page);
+          const { pictures } = await takePictures(page, shot);
+          for (const [size, bytes] of Object.entries(pictures)) {
+            const file = size === "small" ? `${shot.name}-small.png` : `${shot.name}.png`;
+            const { width, height } = pictureSize(shot, size);
+            const image = decodePng(bytes);
+            assert(image.width === width && image.height === height, `${file} is ${image.width} x ${image.height}, not ${width} x ${height}`);
+            assertNotBlank(imageStats(image), file);
+            const budget = size === "small" ? 60_000 : 300_000;
+            assert(bytes.length <= budget, `${file} has ${bytes.length} bytes, more than ${budget}`);
+            await writeFile(path.join(dir, file), bytes);
+            notes.push(`${file} ${image.width} x ${image.height}, ${bytes.length} bytes`);
+          }
+          await assertNoPanic(page);
+          assert(log.problems.length === 0, log.problems.join("; "));
+        } finally {
+          await context.close();
+        }
+      }
+      return `${notes.join("; ")} in ${dir}`;
     });
 
     await check("no console errors, uncaught exceptions or failed requests", async () => {

@@ -1,6 +1,7 @@
 // A tiny PNG decoder and image statistics for the browser tests, so that the tests can
 // look at their own screenshots without an image library. It reads what Chromium's
-// screenshots are: 8-bit RGB or RGBA, not interlaced.
+// screenshots are, 8-bit RGB or RGBA, and the 8-bit palette images of
+// web/tests/screenshots.mjs; not interlaced.
 
 import { inflateSync } from "node:zlib";
 
@@ -11,6 +12,7 @@ export function decodePng(buffer) {
   if (!buffer.subarray(0, 8).equals(PNG_SIGNATURE)) throw new Error("not a PNG file");
   let offset = 8;
   let header = null;
+  let palette = null;
   const idat = [];
   while (offset < buffer.length) {
     const length = buffer.readUInt32BE(offset);
@@ -25,6 +27,8 @@ export function decodePng(buffer) {
         colorType: body[9],
         interlace: body[12],
       };
+    } else if (type === "PLTE") {
+      palette = body;
     } else if (type === "IDAT") {
       idat.push(body);
     } else if (type === "IEND") {
@@ -33,8 +37,8 @@ export function decodePng(buffer) {
   }
   if (!header) throw new Error("PNG without IHDR");
   const { width, height, bitDepth, colorType, interlace } = header;
-  const channels = { 2: 3, 6: 4 }[colorType];
-  if (bitDepth !== 8 || !channels || interlace !== 0) {
+  const channels = { 2: 3, 3: 1, 6: 4 }[colorType];
+  if (bitDepth !== 8 || !channels || interlace !== 0 || (colorType === 3 && !palette)) {
     throw new Error(`unsupported PNG: bit depth ${bitDepth}, colour type ${colorType}, interlace ${interlace}`);
   }
   const raw = inflateSync(Buffer.concat(idat));
@@ -67,6 +71,12 @@ export function decodePng(buffer) {
       }
       data[dst + x] = (raw[src + x] + predictor) & 0xff;
     }
+  }
+  if (colorType === 3) {
+    // Palette indices to RGB.
+    const rgb = Buffer.alloc(width * height * 3);
+    for (let i = 0; i < width * height; i++) palette.copy(rgb, 3 * i, 3 * data[i], 3 * data[i] + 3);
+    return { width, height, channels: 3, data: rgb };
   }
   return { width, height, channels, data };
 }

@@ -134,18 +134,22 @@ pub enum ExportKind {
     PlotsCsv,
     /// The scenario as JSON.
     ScenarioJson,
+    /// Every trajectory of the run (TUM and CSV) and the landmarks, zipped.
+    TrajectoriesZip,
 }
 
 impl ExportKind {
     /// Every kind, with its name in the browser test hook.
-    pub const ALL: [(Self, &'static str); 4] = [
+    pub const ALL: [(Self, &'static str); 5] = [
         (Self::MapPng, "map-png"),
         (Self::WindowPng, "window-png"),
         (Self::PlotsCsv, "plots-csv"),
         (Self::ScenarioJson, "scenario-json"),
+        (Self::TrajectoriesZip, "trajectories-zip"),
     ];
 
-    /// The kind called `name` (`map-png`, `window-png`, `plots-csv`, `scenario-json`).
+    /// The kind called `name` (`map-png`, `window-png`, `plots-csv`, `scenario-json`,
+    /// `trajectories-zip`).
     pub fn from_name(name: &str) -> Option<Self> {
         Self::ALL.iter().find(|(_, n)| *n == name).map(|(k, _)| *k)
     }

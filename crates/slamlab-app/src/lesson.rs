@@ -9,6 +9,7 @@
 //! [`crate::registry::LESSONS`] (`docs/ADDING-A-LESSON.md` has the whole recipe).
 
 use crate::time_control::{TimeAction, TimeControl, TimeInfo};
+use crate::widgets::map_canvas::MapView;
 use std::any::Any;
 
 pub use crate::panels::PanelVisibility;
@@ -87,47 +88,68 @@ pub fn scenario_from_start<S: slamlab_sim::params::Scenario>(
     (scenario, notices)
 }
 
+/// `frame` and `frame_mut` for a lesson whose [`LessonFrame`] is its field `frame`:
+/// write `frame_accessors!();` in its `impl Lesson`.
+macro_rules! frame_accessors {
+    () => {
+        fn frame(&self) -> &dyn $crate::lesson::Frame {
+            &self.frame
+        }
+        fn frame_mut(&mut self) -> &mut dyn $crate::lesson::Frame {
+            &mut self.frame
+        }
+    };
+}
+pub(crate) use frame_accessors;
+
+/// A share link's pairs with the seed first, when the changed parameters do not
+/// already hold it: a link reproduces its run even after the lesson's default seed
+/// changes.
+pub fn with_seed(mut pairs: Vec<(String, String)>, seed: u64) -> Vec<(String, String)> {
+    if !pairs.iter().any(|(name, _)| name == "seed") {
+        pairs.insert(0, ("seed".to_owned(), seed.to_string()));
+    }
+    pairs
+}
+
 /// A lesson that could not open, with a notice that says `why` (only a broken build
 /// gets here: every lesson's defaults are tested). The registry
 /// ([`crate::registry::open`]) opens the default lesson in its place with the notice,
 /// so no lesson needs to import another.
 pub fn open_instead(_start: &LessonStart<'_>, why: String) -> Box<dyn Lesson> {
-    Box::new(CouldNotOpen {
-        why,
-        time: TimeControl::default(),
-    })
+    let mut frame = LessonFrame::new("", ());
+    frame.notices.push(why.clone());
+    Box::new(CouldNotOpen { why, frame })
 }
 
 /// What [`open_instead`] returns: a placeholder the registry replaces.
 #[derive(Debug)]
 pub struct CouldNotOpen {
     why: String,
-    time: TimeControl,
+    frame: LessonFrame<()>,
+}
+
+impl crate::widgets::layout::LessonPanels for CouldNotOpen {
+    fn plots_ui(&mut self, _ui: &mut egui::Ui) {}
+    fn parameters_ui(&mut self, _ui: &mut egui::Ui) {}
+    fn explanation_ui(&mut self, _ui: &mut egui::Ui) {}
+    fn map_ui(&mut self, ui: &mut egui::Ui) {
+        ui.label(&self.why);
+    }
 }
 
 impl Lesson for CouldNotOpen {
-    fn id(&self) -> &'static str {
-        ""
-    }
+    frame_accessors!();
     fn could_not_open(&self) -> Option<&str> {
         Some(&self.why)
-    }
-    fn notices(&self) -> Vec<String> {
-        vec![self.why.clone()]
-    }
-    fn time(&self) -> &TimeControl {
-        &self.time
-    }
-    fn time_mut(&mut self) -> &mut TimeControl {
-        &mut self.time
     }
     fn time_info(&self) -> TimeInfo {
         TimeInfo::default()
     }
-    fn apply_time_action(&mut self, _action: TimeAction) {}
+    fn on_time_action(&mut self, _action: TimeAction) {}
     fn advance(&mut self, _dt: f64) {}
-    fn panels_ui(&mut self, ui: &mut egui::Ui, _panels: &mut PanelVisibility, _compact: bool) {
-        ui.label(&self.why);
+    fn changed_params(&self) -> Vec<(String, String)> {
+        Vec::new()
     }
     fn stored_settings(&self) -> serde_json::Value {
         serde_json::Value::Null
@@ -137,12 +159,6 @@ impl Lesson for CouldNotOpen {
     }
     fn test_state(&self) -> serde_json::Value {
         serde_json::Value::Null
-    }
-    fn as_any(&self) -> &dyn Any {
-        self
-    }
-    fn as_any_mut(&mut self) -> &mut dyn Any {
-        self
     }
 }
 
@@ -172,23 +188,249 @@ impl std::fmt::Debug for LessonRequest {
     }
 }
 
-/// One lesson on screen. Everything the shell needs, nothing it must know about
-/// the lesson's world.
-pub trait Lesson: std::fmt::Debug {
-    /// The lesson's id, as in [`crate::registry::LESSONS`].
+/// A lesson's view settings (map layers, windows): saved between visits, and, when
+/// the lesson has them, the map legend's switch and the switch that makes the map
+/// follow the robot (the URL's `legend=` and `follow=`).
+pub trait LessonView:
+    Clone + Default + std::fmt::Debug + serde::Serialize + serde::de::DeserializeOwned + 'static
+{
+    /// The map legend's switch.
+    fn legend_mut(&mut self) -> Option<&mut bool> {
+        None
+    }
+    /// The switch that keeps the robot in the middle of the map.
+    fn follow_mut(&mut self) -> Option<&mut bool> {
+        None
+    }
+}
+
+impl LessonView for () {}
+
+/// Implements [`LessonView`] for a view struct from the names of its legend and
+/// follow switches: `lesson_view!(KidnapView, legend: legend, follow: follow_robot);`
+/// (either may be left out).
+macro_rules! lesson_view {
+    ($view:ty $(, legend: $legend:ident)? $(, follow: $follow:ident)?) => {
+        impl $crate::lesson::LessonView for $view {
+            $(fn legend_mut(&mut self) -> Option<&mut bool> {
+                Some(&mut self.$legend)
+            })?
+            $(fn follow_mut(&mut self) -> Option<&mut bool> {
+                Some(&mut self.$follow)
+            })?
+        }
+    };
+}
+pub(crate) use lesson_view;
+
+/// What every lesson holds the same way: its id, its clock, its view settings, its
+/// map view, its notices and its requests to the shell. Each lesson keeps one in a
+/// field named `frame`; the [`Lesson`] trait's default methods reach it (through
+/// [`Frame`]), so that a lesson's `impl Lesson` is only what is particular to it.
+#[derive(Debug)]
+pub struct LessonFrame<V> {
+    id: &'static str,
+    /// The lesson's clock.
+    pub time: TimeControl,
+    /// What the lesson shows (saved with the user's settings).
+    pub view: V,
+    /// The map's pan and zoom, for a lesson with a map ([`LessonFrame::with_map`]).
+    pub map: MapView,
+    has_map: bool,
+    /// Link problems and what the run had to change, shown in the Notices menu.
+    pub notices: Vec<String>,
+    /// The latest refusal or load result, shown under the map's toolbar.
+    pub note: Option<String>,
+    /// A request for the shell ([`Lesson::take_request`]).
+    pub request: Option<LessonRequest>,
+    /// The lesson started over on a file the URL named
+    /// ([`Lesson::take_restarted_from_link`]).
+    pub restarted_from_link: bool,
+    /// A student's own estimates, scored beside the lesson's estimators.
+    pub estimates: crate::widgets::estimates::Estimates,
+}
+
+impl<V: LessonView> LessonFrame<V> {
+    /// The frame of lesson `id` with `view`, a paused clock and no map.
+    pub fn new(id: &'static str, view: V) -> Self {
+        Self {
+            id,
+            time: TimeControl::default(),
+            view,
+            map: MapView::default(),
+            has_map: false,
+            notices: Vec::new(),
+            note: None,
+            request: None,
+            restarted_from_link: false,
+            estimates: crate::widgets::estimates::Estimates::default(),
+        }
+    }
+
+    /// The same frame with a map (the URL's `zoom=` applies to it).
+    pub fn with_map(mut self, map: MapView) -> Self {
+        self.map = map;
+        self.has_map = true;
+        self
+    }
+
+    /// The same frame with the stored clock speed and view, when there are any.
+    pub fn restored(mut self, stored: Option<&StoredSettings<V>>) -> Self {
+        if let Some(stored) = stored {
+            stored.restore_clock(&mut self.time);
+            self.view = stored.view.clone();
+        }
+        self
+    }
+
+    /// The same frame with this clock (a lesson's own speed).
+    pub fn with_time(mut self, time: TimeControl) -> Self {
+        self.time = time;
+        self
+    }
+
+    /// The same frame with these notices.
+    pub fn with_notices(mut self, notices: Vec<String>) -> Self {
+        self.notices = notices;
+        self
+    }
+}
+
+/// A lesson's [`LessonFrame`], whatever its view type: what the [`Lesson`] trait's
+/// default methods use.
+pub trait Frame {
+    /// The lesson's id.
     fn id(&self) -> &'static str;
+    /// The clock.
+    fn time(&self) -> &TimeControl;
+    /// The clock, to change.
+    fn time_mut(&mut self) -> &mut TimeControl;
+    /// The frame's notices.
+    fn notices(&self) -> &[String];
+    /// The notices, to add to.
+    fn notices_mut(&mut self) -> &mut Vec<String>;
+    /// The view settings as JSON (for [`StoredSettings`]).
+    fn view_json(&self) -> serde_json::Value;
+    /// The map view, if the lesson has a map.
+    fn map_view_mut(&mut self) -> Option<&mut MapView>;
+    /// Switches the legend; false without one.
+    fn set_legend(&mut self, on: bool) -> bool;
+    /// Switches following; false when nothing can be followed.
+    fn set_follow(&mut self, on: bool) -> bool;
+    /// The request for the shell, taken.
+    fn take_request(&mut self) -> Option<LessonRequest>;
+    /// Whether the lesson started over on a linked file, taken.
+    fn take_restarted_from_link(&mut self) -> bool;
+    /// The student's estimates.
+    fn estimates(&self) -> &crate::widgets::estimates::Estimates;
+    /// The student's estimates, to add to.
+    fn estimates_mut(&mut self) -> &mut crate::widgets::estimates::Estimates;
+    /// The note under the map, to set.
+    fn note_mut(&mut self) -> &mut Option<String>;
+}
+
+impl<V: LessonView> Frame for LessonFrame<V> {
+    fn id(&self) -> &'static str {
+        self.id
+    }
+    fn time(&self) -> &TimeControl {
+        &self.time
+    }
+    fn time_mut(&mut self) -> &mut TimeControl {
+        &mut self.time
+    }
+    fn notices(&self) -> &[String] {
+        &self.notices
+    }
+    fn notices_mut(&mut self) -> &mut Vec<String> {
+        &mut self.notices
+    }
+    fn view_json(&self) -> serde_json::Value {
+        serde_json::to_value(&self.view).unwrap_or_default()
+    }
+    fn map_view_mut(&mut self) -> Option<&mut MapView> {
+        self.has_map.then_some(&mut self.map)
+    }
+    fn set_legend(&mut self, on: bool) -> bool {
+        self.view.legend_mut().map(|l| *l = on).is_some()
+    }
+    fn set_follow(&mut self, on: bool) -> bool {
+        self.view.follow_mut().map(|f| *f = on).is_some()
+    }
+    fn take_request(&mut self) -> Option<LessonRequest> {
+        self.request.take()
+    }
+    fn take_restarted_from_link(&mut self) -> bool {
+        std::mem::take(&mut self.restarted_from_link)
+    }
+    fn estimates(&self) -> &crate::widgets::estimates::Estimates {
+        &self.estimates
+    }
+    fn estimates_mut(&mut self) -> &mut crate::widgets::estimates::Estimates {
+        &mut self.estimates
+    }
+    fn note_mut(&mut self) -> &mut Option<String> {
+        &mut self.note
+    }
+}
+
+/// Any `'static` value as [`Any`], for [`Lesson::as_any`]'s default.
+pub trait AsAny: Any {
+    /// As `&dyn Any`.
+    fn any_ref(&self) -> &dyn Any;
+    /// As `&mut dyn Any`.
+    fn any_mut(&mut self) -> &mut dyn Any;
+}
+
+impl<T: Any> AsAny for T {
+    fn any_ref(&self) -> &dyn Any {
+        self
+    }
+    fn any_mut(&mut self) -> &mut dyn Any {
+        self
+    }
+}
+
+/// One lesson on screen. Everything the shell needs, nothing it must know about
+/// the lesson's world. What every lesson does the same way is written here once,
+/// on the lesson's [`LessonFrame`]; a lesson implements what is its own: what the
+/// time bar shows, what a step does, how it advances, its panels
+/// ([`LessonPanels`](crate::widgets::layout::LessonPanels)), its parameters in a
+/// share link, and its part of the test hook's state.
+pub trait Lesson: crate::widgets::layout::LessonPanels + AsAny + std::fmt::Debug {
+    /// The lesson's frame ([`frame_accessors!`] writes this and the next).
+    fn frame(&self) -> &dyn Frame;
+    /// The lesson's frame, to change.
+    fn frame_mut(&mut self) -> &mut dyn Frame;
+
+    /// The lesson's id, as in [`crate::registry::LESSONS`].
+    fn id(&self) -> &'static str {
+        self.frame().id()
+    }
     /// What runs now, for the top bar after the lesson's title ("EKF vs UKF");
     /// empty for nothing.
     fn subtitle(&self) -> String {
         String::new()
     }
-    /// Things the user should know now: link problems, what the run had to change,
-    /// the latest errors.
-    fn notices(&self) -> Vec<String>;
+    /// Things the user should know now: the frame's (link problems, what the run
+    /// had to change) and the run's latest ([`Lesson::run_notices`]).
+    fn notices(&self) -> Vec<String> {
+        let mut all = self.frame().notices().to_vec();
+        all.extend(self.run_notices());
+        all
+    }
+    /// The run's latest notes and errors, after the frame's notices.
+    fn run_notices(&self) -> Vec<String> {
+        Vec::new()
+    }
     /// The lesson's clock.
-    fn time(&self) -> &TimeControl;
+    fn time(&self) -> &TimeControl {
+        self.frame().time()
+    }
     /// The lesson's clock, to change its speed.
-    fn time_mut(&mut self) -> &mut TimeControl;
+    fn time_mut(&mut self) -> &mut TimeControl {
+        self.frame_mut().time_mut()
+    }
     /// What the time bar shows.
     fn time_info(&self) -> TimeInfo;
     /// Which step buttons the time bar shows: phases and ticks unless the lesson
@@ -196,9 +438,17 @@ pub trait Lesson: std::fmt::Debug {
     fn step_controls(&self) -> crate::time_control::StepControls {
         crate::time_control::StepControls::PhasesAndTicks
     }
-    /// Does what a time-bar button or shortcut asks.
-    fn apply_time_action(&mut self, action: TimeAction);
-    /// Reads the lesson's own input (drive keys) before the clock advances.
+    /// Does what a time-bar button or shortcut asks: the clock takes it first
+    /// (run, pause, stop on a step), then the lesson ([`Lesson::on_time_action`]).
+    fn apply_time_action(&mut self, action: TimeAction) {
+        self.time_mut().apply(action);
+        self.on_time_action(action);
+    }
+    /// The lesson's part of a time-bar action: step a phase or a tick, step back,
+    /// start over.
+    fn on_time_action(&mut self, action: TimeAction);
+    /// Reads the lesson's own input (drive keys, dropped files) before the clock
+    /// advances.
     fn read_input(&mut self, _ctx: &egui::Context) {}
     /// Runs what the clock owes after `dt` seconds of real time, within the frame budget.
     fn advance(&mut self, dt: f64);
@@ -213,35 +463,58 @@ pub trait Lesson: std::fmt::Debug {
         self.time().running
     }
     /// The panels and the map.
-    fn panels_ui(&mut self, ui: &mut egui::Ui, panels: &mut PanelVisibility, compact: bool);
+    fn panels_ui(&mut self, ui: &mut egui::Ui, panels: &mut PanelVisibility, compact: bool) {
+        let id = self.id();
+        crate::widgets::layout::lesson_panels_ui(self, ui, panels, compact, id);
+    }
     /// The lesson's entries in the View menu (map layers, windows).
     fn view_menu_ui(&mut self, _ui: &mut egui::Ui) {}
+    /// The user's parameters that differ from the lesson's start, as `key=value`
+    /// pairs (stored between visits).
+    fn changed_params(&self) -> Vec<(String, String)>;
+    /// The pairs of a share link: the changed parameters unless the lesson adds
+    /// more (the seed, a loaded file's location).
+    fn share_pairs(&self) -> Vec<(String, String)> {
+        self.changed_params()
+    }
     /// What to remember between visits (view options, clock speed, the user's
     /// parameters); given back as [`LessonStart::stored`].
-    fn stored_settings(&self) -> serde_json::Value;
+    fn stored_settings(&self) -> serde_json::Value {
+        StoredSettings {
+            view: self.frame().view_json(),
+            time: self.time().clone(),
+            params: self.changed_params(),
+        }
+        .to_value()
+    }
     /// The query string (without `?`) that reopens this setup.
-    fn share_query(&self, embed: bool) -> String;
+    fn share_query(&self, embed: bool) -> String {
+        crate::query::build(self.id(), &self.share_pairs(), embed)
+    }
     /// The lesson's part of the test hook's JSON (tick, phase, seed, estimators, errors).
     fn test_state(&self) -> serde_json::Value;
     /// For tests and the shell's typed helpers.
-    fn as_any(&self) -> &dyn Any;
+    fn as_any(&self) -> &dyn Any {
+        self.any_ref()
+    }
     /// For tests and the shell's typed helpers.
-    fn as_any_mut(&mut self) -> &mut dyn Any;
+    fn as_any_mut(&mut self) -> &mut dyn Any {
+        self.any_mut()
+    }
     /// The lesson's map view, for the URL's `zoom=`; `None` for a lesson without a
-    /// [`MapView`](crate::widgets::map_canvas::MapView) (the shell then says the
-    /// zoom does not apply).
-    fn map_view_mut(&mut self) -> Option<&mut crate::widgets::map_canvas::MapView> {
-        None
+    /// [`MapView`] (the shell then says the zoom does not apply).
+    fn map_view_mut(&mut self) -> Option<&mut MapView> {
+        self.frame_mut().map_view_mut()
     }
     /// Shows or hides the map's legend (the URL's `legend=`); false when the lesson
     /// has no legend to switch.
-    fn set_legend(&mut self, _on: bool) -> bool {
-        false
+    fn set_legend(&mut self, on: bool) -> bool {
+        self.frame_mut().set_legend(on)
     }
     /// Makes the map follow the robot or not (the URL's `follow=`); false when the
     /// lesson's map cannot follow anything.
-    fn set_follow(&mut self, _on: bool) -> bool {
-        false
+    fn set_follow(&mut self, on: bool) -> bool {
+        self.frame_mut().set_follow(on)
     }
     /// The lesson's own keys beside the time bar's, for the Keys menu.
     fn keys(&self) -> Vec<(&'static str, &'static str)> {
@@ -251,7 +524,23 @@ pub trait Lesson: std::fmt::Debug {
     /// first frame) since the last call? The shell then applies the URL's figure keys
     /// (`tick=`, `run=`, `zoom=`, …) again, so that the link opens as shared.
     fn take_restarted_from_link(&mut self) -> bool {
-        false
+        self.frame_mut().take_restarted_from_link()
+    }
+    /// The run's trajectories so far: the truth (where there is one), odometry,
+    /// and each estimator's estimate, for File → Export trajectories and for
+    /// scoring a student's estimate beside them; none for a lesson without poses.
+    fn trajectories(&self) -> Vec<slamlab_sim::metrics::NamedTrajectory> {
+        Vec::new()
+    }
+    /// The time a student's estimate is drawn and scored up to, seconds: the time
+    /// bar's; `None` for a lesson whose trajectories are not in time (a pose
+    /// graph's vertices), drawn whole.
+    fn estimate_clock(&self) -> Option<f64> {
+        Some(self.time_info().time_s)
+    }
+    /// The landmark maps now: the true one (named `truth`) and each estimator's.
+    fn landmark_maps(&self) -> Vec<(String, Vec<slamlab_sim::io::trajectory::LandmarkRow>)> {
+        Vec::new()
     }
     /// Every plot's data, unthinned, for "Export plot data as CSV".
     fn plot_series(&self) -> Vec<crate::export::PlotSeries> {
@@ -259,20 +548,12 @@ pub trait Lesson: std::fmt::Debug {
     }
     /// A request for the shell, taken once (polled every frame).
     fn take_request(&mut self) -> Option<LessonRequest> {
-        None
+        self.frame_mut().take_request()
     }
     /// Why the lesson could not open, if it could not ([`open_instead`]).
     fn could_not_open(&self) -> Option<&str> {
         None
     }
-}
-
-/// A lesson with one more notice in front of its own (a lesson that opened in
-/// place of another says why).
-#[derive(Debug)]
-pub struct WithNotice {
-    inner: Box<dyn Lesson>,
-    notice: String,
 }
 
 /// Adds a notice to a lesson.
@@ -282,97 +563,9 @@ pub trait LessonExt {
 }
 
 impl LessonExt for Box<dyn Lesson> {
-    fn with_notice(self, notice: String) -> Box<dyn Lesson> {
-        Box::new(WithNotice {
-            inner: self,
-            notice,
-        })
-    }
-}
-
-impl Lesson for WithNotice {
-    fn id(&self) -> &'static str {
-        self.inner.id()
-    }
-    fn subtitle(&self) -> String {
-        self.inner.subtitle()
-    }
-    fn notices(&self) -> Vec<String> {
-        let mut all = vec![self.notice.clone()];
-        all.extend(self.inner.notices());
-        all
-    }
-    fn time(&self) -> &TimeControl {
-        self.inner.time()
-    }
-    fn time_mut(&mut self) -> &mut TimeControl {
-        self.inner.time_mut()
-    }
-    fn time_info(&self) -> TimeInfo {
-        self.inner.time_info()
-    }
-    fn step_controls(&self) -> crate::time_control::StepControls {
-        self.inner.step_controls()
-    }
-    fn apply_time_action(&mut self, action: TimeAction) {
-        self.inner.apply_time_action(action);
-    }
-    fn read_input(&mut self, ctx: &egui::Context) {
-        self.inner.read_input(ctx);
-    }
-    fn advance(&mut self, dt: f64) {
-        self.inner.advance(dt);
-    }
-    fn last_advance_updated(&self) -> bool {
-        self.inner.last_advance_updated()
-    }
-    fn wants_repaint(&self) -> bool {
-        self.inner.wants_repaint()
-    }
-    fn panels_ui(&mut self, ui: &mut egui::Ui, panels: &mut PanelVisibility, compact: bool) {
-        self.inner.panels_ui(ui, panels, compact);
-    }
-    fn view_menu_ui(&mut self, ui: &mut egui::Ui) {
-        self.inner.view_menu_ui(ui);
-    }
-    fn stored_settings(&self) -> serde_json::Value {
-        self.inner.stored_settings()
-    }
-    fn share_query(&self, embed: bool) -> String {
-        self.inner.share_query(embed)
-    }
-    fn test_state(&self) -> serde_json::Value {
-        self.inner.test_state()
-    }
-    fn as_any(&self) -> &dyn Any {
-        self.inner.as_any()
-    }
-    fn as_any_mut(&mut self) -> &mut dyn Any {
-        self.inner.as_any_mut()
-    }
-    fn map_view_mut(&mut self) -> Option<&mut crate::widgets::map_canvas::MapView> {
-        self.inner.map_view_mut()
-    }
-    fn set_legend(&mut self, on: bool) -> bool {
-        self.inner.set_legend(on)
-    }
-    fn set_follow(&mut self, on: bool) -> bool {
-        self.inner.set_follow(on)
-    }
-    fn plot_series(&self) -> Vec<crate::export::PlotSeries> {
-        self.inner.plot_series()
-    }
-    fn keys(&self) -> Vec<(&'static str, &'static str)> {
-        self.inner.keys()
-    }
-    fn take_request(&mut self) -> Option<LessonRequest> {
-        self.inner.take_request()
-    }
-    fn take_restarted_from_link(&mut self) -> bool {
-        self.inner.take_restarted_from_link()
-    }
-    fn could_not_open(&self) -> Option<&str> {
-        self.inner.could_not_open()
+    fn with_notice(mut self, notice: String) -> Box<dyn Lesson> {
+        self.frame_mut().notices_mut().insert(0, notice);
+        self
     }
 }
 

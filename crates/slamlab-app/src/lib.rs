@@ -128,6 +128,11 @@ pub struct SlamLabApp {
     /// "Open scenario…": the picker, and scenario files dropped on the window.
     scenario_picker: widgets::file_picker::FilePicker,
     scenario_drops: widgets::dropped_files::DropInbox,
+    /// "Open your estimate…": the picker, and estimates dropped on the window.
+    estimate_picker: widgets::file_picker::FilePicker,
+    estimate_drops: widgets::dropped_files::DropInbox,
+    /// `estimate=` files named in the URL, while they are read.
+    estimate_fetches: Vec<(String, Option<widgets::fetch::Fetch>)>,
     /// The settings loaded at start, with each lesson's entry updated when the user
     /// leaves it. An embedded page saves these back unchanged (except the theme), so
     /// a lecture figure never rewrites the student's own setup.
@@ -196,6 +201,12 @@ impl SlamLabApp {
             plots: panels.plots,
         });
         apply_figure(&mut *lesson, &parsed.figure, &mut notices);
+        let estimate_fetches = parsed
+            .figure
+            .estimates
+            .iter()
+            .map(|location| (location.clone(), None))
+            .collect();
         Self {
             query: query.trim_start_matches('?').to_owned(),
             frames: 0,
@@ -220,6 +231,9 @@ impl SlamLabApp {
             ctx: None,
             scenario_picker: widgets::file_picker::FilePicker::default(),
             scenario_drops: widgets::dropped_files::DropInbox::default(),
+            estimate_picker: widgets::file_picker::FilePicker::multiple(),
+            estimate_drops: widgets::dropped_files::DropInbox::default(),
+            estimate_fetches,
             stored: settings,
         }
     }
@@ -375,6 +389,7 @@ impl SlamLabApp {
             })),
             "screen": [self.screen.x, self.screen.y],
             "map_rect": self.map_rect.map(|r| [r.left(), r.top(), r.width(), r.height()]),
+            "estimates": self.lesson.frame().estimates().last_scores(),
             "panels": {
                 "parameters": self.panels().parameters,
                 "explanation": self.panels().explanation,
@@ -452,6 +467,10 @@ impl SlamLabApp {
             self.apply_time_action(action);
         }
         let dt = f64::from(ctx.input(|i| i.stable_dt));
+        // Scenario files and estimates dropped on the window are the shell's, not
+        // the lesson's (which reads maps, logs and graphs).
+        self.poll_scenario_files(&ctx);
+        self.poll_estimates(&ctx);
         let sim_start = web_time::Instant::now();
         self.lesson.read_input(&ctx);
         if self.lesson.take_restarted_from_link() {
@@ -496,7 +515,6 @@ impl SlamLabApp {
         if !notices.is_empty() {
             egui::Panel::top("slamlab_notices").show(ui, |ui| self.notice_bar_ui(ui, &notices));
         }
-        self.poll_scenario_files(&ctx);
         widgets::share::set_figure_suffix(
             &ctx,
             self.figure_suffix(false),
@@ -513,7 +531,9 @@ impl SlamLabApp {
         } else {
             &mut self.panels
         };
+        widgets::estimates::clear_placement(&ctx);
         self.lesson.panels_ui(ui, panels, self.embed);
+        self.estimates_ui(&ctx);
         match self.lesson.take_request() {
             Some(lesson::LessonRequest::Save(files)) => self.exporter.save_all(files),
             Some(request) => {
@@ -699,6 +719,17 @@ impl SlamLabApp {
 
     /// The File menu: open a scenario, and the exports.
     fn file_menu_ui(&mut self, ui: &mut egui::Ui) {
+        ui.label(
+            "Your own estimate (TUM or CSV trajectory, landmark CSV), or drop it on the window:",
+        );
+        self.estimate_picker.ui(
+            ui,
+            "Open your estimate…",
+            ".tum,.txt,.csv,text/plain,text/csv",
+            slamlab_sim::io::trajectory::MAX_TRAJECTORY_BYTES as usize,
+            "path/to/my_estimate.tum",
+        );
+        ui.separator();
         ui.label("Open a scenario file (.json) or drop one on the window:");
         self.scenario_picker.ui(
             ui,
@@ -715,6 +746,18 @@ impl SlamLabApp {
             .clicked()
         {
             self.export(&ctx, export::ExportKind::MapPng);
+            ui.close();
+        }
+        if ui
+            .button("Export trajectories (zip)")
+            .on_hover_text(
+                "The truth and every estimator's trajectory so far as TUM and CSV files (with \
+                 covariances where the estimator has them), and the landmarks: score them with \
+                 `slamlab evaluate` or evo",
+            )
+            .clicked()
+        {
+            self.export(&ctx, export::ExportKind::TrajectoriesZip);
             ui.close();
         }
         if ui.button("Export window as PNG").clicked() {
@@ -785,6 +828,28 @@ impl SlamLabApp {
                     });
                 }
             }
+            ExportKind::TrajectoriesZip => {
+                let trajectories = self.lesson.trajectories();
+                if trajectories.is_empty() {
+                    self.exporter.status =
+                        Some("This lesson has no trajectories to export".to_owned());
+                } else {
+                    let folder = format!("{stem}-trajectories");
+                    let files = slamlab_sim::io::trajectory::export_files(
+                        self.lesson.id(),
+                        &trajectories,
+                        &self.lesson.landmark_maps(),
+                    );
+                    match slamlab_sim::io::archive::write_zip(&folder, &files) {
+                        Ok(bytes) => self.exporter.save(ExportFile {
+                            name: format!("{folder}.zip"),
+                            mime: "application/zip",
+                            bytes,
+                        }),
+                        Err(e) => self.exporter.status = Some(e.to_string()),
+                    }
+                }
+            }
             ExportKind::ScenarioJson => {
                 let file = export::scenario_of_query(&self.share_query(false));
                 self.exporter.save(ExportFile {
@@ -794,6 +859,90 @@ impl SlamLabApp {
                 });
             }
         }
+    }
+
+    /// Reads the estimates dropped on the window, picked with "Open your
+    /// estimate…" or named by `estimate=`, into the lesson's estimates. A file the
+    /// lesson reads itself (in the pose-graph lesson a `.txt` is an iSAM graph)
+    /// stays the lesson's.
+    fn poll_estimates(&mut self, ctx: &egui::Context) {
+        let text_is_theirs = self.lesson.id() == "pose-graph";
+        let is_estimate = |file: &egui::DroppedFileHandle| {
+            let name = file.path().to_string_lossy().to_ascii_lowercase();
+            name.ends_with(".tum")
+                || name.ends_with(".csv")
+                || (!text_is_theirs && name.ends_with(".txt"))
+        };
+        let taken = ctx.input_mut(|i| {
+            let (mine, rest): (Vec<_>, Vec<_>) = std::mem::take(&mut i.raw.dropped_files)
+                .into_iter()
+                .partition(is_estimate);
+            i.raw.dropped_files = rest;
+            mine
+        });
+        let mut files: Vec<(String, Result<Vec<u8>, String>)> = Vec::new();
+        if let Some(batch) = self.estimate_drops.read(ctx, taken) {
+            files.extend(batch);
+        }
+        if let Some(batch) = self.estimate_picker.poll_all() {
+            files.extend(batch);
+        }
+        for (location, fetch) in &mut self.estimate_fetches {
+            match fetch {
+                None => *fetch = Some(widgets::fetch::Fetch::start(location, ctx)),
+                Some(f) => {
+                    if let Some(result) = f.poll() {
+                        let name = location.rsplit('/').next().unwrap_or(location).to_owned();
+                        files.push((name, result));
+                    }
+                }
+            }
+        }
+        self.estimate_fetches
+            .retain(|(_, f)| f.as_ref().is_none_or(widgets::fetch::Fetch::is_pending));
+        for (name, bytes) in files {
+            let added = bytes
+                .map_err(|why| format!("Could not read {name}: {why}"))
+                .and_then(|b| self.lesson.frame_mut().estimates_mut().add(&name, &b));
+            match added {
+                Ok(said) => *self.lesson.frame_mut().note_mut() = Some(said),
+                Err(why) => self.app_notices.push(why),
+            }
+        }
+    }
+
+    /// The student's estimates on the map and in their window.
+    fn estimates_ui(&mut self, ctx: &egui::Context) {
+        if self.lesson.frame().estimates().is_empty() && !self.lesson.frame().estimates().open {
+            return;
+        }
+        let now = self.lesson.estimate_clock().unwrap_or(f64::INFINITY);
+        widgets::estimates::map_overlay(ctx, self.lesson.frame().estimates(), now);
+        if self.lesson.frame().estimates().open {
+            self.score_estimates();
+            let has_truth = self
+                .lesson
+                .trajectories()
+                .iter()
+                .any(|t| t.role == slamlab_sim::metrics::TrajectoryRole::Truth);
+            widgets::estimates::window_ui(ctx, self.lesson.frame_mut().estimates_mut(), has_truth);
+        }
+    }
+
+    /// Scores the estimates against the lesson's run as it is now.
+    fn score_estimates(&mut self) {
+        let tick = self.lesson.time_info().tick;
+        // Stepping back and starting over change the run at the same tick: score
+        // again at least twice a second.
+        let version = tick.wrapping_mul(1_000_003).wrapping_add(self.frames / 30);
+        if !self.lesson.frame().estimates().is_stale(version) {
+            return;
+        }
+        let (trajectories, landmarks) = (self.lesson.trajectories(), self.lesson.landmark_maps());
+        self.lesson
+            .frame_mut()
+            .estimates_mut()
+            .score(version, &trajectories, &landmarks);
     }
 
     /// Opens a scenario file picked or dropped this frame. A dropped `.json` is taken
@@ -996,7 +1145,7 @@ mod tests {
             }),
         );
         let app = SlamLabApp::with_settings("embed=1&landmarks=5", Some(stored.clone()));
-        let view = app.landmark_lesson().map(|l| l.view.clone());
+        let view = app.landmark_lesson().map(|l| l.frame.view.clone());
         assert!(
             view.is_some_and(|v| !v.legend && !v.heatmap && !v.follow_robot),
             "an embedded figure does not take the stored view"
@@ -1004,7 +1153,7 @@ mod tests {
         assert_eq!(app.settings(), stored);
         // The full app does.
         let app = SlamLabApp::with_settings("", Some(stored.clone()));
-        assert!(app.landmark_lesson().is_some_and(|l| l.view.heatmap));
+        assert!(app.landmark_lesson().is_some_and(|l| l.frame.view.heatmap));
     }
 
     #[test]

@@ -24,8 +24,9 @@ pub struct Query {
 }
 
 /// The keys the app reads itself; lessons never see them.
-pub const APP_KEYS: [&str; 9] = [
+pub const APP_KEYS: [&str; 10] = [
     "lesson",
+    "estimate",
     "embed",
     "many-runs",
     "tick",
@@ -61,6 +62,9 @@ pub struct FigureOptions {
     pub zoom: Option<f32>,
     /// `follow=1`: the map follows the robot.
     pub follow: Option<bool>,
+    /// `estimate=FILE` (repeatable): a student's estimate beside the page, scored
+    /// in the lesson.
+    pub estimates: Vec<String>,
 }
 
 impl FigureOptions {
@@ -89,6 +93,9 @@ impl FigureOptions {
         }
         if let Some(on) = self.follow {
             pairs.push(("follow".to_owned(), u8::from(on).to_string()));
+        }
+        for location in &self.estimates {
+            pairs.push(("estimate".to_owned(), location.clone()));
         }
         pairs
     }
@@ -138,7 +145,7 @@ impl Query {
                         MANY_RUNS_RANGE.end()
                     )),
                 },
-                "tick" | "run" | "legend" | "panels" | "zoom" | "follow" => {
+                "tick" | "run" | "legend" | "panels" | "zoom" | "follow" | "estimate" => {
                     parsed.parse_figure_key(&key, &value);
                 }
                 _ => parsed.pairs.push((key, value)),
@@ -151,6 +158,23 @@ impl Query {
     fn parse_figure_key(&mut self, key: &str, value: &str) {
         let figure = &mut self.figure;
         match key {
+            "estimate" => {
+                // A file beside the page (or a path on the desktop), as map= names one.
+                let location = value.trim();
+                if location.is_empty() || location.len() > 1024 || location.contains("://") {
+                    self.issues.push(format!(
+                        "estimate = '{}' is not a file beside the page (a relative path such as estimates/mine.tum); it is ignored",
+                        location.chars().take(80).collect::<String>()
+                    ));
+                } else if figure.estimates.len() >= crate::widgets::estimates::MAX_ESTIMATES {
+                    self.issues.push(format!(
+                        "estimate = '{location}': at most {} estimates; it is ignored",
+                        crate::widgets::estimates::MAX_ESTIMATES
+                    ));
+                } else {
+                    figure.estimates.push(location.to_owned());
+                }
+            }
             "tick" => match value.parse::<u64>() {
                 Ok(n) if n <= TICK_LIMIT => figure.tick = Some(n),
                 Ok(n) => {

@@ -218,7 +218,7 @@ fn print_text(
         kind => writeln!(
             out,
             "alignment: {}: rotation {:.4}°, translation ({:.4}, {:.4}) m{}",
-            kind.to_uppercase().replace("2", "(2)"),
+            if kind == "sim2" { "Sim(2)" } else { "SE(2)" },
             a.rotation_deg,
             a.translation_m[0],
             a.translation_m[1],

@@ -68,6 +68,7 @@ pub fn command() -> Command {
                         .help("stop as soon as the cost is at or below this (for timing against another solver)"),
                 )
                 .arg(Arg::new("out").long("out").value_name("FILE").value_parser(clap::value_parser!(PathBuf)).help("write the optimized graph (g2o)"))
+                .arg(crate::trajectory_out::arg().help("write the optimized poses to DIR (TUM and CSV, each pose at the time of its vertex id) and the point vertices as landmarks"))
                 .arg(Arg::new("json").long("json").action(ArgAction::SetTrue).help("print one JSON object")),
         )
         .subcommand(
@@ -218,6 +219,26 @@ fn optimize(m: &ArgMatches) -> Result<()> {
         lambdas: reports.iter().map(|r| r.lambda).collect(),
         step_norms: reports.iter().map(|r| r.step_norm).collect(),
     };
+    {
+        use slamlab_sim::metrics::TrajectoryRole;
+        use slamlab_sim::pose_graph::export;
+        let graph = optimizer.graph();
+        let landmarks = export::landmarks(graph);
+        crate::trajectory_out::write(
+            m,
+            "pose-graph",
+            &[export::pose_trajectory(
+                graph,
+                "optimized",
+                TrajectoryRole::Estimate,
+            )],
+            &if landmarks.is_empty() {
+                Vec::new()
+            } else {
+                vec![("optimized".to_owned(), landmarks)]
+            },
+        )?;
+    }
     if let Some(out) = m.get_one::<PathBuf>("out") {
         let text = io::graph::write_g2o(optimizer.graph())?;
         std::fs::write(out, text).with_context(|| format!("writing {}", out.display()))?;

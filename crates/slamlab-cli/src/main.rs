@@ -31,6 +31,7 @@ mod map;
 mod output;
 mod registry;
 mod scenario_file;
+mod trajectory_out;
 
 use anyhow::Result;
 use clap::{Arg, ArgMatches, Command};

@@ -20,9 +20,9 @@ mod explain;
 mod map;
 mod plots;
 
-use crate::lesson::{self, Lesson, LessonStart, PanelVisibility, StoredSettings};
+use crate::lesson::{self, Lesson, LessonFrame, LessonStart, StoredSettings};
 use crate::palette;
-use crate::time_control::{StepControls, TimeAction, TimeControl, TimeInfo};
+use crate::time_control::{StepControls, TimeAction, TimeInfo};
 use crate::widgets::dropped_files::DropInbox;
 use crate::widgets::fetch::Fetch;
 use crate::widgets::file_picker::{FilePicker, PickedFile};
@@ -88,6 +88,8 @@ pub struct CartographerView {
     pub grids_window: bool,
 }
 
+crate::lesson::lesson_view!(CartographerView, legend: legend, follow: follow_robot);
+
 impl Default for CartographerView {
     fn default() -> Self {
         Self {
@@ -135,15 +137,10 @@ pub struct CartographerLesson {
     phase_ms_max: f64,
     /// The most time one frame spent on phases, milliseconds.
     frame_ms_max: f64,
-    /// The lesson's clock.
-    pub time: TimeControl,
-    /// What the map shows.
-    pub view: CartographerView,
-    canvas: MapView,
+    /// The clock, the view, the map view, the notices and the requests.
+    pub frame: LessonFrame<CartographerView>,
     tiles: map::SubmapTiles,
     grids: map::MaxGridTextures,
-    notices: Vec<String>,
-    note: Option<String>,
     inbox: DropInbox,
     picker: FilePicker,
     log_fetch: Option<LogFetch>,
@@ -190,13 +187,10 @@ pub fn open(start: &LessonStart<'_>) -> Box<dyn Lesson> {
             return lesson::open_instead(start, format!("Cartographer could not open: {why}"));
         }
     };
-    lesson.notices.splice(0..0, link_notices);
-    if let Some(stored) = stored {
-        lesson.view = stored.view.clone();
-        stored.restore_clock(&mut lesson.time);
-    }
+    lesson.frame.notices.splice(0..0, link_notices);
+    lesson.frame = lesson.frame.restored(stored.as_ref());
     if let Some(location) = location {
-        lesson.note = Some(format!("Loading the log {location}…"));
+        lesson.frame.note = Some(format!("Loading the log {location}…"));
         lesson.log_fetch = Some(LogFetch {
             location,
             started: false,
@@ -234,13 +228,11 @@ impl CartographerLesson {
             scan_ms: Vec::new(),
             phase_ms_max: 0.0,
             frame_ms_max: 0.0,
-            time: TimeControl::default(),
-            view: CartographerView::default(),
-            canvas: MapView::default(),
+            frame: LessonFrame::new(LESSON_ID, CartographerView::default())
+                .with_map(MapView::default())
+                .with_notices(notices),
             tiles: map::SubmapTiles::default(),
             grids: map::MaxGridTextures::default(),
-            notices,
-            note: None,
             inbox: DropInbox::default(),
             picker: FilePicker::multiple(),
             log_fetch: None,
@@ -262,7 +254,7 @@ impl CartographerLesson {
 
     /// The latest note under the map toolbar.
     pub fn note(&self) -> Option<&str> {
-        self.note.as_deref()
+        self.frame.note.as_deref()
     }
 
     /// Sets a parameter of the pending scenario from text, as the panel does.
@@ -286,7 +278,7 @@ impl CartographerLesson {
         self.stepper = Stepper::with_policy(run, (), policy());
         self.pending = PendingParams::new(scenario.clone());
         self.scenario = scenario;
-        self.notices = notices;
+        self.frame.notices = notices;
         self.scan_ms.clear();
         self.phase_ms_max = 0.0;
         self.frame_ms_max = 0.0;
@@ -294,8 +286,8 @@ impl CartographerLesson {
         self.grids.clear();
         self.catch_up = catch_up.filter(|&n| n > 0);
         if catch_up.is_none() {
-            self.time.apply(TimeAction::Reset);
-            self.canvas.refit();
+            self.frame.time.apply(TimeAction::Reset);
+            self.frame.map.refit();
         }
     }
 
@@ -320,14 +312,16 @@ impl CartographerLesson {
             match builtin_map(name) {
                 Ok(grid) => self.source = Source::Simulated(name.to_owned(), Arc::new(grid)),
                 Err(why) => {
-                    self.note = Some(format!("Could not open the map {name}: {why}"));
+                    self.frame.note = Some(format!("Could not open the map {name}: {why}"));
                     scenario.map = self.scenario.map.clone();
                 }
             }
         }
         match self.input_of(&scenario) {
             Ok(input) => self.restart_on(scenario, input, None),
-            Err(why) => self.note = Some(format!("Could not start over: {why}; the run goes on")),
+            Err(why) => {
+                self.frame.note = Some(format!("Could not start over: {why}; the run goes on"))
+            }
         }
     }
 
@@ -344,7 +338,7 @@ impl CartographerLesson {
         };
         let input = self.sim().input().clone();
         self.restart_on(scenario, input, Some(done));
-        self.note = Some(format!(
+        self.frame.note = Some(format!(
             "Kidnap detection {}: mapping the same scans again up to scan {done}",
             if on { "on" } else { "off" }
         ));
@@ -354,18 +348,18 @@ impl CartographerLesson {
     /// (a click), or to a random free place at least 2 m away.
     pub fn kidnap(&mut self, to: Option<Pose2>) {
         let Source::Simulated(name, grid) = &self.source else {
-            self.note = Some(
+            self.frame.note = Some(
                 "A log is replayed as recorded: only a simulated robot can be kidnapped".to_owned(),
             );
             return;
         };
         let k = self.sim().scans_done();
         if self.sim().is_done() {
-            self.note = Some("Every scan is in: reset to kidnap the robot".to_owned());
+            self.frame.note = Some("Every scan is in: reset to kidnap the robot".to_owned());
             return;
         }
         if let Some(at) = self.scenario.kidnap_at.filter(|&at| at < k) {
-            self.note = Some(format!(
+            self.frame.note = Some(format!(
                 "The robot was kidnapped at scan {at} already: one kidnap per run (reset to kidnap it elsewhere)"
             ));
             return;
@@ -383,11 +377,11 @@ impl CartographerLesson {
                 self.pending.scenario.kidnap_at = Some(k);
                 self.pending.scenario.kidnap_to = scenario.kidnap_to;
                 self.scenario = scenario;
-                self.note = Some(format!(
+                self.frame.note = Some(format!(
                     "Kidnapped before scan {k}: the odometry does not see it; watch the matching cost"
                 ));
             }
-            Err(why) => self.note = Some(format!("Could not kidnap the robot: {why}")),
+            Err(why) => self.frame.note = Some(format!("Could not kidnap the robot: {why}")),
         }
     }
 
@@ -396,12 +390,12 @@ impl CartographerLesson {
         let log = match LaserLog::from_bytes(bytes) {
             Ok(log) => log,
             Err(why) => {
-                self.note = Some(format!("Could not read the log {name}: {why}"));
+                self.frame.note = Some(format!("Could not read the log {name}: {why}"));
                 return;
             }
         };
         if log.scans.is_empty() {
-            self.note = Some(format!("{name} has no laser scans"));
+            self.frame.note = Some(format!("{name} has no laser scans"));
             return;
         }
         let input = log_input(&log, name);
@@ -413,7 +407,7 @@ impl CartographerLesson {
             ..self.pending.scenario.clone()
         };
         self.restart_on(scenario, Arc::new(input), None);
-        self.note = Some(format!(
+        self.frame.note = Some(format!(
             "Loaded {name}: {count} scans over {span:.0} s; no ground truth, no kidnap button"
         ));
     }
@@ -423,7 +417,7 @@ impl CartographerLesson {
         let (name, grid, notes) = match slamlab_sim::kidnap::session::load_dropped_map(files) {
             Ok(loaded) => loaded,
             Err(why) => {
-                self.note = Some(format!("Could not load the map: {why}; the run goes on"));
+                self.frame.note = Some(format!("Could not load the map: {why}; the run goes on"));
                 return;
             }
         };
@@ -433,7 +427,7 @@ impl CartographerLesson {
             Ok(input) => {
                 self.source = Source::Simulated(name.clone(), grid);
                 self.restart_on(scenario, Arc::new(input), None);
-                self.note = Some(format!(
+                self.frame.note = Some(format!(
                     "The robot explores {name}{}",
                     if notes.is_empty() {
                         String::new()
@@ -442,7 +436,7 @@ impl CartographerLesson {
                     }
                 ));
             }
-            Err(why) => self.note = Some(format!("Could not drive in {name}: {why}")),
+            Err(why) => self.frame.note = Some(format!("Could not drive in {name}: {why}")),
         }
     }
 
@@ -466,7 +460,7 @@ impl CartographerLesson {
                 self.load_log(&name, &bytes, Some(location));
             }
             Err(why) => {
-                self.note = Some(format!(
+                self.frame.note = Some(format!(
                     "Could not load the log {location}: {why}; the simulated robot maps instead"
                 ));
             }
@@ -527,14 +521,14 @@ impl CartographerLesson {
     /// search (its tree is the one drawn).
     pub fn step_search(&mut self) {
         self.catch_up = None;
-        self.time.apply(TimeAction::StepPhase);
+        self.frame.time.apply(TimeAction::StepPhase);
         if self.step_until(|p| matches!(p, CartographerPhase::Search { .. })) {
             if let Some(search) = &self.sim().last_search {
                 let result = search.score.map_or_else(
                     || "no match above min_score".to_owned(),
                     |s| format!("best score {s:.3}"),
                 );
-                self.note = Some(format!(
+                self.frame.note = Some(format!(
                     "Searched scan {}'s node in submap {}{}: {result}",
                     search.scan,
                     search.submap,
@@ -542,7 +536,7 @@ impl CartographerLesson {
                 ));
             }
         } else {
-            self.note = Some("No search left: every scan is in".to_owned());
+            self.frame.note = Some("No search left: every scan is in".to_owned());
         }
     }
 
@@ -550,9 +544,9 @@ impl CartographerLesson {
     /// of the pose graph.
     pub fn step_optimization(&mut self) {
         self.catch_up = None;
-        self.time.apply(TimeAction::StepPhase);
+        self.frame.time.apply(TimeAction::StepPhase);
         if self.step_until(|p| matches!(p, CartographerPhase::Optimization { .. })) {
-            self.note = self.sim().last_optimization.map(|o| {
+            self.frame.note = self.sim().last_optimization.map(|o| {
                 format!(
                     "Optimized after scan {}: cost {} → {} in {} iterations; nodes moved {:.3} m \
                      on average, {:.3} m at most",
@@ -565,7 +559,7 @@ impl CartographerLesson {
                 )
             });
         } else {
-            self.note = Some("No optimization left: every scan is in".to_owned());
+            self.frame.note = Some("No optimization left: every scan is in".to_owned());
         }
     }
 
@@ -667,7 +661,7 @@ impl CartographerLesson {
                  corrupted map (Fig. 5.10). Switching replays the run to this scan",
             );
             self.set_detection(detection);
-            ui.toggle_value(&mut self.view.grids_window, "Max grids")
+            ui.toggle_value(&mut self.frame.view.grids_window, "Max grids")
                 .on_hover_text("The precomputed grids of a finished submap (thesis Fig. 5.7)");
         });
     }
@@ -729,18 +723,6 @@ impl CartographerLesson {
             None,
         );
     }
-
-    /// The pairs that reopen this setup.
-    pub fn share_pairs(&self) -> Vec<(String, String)> {
-        let mut pairs = params::changed_pairs(&self.scenario, &default_scenario());
-        if !pairs.iter().any(|(name, _)| name == "seed") {
-            pairs.insert(0, ("seed".to_owned(), self.scenario.seed.to_string()));
-        }
-        if let Source::Log(_, Some(location)) = &self.source {
-            pairs.push(("log".to_owned(), location.clone()));
-        }
-        pairs
-    }
 }
 
 impl crate::widgets::layout::LessonPanels for CartographerLesson {
@@ -758,7 +740,7 @@ impl crate::widgets::layout::LessonPanels for CartographerLesson {
 
     fn map_ui(&mut self, ui: &mut egui::Ui) {
         self.actions_ui(ui);
-        if let Some(note) = &self.note {
+        if let Some(note) = &self.frame.note {
             ui.label(egui::RichText::new(note).color(palette::VERMILLION));
         }
         if let Some(target) = self.catch_up {
@@ -767,7 +749,7 @@ impl crate::widgets::layout::LessonPanels for CartographerLesson {
                 self.sim().scans_done()
             ));
         }
-        if self.view.grids_window {
+        if self.frame.view.grids_window {
             let mut open = true;
             map::max_grids_window(
                 ui.ctx(),
@@ -775,14 +757,14 @@ impl crate::widgets::layout::LessonPanels for CartographerLesson {
                 &mut self.grids,
                 &mut open,
             );
-            self.view.grids_window = open;
+            self.frame.view.grids_window = open;
         }
         let clicked = map::map_ui(
             ui,
             self.stepper.sim().sim(),
-            &mut self.canvas,
+            &mut self.frame.map,
             &mut self.tiles,
-            &mut self.view,
+            &mut self.frame.view,
             self.click_kidnap,
         );
         if let Some(pose) = clicked {
@@ -793,26 +775,33 @@ impl crate::widgets::layout::LessonPanels for CartographerLesson {
 }
 
 impl Lesson for CartographerLesson {
-    fn id(&self) -> &'static str {
-        LESSON_ID
+    crate::lesson::frame_accessors!();
+
+    fn trajectories(&self) -> Vec<slamlab_sim::metrics::NamedTrajectory> {
+        slamlab_sim::cartographer::export::trajectories(self.sim())
+    }
+
+    fn share_pairs(&self) -> Vec<(String, String)> {
+        let mut pairs = lesson::with_seed(
+            params::changed_pairs(&self.scenario, &default_scenario()),
+            self.scenario.seed,
+        );
+        if let Source::Log(_, Some(location)) = &self.source {
+            pairs.push(("log".to_owned(), location.clone()));
+        }
+        pairs
     }
 
     fn subtitle(&self) -> String {
         self.subtitle_text()
     }
 
-    fn notices(&self) -> Vec<String> {
-        let mut all = self.notices.clone();
-        all.extend(self.sim().notes.iter().take(3).cloned());
-        all
+    fn run_notices(&self) -> Vec<String> {
+        self.sim().notes.iter().take(3).cloned().collect()
     }
 
-    fn time(&self) -> &TimeControl {
-        &self.time
-    }
-
-    fn time_mut(&mut self) -> &mut TimeControl {
-        &mut self.time
+    fn changed_params(&self) -> Vec<(String, String)> {
+        params::changed_pairs(&self.pending.scenario, &default_scenario())
     }
 
     fn time_info(&self) -> TimeInfo {
@@ -842,8 +831,7 @@ impl Lesson for CartographerLesson {
         }
     }
 
-    fn apply_time_action(&mut self, action: TimeAction) {
-        self.time.apply(action);
+    fn on_time_action(&mut self, action: TimeAction) {
         match action {
             TimeAction::ToggleRun => {}
             TimeAction::StepPhase | TimeAction::StepTick => {
@@ -862,7 +850,7 @@ impl Lesson for CartographerLesson {
                 let input = self.input_of(&scenario);
                 match input {
                     Ok(input) => self.restart_on(scenario, input, None),
-                    Err(why) => self.note = Some(format!("Could not start over: {why}")),
+                    Err(why) => self.frame.note = Some(format!("Could not start over: {why}")),
                 }
             }
         }
@@ -883,7 +871,7 @@ impl Lesson for CartographerLesson {
             for (name, bytes) in batch {
                 match bytes {
                     Ok(bytes) => files.push((name, bytes)),
-                    Err(why) => self.note = Some(format!("Could not read {name}: {why}")),
+                    Err(why) => self.frame.note = Some(format!("Could not read {name}: {why}")),
                 }
             }
             if files.iter().any(|(name, _)| is_map_file(name)) {
@@ -913,12 +901,12 @@ impl Lesson for CartographerLesson {
             return;
         }
         if self.sim().is_done() {
-            self.time.running = false;
+            self.frame.time.running = false;
             return;
         }
         let mut stepped = false;
         let lesson = &mut *self;
-        let mut time = lesson.time.clone();
+        let mut time = lesson.frame.time.clone();
         // Phase by phase within the budget: a scan with many searches
         // spreads over frames; a tick is counted when its scan is finished.
         lesson::advance_within_ms(&mut time, dt, PHASE_BUDGET_MS, || {
@@ -929,7 +917,7 @@ impl Lesson for CartographerLesson {
             stepped = true;
             !lesson.sim().is_mid_scan()
         });
-        self.time = time;
+        self.frame.time = time;
         self.advanced = stepped;
         if stepped {
             self.note_frame(started);
@@ -941,49 +929,18 @@ impl Lesson for CartographerLesson {
     }
 
     fn wants_repaint(&self) -> bool {
-        self.time.running || self.catch_up.is_some() || self.log_fetch.is_some()
-    }
-
-    fn panels_ui(&mut self, ui: &mut egui::Ui, panels: &mut PanelVisibility, compact: bool) {
-        crate::widgets::layout::lesson_panels_ui(self, ui, panels, compact, LESSON_ID);
+        self.frame.time.running || self.catch_up.is_some() || self.log_fetch.is_some()
     }
 
     fn view_menu_ui(&mut self, ui: &mut egui::Ui) {
-        ui.checkbox(&mut self.view.legend, "Map legend");
-        ui.checkbox(&mut self.view.scan, "Current scan");
-        ui.checkbox(&mut self.view.intra, "Intra-submap constraints");
-        ui.checkbox(&mut self.view.truth, "True robot");
+        ui.checkbox(&mut self.frame.view.legend, "Map legend");
+        ui.checkbox(&mut self.frame.view.scan, "Current scan");
+        ui.checkbox(&mut self.frame.view.intra, "Intra-submap constraints");
+        ui.checkbox(&mut self.frame.view.truth, "True robot");
         ui.checkbox(
-            &mut self.view.grids_window,
+            &mut self.frame.view.grids_window,
             "Precomputed max grids (Fig. 5.7)",
         );
-    }
-
-    fn stored_settings(&self) -> serde_json::Value {
-        StoredSettings {
-            view: self.view.clone(),
-            time: self.time.clone(),
-            params: params::changed_pairs(&self.pending.scenario, &default_scenario()),
-        }
-        .to_value()
-    }
-
-    fn share_query(&self, embed: bool) -> String {
-        crate::query::build(LESSON_ID, &self.share_pairs(), embed)
-    }
-
-    fn map_view_mut(&mut self) -> Option<&mut MapView> {
-        Some(&mut self.canvas)
-    }
-
-    fn set_legend(&mut self, on: bool) -> bool {
-        self.view.legend = on;
-        true
-    }
-
-    fn set_follow(&mut self, on: bool) -> bool {
-        self.view.follow_robot = on;
-        true
     }
 
     fn plot_series(&self) -> Vec<crate::export::PlotSeries> {
@@ -1057,14 +1014,6 @@ impl Lesson for CartographerLesson {
             "next_phase": self.next_phase_text(),
             "phases_run": self.stepper.phases_run(),
         })
-    }
-
-    fn as_any(&self) -> &dyn std::any::Any {
-        self
-    }
-
-    fn as_any_mut(&mut self) -> &mut dyn std::any::Any {
-        self
     }
 }
 

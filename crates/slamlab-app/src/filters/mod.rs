@@ -15,7 +15,7 @@ mod explain;
 mod marginal;
 mod one_step;
 
-use crate::lesson::{self, Lesson, LessonStart, PanelVisibility, StoredSettings};
+use crate::lesson::{self, Lesson, LessonFrame, LessonStart, LessonView, StoredSettings};
 use crate::palette;
 use crate::time_control::{TimeAction, TimeControl, TimeInfo};
 use crate::widgets::map_canvas::MapView;
@@ -50,6 +50,8 @@ pub struct FiltersView {
     /// A narrow window's bottom panel: the error table instead of the marginal plot.
     pub table: bool,
 }
+
+impl LessonView for FiltersView {}
 
 /// The parameters of the one-step view's panel.
 const ONE_STEP_PARAMS: &[&str] = &[
@@ -89,13 +91,9 @@ pub struct FiltersLesson {
     result: Option<OneStep>,
     /// The samples' and particles' standard normal draws, kept while the prior moves.
     draws: Draws,
-    /// Why the latest belief or setting was refused (the last valid one is kept).
-    note: Option<String>,
+    /// The clock, the view, the map view, the notices and the requests.
+    pub frame: LessonFrame<FiltersView>,
     corridor: Stepper<CorridorSim>,
-    /// The lesson's clock: one tick is one corridor step (predict, update).
-    pub time: TimeControl,
-    view: FiltersView,
-    notices: Vec<String>,
     input_view: MapView,
     output_view: MapView,
     density: one_step::Density,
@@ -130,16 +128,13 @@ pub fn open(start: &LessonStart<'_>) -> Box<dyn Lesson> {
         stored.as_ref().map(|s| s.params.as_slice()),
     );
     let mut lesson = FiltersLesson::new(scenario);
-    lesson.notices.extend(notices);
-    if let Some(stored) = stored {
-        lesson.view = stored.view.clone();
-        stored.restore_clock(&mut lesson.time);
-    }
+    lesson.frame.notices.extend(notices);
+    lesson.frame = lesson.frame.restored(stored.as_ref());
     if let Some((_, v)) = start.pairs.iter().find(|(k, _)| k == "view") {
         match v.as_str() {
-            "corridor" => lesson.view.tab = Tab::Corridor,
-            "one-step" => lesson.view.tab = Tab::OneStep,
-            other => lesson.notices.push(format!(
+            "corridor" => lesson.frame.view.tab = Tab::Corridor,
+            "one-step" => lesson.frame.view.tab = Tab::OneStep,
+            other => lesson.frame.notices.push(format!(
                 "link: view={other} is not a view (one-step or corridor); showing one-step"
             )),
         }
@@ -158,10 +153,7 @@ impl FiltersLesson {
             scenario,
             result: None,
             draws: Draws::default(),
-            note: None,
-            time,
-            view: FiltersView::default(),
-            notices: Vec::new(),
+            frame: LessonFrame::new(LESSON_ID, FiltersView::default()).with_time(time),
             input_view: MapView::default(),
             output_view: MapView::default(),
             density: one_step::Density::default(),
@@ -179,12 +171,13 @@ impl FiltersLesson {
             fallback.particles = fallback.particles.max(2);
             fallback.alpha = 1.0;
             fallback.kappa = 0.0;
-            let why = lesson.note.clone();
+            let why = lesson.frame.note.clone();
             lesson.scenario = fallback;
             lesson.pending = PendingParams::new(lesson.scenario.clone());
             lesson.recompute();
             if let Some(why) = why {
                 lesson
+                    .frame
                     .notices
                     .push(format!("{why}; showing the function's default prior"));
             }
@@ -204,7 +197,7 @@ impl FiltersLesson {
 
     /// Why the latest change was refused.
     pub fn note(&self) -> Option<&str> {
-        self.note.as_deref()
+        self.frame.note.as_deref()
     }
 
     /// Where the prior's handles were drawn in the last frame (mean, first and
@@ -220,7 +213,7 @@ impl FiltersLesson {
 
     /// The view in the centre.
     pub fn tab(&self) -> Tab {
-        self.view.tab
+        self.frame.view.tab
     }
 
     /// The corridor run.
@@ -230,7 +223,7 @@ impl FiltersLesson {
 
     /// Shows a view.
     pub fn set_tab(&mut self, tab: Tab) {
-        self.view.tab = tab;
+        self.frame.view.tab = tab;
     }
 
     /// Sets a parameter from text, as the panel does, and applies it.
@@ -248,10 +241,10 @@ impl FiltersLesson {
             Ok(r) => {
                 self.marginal = marginal::histogram(&r);
                 self.result = Some(r);
-                self.note = None;
+                self.frame.note = None;
                 self.density_stale = true;
             }
-            Err(e) => self.note = Some(format!("{e}. The last valid belief is kept.")),
+            Err(e) => self.frame.note = Some(format!("{e}. The last valid belief is kept.")),
         }
         self.last_compute_ms = start.elapsed().as_secs_f64() * 1e3;
         self.computations += 1;
@@ -261,7 +254,7 @@ impl FiltersLesson {
     /// corridor parameter replays the corridor to the same step.
     fn apply_pending(&mut self) {
         let new = self.pending.scenario.clone();
-        if new == self.scenario && self.note.is_none() && self.result.is_some() {
+        if new == self.scenario && self.frame.note.is_none() && self.result.is_some() {
             // Nothing changed (a held handle that did not move): the result stands.
             return;
         }
@@ -269,7 +262,7 @@ impl FiltersLesson {
         let corridor_changed = corridor_part(&new) != corridor_part(&self.scenario);
         let last_valid = std::mem::replace(&mut self.scenario, new);
         self.recompute();
-        if self.note.is_some() && self.result.is_some() {
+        if self.frame.note.is_some() && self.result.is_some() {
             // Refused: the last valid setting stays (the note says why).
             self.scenario = last_valid;
             self.pending.scenario = self.scenario.clone();
@@ -380,14 +373,14 @@ impl FiltersLesson {
     fn parameters_panel_ui(&mut self, ui: &mut egui::Ui) {
         ui.heading("Filters: from Bayes to particles");
         ui.horizontal(|ui| {
-            ui.selectable_value(&mut self.view.tab, Tab::OneStep, "One step");
-            ui.selectable_value(&mut self.view.tab, Tab::Corridor, "Corridor");
+            ui.selectable_value(&mut self.frame.view.tab, Tab::OneStep, "One step");
+            ui.selectable_value(&mut self.frame.view.tab, Tab::Corridor, "Corridor");
         });
         ui.separator();
-        if let Some(note) = &self.note {
+        if let Some(note) = &self.frame.note {
             ui.colored_label(palette::VERMILLION, note);
         }
-        let names = match self.view.tab {
+        let names = match self.frame.view.tab {
             Tab::OneStep => {
                 let mut chosen = self.scenario.function.name();
                 ui.horizontal(|ui| {
@@ -457,7 +450,7 @@ fn corridor_part(s: &FiltersScenario) -> [f64; 8] {
 
 impl crate::widgets::layout::LessonPanels for FiltersLesson {
     fn plots_ui(&mut self, ui: &mut egui::Ui) {
-        match self.view.tab {
+        match self.frame.view.tab {
             Tab::OneStep => {
                 let height = ui.available_height();
                 let Some(r) = &self.result else {
@@ -478,11 +471,11 @@ impl crate::widgets::layout::LessonPanels for FiltersLesson {
                     // A narrow window: the plot or the table, one at a time.
                     let top = ui.cursor().top();
                     ui.horizontal(|ui| {
-                        ui.selectable_value(&mut self.view.table, false, "Marginal plot");
-                        ui.selectable_value(&mut self.view.table, true, "Error table");
+                        ui.selectable_value(&mut self.frame.view.table, false, "Marginal plot");
+                        ui.selectable_value(&mut self.frame.view.table, true, "Error table");
                     });
                     let height = height - (ui.cursor().top() - top);
-                    if self.view.table {
+                    if self.frame.view.table {
                         egui::ScrollArea::vertical()
                             .id_salt("filters_table_scroll")
                             .show(ui, |ui| explain::table_ui(ui, Some(r), compute_ms));
@@ -503,14 +496,14 @@ impl crate::widgets::layout::LessonPanels for FiltersLesson {
     }
 
     fn explanation_ui(&mut self, ui: &mut egui::Ui) {
-        match self.view.tab {
+        match self.frame.view.tab {
             Tab::OneStep => explain::one_step_ui(ui, self.result.as_ref(), &self.scenario),
             Tab::Corridor => explain::corridor_ui(ui, &self.corridor),
         }
     }
 
     fn map_ui(&mut self, ui: &mut egui::Ui) {
-        match self.view.tab {
+        match self.frame.view.tab {
             Tab::OneStep => self.one_step_map_ui(ui),
             Tab::Corridor => {
                 self.drag.on_screen = None;
@@ -521,6 +514,8 @@ impl crate::widgets::layout::LessonPanels for FiltersLesson {
 }
 
 impl Lesson for FiltersLesson {
+    crate::lesson::frame_accessors!();
+
     fn plot_series(&self) -> Vec<crate::export::PlotSeries> {
         let mut all = corridor::series(self.corridor.sim());
         if let Some(r) = &self.result {
@@ -529,27 +524,11 @@ impl Lesson for FiltersLesson {
         all
     }
 
-    fn id(&self) -> &'static str {
-        LESSON_ID
-    }
-
     fn subtitle(&self) -> String {
-        match self.view.tab {
+        match self.frame.view.tab {
             Tab::OneStep => format!("one step through {}", self.scenario.function.name()),
             Tab::Corridor => "corridor: histogram vs Kalman".to_owned(),
         }
-    }
-
-    fn notices(&self) -> Vec<String> {
-        self.notices.clone()
-    }
-
-    fn time(&self) -> &TimeControl {
-        &self.time
-    }
-
-    fn time_mut(&mut self) -> &mut TimeControl {
-        &mut self.time
     }
 
     fn time_info(&self) -> TimeInfo {
@@ -566,8 +545,7 @@ impl Lesson for FiltersLesson {
         }
     }
 
-    fn apply_time_action(&mut self, action: TimeAction) {
-        self.time.apply(action);
+    fn on_time_action(&mut self, action: TimeAction) {
         match action {
             TimeAction::ToggleRun => {}
             TimeAction::StepPhase => {
@@ -585,34 +563,22 @@ impl Lesson for FiltersLesson {
 
     fn advance(&mut self, dt: f64) {
         let corridor = &mut self.corridor;
-        lesson::advance_within_budget(&mut self.time, dt, || {
+        lesson::advance_within_budget(&mut self.frame.time, dt, || {
             corridor.step_phase();
             !slamlab_sim::stepper::Simulation::is_mid_tick(corridor.sim())
         });
     }
 
-    fn panels_ui(&mut self, ui: &mut egui::Ui, panels: &mut PanelVisibility, compact: bool) {
-        crate::widgets::layout::lesson_panels_ui(self, ui, panels, compact, LESSON_ID);
+    fn changed_params(&self) -> Vec<(String, String)> {
+        params::changed_pairs(&self.scenario, &FiltersScenario::default())
     }
 
-    fn stored_settings(&self) -> serde_json::Value {
-        StoredSettings {
-            view: self.view.clone(),
-            time: self.time.clone(),
-            params: params::changed_pairs(&self.scenario, &FiltersScenario::default()),
-        }
-        .to_value()
-    }
-
-    fn share_query(&self, embed: bool) -> String {
-        let mut pairs = params::changed_pairs(&self.scenario, &FiltersScenario::default());
-        if !pairs.iter().any(|(name, _)| name == "seed") {
-            pairs.insert(0, ("seed".to_owned(), self.scenario.seed.to_string()));
-        }
-        if self.view.tab == Tab::Corridor {
+    fn share_pairs(&self) -> Vec<(String, String)> {
+        let mut pairs = lesson::with_seed(self.changed_params(), self.scenario.seed);
+        if self.frame.view.tab == Tab::Corridor {
             pairs.push(("view".to_owned(), "corridor".to_owned()));
         }
-        crate::query::build(LESSON_ID, &pairs, embed)
+        pairs
     }
 
     fn test_state(&self) -> serde_json::Value {
@@ -634,9 +600,9 @@ impl Lesson for FiltersLesson {
         serde_json::json!({
             "tick": slamlab_sim::stepper::Simulation::tick(sim),
             "seed": self.scenario.seed,
-            "view": match self.view.tab { Tab::OneStep => "one-step", Tab::Corridor => "corridor" },
+            "view": match self.frame.view.tab { Tab::OneStep => "one-step", Tab::Corridor => "corridor" },
             "function": self.scenario.function.name(),
-            "note": self.note,
+            "note": self.frame.note,
             "samples_mean": self.result.as_ref().map(|r| [r.truth.moments.mean[0], r.truth.moments.mean[1]]),
             "samples": self.result.as_ref().map(|r| r.truth.points.len()),
             "prior": {
@@ -666,13 +632,5 @@ impl Lesson for FiltersLesson {
                 "gain_tick": sim.last_update().map(|_| sim.last_update_tick()),
             },
         })
-    }
-
-    fn as_any(&self) -> &dyn std::any::Any {
-        self
-    }
-
-    fn as_any_mut(&mut self) -> &mut dyn std::any::Any {
-        self
     }
 }

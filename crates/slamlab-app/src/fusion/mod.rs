@@ -12,9 +12,9 @@ mod plots;
 
 pub use explain::rmse_text;
 
-use crate::lesson::{self, Lesson, LessonStart, PanelVisibility, StoredSettings};
+use crate::lesson::{self, Lesson, LessonFrame, LessonStart, StoredSettings};
 use crate::palette;
-use crate::time_control::{TimeAction, TimeControl, TimeInfo};
+use crate::time_control::{TimeAction, TimeInfo};
 use crate::widgets::map_canvas::MapView;
 use crate::widgets::params_panel::{self, PendingParams};
 use egui::Color32;
@@ -82,6 +82,8 @@ pub struct FusionView {
     pub ellipses: bool,
 }
 
+crate::lesson::lesson_view!(FusionView, legend: legend);
+
 impl Default for FusionView {
     fn default() -> Self {
         Self {
@@ -98,15 +100,8 @@ impl Default for FusionView {
 pub struct FusionLesson {
     stepper: Stepper<FusionSim>,
     pending: PendingParams<FusionLessonScenario>,
-    /// The lesson's clock.
-    pub time: TimeControl,
-    /// What the map shows.
-    pub view: FusionView,
-    canvas: MapView,
-    /// Link problems and what the run had to change.
-    notices: Vec<String>,
-    /// The latest live change or refusal, shown above the map.
-    note: Option<String>,
+    /// The clock, the view, the map view, the notices and the requests.
+    pub frame: LessonFrame<FusionView>,
     /// The live noise sliders' values while one is dragged (SI units).
     noise_edit: [f64; 5],
 }
@@ -127,6 +122,7 @@ pub fn open(start: &LessonStart<'_>) -> Box<dyn Lesson> {
             match FusionLesson::new(FusionLessonScenario::default()) {
                 Ok(mut lesson) => {
                     lesson
+                        .frame
                         .notices
                         .push(format!("{why}; the default drive opens instead"));
                     lesson
@@ -140,13 +136,10 @@ pub fn open(start: &LessonStart<'_>) -> Box<dyn Lesson> {
             }
         }
     };
-    lesson.notices.splice(0..0, link_notices);
-    if let Some(stored) = stored {
-        lesson.view = stored.view.clone();
-        stored.restore_clock(&mut lesson.time);
-    }
+    lesson.frame.notices.splice(0..0, link_notices);
+    lesson.frame = lesson.frame.restored(stored.as_ref());
     if start.embed {
-        lesson.view.legend = false;
+        lesson.frame.view.legend = false;
     }
     Box::new(lesson)
 }
@@ -175,11 +168,9 @@ impl FusionLesson {
         Ok(Self {
             stepper: Stepper::with_policy(sim, (), POLICY),
             pending: PendingParams::new(setup),
-            time: TimeControl::default(),
-            view: FusionView::default(),
-            canvas: MapView::default(),
-            notices,
-            note: None,
+            frame: LessonFrame::new(LESSON_ID, FusionView::default())
+                .with_map(MapView::default())
+                .with_notices(notices),
             noise_edit,
         })
     }
@@ -191,7 +182,7 @@ impl FusionLesson {
 
     /// The map's view (its centre and scale): it fits the room, never the ellipses.
     pub fn map_view(&self) -> &MapView {
-        &self.canvas
+        &self.frame.map
     }
 
     /// The setup being edited in the parameter panel (applied on reset).
@@ -216,13 +207,15 @@ impl FusionLesson {
                 self.noise_edit = LiveNoise::ALL.map(|n| n.get(sim.live()));
                 self.stepper = Stepper::with_policy(sim, (), POLICY);
                 self.pending = PendingParams::new(setup);
-                self.notices = notices;
-                self.note = None;
+                self.frame.notices = notices;
+                self.frame.note = None;
             }
-            Err(why) => self.note = Some(format!("Could not start over: {why}; the run goes on")),
+            Err(why) => {
+                self.frame.note = Some(format!("Could not start over: {why}; the run goes on"))
+            }
         }
-        self.time.apply(TimeAction::Reset);
-        self.canvas.refit();
+        self.frame.time.apply(TimeAction::Reset);
+        self.frame.map.refit();
     }
 
     /// Applies a live change (a sensor switch, a noise, a bad reading); it is
@@ -231,16 +224,17 @@ impl FusionLesson {
         if let FusionEvent::SetNoise { value, .. } = event
             && !(value.is_finite() && value > 0.0)
         {
-            self.note = Some(format!(
+            self.frame.note = Some(format!(
                 "Noise {value} refused: a standard deviation must be a number above 0"
             ));
             return;
         }
         if self.sim().finished() && matches!(event, FusionEvent::Inject(_)) {
-            self.note = Some("The drive is over: step back or reset to inject a reading".into());
+            self.frame.note =
+                Some("The drive is over: step back or reset to inject a reading".into());
             return;
         }
-        self.note = Some(format!(
+        self.frame.note = Some(format!(
             "At {:.2} s: {}",
             self.sim().now(),
             event.describe()
@@ -262,16 +256,6 @@ impl FusionLesson {
     /// Goes back one reading.
     pub fn step_back(&mut self) -> bool {
         self.stepper.step_back()
-    }
-
-    /// The pairs that reopen this setup (the seed always).
-    pub fn share_pairs(&self) -> Vec<(String, String)> {
-        let setup = self.sim().setup();
-        let mut pairs = params::changed_pairs(setup, &FusionLessonScenario::default());
-        if !pairs.iter().any(|(name, _)| name == "seed") {
-            pairs.insert(0, ("seed".to_owned(), setup.scenario.seed.to_string()));
-        }
-        pairs
     }
 
     /// The last phase's name ("IMU: yaw rate at 12.34 s"), if any.
@@ -463,20 +447,31 @@ impl crate::widgets::layout::LessonPanels for FusionLesson {
     }
 
     fn map_ui(&mut self, ui: &mut egui::Ui) {
-        if let Some(note) = &self.note {
+        if let Some(note) = &self.frame.note {
             ui.label(egui::RichText::new(note).color(palette::VERMILLION));
         }
-        map::map_ui(ui, self.stepper.sim(), &mut self.canvas, &mut self.view);
+        map::map_ui(
+            ui,
+            self.stepper.sim(),
+            &mut self.frame.map,
+            &mut self.frame.view,
+        );
     }
 }
 
 impl Lesson for FusionLesson {
-    fn plot_series(&self) -> Vec<crate::export::PlotSeries> {
-        plots::series(self.stepper.sim())
+    crate::lesson::frame_accessors!();
+
+    fn share_pairs(&self) -> Vec<(String, String)> {
+        let setup = self.sim().setup();
+        lesson::with_seed(
+            params::changed_pairs(setup, &FusionLessonScenario::default()),
+            setup.scenario.seed,
+        )
     }
 
-    fn id(&self) -> &'static str {
-        LESSON_ID
+    fn plot_series(&self) -> Vec<crate::export::PlotSeries> {
+        plots::series(self.stepper.sim())
     }
 
     fn subtitle(&self) -> String {
@@ -484,18 +479,12 @@ impl Lesson for FusionLesson {
         format!("{} on one drive", names.join(" vs "))
     }
 
-    fn notices(&self) -> Vec<String> {
-        let mut all = self.notices.clone();
-        all.extend(self.sim().notes().iter().rev().take(3).cloned());
-        all
+    fn run_notices(&self) -> Vec<String> {
+        self.sim().notes().iter().rev().take(3).cloned().collect()
     }
 
-    fn time(&self) -> &TimeControl {
-        &self.time
-    }
-
-    fn time_mut(&mut self) -> &mut TimeControl {
-        &mut self.time
+    fn changed_params(&self) -> Vec<(String, String)> {
+        params::changed_pairs(&self.pending.scenario, &FusionLessonScenario::default())
     }
 
     fn time_info(&self) -> TimeInfo {
@@ -508,8 +497,7 @@ impl Lesson for FusionLesson {
         }
     }
 
-    fn apply_time_action(&mut self, action: TimeAction) {
-        self.time.apply(action);
+    fn on_time_action(&mut self, action: TimeAction) {
         match action {
             TimeAction::ToggleRun => {}
             TimeAction::StepPhase => self.step_phase(),
@@ -524,37 +512,20 @@ impl Lesson for FusionLesson {
 
     fn advance(&mut self, dt: f64) {
         let stepper = &mut self.stepper;
-        lesson::advance_within_budget(&mut self.time, dt, || {
+        lesson::advance_within_budget(&mut self.frame.time, dt, || {
             stepper.step_phase();
             !stepper.sim().is_mid_tick()
         });
         if self.sim().finished() {
-            self.time.running = false;
+            self.frame.time.running = false;
         }
-    }
-
-    fn panels_ui(&mut self, ui: &mut egui::Ui, panels: &mut PanelVisibility, compact: bool) {
-        crate::widgets::layout::lesson_panels_ui(self, ui, panels, compact, LESSON_ID);
     }
 
     fn view_menu_ui(&mut self, ui: &mut egui::Ui) {
-        ui.checkbox(&mut self.view.legend, "Map legend");
-        ui.checkbox(&mut self.view.odometry_path, "Raw odometry path");
-        ui.checkbox(&mut self.view.slam_poses, "SLAM poses");
-        ui.checkbox(&mut self.view.ellipses, "95% ellipses");
-    }
-
-    fn stored_settings(&self) -> serde_json::Value {
-        StoredSettings {
-            view: self.view.clone(),
-            time: self.time.clone(),
-            params: params::changed_pairs(&self.pending.scenario, &FusionLessonScenario::default()),
-        }
-        .to_value()
-    }
-
-    fn share_query(&self, embed: bool) -> String {
-        crate::query::build(LESSON_ID, &self.share_pairs(), embed)
+        ui.checkbox(&mut self.frame.view.legend, "Map legend");
+        ui.checkbox(&mut self.frame.view.odometry_path, "Raw odometry path");
+        ui.checkbox(&mut self.frame.view.slam_poses, "SLAM poses");
+        ui.checkbox(&mut self.frame.view.ellipses, "95% ellipses");
     }
 
     fn test_state(&self) -> serde_json::Value {
@@ -591,13 +562,5 @@ impl Lesson for FusionLesson {
             "sensors": [sim.sensor_on(ODOMETRY), sim.sensor_on(IMU), sim.sensor_on(SLAM)],
             "runs": runs,
         })
-    }
-
-    fn as_any(&self) -> &dyn std::any::Any {
-        self
-    }
-
-    fn as_any_mut(&mut self) -> &mut dyn std::any::Any {
-        self
     }
 }

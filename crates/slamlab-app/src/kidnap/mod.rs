@@ -9,9 +9,9 @@ mod explain;
 mod map;
 mod plots;
 
-use crate::lesson::{self, Lesson, LessonStart, PanelVisibility, StoredSettings};
+use crate::lesson::{self, Lesson, LessonFrame, LessonStart, StoredSettings};
 use crate::palette;
-use crate::time_control::{TimeAction, TimeControl, TimeInfo};
+use crate::time_control::{TimeAction, TimeInfo};
 use crate::widgets::drive::{self, PadDirection};
 use crate::widgets::dropped_files::DropInbox;
 use crate::widgets::fetch::{self, Fetch};
@@ -87,6 +87,8 @@ pub struct KidnapView {
     pub click_kidnap: bool,
 }
 
+crate::lesson::lesson_view!(KidnapView, legend: legend, follow: follow_robot);
+
 impl Default for KidnapView {
     fn default() -> Self {
         Self {
@@ -122,17 +124,10 @@ pub struct KidnapLesson {
     pending: PendingParams<MclScenario>,
     /// A map the student loaded (name, grid); used instead of the built-in one.
     loaded: Option<(String, OccupancyGrid)>,
-    /// The lesson's clock.
-    pub time: TimeControl,
-    /// What the map shows.
-    pub view: KidnapView,
-    canvas: MapView,
+    /// The clock, the view, the map view and the notices.
+    pub frame: LessonFrame<KidnapView>,
     texture: map::GridTexture,
     drag: map::KidnapDrag,
-    /// Link problems and what the run had to change.
-    notices: Vec<String>,
-    /// The latest refusal or load result, shown under the map toolbar.
-    note: Option<String>,
     /// Maps dropped on the window, while they are read.
     inbox: DropInbox,
     /// A lone image dropped or opened without its YAML, waiting for its resolution.
@@ -146,8 +141,6 @@ pub struct KidnapLesson {
     pad: Option<PadDirection>,
     /// The latest command sent to the run while driving by hand.
     sent: Option<(f64, f64)>,
-    /// The run started over on the map the URL named (for the shell's figure keys).
-    restarted_from_link: bool,
 }
 
 /// A ROS map read from a location named in the URL: first its YAML, then the
@@ -209,18 +202,15 @@ pub fn open(start: &LessonStart<'_>) -> Box<dyn Lesson> {
             );
         }
     };
-    lesson.notices.splice(0..0, link_notices);
-    if let Some(stored) = stored {
-        lesson.view = stored.view.clone();
-        stored.restore_clock(&mut lesson.time);
-    }
+    lesson.frame.notices.splice(0..0, link_notices);
+    lesson.frame = lesson.frame.restored(stored.as_ref());
     // An embed keeps the legend on: without it a lecture figure's particle clouds,
     // rays and ellipses are unexplained (`legend=0` hides it).
     if start.embed {
-        lesson.view.legend = true;
+        lesson.frame.view.legend = true;
     }
     if let Some(location) = location {
-        lesson.note = Some(format!("Loading the map {location}…"));
+        lesson.frame.note = Some(format!("Loading the map {location}…"));
         lesson.map_location = Some(MapFetch {
             location,
             started: false,
@@ -263,20 +253,17 @@ impl KidnapLesson {
             stepper: Stepper::new(sim, ()),
             pending,
             loaded: None,
-            time: TimeControl::default(),
-            view: KidnapView::default(),
-            canvas: MapView::default(),
+            frame: LessonFrame::new(LESSON_ID, KidnapView::default())
+                .with_map(MapView::default())
+                .with_notices(notices),
             texture: map::GridTexture::default(),
             drag: map::KidnapDrag::default(),
-            notices,
-            note: None,
             inbox: DropInbox::default(),
             map_picker: FilePicker::multiple(),
             lone_image: None,
             map_location: None,
             pad: None,
             sent: None,
-            restarted_from_link: false,
         })
     }
 
@@ -287,7 +274,7 @@ impl KidnapLesson {
 
     /// The latest note under the map toolbar (a refusal, what a load did).
     pub fn note(&self) -> Option<&str> {
-        self.note.as_deref()
+        self.frame.note.as_deref()
     }
 
     /// The scenario being edited in the parameter panel (applied on reset).
@@ -306,17 +293,17 @@ impl KidnapLesson {
         let (sim, notices) = match KidnapSim::open(self.pending.scenario.clone(), grid) {
             Ok(opened) => opened,
             Err(why) => {
-                self.note = Some(format!("Could not start over: {why}; the run goes on"));
+                self.frame.note = Some(format!("Could not start over: {why}; the run goes on"));
                 return;
             }
         };
         self.pending = PendingParams::new(sim.run().scenario().clone());
         self.stepper = Stepper::new(sim, ());
-        self.notices = notices;
-        self.note = None;
-        self.time.apply(TimeAction::Reset);
+        self.frame.notices = notices;
+        self.frame.note = None;
+        self.frame.time.apply(TimeAction::Reset);
         self.texture.clear();
-        self.canvas.refit();
+        self.frame.map.refit();
     }
 
     /// Applies a live event (a kidnap, scattering the particles) to the run; it is
@@ -325,10 +312,10 @@ impl KidnapLesson {
         if let KidnapEvent::KidnapTo(pose) = event
             && let Err(why) = self.stepper.sim().check_kidnap(&pose)
         {
-            self.note = Some(format!("Kidnap refused: {why}"));
+            self.frame.note = Some(format!("Kidnap refused: {why}"));
             return;
         }
-        self.note = Some(event.describe());
+        self.frame.note = Some(event.describe());
         self.stepper.apply(event);
     }
 
@@ -359,14 +346,14 @@ impl KidnapLesson {
                 bytes: bytes.clone(),
                 resolution: slamlab_sim::kidnap::session::LONE_IMAGE_RESOLUTION,
             });
-            self.note = Some(format!(
+            self.frame.note = Some(format!(
                 "{name} has no YAML: give its resolution (metres per pixel) above the map and press Load"
             ));
             return;
         }
         match slamlab_sim::kidnap::session::load_dropped_map(files) {
             Ok((name, grid, notes)) => self.use_loaded_map(name, grid, &notes),
-            Err(why) => self.note = Some(format!("Could not load the map: {why}")),
+            Err(why) => self.frame.note = Some(format!("Could not load the map: {why}")),
         }
     }
 
@@ -390,7 +377,7 @@ impl KidnapLesson {
                 &["its origin at (0, 0), as no YAML gives one".to_owned()],
             ),
             Err(why) => {
-                self.note = Some(format!("Could not load {}: {why}", image.name));
+                self.frame.note = Some(format!("Could not load {}: {why}", image.name));
                 self.lone_image = Some(image);
             }
         }
@@ -415,7 +402,7 @@ impl KidnapLesson {
         self.map_location = None;
         self.lone_image = None;
         self.reset();
-        self.note = Some(note);
+        self.frame.note = Some(note);
     }
 
     /// A picked map YAML with the image it names, read from beside it (natively the
@@ -450,21 +437,6 @@ impl KidnapLesson {
         batch
     }
 
-    /// The query string (without `?`) that reopens this setup.
-    pub fn share_pairs(&self) -> Vec<(String, String)> {
-        let scenario = self.sim().run().scenario();
-        let mut pairs = params::changed_pairs(scenario, &default_scenario());
-        if !pairs.iter().any(|(name, _)| name == "seed") {
-            pairs.insert(0, ("seed".to_owned(), scenario.seed.to_string()));
-        }
-        // A map read from a location travels in the link as that location.
-        if let Some(fetch) = self.map_location.as_ref().filter(|f| f.loaded) {
-            pairs.retain(|(name, _)| name != "map");
-            pairs.push(("map".to_owned(), fetch.location.clone()));
-        }
-        pairs
-    }
-
     /// Reads the map named by `map=` stage by stage: the YAML, then its image.
     fn poll_map_location(&mut self, ctx: &egui::Context) {
         let Some(state) = self.map_location.as_mut() else {
@@ -483,7 +455,7 @@ impl KidnapLesson {
         };
         let location = state.location.clone();
         let fail = |lesson: &mut Self, why: String| {
-            lesson.note = Some(format!(
+            lesson.frame.note = Some(format!(
                 "Could not load the map {location}: {why}; showing the {}",
                 lesson.sim().run().scenario().map
             ));
@@ -521,7 +493,7 @@ impl KidnapLesson {
                 };
                 self.load_dropped(&[(yaml_name, yaml), (image_name, bytes)]);
                 if self.loaded.is_some() {
-                    self.restarted_from_link = true;
+                    self.frame.restarted_from_link = true;
                     self.map_location = Some(MapFetch {
                         location,
                         started: true,
@@ -567,7 +539,7 @@ impl KidnapLesson {
         } else {
             KidnapEvent::Explore
         };
-        self.note = Some(if by_hand {
+        self.frame.note = Some(if by_hand {
             "Driving by hand: hold the arrow keys or WASD, or the pad above the map".to_owned()
         } else {
             event.describe()
@@ -595,7 +567,7 @@ impl KidnapLesson {
             self.stepper.apply(KidnapEvent::Drive(command.0, command.1));
         }
         if command != (0.0, 0.0) {
-            self.time.running = true;
+            self.frame.time.running = true;
         }
         self.sent = Some(command);
     }
@@ -733,7 +705,7 @@ impl crate::widgets::layout::LessonPanels for KidnapLesson {
 
     fn map_ui(&mut self, ui: &mut egui::Ui) {
         self.actions_ui(ui);
-        if let Some(note) = &self.note {
+        if let Some(note) = &self.frame.note {
             ui.label(egui::RichText::new(note).color(palette::VERMILLION));
         }
         let mut lone_action = None;
@@ -762,7 +734,7 @@ impl crate::widgets::layout::LessonPanels for KidnapLesson {
             }
             Some(false) => {
                 self.lone_image = None;
-                self.note = None;
+                self.frame.note = None;
             }
             None => {}
         }
@@ -778,9 +750,9 @@ impl crate::widgets::layout::LessonPanels for KidnapLesson {
         let request = map::map_ui(
             ui,
             self.stepper.sim().run(),
-            &mut self.canvas,
+            &mut self.frame.map,
             &mut self.texture,
-            &mut self.view,
+            &mut self.frame.view,
             &mut self.drag,
         );
         if let Some(map::MapRequest::KidnapTo(pose)) = request {
@@ -790,16 +762,32 @@ impl crate::widgets::layout::LessonPanels for KidnapLesson {
 }
 
 impl Lesson for KidnapLesson {
+    crate::lesson::frame_accessors!();
+
+    fn trajectories(&self) -> Vec<slamlab_sim::metrics::NamedTrajectory> {
+        slamlab_sim::kidnap::export::trajectories(self.sim().run())
+    }
+
+    fn share_pairs(&self) -> Vec<(String, String)> {
+        let scenario = self.sim().run().scenario();
+        let mut pairs = lesson::with_seed(
+            params::changed_pairs(scenario, &default_scenario()),
+            scenario.seed,
+        );
+        // A map read from a location travels in the link as that location.
+        if let Some(fetch) = self.map_location.as_ref().filter(|f| f.loaded) {
+            pairs.retain(|(name, _)| name != "map");
+            pairs.push(("map".to_owned(), fetch.location.clone()));
+        }
+        pairs
+    }
+
     fn keys(&self) -> Vec<(&'static str, &'static str)> {
         crate::widgets::drive::DRIVE_KEYS.to_vec()
     }
 
     fn plot_series(&self) -> Vec<crate::export::PlotSeries> {
         plots::series(self.stepper.sim().run())
-    }
-
-    fn id(&self) -> &'static str {
-        LESSON_ID
     }
 
     fn subtitle(&self) -> String {
@@ -816,18 +804,19 @@ impl Lesson for KidnapLesson {
         format!("{} on {map}", names.join(" vs "))
     }
 
-    fn notices(&self) -> Vec<String> {
-        let mut all = self.notices.clone();
-        all.extend(self.sim().run().notes().iter().rev().take(3).cloned());
-        all
+    fn run_notices(&self) -> Vec<String> {
+        self.sim()
+            .run()
+            .notes()
+            .iter()
+            .rev()
+            .take(3)
+            .cloned()
+            .collect()
     }
 
-    fn time(&self) -> &TimeControl {
-        &self.time
-    }
-
-    fn time_mut(&mut self) -> &mut TimeControl {
-        &mut self.time
+    fn changed_params(&self) -> Vec<(String, String)> {
+        params::changed_pairs(&self.pending.scenario, &default_scenario())
     }
 
     fn time_info(&self) -> TimeInfo {
@@ -841,8 +830,7 @@ impl Lesson for KidnapLesson {
         }
     }
 
-    fn apply_time_action(&mut self, action: TimeAction) {
-        self.time.apply(action);
+    fn on_time_action(&mut self, action: TimeAction) {
         match action {
             TimeAction::ToggleRun => {}
             TimeAction::StepPhase => self.step_phase(),
@@ -854,9 +842,6 @@ impl Lesson for KidnapLesson {
         }
     }
 
-    fn take_restarted_from_link(&mut self) -> bool {
-        std::mem::take(&mut self.restarted_from_link)
-    }
     fn read_input(&mut self, ctx: &egui::Context) {
         self.poll_map_location(ctx);
         let keys = if self.driving_by_hand() {
@@ -875,7 +860,7 @@ impl Lesson for KidnapLesson {
                 match bytes {
                     Ok(bytes) => files.push((name, bytes)),
                     Err(why) => {
-                        self.note = Some(format!("Could not read {name}: {why}"));
+                        self.frame.note = Some(format!("Could not read {name}: {why}"));
                         return;
                     }
                 }
@@ -886,47 +871,16 @@ impl Lesson for KidnapLesson {
 
     fn advance(&mut self, dt: f64) {
         let stepper = &mut self.stepper;
-        lesson::advance_within_budget(&mut self.time, dt, || {
+        lesson::advance_within_budget(&mut self.frame.time, dt, || {
             stepper.step_phase();
             !stepper.sim().is_mid_tick()
         });
     }
 
-    fn panels_ui(&mut self, ui: &mut egui::Ui, panels: &mut PanelVisibility, compact: bool) {
-        crate::widgets::layout::lesson_panels_ui(self, ui, panels, compact, LESSON_ID);
-    }
-
     fn view_menu_ui(&mut self, ui: &mut egui::Ui) {
-        ui.checkbox(&mut self.view.legend, "Map legend");
-        ui.checkbox(&mut self.view.rays, "Lidar rays");
-        ui.checkbox(&mut self.view.particles, "Particles");
-    }
-
-    fn stored_settings(&self) -> serde_json::Value {
-        StoredSettings {
-            view: self.view.clone(),
-            time: self.time.clone(),
-            params: params::changed_pairs(&self.pending.scenario, &default_scenario()),
-        }
-        .to_value()
-    }
-
-    fn share_query(&self, embed: bool) -> String {
-        crate::query::build(LESSON_ID, &self.share_pairs(), embed)
-    }
-
-    fn map_view_mut(&mut self) -> Option<&mut MapView> {
-        Some(&mut self.canvas)
-    }
-
-    fn set_legend(&mut self, on: bool) -> bool {
-        self.view.legend = on;
-        true
-    }
-
-    fn set_follow(&mut self, on: bool) -> bool {
-        self.view.follow_robot = on;
-        true
+        ui.checkbox(&mut self.frame.view.legend, "Map legend");
+        ui.checkbox(&mut self.frame.view.rays, "Lidar rays");
+        ui.checkbox(&mut self.frame.view.particles, "Particles");
     }
 
     fn test_state(&self) -> serde_json::Value {
@@ -965,13 +919,5 @@ impl Lesson for KidnapLesson {
             "kidnap_tick": run.kidnap_tick(),
             "filters": filters,
         })
-    }
-
-    fn as_any(&self) -> &dyn std::any::Any {
-        self
-    }
-
-    fn as_any_mut(&mut self) -> &mut dyn std::any::Any {
-        self
     }
 }

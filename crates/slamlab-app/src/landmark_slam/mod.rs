@@ -14,8 +14,8 @@ mod map;
 mod params_panel;
 mod plots;
 
-use crate::lesson::{self, Lesson, LessonStart, PanelVisibility, StoredSettings};
-use crate::time_control::{TimeAction, TimeControl, TimeInfo};
+use crate::lesson::{self, Lesson, LessonFrame, LessonStart, PanelVisibility, StoredSettings};
+use crate::time_control::{TimeAction, TimeInfo};
 use serde::{Deserialize, Serialize};
 use slamlab_core::Pose2;
 use slamlab_core::kalman::LandmarkSlam;
@@ -57,6 +57,8 @@ pub struct ViewOptions {
     pub many_runs: bool,
 }
 
+crate::lesson::lesson_view!(ViewOptions, legend: legend, follow: follow_robot);
+
 impl Default for ViewOptions {
     fn default() -> Self {
         Self {
@@ -97,20 +99,15 @@ pub struct LandmarkSlamLesson {
     session: LandmarkSession,
     pending: LandmarkScenario,
     pending_issues: BTreeMap<String, String>,
-    /// The lesson's clock.
-    pub time: TimeControl,
-    /// What the map shows.
-    pub view: ViewOptions,
+    /// The clock, the view, the map view, the notices and the requests.
+    pub frame: LessonFrame<ViewOptions>,
     /// Manual driving.
     pub drive: drive::DriveState,
-    map_view: crate::widgets::map_canvas::MapView,
     heatmap: heatmap::HeatmapState,
     /// The "Many runs" window's study.
     pub many_runs: many_runs::ManyRunsState,
     /// Bumped whenever the session changes, so caches know when to refresh.
     version: u64,
-    /// Problems with the link the lesson was opened with.
-    link_notices: Vec<String>,
 }
 
 /// Opens the lesson from the URL's pairs, with what it stored last time (the
@@ -123,20 +120,17 @@ pub fn open(start: &LessonStart<'_>) -> Box<dyn Lesson> {
         stored.as_ref().map(|s| s.params.as_slice()),
     );
     let mut lesson = LandmarkSlamLesson::new(scenario);
-    lesson.link_notices = link_notices;
+    lesson.frame.notices = link_notices;
     // A lecture figure looks the same for every student: the view a student left
     // in the full app (an open heatmap, say) stays there.
-    if let Some(stored) = stored {
-        lesson.view = stored.view.clone();
-        stored.restore_clock(&mut lesson.time);
-    }
+    lesson.frame = lesson.frame.restored(stored.as_ref());
     if let Some(trials) = start.many_runs {
         lesson.start_many_runs(trials);
     }
     if start.embed {
         // A lecture figure is small: the map gets the room, and the legend is one
         // click away (every element also has a tooltip).
-        lesson.view.legend = false;
+        lesson.frame.view.legend = false;
     }
     Box::new(lesson)
 }
@@ -150,14 +144,12 @@ impl LandmarkSlamLesson {
             session,
             pending,
             pending_issues: BTreeMap::new(),
-            time: TimeControl::default(),
-            view: ViewOptions::default(),
+            frame: LessonFrame::new(LESSON_ID, ViewOptions::default())
+                .with_map(crate::widgets::map_canvas::MapView::default()),
             drive: drive::DriveState::default(),
-            map_view: crate::widgets::map_canvas::MapView::default(),
             heatmap: heatmap::HeatmapState::default(),
             many_runs: many_runs::ManyRunsState::default(),
             version: 0,
-            link_notices: Vec::new(),
         }
     }
 
@@ -230,9 +222,9 @@ impl LandmarkSlamLesson {
     pub fn reset(&mut self) {
         self.session = LandmarkSession::new(self.pending.clone());
         self.pending = self.session.scenario().clone();
-        self.time.apply(TimeAction::Reset);
+        self.frame.time.apply(TimeAction::Reset);
         self.drive.stop();
-        self.map_view.refit();
+        self.frame.map.refit();
         self.version += 1;
     }
 
@@ -266,7 +258,7 @@ impl LandmarkSlamLesson {
 
     /// Opens the "Many runs" window and starts `trials` runs of the current scenario.
     pub fn start_many_runs(&mut self, trials: usize) {
-        self.view.many_runs = true;
+        self.frame.view.many_runs = true;
         self.many_runs.trials = trials;
         self.many_runs.start(&self.session);
     }
@@ -303,37 +295,15 @@ impl LandmarkSlamLesson {
         self.session.phases_run() > 0 && cost <= 2_000_000_000
     }
 
-    /// Does what a time-bar button or shortcut asks.
-    pub fn apply_time_action(&mut self, action: TimeAction) {
-        match action {
-            TimeAction::ToggleRun => self.time.apply(action),
-            TimeAction::StepPhase => {
-                self.time.apply(action);
-                self.step_phase();
-            }
-            TimeAction::StepTick => {
-                self.time.apply(action);
-                self.step_tick();
-            }
-            TimeAction::StepBack => {
-                self.time.apply(action);
-                if self.can_step_back() && self.session.step_back() {
-                    self.version += 1;
-                }
-            }
-            TimeAction::Reset => self.reset(),
-        }
-    }
-
     /// Runs the ticks the clock owes after `dt` seconds of real time, phase by phase,
     /// within the frame budget (so that even 500 landmarks keep the page responsive).
     pub fn advance(&mut self, dt: f64) {
-        if self.time.running {
+        if self.frame.time.running {
             self.apply_drive_command();
         }
         let session = &mut self.session;
         let mut phases = 0_u64;
-        lesson::advance_within_budget(&mut self.time, dt, || {
+        lesson::advance_within_budget(&mut self.frame.time, dt, || {
             session.step_phase();
             phases += 1;
             !session.is_mid_tick()
@@ -367,43 +337,6 @@ impl LandmarkSlamLesson {
         }
     }
 
-    /// Things the user should know: what the session had to change, and the errors
-    /// of the latest phase.
-    pub fn notices(&self) -> Vec<String> {
-        let mut notices = self.link_notices.clone();
-        notices.extend(self.session.notices().iter().cloned());
-        notices.extend(
-            self.session
-                .filters()
-                .iter()
-                .filter_map(|run| run.last_error.clone()),
-        );
-        notices
-    }
-
-    /// `key=value` pairs that reproduce the running setup: the seed and every
-    /// parameter that differs from the lesson's start (which a link opens on).
-    pub fn share_pairs(&self) -> Vec<(String, String)> {
-        let mut pairs = changed_pairs(&self.session.scenario_now());
-        if !pairs.iter().any(|(name, _)| name == "seed") {
-            pairs.insert(
-                0,
-                ("seed".to_owned(), self.session.scenario().seed.to_string()),
-            );
-        }
-        pairs
-    }
-
-    /// The query string (without `?`) that opens this setup: the lesson, the share
-    /// pairs, `many-runs=N` while the "Many runs" window is open, and `embed=1` if asked.
-    pub fn share_query(&self, embed: bool) -> String {
-        let mut pairs = self.share_pairs();
-        if self.view.many_runs {
-            pairs.push(("many-runs".to_owned(), self.many_runs.trials.to_string()));
-        }
-        crate::query::build(LESSON_ID, &pairs, embed)
-    }
-
     /// Pairs of the pending scenario that differ from the lesson's defaults, for saving.
     pub fn pending_pairs(&self) -> Vec<(String, String)> {
         changed_pairs(&self.pending)
@@ -412,9 +345,9 @@ impl LandmarkSlamLesson {
     /// Does anything need another frame soon (running, a drive key held, the
     /// "Many runs" window at work)?
     pub fn wants_repaint(&self) -> bool {
-        self.time.running
+        self.frame.time.running
             || self.drive.is_active()
-            || (self.view.many_runs && self.many_runs.is_running())
+            || (self.frame.view.many_runs && self.many_runs.is_running())
     }
 
     /// Reads the drive keys (arrows, WASD) while driving by hand. Starting to drive
@@ -426,8 +359,8 @@ impl LandmarkSlamLesson {
         }
         self.drive.keys = drive::keyboard_command(ctx);
         let active = self.drive.is_active();
-        if active && !self.drive.was_active && !self.time.running {
-            self.time.apply(TimeAction::ToggleRun);
+        if active && !self.drive.was_active && !self.frame.time.running {
+            self.frame.time.apply(TimeAction::ToggleRun);
         }
         self.drive.was_active = active;
     }
@@ -436,7 +369,7 @@ impl LandmarkSlamLesson {
     /// and the map (centre), plus the heatmap window.
     pub fn panels_ui(&mut self, ui: &mut egui::Ui, panels: &mut PanelVisibility, compact: bool) {
         crate::widgets::layout::lesson_panels_ui(self, ui, panels, compact, "landmark");
-        if self.view.heatmap {
+        if self.frame.view.heatmap {
             let mut open = true;
             // Beside the map where there is room (the right of the window), inside the
             // frame always: a lecture iframe of 800 x 500 included.
@@ -454,19 +387,19 @@ impl LandmarkSlamLesson {
                 .show(ui.ctx(), |ui| {
                     heatmap::heatmap_ui(ui, &self.session, &mut self.heatmap, self.version);
                 });
-            self.view.heatmap = open;
+            self.frame.view.heatmap = open;
         }
         // Esc closes the windows over the map, the one on top (Many runs) first.
-        if (self.view.many_runs || self.view.heatmap)
+        if (self.frame.view.many_runs || self.frame.view.heatmap)
             && ui.input(|i| i.key_pressed(egui::Key::Escape))
         {
-            if self.view.many_runs {
-                self.view.many_runs = false;
+            if self.frame.view.many_runs {
+                self.frame.view.many_runs = false;
             } else {
-                self.view.heatmap = false;
+                self.frame.view.heatmap = false;
             }
         }
-        if self.view.many_runs {
+        if self.frame.view.many_runs {
             let mut open = true;
             // As large as it needs, as small as a lecture page's iframe.
             let screen = ui.ctx().content_rect();
@@ -487,7 +420,7 @@ impl LandmarkSlamLesson {
                             many_runs::many_runs_ui(ui, &mut self.many_runs, &self.session);
                         });
                 });
-            self.view.many_runs = open;
+            self.frame.view.many_runs = open;
         }
     }
 
@@ -527,14 +460,75 @@ impl crate::widgets::layout::LessonPanels for LandmarkSlamLesson {
         map::map_ui(
             ui,
             &self.session,
-            &mut self.map_view,
-            &mut self.view,
+            &mut self.frame.map,
+            &mut self.frame.view,
             &mut self.drive,
         );
     }
 }
 
 impl Lesson for LandmarkSlamLesson {
+    crate::lesson::frame_accessors!();
+
+    fn trajectories(&self) -> Vec<slamlab_sim::metrics::NamedTrajectory> {
+        slamlab_sim::landmark_slam::export::trajectories(&self.session)
+    }
+
+    fn landmark_maps(&self) -> Vec<(String, Vec<slamlab_sim::io::trajectory::LandmarkRow>)> {
+        slamlab_sim::landmark_slam::export::landmarks(&self.session)
+    }
+
+    fn changed_params(&self) -> Vec<(String, String)> {
+        self.pending_pairs()
+    }
+
+    /// The query string (without `?`) that opens this setup: the lesson, the share
+    /// pairs, `many-runs=N` while the "Many runs" window is open, and `embed=1` if asked.
+    fn share_query(&self, embed: bool) -> String {
+        let mut pairs = self.share_pairs();
+        if self.frame.view.many_runs {
+            pairs.push(("many-runs".to_owned(), self.many_runs.trials.to_string()));
+        }
+        crate::query::build(LESSON_ID, &pairs, embed)
+    }
+
+    /// `key=value` pairs that reproduce the running setup: the seed and every
+    /// parameter that differs from the lesson's start (which a link opens on).
+    fn share_pairs(&self) -> Vec<(String, String)> {
+        lesson::with_seed(
+            changed_pairs(&self.session.scenario_now()),
+            self.session.scenario().seed,
+        )
+    }
+
+    /// What the session had to change, and the errors of the latest phase.
+    fn run_notices(&self) -> Vec<String> {
+        let mut notices = Vec::new();
+        notices.extend(self.session.notices().iter().cloned());
+        notices.extend(
+            self.session
+                .filters()
+                .iter()
+                .filter_map(|run| run.last_error.clone()),
+        );
+        notices
+    }
+
+    /// Does what a time-bar button or shortcut asks.
+    fn on_time_action(&mut self, action: TimeAction) {
+        match action {
+            TimeAction::ToggleRun => {}
+            TimeAction::StepPhase => self.step_phase(),
+            TimeAction::StepTick => self.step_tick(),
+            TimeAction::StepBack => {
+                if self.can_step_back() && self.session.step_back() {
+                    self.version += 1;
+                }
+            }
+            TimeAction::Reset => self.reset(),
+        }
+    }
+
     fn keys(&self) -> Vec<(&'static str, &'static str)> {
         crate::widgets::drive::DRIVE_KEYS.to_vec()
     }
@@ -543,32 +537,12 @@ impl Lesson for LandmarkSlamLesson {
         plots::series(&self.session)
     }
 
-    fn id(&self) -> &'static str {
-        LESSON_ID
-    }
-
     fn subtitle(&self) -> String {
         self.filters_title()
     }
 
-    fn notices(&self) -> Vec<String> {
-        LandmarkSlamLesson::notices(self)
-    }
-
-    fn time(&self) -> &TimeControl {
-        &self.time
-    }
-
-    fn time_mut(&mut self) -> &mut TimeControl {
-        &mut self.time
-    }
-
     fn time_info(&self) -> TimeInfo {
         LandmarkSlamLesson::time_info(self)
-    }
-
-    fn apply_time_action(&mut self, action: TimeAction) {
-        LandmarkSlamLesson::apply_time_action(self, action);
     }
 
     fn read_input(&mut self, ctx: &egui::Context) {
@@ -588,35 +562,9 @@ impl Lesson for LandmarkSlamLesson {
     }
 
     fn view_menu_ui(&mut self, ui: &mut egui::Ui) {
-        ui.checkbox(&mut self.view.legend, "Map legend");
-        ui.checkbox(&mut self.view.heatmap, "Covariance heatmap");
-        ui.checkbox(&mut self.view.many_runs, "Many runs (average NEES)");
-    }
-
-    fn stored_settings(&self) -> serde_json::Value {
-        StoredSettings {
-            view: self.view.clone(),
-            time: self.time.clone(),
-            params: self.pending_pairs(),
-        }
-        .to_value()
-    }
-
-    fn share_query(&self, embed: bool) -> String {
-        LandmarkSlamLesson::share_query(self, embed)
-    }
-
-    // The shell's figure keys (zoom=, legend=, follow=).
-    fn map_view_mut(&mut self) -> Option<&mut crate::widgets::map_canvas::MapView> {
-        Some(&mut self.map_view)
-    }
-    fn set_legend(&mut self, on: bool) -> bool {
-        self.view.legend = on;
-        true
-    }
-    fn set_follow(&mut self, on: bool) -> bool {
-        self.view.follow_robot = on;
-        true
+        ui.checkbox(&mut self.frame.view.legend, "Map legend");
+        ui.checkbox(&mut self.frame.view.heatmap, "Covariance heatmap");
+        ui.checkbox(&mut self.frame.view.many_runs, "Many runs (average NEES)");
     }
 
     fn test_state(&self) -> serde_json::Value {
@@ -636,14 +584,6 @@ impl Lesson for LandmarkSlamLesson {
             "filters": session.filters().iter().map(|run| run.kind.name()).collect::<Vec<_>>(),
             "many_runs": many_runs,
         })
-    }
-
-    fn as_any(&self) -> &dyn std::any::Any {
-        self
-    }
-
-    fn as_any_mut(&mut self) -> &mut dyn std::any::Any {
-        self
     }
 }
 
@@ -717,13 +657,13 @@ mod tests {
     fn the_share_link_opens_many_runs_when_its_window_is_open() {
         let mut lesson = LandmarkSlamLesson::new(default_scenario());
         assert_eq!(lesson.share_query(false), "lesson=landmark-slam&seed=1");
-        lesson.view.many_runs = true;
+        lesson.frame.view.many_runs = true;
         lesson.many_runs.trials = 80;
         let link = lesson.share_query(true);
         assert_eq!(link, "lesson=landmark-slam&seed=1&many-runs=80&embed=1");
         let opened = reopen(&link);
         let reopened = opened.as_any().downcast_ref::<LandmarkSlamLesson>();
-        assert!(reopened.is_some_and(|l| l.view.many_runs && l.many_runs.trials == 80));
+        assert!(reopened.is_some_and(|l| l.frame.view.many_runs && l.many_runs.trials == 80));
     }
 
     #[test]
@@ -743,7 +683,7 @@ mod tests {
     #[test]
     fn advancing_runs_whole_ticks() {
         let mut lesson = LandmarkSlamLesson::new(LandmarkScenario::default());
-        lesson.time.speed_tps = 10.0;
+        lesson.frame.time.speed_tps = 10.0;
         lesson.apply_time_action(TimeAction::ToggleRun);
         lesson.advance(0.2);
         assert_eq!(lesson.session().tick(), 2);

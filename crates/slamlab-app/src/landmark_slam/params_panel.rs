@@ -3,6 +3,7 @@
 //! URL and the command line share one vocabulary and one validation.
 
 use super::LandmarkSlamLesson;
+use crate::lesson::Lesson as _;
 use crate::palette;
 use crate::widgets::sources;
 use slamlab_sim::EstimatorKind;

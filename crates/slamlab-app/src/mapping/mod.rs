@@ -13,9 +13,9 @@ mod plots;
 
 pub use particles::ShownMap;
 
-use crate::lesson::{self, Lesson, LessonRequest, LessonStart, PanelVisibility, StoredSettings};
+use crate::lesson::{self, Lesson, LessonFrame, LessonRequest, LessonStart, StoredSettings};
 use crate::palette;
-use crate::time_control::{TimeAction, TimeControl, TimeInfo};
+use crate::time_control::{TimeAction, TimeInfo};
 use crate::widgets::dropped_files::DropInbox;
 use crate::widgets::fetch::Fetch;
 use crate::widgets::file_picker::{FilePicker, PickedFile};
@@ -106,6 +106,8 @@ pub struct MappingView {
     pub follow_robot: bool,
 }
 
+crate::lesson::lesson_view!(MappingView, legend: legend, follow: follow_robot);
+
 impl Default for MappingView {
     fn default() -> Self {
         Self {
@@ -143,19 +145,12 @@ pub struct MappingLesson {
     catch_up: Option<usize>,
     /// Milliseconds each scan took (index = scan), as measured here.
     scan_ms: ScanTimes,
-    /// The lesson's clock.
-    pub time: TimeControl,
-    /// What the map shows.
-    pub view: MappingView,
-    canvas: MapView,
+    /// The clock, the view, the map view, the notices and the requests.
+    pub frame: LessonFrame<MappingView>,
     tiles: map::GridTiles,
-    notices: Vec<String>,
-    note: Option<String>,
     inbox: DropInbox,
     log_picker: FilePicker,
     log_fetch: Option<LogFetch>,
-    /// A request for the shell (a file to save, another lesson to open).
-    request: Option<LessonRequest>,
     /// The beam of the current scan whose update is inspected, if any.
     pub beam: Option<usize>,
     /// A ROS map the student loaded for the simulated robot to explore
@@ -236,13 +231,10 @@ pub fn open(start: &LessonStart<'_>) -> Box<dyn Lesson> {
         Ok(lesson) => lesson,
         Err(why) => return lesson::open_instead(start, format!("Mapping could not open: {why}")),
     };
-    lesson.notices.splice(0..0, link_notices);
-    if let Some(stored) = stored {
-        lesson.view = stored.view.clone();
-        stored.restore_clock(&mut lesson.time);
-    }
+    lesson.frame.notices.splice(0..0, link_notices);
+    lesson.frame = lesson.frame.restored(stored.as_ref());
     if let Some(location) = location {
-        lesson.note = Some(format!("Loading the log {location}…"));
+        lesson.frame.note = Some(format!("Loading the log {location}…"));
         lesson.log_fetch = Some(LogFetch {
             location,
             started: false,
@@ -266,16 +258,13 @@ impl MappingLesson {
             log_location: None,
             catch_up: None,
             scan_ms: ScanTimes::default(),
-            time: TimeControl::default(),
-            view: MappingView::default(),
-            canvas: MapView::default(),
+            frame: LessonFrame::new(LESSON_ID, MappingView::default())
+                .with_map(MapView::default())
+                .with_notices(notices),
             tiles: map::GridTiles::default(),
-            notices,
-            note: None,
             inbox: DropInbox::default(),
             log_picker: FilePicker::multiple(),
             log_fetch: None,
-            request: None,
             beam: None,
             loaded_map: None,
             builtin_chosen: false,
@@ -311,7 +300,7 @@ impl MappingLesson {
         let (name, grid, notes) = match slamlab_sim::kidnap::session::load_dropped_map(files) {
             Ok(loaded) => loaded,
             Err(why) => {
-                self.note = Some(format!("Could not load the map: {why}; the run goes on"));
+                self.frame.note = Some(format!("Could not load the map: {why}; the run goes on"));
                 return;
             }
         };
@@ -333,7 +322,7 @@ impl MappingLesson {
                 self.log_name = None;
                 self.log_location = None;
                 self.restart(scenario, None);
-                self.note = Some(format!(
+                self.frame.note = Some(format!(
                     "The robot explores {name}: {w} x {h} cells at {r} m{}",
                     if notes.is_empty() {
                         String::new()
@@ -343,7 +332,8 @@ impl MappingLesson {
                 ));
             }
             Err(why) => {
-                self.note = Some(format!("Could not drive in {name}: {why}; the run goes on"));
+                self.frame.note =
+                    Some(format!("Could not drive in {name}: {why}; the run goes on"));
             }
         }
     }
@@ -355,7 +345,7 @@ impl MappingLesson {
 
     /// The latest note under the map toolbar.
     pub fn note(&self) -> Option<&str> {
-        self.note.as_deref()
+        self.frame.note.as_deref()
     }
 
     /// Sets a parameter of the pending scenario from text, as the panel does.
@@ -381,7 +371,7 @@ impl MappingLesson {
             match self.simulate_current(&scenario) {
                 Ok(input) => self.input = Arc::new(input),
                 Err(why) => {
-                    self.note = Some(format!("Could not start over: {why}; the run goes on"));
+                    self.frame.note = Some(format!("Could not start over: {why}; the run goes on"));
                     return;
                 }
             }
@@ -396,7 +386,7 @@ impl MappingLesson {
         let (session, notices) = MappingSession::new(scenario, self.input.clone());
         self.pending = PendingParams::new(session.scenario().clone());
         self.session = session;
-        self.notices = notices;
+        self.frame.notices = notices;
         self.catch_up = catch_up.filter(|&n| n > 0);
         self.scan_ms = ScanTimes::default();
         self.tiles.clear();
@@ -405,8 +395,8 @@ impl MappingLesson {
             self.shown = ShownMap::Best;
         }
         if catch_up.is_none() {
-            self.time.apply(TimeAction::Reset);
-            self.canvas.refit();
+            self.frame.time.apply(TimeAction::Reset);
+            self.frame.map.refit();
         }
     }
 
@@ -417,7 +407,8 @@ impl MappingLesson {
             return;
         }
         if source == PoseSource::Truth && self.input.truth.is_none() {
-            self.note = Some("A real log has no true poses: choose another pose source".to_owned());
+            self.frame.note =
+                Some("A real log has no true poses: choose another pose source".to_owned());
             return;
         }
         let done = self.session.sim().scans_done();
@@ -425,7 +416,7 @@ impl MappingLesson {
         scenario.poses = source;
         self.pending.scenario.poses = source;
         self.restart(scenario, Some(done));
-        self.note = Some(format!(
+        self.frame.note = Some(format!(
             "Mapping again with {} up to scan {done}",
             source.label()
         ));
@@ -438,12 +429,12 @@ impl MappingLesson {
         let log = match LaserLog::from_bytes(bytes) {
             Ok(log) => log,
             Err(why) => {
-                self.note = Some(format!("Could not read the log {name}: {why}"));
+                self.frame.note = Some(format!("Could not read the log {name}: {why}"));
                 return;
             }
         };
         if log.scans.is_empty() {
-            self.note = Some(format!("{name} has no laser scans"));
+            self.frame.note = Some(format!("{name} has no laser scans"));
             return;
         }
         let input = log_input(&log, name);
@@ -456,7 +447,7 @@ impl MappingLesson {
             scenario.poses = PoseSource::ScanToMap;
         }
         self.restart(scenario, None);
-        self.note = Some(format!(
+        self.frame.note = Some(format!(
             "Loaded {name}: {count} scans over {:.0} s; no ground truth, so no error plot",
             span
         ));
@@ -486,7 +477,7 @@ impl MappingLesson {
                 }
             }
             Err(why) => {
-                self.note = Some(format!(
+                self.frame.note = Some(format!(
                     "Could not load the log {location}: {why}; the simulated robot maps instead"
                 ));
             }
@@ -509,7 +500,7 @@ impl MappingLesson {
     /// The built map as a ROS map (YAML and PGM), for download.
     fn export_map(&mut self) {
         let Some(grid) = self.session.sim().grid().to_occupancy_grid(0.65, 0.196) else {
-            self.note = Some("The map is empty: nothing to export yet".to_owned());
+            self.frame.note = Some("The map is empty: nothing to export yet".to_owned());
             return;
         };
         match slamlab_sim::io::ros_map::export_map(
@@ -518,7 +509,7 @@ impl MappingLesson {
             slamlab_sim::io::ros_map::ImageFormat::Pgm,
         ) {
             Ok((yaml, image)) => {
-                self.request = Some(LessonRequest::Save(vec![
+                self.frame.request = Some(LessonRequest::Save(vec![
                     crate::export::ExportFile {
                         name: "slamlab-map.yaml".to_owned(),
                         mime: "text/yaml",
@@ -531,18 +522,18 @@ impl MappingLesson {
                     },
                 ]));
             }
-            Err(why) => self.note = Some(format!("Could not export the map: {why}")),
+            Err(why) => self.frame.note = Some(format!("Could not export the map: {why}")),
         }
     }
 
     /// Opens the Monte Carlo localization lesson on the map built so far.
     fn localize_in_map(&mut self) {
         let Some(grid) = self.session.sim().grid().to_occupancy_grid(0.65, 0.196) else {
-            self.note = Some("The map is empty: map some scans first".to_owned());
+            self.frame.note = Some("The map is empty: map some scans first".to_owned());
             return;
         };
         let name = format!("the map built from {}", self.input.name);
-        self.request = Some(LessonRequest::LocalizeInMap { name, grid });
+        self.frame.request = Some(LessonRequest::LocalizeInMap { name, grid });
     }
 
     fn next_phase_label(&self) -> String {
@@ -601,8 +592,8 @@ impl MappingLesson {
 
     /// Follows the robot at `scale` pixels per metre or closer.
     fn look_closer(&mut self, scale: f32) {
-        self.view.follow_robot = true;
-        self.canvas.zoom_to_at_least(scale);
+        self.frame.view.follow_robot = true;
+        self.frame.map.zoom_to_at_least(scale);
     }
 
     fn mapping_parameters_ui(&mut self, ui: &mut egui::Ui) {
@@ -730,19 +721,6 @@ impl MappingLesson {
             "update_ms_median": update_ms.get(update_ms.len() / 2),
         })
     }
-
-    /// The pairs that reopen this setup.
-    pub fn share_pairs(&self) -> Vec<(String, String)> {
-        let scenario = self.session.scenario();
-        let mut pairs = params::changed_pairs(scenario, &default_scenario());
-        if !pairs.iter().any(|(name, _)| name == "seed") {
-            pairs.insert(0, ("seed".to_owned(), scenario.seed.to_string()));
-        }
-        if let Some(location) = &self.log_location {
-            pairs.push(("log".to_owned(), location.clone()));
-        }
-        pairs
-    }
 }
 
 impl crate::widgets::layout::LessonPanels for MappingLesson {
@@ -775,7 +753,7 @@ impl crate::widgets::layout::LessonPanels for MappingLesson {
                 .sim_mut_untracked()
                 .keep_grid_before_insert(self.beam.is_some());
         }
-        if let Some(note) = &self.note {
+        if let Some(note) = &self.frame.note {
             ui.label(egui::RichText::new(note).color(palette::VERMILLION));
         }
         if let Some(target) = self.catch_up {
@@ -806,9 +784,9 @@ impl crate::widgets::layout::LessonPanels for MappingLesson {
         if let Some(clicked) = map::map_ui(
             ui,
             &self.session,
-            &mut self.canvas,
+            &mut self.frame.map,
             &mut self.tiles,
-            &mut self.view,
+            &mut self.frame.view,
             self.beam,
             grid,
             highlighted,
@@ -819,8 +797,22 @@ impl crate::widgets::layout::LessonPanels for MappingLesson {
 }
 
 impl Lesson for MappingLesson {
-    fn id(&self) -> &'static str {
-        LESSON_ID
+    crate::lesson::frame_accessors!();
+
+    fn trajectories(&self) -> Vec<slamlab_sim::metrics::NamedTrajectory> {
+        slamlab_sim::mapping::export::trajectories(&self.session)
+    }
+
+    fn share_pairs(&self) -> Vec<(String, String)> {
+        let scenario = self.session.scenario();
+        let mut pairs = lesson::with_seed(
+            params::changed_pairs(scenario, &default_scenario()),
+            scenario.seed,
+        );
+        if let Some(location) = &self.log_location {
+            pairs.push(("log".to_owned(), location.clone()));
+        }
+        pairs
     }
 
     fn subtitle(&self) -> String {
@@ -831,20 +823,17 @@ impl Lesson for MappingLesson {
         )
     }
 
-    fn notices(&self) -> Vec<String> {
-        let mut all = self.notices.clone();
-        if let Some(note) = self.session.sim().note() {
-            all.push(note.to_owned());
-        }
-        all
+    fn run_notices(&self) -> Vec<String> {
+        self.session
+            .sim()
+            .note()
+            .map(str::to_owned)
+            .into_iter()
+            .collect()
     }
 
-    fn time(&self) -> &TimeControl {
-        &self.time
-    }
-
-    fn time_mut(&mut self) -> &mut TimeControl {
-        &mut self.time
+    fn changed_params(&self) -> Vec<(String, String)> {
+        params::changed_pairs(&self.pending.scenario, &default_scenario())
     }
 
     fn time_info(&self) -> TimeInfo {
@@ -861,8 +850,7 @@ impl Lesson for MappingLesson {
         }
     }
 
-    fn apply_time_action(&mut self, action: TimeAction) {
-        self.time.apply(action);
+    fn on_time_action(&mut self, action: TimeAction) {
         match action {
             TimeAction::ToggleRun => {}
             TimeAction::StepPhase => self.step_phase(),
@@ -894,7 +882,7 @@ impl Lesson for MappingLesson {
             for (name, bytes) in batch {
                 match bytes {
                     Ok(bytes) => files.push((name, bytes)),
-                    Err(why) => self.note = Some(format!("Could not read {name}: {why}")),
+                    Err(why) => self.frame.note = Some(format!("Could not read {name}: {why}")),
                 }
             }
             if files.iter().any(|(name, _)| is_map_file(name)) {
@@ -923,13 +911,13 @@ impl Lesson for MappingLesson {
             return;
         }
         if self.session.sim().is_done() {
-            self.time.running = false;
+            self.frame.time.running = false;
             return;
         }
         let session = &mut self.session;
         let scan_ms = &mut self.scan_ms;
         let mut updated = false;
-        lesson::advance_within_budget(&mut self.time, dt, || {
+        lesson::advance_within_budget(&mut self.frame.time, dt, || {
             scan_ms.timed(session, |s| {
                 updated |= s.stepper_mut().step_phase().is_filter_update();
             });
@@ -943,54 +931,19 @@ impl Lesson for MappingLesson {
     }
 
     fn wants_repaint(&self) -> bool {
-        self.time.running || self.catch_up.is_some() || self.log_fetch.is_some()
-    }
-
-    fn panels_ui(&mut self, ui: &mut egui::Ui, panels: &mut PanelVisibility, compact: bool) {
-        crate::widgets::layout::lesson_panels_ui(self, ui, panels, compact, LESSON_ID);
+        self.frame.time.running || self.catch_up.is_some() || self.log_fetch.is_some()
     }
 
     fn view_menu_ui(&mut self, ui: &mut egui::Ui) {
-        ui.checkbox(&mut self.view.legend, "Map legend");
-        ui.checkbox(&mut self.view.scan, "Current scan");
-        ui.checkbox(&mut self.view.path, "Estimated path");
-        ui.checkbox(&mut self.view.truth, "True path");
-        ui.checkbox(&mut self.view.true_map, "True map underneath");
-    }
-
-    fn stored_settings(&self) -> serde_json::Value {
-        StoredSettings {
-            view: self.view.clone(),
-            time: self.time.clone(),
-            params: params::changed_pairs(&self.pending.scenario, &default_scenario()),
-        }
-        .to_value()
-    }
-
-    fn share_query(&self, embed: bool) -> String {
-        crate::query::build(LESSON_ID, &self.share_pairs(), embed)
-    }
-
-    fn map_view_mut(&mut self) -> Option<&mut MapView> {
-        Some(&mut self.canvas)
-    }
-
-    fn set_legend(&mut self, on: bool) -> bool {
-        self.view.legend = on;
-        true
-    }
-
-    fn set_follow(&mut self, on: bool) -> bool {
-        self.view.follow_robot = on;
-        true
+        ui.checkbox(&mut self.frame.view.legend, "Map legend");
+        ui.checkbox(&mut self.frame.view.scan, "Current scan");
+        ui.checkbox(&mut self.frame.view.path, "Estimated path");
+        ui.checkbox(&mut self.frame.view.truth, "True path");
+        ui.checkbox(&mut self.frame.view.true_map, "True map underneath");
     }
 
     fn plot_series(&self) -> Vec<crate::export::PlotSeries> {
         plots::series(&self.session, &self.scan_ms.ms)
-    }
-
-    fn take_request(&mut self) -> Option<LessonRequest> {
-        self.request.take()
     }
 
     fn test_state(&self) -> serde_json::Value {
@@ -1006,7 +959,7 @@ impl Lesson for MappingLesson {
             "total_scans": self.input.scans.len(),
             "input_seconds": self.input.duration(),
             "log": self.log_name,
-            "note": self.note,
+            "note": self.frame.note,
             "seed": self.session.scenario().seed,
             "poses": summary.poses,
             "input": summary.input,
@@ -1018,13 +971,5 @@ impl Lesson for MappingLesson {
             "phase": self.session.stepper().last_phase().map(MappingPhase::label).unwrap_or_default(),
             "grid_fastslam": self.grid_fastslam_state(),
         })
-    }
-
-    fn as_any(&self) -> &dyn std::any::Any {
-        self
-    }
-
-    fn as_any_mut(&mut self) -> &mut dyn std::any::Any {
-        self
     }
 }

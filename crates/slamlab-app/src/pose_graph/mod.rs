@@ -9,7 +9,7 @@ mod explain;
 mod map;
 mod plots;
 
-use crate::lesson::{self, Lesson, LessonStart, PanelVisibility, StoredSettings};
+use crate::lesson::{self, Lesson, LessonFrame, LessonStart, StoredSettings};
 use crate::palette;
 use crate::time_control::{FRAME_BUDGET_MS, StepControls, TimeAction, TimeControl, TimeInfo};
 use crate::widgets::dropped_files::DropInbox;
@@ -62,6 +62,8 @@ pub struct PoseGraphView {
     /// Optimize at once after a vertex is dropped.
     pub reoptimize_after_drag: bool,
 }
+
+crate::lesson::lesson_view!(PoseGraphView, legend: legend);
 
 impl Default for PoseGraphView {
     fn default() -> Self {
@@ -133,11 +135,8 @@ pub struct PoseGraphLesson {
     pending: PendingParams<PoseGraphScenario>,
     /// A file the student opened (name, bytes); "Apply & reset" reopens it.
     loaded: Option<(String, Vec<u8>)>,
-    /// The lesson's clock.
-    pub time: TimeControl,
-    /// What the map shows.
-    pub view: PoseGraphView,
-    canvas: MapView,
+    /// The clock, the view, the map view, the notices and the requests.
+    pub frame: LessonFrame<PoseGraphView>,
     drag: Option<usize>,
     last_transform: Option<crate::widgets::map_canvas::MapTransform>,
     optimizing: Option<OptimizeRun>,
@@ -145,8 +144,6 @@ pub struct PoseGraphLesson {
     pub(crate) patterns: Patterns,
     marginals: Option<Vec<(usize, nalgebra::Matrix2<f64>)>>,
     comparison: Option<[KernelRun; 2]>,
-    notices: Vec<String>,
-    note: Option<String>,
     inbox: DropInbox,
     picker: FilePicker,
 }
@@ -172,19 +169,16 @@ pub fn open(start: &LessonStart<'_>) -> Box<dyn Lesson> {
                     );
                 }
             };
-            lesson.notices.push(format!(
+            lesson.frame.notices.push(format!(
                 "the link's graph could not be built ({why}); showing the default"
             ));
             lesson
         }
     };
-    lesson.notices.splice(0..0, link_notices);
-    if let Some(stored) = stored {
-        lesson.view = stored.view.clone();
-        stored.restore_clock(&mut lesson.time);
-    }
+    lesson.frame.notices.splice(0..0, link_notices);
+    lesson.frame = lesson.frame.restored(stored.as_ref());
     if start.embed {
-        lesson.view.legend = false;
+        lesson.frame.view.legend = false;
     }
     Box::new(lesson)
 }
@@ -200,9 +194,9 @@ impl PoseGraphLesson {
             session,
             pending,
             loaded: None,
-            time,
-            view: PoseGraphView::default(),
-            canvas: MapView::default(),
+            frame: LessonFrame::new(LESSON_ID, PoseGraphView::default())
+                .with_map(MapView::default())
+                .with_time(time),
             drag: None,
             last_transform: None,
             optimizing: None,
@@ -213,8 +207,6 @@ impl PoseGraphLesson {
             },
             marginals: None,
             comparison: None,
-            notices: Vec::new(),
-            note: None,
             inbox: DropInbox::default(),
             picker: FilePicker::default(),
         })
@@ -232,7 +224,7 @@ impl PoseGraphLesson {
 
     /// The latest refusal or load result.
     pub fn note(&self) -> Option<&str> {
-        self.note.as_deref()
+        self.frame.note.as_deref()
     }
 
     /// How long the latest "Optimize" took.
@@ -268,27 +260,27 @@ impl PoseGraphLesson {
         if p.kernel != s.kernel || p.kernel_width != s.kernel_width {
             match self.session.set_kernel(p.kernel, p.kernel_width) {
                 Ok(()) => self.after_edit(),
-                Err(why) => self.note = Some(why),
+                Err(why) => self.frame.note = Some(why),
             }
         }
     }
 
     fn after_edit(&mut self) {
         self.marginals = None;
-        self.time.running = false;
+        self.frame.time.running = false;
     }
 
     fn install(&mut self, session: PoseGraphSession) {
         self.session = session;
         self.pending = PendingParams::new(self.session.scenario().clone());
-        self.time.apply(TimeAction::Reset);
+        self.frame.time.apply(TimeAction::Reset);
         self.optimizing = None;
         self.last_optimize = None;
         self.patterns.dirty = true;
         self.marginals = None;
         self.comparison = None;
         self.drag = None;
-        self.canvas.refit();
+        self.frame.map.refit();
     }
 
     /// Starts over with the pending parameters (and the opened file, if any). On a
@@ -302,9 +294,11 @@ impl PoseGraphLesson {
         match opened {
             Ok(session) => {
                 self.install(session);
-                self.note = None;
+                self.frame.note = None;
             }
-            Err(why) => self.note = Some(format!("Could not start over: {why}; the graph stays")),
+            Err(why) => {
+                self.frame.note = Some(format!("Could not start over: {why}; the graph stays"))
+            }
         }
     }
 
@@ -332,7 +326,7 @@ impl PoseGraphLesson {
                 );
                 self.install(session);
                 self.loaded = Some((name.to_owned(), bytes));
-                self.note = Some(text);
+                self.frame.note = Some(text);
                 self.start_optimize();
                 // The time to convergence counts the reading and the structure analysis.
                 if let Some(run) = self.optimizing.as_mut() {
@@ -340,7 +334,7 @@ impl PoseGraphLesson {
                 }
             }
             Err(why) => {
-                self.note = Some(format!("Could not open {why}; the graph on screen stays"));
+                self.frame.note = Some(format!("Could not open {why}; the graph on screen stays"));
             }
         }
     }
@@ -353,7 +347,7 @@ impl PoseGraphLesson {
         let edges = self.session.graph().edges().len();
         match self.session.step_back() {
             Ok(_) => {
-                self.note = None;
+                self.frame.note = None;
                 if self.session.graph().edges().len() != edges {
                     self.comparison = None;
                 }
@@ -364,7 +358,7 @@ impl PoseGraphLesson {
                 pending.kernel = kernel;
                 pending.kernel_width = width;
             }
-            Err(why) => self.note = Some(why),
+            Err(why) => self.frame.note = Some(why),
         }
         self.patterns.dirty = true;
         self.marginals = None;
@@ -374,8 +368,8 @@ impl PoseGraphLesson {
     pub fn step_iteration(&mut self) {
         self.optimizing = None;
         if let Err(why) = self.session.step() {
-            self.note = Some(format!("The solver stopped: {why}"));
-            self.time.running = false;
+            self.frame.note = Some(format!("The solver stopped: {why}"));
+            self.frame.time.running = false;
         }
         self.marginals = None;
     }
@@ -383,7 +377,7 @@ impl PoseGraphLesson {
     /// Runs iterations to convergence (or the limit) within the frame budget,
     /// drawing the progress between frames.
     pub fn start_optimize(&mut self) {
-        self.time.running = false;
+        self.frame.time.running = false;
         self.marginals = None;
         self.optimizing = Some(OptimizeRun {
             started: web_time::Instant::now(),
@@ -420,7 +414,7 @@ impl PoseGraphLesson {
                 }
                 Ok(_) => {}
                 Err(why) => {
-                    self.note = Some(format!("The solver stopped: {why}"));
+                    self.frame.note = Some(format!("The solver stopped: {why}"));
                     finished = Some(false);
                     break;
                 }
@@ -444,12 +438,12 @@ impl PoseGraphLesson {
     pub fn add_wrong_loop_closure(&mut self) {
         match self.session.add_wrong_loop_closure() {
             Ok(text) => {
-                self.note = Some(format!("Added a {text}"));
+                self.frame.note = Some(format!("Added a {text}"));
                 self.patterns.dirty = true;
                 self.comparison = None;
                 self.after_edit();
             }
-            Err(why) => self.note = Some(format!("No wrong loop closure added: {why}")),
+            Err(why) => self.frame.note = Some(format!("No wrong loop closure added: {why}")),
         }
     }
 
@@ -468,19 +462,9 @@ impl PoseGraphLesson {
     /// Ends a drag: records it, and re-optimizes when the view asks for it.
     pub fn finish_drag(&mut self, index: usize) {
         self.session.finish_drag(index);
-        if self.view.reoptimize_after_drag {
+        if self.frame.view.reoptimize_after_drag {
             self.start_optimize();
         }
-    }
-
-    /// The query string pairs that reopen this setup.
-    pub fn share_pairs(&self) -> Vec<(String, String)> {
-        let scenario = self.session.scenario();
-        let mut pairs = params::changed_pairs(scenario, &default_scenario());
-        if !pairs.iter().any(|(name, _)| name == "seed") {
-            pairs.insert(0, ("seed".to_owned(), scenario.seed.to_string()));
-        }
-        pairs
     }
 
     fn solver_name(solver: SolverKind) -> &'static str {
@@ -489,7 +473,7 @@ impl PoseGraphLesson {
 
     fn ensure_marginals(&mut self) {
         if self.marginals.is_none()
-            && self.view.ellipses
+            && self.frame.view.ellipses
             && self.session.is_converged()
             && self.optimizing.is_none()
         {
@@ -503,7 +487,7 @@ impl PoseGraphLesson {
             && let Some(batch) = self.inbox.poll(ctx)
         {
             if batch.len() > 1 {
-                self.note = Some(format!(
+                self.frame.note = Some(format!(
                     "{} files were dropped; drop one pose-graph file at a time. The graph on screen stays",
                     batch.len()
                 ));
@@ -515,7 +499,7 @@ impl PoseGraphLesson {
             match bytes {
                 Ok(bytes) => self.load_file(&name, bytes),
                 Err(why) => {
-                    self.note = Some(format!(
+                    self.frame.note = Some(format!(
                         "Could not read {name}: {why}; the graph on screen stays"
                     ))
                 }
@@ -627,15 +611,15 @@ impl crate::widgets::layout::LessonPanels for PoseGraphLesson {
     }
 
     fn map_ui(&mut self, ui: &mut egui::Ui) {
-        if let Some(note) = &self.note {
+        if let Some(note) = &self.frame.note {
             ui.label(egui::RichText::new(note).color(palette::VERMILLION));
         }
         self.ensure_marginals();
         let request = map::map_ui(
             ui,
             &self.session,
-            &mut self.canvas,
-            &mut self.view,
+            &mut self.frame.map,
+            &mut self.frame.view,
             &mut self.drag,
             &mut self.last_transform,
             self.marginals.as_deref(),
@@ -644,7 +628,7 @@ impl crate::widgets::layout::LessonPanels for PoseGraphLesson {
         match request {
             Some(map::MapRequest::Move(i, x, y)) => {
                 if let Err(why) = self.drag_vertex(i, x, y) {
-                    self.note = Some(why);
+                    self.frame.note = Some(why);
                     self.drag = None;
                 }
             }
@@ -655,12 +639,32 @@ impl crate::widgets::layout::LessonPanels for PoseGraphLesson {
 }
 
 impl Lesson for PoseGraphLesson {
-    fn plot_series(&self) -> Vec<crate::export::PlotSeries> {
-        plots::series(&self.session)
+    crate::lesson::frame_accessors!();
+
+    fn trajectories(&self) -> Vec<slamlab_sim::metrics::NamedTrajectory> {
+        use slamlab_sim::metrics::TrajectoryRole;
+        use slamlab_sim::pose_graph::export::pose_trajectory;
+        vec![pose_trajectory(
+            self.session.graph(),
+            "graph",
+            TrajectoryRole::Estimate,
+        )]
     }
 
-    fn id(&self) -> &'static str {
-        LESSON_ID
+    fn estimate_clock(&self) -> Option<f64> {
+        None
+    }
+
+    fn share_pairs(&self) -> Vec<(String, String)> {
+        let scenario = self.session.scenario();
+        lesson::with_seed(
+            params::changed_pairs(scenario, &default_scenario()),
+            scenario.seed,
+        )
+    }
+
+    fn plot_series(&self) -> Vec<crate::export::PlotSeries> {
+        plots::series(&self.session)
     }
 
     fn subtitle(&self) -> String {
@@ -673,16 +677,8 @@ impl Lesson for PoseGraphLesson {
         )
     }
 
-    fn notices(&self) -> Vec<String> {
-        self.notices.clone()
-    }
-
-    fn time(&self) -> &TimeControl {
-        &self.time
-    }
-
-    fn time_mut(&mut self) -> &mut TimeControl {
-        &mut self.time
+    fn changed_params(&self) -> Vec<(String, String)> {
+        params::changed_pairs(&self.pending.scenario, &default_scenario())
     }
 
     fn time_info(&self) -> TimeInfo {
@@ -707,8 +703,7 @@ impl Lesson for PoseGraphLesson {
         }
     }
 
-    fn apply_time_action(&mut self, action: TimeAction) {
-        self.time.apply(action);
+    fn on_time_action(&mut self, action: TimeAction) {
         match action {
             TimeAction::ToggleRun => self.optimizing = None,
             TimeAction::StepPhase | TimeAction::StepTick => self.step_iteration(),
@@ -728,7 +723,7 @@ impl Lesson for PoseGraphLesson {
         }
         let session = &mut self.session;
         let mut error = None;
-        lesson::advance_within_budget(&mut self.time, dt, || {
+        lesson::advance_within_budget(&mut self.frame.time, dt, || {
             if error.is_none()
                 && !session.is_converged()
                 && let Err(why) = session.step()
@@ -737,46 +732,29 @@ impl Lesson for PoseGraphLesson {
             }
             true
         });
-        if self.time.running && (self.session.is_converged() || error.is_some()) {
-            self.time.running = false;
+        if self.frame.time.running && (self.session.is_converged() || error.is_some()) {
+            self.frame.time.running = false;
         }
         if let Some(why) = error {
-            self.note = Some(format!("The solver stopped: {why}"));
+            self.frame.note = Some(format!("The solver stopped: {why}"));
         }
-        if self.time.running {
+        if self.frame.time.running {
             self.marginals = None;
         }
     }
 
     fn wants_repaint(&self) -> bool {
-        self.time.running || self.optimizing.is_some()
-    }
-
-    fn panels_ui(&mut self, ui: &mut egui::Ui, panels: &mut PanelVisibility, compact: bool) {
-        crate::widgets::layout::lesson_panels_ui(self, ui, panels, compact, LESSON_ID);
+        self.frame.time.running || self.optimizing.is_some()
     }
 
     fn view_menu_ui(&mut self, ui: &mut egui::Ui) {
-        ui.checkbox(&mut self.view.legend, "Map legend");
-        ui.checkbox(&mut self.view.truth, "True path");
-        ui.checkbox(&mut self.view.ellipses, "Covariance ellipses");
+        ui.checkbox(&mut self.frame.view.legend, "Map legend");
+        ui.checkbox(&mut self.frame.view.truth, "True path");
+        ui.checkbox(&mut self.frame.view.ellipses, "Covariance ellipses");
         ui.checkbox(
-            &mut self.view.reoptimize_after_drag,
+            &mut self.frame.view.reoptimize_after_drag,
             "Re-optimize after a drag",
         );
-    }
-
-    fn stored_settings(&self) -> serde_json::Value {
-        StoredSettings {
-            view: self.view.clone(),
-            time: self.time.clone(),
-            params: params::changed_pairs(&self.pending.scenario, &default_scenario()),
-        }
-        .to_value()
-    }
-
-    fn share_query(&self, embed: bool) -> String {
-        crate::query::build(LESSON_ID, &self.share_pairs(), embed)
     }
 
     fn test_state(&self) -> serde_json::Value {
@@ -802,18 +780,10 @@ impl Lesson for PoseGraphLesson {
             "rmse": self.session.rmse(),
             "optimizing": self.optimizing.is_some(),
             "optimize": self.last_optimize,
-            "note": self.note,
+            "note": self.frame.note,
             "can_step_back": self.session.can_step_back(),
             "h_blocks": self.patterns.h_blocks,
             "step_back_undoes": self.session.step_back_undoes(),
         })
-    }
-
-    fn as_any(&self) -> &dyn std::any::Any {
-        self
-    }
-
-    fn as_any_mut(&mut self) -> &mut dyn std::any::Any {
-        self
     }
 }

@@ -13,7 +13,7 @@ mod explain;
 mod plots;
 mod row;
 
-use crate::lesson::{self, Lesson, LessonStart, PanelVisibility, StoredSettings};
+use crate::lesson::{self, Lesson, LessonFrame, LessonStart, LessonView, StoredSettings};
 use crate::palette;
 use crate::time_control::{TimeAction, TimeControl, TimeInfo};
 use crate::widgets::params_panel::{self, PendingParams};
@@ -51,16 +51,13 @@ pub struct LabView {}
 pub struct ResamplingLesson {
     run: LabRun,
     pending: PendingParams<LabScenario>,
-    /// The lesson's clock: one tick is one resampling by every method.
-    pub time: TimeControl,
-    view: LabView,
-    /// Link problems.
-    notices: Vec<String>,
+    /// The clock, the view, the map view, the notices and the requests.
+    pub frame: LessonFrame<LabView>,
     /// The weight editor's text.
     weights_text: String,
-    /// What the latest edit did, or why it was refused.
-    note: Option<String>,
 }
+
+impl LessonView for LabView {}
 
 /// Opens the lab from the URL's pairs, with what it stored last time.
 pub fn open(start: &LessonStart<'_>) -> Box<dyn Lesson> {
@@ -71,11 +68,8 @@ pub fn open(start: &LessonStart<'_>) -> Box<dyn Lesson> {
         stored.as_ref().map(|s| s.params.as_slice()),
     );
     let mut lesson = ResamplingLesson::new(scenario);
-    lesson.notices = notices;
-    if let Some(stored) = stored {
-        lesson.view = stored.view.clone();
-        stored.restore_clock(&mut lesson.time);
-    }
+    lesson.frame.notices = notices;
+    lesson.frame = lesson.frame.restored(stored.as_ref());
     Box::new(lesson)
 }
 
@@ -89,11 +83,8 @@ impl ResamplingLesson {
         let mut lesson = Self {
             pending: PendingParams::new(run.scenario().clone()),
             run,
-            time,
-            view: LabView::default(),
-            notices: Vec::new(),
+            frame: LessonFrame::new(LESSON_ID, LabView::default()).with_time(time),
             weights_text: String::new(),
-            note: None,
         };
         lesson.sync_editor();
         lesson
@@ -120,7 +111,7 @@ impl ResamplingLesson {
     /// changed.
     fn apply_pending(&mut self) {
         if self.run.reconfigure(self.pending.scenario.clone()) {
-            self.time.apply(TimeAction::Reset);
+            self.frame.time.apply(TimeAction::Reset);
         }
         self.sync_editor();
     }
@@ -149,10 +140,10 @@ impl ResamplingLesson {
     fn apply_editor(&mut self) {
         let text = self.weights_text.replace(';', ",");
         match self.pending.set("weights", &text) {
-            Some(issue) => self.note = Some(format!("Weights not changed: {issue}")),
+            Some(issue) => self.frame.note = Some(format!("Weights not changed: {issue}")),
             None => {
                 self.apply_pending();
-                self.note = self.run.note().map(|n| format!("Weights checked: {n}"));
+                self.frame.note = self.run.note().map(|n| format!("Weights checked: {n}"));
             }
         }
     }
@@ -182,7 +173,7 @@ impl ResamplingLesson {
         }
         self.pending.scenario.weights = LabWeights::Custom(weights);
         self.apply_pending();
-        self.note = self.run.note().map(|n| format!("Weights checked: {n}"));
+        self.frame.note = self.run.note().map(|n| format!("Weights checked: {n}"));
     }
 
     /// Plots particle `i`'s histogram.
@@ -211,7 +202,7 @@ impl ResamplingLesson {
                 .on_hover_text("Every method resamples this many times; the statistics gather")
                 .clicked()
             {
-                self.time.apply(TimeAction::StepTick);
+                self.frame.time.apply(TimeAction::StepTick);
                 self.press(times);
             }
             if ui
@@ -229,7 +220,7 @@ impl ResamplingLesson {
                 let chosen = self.run.scenario().weights == LabWeights::Preset(preset);
                 if ui.selectable_label(chosen, preset.name()).clicked() {
                     self.set_param("weights", preset.name());
-                    self.note = None;
+                    self.frame.note = None;
                 }
             }
         });
@@ -269,7 +260,7 @@ impl ResamplingLesson {
                 self.apply_editor();
             }
         }
-        if let Some(note) = &self.note {
+        if let Some(note) = &self.frame.note {
             ui.colored_label(palette::VERMILLION, note);
         }
         ui.separator();
@@ -291,7 +282,7 @@ impl ResamplingLesson {
                         .collect();
                     if methods.is_empty() {
                         methods.push(method);
-                        self.note = Some("At least one method stays on".to_owned());
+                        self.frame.note = Some("At least one method stays on".to_owned());
                     }
                     self.pending.scenario.methods = methods;
                     self.apply_pending();
@@ -342,12 +333,10 @@ impl crate::widgets::layout::LessonPanels for ResamplingLesson {
 }
 
 impl Lesson for ResamplingLesson {
+    crate::lesson::frame_accessors!();
+
     fn plot_series(&self) -> Vec<crate::export::PlotSeries> {
         plots::series(&self.run)
-    }
-
-    fn id(&self) -> &'static str {
-        LESSON_ID
     }
 
     fn subtitle(&self) -> String {
@@ -359,18 +348,6 @@ impl Lesson for ResamplingLesson {
             .map(|m| m.name())
             .collect();
         format!("{} particles: {}", self.run.particles(), names.join(", "))
-    }
-
-    fn notices(&self) -> Vec<String> {
-        self.notices.clone()
-    }
-
-    fn time(&self) -> &TimeControl {
-        &self.time
-    }
-
-    fn time_mut(&mut self) -> &mut TimeControl {
-        &mut self.time
     }
 
     fn time_info(&self) -> TimeInfo {
@@ -390,8 +367,7 @@ impl Lesson for ResamplingLesson {
         }
     }
 
-    fn apply_time_action(&mut self, action: TimeAction) {
-        self.time.apply(action);
+    fn on_time_action(&mut self, action: TimeAction) {
         match action {
             TimeAction::ToggleRun => {}
             TimeAction::StepPhase | TimeAction::StepTick => self.press(1),
@@ -406,32 +382,18 @@ impl Lesson for ResamplingLesson {
 
     fn advance(&mut self, dt: f64) {
         let run = &mut self.run;
-        lesson::advance_within_budget(&mut self.time, dt, || {
+        lesson::advance_within_budget(&mut self.frame.time, dt, || {
             run.press(1);
             true
         });
     }
 
-    fn panels_ui(&mut self, ui: &mut egui::Ui, panels: &mut PanelVisibility, compact: bool) {
-        crate::widgets::layout::lesson_panels_ui(self, ui, panels, compact, LESSON_ID);
+    fn changed_params(&self) -> Vec<(String, String)> {
+        params::changed_pairs(self.run.scenario(), &LabScenario::default())
     }
 
-    fn stored_settings(&self) -> serde_json::Value {
-        StoredSettings {
-            view: self.view.clone(),
-            time: self.time.clone(),
-            params: params::changed_pairs(self.run.scenario(), &LabScenario::default()),
-        }
-        .to_value()
-    }
-
-    fn share_query(&self, embed: bool) -> String {
-        let scenario = self.run.scenario();
-        let mut pairs = params::changed_pairs(scenario, &LabScenario::default());
-        if !pairs.iter().any(|(name, _)| name == "seed") {
-            pairs.insert(0, ("seed".to_owned(), scenario.seed.to_string()));
-        }
-        crate::query::build(LESSON_ID, &pairs, embed)
+    fn share_pairs(&self) -> Vec<(String, String)> {
+        lesson::with_seed(self.changed_params(), self.run.scenario().seed)
     }
 
     fn test_state(&self) -> serde_json::Value {
@@ -461,13 +423,5 @@ impl Lesson for ResamplingLesson {
             "note": self.run.note(),
             "methods": methods,
         })
-    }
-
-    fn as_any(&self) -> &dyn std::any::Any {
-        self
-    }
-
-    fn as_any_mut(&mut self) -> &mut dyn std::any::Any {
-        self
     }
 }

@@ -18,7 +18,7 @@ mod images;
 mod photos;
 mod plots;
 
-use crate::lesson::{self, Lesson, LessonStart, PanelVisibility, StoredSettings};
+use crate::lesson::{self, Lesson, LessonFrame, LessonStart, LessonView, StoredSettings};
 use crate::time_control::{StepControls, TimeAction, TimeControl, TimeInfo};
 use crate::widgets::params_panel::{self, PendingParams};
 use serde::{Deserialize, Serialize};
@@ -57,6 +57,8 @@ pub struct VoView {
     pub match_lines: bool,
 }
 
+impl LessonView for VoView {}
+
 /// The visual-odometry lesson.
 #[derive(Debug)]
 pub struct VisualOdometryLesson {
@@ -67,11 +69,8 @@ pub struct VisualOdometryLesson {
     /// The step shown (clamped to the run's steps).
     pair: usize,
     session: Option<TwoViewSession>,
-    /// The lesson's clock: one tick is one RANSAC sample.
-    pub time: TimeControl,
-    /// What the images show.
-    pub view: VoView,
-    notices: Vec<String>,
+    /// The clock, the view, the map view, the notices and the requests.
+    pub frame: LessonFrame<VoView>,
     /// The feature under the pointer: (right image?, match index).
     hovered: Option<(bool, usize)>,
     /// The student's own photos.
@@ -87,11 +86,8 @@ pub fn open(start: &LessonStart<'_>) -> Box<dyn Lesson> {
         stored.as_ref().map(|s| s.params.as_slice()),
     );
     let mut lesson = VisualOdometryLesson::new(scenario);
-    lesson.notices.extend(notices);
-    if let Some(stored) = stored {
-        lesson.view = stored.view.clone();
-        stored.restore_clock(&mut lesson.time);
-    }
+    lesson.frame.notices.extend(notices);
+    lesson.frame = lesson.frame.restored(stored.as_ref());
     Box::new(lesson)
 }
 
@@ -119,16 +115,14 @@ impl VisualOdometryLesson {
             run,
             pair: 0,
             session: None,
-            time,
-            view: VoView::default(),
-            notices: Vec::new(),
+            frame: LessonFrame::new(LESSON_ID, VoView::default()).with_time(time),
             hovered: None,
             photos: photos::PhotoPair::default(),
         };
         let wanted = lesson.scenario.pair;
         lesson.show_pair(wanted);
         if lesson.pair != wanted {
-            lesson.notices.push(format!(
+            lesson.frame.notices.push(format!(
                 "pair = {wanted} is past the last VO step of this run; showing step {}",
                 lesson.pair
             ));
@@ -164,7 +158,7 @@ impl VisualOdometryLesson {
         self.scenario.pair = self.pair;
         self.pending.scenario.pair = self.pair;
         self.hovered = None;
-        self.time.apply(TimeAction::Reset);
+        self.frame.time.apply(TimeAction::Reset);
         self.session = match (
             self.run.pairs.get(self.pair),
             self.run.camera,
@@ -214,7 +208,7 @@ impl VisualOdometryLesson {
     /// RANSAC to its adaptive bound, then the refit, the decomposition and
     /// the pure-rotation test.
     pub fn run_ransac_to_end(&mut self) {
-        self.time.apply(TimeAction::StepTick);
+        self.frame.time.apply(TimeAction::StepTick);
         if let Some(session) = &mut self.session {
             session.run_to_end();
         }
@@ -317,13 +311,16 @@ impl VisualOdometryLesson {
                 self.show_pair(k);
             }
         }
-        ui.checkbox(&mut self.view.true_outliers, "Mark the truly wrong matches")
-            .on_hover_text(
-                "The simulator knows which matches are wrong: a ring in the truth colour \
-                 around each. RANSAC does not know it.",
-            );
         ui.checkbox(
-            &mut self.view.match_lines,
+            &mut self.frame.view.true_outliers,
+            "Mark the truly wrong matches",
+        )
+        .on_hover_text(
+            "The simulator knows which matches are wrong: a ring in the truth colour \
+                 around each. RANSAC does not know it.",
+        );
+        ui.checkbox(
+            &mut self.frame.view.match_lines,
             "Lines across the images (Fig. 4.14)",
         )
         .on_hover_text("A line from each feature in the first image to its match in the second");
@@ -385,7 +382,7 @@ impl crate::widgets::layout::LessonPanels for VisualOdometryLesson {
                     &self.run,
                     self.pair,
                     self.session.as_ref(),
-                    &self.view,
+                    &self.frame.view,
                     self.hovered,
                 )
             })
@@ -395,12 +392,18 @@ impl crate::widgets::layout::LessonPanels for VisualOdometryLesson {
 }
 
 impl Lesson for VisualOdometryLesson {
-    fn plot_series(&self) -> Vec<crate::export::PlotSeries> {
-        plots::series(&self.run, self.session.as_ref())
+    crate::lesson::frame_accessors!();
+
+    fn trajectories(&self) -> Vec<slamlab_sim::metrics::NamedTrajectory> {
+        slamlab_sim::visual_odometry::export::trajectories(&self.run)
     }
 
-    fn id(&self) -> &'static str {
-        LESSON_ID
+    fn estimate_clock(&self) -> Option<f64> {
+        None
+    }
+
+    fn plot_series(&self) -> Vec<crate::export::PlotSeries> {
+        plots::series(&self.run, self.session.as_ref())
     }
 
     fn subtitle(&self) -> String {
@@ -417,20 +420,13 @@ impl Lesson for VisualOdometryLesson {
         )
     }
 
-    fn notices(&self) -> Vec<String> {
-        let mut all = self.notices.clone();
-        if let Some(error) = self.session.as_ref().and_then(TwoViewSession::start_error) {
-            all.push(format!("RANSAC cannot start on this step: {error}"));
-        }
-        all
-    }
-
-    fn time(&self) -> &TimeControl {
-        &self.time
-    }
-
-    fn time_mut(&mut self) -> &mut TimeControl {
-        &mut self.time
+    fn run_notices(&self) -> Vec<String> {
+        self.session
+            .as_ref()
+            .and_then(TwoViewSession::start_error)
+            .map(|error| format!("RANSAC cannot start on this step: {error}"))
+            .into_iter()
+            .collect()
     }
 
     fn time_info(&self) -> TimeInfo {
@@ -478,12 +474,11 @@ impl Lesson for VisualOdometryLesson {
         }
     }
 
-    fn apply_time_action(&mut self, action: TimeAction) {
-        self.time.apply(action);
+    fn on_time_action(&mut self, action: TimeAction) {
         match action {
             TimeAction::ToggleRun => {
                 if self.session.as_ref().is_none_or(TwoViewSession::is_done) {
-                    self.time.running = false;
+                    self.frame.time.running = false;
                 }
             }
             TimeAction::StepPhase | TimeAction::StepTick => self.step_sample(),
@@ -500,45 +495,29 @@ impl Lesson for VisualOdometryLesson {
 
     fn advance(&mut self, dt: f64) {
         let Some(session) = &mut self.session else {
-            self.time.running = false;
+            self.frame.time.running = false;
             return;
         };
-        lesson::advance_within_budget(&mut self.time, dt, || {
+        lesson::advance_within_budget(&mut self.frame.time, dt, || {
             session.step();
             true
         });
         if session.is_done() {
-            self.time.running = false;
+            self.frame.time.running = false;
         }
-    }
-
-    fn panels_ui(&mut self, ui: &mut egui::Ui, panels: &mut PanelVisibility, compact: bool) {
-        crate::widgets::layout::lesson_panels_ui(self, ui, panels, compact, LESSON_ID);
     }
 
     fn view_menu_ui(&mut self, ui: &mut egui::Ui) {
-        ui.checkbox(&mut self.view.true_outliers, "Truly wrong matches");
-        ui.checkbox(&mut self.view.match_lines, "Lines across the images");
+        ui.checkbox(&mut self.frame.view.true_outliers, "Truly wrong matches");
+        ui.checkbox(&mut self.frame.view.match_lines, "Lines across the images");
     }
 
-    fn stored_settings(&self) -> serde_json::Value {
-        StoredSettings {
-            view: self.view.clone(),
-            time: self.time.clone(),
-            params: params::changed_pairs(&self.scenario, &VoScenario::default()),
-        }
-        .to_value()
+    fn changed_params(&self) -> Vec<(String, String)> {
+        params::changed_pairs(&self.scenario, &VoScenario::default())
     }
 
-    fn share_query(&self, embed: bool) -> String {
-        let mut pairs = params::changed_pairs(&self.scenario, &VoScenario::default());
-        if !pairs.iter().any(|(name, _)| name == "seed") {
-            pairs.insert(
-                0,
-                ("seed".to_owned(), self.scenario.settings.seed.to_string()),
-            );
-        }
-        crate::query::build(LESSON_ID, &pairs, embed)
+    fn share_pairs(&self) -> Vec<(String, String)> {
+        lesson::with_seed(self.changed_params(), self.scenario.settings.seed)
     }
 
     fn test_state(&self) -> serde_json::Value {
@@ -603,13 +582,5 @@ impl Lesson for VisualOdometryLesson {
                 "visual_odometry_unit_scale": r.visual_odometry_unit_scale,
             },
         })
-    }
-
-    fn as_any(&self) -> &dyn std::any::Any {
-        self
-    }
-
-    fn as_any_mut(&mut self) -> &mut dyn std::any::Any {
-        self
     }
 }

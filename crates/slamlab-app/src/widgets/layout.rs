@@ -54,7 +54,7 @@ pub fn map_rect(ctx: &egui::Context) -> Option<egui::Rect> {
 
 /// Lays out `lesson`'s areas; `id` keeps each lesson's panel sizes apart.
 pub fn lesson_panels_ui(
-    lesson: &mut impl LessonPanels,
+    lesson: &mut (impl LessonPanels + ?Sized),
     ui: &mut egui::Ui,
     panels: &mut PanelVisibility,
     compact: bool,
@@ -137,7 +137,7 @@ pub fn lesson_panels_ui(
 /// The side panels of a narrow window: drawers over the map (and the plots), the
 /// parameters from the left, the explanation from the right, one at a time.
 fn drawers_ui(
-    lesson: &mut impl LessonPanels,
+    lesson: &mut (impl LessonPanels + ?Sized),
     ui: &mut egui::Ui,
     panels: &mut PanelVisibility,
     id: &str,
@@ -205,7 +205,7 @@ fn drawers_ui(
 /// The plots of a tiny window: a drawer over the lower part of the map, with a
 /// Close button.
 fn plots_drawer_ui(
-    lesson: &mut impl LessonPanels,
+    lesson: &mut (impl LessonPanels + ?Sized),
     ctx: &egui::Context,
     panels: &mut PanelVisibility,
     id: &str,

@@ -356,7 +356,16 @@ pub fn canvas_ui(
     {
         view.center = [x, y];
     }
-    (response, view.transform(rect))
+    let transform = view.transform(rect);
+    crate::widgets::estimates::record_placement(
+        ui.ctx(),
+        crate::widgets::estimates::MapPlacement {
+            layer: ui.layer_id(),
+            rect,
+            transform,
+        },
+    );
+    (response, transform)
 }
 
 /// The zoom buttons of a map toolbar ("−", "+", "Fit"); they act on the canvas

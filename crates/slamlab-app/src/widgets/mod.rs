@@ -4,6 +4,7 @@
 
 pub mod drive;
 pub mod dropped_files;
+pub mod estimates;
 pub mod fetch;
 pub mod file_picker;
 pub mod grid_tiles;

@@ -200,7 +200,7 @@ fn rendered_side_by_side_with_the_costmap_after_a_kidnap() {
     );
     h.run();
     let lesson = lesson_mut(&mut h);
-    lesson.view.costmap = true;
+    lesson.frame.view.costmap = true;
     for _ in 0..60 {
         lesson.step_tick();
     }
@@ -285,7 +285,7 @@ fn driving_by_hand_with_the_keys_moves_the_robot_and_stops_it() {
     }
     h.key_up(egui::Key::ArrowUp);
     h.step();
-    assert!(lesson(&h).time.running, "driving starts the clock");
+    assert!(lesson(&h).frame.time.running, "driving starts the clock");
     assert_eq!(
         lesson(&h).sim().run().manual(),
         Some((0.0, 0.0)),
@@ -461,9 +461,9 @@ fn right_after_a_kidnap_the_status_reads_the_estimates_error_now() {
 #[test]
 fn an_embedded_figure_keeps_the_legend_that_explains_its_clouds() {
     let h = harness("lesson=kidnap&embed=1");
-    assert!(lesson(&h).view.legend);
+    assert!(lesson(&h).frame.view.legend);
     let h = harness("lesson=kidnap&embed=1&legend=0");
-    assert!(!lesson(&h).view.legend);
+    assert!(!lesson(&h).frame.view.legend);
 }
 
 /// The numbers docs/kidnap.md gives for the default side-by-side run after a kidnap:

@@ -6,6 +6,7 @@ use super::common::{count_pixels_near as count_pixels, harness};
 use egui_kittest::Harness;
 use egui_kittest::kittest::{NodeT as _, Queryable as _};
 use slamlab_app::SlamLabApp;
+use slamlab_app::lesson::Lesson as _;
 
 /// Okabe-Ito reddish purple: FastSLAM.
 const PURPLE: [u8; 3] = [0xCC, 0x79, 0xA7];

@@ -8,6 +8,7 @@ use super::common::{
 use egui_kittest::Harness;
 use egui_kittest::kittest::Queryable as _;
 use slamlab_app::SlamLabApp;
+use slamlab_app::lesson::Lesson as _;
 use slamlab_sim::Phase;
 use slamlab_sim::landmark_slam::scenario::PARAMS;
 use slamlab_sim::params::{self, ParamIssue, ParamKind};
@@ -153,7 +154,7 @@ fn the_lesson_survives_extreme_parameters() {
         // Run with max speed, drawing every frame.
         h.key_press(egui::Key::Space);
         if let Some(lesson) = h.state_mut().landmark_lesson_mut() {
-            lesson.time.max_speed = true;
+            lesson.frame.time.max_speed = true;
         }
         for _ in 0..25 {
             h.step();
@@ -173,7 +174,7 @@ fn the_lesson_survives_extreme_parameters() {
         }
         // The same frames at a stretched state also survive the heatmap window.
         if let Some(lesson) = h.state_mut().landmark_lesson_mut() {
-            lesson.view.heatmap = true;
+            lesson.frame.view.heatmap = true;
         }
         h.run();
         // A Gaussian filter's correlations; FastSLAM alone (the maximum of the
@@ -538,7 +539,7 @@ fn many_runs_averages_each_filters_nees_over_seeded_runs() {
     // A lecture page can open the window running: many-runs=N in the URL.
     let from_url = SlamLabApp::from_query("lesson=landmark-slam&seed=3&many-runs=5");
     let lesson = from_url.landmark_lesson();
-    assert!(lesson.is_some_and(|l| l.view.many_runs && l.many_runs.is_running()));
+    assert!(lesson.is_some_and(|l| l.frame.view.many_runs && l.many_runs.is_running()));
     assert_eq!(lesson.map(|l| l.many_runs.trials), Some(5));
     assert!(from_url.notices().is_empty(), "{:?}", from_url.notices());
 
@@ -629,7 +630,7 @@ fn the_magnifier_shows_the_robot_ellipse_magnified() {
         let mut h = harness("lesson=landmark-slam&seed=7&estimator=ekf");
         h.run();
         if let Some(lesson) = h.state_mut().landmark_lesson_mut() {
-            lesson.view.magnifier = magnifier;
+            lesson.frame.view.magnifier = magnifier;
             for _ in 0..60 {
                 lesson.step_tick();
             }
@@ -713,7 +714,7 @@ fn the_windows_stay_inside_the_frame() {
         let mut h = super::common::harness_sized("lesson=landmark-slam&seed=7&tick=30", size);
         h.run();
         if let Some(lesson) = h.state_mut().landmark_lesson_mut() {
-            lesson.view.heatmap = true;
+            lesson.frame.view.heatmap = true;
         }
         h.run();
         let screen = egui::Rect::from_min_size(egui::Pos2::ZERO, size);
@@ -722,8 +723,8 @@ fn the_windows_stay_inside_the_frame() {
             .rect();
         assert!(screen.contains_rect(image), "{size:?}: heatmap {image:?}");
         if let Some(lesson) = h.state_mut().landmark_lesson_mut() {
-            lesson.view.heatmap = false;
-            lesson.view.many_runs = true;
+            lesson.frame.view.heatmap = false;
+            lesson.frame.view.many_runs = true;
         }
         h.run();
         let title = h.get_by_label("Consistency over many runs").rect();

@@ -8,6 +8,7 @@
 mod common;
 
 mod cartographer_ui;
+mod estimates_ui;
 mod exports_ui;
 mod filters_ui;
 mod fusion_ui;

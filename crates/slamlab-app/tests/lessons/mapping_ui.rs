@@ -407,7 +407,7 @@ fn one_particles_proposal_is_drawn_and_explained_at_800_by_500() {
         }
     }
     assert!(phases < 500, "no proposal phase");
-    lesson_mut(&mut h).view.follow_robot = true;
+    lesson_mut(&mut h).frame.view.follow_robot = true;
     h.run();
     let Some(image) = render_or_skip(&mut h) else {
         return;

@@ -201,10 +201,10 @@ fn zoom_legend_follow_and_panels_from_the_url() {
     let app = SlamLabApp::from_query("lesson=landmark-slam&embed=1&legend=1&follow=1");
     assert!(
         app.landmark_lesson()
-            .is_some_and(|l| l.view.legend && l.view.follow_robot)
+            .is_some_and(|l| l.frame.view.legend && l.frame.view.follow_robot)
     );
     let app = SlamLabApp::from_query("lesson=landmark-slam&embed=1");
-    assert!(app.landmark_lesson().is_some_and(|l| !l.view.legend));
+    assert!(app.landmark_lesson().is_some_and(|l| !l.frame.view.legend));
 
     // panels= sets exactly those panels, an unknown name is a notice.
     let mut h = harness("lesson=kidnap&panels=explanation,maps", size);
@@ -471,8 +471,8 @@ fn settings_with_windows_open() -> slamlab_app::Settings {
     let Some(lesson) = app.lesson_as_mut::<slamlab_app::landmark_slam::LandmarkSlamLesson>() else {
         panic!("the landmark lesson did not open");
     };
-    lesson.view.many_runs = true;
-    lesson.view.heatmap = true;
+    lesson.frame.view.many_runs = true;
+    lesson.frame.view.heatmap = true;
     let stored = app.lesson().stored_settings();
     let mut settings = slamlab_app::Settings {
         dark_mode: Some(true),
@@ -504,7 +504,7 @@ fn a_link_opens_as_shared_over_stored_windows() {
     h.run();
     let lesson = super::common::lesson_of::<slamlab_app::landmark_slam::LandmarkSlamLesson>(&h);
     assert!(
-        !lesson.view.many_runs && !lesson.view.heatmap,
+        !lesson.frame.view.many_runs && !lesson.frame.view.heatmap,
         "stored windows stay closed"
     );
     assert!(!label_visible(&h, "Consistency over many runs"));
@@ -807,7 +807,7 @@ fn esc_closes_the_windows_over_the_map_one_at_a_time() {
         else {
             panic!("the landmark lesson did not open");
         };
-        lesson.view.heatmap = true;
+        lesson.frame.view.heatmap = true;
     }
     h.step();
     assert!(label_visible(&h, "Consistency over many runs"));
@@ -816,14 +816,14 @@ fn esc_closes_the_windows_over_the_map_one_at_a_time() {
     h.step();
     let lesson = super::common::lesson_of::<slamlab_app::landmark_slam::LandmarkSlamLesson>(&h);
     assert!(
-        !lesson.view.many_runs && lesson.view.heatmap,
+        !lesson.frame.view.many_runs && lesson.frame.view.heatmap,
         "Many runs first"
     );
     h.key_press(egui::Key::Escape);
     h.step();
     h.step();
     let lesson = super::common::lesson_of::<slamlab_app::landmark_slam::LandmarkSlamLesson>(&h);
-    assert!(!lesson.view.heatmap, "then the heatmap");
+    assert!(!lesson.frame.view.heatmap, "then the heatmap");
 }
 
 #[test]

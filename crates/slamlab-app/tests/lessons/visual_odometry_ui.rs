@@ -225,7 +225,7 @@ fn the_rendered_images_show_inliers_outliers_and_the_sample() {
         for _ in 0..3 {
             lesson_mut(&mut h).step_sample();
         }
-        lesson_mut(&mut h).view.true_outliers = true;
+        lesson_mut(&mut h).frame.view.true_outliers = true;
         h.run();
         let Some(image) = render_or_skip(&mut h) else {
             return;

@@ -108,6 +108,7 @@ impl RunLesson for Cartographer {
             .arg(number("huber_scale", "default 10"))
             .arg(number("T", "kidnap trigger threshold (default 1.5)"))
             .arg(count("f_size", "kidnap average filter size (default 4)"))
+            .arg(crate::trajectory_out::arg())
     }
 
     fn run(&self, m: &ArgMatches, out: &mut Output) -> Result<()> {
@@ -209,6 +210,12 @@ impl RunLesson for Cartographer {
         }
         let time_ms = started.elapsed().as_secs_f64() * 1e3;
         let summary = sim.summary(kidnap_at, time_ms);
+        crate::trajectory_out::write(
+            m,
+            self.id(),
+            &slamlab_sim::cartographer::export::trajectories(&sim),
+            &[],
+        )?;
         for note in summary.notes.iter().take(5) {
             eprintln!("warning: {note}");
         }

@@ -43,6 +43,7 @@ impl RunLesson for Kidnap {
                     .help("ticks of 0.1 s"),
             )
             .args(flags::table_args::<MclScenario>(|name| name != "map"))
+            .arg(crate::trajectory_out::arg())
     }
 
     fn run(&self, m: &ArgMatches, out: &mut Output) -> Result<()> {
@@ -57,6 +58,12 @@ impl RunLesson for Kidnap {
             eprintln!("warning: {note}");
         }
         run.run_ticks(steps);
+        crate::trajectory_out::write(
+            m,
+            self.id(),
+            &slamlab_sim::kidnap::export::trajectories(&run),
+            &[],
+        )?;
         let summaries = run.summaries();
         if out.json() {
             out.print_json(&json!({

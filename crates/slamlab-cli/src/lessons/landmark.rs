@@ -11,6 +11,7 @@ use crate::output::Output;
 use anyhow::{Context, Result, bail};
 use clap::{Arg, ArgMatches, Command};
 use slamlab_sim::io::landmark_data::{LandmarkData, read_path};
+use slamlab_sim::landmark_slam::export;
 use slamlab_sim::landmark_slam::presets;
 use slamlab_sim::landmark_slam::summary::{RunSummary, run_headless, run_recorded};
 use slamlab_sim::world::recorded::RecordedWorld;
@@ -41,24 +42,31 @@ impl RunLesson for LandmarkSlam {
             )
             .arg(data_arg())
             .args(scenario_args(&[]))
+            .arg(crate::trajectory_out::arg())
     }
 
     fn run(&self, matches: &ArgMatches, out: &mut Output) -> Result<()> {
         let steps = matches.get_one::<u64>("steps").copied().unwrap_or(200);
-        let summary = match data_from(matches)? {
+        let (session, summary) = match data_from(matches)? {
             Some(data) => {
                 let scenario = scenario_for_data(matches, &[], &data)?;
                 let world = recorded_world(&data, &scenario)?;
                 // A data set runs to its end unless --steps says otherwise.
                 let steps = flags::given(matches, "steps").then_some(steps);
-                run_recorded(scenario, world, steps).1
+                run_recorded(scenario, world, steps)
             }
             None => {
                 let scenario = scenario_from(matches, &[])?;
                 check_runnable(&scenario)?;
-                run_headless(scenario, steps).1
+                run_headless(scenario, steps)
             }
         };
+        crate::trajectory_out::write(
+            matches,
+            self.id(),
+            &export::trajectories(&session),
+            &export::landmarks(&session),
+        )?;
         if out.json() {
             let first = summary.filters.first();
             let mut value = serde_json::to_value(&summary).context("serializing the summary")?;

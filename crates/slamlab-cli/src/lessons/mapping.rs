@@ -49,6 +49,7 @@ impl RunLesson for Mapping {
                     .help("write the built map as a ROS map_server YAML and PGM beside it"),
             )
             .args(flags::table_args::<MappingScenario>(|name| name != "map"))
+            .arg(crate::trajectory_out::arg())
     }
 
     fn run(&self, m: &ArgMatches, out: &mut Output) -> Result<()> {
@@ -85,6 +86,12 @@ impl RunLesson for Mapping {
         }
         let time_ms = started.elapsed().as_secs_f64() * 1e3;
         let summary = session.summary();
+        crate::trajectory_out::write(
+            m,
+            self.id(),
+            &slamlab_sim::mapping::export::trajectories(&session),
+            &[],
+        )?;
         if let Some(note) = session.sim().note() {
             eprintln!("warning: {note}");
         }

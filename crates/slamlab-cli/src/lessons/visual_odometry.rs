@@ -33,7 +33,9 @@ impl RunLesson for VisualOdometry {
     fn command(&self) -> Command {
         // The lesson's table (the URL's names, ranges and defaults), but the
         // step the app shows in its two images.
-        Command::new(self.id()).args(flags::table_args::<VoScenario>(|name| name != "pair"))
+        Command::new(self.id())
+            .args(flags::table_args::<VoScenario>(|name| name != "pair"))
+            .arg(crate::trajectory_out::arg())
     }
 
     fn run(&self, m: &ArgMatches, out: &mut Output) -> Result<()> {
@@ -43,6 +45,12 @@ impl RunLesson for VisualOdometry {
         let start = std::time::Instant::now();
         let run = run_visual_odometry(settings);
         let time_ms = start.elapsed().as_secs_f64() * 1000.0;
+        crate::trajectory_out::write(
+            m,
+            self.id(),
+            &slamlab_sim::visual_odometry::export::trajectories(&run),
+            &[],
+        )?;
         let general = run.steps.iter().filter(|s| s.outcome == "general").count();
         let pure = run
             .steps

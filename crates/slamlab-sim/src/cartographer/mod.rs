@@ -31,6 +31,7 @@
 //! The input is [`MappingInput`] (a simulated log from [`input::kidnap_input`]
 //! or a CARMEN log); the truth reaches only [`CartographerSim::summary`].
 
+pub mod export;
 pub mod input;
 pub mod session;
 #[cfg(test)]

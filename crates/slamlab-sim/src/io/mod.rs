@@ -4,6 +4,7 @@
 //! scenario files. What a reader returns is plain data; the lessons and the
 //! command line decide what to do with it.
 
+pub mod archive;
 pub mod graph;
 pub mod landmark_data;
 pub mod laser_log;

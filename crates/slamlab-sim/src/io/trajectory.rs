@@ -554,6 +554,94 @@ pub fn write_landmarks(rows: &[LandmarkRow]) -> String {
     out
 }
 
+/// A file name made of `name`: lower case, `[a-z0-9._-]` kept, anything else a
+/// dash, never empty.
+pub fn file_stem(name: &str) -> String {
+    let stem: String = name
+        .trim()
+        .to_lowercase()
+        .chars()
+        .map(|c| {
+            if c.is_ascii_alphanumeric() || c == '.' || c == '_' || c == '-' {
+                c
+            } else {
+                '-'
+            }
+        })
+        .collect();
+    let stem = stem.trim_matches(|c| c == '-' || c == '.').to_owned();
+    if stem.is_empty() {
+        "trajectory".to_owned()
+    } else {
+        stem
+    }
+}
+
+/// The files a lesson's trajectories export to: for each, `NAME.tum` and
+/// `NAME.csv` (with the covariances when the estimator has them); for each
+/// landmark map, `NAME-landmarks.csv`; and a `README.txt` saying what they are.
+/// Names that would repeat get a number.
+pub fn export_files(
+    lesson: &str,
+    trajectories: &[crate::metrics::NamedTrajectory],
+    landmarks: &[(String, Vec<LandmarkRow>)],
+) -> Vec<(String, Vec<u8>)> {
+    let mut used: Vec<String> = Vec::new();
+    let mut unique = |name: &str| {
+        let stem = file_stem(name);
+        let mut candidate = stem.clone();
+        let mut k = 2;
+        while used.contains(&candidate) {
+            candidate = format!("{stem}-{k}");
+            k += 1;
+        }
+        used.push(candidate.clone());
+        candidate
+    };
+    let mut files = Vec::new();
+    let mut readme = format!(
+        "SLAM Lab, lesson {lesson}: the trajectories of this run.\n\n\
+         NAME.tum  t x y z qx qy qz qw (TUM format, as evo reads it; z = 0, a rotation about z)\n\
+         NAME.csv  t,x,y,theta and, for an estimator with a covariance, the upper triangle of the 3x3\n          \
+         covariance of (x, y, theta): c_xx,c_xy,c_xtheta,c_yy,c_ytheta,c_thetatheta (m^2, m rad, rad^2)\n\
+         NAME-landmarks.csv  id,x,y and, with covariances, c_xx,c_xy,c_yy\n\
+         Times in seconds from the run's start; metres and radians; x forward, y left (ROS REP-103).\n\
+         Score one against another: slamlab evaluate --estimate NAME.tum --reference truth.tum\n\n"
+    );
+    for t in trajectories {
+        let stem = unique(&t.name);
+        let role = match t.role {
+            crate::metrics::TrajectoryRole::Truth => "the true path",
+            crate::metrics::TrajectoryRole::Estimate => "an estimate",
+            crate::metrics::TrajectoryRole::Odometry => "odometry alone (dead reckoning)",
+        };
+        let _ = writeln!(
+            readme,
+            "{stem}: {role}, {} poses{}",
+            t.trajectory.len(),
+            if t.trajectory.covariances().is_some() {
+                ", with covariances"
+            } else {
+                ""
+            }
+        );
+        files.push((format!("{stem}.tum"), write_tum(&t.trajectory).into_bytes()));
+        files.push((format!("{stem}.csv"), write_csv(&t.trajectory).into_bytes()));
+    }
+    for (name, rows) in landmarks {
+        let stem = unique(&format!("{name}-landmarks"));
+        let _ = writeln!(
+            readme,
+            "{stem}: {}'s landmarks, {} of them",
+            name,
+            rows.len()
+        );
+        files.push((format!("{stem}.csv"), write_landmarks(rows).into_bytes()));
+    }
+    files.push(("README.txt".to_owned(), readme.into_bytes()));
+    files
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

@@ -3,6 +3,7 @@
 //! and the experiments report.
 
 pub mod experiment;
+pub mod export;
 pub mod params;
 pub mod run;
 pub mod scenario;

@@ -15,6 +15,7 @@ use super::scenario::{InitMode, MclScenario};
 use crate::grid::explorer::Explorer;
 use crate::grid::robot::{GridRobot, OdometrySensor};
 use crate::noise::stream_seed;
+use nalgebra::Matrix3;
 use rand::SeedableRng;
 use rand_chacha::ChaCha8Rng;
 use serde::{Deserialize, Serialize};
@@ -113,6 +114,10 @@ pub struct FilterRun {
     pub updates: Vec<UpdateRecord>,
     /// Its error at every tick.
     pub ticks: Vec<TickError>,
+    /// Its estimate at the end of every tick (the last update's, moved by the
+    /// odometry since, as the error above uses it) with the last update's
+    /// covariance; `None` before it has one.
+    pub estimates: Vec<Option<(Pose2, Matrix3<f64>)>>,
     /// The last phase reports (for the explanation panel).
     pub last_predict: Option<PredictReport>,
     /// The last weighting report.
@@ -260,6 +265,8 @@ pub struct MclRun {
     /// Where the latest scan was taken (the robot may have been kidnapped since).
     scan_pose: Option<Pose2>,
     path: Vec<Pose2>,
+    /// The true pose at the end of every tick.
+    truth_ticks: Vec<Pose2>,
     /// Indices of `path` where a kidnap starts a new stretch (a teleport, not a drive).
     path_breaks: Vec<usize>,
     notes: Vec<String>,
@@ -326,6 +333,7 @@ impl MclRun {
                     due: false,
                     updates: Vec::new(),
                     ticks: Vec::new(),
+                    estimates: Vec::new(),
                     last_predict: None,
                     last_weight: None,
                     last_resample: None,
@@ -350,6 +358,7 @@ impl MclRun {
             scan: None,
             scan_pose: None,
             path: vec![start],
+            truth_ticks: Vec::new(),
             path_breaks: Vec::new(),
             notes,
             kidnap_rng: ChaCha8Rng::seed_from_u64(stream_seed(seed, 5)),
@@ -496,8 +505,12 @@ impl MclRun {
     fn finish_tick(&mut self) {
         let truth = self.robot.pose;
         let odom = self.odometry.pose;
+        self.truth_ticks.push(truth);
         for f in &mut self.filters {
-            let e = f.current_estimate(&odom).map_or(
+            let now = f.current_estimate(&odom);
+            f.estimates
+                .push(now.zip(f.mcl().estimate().map(|e| e.covariance)));
+            let e = now.map_or(
                 TickError {
                     position: f64::INFINITY,
                     heading: std::f64::consts::PI,
@@ -593,6 +606,12 @@ impl MclRun {
     /// The true path so far.
     pub fn path(&self) -> &[Pose2] {
         &self.path
+    }
+
+    /// The true pose at the end of every tick (`path` also holds the kidnaps'
+    /// teleports).
+    pub fn truth_ticks(&self) -> &[Pose2] {
+        &self.truth_ticks
     }
 
     /// The true path in stretches: a kidnap teleports the robot, so the path breaks

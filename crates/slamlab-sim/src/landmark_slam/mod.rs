@@ -13,6 +13,7 @@
 
 pub mod consistency;
 pub mod experiment;
+pub mod export;
 pub mod fastslam;
 pub mod presets;
 pub mod real_data;

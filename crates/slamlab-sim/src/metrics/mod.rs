@@ -37,7 +37,7 @@ pub use errors::{
     relative_errors,
 };
 pub use evaluation::{Evaluation, EvaluationSettings, evaluate};
-pub use trajectory::Trajectory;
+pub use trajectory::{NamedTrajectory, Trajectory, TrajectoryRole};
 
 use nalgebra::{Matrix3, Vector3};
 use serde::Serialize;

@@ -92,3 +92,39 @@ impl Trajectory {
 pub fn distance(a: &Pose2, b: &Pose2) -> f64 {
     slamlab_core::math::hypot(a.x - b.x, a.y - b.y)
 }
+
+/// What a trajectory is in a lesson: the truth, an estimator's estimate, or raw
+/// odometry (dead reckoning), for export and for the comparisons.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, serde::Serialize)]
+#[serde(rename_all = "snake_case")]
+pub enum TrajectoryRole {
+    /// The true path (simulations only).
+    Truth,
+    /// An estimator's estimate.
+    Estimate,
+    /// Odometry alone, the baseline every estimator should beat.
+    Odometry,
+}
+
+/// A lesson's trajectory with its name (the estimator's: `ekf`, `amcl`,
+/// `scan-to-map`, or `truth`).
+#[derive(Clone, Debug, PartialEq)]
+pub struct NamedTrajectory {
+    /// The name, as files and plots call it.
+    pub name: String,
+    /// Truth, estimate or odometry.
+    pub role: TrajectoryRole,
+    /// The poses.
+    pub trajectory: Trajectory,
+}
+
+impl NamedTrajectory {
+    /// A named trajectory.
+    pub fn new(name: impl Into<String>, role: TrajectoryRole, trajectory: Trajectory) -> Self {
+        Self {
+            name: name.into(),
+            role,
+            trajectory,
+        }
+    }
+}

@@ -5,6 +5,7 @@
 //! - [`experiment`]: the graph-based SLAM simulation of thesis Sec. 4.2.
 
 pub mod experiment;
+pub mod export;
 pub mod session;
 
 pub use session::{PoseGraphScenario, PoseGraphSession};

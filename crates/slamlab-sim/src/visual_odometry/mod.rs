@@ -10,6 +10,7 @@
 //! `slamlab_core::vision` see pixel matches and the intrinsics.
 
 pub mod experiment;
+pub mod export;
 pub mod odometry;
 pub mod photos;
 pub mod scenario;

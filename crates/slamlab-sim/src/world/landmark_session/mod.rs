@@ -221,6 +221,12 @@ impl LandmarkSession {
         self.sim().dead_reckoning
     }
 
+    /// The time of every completed tick, seconds, starting with 0 for the start
+    /// (one per pose of the paths).
+    pub fn tick_times(&self) -> &[f64] {
+        &self.records().times
+    }
+
     /// The dead-reckoning path, one pose per tick.
     pub fn dead_reckoning_path(&self) -> &[Pose2] {
         &self.records().dead_reckoning_path

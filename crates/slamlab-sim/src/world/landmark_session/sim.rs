@@ -810,6 +810,7 @@ impl LandmarkSim {
 
     /// Ends a tick: the paths and every estimator's metrics.
     fn end_tick(&self, records: &mut LandmarkRecords) {
+        records.times.push(self.time());
         records.truth_path.push(self.truth);
         records.dead_reckoning_path.push(self.dead_reckoning);
         let time = self.time();
@@ -818,6 +819,7 @@ impl LandmarkSim {
         let truth_known = self.replay.as_ref().is_none_or(|r| r.truth_known);
         for (run, rec) in self.filters.iter().zip(&mut records.filters) {
             rec.path.push(run.filter.robot_pose());
+            rec.covariances.push(run.filter.robot_covariance());
             if !truth_known {
                 continue;
             }

@@ -1,0 +1,609 @@
+//! A student's own estimates, brought into any lesson: a TUM or CSV trajectory
+//! (with or without covariances) or a landmark CSV, dropped on the page, opened
+//! from the File menu or named by `estimate=` in the URL. Each becomes one more
+//! estimator of the lesson, drawn on its map in a colour of its own up to the time
+//! bar's time, and scored against the lesson's truth with the same metrics as
+//! the lesson's own estimators (`slamlab_sim::metrics`, equal to evo), in the
+//! "Your estimates" window: ATE and RPE, NEES where covariances were given, and
+//! the position error over time beside the built-in estimators'.
+//!
+//! Written once for every lesson: a lesson only says what its trajectories are
+//! ([`crate::lesson::Lesson::trajectories`]); the frame holds the estimates, the
+//! shell routes files to them and draws the overlay and the window.
+
+use crate::palette;
+use crate::widgets::map_canvas::MapTransform;
+use egui::{Color32, Pos2, Stroke};
+use slamlab_core::Pose2;
+use slamlab_sim::io::trajectory::{self, LandmarkRow, TrajectoryFormat};
+use slamlab_sim::metrics::{
+    Alignment, EvaluationSettings, NamedTrajectory, Trajectory, TrajectoryRole, evaluate,
+};
+
+/// The most estimates a lesson holds at once.
+pub const MAX_ESTIMATES: usize = 8;
+
+/// The colours of students' estimates (Paul Tol's muted scheme, apart from the
+/// lessons' own Okabe-Ito colours).
+pub const COLORS: [Color32; 5] = [
+    Color32::from_rgb(0x88, 0x22, 0x55),
+    Color32::from_rgb(0x44, 0xAA, 0x99),
+    Color32::from_rgb(0x99, 0x99, 0x33),
+    Color32::from_rgb(0x33, 0x22, 0x88),
+    Color32::from_rgb(0xAA, 0x44, 0x99),
+];
+
+/// What an estimate file holds.
+#[derive(Clone, Debug, PartialEq)]
+pub enum EstimateContent {
+    /// A trajectory.
+    Trajectory(Trajectory),
+    /// Landmark positions.
+    Landmarks(Vec<LandmarkRow>),
+}
+
+/// One estimate a student brought in.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Estimate {
+    /// The file's name.
+    pub name: String,
+    /// Its colour.
+    pub color: Color32,
+    /// What it holds.
+    pub content: EstimateContent,
+    /// Drawn on the map.
+    pub visible: bool,
+}
+
+/// One estimator's score against the lesson's reference, as the window and the
+/// test hook show it.
+#[derive(Clone, Debug, PartialEq, serde::Serialize)]
+pub struct EstimateScore {
+    /// The estimator's name (a file's name for a student's estimate).
+    pub name: String,
+    /// A student's estimate (not one of the lesson's).
+    pub dropped: bool,
+    /// RMSE of the absolute position error, metres (SE(2)-aligned when
+    /// [`Estimates::align`] is on).
+    pub ate_rmse: Option<f64>,
+    /// The largest position error, metres.
+    pub ate_max: Option<f64>,
+    /// RMSE of the relative translation error over one pose, metres.
+    pub rpe_rmse: Option<f64>,
+    /// The average NEES (covariances only).
+    pub anees: Option<f64>,
+    /// The share of NEES values inside the 95 % band.
+    pub nees_in_band: Option<f64>,
+    /// Pairs compared.
+    pub pairs: usize,
+    /// For landmarks: the RMS distance to the true landmarks, metres.
+    pub landmark_rmse: Option<f64>,
+    /// Why there is no score, or what to know about it.
+    pub note: Option<String>,
+    /// Position error over time `[t, e]`, for the plot.
+    #[serde(skip)]
+    pub errors: Vec<[f64; 2]>,
+    /// The line's colour.
+    #[serde(skip)]
+    pub color: Color32,
+}
+
+/// The estimates a lesson holds, and their scores.
+#[derive(Debug, Default)]
+pub struct Estimates {
+    items: Vec<Estimate>,
+    version: u64,
+    /// The "Your estimates" window is open.
+    pub open: bool,
+    /// Align each trajectory to the reference (SE(2)) before the absolute error.
+    pub align: bool,
+    scores: Vec<EstimateScore>,
+    scored: Option<(u64, u64, bool)>,
+}
+
+/// Is this file a student's estimate rather than a lesson's input (a map, a log,
+/// a graph)? TUM (`.tum`, or a `.txt` whose first line has eight numbers) and
+/// CSV files are.
+pub fn is_estimate_file(name: &str, bytes: &[u8]) -> bool {
+    let lower = name.to_ascii_lowercase();
+    if lower.ends_with(".tum") || lower.ends_with(".csv") {
+        return true;
+    }
+    lower.ends_with(".txt") && matches!(trajectory::detect_format(bytes), Ok(TrajectoryFormat::Tum))
+}
+
+impl Estimates {
+    /// The estimates, in the order they came.
+    pub fn items(&self) -> &[Estimate] {
+        &self.items
+    }
+
+    /// Whether there are none.
+    pub fn is_empty(&self) -> bool {
+        self.items.is_empty()
+    }
+
+    /// Reads a dropped or opened file; returns what to tell the student. The
+    /// estimates already there stay whatever the file holds.
+    pub fn add(&mut self, name: &str, bytes: &[u8]) -> Result<String, String> {
+        trajectory::check_size(bytes.len() as u64).map_err(|e| format!("{name}: {e}"))?;
+        if self.items.len() >= MAX_ESTIMATES {
+            return Err(format!(
+                "{name}: the lesson holds {MAX_ESTIMATES} estimates at most; remove one first"
+            ));
+        }
+        let is_landmarks = name.to_ascii_lowercase().ends_with(".csv") && {
+            let first = String::from_utf8_lossy(&bytes[..bytes.len().min(4096)])
+                .lines()
+                .map(str::trim)
+                .find(|l| !l.is_empty() && !l.starts_with('#'))
+                .unwrap_or("")
+                .to_ascii_lowercase();
+            first.starts_with("id") || matches!(first.split(',').count(), 3 | 6)
+        };
+        let (content, notices) = if is_landmarks {
+            let rows = trajectory::read_landmarks(bytes).map_err(|e| format!("{name}: {e}"))?;
+            (EstimateContent::Landmarks(rows), Vec::new())
+        } else {
+            let file =
+                trajectory::read_trajectory(name, bytes).map_err(|e| format!("{name}: {e}"))?;
+            (EstimateContent::Trajectory(file.trajectory), file.notices)
+        };
+        let used: Vec<Color32> = self.items.iter().map(|e| e.color).collect();
+        let color = COLORS
+            .iter()
+            .copied()
+            .find(|c| !used.contains(c))
+            .unwrap_or(COLORS[self.items.len() % COLORS.len()]);
+        let what = match &content {
+            EstimateContent::Trajectory(t) => format!(
+                "{} poses{}",
+                t.len(),
+                if t.covariances().is_some() {
+                    " with covariances"
+                } else {
+                    ""
+                }
+            ),
+            EstimateContent::Landmarks(rows) => format!("{} landmarks", rows.len()),
+        };
+        self.items.push(Estimate {
+            name: name.to_owned(),
+            color,
+            content,
+            visible: true,
+        });
+        self.version += 1;
+        self.open = true;
+        let mut message = format!("Your estimate {name}: {what}");
+        for n in notices {
+            message.push_str("; ");
+            message.push_str(&n);
+        }
+        Ok(message)
+    }
+
+    /// Removes estimate `index`.
+    pub fn remove(&mut self, index: usize) {
+        if index < self.items.len() {
+            self.items.remove(index);
+            self.version += 1;
+        }
+    }
+
+    /// Whether the scores are older than the run (`run_version`: what changes
+    /// when the run does) or the estimates.
+    pub fn is_stale(&self, run_version: u64) -> bool {
+        self.scored != Some((run_version, self.version, self.align))
+    }
+
+    /// Scores the lesson's estimators and the student's against the lesson's
+    /// truth (or, without one, against its first estimator).
+    pub fn score(
+        &mut self,
+        run_version: u64,
+        trajectories: &[NamedTrajectory],
+        landmarks: &[(String, Vec<LandmarkRow>)],
+    ) -> &[EstimateScore] {
+        self.scores = score_all(&self.items, trajectories, landmarks, self.align);
+        self.scored = Some((run_version, self.version, self.align));
+        &self.scores
+    }
+
+    /// The scores last computed.
+    pub fn last_scores(&self) -> &[EstimateScore] {
+        &self.scores
+    }
+}
+
+/// The reference: the lesson's truth, or without one its first estimator.
+fn reference_of(trajectories: &[NamedTrajectory]) -> Option<&NamedTrajectory> {
+    trajectories
+        .iter()
+        .find(|t| t.role == TrajectoryRole::Truth)
+        .or_else(|| {
+            trajectories
+                .iter()
+                .find(|t| t.role == TrajectoryRole::Estimate)
+        })
+}
+
+fn score_trajectory(
+    name: &str,
+    dropped: bool,
+    color: Color32,
+    estimate: &Trajectory,
+    reference: &Trajectory,
+    align: bool,
+) -> EstimateScore {
+    let settings = EvaluationSettings {
+        alignment: if align {
+            Alignment::Se2
+        } else {
+            Alignment::None
+        },
+        ..EvaluationSettings::default()
+    };
+    let mut score = EstimateScore {
+        name: name.to_owned(),
+        dropped,
+        ate_rmse: None,
+        ate_max: None,
+        rpe_rmse: None,
+        anees: None,
+        nees_in_band: None,
+        pairs: 0,
+        landmark_rmse: None,
+        note: None,
+        errors: Vec::new(),
+        color,
+    };
+    match evaluate(reference, estimate, &settings) {
+        Ok(e) => {
+            score.ate_rmse = Some(e.ape.translation.rmse);
+            score.ate_max = Some(e.ape.translation.max);
+            score.rpe_rmse = e.rpe.as_ref().map(|r| r.translation.rmse);
+            if let Some(n) = &e.nees {
+                score.anees = n.anees;
+                score.nees_in_band = n.share_in_band;
+            }
+            score.pairs = e.pairing.pairs;
+            score.errors = e
+                .pair_times(reference)
+                .into_iter()
+                .zip(&e.ape.translation_m)
+                .map(|(t, err)| [t, *err])
+                .collect();
+            score.note = e.notices.first().cloned();
+        }
+        Err(why) => score.note = Some(why.to_string()),
+    }
+    score
+}
+
+fn score_all(
+    items: &[Estimate],
+    trajectories: &[NamedTrajectory],
+    landmarks: &[(String, Vec<LandmarkRow>)],
+    align: bool,
+) -> Vec<EstimateScore> {
+    let Some(reference) = reference_of(trajectories) else {
+        return Vec::new();
+    };
+    let mut all: Vec<EstimateScore> = trajectories
+        .iter()
+        .filter(|t| !std::ptr::eq(*t, reference) && t.role != TrajectoryRole::Truth)
+        .map(|t| {
+            score_trajectory(
+                &t.name,
+                false,
+                if t.role == TrajectoryRole::Odometry {
+                    palette::DEAD_RECKONING
+                } else {
+                    palette::estimator_color(&t.name)
+                },
+                &t.trajectory,
+                &reference.trajectory,
+                align,
+            )
+        })
+        .collect();
+    let true_landmarks = landmarks.iter().find(|(name, _)| name == "truth");
+    for item in items {
+        match &item.content {
+            EstimateContent::Trajectory(t) => all.push(score_trajectory(
+                &item.name,
+                true,
+                item.color,
+                t,
+                &reference.trajectory,
+                align,
+            )),
+            EstimateContent::Landmarks(rows) => {
+                let (rmse, note) = match true_landmarks {
+                    Some((_, truth)) => {
+                        let errors: Vec<f64> = rows
+                            .iter()
+                            .filter_map(|r| {
+                                let t = truth.iter().find(|t| t.id == r.id)?;
+                                Some(slamlab_core::math::hypot(r.x - t.x, r.y - t.y))
+                            })
+                            .collect();
+                        if errors.is_empty() {
+                            (None, Some("no landmark id matches the lesson's".to_owned()))
+                        } else {
+                            let n = errors.len() as f64;
+                            (
+                                Some((errors.iter().map(|e| e * e).sum::<f64>() / n).sqrt()),
+                                Some(format!(
+                                    "{} of {} landmarks matched by id",
+                                    errors.len(),
+                                    rows.len()
+                                )),
+                            )
+                        }
+                    }
+                    None => (None, Some("this lesson has no true landmarks".to_owned())),
+                };
+                all.push(EstimateScore {
+                    name: item.name.clone(),
+                    dropped: true,
+                    ate_rmse: None,
+                    ate_max: None,
+                    rpe_rmse: None,
+                    anees: None,
+                    nees_in_band: None,
+                    pairs: 0,
+                    landmark_rmse: rmse,
+                    note,
+                    errors: Vec::new(),
+                    color: item.color,
+                });
+            }
+        }
+    }
+    all
+}
+
+/// Where the lesson's map was drawn this frame, for the overlay: its layer, its
+/// rectangle and its transform.
+#[derive(Clone, Copy, Debug)]
+pub struct MapPlacement {
+    /// The layer the map was painted on.
+    pub layer: egui::LayerId,
+    /// The map's rectangle.
+    pub rect: egui::Rect,
+    /// World to screen.
+    pub transform: MapTransform,
+}
+
+fn placement_id() -> egui::Id {
+    egui::Id::unique("slamlab_map_placement")
+}
+
+/// Records where the map is drawn (the map canvas calls it every frame).
+pub fn record_placement(ctx: &egui::Context, placement: MapPlacement) {
+    ctx.data_mut(|d| d.insert_temp(placement_id(), placement));
+}
+
+/// Forgets the map's placement (before a frame, so that a lesson without a map
+/// gets no overlay).
+pub fn clear_placement(ctx: &egui::Context) {
+    ctx.data_mut(|d| d.remove::<MapPlacement>(placement_id()));
+}
+
+/// The map's placement this frame, if a map was drawn.
+pub fn placement(ctx: &egui::Context) -> Option<MapPlacement> {
+    ctx.data(|d| d.get_temp(placement_id()))
+}
+
+/// The last pose of `t` at or before `now` and the poses up to it.
+fn up_to(t: &Trajectory, now: f64) -> usize {
+    t.stamps().partition_point(|&s| s <= now + 1e-9)
+}
+
+/// Draws the visible trajectory estimates on the lesson's map, up to `now`:
+/// the path, the current pose with its 95 % ellipse and heading wedge when the
+/// file gave covariances; landmarks as crosses.
+pub fn map_overlay(ctx: &egui::Context, estimates: &Estimates, now: f64) {
+    let Some(p) = placement(ctx) else {
+        return;
+    };
+    let painter = egui::Painter::new(ctx.clone(), p.layer, p.rect);
+    let t = &p.transform;
+    for e in estimates.items.iter().filter(|e| e.visible) {
+        match &e.content {
+            EstimateContent::Trajectory(traj) => {
+                let n = up_to(traj, now);
+                if n == 0 {
+                    continue;
+                }
+                // At most a few thousand segments on screen.
+                let step = (n / 4000).max(1);
+                let points: Vec<Pos2> = traj.poses()[..n]
+                    .iter()
+                    .step_by(step)
+                    .chain(std::iter::once(&traj.poses()[n - 1]))
+                    .map(|q| t.pose(q))
+                    .filter(|q| crate::widgets::map_canvas::finite(*q))
+                    .collect();
+                painter.add(egui::Shape::line(points, Stroke::new(2.0, e.color)));
+                let pose: Pose2 = traj.poses()[n - 1];
+                let covariance = traj
+                    .covariances()
+                    .map_or_else(nalgebra::Matrix3::zeros, |c| c[n - 1]);
+                crate::widgets::map_canvas::draw_estimate(
+                    &painter,
+                    t,
+                    &pose,
+                    &covariance,
+                    crate::widgets::map_canvas::EstimateStyle {
+                        color: e.color,
+                        ellipse: traj.covariances().is_some(),
+                        wedge_radius: 14.0,
+                        dot: true,
+                    },
+                );
+            }
+            EstimateContent::Landmarks(rows) => {
+                for r in rows {
+                    let c = t.xy(r.x, r.y);
+                    if !crate::widgets::map_canvas::finite(c) {
+                        continue;
+                    }
+                    let d = 5.0;
+                    let stroke = Stroke::new(2.0, e.color);
+                    painter.line_segment([c + egui::vec2(-d, -d), c + egui::vec2(d, d)], stroke);
+                    painter.line_segment([c + egui::vec2(-d, d), c + egui::vec2(d, -d)], stroke);
+                }
+            }
+        }
+    }
+}
+
+/// The "Your estimates" window: each estimator's score (the lesson's and the
+/// student's), a plot of the position error over time, the alignment switch,
+/// and a button to remove each dropped estimate.
+pub fn window_ui(ctx: &egui::Context, estimates: &mut Estimates, has_truth: bool) {
+    let mut open = estimates.open;
+    let screen = ctx.content_rect();
+    // Beside the map, not over all of it: at most about 40 % of the window's
+    // width and half its height, in the bottom right corner.
+    let size = egui::vec2(
+        (0.42 * screen.width())
+            .clamp(300.0, 470.0)
+            .min(screen.width() - 16.0),
+        (0.5 * screen.height())
+            .clamp(180.0, 380.0)
+            .min(screen.height() - 40.0),
+    );
+    let mut remove = None;
+    egui::Window::new("Your estimates")
+        .open(&mut open)
+        .default_size(size)
+        .default_pos(screen.right_bottom() - size - egui::vec2(8.0, 8.0))
+        .constrain(true)
+        .show(ctx, |ui| {
+            ui.label(format!(
+                "Scored against {} up to the time bar's time, as `slamlab evaluate` and evo score them.",
+                if has_truth { "the truth" } else { "the lesson's first estimator (no truth here)" }
+            ));
+            ui.checkbox(&mut estimates.align, "Align each to the reference first (SE(2), evo's --align)");
+            let fmt = |v: Option<f64>, digits: usize| v.map_or("–".to_owned(), |v| format!("{v:.digits$}"));
+            egui::Grid::new("estimate_scores").striped(true).show(ui, |ui| {
+                for h in ["", "estimator", "ATE m", "max m", "RPE m", "ANEES", ""] {
+                    ui.strong(h);
+                }
+                ui.end_row();
+                for s in &estimates.scores {
+                    let (rect, _) = ui.allocate_exact_size(egui::vec2(12.0, 12.0), egui::Sense::hover());
+                    ui.painter().rect_filled(rect, 2.0, s.color);
+                    let label = ui.label(&s.name);
+                    if let Some(note) = &s.note {
+                        label.on_hover_text(note);
+                    }
+                    if s.landmark_rmse.is_some() {
+                        ui.label(format!("landmarks {}", fmt(s.landmark_rmse, 3)));
+                        ui.label("");
+                        ui.label("");
+                        ui.label("");
+                    } else {
+                        ui.label(fmt(s.ate_rmse, 3));
+                        ui.label(fmt(s.ate_max, 3));
+                        ui.label(fmt(s.rpe_rmse, 4));
+                        ui.label(fmt(s.anees, 2));
+                    }
+                    if s.dropped {
+                        if let Some(k) = estimates.items.iter().position(|e| e.name == s.name)
+                            && ui.small_button("Remove").on_hover_text("Remove this estimate").clicked()
+                        {
+                            remove = Some(k);
+                        }
+                    } else {
+                        ui.label("");
+                    }
+                    ui.end_row();
+                }
+            });
+            if estimates.items.is_empty() {
+                ui.weak("Drop a trajectory (TUM t x y z qx qy qz qw, or CSV t,x,y,theta[,covariance]) or a landmark CSV (id,x,y) on the page, or use File → Open your estimate. File → Export trajectories gives the lesson's own in these formats.");
+            }
+            let series: Vec<(String, Color32, Vec<[f64; 2]>)> = estimates
+                .scores
+                .iter()
+                .filter(|s| !s.errors.is_empty())
+                .map(|s| (s.name.clone(), s.color, s.errors.clone()))
+                .collect();
+            if !series.is_empty() {
+                ui.label("Position error (m) over time (s)");
+                egui_plot::Plot::new("estimate_errors")
+                    .height((ui.available_height() - 8.0).clamp(70.0, 160.0))
+                    .x_axis_label("time (s)")
+                    .y_axis_label("error (m)")
+                    .allow_scroll(false)
+                    .show(ui, |plot| {
+                        for (name, color, points) in series {
+                            plot.line(
+                                egui_plot::Line::new(name, egui_plot::PlotPoints::from(points))
+                                    .color(color)
+                                    .width(1.5),
+                            );
+                        }
+                    });
+            }
+        });
+    if let Some(k) = remove {
+        estimates.remove(k);
+    }
+    estimates.open = open;
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use slamlab_sim::io::trajectory::write_tum;
+
+    fn line(n: usize, dy: f64) -> Trajectory {
+        Trajectory::new(
+            (0..n).map(|k| k as f64 * 0.1).collect(),
+            (0..n)
+                .map(|k| Pose2::new(k as f64 * 0.1, dy, 0.0))
+                .collect(),
+        )
+    }
+
+    #[test]
+    fn a_dropped_trajectory_is_scored_beside_the_lessons() {
+        let mut estimates = Estimates::default();
+        let text = write_tum(&line(50, 0.2));
+        assert!(is_estimate_file("mine.txt", text.as_bytes()));
+        assert!(!is_estimate_file("map.yaml", b"image: map.pgm"));
+        let said = estimates.add("mine.txt", text.as_bytes()).unwrap();
+        assert_eq!(said, "Your estimate mine.txt: 50 poses");
+        let lesson = || -> (Vec<NamedTrajectory>, Vec<(String, Vec<LandmarkRow>)>) {
+            (
+                vec![
+                    NamedTrajectory::new("truth", TrajectoryRole::Truth, line(30, 0.0)),
+                    NamedTrajectory::new("ekf", TrajectoryRole::Estimate, line(30, 0.05)),
+                ],
+                Vec::new(),
+            )
+        };
+        let (trajectories, landmarks) = lesson();
+        assert!(estimates.is_stale(30));
+        let scores = estimates.score(30, &trajectories, &landmarks).to_vec();
+        assert!(!estimates.is_stale(30));
+        assert_eq!(scores.len(), 2);
+        assert_eq!(scores[0].name, "ekf");
+        assert!((scores[0].ate_rmse.unwrap() - 0.05).abs() < 1e-12);
+        // The student's is scored over the 30 poses the run has so far.
+        assert_eq!(scores[1].pairs, 30);
+        assert!((scores[1].ate_rmse.unwrap() - 0.2).abs() < 1e-12);
+        // Refusals say why and keep what is there.
+        let refused = estimates.add("bad.csv", b"0,1,2,0\n0,1,2,0\n").unwrap_err();
+        assert!(refused.starts_with("bad.csv: line 2"), "{refused}");
+        assert_eq!(estimates.items().len(), 1);
+        estimates.remove(0);
+        assert!(estimates.is_empty());
+    }
+}

@@ -1,0 +1,182 @@
+//! A student's estimate in a lesson: a lesson's own estimator exported and brought
+//! back scores exactly as the lesson scores it; files named in the URL, several
+//! estimates and bad files; the estimate drawn on the map.
+
+use super::common::{count_pixels, harness_sized as harness, render_or_skip};
+use egui_kittest::Harness;
+use slamlab_app::SlamLabApp;
+use slamlab_app::widgets::estimates::COLORS;
+use slamlab_sim::io::trajectory::export_files;
+
+fn state(h: &Harness<'_, SlamLabApp>) -> serde_json::Value {
+    serde_json::from_str(&h.state().test_state_json()).unwrap_or_default()
+}
+
+fn score<'a>(state: &'a serde_json::Value, name: &str) -> &'a serde_json::Value {
+    state["estimates"]
+        .as_array()
+        .and_then(|a| a.iter().find(|s| s["name"] == name))
+        .unwrap_or_else(|| panic!("no score for {name} in {}", state["estimates"]))
+}
+
+/// The lesson's files as File → Export trajectories writes them.
+fn exported(h: &Harness<'_, SlamLabApp>) -> Vec<(String, Vec<u8>)> {
+    let lesson = h.state().lesson();
+    export_files(lesson.id(), &lesson.trajectories(), &lesson.landmark_maps())
+}
+
+fn add(h: &mut Harness<'_, SlamLabApp>, name: &str, bytes: &[u8]) -> Result<String, String> {
+    h.state_mut()
+        .lesson_mut()
+        .frame_mut()
+        .estimates_mut()
+        .add(name, bytes)
+}
+
+#[test]
+fn an_exported_estimator_brought_back_scores_as_the_lessons_own() {
+    let mut h = harness(
+        "lesson=landmark-slam&seed=5&estimator=ekf,ukf&tick=80",
+        egui::vec2(1280.0, 800.0),
+    );
+    h.run();
+    let files = exported(&h);
+    let file = |name: &str| {
+        files
+            .iter()
+            .find(|(n, _)| n == name)
+            .map(|(_, b)| b.clone())
+            .unwrap_or_else(|| panic!("no {name}"))
+    };
+    assert!(
+        add(&mut h, "ekf.csv", &file("ekf.csv"))
+            .unwrap()
+            .contains("81 poses with covariances")
+    );
+    assert!(add(&mut h, "ukf.tum", &file("ukf.tum")).is_ok());
+    assert!(add(&mut h, "ekf-landmarks.csv", &file("ekf-landmarks.csv")).is_ok());
+    h.run();
+    let st = state(&h);
+    for (own, dropped) in [("ekf", "ekf.csv"), ("ukf", "ukf.tum")] {
+        let (a, b) = (score(&st, own), score(&st, dropped));
+        assert_eq!(a["dropped"], false);
+        assert_eq!(b["dropped"], true);
+        assert_eq!(a["pairs"], 81);
+        assert_eq!(a["pairs"], b["pairs"]);
+        for key in ["ate_rmse", "ate_max", "rpe_rmse"] {
+            let (x, y) = (a[key].as_f64().unwrap(), b[key].as_f64().unwrap());
+            // The TUM file holds the heading as a quaternion: 1e-9.
+            assert!(
+                (x - y).abs() <= 1e-9 * x.abs().max(1.0),
+                "{dropped} {key}: {x} against {y}"
+            );
+        }
+    }
+    // The CSV keeps the covariances to the bit: the same ANEES; the TUM file has none.
+    assert_eq!(score(&st, "ekf")["anees"], score(&st, "ekf.csv")["anees"]);
+    assert!(score(&st, "ekf")["anees"].as_f64().is_some());
+    assert!(score(&st, "ukf.tum")["anees"].is_null());
+    // The landmarks of the EKF, matched by id, against the true map.
+    let lm = score(&st, "ekf-landmarks.csv")["landmark_rmse"]
+        .as_f64()
+        .unwrap();
+    assert!(lm > 0.0 && lm < 2.0, "{lm}");
+}
+
+#[test]
+fn estimates_follow_the_time_bar_and_bad_files_change_nothing() {
+    let mut h = harness(
+        "lesson=landmark-slam&seed=5&tick=60",
+        egui::vec2(1280.0, 800.0),
+    );
+    h.run();
+    let ekf = exported(&h)
+        .into_iter()
+        .find(|(n, _)| n == "ekf.tum")
+        .map(|(_, b)| b)
+        .unwrap();
+    add(&mut h, "mine.tum", &ekf).unwrap();
+    h.run();
+    assert_eq!(score(&state(&h), "mine.tum")["pairs"], 61);
+    // Bad files: a zip, a NaN, a repeated time, a file too large; the estimate
+    // already there stays, and each refusal names the file and the line.
+    let refusals = [
+        add(&mut h, "mine.zip.csv", b"PK\x03\x04xxxx").unwrap_err(),
+        add(&mut h, "nan.csv", b"0,1,2,0\n0.1,NaN,2,0\n").unwrap_err(),
+        add(&mut h, "twice.tum", b"0 1 2 0 0 0 0 1\n0 1 2 0 0 0 0 1\n").unwrap_err(),
+        add(&mut h, "huge.csv", &vec![b'0'; 65 << 20]).unwrap_err(),
+    ];
+    assert!(refusals[0].contains("zip archive"), "{}", refusals[0]);
+    assert_eq!(
+        refusals[1],
+        "nan.csv: line 2: x is NaN, not a finite number"
+    );
+    assert!(
+        refusals[2].starts_with("twice.tum: line 2: the time 0 s repeats"),
+        "{}",
+        refusals[2]
+    );
+    assert!(
+        refusals[3].contains("more than the 67108864 bytes"),
+        "{}",
+        refusals[3]
+    );
+    assert_eq!(h.state().lesson().frame().estimates().items().len(), 1);
+    h.run();
+    assert_eq!(score(&state(&h), "mine.tum")["pairs"], 61);
+}
+
+/// `estimate=` names a file (a path on the desktop, a file beside the page in the
+/// browser), and the estimate is drawn on the map in its colour.
+#[test]
+fn a_linked_estimate_is_drawn_on_the_map() {
+    let dir = std::env::temp_dir().join(format!("slamlab-estimate-ui-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let mut first = harness(
+        "lesson=landmark-slam&seed=2&tick=150",
+        egui::vec2(800.0, 500.0),
+    );
+    first.run();
+    let ekf = exported(&first)
+        .into_iter()
+        .find(|(n, _)| n == "ekf.tum")
+        .map(|(_, b)| b)
+        .unwrap();
+    // Someone else's: the same path, shifted by half a metre.
+    let shifted: String = String::from_utf8(ekf)
+        .unwrap()
+        .lines()
+        .map(|l| {
+            let mut f: Vec<String> = l.split(' ').map(str::to_owned).collect();
+            if !l.starts_with('#') {
+                f[2] = format!("{}", f[2].parse::<f64>().unwrap() + 0.5);
+            }
+            f.join(" ") + "\n"
+        })
+        .collect();
+    let path = dir.join("theirs.tum");
+    std::fs::write(&path, shifted).unwrap();
+    let query = format!(
+        "lesson=landmark-slam&seed=2&tick=150&estimate={}&estimate=https://elsewhere.example/x.tum",
+        path.display()
+    );
+    let mut h = harness(&query, egui::vec2(800.0, 500.0));
+    h.run();
+    let st = state(&h);
+    let theirs = score(&st, "theirs.tum");
+    assert_eq!(theirs["pairs"], 151);
+    assert!(theirs["ate_rmse"].as_f64().unwrap() > 0.45, "{theirs}");
+    assert!(
+        st["notices"].as_u64().unwrap() >= 1,
+        "the link to another host is refused"
+    );
+    if let Some(image) = render_or_skip(&mut h) {
+        if let Some(dir) = std::env::var_os("SLAMLAB_UI_SHOTS") {
+            let _ = image.save(std::path::Path::new(&dir).join("estimate-on-landmark-800x500.png"));
+        }
+        let [r, g, b, _] = COLORS[0].to_array();
+        let drawn = count_pixels(&image, [r, g, b], 24);
+        assert!(drawn > 150, "the estimate's colour covers {drawn} pixels");
+    }
+    let _ = std::fs::remove_dir_all(&dir);
+}
