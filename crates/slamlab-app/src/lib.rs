@@ -531,7 +531,7 @@ impl SlamLabApp {
         } else {
             &mut self.panels
         };
-        widgets::estimates::clear_placement(&ctx);
+        widgets::map_canvas::clear_placement(&ctx);
         self.lesson.panels_ui(ui, panels, self.embed);
         self.estimates_ui(&ctx);
         match self.lesson.take_request() {
