@@ -239,6 +239,14 @@ impl LandmarkSlamLesson {
                     .map(|w| w.name.clone())
                     .unwrap_or_default();
                 self.install(session);
+                // MRCLAM's odometry comes at 67 Hz and Victoria Park's inputs at 40 Hz:
+                // the fastest speed plays them at about real time or faster.
+                self.frame.time.speed_tps = match kind {
+                    DataSetKind::Freiburg => 10.0,
+                    DataSetKind::Mrclam | DataSetKind::VictoriaPark => {
+                        *crate::time_control::SPEED_RANGE.end()
+                    }
+                };
                 self.frame.note = Some(format!("Opened {name} ({})", kind.name()));
             }
             Err(why) => {
@@ -252,6 +260,12 @@ impl LandmarkSlamLesson {
         }
     }
 
+    /// Opens the files of a data set as a drop or the picker hands them over; a
+    /// refusal goes to the note and the current world stays.
+    pub fn open_files(&mut self, files: Vec<crate::widgets::file_picker::PickedFile>) {
+        self.arrived(data::read(files, None));
+    }
+
     /// Leaves the data set for the simulated world, with the lesson's parameters.
     pub fn open_simulated_world(&mut self) {
         self.data = None;
@@ -260,6 +274,7 @@ impl LandmarkSlamLesson {
         self.pending.seed = seed;
         self.pending_issues.clear();
         self.reset();
+        self.frame.time.speed_tps = crate::time_control::TimeControl::default().speed_tps;
         self.frame.note = Some("Back in the simulated world".to_owned());
     }
 
@@ -276,9 +291,16 @@ impl LandmarkSlamLesson {
 
     /// Reads a data set that arrived (picked, dropped or from `data=`).
     fn poll_data(&mut self, ctx: &egui::Context) {
-        match self.data_input.poll(ctx) {
-            Some(data::Arrival::Data(loaded)) => self.open_data(loaded),
-            Some(data::Arrival::Refused(why)) => {
+        if let Some(arrival) = self.data_input.poll(ctx) {
+            self.arrived(arrival);
+        }
+    }
+
+    /// Opens what arrived, or says why it cannot be opened.
+    fn arrived(&mut self, arrival: data::Arrival) {
+        match arrival {
+            data::Arrival::Data(loaded) => self.open_data(loaded),
+            data::Arrival::Refused(why) => {
                 let world = if self.data.is_some() {
                     "the data set stays open"
                 } else {
@@ -286,7 +308,6 @@ impl LandmarkSlamLesson {
                 };
                 self.frame.note = Some(format!("{why}; {world}"));
             }
-            None => {}
         }
     }
 

@@ -54,6 +54,7 @@ fn state(h: &Harness<'_, SlamLabApp>) -> serde_json::Value {
 }
 
 #[test]
+#[ignore = "compiled and clippy-clean, not yet run (the shared VM was too loaded to build the test binary on 2026-11-28): run with --ignored and SLAMLAB_SHARED_DATA"]
 fn mrclam_opens_by_url_and_its_error_against_vicon_is_the_headless_runs() {
     let Some(zip) = mrclam_zip() else {
         return;
@@ -97,8 +98,11 @@ fn mrclam_opens_by_url_and_its_error_against_vicon_is_the_headless_runs() {
     let expected = (errors.iter().map(|e| e * e).sum::<f64>() / errors.len() as f64).sqrt();
     assert_eq!(samples as usize, errors.len());
     assert_eq!(rmse.to_bits(), expected.to_bits(), "{rmse} vs {expected}");
-    // Vicon has gaps: fewer error samples than ticks.
-    assert!(samples < TICKS as u64, "{samples} samples of {TICKS} ticks");
+    // One error sample per tick where Vicon knows the pose (none in its gaps).
+    assert!(
+        samples > TICKS as u64 / 2 && samples <= TICKS as u64,
+        "{samples} samples of {TICKS} ticks"
+    );
     // Against Vicon, after 6000 steps (about 90 s) the EKF is within a metre
     // and below dead reckoning's error at the end.
     let session = lesson.session();
@@ -113,10 +117,26 @@ fn mrclam_opens_by_url_and_its_error_against_vicon_is_the_headless_runs() {
         latest < dr_error,
         "EKF {latest} m, dead reckoning {dr_error} m"
     );
-    // The run's numbers, pinned (the seed plays no part: the data is the noise).
-    assert!(
-        (rmse - 0.0).abs() < 1e-3,
-        "RMSE {rmse}, dead reckoning {dr_error}"
+    println!(
+        "after {TICKS} steps: EKF RMSE {rmse} m, latest {latest} m, dead reckoning {dr_error} m"
+    );
+
+    // The page's headless entry (the browser check calls it in wasm) gives the
+    // same bits from the zip's bytes.
+    let bytes = std::fs::read(&zip).unwrap();
+    let headless: serde_json::Value = serde_json::from_str(&SlamLabApp::headless_log_state(
+        "lesson=landmark-slam&estimator=ekf",
+        "MRCLAM_Dataset6.zip",
+        &bytes,
+        TICKS as u64,
+    ))
+    .unwrap();
+    assert_eq!(
+        headless["position_error"]["ekf"]["rmse"]
+            .as_f64()
+            .map(f64::to_bits),
+        Some(rmse.to_bits()),
+        "{headless}"
     );
 
     // Robot 3 from the panel: a new run of that robot.
@@ -170,6 +190,7 @@ fn a_file_that_is_no_data_set_leaves_the_simulated_world_open() {
 }
 
 #[test]
+#[ignore = "compiled and clippy-clean, not yet run (the shared VM was too loaded to build the test binary on 2026-11-28): run with --ignored and SLAMLAB_SHARED_DATA"]
 fn mrclam_renders_at_800_by_500_in_a_lecture_and_full_size() {
     let Some(zip) = mrclam_zip() else {
         return;
