@@ -9,5 +9,8 @@ pub mod run;
 pub mod scenario;
 pub mod session;
 
+#[cfg(test)]
+mod replay_tests;
+
 pub use run::{FilterRun, FilterSummary, MclPhase, MclRun, MclRunError, TickError, UpdateRecord};
 pub use scenario::{InitMode, LaserModelType, LocalizationEstimator, MclScenario};
