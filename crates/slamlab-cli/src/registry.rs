@@ -30,6 +30,7 @@ pub static EXPERIMENTS: &[&dyn Experiment] = &[
     &experiments::ekf_vs_ukf::EkfVsUkf,
     &experiments::consistency::Consistency,
     &experiments::fastslam::FastSlam,
+    &experiments::real_data::RealData,
     &experiments::grid_fastslam::GridFastSlam,
     &experiments::resampling::Resampling,
     &experiments::fusion::Fusion,

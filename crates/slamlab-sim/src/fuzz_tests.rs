@@ -791,3 +791,186 @@ fn corrected_logs_survive_mutations() {
     );
     report.assert_clean();
 }
+
+/// The landmark data sets' files, cut to 4 kB: MRCLAM Dataset 6 unzipped (each
+/// file by name), the Freiburg course's and Victoria Park's; empty without the
+/// shared data.
+fn landmark_files() -> Vec<io::landmark_data::DataFile> {
+    use io::landmark_data::{DataFile, unzip};
+    let Some(root) = slamlab_fuzz::shared_data() else {
+        eprintln!(
+            "slamlab-fuzz: ../shared/data is absent; fuzzing the landmark data sets with the built-in seeds only"
+        );
+        return Vec::new();
+    };
+    let dir = root.join("landmarks");
+    let mut files = Vec::new();
+    if let Ok(bytes) = std::fs::read(dir.join("mrclam/MRCLAM_Dataset6.zip"))
+        && let Ok(unzipped) = unzip(&DataFile::new("MRCLAM_Dataset6.zip", bytes))
+    {
+        files.extend(
+            unzipped
+                .into_iter()
+                .map(|f| DataFile::new(f.base_name().to_owned(), head(&f.bytes, 4096))),
+        );
+    }
+    for name in [
+        "freiburg/world.dat",
+        "freiburg/sensor_data.dat",
+        "victoria_park/inputs.dat",
+        "victoria_park/measurements.dat",
+        "victoria_park/gps.dat",
+    ] {
+        if let Ok(bytes) = std::fs::read(dir.join(name)) {
+            let base = io::landmark_data::base_name(name).to_owned();
+            files.push(DataFile::new(base, head(&bytes, 4096)));
+        }
+    }
+    files
+}
+/// Fuzzes one data set: each input takes, in turn, the place of every file of
+/// the small set (the others stay valid), goes through the reader, and when it
+/// is accepted becomes a recorded world that a session runs 20 ticks of. An
+/// input counts as accepted when some place took it; a refusal must name the
+/// file (and the line, when it lies in one).
+fn fuzz_landmark_set(name: &str, small: &[(&str, &str)]) {
+    use crate::world::landmark_session::LandmarkSession;
+    use crate::world::recorded::RecordedWorld;
+    use io::landmark_data::{DataFile, read_landmark_data};
+    let names: Vec<&str> = small.iter().map(|(n, _)| *n).collect();
+    let mut seeds: Vec<Vec<u8>> = small.iter().map(|(_, t)| t.as_bytes().to_vec()).collect();
+    seeds.extend(
+        landmark_files()
+            .into_iter()
+            .filter(|f| names.contains(&f.name.as_str()))
+            .map(|f| f.bytes),
+    );
+    let report = Target::new(name, seeds, CAP).run_checked(
+        |bytes| {
+            let mut refusals = Vec::new();
+            for role in &names {
+                let files: Vec<DataFile> = small
+                    .iter()
+                    .map(|(n, t)| {
+                        let content = if n == role {
+                            bytes.to_vec()
+                        } else {
+                            t.as_bytes().to_vec()
+                        };
+                        DataFile::new(*n, content)
+                    })
+                    .collect();
+                match read_landmark_data(files) {
+                    Ok(data) => {
+                        if let Ok(world) = RecordedWorld::from_data(&data, 1) {
+                            let scenario = crate::landmark_slam::presets::scenario(
+                                crate::landmark_slam::presets::for_data(data.kind()),
+                                1,
+                            )
+                            .unwrap_or_default();
+                            let mut session = LandmarkSession::recorded(
+                                crate::LandmarkScenario {
+                                    estimators: vec![
+                                        crate::EstimatorKind::Ekf,
+                                        crate::EstimatorKind::FastSlam2,
+                                    ],
+                                    fastslam: crate::world::landmark_scenario::FastSlamSettings {
+                                        particles: 5,
+                                        ..scenario.fastslam
+                                    },
+                                    ..scenario
+                                },
+                                std::sync::Arc::new(world),
+                            );
+                            session.run_ticks(20);
+                        }
+                    }
+                    Err(e) => refusals.push(e.to_string()),
+                }
+            }
+            // Accepted in some place, or refused in every one (reported by the first).
+            match refusals.first() {
+                Some(first) if refusals.len() == names.len() => Err(first.clone()),
+                _ => Ok(()),
+            }
+        },
+        |message| {
+            let names_file = names.iter().any(|n| message.contains(n));
+            if names_file || message.contains("files") {
+                Ok(())
+            } else {
+                Err(format!("'{message}' does not name the file"))
+            }
+        },
+    );
+    report.assert_clean();
+}
+#[test]
+fn mrclam_files_survive_mutations() {
+    fuzz_landmark_set("MRCLAM .dat files", &SMALL_MRCLAM);
+}
+#[test]
+fn freiburg_files_survive_mutations() {
+    fuzz_landmark_set("Freiburg course files", &SMALL_FREIBURG);
+}
+#[test]
+fn victoria_park_files_survive_mutations() {
+    fuzz_landmark_set("Victoria Park files", &SMALL_VICTORIA_PARK);
+}
+#[test]
+fn mrclam_zips_survive_mutations() {
+    use io::landmark_data::{DataFile, read_landmark_data};
+    use std::io::Write;
+    // Zips of the small set and of the real files' heads, deflated and stored.
+    let zip = |files: &[(String, Vec<u8>)], method: zip::CompressionMethod| {
+        let mut writer = zip::ZipWriter::new(std::io::Cursor::new(Vec::new()));
+        let options = zip::write::SimpleFileOptions::default().compression_method(method);
+        for (name, bytes) in files {
+            if writer
+                .start_file(format!("MRCLAM_Dataset6/{name}"), options)
+                .is_err()
+                || writer.write_all(bytes).is_err()
+            {
+                return Vec::new();
+            }
+        }
+        writer.finish().map(|c| c.into_inner()).unwrap_or_default()
+    };
+    let small: Vec<(String, Vec<u8>)> = SMALL_MRCLAM
+        .iter()
+        .map(|(n, t)| ((*n).to_owned(), t.as_bytes().to_vec()))
+        .collect();
+    let real: Vec<(String, Vec<u8>)> = landmark_files()
+        .into_iter()
+        .filter(|f| {
+            io::landmark_data::DataSetKind::of_file(&f.name)
+                == Some(io::landmark_data::DataSetKind::Mrclam)
+        })
+        .map(|f| (f.name, head(&f.bytes, 1024)))
+        .collect();
+    let mut seeds = vec![
+        zip(&small, zip::CompressionMethod::Deflated),
+        zip(&small, zip::CompressionMethod::Stored),
+    ];
+    if !real.is_empty() {
+        seeds.push(zip(&real, zip::CompressionMethod::Deflated));
+    }
+    seeds.retain(|s| !s.is_empty());
+    let report = Target::new("MRCLAM zip", seeds, CAP).run_checked(
+        |bytes| {
+            read_landmark_data(vec![DataFile::new("MRCLAM_Dataset6.zip", bytes.to_vec())])
+                .map(drop)
+                .map_err(|e| e.to_string())
+        },
+        |message| {
+            if message.contains(".zip") || message.contains(".dat") || message.contains("files") {
+                Ok(())
+            } else {
+                Err(format!(
+                    "'{message}' does not name the zip or the file in it"
+                ))
+            }
+        },
+    );
+    report.assert_clean();
+}

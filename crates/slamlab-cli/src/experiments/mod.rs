@@ -10,6 +10,7 @@ pub mod kidnap;
 pub mod krp;
 pub mod laser_slam;
 pub mod pose_graph;
+pub mod real_data;
 pub mod resampling;
 pub mod two_view;
 pub mod unscented;

@@ -7,6 +7,7 @@
 
 pub mod archive;
 pub mod graph;
+pub mod landmark_data;
 pub mod laser_log;
 pub mod laser_reference;
 pub mod ros2_bag;
