@@ -974,3 +974,46 @@ fn mrclam_zips_survive_mutations() {
     );
     report.assert_clean();
 }
+}
+
+/// A small data set of each kind, written by hand, as `(name, text)`.
+const SMALL_MRCLAM: [(&str, &str); 5] = [
+    (
+        "Barcodes.dat",
+        "# 4 comment lines\n#\n#\n#\n  1 \t  5 \n  6 \t 63 \n  7 \t 81 \n",
+    ),
+    (
+        "Landmark_Groundtruth.dat",
+        "  6 \t 1.0 \t 2.0 \t 0.0001 \t 0.0002 \n  7 \t -1.0 \t 3.0 \t 0.0001 \t 0.0001 \n",
+    ),
+    (
+        "Robot1_Odometry.dat",
+        "100.00 \t 0.1 \t 0.0 \n100.01 \t 0.1 \t 0.05 \n100.02 \t 0.0 \t 0.0 \n",
+    ),
+    (
+        "Robot1_Measurement.dat",
+        "100.005 \t 63 \t 2.2 \t 1.1 \n100.005 \t 81 \t 3.2 \t 1.9 \n100.015 \t 43 \t 1.0 \t 0.0 \n",
+    ),
+    (
+        "Robot1_Groundtruth.dat",
+        "99.99 \t 0.0 \t 0.0 \t 0.0 \n100.02 \t 0.002 \t 0.0 \t 0.001 \n",
+    ),
+];
+const SMALL_FREIBURG: [(&str, &str); 2] = [
+    ("world.dat", "1 2 1\n2 0 4\n"),
+    (
+        "sensor_data.dat",
+        "ODOMETRY 0.1 0.1 0.0\nSENSOR 1 1.9 0.37\nSENSOR 2 -0.035 3.15\nODOMETRY 0.1 0.1 -0.0002\n",
+    ),
+];
+const SMALL_VICTORIA_PARK: [(&str, &str); 3] = [
+    (
+        "inputs.dat",
+        "     0.973      0.000    -0.0035\n     0.998      1.500    -0.0042\n",
+    ),
+    (
+        "measurements.dat",
+        "     0.852   20.46202    0.88575    0.35404\n     0.852   29.59859    1.02102    0.25717\n     1.052    9.5    3.1    0.2\n",
+    ),
+    ("gps.dat", "     0.000     -2.023     -1.923\n"),
+];
