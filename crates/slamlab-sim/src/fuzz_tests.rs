@@ -974,7 +974,6 @@ fn mrclam_zips_survive_mutations() {
     );
     report.assert_clean();
 }
-}
 
 /// A small data set of each kind, written by hand, as `(name, text)`.
 const SMALL_MRCLAM: [(&str, &str); 5] = [
