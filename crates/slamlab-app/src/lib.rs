@@ -941,11 +941,15 @@ impl SlamLabApp {
         if !self.lesson.frame().estimates().is_stale(version) {
             return;
         }
-        let (trajectories, landmarks) = (self.lesson.trajectories(), self.lesson.landmark_maps());
+        let output = widgets::estimates::LessonOutput {
+            trajectories: self.lesson.trajectories(),
+            landmarks: self.lesson.landmark_maps(),
+            relative_poses: self.lesson.relative_poses(),
+        };
         self.lesson
             .frame_mut()
             .estimates_mut()
-            .score(version, &trajectories, &landmarks);
+            .score(version, &output);
     }
 
     /// Opens a scenario file picked or dropped this frame. A dropped `.json` is taken

@@ -695,6 +695,35 @@ fn trajectory_files_survive_mutations() {
         line_or_what,
     );
     report.assert_clean();
+    // A relative pose of two views: R and t, or t and a quaternion.
+    let seeds = vec![
+        crate::io::relative_pose::write_relative_pose(&slamlab_core::vision::RelativePose {
+            rotation: nalgebra::Rotation3::from_euler_angles(0.1, -0.2, 0.3).into_inner(),
+            translation: nalgebra::Vector3::new(0.2, -0.1, 1.0),
+        })
+        .into_bytes(),
+        b"0.1, 0, 1, 0, 0.0499792, 0, 0.99875\n".to_vec(),
+    ];
+    let report = Target::new("relative pose", seeds, CAP).run_checked(
+        |bytes| {
+            crate::io::relative_pose::read_relative_pose(bytes)
+                .map(drop)
+                .map_err(|e| e.to_string())
+        },
+        |message| {
+            // A refusal names the line, the count, what is wrong with R, q or t, or
+            // what the file is.
+            if ["line ", "numbers", "R is", "quaternion", "t is", "file"]
+                .iter()
+                .any(|w| message.contains(w))
+            {
+                Ok(())
+            } else {
+                Err(format!("'{message}' says nothing of what is wrong"))
+            }
+        },
+    );
+    report.assert_clean();
 }
 
 /// Assignment JSON files through the reader the app and the command line use
