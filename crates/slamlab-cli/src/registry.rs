@@ -118,6 +118,7 @@ fn foreign_args(experiment: &dyn Experiment) -> Vec<Arg> {
                 let mut arg = arg
                     .clone()
                     .hide(true)
+                    .required(false)
                     .default_value(None)
                     .help_heading(None);
                 if arg.get_action().takes_values() {
@@ -257,7 +258,8 @@ mod tests {
             for other in EXPERIMENTS {
                 for arg in other.command().get_arguments() {
                     assert!(
-                        sub.get_arguments().any(|a| a.get_id() == arg.get_id()),
+                        sub.get_arguments().any(|a| a.get_id() == arg.get_id()
+                            || (a.get_long().is_some() && a.get_long() == arg.get_long())),
                         "{} lacks --{}",
                         e.name(),
                         arg.get_id()

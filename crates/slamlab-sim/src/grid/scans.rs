@@ -42,6 +42,30 @@ pub struct MappingInput {
 }
 
 impl MappingInput {
+    /// The reference trajectory of this input when it was read from a log: a
+    /// corrected log's bytes, its scans matched to the input's in the log's clock
+    /// (through [`MappingInput::time_origin`]) by time and identical ranges.
+    pub fn reference_from(
+        &self,
+        bytes: &[u8],
+        name: &str,
+    ) -> Result<crate::grid::reference::LogReference, crate::io::laser_reference::ReferenceError>
+    {
+        let reference = crate::io::laser_reference::ReferenceLog::from_bytes(bytes)?;
+        let scans: Vec<(usize, f64, &[f64])> = self
+            .scans
+            .iter()
+            .enumerate()
+            .map(|(k, s)| (k, s.time + self.time_origin, s.scan.ranges.as_slice()))
+            .collect();
+        let association = crate::io::laser_reference::associate_scans(&reference, &scans)?;
+        Ok(crate::grid::reference::LogReference::from_association(
+            name,
+            &reference,
+            &association,
+        ))
+    }
+
     /// Seconds from the first scan to the last.
     pub fn duration(&self) -> f64 {
         match (self.scans.first(), self.scans.last()) {
