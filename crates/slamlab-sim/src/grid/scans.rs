@@ -151,3 +151,29 @@ pub fn map_agreement(built: &ProbabilityGrid, truth: &OccupancyGrid) -> Option<f
     }
     (known > 0).then(|| same as f64 / known as f64)
 }
+
+#[cfg(test)]
+mod tests {
+    use crate::io::laser_log::LaserLog;
+
+    /// The Intel log's reference, matched through the mapping input (the lessons'
+    /// path) as through the log itself: 910 of 910, the same scans.
+    #[test]
+    fn the_intel_reference_matches_through_the_mapping_input() {
+        let Some(dir) = crate::io::laser_reference::tests::shared_laser_dir() else {
+            return;
+        };
+        let log = LaserLog::read_file(&dir.join("intel.clf.bz2")).unwrap();
+        let bytes = std::fs::read(dir.join("intel-corrected.log.gz")).unwrap();
+        let direct =
+            crate::grid::reference::LogReference::read(&bytes, "intel-corrected.log.gz", &log)
+                .unwrap();
+        let input = crate::grid::log_input(&log, "intel.clf.bz2");
+        let through = input
+            .reference_from(&bytes, "intel-corrected.log.gz")
+            .unwrap();
+        assert_eq!(direct.points.len(), 910);
+        assert_eq!(through, direct);
+        assert_eq!(through.points[0].scan, 169);
+    }
+}
