@@ -75,6 +75,11 @@ pub struct RealDataRow {
     pub coverage: f64,
     /// Landmarks in the final map.
     pub landmarks: usize,
+    /// The path against the data's GPS (Victoria Park), after the rigid
+    /// alignment that carries it onto the fixes: not an error against a truth
+    /// (the GPS has metres of its own error and gaps) but how well the path's
+    /// shape agrees with an independent sensor. `None` without a GPS.
+    pub gps: Option<GpsFit>,
     /// The filter's last error, if a phase failed.
     pub error: Option<String>,
 }
@@ -249,8 +254,68 @@ fn score(
         pairs: evaluation.as_ref().map_or(0, |e| e.pairing.pairs),
         coverage: evaluation.as_ref().map_or(0.0, |e| e.pairing.coverage),
         landmarks: map.map_or(0, <[_]>::len),
+        gps: gps_fit(world, estimate),
         error,
     }
+}
+
+/// How far apart two paired times of the path and the GPS may be, seconds:
+/// Victoria Park's steps come at about 40 Hz (inputs) with laser scans between,
+/// so every fix inside the run has a step within about 13 ms.
+pub const GPS_MAX_DIFF: f64 = 0.05;
+
+/// An estimated path carried onto a data set's GPS fixes (Victoria Park) by
+/// the rigid transform that fits them best (Umeyama's method over the fixes
+/// paired with the path's poses in time, [`crate::metrics::umeyama`]), and the
+/// distance that remains: the GPS alignment RMSE
+/// `sqrt(1/N Σ |g_i - (R p_i + t)|²)` over the `N` pairs.
+///
+/// The GPS is no truth: its fixes are off by metres under the trees and it
+/// drops out, so the RMSE bounds how well the path's shape agrees with an
+/// independent sensor (and includes the GPS's own error), and the transform is
+/// where the GPS's frame sits against the estimate's (Victoria Park's README:
+/// about (+67, +39) m and -33°).
+#[derive(Clone, Copy, Debug, PartialEq, Serialize)]
+pub struct GpsFit {
+    /// The RMS distance between the fixes and the aligned path, metres.
+    pub rmse: f64,
+    /// The fixes paired with a pose of the path (within [`GPS_MAX_DIFF`]).
+    pub pairs: usize,
+    /// The fixes the data has.
+    pub fixes: usize,
+    /// The rotation that carries the path into the GPS's frame, degrees.
+    pub rotation_deg: f64,
+    /// The translation that carries the path into the GPS's frame, metres.
+    pub translation_m: [f64; 2],
+    /// The transform itself (estimate to GPS).
+    #[serde(skip)]
+    pub similarity: Similarity,
+}
+
+impl GpsFit {
+    /// A GPS fix in the estimate's frame (the alignment undone:
+    /// `Rᵀ (g - t)`), for drawing it over the estimate.
+    pub fn to_estimate_frame(&self, fix: [f64; 2]) -> [f64; 2] {
+        let (s, c) = slamlab_core::math::sin_cos(self.similarity.rotation);
+        let [tx, ty] = self.similarity.translation;
+        let (dx, dy) = (fix[0] - tx, fix[1] - ty);
+        let k = 1.0 / self.similarity.scale;
+        [k * (c * dx + s * dy), k * (-s * dx + c * dy)]
+    }
+}
+
+/// The path `estimate` against the GPS of `world` ([`GpsFit`]); `None`
+/// without a GPS or with fewer than two distinct paired positions.
+pub fn gps_fit(world: &RecordedWorld, estimate: &Trajectory) -> Option<GpsFit> {
+    let evaluation = reference_alignment(world, estimate, GPS_MAX_DIFF)?;
+    Some(GpsFit {
+        rmse: evaluation.ape.translation.rmse,
+        pairs: evaluation.pairing.pairs,
+        fixes: world.reference.len(),
+        rotation_deg: evaluation.alignment.rotation_deg,
+        translation_m: evaluation.alignment.translation_m,
+        similarity: evaluation.similarity,
+    })
 }
 
 /// The estimated path against a recorded world's reference (Victoria Park's GPS,
