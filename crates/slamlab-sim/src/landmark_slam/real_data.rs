@@ -259,6 +259,95 @@ fn score(
     }
 }
 
+/// The scenario's parameters that do not reach a replay of any data set: the
+/// simulated world's (its landmarks, layout and size), the scripted robot's
+/// (controller, speed, turn rate, tick length: the data has its own steps) and
+/// the simulated car's wheel base (Victoria Park's car is the data's).
+const SIMULATION_ONLY: [&str; 8] = [
+    "controller",
+    "v",
+    "w-deg",
+    "dt",
+    "landmarks",
+    "layout",
+    "world-size",
+    "wheel-base",
+];
+
+/// The parameters a run of `slamlab experiment real-data` used, as
+/// [`crate::landmark_slam::summary::parameters_json`] prints them, but only
+/// those that reach the replay of `kind`: the data set's motion noise (MRCLAM's
+/// `(v, ω)` noise and velocity model, the Freiburg odometry's `(δrot1, δtrans,
+/// δrot2)` noise, Victoria Park's speed and steering noise), the camera's or
+/// laser's noise and reach, the association and its gates, and the filters'
+/// own settings for the filters that ran. `estimator`, `mode` and `robot` are
+/// the lists the experiment ran, not the base scenario's single values.
+pub fn parameters_used(
+    base: &LandmarkScenario,
+    kind: crate::io::landmark_data::DataSetKind,
+    estimators: &[RealEstimator],
+    modes: &[MapMode],
+    robots: &[u32],
+) -> serde_json::Map<String, serde_json::Value> {
+    use crate::io::landmark_data::DataSetKind;
+    use crate::world::landmark_scenario::Association;
+    let motion: &[&str] = match kind {
+        DataSetKind::Mrclam => &["v-std", "w-std-deg", "motion"],
+        DataSetKind::Freiburg => &["odometry-rot-std", "odometry-trans-std"],
+        DataSetKind::VictoriaPark => &["v-std", "steering-std-deg"],
+    };
+    let other_motion = [
+        "v-std",
+        "w-std-deg",
+        "motion",
+        "odometry-rot-std",
+        "odometry-trans-std",
+        "steering-std-deg",
+    ];
+    let runs = |f: fn(EstimatorKind) -> bool| {
+        estimators
+            .iter()
+            .any(|e| matches!(e, RealEstimator::Filter(k) if f(*k)))
+    };
+    let ukf = runs(|k| k == EstimatorKind::Ukf);
+    let particles = runs(|k| matches!(k, EstimatorKind::FastSlam1 | EstimatorKind::FastSlam2));
+    let unknown = base.association == Association::Unknown;
+    let mut used = crate::landmark_slam::summary::parameters_json(base);
+    used.retain(|name, _| {
+        let name = name.as_str();
+        !SIMULATION_ONLY.contains(&name)
+            && (motion.contains(&name) || !other_motion.contains(&name))
+            && (ukf || !name.starts_with("ukf-"))
+            && (particles
+                || !matches!(
+                    name,
+                    "particles" | "fastslam-resampler" | "resample-threshold" | "seed"
+                ))
+            && (unknown || !matches!(name, "gate" | "new-landmark-threshold"))
+    });
+    let list = |items: Vec<String>| serde_json::Value::String(items.join(","));
+    used.insert(
+        "estimator".to_owned(),
+        list(estimators.iter().map(|e| e.name().to_owned()).collect()),
+    );
+    used.insert(
+        "mode".to_owned(),
+        list(modes.iter().map(|m| m.name().to_owned()).collect()),
+    );
+    match kind {
+        DataSetKind::Mrclam => {
+            used.insert(
+                "robot".to_owned(),
+                list(robots.iter().map(u32::to_string).collect()),
+            );
+        }
+        DataSetKind::Freiburg | DataSetKind::VictoriaPark => {
+            used.remove("robot");
+        }
+    }
+    used
+}
+
 /// How far apart two paired times of the path and the GPS may be, seconds:
 /// Victoria Park's steps come at about 40 Hz (inputs) with laser scans between,
 /// so every fix inside the run has a step within about 13 ms.
