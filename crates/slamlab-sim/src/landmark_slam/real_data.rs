@@ -362,8 +362,8 @@ pub const GPS_MAX_DIFF: f64 = 0.05;
 /// The GPS is no truth: its fixes are off by metres under the trees and it
 /// drops out, so the RMSE bounds how well the path's shape agrees with an
 /// independent sensor (and includes the GPS's own error), and the transform is
-/// where the GPS's frame sits against the estimate's (Victoria Park's README:
-/// about (+67, +39) m and -33°).
+/// where the GPS's frame sits against the estimate's (for EKF-SLAM's whole
+/// Victoria Park run: 2.3° and (-1.6, -0.6) m, `docs/real-landmark-data.md`).
 #[derive(Clone, Copy, Debug, PartialEq, Serialize)]
 pub struct GpsFit {
     /// The RMS distance between the fixes and the aligned path, metres.
