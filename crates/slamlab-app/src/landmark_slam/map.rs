@@ -87,6 +87,7 @@ pub fn map_ui(
         draw_truth_robot(&painter, &t, truth, colors.truth, colors.background);
     }
     let sigma_points_shown = draw_filters(&painter, &t, session, opts, &colors);
+    draw_gps(&painter, &t, session);
     ui.data_mut(|d| d.insert_temp(sigma_points_id(), sigma_points_shown));
     draw_scale_and_axes(&painter, &t, &colors);
     if opts.magnifier {
@@ -384,10 +385,7 @@ fn draw_world(
                 painter.add(Shape::line(truth_path, truth_stroke));
             }
         }
-        Some(world) => {
-            let gps = super::gps_fit_now(session);
-            draw_recorded_references(painter, t, session, world, gps.as_ref(), colors);
-        }
+        Some(world) => draw_recorded_references(painter, t, session, world, colors),
     }
     // True landmarks.
     let highlight = updated_landmark(session);
@@ -448,8 +446,8 @@ fn draw_world(
 
 /// What a recorded world's map is fitted to (`[x_min, y_min, x_max, y_max]`,
 /// metres): its landmarks and every robot's Vicon path (MRCLAM, the Freiburg
-/// files' landmarks), with a margin; Victoria Park has neither, so the square
-/// around the start that holds every GPS fix however the GPS's frame turns.
+/// files' landmarks), with a margin; Victoria Park has neither, so its GPS
+/// fixes, moved so that the first is on the start.
 pub fn recorded_bounds(world: &RecordedWorld) -> [f64; 4] {
     let mut b = [
         f64::INFINITY,
@@ -475,15 +473,15 @@ pub fn recorded_bounds(world: &RecordedWorld) -> [f64; 4] {
             grow(p.x, p.y);
         }
     }
+    // The GPS's extent with its first fix on the start: its frame is turned a
+    // few degrees from the estimate's at most (2.3° for EKF-SLAM's whole run).
     if let Some((_, first)) = world.reference.first() {
-        let reach = world
-            .reference
-            .iter()
-            .map(|(_, p)| (p - first).norm())
-            .filter(|d| d.is_finite())
-            .fold(0.0_f64, f64::max);
-        grow(world.start.x - reach, world.start.y - reach);
-        grow(world.start.x + reach, world.start.y + reach);
+        for (_, p) in &world.reference {
+            grow(
+                world.start.x + p[0] - first[0],
+                world.start.y + p[1] - first[1],
+            );
+        }
     }
     // Without a true path (the Freiburg files) the robot drives around the
     // landmarks: a wider margin keeps its path on the map.
@@ -494,15 +492,12 @@ pub fn recorded_bounds(world: &RecordedWorld) -> [f64; 4] {
 
 /// A recorded world's references: its true path (MRCLAM's Vicon) up to now,
 /// split at its gaps (a gap is drawn as a gap, not bridged); the other robots
-/// where Vicon puts them now, greyed; the GPS fixes up to now (Victoria Park)
-/// as grey dots, carried into the estimate's frame by `gps` (none before it
-/// can be fitted).
+/// where Vicon puts them now, greyed.
 fn draw_recorded_references(
     painter: &egui::Painter,
     t: &MapTransform,
     session: &LandmarkSession,
     world: &RecordedWorld,
-    gps: Option<&slamlab_sim::landmark_slam::real_data::GpsFit>,
     colors: &CanvasColors,
 ) {
     let now = session.time();
@@ -546,9 +541,20 @@ fn draw_recorded_references(
             colors.weak_text,
         );
     }
-    let Some(gps) = gps else {
+}
+
+/// The GPS fixes up to now (Victoria Park) as grey dots over the estimates,
+/// carried into the estimate's frame by the fit of the first filter's path
+/// (none before it can be fitted).
+fn draw_gps(painter: &egui::Painter, t: &MapTransform, session: &LandmarkSession) {
+    let Some(world) = session.recorded_world() else {
         return;
     };
+    let Some(gps) = super::gps_fit_now(session) else {
+        return;
+    };
+    let grey = palette::faded(palette::DEAD_RECKONING, 0.9);
+    let now = session.time();
     let end = world.reference.partition_point(|(time, _)| *time <= now);
     let stride = end / MAX_PATH_POINTS + 1;
     for (_, fix) in world.reference[..end].iter().step_by(stride) {

@@ -410,19 +410,30 @@ pub fn gps_fit(world: &RecordedWorld, estimate: &Trajectory) -> Option<GpsFit> {
 /// The estimated path against a recorded world's reference (Victoria Park's GPS,
 /// in a frame of its own): the rigid transform that best carries the path onto
 /// the fixes (Umeyama's method over the pairs within `max_diff` seconds) and the
-/// RMS distance that remains. `None` without a reference or a pair.
+/// RMS distance that remains, over the fixes within the path's time span. `None`
+/// without a reference or a pair.
 pub fn reference_alignment(
     world: &RecordedWorld,
     estimate: &Trajectory,
     max_diff: f64,
 ) -> Option<crate::metrics::Evaluation> {
-    if world.reference.is_empty() {
+    // Only the fixes within the path's time span: a path still being driven
+    // (the lesson's) is then the longer of the two, and each fix finds its step
+    // (evo pairs from the shorter trajectory, which would otherwise be the path,
+    // pairing one fix with every step near it).
+    let start = estimate.stamps().first()? - max_diff;
+    let end = estimate.stamps().last()? + max_diff;
+    let fixes: Vec<&(f64, nalgebra::Vector2<f64>)> = world
+        .reference
+        .iter()
+        .filter(|(t, _)| (start..=end).contains(t))
+        .collect();
+    if fixes.is_empty() {
         return None;
     }
     let reference = Trajectory::new(
-        world.reference.iter().map(|(t, _)| *t).collect(),
-        world
-            .reference
+        fixes.iter().map(|(t, _)| *t).collect(),
+        fixes
             .iter()
             .map(|(_, p)| slamlab_core::Pose2::new(p[0], p[1], 0.0))
             .collect(),

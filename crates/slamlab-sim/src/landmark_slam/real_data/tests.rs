@@ -416,4 +416,19 @@ fn victoria_park_ekf_path_fits_the_gps_better_than_dead_reckoning() {
         "{dead:?}"
     );
     assert_eq!(landmarks, 113);
+    // Half-way (as the lesson fits the path so far): each fix from the start
+    // until then pairs once, none of the later ones (nor the first fix, 0.85 s
+    // before the data's first step).
+    let half = Trajectory::new(
+        session.tick_times()[..3001].to_vec(),
+        session.filters()[0].records().path[..3001].to_vec(),
+    );
+    let end = session.tick_times()[3000];
+    let so_far = world
+        .reference
+        .iter()
+        .filter(|(t, _)| (0.0..=end).contains(t))
+        .count();
+    let fit = gps_fit(&world, &half).unwrap();
+    assert_eq!((fit.pairs, so_far), (236, 236), "{fit:?}");
 }
