@@ -596,7 +596,7 @@ async function main() {
       try {
         await waitRunning(p);
         const s0 = await waitState(p, (st) => st.data && st.data.name === "MRCLAM_Dataset6, robot 1", "MRCLAM loaded by data=", 60_000);
-        assert(s0.data.kind === "mrclam" && s0.data.mode === "slam" && s0.data.steps === 62955, `opened ${JSON.stringify(s0.data)}`);
+        assert(s0.data.kind === "UTIAS MRCLAM" && s0.data.mode === "slam" && s0.data.steps === 62955, `opened ${JSON.stringify(s0.data)}`);
         assert(JSON.stringify(s0.filters) === JSON.stringify(["ekf"]), `filters ${JSON.stringify(s0.filters)}`);
         // Live: Space plays the recorded robot; the error against Vicon fills in.
         await p.mouse.click(VIEWPORT.width / 2, VIEWPORT.height / 2);
