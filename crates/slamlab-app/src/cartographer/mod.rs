@@ -21,7 +21,6 @@ mod map;
 mod plots;
 
 use crate::lesson::{self, Lesson, LessonFrame, LessonStart, StoredSettings};
-use crate::palette;
 use crate::time_control::{StepControls, TimeAction, TimeInfo};
 use crate::widgets::dropped_files::DropInbox;
 use crate::widgets::fetch::Fetch;
@@ -338,10 +337,26 @@ impl CartographerLesson {
         };
         let input = self.sim().input().clone();
         self.restart_on(scenario, input, Some(done));
-        self.frame.note = Some(format!(
-            "Kidnap detection {}: mapping the same scans again up to scan {done}",
-            if on { "on" } else { "off" }
-        ));
+        self.catch_up_note();
+    }
+
+    /// Stops mapping the same scans again (a step or step back), and its note.
+    fn stop_catch_up(&mut self) {
+        if self.catch_up.take().is_some() {
+            self.frame.note = None;
+        }
+    }
+
+    /// The note while the run maps the same scans again up to where it was; none
+    /// once it is there.
+    fn catch_up_note(&mut self) {
+        self.frame.note = self.catch_up.map(|target| {
+            format!(
+                "Kidnap detection {}: mapping the same scans again, scan {} of {target}…",
+                if self.scenario.detection { "on" } else { "off" },
+                self.sim().scans_done()
+            )
+        });
     }
 
     /// Carries the simulated robot elsewhere before the next scan: to `to`
@@ -520,7 +535,7 @@ impl CartographerLesson {
     /// "Step search": runs up to and including the next branch-and-bound
     /// search (its tree is the one drawn).
     pub fn step_search(&mut self) {
-        self.catch_up = None;
+        self.stop_catch_up();
         self.frame.time.apply(TimeAction::StepPhase);
         if self.step_until(|p| matches!(p, CartographerPhase::Search { .. })) {
             if let Some(search) = &self.sim().last_search {
@@ -543,7 +558,7 @@ impl CartographerLesson {
     /// "Step optimization": runs up to and including the next optimization
     /// of the pose graph.
     pub fn step_optimization(&mut self) {
-        self.catch_up = None;
+        self.stop_catch_up();
         self.frame.time.apply(TimeAction::StepPhase);
         if self.step_until(|p| matches!(p, CartographerPhase::Optimization { .. })) {
             self.frame.note = self.sim().last_optimization.map(|o| {
@@ -740,15 +755,6 @@ impl crate::widgets::layout::LessonPanels for CartographerLesson {
 
     fn map_ui(&mut self, ui: &mut egui::Ui) {
         self.actions_ui(ui);
-        if let Some(note) = &self.frame.note {
-            ui.label(egui::RichText::new(note).color(palette::VERMILLION));
-        }
-        if let Some(target) = self.catch_up {
-            ui.label(format!(
-                "Mapping again: scan {} of {target}…",
-                self.sim().scans_done()
-            ));
-        }
         if self.frame.view.grids_window {
             let mut open = true;
             map::max_grids_window(
@@ -835,12 +841,12 @@ impl Lesson for CartographerLesson {
         match action {
             TimeAction::ToggleRun => {}
             TimeAction::StepPhase | TimeAction::StepTick => {
-                self.catch_up = None;
+                self.stop_catch_up();
                 self.step_scan();
             }
             TimeAction::StepBack => {
                 // One phase back: the last search, optimization or local SLAM.
-                self.catch_up = None;
+                self.stop_catch_up();
                 self.stepper.step_back();
                 let done = self.sim().scans_done();
                 self.scan_ms.truncate(done);
@@ -897,6 +903,7 @@ impl Lesson for CartographerLesson {
             if reached(self.sim()) || self.sim().is_done() {
                 self.catch_up = None;
             }
+            self.catch_up_note();
             self.note_frame(started);
             return;
         }

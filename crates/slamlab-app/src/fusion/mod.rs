@@ -447,9 +447,6 @@ impl crate::widgets::layout::LessonPanels for FusionLesson {
     }
 
     fn map_ui(&mut self, ui: &mut egui::Ui) {
-        if let Some(note) = &self.frame.note {
-            ui.label(egui::RichText::new(note).color(palette::VERMILLION));
-        }
         map::map_ui(
             ui,
             self.stepper.sim(),

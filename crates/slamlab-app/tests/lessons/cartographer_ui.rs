@@ -231,7 +231,7 @@ fn step_search_and_step_optimization_each_run_exactly_one() {
     let next = pending.expect("a scan with more than one search");
     eprintln!("next: {next}");
     assert!(
-        h.query_all_by_label(&format!("Next: {next}"))
+        h.query_all_by_label_contains(&format!("Next phase: {next}"))
             .next()
             .is_some(),
         "the time bar shows {next}"
