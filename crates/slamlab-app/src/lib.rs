@@ -576,7 +576,7 @@ impl SlamLabApp {
         } else {
             &mut self.panels
         };
-        widgets::estimates::clear_placement(&ctx);
+        widgets::map_canvas::clear_placement(&ctx);
         self.lesson.panels_ui(ui, panels, self.embed);
         // The notices lie over the foot of the map: they come and go without
         // moving the map or anything on it.

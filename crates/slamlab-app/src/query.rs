@@ -23,6 +23,9 @@ pub struct Query {
     pub issues: Vec<String>,
 }
 
+/// The most estimates a lesson holds at once (`estimate=` keys and files dropped).
+pub const MAX_ESTIMATES: usize = 8;
+
 /// The keys the app reads itself; lessons never see them.
 pub const APP_KEYS: [&str; 10] = [
     "lesson",
@@ -166,10 +169,10 @@ impl Query {
                         "estimate = '{}' is not a file beside the page (a relative path such as estimates/mine.tum); it is ignored",
                         location.chars().take(80).collect::<String>()
                     ));
-                } else if figure.estimates.len() >= crate::widgets::estimates::MAX_ESTIMATES {
+                } else if figure.estimates.len() >= MAX_ESTIMATES {
                     self.issues.push(format!(
                         "estimate = '{location}': at most {} estimates; it is ignored",
-                        crate::widgets::estimates::MAX_ESTIMATES
+                        MAX_ESTIMATES
                     ));
                 } else {
                     figure.estimates.push(location.to_owned());

@@ -220,133 +220,52 @@ fn slamlab_evaluate_equals_evo() {
     );
     let fast = write(&dir, "fast.txt", &fast);
 
-    struct Case<'a> {
-        what: &'a str,
-        estimate: &'a str,
-        evo: Vec<&'a str>,
-        ours: Vec<&'a str>,
-        /// The key of our JSON: ape or rpe, translation or rotation.
-        metric: (&'a str, &'a str),
-    }
-    let cases = [
-        Case {
-            what: "APE, SE(2)",
-            estimate: &plain,
-            evo: vec!["evo_ape", "-a"],
-            ours: vec!["--align", "se2"],
-            metric: ("ape", "translation"),
-        },
-        Case {
-            what: "APE, not aligned",
-            estimate: &plain,
-            evo: vec!["evo_ape"],
-            ours: vec!["--align", "none"],
-            metric: ("ape", "translation"),
-        },
-        Case {
-            what: "APE rotation, SE(2)",
-            estimate: &plain,
-            evo: vec!["evo_ape", "-a", "-r", "angle_deg"],
-            ours: vec!["--align", "se2"],
-            metric: ("ape", "rotation"),
-        },
-        Case {
-            what: "RPE, 1 frame",
-            estimate: &plain,
-            evo: vec!["evo_rpe", "-a"],
-            ours: vec!["--align", "se2"],
-            metric: ("rpe", "translation"),
-        },
-        Case {
-            what: "RPE rotation, 10 frames",
-            estimate: &plain,
-            evo: vec!["evo_rpe", "-a", "-r", "angle_deg", "--delta", "10"],
-            ours: vec!["--delta", "10"],
-            metric: ("rpe", "rotation"),
-        },
-        Case {
-            what: "RPE, 2 m",
-            estimate: &plain,
-            evo: vec!["evo_rpe", "-a", "--delta", "2", "--delta_unit", "m"],
-            ours: vec!["--delta", "2", "--delta-unit", "m"],
-            metric: ("rpe", "translation"),
-        },
-        Case {
-            what: "RPE, all pairs 5 frames",
-            estimate: &plain,
-            evo: vec!["evo_rpe", "-a", "--delta", "5", "--all_pairs"],
-            ours: vec!["--delta", "5", "--all-pairs"],
-            metric: ("rpe", "translation"),
-        },
-        Case {
-            what: "APE, Sim(2)",
-            estimate: &scaled,
-            evo: vec!["evo_ape", "-a", "-s"],
-            ours: vec!["--align", "sim2"],
-            metric: ("ape", "translation"),
-        },
-        Case {
-            what: "APE, SE(2) with a scale error",
-            estimate: &scaled,
-            evo: vec!["evo_ape", "-a"],
-            ours: vec!["--align", "se2"],
-            metric: ("ape", "translation"),
-        },
-        Case {
-            what: "RPE, Sim(2), 3 m",
-            estimate: &scaled,
-            evo: vec!["evo_rpe", "-a", "-s", "--delta", "3", "--delta_unit", "m"],
-            ours: vec!["--align", "sim2", "--delta", "3", "--delta-unit", "m"],
-            metric: ("rpe", "translation"),
-        },
-        Case {
-            what: "APE, jittered times",
-            estimate: &jittered,
-            evo: vec!["evo_ape", "-a", "--t_max_diff", "0.01"],
-            ours: vec!["--max-diff", "0.01"],
-            metric: ("ape", "translation"),
-        },
-        Case {
-            what: "APE, jittered times, 5 ms",
-            estimate: &jittered,
-            evo: vec!["evo_ape", "-a", "--t_max_diff", "0.005"],
-            ours: vec!["--max-diff", "0.005"],
-            metric: ("ape", "translation"),
-        },
-        Case {
-            what: "RPE, jittered times",
-            estimate: &jittered,
-            evo: vec!["evo_rpe", "-a", "-r", "angle_deg"],
-            ours: vec![],
-            metric: ("rpe", "rotation"),
-        },
-        Case {
-            what: "APE, 30 Hz against 10 Hz, offset",
-            estimate: &fast,
-            evo: vec![
-                "evo_ape",
-                "-a",
-                "--t_offset",
-                "0.02",
-                "--t_max_diff",
-                "0.004",
-            ],
-            ours: vec!["--offset", "0.02", "--max-diff", "0.004"],
-            metric: ("ape", "translation"),
-        },
+    // Each case: what | the estimate's file | evo's command | SLAM Lab's flags | the key
+    // of SLAM Lab's JSON.
+    const CASES: &str = "
+        APE, SE(2) | plain | evo_ape -a | --align se2 | ape translation
+        APE, not aligned | plain | evo_ape | --align none | ape translation
+        APE rotation, SE(2) | plain | evo_ape -a -r angle_deg | --align se2 | ape rotation
+        RPE, 1 frame | plain | evo_rpe -a | --align se2 | rpe translation
+        RPE rotation, 10 frames | plain | evo_rpe -a -r angle_deg --delta 10 | --delta 10 | rpe rotation
+        RPE, 2 m | plain | evo_rpe -a --delta 2 --delta_unit m | --delta 2 --delta-unit m | rpe translation
+        RPE, all pairs 5 frames | plain | evo_rpe -a --delta 5 --all_pairs | --delta 5 --all-pairs | rpe translation
+        APE, Sim(2) | scaled | evo_ape -a -s | --align sim2 | ape translation
+        APE, SE(2) with a scale error | scaled | evo_ape -a | --align se2 | ape translation
+        RPE, Sim(2), 3 m | scaled | evo_rpe -a -s --delta 3 --delta_unit m | --align sim2 --delta 3 --delta-unit m | rpe translation
+        APE, jittered times | jittered | evo_ape -a --t_max_diff 0.01 | --max-diff 0.01 | ape translation
+        APE, jittered times, 5 ms | jittered | evo_ape -a --t_max_diff 0.005 | --max-diff 0.005 | ape translation
+        RPE, jittered times | jittered | evo_rpe -a -r angle_deg |  | rpe rotation
+        APE, 30 Hz against 10 Hz, offset | fast | evo_ape -a --t_offset 0.02 --t_max_diff 0.004 | --offset 0.02 --max-diff 0.004 | ape translation";
+    let files = [
+        ("plain", &plain),
+        ("scaled", &scaled),
+        ("jittered", &jittered),
+        ("fast", &fast),
     ];
-    for case in &cases {
-        let mut evo_args: Vec<&str> = vec![case.evo[0], "tum", &reference_file, case.estimate];
-        evo_args.extend(&case.evo[1..]);
-        let theirs = evo.stats(evo_args[0], &evo_args[1..]);
-        let mut ours_args = vec!["--estimate", case.estimate, "--reference", &reference_file];
-        ours_args.extend(&case.ours);
+    for line in CASES.lines().map(str::trim).filter(|l| !l.is_empty()) {
+        let [what, file, evo_line, ours_line, key] =
+            line.split('|').map(str::trim).collect::<Vec<_>>()[..]
+        else {
+            panic!("a case needs five fields: {line}");
+        };
+        let estimate = files
+            .iter()
+            .find(|(name, _)| *name == file)
+            .map(|(_, path)| path.as_str())
+            .unwrap();
+        let evo_words: Vec<&str> = evo_line.split_whitespace().collect();
+        let mut evo_args: Vec<&str> = vec!["tum", &reference_file, estimate];
+        evo_args.extend(&evo_words[1..]);
+        let theirs = evo.stats(evo_words[0], &evo_args);
+        let mut ours_args = vec!["--estimate", estimate, "--reference", &reference_file];
+        ours_args.extend(ours_line.split_whitespace());
         let ours = slamlab(&ours_args);
-        let (metric, part) = case.metric;
-        assert_same(case.what, &theirs, &ours[metric][part]);
+        let (metric, part) = key.split_once(' ').unwrap();
+        assert_same(what, &theirs, &ours[metric][part]);
         eprintln!(
-            "{}: rmse {} (evo) and {} (SLAM Lab), {} pairs",
-            case.what, theirs["rmse"], ours[metric][part]["rmse"], ours["pairing"]["pairs"]
+            "{what}: rmse {} (evo) and {} (SLAM Lab), {} pairs",
+            theirs["rmse"], ours[metric][part]["rmse"], ours["pairing"]["pairs"]
         );
     }
     let _ = std::fs::remove_dir_all(&dir);

@@ -12,7 +12,6 @@
 //! shell routes files to them and draws the overlay and the window.
 
 use crate::palette;
-use crate::widgets::map_canvas::MapTransform;
 use egui::{Color32, Pos2, Stroke};
 use slamlab_core::Pose2;
 use slamlab_sim::io::trajectory::{self, LandmarkRow, TrajectoryFormat};
@@ -20,8 +19,7 @@ use slamlab_sim::metrics::{
     Alignment, EvaluationSettings, NamedTrajectory, Trajectory, TrajectoryRole, evaluate,
 };
 
-/// The most estimates a lesson holds at once.
-pub const MAX_ESTIMATES: usize = 8;
+pub use crate::query::MAX_ESTIMATES;
 
 /// The colours of students' estimates (Paul Tol's muted scheme, apart from the
 /// lessons' own Okabe-Ito colours).
@@ -365,38 +363,6 @@ fn score_all(
     all
 }
 
-/// Where the lesson's map was drawn this frame, for the overlay: its layer, its
-/// rectangle and its transform.
-#[derive(Clone, Copy, Debug)]
-pub struct MapPlacement {
-    /// The layer the map was painted on.
-    pub layer: egui::LayerId,
-    /// The map's rectangle.
-    pub rect: egui::Rect,
-    /// World to screen.
-    pub transform: MapTransform,
-}
-
-fn placement_id() -> egui::Id {
-    egui::Id::unique("slamlab_map_placement")
-}
-
-/// Records where the map is drawn (the map canvas calls it every frame).
-pub fn record_placement(ctx: &egui::Context, placement: MapPlacement) {
-    ctx.data_mut(|d| d.insert_temp(placement_id(), placement));
-}
-
-/// Forgets the map's placement (before a frame, so that a lesson without a map
-/// gets no overlay).
-pub fn clear_placement(ctx: &egui::Context) {
-    ctx.data_mut(|d| d.remove::<MapPlacement>(placement_id()));
-}
-
-/// The map's placement this frame, if a map was drawn.
-pub fn placement(ctx: &egui::Context) -> Option<MapPlacement> {
-    ctx.data(|d| d.get_temp(placement_id()))
-}
-
 /// The last pose of `t` at or before `now` and the poses up to it.
 fn up_to(t: &Trajectory, now: f64) -> usize {
     t.stamps().partition_point(|&s| s <= now + 1e-9)
@@ -406,7 +372,7 @@ fn up_to(t: &Trajectory, now: f64) -> usize {
 /// the path, the current pose with its 95 % ellipse and heading wedge when the
 /// file gave covariances; landmarks as crosses.
 pub fn map_overlay(ctx: &egui::Context, estimates: &Estimates, now: f64) {
-    let Some(p) = placement(ctx) else {
+    let Some(p) = crate::widgets::map_canvas::placement(ctx) else {
         return;
     };
     let painter = egui::Painter::new(ctx.clone(), p.layer, p.rect);

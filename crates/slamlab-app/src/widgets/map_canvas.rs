@@ -383,9 +383,9 @@ pub fn canvas_ui(
         view.center = [x, y];
     }
     let transform = view.transform(rect);
-    crate::widgets::estimates::record_placement(
+    record_placement(
         ui.ctx(),
-        crate::widgets::estimates::MapPlacement {
+        MapPlacement {
             layer: ui.layer_id(),
             rect,
             transform,
@@ -527,6 +527,38 @@ pub fn draw_scale_and_axes(painter: &egui::Painter, t: &MapTransform, colors: &C
         font,
         colors.truth,
     );
+}
+
+/// Where the lesson's map was drawn this frame, for the overlay: its layer, its
+/// rectangle and its transform.
+#[derive(Clone, Copy, Debug)]
+pub struct MapPlacement {
+    /// The layer the map was painted on.
+    pub layer: egui::LayerId,
+    /// The map's rectangle.
+    pub rect: egui::Rect,
+    /// World to screen.
+    pub transform: MapTransform,
+}
+
+fn placement_id() -> egui::Id {
+    egui::Id::unique("slamlab_map_placement")
+}
+
+/// Records where the map is drawn (the map canvas calls it every frame).
+pub fn record_placement(ctx: &egui::Context, placement: MapPlacement) {
+    ctx.data_mut(|d| d.insert_temp(placement_id(), placement));
+}
+
+/// Forgets the map's placement (before a frame, so that a lesson without a map
+/// gets no overlay).
+pub fn clear_placement(ctx: &egui::Context) {
+    ctx.data_mut(|d| d.remove::<MapPlacement>(placement_id()));
+}
+
+/// The map's placement this frame, if a map was drawn.
+pub fn placement(ctx: &egui::Context) -> Option<MapPlacement> {
+    ctx.data(|d| d.get_temp(placement_id()))
 }
 
 #[cfg(test)]
