@@ -560,11 +560,22 @@ impl CartographerLesson {
     pub fn step_optimization(&mut self) {
         self.stop_catch_up();
         self.frame.time.apply(TimeAction::StepPhase);
+        let before = self.sim().scans_done();
         if self.step_until(|p| matches!(p, CartographerPhase::Optimization { .. })) {
+            let every = self.sim().params().optimize_every_n_nodes;
             self.frame.note = self.sim().last_optimization.map(|o| {
+                // A jump of many scans is explained: the graph is solved only every
+                // n nodes (and after a merge).
+                let ran = match o.scan.saturating_sub(before) {
+                    0 | 1 => String::new(),
+                    n => format!(
+                        " (ran {n} scans to reach it: the pose graph is solved every {every} \
+                         nodes and after a merge)"
+                    ),
+                };
                 format!(
-                    "Optimized after scan {}: cost {} → {} in {} iterations; nodes moved {:.3} m \
-                     on average, {:.3} m at most",
+                    "Optimized after scan {}{ran}: cost {} → {} in {} iterations; nodes moved \
+                     {:.3} m on average, {:.3} m at most",
                     o.scan,
                     explain::cost_text(o.cost_before),
                     explain::cost_text(o.cost_after),
@@ -595,6 +606,38 @@ impl CartographerLesson {
                 o.scan, o.searches_pending, o.searches_planned
             ),
             NextPhase::Optimization => format!("scan {}: optimization", o.scan),
+        }
+    }
+
+    /// Where the map draws the robot: the last scan's pose moved with its
+    /// trajectory since (a merge, an optimization).
+    pub fn robot_pose(&self) -> Option<slamlab_core::geometry::Pose2> {
+        map::robot_pose_now(self.sim())
+    }
+
+    /// The kidnap's key moments so far, for the time bar: the detection and the
+    /// merge (which moves the second map onto the first at once), and whether the
+    /// optimization after it has run yet.
+    pub fn moment_text(&self) -> Option<String> {
+        let sim = self.sim();
+        let detected = sim.detections.last().copied();
+        let merged = sim.merges.last().copied();
+        let optimized_since = |m: usize| sim.last_optimization.is_some_and(|o| o.scan >= m);
+        match (detected, merged) {
+            (None, None) => None,
+            (Some(d), None) => Some(format!("Kidnap detected at scan {d}: a new map started")),
+            (d, Some(m)) => {
+                let detected =
+                    d.map_or(String::new(), |d| format!("Kidnap detected at scan {d}; "));
+                let then = if optimized_since(m) {
+                    ", then the optimization refined both"
+                } else {
+                    "; the optimization that refines both is next"
+                };
+                Some(format!(
+                    "{detected}maps merged at scan {m}: the second moved onto the first{then}"
+                ))
+            }
         }
     }
 
@@ -782,6 +825,10 @@ impl crate::widgets::layout::LessonPanels for CartographerLesson {
 
 impl Lesson for CartographerLesson {
     crate::lesson::frame_accessors!();
+
+    fn moment(&self) -> Option<String> {
+        self.moment_text()
+    }
 
     fn trajectories(&self) -> Vec<slamlab_sim::metrics::NamedTrajectory> {
         slamlab_sim::cartographer::export::trajectories(self.sim())
