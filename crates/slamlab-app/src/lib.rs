@@ -1130,10 +1130,11 @@ impl SlamLabApp {
             .constrain(false)
             .show(ctx, |ui| {
                 ui.set_max_width(width);
-                egui::Frame::popup(ui.style())
+                egui::Frame::new()
                     .fill(ui.visuals().panel_fill)
+                    .corner_radius(4.0)
                     .show(ui, |ui| {
-                        ui.set_width(width - 16.0);
+                        ui.set_width(width);
                         egui::ScrollArea::vertical()
                             .max_height(max_height)
                             .show(ui, |ui| self.notice_bar_ui(ui, notices));
@@ -1145,11 +1146,14 @@ impl SlamLabApp {
         let mut dismiss: Vec<String> = Vec::new();
         egui::Frame::new()
             .stroke(egui::Stroke::new(1.5, palette::VERMILLION))
-            .inner_margin(6.0)
+            .inner_margin(egui::Margin::symmetric(6, 3))
             .corner_radius(4.0)
             .show(ui, |ui| {
                 ui.set_width(ui.available_width());
-                ui.horizontal(|ui| {
+                // One notice shares the count's row: the box covers as little of
+                // the map as it can.
+                let single = notices.len() == 1;
+                ui.horizontal_wrapped(|ui| {
                     ui.label(
                         egui::RichText::new(format!("Notices ({})", notices.len()))
                             .strong()
@@ -1158,8 +1162,18 @@ impl SlamLabApp {
                     if notices.len() > 1 && ui.small_button("Dismiss all").clicked() {
                         dismiss.extend(notices.iter().cloned());
                     }
+                    if let Some(notice) = notices.first().filter(|_| single) {
+                        if ui
+                            .small_button("Dismiss")
+                            .on_hover_text("Hide this notice")
+                            .clicked()
+                        {
+                            dismiss.push(notice.clone());
+                        }
+                        ui.label(notice);
+                    }
                 });
-                for notice in notices.iter().take(8) {
+                for notice in notices.iter().take(8).filter(|_| !single) {
                     ui.horizontal_wrapped(|ui| {
                         if ui
                             .small_button("Dismiss")

@@ -777,9 +777,14 @@ impl Verdict {
                 "Kidnapped at tick {tick}: a costmap-aware filter can find the robot again \
                  (its status above says when)"
             ),
-            Verdict::CannotRecover { names, .. } => {
-                format!("{names} will most likely stay lost; ACMCL finds the robot again:")
-            }
+            Verdict::CannotRecover { names, .. } if names == "MCL" => "MCL adds no particles: \
+                 it finds the robot again only if some lie near its new place. ACMCL \
+                 regenerates them:"
+                .to_owned(),
+            Verdict::CannotRecover { names, .. } => format!(
+                "{names} seldom add particles (AMCL only while its mean weight falls): the robot \
+                 is found again only if some lie near its new place. ACMCL regenerates them:"
+            ),
         }
     }
 
@@ -794,11 +799,12 @@ impl Verdict {
                  (thesis Algorithms 10-11), so some land near the robot's new place."
             }
             Verdict::CannotRecover { .. } => {
-                "MCL never adds a particle where it has none. AMCL injects random particles only \
-                 while its short-term mean weight is below its long-term one, which the lesson's \
-                 tempered scan likelihood seldom allows (docs/kidnap.md: in six runs it never \
-                 injected). ACMCL regenerates the particles its costmap rules out at every \
-                 update, and so finds the robot again."
+                "MCL never adds a particle: after a kidnap it finds the robot again only if some \
+                 of its particles happen to lie near the new place (a cloud not yet collapsed). \
+                 AMCL injects random particles only while its short-term mean weight is below \
+                 its long-term one, which the lesson's tempered scan likelihood seldom allows \
+                 (docs/kidnap.md: in six runs it never injected). ACMCL regenerates the \
+                 particles its costmap rules out at every update."
             }
         }
     }
