@@ -5,7 +5,7 @@
 
 use super::common::{harness_sized as harness, label_visible, lesson_of, lesson_of_mut};
 use egui_kittest::Harness;
-use egui_kittest::kittest::Queryable as _;
+use egui_kittest::kittest::{NodeT as _, Queryable as _};
 use slamlab_app::SlamLabApp;
 use slamlab_app::lesson::Lesson as _;
 use slamlab_app::registry::LESSONS;
@@ -326,4 +326,41 @@ fn steady_screen_shots() {
             }
         }
     }
+}
+
+/// The filters lesson's One step view has nothing to run in time: Run and the
+/// steps are disabled there and say why, and neither they nor the keys advance
+/// the hidden corridor; in the Corridor view they run it.
+#[test]
+fn run_and_step_act_on_the_view_shown() {
+    use super::common::text_drawn;
+    let mut h = harness("lesson=filters&seed=5", egui::vec2(1280.0, 800.0));
+    h.run();
+    let tick = |h: &Harness<'_, SlamLabApp>| h.state().lesson().time_info().tick;
+    assert_eq!(h.state().lesson().test_state()["view"], "one-step");
+    for action in [
+        TimeAction::StepPhase,
+        TimeAction::StepTick,
+        TimeAction::ToggleRun,
+    ] {
+        h.state_mut().apply_time_action(action);
+    }
+    for _ in 0..5 {
+        h.step();
+    }
+    h.key_press(egui::Key::Period);
+    h.run();
+    assert_eq!(tick(&h), 0, "the hidden corridor stays where it was");
+    assert!(!h.state().is_running());
+    assert!(text_drawn(&h, "One step has no time"), "the bar says why");
+    let disabled = |h: &Harness<'_, SlamLabApp>, label: &str| {
+        h.get_by_label(label).accesskit_node().is_disabled()
+    };
+    assert!(disabled(&h, "Step phase") && disabled(&h, "Run"));
+    h.get_by_label("Corridor").click();
+    h.run();
+    assert!(!disabled(&h, "Step phase"));
+    h.state_mut().apply_time_action(TimeAction::StepTick);
+    h.run();
+    assert_eq!(tick(&h), 1, "the corridor runs when it is shown");
 }
