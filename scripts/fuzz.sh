@@ -7,7 +7,8 @@
 #   SLAMLAB_FUZZ_SEED=7 scripts/fuzz.sh   another input stream (the default is 2026)
 #
 # Readers: ROS map YAML, PGM/PNG images, the two together (load_map), g2o, TORO and
-# iSAM pose graphs, any pose-graph file (format detection), scenario JSON
+# iSAM pose graphs, any pose-graph file (format detection), CARMEN logs, ROS 2 bags
+# (MCAP) and their CDR messages, scenario JSON
 # (slamlab-sim), URL query strings applied to every lesson's parameters (slamlab-app).
 # Seeds are the built-in maps and ../shared/data (when it is beside the repository).
 # The tests are built in the release profile (the readers run ~10x faster than in the

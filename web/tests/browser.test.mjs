@@ -16,7 +16,7 @@
 
 import { createServer } from "node:http";
 import { readFile, mkdir, writeFile, stat } from "node:fs/promises";
-import { gzipSync } from "node:zlib";
+import { gzipSync, inflateRawSync } from "node:zlib";
 import path from "node:path";
 import { fileURLToPath } from "node:url";
 import { chromium } from "playwright-core";
@@ -29,6 +29,8 @@ const distDir = path.join(webDir, "dist");
 // The external data sets beside the repository (README: ../shared/data); checks that
 // need them skip with a message when they are absent.
 const sharedDataDir = path.resolve(webDir, "..", "..", "shared", "data");
+// Small test files kept in the repository (a ROS 2 bag written by rosbags).
+const repoDataDir = path.resolve(webDir, "..", "crates", "slamlab-sim", "tests", "data");
 const outDir = path.join(webDir, "test-output");
 const chromiumPath = process.env.SLAMLAB_CHROMIUM || "/usr/bin/chromium";
 
@@ -78,9 +80,15 @@ function startServer(root) {
       const url = new URL(req.url, "http://localhost");
       // /shared-data/ serves ../shared/data (the Intel log), as an instructor would host
       // a log beside the site; everything else comes from web/dist.
+      // /repo-data/ serves the repository's small test files the same way.
       const shared = url.pathname.startsWith("/shared-data/");
-      const base = shared ? sharedDataDir : root;
-      const rel = shared ? url.pathname.slice("/shared-data".length) : url.pathname;
+      const repo = url.pathname.startsWith("/repo-data/");
+      const base = shared ? sharedDataDir : repo ? repoDataDir : root;
+      const rel = shared
+        ? url.pathname.slice("/shared-data".length)
+        : repo
+          ? url.pathname.slice("/repo-data".length)
+          : url.pathname;
       let file = path.normalize(path.join(base, decodeURIComponent(rel)));
       if (!file.startsWith(base)) throw new Error("outside the root");
       if ((await stat(file)).isDirectory()) file = path.join(file, "index.html");
@@ -764,6 +772,44 @@ async function main() {
         await assertNoPanic(p);
         assert(log.problems.length === 0, log.problems.join("; "));
         return `${headless.scans} scans (${headless.input_seconds.toFixed(0)} s of data, decompression and parsing included) in ${seconds.toFixed(1)} s = ${factor.toFixed(1)}x real time, end pose bit-identical to native`;
+      } finally {
+        await context.close();
+      }
+    });
+
+    // --- A ROS 2 bag (MCAP with zstd chunks, written by PyPI's rosbags from the Intel
+    // log's first 300 scans: crates/slamlab-sim/tests/data/ros2_bags) opened by `log=`
+    // with `scan-topic=`, then mapped by the lesson as it runs and by the page's wasm
+    // without drawing: the end pose must be the native run's to the bit
+    // (mapping_ui::a_rosbags_bag_mapped_through_the_lesson_ends_at_the_pose_the_browser_must_match).
+    await check("a ROS 2 bag opens by log= and maps, ending on the native pose", async () => {
+      const rel = "ros2_bags/rosbags-intel-300-scans.mcap";
+      const url = `index.html?lesson=mapping&log=repo-data/${rel}&scan-topic=/scan&odom-topic=/odom`;
+      const { context, page: p, log } = await openPage(browser, baseUrl, url, "mapping-ros2-bag");
+      try {
+        await waitRunning(p);
+        const s0 = await waitState(p, (st) => st.lesson === "mapping" && st.total_scans === 300, "the bag loaded by log=", 60_000);
+        assert(s0.log === "rosbags-intel-300-scans.mcap", `opened ${JSON.stringify({ log: s0.log, note: s0.note })}`);
+        assert(JSON.stringify(s0.topics) === JSON.stringify(["/scan", "/odom"]), `topics ${JSON.stringify(s0.topics)}`);
+        assert(/^Loaded rosbags-intel-300-scans\.mcap \(ROS 2 bag, MCAP with zstd chunks\): 300 scans/.test(s0.note), `note ${s0.note}`);
+        // Run the lesson itself for a while and look at it.
+        await p.mouse.click(VIEWPORT.width / 2, VIEWPORT.height / 2); // gives the canvas keyboard focus
+        await p.keyboard.press("Space");
+        const s1 = await waitState(p, (st) => st.scans >= 40, "40 scans mapped from the bag", 60_000);
+        const image = await screenshot(p, "mapping-ros2-bag.png");
+        const stats = imageStats(image);
+        assert(stats.distinctColours > 50, `the page looks blank: ${describe(stats)}`);
+        const headless = JSON.parse(await p.evaluate(async (r) => {
+          const bytes = new Uint8Array(await (await fetch(`repo-data/${r}`)).arrayBuffer());
+          return window.slamlab.slamlab_test_headless_log("lesson=mapping", "rosbags-intel-300-scans.mcap", bytes, 300);
+        }, rel));
+        const NATIVE = [2.1332476175095056, 0.02236945271272885, -0.11727858044618644];
+        const same = headless.pose.every((v, i) => v === NATIVE[i]);
+        assert(headless.scans === 300, `mapped ${headless.scans} scans: ${headless.note}`);
+        assert(same, `ended at ${JSON.stringify(headless.pose)}, natively ${JSON.stringify(NATIVE)}`);
+        await assertNoPanic(p);
+        assert(log.problems.length === 0, log.problems.join("; "));
+        return `300 scans from /scan with /odom; ${s1.scans} mapped live; the whole bag in wasm ends bit-identical to native`;
       } finally {
         await context.close();
       }
@@ -1554,6 +1600,76 @@ async function main() {
       } finally {
         await context.close();
       }
+    });
+
+    // --- A student's estimate: File > Export trajectories downloads a zip of TUM and CSV
+    // files; the EKF's TUM file, dropped back on the page under another name, becomes one
+    // more estimator, scored in wasm exactly as the lesson scores its own EKF; it is drawn
+    // on the map, at 1280 x 800 and at 800 x 500.
+    await check("estimates: the exported EKF dropped back as a student's estimate scores as the lesson's own", async () => {
+      const unzip = (bytes) => {
+        // Local file headers (PK\x03\x04), each deflated (method 8) or stored (0).
+        const files = {};
+        let at = 0;
+        while (at + 30 <= bytes.length && bytes.readUInt32LE(at) === 0x04034b50) {
+          const method = bytes.readUInt16LE(at + 8);
+          const size = bytes.readUInt32LE(at + 18);
+          const nameLength = bytes.readUInt16LE(at + 26);
+          const extra = bytes.readUInt16LE(at + 28);
+          const name = bytes.subarray(at + 30, at + 30 + nameLength).toString("utf8");
+          const start = at + 30 + nameLength + extra;
+          const data = bytes.subarray(start, start + size);
+          files[name] = method === 8 ? inflateRawSync(data) : Buffer.from(data);
+          at = start + size;
+        }
+        return files;
+      };
+      const results = [];
+      for (const [w, h] of [[1280, 800], [800, 500]]) {
+        const url = "index.html?lesson=landmark-slam&seed=7&estimator=ekf,ukf&tick=60";
+        const { context, page: p, log } = await openPage(browser, baseUrl, url, `estimates ${w}x${h}`, { width: w, height: h });
+        try {
+          await waitRunning(p);
+          const s0 = await waitState(p, (st) => st.frames >= 2 && Array.isArray(st.map_rect), "the first frames");
+          await p.mouse.click(s0.map_rect[0] + s0.map_rect[2] / 2, s0.map_rect[1] + s0.map_rect[3] / 2);
+          const [file, asked] = await Promise.all([
+            p.waitForEvent("download", { timeout: 20_000 }),
+            p.evaluate(() => window.slamlab.slamlab_test_export("trajectories-zip")),
+          ]);
+          assert(asked, "the export hook refused");
+          assert(file.suggestedFilename() === "slamlab-landmark-slam-t60-trajectories.zip", file.suggestedFilename());
+          const files = unzip(await readFile(await file.path()));
+          const folder = "slamlab-landmark-slam-t60-trajectories/";
+          for (const name of ["truth.tum", "ekf.tum", "ekf.csv", "ukf.tum", "dead-reckoning.tum", "ekf-landmarks.csv", "README.txt"]) {
+            assert(files[folder + name], `${name} missing from the zip: ${Object.keys(files).join(", ")}`);
+          }
+          const ekf = files[folder + "ekf.tum"].toString("utf8");
+          assert(ekf.trim().split("\n").length === 62, `ekf.tum has ${ekf.trim().split("\n").length} lines`);
+          await p.evaluate((text) => {
+            const dt = new DataTransfer();
+            dt.items.add(new File([text], "mine.tum", { type: "text/plain" }));
+            const canvas = document.getElementById("the_canvas_id");
+            for (const type of ["dragenter", "dragover", "drop"]) {
+              canvas.dispatchEvent(new DragEvent(type, { dataTransfer: dt, bubbles: true, cancelable: true }));
+            }
+          }, ekf);
+          const st = await waitState(p, (s) => Array.isArray(s.estimates) && s.estimates.some((e) => e.name === "mine.tum" && e.ate_rmse !== null), "the dropped estimate's score", 20_000);
+          const mine = st.estimates.find((e) => e.name === "mine.tum");
+          const own = st.estimates.find((e) => e.name === "ekf");
+          assert(mine.pairs === 61 && own.pairs === 61, `pairs ${mine.pairs} and ${own.pairs}`);
+          assert(Math.abs(mine.ate_rmse - own.ate_rmse) <= 1e-9 * Math.max(1, own.ate_rmse), `ATE ${mine.ate_rmse} against the lesson's ${own.ate_rmse}`);
+          assert(mine.ate_rmse > 0.01 && mine.ate_rmse < 2, `ATE ${mine.ate_rmse}`);
+          assert(st.notices === 0, `notices after the drop: ${st.notices}`);
+          const shot = await screenshot(p, `estimates-${w}x${h}.png`);
+          assertNotBlank(imageStats(shot), `the page with an estimate at ${w}x${h}`);
+          await assertNoPanic(p);
+          assert(log.problems.length === 0, log.problems.join("; "));
+          results.push(`${w}x${h}: ATE ${mine.ate_rmse.toFixed(4)} m (the lesson's EKF ${own.ate_rmse.toFixed(4)} m)`);
+        } finally {
+          await context.close();
+        }
+      }
+      return results.join("; ");
     });
 
     // --- The pictures of the README and the lesson documents (web/tests/screenshots.mjs,

@@ -1,6 +1,7 @@
 //! Fuzz tests of every reader in this crate a user can feed: ROS map YAML, PGM and
 //! PNG images, g2o/TORO/iSAM pose graphs, scenario JSON and CARMEN laser logs (plain,
-//! gzip and bzip2). Each runs
+//! gzip and bzip2), ROS 2 bags (MCAP) and the ROS 2 messages in them (CDR).
+//! Each runs
 //! [`slamlab_fuzz::inputs_per_reader`] mutated inputs (10,000 in `./test.sh`,
 //! 1,000,000 in `scripts/fuzz.sh`) from real files: the shared data sets
 //! (`../shared/data`, when present) and the built-in maps. See the `slamlab-fuzz`
@@ -412,6 +413,200 @@ NMEA-GGA 1 2 3 100.7 nohost 0.7
             }
         },
     );
+    report.assert_clean();
+}
+
+/// Seeds for the bag reader: bags written by rosbags (little- and big-endian
+/// CDR, zstd chunks; `tests/data/ros2_bags`), a simulated run written by
+/// SLAM Lab (uncompressed chunks, a summary, the truth topic), and hand-made
+/// files (chunks in zstd, lz4 and none, unchunked, without a summary, an
+/// unknown type), each a few kilobytes.
+fn bag_seeds() -> Vec<Vec<u8>> {
+    use crate::io::ros2_bag::tests::{Layout, TestChannel, hand_made_mcap, rosbags_seed};
+    use crate::io::ros2_bag::{BagWriteOptions, msgs, write_bag};
+    let mut seeds = vec![
+        rosbags_seed("rosbags-intel-3-scans.mcap"),
+        rosbags_seed("rosbags-intel-3-scans-big-endian.mcap"),
+    ];
+    if let Ok(map) = crate::grid::BuiltinMap::Maze.load() {
+        let config = crate::grid::SimulatedLogConfig {
+            lidar: crate::grid::lidar::Lidar {
+                beams: 24,
+                ..crate::grid::SimulatedLogConfig::default().lidar
+            },
+            ..crate::grid::SimulatedLogConfig::default()
+        };
+        if let Ok((log, truth)) = crate::grid::simulate_log(&map, 4, 1, &config)
+            && let Ok(bytes) = write_bag(&log, Some(&truth), &BagWriteOptions::default())
+        {
+            seeds.push(bytes);
+        }
+    }
+    let scan = |t: i64| msgs::LaserScan {
+        header: msgs::Header {
+            stamp: msgs::Time::from_nanos(t),
+            frame_id: "laser".to_owned(),
+        },
+        angle_min: -1.0,
+        angle_max: 1.0,
+        angle_increment: 0.5,
+        range_min: 0.1,
+        range_max: 8.0,
+        ranges: vec![1.0, 2.0, f32::INFINITY, f32::NAN, 3.0],
+        ..msgs::LaserScan::default()
+    };
+    let odom = |t: i64, x: f64| msgs::Odometry {
+        header: msgs::Header {
+            stamp: msgs::Time::from_nanos(t),
+            frame_id: "odom".to_owned(),
+        },
+        child_frame_id: "base_link".to_owned(),
+        pose: msgs::Transform3::from_pose2(Pose2::new(x, 0.0, 0.1)),
+        ..msgs::Odometry::default()
+    };
+    let channels = vec![
+        TestChannel {
+            topic: "/scan",
+            type_name: msgs::LASER_SCAN,
+            encoding: "cdr",
+            messages: vec![(15, scan(15).encode()), (25, scan(25).encode())],
+        },
+        TestChannel {
+            topic: "/odom",
+            type_name: msgs::ODOMETRY,
+            encoding: "cdr",
+            messages: (1..4)
+                .map(|k| (k * 10, odom(k as i64 * 10, k as f64).encode()))
+                .collect(),
+        },
+        TestChannel {
+            topic: "/image",
+            type_name: "sensor_msgs/msg/Image",
+            encoding: "cdr",
+            messages: vec![(20, vec![0, 1, 0, 0, 7])],
+        },
+    ];
+    for (layout, summary) in [
+        (Layout::Unchunked, false),
+        (Layout::Chunked("zstd"), true),
+        (Layout::Chunked("lz4"), false),
+        (Layout::Chunked(""), true),
+    ] {
+        seeds.push(hand_made_mcap(&channels, layout, summary));
+    }
+    seeds
+}
+
+/// ROS 2 bags through the one entry point the app and the CLI use
+/// ([`LaserFile::from_bytes_with_limits`](crate::grid::LaserFile): MCAP
+/// records, chunks unpacked, messages decoded from CDR, topics chosen, scans
+/// posed), with caps far below the defaults so that a chunk header claiming
+/// gigabytes is refused before anything is allocated.
+#[test]
+fn ros2_bags_survive_mutations() {
+    use crate::grid::LaserFile;
+    use crate::io::ros2_bag::{BagLimits, TopicChoice};
+    let limits = BagLimits {
+        max_input_bytes: 1 << 20,
+        max_chunk_bytes: 8 << 20,
+        max_unpacked_bytes: 16 << 20,
+    };
+    let report = Target::new("ROS 2 bag (MCAP)", bag_seeds(), CAP).run_checked(
+        |bytes| {
+            LaserFile::from_bytes_with_limits("fuzz.mcap", bytes, &TopicChoice::default(), &limits)
+                .map(drop)
+                .map_err(|e| e.to_string())
+        },
+        |message| {
+            let names_place = [
+                "bag",
+                "MCAP",
+                "chunk",
+                "message",
+                "topic",
+                "scan",
+                "laser",
+                "odometry",
+                "line",
+                "log",
+                "compress",
+                "transform",
+            ]
+            .iter()
+            .any(|w| message.contains(w));
+            if names_place {
+                Ok(())
+            } else {
+                Err(format!(
+                    "'{message}' does not say what is wrong with the bag"
+                ))
+            }
+        },
+    );
+    report.assert_clean();
+}
+
+/// The CDR decoder alone, on serialized LaserScan, Odometry, TFMessage and
+/// PoseStamped messages in both byte orders: every length field is checked
+/// against the bytes that remain before anything is allocated.
+#[test]
+fn ros2_messages_survive_mutations() {
+    use crate::io::ros2_bag::msgs::{LaserScan, Odometry, PoseStamped, TfMessage};
+    use crate::io::ros2_bag::{Ros2Bag, TopicChoice};
+    let mut seeds = Vec::new();
+    for bag in bag_seeds().iter().take(3) {
+        let Ok(bag) = Ros2Bag::from_bytes(bag) else {
+            continue;
+        };
+        let _ = bag.laser_log(&TopicChoice::default());
+        // Each seed starts with a byte naming its type (0 LaserScan, 1 Odometry,
+        // 2 TFMessage, 3 PoseStamped), so that one target decodes all four.
+        for s in bag.scans.values().flatten().take(2) {
+            let mut bytes = s.message.encode();
+            bytes.insert(0, 0);
+            seeds.push(bytes);
+        }
+        for o in bag.odometry.values().flatten().take(1) {
+            let mut bytes = o.message.encode();
+            bytes.insert(0, 1);
+            seeds.push(bytes);
+        }
+        for p in bag.poses.values().flatten().take(1) {
+            let mut bytes = p.message.encode();
+            bytes.insert(0, 3);
+            seeds.push(bytes);
+        }
+        let tf = TfMessage {
+            transforms: bag
+                .transforms
+                .iter()
+                .take(2)
+                .map(|t| t.transform.clone())
+                .collect(),
+        };
+        let mut bytes = tf.encode();
+        bytes.insert(0, 2);
+        seeds.push(bytes);
+    }
+    // Big-endian LaserScans, assembled by hand.
+    for ranges in [&[1.0f32, 2.5][..], &[f32::INFINITY, 0.5, 3.0, 4.0]] {
+        let mut bytes = crate::io::ros2_bag::tests::hand_laser_scan(true, "base_scan", ranges);
+        bytes.insert(0, 0);
+        seeds.push(bytes);
+    }
+    assert!(seeds.len() >= 8, "only {} message seeds", seeds.len());
+    let report = Target::new("ROS 2 message (CDR)", seeds, CAP).run(|bytes| {
+        let Some((&kind, body)) = bytes.split_first() else {
+            return Err("an empty input: no message type".to_owned());
+        };
+        match kind % 4 {
+            0 => LaserScan::decode(body).map(drop),
+            1 => Odometry::decode(body).map(drop),
+            2 => TfMessage::decode(body).map(drop),
+            _ => PoseStamped::decode(body).map(drop),
+        }
+        .map_err(|e| e.to_string())
+    });
     report.assert_clean();
 }
 

@@ -25,6 +25,7 @@ use crate::time_control::{StepControls, TimeAction, TimeInfo};
 use crate::widgets::dropped_files::DropInbox;
 use crate::widgets::fetch::Fetch;
 use crate::widgets::file_picker::{FilePicker, PickedFile};
+use crate::widgets::laser_file::{LASER_FILE_TYPES, LaserFileState, loaded_note};
 use crate::widgets::map_canvas::MapView;
 use crate::widgets::params_panel::{self, PendingParams};
 use serde::{Deserialize, Serialize};
@@ -34,8 +35,8 @@ use slamlab_sim::cartographer::session::{
     CartographerEvent, CartographerRun, CartographerScenario,
 };
 use slamlab_sim::cartographer::{CartographerPhase, CartographerSim, NextPhase};
-use slamlab_sim::grid::{MappingInput, builtin_map, log_input};
-use slamlab_sim::io::laser_log::LaserLog;
+use slamlab_sim::grid::laser_file::MAX_LASER_FILE_BYTES;
+use slamlab_sim::grid::{LaserFile, MappingInput, builtin_map};
 use slamlab_sim::params;
 use slamlab_sim::stepper::{CheckpointPolicy, Stepper};
 use std::sync::Arc;
@@ -115,7 +116,7 @@ struct LogFetch {
 enum Source {
     /// The simulated robot in a map (built-in or loaded): its name and grid.
     Simulated(String, Arc<OccupancyGrid>),
-    /// A CARMEN log: its name and, from `log=`, its location.
+    /// A CARMEN log or a ROS 2 bag: its name and, from `log=`, its location.
     Log(String, Option<String>),
 }
 
@@ -143,6 +144,8 @@ pub struct CartographerLesson {
     inbox: DropInbox,
     picker: FilePicker,
     log_fetch: Option<LogFetch>,
+    /// The log or bag being mapped: a bag's topics and what the reader assumed.
+    laser: LaserFileState,
     /// A click on the map kidnaps the robot there.
     pub click_kidnap: bool,
     /// A built-in map was chosen in place of a log or a loaded map: the
@@ -171,6 +174,7 @@ pub fn open(start: &LessonStart<'_>) -> Box<dyn Lesson> {
         .filter(|(k, _)| k != "log")
         .cloned()
         .collect();
+    let (laser, pairs) = LaserFileState::from_pairs(&pairs);
     let start = &LessonStart {
         pairs: &pairs,
         ..*start
@@ -188,6 +192,7 @@ pub fn open(start: &LessonStart<'_>) -> Box<dyn Lesson> {
     };
     lesson.frame.notices.splice(0..0, link_notices);
     lesson.frame = lesson.frame.restored(stored.as_ref());
+    lesson.laser = laser;
     if let Some(location) = location {
         lesson.frame.note = Some(format!("Loading the log {location}…"));
         lesson.log_fetch = Some(LogFetch {
@@ -235,6 +240,7 @@ impl CartographerLesson {
             inbox: DropInbox::default(),
             picker: FilePicker::multiple(),
             log_fetch: None,
+            laser: LaserFileState::default(),
             click_kidnap: false,
             builtin_chosen: false,
             advanced: false,
@@ -309,7 +315,10 @@ impl CartographerLesson {
                 "maze"
             };
             match builtin_map(name) {
-                Ok(grid) => self.source = Source::Simulated(name.to_owned(), Arc::new(grid)),
+                Ok(grid) => {
+                    self.source = Source::Simulated(name.to_owned(), Arc::new(grid));
+                    self.laser.close();
+                }
                 Err(why) => {
                     self.frame.note = Some(format!("Could not open the map {name}: {why}"));
                     scenario.map = self.scenario.map.clone();
@@ -400,31 +409,26 @@ impl CartographerLesson {
         }
     }
 
-    /// Maps a laser log (bytes of a CARMEN file, plain or compressed).
+    /// Maps a laser file (a CARMEN log, plain or compressed, or a ROS 2 bag).
+    /// On any problem the current run stays, with a note that names it.
     pub fn load_log(&mut self, name: &str, bytes: &[u8], location: Option<String>) {
-        let log = match LaserLog::from_bytes(bytes) {
-            Ok(log) => log,
-            Err(why) => {
-                self.frame.note = Some(format!("Could not read the log {name}: {why}"));
-                return;
-            }
-        };
-        if log.scans.is_empty() {
-            self.frame.note = Some(format!("{name} has no laser scans"));
-            return;
+        match self.laser.open(name, bytes) {
+            Ok(file) => self.map_file(name, file, location),
+            Err(why) => self.frame.note = Some(why),
         }
-        let input = log_input(&log, name);
-        let (count, span) = (input.scans.len(), input.duration());
+    }
+
+    /// Maps an opened laser file.
+    fn map_file(&mut self, name: &str, file: LaserFile, location: Option<String>) {
+        let note = loaded_note(name, &file);
         self.source = Source::Log(name.to_owned(), location);
         let scenario = CartographerScenario {
             kidnap_at: None,
             kidnap_to: None,
             ..self.pending.scenario.clone()
         };
-        self.restart_on(scenario, Arc::new(input), None);
-        self.frame.note = Some(format!(
-            "Loaded {name}: {count} scans over {span:.0} s; no ground truth, no kidnap button"
-        ));
+        self.restart_on(scenario, Arc::new(file.input), None);
+        self.frame.note = Some(format!("{note}; no kidnap button"));
     }
 
     /// Lets the simulated robot explore a ROS map instead of a built-in one.
@@ -441,6 +445,7 @@ impl CartographerLesson {
         match scenario.simulate(grid.clone(), &name) {
             Ok(input) => {
                 self.source = Source::Simulated(name.clone(), grid);
+                self.laser.close();
                 self.restart_on(scenario, Arc::new(input), None);
                 self.frame.note = Some(format!(
                     "The robot explores {name}{}",
@@ -748,15 +753,27 @@ impl CartographerLesson {
                 .on_hover_text("The built-in maps; press \"Apply & reset\"")
                 .widget_info(|| egui::WidgetInfo::labeled(egui::Role::ComboBox, true, "map"));
         });
+        if let Some(result) = self.laser.topics_ui(ui) {
+            match result {
+                Ok(file) => {
+                    let (name, location) = match &self.source {
+                        Source::Log(name, location) => (name.clone(), location.clone()),
+                        Source::Simulated(name, _) => (name.clone(), None),
+                    };
+                    self.map_file(&name, file, location);
+                }
+                Err(why) => self.frame.note = Some(why),
+            }
+        }
         ui.label(
-            "Or open a CARMEN laser log (.clf, .gz, .bz2) or a ROS map (its YAML with the \
-             image); or drop either on the window:",
+            "Or open a CARMEN laser log (.clf, .gz, .bz2), a ROS 2 bag (.mcap) or a ROS map (its \
+             YAML with the image); or drop either on the window:",
         );
         self.picker.ui(
             ui,
-            "Open log or map…",
-            ".clf,.log,.gz,.bz2,.txt,.yaml,.yml,.pgm,.png",
-            256 << 20,
+            "Open log, bag or map…",
+            LASER_FILE_TYPES,
+            MAX_LASER_FILE_BYTES as usize,
             "path/to/intel.clf.bz2",
         );
         let running = self.scenario.clone();
@@ -841,6 +858,7 @@ impl Lesson for CartographerLesson {
         );
         if let Source::Log(_, Some(location)) = &self.source {
             pairs.push(("log".to_owned(), location.clone()));
+            pairs.extend(self.laser.share_pairs());
         }
         pairs
     }
@@ -850,7 +868,9 @@ impl Lesson for CartographerLesson {
     }
 
     fn run_notices(&self) -> Vec<String> {
-        self.sim().notes.iter().take(3).cloned().collect()
+        let mut all: Vec<String> = self.laser.notices().to_vec();
+        all.extend(self.sim().notes.iter().take(3).cloned());
+        all
     }
 
     fn changed_params(&self) -> Vec<(String, String)> {

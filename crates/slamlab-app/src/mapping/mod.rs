@@ -18,11 +18,12 @@ use crate::time_control::{TimeAction, TimeInfo};
 use crate::widgets::dropped_files::DropInbox;
 use crate::widgets::fetch::Fetch;
 use crate::widgets::file_picker::{FilePicker, PickedFile};
+use crate::widgets::laser_file::{LASER_FILE_TYPES, LaserFileState, loaded_note};
 use crate::widgets::map_canvas::MapView;
 use crate::widgets::params_panel::{self, PendingParams};
 use serde::{Deserialize, Serialize};
-use slamlab_sim::grid::{MappingInput, builtin_map, log_input};
-use slamlab_sim::io::laser_log::LaserLog;
+use slamlab_sim::grid::laser_file::MAX_LASER_FILE_BYTES;
+use slamlab_sim::grid::{LaserFile, MappingInput, builtin_map};
 use slamlab_sim::mapping::{
     MappingEvent, MappingPhase, MappingScenario, MappingSession, PoseSource, simulated_input,
 };
@@ -150,6 +151,8 @@ pub struct MappingLesson {
     inbox: DropInbox,
     log_picker: FilePicker,
     log_fetch: Option<LogFetch>,
+    /// The log or bag being mapped: a bag's topics and what the reader assumed.
+    laser: LaserFileState,
     /// The beam of the current scan whose update is inspected, if any.
     pub beam: Option<usize>,
     /// A ROS map the student loaded for the simulated robot to explore
@@ -217,6 +220,7 @@ pub fn open(start: &LessonStart<'_>) -> Box<dyn Lesson> {
         .filter(|(k, _)| k != "log")
         .cloned()
         .collect();
+    let (laser, pairs) = LaserFileState::from_pairs(&pairs);
     let start = &LessonStart {
         pairs: &pairs,
         ..*start
@@ -232,6 +236,7 @@ pub fn open(start: &LessonStart<'_>) -> Box<dyn Lesson> {
     };
     lesson.frame.notices.splice(0..0, link_notices);
     lesson.frame = lesson.frame.restored(stored.as_ref());
+    lesson.laser = laser;
     if let Some(location) = location {
         lesson.frame.note = Some(format!("Loading the log {location}…"));
         lesson.log_fetch = Some(LogFetch {
@@ -264,6 +269,7 @@ impl MappingLesson {
             inbox: DropInbox::default(),
             log_picker: FilePicker::multiple(),
             log_fetch: None,
+            laser: LaserFileState::default(),
             beam: None,
             loaded_map: None,
             builtin_chosen: false,
@@ -320,6 +326,7 @@ impl MappingLesson {
                 self.loaded_map = Some((name.clone(), grid));
                 self.log_name = None;
                 self.log_location = None;
+                self.laser.close();
                 self.restart(scenario, None);
                 self.frame.note = Some(format!(
                     "The robot explores {name}: {w} x {h} cells at {r} m{}",
@@ -437,35 +444,28 @@ impl MappingLesson {
         });
     }
 
-    /// Maps a laser log (bytes of a CARMEN file, plain or compressed) instead
-    /// of the simulated robot. On any problem the current run stays, with a
-    /// note that names it.
+    /// Maps a laser file (a CARMEN log, plain or compressed, or a ROS 2 bag)
+    /// instead of the simulated robot. On any problem the current run stays,
+    /// with a note that names it.
     pub fn load_log(&mut self, name: &str, bytes: &[u8]) {
-        let log = match LaserLog::from_bytes(bytes) {
-            Ok(log) => log,
-            Err(why) => {
-                self.frame.note = Some(format!("Could not read the log {name}: {why}"));
-                return;
-            }
-        };
-        if log.scans.is_empty() {
-            self.frame.note = Some(format!("{name} has no laser scans"));
-            return;
+        match self.laser.open(name, bytes) {
+            Ok(file) => self.map_file(name, file),
+            Err(why) => self.frame.note = Some(why),
         }
-        let input = log_input(&log, name);
-        let count = input.scans.len();
-        let span = input.duration();
-        self.input = Arc::new(input);
+    }
+
+    /// Maps an opened laser file.
+    fn map_file(&mut self, name: &str, file: LaserFile) {
+        let note = loaded_note(name, &file);
+        let has_truth = file.input.truth.is_some();
+        self.input = Arc::new(file.input);
         self.log_name = Some(name.to_owned());
         let mut scenario = self.pending.scenario.clone();
-        if scenario.poses == PoseSource::Truth {
+        if scenario.poses == PoseSource::Truth && !has_truth {
             scenario.poses = PoseSource::ScanToMap;
         }
         self.restart(scenario, None);
-        self.frame.note = Some(format!(
-            "Loaded {name}: {count} scans over {:.0} s; no ground truth, so no error plot",
-            span
-        ));
+        self.frame.note = Some(note);
     }
 
     /// Reads the log named by `log=`.
@@ -651,6 +651,7 @@ impl MappingLesson {
                                 self.log_name.is_some() || self.loaded_map.is_some();
                             self.log_name = None;
                             self.log_location = None;
+                            self.laser.close();
                             self.loaded_map = None;
                             self.pending.set("map", name);
                         }
@@ -662,15 +663,24 @@ impl MappingLesson {
                 )
                 .widget_info(|| egui::WidgetInfo::labeled(egui::Role::ComboBox, true, "map"));
         });
+        if let Some(result) = self.laser.topics_ui(ui) {
+            match result {
+                Ok(file) => {
+                    let name = self.log_name.clone().unwrap_or_default();
+                    self.map_file(&name, file);
+                }
+                Err(why) => self.frame.note = Some(why),
+            }
+        }
         ui.label(
-            "Or open a CARMEN laser log (.clf, .log, .gz, .bz2), or a ROS map (its YAML with the \
-             image) for the robot to explore; or drop either on the window:",
+            "Or open a CARMEN laser log (.clf, .log, .gz, .bz2), a ROS 2 bag (.mcap), or a ROS \
+             map (its YAML with the image) for the robot to explore; or drop either on the window:",
         );
         self.log_picker.ui(
             ui,
-            "Open log or map…",
-            ".clf,.log,.gz,.bz2,.txt,.yaml,.yml,.pgm,.png",
-            256 << 20,
+            "Open log, bag or map…",
+            LASER_FILE_TYPES,
+            MAX_LASER_FILE_BYTES as usize,
             "path/to/intel.clf.bz2",
         );
         let running = self.session.scenario().clone();
@@ -819,6 +829,7 @@ impl Lesson for MappingLesson {
         );
         if let Some(location) = &self.log_location {
             pairs.push(("log".to_owned(), location.clone()));
+            pairs.extend(self.laser.share_pairs());
         }
         pairs
     }
@@ -832,12 +843,9 @@ impl Lesson for MappingLesson {
     }
 
     fn run_notices(&self) -> Vec<String> {
-        self.session
-            .sim()
-            .note()
-            .map(str::to_owned)
-            .into_iter()
-            .collect()
+        let mut all: Vec<String> = self.laser.notices().to_vec();
+        all.extend(self.session.sim().note().map(str::to_owned));
+        all
     }
 
     fn changed_params(&self) -> Vec<(String, String)> {
@@ -968,6 +976,7 @@ impl Lesson for MappingLesson {
             "total_scans": self.input.scans.len(),
             "input_seconds": self.input.duration(),
             "log": self.log_name,
+            "topics": self.laser.topics().map(|t| [t.scan.clone(), t.odometry.clone()]),
             "note": self.frame.note,
             "seed": self.session.scenario().seed,
             "poses": summary.poses,

@@ -504,8 +504,6 @@ pub fn window_ui(ctx: &egui::Context, estimates: &mut Estimates, has_truth: bool
                 ui.label("Position error (m) over time (s)");
                 egui_plot::Plot::new("estimate_errors")
                     .height((ui.available_height() - 8.0).clamp(70.0, 160.0))
-                    .x_axis_label("time (s)")
-                    .y_axis_label("error (m)")
                     .allow_scroll(false)
                     .show(ui, |plot| {
                         for (name, color, points) in series {

@@ -1,6 +1,7 @@
 //! Widgets every lesson shares: the map canvas (pan, zoom, follow, grid, scale
 //! bar), the parameter panel built from a scenario's parameter table, plot helpers,
-//! particle clouds as one mesh, the drive pad, file picking and drops, the share link and the Sources window.
+//! particle clouds as one mesh, the drive pad, file picking and drops, the laser file
+//! (CARMEN log or ROS 2 bag) of the lidar lessons, the share link and the Sources window.
 
 pub mod drive;
 pub mod dropped_files;
@@ -8,6 +9,7 @@ pub mod estimates;
 pub mod fetch;
 pub mod file_picker;
 pub mod grid_tiles;
+pub mod laser_file;
 pub mod layout;
 pub mod map_canvas;
 pub mod params_panel;

@@ -370,3 +370,38 @@ fn the_detection_and_the_merge_are_marked_and_said_when_they_have_happened() {
         let _ = image.save(std::path::Path::new(&dir).join("cartographer-moments.png"));
     }
 }
+
+/// A ROS 2 bag (rosbags wrote it from the Intel log's first 300 scans) opens
+/// where a CARMEN log does and builds submaps; a truncated copy is refused
+/// and the bag's run stays.
+#[test]
+fn a_ros2_bag_builds_submaps_and_a_truncated_one_leaves_the_run() {
+    let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR"))
+        .join("../slamlab-sim/tests/data/ros2_bags/rosbags-intel-300-scans.mcap");
+    let bytes = std::fs::read(&path).unwrap();
+    let mut h = harness("lesson=cartographer");
+    lesson_mut(&mut h).load_log("intel.mcap", &bytes, None);
+    h.run();
+    let state = lesson(&h).test_state();
+    assert_eq!(state["total_scans"], 300, "{state}");
+    let note = lesson(&h).note().unwrap_or_default().to_owned();
+    assert!(
+        note.starts_with("Loaded intel.mcap (ROS 2 bag, MCAP with zstd chunks): 300 scans"),
+        "{note}"
+    );
+    for _ in 0..300 {
+        lesson_mut(&mut h).apply_time_action(slamlab_app::time_control::TimeAction::StepTick);
+    }
+    let state = lesson(&h).test_state();
+    eprintln!("{state}");
+    assert_eq!(state["scans"], 300, "{state}");
+    assert!(state["submaps"].as_u64().unwrap_or(0) >= 2, "{state}");
+    lesson_mut(&mut h).load_log("cut.mcap", &bytes[..bytes.len() / 2], None);
+    let state = lesson(&h).test_state();
+    let note = lesson(&h).note().unwrap_or_default();
+    assert!(
+        note.starts_with("Could not read the log cut.mcap: the bag is truncated"),
+        "{note}"
+    );
+    assert_eq!(state["total_scans"], 300, "{state}");
+}

@@ -428,3 +428,185 @@ fn one_particles_proposal_is_drawn_and_explained_at_800_by_500() {
         let _ = image.save(std::env::temp_dir().join("slamlab-grid-fastslam-proposal.png"));
     }
 }
+
+/// A ROS 2 bag of a simulated run with a second LaserScan topic (the same
+/// scans, each beam 10 cm shorter) and the run's odometry, as a robot records
+/// it: `/scan`, `/scan_rear`, `/odom` (no `/tf_static`: the mounting is assumed).
+#[allow(clippy::unwrap_used)] // a test's fixture: a failure stops the test
+fn two_laser_bag() -> Vec<u8> {
+    use slamlab_sim::io::ros2_bag::msgs::{self, Header, LaserScan, Odometry, Time, Transform3};
+    use std::collections::BTreeMap;
+    let map = slamlab_sim::grid::BuiltinMap::Office.load().unwrap();
+    let (log, _) = slamlab_sim::grid::simulate_log(
+        &map,
+        300,
+        5,
+        &slamlab_sim::grid::SimulatedLogConfig::default(),
+    )
+    .unwrap();
+    let mut w = mcap::WriteOptions::new()
+        .profile("ros2")
+        .create(std::io::Cursor::new(Vec::new()))
+        .unwrap();
+    let mut channel = |topic: &str, type_name: &str| {
+        let schema = msgs::schema_text(type_name).unwrap();
+        let id = w
+            .add_schema(type_name, "ros2msg", schema.as_bytes())
+            .unwrap();
+        w.add_channel(id, topic, "cdr", &BTreeMap::new()).unwrap()
+    };
+    let scan = channel("/scan", msgs::LASER_SCAN);
+    let rear = channel("/scan_rear", msgs::LASER_SCAN);
+    let odom = channel("/odom", msgs::ODOMETRY);
+    for (k, s) in log.scans.iter().enumerate() {
+        let stamp = Time::from_seconds(s.timestamp);
+        let t = stamp.nanos() as u64;
+        let header = |frame: &str| Header {
+            stamp,
+            frame_id: frame.to_owned(),
+        };
+        let n = s.scan.angles.len();
+        let mut message = LaserScan {
+            header: header("laser"),
+            angle_min: s.scan.angles[0] as f32,
+            angle_max: s.scan.angles[n - 1] as f32,
+            angle_increment: ((s.scan.angles[n - 1] - s.scan.angles[0]) / (n - 1) as f64) as f32,
+            range_min: 0.05,
+            range_max: s.scan.range_max as f32,
+            ranges: s.scan.ranges.iter().map(|&r| r as f32).collect(),
+            ..LaserScan::default()
+        };
+        let write = |w: &mut mcap::Writer<std::io::Cursor<Vec<u8>>>, channel_id, data: &[u8]| {
+            w.write_to_known_channel(
+                &mcap::records::MessageHeader {
+                    channel_id,
+                    sequence: k as u32,
+                    log_time: t,
+                    publish_time: t,
+                },
+                data,
+            )
+            .unwrap();
+        };
+        write(&mut w, scan, &message.encode());
+        message.ranges.iter_mut().for_each(|r| *r -= 0.1);
+        write(&mut w, rear, &message.encode());
+        let o = Odometry {
+            header: header("odom"),
+            child_frame_id: "base_link".to_owned(),
+            pose: Transform3::from_pose2(s.odometry),
+            ..Odometry::default()
+        };
+        write(&mut w, odom, &o.encode());
+    }
+    w.finish().unwrap();
+    w.into_inner().into_inner()
+}
+
+/// A bag opens where a log does; `scan-topic=` picks its laser, the menu
+/// another; a ROS 1 bag is refused with how to convert it, and the run stays.
+#[test]
+fn a_ros2_bag_maps_with_the_topics_chosen_and_a_ros1_bag_leaves_the_run() {
+    let bag = two_laser_bag();
+    let mut h = harness("lesson=mapping&scan-topic=/scan_rear&poses=scan-to-map");
+    lesson_mut(&mut h).load_log("robot.mcap", &bag);
+    h.run();
+    let l = lesson(&h);
+    let note = l.note().unwrap_or_default().to_owned();
+    assert!(
+        note.starts_with("Loaded robot.mcap (ROS 2 bag, MCAP with uncompressed chunks): 300 scans")
+            && note.contains("from /scan_rear, odometry /odom"),
+        "{note}"
+    );
+    let first = &l.session().sim().input().scans[0];
+    assert_eq!(first.scan.ranges.len(), 360);
+    let rear_range = first.scan.ranges[0];
+    // The notices say what the reader assumed: the mounting, the other laser.
+    let notices = h.state().notices().join("\n");
+    assert!(
+        notices.contains("no transform from base_link to laser"),
+        "{notices}"
+    );
+    // The menu offers the other laser.
+    let menu = egui::accesskit::Role::ComboBox;
+    assert!(h.query_by_role_and_label(menu, "scan topic").is_some());
+    h.get_by_role_and_label(menu, "scan topic").click();
+    h.run();
+    h.get_by_label("/scan").click();
+    h.run();
+    let l = lesson(&h);
+    assert!(
+        l.note().unwrap_or_default().contains("from /scan,"),
+        "{:?}",
+        l.note()
+    );
+    let front_range = l.session().sim().input().scans[0].scan.ranges[0];
+    assert!(
+        ((front_range - rear_range) - 0.1).abs() < 1e-6,
+        "{front_range} {rear_range}"
+    );
+    for _ in 0..120 {
+        lesson_mut(&mut h).step_tick();
+    }
+    h.run();
+    if let Some(image) = render_or_skip(&mut h) {
+        let _ = image.save(std::env::temp_dir().join("slamlab-mapping-bag.png"));
+        let dark = count_pixels(image.as_raw(), [0x00, 0x00, 0x00], 60);
+        assert!(dark > 200, "walls mapped from the bag: {dark} dark pixels");
+    }
+    // A ROS 1 bag: refused with how to convert it; the bag's run stays.
+    let before = lesson(&h).session().sim().input().name.clone();
+    lesson_mut(&mut h).load_log("old.bag", b"#ROSBAG V2.0\nE\x00\x00\x00");
+    let l = lesson(&h);
+    let note = l.note().unwrap_or_default();
+    assert!(
+        note.starts_with("Could not read the log old.bag: this is a ROS 1 bag")
+            && note.contains("rosbags-convert"),
+        "{note}"
+    );
+    assert_eq!(l.session().sim().input().name, before);
+    assert_eq!(l.session().sim().scans_done(), 120);
+    // The whole bag at 800 x 500, as a lecture page embeds the lesson.
+    let mut h = harness_sized("lesson=mapping&poses=scan-to-map", egui::vec2(800.0, 500.0));
+    lesson_mut(&mut h).load_log("robot.mcap", &bag);
+    for _ in 0..300 {
+        lesson_mut(&mut h).step_tick();
+    }
+    h.run();
+    if let Some(image) = render_or_skip(&mut h) {
+        let _ = image.save(std::env::temp_dir().join("slamlab-mapping-bag-800x500.png"));
+    }
+}
+
+/// The bag rosbags wrote from the Intel log's first 300 scans (zstd chunks),
+/// mapped with scan-to-map poses through the lesson: the browser check ("a ROS
+/// 2 bag opens by log= and maps") must end at this pose to the bit, in wasm.
+const ROSBAGS_END_POSE: [f64; 3] = [
+    2.1332476175095056,
+    0.02236945271272885,
+    -0.11727858044618644,
+];
+
+#[test]
+fn a_rosbags_bag_mapped_through_the_lesson_ends_at_the_pose_the_browser_must_match() {
+    let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR"))
+        .join("../slamlab-sim/tests/data/ros2_bags/rosbags-intel-300-scans.mcap");
+    let bytes = std::fs::read(&path).unwrap();
+    let state: serde_json::Value = serde_json::from_str(&SlamLabApp::headless_log_state(
+        "lesson=mapping",
+        "rosbags-intel-300-scans.mcap",
+        &bytes,
+        300,
+    ))
+    .unwrap();
+    assert_eq!(state["scans"], 300, "{state}");
+    assert_eq!(state["topics"], serde_json::json!(["/scan", "/odom"]));
+    let pose: Vec<f64> = state["pose"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|v| v.as_f64().unwrap())
+        .collect();
+    eprintln!("pose {pose:?}");
+    assert_eq!(pose, ROSBAGS_END_POSE);
+}

@@ -17,11 +17,9 @@ use super::fastslam::parse_counts;
 use crate::command::Experiment;
 use crate::map::{map_arg, read_map};
 use crate::output::{Output, progress_bar};
-use anyhow::{Context, Result, bail};
+use anyhow::{Result, bail};
 use clap::{Arg, ArgMatches, Command};
 use slamlab_core::particle::{GridFastSlamConfig, MAX_GRID_PARTICLES, Proposal};
-use slamlab_sim::grid::log_input;
-use slamlab_sim::io::laser_log::LaserLog;
 use slamlab_sim::mapping::MappingScenario;
 use slamlab_sim::mapping::grid_fastslam::run_grid_fastslam;
 use slamlab_sim::mapping::grid_fastslam::{GridExperimentPlan, grid_fastslam_experiment};
@@ -75,8 +73,9 @@ impl Experiment for GridFastSlam {
                     .help("scans per drive (0.1 s apart)"),
             )
             .arg(Arg::new("log").long("log").value_name("FILE").help(
-                "run over a CARMEN laser log (plain, .gz or .bz2) instead of simulated drives",
+                "run over a CARMEN laser log (plain, .gz or .bz2) or a ROS 2 bag (.mcap) instead of simulated drives",
             ))
+            .args(crate::log_cmd::topic_args())
             .arg(
                 Arg::new("map-out")
                     .long("map-out")
@@ -196,11 +195,8 @@ fn run_log(
     m: &ArgMatches,
     out: &mut Output,
 ) -> Result<()> {
-    let log = LaserLog::read_file(path).with_context(|| format!("reading {}", path.display()))?;
-    let name = path.file_name().map_or(path.display().to_string(), |n| {
-        n.to_string_lossy().into_owned()
-    });
-    let input = log_input(&log, &name);
+    let input = crate::log_cmd::read_laser_file(&path.display().to_string(), m)?.input;
+    let name = input.name.clone();
     if input.scans.is_empty() {
         bail!("{name} has no laser scans");
     }

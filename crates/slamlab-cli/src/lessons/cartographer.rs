@@ -8,18 +8,16 @@
 //! ```
 
 use crate::command::RunLesson;
+use crate::log_cmd::{read_laser_file, topic_args};
 use crate::map::{map_arg, read_map};
 use crate::output::{Output, units_bar, units_progress};
-use anyhow::{Context, Result, bail};
+use anyhow::{Result, bail};
 use clap::{Arg, ArgMatches, Command};
 use serde_json::json;
 use slamlab_sim::cartographer::input::{KidnapPlace, kidnap_input_to};
 use slamlab_sim::cartographer::{CartographerParams, CartographerSim};
 use slamlab_sim::grid::SimulatedLogConfig;
-use slamlab_sim::grid::log_input;
-use slamlab_sim::io::laser_log::LaserLog;
 use std::io::Write;
-use std::path::Path;
 use std::sync::Arc;
 use std::time::Instant;
 
@@ -54,9 +52,10 @@ impl RunLesson for Cartographer {
             .arg(map_arg())
             .arg(
                 Arg::new("log").long("log").value_name("FILE").help(
-                    "map a CARMEN laser log (plain, .gz or .bz2) instead of a simulated robot",
+                    "map a CARMEN laser log (plain, .gz or .bz2) or a ROS 2 bag (.mcap) instead of a simulated robot",
                 ),
             )
+            .args(topic_args())
             .arg(count(
                 "steps",
                 "scans to simulate (default 600); with --log, map only the log's first scans",
@@ -159,17 +158,13 @@ impl RunLesson for Cartographer {
         let seed = m.get_one::<u64>("seed").copied().unwrap_or(1);
         let mut kidnap_at = n("kidnap-at");
         let input = if let Some(log_path) = m.get_one::<String>("log") {
-            let log = LaserLog::read_file(Path::new(log_path))
-                .with_context(|| format!("reading {log_path}"))?;
-            let name = Path::new(log_path)
-                .file_name()
-                .map_or(log_path.clone(), |n| n.to_string_lossy().into_owned());
+            let file = read_laser_file(log_path, m)?;
             if kidnap_at.take().is_some() {
                 eprintln!(
                     "warning: --kidnap-at applies to a simulated robot; a log is replayed as recorded"
                 );
             }
-            let mut input = log_input(&log, &name);
+            let mut input = file.input;
             if let Some(first) = n("steps") {
                 input.scans.truncate(first);
             }

@@ -3,18 +3,18 @@
 //! ```text
 //! slamlab run mapping --map office --steps 3000 --poses scan-to-map --seed 1 --json
 //! slamlab run mapping --log intel.clf.bz2 --poses scan-to-map --json --map-out intel.yaml
+//! slamlab run mapping --log my_robot.mcap --scan-topic /scan --odom-topic /odom
 //! slamlab run mapping --map office --poses grid-fastslam --particles 30 --proposal scan-match
 //! ```
 
 use crate::command::RunLesson;
 use crate::flags;
+use crate::log_cmd::{read_laser_file, topic_args};
 use crate::map::{map_arg, read_map};
 use crate::output::{Output, progress_bar};
 use anyhow::{Context, Result, bail};
 use clap::{Arg, ArgMatches, Command};
 use serde_json::json;
-use slamlab_sim::grid::log_input;
-use slamlab_sim::io::laser_log::LaserLog;
 use slamlab_sim::io::ros_map::{ImageFormat, export_map};
 use slamlab_sim::mapping::{MappingScenario, MappingSession, simulated_input};
 use std::io::Write;
@@ -31,7 +31,7 @@ impl RunLesson for Mapping {
     }
 
     fn about(&self) -> &'static str {
-        "occupancy-grid mapping with a lidar: a simulated robot's scans or a CARMEN log, posed by truth, odometry, ICP, scan-to-map matching or grid FastSLAM's particles"
+        "occupancy-grid mapping with a lidar: a simulated robot's scans, a CARMEN log or a ROS 2 bag, posed by truth, odometry, ICP, scan-to-map matching or grid FastSLAM's particles"
     }
 
     fn command(&self) -> Command {
@@ -39,9 +39,10 @@ impl RunLesson for Mapping {
             .arg(map_arg())
             .arg(
                 Arg::new("log").long("log").value_name("FILE").help(
-                    "map a CARMEN laser log (plain, .gz or .bz2) instead of a simulated robot",
+                    "map a CARMEN laser log (plain, .gz or .bz2) or a ROS 2 bag (.mcap) instead of a simulated robot",
                 ),
             )
+            .args(topic_args())
             .arg(
                 Arg::new("map-out")
                     .long("map-out")
@@ -55,12 +56,7 @@ impl RunLesson for Mapping {
     fn run(&self, m: &ArgMatches, out: &mut Output) -> Result<()> {
         let mut scenario: MappingScenario = flags::scenario_from(m, &["map"])?;
         let input = if let Some(log_path) = m.get_one::<String>("log") {
-            let log = LaserLog::read_file(Path::new(log_path))
-                .with_context(|| format!("reading {log_path}"))?;
-            let name = Path::new(log_path)
-                .file_name()
-                .map_or(log_path.clone(), |n| n.to_string_lossy().into_owned());
-            log_input(&log, &name)
+            read_laser_file(log_path, m)?.input
         } else {
             let spec = m.get_one::<String>("map").map_or("maze", String::as_str);
             let (grid, name) = read_map(spec, None)?;

@@ -1,10 +1,12 @@
 //! The grid world of the lidar lessons (Monte Carlo localization, mapping,
 //! Cartographer): the built-in maps, the simulated lidar, the round robot that
 //! cannot drive through walls, the explorer that tours any map, simulated laser
-//! logs, and the scans every mapping run takes as its input.
+//! logs, and the scans every mapping run takes as its input (from a simulated
+//! robot, a CARMEN log or a ROS 2 bag: [`laser_file`]).
 
 pub mod builtin;
 pub mod explorer;
+pub mod laser_file;
 pub mod lidar;
 pub mod robot;
 pub mod scans;
@@ -12,6 +14,7 @@ pub mod simulated_log;
 
 pub use builtin::BuiltinMap;
 pub use explorer::Explorer;
+pub use laser_file::{BagTopics, LaserFile, LaserFileError};
 pub use lidar::Lidar;
 pub use robot::{GridRobot, OdometrySensor};
 pub use scans::{InputScan, MappingInput, builtin_map, log_input, map_agreement, trajectory_rmse};
