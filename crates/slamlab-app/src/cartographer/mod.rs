@@ -478,6 +478,10 @@ impl CartographerLesson {
             Ok(bytes) => {
                 let name = location.rsplit('/').next().unwrap_or(&location).to_owned();
                 self.load_log(&name, &bytes, Some(location));
+                if matches!(&self.source, Source::Log(n, _) if *n == name) {
+                    // The link's figure keys (`run=1`, `tick=`) hold for the log.
+                    self.frame.restarted_from_link = true;
+                }
             }
             Err(why) => {
                 self.frame.note = Some(format!(

@@ -11,6 +11,7 @@ mod map;
 mod plots;
 
 pub use explain::rmse_text;
+pub use plots::ERROR_HEADROOM;
 
 use crate::lesson::{self, Lesson, LessonFrame, LessonStart, StoredSettings};
 use crate::palette;

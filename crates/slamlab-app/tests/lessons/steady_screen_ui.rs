@@ -364,3 +364,117 @@ fn run_and_step_act_on_the_view_shown() {
     h.run();
     assert_eq!(tick(&h), 1, "the corridor runs when it is shown");
 }
+
+/// At 800 x 500 no plot's key takes more height than the plot under it, in any
+/// lesson; and the landmark map keeps more than a third of the window's height.
+#[test]
+fn at_800_by_500_keys_are_never_taller_than_their_plots() {
+    use slamlab_app::widgets::plots::figure_records;
+    let size = egui::vec2(800.0, 500.0);
+    let mut problems = Vec::new();
+    for entry in LESSONS {
+        let query = format!("lesson={}&seed=5&tick=12", entry.id);
+        let mut h = harness(&query, size);
+        h.run();
+        let records = figure_records(&h.ctx);
+        for key in records.iter().filter_map(|r| r.key) {
+            // The plot right under the key, overlapping it side to side.
+            let below = records
+                .iter()
+                .filter_map(|r| r.data)
+                .filter(|d| d.top() >= key.bottom() - 2.0)
+                .filter(|d| d.left() < key.right() && key.left() < d.right())
+                .min_by(|a, b| a.top().total_cmp(&b.top()));
+            if let Some(plot) = below
+                && key.height() > plot.height()
+            {
+                problems.push(format!(
+                    "{query}: a key {:.0} points tall over a plot {:.0} tall",
+                    key.height(),
+                    plot.height()
+                ));
+            }
+        }
+        if entry.id == "landmark-slam" {
+            let map = records
+                .iter()
+                .find_map(|r| r.map)
+                .unwrap_or(egui::Rect::NOTHING);
+            assert!(
+                map.height() > size.y / 3.0,
+                "the landmark map is {:.0} points tall",
+                map.height()
+            );
+        }
+    }
+    assert!(problems.is_empty(), "{}", problems.join("\n"));
+}
+
+/// The fusion lesson's x, y and yaw error plots are scaled to the errors, not to
+/// the differential filter's 2σ band (metres, beyond ±π in yaw): each plot's y
+/// range reaches at least its largest error and at most `ERROR_HEADROOM` (1.25)
+/// times it, and the key says how far the cut band reaches.
+#[test]
+fn the_fusion_error_plots_fit_the_errors_and_say_where_the_band_is_cut() {
+    use super::common::text_drawn;
+    use slamlab_app::fusion::{ERROR_HEADROOM, FusionLesson};
+    let mut h = harness("lesson=fusion&seed=5&tick=120", egui::vec2(1280.0, 800.0));
+    h.run();
+    let bounds = slamlab_app::widgets::plots::figure_bounds(&h.ctx);
+    let sim = lesson_of::<FusionLesson>(&h).sim();
+    for (k, title) in ["x error", "y error", "Yaw error"].into_iter().enumerate() {
+        let largest = sim
+            .runs()
+            .iter()
+            .flat_map(|r| r.samples().iter().map(move |s| s.error[k].abs()))
+            .fold(0.0_f64, f64::max);
+        let largest_band = sim
+            .runs()
+            .iter()
+            .flat_map(|r| r.samples().iter().map(move |s| 2.0 * s.sigma[k]))
+            .fold(0.0_f64, f64::max);
+        let Some((_, [_, y0, _, y1])) = bounds.iter().find(|(t, _)| t == title) else {
+            panic!("no {title} plot drawn: {bounds:?}");
+        };
+        let reach = y0.abs().max(y1.abs());
+        eprintln!(
+            "{title}: largest error {largest:.4}, 2σ up to {largest_band:.3}, y to ±{reach:.4}"
+        );
+        assert!(largest > 0.0);
+        assert!(reach >= largest, "{title}: the largest error is in view");
+        assert!(
+            reach <= ERROR_HEADROOM * largest * 1.001 || reach <= 0.0101,
+            "{title}: ±{reach} for errors up to {largest}"
+        );
+        assert!(largest_band > reach, "the band is cut here");
+    }
+    assert!(
+        text_drawn(&h, "(cut; reaches ±"),
+        "the key says how far the band reaches"
+    );
+}
+
+/// Every mark the visual-odometry lesson draws is in a key: the flow lines, the
+/// docking station, and whose inliers the colours are (the best hypothesis so
+/// far while RANSAC runs, the final estimate once it is done).
+#[test]
+fn the_visual_odometry_keys_name_every_mark() {
+    use super::common::text_drawn;
+    let mut h = harness(
+        "lesson=visual-odometry&seed=5&tick=40",
+        egui::vec2(1280.0, 800.0),
+    );
+    h.run();
+    for needle in [
+        "flow (right image",
+        "docking station",
+        "epipolar line",
+        "inlier of the",
+    ] {
+        assert!(text_drawn(&h, needle), "{needle} is in a key");
+    }
+    assert!(
+        text_drawn(&h, "inlier of the final E") || text_drawn(&h, "inlier of the best E so far"),
+        "whose inliers"
+    );
+}
