@@ -972,7 +972,9 @@ impl SlamLabApp {
                 .map_err(|why| format!("Could not read {name}: {why}"))
                 .and_then(|b| self.lesson.frame_mut().estimates_mut().add(&name, &b));
             match added {
-                Ok(said) => *self.lesson.frame_mut().note_mut() = Some(said),
+                // Added: said beside the title (the estimates window shows it too);
+                // the notices are for what went wrong or changed the run.
+                Ok(said) => self.exporter.status = Some(said),
                 Err(why) => self.app_notices.push(why),
             }
         }
