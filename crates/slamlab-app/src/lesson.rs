@@ -450,22 +450,12 @@ pub trait Lesson: crate::widgets::layout::LessonPanels + AsAny + std::fmt::Debug
     /// Does what a time-bar button or shortcut asks: the clock takes it first
     /// (run, pause, stop on a step), then the lesson ([`Lesson::on_time_action`]).
     /// Starting over clears the note (a reset that fails leaves its own).
-    /// A view with nothing to run in time ([`Lesson::idle_reason`]) takes none.
     fn apply_time_action(&mut self, action: TimeAction) {
-        if self.idle_reason().is_some() {
-            self.time_mut().running = false;
-            return;
-        }
         if action == TimeAction::Reset {
             *self.frame_mut().note_mut() = None;
         }
         self.time_mut().apply(action);
         self.on_time_action(action);
-    }
-    /// Why the view on screen has nothing for the clock to run (the time bar's
-    /// buttons are disabled, and say this); `None` for most lessons and views.
-    fn idle_reason(&self) -> Option<String> {
-        None
     }
     /// The key moment the run has just passed ("loop closure found at scan 158"),
     /// shown in the time bar; `None` for most lessons and most ticks.

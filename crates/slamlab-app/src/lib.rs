@@ -546,7 +546,6 @@ impl SlamLabApp {
             let info = self.lesson.time_info();
             let steps = self.lesson.step_controls();
             let moment = self.lesson.moment();
-            let idle = self.lesson.idle_reason();
             let actions = time_control::time_bar_ui(
                 ui,
                 self.lesson.time_mut(),
@@ -554,7 +553,6 @@ impl SlamLabApp {
                 steps,
                 self.embed,
                 moment.as_deref(),
-                idle.as_deref(),
             );
             for action in actions {
                 self.apply_time_action(action);

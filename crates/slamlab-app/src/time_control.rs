@@ -236,7 +236,6 @@ pub fn time_bar_ui(
     steps: StepControls,
     compact: bool,
     moment: Option<&str>,
-    idle: Option<&str>,
 ) -> Vec<TimeAction> {
     let unit = match steps {
         StepControls::PhasesAndTicks => "tick",
@@ -249,7 +248,7 @@ pub fn time_bar_ui(
         let one_row = ui
             .horizontal_wrapped(|ui| {
                 ui.set_min_height(row_height);
-                controls_ui(ui, time, info, steps, unit, idle, &mut actions);
+                controls_ui(ui, time, info, steps, unit, &mut actions);
                 // The controls' widths are fixed: whether the status fits beside
                 // them depends on the window's width only.
                 let least = if compact {
@@ -260,7 +259,7 @@ pub fn time_bar_ui(
                 let fits = room_left(ui) >= counter_width + least;
                 if fits {
                     ui.separator();
-                    status_ui(ui, info, unit, counter_width, compact, moment, idle);
+                    status_ui(ui, info, unit, counter_width, compact, moment);
                 }
                 fits
             })
@@ -268,7 +267,7 @@ pub fn time_bar_ui(
         if !one_row {
             ui.horizontal(|ui| {
                 ui.set_min_height(row_height);
-                status_ui(ui, info, unit, counter_width, compact, moment, idle);
+                status_ui(ui, info, unit, counter_width, compact, moment);
             });
         }
     });
@@ -307,34 +306,22 @@ fn controls_ui(
     info: &TimeInfo,
     steps: StepControls,
     unit: &str,
-    idle: Option<&str>,
     actions: &mut Vec<TimeAction>,
 ) {
-    // A view with nothing to run in time: the buttons stay where they are,
-    // disabled, and say why on hover.
-    let enabled = idle.is_none();
-    let why = idle.unwrap_or_default();
     let back_hover = match steps {
         StepControls::PhasesAndTicks => "Go back one phase (,)".to_owned(),
         StepControls::One { back_unit, .. } => format!("Go back one {back_unit} or edit (,)"),
     };
     let run_label = if time.running { "Pause" } else { "Run" };
     if ui
-        .add_enabled(
-            enabled,
-            egui::Button::new(run_label).min_size(egui::vec2(RUN_WIDTH, 0.0)),
-        )
+        .add(egui::Button::new(run_label).min_size(egui::vec2(RUN_WIDTH, 0.0)))
         .on_hover_text("Run or pause the simulation (Space)")
-        .on_disabled_hover_text(why)
         .clicked()
     {
         actions.push(TimeAction::ToggleRun);
     }
     if ui
-        .add_enabled(
-            enabled && info.can_step_back,
-            egui::Button::new("Step back"),
-        )
+        .add_enabled(info.can_step_back, egui::Button::new("Step back"))
         .on_hover_text(back_hover)
         .on_disabled_hover_text("Nothing to go back to, or the run is too long to replay quickly")
         .clicked()
@@ -344,8 +331,7 @@ fn controls_ui(
     match steps {
         StepControls::PhasesAndTicks => {
             if ui
-                .add_enabled(enabled, egui::Button::new("Step phase"))
-                .on_disabled_hover_text(why)
+                .button("Step phase")
                 .on_hover_text(format!(
                     "Run one phase of the filters: the prediction, or one landmark update (.); \
                      next: {}",
@@ -356,8 +342,7 @@ fn controls_ui(
                 actions.push(TimeAction::StepPhase);
             }
             if ui
-                .add_enabled(enabled, egui::Button::new("Step tick"))
-                .on_disabled_hover_text(why)
+                .button("Step tick")
                 .on_hover_text(
                     "Finish the current tick, or run one whole tick: predict, then every update (n)",
                 )
@@ -368,8 +353,7 @@ fn controls_ui(
         }
         StepControls::One { label, hover, .. } => {
             if ui
-                .add_enabled(enabled, egui::Button::new(label))
-                .on_disabled_hover_text(why)
+                .button(label)
                 .on_hover_text(format!("{hover} (. or n); next: {}", info.next_phase))
                 .clicked()
             {
@@ -378,8 +362,7 @@ fn controls_ui(
         }
     }
     if ui
-        .add_enabled(enabled, egui::Button::new("Reset"))
-        .on_disabled_hover_text(why)
+        .button("Reset")
         .on_hover_text("Start over with the parameters in the panel (r)")
         .clicked()
     {
@@ -433,7 +416,6 @@ fn status_ui(
     counter_width: f32,
     compact: bool,
     moment: Option<&str>,
-    idle: Option<&str>,
 ) {
     let height = ui.spacing().interact_size.y;
     let counter = if info.time_s.is_finite() {
@@ -468,12 +450,8 @@ fn status_ui(
     if let Some(moment) = moment {
         add(&format!("{moment}   "), crate::palette::VERMILLION);
     }
-    if let Some(idle) = idle {
-        add(idle, strong);
-    } else {
-        add(&format!("{next_name}: {}", info.next_phase), strong);
-    }
-    if !compact && idle.is_none() {
+    add(&format!("{next_name}: {}", info.next_phase), strong);
+    if !compact {
         let last = info.last_phase.as_deref().unwrap_or("none yet");
         add(&format!("   Last phase: {last}"), weak);
     }

@@ -558,20 +558,7 @@ impl Lesson for FiltersLesson {
         }
     }
 
-    fn idle_reason(&self) -> Option<String> {
-        (self.frame.view.tab == Tab::OneStep).then(|| {
-            "One step has no time: it pushes one Gaussian through the function once. The \
-             Corridor tab runs the filters step by step."
-                .to_owned()
-        })
-    }
-
     fn advance(&mut self, dt: f64) {
-        // The hidden corridor never runs behind the One step view.
-        if self.frame.view.tab == Tab::OneStep {
-            self.frame.time.running = false;
-            return;
-        }
         let corridor = &mut self.corridor;
         lesson::advance_within_budget(&mut self.frame.time, dt, || {
             corridor.step_phase();

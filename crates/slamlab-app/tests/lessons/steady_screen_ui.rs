@@ -5,7 +5,7 @@
 
 use super::common::{harness_sized as harness, label_visible, lesson_of, lesson_of_mut};
 use egui_kittest::Harness;
-use egui_kittest::kittest::{NodeT as _, Queryable as _};
+use egui_kittest::kittest::Queryable as _;
 use slamlab_app::SlamLabApp;
 use slamlab_app::lesson::Lesson as _;
 use slamlab_app::registry::LESSONS;
@@ -326,88 +326,6 @@ fn steady_screen_shots() {
             }
         }
     }
-}
-
-/// The filters lesson's One step view has nothing to run in time: Run and the
-/// steps are disabled there and say why, and neither they nor the keys advance
-/// the hidden corridor; in the Corridor view they run it.
-#[test]
-fn run_and_step_act_on_the_view_shown() {
-    use super::common::text_drawn;
-    let mut h = harness("lesson=filters&seed=5", egui::vec2(1280.0, 800.0));
-    h.run();
-    let tick = |h: &Harness<'_, SlamLabApp>| h.state().lesson().time_info().tick;
-    assert_eq!(h.state().lesson().test_state()["view"], "one-step");
-    for action in [
-        TimeAction::StepPhase,
-        TimeAction::StepTick,
-        TimeAction::ToggleRun,
-    ] {
-        h.state_mut().apply_time_action(action);
-    }
-    for _ in 0..5 {
-        h.step();
-    }
-    h.key_press(egui::Key::Period);
-    h.run();
-    assert_eq!(tick(&h), 0, "the hidden corridor stays where it was");
-    assert!(!h.state().is_running());
-    assert!(text_drawn(&h, "One step has no time"), "the bar says why");
-    let disabled = |h: &Harness<'_, SlamLabApp>, label: &str| {
-        h.get_by_label(label).accesskit_node().is_disabled()
-    };
-    assert!(disabled(&h, "Step phase") && disabled(&h, "Run"));
-    h.get_by_label("Corridor").click();
-    h.run();
-    assert!(!disabled(&h, "Step phase"));
-    h.state_mut().apply_time_action(TimeAction::StepTick);
-    h.run();
-    assert_eq!(tick(&h), 1, "the corridor runs when it is shown");
-}
-
-/// At 800 x 500 no plot's key takes more height than the plot under it, in any
-/// lesson; and the landmark map keeps more than a third of the window's height.
-#[test]
-fn at_800_by_500_keys_are_never_taller_than_their_plots() {
-    use slamlab_app::widgets::plots::figure_records;
-    let size = egui::vec2(800.0, 500.0);
-    let mut problems = Vec::new();
-    for entry in LESSONS {
-        let query = format!("lesson={}&seed=5&tick=12", entry.id);
-        let mut h = harness(&query, size);
-        h.run();
-        let records = figure_records(&h.ctx);
-        for key in records.iter().filter_map(|r| r.key) {
-            // The plot right under the key, overlapping it side to side.
-            let below = records
-                .iter()
-                .filter_map(|r| r.data)
-                .filter(|d| d.top() >= key.bottom() - 2.0)
-                .filter(|d| d.left() < key.right() && key.left() < d.right())
-                .min_by(|a, b| a.top().total_cmp(&b.top()));
-            if let Some(plot) = below
-                && key.height() > plot.height()
-            {
-                problems.push(format!(
-                    "{query}: a key {:.0} points tall over a plot {:.0} tall",
-                    key.height(),
-                    plot.height()
-                ));
-            }
-        }
-        if entry.id == "landmark-slam" {
-            let map = records
-                .iter()
-                .find_map(|r| r.map)
-                .unwrap_or(egui::Rect::NOTHING);
-            assert!(
-                map.height() > size.y / 3.0,
-                "the landmark map is {:.0} points tall",
-                map.height()
-            );
-        }
-    }
-    assert!(problems.is_empty(), "{}", problems.join("\n"));
 }
 
 /// The fusion lesson's x, y and yaw error plots are scaled to the errors, not to
