@@ -560,6 +560,12 @@ pub trait Lesson: crate::widgets::layout::LessonPanels + AsAny + std::fmt::Debug
     fn landmark_maps(&self) -> Vec<(String, Vec<slamlab_sim::io::trajectory::LandmarkRow>)> {
         Vec::new()
     }
+    /// The relative pose of the two views shown now (two-view geometry): the true
+    /// one (named `truth`) and the lesson's estimate; a student's dropped relative
+    /// pose is scored against the true one.
+    fn relative_poses(&self) -> Vec<(String, slamlab_core::vision::RelativePose)> {
+        Vec::new()
+    }
     /// Every plot's data, unthinned, for "Export plot data as CSV".
     fn plot_series(&self) -> Vec<crate::export::PlotSeries> {
         Vec::new()

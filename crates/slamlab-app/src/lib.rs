@@ -458,7 +458,8 @@ impl SlamLabApp {
 
     /// Like [`headless_state`](Self::headless_state), with a CARMEN log (`bytes`, plain
     /// or compressed, named `name`) opened in the mapping or Cartographer lesson first,
-    /// as if it had been dropped on the window. The browser test maps the Intel log
+    /// or a landmark data set (the MRCLAM zip) in the landmark lesson, as if it had
+    /// been dropped on the window. The browser test maps the Intel log
     /// this way and times it. A query for another lesson gives an error; a log that
     /// cannot be read gives the state with the lesson's note saying why.
     pub fn headless_log_state(query: &str, name: &str, bytes: &[u8], ticks: u64) -> String {
@@ -467,8 +468,10 @@ impl SlamLabApp {
             lesson.load_log(name, bytes);
         } else if let Some(lesson) = app.lesson_as_mut::<cartographer::CartographerLesson>() {
             lesson.load_log(name, bytes, None);
+        } else if let Some(lesson) = app.lesson_as_mut::<LandmarkSlamLesson>() {
+            lesson.open_files(vec![(name.to_owned(), Ok(bytes.to_vec()))]);
         } else {
-            return r#"{"error":"the query opens neither the mapping nor the Cartographer lesson"}"#
+            return r#"{"error":"the query opens none of the mapping, Cartographer and landmark lessons"}"#
                 .to_owned();
         }
         for _ in 0..ticks.min(100_000) {
@@ -1005,11 +1008,15 @@ impl SlamLabApp {
         if !self.lesson.frame().estimates().is_stale(version) {
             return;
         }
-        let (trajectories, landmarks) = (self.lesson.trajectories(), self.lesson.landmark_maps());
+        let output = widgets::estimates::LessonOutput {
+            trajectories: self.lesson.trajectories(),
+            landmarks: self.lesson.landmark_maps(),
+            relative_poses: self.lesson.relative_poses(),
+        };
         self.lesson
             .frame_mut()
             .estimates_mut()
-            .score(version, &trajectories, &landmarks);
+            .score(version, &output);
     }
 
     /// Opens a scenario file picked or dropped this frame. A dropped `.json` is taken

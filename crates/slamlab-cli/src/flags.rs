@@ -38,7 +38,13 @@ pub fn table_args<S: Scenario>(keep: impl Fn(&str) -> bool) -> Vec<Arg> {
 /// (the command's own flags of the same names). Refuses a value that cannot be
 /// read or has no effect, and warns on stderr about one it clamped.
 pub fn scenario_from<S: Scenario>(matches: &ArgMatches, skip: &[&str]) -> Result<S> {
-    let mut scenario = S::default();
+    scenario_from_base(matches, skip, S::default())
+}
+
+/// As [`scenario_from`], on top of `base` instead of the default scenario (a
+/// data set's preset: its flags apply on top of it).
+pub fn scenario_from_base<S: Scenario>(matches: &ArgMatches, skip: &[&str], base: S) -> Result<S> {
+    let mut scenario = base;
     apply_table_flags(matches, &mut scenario, skip)?;
     Ok(scenario)
 }

@@ -20,6 +20,7 @@
 //! `lessons/` or `experiments/`, implementing a trait of [`command`]) and one entry
 //! there.
 
+mod assignment_cmd;
 mod command;
 mod evaluate_cmd;
 mod experiments;
@@ -97,6 +98,8 @@ fn cli() -> Command {
         .subcommand(graph_cmd::command())
         .subcommand(log_cmd::command())
         .subcommand(evaluate_cmd::command())
+        .subcommand(assignment_cmd::export_command())
+        .subcommand(assignment_cmd::grade_command())
         .subcommand(
             Command::new("params")
                 .about("List a lesson's parameters (the URL's and the flags' names) with their units, ranges and defaults")
@@ -150,6 +153,8 @@ fn main() -> std::process::ExitCode {
         Some(("graph", m)) => graph_cmd::run(m),
         Some(("log", m)) => log_cmd::run(m),
         Some(("evaluate", m)) => evaluate_cmd::run(m, &mut std::io::stdout().lock()),
+        Some(("export-inputs", m)) => assignment_cmd::run_export(m, &mut std::io::stdout().lock()),
+        Some(("grade", m)) => assignment_cmd::run_grade(m, &mut std::io::stdout().lock()),
         Some(("run", m)) => registry::run_lesson(m, &mut std::io::stdout().lock()),
         Some(("experiment", m)) => registry::run_experiment(m, &mut std::io::stdout().lock()),
         Some(("params", m)) => list_params(m),

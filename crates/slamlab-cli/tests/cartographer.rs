@@ -113,6 +113,37 @@ fn run_cartographer_prints_the_issue_json_and_counts_scans() {
     assert!(!err.contains("trials"), "{err}");
 }
 
+/// `--loop-closures off`: the same scans mapped by local SLAM alone, no
+/// branch-and-bound search and no loop closure (the lesson's switch); on, the
+/// maze's first 200 scans close loops.
+#[test]
+fn run_cartographer_with_loop_closures_off_searches_nothing() {
+    let run = |closures: &str| {
+        json(&slamlab(&[
+            "run",
+            "cartographer",
+            "--map",
+            "maze",
+            "--steps",
+            "200",
+            "--loop-closures",
+            closures,
+            "--json",
+        ]))
+    };
+    let off = run("off");
+    assert_eq!(off["scans"], 200);
+    assert_eq!(off["loop_closures"], 0, "{off}");
+    assert_eq!(off["bbs"]["searches"], 0, "{off}");
+    assert_eq!(off["parameters"]["sampling_ratio"], 0.0);
+    let on = run("on");
+    assert!(on["loop_closures"].as_u64().unwrap() > 0, "{on}");
+    assert!(on["bbs"]["searches"].as_u64().unwrap() > 0, "{on}");
+    // The same local SLAM: as many nodes and submaps either way.
+    assert_eq!(off["nodes"], on["nodes"]);
+    assert_eq!(off["submaps"], on["submaps"]);
+}
+
 /// The Intel log (`../shared/data/laser/intel.clf.bz2`); skipped with a
 /// message when the shared data is absent. Slow in a debug build (over
 /// two minutes): `cargo test --release -- --ignored`.

@@ -567,3 +567,74 @@ fn log_record_writes_a_carmen_log_and_its_truth_that_log_info_reads() {
     assert!(!ok && stderr.contains("nowhere.yaml"), "{stderr}");
     let _ = std::fs::remove_dir_all(&dir);
 }
+
+/// `slamlab run kidnap --log`: a simulated run recorded as a bag (with its truth)
+/// and converted to CARMEN (without), localized globally in the maze it was
+/// recorded in.
+#[test]
+fn run_kidnap_localizes_a_recorded_bag_and_its_carmen_copy() {
+    let dir = std::env::temp_dir().join(format!("slamlab-cli-kidnap-log-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let bag = dir.join("run.mcap");
+    let bag_s = bag.to_str().unwrap();
+    let (ok, _, stderr) = slamlab(&[
+        "log", "record", "--map", "maze", "--steps", "400", "--seed", "3", "--out", bag_s,
+    ]);
+    assert!(ok, "{stderr}");
+    let args = [
+        "--map",
+        "maze",
+        "--seed",
+        "1",
+        "--estimator",
+        "mcl,acmcl",
+        "--json",
+    ];
+    let mut with_bag = vec!["run", "kidnap", "--log", bag_s];
+    with_bag.extend(args);
+    let v = run_json(&with_bag);
+    assert_eq!(v["log"]["scans"], 400);
+    assert_eq!(v["log"]["replayed"], 400);
+    assert_eq!(v["log"]["truth"], true);
+    assert_eq!(v["log"]["name"], "run.mcap (/scan, odometry /odom)");
+    // The numbers of the sim's replay test: the same bag, seed and filters.
+    assert_eq!(v["filters"][0]["converged_tick"], 86);
+    assert_eq!(v["filters"][1]["converged_tick"], 71);
+    for f in v["filters"].as_array().unwrap() {
+        assert!(f["position_rmse_converged"].as_f64().unwrap() < 0.12, "{f}");
+    }
+
+    let clf = dir.join("run.clf");
+    let clf_s = clf.to_str().unwrap();
+    let (ok, _, stderr) = slamlab(&["log", "convert", bag_s, "--out", clf_s]);
+    assert!(ok, "{stderr}");
+    let mut with_log = vec!["run", "kidnap", "--log", clf_s];
+    with_log.extend(args);
+    let v = run_json(&with_log);
+    assert_eq!(v["log"]["truth"], false);
+    assert!(v["filters"][0]["position_error_final"].is_null());
+    // Against the truth file beside the log, the last line: the robot was found.
+    let truth = std::fs::read_to_string(dir.join("run.clf.truth")).unwrap();
+    let last: Vec<f64> = truth
+        .lines()
+        .rfind(|l| !l.starts_with('#'))
+        .unwrap()
+        .split_whitespace()
+        .map(|x| x.parse().unwrap())
+        .collect();
+    for e in v["final_estimates"].as_array().unwrap() {
+        let (x, y) = (e["x"].as_f64().unwrap(), e["y"].as_f64().unwrap());
+        let d = ((x - last[1]).powi(2) + (y - last[2]).powi(2)).sqrt();
+        assert!(d < 0.15, "{e}: {d} m from the truth");
+    }
+    let (ok, stdout, _) = slamlab(&[
+        "run", "kidnap", "--map", "maze", "--log", clf_s, "--steps", "50",
+    ]);
+    assert!(ok, "{stdout}");
+    assert!(stdout.contains("50 of 400 scans"), "{stdout}");
+    assert!(stdout.contains("no truth: errors unknown"), "{stdout}");
+    // A topic that is not in the bag: the message names it.
+    let (ok, _, stderr) = slamlab(&["run", "kidnap", "--log", bag_s, "--scan-topic", "/front"]);
+    assert!(!ok && stderr.contains("\"/front\""), "{stderr}");
+    let _ = std::fs::remove_dir_all(&dir);
+}

@@ -234,6 +234,32 @@ pub enum NearestNeighbour {
     },
 }
 
+/// The squared Mahalanobis distance `νᵀ S⁻¹ ν` of measurement `z` from landmark
+/// `l` of a joint Gaussian, with `ν = z ⊖ h(x̄, m̄)` and `S = H P Hᵀ + Q` over the
+/// robot (mean `robot`, covariance `pxx`) and the landmark, as in
+/// [`nearest_neighbour`]. `None` when the model cannot be evaluated (the
+/// landmark on the robot) or `S` is not positive definite. With a known id this
+/// is the innovation gate that refuses an outlier (a misread id).
+pub fn landmark_distance(
+    robot: &Pose2,
+    pxx: &Matrix3<f64>,
+    l: &GaussianLandmark,
+    z: &RangeBearing,
+    measurement_noise: &Matrix2<f64>,
+) -> Option<f64> {
+    let p = range_bearing::predict(robot, &l.mean).ok()?;
+    let hx = p.jacobian_pose;
+    let hm = p.jacobian_landmark;
+    let cross = hx * l.cross_covariance * hm.transpose();
+    let s = hx * pxx * hx.transpose()
+        + cross
+        + cross.transpose()
+        + hm * l.covariance * hm.transpose()
+        + measurement_noise;
+    let nu = z.difference(&p.measurement);
+    mahalanobis_squared(&nu, &s)
+}
+
 /// Nearest-neighbour data association with a Mahalanobis gate for EKF-SLAM
 /// (Probabilistic Robotics Sec. 10.3; Bar-Shalom's gating): for every landmark,
 /// the innovation `ν = z ⊖ h(x̄, m̄)` and its covariance
@@ -255,19 +281,7 @@ pub fn nearest_neighbour(
         let Some(l) = view.landmark(slot) else {
             continue;
         };
-        let Ok(p) = range_bearing::predict(&robot, &l.mean) else {
-            continue;
-        };
-        let hx = p.jacobian_pose;
-        let hm = p.jacobian_landmark;
-        let cross = hx * l.cross_covariance * hm.transpose();
-        let s = hx * pxx * hx.transpose()
-            + cross
-            + cross.transpose()
-            + hm * l.covariance * hm.transpose()
-            + measurement_noise;
-        let nu = z.difference(&p.measurement);
-        if let Some(d2) = mahalanobis_squared(&nu, &s)
+        if let Some(d2) = landmark_distance(&robot, &pxx, &l, z, measurement_noise)
             && best.is_none_or(|(_, _, b)| d2 < b)
         {
             best = Some((slot, l.id, d2));

@@ -1,4 +1,11 @@
-//! Two-wheel differential-drive motion (thesis `000` Sec. 2.5 and 3.4.1; slides `001`).
+//! Two-wheel differential-drive motion (thesis `000` Sec. 2.5 and 3.4.1; slides `001`),
+//! and motions as data sets record them ([`recorded`]: odometry readings, the ACFR car).
+
+pub mod recorded;
+
+pub use recorded::{
+    CarGeometry, CarStep, OdometryStep, RecordedMotion, RecordedMotionError, RecordedStep,
+};
 
 use crate::geometry::{Pose2, wrap_angle};
 use crate::math;

@@ -24,7 +24,7 @@ mod common;
 
 use cpu_time::ThreadTime;
 use slamlab_sim::cartographer::input::kidnap_input;
-use slamlab_sim::cartographer::{CartographerParams, CartographerSim};
+use slamlab_sim::cartographer::{CartographerParams, CartographerPhase, CartographerSim};
 use slamlab_sim::grid::SimulatedLogConfig;
 use slamlab_sim::grid::{builtin_map, log_input};
 use std::sync::Arc;
@@ -38,17 +38,95 @@ fn percentile(values: &mut [f64], q: f64) -> f64 {
     values[((values.len() - 1) as f64 * q).round() as usize]
 }
 
-/// Runs `sim` to its end; prints the per-scan CPU times under `label`.
+/// CPU time and count of one kind of phase.
+#[derive(Clone, Copy, Default)]
+struct PhaseTime {
+    count: usize,
+    seconds: f64,
+}
+
+impl PhaseTime {
+    fn add(&mut self, seconds: f64) {
+        self.count += 1;
+        self.seconds += seconds;
+    }
+}
+
+/// Where a run's CPU time went, phase by phase
+/// (`CartographerSim::step_phase`).
+#[derive(Default)]
+struct Profile {
+    local_slam: PhaseTime,
+    local_searches: PhaseTime,
+    global_searches: PhaseTime,
+    optimizations: PhaseTime,
+    other: PhaseTime,
+}
+
+impl Profile {
+    fn print(&self, label: &str, total: f64) {
+        println!("{label}: profile (thread CPU)");
+        println!("  | phase | count | CPU s | share | per phase ms |");
+        for (name, t) in [
+            (
+                "local SLAM (match, insert, finish submaps)",
+                self.local_slam,
+            ),
+            ("searches in a window (same map)", self.local_searches),
+            (
+                "searches of whole submaps (other map)",
+                self.global_searches,
+            ),
+            ("optimizations", self.optimizations),
+            ("bookkeeping phases", self.other),
+        ] {
+            println!(
+                "  | {name} | {} | {:.2} | {:.1} % | {:.3} |",
+                t.count,
+                t.seconds,
+                100.0 * t.seconds / total.max(1e-12),
+                if t.count == 0 {
+                    0.0
+                } else {
+                    1e3 * t.seconds / t.count as f64
+                }
+            );
+        }
+    }
+}
+
+/// Runs `sim` to its end phase by phase; prints the per-scan CPU times and
+/// the profile under `label`.
 fn run(label: &str, mut sim: CartographerSim, kidnap_at: Option<usize>) {
-    let mut per_scan = Vec::new();
+    let mut per_scan: Vec<f64> = Vec::new();
+    let mut profile = Profile::default();
     let started = Instant::now();
     let started_cpu = ThreadTime::now();
     loop {
-        let scan_started = ThreadTime::now();
-        if !sim.step() {
-            break;
+        let phase_started = ThreadTime::now();
+        let phase = sim.step_phase();
+        let seconds = phase_started.elapsed().as_secs_f64();
+        match phase {
+            CartographerPhase::Done => break,
+            CartographerPhase::LocalSlam { .. } => {
+                profile.local_slam.add(seconds);
+                per_scan.push(seconds * 1e3);
+            }
+            CartographerPhase::Search { global, .. } => {
+                if global {
+                    profile.global_searches.add(seconds);
+                } else {
+                    profile.local_searches.add(seconds);
+                }
+            }
+            CartographerPhase::Optimization { .. } => profile.optimizations.add(seconds),
+            CartographerPhase::Settled { .. } => profile.other.add(seconds),
         }
-        per_scan.push(scan_started.elapsed().as_secs_f64() * 1e3);
+        if !matches!(phase, CartographerPhase::LocalSlam { .. })
+            && let Some(last) = per_scan.last_mut()
+        {
+            *last += seconds * 1e3;
+        }
     }
     let wall = started.elapsed().as_secs_f64();
     let cpu = started_cpu.elapsed().as_secs_f64();
@@ -79,6 +157,7 @@ fn run(label: &str, mut sim: CartographerSim, kidnap_at: Option<usize>) {
         s.detections,
         s.recovered_at,
     );
+    profile.print(label, cpu);
 }
 
 fn office(kidnap_at: Option<usize>, params: CartographerParams, label: &str) {
@@ -104,14 +183,24 @@ fn intel() {
     let Some(log) = common::intel_log() else {
         return;
     };
-    let input = Arc::new(log_input(&log, "intel.clf.bz2"));
+    let mut input = log_input(&log, "intel.clf.bz2");
+    // `SLAMLAB_BENCH_INTEL_SCANS=N`: only the first N scans (a profile of a
+    // shorter run).
+    if let Some(n) = std::env::var("SLAMLAB_BENCH_INTEL_SCANS")
+        .ok()
+        .and_then(|v| v.parse::<usize>().ok())
+    {
+        input.scans.truncate(n);
+    }
+    let input = Arc::new(input);
     let (sim, _) = CartographerSim::new(input, CartographerParams::default());
     run("intel, loop closures on", sim, None);
 }
 
 fn main() {
     let local_only = CartographerParams {
-        constraint_every_n_nodes: usize::MAX,
+        sampling_ratio: 0.0,
+        global_search_every_n_nodes: usize::MAX,
         ..CartographerParams::default()
     };
     office(None, local_only, "office, local SLAM only");

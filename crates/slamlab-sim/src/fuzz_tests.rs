@@ -1,7 +1,7 @@
 //! Fuzz tests of every reader in this crate a user can feed: ROS map YAML, PGM and
 //! PNG images, g2o/TORO/iSAM pose graphs, scenario JSON and CARMEN laser logs (plain,
-//! gzip and bzip2), ROS 2 bags (MCAP) and the ROS 2 messages in them (CDR).
-//! Each runs
+//! gzip and bzip2) with their corrected versions (reference trajectories), ROS 2
+//! bags (MCAP) and the ROS 2 messages in them (CDR). Each runs
 //! [`slamlab_fuzz::inputs_per_reader`] mutated inputs (10,000 in `./test.sh`,
 //! 1,000,000 in `scripts/fuzz.sh`) from real files: the shared data sets
 //! (`../shared/data`, when present) and the built-in maps. See the `slamlab-fuzz`
@@ -695,4 +695,353 @@ fn trajectory_files_survive_mutations() {
         line_or_what,
     );
     report.assert_clean();
+    // A relative pose of two views: R and t, or t and a quaternion.
+    let seeds = vec![
+        crate::io::relative_pose::write_relative_pose(&slamlab_core::vision::RelativePose {
+            rotation: nalgebra::Rotation3::from_euler_angles(0.1, -0.2, 0.3).into_inner(),
+            translation: nalgebra::Vector3::new(0.2, -0.1, 1.0),
+        })
+        .into_bytes(),
+        b"0.1, 0, 1, 0, 0.0499792, 0, 0.99875\n".to_vec(),
+    ];
+    let report = Target::new("relative pose", seeds, CAP).run_checked(
+        |bytes| {
+            crate::io::relative_pose::read_relative_pose(bytes)
+                .map(drop)
+                .map_err(|e| e.to_string())
+        },
+        |message| {
+            // A refusal names the line, the count, what is wrong with R, q or t, or
+            // what the file is.
+            if ["line ", "numbers", "R is", "quaternion", "t is", "file"]
+                .iter()
+                .any(|w| message.contains(w))
+            {
+                Ok(())
+            } else {
+                Err(format!("'{message}' says nothing of what is wrong"))
+            }
+        },
+    );
+    report.assert_clean();
 }
+
+/// Assignment JSON files through the reader the app and the command line use
+/// ([`crate::assignments::read`]: size cap, serde, then the checks against the
+/// lesson's task kind and parameter table). Seeds: the built-in assignments.
+#[test]
+fn assignment_files_survive_mutations() {
+    let seeds: Vec<Vec<u8>> = crate::coursework::BUILTIN
+        .iter()
+        .map(|(_, text)| text.as_bytes().to_vec())
+        .collect();
+    let report = Target::new("assignment JSON", seeds, CAP).run_checked(
+        |bytes| {
+            crate::assignments::read("fuzz.json", bytes)
+                .map(drop)
+                .map_err(|e| e.to_string())
+        },
+        |message| {
+            if message.starts_with("fuzz.json: ") {
+                Ok(())
+            } else {
+                Err(format!("'{message}' does not name the assignment file"))
+            }
+        },
+    );
+    report.assert_clean();
+}
+
+/// Corrected CARMEN logs (the reference trajectories of laser logs) through
+/// the path the lessons and `slamlab experiment laser-slam` take: read, then
+/// matched to a raw log's scans by time and ranges
+/// ([`crate::grid::reference::LogReference::for_input`]). Seeds: a small
+/// reference of a small raw log (its scans 1, 3 and 7, one of them matching),
+/// the same gzip-compressed, and the head of the Intel log's corrected version.
+#[test]
+fn corrected_logs_survive_mutations() {
+    use crate::grid::log_input;
+    use crate::grid::reference::LogReference;
+    use crate::io::laser_log::LaserLog;
+    use std::io::{Read as _, Write as _};
+    let flaser = |ranges: &[f64], time: f64| -> String {
+        let r: Vec<String> = ranges.iter().map(|v| v.to_string()).collect();
+        format!(
+            "FLASER {} {} 0.5 0.25 0.1 0.5 0.25 0.1 {time} pippo {time}\n",
+            ranges.len(),
+            r.join(" ")
+        )
+    };
+    let mut raw = String::new();
+    for k in 0..10 {
+        let base = k as f64;
+        raw += &flaser(&[base, base + 1.0, base + 2.0], 1000.0 + 0.2 * k as f64);
+    }
+    let input = LaserLog::from_bytes(raw.as_bytes())
+        .map(|log| log_input(&log, "raw"))
+        .unwrap_or_default();
+    let mut reference = String::from("# corrected\nODOM 0 0 0 0 0 0 0.0 pippo 0.0\n");
+    reference += &flaser(&[1.0, 2.0, 3.0], 0.203);
+    reference += &flaser(&[3.0, 4.0, 5.0], 0.598);
+    reference += &flaser(&[7.0, 8.0, 9.0], 1.404);
+    reference += "NEFF 30 0.0 pippo 0.0\n";
+    let mut seeds = vec![reference.clone().into_bytes()];
+    let mut gz = flate2::write::GzEncoder::new(Vec::new(), flate2::Compression::default());
+    if gz.write_all(reference.as_bytes()).is_ok()
+        && let Ok(bytes) = gz.finish()
+    {
+        seeds.push(bytes);
+    }
+    for bytes in shared_file_seeds("laser", &["gz"], usize::MAX) {
+        let mut text = Vec::new();
+        if flate2::read::MultiGzDecoder::new(&bytes[..])
+            .take(64 << 10)
+            .read_to_end(&mut text)
+            .is_ok()
+        {
+            seeds.push(head(&text, 4096));
+        }
+    }
+    let report = Target::new("corrected CARMEN log", seeds, CAP).run_checked(
+        |bytes| {
+            LogReference::for_input(bytes, "fuzz", &input)
+                .map(drop)
+                .map_err(|e| e.to_string())
+        },
+        |message| {
+            if message.contains("reference") || message.contains("log") {
+                Ok(())
+            } else {
+                Err(format!(
+                    "'{message}' does not say what is wrong with the reference"
+                ))
+            }
+        },
+    );
+    report.assert_clean();
+}
+
+/// The landmark data sets' files, cut to 4 kB: MRCLAM Dataset 6 unzipped (each
+/// file by name), the Freiburg course's and Victoria Park's; empty without the
+/// shared data.
+fn landmark_files() -> Vec<io::landmark_data::DataFile> {
+    use io::landmark_data::{DataFile, unzip};
+    let Some(root) = slamlab_fuzz::shared_data() else {
+        eprintln!(
+            "slamlab-fuzz: ../shared/data is absent; fuzzing the landmark data sets with the built-in seeds only"
+        );
+        return Vec::new();
+    };
+    let dir = root.join("landmarks");
+    let mut files = Vec::new();
+    if let Ok(bytes) = std::fs::read(dir.join("mrclam/MRCLAM_Dataset6.zip"))
+        && let Ok(unzipped) = unzip(&DataFile::new("MRCLAM_Dataset6.zip", bytes))
+    {
+        files.extend(
+            unzipped
+                .into_iter()
+                .map(|f| DataFile::new(f.base_name().to_owned(), head(&f.bytes, 4096))),
+        );
+    }
+    for name in [
+        "freiburg/world.dat",
+        "freiburg/sensor_data.dat",
+        "victoria_park/inputs.dat",
+        "victoria_park/measurements.dat",
+        "victoria_park/gps.dat",
+    ] {
+        if let Ok(bytes) = std::fs::read(dir.join(name)) {
+            let base = io::landmark_data::base_name(name).to_owned();
+            files.push(DataFile::new(base, head(&bytes, 4096)));
+        }
+    }
+    files
+}
+/// Fuzzes one data set: each input takes, in turn, the place of every file of
+/// the small set (the others stay valid), goes through the reader, and when it
+/// is accepted becomes a recorded world that a session runs 20 ticks of. An
+/// input counts as accepted when some place took it; a refusal must name the
+/// file (and the line, when it lies in one).
+fn fuzz_landmark_set(name: &str, small: &[(&str, &str)]) {
+    use crate::world::landmark_session::LandmarkSession;
+    use crate::world::recorded::RecordedWorld;
+    use io::landmark_data::{DataFile, read_landmark_data};
+    let names: Vec<&str> = small.iter().map(|(n, _)| *n).collect();
+    let mut seeds: Vec<Vec<u8>> = small.iter().map(|(_, t)| t.as_bytes().to_vec()).collect();
+    seeds.extend(
+        landmark_files()
+            .into_iter()
+            .filter(|f| names.contains(&f.name.as_str()))
+            .map(|f| f.bytes),
+    );
+    let report = Target::new(name, seeds, CAP).run_checked(
+        |bytes| {
+            let mut refusals = Vec::new();
+            for role in &names {
+                let files: Vec<DataFile> = small
+                    .iter()
+                    .map(|(n, t)| {
+                        let content = if n == role {
+                            bytes.to_vec()
+                        } else {
+                            t.as_bytes().to_vec()
+                        };
+                        DataFile::new(*n, content)
+                    })
+                    .collect();
+                match read_landmark_data(files) {
+                    Ok(data) => {
+                        if let Ok(world) = RecordedWorld::from_data(&data, 1) {
+                            let scenario = crate::landmark_slam::presets::scenario(
+                                crate::landmark_slam::presets::for_data(data.kind()),
+                                1,
+                            )
+                            .unwrap_or_default();
+                            let mut session = LandmarkSession::recorded(
+                                crate::LandmarkScenario {
+                                    estimators: vec![
+                                        crate::EstimatorKind::Ekf,
+                                        crate::EstimatorKind::FastSlam2,
+                                    ],
+                                    fastslam: crate::world::landmark_scenario::FastSlamSettings {
+                                        particles: 5,
+                                        ..scenario.fastslam
+                                    },
+                                    ..scenario
+                                },
+                                std::sync::Arc::new(world),
+                            );
+                            session.run_ticks(20);
+                        }
+                    }
+                    Err(e) => refusals.push(e.to_string()),
+                }
+            }
+            // Accepted in some place, or refused in every one (reported by the first).
+            match refusals.first() {
+                Some(first) if refusals.len() == names.len() => Err(first.clone()),
+                _ => Ok(()),
+            }
+        },
+        |message| {
+            let names_file = names.iter().any(|n| message.contains(n));
+            if names_file || message.contains("files") {
+                Ok(())
+            } else {
+                Err(format!("'{message}' does not name the file"))
+            }
+        },
+    );
+    report.assert_clean();
+}
+#[test]
+fn mrclam_files_survive_mutations() {
+    fuzz_landmark_set("MRCLAM .dat files", &SMALL_MRCLAM);
+}
+#[test]
+fn freiburg_files_survive_mutations() {
+    fuzz_landmark_set("Freiburg course files", &SMALL_FREIBURG);
+}
+#[test]
+fn victoria_park_files_survive_mutations() {
+    fuzz_landmark_set("Victoria Park files", &SMALL_VICTORIA_PARK);
+}
+#[test]
+fn mrclam_zips_survive_mutations() {
+    use io::landmark_data::{DataFile, read_landmark_data};
+    use std::io::Write;
+    // Zips of the small set and of the real files' heads, deflated and stored.
+    let zip = |files: &[(String, Vec<u8>)], method: zip::CompressionMethod| {
+        let mut writer = zip::ZipWriter::new(std::io::Cursor::new(Vec::new()));
+        let options = zip::write::SimpleFileOptions::default().compression_method(method);
+        for (name, bytes) in files {
+            if writer
+                .start_file(format!("MRCLAM_Dataset6/{name}"), options)
+                .is_err()
+                || writer.write_all(bytes).is_err()
+            {
+                return Vec::new();
+            }
+        }
+        writer.finish().map(|c| c.into_inner()).unwrap_or_default()
+    };
+    let small: Vec<(String, Vec<u8>)> = SMALL_MRCLAM
+        .iter()
+        .map(|(n, t)| ((*n).to_owned(), t.as_bytes().to_vec()))
+        .collect();
+    let real: Vec<(String, Vec<u8>)> = landmark_files()
+        .into_iter()
+        .filter(|f| {
+            io::landmark_data::DataSetKind::of_file(&f.name)
+                == Some(io::landmark_data::DataSetKind::Mrclam)
+        })
+        .map(|f| (f.name, head(&f.bytes, 1024)))
+        .collect();
+    let mut seeds = vec![
+        zip(&small, zip::CompressionMethod::Deflated),
+        zip(&small, zip::CompressionMethod::Stored),
+    ];
+    if !real.is_empty() {
+        seeds.push(zip(&real, zip::CompressionMethod::Deflated));
+    }
+    seeds.retain(|s| !s.is_empty());
+    let report = Target::new("MRCLAM zip", seeds, CAP).run_checked(
+        |bytes| {
+            read_landmark_data(vec![DataFile::new("MRCLAM_Dataset6.zip", bytes.to_vec())])
+                .map(drop)
+                .map_err(|e| e.to_string())
+        },
+        |message| {
+            if message.contains(".zip") || message.contains(".dat") || message.contains("files") {
+                Ok(())
+            } else {
+                Err(format!(
+                    "'{message}' does not name the zip or the file in it"
+                ))
+            }
+        },
+    );
+    report.assert_clean();
+}
+
+/// A small data set of each kind, written by hand, as `(name, text)`.
+const SMALL_MRCLAM: [(&str, &str); 5] = [
+    (
+        "Barcodes.dat",
+        "# 4 comment lines\n#\n#\n#\n  1 \t  5 \n  6 \t 63 \n  7 \t 81 \n",
+    ),
+    (
+        "Landmark_Groundtruth.dat",
+        "  6 \t 1.0 \t 2.0 \t 0.0001 \t 0.0002 \n  7 \t -1.0 \t 3.0 \t 0.0001 \t 0.0001 \n",
+    ),
+    (
+        "Robot1_Odometry.dat",
+        "100.00 \t 0.1 \t 0.0 \n100.01 \t 0.1 \t 0.05 \n100.02 \t 0.0 \t 0.0 \n",
+    ),
+    (
+        "Robot1_Measurement.dat",
+        "100.005 \t 63 \t 2.2 \t 1.1 \n100.005 \t 81 \t 3.2 \t 1.9 \n100.015 \t 43 \t 1.0 \t 0.0 \n",
+    ),
+    (
+        "Robot1_Groundtruth.dat",
+        "99.99 \t 0.0 \t 0.0 \t 0.0 \n100.02 \t 0.002 \t 0.0 \t 0.001 \n",
+    ),
+];
+const SMALL_FREIBURG: [(&str, &str); 2] = [
+    ("world.dat", "1 2 1\n2 0 4\n"),
+    (
+        "sensor_data.dat",
+        "ODOMETRY 0.1 0.1 0.0\nSENSOR 1 1.9 0.37\nSENSOR 2 -0.035 3.15\nODOMETRY 0.1 0.1 -0.0002\n",
+    ),
+];
+const SMALL_VICTORIA_PARK: [(&str, &str); 3] = [
+    (
+        "inputs.dat",
+        "     0.973      0.000    -0.0035\n     0.998      1.500    -0.0042\n",
+    ),
+    (
+        "measurements.dat",
+        "     0.852   20.46202    0.88575    0.35404\n     0.852   29.59859    1.02102    0.25717\n     1.052    9.5    3.1    0.2\n",
+    ),
+    ("gps.dat", "     0.000     -2.023     -1.923\n"),
+];

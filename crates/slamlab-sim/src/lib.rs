@@ -17,10 +17,14 @@
 //! - [`grid`]: the grid world (built-in maps, lidar, robot, explorer, simulated
 //!   logs) and the laser lessons' input,
 //! - [`io`]: every file reader and writer,
+//! - [`coursework`]: assignments, students' variants, their inputs and grades
+//!   ([`assignments`] lists the built-in ones and the lessons that run them),
 //! - [`params`] (parameter tables), [`stepper`] (the generic stepper and its
 //!   checkpoints), [`noise`] (seeded random streams).
 
+pub mod assignments;
 pub mod cartographer;
+pub mod coursework;
 pub mod filters;
 pub mod fusion;
 pub mod grid;

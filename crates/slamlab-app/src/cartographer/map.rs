@@ -8,6 +8,7 @@ use super::CartographerView;
 use crate::palette;
 use crate::widgets::grid_tiles::{GridTiles, draw_scan_and_robot};
 use crate::widgets::map_canvas::{self, CanvasColors, MapView, draw_grid, draw_scale_and_axes};
+use crate::widgets::reference_track::ReferenceTrack;
 use egui::{Color32, Stroke};
 use slamlab_core::Pose2;
 use slamlab_core::scan::branch_and_bound::cell_probability;
@@ -98,8 +99,10 @@ pub fn map_ui(
     tiles: &mut SubmapTiles,
     view: &mut CartographerView,
     click_kidnap: bool,
+    track: &ReferenceTrack,
 ) -> Option<Pose2> {
     let has_truth = sim.input().truth.is_some();
+    let has_reference = sim.input().reference.is_some();
     ui.horizontal_wrapped(|ui| {
         ui.label("Map:");
         if map_canvas::zoom_buttons_ui(ui, canvas, "Fit map") {
@@ -113,6 +116,12 @@ pub fn map_ui(
         );
         if has_truth {
             ui.checkbox(&mut view.truth, "True robot");
+        }
+        if has_reference {
+            ui.checkbox(&mut view.reference, "Reference").on_hover_text(
+                "The corrected log's poses at the reference scans passed, moved onto the map by \
+                 the rigid alignment that fits the trajectory to them best",
+            );
         }
     });
     if view.legend {
@@ -147,6 +156,13 @@ pub fn map_ui(
                 ui.label(
                     egui::RichText::new("ring: maps merged")
                         .color(LOOP_CLOSURE)
+                        .strong(),
+                );
+            }
+            if has_reference && view.reference {
+                ui.label(
+                    egui::RichText::new("— reference (corrected log)")
+                        .color(CanvasColors::of(ui).truth)
                         .strong(),
                 );
             }
@@ -225,6 +241,10 @@ pub fn map_ui(
             Stroke::new(1.5, trajectory_color(submap.trajectory)),
             egui::StrokeKind::Middle,
         );
+    }
+    // The reference under the nodes, so that the estimate stays in view.
+    if has_reference && view.reference {
+        track.draw_path(&painter, &t, colors.truth, colors.background);
     }
     // Nodes: dots in their trajectory's colour.
     for node in &sim.nodes {

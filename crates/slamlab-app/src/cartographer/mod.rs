@@ -28,6 +28,7 @@ use crate::widgets::file_picker::{FilePicker, PickedFile};
 use crate::widgets::laser_file::{LASER_FILE_TYPES, LaserFileState, loaded_note};
 use crate::widgets::map_canvas::MapView;
 use crate::widgets::params_panel::{self, PendingParams};
+use crate::widgets::reference_track::ReferenceTrack;
 use serde::{Deserialize, Serialize};
 use slamlab_core::Pose2;
 use slamlab_core::grid::OccupancyGrid;
@@ -36,6 +37,7 @@ use slamlab_sim::cartographer::session::{
 };
 use slamlab_sim::cartographer::{CartographerPhase, CartographerSim, NextPhase};
 use slamlab_sim::grid::laser_file::MAX_LASER_FILE_BYTES;
+use slamlab_sim::grid::reference::LogReference;
 use slamlab_sim::grid::{LaserFile, MappingInput, builtin_map};
 use slamlab_sim::params;
 use slamlab_sim::stepper::{CheckpointPolicy, Stepper};
@@ -62,6 +64,7 @@ const PANEL_PARAMS: &[&str] = &[
     "linear_search_window",
     "angular_search_window",
     "max_constraint_distance",
+    "sampling_ratio",
     "min_score",
     "global_min_score",
     "optimize_every_n_nodes",
@@ -86,6 +89,8 @@ pub struct CartographerView {
     pub follow_robot: bool,
     /// The precomputed grids window (Fig. 5.7).
     pub grids_window: bool,
+    /// The reference path of a log with a corrected version.
+    pub reference: bool,
 }
 
 crate::lesson::lesson_view!(CartographerView, legend: legend, follow: follow_robot);
@@ -99,6 +104,7 @@ impl Default for CartographerView {
             truth: true,
             follow_robot: false,
             grids_window: false,
+            reference: true,
         }
     }
 }
@@ -144,6 +150,17 @@ pub struct CartographerLesson {
     inbox: DropInbox,
     picker: FilePicker,
     log_fetch: Option<LogFetch>,
+    /// The reference being read from `reference=`.
+    reference_fetch: Option<LogFetch>,
+    /// A reference (name, bytes, location) waiting for its log.
+    pending_reference: Option<(String, Vec<u8>, Option<String>)>,
+    /// Where the reference came from (`reference=`), for the share link.
+    reference_location: Option<String>,
+    /// The trajectory error against the reference as the run goes.
+    track: ReferenceTrack,
+    /// The latest ATE against the reference `[scan, m]` with loop closures
+    /// off (0) and on (1), kept across the switch.
+    scores: [Option<[f64; 2]>; 2],
     /// The log or bag being mapped: a bag's topics and what the reader assumed.
     laser: LaserFileState,
     /// A click on the map kidnaps the robot there.
@@ -168,10 +185,16 @@ pub fn open(start: &LessonStart<'_>) -> Box<dyn Lesson> {
         .rev()
         .find(|(k, _)| k == "log")
         .map(|(_, v)| v.clone());
+    let reference = start
+        .pairs
+        .iter()
+        .rev()
+        .find(|(k, _)| k == "reference")
+        .map(|(_, v)| v.clone());
     let pairs: Vec<(String, String)> = start
         .pairs
         .iter()
-        .filter(|(k, _)| k != "log")
+        .filter(|(k, _)| k != "log" && k != "reference")
         .cloned()
         .collect();
     let (laser, pairs) = LaserFileState::from_pairs(&pairs);
@@ -196,6 +219,13 @@ pub fn open(start: &LessonStart<'_>) -> Box<dyn Lesson> {
     if let Some(location) = location {
         lesson.frame.note = Some(format!("Loading the log {location}…"));
         lesson.log_fetch = Some(LogFetch {
+            location,
+            started: false,
+            fetch: Fetch::default(),
+        });
+    }
+    if let Some(location) = reference {
+        lesson.reference_fetch = Some(LogFetch {
             location,
             started: false,
             fetch: Fetch::default(),
@@ -240,6 +270,11 @@ impl CartographerLesson {
             inbox: DropInbox::default(),
             picker: FilePicker::multiple(),
             log_fetch: None,
+            reference_fetch: None,
+            pending_reference: None,
+            reference_location: None,
+            track: ReferenceTrack::default(),
+            scores: [None, None],
             laser: LaserFileState::default(),
             click_kidnap: false,
             builtin_chosen: false,
@@ -289,6 +324,7 @@ impl CartographerLesson {
         self.frame_ms_max = 0.0;
         self.tiles.clear();
         self.grids.clear();
+        self.track.clear();
         self.catch_up = catch_up.filter(|&n| n > 0);
         if catch_up.is_none() {
             self.frame.time.apply(TimeAction::Reset);
@@ -368,6 +404,71 @@ impl CartographerLesson {
         });
     }
 
+    /// Switches loop closures on or off: the same scans replay from the start
+    /// up to where the run was, and the score against a reference reached so
+    /// far is kept beside the other's.
+    pub fn set_loop_closures(&mut self, on: bool) {
+        if on == self.scenario.loop_closures {
+            return;
+        }
+        self.refresh_reference();
+        self.scores[usize::from(self.scenario.loop_closures)] = self.track.latest();
+        let done = self.sim().scans_done();
+        let scenario = CartographerScenario {
+            loop_closures: on,
+            ..self.scenario.clone()
+        };
+        self.pending.scenario.loop_closures = on;
+        let input = self.sim().input().clone();
+        self.restart_on(scenario, input, Some(done));
+        self.frame.note = Some(format!(
+            "Loop closures {}: mapping the same scans again up to scan {done}",
+            if on { "on" } else { "off" }
+        ));
+    }
+
+    /// Brings the trajectory error against the reference up to the run.
+    fn refresh_reference(&mut self) {
+        let sim = self.stepper.sim().sim();
+        let reference = sim.input().reference.clone();
+        let done = sim.scans_done();
+        self.track
+            .update(reference.as_deref(), done, || sim.scan_poses());
+        if reference.is_some() {
+            self.scores[usize::from(self.scenario.loop_closures)] = self.track.latest();
+        }
+    }
+
+    /// Matches a corrected log (`bytes`) to the log being mapped and starts
+    /// over with it as the reference; with no log yet, keeps it for the next.
+    pub fn load_reference(&mut self, name: &str, bytes: Vec<u8>, location: Option<String>) {
+        if !matches!(self.source, Source::Log(..)) {
+            self.pending_reference = Some((name.to_owned(), bytes, location));
+            self.frame.note = Some(format!(
+                "{name} is a reference: it is scored against once its log is loaded"
+            ));
+            return;
+        }
+        let input = self.sim().input().clone();
+        match LogReference::for_input(&bytes, name, &input) {
+            Ok(reference) => {
+                let description = reference.description.clone();
+                let mut with = (*input).clone();
+                with.reference = Some(Arc::new(reference));
+                self.reference_location = location;
+                self.scores = [None, None];
+                let scenario = self.scenario.clone();
+                self.restart_on(scenario, Arc::new(with), None);
+                self.frame.note = Some(format!("Reference {name}: {description}"));
+            }
+            Err(why) => {
+                self.frame.note = Some(format!(
+                    "Could not use {name} as the reference: {why}; the mapping goes on without a score"
+                ));
+            }
+        }
+    }
+
     /// Carries the simulated robot elsewhere before the next scan: to `to`
     /// (a click), or to a random free place at least 2 m away.
     pub fn kidnap(&mut self, to: Option<Pose2>) {
@@ -422,6 +523,8 @@ impl CartographerLesson {
     fn map_file(&mut self, name: &str, file: LaserFile, location: Option<String>) {
         let note = loaded_note(name, &file);
         self.source = Source::Log(name.to_owned(), location);
+        self.reference_location = None;
+        self.scores = [None, None];
         let scenario = CartographerScenario {
             kidnap_at: None,
             kidnap_to: None,
@@ -429,6 +532,9 @@ impl CartographerLesson {
         };
         self.restart_on(scenario, Arc::new(file.input), None);
         self.frame.note = Some(format!("{note}; no kidnap button"));
+        if let Some((reference, bytes, location)) = self.pending_reference.take() {
+            self.load_reference(&reference, bytes, location);
+        }
     }
 
     /// Lets the simulated robot explore a ROS map instead of a built-in one.
@@ -457,6 +563,31 @@ impl CartographerLesson {
                 ));
             }
             Err(why) => self.frame.note = Some(format!("Could not drive in {name}: {why}")),
+        }
+    }
+
+    fn poll_reference_fetch(&mut self, ctx: &egui::Context) {
+        let Some(state) = self.reference_fetch.as_mut() else {
+            return;
+        };
+        if !state.started {
+            state.started = true;
+            state.fetch = Fetch::start(&state.location, ctx);
+            return;
+        }
+        let Some(result) = state.fetch.poll() else {
+            return;
+        };
+        let location = state.location.clone();
+        self.reference_fetch = None;
+        let name = location.rsplit('/').next().unwrap_or(&location).to_owned();
+        match result {
+            Ok(bytes) => self.load_reference(&name, bytes, Some(location)),
+            Err(why) => {
+                self.frame.note = Some(format!(
+                    "Could not load the reference {location}: {why}; the mapping goes on without a score"
+                ));
+            }
         }
     }
 
@@ -728,6 +859,13 @@ impl CartographerLesson {
                  corrupted map (Fig. 5.10). Switching replays the run to this scan",
             );
             self.set_detection(detection);
+            let mut closures = self.scenario.loop_closures;
+            ui.checkbox(&mut closures, "Loop closures").on_hover_text(
+                "Off: local SLAM alone, no branch-and-bound search (on a long log, the open, \
+                 doubled corridors). Switching replays the same scans to this scan; with a \
+                 reference, both scores stay in the error plot's title",
+            );
+            self.set_loop_closures(closures);
             ui.toggle_value(&mut self.frame.view.grids_window, "Max grids")
                 .on_hover_text("The precomputed grids of a finished submap (thesis Fig. 5.7)");
         });
@@ -806,7 +944,9 @@ impl CartographerLesson {
 
 impl crate::widgets::layout::LessonPanels for CartographerLesson {
     fn plots_ui(&mut self, ui: &mut egui::Ui) {
-        plots::plots_ui(ui, self.sim(), &self.scan_ms);
+        self.refresh_reference();
+        let on = self.scenario.loop_closures;
+        plots::plots_ui(ui, self.sim(), &self.scan_ms, &self.track, self.scores, on);
     }
 
     fn parameters_ui(&mut self, ui: &mut egui::Ui) {
@@ -818,6 +958,7 @@ impl crate::widgets::layout::LessonPanels for CartographerLesson {
     }
 
     fn map_ui(&mut self, ui: &mut egui::Ui) {
+        self.refresh_reference();
         self.actions_ui(ui);
         if self.frame.view.grids_window {
             let mut open = true;
@@ -836,6 +977,7 @@ impl crate::widgets::layout::LessonPanels for CartographerLesson {
             &mut self.tiles,
             &mut self.frame.view,
             self.click_kidnap,
+            &self.track,
         );
         if let Some(pose) = clicked {
             self.click_kidnap = false;
@@ -862,6 +1004,9 @@ impl Lesson for CartographerLesson {
         );
         if let Source::Log(_, Some(location)) = &self.source {
             pairs.push(("log".to_owned(), location.clone()));
+            if let Some(reference) = &self.reference_location {
+                pairs.push(("reference".to_owned(), reference.clone()));
+            }
             pairs.extend(self.laser.share_pairs());
         }
         pairs
@@ -935,6 +1080,9 @@ impl Lesson for CartographerLesson {
 
     fn read_input(&mut self, ctx: &egui::Context) {
         self.poll_log_fetch(ctx);
+        if self.log_fetch.is_none() {
+            self.poll_reference_fetch(ctx);
+        }
         let picked = self.picker.poll_all();
         if let Some(batch) = self.inbox.poll(ctx).or(picked) {
             let batch: Vec<PickedFile> = batch;
@@ -953,8 +1101,18 @@ impl Lesson for CartographerLesson {
             }
             if files.iter().any(|(name, _)| is_map_file(name)) {
                 self.load_map_files(&files);
-            } else if let Some((name, bytes)) = files.first() {
-                self.load_log(name, bytes, None);
+            } else {
+                // A corrected log (by its name) is the reference of the log
+                // dropped with it, or of the log being mapped.
+                let (references, logs): (Vec<_>, Vec<_>) = files
+                    .into_iter()
+                    .partition(|(name, _)| is_reference_name(name));
+                if let Some((name, bytes)) = logs.first() {
+                    self.load_log(name, bytes, None);
+                }
+                if let Some((name, bytes)) = references.into_iter().next() {
+                    self.load_reference(&name, bytes, None);
+                }
             }
         }
     }
@@ -1007,7 +1165,10 @@ impl Lesson for CartographerLesson {
     }
 
     fn wants_repaint(&self) -> bool {
-        self.frame.time.running || self.catch_up.is_some() || self.log_fetch.is_some()
+        self.frame.time.running
+            || self.catch_up.is_some()
+            || self.log_fetch.is_some()
+            || self.reference_fetch.is_some()
     }
 
     fn view_menu_ui(&mut self, ui: &mut egui::Ui) {
@@ -1019,10 +1180,19 @@ impl Lesson for CartographerLesson {
             &mut self.frame.view.grids_window,
             "Precomputed max grids (Fig. 5.7)",
         );
+        ui.checkbox(
+            &mut self.frame.view.reference,
+            "Reference path (a corrected log)",
+        );
     }
 
     fn plot_series(&self) -> Vec<crate::export::PlotSeries> {
-        plots::series(self.sim(), &self.scan_ms)
+        plots::series(
+            self.sim(),
+            &self.scan_ms,
+            &self.track,
+            self.scenario.loop_closures,
+        )
     }
 
     fn test_state(&self) -> serde_json::Value {
@@ -1091,8 +1261,25 @@ impl Lesson for CartographerLesson {
             "mid_scan": sim.is_mid_scan(),
             "next_phase": self.next_phase_text(),
             "phases_run": self.stepper.phases_run(),
+            "loop_closures_on": self.scenario.loop_closures,
+            "reference": sim.input().reference.as_deref().map(|r| serde_json::json!({
+                "name": r.name,
+                "matched": r.points.len(),
+                "scans": r.reference_scans,
+                "ate_m": self.track.latest().map(|p| p[1]),
+                "ate_at_scan": self.track.latest().map(|p| p[0]),
+                "ate_points": self.track.ate.len(),
+                "path_points": self.track.path.len(),
+                "ate_loop_closures_on": self.scores[1].map(|p| p[1]),
+                "ate_loop_closures_off": self.scores[0].map(|p| p[1]),
+            })),
         })
     }
+}
+
+/// Whether a dropped file's name says it is a corrected log (a reference).
+fn is_reference_name(name: &str) -> bool {
+    name.to_ascii_lowercase().contains("corrected")
 }
 
 /// A phase as the time bar names it ("scan 153: search in submap 4").

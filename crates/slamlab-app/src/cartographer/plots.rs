@@ -10,11 +10,61 @@ use crate::palette;
 use crate::widgets::plots::{
     Figure, Mark, Styled, draw_series, figure_plot, figure_ui, key_entries, plot_row, series_data,
 };
+use crate::widgets::reference_track::ReferenceTrack;
 use slamlab_sim::cartographer::CartographerSim;
 
 const DETECTION: &str = "Kidnap detection";
 const SEARCH: &str = "Last branch-and-bound search";
 const TIME: &str = "Time per scan";
+const REFERENCE: &str = "Error against the reference";
+
+/// The trajectory error against a log's reference: the ATE so far with the
+/// run's loop-closure setting, and the other setting's latest as a level.
+fn reference_series(
+    track: &ReferenceTrack,
+    scores: [Option<[f64; 2]>; 2],
+    loop_closures: bool,
+) -> Vec<Styled> {
+    let mode = |on: bool| {
+        if on {
+            "loop closures on"
+        } else {
+            "loop closures off"
+        }
+    };
+    let name = match track.latest() {
+        Some([scan, ate]) => format!("{}: ATE {ate:.3} m at scan {scan:.0}", mode(loop_closures)),
+        None => format!("{}: ATE after two reference scans", mode(loop_closures)),
+    };
+    let color = |on: bool| {
+        if on {
+            LOOP_CLOSURE
+        } else {
+            palette::VERMILLION
+        }
+    };
+    let mut out = vec![Styled::new(
+        PlotSeries::new(REFERENCE, "scan", "ATE (m)", name, track.ate.clone()),
+        color(loop_closures),
+        Mark::Solid,
+        1.8,
+    )];
+    if let Some([scan, ate]) = scores[usize::from(!loop_closures)] {
+        out.push(Styled::new(
+            PlotSeries::new(
+                REFERENCE,
+                "scan",
+                "ATE (m)",
+                format!("{}: {ate:.3} m at scan {scan:.0}", mode(!loop_closures)),
+                vec![[0.0, ate], [scan, ate]],
+            ),
+            color(!loop_closures),
+            Mark::Dashed,
+            1.2,
+        ));
+    }
+    out
+}
 
 /// Every plotted series, defined once for the plots and the CSV export.
 fn plotted(sim: &CartographerSim, scan_ms: &[f64]) -> Vec<Styled> {
@@ -166,9 +216,22 @@ fn plotted(sim: &CartographerSim, scan_ms: &[f64]) -> Vec<Styled> {
     out
 }
 
-/// The plots side by side, each with its key on a line above it.
-pub fn plots_ui(ui: &mut egui::Ui, sim: &CartographerSim, scan_ms: &[f64]) {
-    let all = plotted(sim, scan_ms);
+/// The plots side by side, each with its key on a line above it; with a
+/// log's reference, the error against it takes the place of the time per
+/// scan.
+pub fn plots_ui(
+    ui: &mut egui::Ui,
+    sim: &CartographerSim,
+    scan_ms: &[f64],
+    track: &ReferenceTrack,
+    scores: [Option<[f64; 2]>; 2],
+    loop_closures: bool,
+) {
+    let mut all = plotted(sim, scan_ms);
+    let with_reference = sim.input().reference.is_some();
+    if with_reference {
+        all.extend(reference_series(track, scores, loop_closures));
+    }
     let height = ui.available_height().max(80.0);
     let figure = |title: &'static str, hover: &'static str, y_label: &'static str| Figure {
         title,
@@ -221,6 +284,27 @@ pub fn plots_ui(ui: &mut egui::Ui, sim: &CartographerSim, scan_ms: &[f64]) {
                 |p| draw_series(p, &all, SEARCH),
             );
         }
+        _ if with_reference => {
+            figure_ui(
+                ui,
+                &figure(
+                    REFERENCE,
+                    "The trajectory so far against the log's corrected version (Kümmerle et al. \
+                     2009): at every reference scan passed, the absolute trajectory error (RMS \
+                     position error after the rigid alignment that fits best) of every scan's \
+                     pose as the pose graph has it now. Switch loop closures off and on above \
+                     the map: the same scans map again, and the other setting's error stays as \
+                     a dashed level.",
+                    "ATE (m)",
+                ),
+                |h, y| {
+                    figure_plot("cartographer_reference", "scan", y, h)
+                        .include_x(0.0)
+                        .include_y(0.0)
+                },
+                |p| draw_series(p, &all, REFERENCE),
+            );
+        }
         _ => {
             figure_ui(
                 ui,
@@ -242,6 +326,15 @@ pub fn plots_ui(ui: &mut egui::Ui, sim: &CartographerSim, scan_ms: &[f64]) {
 }
 
 /// Every plot's series, unthinned, for the CSV export.
-pub fn series(sim: &CartographerSim, scan_ms: &[f64]) -> Vec<PlotSeries> {
-    series_data(plotted(sim, scan_ms))
+pub fn series(
+    sim: &CartographerSim,
+    scan_ms: &[f64],
+    track: &ReferenceTrack,
+    loop_closures: bool,
+) -> Vec<PlotSeries> {
+    let mut all = plotted(sim, scan_ms);
+    if sim.input().reference.is_some() {
+        all.extend(reference_series(track, [None, None], loop_closures));
+    }
+    series_data(all)
 }

@@ -55,17 +55,32 @@ pub fn explanation_ui(ui: &mut egui::Ui, run: &MclRun, last: Option<MclPhase>) {
             sources::source_link(ui, "xiang", "Source: Xiang's thesis §5.1");
         }
         Some(MclPhase::Move) => {
-            let robot = run.robot().pose;
-            ui.label(
-                "Move: the robot drove for one tick. The filters do not see where it went: they get \
-                 the wheel odometry (which has its own noise) and the lidar scan.",
-            );
-            ui.monospace(format!(
-                "true pose ({:.2} m, {:.2} m, {:.1}°)",
-                robot.x,
-                robot.y,
-                robot.theta.to_degrees()
-            ));
+            if let Some((done, all)) = run.log_progress() {
+                let odom = run.odometry();
+                ui.label(format!(
+                    "Move: the log's scan {done} of {all}, with the recorded odometry pose at its \
+                     stamp. The filters get exactly what the robot recorded."
+                ));
+                ui.monospace(format!(
+                    "odometry ({:.2} m, {:.2} m, {:.1}°)",
+                    odom.x,
+                    odom.y,
+                    odom.theta.to_degrees()
+                ));
+            } else {
+                ui.label(
+                    "Move: the robot drove for one tick. The filters do not see where it went: they get \
+                     the wheel odometry (which has its own noise) and the lidar scan.",
+                );
+            }
+            if let Some(robot) = run.truth_now() {
+                ui.monospace(format!(
+                    "true pose ({:.2} m, {:.2} m, {:.1}°)",
+                    robot.x,
+                    robot.y,
+                    robot.theta.to_degrees()
+                ));
+            }
             if let Some(scan) = run.scan() {
                 let hits = scan
                     .ranges
@@ -159,6 +174,18 @@ pub fn explanation_ui(ui: &mut egui::Ui, run: &MclRun, last: Option<MclPhase>) {
         // The estimate as amcl publishes it: moved by the odometry since the update,
         // against the truth now (the status above reads the same error).
         match (f.mcl().estimate(), f.current_estimate(&run.odometry())) {
+            (Some(e), Some(now)) if !run.has_truth() => {
+                ui.monospace(format!(
+                    "{}: ({:.2}, {:.2}) m, {:.1}°; no truth to measure its error; cluster of {} \
+                     particles ({} clusters)",
+                    f.name.to_uppercase(),
+                    now.x,
+                    now.y,
+                    now.theta.to_degrees(),
+                    e.count,
+                    e.clusters
+                ));
+            }
             (Some(e), Some(now)) => {
                 let error = run.error_now(k).map_or(f64::NAN, |e| e.position);
                 let heading = wrap_angle(now.theta - truth.theta).to_degrees();

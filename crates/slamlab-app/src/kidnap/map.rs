@@ -169,7 +169,14 @@ pub fn map_ui(
     });
     let grid = run.map().grid();
     let bounds = grid_bounds(grid);
-    let truth = run.robot().pose;
+    // A log without truth: the robot is where the first filter thinks it is (the
+    // lidar is drawn from there, and Follow follows it).
+    let seen_from = run.truth_now().or_else(|| {
+        run.filters()
+            .first()
+            .and_then(|f| f.current_estimate(&run.odometry()))
+    });
+    let truth = seen_from.unwrap_or(run.robot().pose);
     let mut follow = view.follow_robot.then_some([truth.x, truth.y]);
     if view.legend {
         // The key on a line above the map, never over the maze.
@@ -192,7 +199,7 @@ pub fn map_ui(
         }
     }
     if view.rays {
-        draw_rays(&painter, &t, run);
+        draw_rays(&painter, &t, run, seen_from);
     }
     for (k, f) in run.filters().iter().enumerate() {
         let color = filter_color(k, f.name);
@@ -214,14 +221,16 @@ pub fn map_ui(
             );
         }
     }
-    draw_robot(
-        &painter,
-        &t,
-        &truth,
-        run.robot().radius,
-        colors.truth,
-        colors.background,
-    );
+    if run.has_truth() {
+        draw_robot(
+            &painter,
+            &t,
+            &truth,
+            run.robot().radius,
+            colors.truth,
+            colors.background,
+        );
+    }
     draw_scale_and_axes(&painter, &t, &colors);
 
     // Click-kidnap: press where, drag for the heading, release to teleport.
@@ -357,13 +366,15 @@ fn draw_path(painter: &egui::Painter, t: &MapTransform, path: &[Pose2], color: C
     }
 }
 
-fn draw_rays(painter: &egui::Painter, t: &MapTransform, run: &MclRun) {
+fn draw_rays(painter: &egui::Painter, t: &MapTransform, run: &MclRun, seen_from: Option<Pose2>) {
     let Some(scan) = run.scan() else {
         return;
     };
     // From where the scan was taken: after a kidnap the robot is elsewhere until
-    // its next move takes a new scan.
-    let robot = run.scan_pose().unwrap_or(run.robot().pose);
+    // its next move takes a new scan. A log without truth: from the estimate.
+    let Some(robot) = run.scan_pose().or(seen_from) else {
+        return;
+    };
     let from = t.pose(&robot);
     let ray = Stroke::new(0.6, palette::VERMILLION.gamma_multiply(0.25));
     let stride = scan.ranges.len() / 180 + 1;
@@ -444,10 +455,18 @@ fn draw_robot(
 /// and (with Augmented or costmap-aware filters) the costmap and the particles
 /// drawn anew.
 fn legend_entries(run: &MclRun, colors: &CanvasColors) -> Vec<KeyEntry> {
-    let mut rows = vec![
-        KeyEntry::new("true robot and path", colors.truth, Mark::Solid),
-        KeyEntry::new("lidar rays and hits", palette::VERMILLION, Mark::Solid),
-    ];
+    let mut rows = if run.has_truth() {
+        vec![
+            KeyEntry::new("true robot and path", colors.truth, Mark::Solid),
+            KeyEntry::new("lidar rays and hits", palette::VERMILLION, Mark::Solid),
+        ]
+    } else {
+        vec![KeyEntry::new(
+            "lidar from the first estimate (no truth)",
+            palette::VERMILLION,
+            Mark::Solid,
+        )]
+    };
     for (k, f) in run.filters().iter().enumerate() {
         rows.push(KeyEntry::new(
             format!(

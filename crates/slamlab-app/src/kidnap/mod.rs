@@ -4,6 +4,11 @@
 //! one phase at a time: *move* (the robot, its odometry and a scan), *predict*
 //! (the cloud spreads), *weight* (each particle's scan likelihood) and *resample*
 //! (copies replace the unlikely). The robot can be kidnapped at any moment.
+//!
+//! Or the filters localize a recorded robot: a CARMEN log or a ROS 2 bag opened
+//! (picker, drop, `log=`) through the laser lessons' shared widget, replayed
+//! scan by scan in the map on screen (built-in, loaded, or the mapping lesson's
+//! *Localize in this map*), against the bag's truth where it has one.
 
 mod explain;
 mod map;
@@ -16,11 +21,14 @@ use crate::widgets::drive::{self, PadDirection};
 use crate::widgets::dropped_files::DropInbox;
 use crate::widgets::fetch::{self, Fetch};
 use crate::widgets::file_picker::{FilePicker, PickedFile};
+use crate::widgets::laser_file::{LASER_FILE_TYPES, LaserFileState, loaded_note};
 use crate::widgets::map_canvas::MapView;
 use crate::widgets::params_panel::{self, PendingParams};
 use egui::Color32;
 use serde::{Deserialize, Serialize};
 use slamlab_core::grid::OccupancyGrid;
+use slamlab_sim::grid::laser_file::MAX_LASER_FILE_BYTES;
+use slamlab_sim::grid::{LaserFile, MappingInput};
 use slamlab_sim::kidnap::session::{KidnapEvent, KidnapSim};
 use slamlab_sim::kidnap::{MclPhase, MclScenario};
 use slamlab_sim::params;
@@ -132,7 +140,7 @@ pub struct KidnapLesson {
     inbox: DropInbox,
     /// A lone image dropped or opened without its YAML, waiting for its resolution.
     lone_image: Option<LoneImage>,
-    /// "Open map…": a map's YAML with its image.
+    /// "Open map, log or bag…": a map's YAML with its image, or a CARMEN log or a ROS 2 bag.
     map_picker: FilePicker,
     /// `map=` named a ROS map YAML (a URL beside the site, a path on the
     /// desktop): where it is, and its reading, stage by stage.
@@ -141,6 +149,24 @@ pub struct KidnapLesson {
     pad: Option<PadDirection>,
     /// The latest command sent to the run while driving by hand.
     sent: Option<(f64, f64)>,
+    /// A recorded robot the filters localize instead of the simulated one: the
+    /// file's name and its scans (kept when the map or the parameters change).
+    log: Option<(String, MappingInput)>,
+    /// The log or bag open: a bag's topics and what the reader assumed.
+    laser: LaserFileState,
+    /// `log=` named a log or bag: where it is, read after the first frame.
+    log_fetch: Option<LogFetch>,
+    /// The location of a log read from `log=` (kept for share links).
+    log_location: Option<String>,
+}
+
+/// A log being read from `log=` (a location beside the site, a path on the
+/// desktop).
+#[derive(Debug)]
+struct LogFetch {
+    location: String,
+    started: bool,
+    fetch: Fetch,
 }
 
 /// A ROS map read from a location named in the URL: first its YAML, then the
@@ -176,12 +202,19 @@ pub fn open(start: &LessonStart<'_>) -> Box<dyn Lesson> {
         .rev()
         .find(|(k, v)| k == "map" && is_map_location(v))
         .map(|(_, v)| v.clone());
+    let log_location = start
+        .pairs
+        .iter()
+        .rev()
+        .find(|(k, _)| k == "log")
+        .map(|(_, v)| v.clone());
     let pairs: Vec<(String, String)> = start
         .pairs
         .iter()
-        .filter(|(k, v)| !(k == "map" && is_map_location(v)))
+        .filter(|(k, v)| !(k == "map" && is_map_location(v)) && k != "log")
         .cloned()
         .collect();
+    let (laser, pairs) = LaserFileState::from_pairs(&pairs);
     let start = &LessonStart {
         pairs: &pairs,
         ..*start
@@ -208,6 +241,15 @@ pub fn open(start: &LessonStart<'_>) -> Box<dyn Lesson> {
     // rays and ellipses are unexplained (`legend=0` hides it).
     if start.embed {
         lesson.frame.view.legend = true;
+    }
+    lesson.laser = laser;
+    if let Some(location) = log_location {
+        lesson.frame.note = Some(format!("Loading the log {location}…"));
+        lesson.log_fetch = Some(LogFetch {
+            location,
+            started: false,
+            fetch: Fetch::default(),
+        });
     }
     if let Some(location) = location {
         lesson.frame.note = Some(format!("Loading the map {location}…"));
@@ -264,6 +306,10 @@ impl KidnapLesson {
             map_location: None,
             pad: None,
             sent: None,
+            log: None,
+            laser: LaserFileState::default(),
+            log_fetch: None,
+            log_location: None,
         })
     }
 
@@ -290,7 +336,13 @@ impl KidnapLesson {
     /// Starts over with the pending parameters (and the loaded map, if any).
     pub fn reset(&mut self) {
         let grid = self.loaded.as_ref().map(|(_, g)| g.clone());
-        let (sim, notices) = match KidnapSim::open(self.pending.scenario.clone(), grid) {
+        let scenario = self.pending.scenario.clone();
+        let opened = match &self.log {
+            Some((name, input)) => KidnapSim::open_log(scenario, grid, input.clone())
+                .map_err(|why| format!("{name}: {why}")),
+            None => KidnapSim::open(scenario, grid),
+        };
+        let (sim, notices) = match opened {
             Ok(opened) => opened,
             Err(why) => {
                 self.frame.note = Some(format!("Could not start over: {why}; the run goes on"));
@@ -327,6 +379,83 @@ impl KidnapLesson {
     /// Finishes the tick, or runs a whole one.
     pub fn step_tick(&mut self) {
         self.stepper.step_tick();
+    }
+
+    /// Localizes a recorded robot: a laser file (a CARMEN log, plain or
+    /// compressed, or a ROS 2 bag) replayed in the map on screen. On any problem
+    /// the current run stays, with a note that names it.
+    pub fn load_log(&mut self, name: &str, bytes: &[u8]) {
+        match self.laser.open(name, bytes) {
+            Ok(file) => self.localize_file(name, file),
+            Err(why) => self.frame.note = Some(why),
+        }
+    }
+
+    /// Replays an opened laser file in the map on screen.
+    fn localize_file(&mut self, name: &str, file: LaserFile) {
+        let note = loaded_note(name, &file);
+        let before = self.log.replace((name.to_owned(), file.input));
+        self.reset();
+        if self.sim().run().log().is_none() {
+            // The run could not start on it: the lesson keeps what it had.
+            let why = self.frame.note.take().unwrap_or_default();
+            self.log = before;
+            self.laser.close();
+            self.frame.note = Some(format!("Could not localize in {name}: {why}"));
+            return;
+        }
+        self.frame.note = Some(format!("{note}; localizing in {}", self.map_name()));
+    }
+
+    /// Back to the simulated robot (the map stays).
+    pub fn close_log(&mut self) {
+        if self.log.take().is_some() {
+            self.laser.close();
+            self.log_location = None;
+            self.reset();
+            self.frame.note = Some("The simulated robot again".to_owned());
+        }
+    }
+
+    /// The log or bag the filters localize, if any: its name.
+    pub fn log_name(&self) -> Option<&str> {
+        self.log.as_ref().map(|(name, _)| name.as_str())
+    }
+
+    /// Reads the log named by `log=`.
+    fn poll_log_fetch(&mut self, ctx: &egui::Context) {
+        let Some(state) = self.log_fetch.as_mut() else {
+            return;
+        };
+        // The map named by `map=` first, so that the log replays in it.
+        if self.map_location.as_ref().is_some_and(|m| !m.loaded) {
+            return;
+        }
+        if !state.started {
+            state.started = true;
+            state.fetch = Fetch::start(&state.location, ctx);
+            return;
+        }
+        let Some(result) = state.fetch.poll() else {
+            return;
+        };
+        let location = state.location.clone();
+        self.log_fetch = None;
+        match result {
+            Ok(bytes) => {
+                let name = location.rsplit('/').next().unwrap_or(&location).to_owned();
+                self.load_log(&name, &bytes);
+                if self.log_name() == Some(name.as_str()) {
+                    self.log_location = Some(location);
+                    self.frame.restarted_from_link = true;
+                }
+            }
+            Err(why) => {
+                self.frame.note = Some(format!(
+                    "Could not load the log {location}: {why}; the simulated robot runs instead"
+                ));
+            }
+        }
     }
 
     /// Loads a map the student dropped on the window: a ROS map_server YAML with
@@ -402,6 +531,10 @@ impl KidnapLesson {
         self.map_location = None;
         self.lone_image = None;
         self.reset();
+        let note = match self.log_name() {
+            Some(log) => format!("{note}; localizing {log} in it"),
+            None => note,
+        };
         self.frame.note = Some(note);
     }
 
@@ -588,6 +721,8 @@ impl KidnapLesson {
     /// The lesson's main actions, in the row above the map at every window size
     /// (never only in a closed drawer).
     fn actions_ui(&mut self, ui: &mut egui::Ui) {
+        let recorded = self.log.is_some();
+        let has_truth = self.sim().run().has_truth();
         ui.horizontal_wrapped(|ui| {
             if ui
                 .button("Global localization")
@@ -597,18 +732,35 @@ impl KidnapLesson {
                 self.apply_event(KidnapEvent::GlobalLocalization);
             }
             if ui
-                .button("Reset around truth")
+                .add_enabled(has_truth, egui::Button::new("Reset around truth"))
                 .on_hover_text("Every filter's particles around the true pose (tracking)")
+                .on_disabled_hover_text("This log has no truth: no true pose to reset around")
                 .clicked()
             {
                 self.apply_event(KidnapEvent::ResetAroundTruth);
             }
             if ui
-                .button("Kidnap")
+                .add_enabled(!recorded, egui::Button::new("Kidnap"))
                 .on_hover_text("Teleport the robot to a random free pose at least kidnap-distance away; the filters are not told")
+                .on_disabled_hover_text("A recorded robot cannot be kidnapped: the log says where it went")
                 .clicked()
             {
                 self.apply_event(KidnapEvent::KidnapRandom);
+            }
+            if let Some((name, _)) = &self.log {
+                let progress = self
+                    .sim()
+                    .run()
+                    .log_progress()
+                    .map_or(String::new(), |(done, all)| format!(": scan {done} of {all}"));
+                ui.label(format!("Replaying {name}{progress}"));
+                if ui
+                    .button("Simulated robot")
+                    .on_hover_text("Close the log: the simulated robot explores this map again")
+                    .clicked()
+                {
+                    self.close_log();
+                }
             }
         });
     }
@@ -689,7 +841,9 @@ impl KidnapLesson {
     fn kidnap_parameters_ui(&mut self, ui: &mut egui::Ui) {
         ui.heading("Monte Carlo localization");
         ui.label("Kidnap, Global localization and Reset around truth are above the map.");
-        self.driving_ui(ui);
+        if self.log.is_none() {
+            self.driving_ui(ui);
+        }
         ui.separator();
         ui.horizontal(|ui| {
             ui.label("map");
@@ -709,12 +863,25 @@ impl KidnapLesson {
                 .on_hover_text("The built-in maps; press \"Apply & reset\" to open one")
                 .widget_info(|| egui::WidgetInfo::labeled(egui::Role::ComboBox, true, "map"));
         });
-        ui.label("Or open a ROS map (its .yaml and .pgm/.png together), or drop it on the window:");
+        if let Some(result) = self.laser.topics_ui(ui) {
+            match result {
+                Ok(file) => {
+                    let name = self.log_name().unwrap_or_default().to_owned();
+                    self.localize_file(&name, file);
+                }
+                Err(why) => self.frame.note = Some(why),
+            }
+        }
+        ui.label(
+            "Or open a ROS map (its .yaml and .pgm/.png together), or a recorded robot to \
+             localize in the map: a CARMEN laser log (.clf, .log, .gz, .bz2) or a ROS 2 bag \
+             (.mcap); or drop either on the window:",
+        );
         self.map_picker.ui(
             ui,
-            "Open map…",
-            ".yaml,.yml,.pgm,.png",
-            64 << 20,
+            "Open map, log or bag…",
+            LASER_FILE_TYPES,
+            MAX_LASER_FILE_BYTES as usize,
             "path/to/map.yaml",
         );
         let running = self.sim().run().scenario().clone();
@@ -836,6 +1003,16 @@ fn one_line(ui: &mut egui::Ui, text: egui::RichText) {
     ui.add(egui::Label::new(text).truncate());
 }
 
+/// The run's time now, seconds: ticks of `dt` for the simulated robot, the
+/// last scan's time since the log's first for a recorded one.
+fn run_time(run: &slamlab_sim::kidnap::MclRun) -> f64 {
+    match run.log_progress() {
+        Some((0, _)) => 0.0,
+        Some((done, _)) => run.tick_time(done - 1),
+        None => run.tick_count() as f64 * run.scenario().dt,
+    }
+}
+
 /// A phase's name on screen.
 fn phase_name(phase: MclPhase) -> &'static str {
     match phase {
@@ -937,6 +1114,10 @@ impl Lesson for KidnapLesson {
             pairs.retain(|(name, _)| name != "map");
             pairs.push(("map".to_owned(), fetch.location.clone()));
         }
+        if let Some(location) = self.log_location.as_ref().filter(|_| self.log.is_some()) {
+            pairs.push(("log".to_owned(), location.clone()));
+            pairs.extend(self.laser.share_pairs());
+        }
         pairs
     }
 
@@ -959,18 +1140,16 @@ impl Lesson for KidnapLesson {
             Some((name, _)) => name.clone(),
             None => format!("the {}", self.map_name()),
         };
-        format!("{} on {map}", names.join(" vs "))
+        match self.log_name() {
+            Some(log) => format!("{} on {log} in {map}", names.join(" vs ")),
+            None => format!("{} on {map}", names.join(" vs ")),
+        }
     }
 
     fn run_notices(&self) -> Vec<String> {
-        self.sim()
-            .run()
-            .notes()
-            .iter()
-            .rev()
-            .take(3)
-            .cloned()
-            .collect()
+        let mut all: Vec<String> = self.laser.notices().to_vec();
+        all.extend(self.sim().run().notes().iter().rev().take(3).cloned());
+        all
     }
 
     fn changed_params(&self) -> Vec<(String, String)> {
@@ -981,7 +1160,7 @@ impl Lesson for KidnapLesson {
         let run = self.sim().run();
         TimeInfo {
             tick: run.tick_count(),
-            time_s: run.tick_count() as f64 * run.scenario().dt,
+            time_s: run_time(run),
             last_phase: self.stepper.last_phase().map(|p| phase_name(*p).to_owned()),
             next_phase: self.next_phase_label(),
             can_step_back: self.stepper.phases_run() > 0,
@@ -1002,6 +1181,7 @@ impl Lesson for KidnapLesson {
 
     fn read_input(&mut self, ctx: &egui::Context) {
         self.poll_map_location(ctx);
+        self.poll_log_fetch(ctx);
         let keys = if self.driving_by_hand() {
             drive::keyboard_command(ctx)
         } else {
@@ -1023,16 +1203,40 @@ impl Lesson for KidnapLesson {
                     }
                 }
             }
-            self.load_dropped(&files);
+            // A map (YAML, PGM, PNG) loads as a map; anything else is read as a
+            // laser file, a CARMEN log or a bag told apart by its bytes.
+            let is_map_file = |name: &str| {
+                let lower = name.to_ascii_lowercase();
+                [".yaml", ".yml", ".pgm", ".png"]
+                    .iter()
+                    .any(|e| lower.ends_with(e))
+            };
+            let (maps, logs): (Vec<_>, Vec<_>) =
+                files.into_iter().partition(|(name, _)| is_map_file(name));
+            if !maps.is_empty() {
+                self.load_dropped(&maps);
+            }
+            if let Some((name, bytes)) = logs.first() {
+                self.load_log(name, bytes);
+            }
         }
     }
 
     fn advance(&mut self, dt: f64) {
+        if self.sim().run().is_finished() {
+            // The log has no scan left.
+            self.frame.time.running = false;
+            return;
+        }
         let stepper = &mut self.stepper;
         lesson::advance_within_budget(&mut self.frame.time, dt, || {
             stepper.step_phase();
             !stepper.sim().is_mid_tick()
         });
+    }
+
+    fn wants_repaint(&self) -> bool {
+        self.frame.time.running || self.log_fetch.is_some()
     }
 
     fn view_menu_ui(&mut self, ui: &mut egui::Ui) {
@@ -1043,7 +1247,7 @@ impl Lesson for KidnapLesson {
 
     fn test_state(&self) -> serde_json::Value {
         let run = self.sim().run();
-        let truth = run.robot().pose;
+        let truth = run.truth_now();
         let filters: Vec<serde_json::Value> = run
             .filters()
             .iter()
@@ -1069,12 +1273,16 @@ impl Lesson for KidnapLesson {
             .collect();
         serde_json::json!({
             "tick": run.tick_count(),
-            "time": run.tick_count() as f64 * run.scenario().dt,
+            "time": run_time(run),
             "phase": self.stepper.last_phase().map(|p| phase_name(*p)).unwrap_or_default(),
             "seed": run.scenario().seed,
             "map": self.map_name(),
-            "truth": [truth.x, truth.y, truth.theta],
+            "truth": truth.map(|t| [t.x, t.y, t.theta]),
             "kidnap_tick": run.kidnap_tick(),
+            "log": self.log_name(),
+            "log_progress": run.log_progress(),
+            "topics": self.laser.topics().map(|t| [t.scan.clone(), t.odometry.clone()]),
+            "note": self.frame.note,
             "filters": filters,
         })
     }

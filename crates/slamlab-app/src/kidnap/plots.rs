@@ -15,6 +15,14 @@ use slamlab_sim::kidnap::{MclRun, UpdateRecord};
 /// writes them unthinned.
 fn plotted(run: &MclRun) -> Vec<Styled> {
     let dt = run.scenario().dt;
+    // The simulated robot's ticks are dt apart; a log's scans have their own times.
+    let time = |tick: u64| {
+        if run.log().is_some() {
+            run.tick_time(tick as usize)
+        } else {
+            tick as f64 * dt
+        }
+    };
     let log10 = |l: f64| l / std::f64::consts::LN_10;
     let mut out = Vec::new();
     for (k, f) in run.filters().iter().enumerate() {
@@ -23,7 +31,7 @@ fn plotted(run: &MclRun) -> Vec<Styled> {
         let over_time = |pick: &dyn Fn(&UpdateRecord) -> Option<f64>| {
             f.updates
                 .iter()
-                .filter_map(|u| pick(u).map(|v| [u.tick as f64 * dt, v]))
+                .filter_map(|u| pick(u).filter(|v| !v.is_nan()).map(|v| [time(u.tick), v]))
                 .collect::<Vec<_>>()
         };
         // Per plot: the solid series, then the dashed one.
@@ -97,6 +105,9 @@ fn plotted(run: &MclRun) -> Vec<Styled> {
     out
 }
 
+/// What the error plot says when the log has no truth.
+pub const NO_TRUTH: &str = "No truth in this log: 2σ bounds only";
+
 /// The plots side by side, each with its key on a line above it.
 pub fn plots_ui(ui: &mut egui::Ui, run: &MclRun) {
     let all = plotted(run);
@@ -150,17 +161,24 @@ pub fn plots_ui(ui: &mut egui::Ui, run: &MclRun) {
     };
     plot_row(ui, 4, |k, ui| match order[k] {
         0 => {
-            figure_ui(
-                ui,
-                &figure(
-                    "Position error",
-                    "Distance from the estimate (the heaviest cluster's weighted mean) to the true \
-                     robot, and the estimate's own 2σ bound along its longest axis",
-                    "error (m)",
-                ),
-                plot("kidnap_error"),
-                |plot_ui| draw_series(plot_ui, &all, "Position error"),
+            let mut error_figure = figure(
+                "Position error",
+                "Distance from the estimate (the heaviest cluster's weighted mean) to the true \
+                 robot, and the estimate's own 2σ bound along its longest axis",
+                "error (m)",
             );
+            if !run.has_truth() {
+                // Above the plot, so that it is read before the empty error lines.
+                let said = ui.label(NO_TRUTH).on_hover_text(
+                    "The log has no true poses (only a bag SLAM Lab simulated carries them, \
+                         on /ground_truth): nothing to measure the error against. The dashed \
+                         lines are each estimate's own 2σ bound.",
+                );
+                error_figure.height -= said.rect.height() + ui.spacing().item_spacing.y;
+            }
+            figure_ui(ui, &error_figure, plot("kidnap_error"), |plot_ui| {
+                draw_series(plot_ui, &all, "Position error")
+            });
         }
         1 => {
             if augmented {

@@ -17,6 +17,7 @@ use nalgebra::{Matrix2, Vector2};
 use slamlab_core::Pose2;
 use slamlab_core::geometry::{CHI2_2DOF_95, CovarianceEllipse};
 use slamlab_core::kalman::LandmarkSlam;
+use slamlab_sim::world::recorded::RecordedWorld;
 use slamlab_sim::{LandmarkSession, Phase};
 use std::f64::consts::PI;
 
@@ -53,7 +54,17 @@ pub fn map_ui(
             filter_label(names[other].kind.name()),
         )
     });
-    let half = 0.5 * session.world().size;
+    // A recorded world's square holds its landmarks and truth; Victoria Park has
+    // neither, so its GPS sets the extent.
+    let half = session
+        .recorded_world()
+        .map_or(0.5 * session.world().size, |w| {
+            w.reference
+                .iter()
+                .fold(0.5 * session.world().size, |h, (_, p)| {
+                    h.max(p[0].abs()).max(p[1].abs())
+                })
+        });
     if opts.legend {
         // The key on a line above the map, never over the world.
         let colors = CanvasColors::of(ui);
@@ -76,13 +87,10 @@ pub fn map_ui(
     draw_grid(&painter, &t, &colors);
     draw_world(&painter, &t, session, opts, &colors);
     // The truth first: the estimates' ellipses and wedges are drawn over its marker.
-    draw_truth_robot(
-        &painter,
-        &t,
-        session.truth(),
-        colors.truth,
-        colors.background,
-    );
+    // A recorded world shows it only where the data knows it.
+    if let Some(truth) = session.true_pose() {
+        draw_truth_robot(&painter, &t, truth, colors.truth, colors.background);
+    }
     let sigma_points_shown = draw_filters(&painter, &t, session, opts, &colors);
     ui.data_mut(|d| d.insert_temp(sigma_points_id(), sigma_points_shown));
     draw_scale_and_axes(&painter, &t, &colors);
@@ -338,11 +346,12 @@ fn draw_world(
     opts: &ViewOptions,
     colors: &CanvasColors,
 ) {
-    // World square.
+    // World square (a recorded world has no walls: its square only frames the data).
+    let recorded = session.recorded_world().cloned();
     let half = session.world().size / 2.0;
     let a = t.xy(-half, -half);
     let b = t.xy(half, half);
-    if finite(a) && finite(b) {
+    if recorded.is_none() && finite(a) && finite(b) {
         painter.rect_stroke(
             Rect::from_two_pos(a, b),
             0.0,
@@ -350,7 +359,15 @@ fn draw_world(
             egui::StrokeKind::Middle,
         );
     }
-    let truth = session.truth();
+    // A recorded world's rays start at the true pose where it is known, else at
+    // the first estimate's (as the session places the measured points).
+    let truth = match (&recorded, session.true_pose()) {
+        (Some(_), None) => session
+            .filters()
+            .first()
+            .map_or(session.dead_reckoning(), |run| run.filter().robot_pose()),
+        _ => session.truth(),
+    };
     let robot = t.pose(&truth);
     // Sensor field of view: the reach of this tick, filled, and a reach changed from
     // the panel, which applies from the next tick, as a dashed outline.
@@ -395,12 +412,15 @@ fn draw_world(
     if finite(dr_pose) {
         painter.circle_stroke(dr_pose, 4.0, Stroke::new(1.5, palette::DEAD_RECKONING));
     }
-    let truth_path = path_points(t, session.truth_path(), Some(truth));
-    if truth_path.len() >= 2 {
-        painter.add(Shape::line(
-            truth_path,
-            Stroke::new(1.5, palette::faded(colors.truth, 0.8)),
-        ));
+    let truth_stroke = Stroke::new(1.5, palette::faded(colors.truth, 0.8));
+    match &recorded {
+        None => {
+            let truth_path = path_points(t, session.truth_path(), Some(truth));
+            if truth_path.len() >= 2 {
+                painter.add(Shape::line(truth_path, truth_stroke));
+            }
+        }
+        Some(world) => draw_recorded_references(painter, t, session, world, colors),
     }
     // True landmarks.
     let highlight = updated_landmark(session);
@@ -438,6 +458,85 @@ fn draw_world(
             };
             painter.line_segment([robot, end], stroke);
             painter.circle_stroke(end, radius, stroke);
+        }
+        // Other robots seen (MRCLAM): greyed and named, never used by the filters.
+        let grey = Stroke::new(0.9, palette::faded(palette::DEAD_RECKONING, 0.7));
+        for o in session.other_sightings() {
+            let end = t.v(&o.measured_point);
+            if !finite(end) {
+                continue;
+            }
+            painter.extend(Shape::dashed_line(&[robot, end], grey, 3.0, 3.0));
+            painter.circle_stroke(end, 3.0, grey);
+            painter.text(
+                end + vec2(5.0, 4.0),
+                egui::Align2::LEFT_TOP,
+                format!("robot {} (not used)", o.robot),
+                egui::FontId::proportional(10.0),
+                colors.weak_text,
+            );
+        }
+    }
+}
+
+/// A recorded world's references: its true path (MRCLAM's Vicon) up to now,
+/// split at its gaps (a gap is drawn as a gap, not bridged); the other robots
+/// where Vicon puts them now, greyed; the GPS fixes up to now (Victoria Park),
+/// in their own frame, as grey dots.
+fn draw_recorded_references(
+    painter: &egui::Painter,
+    t: &MapTransform,
+    session: &LandmarkSession,
+    world: &RecordedWorld,
+    colors: &CanvasColors,
+) {
+    let now = session.time();
+    let stroke = Stroke::new(1.5, palette::faded(colors.truth, 0.8));
+    if let Some(track) = &world.truth {
+        let pieces = track.pieces(now);
+        let total: usize = pieces.iter().map(|p| p.len()).sum();
+        let stride = total / MAX_PATH_POINTS + 1;
+        for piece in pieces {
+            let points: Vec<Pos2> = piece
+                .iter()
+                .enumerate()
+                .filter(|(i, _)| i % stride == 0 || *i + 1 == piece.len())
+                .map(|(_, (_, p))| t.pose(p))
+                .filter(|p| finite(*p))
+                .collect();
+            if points.len() >= 2 {
+                painter.add(Shape::line(points, stroke));
+            }
+        }
+    }
+    let grey = palette::faded(palette::DEAD_RECKONING, 0.8);
+    for other in &world.others {
+        let Some(pose) = other.truth.at(now) else {
+            continue;
+        };
+        let p = t.pose(&pose);
+        if !finite(p) {
+            continue;
+        }
+        painter.circle_stroke(p, 6.0, Stroke::new(1.2, grey));
+        painter.line_segment(
+            [p, p + 10.0 * screen_dir(pose.theta)],
+            Stroke::new(1.2, grey),
+        );
+        painter.text(
+            p + vec2(7.0, -7.0),
+            egui::Align2::LEFT_BOTTOM,
+            other.number.to_string(),
+            egui::FontId::proportional(10.0),
+            colors.weak_text,
+        );
+    }
+    let end = world.reference.partition_point(|(time, _)| *time <= now);
+    let stride = end / MAX_PATH_POINTS + 1;
+    for (_, fix) in world.reference[..end].iter().step_by(stride) {
+        let p = t.v(fix);
+        if finite(p) && t.rect.contains(p) {
+            painter.circle_filled(p, 1.5, grey);
         }
     }
 }

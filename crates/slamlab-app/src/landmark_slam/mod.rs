@@ -5,7 +5,14 @@
 //! paints it; every number it shows comes from the session. Parameters are edited
 //! on a copy of the scenario and take effect on reset, except the sensor's field of
 //! view and range, which change the running session from the next tick.
+//!
+//! The world is the simulated one or a recorded data set ([`data`]): MRCLAM (a
+//! robot of five, with Vicon truth), the Freiburg course's files or Victoria
+//! Park, opened by the file picker, a drop or `data=`. A data set opens with its
+//! preset (the noise measured from the data); the robot and the mode (SLAM or
+//! localization with the map given) are parameters like the others.
 
+pub mod data;
 pub mod drive;
 mod explain;
 mod heatmap;
@@ -19,10 +26,14 @@ use crate::time_control::{TimeAction, TimeInfo};
 use serde::{Deserialize, Serialize};
 use slamlab_core::Pose2;
 use slamlab_core::kalman::LandmarkSlam;
+use slamlab_sim::io::landmark_data::DataSetKind;
+use slamlab_sim::landmark_slam::presets;
 use slamlab_sim::params::{self, ParamIssue};
 use slamlab_sim::world::landmark_scenario::ControllerKind;
+use slamlab_sim::world::recorded::RecordedWorld;
 use slamlab_sim::{LandmarkScenario, LandmarkSession};
 use std::collections::BTreeMap;
+use std::sync::Arc;
 
 /// The lesson's id in URLs and the menu.
 pub const LESSON_ID: &str = "landmark-slam";
@@ -108,12 +119,30 @@ pub struct LandmarkSlamLesson {
     pub many_runs: many_runs::ManyRunsState,
     /// Bumped whenever the session changes, so caches know when to refresh.
     version: u64,
+    /// The recorded data set the run replays; `None` in the simulated world.
+    data: Option<data::LoadedData>,
+    /// The picker, the drops and `data=`.
+    data_input: data::DataInput,
+    /// The URL's parameter pairs, applied again over a data set's preset when
+    /// `data=` arrives (so `robot=3&mode=localization` hold).
+    link_pairs: Vec<(String, String)>,
 }
 
 /// Opens the lesson from the URL's pairs, with what it stored last time (the
 /// stored parameters only when the URL gives none).
 pub fn open(start: &LessonStart<'_>) -> Box<dyn Lesson> {
     let stored = StoredSettings::<ViewOptions>::from_start(start);
+    let location = data::location(start.pairs);
+    let pairs: Vec<(String, String)> = start
+        .pairs
+        .iter()
+        .filter(|(k, _)| k != data::DATA_KEY)
+        .cloned()
+        .collect();
+    let start = &LessonStart {
+        pairs: &pairs,
+        ..*start
+    };
     let (scenario, link_notices) = lesson::scenario_from_start(
         start,
         default_scenario(),
@@ -121,6 +150,11 @@ pub fn open(start: &LessonStart<'_>) -> Box<dyn Lesson> {
     );
     let mut lesson = LandmarkSlamLesson::new(scenario);
     lesson.frame.notices = link_notices;
+    if let Some(location) = location {
+        lesson.frame.note = Some(format!("Loading the data set {location}…"));
+        lesson.link_pairs = pairs.clone();
+        lesson.data_input.fetch(location);
+    }
     // A lecture figure looks the same for every student: the view a student left
     // in the full app (an open heatmap, say) stays there.
     lesson.frame = lesson.frame.restored(stored.as_ref());
@@ -150,7 +184,136 @@ impl LandmarkSlamLesson {
             heatmap: heatmap::HeatmapState::default(),
             many_runs: many_runs::ManyRunsState::default(),
             version: 0,
+            data: None,
+            data_input: data::DataInput::default(),
+            link_pairs: Vec::new(),
         }
+    }
+
+    /// The data set the run replays, if any.
+    pub fn data(&self) -> Option<&data::LoadedData> {
+        self.data.as_ref()
+    }
+
+    /// The recorded world being replayed, if any.
+    pub fn recorded_world(&self) -> Option<&Arc<RecordedWorld>> {
+        self.session.recorded_world()
+    }
+
+    /// A session of `scenario` in the current world: the data set's (its robot
+    /// `scenario.robot` for MRCLAM) or the simulated one.
+    fn start_session(&self, scenario: LandmarkScenario) -> Result<LandmarkSession, String> {
+        match &self.data {
+            None => Ok(LandmarkSession::new(scenario)),
+            Some(loaded) => {
+                let world = RecordedWorld::from_data(&loaded.data, scenario.robot)?;
+                Ok(LandmarkSession::recorded(scenario, Arc::new(world)))
+            }
+        }
+    }
+
+    /// Opens a data set in place of the current world, with the data set's preset
+    /// (its measured noise) and the panel's seed, then the link's own parameters
+    /// when it came from `data=`. A world the data cannot give (a robot not in
+    /// the files) leaves the current run as it was, with a note that says why.
+    pub fn open_data(&mut self, loaded: data::LoadedData) {
+        let kind = loaded.data.kind();
+        let seed = self.pending.seed;
+        let mut scenario = presets::scenario(presets::for_data(kind), seed).unwrap_or_default();
+        if loaded.location.is_some() {
+            let pairs = self
+                .link_pairs
+                .iter()
+                .filter(|(k, _)| k != "preset")
+                .map(|(k, v)| (k.as_str(), v.as_str()));
+            let issues = params::apply_pairs(&mut scenario, pairs, &crate::query::APP_KEYS);
+            self.frame
+                .notices
+                .extend(issues.iter().map(ToString::to_string));
+        }
+        let previous = self.data.replace(loaded);
+        match self.start_session(scenario) {
+            Ok(session) => {
+                let name = session
+                    .recorded_world()
+                    .map(|w| w.name.clone())
+                    .unwrap_or_default();
+                self.install(session);
+                // MRCLAM's odometry comes at 67 Hz and Victoria Park's inputs at 40 Hz:
+                // the fastest speed plays them at about real time or faster.
+                self.frame.time.speed_tps = match kind {
+                    DataSetKind::Freiburg => 10.0,
+                    DataSetKind::Mrclam | DataSetKind::VictoriaPark => {
+                        *crate::time_control::SPEED_RANGE.end()
+                    }
+                };
+                self.frame.note = Some(format!("Opened {name} ({})", kind.name()));
+            }
+            Err(why) => {
+                let name = self.data.as_ref().map(|d| d.name.clone());
+                self.data = previous;
+                self.frame.note = Some(format!(
+                    "Could not open {}: {why}; the current world stays",
+                    name.unwrap_or_default()
+                ));
+            }
+        }
+    }
+
+    /// Opens the files of a data set as a drop or the picker hands them over; a
+    /// refusal goes to the note and the current world stays.
+    pub fn open_files(&mut self, files: Vec<crate::widgets::file_picker::PickedFile>) {
+        self.arrived(data::read(files, None));
+    }
+
+    /// Leaves the data set for the simulated world, with the lesson's parameters.
+    pub fn open_simulated_world(&mut self) {
+        self.data = None;
+        let seed = self.pending.seed;
+        self.pending = default_scenario();
+        self.pending.seed = seed;
+        self.pending_issues.clear();
+        self.reset();
+        self.frame.time.speed_tps = crate::time_control::TimeControl::default().speed_tps;
+        self.frame.note = Some("Back in the simulated world".to_owned());
+    }
+
+    /// Runs `session` from its start in place of the current one.
+    fn install(&mut self, session: LandmarkSession) {
+        self.session = session;
+        self.pending = self.session.scenario().clone();
+        self.pending_issues.clear();
+        self.frame.time.apply(TimeAction::Reset);
+        self.drive.stop();
+        self.frame.map.refit();
+        self.version += 1;
+    }
+
+    /// Reads a data set that arrived (picked, dropped or from `data=`).
+    fn poll_data(&mut self, ctx: &egui::Context) {
+        if let Some(arrival) = self.data_input.poll(ctx) {
+            self.arrived(arrival);
+        }
+    }
+
+    /// Opens what arrived, or says why it cannot be opened.
+    fn arrived(&mut self, arrival: data::Arrival) {
+        match arrival {
+            data::Arrival::Data(loaded) => self.open_data(loaded),
+            data::Arrival::Refused(why) => {
+                let world = if self.data.is_some() {
+                    "the data set stays open"
+                } else {
+                    "the simulated world stays open"
+                };
+                self.frame.note = Some(format!("{why}; {world}"));
+            }
+        }
+    }
+
+    /// The data set's kind, if a recorded world is open.
+    pub fn data_kind(&self) -> Option<DataSetKind> {
+        self.data.as_ref().map(|d| d.data.kind())
     }
 
     /// The running session (truth, sensor, filters).
@@ -220,12 +383,12 @@ impl LandmarkSlamLesson {
 
     /// Starts over with the pending parameters (same seed: same world and noise).
     pub fn reset(&mut self) {
-        self.session = LandmarkSession::new(self.pending.clone());
-        self.pending = self.session.scenario().clone();
-        self.frame.time.apply(TimeAction::Reset);
-        self.drive.stop();
-        self.frame.map.refit();
-        self.version += 1;
+        match self.start_session(self.pending.clone()) {
+            Ok(session) => self.install(session),
+            Err(why) => {
+                self.frame.note = Some(format!("{why}; the run goes on as it was"));
+            }
+        }
     }
 
     /// Opens preset `id` with the panel's seed and restarts the run with it.
@@ -425,6 +588,15 @@ impl LandmarkSlamLesson {
     }
 
     fn landmark_parameters_ui(&mut self, ui: &mut egui::Ui) {
+        data::world_ui(ui, self);
+        ui.separator();
+        if self.data.is_some() {
+            // A recorded robot drives itself.
+            if params_panel::parameters_ui(ui, self) {
+                self.reset();
+            }
+            return;
+        }
         let manual_before = self.is_manual();
         let mut manual = manual_before;
         drive::drive_panel_ui(
@@ -494,11 +666,17 @@ impl Lesson for LandmarkSlamLesson {
 
     /// `key=value` pairs that reproduce the running setup: the seed and every
     /// parameter that differs from the lesson's start (which a link opens on).
+    /// A data set read from `data=` is named again by its location; one dropped
+    /// or picked cannot be (the link opens the simulated world then).
     fn share_pairs(&self) -> Vec<(String, String)> {
-        lesson::with_seed(
+        let mut pairs = lesson::with_seed(
             changed_pairs(&self.session.scenario_now()),
             self.session.scenario().seed,
-        )
+        );
+        if let Some(location) = self.data.as_ref().and_then(|d| d.location.clone()) {
+            pairs.insert(0, (data::DATA_KEY.to_owned(), location));
+        }
+        pairs
     }
 
     /// What the session had to change, and the errors of the latest phase.
@@ -546,6 +724,7 @@ impl Lesson for LandmarkSlamLesson {
     }
 
     fn read_input(&mut self, ctx: &egui::Context) {
+        self.poll_data(ctx);
         self.read_drive_keys(ctx);
     }
 
@@ -576,6 +755,39 @@ impl Lesson for LandmarkSlamLesson {
             })
         });
         let session = self.session();
+        let data = session.recorded_world().map(|world| {
+            let (played, steps) = session.recorded_progress().unwrap_or_default();
+            serde_json::json!({
+                "name": world.name,
+                "kind": world.kind.name(),
+                "robot": world.robot,
+                "mode": session.scenario().mode.name(),
+                "played": played,
+                "steps": steps,
+                "finished": session.is_finished(),
+                "truth_known": session.true_pose().is_some(),
+            })
+        });
+        // The latest robot position error (m) against the truth, per filter, and
+        // the RMSE over the ticks with a known truth; `null` without a truth.
+        let errors: BTreeMap<&str, serde_json::Value> = session
+            .filters()
+            .iter()
+            .map(|run| {
+                let errors: Vec<f64> = run.history.iter().map(|m| m.position_error).collect();
+                let rmse = (!errors.is_empty()).then(|| {
+                    (errors.iter().map(|e| e * e).sum::<f64>() / errors.len() as f64).sqrt()
+                });
+                (
+                    run.kind.name(),
+                    serde_json::json!({
+                        "latest": run.latest().map(|m| m.position_error),
+                        "rmse": rmse,
+                        "samples": errors.len(),
+                    }),
+                )
+            })
+            .collect();
         serde_json::json!({
             "tick": session.tick(),
             "time": session.time(),
@@ -583,6 +795,9 @@ impl Lesson for LandmarkSlamLesson {
             "seed": session.scenario().seed,
             "filters": session.filters().iter().map(|run| run.kind.name()).collect::<Vec<_>>(),
             "many_runs": many_runs,
+            "data": data,
+            "loading_data": self.data_input.is_fetching(),
+            "position_error": errors,
         })
     }
 }

@@ -8,6 +8,7 @@ use crate::palette;
 use crate::widgets::sources;
 use slamlab_sim::EstimatorKind;
 use slamlab_sim::LandmarkScenario;
+use slamlab_sim::io::landmark_data::DataSetKind;
 use slamlab_sim::params::{self, ParamKind, Scenario};
 use slamlab_sim::world::landmark_scenario::{Association, ControllerKind};
 
@@ -355,6 +356,11 @@ pub fn parameters_ui(ui: &mut egui::Ui, lesson: &mut LandmarkSlamLesson) -> bool
     preset_ui(ui, lesson);
     ui.add_space(4.0);
 
+    if let Some(kind) = lesson.data_kind() {
+        recorded_params_ui(ui, lesson, kind);
+        share_ui(ui, lesson);
+        return apply;
+    }
     group_ui(ui, "Noise (the filters assume the same)", |ui| {
         number_ui(ui, lesson, "v-std", "forward speed σ_v");
         number_ui(ui, lesson, "w-std-deg", "turn rate σ_w");
@@ -427,6 +433,63 @@ pub fn parameters_ui(ui: &mut egui::Ui, lesson: &mut LandmarkSlamLesson) -> bool
     ui.add_space(6.0);
     share_ui(ui, lesson);
     apply
+}
+
+/// The parameters of a recorded world: the noise the filters assume (the data
+/// set's measured defaults; the data's own noise is what it is), the sensor's
+/// reach on the recorded measurements, the estimators and association.
+fn recorded_params_ui(ui: &mut egui::Ui, lesson: &mut LandmarkSlamLesson, kind: DataSetKind) {
+    group_ui(ui, "Noise the filters assume (the data's is fixed)", |ui| {
+        match kind {
+            DataSetKind::Mrclam => {
+                number_ui(ui, lesson, "v-std", "forward speed σ_v");
+                number_ui(ui, lesson, "w-std-deg", "turn rate σ_w");
+            }
+            DataSetKind::Freiburg => {
+                number_ui(
+                    ui,
+                    lesson,
+                    "odometry-rot-std-deg",
+                    "odometry rotations σ_rot",
+                );
+                number_ui(
+                    ui,
+                    lesson,
+                    "odometry-trans-std",
+                    "odometry translation σ_trans",
+                );
+            }
+            DataSetKind::VictoriaPark => {
+                number_ui(ui, lesson, "v-std", "encoder speed σ_v");
+                number_ui(ui, lesson, "steering-std-deg", "steering σ_α");
+            }
+        }
+        number_ui(ui, lesson, "range-std", "range σ_r");
+        number_ui(ui, lesson, "bearing-std-deg", "bearing σ_b");
+        ui.label(
+            "Defaults are measured from the data (MRCLAM: residuals against Vicon). Make              them smaller and watch the NEES leave its band.",
+        );
+    });
+    group_ui(ui, "Sensor (live: from the next tick)", |ui| {
+        number_ui(ui, lesson, "max-range", "use measurements up to");
+    });
+    group_ui(ui, "Run", |ui| {
+        seed_ui(ui, lesson);
+        estimators_ui(ui, lesson);
+        number_ui(ui, lesson, "outlier-gate", "outlier gate (known ids)");
+    });
+    let particle_filters = lesson
+        .pending
+        .estimators
+        .iter()
+        .chain(&lesson.session.scenario().estimators)
+        .any(EstimatorKind::is_particle_filter);
+    if particle_filters || kind == DataSetKind::VictoriaPark {
+        group_ui(ui, "FastSLAM and data association", |ui| {
+            fastslam_ui(ui, lesson);
+        });
+    }
+    ui.add_space(6.0);
 }
 
 /// The link that reproduces the running setup, for instructors to share or embed.

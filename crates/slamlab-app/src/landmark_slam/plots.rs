@@ -104,8 +104,38 @@ pub fn coincidence_note(session: &LandmarkSession, pairs: &[(usize, f64)]) -> Op
 }
 
 /// The four plots side by side (two in an embed).
+/// Why a recorded world's error plots are empty or broken: no true path in
+/// the data (the Freiburg files, Victoria Park), or Vicon's gaps (MRCLAM).
+pub fn truth_note(session: &LandmarkSession) -> Option<String> {
+    let world = session.recorded_world()?;
+    match &world.truth {
+        None => Some(format!(
+            "{} has no true path, so the robot error, landmark error and NEES plots stay \
+             empty; the NIS needs no truth.{}",
+            world.name,
+            if world.reference.is_empty() {
+                ""
+            } else {
+                " The GPS (grey dots, in its own frame) is the only independent reference."
+            }
+        )),
+        Some(track) => {
+            let gaps = track.gaps().len();
+            (gaps > 0).then(|| {
+                format!(
+                    "Vicon truth with {gaps} gaps: where it is missing the error plots have no \
+                     samples and the map's true path breaks."
+                )
+            })
+        }
+    }
+}
+
 pub fn plots_ui(ui: &mut egui::Ui, session: &LandmarkSession) {
     if let Some(note) = coincidence_note(session, &coinciding_series(session)) {
+        ui.label(egui::RichText::new(note).color(ui.visuals().warn_fg_color));
+    }
+    if let Some(note) = truth_note(session) {
         ui.label(egui::RichText::new(note).color(ui.visuals().warn_fg_color));
     }
     // The filters' colours once for the row, not a legend over every plot's data.

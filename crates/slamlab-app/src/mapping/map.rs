@@ -8,6 +8,7 @@ use crate::palette;
 pub use crate::widgets::grid_tiles::GridTiles;
 use crate::widgets::grid_tiles::{draw_path, draw_scan_and_robot};
 use crate::widgets::map_canvas::{self, CanvasColors, MapView, draw_grid, draw_scale_and_axes};
+use crate::widgets::reference_track::ReferenceTrack;
 use egui::{Color32, Pos2};
 use slamlab_core::grid::ProbabilityGrid;
 use slamlab_sim::mapping::{MappingSession, PoseSource};
@@ -67,9 +68,11 @@ pub fn map_ui(
     beam: Option<usize>,
     grid: &ProbabilityGrid,
     shown_particle: Option<usize>,
+    track: &ReferenceTrack,
 ) -> Option<usize> {
     let sim = session.sim();
     let has_truth = sim.input().truth.is_some();
+    let has_reference = !has_truth && sim.input().reference.is_some();
     ui.horizontal_wrapped(|ui| {
         ui.label("Map:");
         if map_canvas::zoom_buttons_ui(ui, canvas, "Fit map") {
@@ -85,6 +88,12 @@ pub fn map_ui(
             ui.checkbox(&mut view.truth, "True path");
             ui.checkbox(&mut view.true_map, "True map").on_hover_text(
                 "The map the simulated robot drives in, faint, under the one being built",
+            );
+        }
+        if has_reference {
+            ui.checkbox(&mut view.truth, "Reference").on_hover_text(
+                "The corrected log's poses at the reference scans passed, moved onto the map by \
+                 the rigid alignment that fits the path to them best",
             );
         }
     });
@@ -125,6 +134,9 @@ pub fn map_ui(
             }
             if has_truth && view.truth {
                 ui.label(egui::RichText::new("— true path").strong());
+            }
+            if has_reference && view.truth {
+                ui.label(egui::RichText::new("— reference (corrected log)").strong());
             }
             ui.label(
                 egui::RichText::new("· scan end points")
@@ -204,6 +216,9 @@ pub fn map_ui(
             colors.truth,
             1.2,
         );
+    }
+    if has_reference && view.truth {
+        track.draw_path(&painter, &t, colors.truth, colors.background);
     }
     if view.path
         && let Some(filter) = filter

@@ -21,8 +21,10 @@ use crate::widgets::file_picker::{FilePicker, PickedFile};
 use crate::widgets::laser_file::{LASER_FILE_TYPES, LaserFileState, loaded_note};
 use crate::widgets::map_canvas::MapView;
 use crate::widgets::params_panel::{self, PendingParams};
+use crate::widgets::reference_track::ReferenceTrack;
 use serde::{Deserialize, Serialize};
 use slamlab_sim::grid::laser_file::MAX_LASER_FILE_BYTES;
+use slamlab_sim::grid::reference::LogReference;
 use slamlab_sim::grid::{LaserFile, MappingInput, builtin_map};
 use slamlab_sim::mapping::{
     MappingEvent, MappingPhase, MappingScenario, MappingSession, PoseSource, simulated_input,
@@ -151,6 +153,14 @@ pub struct MappingLesson {
     inbox: DropInbox,
     log_picker: FilePicker,
     log_fetch: Option<LogFetch>,
+    /// The reference being read from `reference=`.
+    reference_fetch: Option<LogFetch>,
+    /// A reference (name, bytes, location) waiting for its log.
+    pending_reference: Option<(String, Vec<u8>, Option<String>)>,
+    /// Where the reference came from (`reference=`), for the share link.
+    reference_location: Option<String>,
+    /// The trajectory error against the reference as the run goes.
+    track: ReferenceTrack,
     /// The log or bag being mapped: a bag's topics and what the reader assumed.
     laser: LaserFileState,
     /// The beam of the current scan whose update is inspected, if any.
@@ -214,10 +224,16 @@ fn log_location(pairs: &[(String, String)]) -> Option<String> {
 pub fn open(start: &LessonStart<'_>) -> Box<dyn Lesson> {
     let stored = StoredSettings::<MappingView>::from_start(start);
     let location = log_location(start.pairs);
+    let reference = start
+        .pairs
+        .iter()
+        .rev()
+        .find(|(k, _)| k == "reference")
+        .map(|(_, v)| v.clone());
     let pairs: Vec<(String, String)> = start
         .pairs
         .iter()
-        .filter(|(k, _)| k != "log")
+        .filter(|(k, _)| k != "log" && k != "reference")
         .cloned()
         .collect();
     let (laser, pairs) = LaserFileState::from_pairs(&pairs);
@@ -240,6 +256,13 @@ pub fn open(start: &LessonStart<'_>) -> Box<dyn Lesson> {
     if let Some(location) = location {
         lesson.frame.note = Some(format!("Loading the log {location}…"));
         lesson.log_fetch = Some(LogFetch {
+            location,
+            started: false,
+            fetch: Fetch::default(),
+        });
+    }
+    if let Some(location) = reference {
+        lesson.reference_fetch = Some(LogFetch {
             location,
             started: false,
             fetch: Fetch::default(),
@@ -269,6 +292,10 @@ impl MappingLesson {
             inbox: DropInbox::default(),
             log_picker: FilePicker::multiple(),
             log_fetch: None,
+            reference_fetch: None,
+            pending_reference: None,
+            reference_location: None,
+            track: ReferenceTrack::default(),
             laser: LaserFileState::default(),
             beam: None,
             loaded_map: None,
@@ -396,6 +423,7 @@ impl MappingLesson {
         self.catch_up = catch_up.filter(|&n| n > 0);
         self.scan_ms = ScanTimes::default();
         self.tiles.clear();
+        self.track.clear();
         self.mean_map.clear();
         if !matches!(self.shown, ShownMap::Mean) {
             self.shown = ShownMap::Best;
@@ -460,12 +488,80 @@ impl MappingLesson {
         let has_truth = file.input.truth.is_some();
         self.input = Arc::new(file.input);
         self.log_name = Some(name.to_owned());
+        self.reference_location = None;
         let mut scenario = self.pending.scenario.clone();
         if scenario.poses == PoseSource::Truth && !has_truth {
             scenario.poses = PoseSource::ScanToMap;
         }
         self.restart(scenario, None);
         self.frame.note = Some(note);
+        if let Some((reference, bytes, location)) = self.pending_reference.take() {
+            self.load_reference(&reference, bytes, location);
+        }
+    }
+
+    /// Matches a corrected log (`bytes`) to the log being mapped and starts
+    /// over with it as the reference; with no log yet, keeps it for the next.
+    pub fn load_reference(&mut self, name: &str, bytes: Vec<u8>, location: Option<String>) {
+        if self.log_name.is_none() {
+            self.pending_reference = Some((name.to_owned(), bytes, location));
+            self.frame.note = Some(format!(
+                "{name} is a reference: it is scored against once its log is loaded"
+            ));
+            return;
+        }
+        match LogReference::for_input(&bytes, name, &self.input) {
+            Ok(reference) => {
+                let description = reference.description.clone();
+                let mut with = (*self.input).clone();
+                with.reference = Some(Arc::new(reference));
+                self.input = Arc::new(with);
+                self.reference_location = location;
+                let scenario = self.session.scenario().clone();
+                self.restart(scenario, None);
+                self.frame.note = Some(format!("Reference {name}: {description}"));
+            }
+            Err(why) => {
+                self.frame.note = Some(format!(
+                    "Could not use {name} as the reference: {why}; the mapping goes on without a score"
+                ));
+            }
+        }
+    }
+
+    /// Brings the trajectory error against the reference up to the run.
+    fn refresh_reference(&mut self) {
+        let reference = self.input.reference.clone();
+        let done = self.session.sim().scans_done();
+        let session = &self.session;
+        self.track
+            .update(reference.as_deref(), done, || session.scan_poses());
+    }
+
+    /// Reads the reference named by `reference=` (after the log).
+    fn poll_reference_fetch(&mut self, ctx: &egui::Context) {
+        let Some(state) = self.reference_fetch.as_mut() else {
+            return;
+        };
+        if !state.started {
+            state.started = true;
+            state.fetch = Fetch::start(&state.location, ctx);
+            return;
+        }
+        let Some(result) = state.fetch.poll() else {
+            return;
+        };
+        let location = state.location.clone();
+        self.reference_fetch = None;
+        let name = location.rsplit('/').next().unwrap_or(&location).to_owned();
+        match result {
+            Ok(bytes) => self.load_reference(&name, bytes, Some(location)),
+            Err(why) => {
+                self.frame.note = Some(format!(
+                    "Could not load the reference {location}: {why}; the mapping goes on without a score"
+                ));
+            }
+        }
     }
 
     /// Reads the log named by `log=`.
@@ -752,7 +848,8 @@ impl MappingLesson {
 
 impl crate::widgets::layout::LessonPanels for MappingLesson {
     fn plots_ui(&mut self, ui: &mut egui::Ui) {
-        plots::plots_ui(ui, &self.session, &self.scan_ms.ms);
+        self.refresh_reference();
+        plots::plots_ui(ui, &self.session, &self.scan_ms.ms, &self.track);
     }
 
     fn parameters_ui(&mut self, ui: &mut egui::Ui) {
@@ -771,6 +868,7 @@ impl crate::widgets::layout::LessonPanels for MappingLesson {
     }
 
     fn map_ui(&mut self, ui: &mut egui::Ui) {
+        self.refresh_reference();
         // While a beam is inspected the run keeps the grid from before each
         // insertion, to explain a scan already in (a new run or a step back
         // starts without it).
@@ -808,6 +906,7 @@ impl crate::widgets::layout::LessonPanels for MappingLesson {
             self.beam,
             grid,
             highlighted,
+            &self.track,
         ) {
             self.shown = ShownMap::Particle(clicked);
         }
@@ -829,6 +928,9 @@ impl Lesson for MappingLesson {
         );
         if let Some(location) = &self.log_location {
             pairs.push(("log".to_owned(), location.clone()));
+            if let Some(reference) = &self.reference_location {
+                pairs.push(("reference".to_owned(), reference.clone()));
+            }
             pairs.extend(self.laser.share_pairs());
         }
         pairs
@@ -885,6 +987,9 @@ impl Lesson for MappingLesson {
 
     fn read_input(&mut self, ctx: &egui::Context) {
         self.poll_log_fetch(ctx);
+        if self.log_fetch.is_none() {
+            self.poll_reference_fetch(ctx);
+        }
         let picked = self.log_picker.poll_all();
         if let Some(batch) = self.inbox.poll(ctx).or(picked) {
             let batch: Vec<PickedFile> = batch;
@@ -903,8 +1008,18 @@ impl Lesson for MappingLesson {
             }
             if files.iter().any(|(name, _)| is_map_file(name)) {
                 self.load_map_files(&files);
-            } else if let Some((name, bytes)) = files.first() {
-                self.load_log(name, bytes);
+            } else {
+                // A corrected log (by its name) is the reference of the log
+                // dropped with it, or of the log being mapped.
+                let (references, logs): (Vec<_>, Vec<_>) = files
+                    .into_iter()
+                    .partition(|(name, _)| name.to_ascii_lowercase().contains("corrected"));
+                if let Some((name, bytes)) = logs.first() {
+                    self.load_log(name, bytes);
+                }
+                if let Some((name, bytes)) = references.into_iter().next() {
+                    self.load_reference(&name, bytes, None);
+                }
             }
         }
     }
@@ -948,7 +1063,10 @@ impl Lesson for MappingLesson {
     }
 
     fn wants_repaint(&self) -> bool {
-        self.frame.time.running || self.catch_up.is_some() || self.log_fetch.is_some()
+        self.frame.time.running
+            || self.catch_up.is_some()
+            || self.log_fetch.is_some()
+            || self.reference_fetch.is_some()
     }
 
     fn view_menu_ui(&mut self, ui: &mut egui::Ui) {
@@ -960,7 +1078,7 @@ impl Lesson for MappingLesson {
     }
 
     fn plot_series(&self) -> Vec<crate::export::PlotSeries> {
-        plots::series(&self.session, &self.scan_ms.ms)
+        plots::series(&self.session, &self.scan_ms.ms, &self.track)
     }
 
     fn test_state(&self) -> serde_json::Value {
@@ -976,6 +1094,15 @@ impl Lesson for MappingLesson {
             "total_scans": self.input.scans.len(),
             "input_seconds": self.input.duration(),
             "log": self.log_name,
+            "reference": self.input.reference.as_deref().map(|r| serde_json::json!({
+                "name": r.name,
+                "matched": r.points.len(),
+                "scans": r.reference_scans,
+                "ate_m": self.track.latest().map(|p| p[1]),
+                "ate_at_scan": self.track.latest().map(|p| p[0]),
+                "ate_points": self.track.ate.len(),
+                "path_points": self.track.path.len(),
+            })),
             "topics": self.laser.topics().map(|t| [t.scan.clone(), t.odometry.clone()]),
             "note": self.frame.note,
             "seed": self.session.scenario().seed,

@@ -1,5 +1,6 @@
 //! The plots under the map, one point per scan: the position error against
-//! the truth (simulation only), the matcher's cost (grid FastSLAM: the
+//! the truth (simulation only) or, for a log with its corrected version, the
+//! trajectory error against that reference, the matcher's cost (grid FastSLAM: the
 //! effective sample size with its resamplings), and the time each scan took
 //! here.
 
@@ -10,6 +11,7 @@ use crate::widgets::plots::{
     Figure, Mark, Styled, draw_series, figure_plot, figure_ui, plot_row, series_data,
     style_entries, title_ui,
 };
+use crate::widgets::reference_track::ReferenceTrack;
 use slamlab_sim::mapping::MappingSession;
 
 const ERROR: &str = "Trajectory error";
@@ -18,12 +20,24 @@ const NEFF: &str = "Effective sample size";
 const TIME: &str = "Time per scan";
 
 /// Every plotted series, defined once for the plots and the CSV export.
-fn plotted(session: &MappingSession, scan_ms: &[f64]) -> Vec<Styled> {
+fn plotted(session: &MappingSession, scan_ms: &[f64], track: &ReferenceTrack) -> Vec<Styled> {
     let sim = session.sim();
     let records = session.stepper().records();
     let color = source_color(sim.source());
     let name = sim.source().name();
     let mut out = Vec::new();
+    if sim.input().truth.is_none() && sim.input().reference.is_some() {
+        let label = match track.latest() {
+            Some([scan, ate]) => format!("{name}: ATE {ate:.3} m at scan {scan:.0}"),
+            None => format!("{name}: ATE after two reference scans"),
+        };
+        out.push(Styled::new(
+            PlotSeries::new(ERROR, "scan", "ATE (m)", label, track.ate.clone()),
+            color,
+            Mark::Solid,
+            1.6,
+        ));
+    }
     if let Some(truth) = &sim.input().truth {
         let error = records
             .poses
@@ -139,12 +153,18 @@ fn plotted(session: &MappingSession, scan_ms: &[f64]) -> Vec<Styled> {
 }
 
 /// The plots side by side, each with its key on a line above it.
-pub fn plots_ui(ui: &mut egui::Ui, session: &MappingSession, scan_ms: &[f64]) {
-    let all = plotted(session, scan_ms);
+pub fn plots_ui(
+    ui: &mut egui::Ui,
+    session: &MappingSession,
+    scan_ms: &[f64],
+    track: &ReferenceTrack,
+) {
+    let all = plotted(session, scan_ms, track);
     let sim = session.sim();
     let color = source_color(sim.source());
     let height = ui.available_height().max(80.0);
     let has_truth = sim.input().truth.is_some();
+    let has_reference = sim.input().reference.is_some();
     let plot = |id: &'static str| {
         move |h: f32, y: &str| figure_plot(id, "scan", y, h).include_x(0.0).include_y(0.0)
     };
@@ -174,9 +194,27 @@ pub fn plots_ui(ui: &mut egui::Ui, session: &MappingSession, scan_ms: &[f64]) {
                 |p| draw_series(p, &all, ERROR),
             );
         }
+        0 if has_reference => {
+            figure_ui(
+                ui,
+                &figure(
+                    ERROR,
+                    "Against the log's corrected version (Kümmerle et al. 2009): at every \
+                     reference scan passed, the absolute trajectory error (RMS position error after \
+                     the rigid alignment that fits best) of every scan's pose so far. Switch the \
+                     pose source to compare them on the same scans.",
+                    "ATE (m)",
+                ),
+                plot("mapping_error"),
+                |p| draw_series(p, &all, ERROR),
+            );
+        }
         0 => {
             title_ui(ui, ERROR, error_hover);
-            ui.label("A real log has no ground truth: no error to plot.");
+            ui.label(
+                "A real log has no ground truth: drop its corrected version with it (or give \
+                 reference= in the URL) to plot the error against it.",
+            );
         }
         1 if sim.grid_fastslam().is_some() => {
             figure_ui(
@@ -223,6 +261,10 @@ pub fn plots_ui(ui: &mut egui::Ui, session: &MappingSession, scan_ms: &[f64]) {
 }
 
 /// Every plot's series, unthinned, for the CSV export.
-pub fn series(session: &MappingSession, scan_ms: &[f64]) -> Vec<PlotSeries> {
-    series_data(plotted(session, scan_ms))
+pub fn series(
+    session: &MappingSession,
+    scan_ms: &[f64],
+    track: &ReferenceTrack,
+) -> Vec<PlotSeries> {
+    series_data(plotted(session, scan_ms, track))
 }

@@ -402,6 +402,33 @@ impl Lesson for VisualOdometryLesson {
         None
     }
 
+    fn relative_poses(&self) -> Vec<(String, slamlab_core::vision::RelativePose)> {
+        if self.photos.showing() {
+            return Vec::new();
+        }
+        let mut poses: Vec<(String, slamlab_core::vision::RelativePose)> = self
+            .run
+            .pairs
+            .get(self.pair)
+            .map(|p| ("truth".to_owned(), p.truth))
+            .into_iter()
+            .collect();
+        // RANSAC's answer so far: the rotation and, for general motion, the
+        // direction of translation (a pure rotation's has none).
+        if let Some(Ok(e)) = self.session.as_ref().and_then(|s| s.estimate())
+            && let Some(translation) = e.translation
+        {
+            poses.push((
+                "ransac".to_owned(),
+                slamlab_core::vision::RelativePose {
+                    rotation: e.rotation,
+                    translation,
+                },
+            ));
+        }
+        poses
+    }
+
     fn plot_series(&self) -> Vec<crate::export::PlotSeries> {
         plots::series(&self.run, self.session.as_ref())
     }

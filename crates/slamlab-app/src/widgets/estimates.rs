@@ -1,11 +1,13 @@
 //! A student's own estimates, brought into any lesson: a TUM or CSV trajectory
-//! (with or without covariances) or a landmark CSV, dropped on the page, opened
+//! (with or without covariances), a landmark CSV or (in the two-view lesson) a
+//! relative pose of two views, dropped on the page, opened
 //! from the File menu or named by `estimate=` in the URL. Each becomes one more
 //! estimator of the lesson, drawn on its map in a colour of its own up to the time
 //! bar's time, and scored against the lesson's truth with the same metrics as
 //! the lesson's own estimators (`slamlab_sim::metrics`, equal to evo), in the
 //! "Your estimates" window: ATE and RPE, NEES where covariances were given, and
-//! the position error over time beside the built-in estimators'.
+//! the position error over time beside the built-in estimators'; for a relative
+//! pose, the rotation error and the angle between the translation directions.
 //!
 //! Written once for every lesson: a lesson only says what its trajectories are
 //! ([`crate::lesson::Lesson::trajectories`]); the frame holds the estimates, the
@@ -14,6 +16,8 @@
 use crate::palette;
 use egui::{Color32, Pos2, Stroke};
 use slamlab_core::Pose2;
+use slamlab_core::vision::RelativePose;
+use slamlab_sim::io::relative_pose;
 use slamlab_sim::io::trajectory::{self, LandmarkRow, TrajectoryFormat};
 use slamlab_sim::metrics::{
     Alignment, EvaluationSettings, NamedTrajectory, Trajectory, TrajectoryRole, evaluate,
@@ -38,6 +42,8 @@ pub enum EstimateContent {
     Trajectory(Trajectory),
     /// Landmark positions.
     Landmarks(Vec<LandmarkRow>),
+    /// A relative pose of two views (`X_b = R X_a + t`).
+    RelativePose(RelativePose),
 }
 
 /// One estimate a student brought in.
@@ -76,6 +82,11 @@ pub struct EstimateScore {
     pub pairs: usize,
     /// For landmarks: the RMS distance to the true landmarks, metres.
     pub landmark_rmse: Option<f64>,
+    /// For a relative pose: the angle of `R_trueᵀ R`, degrees.
+    pub rotation_error_deg: Option<f64>,
+    /// For a relative pose: the angle between the estimated and the true
+    /// direction of translation, degrees.
+    pub direction_error_deg: Option<f64>,
     /// Why there is no score, or what to know about it.
     pub note: Option<String>,
     /// Position error over time `[t, e]`, for the plot.
@@ -100,14 +111,16 @@ pub struct Estimates {
 }
 
 /// Is this file a student's estimate rather than a lesson's input (a map, a log,
-/// a graph)? TUM (`.tum`, or a `.txt` whose first line has eight numbers) and
-/// CSV files are.
+/// a graph)? TUM (`.tum`, or a `.txt` whose first line has eight numbers), CSV
+/// files and relative poses (a `.txt` of 12 or 7 numbers) are.
 pub fn is_estimate_file(name: &str, bytes: &[u8]) -> bool {
     let lower = name.to_ascii_lowercase();
     if lower.ends_with(".tum") || lower.ends_with(".csv") {
         return true;
     }
-    lower.ends_with(".txt") && matches!(trajectory::detect_format(bytes), Ok(TrajectoryFormat::Tum))
+    lower.ends_with(".txt")
+        && (matches!(trajectory::detect_format(bytes), Ok(TrajectoryFormat::Tum))
+            || relative_pose::is_relative_pose(bytes))
 }
 
 impl Estimates {
@@ -142,6 +155,10 @@ impl Estimates {
         let (content, notices) = if is_landmarks {
             let rows = trajectory::read_landmarks(bytes).map_err(|e| format!("{name}: {e}"))?;
             (EstimateContent::Landmarks(rows), Vec::new())
+        } else if relative_pose::is_relative_pose(bytes) {
+            let file =
+                relative_pose::read_relative_pose(bytes).map_err(|e| format!("{name}: {e}"))?;
+            (EstimateContent::RelativePose(file.pose), file.notices)
         } else {
             let file =
                 trajectory::read_trajectory(name, bytes).map_err(|e| format!("{name}: {e}"))?;
@@ -164,6 +181,7 @@ impl Estimates {
                 }
             ),
             EstimateContent::Landmarks(rows) => format!("{} landmarks", rows.len()),
+            EstimateContent::RelativePose(_) => "a relative pose of two views".to_owned(),
         };
         self.items.push(Estimate {
             name: name.to_owned(),
@@ -197,13 +215,8 @@ impl Estimates {
 
     /// Scores the lesson's estimators and the student's against the lesson's
     /// truth (or, without one, against its first estimator).
-    pub fn score(
-        &mut self,
-        run_version: u64,
-        trajectories: &[NamedTrajectory],
-        landmarks: &[(String, Vec<LandmarkRow>)],
-    ) -> &[EstimateScore] {
-        self.scores = score_all(&self.items, trajectories, landmarks, self.align);
+    pub fn score(&mut self, run_version: u64, lesson: &LessonOutput) -> &[EstimateScore] {
+        self.scores = score_all(&self.items, lesson, self.align);
         self.scored = Some((run_version, self.version, self.align));
         &self.scores
     }
@@ -212,6 +225,69 @@ impl Estimates {
     pub fn last_scores(&self) -> &[EstimateScore] {
         &self.scores
     }
+}
+
+/// What a lesson gives its estimates to be scored against: its trajectories, its
+/// landmark maps and its relative poses, each with the truth named `truth`.
+#[derive(Clone, Debug, Default)]
+pub struct LessonOutput {
+    /// The truth and the estimators' paths.
+    pub trajectories: Vec<NamedTrajectory>,
+    /// The true landmarks (`truth`) and each estimator's.
+    pub landmarks: Vec<(String, Vec<LandmarkRow>)>,
+    /// The true relative pose of the two views shown (`truth`) and the lesson's
+    /// estimate of it.
+    pub relative_poses: Vec<(String, RelativePose)>,
+}
+
+/// A score with nothing in it yet.
+fn empty_score(name: &str, dropped: bool, color: Color32) -> EstimateScore {
+    EstimateScore {
+        name: name.to_owned(),
+        dropped,
+        ate_rmse: None,
+        ate_max: None,
+        rpe_rmse: None,
+        anees: None,
+        nees_in_band: None,
+        pairs: 0,
+        landmark_rmse: None,
+        rotation_error_deg: None,
+        direction_error_deg: None,
+        note: None,
+        errors: Vec::new(),
+        color,
+    }
+}
+
+/// A relative pose scored against the true one.
+fn score_relative_pose(
+    name: &str,
+    dropped: bool,
+    color: Color32,
+    pose: &RelativePose,
+    truth: Option<&RelativePose>,
+) -> EstimateScore {
+    let mut score = empty_score(name, dropped, color);
+    match truth {
+        Some(t) => match slamlab_sim::metrics::relative_pose_error(
+            &pose.rotation,
+            &pose.translation,
+            &t.rotation,
+            &t.translation,
+        ) {
+            Some(e) => {
+                score.rotation_error_deg = Some(e.rotation_deg);
+                score.direction_error_deg = Some(e.translation_direction_deg);
+            }
+            None => score.note = Some("a translation of length zero has no direction".to_owned()),
+        },
+        None => {
+            score.note =
+                Some("this lesson shows no pair of views with a true relative pose".to_owned());
+        }
+    }
+    score
 }
 
 /// The reference: the lesson's truth, or without one its first estimator.
@@ -242,20 +318,7 @@ fn score_trajectory(
         },
         ..EvaluationSettings::default()
     };
-    let mut score = EstimateScore {
-        name: name.to_owned(),
-        dropped,
-        ate_rmse: None,
-        ate_max: None,
-        rpe_rmse: None,
-        anees: None,
-        nees_in_band: None,
-        pairs: 0,
-        landmark_rmse: None,
-        note: None,
-        errors: Vec::new(),
-        color,
-    };
+    let mut score = empty_score(name, dropped, color);
     match evaluate(reference, estimate, &settings) {
         Ok(e) => {
             score.ate_rmse = Some(e.ape.translation.rmse);
@@ -279,43 +342,57 @@ fn score_trajectory(
     score
 }
 
-fn score_all(
-    items: &[Estimate],
-    trajectories: &[NamedTrajectory],
-    landmarks: &[(String, Vec<LandmarkRow>)],
-    align: bool,
-) -> Vec<EstimateScore> {
-    let Some(reference) = reference_of(trajectories) else {
-        return Vec::new();
-    };
-    let mut all: Vec<EstimateScore> = trajectories
+fn score_all(items: &[Estimate], lesson: &LessonOutput, align: bool) -> Vec<EstimateScore> {
+    let true_pose = lesson
+        .relative_poses
         .iter()
-        .filter(|t| !std::ptr::eq(*t, reference) && t.role != TrajectoryRole::Truth)
-        .map(|t| {
-            score_trajectory(
-                &t.name,
-                false,
-                if t.role == TrajectoryRole::Odometry {
-                    palette::DEAD_RECKONING
-                } else {
-                    palette::estimator_color(&t.name)
-                },
-                &t.trajectory,
-                &reference.trajectory,
-                align,
-            )
+        .find(|(name, _)| name == "truth")
+        .map(|(_, p)| p);
+    let mut all: Vec<EstimateScore> = lesson
+        .relative_poses
+        .iter()
+        .filter(|(name, _)| name != "truth")
+        .map(|(name, p)| {
+            score_relative_pose(name, false, palette::estimator_color(name), p, true_pose)
         })
         .collect();
-    let true_landmarks = landmarks.iter().find(|(name, _)| name == "truth");
+    let reference = reference_of(&lesson.trajectories);
+    all.extend(
+        lesson
+            .trajectories
+            .iter()
+            .filter(|t| {
+                reference.is_some_and(|r| !std::ptr::eq(*t, r)) && t.role != TrajectoryRole::Truth
+            })
+            .map(|t| {
+                score_trajectory(
+                    &t.name,
+                    false,
+                    if t.role == TrajectoryRole::Odometry {
+                        palette::DEAD_RECKONING
+                    } else {
+                        palette::estimator_color(&t.name)
+                    },
+                    &t.trajectory,
+                    reference.map_or(&t.trajectory, |r| &r.trajectory),
+                    align,
+                )
+            }),
+    );
+    let true_landmarks = lesson.landmarks.iter().find(|(name, _)| name == "truth");
     for item in items {
         match &item.content {
-            EstimateContent::Trajectory(t) => all.push(score_trajectory(
-                &item.name,
-                true,
-                item.color,
-                t,
-                &reference.trajectory,
-                align,
+            EstimateContent::Trajectory(t) => all.push(match reference {
+                Some(r) => score_trajectory(&item.name, true, item.color, t, &r.trajectory, align),
+                None => {
+                    let mut s = empty_score(&item.name, true, item.color);
+                    s.note =
+                        Some("this lesson has no trajectory to compare a path with".to_owned());
+                    s
+                }
+            }),
+            EstimateContent::RelativePose(p) => all.push(score_relative_pose(
+                &item.name, true, item.color, p, true_pose,
             )),
             EstimateContent::Landmarks(rows) => {
                 let (rmse, note) = match true_landmarks {
@@ -343,20 +420,10 @@ fn score_all(
                     }
                     None => (None, Some("this lesson has no true landmarks".to_owned())),
                 };
-                all.push(EstimateScore {
-                    name: item.name.clone(),
-                    dropped: true,
-                    ate_rmse: None,
-                    ate_max: None,
-                    rpe_rmse: None,
-                    anees: None,
-                    nees_in_band: None,
-                    pairs: 0,
-                    landmark_rmse: rmse,
-                    note,
-                    errors: Vec::new(),
-                    color: item.color,
-                });
+                let mut score = empty_score(&item.name, true, item.color);
+                score.landmark_rmse = rmse;
+                score.note = note;
+                all.push(score);
             }
         }
     }
@@ -411,6 +478,7 @@ pub fn map_overlay(ctx: &egui::Context, estimates: &Estimates, now: f64) {
                     },
                 );
             }
+            EstimateContent::RelativePose(_) => {}
             EstimateContent::Landmarks(rows) => {
                 for r in rows {
                     let c = t.xy(r.x, r.y);
@@ -473,6 +541,13 @@ pub fn window_ui(ctx: &egui::Context, estimates: &mut Estimates, has_truth: bool
                         ui.label("");
                         ui.label("");
                         ui.label("");
+                    } else if s.rotation_error_deg.is_some() || s.direction_error_deg.is_some() {
+                        ui.label(format!("R {}°", fmt(s.rotation_error_deg, 3)))
+                            .on_hover_text("The rotation error: the angle of R_trueᵀ R");
+                        ui.label(format!("t {}°", fmt(s.direction_error_deg, 2)))
+                            .on_hover_text("The angle between the estimated and the true direction of translation (a monocular t has no length)");
+                        ui.label("");
+                        ui.label("");
                     } else {
                         ui.label(fmt(s.ate_rmse, 3));
                         ui.label(fmt(s.ate_max, 3));
@@ -492,7 +567,7 @@ pub fn window_ui(ctx: &egui::Context, estimates: &mut Estimates, has_truth: bool
                 }
             });
             if estimates.items.is_empty() {
-                ui.weak("Drop a trajectory (TUM t x y z qx qy qz qw, or CSV t,x,y,theta[,covariance]) or a landmark CSV (id,x,y) on the page, or use File → Open your estimate. File → Export trajectories gives the lesson's own in these formats.");
+                ui.weak("Drop a trajectory (TUM t x y z qx qy qz qw, or CSV t,x,y,theta[,covariance]), a landmark CSV (id,x,y) or, in the two-view lesson, a relative pose (.txt: R row by row then t, or tx ty tz qx qy qz qw) on the page, or use File → Open your estimate. File → Export trajectories gives the lesson's own in these formats.");
             }
             let series: Vec<(String, Color32, Vec<[f64; 2]>)> = estimates
                 .scores
@@ -544,18 +619,15 @@ mod tests {
         assert!(!is_estimate_file("map.yaml", b"image: map.pgm"));
         let said = estimates.add("mine.txt", text.as_bytes()).unwrap();
         assert_eq!(said, "Your estimate mine.txt: 50 poses");
-        let lesson = || -> (Vec<NamedTrajectory>, Vec<(String, Vec<LandmarkRow>)>) {
-            (
-                vec![
-                    NamedTrajectory::new("truth", TrajectoryRole::Truth, line(30, 0.0)),
-                    NamedTrajectory::new("ekf", TrajectoryRole::Estimate, line(30, 0.05)),
-                ],
-                Vec::new(),
-            )
+        let lesson = LessonOutput {
+            trajectories: vec![
+                NamedTrajectory::new("truth", TrajectoryRole::Truth, line(30, 0.0)),
+                NamedTrajectory::new("ekf", TrajectoryRole::Estimate, line(30, 0.05)),
+            ],
+            ..LessonOutput::default()
         };
-        let (trajectories, landmarks) = lesson();
         assert!(estimates.is_stale(30));
-        let scores = estimates.score(30, &trajectories, &landmarks).to_vec();
+        let scores = estimates.score(30, &lesson).to_vec();
         assert!(!estimates.is_stale(30));
         assert_eq!(scores.len(), 2);
         assert_eq!(scores[0].name, "ekf");
@@ -569,5 +641,55 @@ mod tests {
         assert_eq!(estimates.items().len(), 1);
         estimates.remove(0);
         assert!(estimates.is_empty());
+    }
+
+    /// A relative pose dropped in the two-view lesson is scored as the lesson's
+    /// own RANSAC estimate is: the true pose written and dropped back has no
+    /// error; one turned by 2° about the camera's axis has a rotation error of 2°.
+    #[test]
+    fn a_dropped_relative_pose_is_scored_against_the_true_one() {
+        use nalgebra::{Rotation3, Vector3};
+        use slamlab_sim::io::relative_pose::write_relative_pose;
+        let truth = RelativePose {
+            rotation: Rotation3::from_euler_angles(0.0, 0.05, 0.0).into_inner(),
+            translation: Vector3::new(0.1, 0.0, 1.0),
+        };
+        let turned = RelativePose {
+            rotation: Rotation3::from_euler_angles(0.0, 0.0, 2.0_f64.to_radians()).into_inner()
+                * truth.rotation,
+            translation: truth.translation,
+        };
+        let mut estimates = Estimates::default();
+        for (name, pose) in [("same.txt", &truth), ("turned.txt", &turned)] {
+            let text = write_relative_pose(pose);
+            assert!(is_estimate_file(name, text.as_bytes()));
+            let said = estimates.add(name, text.as_bytes()).unwrap();
+            assert_eq!(
+                said,
+                format!("Your estimate {name}: a relative pose of two views")
+            );
+        }
+        let lesson = LessonOutput {
+            relative_poses: vec![("truth".to_owned(), truth), ("ransac".to_owned(), turned)],
+            ..LessonOutput::default()
+        };
+        let scores = estimates.score(1, &lesson).to_vec();
+        let names: Vec<&str> = scores.iter().map(|s| s.name.as_str()).collect();
+        assert_eq!(names, ["ransac", "same.txt", "turned.txt"]);
+        assert!(scores[1].rotation_error_deg.unwrap() < 1e-6);
+        assert!(scores[1].direction_error_deg.unwrap() < 1e-6);
+        for s in [&scores[0], &scores[2]] {
+            assert!((s.rotation_error_deg.unwrap() - 2.0).abs() < 1e-9, "{s:?}");
+        }
+        // Without a true pose (another lesson), the score says why it is empty.
+        let other = estimates.score(2, &LessonOutput::default()).to_vec();
+        assert!(other[0].rotation_error_deg.is_none());
+        assert!(
+            other[0]
+                .note
+                .as_deref()
+                .unwrap()
+                .contains("no pair of views")
+        );
     }
 }

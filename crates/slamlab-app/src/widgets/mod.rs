@@ -15,5 +15,6 @@ pub mod map_canvas;
 pub mod params_panel;
 pub mod particles;
 pub mod plots;
+pub mod reference_track;
 pub mod share;
 pub mod sources;

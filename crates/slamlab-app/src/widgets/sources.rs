@@ -231,6 +231,45 @@ pub const SOURCES: &[Source] = &[
         covers: "Standard graphs to drop on the pose-graph lesson as .g2o or TORO files.",
         sections: &[],
     },
+    Source {
+        key: "mrclam",
+        short: "UTIAS MRCLAM data set",
+        title: "The UTIAS multi-robot cooperative localization and mapping dataset",
+        author: "K. Y. K. Leung, Y. Halpern, T. D. Barfoot and H. H. T. Liu",
+        publisher: "University of Toronto Institute for Aerospace Studies; International \
+                    Journal of Robotics Research 30(8):969-974",
+        year: "2011",
+        covers: "A real world for the landmark lesson: five robots' odometry and camera \
+                 sightings of fifteen barcoded landmarks, with Vicon ground truth for \
+                 everything, so a filter's error and NEES are measured against the truth.",
+        sections: &[],
+    },
+    Source {
+        key: "freiburg-data",
+        short: "Freiburg course data",
+        title: "Robot Mapping: EKF-SLAM exercise data (world.dat, sensor_data.dat)",
+        author: "C. Stachniss",
+        publisher: "Robot Mapping course, University of Freiburg",
+        year: "WS 2013/14",
+        covers: "The input of the course's EKF-SLAM, UKF-SLAM and FastSLAM exercises: \
+                 odometry as rot1-trans-rot2, range-bearing sightings with known ids, and the \
+                 nine true landmarks (no true path).",
+        sections: &[],
+    },
+    Source {
+        key: "victoria-park",
+        short: "Victoria Park data set",
+        title: "Optimization of the simultaneous localization and map-building algorithm for \
+                real-time implementation",
+        author: "J. Guivant and E. Nebot",
+        publisher: "Australian Centre for Field Robotics; IEEE Transactions on Robotics and \
+                    Automation 17(3):242-257",
+        year: "2001",
+        covers: "A car among the trees of a Sydney park: encoder speed and steering (the ACFR \
+                 car model), tree detections without identity, and GPS as the only \
+                 independent reference.",
+        sections: &[],
+    },
 ];
 
 /// The entry named `key`.

@@ -313,7 +313,7 @@ fn driving_by_hand_with_the_keys_moves_the_robot_and_stops_it() {
     assert!(!lesson(&h).driving_by_hand());
 }
 
-/// "Open map…" natively: the path of a map's YAML; its image is read beside it and
+/// "Open map, log or bag…" natively: the path of a map's YAML; its image is read beside it and
 /// the lesson restarts on the loaded map. A missing file leaves the map and a note.
 #[test]
 fn open_map_reads_the_yaml_and_its_image() {
@@ -323,12 +323,12 @@ fn open_map_reads_the_yaml_and_its_image() {
     );
     let mut h = harness("lesson=kidnap&seed=2");
     h.run();
-    h.get_by_label("Open map…").scroll_to_me();
+    h.get_by_label("Open map, log or bag…").scroll_to_me();
     h.run();
     h.get_by_label("path").focus();
     h.get_by_label("path").type_text("/nonexistent/map.yaml");
     h.run();
-    h.get_by_label("Open map…").click();
+    h.get_by_label("Open map, log or bag…").click();
     h.run();
     assert_eq!(lesson(&h).map_name(), "maze");
     let notes = lesson(&h).note().unwrap_or_default().to_owned();
@@ -341,7 +341,7 @@ fn open_map_reads_the_yaml_and_its_image() {
     }
     h.get_by_label("path").type_text(&yaml);
     h.run();
-    h.get_by_label("Open map…").click();
+    h.get_by_label("Open map, log or bag…").click();
     h.run();
     assert_eq!(lesson(&h).map_name(), "office.yaml");
     let notes = lesson(&h).note().unwrap_or_default().to_owned();
@@ -658,4 +658,177 @@ fn measure_default_mcl_after_a_kidnap() {
             lesson(&h).sim().run().status_of(0)
         );
     }
+}
+
+/// A simulated run in the maze (400 scans, seed 3) as a ROS 2 bag with its truth,
+/// and as the CARMEN log SLAM Lab writes (no truth).
+#[allow(clippy::unwrap_used)] // a test's fixture: a failure stops the test
+fn recorded_run() -> (Vec<u8>, String, Vec<slamlab_core::Pose2>) {
+    use slamlab_sim::grid::{BuiltinMap, SimulatedLogConfig, simulate_log};
+    use slamlab_sim::io::ros2_bag::{BagWriteOptions, write_bag};
+    let map = BuiltinMap::Maze.load().unwrap();
+    let (log, truth) = simulate_log(&map, 400, 3, &SimulatedLogConfig::default()).unwrap();
+    let bag = write_bag(&log, Some(&truth), &BagWriteOptions::default()).unwrap();
+    let text = slamlab_sim::io::laser_log::write_carmen(&log).unwrap();
+    (bag, text, truth.iter().map(|t| t.pose).collect())
+}
+
+/// The lesson localizes a recorded robot: a bag with its truth (errors measured),
+/// its CARMEN copy without (the status and the error plot say why there is no
+/// error), a bag in a map it was not recorded in (a notice), a ROS 1 bag
+/// (refused; the run stays), and back to the simulated robot.
+#[test]
+fn a_bag_or_a_log_is_localized_in_the_map_with_or_without_truth() {
+    use slamlab_app::lesson::Lesson as _;
+    let (bag, text, truth) = recorded_run();
+    let mut h = harness("lesson=kidnap&seed=1&estimator=mcl,acmcl");
+    lesson_mut(&mut h).load_log("run.mcap", &bag);
+    h.run();
+    let note = lesson(&h).note().unwrap_or_default().to_owned();
+    assert!(
+        note.starts_with("Loaded run.mcap (ROS 2 bag, MCAP with uncompressed chunks): 400 scans")
+            && note.contains("with its true poses")
+            && note.ends_with("localizing in maze"),
+        "{note}"
+    );
+    assert!(h.state().notices().is_empty(), "{:?}", h.state().notices());
+    for _ in 0..450 {
+        lesson_mut(&mut h).step_tick();
+    }
+    h.run();
+    let state = lesson(&h).test_state();
+    assert_eq!(state["log_progress"], serde_json::json!([400, 400]));
+    assert_eq!(state["tick"], 400, "the run stops at the log's end");
+    let last = truth[399];
+    assert_eq!(
+        state["truth"],
+        serde_json::json!([last.x, last.y, last.theta])
+    );
+    // The numbers of the sim's and the CLI's replay tests: the same bag and seed.
+    let run = lesson(&h).sim().run();
+    let converged: Vec<_> = run.summaries().iter().map(|s| s.converged_tick).collect();
+    assert_eq!(converged, [Some(86), Some(71)]);
+    for f in state["filters"].as_array().unwrap() {
+        assert!(f["position_error"].as_f64().unwrap() < 0.12, "{f}");
+        assert!(f["status"].as_str().unwrap().starts_with("tracking"), "{f}");
+    }
+    // A recorded robot is not kidnapped.
+    lesson_mut(&mut h).apply_event(slamlab_sim::kidnap::session::KidnapEvent::KidnapRandom);
+    assert_eq!(lesson(&h).sim().run().kidnap_tick(), None);
+    if let Some(image) = render_or_skip(&mut h) {
+        let _ = image.save(std::env::temp_dir().join("slamlab-kidnap-bag.png"));
+    }
+
+    // The CARMEN copy, at 800 x 500: no truth.
+    let mut h = super::common::harness_sized(
+        "lesson=kidnap&seed=1&estimator=mcl,acmcl",
+        egui::vec2(800.0, 500.0),
+    );
+    lesson_mut(&mut h).load_log("run.clf", text.as_bytes());
+    for _ in 0..400 {
+        lesson_mut(&mut h).step_tick();
+    }
+    h.run();
+    let state = lesson(&h).test_state();
+    assert!(state["truth"].is_null());
+    for f in state["filters"].as_array().unwrap() {
+        assert!(f["position_error"].is_null(), "{f}");
+        assert!(
+            f["status"]
+                .as_str()
+                .unwrap()
+                .starts_with("no truth in this log: estimate ("),
+            "{f}"
+        );
+        // Found all the same, against the truth the bag carried.
+        let e = f["estimate_now"].as_array().unwrap();
+        let d = slamlab_core::math::hypot(
+            e[0].as_f64().unwrap() - truth[399].x,
+            e[1].as_f64().unwrap() - truth[399].y,
+        );
+        assert!(d < 0.15, "{f}: {d}");
+    }
+    assert!(super::common::label_visible(
+        &h,
+        "No truth in this log: 2σ bounds only"
+    ));
+    if let Some(image) = render_or_skip(&mut h) {
+        let _ = image.save(std::env::temp_dir().join("slamlab-kidnap-log-800x500.png"));
+    }
+
+    // The bag in the office: its true poses are not the office's free space.
+    let mut h = harness("lesson=kidnap&map=office&seed=1");
+    lesson_mut(&mut h).load_log("run.mcap", &bag);
+    h.run();
+    let notices = h.state().notices().join("\n");
+    assert!(
+        notices
+            .contains("true poses are outside the map's free space: was it recorded in this map?"),
+        "{notices}"
+    );
+    // A ROS 1 bag: refused with how to convert it; the bag's run stays.
+    lesson_mut(&mut h).step_tick();
+    lesson_mut(&mut h).load_log("old.bag", b"#ROSBAG V2.0\nE\x00\x00\x00");
+    let l = lesson(&h);
+    assert!(
+        l.note()
+            .unwrap_or_default()
+            .starts_with("Could not read the log old.bag: this is a ROS 1 bag"),
+        "{:?}",
+        l.note()
+    );
+    assert_eq!(l.log_name(), Some("run.mcap"));
+    assert_eq!(l.sim().run().tick_count(), 1);
+    // Back to the simulated robot, in the same map.
+    lesson_mut(&mut h).close_log();
+    let l = lesson(&h);
+    assert!(l.log_name().is_none() && l.sim().run().log().is_none());
+    assert_eq!(l.map_name(), "office");
+}
+
+/// `log=` (on the desktop a path) opens a bag in the lesson, with `scan-topic=`,
+/// and travels in share links; a real robot's bag has no truth.
+#[test]
+fn log_in_the_url_opens_a_bag_and_stays_in_the_share_link() {
+    use slamlab_app::lesson::Lesson as _;
+    let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR"))
+        .join("../slamlab-sim/tests/data/ros2_bags/rosbags-intel-300-scans.mcap");
+    let path = path.to_string_lossy().into_owned();
+    let mut h = harness(&format!(
+        "lesson=kidnap&particles=300&log={path}&scan-topic=/scan"
+    ));
+    for _ in 0..5 {
+        h.run();
+    }
+    let l = lesson(&h);
+    assert_eq!(
+        l.log_name(),
+        Some("rosbags-intel-300-scans.mcap"),
+        "{:?}",
+        l.note()
+    );
+    assert!(!l.sim().run().has_truth());
+    assert_eq!(l.sim().run().log_progress(), Some((0, 300)));
+    let pairs = l.share_pairs();
+    assert!(
+        pairs.contains(&("log".to_owned(), path.clone())),
+        "{pairs:?}"
+    );
+    assert!(
+        pairs.contains(&("scan-topic".to_owned(), "/scan".to_owned())),
+        "{pairs:?}"
+    );
+    for _ in 0..20 {
+        lesson_mut(&mut h).step_tick();
+    }
+    assert!(lesson(&h).test_state()["truth"].is_null());
+    assert!(
+        lesson(&h)
+            .sim()
+            .run()
+            .status_of(0)
+            .starts_with("no truth in this log"),
+        "{}",
+        lesson(&h).sim().run().status_of(0)
+    );
 }

@@ -13,6 +13,7 @@ mod exports_ui;
 mod filters_ui;
 mod fusion_ui;
 mod kidnap_ui;
+mod landmark_data_ui;
 mod landmark_fastslam_ui;
 mod landmark_ui;
 mod mapping_ui;

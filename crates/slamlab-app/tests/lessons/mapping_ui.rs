@@ -429,6 +429,68 @@ fn one_particles_proposal_is_drawn_and_explained_at_800_by_500() {
     }
 }
 
+/// The Intel log's first 2,000 scans with its corrected version dropped after
+/// it: scan-to-map's trajectory error against the reference as the run goes
+/// (measured 2026-11-28: 0.086 m at scan 1,999, as `tests/laser_slam.rs`); a
+/// reference of another log first is refused with a message naming it, and the
+/// run goes on without a score. Skipped with a message when `../shared` is
+/// absent.
+#[test]
+fn the_intel_log_with_its_reference_plots_the_error_against_it() {
+    let dir = std::env::var_os("SLAMLAB_SHARED")
+        .map_or_else(
+            || std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../../../shared"),
+            std::path::PathBuf::from,
+        )
+        .join("data/laser");
+    let (Ok(log), Ok(reference)) = (
+        std::fs::read(dir.join("intel.clf.bz2")),
+        std::fs::read(dir.join("intel-corrected.log.gz")),
+    ) else {
+        eprintln!(
+            "skipped: the Intel log and its reference are not in {}",
+            dir.display()
+        );
+        return;
+    };
+    let mut h = harness_sized("lesson=mapping", egui::vec2(800.0, 500.0));
+    lesson_mut(&mut h).load_log("intel.clf.bz2", &log);
+    // Three ranges no scan of the Intel log has.
+    let other = b"FLASER 3 1.0 2.0 3.0 0 0 0 0 0 0 0.1 host 0.1\n".to_vec();
+    lesson_mut(&mut h).load_reference("other-corrected.log", other, None);
+    let state = lesson(&h).test_state();
+    assert!(state["reference"].is_null(), "{state}");
+    let note = state["note"].as_str().unwrap_or_default();
+    assert!(
+        note.contains("other-corrected.log") && note.contains("another log"),
+        "{note}"
+    );
+    lesson_mut(&mut h).load_reference("intel-corrected.log.gz", reference, None);
+    let state = lesson(&h).test_state();
+    assert_eq!(state["reference"]["matched"], 910, "{state}");
+    assert_eq!(state["poses"], "scan-to-map");
+    for _ in 0..2000 {
+        lesson_mut(&mut h).step_tick();
+    }
+    h.run();
+    let state = lesson(&h).test_state();
+    assert_eq!(state["scans"], 2000);
+    let ate = state["reference"]["ate_m"].as_f64().unwrap();
+    let at = state["reference"]["ate_at_scan"].as_f64().unwrap();
+    eprintln!("scan-to-map against the reference at scan {at}: ATE {ate}");
+    assert!((ate - 0.086).abs() < 0.0086, "{ate}");
+    assert!((1900.0..2000.0).contains(&at), "{at}");
+    // An error for every reference scan passed from the second on, though
+    // the 2,000 scans ran without a frame drawn; the path through them all.
+    let passed = state["reference"]["path_points"].as_u64().unwrap();
+    assert!(passed > 100, "{}", state["reference"]);
+    assert_eq!(state["reference"]["ate_points"].as_u64(), Some(passed - 1));
+    let Some(image) = render_or_skip(&mut h) else {
+        return;
+    };
+    let _ = image.save(std::env::temp_dir().join("slamlab-mapping-intel-reference.png"));
+}
+
 /// A ROS 2 bag of a simulated run with a second LaserScan topic (the same
 /// scans, each beam 10 cm shorter) and the run's odometry, as a robot records
 /// it: `/scan`, `/scan_rear`, `/odom` (no `/tf_static`: the mounting is assumed).

@@ -5,6 +5,7 @@
 //! slamlab run cartographer --map maze --steps 600 --kidnap-at 152 --seed 1 --json
 //! slamlab run cartographer --map maze --steps 600 --kidnap-at 152 --detection off
 //! slamlab run cartographer --log intel.clf.bz2 --json
+//! slamlab run cartographer --log intel.clf.bz2 --reference intel-corrected.log.gz --loop-closures off
 //! ```
 
 use crate::command::RunLesson;
@@ -13,10 +14,12 @@ use crate::map::{map_arg, read_map};
 use crate::output::{Output, units_bar, units_progress};
 use anyhow::{Result, bail};
 use clap::{Arg, ArgMatches, Command};
+use cpu_time::ThreadTime;
 use serde_json::json;
 use slamlab_sim::cartographer::input::{KidnapPlace, kidnap_input_to};
 use slamlab_sim::cartographer::{CartographerParams, CartographerSim};
 use slamlab_sim::grid::SimulatedLogConfig;
+use slamlab_sim::grid::reference::{self, LogReference};
 use std::io::Write;
 use std::sync::Arc;
 use std::time::Instant;
@@ -55,6 +58,9 @@ impl RunLesson for Cartographer {
                     "map a CARMEN laser log (plain, .gz or .bz2) or a ROS 2 bag (.mcap) instead of a simulated robot",
                 ),
             )
+            .arg(Arg::new("reference").long("reference").value_name("FILE").help(
+                "with --log: its corrected log (e.g. intel-corrected.log.gz); the trajectory is scored against it (ATE, relative errors)",
+            ))
             .args(topic_args())
             .arg(count(
                 "steps",
@@ -82,21 +88,35 @@ impl RunLesson for Cartographer {
                     .value_parser(["on", "off"])
                     .help("kidnap detection (Algorithm 13): on (default) or off, the original behaviour"),
             )
+            .arg(
+                Arg::new("loop-closures")
+                    .long("loop-closures")
+                    .value_parser(["on", "off"])
+                    .help("loop closures: on (default), or off for local SLAM alone (no branch-and-bound search; the lesson's switch)"),
+            )
             .arg(count("num_range_data", "scans per submap (default 30)"))
             .arg(number("resolution", "submap cell size, metres (default 0.05)"))
             .arg(number("hit_probability", "default 0.55"))
             .arg(number("miss_probability", "default 0.49"))
             .arg(number(
                 "linear_search_window",
-                "loop-closure search half-width, metres (default 7)",
+                "loop-closure search half-width, metres (default 0.6)",
             ))
             .arg(number(
                 "angular_search_window",
-                "loop-closure search half-width, degrees (default 30)",
+                "loop-closure search half-width, degrees (default 5)",
             ))
             .arg(number(
                 "max_constraint_distance",
                 "search only submaps whose origin is this near a node, metres (default 15)",
+            ))
+            .arg(number(
+                "sampling_ratio",
+                "share of node-submap pairs searched for loop closures, sampled per submap (default 0.1)",
+            ))
+            .arg(count(
+                "max_closures_per_submap_pair",
+                "loop closures tying a node's submap to another before their pairs are searched no more (default 0: no limit)",
             ))
             .arg(number("min_score", "a loop closure must score above this (default 0.55)"))
             .arg(number(
@@ -135,6 +155,12 @@ impl RunLesson for Cartographer {
         if let Some(v) = f("max_constraint_distance") {
             params.max_constraint_distance = v;
         }
+        if let Some(v) = f("sampling_ratio") {
+            params.sampling_ratio = v;
+        }
+        if let Some(v) = n("max_closures_per_submap_pair") {
+            params.max_closures_per_submap_pair = v;
+        }
         if let Some(v) = f("min_score") {
             params.min_score = v;
         }
@@ -154,6 +180,11 @@ impl RunLesson for Cartographer {
             params.kidnap.filter_size = v;
         }
         params.detection = m.get_one::<String>("detection").is_none_or(|d| d == "on");
+        if m.get_one::<String>("loop-closures")
+            .is_some_and(|v| v == "off")
+        {
+            params = params.without_loop_closures();
+        }
         let steps = n("steps").unwrap_or(600);
         let seed = m.get_one::<u64>("seed").copied().unwrap_or(1);
         let mut kidnap_at = n("kidnap-at");
@@ -165,6 +196,19 @@ impl RunLesson for Cartographer {
                 );
             }
             let mut input = file.input;
+            // Matched to the whole log, before --steps cuts it: the reference
+            // scans past the cut are not scored.
+            if let Some(path) = m.get_one::<String>("reference") {
+                match std::fs::read(path)
+                    .map_err(|e| format!("cannot read {path}: {e}"))
+                    .and_then(|bytes| {
+                        LogReference::for_input(&bytes, path, &input)
+                            .map_err(|e| format!("{path}: {e}"))
+                    }) {
+                    Ok(r) => input.reference = Some(Arc::new(r)),
+                    Err(e) => eprintln!("warning: {e}; the run goes on without a score"),
+                }
+            }
             if let Some(first) = n("steps") {
                 input.scans.truncate(first);
             }
@@ -200,11 +244,18 @@ impl RunLesson for Cartographer {
         let total = sim.input().scans.len();
         let bar = units_bar("cartographer", total, "scans");
         let started = Instant::now();
+        let cpu_started = ThreadTime::now();
         while sim.step() {
             units_progress(&bar, "cartographer", sim.scans_done(), total, "scans");
         }
         let time_ms = started.elapsed().as_secs_f64() * 1e3;
+        let cpu_s = cpu_started.elapsed().as_secs_f64();
         let summary = sim.summary(kidnap_at, time_ms);
+        let score = sim
+            .input()
+            .reference
+            .as_deref()
+            .and_then(|r| reference::score(r, &sim.scan_poses()));
         crate::trajectory_out::write(
             m,
             self.id(),
@@ -224,6 +275,7 @@ impl RunLesson for Cartographer {
                 "false_alarms": summary.false_alarms,
                 "recovered_at": summary.recovered_at,
                 "loop_closures": summary.loop_closures,
+                "rejected_closures": summary.rejected_closures,
                 "trajectory_rmse": summary.trajectory_rmse,
                 "map_agreement": summary.map_agreement,
                 "bbs": summary.bbs,
@@ -232,6 +284,9 @@ impl RunLesson for Cartographer {
                 "trajectories": summary.trajectories,
                 "optimizations": summary.optimizations,
                 "time_ms": time_ms,
+                "cpu_s": cpu_s,
+                "real_time_factor": sim.input().duration() / cpu_s.max(1e-9),
+                "score": score,
                 "parameters": serde_json::to_value(sim.params())?,
             }))?;
             return Ok(());
@@ -270,7 +325,18 @@ impl RunLesson for Cartographer {
         )?;
         writeln!(out, "trajectory RMSE: {} m", g(summary.trajectory_rmse))?;
         writeln!(out, "map agreement:   {}", g(summary.map_agreement))?;
-        writeln!(out, "time:            {time_ms:.0} ms")?;
+        if let Some(s) = &score {
+            writeln!(
+                out,
+                "reference:       ATE {:.3} m after SE(2) alignment at {} reference scans",
+                s.ate_m, s.pairs
+            )?;
+        }
+        writeln!(
+            out,
+            "time:            {time_ms:.0} ms ({cpu_s:.1} s of CPU, {:.0}x real time)",
+            sim.input().duration() / cpu_s.max(1e-9)
+        )?;
         Ok(())
     }
 }

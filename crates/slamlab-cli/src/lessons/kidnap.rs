@@ -2,13 +2,20 @@
 //!
 //! ```text
 //! slamlab run kidnap --map maze --estimator mcl --particles 2000 --init global --steps 600 --seed 1 --json
+//! slamlab run kidnap --map office.yaml --log robot.mcap --scan-topic /scan --odom-topic /odom
 //! ```
+//!
+//! With `--log` (a CARMEN log or a ROS 2 bag) the filters localize the recorded
+//! robot in the map, one tick a scan, to the end of the log (or `--steps`
+//! ticks); the errors are against the bag's `/ground_truth` where it has one,
+//! and left out where the log has no truth.
 //!
 //! Parameter flags carry ROS amcl's names with dashes (`--laser-sigma-hit`,
 //! `--odom-alpha1`, `--update-min-d`, ...).
 
 use crate::command::RunLesson;
 use crate::flags;
+use crate::log_cmd::{read_laser_file, topic_args};
 use crate::map::{map_arg, read_map, resolution_arg};
 use crate::output::Output;
 use anyhow::{Context, Result};
@@ -40,8 +47,12 @@ impl RunLesson for Kidnap {
                     .long("steps")
                     .value_parser(clap::value_parser!(u64).range(0..=1_000_000))
                     .default_value("600")
-                    .help("ticks of 0.1 s"),
+                    .help("ticks of 0.1 s (with --log: at most this many scans; default the whole log)"),
             )
+            .arg(Arg::new("log").long("log").value_name("FILE").help(
+                "localize a recorded robot: a CARMEN laser log (plain, .gz or .bz2) or a ROS 2 bag (.mcap), in the map given by --map",
+            ))
+            .args(topic_args())
             .args(flags::table_args::<MclScenario>(|name| name != "map"))
             .arg(crate::trajectory_out::arg())
     }
@@ -51,13 +62,28 @@ impl RunLesson for Kidnap {
         let spec = m.get_one::<String>("map").map_or("maze", String::as_str);
         let (grid, name) = read_map(spec, m.get_one::<f64>("resolution").copied())?;
         scenario.map = name.clone();
-        let steps = m.get_one::<u64>("steps").copied().unwrap_or(600);
+        let steps_given = m.value_source("steps") == Some(clap::parser::ValueSource::CommandLine);
+        let mut steps = m.get_one::<u64>("steps").copied().unwrap_or(600);
         let (width, height, resolution) = (grid.width(), grid.height(), grid.resolution());
-        let mut run = MclRun::new(scenario.clone(), grid).with_context(|| format!("map {name}"))?;
+        let log = match m.get_one::<String>("log") {
+            Some(path) => Some((path, read_laser_file(path, m)?)),
+            None => None,
+        };
+        let mut run = match &log {
+            Some((path, file)) => {
+                if !steps_given {
+                    steps = file.input.scans.len() as u64;
+                }
+                MclRun::from_log(scenario.clone(), grid, file.input.clone())
+                    .with_context(|| format!("localizing {path} in the map {name}"))?
+            }
+            None => MclRun::new(scenario.clone(), grid).with_context(|| format!("map {name}"))?,
+        };
         for note in run.notes() {
             eprintln!("warning: {note}");
         }
         run.run_ticks(steps);
+        let steps = run.tick_count();
         crate::trajectory_out::write(
             m,
             self.id(),
@@ -65,23 +91,73 @@ impl RunLesson for Kidnap {
             &[],
         )?;
         let summaries = run.summaries();
+        let estimates: Vec<serde_json::Value> = run
+            .filters()
+            .iter()
+            .map(|f| match f.current_estimate(&run.odometry()) {
+                Some(p) => json!({"name": f.name, "x": p.x, "y": p.y, "theta": p.theta}),
+                None => json!({"name": f.name}),
+            })
+            .collect();
         if out.json() {
-            out.print_json(&json!({
+            let mut report = json!({
                 "steps": steps,
                 "seed": scenario.seed,
                 "map": {"name": name, "width": width, "height": height, "resolution": resolution},
                 "parameters": serde_json::to_value(&scenario)?,
                 "filters": summaries,
-            }))?;
+            });
+            if let Some((_, file)) = &log {
+                report["log"] = json!({
+                    "name": file.describe(),
+                    "format": file.format,
+                    "scans": file.input.scans.len(),
+                    "replayed": run.log_progress().map_or(0, |(done, _)| done),
+                    "truth": run.has_truth(),
+                });
+                report["final_estimates"] = json!(estimates);
+            }
+            out.print_json(&report)?;
             return Ok(());
         }
-        writeln!(
-            out,
-            "SLAM Lab: Monte Carlo localization on {name} ({width} x {height} cells of {resolution} m) — {steps} ticks, seed {}, init {}",
-            scenario.seed,
-            scenario.init.name()
-        )?;
-        writeln!(out)?;
+        if let Some((_, file)) = &log {
+            let truth = if run.has_truth() {
+                "errors against its truth"
+            } else {
+                "no truth: errors unknown"
+            };
+            writeln!(
+                out,
+                "SLAM Lab: Monte Carlo localization of {} ({}) in {name} ({width} x {height} cells of {resolution} m) — {steps} of {} scans, seed {}, init {}; {truth}",
+                file.describe(),
+                file.format,
+                file.input.scans.len(),
+                scenario.seed,
+                scenario.init.name()
+            )?;
+            writeln!(out)?;
+            for (k, f) in run.filters().iter().enumerate() {
+                writeln!(
+                    out,
+                    "{:<8} {:>5} particles  {}",
+                    f.name,
+                    f.mcl().count(),
+                    run.status_of(k)
+                )?;
+            }
+            if !run.has_truth() {
+                return Ok(());
+            }
+            writeln!(out)?;
+        } else {
+            writeln!(
+                out,
+                "SLAM Lab: Monte Carlo localization on {name} ({width} x {height} cells of {resolution} m) — {steps} ticks, seed {}, init {}",
+                scenario.seed,
+                scenario.init.name()
+            )?;
+            writeln!(out)?;
+        }
         writeln!(
             out,
             "{:<8} {:>9} {:>10} {:>12} {:>12} {:>12}",

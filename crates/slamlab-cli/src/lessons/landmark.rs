@@ -2,6 +2,7 @@
 //!
 //! ```text
 //! slamlab run landmark-slam --estimator ekf --steps 200 --seed 1 --json
+//! slamlab run landmark-slam --data MRCLAM_Dataset6.zip --robot 1 --mode localization
 //! ```
 
 use crate::command::RunLesson;
@@ -9,10 +10,14 @@ use crate::flags;
 use crate::output::Output;
 use anyhow::{Context, Result, bail};
 use clap::{Arg, ArgMatches, Command};
+use slamlab_sim::io::landmark_data::{LandmarkData, read_path};
 use slamlab_sim::landmark_slam::export;
-use slamlab_sim::landmark_slam::summary::{RunSummary, run_headless};
+use slamlab_sim::landmark_slam::presets;
+use slamlab_sim::landmark_slam::summary::{RunSummary, run_headless, run_recorded};
+use slamlab_sim::world::recorded::RecordedWorld;
 use slamlab_sim::{LandmarkScenario, LandmarkSession};
 use std::io::Write;
+use std::sync::Arc;
 
 /// The landmark lesson's run.
 pub struct LandmarkSlam;
@@ -35,15 +40,27 @@ impl RunLesson for LandmarkSlam {
                     .default_value("200")
                     .help("number of simulation ticks"),
             )
+            .arg(data_arg())
             .args(scenario_args(&[]))
             .arg(crate::trajectory_out::arg())
     }
 
     fn run(&self, matches: &ArgMatches, out: &mut Output) -> Result<()> {
         let steps = matches.get_one::<u64>("steps").copied().unwrap_or(200);
-        let scenario = scenario_from(matches, &[])?;
-        check_runnable(&scenario)?;
-        let (session, summary) = run_headless(scenario, steps);
+        let (session, summary) = match data_from(matches)? {
+            Some(data) => {
+                let scenario = scenario_for_data(matches, &[], &data)?;
+                let world = recorded_world(&data, &scenario)?;
+                // A data set runs to its end unless --steps says otherwise.
+                let steps = flags::given(matches, "steps").then_some(steps);
+                run_recorded(scenario, world, steps)
+            }
+            None => {
+                let scenario = scenario_from(matches, &[])?;
+                check_runnable(&scenario)?;
+                run_headless(scenario, steps)
+            }
+        };
         crate::trajectory_out::write(
             matches,
             self.id(),
@@ -68,6 +85,48 @@ impl RunLesson for LandmarkSlam {
         }
         print_summary(out, &summary)
     }
+}
+
+/// `--data PATH`: a recorded data set instead of the simulated world.
+pub fn data_arg() -> Arg {
+    Arg::new("data").long("data").value_name("PATH").help(
+        "replay a data set instead of the simulated world: the UTIAS MRCLAM zip (or a folder \
+             or one of its .dat files), the Freiburg course's sensor_data.dat (world.dat beside \
+             it), or Victoria Park's folder or inputs.dat; the data set's preset applies first, \
+             the flags on top",
+    )
+}
+
+/// The data set `--data` names, read (or `None` without the flag).
+pub fn data_from(matches: &ArgMatches) -> Result<Option<LandmarkData>> {
+    let Some(path) = matches.get_one::<String>("data") else {
+        return Ok(None);
+    };
+    read_path(std::path::Path::new(path))
+        .map(Some)
+        .map_err(|e| anyhow::anyhow!("--data {path}: {e}"))
+}
+
+/// The landmark scenario for `data`: its preset, then the flags given (but
+/// those in `skip`).
+pub fn scenario_for_data(
+    matches: &ArgMatches,
+    skip: &[&str],
+    data: &LandmarkData,
+) -> Result<LandmarkScenario> {
+    let seed = LandmarkScenario::default().seed;
+    let base = presets::scenario(presets::for_data(data.kind()), seed).unwrap_or_default();
+    flags::scenario_from_base(matches, skip, base)
+}
+
+/// The world of `data` for `scenario` (its robot, for MRCLAM).
+pub fn recorded_world(
+    data: &LandmarkData,
+    scenario: &LandmarkScenario,
+) -> Result<Arc<RecordedWorld>> {
+    RecordedWorld::from_data(data, scenario.robot)
+        .map(Arc::new)
+        .map_err(|e| anyhow::anyhow!("--robot {}: {e}", scenario.robot))
 }
 
 /// The landmark scenario's flags (the URL's names), but those in `skip` (a
@@ -113,9 +172,24 @@ pub fn check_runnable(scenario: &LandmarkScenario) -> Result<()> {
 fn print_summary(out: &mut Output, summary: &RunSummary) -> Result<()> {
     writeln!(
         out,
-        "SLAM Lab: {} — {} ticks ({:.1} s simulated), seed {}",
-        summary.lesson, summary.steps, summary.duration_s, summary.seed
+        "SLAM Lab: {} — {} ticks ({:.1} s {}), seed {}",
+        summary.lesson,
+        summary.steps,
+        summary.duration_s,
+        if summary.data.is_some() {
+            "of data"
+        } else {
+            "simulated"
+        },
+        summary.seed
     )?;
+    if let Some(data) = &summary.data {
+        writeln!(
+            out,
+            "data: {} ({} of {} steps played)\n      {}\n      cite: {}",
+            data.name, data.steps_played, data.steps_total, data.title, data.citation
+        )?;
+    }
     writeln!(out)?;
     out.parameters(&summary.parameters, 16)?;
     for note in &summary.notices {
@@ -134,13 +208,22 @@ fn print_summary(out: &mut Output, summary: &RunSummary) -> Result<()> {
         "NIS mean",
         "landmarks"
     )?;
+    // Recorded data without a true path has no robot errors to show.
+    let no_truth = summary.data.as_ref().is_some_and(|d| !d.has_truth);
+    let robot = |v: f64| {
+        if no_truth {
+            "-".to_owned()
+        } else {
+            format!("{v:.4}")
+        }
+    };
     for f in &summary.filters {
         writeln!(
             out,
-            "{:<8} {:>14.4} {:>14.4} {:>16} {:>10} {:>10} {:>10}",
+            "{:<8} {:>14} {:>14} {:>16} {:>10} {:>10} {:>10}",
             f.name,
-            f.robot_rmse,
-            f.robot_error_final,
+            robot(f.robot_rmse),
+            robot(f.robot_error_final),
             fmt(f.landmark_rmse),
             fmt(f.nees_mean),
             fmt(f.nis_mean),

@@ -4,7 +4,7 @@ use super::state::{SlamState, check_control, check_measurement};
 use super::{FilterConfig, FilterError, LandmarkSlam, PredictReport, UpdateReport, symmetrize};
 use crate::belief::{self, JointGaussian, LandmarkBelief, LandmarkEstimate, PoseBelief};
 use crate::geometry::Pose2;
-use crate::motion::Control;
+use crate::motion::{Control, RecordedMotion};
 use crate::range_bearing::{self, RangeBearing};
 use nalgebra::{DMatrix, DVector, Matrix2, Matrix2x3, Matrix3, Vector2};
 use serde::{Deserialize, Serialize};
@@ -261,6 +261,41 @@ impl EkfSlam {
             position: g.landmark,
         })
     }
+    /// Moves the robot's mean to `pose` and its covariance by the motion's
+    /// Jacobian `f` and process noise `q` (thesis Eq. 3.17-3.19, 3.34-3.35):
+    /// `P_RR ← F P_RR Fᵀ + Q` and `P_RL ← F P_RL`; the landmarks stay put.
+    fn propagate(&mut self, pose: Pose2, mut f: Matrix3<f64>, q: &Matrix3<f64>) {
+        // ∂f/∂θ = J (p' - p) for every motion model here. FEJ takes the displacement
+        // from the previous *predicted* position, so that the products of F over time
+        // telescope as they do for the true system; a supplied point gives the move.
+        let displacement = match (self.linearization, &self.supplied) {
+            (Linearization::LatestEstimate, _) => None,
+            (Linearization::Supplied, Some(point)) => Some((point.robot_before, point.robot)),
+            _ => Some((self.robot_prior, pose)),
+        };
+        if let Some((from, to)) = displacement {
+            f[(0, 2)] = -(to.y - from.y);
+            f[(1, 2)] = to.x - from.x;
+        }
+        self.state.mean[0] = pose.x;
+        self.state.mean[1] = pose.y;
+        self.state.mean[2] = pose.theta;
+
+        let p_rr: Matrix3<f64> = self.state.covariance.fixed_view::<3, 3>(0, 0).into_owned();
+        let new_rr = f * p_rr * f.transpose() + q;
+        self.state
+            .covariance
+            .fixed_view_mut::<3, 3>(0, 0)
+            .copy_from(&(0.5 * (new_rr + new_rr.transpose())));
+        // P_RL ← F P_RL: the landmarks stay put, their correlation with the robot moves with it.
+        let p_lr = self
+            .state
+            .covariance
+            .view((3, 0), (self.state.len() - 3, 3))
+            * f.transpose();
+        self.state.set_landmark_robot_covariance(&p_lr);
+        self.robot_prior = pose;
+    }
 }
 
 impl LandmarkSlam for EkfSlam {
@@ -279,25 +314,7 @@ impl LandmarkSlam for EkfSlam {
             .config
             .motion_model
             .step(&self.robot_pose(), control, dt);
-        let mut f = step.jacobian_pose;
         let g = step.jacobian_control;
-        // ∂f/∂θ = J (p' - p) for both motion models. FEJ takes the displacement
-        // from the previous *predicted* position, so that the products of F over time
-        // telescope as they do for the true system; a supplied point gives the move.
-        let displacement = match (self.linearization, &self.supplied) {
-            (Linearization::LatestEstimate, _) => None,
-            (Linearization::Supplied, Some(point)) => Some((point.robot_before, point.robot)),
-            _ => Some((self.robot_prior, step.pose)),
-        };
-        if let Some((from, to)) = displacement {
-            f[(0, 2)] = -(to.y - from.y);
-            f[(1, 2)] = to.x - from.x;
-        }
-        self.state.mean[0] = step.pose.x;
-        self.state.mean[1] = step.pose.y;
-        self.state.mean[2] = step.pose.theta;
-
-        let p_rr: Matrix3<f64> = self.state.covariance.fixed_view::<3, 3>(0, 0).into_owned();
         // A robot commanded to stop does not move: the control noise is on the
         // executed wheel speeds of a moving robot (the simulator does the same).
         let q = if *control == Control::default() {
@@ -305,21 +322,26 @@ impl LandmarkSlam for EkfSlam {
         } else {
             g * self.config.noise.control_covariance() * g.transpose()
         };
-        let new_rr = f * p_rr * f.transpose() + q;
-        self.state
-            .covariance
-            .fixed_view_mut::<3, 3>(0, 0)
-            .copy_from(&(0.5 * (new_rr + new_rr.transpose())));
-        // P_RL ← F P_RL: the landmarks stay put, their correlation with the robot moves with it.
-        let p_lr = self
-            .state
-            .covariance
-            .view((3, 0), (self.state.len() - 3, 3))
-            * f.transpose();
-        self.state.set_landmark_robot_covariance(&p_lr);
-        self.robot_prior = step.pose;
+        self.propagate(step.pose, step.jacobian_pose, &q);
         Ok(PredictReport {
             control: *control,
+            robot_det_before,
+            robot_det_after: self.robot_covariance().determinant(),
+        })
+    }
+
+    /// The same prediction with a recorded motion: `F` and `G = ∂f/∂u` of the
+    /// motion, and `G diag(σ²) Gᵀ` for the input's noise.
+    fn predict_recorded(&mut self, motion: &RecordedMotion) -> Result<PredictReport, FilterError> {
+        let robot_det_before = self.robot_covariance().determinant();
+        let step = motion
+            .step(&self.robot_pose())
+            .map_err(|e| FilterError::InvalidMotion(e.to_string()))?;
+        let g = step.jacobian_input;
+        let q = g * step.input_covariance * g.transpose();
+        self.propagate(step.pose, step.jacobian_pose, &q);
+        Ok(PredictReport {
+            control: motion.velocity().unwrap_or_default(),
             robot_det_before,
             robot_det_after: self.robot_covariance().determinant(),
         })
@@ -332,6 +354,17 @@ impl LandmarkSlam for EkfSlam {
             Some(slot) => self.correct(id, slot, z),
             None => self.initialize(id, z),
         }
+    }
+
+    fn insert_landmark(
+        &mut self,
+        id: usize,
+        position: Vector2<f64>,
+        covariance: Matrix2<f64>,
+    ) -> Result<(), FilterError> {
+        self.state.insert_known(id, position, &covariance)?;
+        self.first_estimates.push(position);
+        Ok(())
     }
 
     fn gaussian(&self) -> Option<&dyn JointGaussian> {

@@ -14,6 +14,8 @@
 
 mod ekf_slam;
 pub mod fusion;
+#[cfg(test)]
+mod recorded_tests;
 mod state;
 mod ukf_slam;
 pub mod unscented;
@@ -25,7 +27,7 @@ pub use unscented::UnscentedParams;
 pub use crate::belief::LandmarkEstimate;
 use crate::belief::{JointGaussian, LandmarkBelief, ParticleBelief, PoseBelief};
 use crate::geometry::Pose2;
-use crate::motion::{Control, MotionModel};
+use crate::motion::{Control, MotionModel, RecordedMotion};
 use crate::particle::fastslam::{FastSlam, ResampleReport};
 use crate::range_bearing::{MeasurementError, RangeBearing};
 use nalgebra::{DMatrix, Matrix2, Vector2};
@@ -118,6 +120,18 @@ pub enum FilterError {
         /// Which matrix.
         what: &'static str,
     },
+    /// A recorded motion (odometry reading, car input) cannot move the robot.
+    #[error("{0}")]
+    InvalidMotion(String),
+    /// A landmark given with the map is already in the state, or its position or
+    /// covariance is not finite (or the covariance not symmetric positive semi-definite).
+    #[error("landmark {id} cannot be added to the map: {why}")]
+    InvalidLandmark {
+        /// The landmark's id.
+        id: usize,
+        /// Why.
+        why: &'static str,
+    },
     /// A result came out NaN or infinite (the inputs were finite).
     #[error("{what} came out NaN or infinite; the step was skipped")]
     NonFinite {
@@ -188,6 +202,21 @@ pub trait LandmarkSlam: PoseBelief + LandmarkBelief {
     fn predict(&mut self, control: &Control, dt: f64) -> Result<PredictReport, FilterError>;
     /// Update with one measurement of landmark `id`; initializes it when new.
     fn update(&mut self, id: usize, z: &RangeBearing) -> Result<UpdateReport, FilterError>;
+    /// Prediction with a motion as a data set records it (an odometry reading, the
+    /// ACFR car's input; [`RecordedMotion`]) instead of a velocity command: the
+    /// same phase, with the motion's own model and input noise.
+    fn predict_recorded(&mut self, motion: &RecordedMotion) -> Result<PredictReport, FilterError>;
+    /// Adds landmark `id` at `position` with `covariance` and no correlation with
+    /// the robot or the other landmarks: a map given before the run (localization
+    /// with a known map, where the map enters with its survey's uncertainty).
+    /// Refused when `id` is already in the state or the numbers are not a
+    /// position and a covariance.
+    fn insert_landmark(
+        &mut self,
+        id: usize,
+        position: Vector2<f64>,
+        covariance: Matrix2<f64>,
+    ) -> Result<(), FilterError>;
 
     /// The joint Gaussian over robot and landmarks, for filters that keep one
     /// (EKF, UKF); `None` for a particle filter.
@@ -217,6 +246,34 @@ pub trait LandmarkSlam: PoseBelief + LandmarkBelief {
     fn resample(&mut self) -> Option<ResampleReport> {
         None
     }
+}
+
+/// Checks a landmark given with the map: a finite position and a finite,
+/// symmetric, positive semi-definite covariance.
+pub(crate) fn check_known_landmark(
+    id: usize,
+    position: &Vector2<f64>,
+    covariance: &Matrix2<f64>,
+) -> Result<(), FilterError> {
+    let finite = position
+        .iter()
+        .chain(covariance.iter())
+        .all(|v| v.is_finite());
+    let (a, b, c) = (covariance[(0, 0)], covariance[(0, 1)], covariance[(1, 1)]);
+    let psd = a >= 0.0 && c >= 0.0 && a * c - b * b >= -1e-12 * (a * c).abs().max(1e-300);
+    if !finite {
+        return Err(FilterError::InvalidLandmark {
+            id,
+            why: "its position or covariance is not finite",
+        });
+    }
+    if covariance[(0, 1)] != covariance[(1, 0)] || !psd {
+        return Err(FilterError::InvalidLandmark {
+            id,
+            why: "its covariance is not symmetric positive semi-definite",
+        });
+    }
+    Ok(())
 }
 
 /// Makes `p` exactly symmetric by averaging it with its transpose.

@@ -79,6 +79,26 @@ impl SlamState {
 }
 
 impl SlamState {
+    /// Adds a landmark given with the map: uncorrelated with everything in the
+    /// state (checked first by [`super::check_known_landmark`]).
+    pub(crate) fn insert_known(
+        &mut self,
+        id: usize,
+        position: Vector2<f64>,
+        covariance: &Matrix2<f64>,
+    ) -> Result<(), FilterError> {
+        if self.slot(id).is_some() {
+            return Err(FilterError::InvalidLandmark {
+                id,
+                why: "it is already in the state",
+            });
+        }
+        super::check_known_landmark(id, &position, covariance)?;
+        let cross = MatrixXx2::zeros(self.len());
+        self.push_landmark(id, position, &cross, covariance);
+        Ok(())
+    }
+
     /// Sets the landmark-robot cross-covariance `P_LR` (`(n − 3) x 3`) and its
     /// transpose `P_RL`, as a prediction leaves them.
     pub(crate) fn set_landmark_robot_covariance(&mut self, p_lr: &MatrixXx3<f64>) {

@@ -6,7 +6,7 @@ use super::{FilterConfig, FilterError, LandmarkSlam, PredictReport, UpdateReport
 use crate::belief::{self, JointGaussian, LandmarkBelief, LandmarkEstimate, PoseBelief};
 use crate::geometry::{Pose2, wrap_angle};
 use crate::linalg::psd_cholesky;
-use crate::motion::Control;
+use crate::motion::{Control, RecordedMotion};
 use crate::range_bearing::{self, MeasurementError, RangeBearing};
 use nalgebra::{DMatrix, DVector, Matrix2, Matrix3, Vector2};
 
@@ -215,6 +215,67 @@ impl LandmarkSlam for UkfSlam {
             robot_det_before,
             robot_det_after: self.robot_covariance().determinant(),
         })
+    }
+
+    /// The same prediction with a recorded motion: sigma points over the robot and
+    /// the motion's input noise together (3 + 3 dimensions for an odometry
+    /// reading, 3 + 2 for the car), each moved by `x ⊕ δ(u + ε)`.
+    fn predict_recorded(&mut self, motion: &RecordedMotion) -> Result<PredictReport, FilterError> {
+        motion
+            .validate()
+            .map_err(|e| FilterError::InvalidMotion(e.to_string()))?;
+        let robot_det_before = self.robot_covariance().determinant();
+        let n = self.state.len();
+        let k = motion.input_dim();
+        let std = motion.input_std();
+        let mut mean_a = DVector::zeros(3 + k);
+        mean_a.rows_mut(0, 3).copy_from(&self.state.mean.rows(0, 3));
+        let mut p_aa = DMatrix::zeros(3 + k, 3 + k);
+        p_aa.view_mut((0, 0), (3, 3))
+            .copy_from(&self.state.covariance.view((0, 0), (3, 3)));
+        for i in 0..k {
+            p_aa[(3 + i, 3 + i)] = std[i] * std[i];
+        }
+        let mut p_oa = DMatrix::zeros(n - 3, 3 + k);
+        p_oa.view_mut((0, 0), (n - 3, 3))
+            .copy_from(&self.state.covariance.view((3, 0), (n - 3, 3)));
+        let out = unscented_transform(&self.params, &mean_a, &p_aa, &p_oa, &[2], |a| {
+            let mut noise = [0.0; 3];
+            for i in 0..k {
+                noise[i] = a[3 + i];
+            }
+            match motion.apply(&pose_of(a), &noise) {
+                Ok(p) => DVector::from_column_slice(&[p.x, p.y, p.theta]),
+                Err(_) => DVector::from_element(3, f64::NAN),
+            }
+        })?;
+        if !out.is_finite() {
+            return Err(FilterError::NonFinite {
+                what: "the predicted robot pose or covariance",
+            });
+        }
+        self.state.mean.rows_mut(0, 3).copy_from(&out.mean);
+        self.state.mean[2] = wrap_angle(self.state.mean[2]);
+        self.state
+            .covariance
+            .view_mut((0, 0), (3, 3))
+            .copy_from(&out.covariance);
+        self.state
+            .set_landmark_robot_covariance(&out.cross_other.fixed_columns::<3>(0).into_owned());
+        Ok(PredictReport {
+            control: motion.velocity().unwrap_or_default(),
+            robot_det_before,
+            robot_det_after: self.robot_covariance().determinant(),
+        })
+    }
+
+    fn insert_landmark(
+        &mut self,
+        id: usize,
+        position: Vector2<f64>,
+        covariance: Matrix2<f64>,
+    ) -> Result<(), FilterError> {
+        self.state.insert_known(id, position, &covariance)
     }
 
     fn update(&mut self, id: usize, z: &RangeBearing) -> Result<UpdateReport, FilterError> {

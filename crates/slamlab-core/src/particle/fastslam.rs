@@ -56,7 +56,7 @@ use crate::association::{
 use crate::belief::{ParticleBelief, PoseBelief};
 use crate::geometry::{Pose2, wrap_angle};
 use crate::math;
-use crate::motion::{Control, MotionModel};
+use crate::motion::{Control, MotionModel, RecordedMotion};
 use crate::range_bearing::{self, MIN_RANGE, RangeBearing};
 use nalgebra::{Matrix2, Matrix3, Vector2, Vector3};
 use rand::SeedableRng;
@@ -226,6 +226,17 @@ pub enum FastSlamError {
         w: f64,
         /// Time step.
         dt: f64,
+    },
+    /// A recorded motion (odometry reading, car input) cannot move the particles.
+    #[error("{0}")]
+    InvalidMotion(String),
+    /// A landmark given with the map is already in it, or not a position and a covariance.
+    #[error("landmark {id} cannot be added to the map: {why}")]
+    InvalidLandmark {
+        /// The landmark's id.
+        id: usize,
+        /// Why.
+        why: &'static str,
     },
     /// A measurement is NaN or infinite.
     #[error("measurement (range {range}, bearing {bearing}) must be finite")]
@@ -555,6 +566,120 @@ impl FastSlam {
             control: *control,
             spread,
         })
+    }
+
+    /// Prediction with a motion as a data set records it ([`RecordedMotion`]): the
+    /// same sampling as [`predict`](Self::predict) with the motion's model and
+    /// input noise. FastSLAM 1.0 draws each particle's input `u + N(0, diag(σ²))`
+    /// and moves it by `x ⊕ δ(u)`; FastSLAM 2.0 starts the proposal
+    /// `N(x ⊕ δ(u), G diag(σ²) Gᵀ)`. A robot standing still gets no noise.
+    pub fn predict_recorded(
+        &mut self,
+        motion: &RecordedMotion,
+    ) -> Result<ParticlePredictReport, FastSlamError> {
+        motion
+            .validate()
+            .map_err(|e| FastSlamError::InvalidMotion(e.to_string()))?;
+        let k = motion.input_dim();
+        let std = motion.input_std();
+        let moving = !motion.is_still();
+        for p in &mut self.particles {
+            finish_step(p, &self.measurement_covariance);
+            match self.config.version {
+                FastSlamVersion::V1 => {
+                    let mut noise = [0.0; 3];
+                    if moving {
+                        for i in 0..k {
+                            noise[i] = std[i] * normal(&mut self.rng);
+                        }
+                    }
+                    // A failed move (a draw beyond the car's steering limit) keeps the pose.
+                    if let Ok(pose) = motion.apply(&p.pose, &noise) {
+                        p.pose = pose;
+                    }
+                    p.proposal = None;
+                }
+                FastSlamVersion::V2 => {
+                    let step = motion
+                        .step(&p.pose)
+                        .map_err(|e| FastSlamError::InvalidMotion(e.to_string()))?;
+                    let g = step.jacobian_input;
+                    let noise = Vector3::new(
+                        normal(&mut self.rng),
+                        normal(&mut self.rng),
+                        normal(&mut self.rng),
+                    );
+                    let proposal = Proposal {
+                        mean: step.pose.to_vector(),
+                        covariance: g * step.input_covariance * g.transpose(),
+                        noise,
+                        replays: Vec::new(),
+                    };
+                    p.pose = proposal.draw();
+                    p.proposal = Some(proposal);
+                }
+            }
+        }
+        let mean = self.mean_pose();
+        let spread = (self
+            .particles
+            .iter()
+            .zip(&self.weights)
+            .map(|(p, w)| w * (p.pose.translation() - mean.translation()).norm_squared())
+            .sum::<f64>())
+        .sqrt();
+        Ok(ParticlePredictReport {
+            control: motion.velocity().unwrap_or_default(),
+            spread,
+        })
+    }
+
+    /// Adds landmark `id` at `position` with `covariance` to every particle's map:
+    /// a map given before the run (localization with a known map). Refused when a
+    /// particle has `id` already, or the numbers are not a position and a
+    /// covariance. With maximum-likelihood association the particles' own labels
+    /// continue above `id`.
+    pub fn insert_landmark(
+        &mut self,
+        id: usize,
+        position: Vector2<f64>,
+        covariance: Matrix2<f64>,
+    ) -> Result<(), FastSlamError> {
+        let finite = position
+            .iter()
+            .chain(covariance.iter())
+            .all(|v| v.is_finite());
+        let psd = covariance[(0, 1)] == covariance[(1, 0)]
+            && covariance[(0, 0)] >= 0.0
+            && covariance[(1, 1)] >= 0.0
+            && covariance[(0, 0)] * covariance[(1, 1)] >= covariance[(0, 1)].powi(2);
+        if !(finite && psd) {
+            return Err(FastSlamError::InvalidLandmark {
+                id,
+                why: "its position or covariance is not finite, or the covariance not symmetric positive semi-definite",
+            });
+        }
+        if self
+            .particles
+            .iter()
+            .any(|p| p.map.iter().any(|l| l.id == id))
+        {
+            return Err(FastSlamError::InvalidLandmark {
+                id,
+                why: "it is already in the map",
+            });
+        }
+        let landmark = Arc::new(LandmarkEkf {
+            id,
+            mean: position,
+            covariance,
+            observations: 0,
+        });
+        for p in &mut self.particles {
+            Arc::make_mut(&mut p.map).push(Arc::clone(&landmark));
+            p.next_id = p.next_id.max(id.saturating_add(1));
+        }
+        Ok(())
     }
 
     /// Measurement update (importance weighting) with one measurement: every
@@ -1215,6 +1340,73 @@ mod tests {
             particles,
             ..FastSlamConfig::default()
         }
+    }
+
+    #[test]
+    fn recorded_motions_spread_the_particles_as_g_m_gt() {
+        // One step from a certain pose: the cloud's covariance is the linearized
+        // G diag(σ²) Gᵀ to sampling error (10,000 particles: a few per cent).
+        use crate::motion::{CarGeometry, CarStep, OdometryStep};
+        let motions = [
+            RecordedMotion::Odometry(OdometryStep {
+                rot1: 0.1,
+                trans: 0.5,
+                rot2: -0.05,
+                rot_std: 0.02,
+                trans_std: 0.05,
+            }),
+            RecordedMotion::Car(CarStep {
+                speed: 3.0,
+                steering: 0.1,
+                dt: 0.1,
+                car: CarGeometry::VICTORIA_PARK,
+                speed_std: 0.5,
+                steering_std: 0.02,
+            }),
+        ];
+        let start = Pose2::new(1.0, -2.0, 0.7);
+        for version in [FastSlamVersion::V1, FastSlamVersion::V2] {
+            for motion in motions {
+                let mut f = FastSlam::new(config(version, 10_000), start).unwrap();
+                f.predict_recorded(&motion).unwrap();
+                let step = motion.step(&start).unwrap();
+                let expected =
+                    step.jacobian_input * step.input_covariance * step.jacobian_input.transpose();
+                let got = f.robot_covariance();
+                for i in 0..3 {
+                    let rel = (got[(i, i)] - expected[(i, i)]).abs() / expected[(i, i)];
+                    assert!(
+                        rel < 0.05,
+                        "{version:?} {motion:?} [{i}]: {got} vs {expected}"
+                    );
+                }
+                let offset = (f.mean_pose().translation() - step.pose.translation()).norm();
+                assert!(offset < 0.01, "{version:?} {motion:?}: {offset}");
+            }
+        }
+    }
+
+    #[test]
+    fn a_given_map_is_in_every_particle_and_matched_by_id() {
+        let mut f = FastSlam::new(config(FastSlamVersion::V2, 50), Pose2::IDENTITY).unwrap();
+        let tiny = Matrix2::new(1e-8, 0.0, 0.0, 1e-8);
+        f.insert_landmark(6, Vector2::new(3.0, 1.0), tiny).unwrap();
+        f.insert_landmark(7, Vector2::new(-1.0, 4.0), tiny).unwrap();
+        assert!(matches!(
+            f.insert_landmark(7, Vector2::new(0.0, 0.0), tiny),
+            Err(FastSlamError::InvalidLandmark { id: 7, .. })
+        ));
+        assert!(
+            f.insert_landmark(8, Vector2::new(0.0, f64::INFINITY), tiny)
+                .is_err()
+        );
+        assert_eq!(f.landmark_filter_sharing(), (2, 100));
+        let z = crate::range_bearing::predict(&Pose2::IDENTITY, &Vector2::new(3.0, 1.0))
+            .unwrap()
+            .measurement;
+        let report = f.update(&LandmarkObservation { id: 6, z }).unwrap();
+        assert_eq!(report.new_landmark_particles, 0, "landmark 6 is known");
+        assert!(f.best_landmarks().iter().all(|l| l.id == 6 || l.id == 7));
     }
 
     #[test]

@@ -24,7 +24,11 @@
 //! walks the tree depth first, best-scored child first, and cuts every branch
 //! whose bound is no better than the best leaf found so far; the answer is the
 //! exhaustive search's answer (the bound never underestimates), found with a
-//! small fraction of its work.
+//! small fraction of its work. The tree starts at the lowest height whose
+//! boxes hold each heading's offsets in one box (at most the tallest grid):
+//! Cartographer always starts at `branch_and_bound_depth − 1`, where a small
+//! window's box has one child that is the same box again, so the answer is the
+//! same and the repeated scoring is saved.
 //!
 //! Scores here are mean probabilities (the sum of Eq. 5.10 divided by the
 //! number of points), as Cartographer's `min_score` reads them; cells never
@@ -39,19 +43,20 @@
 //! student reads as a score is the mean probability the bytes stand for
 //! (to 0.8/255 ≈ 0.003 per cell).
 //!
-//! The precomputed grids are built as Cartographer builds them: a sliding
-//! window maximum (a deque of non-ascending maxima) along each row, then along
-//! each column of the result. Each grid covers the submap's known cells
-//! widened by `2^h − 1` cells below and to the left, so that a box that only
-//! overlaps the submap still has its value.
+//! The precomputed grids hold what Cartographer's `PrecomputationGrid2D` holds,
+//! built by doubling rather than by its sliding-window maximum: a box of side
+//! `2^h` is four boxes of side `2^(h−1)`, so each height is the maximum of two
+//! cells of the height below along the rows, then two along the columns (the
+//! same bytes; two comparisons a cell). Each grid covers the submap's known
+//! cells widened by `2^h − 1` cells below and to the left, so that a box that
+//! only overlaps the submap still has its value.
 
 use super::scan_to_map::{UNKNOWN_PROBABILITY, angular_step};
-use super::{Point2, transform_point};
+use super::{Point2, PointTransform};
 use crate::geometry::{Pose2, wrap_angle};
 use crate::grid::ProbabilityGrid;
 use crate::math;
 use serde::{Deserialize, Serialize};
-use std::collections::VecDeque;
 use thiserror::Error;
 
 /// The tallest tree accepted: boxes of `2^10 = 1024` cells a side.
@@ -103,40 +108,6 @@ impl MaxGrid {
     }
 }
 
-/// The maxima of every window of `side` values of `values` padded with `pad`
-/// on both sides: `out[p] = max(padded[p .. p + side])` for `p` in
-/// `0 .. values.len() + side − 1` (Cartographer's `SlidingWindowMaximum`: a
-/// deque holding the window's non-ascending maxima, front the largest).
-fn sliding_max(values: &[u8], side: usize, pad: u8, out: &mut Vec<u8>) {
-    out.clear();
-    let n = values.len();
-    let at = |q: usize| -> u8 {
-        // Position q of the padded row (side − 1 pads, values, side − 1 pads).
-        if q + 1 < side || q + 1 - side >= n {
-            pad
-        } else {
-            values[q + 1 - side]
-        }
-    };
-    let total = n + 2 * (side - 1);
-    let mut maxima: VecDeque<u8> = VecDeque::with_capacity(side);
-    for q in 0..total {
-        let v = at(q);
-        while maxima.back().is_some_and(|&b| v > b) {
-            maxima.pop_back();
-        }
-        maxima.push_back(v);
-        if q + 1 >= side {
-            // The window [q + 1 − side, q] is full.
-            out.push(*maxima.front().unwrap_or(&pad));
-            let leaving = at(q + 1 - side);
-            if maxima.front() == Some(&leaving) {
-                maxima.pop_front();
-            }
-        }
-    }
-}
-
 /// The precomputed max grids of heights `0..=max_height` of one finished
 /// submap (thesis Eq. 5.13, Fig. 5.7). Height 0 is the submap itself.
 #[derive(Clone, Debug, PartialEq)]
@@ -167,42 +138,67 @@ impl PrecomputedGrids {
         }
         let max_height = max_height.min(MAX_HEIGHT);
         let mut grids = Vec::with_capacity(max_height as usize + 1);
-        let mut row_out = Vec::new();
-        let mut column = Vec::new();
-        let mut col_out = Vec::new();
-        for height in 0..=max_height {
-            let side = 1usize << height;
-            let wide_w = w + side - 1;
-            let wide_h = h + side - 1;
-            // Rows first: intermediate[j][p] = max of row j over [p − (side − 1), p].
-            let mut intermediate = vec![unknown; wide_w * h];
-            for j in 0..h {
-                sliding_max(&base[j * w..(j + 1) * w], side, unknown, &mut row_out);
-                // row_out has w + side − 1 entries: box starts x = −(side−1) .. w−1.
-                intermediate[j * wide_w..(j + 1) * wide_w].copy_from_slice(&row_out[..wide_w]);
+        grids.push(MaxGrid {
+            i0: i_min,
+            j0: j_min,
+            width: w,
+            height: h,
+            cells: base,
+        });
+        for height in 1..=max_height {
+            if let Some(prev) = grids.last() {
+                let next = Self::doubled(prev, height, unknown);
+                grids.push(next);
             }
-            let mut cells = vec![unknown; wide_w * wide_h];
-            for p in 0..wide_w {
-                column.clear();
-                column.extend((0..h).map(|j| intermediate[j * wide_w + p]));
-                sliding_max(&column, side, unknown, &mut col_out);
-                for (q, &v) in col_out.iter().take(wide_h).enumerate() {
-                    cells[q * wide_w + p] = v;
-                }
-            }
-            grids.push(MaxGrid {
-                i0: i_min - (side as i64 - 1),
-                j0: j_min - (side as i64 - 1),
-                width: wide_w,
-                height: wide_h,
-                cells,
-            });
         }
         Some(Self {
             resolution: grid.resolution(),
             bounds,
             grids,
         })
+    }
+
+    /// The grid of height `height` from the one below it: a box of side
+    /// `2^h` is four boxes of side `2^(h−1)`, so its maximum is the largest of
+    /// theirs, taken along the rows and then along the columns (the same
+    /// values as a sliding-window maximum over the submap, with two
+    /// comparisons a cell instead of a window's worth).
+    fn doubled(prev: &MaxGrid, height: u32, unknown: u8) -> MaxGrid {
+        let half = 1usize << (height - 1);
+        let (pw, ph) = (prev.width, prev.height);
+        let (w, h) = (pw + half, ph + half);
+        // Columns of the new grid p read the previous grid's columns p − half
+        // and p (each box's left and right halves); rows likewise.
+        let mut rows = vec![unknown; w * ph];
+        for (q, row) in rows.chunks_mut(w).enumerate() {
+            let src = &prev.cells[q * pw..(q + 1) * pw];
+            for (p, cell) in row.iter_mut().enumerate() {
+                let left = if p >= half { src[p - half] } else { unknown };
+                let right = if p < pw { src[p] } else { unknown };
+                *cell = left.max(right);
+            }
+        }
+        let mut cells = vec![unknown; w * h];
+        for (q, row) in cells.chunks_mut(w).enumerate() {
+            let below = (q >= half).then(|| &rows[(q - half) * w..(q - half + 1) * w]);
+            let above = (q < ph).then(|| &rows[q * w..(q + 1) * w]);
+            match (below, above) {
+                (Some(b), Some(a)) => {
+                    for ((cell, &x), &y) in row.iter_mut().zip(b).zip(a) {
+                        *cell = x.max(y);
+                    }
+                }
+                (Some(only), None) | (None, Some(only)) => row.copy_from_slice(only),
+                (None, None) => {}
+            }
+        }
+        MaxGrid {
+            i0: prev.i0 - half as i64,
+            j0: prev.j0 - half as i64,
+            width: w,
+            height: h,
+            cells,
+        }
     }
 
     /// Metres per cell.
@@ -459,10 +455,13 @@ impl Discretized {
         let mut extents = Vec::with_capacity(scans.capacity());
         for a in -n_ang..=n_ang {
             let pose = Pose2::new(initial.x, initial.y, initial.theta + a as f64 * step);
+            // The heading's sine and cosine once for all points (the same
+            // bits as `transform_point`).
+            let transform = PointTransform::new(&pose);
             let cells: Vec<(i64, i64)> = points
                 .iter()
                 .map(|p| {
-                    let q = transform_point(&pose, *p);
+                    let q = transform.apply(*p);
                     (
                         crate::grid::floor_to_i64(q[0] / r),
                         crate::grid::floor_to_i64(q[1] / r),
@@ -502,6 +501,21 @@ impl Discretized {
             step,
             center: (initial.x, initial.y),
         })
+    }
+
+    /// The lowest height (at most `max_height`) whose `2^h x 2^h` boxes
+    /// hold every heading's offsets in one box.
+    fn top_height(&self, max_height: u32) -> u32 {
+        let span = self
+            .bounds
+            .iter()
+            .flatten()
+            .map(|b| (b.1 - b.0 + 1).max(b.3 - b.2 + 1))
+            .max()
+            .unwrap_or(1);
+        (0..=max_height)
+            .find(|&h| (1i64 << h) >= span)
+            .unwrap_or(max_height)
     }
 
     fn exhaustive_count(&self) -> usize {
@@ -691,7 +705,11 @@ pub fn branch_and_bound(
             return (Err(e), record);
         }
     };
-    let top = grids.max_height();
+    // The tree starts at the lowest height whose boxes cover every
+    // heading's offsets: a taller box has a single child that is its own
+    // box again, and scoring it only repeats work (a small window, such as
+    // a loop-closure search around a good estimate, needs few heights).
+    let top = disc.top_height(grids.max_height());
     let stride = 1i64 << top;
     // The lowest-resolution candidates: every heading, offsets from each
     // heading's lower bound in steps of 2^top.
@@ -995,6 +1013,46 @@ mod tests {
             );
         }
         eprintln!("exhaustive / branch-and-bound candidates: {ratios:?}");
+    }
+
+    /// A window of ±0.3 m at 0.1 m cells holds 7 offsets a side: the tree
+    /// starts at height 3 (boxes of 8), the heights above score nothing, and
+    /// the answer is still the exhaustive search's.
+    #[test]
+    fn a_small_window_starts_low_in_the_tree_with_the_exhaustive_answer() {
+        for seed in 1..=6u64 {
+            let (grid, scan_at) = random_world(seed);
+            let grids = PrecomputedGrids::new(&grid, 6).unwrap();
+            let truth = Pose2::new(0.4, -0.3, 0.2 * seed as f64);
+            let points = scan_at(&truth).points();
+            let window = SearchWindow::Around {
+                initial: Pose2::new(truth.x + 0.15, truth.y - 0.12, truth.theta + 0.05),
+                linear: 0.3,
+                angular: 0.1,
+            };
+            let params = BranchAndBoundParams {
+                min_score: 0.5,
+                recorded_nodes: 0,
+            };
+            let (bbs, record) = branch_and_bound(&grids, &points, &window, &params);
+            let (naive, count) = exhaustive_search(&grids, &points, &window, 0.5);
+            let (bbs, naive) = (bbs.unwrap(), naive.unwrap());
+            assert_eq!(
+                (bbs.score, bbs.pose),
+                (naive.score, naive.pose),
+                "seed {seed}"
+            );
+            assert_eq!(record.exhaustive_candidates, count);
+            assert_eq!(record.evaluated_per_height.len(), 7);
+            assert!(record.evaluated_per_height[3] > 0, "{record:?}");
+            assert!(
+                record.evaluated_per_height[4..].iter().all(|&n| n == 0),
+                "seed {seed}: {:?}",
+                record.evaluated_per_height
+            );
+            // One box per heading at the top.
+            assert_eq!(record.evaluated_per_height[3], record.angles);
+        }
     }
 
     #[test]

@@ -30,3 +30,12 @@ pub fn intel_log() -> Option<LaserLog> {
         }
     }
 }
+
+/// The folder that holds `data/`: `../shared` beside the repository, or `$SLAMLAB_SHARED`.
+#[allow(dead_code)] // not every benchmark reads the shared data
+pub fn shared_root() -> PathBuf {
+    std::env::var_os("SLAMLAB_SHARED").map_or_else(
+        || std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../../../shared"),
+        PathBuf::from,
+    )
+}

@@ -166,6 +166,8 @@ pub fn kidnap_input_to(
         scans,
         truth: Some(truth),
         true_map: Some(map),
+        reference: None,
+        time_origin: 0.0,
     })
 }
 

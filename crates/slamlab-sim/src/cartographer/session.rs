@@ -45,6 +45,9 @@ pub struct CartographerScenario {
     pub kidnap_place: String,
     /// Kidnap detection (Algorithm 13) on or off.
     pub detection: bool,
+    /// Loop closures on, or off: no branch-and-bound search at all, local
+    /// SLAM alone (the open, doubled corridors of a long log).
+    pub loop_closures: bool,
     /// Scans per submap before the next one starts.
     pub num_range_data: usize,
     /// Submap cell size, metres.
@@ -60,6 +63,12 @@ pub struct CartographerScenario {
     /// Submaps whose origin is farther than this from a node are not
     /// searched for loop closures with it, metres.
     pub max_constraint_distance: f64,
+    /// The share of node-submap pairs searched for loop closures, sampled
+    /// per submap.
+    pub sampling_ratio: f64,
+    /// Loop closures that tie two submaps before their pairs are searched
+    /// no more (0: no limit).
+    pub max_closures_per_submap_pair: usize,
     /// A loop closure must score above this.
     pub min_score: f64,
     /// A match between maps must score above this.
@@ -85,6 +94,7 @@ impl Default for CartographerScenario {
             kidnap_to: None,
             kidnap_place: KidnapPlace::Mapped.name().to_owned(),
             detection: p.detection,
+            loop_closures: true,
             num_range_data: p.num_range_data,
             resolution: p.resolution,
             hit_probability: p.hit_probability,
@@ -94,6 +104,8 @@ impl Default for CartographerScenario {
             // 29.999999999999996, in the panel and in share links.
             angular_search_window: (p.angular_search_window.to_degrees() * 1e9).round() / 1e9,
             max_constraint_distance: p.max_constraint_distance,
+            sampling_ratio: p.sampling_ratio,
+            max_closures_per_submap_pair: p.max_closures_per_submap_pair,
             min_score: p.min_score,
             global_min_score: p.global_min_score,
             optimize_every_n_nodes: p.optimize_every_n_nodes,
@@ -116,6 +128,8 @@ impl CartographerScenario {
             linear_search_window: self.linear_search_window,
             angular_search_window: self.angular_search_window.to_radians(),
             max_constraint_distance: self.max_constraint_distance,
+            sampling_ratio: self.sampling_ratio,
+            max_closures_per_submap_pair: self.max_closures_per_submap_pair,
             min_score: self.min_score,
             global_min_score: self.global_min_score,
             optimize_every_n_nodes: self.optimize_every_n_nodes,
@@ -124,7 +138,11 @@ impl CartographerScenario {
         };
         p.kidnap.threshold = self.t;
         p.kidnap.filter_size = self.f_size;
-        p
+        if self.loop_closures {
+            p
+        } else {
+            p.without_loop_closures()
+        }
     }
 
     /// The simulated input on `map`: `steps` scans with this scenario's seed
@@ -236,6 +254,13 @@ pub static PARAMS: &[Param<CartographerScenario>] = &[
         |s| Some(ON_OFF[usize::from(!s.detection)].to_owned()),
         |s, v| choose(ON_OFF, v).map(|i| s.detection = i == 0),
     ),
+    Param::words(
+        "loop-closures",
+        "loop closures: on, or off for local SLAM alone (no branch-and-bound search)",
+        ON_OFF,
+        |s| Some(ON_OFF[usize::from(!s.loop_closures)].to_owned()),
+        |s, v| choose(ON_OFF, v).map(|i| s.loop_closures = i == 0),
+    ),
     Param::count(
         "num_range_data",
         "",
@@ -285,6 +310,21 @@ pub static PARAMS: &[Param<CartographerScenario>] = &[
         "search only submaps whose origin is this near a node",
         (0.0, 1000.0),
         max_constraint_distance
+    ),
+    field!(
+        "sampling_ratio",
+        "",
+        "share of node-submap pairs searched for loop closures, sampled per submap (Cartographer's sampling_ratio)",
+        (0.0, 1.0),
+        sampling_ratio
+    ),
+    Param::count(
+        "max_closures_per_submap_pair",
+        "",
+        "loop closures tying a node's submap to another before their node-submap pairs are searched no more (0: no limit)",
+        (0, 10_000),
+        |s| Some(s.max_closures_per_submap_pair as u64),
+        |s, v| s.max_closures_per_submap_pair = usize::try_from(v).unwrap_or(10_000),
     ),
     field!(
         "min_score",

@@ -33,6 +33,12 @@ pub struct MappingInput {
     pub truth: Option<Vec<Pose2>>,
     /// The map the simulated robot drove in (simulation only).
     pub true_map: Option<Arc<OccupancyGrid>>,
+    /// A laser log's reference trajectory (a corrected log), when one came
+    /// with it (metrics only, as the truth).
+    pub reference: Option<Arc<crate::grid::reference::LogReference>>,
+    /// A laser log's clock at its first scan (`time` counts from it),
+    /// seconds: what a reference is matched by.
+    pub time_origin: f64,
 }
 
 impl MappingInput {
@@ -63,6 +69,8 @@ pub fn log_input(log: &LaserLog, name: &str) -> MappingInput {
             .collect(),
         truth: None,
         true_map: None,
+        reference: None,
+        time_origin: t0,
     }
 }
 

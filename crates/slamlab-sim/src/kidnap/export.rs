@@ -7,17 +7,21 @@ use super::run::MclRun;
 use crate::metrics::{NamedTrajectory, Trajectory, TrajectoryRole};
 
 /// The truth and each filter's estimates, stamped at the end of their ticks
-/// (`k · dt` for tick `k`, from 1). A filter's trajectory starts at its first
-/// estimate (a global localization has none before its first update).
+/// (`k · dt` for tick `k`, from 1; for a replayed log the scan's time since the
+/// log's first scan). A filter's trajectory starts at its first estimate (a
+/// global localization has none before its first update). A log without truth
+/// has no truth trajectory.
 pub fn trajectories(run: &MclRun) -> Vec<NamedTrajectory> {
-    let dt = run.scenario().dt;
-    let stamp = |k: usize| (k + 1) as f64 * dt;
+    let stamp = |k: usize| run.tick_time(k);
     let truth = run.truth_ticks();
-    let mut all = vec![NamedTrajectory::new(
-        "truth",
-        TrajectoryRole::Truth,
-        Trajectory::new((0..truth.len()).map(stamp).collect(), truth.to_vec()),
-    )];
+    let mut all = Vec::new();
+    if run.has_truth() {
+        all.push(NamedTrajectory::new(
+            "truth",
+            TrajectoryRole::Truth,
+            Trajectory::new((0..truth.len()).map(stamp).collect(), truth.to_vec()),
+        ));
+    }
     for f in run.filters() {
         let mut t = Trajectory::default();
         for (k, e) in f.estimates.iter().enumerate() {

@@ -10,10 +10,18 @@
 //! Random streams (each derived from the scenario's seed, so changing one part
 //! never changes another's numbers): the start pose, lidar noise, odometry
 //! noise, the explorer's goals, and one per filter.
+//!
+//! A run can also replay a recorded robot ([`MclRun::from_log`]): the *move*
+//! phase then takes the log's next scan and its odometry pose instead of
+//! driving the simulated robot, and the filters run exactly as they do on the
+//! simulated robot. A log has no truth unless it carries one (a bag SLAM Lab
+//! simulated has `/ground_truth`); without it every error is `NaN`, the
+//! statuses say so, and the summaries leave the errors out.
 
 use super::scenario::{InitMode, MclScenario};
 use crate::grid::explorer::Explorer;
 use crate::grid::robot::{GridRobot, OdometrySensor};
+use crate::grid::scans::MappingInput;
 use crate::noise::stream_seed;
 use nalgebra::Matrix3;
 use rand::SeedableRng;
@@ -44,6 +52,9 @@ pub enum MclRunError {
     /// Free cells, but none where the robot's disc fits.
     #[error("no free place on the map is farther than the robot radius {0} m from every wall")]
     RobotDoesNotFit(f64),
+    /// A log to replay without a single scan.
+    #[error("the log has no laser scan to localize with")]
+    EmptyLog,
 }
 
 /// The phase a run will execute next.
@@ -217,12 +228,14 @@ impl FilterRun {
             (!after.is_empty()).then(|| (after.iter().sum::<f64>() / after.len() as f64).sqrt())
         });
         let last = self.ticks.last();
+        // A run without truth has NaN errors: no number to report.
+        let known = |v: f64| (!v.is_nan()).then_some(v);
         FilterSummary {
             name: self.name.to_owned(),
             particles: self.mcl().count(),
             converged_tick,
-            position_error_final: last.map(|e| e.position),
-            heading_error_final: last.map(|e| e.heading),
+            position_error_final: last.and_then(|e| known(e.position)),
+            heading_error_final: last.and_then(|e| known(e.heading)),
             position_rmse_converged,
         }
     }
@@ -274,6 +287,11 @@ pub struct MclRun {
     kidnap_tick: Option<u64>,
     /// The student's command `(v, w)` while driving by hand; `None`: the explorer drives.
     manual: Option<(f64, f64)>,
+    /// A recorded robot replayed instead of the simulated one (its truth, when
+    /// it has one, has one pose per scan).
+    replay: Option<Arc<MappingInput>>,
+    /// The log's next scan.
+    replay_next: usize,
 }
 
 impl MclRun {
@@ -281,11 +299,7 @@ impl MclRun {
     /// fits (with 0.1 m to spare), the filters initialized as the scenario says.
     pub fn new(scenario: MclScenario, grid: OccupancyGrid) -> Result<Self, MclRunError> {
         let seed = scenario.seed;
-        let radius = if scenario.robot_radius >= 0.0 && scenario.robot_radius.is_finite() {
-            scenario.robot_radius
-        } else {
-            0.2
-        };
+        let radius = robot_radius(&scenario);
         let collision = Arc::new(Costmap::inflate(&grid, radius));
         let start_cells = Costmap::inflate(&grid, radius + 0.1).valid_cells();
         let start_cells = if start_cells.is_empty() {
@@ -299,7 +313,94 @@ impl MclRun {
         let start = start_cells
             .sample(&mut start_rng)
             .ok_or(MclRunError::RobotDoesNotFit(radius))?;
-        let map = Arc::new(map);
+        Ok(Self::assemble(scenario, Arc::new(map), collision, start))
+    }
+
+    /// Replays a recorded robot in `grid`: every tick's *move* takes the log's
+    /// next scan and the odometry pose at it ([`MappingInput`], from a CARMEN
+    /// log or a ROS 2 bag through [`crate::grid::LaserFile`]); the filters are
+    /// seeded, initialized and stepped as on the simulated robot. The truth is
+    /// the input's, when it has one pose per scan (a bag SLAM Lab simulated);
+    /// else the run has none ([`MclRun::has_truth`]). `init = tracking` starts
+    /// the particles around the first true pose, or without truth around the
+    /// log's first odometry pose (the map's frame only where the robot's
+    /// odometry started at its place in the map, as in a simulated log; a
+    /// recorded robot wants `init = global`). The notes say where the log does
+    /// not fit the map ([`log_notes`]).
+    pub fn from_log(
+        scenario: MclScenario,
+        grid: OccupancyGrid,
+        mut input: MappingInput,
+    ) -> Result<Self, MclRunError> {
+        let mut notes = Vec::new();
+        if let Some(truth) = &input.truth
+            && truth.len() != input.scans.len()
+        {
+            notes.push(format!(
+                "the log's truth has {} poses for {} scans; it is left out",
+                truth.len(),
+                input.scans.len()
+            ));
+            input.truth = None;
+        }
+        // An odometry pose that is not a number would spread NaN through every
+        // particle: those scans are dropped (with their truth), and counted.
+        let finite: Vec<bool> = input.scans.iter().map(|s| s.odometry.is_finite()).collect();
+        let dropped = finite.iter().filter(|&&ok| !ok).count();
+        if dropped > 0 {
+            let mut keep = finite.iter();
+            input
+                .scans
+                .retain(|_| keep.next().copied().unwrap_or(false));
+            if let Some(truth) = &mut input.truth {
+                let mut keep = finite.iter();
+                truth.retain(|_| keep.next().copied().unwrap_or(false));
+            }
+            notes.push(format!(
+                "{dropped} scans whose odometry pose is not a number were left out"
+            ));
+        }
+        let Some(first) = input.scans.first().map(|s| s.odometry) else {
+            return Err(MclRunError::EmptyLog);
+        };
+        notes.extend(log_notes(&grid, &input));
+        let radius = robot_radius(&scenario);
+        let collision = Arc::new(Costmap::inflate(&grid, radius));
+        let map = LocalizationMap::new(grid, scenario.laser_likelihood_max_dist)
+            .map_err(|_| MclRunError::NoFreeCell)?;
+        let truth_start = input.truth.as_ref().and_then(|t| t.first().copied());
+        if truth_start.is_none() && scenario.init == InitMode::Tracking {
+            notes.push(format!(
+                "the log has no truth: tracking starts around its first odometry pose ({:.2}, {:.2}) m, {:.0}°, which is a place in the map only if the odometry started there; init global localizes a recorded robot from nothing",
+                first.x,
+                first.y,
+                first.theta.to_degrees()
+            ));
+        }
+        let mut run = Self::assemble(
+            scenario,
+            Arc::new(map),
+            collision,
+            truth_start.unwrap_or(first),
+        );
+        run.notes.extend(notes);
+        run.odometry.pose = first;
+        if truth_start.is_none() {
+            run.path.clear();
+        }
+        run.replay = Some(Arc::new(input));
+        Ok(run)
+    }
+
+    /// A run's pieces around the robot's start pose.
+    fn assemble(
+        scenario: MclScenario,
+        map: Arc<LocalizationMap>,
+        collision: Arc<Costmap>,
+        start: Pose2,
+    ) -> Self {
+        let seed = scenario.seed;
+        let radius = robot_radius(&scenario);
         let mut notes = Vec::new();
         let filters = scenario
             .estimators
@@ -341,7 +442,7 @@ impl MclRun {
             })
             .collect();
         let explorer = Explorer::new(map.grid(), radius, scenario.explorer, stream_seed(seed, 4));
-        Ok(Self {
+        Self {
             robot: GridRobot {
                 pose: start,
                 radius,
@@ -364,13 +465,19 @@ impl MclRun {
             kidnap_rng: ChaCha8Rng::seed_from_u64(stream_seed(seed, 5)),
             kidnap_tick: None,
             manual: None,
+            replay: None,
+            replay_next: 0,
             scenario,
-        })
+        }
     }
 
     /// Executes the next phase and returns it.
     pub fn step_phase(&mut self) -> MclPhase {
         let phase = self.phase;
+        if phase == MclPhase::Move && self.is_finished() {
+            // A replayed log has no scan left: nothing moves.
+            return phase;
+        }
         match phase {
             MclPhase::Move => {
                 self.move_robot();
@@ -407,27 +514,28 @@ impl MclRun {
                 self.phase = MclPhase::Resample;
             }
             MclPhase::Resample => {
-                let truth = self.robot.pose;
+                let truth = self.truth_now();
                 let tick = self.tick;
                 for f in self.filters.iter_mut().filter(|f| f.due) {
                     let n_eff = f.filter.mcl().n_eff();
                     let r = f.filter.resample();
                     f.last_resample = Some(r);
-                    let (pe, he, p2, h2) = match f.filter.mcl().estimate() {
-                        Some(e) => {
-                            let c = e.covariance;
-                            let a = c[(0, 0)];
-                            let b = c[(0, 1)];
-                            let d = c[(1, 1)];
-                            let lmax = 0.5 * (a + d) + (0.25 * (a - d) * (a - d) + b * b).sqrt();
+                    let (pe, he, p2, h2) = match (f.filter.mcl().estimate(), truth) {
+                        (Some(e), None) => {
+                            let (p2, h2) = two_sigma(&e.covariance);
+                            (f64::NAN, f64::NAN, p2, h2)
+                        }
+                        (Some(e), Some(truth)) => {
+                            let (p2, h2) = two_sigma(&e.covariance);
                             (
                                 math::hypot(e.pose.x - truth.x, e.pose.y - truth.y),
                                 wrap_angle(e.pose.theta - truth.theta).abs(),
-                                2.0 * lmax.max(0.0).sqrt(),
-                                2.0 * c[(2, 2)].max(0.0).sqrt(),
+                                p2,
+                                h2,
                             )
                         }
-                        None => (f64::INFINITY, std::f64::consts::PI, 0.0, 0.0),
+                        (None, Some(_)) => (f64::INFINITY, std::f64::consts::PI, 0.0, 0.0),
+                        (None, None) => (f64::NAN, f64::NAN, 0.0, 0.0),
                     };
                     f.updates.push(UpdateRecord {
                         tick,
@@ -452,6 +560,9 @@ impl MclRun {
 
     /// Runs the phases up to the end of the current tick.
     pub fn tick(&mut self) {
+        if self.is_finished() {
+            return;
+        }
         let start = self.tick;
         while self.tick == start {
             self.step_phase();
@@ -466,6 +577,24 @@ impl MclRun {
     }
 
     fn move_robot(&mut self) {
+        if let Some(log) = self.replay.clone() {
+            let Some(s) = log.scans.get(self.replay_next) else {
+                return;
+            };
+            self.odometry.pose = s.odometry;
+            self.scan = Some(s.scan.clone());
+            let truth = log
+                .truth
+                .as_ref()
+                .and_then(|t| t.get(self.replay_next).copied());
+            if let Some(pose) = truth {
+                self.robot.pose = pose;
+                self.path.push(pose);
+            }
+            self.scan_pose = truth;
+            self.replay_next += 1;
+            return;
+        }
         if self.scenario.kidnap_at == Some(self.tick) {
             self.kidnap_random();
         }
@@ -503,23 +632,29 @@ impl MclRun {
     }
 
     fn finish_tick(&mut self) {
-        let truth = self.robot.pose;
+        let truth = self.truth_now();
         let odom = self.odometry.pose;
-        self.truth_ticks.push(truth);
+        if let Some(truth) = truth {
+            self.truth_ticks.push(truth);
+        }
         for f in &mut self.filters {
             let now = f.current_estimate(&odom);
             f.estimates
                 .push(now.zip(f.mcl().estimate().map(|e| e.covariance)));
-            let e = now.map_or(
-                TickError {
+            let e = match (now, truth) {
+                (_, None) => TickError {
+                    position: f64::NAN,
+                    heading: f64::NAN,
+                },
+                (None, Some(_)) => TickError {
                     position: f64::INFINITY,
                     heading: std::f64::consts::PI,
                 },
-                |p| TickError {
+                (Some(p), Some(truth)) => TickError {
                     position: math::hypot(p.x - truth.x, p.y - truth.y),
                     heading: wrap_angle(p.theta - truth.theta).abs(),
                 },
-            );
+            };
             f.ticks.push(e);
             f.due = false;
         }
@@ -530,6 +665,11 @@ impl MclRun {
     /// Teleports the robot (a kidnap); the filters are not told. Refused (with
     /// the reason) where the robot's disc does not fit.
     pub fn kidnap_to(&mut self, pose: Pose2) -> Result<(), String> {
+        if self.replay.is_some() {
+            return Err(
+                "a recorded robot cannot be kidnapped: the log says where it went".to_owned(),
+            );
+        }
         if !self.collision.is_valid_at(pose.x, pose.y) {
             return Err(format!(
                 "({:.2}, {:.2}) is inside or too close to a wall",
@@ -548,6 +688,9 @@ impl MclRun {
     /// `kidnap_distance` from where it is (the farthest of 1,000 draws if none
     /// is that far, with a note). The filters are not told.
     pub fn kidnap_random(&mut self) {
+        if self.replay.is_some() {
+            return;
+        }
         let cells = self.collision.valid_cells();
         let here = self.robot.pose;
         let mut best: Option<(f64, Pose2)> = None;
@@ -640,7 +783,7 @@ impl MclRun {
     /// `None` before the filter has an estimate.
     pub fn error_now(&self, k: usize) -> Option<TickError> {
         let estimate = self.filters.get(k)?.current_estimate(&self.odometry())?;
-        let truth = self.robot().pose;
+        let truth = self.truth_now()?;
         Some(TickError {
             position: math::hypot(estimate.x - truth.x, estimate.y - truth.y),
             heading: wrap_angle(estimate.theta - truth.theta).abs(),
@@ -650,9 +793,63 @@ impl MclRun {
     /// Filter `k`'s status ([`FilterRun::status`]) with its error now: the one status
     /// line every panel shows.
     pub fn status_of(&self, k: usize) -> String {
-        self.filters.get(k).map_or_else(String::new, |f| {
-            f.status(self.kidnap_tick(), self.scenario().dt, self.error_now(k))
-        })
+        let Some(f) = self.filters.get(k) else {
+            return String::new();
+        };
+        if self.has_truth() {
+            return f.status(self.kidnap_tick(), self.scenario().dt, self.error_now(k));
+        }
+        let estimate = f.current_estimate(&self.odometry());
+        match (estimate, f.mcl().estimate()) {
+            (Some(p), Some(e)) => {
+                let (p2, _) = two_sigma(&e.covariance);
+                format!(
+                    "no truth in this log: estimate ({:.2}, {:.2}) m, {:.0}°, 2σ {p2:.2} m",
+                    p.x,
+                    p.y,
+                    p.theta.to_degrees()
+                )
+            }
+            _ => "no truth in this log; waiting for the robot to move".to_owned(),
+        }
+    }
+
+    /// Whether the run knows where the robot truly is: always for the simulated
+    /// robot, for a replayed log only when it carries its truth.
+    pub fn has_truth(&self) -> bool {
+        self.replay.as_ref().is_none_or(|log| log.truth.is_some())
+    }
+
+    /// The true pose now, if the run has a truth.
+    pub fn truth_now(&self) -> Option<Pose2> {
+        self.has_truth().then_some(self.robot.pose)
+    }
+
+    /// The replayed log, if the run replays one.
+    pub fn log(&self) -> Option<&MappingInput> {
+        self.replay.as_deref()
+    }
+
+    /// For a replayed log: scans replayed so far and the log's scan count.
+    pub fn log_progress(&self) -> Option<(usize, usize)> {
+        self.replay
+            .as_ref()
+            .map(|log| (self.replay_next, log.scans.len()))
+    }
+
+    /// Whether a replayed log has run out of scans (never for the simulated
+    /// robot).
+    pub fn is_finished(&self) -> bool {
+        self.log_progress().is_some_and(|(done, all)| done >= all)
+    }
+
+    /// The time at the end of tick `k` (from 0), seconds: `(k + 1) · dt` for the
+    /// simulated robot, the scan's time since the log's first scan for a log.
+    pub fn tick_time(&self, k: usize) -> f64 {
+        match &self.replay {
+            Some(log) => log.scans.get(k).map_or(f64::NAN, |s| s.time),
+            None => (k + 1) as f64 * self.scenario.dt,
+        }
     }
 
     /// The odometry pose.
@@ -717,4 +914,64 @@ impl MclRun {
     pub fn summaries(&self) -> Vec<FilterSummary> {
         self.filters.iter().map(FilterRun::summary).collect()
     }
+}
+
+/// The robot's radius from the scenario (0.2 m where it is not a length).
+fn robot_radius(scenario: &MclScenario) -> f64 {
+    if scenario.robot_radius >= 0.0 && scenario.robot_radius.is_finite() {
+        scenario.robot_radius
+    } else {
+        0.2
+    }
+}
+
+/// Twice the standard deviations of a pose covariance: along the position
+/// ellipse's longest axis (the square root of the larger eigenvalue of the
+/// 2 x 2 block, `λ = (a + d)/2 + sqrt(((a − d)/2)² + b²)`), and in heading.
+fn two_sigma(c: &Matrix3<f64>) -> (f64, f64) {
+    let a = c[(0, 0)];
+    let b = c[(0, 1)];
+    let d = c[(1, 1)];
+    let lmax = 0.5 * (a + d) + (0.25 * (a - d) * (a - d) + b * b).sqrt();
+    (2.0 * lmax.max(0.0).sqrt(), 2.0 * c[(2, 2)].max(0.0).sqrt())
+}
+
+/// Where a log does not fit the map it is replayed in, one sentence each:
+/// true poses (when the log has them) outside the map's free cells, or an
+/// odometry path wider or taller than the whole map (then the log was
+/// recorded somewhere else: the filters will find nothing).
+pub fn log_notes(grid: &OccupancyGrid, input: &MappingInput) -> Vec<String> {
+    let mut notes = Vec::new();
+    let (w, h) = grid.size_m();
+    if let Some(truth) = &input.truth {
+        let outside = truth
+            .iter()
+            .filter(|p| grid.cell_at(p.x, p.y) != Some(slamlab_core::grid::Cell::Free))
+            .count();
+        if outside > 0 {
+            notes.push(format!(
+                "{outside} of the log's {} true poses are outside the map's free space: was it recorded in this map?",
+                truth.len()
+            ));
+        }
+        return notes;
+    }
+    let xs = input.scans.iter().map(|s| s.odometry.x);
+    let ys = input.scans.iter().map(|s| s.odometry.y);
+    let span = |v: &mut dyn Iterator<Item = f64>| {
+        let (lo, hi) = v.fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), x| {
+            (lo.min(x), hi.max(x))
+        });
+        if hi >= lo { hi - lo } else { 0.0 }
+    };
+    let (sx, sy) = (span(&mut xs.into_iter()), span(&mut ys.into_iter()));
+    // The odometry drifts, but not by the map's whole size; a path that spans more
+    // than the map's diagonal cannot have been driven inside it.
+    let diagonal = math::hypot(w, h);
+    if math::hypot(sx, sy) > diagonal {
+        notes.push(format!(
+            "the log's odometry spans {sx:.1} x {sy:.1} m, more than the map ({w:.1} x {h:.1} m) holds: its scans fall outside this map; was it recorded here?"
+        ));
+    }
+    notes
 }

@@ -7,6 +7,7 @@
 //! [`Stepper`]: crate::stepper::Stepper
 
 use crate::grid::builtin::BuiltinMap;
+use crate::grid::scans::MappingInput;
 use crate::io::ros_map::{load_lone_image, load_map, parse_map_yaml};
 use crate::kidnap::{MclPhase, MclRun, MclScenario};
 use crate::params;
@@ -103,6 +104,32 @@ impl KidnapSim {
         Ok((Self { run }, notices))
     }
 
+    /// Opens a replay of a recorded robot's `input` (a CARMEN log or a ROS 2
+    /// bag through [`crate::grid::LaserFile`]) in `grid`, or in the built-in
+    /// map the scenario names ([`MclRun::from_log`]). Parameters out of range
+    /// are clamped (with a notice); a log that cannot be replayed is refused
+    /// with the reason, and the caller keeps its run.
+    pub fn open_log(
+        mut scenario: MclScenario,
+        grid: Option<OccupancyGrid>,
+        input: MappingInput,
+    ) -> Result<(Self, Vec<String>), String> {
+        let mut notices: Vec<String> = params::sanitize(&mut scenario)
+            .iter()
+            .map(ToString::to_string)
+            .collect();
+        let grid = match grid {
+            Some(grid) => grid,
+            None => BuiltinMap::from_name(&scenario.map)
+                .unwrap_or(BuiltinMap::Maze)
+                .load()
+                .map_err(|e| e.to_string())?,
+        };
+        let run = MclRun::from_log(scenario, grid, input).map_err(|e| e.to_string())?;
+        notices.extend(run.notes().iter().cloned());
+        Ok((Self { run }, notices))
+    }
+
     /// The runner: truth, map, scan and filters.
     pub fn run(&self) -> &MclRun {
         &self.run
@@ -156,7 +183,10 @@ impl Simulation for KidnapSim {
                 }
             }
             KidnapEvent::ResetAroundTruth => {
-                let truth = self.run.robot().pose;
+                // A log without truth has nothing to reset around.
+                let Some(truth) = self.run.truth_now() else {
+                    return;
+                };
                 let s = self.run.scenario().clone();
                 let sd = |v: f64| {
                     if v > 0.0 && v.is_finite() {

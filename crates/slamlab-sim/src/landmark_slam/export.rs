@@ -9,32 +9,38 @@ use crate::world::landmark_session::LandmarkSession;
 use nalgebra::Matrix3;
 use slamlab_core::Pose2;
 
-/// The stamps of a path that holds the start pose and one pose per tick.
-fn stamps(len: usize, dt: f64) -> Vec<f64> {
-    (0..len).map(|k| k as f64 * dt).collect()
-}
-
 /// The truth, dead reckoning and every estimator's path so far, each pose at
 /// its tick's time (the start at 0). An estimator's covariance at the start is
 /// the zero matrix (it knows where it starts), then its robot-pose covariance
-/// after every tick.
+/// after every tick. A recorded world's truth is its own track (MRCLAM's Vicon
+/// samples, gaps and all); a world without one has no truth file.
 pub fn trajectories(session: &LandmarkSession) -> Vec<NamedTrajectory> {
-    let dt = session.scenario().dt;
-    let path = |poses: &[Pose2]| Trajectory::new(stamps(poses.len(), dt), poses.to_vec());
-    let mut all = vec![
-        NamedTrajectory::new("truth", TrajectoryRole::Truth, path(session.truth_path())),
-        NamedTrajectory::new(
-            "dead-reckoning",
-            TrajectoryRole::Odometry,
-            path(session.dead_reckoning_path()),
-        ),
-    ];
+    let times = session.tick_times();
+    let path = |poses: &[Pose2]| {
+        let n = poses.len().min(times.len());
+        Trajectory::new(times[..n].to_vec(), poses[..n].to_vec())
+    };
+    let truth = match session.recorded_world() {
+        None => Some(path(session.truth_path())),
+        Some(world) => world.truth.as_ref().map(|t| {
+            Trajectory::new(
+                t.samples.iter().map(|(time, _)| *time).collect(),
+                t.samples.iter().map(|(_, pose)| *pose).collect(),
+            )
+        }),
+    };
+    let mut all: Vec<NamedTrajectory> = truth
+        .map(|t| NamedTrajectory::new("truth", TrajectoryRole::Truth, t))
+        .into_iter()
+        .collect();
+    all.push(NamedTrajectory::new(
+        "dead-reckoning",
+        TrajectoryRole::Odometry,
+        path(session.dead_reckoning_path()),
+    ));
     for run in session.filters() {
         let records = run.records();
-        let covariances: Vec<Matrix3<f64>> = std::iter::once(Matrix3::zeros())
-            .chain(records.history.iter().map(|m| m.covariance))
-            .take(records.path.len())
-            .collect();
+        let covariances: Vec<Matrix3<f64>> = records.covariances.clone();
         all.push(NamedTrajectory::new(
             run.kind.name(),
             TrajectoryRole::Estimate,

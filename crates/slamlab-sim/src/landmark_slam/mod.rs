@@ -7,6 +7,7 @@
 //! - [`summary`]: a headless run's per-filter summary.
 //! - [`experiment`], [`consistency`], [`fastslam`]: the sources' experiments
 //!   (thesis Table 3.1, NEES over many runs, FastSLAM 1.0 against 2.0).
+//! - [`real_data`]: the filters on recorded data sets, scored against the truth.
 //!
 //! [`LandmarkScenario`]: crate::world::landmark_scenario::LandmarkScenario
 
@@ -15,5 +16,6 @@ pub mod experiment;
 pub mod export;
 pub mod fastslam;
 pub mod presets;
+pub mod real_data;
 pub mod scenario;
 pub mod summary;

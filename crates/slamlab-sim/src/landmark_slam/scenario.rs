@@ -5,7 +5,7 @@
 use crate::landmark_slam::presets;
 use crate::params::{self, Param, ParamIssue, Preset, Scenario, choose, choose_list};
 use crate::world::landmark_scenario::{
-    Association, ControllerKind, EstimatorKind, LandmarkScenario,
+    Association, ControllerKind, EstimatorKind, LandmarkScenario, MapMode,
 };
 use crate::world::landmarks::LandmarkLayout;
 use slamlab_core::MotionModel;
@@ -24,6 +24,7 @@ const ESTIMATORS: &[&str] = &[
 ];
 const RESAMPLERS: &[&str] = &["multinomial", "low-variance", "stratified", "residual"];
 const ASSOCIATIONS: &[&str] = &["known", "unknown"];
+const MODES: &[&str] = &["slam", "localization"];
 
 /// Why the circle's speeds are refused while the robot is driven by hand.
 const MANUAL_SPEEDS: &str =
@@ -295,9 +296,52 @@ pub static PARAMS: &[Param<LandmarkScenario>] = &[
     field!(
         "new-landmark-threshold",
         "",
-        "FastSLAM starts a new landmark beyond this squared Mahalanobis distance (unknown association)",
+        "a new landmark starts beyond this squared Mahalanobis distance (unknown association); EKF/UKF drop a measurement between the gate and it as ambiguous",
         (0.1, 100.0),
         fastslam.new_landmark_threshold
+    ),
+    field!(
+        "outlier-gate",
+        "",
+        "EKF/UKF refuse a known landmark's measurement beyond this squared Mahalanobis distance (chi-square, 2 dof; 13.8 = 99.9 %); 0 is off",
+        (0.0, 1000.0),
+        outlier_gate
+    ),
+    Param::words(
+        "mode",
+        "slam: the landmarks are estimated; localization: the true landmarks are given as the map",
+        MODES,
+        |s| Some(s.mode.name().to_owned()),
+        |s, v| choose(MODES, v).map(|i| s.mode = [MapMode::Slam, MapMode::Localization][i]),
+    ),
+    Param::count(
+        "robot",
+        "",
+        "the robot of a recorded MRCLAM data set (1 to 5 in Dataset 6; data= or --data)",
+        (1, 99),
+        |s| Some(u64::from(s.robot)),
+        |s, v| s.robot = u32::try_from(v).unwrap_or(u32::MAX),
+    ),
+    degrees!(
+        "odometry-rot-std-deg",
+        "deg",
+        "std of each rotation of a recorded odometry reading (the Freiburg course's data)",
+        (0.001, 45.0),
+        odometry_rot_std
+    ),
+    field!(
+        "odometry-trans-std",
+        "m",
+        "std of the translation of a recorded odometry reading (the Freiburg course's data)",
+        (1e-4, 2.0),
+        odometry_trans_std
+    ),
+    degrees!(
+        "steering-std-deg",
+        "deg",
+        "std of a recorded car's steering angle (Victoria Park; its speed's is v-std)",
+        (0.01, 45.0),
+        steering_std
     ),
 ];
 

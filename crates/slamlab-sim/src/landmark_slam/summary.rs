@@ -1,9 +1,14 @@
 //! Whole-run metrics and the headless runner behind the CLI and the tests.
 
 use crate::params;
+use crate::world::landmark_scenario::Association;
 use crate::world::landmark_scenario::LandmarkScenario;
-use crate::world::landmark_session::{FilterRun, LandmarkSession};
+use crate::world::landmark_session::{
+    FilterRun, LandmarkSession, nearest_landmark_rmse, tick_metrics,
+};
+use crate::world::recorded::RecordedWorld;
 use serde::Serialize;
+use std::sync::Arc;
 
 /// The summary of one estimator over one run.
 #[derive(Clone, Debug, PartialEq, Serialize)]
@@ -65,6 +70,29 @@ pub struct RunSummary {
     pub notices: Vec<String>,
     /// One entry per estimator.
     pub filters: Vec<FilterSummary>,
+    /// The recorded world the run replayed (absent for the simulated world).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub data: Option<DataSummary>,
+}
+
+/// The recorded world of a run: what it is and where it comes from.
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct DataSummary {
+    /// "MRCLAM_Dataset6, robot 1".
+    pub name: String,
+    /// The data set's title.
+    pub title: String,
+    /// Where its files come from.
+    pub source: String,
+    /// How to cite it.
+    pub citation: String,
+    /// The steps played and the world's step count.
+    pub steps_played: usize,
+    /// The world's step count.
+    pub steps_total: usize,
+    /// Whether the data has the robot's true path (the robot errors and NEES
+    /// are over the ticks where it does).
+    pub has_truth: bool,
 }
 
 /// Every parameter of a scenario as JSON, numbers as numbers.
@@ -97,6 +125,51 @@ pub fn run_headless(scenario: LandmarkScenario, steps: u64) -> (LandmarkSession,
         parameters: parameters_json(session.scenario()),
         notices: session.notices().to_vec(),
         filters: session.filters().iter().map(FilterSummary::of).collect(),
+        data: None,
+    };
+    (session, summary)
+}
+
+/// Replays a recorded world for `steps` ticks, or to its end, without a user
+/// interface. The errors are over the ticks where the data has a truth.
+pub fn run_recorded(
+    scenario: LandmarkScenario,
+    world: Arc<RecordedWorld>,
+    steps: Option<u64>,
+) -> (LandmarkSession, RunSummary) {
+    let mut session = LandmarkSession::recorded(scenario, world.clone());
+    session.run_ticks(steps.unwrap_or(u64::MAX));
+    let source = world.source();
+    let (played, total) = session.recorded_progress().unwrap_or_default();
+    let unknown = session.scenario().association == Association::Unknown;
+    let mut filters: Vec<FilterSummary> = session.filters().iter().map(FilterSummary::of).collect();
+    // The map is compared with the true landmarks after the last tick, whether
+    // or not the data knows the robot's path then.
+    for (summary, run) in filters.iter_mut().zip(session.filters()) {
+        summary.landmark_rmse = if unknown {
+            nearest_landmark_rmse(session.world(), run.filter())
+        } else {
+            tick_metrics(0, 0.0, &world.start, session.world(), run.filter()).landmark_rmse
+        };
+        summary.landmarks_initialized = run.filter().landmark_ids().len();
+    }
+    let summary = RunSummary {
+        lesson: "landmark-slam".to_owned(),
+        steps: session.tick(),
+        seed: session.scenario().seed,
+        duration_s: session.time(),
+        parameters: parameters_json(session.scenario()),
+        notices: session.notices().to_vec(),
+        filters,
+        data: Some(DataSummary {
+            name: world.name.clone(),
+            title: source.title.to_owned(),
+            source: source.source.to_owned(),
+            citation: source.citation.to_owned(),
+            steps_played: played,
+            steps_total: total,
+            has_truth: world.truth.is_some(),
+        }),
     };
     (session, summary)
 }

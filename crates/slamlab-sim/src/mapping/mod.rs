@@ -25,6 +25,7 @@ use crate::grid::{MappingInput, map_agreement, trajectory_rmse};
 use crate::params;
 use crate::stepper::{CheckpointPolicy, Stepper};
 use serde::Serialize;
+use slamlab_core::Pose2;
 use slamlab_core::scan::icp::IcpConfig;
 use std::sync::Arc;
 
@@ -173,6 +174,36 @@ impl MappingSession {
         while !self.sim().is_done() {
             self.stepper.step_tick();
         }
+    }
+
+    /// Every input scan's pose as the run has it now: the pose it was
+    /// inserted at, or with grid FastSLAM the heaviest particle's path (its
+    /// past corrected by later scans) with the scans the filter skipped moved
+    /// by odometry from the last one it processed; `None` for scans not yet
+    /// processed. What [`crate::grid::reference::score`] scores.
+    pub fn scan_poses(&self) -> Vec<Option<Pose2>> {
+        let sim = self.sim();
+        let input = sim.input();
+        let done = self.stepper.records().poses.len();
+        let mut out: Vec<Option<Pose2>> = match sim.grid_fastslam().and_then(|f| f.best()) {
+            Some(best) => {
+                let odometry: Vec<Pose2> = input.scans.iter().map(|s| s.odometry).collect();
+                crate::grid::reference::fill_by_odometry(&best.path.path(), &odometry)
+            }
+            None => self
+                .stepper
+                .records()
+                .poses
+                .iter()
+                .copied()
+                .map(Some)
+                .collect(),
+        };
+        out.resize(input.scans.len(), None);
+        for slot in out.iter_mut().skip(done) {
+            *slot = None;
+        }
+        out
     }
 
     /// The metrics so far.

@@ -103,6 +103,29 @@ impl Association {
     }
 }
 
+/// Whether the map is estimated or given.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "kebab-case")]
+pub enum MapMode {
+    /// SLAM: the landmarks are unknown and each is placed at its first sighting.
+    #[default]
+    Slam,
+    /// Localization: the true landmarks are given as the map before the run
+    /// (exactly in the simulated world; with their survey's uncertainty in a
+    /// recorded one, MRCLAM's Vicon standard deviations).
+    Localization,
+}
+
+impl MapMode {
+    /// The name used in URLs and on the command line.
+    pub fn name(self) -> &'static str {
+        match self {
+            MapMode::Slam => "slam",
+            MapMode::Localization => "localization",
+        }
+    }
+}
+
 /// FastSLAM's settings in the landmark lesson.
 #[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
 #[serde(default)]
@@ -115,7 +138,9 @@ pub struct FastSlamSettings {
     /// at nearly every step, 0 never).
     pub resample_threshold: f64,
     /// The squared Mahalanobis distance beyond which a particle starts a new
-    /// landmark (unknown association).
+    /// landmark (unknown association). The Gaussian filters start one beyond the
+    /// larger of it and their gate, and drop a measurement between the two as
+    /// ambiguous.
     pub new_landmark_threshold: f64,
 }
 
@@ -203,6 +228,23 @@ pub struct LandmarkScenario {
     /// The Mahalanobis gate (χ², 2 degrees of freedom) of the Gaussian filters'
     /// nearest-neighbour association.
     pub gate: f64,
+    /// The outlier gate of the Gaussian filters with known ids: a measurement
+    /// whose squared Mahalanobis distance from its landmark exceeds it (χ², 2
+    /// degrees of freedom) is refused (a misread barcode). 0 switches it off.
+    pub outlier_gate: f64,
+    /// SLAM, or localization with the true landmarks given as the map.
+    pub mode: MapMode,
+    /// The robot of a recorded MRCLAM data set whose files are replayed (1 to 5
+    /// in Dataset 6); the simulated world ignores it.
+    pub robot: u32,
+    /// Standard deviation of each rotation of a recorded odometry reading
+    /// (`δrot1`, `δrot2`: the Freiburg course's data), radians.
+    pub odometry_rot_std: f64,
+    /// Standard deviation of the translation of a recorded odometry reading, metres.
+    pub odometry_trans_std: f64,
+    /// Standard deviation of a recorded car's steering angle (Victoria Park),
+    /// radians; its speed's is `v_std`.
+    pub steering_std: f64,
 }
 
 impl Default for LandmarkScenario {
@@ -227,6 +269,13 @@ impl Default for LandmarkScenario {
             fastslam: FastSlamSettings::default(),
             association: Association::Known,
             gate: DEFAULT_GATE,
+            outlier_gate: 0.0,
+            mode: MapMode::Slam,
+            robot: 1,
+            // The Freiburg course's FastSLAM exercise: noise = [0.005, 0.01, 0.005].
+            odometry_rot_std: 0.005,
+            odometry_trans_std: 0.01,
+            steering_std: 3.0_f64.to_radians(),
         }
     }
 }
@@ -270,6 +319,16 @@ impl LandmarkScenario {
             max_range: self.max_range,
             range_std: self.range_std,
             bearing_std: self.bearing_std,
+        }
+    }
+
+    /// The noise the estimators assume on recorded motions that are not velocities.
+    pub fn recorded_noise(&self) -> crate::world::recorded::RecordedNoise {
+        crate::world::recorded::RecordedNoise {
+            odometry_rot_std: self.odometry_rot_std,
+            odometry_trans_std: self.odometry_trans_std,
+            speed_std: self.v_std,
+            steering_std: self.steering_std,
         }
     }
 

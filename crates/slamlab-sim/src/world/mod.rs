@@ -12,3 +12,4 @@
 pub mod landmark_scenario;
 pub mod landmark_session;
 pub mod landmarks;
+pub mod recorded;

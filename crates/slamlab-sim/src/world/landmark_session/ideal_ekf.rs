@@ -9,11 +9,12 @@
 //! simulator's true robot move and landmark positions before every tick
 //! ([`IdealEkf::observe_truth`]).
 
-use nalgebra::{DMatrix, DVector, Matrix3, Vector2};
+use nalgebra::{DMatrix, DVector, Matrix2, Matrix3, Vector2};
 use slamlab_core::belief::{JointGaussian, LandmarkBelief, LandmarkEstimate, PoseBelief};
 use slamlab_core::kalman::{
     EkfSlam, FilterConfig, FilterError, LandmarkSlam, Linearization, PredictReport, UpdateReport,
 };
+use slamlab_core::motion::RecordedMotion;
 use slamlab_core::range_bearing::RangeBearing;
 use slamlab_core::{Control, Pose2};
 
@@ -59,6 +60,21 @@ impl LandmarkSlam for IdealEkf {
 
     fn update(&mut self, id: usize, z: &RangeBearing) -> Result<UpdateReport, FilterError> {
         self.ekf.update(id, z)
+    }
+
+    /// Recorded data has no truth to linearize at: the EKF then linearizes at
+    /// first estimates (see [`IdealEkf::observe_truth`]).
+    fn predict_recorded(&mut self, motion: &RecordedMotion) -> Result<PredictReport, FilterError> {
+        self.ekf.predict_recorded(motion)
+    }
+
+    fn insert_landmark(
+        &mut self,
+        id: usize,
+        position: Vector2<f64>,
+        covariance: Matrix2<f64>,
+    ) -> Result<(), FilterError> {
+        self.ekf.insert_landmark(id, position, covariance)
     }
 
     fn gaussian(&self) -> Option<&dyn JointGaussian> {

@@ -32,20 +32,23 @@ pub(crate) mod sim;
 mod tests;
 
 pub use records::{
-    FilterRecords, LandmarkRecords, NeffSample, NisSample, RecordLengths, TickMetrics, tick_metrics,
+    FilterRecords, LandmarkRecords, NeffSample, NisSample, RecordLengths, TickMetrics,
+    nearest_landmark_rmse, tick_metrics,
 };
 pub use sim::{
-    FilterState, LandmarkEvent, LandmarkSim, LandmarkSlamDebug, Mislabel, Observation, Phase,
-    fastslam_config,
+    FilterState, LandmarkEvent, LandmarkSim, LandmarkSlamDebug, Mislabel, Observation,
+    OtherSighting, Phase, Rejection, Replay, TickMotion, fastslam_config,
 };
 
 use crate::stepper::Stepper;
 use crate::world::landmark_scenario::{ControllerKind, EstimatorKind, LandmarkScenario};
 use crate::world::landmarks::LandmarkWorld;
+use crate::world::recorded::RecordedWorld;
 use slamlab_core::kalman::{LandmarkSlam, PredictReport, UpdateReport};
 use slamlab_core::particle::fastslam::ResampleReport;
 use slamlab_core::range_bearing::RangeBearingSensor;
 use slamlab_core::{Control, Pose2};
+use std::sync::Arc;
 
 /// One estimator of a session: its state now and, through `Deref`, its
 /// [`FilterRecords`] (`run.path`, `run.history`, `run.nis`, `run.n_eff`).
@@ -63,6 +66,12 @@ pub struct FilterRun<'a> {
     pub last_update: Option<UpdateReport>,
     /// The latest error, if the latest phase failed (the state is then unchanged).
     pub last_error: Option<String>,
+    /// Measurements the outlier gate refused so far.
+    pub rejected: u64,
+    /// The latest measurement the outlier gate refused.
+    pub last_rejection: Option<Rejection>,
+    /// Measurements dropped as ambiguous (between the gate and the new-landmark threshold).
+    pub ambiguous: u64,
 }
 
 impl<'a> FilterRun<'a> {
@@ -108,6 +117,59 @@ impl LandmarkSession {
             stepper: Stepper::new(sim, records),
             notices,
         }
+    }
+
+    /// Starts a session that replays a recorded world (a data set) instead of
+    /// simulating one; see [`LandmarkSim::start_recorded`]. The notices include
+    /// the world's own (skipped rows, accepted quirks).
+    pub fn recorded(scenario: LandmarkScenario, world: Arc<RecordedWorld>) -> Self {
+        let (sim, notices) = LandmarkSim::start_recorded(scenario, world);
+        let records = sim.start_records();
+        Self {
+            stepper: Stepper::new(sim, records),
+            notices,
+        }
+    }
+
+    /// The recorded world being replayed; `None` in the simulated world.
+    pub fn recorded_world(&self) -> Option<&Arc<RecordedWorld>> {
+        self.sim().replay().map(|r| &r.world)
+    }
+
+    /// The steps of a recorded world played so far and its step count.
+    pub fn recorded_progress(&self) -> Option<(usize, usize)> {
+        self.sim()
+            .replay()
+            .map(|r| (r.next.min(r.world.steps.len()), r.world.steps.len()))
+    }
+
+    /// True when a recorded world has no step left: stepping does nothing more.
+    /// A simulated world never ends.
+    pub fn is_finished(&self) -> bool {
+        self.sim().is_finished() && !self.is_mid_tick()
+    }
+
+    /// The true pose now, when it is known: always in the simulated world; in a
+    /// recorded one only where its data has a truth (MRCLAM's Vicon, outside its gaps).
+    pub fn true_pose(&self) -> Option<Pose2> {
+        match self.sim().replay() {
+            None => Some(self.sim().truth),
+            Some(r) if r.truth_known => Some(self.sim().truth),
+            Some(_) => None,
+        }
+    }
+
+    /// The current tick's measurements of other robots (a recorded MRCLAM world):
+    /// shown, never used by the filters.
+    pub fn other_sightings(&self) -> &[OtherSighting] {
+        self.sim()
+            .replay()
+            .map_or(&[], |r| r.other_sightings.as_slice())
+    }
+
+    /// The current tick's motion in a recorded world.
+    pub fn recorded_motion(&self) -> Option<TickMotion> {
+        self.sim().replay().map(|r| r.motion)
     }
 
     fn sim(&self) -> &LandmarkSim {
@@ -159,6 +221,12 @@ impl LandmarkSession {
         self.sim().dead_reckoning
     }
 
+    /// The time of every completed tick, seconds, starting with 0 for the start
+    /// (one per pose of the paths).
+    pub fn tick_times(&self) -> &[f64] {
+        &self.records().times
+    }
+
     /// The dead-reckoning path, one pose per tick.
     pub fn dead_reckoning_path(&self) -> &[Pose2] {
         &self.records().dead_reckoning_path
@@ -199,6 +267,9 @@ impl LandmarkSession {
                 last_predict: state.last_predict,
                 last_update: state.last_update,
                 last_error: state.last_error.clone(),
+                rejected: state.rejected,
+                last_rejection: state.last_rejection,
+                ambiguous: state.ambiguous,
             })
             .collect()
     }
@@ -284,6 +355,9 @@ impl LandmarkSession {
     /// Runs the next phase (starting a new tick when the last one is finished) and
     /// returns it.
     pub fn step_phase(&mut self) -> Phase {
+        if self.is_finished() {
+            return self.last_phase().unwrap_or(Phase::Predict);
+        }
         self.stepper.step_phase()
     }
 
@@ -304,12 +378,23 @@ impl LandmarkSession {
 
     /// Finishes the current tick, or runs a whole new one.
     pub fn step_tick(&mut self) {
-        self.stepper.step_tick();
+        if !self.is_finished() {
+            self.stepper.step_tick();
+        }
     }
 
-    /// Runs `count` whole ticks.
+    /// Runs `count` whole ticks (fewer when a recorded world ends first).
     pub fn run_ticks(&mut self, count: u64) {
-        self.stepper.run_ticks(count);
+        if self.sim().replay().is_none() {
+            self.stepper.run_ticks(count);
+            return;
+        }
+        for _ in 0..count {
+            if self.is_finished() {
+                break;
+            }
+            self.stepper.step_tick();
+        }
     }
 
     /// The sensor mislabels one observation of the next tick: it reports the id of

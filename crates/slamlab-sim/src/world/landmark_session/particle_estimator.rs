@@ -9,9 +9,10 @@
 //! Gaussian: given the path, FastSLAM's landmarks are independent, and the
 //! particles are what it has ([`LandmarkSlam::particle_set`]).
 
-use nalgebra::Matrix3;
+use nalgebra::{Matrix2, Matrix3, Vector2};
 use slamlab_core::belief::{LandmarkBelief, LandmarkEstimate, PoseBelief};
 use slamlab_core::kalman::{FilterError, LandmarkSlam, PredictReport, UpdateReport};
+use slamlab_core::motion::RecordedMotion;
 use slamlab_core::particle::fastslam::{FastSlam, FastSlamError, ResampleReport};
 use slamlab_core::particle::{FastSlamConfig, LandmarkObservation};
 use slamlab_core::range_bearing::RangeBearing;
@@ -45,6 +46,8 @@ fn filter_error(e: FastSlamError) -> FilterError {
             name: "resample threshold",
             value,
         },
+        FastSlamError::InvalidMotion(message) => FilterError::InvalidMotion(message),
+        FastSlamError::InvalidLandmark { id, why } => FilterError::InvalidLandmark { id, why },
         FastSlamError::NoParticles | FastSlamError::TooManyParticles { .. } => {
             FilterError::InvalidParameter {
                 name: "particles",
@@ -145,6 +148,30 @@ impl LandmarkSlam for FastSlamEstimator {
             new_landmark_particles: report.new_landmark_particles,
             best_log_likelihood: report.best_log_weight_change,
         })
+    }
+
+    fn predict_recorded(&mut self, motion: &RecordedMotion) -> Result<PredictReport, FilterError> {
+        let before = self.robot_covariance().determinant();
+        let report = self.inner.predict_recorded(motion).map_err(filter_error)?;
+        self.summarize();
+        Ok(PredictReport {
+            control: report.control,
+            robot_det_before: before,
+            robot_det_after: self.robot_covariance().determinant(),
+        })
+    }
+
+    fn insert_landmark(
+        &mut self,
+        id: usize,
+        position: Vector2<f64>,
+        covariance: Matrix2<f64>,
+    ) -> Result<(), FilterError> {
+        self.inner
+            .insert_landmark(id, position, covariance)
+            .map_err(filter_error)?;
+        self.summarize();
+        Ok(())
     }
 
     fn particle_set(&self) -> Option<&FastSlam> {

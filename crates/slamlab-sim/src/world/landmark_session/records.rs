@@ -68,7 +68,10 @@ pub struct NeffSample {
 pub struct FilterRecords {
     /// The estimated robot pose after every completed tick, starting with the start pose.
     pub path: Vec<Pose2>,
-    /// Metrics after every completed tick.
+    /// The robot-pose covariance with each pose of [`path`](Self::path) (zero at the start).
+    pub covariances: Vec<nalgebra::Matrix3<f64>>,
+    /// Metrics after every completed tick where the truth is known: every tick
+    /// of the simulated world; in a recorded one, the ticks its truth covers.
     pub history: Vec<TickMetrics>,
     /// NIS of every correcting update.
     pub nis: Vec<NisSample>,
@@ -79,6 +82,8 @@ pub struct FilterRecords {
 /// Everything a landmark-SLAM run records.
 #[derive(Clone, Debug, Default)]
 pub struct LandmarkRecords {
+    /// The time of every completed tick, seconds, starting with 0 for the start.
+    pub times: Vec<f64>,
     /// The true path, one pose per tick, starting with the start pose.
     pub truth_path: Vec<Pose2>,
     /// The dead-reckoning path, one pose per tick, starting with the start pose.
@@ -93,12 +98,14 @@ impl LandmarkRecords {
     /// The records at the start: every path holds the start pose.
     pub fn at_start(start: Pose2, estimators: usize) -> Self {
         Self {
+            times: vec![0.0],
             truth_path: vec![start],
             dead_reckoning_path: vec![start],
             commands: Vec::new(),
             filters: (0..estimators)
                 .map(|_| FilterRecords {
                     path: vec![start],
+                    covariances: vec![nalgebra::Matrix3::zeros()],
                     ..FilterRecords::default()
                 })
                 .collect(),
@@ -109,10 +116,11 @@ impl LandmarkRecords {
 /// The lengths of a run's records: where a checkpoint found them.
 #[derive(Clone, Debug, PartialEq)]
 pub struct RecordLengths {
+    times: usize,
     truth_path: usize,
     dead_reckoning_path: usize,
     commands: usize,
-    /// Per estimator: path, history, NIS samples, `N_eff` samples.
+    /// Per estimator: path (and covariances), history, NIS samples, `N_eff` samples.
     filters: Vec<[usize; 4]>,
 }
 
@@ -121,6 +129,7 @@ impl Records for LandmarkRecords {
 
     fn mark(&self) -> RecordLengths {
         RecordLengths {
+            times: self.times.len(),
             truth_path: self.truth_path.len(),
             dead_reckoning_path: self.dead_reckoning_path.len(),
             commands: self.commands.len(),
@@ -133,11 +142,13 @@ impl Records for LandmarkRecords {
     }
 
     fn truncate(&mut self, mark: &RecordLengths) {
+        self.times.truncate(mark.times);
         self.truth_path.truncate(mark.truth_path);
         self.dead_reckoning_path.truncate(mark.dead_reckoning_path);
         self.commands.truncate(mark.commands);
         for (r, &[path, history, nis, n_eff]) in self.filters.iter_mut().zip(&mark.filters) {
             r.path.truncate(path);
+            r.covariances.truncate(path);
             r.history.truncate(history);
             r.nis.truncate(nis);
             r.n_eff.truncate(n_eff);
@@ -147,10 +158,7 @@ impl Records for LandmarkRecords {
 
 /// Landmark RMS error when the estimator labels its landmarks itself: each
 /// estimate against the nearest true landmark.
-pub(crate) fn nearest_landmark_rmse(
-    world: &LandmarkWorld,
-    filter: &dyn LandmarkSlam,
-) -> Option<f64> {
+pub fn nearest_landmark_rmse(world: &LandmarkWorld, filter: &dyn LandmarkSlam) -> Option<f64> {
     let squared: Vec<f64> = filter
         .landmarks()
         .iter()

@@ -22,25 +22,29 @@ use crate::noise::{Stream, gaussian, stream_rng};
 use crate::params::{self, ParamIssue};
 use crate::stepper::Simulation;
 use crate::world::landmark_scenario::{
-    Association, ControllerKind, EstimatorKind, LandmarkScenario,
+    Association, ControllerKind, EstimatorKind, LandmarkScenario, MapMode,
 };
 use crate::world::landmark_session::ideal_ekf::IdealEkf;
 use crate::world::landmark_session::particle_estimator::{FastSlamEstimator, OWN_LABELS};
 use crate::world::landmarks::LandmarkWorld;
-use nalgebra::Vector2;
+use crate::world::recorded::{RecordedWorld, Sighting, StepMotion};
+use nalgebra::{Matrix2, Vector2};
 use rand_chacha::ChaCha8Rng;
 use slamlab_core::association::{
-    AssociationMode, GaussianMap, NearestNeighbour, nearest_neighbour,
+    AssociationMode, GaussianLandmark, GaussianMap, NearestNeighbour, landmark_distance,
+    nearest_neighbour,
 };
 use slamlab_core::kalman::{
     EkfSlam, LandmarkSlam, Linearization, PredictReport, UkfSlam, UpdateReport,
 };
 use slamlab_core::math;
+use slamlab_core::motion::RecordedMotion;
 use slamlab_core::particle::fastslam::{FastSlamNoise, ResamplePolicy, ResampleReport};
 use slamlab_core::particle::{FastSlamConfig, FastSlamVersion};
 use slamlab_core::range_bearing::{self, RangeBearing, RangeBearingSensor};
 use slamlab_core::{Control, MotionModel, Pose2};
 use std::collections::{BTreeSet, VecDeque};
+use std::sync::Arc;
 
 /// One step of an estimator within a tick.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -187,6 +191,24 @@ pub struct FilterState {
     pub last_update: Option<UpdateReport>,
     /// The latest error, if the latest phase failed (the state is then unchanged).
     pub last_error: Option<String>,
+    /// Measurements the outlier gate refused so far.
+    pub rejected: u64,
+    /// The latest measurement the outlier gate refused.
+    pub last_rejection: Option<Rejection>,
+    /// Measurements dropped as ambiguous (unknown association, between the gate
+    /// and the new-landmark threshold).
+    pub ambiguous: u64,
+}
+
+/// A measurement of a known landmark that the outlier gate refused.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Rejection {
+    /// The tick.
+    pub tick: u64,
+    /// The landmark the measurement claimed.
+    pub id: usize,
+    /// Its squared Mahalanobis distance `νᵀ S⁻¹ ν`, beyond the gate.
+    pub mahalanobis_squared: f64,
 }
 
 impl Clone for FilterState {
@@ -199,6 +221,9 @@ impl Clone for FilterState {
             last_predict: self.last_predict,
             last_update: self.last_update,
             last_error: self.last_error.clone(),
+            rejected: self.rejected,
+            last_rejection: self.last_rejection,
+            ambiguous: self.ambiguous,
         }
     }
 }
@@ -238,6 +263,52 @@ pub struct LandmarkSim {
     pub(super) mislabel: Option<Mislabel>,
     /// Landmarks measured in earlier ticks (the mislabel picks one of them).
     seen: BTreeSet<usize>,
+    /// The recorded world being replayed; `None` in the simulated world.
+    pub(super) replay: Option<Replay>,
+}
+
+/// A recorded world being replayed (see [`crate::world::recorded`]): the step
+/// the run has reached, and what the current tick brought.
+#[derive(Clone, Debug)]
+pub struct Replay {
+    /// The world, shared by the run's checkpoints.
+    pub(super) world: Arc<RecordedWorld>,
+    /// The next step to play.
+    pub(super) next: usize,
+    /// The time of the current tick, seconds since the world's start.
+    pub(super) time: f64,
+    /// The current tick's motion as the filters predict with it.
+    pub(super) motion: TickMotion,
+    /// Whether the truth is known at the current tick.
+    pub(super) truth_known: bool,
+    /// Other robots the current tick's measurements saw (shown, not used).
+    pub(super) other_sightings: Vec<OtherSighting>,
+}
+
+/// How a recorded tick moves the robot in the filters.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum TickMotion {
+    /// A velocity held for `dt` seconds, through the scenario's motion model.
+    Velocity {
+        /// The command.
+        control: Control,
+        /// Seconds.
+        dt: f64,
+    },
+    /// An odometry reading or the car's input, with the scenario's noise.
+    Recorded(RecordedMotion),
+}
+
+/// A measurement of another robot (MRCLAM): shown greyed and named, never used.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct OtherSighting {
+    /// The robot seen.
+    pub robot: u32,
+    /// What the camera reported.
+    pub measurement: RangeBearing,
+    /// Where it puts the robot, from the true pose (or the first estimate's when
+    /// the truth is unknown).
+    pub measured_point: Vector2<f64>,
 }
 
 impl LandmarkSim {
@@ -251,47 +322,15 @@ impl LandmarkSim {
             .collect();
         let world = scenario.world();
         let start = scenario.start_pose();
-        let mut filters = Vec::new();
-        for &kind in &scenario.estimators {
-            let built: Result<Box<dyn LandmarkSlamDebug>, String> = match kind {
-                EstimatorKind::Ekf => EkfSlam::new(scenario.filter_config(), start)
-                    .map(|f| Box::new(f) as _)
-                    .map_err(|e| e.to_string()),
-                EstimatorKind::Ukf => UkfSlam::new(scenario.filter_config(), scenario.ukf, start)
-                    .map(|f| Box::new(f) as _)
-                    .map_err(|e| e.to_string()),
-                EstimatorKind::FejEkf => EkfSlam::with_linearization(
-                    scenario.filter_config(),
-                    start,
-                    Linearization::FirstEstimates,
-                )
-                .map(|f| Box::new(f) as _)
-                .map_err(|e| e.to_string()),
-                EstimatorKind::IdealEkf => IdealEkf::new(scenario.filter_config(), start)
-                    .map(|f| Box::new(f) as _)
-                    .map_err(|e| e.to_string()),
-                EstimatorKind::FastSlam1 | EstimatorKind::FastSlam2 => {
-                    FastSlamEstimator::new(fastslam_config(&scenario, kind), start)
-                        .map(|f| Box::new(f) as _)
-                        .map_err(|e| e.to_string())
-                }
-            };
-            match built {
-                Ok(filter) => filters.push(FilterState {
-                    kind,
-                    filter,
-                    last_resample: None,
-                    next_label: OWN_LABELS,
-                    last_predict: None,
-                    last_update: None,
-                    last_error: None,
-                }),
-                Err(e) => notices.push(format!(
-                    "{} could not start: {e}; change the parameter and reset",
-                    kind.name()
-                )),
-            }
-        }
+        let map: Vec<(usize, Vector2<f64>, Matrix2<f64>)> = match scenario.mode {
+            MapMode::Slam => Vec::new(),
+            MapMode::Localization => world
+                .landmarks
+                .iter()
+                .map(|l| (l.id, l.position, Matrix2::zeros()))
+                .collect(),
+        };
+        let filters = build_filters(&scenario, start, &map, &mut notices);
         if world
             .landmarks
             .iter()
@@ -319,13 +358,114 @@ impl LandmarkSim {
             mislabel_tick: None,
             mislabel: None,
             seen: BTreeSet::new(),
+            replay: None,
         };
         (sim, notices)
     }
 
+    /// The run of a recorded world: its steps instead of the simulated robot and
+    /// sensor, from its start pose. The scenario gives the estimators and the
+    /// noise they assume, and its `max-range` the reach beyond which recorded
+    /// measurements are not used; a world whose data names no landmarks (Victoria Park)
+    /// runs with unknown association whatever the scenario says, and the ideal
+    /// EKF (which needs the true state) does not run.
+    pub fn start_recorded(
+        mut scenario: LandmarkScenario,
+        recorded: Arc<RecordedWorld>,
+    ) -> (Self, Vec<String>) {
+        let mut notices: Vec<String> = params::sanitize(&mut scenario)
+            .iter()
+            .map(ParamIssue::to_string)
+            .collect();
+        notices.extend(recorded.notices.iter().cloned());
+        if !recorded.known_association && scenario.association == Association::Known {
+            scenario.association = Association::Unknown;
+            notices.push(format!(
+                "{} names no landmark: association=unknown (the filters associate each \
+                 measurement themselves)",
+                recorded.name
+            ));
+        }
+        if scenario.estimators.contains(&EstimatorKind::IdealEkf) {
+            scenario
+                .estimators
+                .retain(|&e| e != EstimatorKind::IdealEkf);
+            notices.push(
+                "ideal-ekf needs the true state of every landmark and move, which recorded \
+                 data does not give: it does not run"
+                    .to_owned(),
+            );
+        }
+        let map: Vec<(usize, Vector2<f64>, Matrix2<f64>)> = match scenario.mode {
+            MapMode::Slam => Vec::new(),
+            MapMode::Localization if recorded.landmarks.is_empty() => {
+                notices.push(format!(
+                    "{} has no true landmarks to give as the map: mode=slam",
+                    recorded.name
+                ));
+                scenario.mode = MapMode::Slam;
+                Vec::new()
+            }
+            MapMode::Localization => recorded
+                .landmarks
+                .iter()
+                .map(|(l, covariance)| (l.id, l.position, *covariance))
+                .collect(),
+        };
+        let start = recorded.start;
+        let filters = build_filters(&scenario, start, &map, &mut notices);
+        let sim = Self {
+            sensor: scenario.sensor(),
+            control_rng: stream_rng(scenario.seed, Stream::Control),
+            measurement_rng: stream_rng(scenario.seed, Stream::Measurement),
+            truth: start,
+            dead_reckoning: start,
+            tick: 0,
+            controller: scenario.controller,
+            teleop: Control::default(),
+            command: Control::default(),
+            observations: Vec::new(),
+            pending: VecDeque::new(),
+            last_phase: None,
+            filters,
+            world: recorded.landmark_world(),
+            scenario,
+            next_reach: None,
+            mislabel_tick: None,
+            mislabel: None,
+            seen: BTreeSet::new(),
+            replay: Some(Replay {
+                truth_known: recorded.truth_at(0.0).is_some(),
+                world: recorded,
+                next: 0,
+                time: 0.0,
+                motion: TickMotion::Velocity {
+                    control: Control::default(),
+                    dt: 0.0,
+                },
+                other_sightings: Vec::new(),
+            }),
+        };
+        (sim, notices)
+    }
+
+    /// The recorded world being replayed, if any.
+    pub fn replay(&self) -> Option<&Replay> {
+        self.replay.as_ref()
+    }
+
+    /// True when a recorded world has no step left (a simulated world never ends).
+    pub fn is_finished(&self) -> bool {
+        self.replay
+            .as_ref()
+            .is_some_and(|r| r.next >= r.world.steps.len())
+    }
+
     /// The records of a run that has not begun: every path holds the start pose.
     pub fn start_records(&self) -> LandmarkRecords {
-        LandmarkRecords::at_start(self.scenario.start_pose(), self.filters.len())
+        // Before the first tick the truth is the start pose (the scenario's, or
+        // the recorded world's).
+        LandmarkRecords::at_start(self.truth, self.filters.len())
     }
 
     /// The scenario as it stands now: the one the run started with, with the
@@ -344,12 +484,19 @@ impl LandmarkSim {
 
     /// Simulated time of the latest tick, seconds.
     pub fn time(&self) -> f64 {
-        self.tick as f64 * self.scenario.dt
+        match &self.replay {
+            Some(replay) => replay.time,
+            None => self.tick as f64 * self.scenario.dt,
+        }
     }
 
     /// Starts a tick: the command, the true motion, the measurements, and the
     /// phases the estimators run on them.
     fn begin_tick(&mut self, records: &mut LandmarkRecords) {
+        if self.replay.is_some() {
+            self.begin_recorded_tick(records);
+            return;
+        }
         self.tick += 1;
         if let Some((fov, max_range)) = self.next_reach.take() {
             self.sensor.fov = fov;
@@ -418,6 +565,111 @@ impl LandmarkSim {
         }
     }
 
+    /// Starts a tick of a recorded world: its next step's motion, the truth at its
+    /// time, its measurements (other robots apart), and the phases they make.
+    /// After the last step a tick stands still.
+    fn begin_recorded_tick(&mut self, records: &mut LandmarkRecords) {
+        let Some(replay) = self.replay.as_mut() else {
+            return;
+        };
+        self.tick += 1;
+        if let Some((fov, max_range)) = self.next_reach.take() {
+            self.sensor.fov = fov;
+            self.sensor.max_range = max_range;
+        }
+        let max_range = self.sensor.max_range;
+        let noise = self.scenario.recorded_noise();
+        let step = replay.world.steps.get(replay.next).cloned();
+        replay.next += 1;
+        self.observations.clear();
+        replay.other_sightings.clear();
+        let Some(step) = step else {
+            replay.motion = TickMotion::Velocity {
+                control: Control::default(),
+                dt: 0.0,
+            };
+            self.command = Control::default();
+            records.commands.push(self.command);
+            self.pending.push_back(Phase::Predict);
+            return;
+        };
+        replay.time = step.time;
+        (replay.motion, self.command) = match (step.motion, step.motion.recorded(&noise)) {
+            (StepMotion::Velocity { control, dt }, _) => {
+                (TickMotion::Velocity { control, dt }, control)
+            }
+            (_, Some(motion)) => (
+                TickMotion::Recorded(motion),
+                motion.velocity().unwrap_or_default(),
+            ),
+            (_, None) => (
+                TickMotion::Velocity {
+                    control: Control::default(),
+                    dt: 0.0,
+                },
+                Control::default(),
+            ),
+        };
+        records.commands.push(self.command);
+        let truth = replay.world.truth_at(step.time);
+        replay.truth_known = truth.is_some();
+        if let Some(truth) = truth {
+            self.truth = truth;
+        }
+        self.dead_reckoning = step
+            .motion
+            .apply(&self.dead_reckoning, self.scenario.motion, &noise);
+        // Rays are drawn from the true pose, or from the first estimate's when the
+        // truth is unknown.
+        let from = truth
+            .or_else(|| self.filters.first().map(|f| f.filter.robot_pose()))
+            .unwrap_or(self.dead_reckoning);
+        let point = |z: &RangeBearing| {
+            let angle = from.theta + z.bearing;
+            from.translation() + z.range * Vector2::new(math::cos(angle), math::sin(angle))
+        };
+        let mut unlabelled = 0;
+        for o in &step.observations {
+            // Beyond the sensor's reach (the scenario's max-range) a recorded
+            // measurement is not used.
+            if o.measurement.range > max_range {
+                continue;
+            }
+            let id = match o.sighting {
+                Sighting::Landmark(id) => id,
+                Sighting::Unlabelled => {
+                    unlabelled += 1;
+                    unlabelled
+                }
+                Sighting::Robot(robot) => {
+                    replay.other_sightings.push(OtherSighting {
+                        robot,
+                        measurement: o.measurement,
+                        measured_point: point(&o.measurement),
+                    });
+                    continue;
+                }
+            };
+            self.observations.push(Observation {
+                id,
+                measurement: o.measurement,
+                measured_point: point(&o.measurement),
+            });
+        }
+        let count = self.observations.len();
+        self.pending.push_back(Phase::Predict);
+        for (i, o) in self.observations.iter().enumerate() {
+            self.pending.push_back(Phase::Update {
+                id: o.id,
+                index: i + 1,
+                count,
+            });
+        }
+        if self.filters.iter().any(|r| r.kind.is_particle_filter()) {
+            self.pending.push_back(Phase::Resample);
+        }
+    }
+
     /// Gives the first observation of this tick the id of another landmark: of
     /// those seen before and not in view now, the one nearest to the landmark
     /// really measured (a plausible confusion); without one, the nearest other
@@ -461,10 +713,12 @@ impl LandmarkSim {
         let measurement_covariance = self.scenario.filter_config().noise.measurement_covariance();
         for (run, rec) in self.filters.iter_mut().zip(&mut records.filters) {
             let result = match phase {
-                Phase::Predict => run
-                    .filter
-                    .predict(&self.command, dt)
-                    .map(|r| run.last_predict = Some(r)),
+                Phase::Predict => match self.replay.as_ref().map(|r| r.motion) {
+                    None => run.filter.predict(&self.command, dt),
+                    Some(TickMotion::Velocity { control, dt }) => run.filter.predict(&control, dt),
+                    Some(TickMotion::Recorded(motion)) => run.filter.predict_recorded(&motion),
+                }
+                .map(|r| run.last_predict = Some(r)),
                 Phase::Resample => {
                     if let Some(report) = run.filter.resample() {
                         rec.n_eff.push(NeffSample {
@@ -481,6 +735,10 @@ impl LandmarkSim {
                     let z = self.observations[index - 1].measurement;
                     // Without the sensor's ids a Gaussian filter picks the nearest
                     // neighbour inside the gate, or starts a landmark of its own.
+                    // Between the gate and the new-landmark threshold (when that is
+                    // the larger) a measurement is too far to match and too near to
+                    // be another landmark: it is dropped as ambiguous (the two gates
+                    // of Bailey's EKF-SLAM toolbox).
                     let gaussian = run.filter.gaussian();
                     let id = if unknown && let Some(g) = gaussian {
                         let decision = GaussianMap::from_joint(
@@ -493,6 +751,14 @@ impl LandmarkSim {
                         });
                         match decision {
                             Some(NearestNeighbour::Matched { id, .. }) => id,
+                            Some(NearestNeighbour::New {
+                                nearest: Some((_, d2)),
+                            }) if d2 <= self.scenario.fastslam.new_landmark_threshold => {
+                                run.ambiguous += 1;
+                                run.last_update = None;
+                                run.last_error = None;
+                                continue;
+                            }
                             _ => {
                                 run.next_label += 1;
                                 run.next_label - 1
@@ -501,6 +767,30 @@ impl LandmarkSim {
                     } else {
                         id
                     };
+                    // The outlier gate: a known id whose measurement lies beyond the
+                    // gate (a misread barcode) is refused before it can pull the state.
+                    if !unknown
+                        && self.scenario.outlier_gate > 0.0
+                        && let Some(g) = gaussian
+                        && let Some(d2) = known_distance(
+                            g,
+                            run.filter.landmark_ids(),
+                            id,
+                            &z,
+                            &measurement_covariance,
+                        )
+                        && d2 > self.scenario.outlier_gate
+                    {
+                        run.rejected += 1;
+                        run.last_rejection = Some(Rejection {
+                            tick: self.tick,
+                            id,
+                            mahalanobis_squared: d2,
+                        });
+                        run.last_update = None;
+                        run.last_error = None;
+                        continue;
+                    }
                     run.filter.update(id, &z).map(|r| {
                         if let UpdateReport::Corrected { nis, .. } = r {
                             rec.nis.push(NisSample {
@@ -520,10 +810,19 @@ impl LandmarkSim {
 
     /// Ends a tick: the paths and every estimator's metrics.
     fn end_tick(&self, records: &mut LandmarkRecords) {
+        records.times.push(self.time());
         records.truth_path.push(self.truth);
         records.dead_reckoning_path.push(self.dead_reckoning);
         let time = self.time();
+        // A recorded world's truth may be unknown at this tick: then there is
+        // nothing to compare with, and the metrics have a gap.
+        let truth_known = self.replay.as_ref().is_none_or(|r| r.truth_known);
         for (run, rec) in self.filters.iter().zip(&mut records.filters) {
+            rec.path.push(run.filter.robot_pose());
+            rec.covariances.push(run.filter.robot_covariance());
+            if !truth_known {
+                continue;
+            }
             let metrics = tick_metrics(self.tick, time, &self.truth, &self.world, run.filter());
             let metrics = if self.scenario.association == Association::Unknown {
                 TickMetrics {
@@ -533,7 +832,6 @@ impl LandmarkSim {
             } else {
                 metrics
             };
-            rec.path.push(run.filter.robot_pose());
             rec.history.push(metrics);
         }
     }
@@ -565,6 +863,11 @@ impl Simulation for LandmarkSim {
     }
 
     fn apply_event(&mut self, event: &LandmarkEvent) {
+        // A recorded world has no one to drive and no sensor to mislabel; its
+        // sensor's reach decides which recorded measurements the filters get.
+        if self.replay.is_some() && !matches!(event, LandmarkEvent::SensorReach { .. }) {
+            return;
+        }
         match *event {
             LandmarkEvent::Teleop(control) => {
                 if control.is_finite() {
@@ -615,6 +918,101 @@ impl Simulation for LandmarkSim {
         let observations = self.observations.len() * std::mem::size_of::<Observation>();
         f64s * std::mem::size_of::<f64>() + world + observations + 4096
     }
+}
+
+/// The squared Mahalanobis distance of `z` from landmark `id` of a joint
+/// Gaussian ([`landmark_distance`]); `None` when `id` is not in it yet.
+fn known_distance(
+    g: &dyn slamlab_core::belief::JointGaussian,
+    ids: &[usize],
+    id: usize,
+    z: &RangeBearing,
+    noise: &nalgebra::Matrix2<f64>,
+) -> Option<f64> {
+    let slot = ids.iter().position(|&i| i == id)?;
+    let (mean, covariance) = (g.mean(), g.covariance());
+    let j = 3 + 2 * slot;
+    if mean.len() < j + 2 || covariance.nrows() < j + 2 {
+        return None;
+    }
+    let landmark = GaussianLandmark {
+        id,
+        mean: Vector2::new(mean[j], mean[j + 1]),
+        covariance: covariance.fixed_view::<2, 2>(j, j).into_owned(),
+        cross_covariance: covariance.fixed_view::<3, 2>(0, j).into_owned(),
+    };
+    let robot = Pose2::new(mean[0], mean[1], mean[2]);
+    landmark_distance(
+        &robot,
+        &covariance.fixed_view::<3, 3>(0, 0).into_owned(),
+        &landmark,
+        z,
+        noise,
+    )
+}
+
+/// Every estimator of `scenario`, starting at `start` with the landmarks of
+/// `map` (id, position, covariance) given; one that cannot start is left out
+/// with a notice saying why.
+fn build_filters(
+    scenario: &LandmarkScenario,
+    start: Pose2,
+    map: &[(usize, Vector2<f64>, Matrix2<f64>)],
+    notices: &mut Vec<String>,
+) -> Vec<FilterState> {
+    let mut filters = Vec::new();
+    for &kind in &scenario.estimators {
+        let built: Result<Box<dyn LandmarkSlamDebug>, String> = match kind {
+            EstimatorKind::Ekf => EkfSlam::new(scenario.filter_config(), start)
+                .map(|f| Box::new(f) as _)
+                .map_err(|e| e.to_string()),
+            EstimatorKind::Ukf => UkfSlam::new(scenario.filter_config(), scenario.ukf, start)
+                .map(|f| Box::new(f) as _)
+                .map_err(|e| e.to_string()),
+            EstimatorKind::FejEkf => EkfSlam::with_linearization(
+                scenario.filter_config(),
+                start,
+                Linearization::FirstEstimates,
+            )
+            .map(|f| Box::new(f) as _)
+            .map_err(|e| e.to_string()),
+            EstimatorKind::IdealEkf => IdealEkf::new(scenario.filter_config(), start)
+                .map(|f| Box::new(f) as _)
+                .map_err(|e| e.to_string()),
+            EstimatorKind::FastSlam1 | EstimatorKind::FastSlam2 => {
+                FastSlamEstimator::new(fastslam_config(scenario, kind), start)
+                    .map(|f| Box::new(f) as _)
+                    .map_err(|e| e.to_string())
+            }
+        };
+        let given = built.and_then(|mut filter| {
+            for &(id, position, covariance) in map {
+                filter
+                    .insert_landmark(id, position, covariance)
+                    .map_err(|e| e.to_string())?;
+            }
+            Ok(filter)
+        });
+        match given {
+            Ok(filter) => filters.push(FilterState {
+                kind,
+                filter,
+                last_resample: None,
+                next_label: OWN_LABELS,
+                last_predict: None,
+                last_update: None,
+                last_error: None,
+                rejected: 0,
+                last_rejection: None,
+                ambiguous: 0,
+            }),
+            Err(e) => notices.push(format!(
+                "{} could not start: {e}; change the parameter and reset",
+                kind.name()
+            )),
+        }
+    }
+    filters
 }
 
 /// FastSLAM's configuration in a landmark scenario: the scenario's noise and

@@ -1,0 +1,222 @@
+//! The landmark lesson on recorded data: MRCLAM Dataset 6 opened by `data=`
+//! (from `../shared/data`, skipped with a message when it is absent), its robot
+//! and mode chosen in the panel, the error against Vicon read from the lesson's
+//! state and checked against the same run made headless; a file that is no data
+//! set leaves the simulated world open with a message.
+
+use super::common::{harness_sized, lesson_of, lesson_of_mut, render_or_skip};
+use egui_kittest::Harness;
+use egui_kittest::kittest::Queryable as _;
+use slamlab_app::SlamLabApp;
+use slamlab_app::landmark_slam::LandmarkSlamLesson;
+use slamlab_app::lesson::Lesson as _;
+use slamlab_sim::LandmarkSession;
+use slamlab_sim::io::landmark_data::read_path;
+use slamlab_sim::world::recorded::RecordedWorld;
+use std::sync::Arc;
+
+/// Where a screenshot goes: the tests' scratch folder in the target directory.
+fn shot(name: &str) -> std::path::PathBuf {
+    std::path::Path::new(env!("CARGO_TARGET_TMPDIR")).join(format!("{name}.png"))
+}
+
+/// MRCLAM Dataset 6's zip under `../shared/data`, or `None` with a message.
+fn mrclam_zip() -> Option<String> {
+    let Some(data) = slamlab_fuzz::shared_data() else {
+        println!("skipped: ../shared/data is absent (or set SLAMLAB_SHARED_DATA)");
+        return None;
+    };
+    let zip = data.join("landmarks/mrclam/MRCLAM_Dataset6.zip");
+    if !zip.exists() {
+        println!("skipped: {} is absent", zip.display());
+        return None;
+    }
+    Some(zip.display().to_string())
+}
+
+/// Runs frames until `data=` has been read (the desktop reads it in the
+/// frame after the request starts).
+fn wait_for_data(h: &mut Harness<'_, SlamLabApp>) {
+    for _ in 0..10 {
+        h.run();
+        if !lesson_of::<LandmarkSlamLesson>(h).test_state()["loading_data"]
+            .as_bool()
+            .unwrap_or(true)
+        {
+            return;
+        }
+    }
+    panic!("data= was not read in ten frames");
+}
+
+fn state(h: &Harness<'_, SlamLabApp>) -> serde_json::Value {
+    lesson_of::<LandmarkSlamLesson>(h).test_state()
+}
+
+#[test]
+#[ignore = "compiled and clippy-clean, not yet run (the shared VM was too loaded to build the test binary on 2026-11-28): run with --ignored and SLAMLAB_SHARED_DATA"]
+fn mrclam_opens_by_url_and_its_error_against_vicon_is_the_headless_runs() {
+    let Some(zip) = mrclam_zip() else {
+        return;
+    };
+    let query = format!("lesson=landmark-slam&data={zip}&estimator=ekf");
+    let mut h = harness_sized(&query, egui::vec2(1400.0, 900.0));
+    wait_for_data(&mut h);
+    let s = state(&h);
+    assert_eq!(s["data"]["name"], "MRCLAM_Dataset6, robot 1", "{s}");
+    assert_eq!(s["data"]["mode"], "slam", "{s}");
+    assert_eq!(s["filters"], serde_json::json!(["ekf"]), "{s}");
+    // The world's source is in the panel, the robots to choose from beside it.
+    assert!(
+        h.query_by_label_contains("Multi-Robot Cooperative")
+            .is_some()
+    );
+
+    const TICKS: usize = 6000;
+    for _ in 0..TICKS {
+        lesson_of_mut::<LandmarkSlamLesson>(&mut h).step_tick();
+    }
+    h.run();
+    let s = state(&h);
+    let rmse = s["position_error"]["ekf"]["rmse"]
+        .as_f64()
+        .unwrap_or(f64::NAN);
+    let samples = s["position_error"]["ekf"]["samples"].as_u64().unwrap_or(0);
+    assert_eq!(s["data"]["played"], TICKS, "{s}");
+
+    // The same ticks headless, from the files as the command line reads them.
+    let data = read_path(std::path::Path::new(&zip)).unwrap();
+    let lesson = lesson_of::<LandmarkSlamLesson>(&h);
+    let scenario = lesson.session().scenario().clone();
+    let world = Arc::new(RecordedWorld::from_data(&data, 1).unwrap());
+    let mut headless = LandmarkSession::recorded(scenario, world);
+    for _ in 0..TICKS {
+        headless.step_tick();
+    }
+    let run = &headless.filters()[0];
+    let errors: Vec<f64> = run.history.iter().map(|m| m.position_error).collect();
+    let expected = (errors.iter().map(|e| e * e).sum::<f64>() / errors.len() as f64).sqrt();
+    assert_eq!(samples as usize, errors.len());
+    assert_eq!(rmse.to_bits(), expected.to_bits(), "{rmse} vs {expected}");
+    // One error sample per tick where Vicon knows the pose (none in its gaps).
+    assert!(
+        samples > TICKS as u64 / 2 && samples <= TICKS as u64,
+        "{samples} samples of {TICKS} ticks"
+    );
+    // Against Vicon, after 6000 steps (about 90 s) the EKF is within a metre
+    // and below dead reckoning's error at the end.
+    let session = lesson.session();
+    let truth = session.truth();
+    let dr = session.dead_reckoning();
+    let dr_error = ((dr.x - truth.x).powi(2) + (dr.y - truth.y).powi(2)).sqrt();
+    let latest = s["position_error"]["ekf"]["latest"]
+        .as_f64()
+        .unwrap_or(f64::NAN);
+    assert!(rmse < 1.0, "RMSE {rmse}");
+    assert!(
+        latest < dr_error,
+        "EKF {latest} m, dead reckoning {dr_error} m"
+    );
+    println!(
+        "after {TICKS} steps: EKF RMSE {rmse} m, latest {latest} m, dead reckoning {dr_error} m"
+    );
+
+    // The page's headless entry (the browser check calls it in wasm) gives the
+    // same bits from the zip's bytes.
+    let bytes = std::fs::read(&zip).unwrap();
+    let headless: serde_json::Value = serde_json::from_str(&SlamLabApp::headless_log_state(
+        "lesson=landmark-slam&estimator=ekf",
+        "MRCLAM_Dataset6.zip",
+        &bytes,
+        TICKS as u64,
+    ))
+    .unwrap();
+    assert_eq!(
+        headless["position_error"]["ekf"]["rmse"]
+            .as_f64()
+            .map(f64::to_bits),
+        Some(rmse.to_bits()),
+        "{headless}"
+    );
+
+    // Robot 3 from the panel: a new run of that robot.
+    h.get_by_label("3").click();
+    h.run();
+    let s = state(&h);
+    assert_eq!(s["data"]["name"], "MRCLAM_Dataset6, robot 3", "{s}");
+    assert_eq!(s["tick"], 0, "{s}");
+    // Localization with the surveyed map.
+    h.get_by_label("localization").click();
+    h.run();
+    let s = state(&h);
+    assert_eq!(s["data"]["mode"], "localization", "{s}");
+    assert_eq!(s["data"]["robot"], 3, "{s}");
+    // Back to the simulated world.
+    h.get_by_label("Simulated world").click();
+    h.run();
+    assert!(state(&h)["data"].is_null());
+}
+
+#[test]
+fn a_file_that_is_no_data_set_leaves_the_simulated_world_open() {
+    let dir = std::path::Path::new(env!("CARGO_TARGET_TMPDIR"));
+    let bad = dir.join("not-a-data-set.dat");
+    std::fs::write(&bad, "1 2 3\n").unwrap();
+    let query = format!("lesson=landmark-slam&data={}", bad.display());
+    let mut h = harness_sized(&query, egui::vec2(1400.0, 900.0));
+    wait_for_data(&mut h);
+    assert!(state(&h)["data"].is_null());
+    let note = lesson_of::<LandmarkSlamLesson>(&h)
+        .frame
+        .note
+        .clone()
+        .unwrap_or_default();
+    assert!(
+        note.contains("not-a-data-set.dat") && note.contains("simulated world stays open"),
+        "{note}"
+    );
+    let missing = format!(
+        "lesson=landmark-slam&data={}",
+        dir.join("absent.zip").display()
+    );
+    let mut h = harness_sized(&missing, egui::vec2(1400.0, 900.0));
+    wait_for_data(&mut h);
+    let note = lesson_of::<LandmarkSlamLesson>(&h)
+        .frame
+        .note
+        .clone()
+        .unwrap_or_default();
+    assert!(note.contains("absent.zip"), "{note}");
+}
+
+#[test]
+#[ignore = "compiled and clippy-clean, not yet run (the shared VM was too loaded to build the test binary on 2026-11-28): run with --ignored and SLAMLAB_SHARED_DATA"]
+fn mrclam_renders_at_800_by_500_in_a_lecture_and_full_size() {
+    let Some(zip) = mrclam_zip() else {
+        return;
+    };
+    for (size, embed, name) in [
+        (
+            egui::vec2(800.0, 500.0),
+            true,
+            "landmark_mrclam_lecture_800x500",
+        ),
+        (egui::vec2(800.0, 500.0), false, "landmark_mrclam_800x500"),
+        (egui::vec2(1400.0, 900.0), false, "landmark_mrclam_full"),
+    ] {
+        let embed = if embed { "&embed=1" } else { "" };
+        let query = format!("lesson=landmark-slam&data={zip}&estimator=ekf{embed}");
+        let mut h = harness_sized(&query, size);
+        wait_for_data(&mut h);
+        for _ in 0..20_000 {
+            lesson_of_mut::<LandmarkSlamLesson>(&mut h).step_tick();
+        }
+        h.run();
+        let Some(image) = render_or_skip(&mut h) else {
+            return;
+        };
+        image
+            .save(shot(name))
+            .unwrap_or_else(|e| eprintln!("could not save the screenshot: {e}"));
+    }
+}

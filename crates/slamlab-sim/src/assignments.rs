@@ -1,0 +1,37 @@
+//! The assignments SLAM Lab hands out: the built-in ones and, for each kind of
+//! task, the lesson that runs a student's variant of it.
+//!
+//! [`crate::coursework`] is shared and knows no lesson; this list joins the two
+//! (as the app's and the command line's registries list the lessons). Both front
+//! ends go through it, so a student's inputs and grade are the same in the
+//! browser and on the command line.
+
+use crate::coursework::{self, Assignment, CourseworkError, Prepared, TaskRunner};
+
+/// The runners of every kind of task that has one: landmark SLAM (the landmark
+/// world) and localization (the kidnap lesson's Monte Carlo localization).
+pub const RUNNERS: &[TaskRunner] = &[
+    coursework::landmarks::RUNNER,
+    crate::kidnap::assignment::RUNNER,
+];
+
+/// The built-in assignment `name` (`ekf-slam`, `mcl`).
+pub fn builtin(name: &str) -> Result<Assignment, CourseworkError> {
+    coursework::builtin(name, RUNNERS)
+}
+
+/// The names of the built-in assignments.
+pub fn builtin_names() -> Vec<&'static str> {
+    coursework::BUILTIN.iter().map(|(n, _)| *n).collect()
+}
+
+/// Reads an instructor's assignment JSON file (see
+/// [`coursework::read_assignment`]).
+pub fn read(name: &str, bytes: &[u8]) -> Result<Assignment, CourseworkError> {
+    coursework::read_assignment(name, bytes, RUNNERS)
+}
+
+/// Runs `student`'s variant of `assignment`.
+pub fn prepare(assignment: &Assignment, student: &str) -> Result<Prepared, CourseworkError> {
+    coursework::prepare(assignment, student, RUNNERS)
+}

@@ -1,0 +1,364 @@
+//! The grade of one handed-in file: each criterion with the student's value, the
+//! threshold, the points and pass or fail, beside the reference estimators'
+//! values on the same variant; the score; and the SHA-256 of the file, so a
+//! report names exactly what was graded.
+
+use super::CourseworkError;
+use super::assignment::{Assignment, Metric};
+use super::variant::{Variant, sha256_hex};
+use crate::io::trajectory::{check_size, read_trajectory};
+use crate::metrics::{Evaluation, EvaluationSettings, Trajectory, evaluate};
+use serde::Serialize;
+
+/// A reference estimator's value of a criterion's metric.
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct ReferenceValue {
+    /// The estimator (`ekf`, `dead-reckoning`, `mcl`, `odometry`, ...).
+    pub name: String,
+    /// Its value; `None` when it has none.
+    pub value: Option<f64>,
+    /// Whether it would pass.
+    pub pass: bool,
+}
+
+/// One criterion, graded.
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct CriterionGrade {
+    /// The metric's name (`ate_rmse`).
+    pub metric: String,
+    /// What it is (`ATE RMSE`).
+    pub label: String,
+    /// Its unit.
+    pub unit: String,
+    /// The student's value; `None` when it cannot be computed.
+    pub value: Option<f64>,
+    /// The threshold.
+    pub threshold: f64,
+    /// `at-most` or `at-least`.
+    pub direction: String,
+    /// The points a pass earns.
+    pub points: f64,
+    /// The points earned.
+    pub earned: f64,
+    /// Whether it passes.
+    pub pass: bool,
+    /// The reference estimators' values on the same variant.
+    pub references: Vec<ReferenceValue>,
+}
+
+impl CriterionGrade {
+    /// One line for a student: `ATE RMSE 0.213 m ≤ 0.35 m: pass, 70 of 70 points`.
+    pub fn summary(&self) -> String {
+        let value = self
+            .value
+            .map_or("no value".to_owned(), |v| format_value(v, &self.unit));
+        let sign = if self.direction == "at-least" {
+            "≥"
+        } else {
+            "≤"
+        };
+        format!(
+            "{} {value} (pass: {sign} {}): {}, {} of {} points",
+            self.label,
+            format_value(self.threshold, &self.unit),
+            if self.pass { "pass" } else { "fail" },
+            trim_number(self.earned),
+            trim_number(self.points)
+        )
+    }
+}
+
+/// A value with its unit, four significant figures.
+pub fn format_value(v: f64, unit: &str) -> String {
+    let text = if v == 0.0 || (1e-3..1e5).contains(&v.abs()) {
+        let a = v.abs();
+        let digits = match a {
+            _ if a == 0.0 || a >= 1000.0 => 0,
+            _ if a >= 100.0 => 1,
+            _ if a >= 10.0 => 2,
+            _ if a >= 1.0 => 3,
+            _ if a >= 0.1 => 4,
+            _ if a >= 0.01 => 5,
+            _ => 6,
+        };
+        format!("{v:.digits$}")
+    } else {
+        format!("{v:.3e}")
+    };
+    if unit.is_empty() {
+        text
+    } else {
+        format!("{text} {unit}")
+    }
+}
+
+fn trim_number(v: f64) -> String {
+    if v.fract() == 0.0 && v.abs() < 1e15 {
+        format!("{}", v as i64)
+    } else {
+        format!("{v}")
+    }
+}
+
+/// A graded file.
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct Grade {
+    /// The assignment's id.
+    pub assignment: String,
+    /// Its title.
+    pub title: String,
+    /// The student, as given.
+    pub student: String,
+    /// The variant's code.
+    pub variant: String,
+    /// The variant's seed.
+    pub seed: u64,
+    /// The graded file's name.
+    pub estimate_file: String,
+    /// The SHA-256 of its bytes.
+    pub estimate_sha256: String,
+    /// Its size in bytes.
+    pub estimate_bytes: usize,
+    /// Each criterion.
+    pub criteria: Vec<CriterionGrade>,
+    /// The points earned.
+    pub score: f64,
+    /// The points of all criteria.
+    pub max_score: f64,
+    /// The score that passes.
+    pub pass_score: f64,
+    /// Whether the score passes.
+    pub pass: bool,
+    /// What the grader had to say (the evaluation's overlap, dropped poses).
+    pub notices: Vec<String>,
+}
+
+impl Grade {
+    /// Gradescope's `results.json`: the score, the maximum, and one test per
+    /// criterion with its output (Gradescope autograder specification).
+    pub fn gradescope(&self) -> serde_json::Value {
+        let tests: Vec<serde_json::Value> = self
+            .criteria
+            .iter()
+            .map(|c| {
+                let references: Vec<String> = c
+                    .references
+                    .iter()
+                    .map(|r| {
+                        format!(
+                            "{} {}",
+                            r.name,
+                            r.value
+                                .map_or("-".to_owned(), |v| format_value(v, &c.unit))
+                        )
+                    })
+                    .collect();
+                serde_json::json!({
+                    "name": format!("{} ({})", c.label, c.metric),
+                    "score": c.earned,
+                    "max_score": c.points,
+                    "status": if c.pass { "passed" } else { "failed" },
+                    "output": format!("{}\nReferences on your variant: {}.", c.summary(), references.join(", ")),
+                })
+            })
+            .collect();
+        serde_json::json!({
+            "score": self.score,
+            "max_score": self.max_score,
+            "output": format!(
+                "{}: variant {} of {}; graded {} (SHA-256 {}).{}",
+                self.title,
+                self.variant,
+                self.student,
+                self.estimate_file,
+                self.estimate_sha256,
+                if self.notices.is_empty() { String::new() } else { format!(" {}", self.notices.join(" ")) }
+            ),
+            "tests": tests,
+        })
+    }
+}
+
+/// The settings trajectories are scored with: evo's association tolerance, the
+/// assignment's alignment, RPE over one step.
+pub fn trajectory_settings(assignment: &Assignment) -> EvaluationSettings {
+    EvaluationSettings {
+        alignment: assignment.alignment(),
+        ..EvaluationSettings::default()
+    }
+}
+
+/// A trajectory metric of an evaluation.
+pub fn trajectory_metric(metric: Metric, e: &Evaluation) -> Option<f64> {
+    match metric {
+        Metric::AteRmse => Some(e.ape.translation.rmse),
+        Metric::AteMax => Some(e.ape.translation.max),
+        Metric::FinalPositionError => e.ape.translation_m.last().copied(),
+        Metric::RpeTranslationRmse => e.rpe.as_ref().map(|r| r.translation.rmse),
+        Metric::RpeRotationRmseDeg => e.rpe.as_ref().map(|r| r.rotation.rmse),
+        Metric::CostRatio => None,
+    }
+}
+
+/// Refuses an estimate that cannot be for this variant: one that ends after or
+/// well before the variant's run (its times say which run it was made for).
+pub fn check_times(
+    truth: &Trajectory,
+    estimate: &Trajectory,
+    max_diff: f64,
+) -> Result<Vec<String>, CourseworkError> {
+    let (Some((_, end)), Some((first, last))) = (truth.span(), estimate.span()) else {
+        return Err(CourseworkError::BadEstimate(
+            "the estimate holds no pose".to_owned(),
+        ));
+    };
+    let describe = |t: &Trajectory| {
+        t.span().map_or(String::new(), |(a, b)| {
+            format!("{} poses from {a:.3} to {b:.3} s", t.len())
+        })
+    };
+    if last > end + max_diff {
+        return Err(CourseworkError::OtherVariant(format!(
+            "the estimate has {}, past the end of your variant's run ({}): it was made for another student's variant or another assignment; download your own inputs (student= your id) and run your program on them",
+            describe(estimate),
+            describe(truth)
+        )));
+    }
+    if last < end - max_diff {
+        return Err(CourseworkError::OtherVariant(format!(
+            "the estimate has {}, but your variant's run goes on to {end:.3} s ({}): it is cut short, or was made for another student's variant; write one pose per step up to the end",
+            describe(estimate),
+            describe(truth)
+        )));
+    }
+    let mut notices = Vec::new();
+    if first > truth.span().map_or(0.0, |s| s.0) + max_diff {
+        notices.push(format!(
+            "the estimate starts at {first:.3} s; it is scored from there"
+        ));
+    }
+    Ok(notices)
+}
+
+/// Grades a trajectory file against the variant's truth, beside the references.
+pub fn grade_trajectory(
+    assignment: &Assignment,
+    variant: &Variant,
+    truth: &Trajectory,
+    references: &[(String, Trajectory)],
+    file_name: &str,
+    bytes: &[u8],
+) -> Result<Grade, CourseworkError> {
+    check_size(bytes.len() as u64)
+        .map_err(|e| CourseworkError::BadEstimate(format!("{file_name}: {e}")))?;
+    let file = read_trajectory(file_name, bytes)
+        .map_err(|e| CourseworkError::BadEstimate(format!("{file_name}: {e}")))?;
+    let settings = trajectory_settings(assignment);
+    let mut notices = check_times(truth, &file.trajectory, settings.max_diff)
+        .map_err(|e| e.in_file(file_name))?;
+    notices.extend(file.notices.iter().map(|n| format!("{file_name}: {n}")));
+    let evaluation = evaluate(truth, &file.trajectory, &settings)
+        .map_err(|e| CourseworkError::BadEstimate(format!("{file_name}: {e}")))?;
+    notices.extend(evaluation.notices.iter().cloned());
+    let reference_evaluations: Vec<(&str, Option<Evaluation>)> = references
+        .iter()
+        .map(|(name, t)| (name.as_str(), evaluate(truth, t, &settings).ok()))
+        .collect();
+    let values: Vec<Option<f64>> = assignment
+        .criteria
+        .iter()
+        .map(|c| trajectory_metric(c.metric, &evaluation))
+        .collect();
+    let reference_values: Vec<Vec<(String, Option<f64>)>> = assignment
+        .criteria
+        .iter()
+        .map(|c| {
+            reference_evaluations
+                .iter()
+                .map(|(name, e)| {
+                    (
+                        (*name).to_owned(),
+                        e.as_ref().and_then(|e| trajectory_metric(c.metric, e)),
+                    )
+                })
+                .collect()
+        })
+        .collect();
+    Ok(assemble(
+        assignment,
+        variant,
+        file_name,
+        bytes,
+        &values,
+        &reference_values,
+        notices,
+    ))
+}
+
+/// A grade from each criterion's value and the references' values.
+pub fn assemble(
+    assignment: &Assignment,
+    variant: &Variant,
+    file_name: &str,
+    bytes: &[u8],
+    values: &[Option<f64>],
+    reference_values: &[Vec<(String, Option<f64>)>],
+    notices: Vec<String>,
+) -> Grade {
+    let criteria: Vec<CriterionGrade> = assignment
+        .criteria
+        .iter()
+        .enumerate()
+        .map(|(k, c)| {
+            let direction = c.direction();
+            let value = values.get(k).copied().flatten().filter(|v| !v.is_nan());
+            let pass = value.is_some_and(|v| direction.passes(v, c.threshold));
+            CriterionGrade {
+                metric: c.metric.name().to_owned(),
+                label: c.metric.label().to_owned(),
+                unit: c.metric.unit().to_owned(),
+                value,
+                threshold: c.threshold,
+                direction: match direction {
+                    super::assignment::Direction::AtMost => "at-most",
+                    super::assignment::Direction::AtLeast => "at-least",
+                }
+                .to_owned(),
+                points: c.points,
+                earned: if pass { c.points } else { 0.0 },
+                pass,
+                references: reference_values
+                    .get(k)
+                    .map(|refs| {
+                        refs.iter()
+                            .map(|(name, v)| ReferenceValue {
+                                name: name.clone(),
+                                value: *v,
+                                pass: v.is_some_and(|v| direction.passes(v, c.threshold)),
+                            })
+                            .collect()
+                    })
+                    .unwrap_or_default(),
+            }
+        })
+        .collect();
+    let score: f64 = criteria.iter().map(|c| c.earned).sum();
+    let max_score = assignment.max_score();
+    let pass_score = assignment.pass_score();
+    Grade {
+        assignment: assignment.id.clone(),
+        title: assignment.title.clone(),
+        student: variant.student.clone(),
+        variant: variant.code.clone(),
+        seed: variant.seed,
+        estimate_file: file_name.to_owned(),
+        estimate_sha256: sha256_hex(bytes),
+        estimate_bytes: bytes.len(),
+        criteria,
+        score,
+        max_score,
+        pass_score,
+        pass: score >= pass_score - 1e-9,
+        notices,
+    }
+}
