@@ -313,14 +313,15 @@ async function main() {
 
   // --- The download's budget once binaryen's wasm-opt has shrunk it (web/build.sh's
   // default; a SLAMLAB_WASM_OPT=0 build keeps its function names, the "name" section, and
-  // is not held to it): at most 6 MB, the target, and at most 2.4 MB gzipped. The 2 MB
-  // gzip target is not met (2,316,251 bytes by this gzip on 2026-11-27); the bound keeps
-  // the download from growing unnoticed. docs/web-build.md says what the bytes are.
-  await check("the wasm download is at most 6 MB (2.4 MB gzipped)", async () => {
+  // is not held to it): at most 6.5 MB and 2.7 MB gzipped. The targets (6 MB, 2 MB
+  // gzipped) are not met since ROS 2 bags, zip archives and the real landmark data sets
+  // came in (6,400,679 bytes, 2,624,595 gzipped on 2026-11-28); the bound keeps the
+  // download from growing unnoticed. docs/web-build.md says what the bytes are.
+  await check("the wasm download is at most 6.5 MB (2.7 MB gzipped)", async () => {
     const sizes = `${metrics.wasm_bytes} bytes, ${metrics.wasm_gzip_bytes} gzip -9`;
     if (customSectionNames(wasm).includes("name")) return `${sizes}; not checked: built without wasm-opt`;
-    assert(metrics.wasm_bytes <= 6_000_000, `${sizes}: over the 6,000,000-byte budget`);
-    assert(metrics.wasm_gzip_bytes <= 2_400_000, `${sizes}: over the 2,400,000-byte gzip budget`);
+    assert(metrics.wasm_bytes <= 6_500_000, `${sizes}: over the 6,500,000-byte budget`);
+    assert(metrics.wasm_gzip_bytes <= 2_700_000, `${sizes}: over the 2,700,000-byte gzip budget`);
     return sizes;
   });
 
@@ -983,7 +984,7 @@ async function main() {
           await p.evaluate((q) => window.slamlab.slamlab_test_headless(q, 200), "lesson=cartographer&map=maze&kidnap-at=152&seed=3"),
         );
         const seconds = (Date.now() - started) / 1000;
-        const NATIVE = { submaps: 7, nodes: 163, loop_closures: 44, optimizations: 6, searches: 96, nodes_evaluated: 703585, exhaustive_candidates: 194308605 };
+        const NATIVE = { submaps: 7, nodes: 163, loop_closures: 15, optimizations: 6, searches: 34, nodes_evaluated: 153183, exhaustive_candidates: 43636618 };
         const got = {
           submaps: headless.submaps,
           nodes: headless.nodes,
@@ -1229,11 +1230,12 @@ async function main() {
                 `rotation ${s.photos.rotation_deg.toFixed(3)} deg (truth ${pair.rotationDeg.toFixed(3)})`,
             );
             if (viewport === VIEWPORT) {
-              // Not an image: a message, the pair kept.
-              await dropFiles(p, [{ name: "notes.txt", type: "text/plain", b64: Buffer.from("not a photo").toString("base64") }]);
-              const bad = await waitState(p, (st) => st.photos && st.photos.message, "a message for notes.txt");
-              assert(/notes\.txt is not an image/.test(bad.photos.message), `message ${bad.photos.message}`);
-              checkPhotos(bad.photos, "after notes.txt");
+              // Not an image: a message, the pair kept (a .txt would be a student's relative pose,
+              // read as an estimate; a document is refused by the photos).
+              await dropFiles(p, [{ name: "notes.md", type: "text/markdown", b64: Buffer.from("not a photo").toString("base64") }]);
+              const bad = await waitState(p, (st) => st.photos && st.photos.message, "a message for notes.md");
+              assert(/notes\.md is not an image/.test(bad.photos.message), `message ${bad.photos.message}`);
+              checkPhotos(bad.photos, "after notes.md");
               // The same photo twice: a pure rotation, no translation.
               await dropFiles(p, [asFile("left.png", pair.left, "image/png"), asFile("left-again.png", pair.left, "image/png")]);
               const same = await waitState(p, (st) => st.photos && st.photos.right === "left-again.png" && st.photos.inliers > 0, "the same photo twice");
@@ -1241,7 +1243,7 @@ async function main() {
               if ("motion" in same.photos) assert(same.photos.motion === "pure-rotation", `the same photo twice: ${JSON.stringify(same.photos)}`);
               await sleep(300);
               await screenshot(p, "visual-odometry-photos-identical.png");
-              notes.push(`notes.txt refused; the same photo twice: rotation ${same.photos.rotation_deg.toFixed(4)} deg, ${same.photos.motion ?? "?"}`);
+              notes.push(`notes.md refused; the same photo twice: rotation ${same.photos.rotation_deg.toFixed(4)} deg, ${same.photos.motion ?? "?"}`);
             }
             await assertNoPanic(p);
             assert(log.problems.length === 0, log.problems.join("; "));

@@ -108,12 +108,17 @@ fn foreign_args(experiment: &dyn Experiment) -> Vec<Arg> {
     for other in EXPERIMENTS.iter().filter(|e| e.name() != experiment.name()) {
         for arg in other.command().get_arguments() {
             let id = arg.get_id().as_str();
-            let taken = own.get_arguments().any(|a| a.get_id() == id)
-                || args.iter().any(|a| a.get_id() == id);
+            // The same flag: the same id, or the same long name under another id
+            // (real-data's list `estimators` is `--estimator`, as kidnap's one is).
+            let same = |a: &Arg| {
+                a.get_id() == id || (a.get_long().is_some() && a.get_long() == arg.get_long())
+            };
+            let taken = own.get_arguments().any(same) || args.iter().any(same);
             if !taken {
                 let mut arg = arg
                     .clone()
                     .hide(true)
+                    .required(false)
                     .default_value(None)
                     .help_heading(None);
                 if arg.get_action().takes_values() {
@@ -131,7 +136,11 @@ fn foreign_args(experiment: &dyn Experiment) -> Vec<Arg> {
 fn owners(id: &str) -> Vec<&'static str> {
     EXPERIMENTS
         .iter()
-        .filter(|e| e.command().get_arguments().any(|a| a.get_id() == id))
+        .filter(|e| {
+            e.command()
+                .get_arguments()
+                .any(|a| a.get_id() == id || a.get_long() == Some(id))
+        })
         .map(|e| e.name())
         .collect()
 }
@@ -249,7 +258,8 @@ mod tests {
             for other in EXPERIMENTS {
                 for arg in other.command().get_arguments() {
                     assert!(
-                        sub.get_arguments().any(|a| a.get_id() == arg.get_id()),
+                        sub.get_arguments().any(|a| a.get_id() == arg.get_id()
+                            || (a.get_long().is_some() && a.get_long() == arg.get_long())),
                         "{} lacks --{}",
                         e.name(),
                         arg.get_id()

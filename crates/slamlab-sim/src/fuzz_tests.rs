@@ -755,13 +755,12 @@ fn assignment_files_survive_mutations() {
 /// Corrected CARMEN logs (the reference trajectories of laser logs) through
 /// the path the lessons and `slamlab experiment laser-slam` take: read, then
 /// matched to a raw log's scans by time and ranges
-/// ([`crate::grid::reference::LogReference::for_input`]). Seeds: a small
+/// ([`crate::grid::MappingInput::reference_from`]). Seeds: a small
 /// reference of a small raw log (its scans 1, 3 and 7, one of them matching),
 /// the same gzip-compressed, and the head of the Intel log's corrected version.
 #[test]
 fn corrected_logs_survive_mutations() {
     use crate::grid::log_input;
-    use crate::grid::reference::LogReference;
     use crate::io::laser_log::LaserLog;
     use std::io::{Read as _, Write as _};
     let flaser = |ranges: &[f64], time: f64| -> String {
@@ -804,7 +803,8 @@ fn corrected_logs_survive_mutations() {
     }
     let report = Target::new("corrected CARMEN log", seeds, CAP).run_checked(
         |bytes| {
-            LogReference::for_input(bytes, "fuzz", &input)
+            input
+                .reference_from(bytes, "fuzz")
                 .map(drop)
                 .map_err(|e| e.to_string())
         },

@@ -37,7 +37,6 @@ use slamlab_sim::cartographer::session::{
 };
 use slamlab_sim::cartographer::{CartographerPhase, CartographerSim, NextPhase};
 use slamlab_sim::grid::laser_file::MAX_LASER_FILE_BYTES;
-use slamlab_sim::grid::reference::LogReference;
 use slamlab_sim::grid::{LaserFile, MappingInput, builtin_map};
 use slamlab_sim::params;
 use slamlab_sim::stepper::{CheckpointPolicy, Stepper};
@@ -450,7 +449,7 @@ impl CartographerLesson {
             return;
         }
         let input = self.sim().input().clone();
-        match LogReference::for_input(&bytes, name, &input) {
+        match input.reference_from(&bytes, name) {
             Ok(reference) => {
                 let description = reference.description.clone();
                 let mut with = (*input).clone();

@@ -446,12 +446,7 @@ fn recorded_params_ui(ui: &mut egui::Ui, lesson: &mut LandmarkSlamLesson, kind: 
                 number_ui(ui, lesson, "w-std-deg", "turn rate σ_w");
             }
             DataSetKind::Freiburg => {
-                number_ui(
-                    ui,
-                    lesson,
-                    "odometry-rot-std-deg",
-                    "odometry rotations σ_rot",
-                );
+                number_ui(ui, lesson, "odometry-rot-std", "odometry rotations σ_rot");
                 number_ui(
                     ui,
                     lesson,

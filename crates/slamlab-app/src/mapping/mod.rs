@@ -24,7 +24,6 @@ use crate::widgets::params_panel::{self, PendingParams};
 use crate::widgets::reference_track::ReferenceTrack;
 use serde::{Deserialize, Serialize};
 use slamlab_sim::grid::laser_file::MAX_LASER_FILE_BYTES;
-use slamlab_sim::grid::reference::LogReference;
 use slamlab_sim::grid::{LaserFile, MappingInput, builtin_map};
 use slamlab_sim::mapping::{
     MappingEvent, MappingPhase, MappingScenario, MappingSession, PoseSource, simulated_input,
@@ -510,7 +509,7 @@ impl MappingLesson {
             ));
             return;
         }
-        match LogReference::for_input(&bytes, name, &self.input) {
+        match self.input.reference_from(&bytes, name) {
             Ok(reference) => {
                 let description = reference.description.clone();
                 let mut with = (*self.input).clone();

@@ -19,7 +19,7 @@ use serde_json::json;
 use slamlab_sim::cartographer::input::{KidnapPlace, kidnap_input_to};
 use slamlab_sim::cartographer::{CartographerParams, CartographerSim};
 use slamlab_sim::grid::SimulatedLogConfig;
-use slamlab_sim::grid::reference::{self, LogReference};
+use slamlab_sim::grid::reference;
 use std::io::Write;
 use std::sync::Arc;
 use std::time::Instant;
@@ -202,7 +202,8 @@ impl RunLesson for Cartographer {
                 match std::fs::read(path)
                     .map_err(|e| format!("cannot read {path}: {e}"))
                     .and_then(|bytes| {
-                        LogReference::for_input(&bytes, path, &input)
+                        input
+                            .reference_from(&bytes, path)
                             .map_err(|e| format!("{path}: {e}"))
                     }) {
                     Ok(r) => input.reference = Some(Arc::new(r)),

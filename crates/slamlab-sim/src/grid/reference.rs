@@ -20,11 +20,8 @@
 //!   their squares (m², deg²), as Table I reports them. No alignment enters:
 //!   a relative motion does not see the frame.
 
-use crate::grid::MappingInput;
 use crate::io::laser_log::LaserLog;
-use crate::io::laser_reference::{
-    Association, ReferenceError, ReferenceLog, associate, associate_scans,
-};
+use crate::io::laser_reference::{Association, ReferenceError, ReferenceLog, associate};
 use crate::metrics::{self, DeltaUnit, RelativeDelta, Trajectory};
 use serde::Serialize;
 use slamlab_core::Pose2;
@@ -55,30 +52,11 @@ pub struct LogReference {
 }
 
 impl LogReference {
-    /// The reference of `log` (the raw log; its scan indices are the input's,
-    /// as [`crate::grid::log_input`] keeps them) from a corrected log's bytes.
+    /// The reference of `log` (the raw log; its scan indices are the mapping
+    /// input's, as the grid's `log_input` keeps them) from a corrected log's bytes.
     pub fn read(bytes: &[u8], name: &str, log: &LaserLog) -> Result<Self, ReferenceError> {
         let reference = ReferenceLog::from_bytes(bytes)?;
         let association = associate(&reference, log)?;
-        Ok(Self::from_association(name, &reference, &association))
-    }
-
-    /// The reference of a mapping input read from a log (its scans, matched
-    /// in the log's clock through [`MappingInput::time_origin`]) from a
-    /// corrected log's bytes.
-    pub fn for_input(
-        bytes: &[u8],
-        name: &str,
-        input: &MappingInput,
-    ) -> Result<Self, ReferenceError> {
-        let reference = ReferenceLog::from_bytes(bytes)?;
-        let scans: Vec<(usize, f64, &[f64])> = input
-            .scans
-            .iter()
-            .enumerate()
-            .map(|(k, s)| (k, s.time + input.time_origin, s.scan.ranges.as_slice()))
-            .collect();
-        let association = associate_scans(&reference, &scans)?;
         Ok(Self::from_association(name, &reference, &association))
     }
 
@@ -377,23 +355,6 @@ mod tests {
         assert_eq!(score(&reference, &poses).unwrap().pairs, 10);
         assert!(score(&reference, &poses[..1]).is_none());
         assert!(score(&reference, &[]).is_none());
-    }
-
-    /// The Intel log's reference, matched through the mapping input (the
-    /// lessons' path) as through the log itself: 910 of 910, the same scans.
-    #[test]
-    fn the_intel_reference_matches_through_the_mapping_input() {
-        let Some(dir) = crate::io::laser_reference::tests::shared_laser_dir() else {
-            return;
-        };
-        let log = LaserLog::read_file(&dir.join("intel.clf.bz2")).unwrap();
-        let bytes = std::fs::read(dir.join("intel-corrected.log.gz")).unwrap();
-        let direct = LogReference::read(&bytes, "intel-corrected.log.gz", &log).unwrap();
-        let input = crate::grid::log_input(&log, "intel.clf.bz2");
-        let through = LogReference::for_input(&bytes, "intel-corrected.log.gz", &input).unwrap();
-        assert_eq!(direct.points.len(), 910);
-        assert_eq!(through, direct);
-        assert_eq!(through.points[0].scan, 169);
     }
 
     #[test]

@@ -42,6 +42,30 @@ pub struct MappingInput {
 }
 
 impl MappingInput {
+    /// The reference trajectory of this input when it was read from a log: a
+    /// corrected log's bytes, its scans matched to the input's in the log's clock
+    /// (through [`MappingInput::time_origin`]) by time and identical ranges.
+    pub fn reference_from(
+        &self,
+        bytes: &[u8],
+        name: &str,
+    ) -> Result<crate::grid::reference::LogReference, crate::io::laser_reference::ReferenceError>
+    {
+        let reference = crate::io::laser_reference::ReferenceLog::from_bytes(bytes)?;
+        let scans: Vec<(usize, f64, &[f64])> = self
+            .scans
+            .iter()
+            .enumerate()
+            .map(|(k, s)| (k, s.time + self.time_origin, s.scan.ranges.as_slice()))
+            .collect();
+        let association = crate::io::laser_reference::associate_scans(&reference, &scans)?;
+        Ok(crate::grid::reference::LogReference::from_association(
+            name,
+            &reference,
+            &association,
+        ))
+    }
+
     /// Seconds from the first scan to the last.
     pub fn duration(&self) -> f64 {
         match (self.scans.first(), self.scans.last()) {
@@ -126,4 +150,30 @@ pub fn map_agreement(built: &ProbabilityGrid, truth: &OccupancyGrid) -> Option<f
         }
     }
     (known > 0).then(|| same as f64 / known as f64)
+}
+
+#[cfg(test)]
+mod tests {
+    use crate::io::laser_log::LaserLog;
+
+    /// The Intel log's reference, matched through the mapping input (the lessons'
+    /// path) as through the log itself: 910 of 910, the same scans.
+    #[test]
+    fn the_intel_reference_matches_through_the_mapping_input() {
+        let Some(dir) = crate::io::laser_reference::tests::shared_laser_dir() else {
+            return;
+        };
+        let log = LaserLog::read_file(&dir.join("intel.clf.bz2")).unwrap();
+        let bytes = std::fs::read(dir.join("intel-corrected.log.gz")).unwrap();
+        let direct =
+            crate::grid::reference::LogReference::read(&bytes, "intel-corrected.log.gz", &log)
+                .unwrap();
+        let input = crate::grid::log_input(&log, "intel.clf.bz2");
+        let through = input
+            .reference_from(&bytes, "intel-corrected.log.gz")
+            .unwrap();
+        assert_eq!(direct.points.len(), 910);
+        assert_eq!(through, direct);
+        assert_eq!(through.points[0].scan, 169);
+    }
 }

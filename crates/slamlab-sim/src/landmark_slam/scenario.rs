@@ -322,11 +322,13 @@ pub static PARAMS: &[Param<LandmarkScenario>] = &[
         |s| Some(u64::from(s.robot)),
         |s, v| s.robot = u32::try_from(v).unwrap_or(u32::MAX),
     ),
-    degrees!(
-        "odometry-rot-std-deg",
-        "deg",
+    // In radians, as the course states it (0.005 rad): in degrees, six decimals would
+    // not give the default back.
+    field!(
+        "odometry-rot-std",
+        "rad",
         "std of each rotation of a recorded odometry reading (the Freiburg course's data)",
-        (0.001, 45.0),
+        (1e-5, 0.8),
         odometry_rot_std
     ),
     field!(

@@ -803,7 +803,7 @@ fn a_laser_upside_down_turned_or_clockwise_sees_the_same_world() {
             ..s.clone()
         })
         .collect();
-    // Roll π then yaw π/2: q = q_yaw ⊗ q_roll.
+    // Roll π then yaw π/2: q = q_yaw · q_roll (the Hamilton product).
     let yaw = Transform3::from_pose2(Pose2::new(0.0, 0.0, FRAC_PI_2));
     let log = read(&both, yaw.compose(&roll));
     assert!(log.mirrored);
