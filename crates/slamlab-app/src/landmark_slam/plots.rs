@@ -245,9 +245,11 @@ pub fn plots_ui(ui: &mut egui::Ui, session: &LandmarkSession) {
     });
 }
 
-/// Writes `note` in the middle of a plot that has no data for want of it.
+/// Writes `note` in the middle of a plot that has no data for want of it (in
+/// place of the shared "press Run" text: running will not fill it).
 fn empty_note(plot_ui: &mut egui_plot::PlotUi<'_>, note: Option<&str>) {
     if let Some(note) = note {
+        crate::widgets::plots::note_drawn(plot_ui.ctx(), true);
         let b = plot_ui.plot_bounds();
         let centre = egui_plot::PlotPoint::new(
             0.5 * (b.min()[0] + b.max()[0]),
