@@ -17,7 +17,7 @@ fn assignment_arg() -> Arg {
     Arg::new("assignment")
         .required(true)
         .value_name("ASSIGNMENT")
-        .help("a built-in assignment (ekf-slam, mcl) or an assignment JSON file")
+        .help("a built-in assignment (ekf-slam, mcl, pose-graph) or an assignment JSON file")
 }
 
 /// The `export-inputs` subcommand.
@@ -75,7 +75,7 @@ pub fn grade_command() -> Command {
              max_score, one test per criterion), so the same check runs as a Gradescope \
              autograder. --students roster.csv --estimates DIR grades a class into one CSV: the \
              roster's 'student' column (or its first) names each student, whose estimate is \
-             DIR/<student>.tum, .csv or .txt, or DIR/<student>/<the assignment's output file>.",
+             DIR/<student>.tum, .csv, .txt or .g2o, or DIR/<student>/<the assignment's output file>.",
         )
         .arg(assignment_arg())
         .arg(
@@ -92,7 +92,7 @@ pub fn grade_command() -> Command {
                 .value_name("FILE")
                 .value_parser(clap::value_parser!(PathBuf))
                 .requires("student")
-                .help("the student's estimate (TUM or CSV trajectory)"),
+                .help("the student's estimate: a TUM or CSV trajectory, or the assignment's output (an optimized g2o graph)"),
         )
         .arg(
             Arg::new("json")
@@ -349,7 +349,7 @@ fn estimate_of(dir: &Path, student: &str, output_file: &str) -> Option<PathBuf> 
     if student.contains(['/', '\\']) || student.starts_with('.') {
         return None;
     }
-    ["tum", "csv", "txt"]
+    ["tum", "csv", "txt", "g2o"]
         .iter()
         .map(|ext| dir.join(format!("{student}.{ext}")))
         .chain([dir.join(student).join(output_file)])
@@ -377,7 +377,7 @@ fn grade_class(assignment: &Assignment, roster: &Path, dir: &Path) -> Result<Str
         let prepared = prepare(assignment, student)?;
         let row = match estimate_of(dir, student, &assignment.output.file) {
             None => Err(anyhow!(
-                "no estimate: looked for {student}.tum, .csv, .txt and {student}/{}",
+                "no estimate: looked for {student}.tum, .csv, .txt, .g2o and {student}/{}",
                 assignment.output.file
             )),
             Some(path) => grade_file(&prepared, &path),

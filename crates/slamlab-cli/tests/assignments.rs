@@ -129,7 +129,10 @@ fn bad_assignments_and_students_are_refused_with_a_message() {
         "--out",
         s(&dir.join("x")),
     ]);
-    assert!(!ok && stderr.contains("ekf-slam, mcl"), "{stderr}");
+    assert!(
+        !ok && stderr.contains("ekf-slam, mcl, pose-graph"),
+        "{stderr}"
+    );
     let json = dir.join("hw3.json");
     let text = slamlab_sim::coursework::BUILTIN[0]
         .1
@@ -264,19 +267,25 @@ fn python_with_numpy(dir: &Path) -> Option<PathBuf> {
     Some(python)
 }
 
-/// The starter code of both built-in assignments runs, writes an estimate
+/// The starter code of the built-in assignments runs, writes an estimate
 /// `slamlab grade` reads, and scores exactly what the library (the page's grader)
-/// computes: dead reckoning and raw odometry, failing.
+/// computes: dead reckoning, raw odometry and a graph's initial guess, failing.
 #[test]
 fn the_starter_code_writes_an_estimate_that_grades_as_in_the_page() {
     let dir = scratch("starter");
     let Some(python) = python_with_numpy(&dir) else {
         return;
     };
-    for (name, naive, extra) in [
-        ("ekf-slam", "dead-reckoning", None),
-        ("ekf-slam", "dead-reckoning", Some("--odometry")),
-        ("mcl", "odometry", None),
+    for (name, naive, extra, file) in [
+        ("ekf-slam", "dead-reckoning", None, "estimate.tum"),
+        (
+            "ekf-slam",
+            "dead-reckoning",
+            Some("--odometry"),
+            "estimate.tum",
+        ),
+        ("mcl", "odometry", None, "estimate.tum"),
+        ("pose-graph", "initial-guess", None, "estimate.g2o"),
     ] {
         let out = dir.join(format!("{name}-{}", extra.is_some()));
         let (ok, _, stderr) = slamlab(&[
@@ -288,7 +297,7 @@ fn the_starter_code_writes_an_estimate_that_grades_as_in_the_page() {
             s(&out),
         ]);
         assert!(ok, "{stderr}");
-        let estimate = out.join("estimate.tum");
+        let estimate = out.join(file);
         let mut cmd = Command::new(&python);
         cmd.arg(out.join("starter.py"));
         if let Some(flag) = extra {

@@ -9,13 +9,15 @@
 use crate::coursework::{self, Assignment, CourseworkError, Prepared, TaskRunner};
 
 /// The runners of every kind of task that has one: landmark SLAM (the landmark
-/// world) and localization (the kidnap lesson's Monte Carlo localization).
+/// world), localization (the kidnap lesson's Monte Carlo localization) and
+/// pose-graph optimization (the pose-graph lesson).
 pub const RUNNERS: &[TaskRunner] = &[
     coursework::landmarks::RUNNER,
     crate::kidnap::assignment::RUNNER,
+    crate::pose_graph::assignment::RUNNER,
 ];
 
-/// The built-in assignment `name` (`ekf-slam`, `mcl`).
+/// The built-in assignment `name` (`ekf-slam`, `mcl`, `pose-graph`).
 pub fn builtin(name: &str) -> Result<Assignment, CourseworkError> {
     coursework::builtin(name, RUNNERS)
 }
