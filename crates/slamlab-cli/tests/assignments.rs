@@ -130,7 +130,7 @@ fn bad_assignments_and_students_are_refused_with_a_message() {
         s(&dir.join("x")),
     ]);
     assert!(
-        !ok && stderr.contains("ekf-slam, mcl, pose-graph"),
+        !ok && stderr.contains("ekf-slam, mcl, pose-graph, grid-mapping"),
         "{stderr}"
     );
     let json = dir.join("hw3.json");
@@ -286,8 +286,10 @@ fn the_starter_code_writes_an_estimate_that_grades_as_in_the_page() {
         ),
         ("mcl", "odometry", None, "estimate.tum"),
         ("pose-graph", "initial-guess", None, "estimate.g2o"),
+        ("grid-mapping", "all free", None, "map.zip"),
+        ("grid-mapping", "all free", None, "map.yaml"),
     ] {
-        let out = dir.join(format!("{name}-{}", extra.is_some()));
+        let out = dir.join(format!("{name}-{}-{file}", extra.is_some()));
         let (ok, _, stderr) = slamlab(&[
             "export-inputs",
             name,
@@ -303,7 +305,14 @@ fn the_starter_code_writes_an_estimate_that_grades_as_in_the_page() {
         if let Some(flag) = extra {
             cmd.arg(flag);
         }
-        let run = cmd.arg(&estimate).output().unwrap();
+        // The grid-mapping starter writes map.zip and, beside it, map.yaml and
+        // map.pgm: graded as the zip or through the YAML.
+        let written = if file == "map.yaml" {
+            out.join("map.zip")
+        } else {
+            estimate.clone()
+        };
+        let run = cmd.arg(&written).output().unwrap();
         assert!(
             run.status.success(),
             "{}",
@@ -320,18 +329,29 @@ fn the_starter_code_writes_an_estimate_that_grades_as_in_the_page() {
         ]);
         assert!(ok, "{stderr}");
         let cli: serde_json::Value = serde_json::from_str(&stdout).unwrap();
-        let bytes = std::fs::read(&estimate).unwrap();
+        let bytes = std::fs::read(&written).unwrap();
         let page = prepare(&builtin(name).unwrap(), "ada@uni.edu")
             .unwrap()
             .grade(s(&estimate), &bytes)
             .unwrap();
         // Compared as text: serde_json's default float parsing may be one ulp
-        // off, the printed shortest representations are exact.
-        assert_eq!(
-            stdout.trim(),
-            serde_json::to_string_pretty(&page).unwrap(),
-            "{name}"
-        );
+        // off, the printed shortest representations are exact. (A map given
+        // by its YAML is zipped by the command line: other bytes, the same
+        // values.)
+        if file == "map.yaml" {
+            for (k, c) in page.criteria.iter().enumerate() {
+                assert_eq!(
+                    cli["criteria"][k]["value"].to_string(),
+                    serde_json::to_string(&c.value).unwrap()
+                );
+            }
+        } else {
+            assert_eq!(
+                stdout.trim(),
+                serde_json::to_string_pretty(&page).unwrap(),
+                "{name}"
+            );
+        }
         assert_eq!(cli["pass"], false, "{name}: {stdout}");
         // The starter is the naive reference, to the printed precision.
         let value = page.criteria[0].value.unwrap();

@@ -48,7 +48,7 @@ fn reference_tum(p: &Prepared, name: &str) -> Vec<u8> {
 fn the_built_in_assignments_read_and_name_their_lessons() {
     assert_eq!(
         assignments::builtin_names(),
-        ["ekf-slam", "mcl", "pose-graph"]
+        ["ekf-slam", "mcl", "pose-graph", "grid-mapping"]
     );
     let ekf = builtin("ekf-slam").unwrap();
     assert_eq!(
@@ -102,7 +102,7 @@ fn raw_odometry_fails_mcl_and_the_reference_mcl_passes() {
 
 #[test]
 fn a_student_always_gets_the_same_bytes_and_two_students_different_ones() {
-    for name in ["ekf-slam", "mcl", "pose-graph"] {
+    for name in ["ekf-slam", "mcl", "pose-graph", "grid-mapping"] {
         let a = builtin(name).unwrap();
         let ada = prepare(&a, "ada@uni.edu").unwrap();
         let again = prepare(&a, " ADA@uni.edu").unwrap();
@@ -339,7 +339,7 @@ fn assignment_files_are_refused_with_what_to_fix() {
         ),
         (
             r#""lesson": "landmark-slam""#,
-            r#""lesson": "mapping""#,
+            r#""lesson": "fusion""#,
             "has no assignments",
         ),
         (r#""id": "ekf-slam""#, r#""id": "hw 3""#, "id"),
@@ -555,5 +555,118 @@ fn measure_the_pose_graph_references_over_sixty_students() {
         sorted(1),
         sorted(2),
         passes(4)
+    );
+}
+
+/// A map handed in: `answers/<stem>.yaml` and its `.pgm`, zipped as a
+/// student's `map.yaml` and `map.pgm`.
+fn map_zip(p: &Prepared, stem: &str) -> Vec<u8> {
+    let yaml = String::from_utf8(file(p, &format!("answers/{stem}.yaml")))
+        .unwrap()
+        .replace(&format!("{stem}.pgm"), "map.pgm");
+    slamlab_sim::io::archive::write_zip(
+        "hand-in",
+        &[
+            ("map.yaml".to_owned(), yaml.into_bytes()),
+            (
+                "map.pgm".to_owned(),
+                file(p, &format!("answers/{stem}.pgm")),
+            ),
+        ],
+    )
+    .unwrap()
+}
+
+#[test]
+fn an_all_free_map_fails_grid_mapping_and_the_known_poses_map_passes() {
+    use slamlab_sim::io::map_archive::read_map_zip;
+    let a = builtin("grid-mapping").unwrap();
+    for student in &STUDENTS[..3] {
+        let p = prepare(&a, student).unwrap();
+        let reference = p.grade("reference.zip", &map_zip(&p, "reference")).unwrap();
+        assert!(
+            reference.pass && reference.score == 100.0,
+            "{student}: {reference:#?}"
+        );
+        // Its values are the references' beside it.
+        assert_eq!(
+            reference.criteria[0].references[0].value,
+            reference.criteria[0].value
+        );
+        // The true map agrees with itself everywhere and covers everything.
+        let truth = p.grade("true.zip", &map_zip(&p, "true_map")).unwrap();
+        assert_eq!(truth.criteria[0].value, Some(1.0));
+        assert_eq!(truth.criteria[1].value, Some(1.0));
+        // Every cell free: full coverage, the walls wrong.
+        let (map, _) = read_map_zip("true.zip", &map_zip(&p, "true_map")).unwrap();
+        let cells = vec![slamlab_core::grid::Cell::Free; map.width() * map.height()];
+        let free = slamlab_core::grid::OccupancyGrid::new(
+            map.width(),
+            map.height(),
+            map.resolution(),
+            map.origin(),
+            cells,
+        )
+        .unwrap();
+        let (yaml, pgm) = slamlab_sim::io::ros_map::export_map(
+            &free,
+            "map.pgm",
+            slamlab_sim::io::ros_map::ImageFormat::Pgm,
+        )
+        .unwrap();
+        let zip = slamlab_sim::io::archive::write_zip(
+            "x",
+            &[
+                ("map.yaml".to_owned(), yaml.into_bytes()),
+                ("map.pgm".to_owned(), pgm),
+            ],
+        )
+        .unwrap();
+        let naive = p.grade("free.zip", &zip).unwrap();
+        assert!(
+            !naive.pass && !naive.criteria[0].pass,
+            "{student}: {naive:#?}"
+        );
+        assert_eq!(naive.criteria[1].value, Some(1.0));
+        assert_eq!(
+            naive.criteria[0].references[1].value,
+            naive.criteria[0].value
+        );
+    }
+    // A YAML alone, or text, is refused with the file's name.
+    let p = prepare(&a, "ada@uni.edu").unwrap();
+    let err = p
+        .grade("map.yaml", &file(&p, "answers/reference.yaml"))
+        .unwrap_err();
+    assert!(err.to_string().contains("map.yaml"), "{err}");
+}
+
+#[test]
+#[ignore = "a measurement for the docs (60 students)"]
+fn measure_the_grid_mapping_references_over_sixty_students() {
+    let a = builtin("grid-mapping").unwrap();
+    let mut rows = Vec::new();
+    for k in 0..60 {
+        let p = prepare(&a, &format!("student{k}@uni.edu")).unwrap();
+        let g = p.grade("ref.zip", &map_zip(&p, "reference")).unwrap();
+        let free = &g.criteria[0].references[1];
+        rows.push([
+            g.criteria[0].value.unwrap(),
+            g.criteria[1].value.unwrap(),
+            free.value.unwrap(),
+            f64::from(u8::from(g.pass)),
+        ]);
+    }
+    let sorted = |column: usize| {
+        let mut v: Vec<f64> = rows.iter().map(|r| r[column]).collect();
+        v.sort_by(f64::total_cmp);
+        (v[0], v[v.len() / 2], v[v.len() - 1])
+    };
+    eprintln!(
+        "grid-mapping: reference agreement min/median/max {:.4?}, coverage {:.4?}, passes {}/60; all free agreement {:.4?}",
+        sorted(0),
+        sorted(1),
+        rows.iter().filter(|r| r[3] > 0.0).count(),
+        sorted(2),
     );
 }

@@ -51,14 +51,18 @@ pub enum TaskKind {
     /// Least-squares optimization of a pose graph; the output is the optimized
     /// graph.
     PoseGraph,
+    /// Occupancy-grid mapping with known poses; the output is the map (ROS
+    /// map_server's YAML and PGM).
+    GridMapping,
 }
 
 impl TaskKind {
     /// Every task kind.
-    pub const ALL: [TaskKind; 3] = [
+    pub const ALL: [TaskKind; 4] = [
         TaskKind::LandmarkSlam,
         TaskKind::Localization,
         TaskKind::PoseGraph,
+        TaskKind::GridMapping,
     ];
 
     /// The name in an assignment file.
@@ -67,6 +71,7 @@ impl TaskKind {
             TaskKind::LandmarkSlam => "landmark-slam",
             TaskKind::Localization => "localization",
             TaskKind::PoseGraph => "pose-graph",
+            TaskKind::GridMapping => "grid-mapping",
         }
     }
 
@@ -76,6 +81,7 @@ impl TaskKind {
             TaskKind::LandmarkSlam => "landmark-slam",
             TaskKind::Localization => "kidnap",
             TaskKind::PoseGraph => "pose-graph",
+            TaskKind::GridMapping => "mapping",
         }
     }
 
@@ -90,6 +96,7 @@ impl TaskKind {
             TaskKind::LandmarkSlam => &[InputFormat::Freiburg, InputFormat::VelocityCsv],
             TaskKind::Localization => &[InputFormat::RosMap, InputFormat::CarmenLog],
             TaskKind::PoseGraph => &[InputFormat::G2o],
+            TaskKind::GridMapping => &[InputFormat::CarmenLog],
         }
     }
 
@@ -98,6 +105,7 @@ impl TaskKind {
         match self {
             TaskKind::LandmarkSlam | TaskKind::Localization => OutputFormat::Trajectory,
             TaskKind::PoseGraph => OutputFormat::G2o,
+            TaskKind::GridMapping => OutputFormat::RosMap,
         }
     }
 
@@ -112,6 +120,7 @@ impl TaskKind {
                 Metric::RpeRotationRmseDeg,
             ],
             TaskKind::PoseGraph => &[Metric::CostRatio, Metric::AteRmse, Metric::AteMax],
+            TaskKind::GridMapping => &[Metric::MapAgreement, Metric::MapCoverage],
         }
     }
 }
@@ -156,6 +165,9 @@ pub enum OutputFormat {
     Trajectory,
     /// An optimized pose graph in g2o format.
     G2o,
+    /// An occupancy map: ROS map_server's YAML and the PGM (or PNG) it names,
+    /// handed in together (a zip, or the YAML with its image beside it).
+    RosMap,
 }
 
 impl OutputFormat {
@@ -164,6 +176,7 @@ impl OutputFormat {
         match self {
             OutputFormat::Trajectory => "trajectory",
             OutputFormat::G2o => "g2o",
+            OutputFormat::RosMap => "ros-map",
         }
     }
 }
@@ -213,17 +226,26 @@ pub enum Metric {
     /// The optimized graph's cost divided by the reference solver's cost on the
     /// same graph (1 is as good as the reference).
     CostRatio,
+    /// The share of the true map's free and occupied cells a map classifies
+    /// the same, over the cells it knows (`grid::occupancy_agreement`, the
+    /// mapping lesson's map agreement).
+    MapAgreement,
+    /// The share of the true map's free and occupied cells a map knows
+    /// (`grid::occupancy_coverage`).
+    MapCoverage,
 }
 
 impl Metric {
     /// Every metric.
-    pub const ALL: [Metric; 6] = [
+    pub const ALL: [Metric; 8] = [
         Metric::AteRmse,
         Metric::AteMax,
         Metric::FinalPositionError,
         Metric::RpeTranslationRmse,
         Metric::RpeRotationRmseDeg,
         Metric::CostRatio,
+        Metric::MapAgreement,
+        Metric::MapCoverage,
     ];
 
     /// The name in an assignment file.
@@ -235,6 +257,8 @@ impl Metric {
             Metric::RpeTranslationRmse => "rpe_translation_rmse",
             Metric::RpeRotationRmseDeg => "rpe_rotation_rmse_deg",
             Metric::CostRatio => "cost_ratio",
+            Metric::MapAgreement => "map_agreement",
+            Metric::MapCoverage => "map_coverage",
         }
     }
 
@@ -247,6 +271,8 @@ impl Metric {
             Metric::RpeTranslationRmse => "RPE translation RMSE (1 step)",
             Metric::RpeRotationRmseDeg => "RPE rotation RMSE (1 step)",
             Metric::CostRatio => "final cost / reference cost",
+            Metric::MapAgreement => "map agreement with the true map",
+            Metric::MapCoverage => "share of the true map covered",
         }
     }
 
@@ -258,14 +284,17 @@ impl Metric {
             | Metric::FinalPositionError
             | Metric::RpeTranslationRmse => "m",
             Metric::RpeRotationRmseDeg => "deg",
-            Metric::CostRatio => "",
+            Metric::CostRatio | Metric::MapAgreement | Metric::MapCoverage => "",
         }
     }
 
-    /// Which side of a threshold is good: every metric here is an error or a
-    /// cost, smaller is better.
+    /// Which side of a threshold is good: an error or a cost passes at or
+    /// below it, an agreement or a coverage at or above.
     pub fn direction(self) -> Direction {
-        Direction::AtMost
+        match self {
+            Metric::MapAgreement | Metric::MapCoverage => Direction::AtLeast,
+            _ => Direction::AtMost,
+        }
     }
 }
 
@@ -325,7 +354,8 @@ pub struct OutputSpec {
 pub struct Assignment {
     /// A short name (letters, digits, `-` and `_`), part of every student's seed.
     pub id: String,
-    /// The lesson the assignment opens in (`landmark-slam`, `kidnap`, `pose-graph`).
+    /// The lesson the assignment opens in (`landmark-slam`, `kidnap`, `pose-graph`,
+    /// `mapping`).
     pub lesson: String,
     /// The task's kind; the lesson's when left out.
     #[serde(default, skip_serializing_if = "Option::is_none")]

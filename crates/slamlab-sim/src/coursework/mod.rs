@@ -86,6 +86,7 @@ pub const BUILTIN: &[(&str, &str)] = &[
     ("ekf-slam", include_str!("builtin/ekf-slam.json")),
     ("mcl", include_str!("builtin/mcl.json")),
     ("pose-graph", include_str!("builtin/pose-graph.json")),
+    ("grid-mapping", include_str!("builtin/grid-mapping.json")),
 ];
 
 /// One variant's run of a task, made by the lesson that runs that kind of task:

@@ -9,6 +9,7 @@
 //! - [`MappingSession`]: the lesson's face on a [`Stepper`], opened from a
 //!   scenario and an input.
 
+pub mod assignment;
 pub mod export;
 pub mod grid_fastslam;
 pub mod run;
