@@ -17,7 +17,7 @@ fn assignment_arg() -> Arg {
     Arg::new("assignment")
         .required(true)
         .value_name("ASSIGNMENT")
-        .help("a built-in assignment (ekf-slam, mcl, pose-graph, grid-mapping) or an assignment JSON file")
+        .help("a built-in assignment (ekf-slam, mcl, pose-graph, grid-mapping, icp) or an assignment JSON file")
 }
 
 /// The `export-inputs` subcommand.
@@ -92,7 +92,7 @@ pub fn grade_command() -> Command {
                 .value_name("FILE")
                 .value_parser(clap::value_parser!(PathBuf))
                 .requires("student")
-                .help("the student's estimate: a TUM or CSV trajectory, or the assignment's output (an optimized g2o graph; a ROS map as a zip, or its YAML with the image beside it)"),
+                .help("the student's estimate: a TUM or CSV trajectory, or the assignment's output (an optimized g2o graph; a ROS map as a zip, or its YAML with the image beside it; a relative pose)"),
         )
         .arg(
             Arg::new("json")

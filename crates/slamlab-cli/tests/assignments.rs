@@ -288,6 +288,7 @@ fn the_starter_code_writes_an_estimate_that_grades_as_in_the_page() {
         ("pose-graph", "initial-guess", None, "estimate.g2o"),
         ("grid-mapping", "all free", None, "map.zip"),
         ("grid-mapping", "all free", None, "map.yaml"),
+        ("icp", "odometry", None, "pose.txt"),
     ] {
         let out = dir.join(format!("{name}-{}-{file}", extra.is_some()));
         let (ok, _, stderr) = slamlab(&[

@@ -48,7 +48,7 @@ fn reference_tum(p: &Prepared, name: &str) -> Vec<u8> {
 fn the_built_in_assignments_read_and_name_their_lessons() {
     assert_eq!(
         assignments::builtin_names(),
-        ["ekf-slam", "mcl", "pose-graph", "grid-mapping"]
+        ["ekf-slam", "mcl", "pose-graph", "grid-mapping", "icp"]
     );
     let ekf = builtin("ekf-slam").unwrap();
     assert_eq!(
@@ -102,7 +102,7 @@ fn raw_odometry_fails_mcl_and_the_reference_mcl_passes() {
 
 #[test]
 fn a_student_always_gets_the_same_bytes_and_two_students_different_ones() {
-    for name in ["ekf-slam", "mcl", "pose-graph", "grid-mapping"] {
+    for name in ["ekf-slam", "mcl", "pose-graph", "grid-mapping", "icp"] {
         let a = builtin(name).unwrap();
         let ada = prepare(&a, "ada@uni.edu").unwrap();
         let again = prepare(&a, " ADA@uni.edu").unwrap();
@@ -135,7 +135,12 @@ fn a_student_always_gets_the_same_bytes_and_two_students_different_ones() {
             "{name}: only {differing} files differ"
         );
         assert!(!fa.paths().iter().any(|p| p.starts_with("answers/")));
-        assert!(ada.input_files(true).get("answers/truth.tum").is_some());
+        let answers = ada.input_files(true);
+        assert!(
+            answers.get("answers/truth.tum").is_some()
+                || answers.get("answers/relative_pose.txt").is_some(),
+            "{name}"
+        );
     }
 }
 
@@ -668,5 +673,85 @@ fn measure_the_grid_mapping_references_over_sixty_students() {
         sorted(1),
         rows.iter().filter(|r| r[3] > 0.0).count(),
         sorted(2),
+    );
+}
+
+/// The relative pose of a reference (`icp`, `identity`) as a file.
+fn relative_pose_file(p: &Prepared, name: &str) -> Vec<u8> {
+    use slamlab_sim::mapping::icp_assignment::relative_pose_of;
+    let (_, t) = p
+        .references()
+        .unwrap()
+        .iter()
+        .find(|(n, _)| n == name)
+        .unwrap();
+    slamlab_sim::io::relative_pose::write_relative_pose(&relative_pose_of(&t.poses()[1]))
+        .into_bytes()
+}
+
+#[test]
+fn the_odometry_fails_icp_and_the_reference_icp_passes() {
+    let a = builtin("icp").unwrap();
+    for student in &STUDENTS[..4] {
+        let p = prepare(&a, student).unwrap();
+        let truth = p
+            .grade("truth.txt", &file(&p, "answers/relative_pose.txt"))
+            .unwrap();
+        assert!(truth.pass, "{student}: {truth:#?}");
+        assert!(truth.criteria[0].value.unwrap() < 1e-5);
+        assert!(truth.criteria[1].value.unwrap() < 1e-9);
+        let icp = p.grade("icp.txt", &relative_pose_file(&p, "icp")).unwrap();
+        assert!(icp.pass, "{student}: {icp:#?}");
+        // The reference's value beside the student's: the same pose, written
+        // and read back (17 digits).
+        let (mine, reference) = (
+            icp.criteria[1].value.unwrap(),
+            icp.criteria[1].references[0].value.unwrap(),
+        );
+        assert!((mine - reference).abs() < 1e-9, "{mine} {reference}");
+        let none = p
+            .grade("none.txt", &relative_pose_file(&p, "odometry"))
+            .unwrap();
+        assert!(!none.pass, "{student}: {none:#?}");
+    }
+    let p = prepare(&a, "ada@uni.edu").unwrap();
+    let err = p.grade("bad.txt", b"1 2 3\n").unwrap_err().to_string();
+    assert!(err.starts_with("bad.txt"), "{err}");
+}
+
+#[test]
+#[ignore = "a measurement for the docs (60 students)"]
+fn measure_the_icp_references_over_sixty_students() {
+    let a = builtin("icp").unwrap();
+    let mut rows = Vec::new();
+    for k in 0..60 {
+        let p = prepare(&a, &format!("student{k}@uni.edu")).unwrap();
+        let g = p.grade("icp.txt", &relative_pose_file(&p, "icp")).unwrap();
+        let n = p
+            .grade("none.txt", &relative_pose_file(&p, "odometry"))
+            .unwrap();
+        rows.push([
+            g.criteria[0].value.unwrap(),
+            g.criteria[1].value.unwrap(),
+            n.criteria[0].value.unwrap(),
+            n.criteria[1].value.unwrap(),
+            f64::from(u8::from(g.pass)),
+            f64::from(u8::from(n.pass)),
+        ]);
+    }
+    let sorted = |column: usize| {
+        let mut v: Vec<f64> = rows.iter().map(|r| r[column]).collect();
+        v.sort_by(f64::total_cmp);
+        (v[0], v[v.len() / 2], v[v.len() - 1])
+    };
+    let passes = |column: usize| rows.iter().filter(|r| r[column] > 0.0).count();
+    eprintln!(
+        "icp: reference rotation error min/median/max {:.4?} deg, translation {:.4?} m, passes {}/60; odometry: rotation {:.3?} deg, translation {:.3?} m, passes {}/60",
+        sorted(0),
+        sorted(1),
+        passes(4),
+        sorted(2),
+        sorted(3),
+        passes(5)
     );
 }

@@ -54,15 +54,19 @@ pub enum TaskKind {
     /// Occupancy-grid mapping with known poses; the output is the map (ROS
     /// map_server's YAML and PGM).
     GridMapping,
+    /// Scan matching (ICP) of two laser scans; the output is their relative
+    /// pose.
+    Icp,
 }
 
 impl TaskKind {
     /// Every task kind.
-    pub const ALL: [TaskKind; 4] = [
+    pub const ALL: [TaskKind; 5] = [
         TaskKind::LandmarkSlam,
         TaskKind::Localization,
         TaskKind::PoseGraph,
         TaskKind::GridMapping,
+        TaskKind::Icp,
     ];
 
     /// The name in an assignment file.
@@ -72,6 +76,7 @@ impl TaskKind {
             TaskKind::Localization => "localization",
             TaskKind::PoseGraph => "pose-graph",
             TaskKind::GridMapping => "grid-mapping",
+            TaskKind::Icp => "icp",
         }
     }
 
@@ -81,7 +86,7 @@ impl TaskKind {
             TaskKind::LandmarkSlam => "landmark-slam",
             TaskKind::Localization => "kidnap",
             TaskKind::PoseGraph => "pose-graph",
-            TaskKind::GridMapping => "mapping",
+            TaskKind::GridMapping | TaskKind::Icp => "mapping",
         }
     }
 
@@ -97,6 +102,7 @@ impl TaskKind {
             TaskKind::Localization => &[InputFormat::RosMap, InputFormat::CarmenLog],
             TaskKind::PoseGraph => &[InputFormat::G2o],
             TaskKind::GridMapping => &[InputFormat::CarmenLog],
+            TaskKind::Icp => &[InputFormat::ScanCsv],
         }
     }
 
@@ -106,6 +112,7 @@ impl TaskKind {
             TaskKind::LandmarkSlam | TaskKind::Localization => OutputFormat::Trajectory,
             TaskKind::PoseGraph => OutputFormat::G2o,
             TaskKind::GridMapping => OutputFormat::RosMap,
+            TaskKind::Icp => OutputFormat::RelativePose,
         }
     }
 
@@ -121,6 +128,11 @@ impl TaskKind {
             ],
             TaskKind::PoseGraph => &[Metric::CostRatio, Metric::AteRmse, Metric::AteMax],
             TaskKind::GridMapping => &[Metric::MapAgreement, Metric::MapCoverage],
+            TaskKind::Icp => &[
+                Metric::RotationErrorDeg,
+                Metric::TranslationErrorM,
+                Metric::TranslationDirectionErrorDeg,
+            ],
         }
     }
 }
@@ -142,6 +154,8 @@ pub enum InputFormat {
     CarmenLog,
     /// A g2o file (`VERTEX_SE2`, `EDGE_SE2`).
     G2o,
+    /// Laser scans as CSV: `x,y`, one end point a line, in the sensor's frame.
+    ScanCsv,
 }
 
 impl InputFormat {
@@ -153,6 +167,7 @@ impl InputFormat {
             InputFormat::RosMap => "ros-map",
             InputFormat::CarmenLog => "carmen-log",
             InputFormat::G2o => "g2o",
+            InputFormat::ScanCsv => "scan-csv",
         }
     }
 }
@@ -168,6 +183,9 @@ pub enum OutputFormat {
     /// An occupancy map: ROS map_server's YAML and the PGM (or PNG) it names,
     /// handed in together (a zip, or the YAML with its image beside it).
     RosMap,
+    /// A relative pose: `R` (9 numbers) and `t` (3), or `t` and a quaternion
+    /// (`io::relative_pose`).
+    RelativePose,
 }
 
 impl OutputFormat {
@@ -177,6 +195,7 @@ impl OutputFormat {
             OutputFormat::Trajectory => "trajectory",
             OutputFormat::G2o => "g2o",
             OutputFormat::RosMap => "ros-map",
+            OutputFormat::RelativePose => "relative-pose",
         }
     }
 }
@@ -233,11 +252,19 @@ pub enum Metric {
     /// The share of the true map's free and occupied cells a map knows
     /// (`grid::occupancy_coverage`).
     MapCoverage,
+    /// The angle of `R_trueᵀ R` of a relative pose, degrees
+    /// (`metrics::relative_pose_error`).
+    RotationErrorDeg,
+    /// `‖t − t_true‖` of a relative pose, metres.
+    TranslationErrorM,
+    /// The angle between the estimated and the true direction of translation,
+    /// degrees (`metrics::relative_pose_error`).
+    TranslationDirectionErrorDeg,
 }
 
 impl Metric {
     /// Every metric.
-    pub const ALL: [Metric; 8] = [
+    pub const ALL: [Metric; 11] = [
         Metric::AteRmse,
         Metric::AteMax,
         Metric::FinalPositionError,
@@ -246,6 +273,9 @@ impl Metric {
         Metric::CostRatio,
         Metric::MapAgreement,
         Metric::MapCoverage,
+        Metric::RotationErrorDeg,
+        Metric::TranslationErrorM,
+        Metric::TranslationDirectionErrorDeg,
     ];
 
     /// The name in an assignment file.
@@ -259,6 +289,9 @@ impl Metric {
             Metric::CostRatio => "cost_ratio",
             Metric::MapAgreement => "map_agreement",
             Metric::MapCoverage => "map_coverage",
+            Metric::RotationErrorDeg => "rotation_error_deg",
+            Metric::TranslationErrorM => "translation_error_m",
+            Metric::TranslationDirectionErrorDeg => "translation_direction_error_deg",
         }
     }
 
@@ -273,6 +306,9 @@ impl Metric {
             Metric::CostRatio => "final cost / reference cost",
             Metric::MapAgreement => "map agreement with the true map",
             Metric::MapCoverage => "share of the true map covered",
+            Metric::RotationErrorDeg => "rotation error",
+            Metric::TranslationErrorM => "translation error",
+            Metric::TranslationDirectionErrorDeg => "translation direction error",
         }
     }
 
@@ -283,7 +319,10 @@ impl Metric {
             | Metric::AteMax
             | Metric::FinalPositionError
             | Metric::RpeTranslationRmse => "m",
-            Metric::RpeRotationRmseDeg => "deg",
+            Metric::RpeRotationRmseDeg
+            | Metric::RotationErrorDeg
+            | Metric::TranslationDirectionErrorDeg => "deg",
+            Metric::TranslationErrorM => "m",
             Metric::CostRatio | Metric::MapAgreement | Metric::MapCoverage => "",
         }
     }

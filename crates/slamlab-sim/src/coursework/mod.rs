@@ -87,6 +87,7 @@ pub const BUILTIN: &[(&str, &str)] = &[
     ("mcl", include_str!("builtin/mcl.json")),
     ("pose-graph", include_str!("builtin/pose-graph.json")),
     ("grid-mapping", include_str!("builtin/grid-mapping.json")),
+    ("icp", include_str!("builtin/icp.json")),
 ];
 
 /// One variant's run of a task, made by the lesson that runs that kind of task:

@@ -12,6 +12,7 @@
 pub mod assignment;
 pub mod export;
 pub mod grid_fastslam;
+pub mod icp_assignment;
 pub mod run;
 pub mod scenario;
 #[cfg(test)]
