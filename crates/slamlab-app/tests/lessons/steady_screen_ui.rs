@@ -328,6 +328,98 @@ fn steady_screen_shots() {
     }
 }
 
+/// At 800 x 500 no plot's key takes more height than the plot under it, in any
+/// lesson and in the visual-odometry lesson's views (its top view had a 47-point key
+/// over a 34-point plot); and the landmark map keeps more than a third of the
+/// window's height.
+#[test]
+fn at_800_by_500_keys_are_never_taller_than_their_plots() {
+    use slamlab_app::widgets::plots::figure_records;
+    let size = egui::vec2(800.0, 500.0);
+    let mut problems = Vec::new();
+    let queries = LESSONS
+        .iter()
+        .map(|entry| format!("lesson={}&seed=5&tick=12", entry.id))
+        .chain(["lesson=visual-odometry&seed=5&tick=40".to_owned()]);
+    for query in queries {
+        let mut h = harness(&query, size);
+        h.run();
+        let records = figure_records(&h.ctx);
+        for key in records.iter().filter_map(|r| r.key) {
+            // The plot right under the key, overlapping it side to side.
+            let below = records
+                .iter()
+                .filter_map(|r| r.data)
+                .filter(|d| d.top() >= key.bottom() - 2.0)
+                .filter(|d| d.left() < key.right() && key.left() < d.right())
+                .min_by(|a, b| a.top().total_cmp(&b.top()));
+            if let Some(plot) = below
+                && key.height() > plot.height()
+            {
+                problems.push(format!(
+                    "{query}: a key {:.0} points tall over a plot {:.0} tall",
+                    key.height(),
+                    plot.height()
+                ));
+            }
+        }
+        if query.starts_with("lesson=landmark-slam&") {
+            let map = records
+                .iter()
+                .find_map(|r| r.map)
+                .unwrap_or(egui::Rect::NOTHING);
+            assert!(
+                map.height() > size.y / 3.0,
+                "the landmark map is {:.0} points tall",
+                map.height()
+            );
+        }
+    }
+    assert!(problems.is_empty(), "{}", problems.join("\n"));
+}
+
+/// A key folded for want of height is still the plot's key: at 800 x 500 the
+/// visual-odometry lesson's RANSAC plot shows "key" beside its title, and pointing
+/// at it shows every entry.
+#[test]
+fn a_folded_key_shows_its_entries_on_hover() {
+    use super::common::text_drawn;
+    use slamlab_app::widgets::plots::FOLDED_KEY_TEXT;
+    let mut h = harness(
+        "lesson=visual-odometry&seed=5&tick=12",
+        egui::vec2(800.0, 500.0),
+    );
+    h.run();
+    assert!(!text_drawn(&h, "bound N, as log10(N)"), "folded");
+    let folded = h.query_all_by_label(FOLDED_KEY_TEXT).count();
+    assert!(folded >= 1, "a folded key at 800 x 500");
+    // The RANSAC plot is the rightmost: its "key" too.
+    let rightmost = h
+        .query_all_by_label(FOLDED_KEY_TEXT)
+        .max_by(|a, b| a.rect().left().total_cmp(&b.rect().left()))
+        .map(|n| n.rect().center());
+    if let Some(at) = rightmost {
+        h.hover_at(at);
+    }
+    h.run();
+    if let Some(dir) = std::env::var_os("SLAMLAB_UI_SHOTS")
+        && let Some(image) = super::common::render_or_skip(&mut h)
+    {
+        let _ = image.save(std::path::Path::new(&dir).join("folded-key-800x500.png"));
+    }
+    for entry in ["bound N, as log10(N) / 4", "best inlier share"] {
+        assert!(text_drawn(&h, entry), "{entry} shown on hover");
+    }
+    // At 1280 x 800 nothing is folded.
+    let mut h = harness(
+        "lesson=visual-odometry&seed=5&tick=12",
+        egui::vec2(1280.0, 800.0),
+    );
+    h.run();
+    assert_eq!(h.query_all_by_label(FOLDED_KEY_TEXT).count(), 0);
+    assert!(text_drawn(&h, "bound N, as log10(N) / 4"));
+}
+
 /// The fusion lesson's x, y and yaw error plots are scaled to the errors, not to
 /// the differential filter's 2σ band (metres, beyond ±π in yaw): each plot's y
 /// range reaches at least its largest error and at most `ERROR_HEADROOM` (1.25)
