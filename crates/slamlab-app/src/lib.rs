@@ -362,6 +362,15 @@ impl SlamLabApp {
     fn figure_suffix(&self, embed: bool) -> String {
         let mut figure = self.figure.clone();
         figure.run = false;
+        // A link that set the speed shares the speed the clock has now.
+        if figure.speed.is_some() {
+            let time = self.lesson.time();
+            figure.speed = Some(if time.max_speed {
+                query::Speed::Max
+            } else {
+                query::Speed::TicksPerSecond(time.speed_tps)
+            });
+        }
         if !embed {
             figure.panels = None;
         }
@@ -1230,6 +1239,15 @@ fn apply_figure(lesson: &mut dyn Lesson, figure: &query::FigureOptions, notices:
         && !lesson.set_follow(on)
     {
         notices.push("follow: this lesson's map has no robot to follow".to_owned());
+    }
+    match figure.speed {
+        Some(query::Speed::Max) => lesson.time_mut().max_speed = true,
+        Some(query::Speed::TicksPerSecond(v)) => {
+            let time = lesson.time_mut();
+            time.max_speed = false;
+            time.speed_tps = v;
+        }
+        None => {}
     }
     if figure.run && !lesson.time().running {
         lesson.apply_time_action(TimeAction::ToggleRun);
