@@ -488,3 +488,36 @@ fn the_visual_odometry_keys_name_every_mark() {
         "whose inliers"
     );
 }
+
+/// The Cartographer lesson's *Max grids* window opens over the map, below the
+/// menu and the time bar (it covered the menu bar), at 1280 x 800 and 800 x 500.
+#[test]
+fn the_max_grids_window_stays_off_the_menu_and_the_time_bar() {
+    const TITLE: &str = "Precomputed max grids (Fig. 5.7)";
+    for size in [egui::vec2(1280.0, 800.0), egui::vec2(800.0, 500.0)] {
+        let mut h = harness("lesson=cartographer&seed=5&tick=12", size);
+        h.run();
+        assert!(h.query_by_label(TITLE).is_none());
+        h.get_by_label("Max grids").click();
+        h.run();
+        let window = h.get_by_label(TITLE).rect();
+        let button = h.get_by_label("Max grids").rect();
+        assert!(
+            window.intersect(button).area() <= 0.0,
+            "the window {window:?} leaves its button {button:?} in view"
+        );
+        let bar = h.state().time_bar_rect().unwrap_or(egui::Rect::NOTHING);
+        assert!(bar.is_positive(), "a time bar");
+        assert!(
+            window.top() >= bar.bottom(),
+            "at {size:?} the window's title {window:?} is under the time bar {bar:?}"
+        );
+        assert!(window.bottom() <= size.y && window.right() <= size.x);
+        if let Some(dir) = std::env::var_os("SLAMLAB_UI_SHOTS")
+            && let Some(image) = super::common::render_or_skip(&mut h)
+        {
+            let name = format!("max-grids-{}x{}.png", size.x, size.y);
+            let _ = image.save(std::path::Path::new(&dir).join(name));
+        }
+    }
+}
