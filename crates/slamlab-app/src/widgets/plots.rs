@@ -839,6 +839,11 @@ fn figure_scaled_ui<'a, R>(
     let estimated_plot = figure.height - 2.0 * ui.text_style_height(&egui::TextStyle::Body) - 34.0;
     let fits = y_label_fits(ui, figure.y_label, estimated_plot);
     let title = match unit_of(figure.y_label).filter(|_| !fits) {
+        // A title ending in a number (the corridor's "K = ... = 0.308") would seem
+        // to give that number the axis's unit: it names the axis instead.
+        Some(_) if figure.title.ends_with(|c: char| c.is_ascii_digit()) => {
+            format!("{}; y: {}", figure.title, figure.y_label)
+        }
         // Too short to name the axis beside it: the title carries the unit.
         Some(unit) => format!("{} ({unit})", figure.title),
         None => figure.title.to_owned(),

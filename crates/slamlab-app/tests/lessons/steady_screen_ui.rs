@@ -521,3 +521,34 @@ fn the_max_grids_window_stays_off_the_menu_and_the_time_bar() {
         }
     }
 }
+
+/// The corridor's Kalman gain is a ratio of variances (m² / m²) and has no unit:
+/// where the gain plot is too short to name its y axis (density, 1/m) beside it,
+/// the title does not append "(1/m)" to the gain's value but names the axis.
+#[test]
+fn the_corridor_gain_has_no_unit_in_its_title() {
+    let mut h = harness(
+        "lesson=filters&seed=5&view=corridor&tick=60",
+        egui::vec2(800.0, 500.0),
+    );
+    h.run();
+    let titles: Vec<String> = super::common::drawn_texts(&h)
+        .into_iter()
+        .map(|(text, _, _)| text)
+        .filter(|t| t.starts_with("Kalman gain at step"))
+        .collect();
+    if let Some(dir) = std::env::var_os("SLAMLAB_UI_SHOTS")
+        && let Some(image) = super::common::render_or_skip(&mut h)
+    {
+        let _ = image.save(std::path::Path::new(&dir).join("corridor-gain-800x500.png"));
+    }
+    assert!(!titles.is_empty(), "the gain plot is drawn after a door");
+    for title in titles {
+        // Not "K = ... = 0.295 (1/m)".
+        let unit_on_value = title
+            .strip_suffix(" (1/m)")
+            .is_some_and(|before| before.ends_with(|c: char| c.is_ascii_digit()));
+        assert!(!unit_on_value, "{title}");
+        assert!(title.ends_with("; y: density (1/m)"), "{title}");
+    }
+}
