@@ -28,7 +28,8 @@ const webDir = path.resolve(path.dirname(fileURLToPath(import.meta.url)), "..");
 const distDir = path.join(webDir, "dist");
 // The external data sets beside the repository (README: ../shared/data); checks that
 // need them skip with a message when they are absent.
-const sharedDataDir = path.resolve(webDir, "..", "..", "shared", "data");
+// SLAMLAB_SHARED_DATA names them elsewhere (a worktree away from the repository).
+const sharedDataDir = path.resolve(process.env.SLAMLAB_SHARED_DATA || path.join(webDir, "..", "..", "shared", "data"));
 // Small test files kept in the repository (a ROS 2 bag written by rosbags).
 const repoDataDir = path.resolve(webDir, "..", "crates", "slamlab-sim", "tests", "data");
 const outDir = path.join(webDir, "test-output");
@@ -574,6 +575,47 @@ async function main() {
         assert(s.tick === 0, `the run on the map moved: tick ${s.tick}`);
         assert(log.problems.length === 0, log.problems.join("; "));
         return `${notes.join(", ")}; done after ${metrics.many_runs_20_laps_ms} ms`;
+      } finally {
+        await context.close();
+      }
+    });
+
+    // --- Landmark SLAM on real data: MRCLAM Dataset 6 (the UTIAS zip as distributed,
+    // 5 MB) opened by `data=` from the same host, robot 1 with EKF-SLAM. The page runs it
+    // live against Vicon; the page's wasm then replays 6,000 steps of the same bytes
+    // without drawing, and its error against Vicon must be the native run's to the bit
+    // (crates/slamlab-app/tests/lessons/landmark_data_ui.rs pins the same number).
+    await check("landmark SLAM opens MRCLAM by data= and its error against Vicon is the native one", async () => {
+      const rel = "landmarks/mrclam/MRCLAM_Dataset6.zip";
+      const file = path.join(sharedDataDir, rel);
+      const found = await stat(file).then(() => true, () => false);
+      if (!found) return `skipped: ${file} is absent (the shared data sets are not beside the repository; SLAMLAB_SHARED_DATA names them)`;
+      const NATIVE_RMSE_6000 = 0.11077003955614562;
+      const url = `index.html?lesson=landmark-slam&estimator=ekf&data=shared-data/${rel}`;
+      const { context, page: p, log } = await openPage(browser, baseUrl, url, "landmark-mrclam");
+      try {
+        await waitRunning(p);
+        const s0 = await waitState(p, (st) => st.data && st.data.name === "MRCLAM_Dataset6, robot 1", "MRCLAM loaded by data=", 60_000);
+        assert(s0.data.kind === "UTIAS MRCLAM" && s0.data.mode === "slam" && s0.data.steps === 62955, `opened ${JSON.stringify(s0.data)}`);
+        assert(JSON.stringify(s0.filters) === JSON.stringify(["ekf"]), `filters ${JSON.stringify(s0.filters)}`);
+        // Live: Space plays the recorded robot; the error against Vicon fills in.
+        await p.mouse.click(VIEWPORT.width / 2, VIEWPORT.height / 2);
+        await p.keyboard.press("Space");
+        const live = await waitState(p, (st) => st.data.played >= 300 && st.position_error.ekf.samples > 0, "300 steps played live", 60_000);
+        const liveRmse = live.position_error.ekf.rmse;
+        assert(Number.isFinite(liveRmse) && liveRmse < 1, `live EKF RMSE against Vicon ${liveRmse} m after ${live.data.played} steps`);
+        await p.keyboard.press("Space");
+        // Headless in this page's wasm: 6,000 steps of the same bytes.
+        const headless = JSON.parse(await p.evaluate(async (r) => {
+          const bytes = new Uint8Array(await (await fetch(`shared-data/${r}`)).arrayBuffer());
+          return window.slamlab.slamlab_test_headless_log("lesson=landmark-slam&estimator=ekf", "MRCLAM_Dataset6.zip", bytes, 6000);
+        }, rel));
+        const rmse = headless.position_error?.ekf?.rmse;
+        assert(headless.data?.played === 6000, `the headless replay played ${headless.data?.played} steps: ${JSON.stringify(headless).slice(0, 300)}`);
+        assert(rmse === NATIVE_RMSE_6000, `EKF RMSE against Vicon after 6000 steps: ${rmse} m in the browser, ${NATIVE_RMSE_6000} m natively`);
+        await assertNoPanic(p);
+        assert(log.problems.length === 0, log.problems.join("; "));
+        return `live: ${live.data.played} steps, EKF RMSE ${liveRmse.toFixed(3)} m over ${live.position_error.ekf.samples} Vicon samples; headless 6000 steps: ${rmse} m, bit-identical to native`;
       } finally {
         await context.close();
       }
