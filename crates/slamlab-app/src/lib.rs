@@ -347,14 +347,8 @@ impl SlamLabApp {
             use widgets::assignment::DeskAction;
             match action {
                 DeskAction::Save(file) => self.exporter.save(file),
-                DeskAction::Report => {
-                    let link = self.share_query(false);
-                    if let Some(file) = self.assignment.as_ref().and_then(|d| d.report_json(&link))
-                    {
-                        self.exporter.save(file);
-                    }
-                }
-                DeskAction::Picture(name) => self.exporter.request_png(ctx, None, name),
+                DeskAction::Report => self.export(ctx, export::ExportKind::GradeJson),
+                DeskAction::Picture => self.export(ctx, export::ExportKind::GradePng),
                 DeskAction::OpenVariant => self.open_assignment_lesson(),
                 DeskAction::HandIn(files) => self.take_estimates(files),
             }
@@ -987,6 +981,30 @@ impl SlamLabApp {
                             bytes,
                         }),
                         Err(e) => self.exporter.status = Some(e.to_string()),
+                    }
+                }
+            }
+            ExportKind::GradeJson | ExportKind::GradePng => {
+                let link = self.share_query(false);
+                let grade = self.assignment.as_ref().and_then(|d| d.selected_grade());
+                match (kind, grade) {
+                    (_, None) => {
+                        self.exporter.status =
+                            Some("No grade yet: hand in your estimate first".to_owned());
+                    }
+                    (ExportKind::GradeJson, Some(_)) => {
+                        if let Some(file) =
+                            self.assignment.as_ref().and_then(|d| d.report_json(&link))
+                        {
+                            self.exporter.save(file);
+                        }
+                    }
+                    (_, Some(grade)) => {
+                        let name = format!(
+                            "{}.png",
+                            widgets::assignment::AssignmentDesk::report_stem(grade)
+                        );
+                        self.exporter.request_png(ctx, None, name);
                     }
                 }
             }

@@ -88,8 +88,8 @@ pub enum DeskAction {
     Save(ExportFile),
     /// Save the report of the grade shown (JSON).
     Report,
-    /// Save a picture of the window as `name`.
-    Picture(String),
+    /// Save a picture of the window with the grade shown.
+    Picture,
     /// The variant changed (the student typed their id): open the lesson on it.
     OpenVariant,
     /// Files picked with "Open your estimate…", to hand in.
@@ -585,10 +585,7 @@ impl AssignmentDesk {
                 .on_hover_text("The page as it is now: the lesson with your estimate, and this grade")
                 .clicked()
             {
-                actions.push(DeskAction::Picture(format!(
-                    "{}.png",
-                    Self::report_stem(g)
-                )));
+                actions.push(DeskAction::Picture);
             }
         });
     }

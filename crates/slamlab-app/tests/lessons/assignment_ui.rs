@@ -370,3 +370,92 @@ fn the_mcl_link_opens_the_variants_localization_run() {
     }
     assert!(compared >= 400, "{compared} poses compared");
 }
+
+/// Saves what the Assignment panel's `button` makes to `path` (the desktop's
+/// save window) and returns its bytes; `None` without a renderer (a PNG).
+fn save_from_panel(h: &mut Harness<'_, SlamLabApp>, button: &str, path: &Path) -> Option<Vec<u8>> {
+    h.get_by_label(button).click();
+    for _ in 0..4 {
+        h.step();
+    }
+    let save_path = h.state_mut().exporter.save_path_mut()?;
+    *save_path = path.to_string_lossy().into_owned();
+    h.run();
+    h.get_by_label("Save").click();
+    h.run();
+    let status = h.state().exporter.status.clone().unwrap_or_default();
+    assert!(status.starts_with("Saved"), "{button}: {status}");
+    std::fs::read(path).ok()
+}
+
+/// The report: the JSON names the assignment, the variant, the seed, each
+/// criterion, the score and the SHA-256 of the graded file, and the link that
+/// opens the variant again; the picture is the window with the grade.
+#[test]
+fn the_grade_report_names_the_variant_and_the_file() {
+    let dir = std::env::temp_dir().join(format!("slamlab-grade-report-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let mut h = harness(&format!("{LINK}&tick=200"), egui::vec2(1280.0, 800.0));
+    h.run();
+    let prepared = alices();
+    let ekf = write_tum(&prepared.references().unwrap()[0].1).into_bytes();
+    drop_file(&mut h, "estimate.tum", ekf.clone());
+    let json = save_from_panel(&mut h, "Report (JSON)", &dir.join("report.json")).unwrap();
+    let report: serde_json::Value = serde_json::from_slice(&json).unwrap();
+    let expected = prepared.grade("estimate.tum", &ekf).unwrap();
+    assert_eq!(report["format"], "slamlab-grade-report");
+    assert_eq!(report["assignment"], "ekf-slam");
+    assert_eq!(report["student"], "alice@example.edu");
+    assert_eq!(report["variant"], expected.variant.as_str());
+    assert_eq!(report["seed"], expected.seed);
+    assert_eq!(report["steps"], prepared.steps);
+    assert_eq!(
+        report["estimate_sha256"],
+        slamlab_sim::coursework::sha256_hex(&ekf)
+    );
+    assert_eq!(report["score"], 100.0);
+    assert_eq!(report["max_score"], 100.0);
+    assert_eq!(report["pass"], true);
+    // Each criterion as the library grades it (serde_json reads a number back
+    // to within one unit in the last place).
+    let criteria = report["criteria"].as_array().unwrap();
+    assert_eq!(criteria.len(), expected.criteria.len());
+    for (got, want) in criteria.iter().zip(&expected.criteria) {
+        assert_eq!(got["metric"], want.metric.as_str());
+        assert_eq!(got["threshold"], want.threshold);
+        assert_eq!(got["earned"], want.earned);
+        assert_eq!(got["pass"], want.pass);
+        let close = |a: &serde_json::Value, b: Option<f64>| {
+            (a.as_f64().unwrap() - b.unwrap()).abs() <= 1e-15 * b.unwrap().abs()
+        };
+        assert!(close(&got["value"], want.value));
+        for (r, w) in got["references"]
+            .as_array()
+            .unwrap()
+            .iter()
+            .zip(&want.references)
+        {
+            assert_eq!(r["name"], w.name.as_str());
+            assert!(close(&r["value"], w.value));
+        }
+    }
+    // The link opens the same variant at the same tick.
+    let link = report["link"].as_str().unwrap();
+    let again = SlamLabApp::from_query(link);
+    assert_eq!(again.lesson().time_info().tick, 200);
+    assert_eq!(
+        again
+            .assignment()
+            .and_then(|d| d.prepared())
+            .map(|p| p.variant.seed),
+        Some(expected.seed)
+    );
+    assert!(again.notices().is_empty(), "{:?}", again.notices());
+    if let Some(png) = save_from_panel(&mut h, "Picture (PNG)", &dir.join("report.png")) {
+        assert!(png.starts_with(b"\x89PNG"));
+        if let Some(shots) = std::env::var_os("SLAMLAB_UI_SHOTS") {
+            let _ = std::fs::write(Path::new(&shots).join("grade-report.png"), &png);
+        }
+    }
+    let _ = std::fs::remove_dir_all(&dir);
+}
