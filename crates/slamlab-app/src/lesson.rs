@@ -237,9 +237,11 @@ pub struct LessonFrame<V> {
     /// The map's pan and zoom, for a lesson with a map ([`LessonFrame::with_map`]).
     pub map: MapView,
     has_map: bool,
-    /// Link problems and what the run had to change, shown in the Notices menu.
+    /// Link problems and what the run had to change, shown in the notices.
     pub notices: Vec<String>,
-    /// The latest refusal or load result, shown under the map's toolbar.
+    /// The latest refusal or load result: the first of the notices, counted with
+    /// them. It holds until the student starts over, steps back before it, or
+    /// dismisses it (the shell clears it then), or the lesson replaces it.
     pub note: Option<String>,
     /// A request for the shell ([`Lesson::take_request`]).
     pub request: Option<LessonRequest>,
@@ -325,8 +327,10 @@ pub trait Frame {
     fn estimates(&self) -> &crate::widgets::estimates::Estimates;
     /// The student's estimates, to add to.
     fn estimates_mut(&mut self) -> &mut crate::widgets::estimates::Estimates;
-    /// The note under the map, to set.
+    /// The note (the latest refusal or load result), to set or clear.
     fn note_mut(&mut self) -> &mut Option<String>;
+    /// The note.
+    fn note(&self) -> Option<&str>;
 }
 
 impl<V: LessonView> Frame for LessonFrame<V> {
@@ -372,6 +376,9 @@ impl<V: LessonView> Frame for LessonFrame<V> {
     fn note_mut(&mut self) -> &mut Option<String> {
         &mut self.note
     }
+    fn note(&self) -> Option<&str> {
+        self.note.as_deref()
+    }
 }
 
 /// Any `'static` value as [`Any`], for [`Lesson::as_any`]'s default.
@@ -412,10 +419,12 @@ pub trait Lesson: crate::widgets::layout::LessonPanels + AsAny + std::fmt::Debug
     fn subtitle(&self) -> String {
         String::new()
     }
-    /// Things the user should know now: the frame's (link problems, what the run
-    /// had to change) and the run's latest ([`Lesson::run_notices`]).
+    /// Things the user should know now, in the one notices box: the note (the
+    /// latest refusal or load result), the frame's notices (link problems, what
+    /// the run had to change) and the run's latest ([`Lesson::run_notices`]).
     fn notices(&self) -> Vec<String> {
-        let mut all = self.frame().notices().to_vec();
+        let mut all: Vec<String> = self.frame().note().map(str::to_owned).into_iter().collect();
+        all.extend(self.frame().notices().iter().cloned());
         all.extend(self.run_notices());
         all
     }
@@ -440,9 +449,18 @@ pub trait Lesson: crate::widgets::layout::LessonPanels + AsAny + std::fmt::Debug
     }
     /// Does what a time-bar button or shortcut asks: the clock takes it first
     /// (run, pause, stop on a step), then the lesson ([`Lesson::on_time_action`]).
+    /// Starting over clears the note (a reset that fails leaves its own).
     fn apply_time_action(&mut self, action: TimeAction) {
+        if action == TimeAction::Reset {
+            *self.frame_mut().note_mut() = None;
+        }
         self.time_mut().apply(action);
         self.on_time_action(action);
+    }
+    /// The key moment the run has just passed ("loop closure found at scan 158"),
+    /// shown in the time bar; `None` for most lessons and most ticks.
+    fn moment(&self) -> Option<String> {
+        None
     }
     /// The lesson's part of a time-bar action: step a phase or a tick, step back,
     /// start over.

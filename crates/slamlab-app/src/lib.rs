@@ -114,6 +114,17 @@ pub struct SlamLabApp {
     figure: query::FigureOptions,
     /// The map's (central panel's) rectangle and the window's size, last frame.
     map_rect: Option<egui::Rect>,
+    /// The time bar's rectangle in the last frame.
+    time_bar_rect: Option<egui::Rect>,
+    /// The lesson's note and the tick it was first shown at: stepping back before
+    /// that tick clears it (what it said no longer holds).
+    note_since: Option<(String, u64)>,
+    /// The query string the page's address shows (without `?`): the one the app
+    /// opened with, then the lesson's after a switch of lessons, so that a reload
+    /// opens the lesson on screen.
+    address: String,
+    /// Has the address changed since the browser last took it?
+    address_changed: bool,
     screen: egui::Vec2,
     app_notices: Vec<String>,
     dismissed: BTreeSet<String>,
@@ -257,6 +268,10 @@ impl SlamLabApp {
             last_bar_text: String::new(),
             figure: parsed.figure,
             map_rect: None,
+            time_bar_rect: None,
+            note_since: None,
+            address: query.trim_start_matches('?').to_owned(),
+            address_changed: false,
             screen: egui::Vec2::ZERO,
             app_notices: notices,
             dismissed: BTreeSet::new(),
@@ -423,6 +438,31 @@ impl SlamLabApp {
         self.map_rect
     }
 
+    /// The time bar's rectangle in the last frame, points.
+    pub fn time_bar_rect(&self) -> Option<egui::Rect> {
+        self.time_bar_rect
+    }
+
+    /// The query string (without `?`) the page's address shows: how the app
+    /// opened, or after a switch of lessons (the menu, "Localize in this map", a
+    /// scenario file) the lesson on screen, so that a reload opens it.
+    pub fn address(&self) -> &str {
+        &self.address
+    }
+
+    /// The address, when it changed since the last call (the browser then
+    /// replaces the page's address with it, without reloading).
+    pub fn take_address_change(&mut self) -> Option<String> {
+        std::mem::take(&mut self.address_changed).then(|| self.address.clone())
+    }
+
+    /// Points the address at the lesson now on screen (`lesson=ID`, with
+    /// `embed=1` in a figure).
+    fn address_follows_lesson(&mut self) {
+        self.address = query::build(self.lesson.id(), &[], self.embed);
+        self.address_changed = true;
+    }
+
     /// Was the window narrow (side panels as drawers) in the last frame?
     pub fn is_narrow(&self) -> bool {
         self.narrow
@@ -439,6 +479,15 @@ impl SlamLabApp {
     fn figure_suffix(&self, embed: bool) -> String {
         let mut figure = self.figure.clone();
         figure.run = false;
+        // A link that set the speed shares the speed the clock has now.
+        if figure.speed.is_some() {
+            let time = self.lesson.time();
+            figure.speed = Some(if time.max_speed {
+                query::Speed::Max
+            } else {
+                query::Speed::TicksPerSecond(time.speed_tps)
+            });
+        }
         if !embed {
             figure.panels = None;
         }
@@ -614,28 +663,33 @@ impl SlamLabApp {
         } else {
             egui::Panel::top("slamlab_menu").show(ui, |ui| self.menu_bar_ui(ui));
         }
-        // The header and the time bar wrap their text: when it changes (a lesson
-        // names new photos, the next phase), the panels take a new height, which
-        // egui settles on the next frame. Ask for it, or an idle lesson would
-        // leave the old layout on screen with a gap between the panels.
+        // The header's and the time bar's heights depend on the window's width
+        // only (their changing texts are cut to one line), so a new title or phase
+        // moves nothing. A new title still asks for one more frame, so that an idle
+        // lesson shows it.
         let bar_text = format!("{}\n{}", self.title(), self.lesson.time_info().next_phase);
         if bar_text != self.last_bar_text {
             self.last_bar_text = bar_text;
             ctx.request_repaint();
         }
-        egui::Panel::top("slamlab_time_bar").show(ui, |ui| {
+        let bar = egui::Panel::top("slamlab_time_bar").show(ui, |ui| {
             let info = self.lesson.time_info();
             let steps = self.lesson.step_controls();
-            let actions =
-                time_control::time_bar_ui(ui, self.lesson.time_mut(), &info, steps, self.embed);
+            let moment = self.lesson.moment();
+            let actions = time_control::time_bar_ui(
+                ui,
+                self.lesson.time_mut(),
+                &info,
+                steps,
+                self.embed,
+                moment.as_deref(),
+            );
             for action in actions {
                 self.apply_time_action(action);
             }
         });
-        let notices = self.notices();
-        if !notices.is_empty() {
-            egui::Panel::top("slamlab_notices").show(ui, |ui| self.notice_bar_ui(ui, &notices));
-        }
+        self.time_bar_rect = Some(bar.response.rect);
+        self.expire_note();
         widgets::share::set_figure_suffix(
             &ctx,
             self.figure_suffix(false),
@@ -655,6 +709,14 @@ impl SlamLabApp {
         };
         widgets::map_canvas::clear_placement(&ctx);
         self.lesson.panels_ui(ui, panels, self.embed);
+        // The notices lie over the foot of the map: they come and go without
+        // moving the map or anything on it.
+        let notices = self.notices();
+        if !notices.is_empty()
+            && let Some(map) = widgets::layout::map_rect(&ctx)
+        {
+            self.notices_ui(&ctx, map, &notices);
+        }
         self.estimates_ui(&ctx);
         match self.lesson.take_request() {
             Some(lesson::LessonRequest::Save(files)) => self.exporter.save_all(files),
@@ -668,6 +730,7 @@ impl SlamLabApp {
                     self.lesson = next;
                     self.app_notices.clear();
                     self.dismissed.clear();
+                    self.address_follows_lesson();
                 }
             }
             None => {}
@@ -712,9 +775,9 @@ impl SlamLabApp {
     /// interact, and a link to the same setup in the full app.
     fn embed_header_ui(&mut self, ui: &mut egui::Ui) {
         let title = self.title();
+        // The controls first, then the title in the room left, cut to one line:
+        // a new title (a pose source chosen) moves nothing.
         ui.horizontal_wrapped(|ui| {
-            ui.label(egui::RichText::new(title).strong());
-            ui.separator();
             self.panel_toggles_ui(ui);
             ui.separator();
             let url = format!("index.html?{}", self.share_query(false));
@@ -725,6 +788,12 @@ impl SlamLabApp {
                     .small()
                     .weak(),
             );
+            ui.separator();
+            if title_bar::room_left(ui) < 160.0 {
+                ui.end_row();
+            }
+            let room = title_bar::room_left(ui);
+            title_bar::title_ui(ui, &title, None, room);
         });
     }
 
@@ -780,16 +849,23 @@ impl SlamLabApp {
             if !self.narrow {
                 self.assignment_toggle_ui(ui);
             }
+            // The title and the export status change (a pose source chosen, a file
+            // saved): they take the room the row has left, cut to one line, so the
+            // bar never changes height under the cursor.
+            let theme_width = title_bar::text_width(ui, "Light theme")
+                + 2.0 * ui.spacing().button_padding.x
+                + 2.0 * ui.spacing().item_spacing.x;
             if self.narrow {
                 // A narrow window: the drawer buttons first, then the title; no
                 // right-aligned group for wrapped text to run into.
                 ui.separator();
                 self.panel_toggles_ui(ui);
                 ui.separator();
-                ui.label(egui::RichText::new(title).strong());
-                if let Some(status) = &self.exporter.status {
-                    ui.label(status);
+                if title_bar::room_left(ui) < theme_width + 120.0 {
+                    ui.end_row();
                 }
+                let room = title_bar::room_left(ui) - theme_width;
+                title_bar::title_ui(ui, &title, self.exporter.status.as_deref(), room);
                 let dark = ui.visuals().dark_mode;
                 if ui
                     .small_button(if dark { "Light theme" } else { "Dark theme" })
@@ -801,11 +877,9 @@ impl SlamLabApp {
                 return;
             }
             ui.separator();
-            ui.label(egui::RichText::new(title).strong());
-            if let Some(status) = &self.exporter.status {
-                ui.separator();
-                ui.label(status);
-            }
+            let timing = if self.show_frame_timing { 260.0 } else { 0.0 };
+            let room = title_bar::room_left(ui) - theme_width - timing;
+            title_bar::title_ui(ui, &title, self.exporter.status.as_deref(), room);
             ui.with_layout(egui::Layout::right_to_left(egui::Align::Center), |ui| {
                 let dark = ui.visuals().dark_mode;
                 let label = if dark { "Light theme" } else { "Dark theme" };
@@ -1094,7 +1168,9 @@ impl SlamLabApp {
                 .filter(|d| d.prepared().is_some() && (is_trajectory || added.is_err()));
             let Some(desk) = homework else {
                 match added {
-                    Ok(said) => *self.lesson.frame_mut().note_mut() = Some(said),
+                    // Added: said beside the title (the estimates window shows it too);
+                    // the notices are for what went wrong or changed the run.
+                    Ok(said) => self.exporter.status = Some(said),
                     Err(why) => self.app_notices.push(why),
                 }
                 continue;
@@ -1114,7 +1190,8 @@ impl SlamLabApp {
                         Ok(_) => said,
                         Err(why) => format!("{said} (not drawn: {why})"),
                     };
-                    *self.lesson.frame_mut().note_mut() = Some(note);
+                    // Said beside the title, as an estimate added is.
+                    self.exporter.status = Some(note);
                 }
                 Err(why) => {
                     if added.is_ok() {
@@ -1225,6 +1302,8 @@ impl SlamLabApp {
         self.figure = fresh.figure;
         self.app_notices = fresh.app_notices;
         self.dismissed.clear();
+        self.address = query;
+        self.address_changed = true;
         self.exporter.status = Some(format!("Opened {name}"));
     }
 
@@ -1253,17 +1332,62 @@ impl SlamLabApp {
         );
         self.app_notices.clear();
         self.dismissed.clear();
+        self.address_follows_lesson();
+    }
+
+    /// Clears the lesson's note once the run has stepped back before it: what it
+    /// said (a kidnap, a load, a closure added) is no longer on screen.
+    fn expire_note(&mut self) {
+        let tick = self.lesson.time_info().tick;
+        let note = self.lesson.frame().note().map(str::to_owned);
+        match (note, &self.note_since) {
+            (None, _) => self.note_since = None,
+            (Some(text), Some((seen, since))) if *seen == text => {
+                if tick < *since {
+                    *self.lesson.frame_mut().note_mut() = None;
+                    self.note_since = None;
+                }
+            }
+            (Some(text), _) => self.note_since = Some((text, tick)),
+        }
+    }
+
+    /// The notices, in one box over the foot of the map `map`: "Notices (N)", each
+    /// with its Dismiss button (dismissing the lesson's note clears it).
+    fn notices_ui(&mut self, ctx: &egui::Context, map: egui::Rect, notices: &[String]) {
+        let width = (map.width() - 16.0).clamp(120.0, 720.0);
+        let max_height = (0.45 * map.height()).max(60.0);
+        egui::Area::new(egui::Id::unique("slamlab_notices"))
+            .order(egui::Order::Middle)
+            .fixed_pos(egui::pos2(map.left() + 8.0, map.bottom() - 8.0))
+            .pivot(egui::Align2::LEFT_BOTTOM)
+            .constrain(false)
+            .show(ctx, |ui| {
+                ui.set_max_width(width);
+                egui::Frame::new()
+                    .fill(ui.visuals().panel_fill)
+                    .corner_radius(4.0)
+                    .show(ui, |ui| {
+                        ui.set_width(width);
+                        egui::ScrollArea::vertical()
+                            .max_height(max_height)
+                            .show(ui, |ui| self.notice_bar_ui(ui, notices));
+                    });
+            });
     }
 
     fn notice_bar_ui(&mut self, ui: &mut egui::Ui, notices: &[String]) {
         let mut dismiss: Vec<String> = Vec::new();
         egui::Frame::new()
             .stroke(egui::Stroke::new(1.5, palette::VERMILLION))
-            .inner_margin(6.0)
+            .inner_margin(egui::Margin::symmetric(6, 3))
             .corner_radius(4.0)
             .show(ui, |ui| {
                 ui.set_width(ui.available_width());
-                ui.horizontal(|ui| {
+                // One notice shares the count's row: the box covers as little of
+                // the map as it can.
+                let single = notices.len() == 1;
+                ui.horizontal_wrapped(|ui| {
                     ui.label(
                         egui::RichText::new(format!("Notices ({})", notices.len()))
                             .strong()
@@ -1272,8 +1396,18 @@ impl SlamLabApp {
                     if notices.len() > 1 && ui.small_button("Dismiss all").clicked() {
                         dismiss.extend(notices.iter().cloned());
                     }
+                    if let Some(notice) = notices.first().filter(|_| single) {
+                        if ui
+                            .small_button("Dismiss")
+                            .on_hover_text("Hide this notice")
+                            .clicked()
+                        {
+                            dismiss.push(notice.clone());
+                        }
+                        ui.label(notice);
+                    }
                 });
-                for notice in notices.iter().take(8) {
+                for notice in notices.iter().take(8).filter(|_| !single) {
                     ui.horizontal_wrapped(|ui| {
                         if ui
                             .small_button("Dismiss")
@@ -1289,6 +1423,12 @@ impl SlamLabApp {
                     ui.label(format!("… and {} more", notices.len() - 8));
                 }
             });
+        // A dismissed note is cleared (the next note with the same words shows).
+        let note = self.lesson.frame().note().map(str::to_owned);
+        if let Some(note) = note.filter(|n| dismiss.contains(n)) {
+            *self.lesson.frame_mut().note_mut() = None;
+            dismiss.retain(|d| *d != note);
+        }
         self.dismissed.extend(dismiss);
     }
 }
@@ -1316,8 +1456,63 @@ fn apply_figure(lesson: &mut dyn Lesson, figure: &query::FigureOptions, notices:
     {
         notices.push("follow: this lesson's map has no robot to follow".to_owned());
     }
+    match figure.speed {
+        Some(query::Speed::Max) => lesson.time_mut().max_speed = true,
+        Some(query::Speed::TicksPerSecond(v)) => {
+            let time = lesson.time_mut();
+            time.max_speed = false;
+            time.speed_tps = v;
+        }
+        None => {}
+    }
     if figure.run && !lesson.time().running {
         lesson.apply_time_action(TimeAction::ToggleRun);
+    }
+}
+
+/// The menu bar's and the embed header's title: one line of fixed width.
+mod title_bar {
+    /// The title (strong) and the export status after it, in `width` points, cut
+    /// to one line (the whole on hover).
+    pub fn title_ui(ui: &mut egui::Ui, title: &str, status: Option<&str>, width: f32) {
+        let width = width.max(40.0);
+        let mut job = egui::text::LayoutJob::default();
+        let font = egui::TextStyle::Body.resolve(ui.style());
+        job.append(
+            title,
+            0.0,
+            egui::TextFormat::simple(font.clone(), ui.visuals().strong_text_color()),
+        );
+        if let Some(status) = status {
+            job.append(
+                &format!("   {status}"),
+                0.0,
+                egui::TextFormat::simple(font, ui.visuals().text_color()),
+            );
+        }
+        let height = ui.spacing().interact_size.y;
+        ui.allocate_ui_with_layout(
+            egui::vec2(width, height),
+            egui::Layout::left_to_right(egui::Align::Center),
+            |ui| {
+                ui.set_min_width(width);
+                ui.add(egui::Label::new(job).truncate());
+            },
+        );
+    }
+
+    /// The width left on the current row, points.
+    pub fn room_left(ui: &egui::Ui) -> f32 {
+        ui.clip_rect().right().min(ui.max_rect().right()) - ui.cursor().min.x - 4.0
+    }
+
+    /// The width of `text` in the body font, points.
+    pub fn text_width(ui: &egui::Ui, text: &str) -> f32 {
+        let font = egui::TextStyle::Body.resolve(ui.style());
+        ui.painter()
+            .layout_no_wrap(text.to_owned(), font, egui::Color32::WHITE)
+            .size()
+            .x
     }
 }
 

@@ -28,7 +28,7 @@ pub struct Query {
 pub const MAX_ESTIMATES: usize = 8;
 
 /// The keys the app reads itself; lessons never see them.
-pub const APP_KEYS: [&str; 12] = [
+pub const APP_KEYS: [&str; 13] = [
     "lesson",
     "estimate",
     "assignment",
@@ -37,6 +37,7 @@ pub const APP_KEYS: [&str; 12] = [
     "many-runs",
     "tick",
     "run",
+    "speed",
     "legend",
     "panels",
     "zoom",
@@ -68,6 +69,9 @@ pub struct FigureOptions {
     pub zoom: Option<f32>,
     /// `follow=1`: the map follows the robot.
     pub follow: Option<bool>,
+    /// `speed=max` or `speed=N`: the clock's speed while running, as the time
+    /// bar's speed field and max box set it.
+    pub speed: Option<Speed>,
     /// `estimate=FILE` (repeatable): a student's estimate beside the page, scored
     /// in the lesson.
     pub estimates: Vec<String>,
@@ -81,6 +85,26 @@ pub struct FigureOptions {
 
 /// The longest `student=` text read (an e-mail address or a name fits many times).
 pub const MAX_STUDENT_CHARS: usize = 200;
+
+/// The clock's speed a link asks for (`speed=`).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum Speed {
+    /// `speed=max`: as many ticks as fit in each frame's budget.
+    Max,
+    /// `speed=N`: N ticks (scans, steps) per second, within
+    /// [`crate::time_control::SPEED_RANGE`].
+    TicksPerSecond(f64),
+}
+
+impl Speed {
+    /// The value in a link.
+    pub fn value(self) -> String {
+        match self {
+            Speed::Max => "max".to_owned(),
+            Speed::TicksPerSecond(v) => format!("{v}"),
+        }
+    }
+}
 
 impl FigureOptions {
     /// The options as `key=value` pairs for a link (`tick` given separately).
@@ -108,6 +132,9 @@ impl FigureOptions {
         }
         if let Some(on) = self.follow {
             pairs.push(("follow".to_owned(), u8::from(on).to_string()));
+        }
+        if let Some(speed) = self.speed {
+            pairs.push(("speed".to_owned(), speed.value()));
         }
         for location in &self.estimates {
             pairs.push(("estimate".to_owned(), location.clone()));
@@ -166,7 +193,7 @@ impl Query {
                         MANY_RUNS_RANGE.end()
                     )),
                 },
-                "tick" | "run" | "legend" | "panels" | "zoom" | "follow" | "estimate"
+                "tick" | "run" | "legend" | "panels" | "zoom" | "follow" | "estimate" | "speed"
                 | "assignment" | "student" => {
                     parsed.parse_figure_key(&key, &value);
                 }
@@ -225,6 +252,32 @@ impl Query {
                     ));
                 } else {
                     figure.estimates.push(location.to_owned());
+                }
+            }
+            "speed" => {
+                let range = crate::time_control::SPEED_RANGE;
+                if value.eq_ignore_ascii_case("max") {
+                    figure.speed = Some(Speed::Max);
+                } else {
+                    match value.parse::<f64>() {
+                        Ok(v) if v.is_finite() && range.contains(&v) => {
+                            figure.speed = Some(Speed::TicksPerSecond(v));
+                        }
+                        Ok(v) if v.is_finite() && v > 0.0 => {
+                            let clamped = v.clamp(*range.start(), *range.end());
+                            self.issues.push(format!(
+                                "speed = {v} is outside {}..{} per second; {clamped} is used",
+                                range.start(),
+                                range.end()
+                            ));
+                            figure.speed = Some(Speed::TicksPerSecond(clamped));
+                        }
+                        _ => self.issues.push(format!(
+                            "speed = '{value}' is not a number of ticks per second ({}..{}) or max; the lesson's speed is used",
+                            range.start(),
+                            range.end()
+                        )),
+                    }
                 }
             }
             "tick" => match value.parse::<u64>() {
@@ -486,6 +539,42 @@ mod tests {
             assert!(q.issues[0].starts_with(starts), "{bad}: {:?}", q.issues);
             assert_eq!(q.figure, FigureOptions::default(), "{bad}");
             assert!(q.pairs.is_empty(), "{bad}");
+        }
+    }
+
+    #[test]
+    fn speed_is_read_clamped_or_refused() {
+        assert_eq!(Query::parse("speed=max").figure.speed, Some(Speed::Max));
+        assert_eq!(Query::parse("speed=MAX").figure.speed, Some(Speed::Max));
+        let q = Query::parse("lesson=mapping&speed=50");
+        assert_eq!(q.figure.speed, Some(Speed::TicksPerSecond(50.0)));
+        assert!(q.issues.is_empty() && q.pairs.is_empty(), "{q:?}");
+        // The link the shell writes reads back the same.
+        for speed in [Speed::Max, Speed::TicksPerSecond(2.5)] {
+            let figure = FigureOptions {
+                speed: Some(speed),
+                ..FigureOptions::default()
+            };
+            let again = Query::parse(&build("mapping", &figure.pairs(0), false));
+            assert_eq!(again.figure, figure);
+        }
+        let q = Query::parse("speed=100000");
+        assert_eq!(q.figure.speed, Some(Speed::TicksPerSecond(200.0)));
+        assert!(q.issues[0].contains("200 is used"), "{:?}", q.issues);
+        let q = Query::parse("speed=0.01");
+        assert_eq!(q.figure.speed, Some(Speed::TicksPerSecond(1.0)));
+        for bad in [
+            "speed=0",
+            "speed=-3",
+            "speed=NaN",
+            "speed=inf",
+            "speed=",
+            "speed=fast",
+        ] {
+            let q = Query::parse(bad);
+            assert_eq!(q.figure.speed, None, "{bad}");
+            assert_eq!(q.issues.len(), 1, "{bad}");
+            assert!(q.pairs.is_empty(), "{bad}: not a lesson parameter");
         }
     }
 

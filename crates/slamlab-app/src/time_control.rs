@@ -216,130 +216,258 @@ pub fn shortcut_actions(ctx: &egui::Context) -> Vec<TimeAction> {
     actions
 }
 
-/// The time bar: Run/Pause, Step back, Step phase (naming the next phase), Step
-/// tick, Reset, speed, tick and simulated time; a lesson with one kind of step
-/// ([`StepControls::One`]) shows one step button instead of the phase and tick
-/// buttons. Returns what was clicked.
+/// The time bar: Run/Pause, Step back, Step phase, Step tick, Reset, speed; then
+/// the tick and simulated time, the key moment the run just passed (a lesson's
+/// [`Lesson::moment`](crate::lesson::Lesson::moment)), the next phase and the last.
+/// A lesson with one kind of step ([`StepControls::One`]) shows one step button
+/// instead of the phase and tick buttons. Returns what was clicked.
+///
+/// Nothing moves under the cursor: every control has a width fixed by the lesson
+/// and the window (never by the text of the moment), the counter has a slot wide
+/// enough for long runs, and the texts that change as the run goes (the phases,
+/// the moment) come last, on one line cut to the room left (the whole text on
+/// hover). Where the controls and a readable status do not fit one row (below
+/// about 1100 points) the status has a row of its own: the bar's height depends on
+/// the window's width only.
 pub fn time_bar_ui(
     ui: &mut egui::Ui,
     time: &mut TimeControl,
     info: &TimeInfo,
     steps: StepControls,
     compact: bool,
+    moment: Option<&str>,
 ) -> Vec<TimeAction> {
     let unit = match steps {
         StepControls::PhasesAndTicks => "tick",
         StepControls::One { unit, .. } => unit,
     };
+    let mut actions = Vec::new();
+    let row_height = ui.spacing().interact_size.y;
+    let counter_width = text_width(ui, &counter_template(unit, info.time_s.is_finite())) + 8.0;
+    ui.vertical(|ui| {
+        let one_row = ui
+            .horizontal_wrapped(|ui| {
+                ui.set_min_height(row_height);
+                controls_ui(ui, time, info, steps, unit, &mut actions);
+                // The controls' widths are fixed: whether the status fits beside
+                // them depends on the window's width only.
+                let least = if compact {
+                    STATUS_MIN_WIDTH_EMBED
+                } else {
+                    STATUS_MIN_WIDTH
+                };
+                let fits = room_left(ui) >= counter_width + least;
+                if fits {
+                    ui.separator();
+                    status_ui(ui, info, unit, counter_width, compact, moment);
+                }
+                fits
+            })
+            .inner;
+        if !one_row {
+            ui.horizontal(|ui| {
+                ui.set_min_height(row_height);
+                status_ui(ui, info, unit, counter_width, compact, moment);
+            });
+        }
+    });
+    actions
+}
+
+/// The least width the status (moment, next and last phase) needs beside the
+/// controls and the counter to share their row, points.
+const STATUS_MIN_WIDTH: f32 = 300.0;
+
+/// The same in an embedded figure, which shows only the next phase: a lecture's
+/// 900-point iframe keeps the bar to one row.
+const STATUS_MIN_WIDTH_EMBED: f32 = 150.0;
+
+/// The widest counter a run is likely to reach, for its slot's width.
+fn counter_template(unit: &str, timed: bool) -> String {
+    if timed {
+        "tick 00000   t = 0000.0 s".to_owned()
+    } else {
+        format!("{unit} 00000")
+    }
+}
+
+/// The width of the speed value's box: its largest value with the unit.
+fn speed_value_width(ui: &egui::Ui, unit: &str) -> f32 {
+    text_width(ui, &format!("200 {unit}s/s")) + 2.0 * ui.spacing().button_padding.x + 6.0
+}
+
+/// The Run/Pause button's width (the longer of its two labels).
+const RUN_WIDTH: f32 = 56.0;
+
+/// Run, the steps, Reset and the speed: the same places whatever the run says.
+fn controls_ui(
+    ui: &mut egui::Ui,
+    time: &mut TimeControl,
+    info: &TimeInfo,
+    steps: StepControls,
+    unit: &str,
+    actions: &mut Vec<TimeAction>,
+) {
     let back_hover = match steps {
         StepControls::PhasesAndTicks => "Go back one phase (,)".to_owned(),
         StepControls::One { back_unit, .. } => format!("Go back one {back_unit} or edit (,)"),
     };
-    let mut actions = Vec::new();
-    ui.horizontal_wrapped(|ui| {
-        let run_label = if time.running { "Pause" } else { "Run" };
-        if ui
-            .add(egui::Button::new(run_label).min_size(egui::vec2(56.0, 0.0)))
-            .on_hover_text("Run or pause the simulation (Space)")
-            .clicked()
-        {
-            actions.push(TimeAction::ToggleRun);
-        }
-        if ui
-            .add_enabled(info.can_step_back, egui::Button::new("Step back"))
-            .on_hover_text(back_hover)
-            .on_disabled_hover_text(
-                "Nothing to go back to, or the run is too long to replay quickly",
-            )
-            .clicked()
-        {
-            actions.push(TimeAction::StepBack);
-        }
-        match steps {
-            StepControls::PhasesAndTicks => {
-                if ui
-                    .button("Step phase")
-                    .on_hover_text(
-                        "Run one phase of the filters: the prediction, or one landmark update (.)",
-                    )
-                    .clicked()
-                {
-                    actions.push(TimeAction::StepPhase);
-                }
-                ui.label(egui::RichText::new(format!("Next phase: {}", info.next_phase)).strong())
-                    .on_hover_text("What \"Step phase\" runs next");
-                if ui
-                    .button("Step tick")
-                    .on_hover_text(
-                        "Finish the current tick, or run one whole tick: predict, then every update (n)",
-                    )
-                    .clicked()
-                {
-                    actions.push(TimeAction::StepTick);
-                }
+    let run_label = if time.running { "Pause" } else { "Run" };
+    if ui
+        .add(egui::Button::new(run_label).min_size(egui::vec2(RUN_WIDTH, 0.0)))
+        .on_hover_text("Run or pause the simulation (Space)")
+        .clicked()
+    {
+        actions.push(TimeAction::ToggleRun);
+    }
+    if ui
+        .add_enabled(info.can_step_back, egui::Button::new("Step back"))
+        .on_hover_text(back_hover)
+        .on_disabled_hover_text("Nothing to go back to, or the run is too long to replay quickly")
+        .clicked()
+    {
+        actions.push(TimeAction::StepBack);
+    }
+    match steps {
+        StepControls::PhasesAndTicks => {
+            if ui
+                .button("Step phase")
+                .on_hover_text(format!(
+                    "Run one phase of the filters: the prediction, or one landmark update (.); \
+                     next: {}",
+                    info.next_phase
+                ))
+                .clicked()
+            {
+                actions.push(TimeAction::StepPhase);
             }
-            StepControls::One { label, hover, .. } => {
-                if ui
-                    .button(label)
-                    .on_hover_text(format!("{hover} (. or n)"))
-                    .clicked()
-                {
-                    actions.push(TimeAction::StepPhase);
-                }
-                ui.label(egui::RichText::new(format!("Next: {}", info.next_phase)).strong())
-                    .on_hover_text(format!("What \"{label}\" runs next"));
+            if ui
+                .button("Step tick")
+                .on_hover_text(
+                    "Finish the current tick, or run one whole tick: predict, then every update (n)",
+                )
+                .clicked()
+            {
+                actions.push(TimeAction::StepTick);
             }
         }
-        if ui
-            .button("Reset")
-            .on_hover_text("Start over with the parameters in the panel (r)")
-            .clicked()
-        {
-            actions.push(TimeAction::Reset);
+        StepControls::One { label, hover, .. } => {
+            if ui
+                .button(label)
+                .on_hover_text(format!("{hover} (. or n); next: {}", info.next_phase))
+                .clicked()
+            {
+                actions.push(TimeAction::StepPhase);
+            }
         }
-        ui.separator();
-        // The label, slider and value are one group: it starts a new row when the
-        // rest of this one cannot hold it (a slider clips rather than wraps).
-        let group = text_width(ui, "Speed")
-            + ui.spacing().slider_width
-            + text_width(ui, &format!("1000 {unit}s/s"))
-            + 4.0 * ui.spacing().item_spacing.x
-            + 4.0 * ui.spacing().button_padding.x
-            + 16.0;
-        if room_left(ui) < group {
-            ui.end_row();
-        }
-        ui.label("Speed");
-        ui.add_enabled(
-            !time.max_speed,
-            egui::Slider::new(&mut time.speed_tps, SPEED_RANGE)
-                .logarithmic(true)
-                .integer()
+    }
+    if ui
+        .button("Reset")
+        .on_hover_text("Start over with the parameters in the panel (r)")
+        .clicked()
+    {
+        actions.push(TimeAction::Reset);
+    }
+    ui.separator();
+    // The label, slider, value and max are one group: it starts a new row when
+    // the rest of this one cannot hold it (a slider clips rather than wraps). Its
+    // width is fixed, so where it goes depends on the window only.
+    let value_width = speed_value_width(ui, unit);
+    let group = text_width(ui, "Speed")
+        + ui.spacing().slider_width
+        + value_width
+        + ui.spacing().icon_width
+        + text_width(ui, "max")
+        + 5.0 * ui.spacing().item_spacing.x
+        + 8.0;
+    if room_left(ui) < group {
+        ui.end_row();
+    }
+    ui.label("Speed");
+    ui.add_enabled(
+        !time.max_speed,
+        egui::Slider::new(&mut time.speed_tps, SPEED_RANGE)
+            .logarithmic(true)
+            .show_value(false),
+    )
+    .on_hover_text(format!("Speed while running, {unit}s per second"));
+    let height = ui.spacing().interact_size.y;
+    ui.add_enabled_ui(!time.max_speed, |ui| {
+        ui.add_sized(
+            egui::vec2(value_width, height),
+            egui::DragValue::new(&mut time.speed_tps)
+                .range(SPEED_RANGE)
+                .speed(0.5)
+                .max_decimals(0)
                 .suffix(format!(" {unit}s/s")),
         )
         .on_hover_text(format!("Speed while running, {unit}s per second"));
-        ui.checkbox(&mut time.max_speed, "max")
-            .on_hover_text("Run as fast as this computer can");
-        ui.separator();
-        if info.time_s.is_finite() {
-            ui.label(format!("tick {}   t = {:.1} s", info.tick, info.time_s))
-                .on_hover_text("Ticks run so far and the simulated time");
-        } else {
-            ui.label(format!("{unit} {}", info.tick))
-                .on_hover_text(format!("{unit}s run so far"));
-        }
-        if !compact {
-            let last = info.last_phase.as_deref().unwrap_or("none yet");
-            let text = format!("Last phase: {last}");
-            // On a row of its own when little is left of this one; it wraps there.
-            if room_left(ui) < text_width(ui, &text).min(160.0) {
-                ui.end_row();
-            }
-            ui.add(egui::Label::new(text).wrap())
-                .on_hover_text("The phase shown on the map and in the explanation");
-        }
     });
-    actions
+    ui.checkbox(&mut time.max_speed, "max")
+        .on_hover_text("Run as fast as this computer can");
+}
+
+/// The tick and time in a slot of fixed width, then the key moment, the next
+/// phase and the last, on one line cut to the room left (whole on hover).
+fn status_ui(
+    ui: &mut egui::Ui,
+    info: &TimeInfo,
+    unit: &str,
+    counter_width: f32,
+    compact: bool,
+    moment: Option<&str>,
+) {
+    let height = ui.spacing().interact_size.y;
+    let counter = if info.time_s.is_finite() {
+        format!("tick {}   t = {:.1} s", info.tick, info.time_s)
+    } else {
+        format!("{unit} {}", info.tick)
+    };
+    let hover = if info.time_s.is_finite() {
+        "Ticks run so far and the simulated time".to_owned()
+    } else {
+        format!("{unit}s run so far")
+    };
+    ui.allocate_ui_with_layout(
+        egui::vec2(counter_width, height),
+        egui::Layout::left_to_right(egui::Align::Center),
+        |ui| {
+            ui.set_min_width(counter_width);
+            ui.label(counter).on_hover_text(hover);
+        },
+    );
+    let next_name = match compact {
+        true => "Next",
+        false => "Next phase",
+    };
+    let mut job = egui::text::LayoutJob::default();
+    let body = egui::TextStyle::Body.resolve(ui.style());
+    let strong = ui.visuals().strong_text_color();
+    let weak = ui.visuals().text_color();
+    let mut add = |text: &str, color: egui::Color32| {
+        job.append(text, 0.0, egui::TextFormat::simple(body.clone(), color));
+    };
+    if let Some(moment) = moment {
+        add(&format!("{moment}   "), crate::palette::VERMILLION);
+    }
+    add(&format!("{next_name}: {}", info.next_phase), strong);
+    if !compact {
+        let last = info.last_phase.as_deref().unwrap_or("none yet");
+        add(&format!("   Last phase: {last}"), weak);
+    }
+    // The room left on this row (`available_width` in a wrapping row is a whole
+    // new row's, and the label would start one).
+    let width = (room_left(ui) - ui.spacing().item_spacing.x).max(0.0);
+    ui.allocate_ui_with_layout(
+        egui::vec2(width, height),
+        egui::Layout::left_to_right(egui::Align::Center),
+        |ui| {
+            ui.add(egui::Label::new(job).truncate()).on_hover_text(
+                "What \"Step phase\" runs next, and the phase shown on the map and in the \
+                 explanation",
+            );
+        },
+    );
 }
 
 /// The width left on the current row up to the window's (or the panel's) right edge,

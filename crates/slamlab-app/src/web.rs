@@ -224,6 +224,27 @@ fn set_status(text: &str, state: &str) {
     }
 }
 
+/// Shows `query` in the page's address without reloading (the history entry is
+/// replaced, not added): after a switch of lessons a reload opens the lesson on
+/// screen, and the address names it.
+fn replace_address(query: &str) {
+    let Some(window) = web_sys::window() else {
+        return;
+    };
+    let location = window.location();
+    let path = location.pathname().unwrap_or_default();
+    let hash = location.hash().unwrap_or_default();
+    let url = format!("{path}?{query}{hash}");
+    if let Ok(history) = window.history()
+        && let Err(err) = history.replace_state_with_url(&JsValue::NULL, "", Some(&url))
+    {
+        log::warn!(
+            "could not show the lesson in the address: {}",
+            js_to_string(&err)
+        );
+    }
+}
+
 /// A JavaScript error as text.
 fn js_to_string(value: &JsValue) -> String {
     value.as_string().unwrap_or_else(|| format!("{value:?}"))
@@ -243,6 +264,9 @@ impl eframe::App for WebApp {
 
     fn ui(&mut self, ui: &mut egui::Ui, frame: &mut eframe::Frame) {
         self.inner.ui(ui, frame);
+        if let Some(query) = self.inner.take_address_change() {
+            replace_address(&query);
+        }
     }
 
     fn as_any_mut(&mut self) -> Option<&mut dyn std::any::Any> {

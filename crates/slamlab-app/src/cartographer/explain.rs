@@ -100,9 +100,14 @@ pub fn explanation_ui(ui: &mut egui::Ui, sim: &CartographerSim, scenario: &Carto
             ));
         }
         (Some(d), Some(m)) => {
+            let then = if sim.last_optimization.is_some_and(|o| o.scan >= *m) {
+                "; the optimization after it refined both"
+            } else {
+                "; the optimization that refines both runs next"
+            };
             ui.label(format!(
                 "Detected at scan {d}; merged at scan {m}: the inter-trajectory loop closure \
-                 (thick green) moved the second map onto the first (Fig. 5.12)."
+                 (thick green) moved the second map onto the first (Fig. 5.12){then}."
             ));
         }
     }

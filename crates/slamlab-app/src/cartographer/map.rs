@@ -145,6 +145,20 @@ pub fn map_ui(
             if view.intra {
                 ui.label(egui::RichText::new("— intra-submap").color(palette::DEAD_RECKONING));
             }
+            if !sim.detections.is_empty() {
+                ui.label(
+                    egui::RichText::new("ring: kidnap detected")
+                        .color(DETECTION)
+                        .strong(),
+                );
+            }
+            if !sim.merges.is_empty() {
+                ui.label(
+                    egui::RichText::new("ring: maps merged")
+                        .color(LOOP_CLOSURE)
+                        .strong(),
+                );
+            }
             if has_reference && view.reference {
                 ui.label(
                     egui::RichText::new("— reference (corrected log)")
@@ -156,9 +170,10 @@ pub fn map_ui(
         });
     }
     let last = sim.records.last();
+    let robot = robot_pose_now(sim);
     let mut follow = view
         .follow_robot
-        .then(|| last.map(|r| [r.global_pose.x, r.global_pose.y]))
+        .then(|| robot.map(|p| [p.x, p.y]))
         .flatten();
     let following = follow.is_some();
     let (response, t) =
@@ -239,6 +254,37 @@ pub fn map_ui(
             trajectory_color(node.trajectory),
         );
     }
+    // The key moments: where the kidnap was detected and where the maps merged,
+    // on the nodes (they move with the optimization).
+    for (d, scan) in moment_marks(sim) {
+        let color = match d {
+            Moment::Detected => DETECTION,
+            Moment::Merged => LOOP_CLOSURE,
+        };
+        let Some(node) = sim.nodes.iter().find(|n| n.scan >= scan) else {
+            continue;
+        };
+        let p = t.xy(node.global_pose.x, node.global_pose.y);
+        painter.circle_stroke(p, 9.0, Stroke::new(2.5, colors.background));
+        painter.circle_stroke(p, 9.0, Stroke::new(1.8, color));
+        let text = match d {
+            Moment::Detected => format!("kidnap detected, scan {scan}"),
+            Moment::Merged => format!("merged, scan {scan}"),
+        };
+        let galley = painter.layout_no_wrap(text, egui::FontId::proportional(12.0), color);
+        // The detection's label above, the merge's below: the two are often
+        // a scan or two apart, on nearly the same node.
+        let at = match d {
+            Moment::Detected => p + egui::vec2(12.0, -galley.size().y - 2.0),
+            Moment::Merged => p + egui::vec2(12.0, 2.0),
+        };
+        painter.rect_filled(
+            egui::Rect::from_min_size(at, galley.size()).expand(2.0),
+            2.0,
+            colors.background.gamma_multiply(0.85),
+        );
+        painter.galley(at, galley, color);
+    }
     // The true robot, hollow and grey (simulation only).
     if view.truth
         && let Some(truth) = &sim.input().truth
@@ -247,18 +293,58 @@ pub fn map_ui(
         let radius = (0.2 * t.scale).max(4.0);
         painter.circle_stroke(t.xy(p.x, p.y), radius, Stroke::new(1.5, colors.truth));
     }
-    if let Some(r) = last {
+    if let (Some(r), Some(pose)) = (last, robot) {
         let scan = sim.input().scans.get(r.scan).map(|s| &s.scan);
         draw_scan_and_robot(
             &painter,
             &t,
             scan.filter(|_| view.scan),
-            &r.global_pose,
+            &pose,
             trajectory_color(r.trajectory),
         );
     }
     draw_scale_and_axes(&painter, &t, &colors);
     clicked
+}
+
+/// The robot's pose in the global frame as the pose graph has it now: the last
+/// scan's pose as it was taken, moved as its trajectory's newest node has been
+/// moved since (by a merge or an optimization), `g_node,now · g_node,then⁻¹ ·
+/// g_scan,then`. Without a node it is the pose as taken.
+pub fn robot_pose_now(sim: &CartographerSim) -> Option<Pose2> {
+    let last = sim.records.last()?;
+    let moved = sim
+        .nodes
+        .iter()
+        .rev()
+        .find(|n| n.trajectory == last.trajectory && n.scan <= last.scan)
+        .and_then(|n| {
+            let then = sim.records.iter().rev().find(|r| r.scan == n.scan)?;
+            Some(n.global_pose.compose(&then.global_pose.inverse()))
+        });
+    Some(match moved {
+        Some(correction) => correction.compose(&last.global_pose),
+        None => last.global_pose,
+    })
+}
+
+/// A key moment of a kidnap during mapping.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Moment {
+    /// The detector declared a kidnap: a new trajectory (and map) starts.
+    Detected,
+    /// An inter-trajectory loop closure merged the new map into the first.
+    Merged,
+}
+
+/// The colour of a detection's mark.
+pub const DETECTION: Color32 = palette::VERMILLION;
+
+/// Every detection and merge so far, with its scan: what the map marks.
+pub fn moment_marks(sim: &CartographerSim) -> Vec<(Moment, usize)> {
+    let detected = sim.detections.iter().map(|&d| (Moment::Detected, d));
+    let merged = sim.merges.iter().map(|&m| (Moment::Merged, m));
+    detected.chain(merged).collect()
 }
 
 /// The heights Fig. 5.7 shows: boxes of 1, 4, 16 and 64 cells a side.

@@ -21,7 +21,6 @@ mod map;
 mod plots;
 
 use crate::lesson::{self, Lesson, LessonFrame, LessonStart, StoredSettings};
-use crate::palette;
 use crate::time_control::{StepControls, TimeAction, TimeInfo};
 use crate::widgets::dropped_files::DropInbox;
 use crate::widgets::fetch::Fetch;
@@ -382,10 +381,26 @@ impl CartographerLesson {
         };
         let input = self.sim().input().clone();
         self.restart_on(scenario, input, Some(done));
-        self.frame.note = Some(format!(
-            "Kidnap detection {}: mapping the same scans again up to scan {done}",
-            if on { "on" } else { "off" }
-        ));
+        self.catch_up_note();
+    }
+
+    /// Stops mapping the same scans again (a step or step back), and its note.
+    fn stop_catch_up(&mut self) {
+        if self.catch_up.take().is_some() {
+            self.frame.note = None;
+        }
+    }
+
+    /// The note while the run maps the same scans again up to where it was; none
+    /// once it is there.
+    fn catch_up_note(&mut self) {
+        self.frame.note = self.catch_up.map(|target| {
+            format!(
+                "Kidnap detection {}: mapping the same scans again, scan {} of {target}…",
+                if self.scenario.detection { "on" } else { "off" },
+                self.sim().scans_done()
+            )
+        });
     }
 
     /// Switches loop closures on or off: the same scans replay from the start
@@ -593,6 +608,10 @@ impl CartographerLesson {
             Ok(bytes) => {
                 let name = location.rsplit('/').next().unwrap_or(&location).to_owned();
                 self.load_log(&name, &bytes, Some(location));
+                if matches!(&self.source, Source::Log(n, _) if *n == name) {
+                    // The link's figure keys (`run=1`, `tick=`) hold for the log.
+                    self.frame.restarted_from_link = true;
+                }
             }
             Err(why) => {
                 self.frame.note = Some(format!(
@@ -655,7 +674,7 @@ impl CartographerLesson {
     /// "Step search": runs up to and including the next branch-and-bound
     /// search (its tree is the one drawn).
     pub fn step_search(&mut self) {
-        self.catch_up = None;
+        self.stop_catch_up();
         self.frame.time.apply(TimeAction::StepPhase);
         if self.step_until(|p| matches!(p, CartographerPhase::Search { .. })) {
             if let Some(search) = &self.sim().last_search {
@@ -678,13 +697,24 @@ impl CartographerLesson {
     /// "Step optimization": runs up to and including the next optimization
     /// of the pose graph.
     pub fn step_optimization(&mut self) {
-        self.catch_up = None;
+        self.stop_catch_up();
         self.frame.time.apply(TimeAction::StepPhase);
+        let before = self.sim().scans_done();
         if self.step_until(|p| matches!(p, CartographerPhase::Optimization { .. })) {
+            let every = self.sim().params().optimize_every_n_nodes;
             self.frame.note = self.sim().last_optimization.map(|o| {
+                // A jump of many scans is explained: the graph is solved only every
+                // n nodes (and after a merge).
+                let ran = match o.scan.saturating_sub(before) {
+                    0 | 1 => String::new(),
+                    n => format!(
+                        " (ran {n} scans to reach it: the pose graph is solved every {every} \
+                         nodes and after a merge)"
+                    ),
+                };
                 format!(
-                    "Optimized after scan {}: cost {} → {} in {} iterations; nodes moved {:.3} m \
-                     on average, {:.3} m at most",
+                    "Optimized after scan {}{ran}: cost {} → {} in {} iterations; nodes moved \
+                     {:.3} m on average, {:.3} m at most",
                     o.scan,
                     explain::cost_text(o.cost_before),
                     explain::cost_text(o.cost_after),
@@ -715,6 +745,38 @@ impl CartographerLesson {
                 o.scan, o.searches_pending, o.searches_planned
             ),
             NextPhase::Optimization => format!("scan {}: optimization", o.scan),
+        }
+    }
+
+    /// Where the map draws the robot: the last scan's pose moved with its
+    /// trajectory since (a merge, an optimization).
+    pub fn robot_pose(&self) -> Option<slamlab_core::geometry::Pose2> {
+        map::robot_pose_now(self.sim())
+    }
+
+    /// The kidnap's key moments so far, for the time bar: the detection and the
+    /// merge (which moves the second map onto the first at once), and whether the
+    /// optimization after it has run yet.
+    pub fn moment_text(&self) -> Option<String> {
+        let sim = self.sim();
+        let detected = sim.detections.last().copied();
+        let merged = sim.merges.last().copied();
+        let optimized_since = |m: usize| sim.last_optimization.is_some_and(|o| o.scan >= m);
+        match (detected, merged) {
+            (None, None) => None,
+            (Some(d), None) => Some(format!("Kidnap detected at scan {d}: a new map started")),
+            (d, Some(m)) => {
+                let detected =
+                    d.map_or(String::new(), |d| format!("Kidnap detected at scan {d}; "));
+                let then = if optimized_since(m) {
+                    ", then the optimization refined both"
+                } else {
+                    "; the optimization that refines both is next"
+                };
+                Some(format!(
+                    "{detected}maps merged at scan {m}: the second moved onto the first{then}"
+                ))
+            }
         }
     }
 
@@ -897,15 +959,6 @@ impl crate::widgets::layout::LessonPanels for CartographerLesson {
     fn map_ui(&mut self, ui: &mut egui::Ui) {
         self.refresh_reference();
         self.actions_ui(ui);
-        if let Some(note) = &self.frame.note {
-            ui.label(egui::RichText::new(note).color(palette::VERMILLION));
-        }
-        if let Some(target) = self.catch_up {
-            ui.label(format!(
-                "Mapping again: scan {} of {target}…",
-                self.sim().scans_done()
-            ));
-        }
         if self.frame.view.grids_window {
             let mut open = true;
             map::max_grids_window(
@@ -934,6 +987,10 @@ impl crate::widgets::layout::LessonPanels for CartographerLesson {
 
 impl Lesson for CartographerLesson {
     crate::lesson::frame_accessors!();
+
+    fn moment(&self) -> Option<String> {
+        self.moment_text()
+    }
 
     fn trajectories(&self) -> Vec<slamlab_sim::metrics::NamedTrajectory> {
         slamlab_sim::cartographer::export::trajectories(self.sim())
@@ -999,12 +1056,12 @@ impl Lesson for CartographerLesson {
         match action {
             TimeAction::ToggleRun => {}
             TimeAction::StepPhase | TimeAction::StepTick => {
-                self.catch_up = None;
+                self.stop_catch_up();
                 self.step_scan();
             }
             TimeAction::StepBack => {
                 // One phase back: the last search, optimization or local SLAM.
-                self.catch_up = None;
+                self.stop_catch_up();
                 self.stepper.step_back();
                 let done = self.sim().scans_done();
                 self.scan_ms.truncate(done);
@@ -1074,6 +1131,7 @@ impl Lesson for CartographerLesson {
             if reached(self.sim()) || self.sim().is_done() {
                 self.catch_up = None;
             }
+            self.catch_up_note();
             self.note_frame(started);
             return;
         }

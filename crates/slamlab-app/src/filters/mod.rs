@@ -377,9 +377,6 @@ impl FiltersLesson {
             ui.selectable_value(&mut self.frame.view.tab, Tab::Corridor, "Corridor");
         });
         ui.separator();
-        if let Some(note) = &self.frame.note {
-            ui.colored_label(palette::VERMILLION, note);
-        }
         let names = match self.frame.view.tab {
             Tab::OneStep => {
                 let mut chosen = self.scenario.function.name();

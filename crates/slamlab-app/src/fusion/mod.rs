@@ -11,6 +11,7 @@ mod map;
 mod plots;
 
 pub use explain::rmse_text;
+pub use plots::ERROR_HEADROOM;
 
 use crate::lesson::{self, Lesson, LessonFrame, LessonStart, StoredSettings};
 use crate::palette;
@@ -447,9 +448,6 @@ impl crate::widgets::layout::LessonPanels for FusionLesson {
     }
 
     fn map_ui(&mut self, ui: &mut egui::Ui) {
-        if let Some(note) = &self.frame.note {
-            ui.label(egui::RichText::new(note).color(palette::VERMILLION));
-        }
         map::map_ui(
             ui,
             self.stepper.sim(),

@@ -765,6 +765,79 @@ impl KidnapLesson {
         });
     }
 
+    /// Each filter's status ("MCL: tracking (0.12 m off)") in its colour, one line
+    /// each, then what a kidnap shows: above the map at every window size, so the
+    /// student sees tracking or lost without opening the explanation. After a
+    /// kidnap that no filter of the run can recover from, the last line says so
+    /// and which filter can, with a button that runs it beside them.
+    fn status_ui(&mut self, ui: &mut egui::Ui) {
+        let run = self.sim().run();
+        let lines: Vec<(String, Color32)> = run
+            .filters()
+            .iter()
+            .enumerate()
+            .map(|(k, f)| {
+                (
+                    format!("{}: {}", f.name.to_uppercase(), run.status_of(k)),
+                    filter_color(k, f.name),
+                )
+            })
+            .collect();
+        for (text, color) in lines {
+            one_line(ui, egui::RichText::new(text).color(color).strong());
+        }
+        let verdict = recovery_verdict(run);
+        let compare = ui
+            .horizontal(|ui| {
+                let asks = matches!(verdict, Verdict::CannotRecover { .. });
+                let room = ui.available_width() - if asks { 150.0 } else { 0.0 };
+                ui.allocate_ui_with_layout(
+                    egui::vec2(room.max(40.0), ui.spacing().interact_size.y),
+                    egui::Layout::left_to_right(egui::Align::Center),
+                    |ui| {
+                        let text = verdict.text();
+                        let text = match verdict {
+                            Verdict::CannotRecover { .. } => egui::RichText::new(text)
+                                .color(palette::VERMILLION)
+                                .strong(),
+                            _ => egui::RichText::new(text).weak(),
+                        };
+                        ui.add(egui::Label::new(text).truncate())
+                            .on_hover_text(verdict.reason());
+                    },
+                );
+                asks && ui
+                    .button("Compare with ACMCL")
+                    .on_hover_text(
+                        "Start over with ACMCL beside these filters, the kidnap scheduled at the \
+                         same tick, and run back to this tick: one robot, one set of scans and \
+                         one kidnap for all the filters",
+                    )
+                    .clicked()
+            })
+            .inner;
+        if compare && let Verdict::CannotRecover { kidnap_tick, .. } = verdict {
+            self.compare_with_acmcl(kidnap_tick);
+        }
+    }
+
+    /// Starts over with ACMCL beside the run's filters and the kidnap scheduled at
+    /// `kidnap_tick`, then runs to where the run was.
+    pub fn compare_with_acmcl(&mut self, kidnap_tick: u64) {
+        use slamlab_sim::kidnap::LocalizationEstimator;
+        let now = self.sim().run().tick_count();
+        let mut scenario = self.sim().run().scenario().clone();
+        if !scenario.estimators.contains(&LocalizationEstimator::Acmcl) {
+            scenario.estimators.push(LocalizationEstimator::Acmcl);
+        }
+        scenario.kidnap_at = Some(kidnap_tick);
+        self.pending = PendingParams::new(scenario);
+        self.reset();
+        for _ in 0..now {
+            self.step_tick();
+        }
+    }
+
     fn kidnap_parameters_ui(&mut self, ui: &mut egui::Ui) {
         ui.heading("Monte Carlo localization");
         ui.label("Kidnap, Global localization and Reset around truth are above the map.");
@@ -843,6 +916,93 @@ pub fn explain_status(lesson: &KidnapLesson) -> Vec<String> {
         .collect()
 }
 
+/// What the run shows about finding the robot again.
+#[derive(Clone, Debug, PartialEq)]
+pub enum Verdict {
+    /// No kidnap yet.
+    NotKidnapped,
+    /// Kidnapped at this tick; a filter of the run can find the robot again.
+    Kidnapped(u64),
+    /// Kidnapped at `kidnap_tick`, and no filter of the run can find the robot
+    /// again (`names`: theirs).
+    CannotRecover {
+        /// The kidnap's tick.
+        kidnap_tick: u64,
+        /// The run's filters, "MCL" or "MCL and AMCL".
+        names: String,
+    },
+}
+
+impl Verdict {
+    /// What the line above the map says.
+    pub fn text(&self) -> String {
+        match self {
+            Verdict::NotKidnapped => {
+                "Kidnap (above) carries the robot elsewhere; the filters are not told".to_owned()
+            }
+            Verdict::Kidnapped(tick) => format!(
+                "Kidnapped at tick {tick}: a costmap-aware filter can find the robot again \
+                 (its status above says when)"
+            ),
+            Verdict::CannotRecover { names, .. } if names == "MCL" => "MCL adds no particles: \
+                 it finds the robot again only if some lie near its new place. ACMCL \
+                 regenerates them:"
+                .to_owned(),
+            Verdict::CannotRecover { names, .. } => format!(
+                "{names} seldom add particles (AMCL only while its mean weight falls): the robot \
+                 is found again only if some lie near its new place. ACMCL regenerates them:"
+            ),
+        }
+    }
+
+    /// Why (on hover).
+    pub fn reason(&self) -> &'static str {
+        match self {
+            Verdict::NotKidnapped => {
+                "The filters are not told of a kidnap: watch whether they notice."
+            }
+            Verdict::Kidnapped(_) => {
+                "CMCL and ACMCL regenerate, at every update, the particles their costmap rules out \
+                 (thesis Algorithms 10-11), so some land near the robot's new place."
+            }
+            Verdict::CannotRecover { .. } => {
+                "MCL never adds a particle: after a kidnap it finds the robot again only if some \
+                 of its particles happen to lie near the new place (a cloud not yet collapsed). \
+                 AMCL injects random particles only while its short-term mean weight is below \
+                 its long-term one, which the lesson's tempered scan likelihood seldom allows \
+                 (docs/kidnap.md: in six runs it never injected). ACMCL regenerates the \
+                 particles its costmap rules out at every update."
+            }
+        }
+    }
+}
+
+/// Whether the run's filters can find the robot again after its kidnap: a
+/// costmap-aware filter (CMCL, ACMCL) regenerates the particles its costmap rules
+/// out at every update; plain MCL never adds a particle, and AMCL injects only
+/// while its short-term mean weight is below the long-term one, which the
+/// lesson's tempered scan likelihood seldom allows (docs/kidnap.md).
+pub fn recovery_verdict(run: &slamlab_sim::kidnap::MclRun) -> Verdict {
+    use slamlab_sim::kidnap::LocalizationEstimator as E;
+    let Some(kidnap_tick) = run.kidnap_tick() else {
+        return Verdict::NotKidnapped;
+    };
+    let estimators = &run.scenario().estimators;
+    if estimators.iter().any(|e| matches!(e, E::Cmcl | E::Acmcl)) {
+        return Verdict::Kidnapped(kidnap_tick);
+    }
+    let names: Vec<String> = estimators.iter().map(|e| e.name().to_uppercase()).collect();
+    Verdict::CannotRecover {
+        kidnap_tick,
+        names: names.join(" and "),
+    }
+}
+
+/// `text` on one line cut to the room there is (the whole on hover).
+fn one_line(ui: &mut egui::Ui, text: egui::RichText) {
+    ui.add(egui::Label::new(text).truncate());
+}
+
 /// The run's time now, seconds: ticks of `dt` for the simulated robot, the
 /// last scan's time since the log's first for a recorded one.
 fn run_time(run: &slamlab_sim::kidnap::MclRun) -> f64 {
@@ -882,9 +1042,7 @@ impl crate::widgets::layout::LessonPanels for KidnapLesson {
 
     fn map_ui(&mut self, ui: &mut egui::Ui) {
         self.actions_ui(ui);
-        if let Some(note) = &self.frame.note {
-            ui.label(egui::RichText::new(note).color(palette::VERMILLION));
-        }
+        self.status_ui(ui);
         let mut lone_action = None;
         if let Some(image) = &mut self.lone_image {
             ui.horizontal_wrapped(|ui| {

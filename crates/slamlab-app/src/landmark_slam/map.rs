@@ -43,18 +43,17 @@ pub fn map_ui(
     } else {
         drive.pad = None;
     }
-    // Above the map, not over it: two filters drawn over each other (at the scale
-    // of the last frame).
-    if let Some(other) = coinciding_on_screen(session, view.scale) {
+    // Two filters drawn over each other (at the scale of the last frame): said
+    // in a band over the top of the map, which comes and goes without moving it.
+    let coinciding = coinciding_on_screen(session, view.scale).map(|other| {
         let names = session.filters();
-        let note = format!(
+        format!(
             "{} and {} agree here to within a pixel or two: one is drawn over the other. \
              Try the precise-range preset, where they part.",
             filter_label(names[0].kind.name()),
             filter_label(names[other].kind.name()),
-        );
-        ui.label(egui::RichText::new(note).color(ui.visuals().warn_fg_color));
-    }
+        )
+    });
     // A recorded world's square holds its landmarks and truth; Victoria Park has
     // neither, so its GPS sets the extent.
     let half = session
@@ -98,6 +97,15 @@ pub fn map_ui(
     if opts.magnifier {
         draw_magnifier(&painter, &t, session, opts, &colors, None);
     }
+    if let Some(note) = coinciding {
+        band_over_map(
+            &painter,
+            rect,
+            &note,
+            ui.visuals().warn_fg_color,
+            colors.background,
+        );
+    }
     if let Some(pointer) = response.hover_pos()
         && !response.dragged()
         && let Some(text) = hover_text(&t, session, pointer)
@@ -106,6 +114,28 @@ pub fn map_ui(
             ui.label(text);
         });
     }
+}
+
+/// `text` in a band across the top of the map at `rect`, on the map's
+/// background: a note that comes and goes without moving the map.
+fn band_over_map(
+    painter: &egui::Painter,
+    rect: egui::Rect,
+    text: &str,
+    color: Color32,
+    background: Color32,
+) {
+    let width = (rect.width() - 60.0).clamp(80.0, 560.0);
+    let galley = painter.layout(
+        text.to_owned(),
+        egui::FontId::proportional(13.0),
+        color,
+        width,
+    );
+    let at = egui::pos2(rect.left() + 40.0, rect.top() + 6.0);
+    let band = egui::Rect::from_min_size(at, galley.size()).expand(4.0);
+    painter.rect_filled(band, 3.0, background.gamma_multiply(0.9));
+    painter.galley(at, galley, color);
 }
 
 fn toolbar_ui(

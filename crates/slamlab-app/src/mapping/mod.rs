@@ -14,7 +14,6 @@ mod plots;
 pub use particles::ShownMap;
 
 use crate::lesson::{self, Lesson, LessonFrame, LessonRequest, LessonStart, StoredSettings};
-use crate::palette;
 use crate::time_control::{TimeAction, TimeInfo};
 use crate::widgets::dropped_files::DropInbox;
 use crate::widgets::fetch::Fetch;
@@ -286,7 +285,7 @@ impl MappingLesson {
             catch_up: None,
             scan_ms: ScanTimes::default(),
             frame: LessonFrame::new(LESSON_ID, MappingView::default())
-                .with_map(MapView::default())
+                .with_map(MapView::growing())
                 .with_notices(notices),
             tiles: map::GridTiles::default(),
             inbox: DropInbox::default(),
@@ -450,10 +449,26 @@ impl MappingLesson {
         scenario.poses = source;
         self.pending.scenario.poses = source;
         self.restart(scenario, Some(done));
-        self.frame.note = Some(format!(
-            "Mapping again with {} up to scan {done}",
-            source.label()
-        ));
+        self.catch_up_note();
+    }
+
+    /// Stops mapping the same scans again (a step or step back), and its note.
+    fn stop_catch_up(&mut self) {
+        if self.catch_up.take().is_some() {
+            self.frame.note = None;
+        }
+    }
+
+    /// The note while the run maps the same scans again up to where it was; none
+    /// once it is there (the map and the title then say it).
+    fn catch_up_note(&mut self) {
+        self.frame.note = self.catch_up.map(|target| {
+            format!(
+                "Mapping again with {}: scan {} of {target}…",
+                self.session.sim().source().label(),
+                self.session.sim().scans_done()
+            )
+        });
     }
 
     /// Maps a laser file (a CARMEN log, plain or compressed, or a ROS 2 bag)
@@ -569,6 +584,8 @@ impl MappingLesson {
                 self.load_log(&name, &bytes);
                 if self.log_name.as_deref() == Some(name.as_str()) {
                     self.log_location = Some(location);
+                    // The link's figure keys (`run=1`, `tick=`) hold for the log.
+                    self.frame.restarted_from_link = true;
                 }
             }
             Err(why) => {
@@ -860,15 +877,6 @@ impl crate::widgets::layout::LessonPanels for MappingLesson {
                 .sim_mut_untracked()
                 .keep_grid_before_insert(self.beam.is_some());
         }
-        if let Some(note) = &self.frame.note {
-            ui.label(egui::RichText::new(note).color(palette::VERMILLION));
-        }
-        if let Some(target) = self.catch_up {
-            ui.label(format!(
-                "Mapping again: scan {} of {target}…",
-                self.session.sim().scans_done()
-            ));
-        }
         let sim = self.session.sim();
         let mean = match sim.grid_fastslam() {
             Some(filter) if self.shown == ShownMap::Mean => self
@@ -965,7 +973,7 @@ impl Lesson for MappingLesson {
             TimeAction::StepPhase => self.step_phase(),
             TimeAction::StepTick => self.step_tick(),
             TimeAction::StepBack => {
-                self.catch_up = None;
+                self.stop_catch_up();
                 self.scan_ms.open = 0.0;
                 self.session.stepper_mut().step_back();
             }
@@ -1030,6 +1038,7 @@ impl Lesson for MappingLesson {
             if self.session.sim().scans_done() >= target || self.session.sim().is_done() {
                 self.catch_up = None;
             }
+            self.catch_up_note();
             return;
         }
         if self.session.sim().is_done() {

@@ -10,7 +10,6 @@ mod map;
 mod plots;
 
 use crate::lesson::{self, Lesson, LessonFrame, LessonStart, StoredSettings};
-use crate::palette;
 use crate::time_control::{FRAME_BUDGET_MS, StepControls, TimeAction, TimeControl, TimeInfo};
 use crate::widgets::dropped_files::DropInbox;
 use crate::widgets::file_picker::FilePicker;
@@ -611,9 +610,6 @@ impl crate::widgets::layout::LessonPanels for PoseGraphLesson {
     }
 
     fn map_ui(&mut self, ui: &mut egui::Ui) {
-        if let Some(note) = &self.frame.note {
-            ui.label(egui::RichText::new(note).color(palette::VERMILLION));
-        }
         self.ensure_marginals();
         let request = map::map_ui(
             ui,

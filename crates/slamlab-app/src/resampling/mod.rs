@@ -260,9 +260,6 @@ impl ResamplingLesson {
                 self.apply_editor();
             }
         }
-        if let Some(note) = &self.frame.note {
-            ui.colored_label(palette::VERMILLION, note);
-        }
         ui.separator();
         ui.label(egui::RichText::new("Methods").strong());
         ui.horizontal_wrapped(|ui| {

@@ -103,13 +103,7 @@ pub fn centre_ui(
     let text = ui.visuals().text_color();
     let truth = palette::truth_color(dark);
 
-    let key = vec![
-        KeyEntry::new("inlier", INLIER, Mark::Dots),
-        KeyEntry::new("outlier", OUTLIER, Mark::Dots),
-        KeyEntry::new("not classified yet", UNCLASSIFIED, Mark::Dots),
-        KeyEntry::new("sample drawn", SAMPLE, Mark::Solid),
-        KeyEntry::new("epipolar line (hover a feature)", EPIPOLAR, Mark::Solid),
-    ];
+    let key = match_key(session, view);
     let step = run.steps.get(pair);
     if let Some(step) = step {
         ui.add(
@@ -290,6 +284,66 @@ pub fn centre_ui(
     now_hovered
 }
 
+/// Whose inliers the colours show: nothing yet, the best hypothesis so far (not
+/// the sample just drawn), or the final estimate's.
+pub fn classified_by(session: &TwoViewSession) -> &'static str {
+    if session.estimate().is_some() {
+        "the final E"
+    } else if session.iteration() > 0 {
+        "the best E so far"
+    } else {
+        ""
+    }
+}
+
+/// The key of the two images: every mark drawn on them, and whose inliers the
+/// colours show.
+pub fn match_key(session: &TwoViewSession, view: &VoView) -> Vec<KeyEntry> {
+    let by = classified_by(session);
+    let mut key = if by.is_empty() {
+        vec![KeyEntry::new(
+            "match, not classified yet",
+            UNCLASSIFIED,
+            Mark::Dots,
+        )]
+    } else {
+        vec![
+            KeyEntry::new(format!("inlier of {by}"), INLIER, Mark::Dots),
+            KeyEntry::new(format!("outlier of {by}"), OUTLIER, Mark::Dots),
+        ]
+    };
+    key.push(KeyEntry::new(
+        "flow (right image: from the feature's place on the left)",
+        if by.is_empty() { UNCLASSIFIED } else { INLIER },
+        Mark::Solid,
+    ));
+    if view.match_lines {
+        key.push(KeyEntry::new(
+            "match line (faint, across the images)",
+            UNCLASSIFIED,
+            Mark::Solid,
+        ));
+    }
+    key.push(KeyEntry::new(
+        "the sample drawn (while RANSAC runs)",
+        SAMPLE,
+        Mark::Solid,
+    ));
+    if view.true_outliers {
+        key.push(KeyEntry::new(
+            "truly wrong (ring)",
+            UNCLASSIFIED,
+            Mark::Dots,
+        ));
+    }
+    key.push(KeyEntry::new(
+        "epipolar line (hover a feature)",
+        EPIPOLAR,
+        Mark::Solid,
+    ));
+    key
+}
+
 /// The top view: truth, wheel odometry, VO scaled by the wheel speeds and VO
 /// with unit steps, the station, and the step shown.
 fn top_view_ui(ui: &mut egui::Ui, run: &VoRun, pair: usize, truth: Color32) {
@@ -303,6 +357,7 @@ fn top_view_ui(ui: &mut egui::Ui, run: &VoRun, pair: usize, truth: Color32) {
         KeyEntry::new("VO scaled by wheel speeds", VO_SCALED, Mark::Solid),
         KeyEntry::new("VO, unit steps", VO_UNIT, Mark::Solid),
         KeyEntry::new("this step", SAMPLE, Mark::Dots),
+        KeyEntry::new("docking station", truth.gamma_multiply(0.6), Mark::Solid),
     ];
     figure_ui(
         ui,

@@ -26,6 +26,9 @@ pub struct MapView {
     pub(crate) adjusted: bool,
     /// A zoom factor on the first fit (the URL's `zoom=`), applied once.
     pub(crate) pending_zoom: Option<f32>,
+    /// Fit again whenever what is drawn grows out of view (a map built from a
+    /// log), until the user pans or zooms.
+    pub(crate) follows_growth: bool,
 }
 
 impl Default for MapView {
@@ -37,11 +40,32 @@ impl Default for MapView {
             fitted_size: egui::Vec2::ZERO,
             adjusted: false,
             pending_zoom: None,
+            follows_growth: false,
         }
     }
 }
 
 impl MapView {
+    /// A view that fits again whenever what is drawn grows out of it (a map built
+    /// as it goes), until the user pans or zooms.
+    pub fn growing() -> Self {
+        Self {
+            follows_growth: true,
+            ..Self::default()
+        }
+    }
+
+    /// Does the view at `rect` show all of `bounds` (`[x_min, y_min, x_max,
+    /// y_max]`, metres)? Bounds that are not finite count as shown.
+    pub fn shows(&self, rect: Rect, bounds: [f64; 4]) -> bool {
+        if !bounds.iter().all(|v| v.is_finite()) {
+            return true;
+        }
+        let t = self.transform(rect);
+        let corners = [t.xy(bounds[0], bounds[1]), t.xy(bounds[2], bounds[3])];
+        corners.iter().all(|c| rect.expand(1.0).contains(*c))
+    }
+
     /// Fits the world into the map on the next frame.
     pub fn refit(&mut self) {
         self.fitted = false;
@@ -324,7 +348,9 @@ pub fn canvas_ui(
         },
     );
     let resized = (rect.size() - view.fitted_size).length() > 1.0;
-    if !view.fitted || (resized && !view.adjusted) {
+    let outgrown =
+        view.follows_growth && !view.adjusted && follow.is_none() && !view.shows(rect, bounds);
+    if !view.fitted || (resized && !view.adjusted) || outgrown {
         view.fit(rect, bounds, legend_space);
     }
     if let Some(factor) = view.pending_zoom.take() {

@@ -68,6 +68,13 @@ pub fn draw_series(plot_ui: &mut PlotUi<'_>, all: &[Styled], plot: &str) {
     };
     let mut ordered: Vec<&Styled> = all.iter().filter(|s| s.data.plot == plot).collect();
     ordered.sort_by_key(|s| layer(s.mark));
+    let drawn = ordered.iter().any(|s| {
+        s.data
+            .points
+            .iter()
+            .any(|p| p[0].is_finite() && p[1].is_finite())
+    });
+    note_drawn(plot_ui.ctx(), drawn);
     for s in ordered {
         let points = thin(s.data.points.clone());
         if points.is_empty() {
@@ -104,6 +111,22 @@ pub fn draw_series(plot_ui: &mut PlotUi<'_>, all: &[Styled], plot: &str) {
         }
     }
 }
+
+fn drawn_id() -> egui::Id {
+    egui::Id::unique("slamlab_plot_drawn")
+}
+
+/// Tells the figure being drawn whether its series had any point ([`draw_series`]
+/// calls this; a lesson that draws its own items calls it with true).
+pub fn note_drawn(ctx: &egui::Context, drawn: bool) {
+    ctx.data_mut(|d| {
+        let seen: &mut Option<bool> = d.get_temp_mut_or_default(drawn_id());
+        *seen = Some(seen.unwrap_or(false) || drawn);
+    });
+}
+
+/// What an empty plot says instead of a meaningless axis.
+pub const EMPTY_PLOT_TEXT: &str = "Nothing yet: press Run or Step";
 
 /// A marker's radius on a plot `plot_height` points tall: `radius` on a plot of 150
 /// points or more, smaller on a smaller one (down to 40%), so that events stay
@@ -739,8 +762,30 @@ fn figure_scaled_ui<'a, R>(
     }
     let used = ui.cursor().top() - top;
     let height = (figure.height - used).max(MIN_PLOT_HEIGHT);
+    ui.ctx()
+        .data_mut(|d| d.insert_temp::<Option<bool>>(drawn_id(), None));
     let response = plot(height, if fits { figure.y_label } else { "" }).show(ui, add);
-    edge_values_ui(ui, &response, log);
+    let drawn: Option<bool> = ui.ctx().data(|d| d.get_temp(drawn_id())).flatten();
+    if drawn == Some(false) {
+        // No data yet: say what to do over the axes rather than show a scale
+        // that means nothing.
+        let rect = response.response.rect;
+        ui.painter().rect_filled(
+            rect,
+            0.0,
+            ui.visuals().extreme_bg_color.gamma_multiply(0.85),
+        );
+        ui.painter().text(
+            rect.center(),
+            egui::Align2::CENTER_CENTER,
+            EMPTY_PLOT_TEXT,
+            egui::FontId::proportional(TICK_FONT_SIZE + 1.0),
+            ui.visuals().weak_text_color(),
+        );
+    } else {
+        edge_values_ui(ui, &response, log);
+    }
+    record_bounds(ui.ctx(), figure.title, response.transform.bounds());
     record(
         ui.ctx(),
         FigureRecord {
@@ -921,6 +966,42 @@ pub fn columns_ui(ui: &mut egui::Ui, count: usize, mut add: impl FnMut(usize, &m
             column.with_layout(egui::Layout::top_down(egui::Align::LEFT), |ui| add(k, ui));
         }
     });
+}
+
+fn bounds_id() -> egui::Id {
+    egui::Id::unique("slamlab_figure_bounds")
+}
+
+/// Records the bounds a plot showed in this pass ([`figure_bounds`]).
+fn record_bounds(ctx: &egui::Context, title: &str, bounds: &egui_plot::PlotBounds) {
+    let pass = ctx.cumulative_pass_nr();
+    let entry = (
+        title.to_owned(),
+        [
+            bounds.min()[0],
+            bounds.min()[1],
+            bounds.max()[0],
+            bounds.max()[1],
+        ],
+    );
+    ctx.data_mut(|d| {
+        let all = d.get_temp_mut_or_default::<(u64, Vec<(String, [f64; 4])>)>(bounds_id());
+        if all.0 != pass {
+            *all = (pass, Vec::new());
+        }
+        all.1.push(entry);
+    });
+}
+
+/// The bounds `[x_min, y_min, x_max, y_max]` of every plot drawn with
+/// [`figure_ui`] in the latest pass, by title (for tests: a scale that fits the
+/// data).
+pub fn figure_bounds(ctx: &egui::Context) -> Vec<(String, [f64; 4])> {
+    let pass = ctx.cumulative_pass_nr();
+    ctx.data(|d| d.get_temp::<(u64, Vec<(String, [f64; 4])>)>(bounds_id()))
+        .filter(|(p, _)| p + 1 >= pass)
+        .map(|(_, all)| all)
+        .unwrap_or_default()
 }
 
 fn records_id() -> egui::Id {

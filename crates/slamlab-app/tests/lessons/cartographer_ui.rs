@@ -231,7 +231,7 @@ fn step_search_and_step_optimization_each_run_exactly_one() {
     let next = pending.expect("a scan with more than one search");
     eprintln!("next: {next}");
     assert!(
-        h.query_all_by_label(&format!("Next: {next}"))
+        h.query_all_by_label_contains(&format!("Next phase: {next}"))
             .next()
             .is_some(),
         "the time bar shows {next}"
@@ -272,6 +272,103 @@ fn step_search_and_step_optimization_each_run_exactly_one() {
     assert_eq!(state["bbs"]["nodes_evaluated"], 153_183);
     assert_eq!(state["optimizations"], 6);
     assert_eq!(state["recovered_at"], MERGED_AT);
+}
+
+/// The kidnap's two key moments cannot be missed: the detection (scan 152) and
+/// the merge (scan 154) are marked on the map and said in the time bar, and what
+/// is said has happened: after the search that merges the maps, the time bar and
+/// the explanation say the optimization that moves the second map is still to
+/// come; once it has run, that it moved it. A Step optimization that runs many
+/// scans says why.
+#[test]
+fn the_detection_and_the_merge_are_marked_and_said_when_they_have_happened() {
+    use super::common::text_drawn;
+    let mut h = harness("lesson=cartographer&map=maze&kidnap-at=152&seed=3");
+    lesson_mut(&mut h).run_to(151);
+    assert_eq!(lesson(&h).moment(), None);
+    lesson_mut(&mut h).run_to(153);
+    h.run();
+    assert_eq!(
+        lesson(&h).moment().as_deref(),
+        Some("Kidnap detected at scan 152: a new map started")
+    );
+    assert!(
+        text_drawn(&h, "kidnap detected, scan 152"),
+        "marked on the map"
+    );
+    assert!(
+        text_drawn(&h, "Kidnap detected at scan 152"),
+        "said in the time bar"
+    );
+    // Search by search up to the merge: the optimization is still to come.
+    for _ in 0..200 {
+        if !lesson(&h).sim().merges.is_empty() {
+            break;
+        }
+        lesson_mut(&mut h).step_search();
+    }
+    assert_eq!(lesson(&h).sim().merges, vec![MERGED_AT]);
+    h.run();
+    let moment = lesson(&h).moment().unwrap_or_default();
+    assert!(
+        moment.ends_with(
+            "maps merged at scan 154: the second moved onto the first; the optimization that \
+             refines both is next"
+        ),
+        "{moment}"
+    );
+    assert!(text_drawn(&h, "merged, scan 154"), "marked on the map");
+    // The robot is drawn where the merge moved its map, not where its last scan
+    // was first placed (the new map's origin).
+    let sim = lesson(&h).sim();
+    let (Some(now), Some(taken), Some(node)) = (
+        lesson(&h).robot_pose(),
+        sim.records.last().map(|r| r.global_pose),
+        sim.nodes.iter().rev().find(|n| n.trajectory == 1),
+    ) else {
+        panic!("no robot or node after the merge");
+    };
+    let dist = |a: &slamlab_core::geometry::Pose2, b: &slamlab_core::geometry::Pose2| {
+        slamlab_core::math::hypot(a.x - b.x, a.y - b.y)
+    };
+    eprintln!(
+        "robot {now:?}, as taken {taken:?}, newest node {:?}",
+        node.global_pose
+    );
+    assert!(
+        dist(&now, &node.global_pose) < 0.5,
+        "beside its newest node"
+    );
+    assert!(
+        dist(&taken, &node.global_pose) > 1.0,
+        "the stale pose is elsewhere"
+    );
+    if let Some(image) = render_or_skip(&mut h)
+        && let Some(dir) = std::env::var_os("SLAMLAB_UI_SHOTS")
+    {
+        let _ = image.save(std::path::Path::new(&dir).join("cartographer-merged.png"));
+    }
+    assert!(lesson(&h).next_phase_text().contains("optimization"));
+    lesson_mut(&mut h).step_optimization();
+    h.run();
+    let moment = lesson(&h).moment().unwrap_or_default();
+    assert!(
+        moment.ends_with("the second moved onto the first, then the optimization refined both"),
+        "{moment}"
+    );
+    // The next optimization is some scans away: the note says why it ran them.
+    lesson_mut(&mut h).step_optimization();
+    let note = lesson(&h).note().map(str::to_owned).unwrap_or_default();
+    eprintln!("{note}");
+    assert!(
+        note.contains("scans to reach it: the pose graph is solved every"),
+        "{note}"
+    );
+    if let Some(image) = render_or_skip(&mut h)
+        && let Some(dir) = std::env::var_os("SLAMLAB_UI_SHOTS")
+    {
+        let _ = image.save(std::path::Path::new(&dir).join("cartographer-moments.png"));
+    }
 }
 
 /// The Intel log's first 2,000 scans dropped with its corrected version: the

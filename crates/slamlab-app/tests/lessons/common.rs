@@ -88,3 +88,36 @@ pub fn count_pixels_near(rgba: &[u8], target: [u8; 3], tolerance: i32) -> usize 
 pub fn label_visible(h: &Harness<'_, SlamLabApp>, text: &str) -> bool {
     h.query_all_by_label_contains(text).next().is_some()
 }
+
+/// Every text drawn in the last frame (labels and painted text alike), with its
+/// rectangle on screen and its clip.
+pub fn drawn_texts(h: &Harness<'_, SlamLabApp>) -> Vec<(String, egui::Rect, egui::Rect)> {
+    fn walk(
+        shape: &egui::Shape,
+        clip: egui::Rect,
+        out: &mut Vec<(String, egui::Rect, egui::Rect)>,
+    ) {
+        match shape {
+            egui::Shape::Text(t) => {
+                out.push((t.galley.text().to_owned(), t.visual_bounding_rect(), clip));
+            }
+            egui::Shape::Vec(shapes) => shapes.iter().for_each(|s| walk(s, clip, out)),
+            _ => {}
+        }
+    }
+    let mut out = Vec::new();
+    for clipped in &h.output().shapes {
+        walk(&clipped.shape, clipped.clip_rect, &mut out);
+    }
+    out
+}
+
+/// Is a text containing `needle` drawn in the last frame, at least partly inside
+/// its clip and the window (on screen, not scrolled away)?
+pub fn text_drawn(h: &Harness<'_, SlamLabApp>, needle: &str) -> bool {
+    let screen = h.ctx.content_rect();
+    drawn_texts(h).iter().any(|(text, rect, clip)| {
+        let shown = rect.intersect(*clip).intersect(screen);
+        text.contains(needle) && shown.width() > 1.0 && shown.height() > 1.0
+    })
+}

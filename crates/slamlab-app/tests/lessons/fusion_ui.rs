@@ -239,10 +239,17 @@ fn at_800_by_500_nothing_stray_at_the_start_and_the_wide_ellipse_is_explained() 
     // At t = 0 every estimate sits on the robot with a covariance of 1e-9: nothing
     // of the modes' colours may reach beyond the robot's marker (a degenerate
     // ellipse or heading wedge used to draw a line to the map's edge).
+    // The map's canvas, a little inside its frame.
+    let canvas = slamlab_app::widgets::plots::figure_records(&h.ctx)
+        .iter()
+        .find_map(|r| r.map)
+        .unwrap_or(egui::Rect::NOTHING)
+        .shrink(2.0);
+    let inside = |x: u32, y: u32| canvas.contains(egui::pos2(x as f32, y as f32));
     let robot = {
         let (mut sx, mut sy, mut n) = (0usize, 0usize, 0usize);
         for (x, y, p) in image.enumerate_pixels() {
-            if x > 320 && p.0[..3] == [0xCC, 0x79, 0xA7] {
+            if inside(x, y) && p.0[..3] == [0xCC, 0x79, 0xA7] {
                 sx += x as usize;
                 sy += y as usize;
                 n += 1;
@@ -261,12 +268,8 @@ fn at_800_by_500_nothing_stray_at_the_start_and_the_wide_ellipse_is_explained() 
         .enumerate_pixels()
         .filter(|(x, y, p)| {
             let (dx, dy) = (*x as i64 - robot.0 as i64, *y as i64 - robot.1 as i64);
-            // Right of the legend (at the map's top left), inside the map.
-            dx * dx + dy * dy > 40 * 40
-                && *x > 320
-                && (*y as usize) > 130
-                && (*y as usize) < 370
-                && coloured(p)
+            // Inside the map's canvas (the key is above it).
+            dx * dx + dy * dy > 40 * 40 && inside(*x, *y) && coloured(p)
         })
         .count();
     assert!(

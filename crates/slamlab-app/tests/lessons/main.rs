@@ -22,4 +22,5 @@ mod pose_graph_ui;
 mod resampling_ui;
 mod shell_ui;
 mod sources_ui;
+mod steady_screen_ui;
 mod visual_odometry_ui;
