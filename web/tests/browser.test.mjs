@@ -314,15 +314,16 @@ async function main() {
 
   // --- The download's budget once binaryen's wasm-opt has shrunk it (web/build.sh's
   // default; a SLAMLAB_WASM_OPT=0 build keeps its function names, the "name" section, and
-  // is not held to it): at most 6.5 MB and 2.7 MB gzipped. The targets (6 MB, 2 MB
+  // is not held to it): at most 6.6 MB and 2.75 MB gzipped. The targets (6 MB, 2 MB
   // gzipped) are not met since ROS 2 bags, zip archives and the real landmark data sets
-  // came in (6,400,679 bytes, 2,624,595 gzipped on 2026-11-28); the bound keeps the
-  // download from growing unnoticed. docs/web-build.md says what the bytes are.
-  await check("the wasm download is at most 6.5 MB (2.7 MB gzipped)", async () => {
+  // came in (6,400,679 bytes, 2,624,595 gzipped on 2026-11-28), and homework in the page
+  // (the assignments' inputs and grader: 6,587,954 bytes, 2,703,877 gzipped); the bound
+  // keeps the download from growing unnoticed. docs/web-build.md says what the bytes are.
+  await check("the wasm download is at most 6.6 MB (2.75 MB gzipped)", async () => {
     const sizes = `${metrics.wasm_bytes} bytes, ${metrics.wasm_gzip_bytes} gzip -9`;
     if (customSectionNames(wasm).includes("name")) return `${sizes}; not checked: built without wasm-opt`;
-    assert(metrics.wasm_bytes <= 6_500_000, `${sizes}: over the 6,500,000-byte budget`);
-    assert(metrics.wasm_gzip_bytes <= 2_700_000, `${sizes}: over the 2,700,000-byte gzip budget`);
+    assert(metrics.wasm_bytes <= 6_600_000, `${sizes}: over the 6,600,000-byte budget`);
+    assert(metrics.wasm_gzip_bytes <= 2_750_000, `${sizes}: over the 2,750,000-byte gzip budget`);
     return sizes;
   });
 
@@ -1806,8 +1807,8 @@ async function main() {
         // Alice's link: first her variant's length, then the lesson at its last step.
         const open = async (query) => {
           await element.evaluate((el, src) => { el.src = src; }, `index.html?${query}`);
-          await sleep(200);
           frame = await (await element.elementHandle()).contentFrame();
+          await frame.waitForURL((u) => u.href.endsWith(query), { waitUntil: "load", timeout: 30_000 });
           await waitRunning(frame);
           return waitState(frame, (st) => st.assignment && st.assignment.stage === "ready" && st.frames >= 2, "Alice's variant", 60_000);
         };
