@@ -1099,9 +1099,19 @@ impl SlamLabApp {
     /// stays the lesson's.
     fn poll_estimates(&mut self, ctx: &egui::Context) {
         let text_is_theirs = self.lesson.id() == "pose-graph";
+        // Homework whose output is no trajectory (a graph, a map, a relative
+        // pose) takes every dropped file but a scenario: it is handed in.
+        let hands_in_anything = self
+            .assignment
+            .as_ref()
+            .and_then(|d| d.prepared())
+            .is_some_and(|p| {
+                p.assignment.output.format != slamlab_sim::coursework::OutputFormat::Trajectory
+            });
         let is_estimate = |file: &egui::DroppedFileHandle| {
             let name = file.path().to_string_lossy().to_ascii_lowercase();
-            name.ends_with(".tum")
+            hands_in_anything
+                || name.ends_with(".tum")
                 || name.ends_with(".csv")
                 || (!text_is_theirs && name.ends_with(".txt"))
         };
@@ -1136,10 +1146,12 @@ impl SlamLabApp {
     }
 
     /// Takes a student's estimate files into the lesson (drawn and scored in
-    /// *Your estimates*). With homework open, each trajectory is also handed in:
-    /// graded in the Assignment window, and drawn only if the grader takes it (a
-    /// file made for another student's variant is refused with the grader's
-    /// reason, and what was handed in before stays).
+    /// *Your estimates*). With homework open, each file is first handed in:
+    /// graded in the Assignment panel by the assignment's own kind (a
+    /// trajectory, a graph, a map, a relative pose), then drawn on the map where
+    /// the lesson's estimates can draw it. A file the grader refuses (made for
+    /// another student's variant, another assignment) is said with the grader's
+    /// reason and not drawn; what was handed in before stays.
     fn take_estimates(&mut self, files: Vec<(String, Result<Vec<u8>, String>)>) {
         for (name, bytes) in files {
             let bytes = match bytes {
@@ -1150,24 +1162,9 @@ impl SlamLabApp {
                     continue;
                 }
             };
-            let was_open = self.lesson.frame().estimates().open;
-            let added = self.lesson.frame_mut().estimates_mut().add(&name, &bytes);
-            let is_trajectory = added.is_ok()
-                && matches!(
-                    self.lesson
-                        .frame()
-                        .estimates()
-                        .items()
-                        .last()
-                        .map(|e| &e.content),
-                    Some(widgets::estimates::EstimateContent::Trajectory(_))
-                );
-            let homework = self
-                .assignment
-                .as_mut()
-                .filter(|d| d.prepared().is_some() && (is_trajectory || added.is_err()));
+            let homework = self.assignment.as_mut().filter(|d| d.prepared().is_some());
             let Some(desk) = homework else {
-                match added {
+                match self.lesson.frame_mut().estimates_mut().add(&name, &bytes) {
                     // Added: said beside the title (the estimates window shows it too);
                     // the notices are for what went wrong or changed the run.
                     Ok(said) => self.exporter.status = Some(said),
@@ -1183,25 +1180,24 @@ impl SlamLabApp {
                         widgets::assignment::points(grade.max_score),
                         if grade.pass { "pass" } else { "fail" }
                     );
-                    // The grade is in the Assignment panel; the scores window
-                    // opens only if the student had it open.
-                    self.lesson.frame_mut().estimates_mut().open = was_open;
-                    let note = match added {
-                        Ok(_) => said,
-                        Err(why) => format!("{said} (not drawn: {why})"),
+                    // Drawn where the lesson's estimates can draw it; the grade
+                    // is in the Assignment panel, so the scores window opens
+                    // only if the student had it open.
+                    let estimates = self.lesson.frame_mut().estimates_mut();
+                    let was_open = estimates.open;
+                    let drawn = if widgets::estimates::is_estimate_file(&name, &bytes) {
+                        estimates.add(&name, &bytes).err()
+                    } else {
+                        None
                     };
+                    estimates.open = was_open;
                     // Said beside the title, as an estimate added is.
-                    self.exporter.status = Some(note);
+                    self.exporter.status = Some(match drawn {
+                        None => said,
+                        Some(why) => format!("{said} (not drawn: {why})"),
+                    });
                 }
-                Err(why) => {
-                    if added.is_ok() {
-                        let estimates = self.lesson.frame_mut().estimates_mut();
-                        let last = estimates.items().len().saturating_sub(1);
-                        estimates.remove(last);
-                        estimates.open = was_open;
-                    }
-                    self.app_notices.push(why);
-                }
+                Err(why) => self.app_notices.push(why),
             }
         }
     }

@@ -17,7 +17,7 @@ fn assignment_arg() -> Arg {
     Arg::new("assignment")
         .required(true)
         .value_name("ASSIGNMENT")
-        .help("a built-in assignment (ekf-slam, mcl) or an assignment JSON file")
+        .help("a built-in assignment (ekf-slam, mcl, pose-graph, grid-mapping, icp) or an assignment JSON file")
 }
 
 /// The `export-inputs` subcommand.
@@ -75,7 +75,7 @@ pub fn grade_command() -> Command {
              max_score, one test per criterion), so the same check runs as a Gradescope \
              autograder. --students roster.csv --estimates DIR grades a class into one CSV: the \
              roster's 'student' column (or its first) names each student, whose estimate is \
-             DIR/<student>.tum, .csv or .txt, or DIR/<student>/<the assignment's output file>.",
+             DIR/<student>.tum, .csv, .txt, .g2o or .zip, or DIR/<student>/<the assignment's output file>.",
         )
         .arg(assignment_arg())
         .arg(
@@ -92,7 +92,7 @@ pub fn grade_command() -> Command {
                 .value_name("FILE")
                 .value_parser(clap::value_parser!(PathBuf))
                 .requires("student")
-                .help("the student's estimate (TUM or CSV trajectory)"),
+                .help("the student's estimate: a TUM or CSV trajectory, or the assignment's output (an optimized g2o graph; a ROS map as a zip, or its YAML with the image beside it; a relative pose)"),
         )
         .arg(
             Arg::new("json")
@@ -222,9 +222,45 @@ pub fn run_export(m: &ArgMatches, out: &mut dyn Write) -> Result<()> {
 }
 
 fn grade_file(prepared: &Prepared, path: &Path) -> Result<Grade> {
-    let bytes = read_capped(path, MAX_TRAJECTORY_BYTES)?;
     let name = path.display().to_string();
+    let bytes = match yaml_and_image(path)? {
+        Some(zip) => zip,
+        None => read_capped(path, MAX_TRAJECTORY_BYTES)?,
+    };
     prepared.grade(&name, &bytes).map_err(|e| anyhow!("{e}"))
+}
+
+/// A ROS map given by its YAML: the YAML and the image it names (beside it),
+/// zipped as a map is handed in. `None` for any other file.
+fn yaml_and_image(path: &Path) -> Result<Option<Vec<u8>>> {
+    use slamlab_sim::io::ros_map::{MAX_YAML_BYTES, parse_map_yaml};
+    let is_yaml = path
+        .extension()
+        .and_then(|e| e.to_str())
+        .is_some_and(|e| e.eq_ignore_ascii_case("yaml") || e.eq_ignore_ascii_case("yml"));
+    if !is_yaml {
+        return Ok(None);
+    }
+    let yaml = read_capped(path, MAX_YAML_BYTES as u64)?;
+    let text = String::from_utf8(yaml.clone())
+        .map_err(|_| anyhow!("{}: not UTF-8 text", path.display()))?;
+    let parsed = parse_map_yaml(&text).map_err(|e| anyhow!("{}: {e}", path.display()))?;
+    let image = path
+        .parent()
+        .unwrap_or_else(|| Path::new("."))
+        .join(&parsed.image);
+    let image_bytes = read_capped(&image, slamlab_sim::io::map_archive::MAX_IMAGE_BYTES as u64)
+        .with_context(|| format!("{} names the image {:?}", path.display(), parsed.image))?;
+    let file_name = |p: &Path| {
+        p.file_name()
+            .map_or_else(String::new, |n| n.to_string_lossy().into_owned())
+    };
+    let zip = slamlab_sim::io::archive::write_zip(
+        "map",
+        &[(file_name(path), yaml), (file_name(&image), image_bytes)],
+    )
+    .map_err(|e| anyhow!("{e}"))?;
+    Ok(Some(zip))
 }
 
 /// Runs `slamlab grade`.
@@ -349,7 +385,7 @@ fn estimate_of(dir: &Path, student: &str, output_file: &str) -> Option<PathBuf> 
     if student.contains(['/', '\\']) || student.starts_with('.') {
         return None;
     }
-    ["tum", "csv", "txt"]
+    ["tum", "csv", "txt", "g2o", "zip"]
         .iter()
         .map(|ext| dir.join(format!("{student}.{ext}")))
         .chain([dir.join(student).join(output_file)])
@@ -377,7 +413,7 @@ fn grade_class(assignment: &Assignment, roster: &Path, dir: &Path) -> Result<Str
         let prepared = prepare(assignment, student)?;
         let row = match estimate_of(dir, student, &assignment.output.file) {
             None => Err(anyhow!(
-                "no estimate: looked for {student}.tum, .csv, .txt and {student}/{}",
+                "no estimate: looked for {student}.tum, .csv, .txt, .g2o, .zip and {student}/{}",
                 assignment.output.file
             )),
             Some(path) => grade_file(&prepared, &path),

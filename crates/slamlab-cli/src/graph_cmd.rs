@@ -1,4 +1,4 @@
-//! `slamlab graph optimize|convert`: pose-graph files on the command line.
+//! `slamlab graph optimize|convert|evaluate`: pose-graph files on the command line.
 //! (`slamlab experiment pose-graph` is in `experiments/pose_graph.rs`.)
 
 use anyhow::{Context, Result, bail};
@@ -72,6 +72,47 @@ pub fn command() -> Command {
                 .arg(Arg::new("json").long("json").action(ArgAction::SetTrue).help("print one JSON object")),
         )
         .subcommand(
+            Command::new("evaluate")
+                .about("Score an optimized graph: its cost against the reference solver's, and its ATE against a truth")
+                .long_about(
+                    "Score an optimized pose graph (a student's g2o file) against the problem it solves.\n\n\
+                     The file must hold the problem's graph: every vertex (same ids and kinds) and every edge \
+                     (same vertices, the same measurement to 1e-5), in any order; otherwise it is refused with \
+                     the first difference. Its cost is F = Σ eᵀ Ω e over the PROBLEM's edges (measurements and \
+                     information matrices from the problem, states from the file: thesis 000 Eq. 4.2, the cost \
+                     `slamlab graph optimize` minimizes). The reference solver (--solver, from the problem's \
+                     initial guess, the first vertex held fixed when the problem has no FIX or prior) gives the \
+                     reference cost; the report has both, their ratio and difference. With --truth (TUM or CSV, \
+                     each pose at the time of its vertex id, as --trajectory-out writes it) the file's and the \
+                     reference's poses are scored as `slamlab evaluate` scores them (APE, RPE). See docs/metrics.md.",
+                )
+                .arg(Arg::new("problem").required(true).value_parser(clap::value_parser!(PathBuf)).help("the graph to optimize, as handed out (g2o, TORO or iSAM)"))
+                .arg(Arg::new("estimate").required(true).value_parser(clap::value_parser!(PathBuf)).help("the optimized graph (g2o)"))
+                .arg(Arg::new("truth").long("truth").value_name("FILE").value_parser(clap::value_parser!(PathBuf)).help("the true poses (TUM or CSV; time = vertex id)"))
+                .arg(
+                    Arg::new("solver")
+                        .long("solver")
+                        .value_parser(["gn", "lm", "gd"])
+                        .default_value("gn")
+                        .help("the reference solver (gn: the pose-graph lesson's default)"),
+                )
+                .arg(
+                    Arg::new("max-iterations")
+                        .long("max-iterations")
+                        .value_parser(clap::value_parser!(u64).range(1..=1_000_000))
+                        .default_value("100")
+                        .help("the reference solver's most steps"),
+                )
+                .arg(
+                    Arg::new("align")
+                        .long("align")
+                        .value_parser(slamlab_sim::metrics::Alignment::NAMES)
+                        .default_value("none")
+                        .help("the alignment before the ATE (none: the gauge vertex holds the truth's frame)"),
+                )
+                .arg(Arg::new("json").long("json").action(ArgAction::SetTrue).help("print one JSON object")),
+        )
+        .subcommand(
             Command::new("convert")
                 .about("Convert a pose graph (g2o, TORO or iSAM) into g2o 2D")
                 .arg(Arg::new("input").required(true).value_parser(clap::value_parser!(PathBuf)))
@@ -84,6 +125,7 @@ pub fn run(matches: &ArgMatches) -> Result<()> {
     match matches.subcommand() {
         Some(("optimize", m)) => optimize(m),
         Some(("convert", m)) => convert(m),
+        Some(("evaluate", m)) => evaluate(m, &mut std::io::stdout().lock()),
         _ => Ok(()),
     }
 }
@@ -261,6 +303,123 @@ fn optimize(m: &ArgMatches) -> Result<()> {
             summary.time_ms,
             if summary.converged { ", converged" } else { "" }
         );
+    }
+    Ok(())
+}
+
+/// The JSON of `slamlab graph evaluate`.
+#[derive(Serialize)]
+struct GraphEvaluation {
+    problem: String,
+    estimate: String,
+    solver: &'static str,
+    reference_iterations: usize,
+    reference_converged: bool,
+    gauge: Option<String>,
+    #[serde(flatten)]
+    score: slamlab_sim::metrics::graph::GraphScore,
+    truth: Option<String>,
+    ate: Option<slamlab_sim::metrics::Evaluation>,
+    reference_ate: Option<slamlab_sim::metrics::Evaluation>,
+}
+
+fn evaluate(m: &ArgMatches, out: &mut dyn std::io::Write) -> Result<()> {
+    use slamlab_sim::metrics::graph::{graph_poses, reference_solution, score_graph};
+    use slamlab_sim::metrics::{Alignment, EvaluationSettings};
+    let path = |name: &str| {
+        m.get_one::<PathBuf>(name)
+            .cloned()
+            .ok_or_else(|| anyhow::anyhow!("{name} is required"))
+    };
+    let (problem_path, estimate_path) = (path("problem")?, path("estimate")?);
+    let problem = read_graph_file(&problem_path)?;
+    let file = read_graph_file(&estimate_path)?;
+    let solver = m
+        .get_one::<String>("solver")
+        .and_then(|s| SolverKind::from_short_name(s))
+        .unwrap_or(SolverKind::GaussNewton);
+    let max_iterations = m.get_one::<u64>("max-iterations").copied().unwrap_or(100) as usize;
+    let settings = OptimizerSettings {
+        solver,
+        ..OptimizerSettings::default()
+    };
+    let reference = reference_solution(&problem, settings, max_iterations).map_err(explain)?;
+    let score = score_graph(&problem, &file, reference.cost).map_err(|why| {
+        anyhow::anyhow!(
+            "{} is not the graph of {}: {why}",
+            estimate_path.display(),
+            problem_path.display()
+        )
+    })?;
+    let truth_path = m.get_one::<PathBuf>("truth").cloned();
+    let (mut ate, mut reference_ate) = (None, None);
+    if let Some(truth_path) = &truth_path {
+        let truth = crate::evaluate_cmd::read_trajectory_file(truth_path)?;
+        let settings = EvaluationSettings {
+            alignment: m
+                .get_one::<String>("align")
+                .and_then(|a| Alignment::from_name(a))
+                .unwrap_or(Alignment::None),
+            ..EvaluationSettings::default()
+        };
+        let score_poses = |graph: &PoseGraph| {
+            slamlab_sim::metrics::evaluate(&truth.trajectory, &graph_poses(graph), &settings)
+                .map_err(|e| anyhow::anyhow!("against {}: {e}", truth_path.display()))
+        };
+        ate = Some(score_poses(&file)?);
+        reference_ate = Some(score_poses(&reference.graph)?);
+    }
+    let report = GraphEvaluation {
+        problem: problem_path.display().to_string(),
+        estimate: estimate_path.display().to_string(),
+        solver: solver.short_name(),
+        reference_iterations: reference.iterations,
+        reference_converged: reference.converged,
+        gauge: reference.gauge.clone(),
+        score,
+        truth: truth_path.map(|p| p.display().to_string()),
+        ate,
+        reference_ate,
+    };
+    if m.get_flag("json") {
+        writeln!(out, "{}", serde_json::to_string_pretty(&report)?)?;
+        return Ok(());
+    }
+    let s = &report.score;
+    writeln!(
+        out,
+        "{}: {} vertices, {} edges, the graph of {}",
+        report.estimate, s.vertices, s.edges, report.problem
+    )?;
+    writeln!(
+        out,
+        "cost Σ eᵀΩe (the problem's edges): {:.6e}; initial guess {:.6e}; reference ({}, {} iterations{}) {:.6e}",
+        s.cost,
+        s.initial_cost,
+        report.solver,
+        report.reference_iterations,
+        if report.reference_converged {
+            ", converged"
+        } else {
+            ""
+        },
+        s.reference_cost
+    )?;
+    writeln!(
+        out,
+        "cost / reference: {}; cost - reference: {:.6e}",
+        s.cost_ratio
+            .map_or("- (the reference cost is 0)".to_owned(), |r| format!(
+                "{r:.6}"
+            )),
+        s.cost_difference
+    )?;
+    if let (Some(a), Some(r)) = (&report.ate, &report.reference_ate) {
+        writeln!(
+            out,
+            "ATE RMSE: {:.6} m (the reference's {:.6} m), over {} poses",
+            a.ape.translation.rmse, r.ape.translation.rmse, a.pairing.pairs
+        )?;
     }
     Ok(())
 }

@@ -129,7 +129,10 @@ fn bad_assignments_and_students_are_refused_with_a_message() {
         "--out",
         s(&dir.join("x")),
     ]);
-    assert!(!ok && stderr.contains("ekf-slam, mcl"), "{stderr}");
+    assert!(
+        !ok && stderr.contains("ekf-slam, mcl, pose-graph, grid-mapping"),
+        "{stderr}"
+    );
     let json = dir.join("hw3.json");
     let text = slamlab_sim::coursework::BUILTIN[0]
         .1
@@ -264,21 +267,30 @@ fn python_with_numpy(dir: &Path) -> Option<PathBuf> {
     Some(python)
 }
 
-/// The starter code of both built-in assignments runs, writes an estimate
+/// The starter code of the built-in assignments runs, writes an estimate
 /// `slamlab grade` reads, and scores exactly what the library (the page's grader)
-/// computes: dead reckoning and raw odometry, failing.
+/// computes: dead reckoning, raw odometry and a graph's initial guess, failing.
 #[test]
 fn the_starter_code_writes_an_estimate_that_grades_as_in_the_page() {
     let dir = scratch("starter");
     let Some(python) = python_with_numpy(&dir) else {
         return;
     };
-    for (name, naive, extra) in [
-        ("ekf-slam", "dead-reckoning", None),
-        ("ekf-slam", "dead-reckoning", Some("--odometry")),
-        ("mcl", "odometry", None),
+    for (name, naive, extra, file) in [
+        ("ekf-slam", "dead-reckoning", None, "estimate.tum"),
+        (
+            "ekf-slam",
+            "dead-reckoning",
+            Some("--odometry"),
+            "estimate.tum",
+        ),
+        ("mcl", "odometry", None, "estimate.tum"),
+        ("pose-graph", "initial-guess", None, "estimate.g2o"),
+        ("grid-mapping", "all free", None, "map.zip"),
+        ("grid-mapping", "all free", None, "map.yaml"),
+        ("icp", "odometry", None, "pose.txt"),
     ] {
-        let out = dir.join(format!("{name}-{}", extra.is_some()));
+        let out = dir.join(format!("{name}-{}-{file}", extra.is_some()));
         let (ok, _, stderr) = slamlab(&[
             "export-inputs",
             name,
@@ -288,13 +300,20 @@ fn the_starter_code_writes_an_estimate_that_grades_as_in_the_page() {
             s(&out),
         ]);
         assert!(ok, "{stderr}");
-        let estimate = out.join("estimate.tum");
+        let estimate = out.join(file);
         let mut cmd = Command::new(&python);
         cmd.arg(out.join("starter.py"));
         if let Some(flag) = extra {
             cmd.arg(flag);
         }
-        let run = cmd.arg(&estimate).output().unwrap();
+        // The grid-mapping starter writes map.zip and, beside it, map.yaml and
+        // map.pgm: graded as the zip or through the YAML.
+        let written = if file == "map.yaml" {
+            out.join("map.zip")
+        } else {
+            estimate.clone()
+        };
+        let run = cmd.arg(&written).output().unwrap();
         assert!(
             run.status.success(),
             "{}",
@@ -311,18 +330,29 @@ fn the_starter_code_writes_an_estimate_that_grades_as_in_the_page() {
         ]);
         assert!(ok, "{stderr}");
         let cli: serde_json::Value = serde_json::from_str(&stdout).unwrap();
-        let bytes = std::fs::read(&estimate).unwrap();
+        let bytes = std::fs::read(&written).unwrap();
         let page = prepare(&builtin(name).unwrap(), "ada@uni.edu")
             .unwrap()
             .grade(s(&estimate), &bytes)
             .unwrap();
         // Compared as text: serde_json's default float parsing may be one ulp
-        // off, the printed shortest representations are exact.
-        assert_eq!(
-            stdout.trim(),
-            serde_json::to_string_pretty(&page).unwrap(),
-            "{name}"
-        );
+        // off, the printed shortest representations are exact. (A map given
+        // by its YAML is zipped by the command line: other bytes, the same
+        // values.)
+        if file == "map.yaml" {
+            for (k, c) in page.criteria.iter().enumerate() {
+                assert_eq!(
+                    cli["criteria"][k]["value"].to_string(),
+                    serde_json::to_string(&c.value).unwrap()
+                );
+            }
+        } else {
+            assert_eq!(
+                stdout.trim(),
+                serde_json::to_string_pretty(&page).unwrap(),
+                "{name}"
+            );
+        }
         assert_eq!(cli["pass"], false, "{name}: {stdout}");
         // The starter is the naive reference, to the printed precision.
         let value = page.criteria[0].value.unwrap();

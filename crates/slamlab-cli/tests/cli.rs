@@ -638,3 +638,69 @@ fn run_kidnap_localizes_a_recorded_bag_and_its_carmen_copy() {
     assert!(!ok && stderr.contains("\"/front\""), "{stderr}");
     let _ = std::fs::remove_dir_all(&dir);
 }
+
+/// A square of four poses with a loop closure that disagrees a little.
+const SQUARE_G2O: &str = "VERTEX_SE2 0 0 0 0\nVERTEX_SE2 1 1.1 0 1.6\nVERTEX_SE2 2 1.0 1.1 3.1\nVERTEX_SE2 3 0 0.9 -1.5\n\
+     EDGE_SE2 0 1 1 0 1.5708 100 0 0 100 0 1000\nEDGE_SE2 1 2 1 0 1.5708 100 0 0 100 0 1000\n\
+     EDGE_SE2 2 3 1 0 1.5708 100 0 0 100 0 1000\nEDGE_SE2 3 0 1.02 0 1.5708 100 0 0 100 0 1000\n";
+
+#[test]
+fn graph_evaluate_scores_an_optimized_graph_against_the_reference_solver() {
+    let dir = std::env::temp_dir().join(format!("slamlab-graph-evaluate-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let problem = dir.join("square.g2o");
+    let optimized = dir.join("optimized.g2o");
+    let truth = dir.join("truth.tum");
+    std::fs::write(&problem, SQUARE_G2O).unwrap();
+    std::fs::write(
+        &truth,
+        "0 0 0 0 0 0 0 1\n1 1 0 0 0 0 0.7071067811865476 0.7071067811865476\n\
+         2 1 1 0 0 0 1 0\n3 0 1 0 0 0 -0.7071067811865476 0.7071067811865476\n",
+    )
+    .unwrap();
+    let (p, o, t) = (
+        problem.to_str().unwrap(),
+        optimized.to_str().unwrap(),
+        truth.to_str().unwrap(),
+    );
+    let (ok, _, stderr) = slamlab(&["graph", "optimize", p, "--solver", "gn", "--out", o]);
+    assert!(ok, "{stderr}");
+    // The lesson's solver's own output scores its own final cost.
+    let (ok, stdout, stderr) = slamlab(&["graph", "evaluate", p, o, "--truth", t, "--json"]);
+    assert!(ok, "{stderr}");
+    let v: serde_json::Value = serde_json::from_str(&stdout).unwrap();
+    let (cost, reference) = (
+        v["cost"].as_f64().unwrap(),
+        v["reference_cost"].as_f64().unwrap(),
+    );
+    assert!(reference > 0.0 && reference < v["initial_cost"].as_f64().unwrap());
+    assert!((cost - reference).abs() <= 1e-9 * reference, "{v}");
+    assert!((v["cost_ratio"].as_f64().unwrap() - 1.0).abs() <= 1e-9);
+    let ate = v["ate"]["ape"]["translation"]["rmse"].as_f64().unwrap();
+    let reference_ate = v["reference_ate"]["ape"]["translation"]["rmse"]
+        .as_f64()
+        .unwrap();
+    assert!((ate - reference_ate).abs() < 1e-9 && ate < 0.05, "{ate}");
+    // The problem as its own answer scores its initial cost.
+    let (ok, stdout, stderr) = slamlab(&["graph", "evaluate", p, p, "--json"]);
+    assert!(ok, "{stderr}");
+    let v: serde_json::Value = serde_json::from_str(&stdout).unwrap();
+    assert_eq!(v["cost"], v["initial_cost"]);
+    assert!(v["cost_ratio"].as_f64().unwrap() > 1.0);
+    // A vertex missing: refused, naming it.
+    let missing = dir.join("missing.g2o");
+    let without_2: String = SQUARE_G2O
+        .lines()
+        .filter(|l| !l.starts_with("VERTEX_SE2 2 ") && !l.contains(" 2 ") || l.contains(" 0 1 "))
+        .map(|l| format!("{l}\n"))
+        .collect();
+    std::fs::write(&missing, without_2).unwrap();
+    let (ok, _, stderr) = slamlab(&["graph", "evaluate", p, missing.to_str().unwrap()]);
+    assert!(!ok);
+    assert!(stderr.contains("missing.g2o"), "{stderr}");
+    assert!(
+        stderr.contains("vertex 2 of the problem is missing"),
+        "{stderr}"
+    );
+    let _ = std::fs::remove_dir_all(&dir);
+}

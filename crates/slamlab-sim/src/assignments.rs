@@ -9,13 +9,19 @@
 use crate::coursework::{self, Assignment, CourseworkError, Prepared, TaskRunner};
 
 /// The runners of every kind of task that has one: landmark SLAM (the landmark
-/// world) and localization (the kidnap lesson's Monte Carlo localization).
+/// world), localization (the kidnap lesson's Monte Carlo localization),
+/// pose-graph optimization (the pose-graph lesson), grid mapping with known
+/// poses and scan matching (the mapping lesson).
 pub const RUNNERS: &[TaskRunner] = &[
     coursework::landmarks::RUNNER,
     crate::kidnap::assignment::RUNNER,
+    crate::pose_graph::assignment::RUNNER,
+    crate::mapping::assignment::RUNNER,
+    crate::mapping::icp_assignment::RUNNER,
 ];
 
-/// The built-in assignment `name` (`ekf-slam`, `mcl`).
+/// The built-in assignment `name` (`ekf-slam`, `mcl`, `pose-graph`,
+/// `grid-mapping`, `icp`).
 pub fn builtin(name: &str) -> Result<Assignment, CourseworkError> {
     coursework::builtin(name, RUNNERS)
 }

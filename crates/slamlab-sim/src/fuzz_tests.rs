@@ -1,7 +1,7 @@
 //! Fuzz tests of every reader in this crate a user can feed: ROS map YAML, PGM and
 //! PNG images, g2o/TORO/iSAM pose graphs, scenario JSON and CARMEN laser logs (plain,
 //! gzip and bzip2) with their corrected versions (reference trajectories), ROS 2
-//! bags (MCAP) and the ROS 2 messages in them (CDR). Each runs
+//! bags (MCAP) and the ROS 2 messages in them (CDR), and maps handed in as a zip. Each runs
 //! [`slamlab_fuzz::inputs_per_reader`] mutated inputs (10,000 in `./test.sh`,
 //! 1,000,000 in `scripts/fuzz.sh`) from real files: the shared data sets
 //! (`../shared/data`, when present) and the built-in maps. See the `slamlab-fuzz`
@@ -161,6 +161,43 @@ fn map_files_survive_mutations_together() {
 
 /// Pieces of the real files under `shared/data/posegraphs` with one of `extensions`:
 /// the first 4 kB and, to reach the loop closures, 4 kB from the middle.
+#[test]
+fn zipped_maps_survive_mutations() {
+    // A handed-in or dropped map: YAML and image in one zip
+    // (`io::map_archive::read_map_zip`): the archive's headers, the YAML that
+    // names the image, the image.
+    let mut seeds = Vec::new();
+    for (k, image) in image_seeds().into_iter().take(6).enumerate() {
+        let name = if image.starts_with(b"\x89PNG") {
+            "m.png"
+        } else {
+            "m.pgm"
+        };
+        let yaml = format!(
+            "image: {name}\nresolution: 0.1\norigin: [-2, -3, 0]\nnegate: 0\noccupied_thresh: 0.65\nfree_thresh: 0.196\n"
+        );
+        let files = [
+            (format!("map{k}.yaml"), yaml.into_bytes()),
+            (name.to_owned(), image),
+        ];
+        if let Ok(zip) = io::archive::write_zip("hand-in", &files) {
+            seeds.push(zip);
+        }
+    }
+    assert!(seeds.len() >= 4, "only {} zip seeds", seeds.len());
+    let report = Target::new("map zip (YAML + image)", seeds, CAP).run_checked(
+        |bytes| io::map_archive::read_map_zip("map.zip", bytes).map(drop),
+        |message| {
+            if message.starts_with("map.zip") {
+                Ok(())
+            } else {
+                Err(format!("'{message}' does not name the file"))
+            }
+        },
+    );
+    report.assert_clean();
+}
+
 fn graph_pieces(extensions: &[&str]) -> Vec<Vec<u8>> {
     let mut pieces = Vec::new();
     for bytes in shared_file_seeds("posegraphs", extensions, usize::MAX) {

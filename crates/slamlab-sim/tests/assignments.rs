@@ -46,7 +46,10 @@ fn reference_tum(p: &Prepared, name: &str) -> Vec<u8> {
 
 #[test]
 fn the_built_in_assignments_read_and_name_their_lessons() {
-    assert_eq!(assignments::builtin_names(), ["ekf-slam", "mcl"]);
+    assert_eq!(
+        assignments::builtin_names(),
+        ["ekf-slam", "mcl", "pose-graph", "grid-mapping", "icp"]
+    );
     let ekf = builtin("ekf-slam").unwrap();
     assert_eq!(
         (ekf.lesson.as_str(), ekf.max_score(), ekf.pass_score()),
@@ -99,7 +102,7 @@ fn raw_odometry_fails_mcl_and_the_reference_mcl_passes() {
 
 #[test]
 fn a_student_always_gets_the_same_bytes_and_two_students_different_ones() {
-    for name in ["ekf-slam", "mcl"] {
+    for name in ["ekf-slam", "mcl", "pose-graph", "grid-mapping", "icp"] {
         let a = builtin(name).unwrap();
         let ada = prepare(&a, "ada@uni.edu").unwrap();
         let again = prepare(&a, " ADA@uni.edu").unwrap();
@@ -125,9 +128,19 @@ fn a_student_always_gets_the_same_bytes_and_two_students_different_ones() {
             .iter()
             .filter(|(path, bytes)| fb.get(path) != Some(bytes.as_slice()))
             .count();
-        assert!(differing >= 3, "{name}: only {differing} files differ");
+        // The README and every data file (a pose graph has one: problem.g2o).
+        let data_files = if name == "pose-graph" { 2 } else { 3 };
+        assert!(
+            differing >= data_files,
+            "{name}: only {differing} files differ"
+        );
         assert!(!fa.paths().iter().any(|p| p.starts_with("answers/")));
-        assert!(ada.input_files(true).get("answers/truth.tum").is_some());
+        let answers = ada.input_files(true);
+        assert!(
+            answers.get("answers/truth.tum").is_some()
+                || answers.get("answers/relative_pose.txt").is_some(),
+            "{name}"
+        );
     }
 }
 
@@ -331,7 +344,7 @@ fn assignment_files_are_refused_with_what_to_fix() {
         ),
         (
             r#""lesson": "landmark-slam""#,
-            r#""lesson": "mapping""#,
+            r#""lesson": "fusion""#,
             "has no assignments",
         ),
         (r#""id": "ekf-slam""#, r#""id": "hw 3""#, "id"),
@@ -360,7 +373,8 @@ fn assignment_files_are_refused_with_what_to_fix() {
         .unwrap_err()
         .to_string();
     assert!(err.contains("big.json") && err.contains("bytes"), "{err}");
-    // A pose-graph task has no input generator yet: refused, not half made.
+    // A pose-graph task of the instructor's reads; one with more poses than
+    // the lesson's graph may have is refused.
     let graph = good
         .replacen(
             r#""lesson": "landmark-slam""#,
@@ -381,11 +395,17 @@ fn assignment_files_are_refused_with_what_to_fix() {
             "",
             1,
         );
-    let err = assignments::read("graph.json", graph.as_bytes())
-        .unwrap_err()
-        .to_string();
+    assert!(assignments::read("graph.json", graph.as_bytes()).is_ok());
+    let err = assignments::read(
+        "graph.json",
+        graph
+            .replacen(r#""steps": 1000"#, r#""steps": 6000"#, 1)
+            .as_bytes(),
+    )
+    .unwrap_err()
+    .to_string();
     assert!(
-        err.contains("cannot make an assignment's inputs yet"),
+        err.contains("a pose-graph assignment has 10 to 5000 poses"),
         "{err}"
     );
 }
@@ -438,4 +458,300 @@ fn measure_the_references_over_sixty_students() {
             rows.iter().filter(|r| r.3).count(),
         );
     }
+}
+
+/// A pose-graph variant's file by its path in the download.
+fn file(p: &Prepared, path: &str) -> Vec<u8> {
+    p.input_files(true).get(path).unwrap().to_vec()
+}
+
+#[test]
+fn the_initial_guess_fails_pose_graph_and_the_reference_solver_passes() {
+    let a = builtin("pose-graph").unwrap();
+    for student in &STUDENTS[..4] {
+        let p = prepare(&a, student).unwrap();
+        assert!((300..=400).contains(&p.steps), "{student}: {}", p.steps);
+        let reference = p
+            .grade("reference.g2o", &file(&p, "answers/reference.g2o"))
+            .unwrap();
+        let naive = p.grade("estimate.g2o", &file(&p, "problem.g2o")).unwrap();
+        assert!(
+            reference.pass && reference.score == 100.0,
+            "{student}: {reference:#?}"
+        );
+        // The reference's cost is its own: the ratio is 1 to the last bits.
+        let ratio = reference.criteria[0].value.unwrap();
+        assert!((ratio - 1.0).abs() < 1e-12, "{student}: {ratio}");
+        assert!(
+            !naive.pass && !naive.criteria[0].pass,
+            "{student}: {naive:#?}"
+        );
+        // The references beside the student's values are the same numbers.
+        let naive_ratio = naive.criteria[0].value.unwrap();
+        assert_eq!(naive.criteria[0].references[1].value, Some(naive_ratio));
+        assert_eq!(
+            naive.criteria[1].references[1].value,
+            naive.criteria[1].value
+        );
+        assert_eq!(
+            reference.criteria[1].references[0].value,
+            reference.criteria[1].value
+        );
+    }
+}
+
+#[test]
+fn another_students_graph_is_refused_and_a_broken_one_named() {
+    let a = builtin("pose-graph").unwrap();
+    let ada = prepare(&a, "ada@uni.edu").unwrap();
+    let alan = prepare(&a, "alan@uni.edu").unwrap();
+    let err = ada
+        .grade("alans.g2o", &file(&alan, "answers/reference.g2o"))
+        .unwrap_err();
+    assert!(matches!(err, CourseworkError::OtherVariant(_)), "{err:?}");
+    assert!(err.to_string().contains("alans.g2o"), "{err}");
+    // A vertex left out: named.
+    let text = String::from_utf8(file(&ada, "answers/reference.g2o")).unwrap();
+    let without: String = text
+        .lines()
+        .filter(|l| !l.starts_with("VERTEX_SE2 7 "))
+        .map(|l| format!("{l}\n"))
+        .collect();
+    let err = ada
+        .grade("mine.g2o", without.as_bytes())
+        .unwrap_err()
+        .to_string();
+    assert!(err.contains("mine.g2o"), "{err}");
+    for bytes in [&b"hello world\n"[..], b"", b"PK\x03\x04zip"] {
+        let err = ada.grade("bad.g2o", bytes).unwrap_err().to_string();
+        assert!(err.starts_with("bad.g2o"), "{err}");
+    }
+}
+
+#[test]
+#[ignore = "a measurement for the docs (60 students)"]
+fn measure_the_pose_graph_references_over_sixty_students() {
+    let a = builtin("pose-graph").unwrap();
+    let mut rows = Vec::new();
+    for k in 0..60 {
+        let p = prepare(&a, &format!("student{k}@uni.edu")).unwrap();
+        let g = p
+            .grade("ref.g2o", &file(&p, "answers/reference.g2o"))
+            .unwrap();
+        let n = p.grade("naive.g2o", &file(&p, "problem.g2o")).unwrap();
+        rows.push([
+            g.criteria[1].value.unwrap(),
+            n.criteria[0].value.unwrap(),
+            n.criteria[1].value.unwrap(),
+            f64::from(u8::from(g.pass)),
+            f64::from(u8::from(n.pass)),
+        ]);
+    }
+    let sorted = |column: usize| {
+        let mut v: Vec<f64> = rows.iter().map(|r| r[column]).collect();
+        v.sort_by(f64::total_cmp);
+        (v[0], v[v.len() / 2], v[v.len() - 1])
+    };
+    let passes = |column: usize| rows.iter().filter(|r| r[column] > 0.0).count();
+    eprintln!(
+        "pose-graph: reference ATE RMSE min/median/max {:.3?}, passes {}/60; initial guess cost ratio {:.3?}, ATE {:.3?}, passes {}/60",
+        sorted(0),
+        passes(3),
+        sorted(1),
+        sorted(2),
+        passes(4)
+    );
+}
+
+/// A map handed in: `answers/<stem>.yaml` and its `.pgm`, zipped as a
+/// student's `map.yaml` and `map.pgm`.
+fn map_zip(p: &Prepared, stem: &str) -> Vec<u8> {
+    let yaml = String::from_utf8(file(p, &format!("answers/{stem}.yaml")))
+        .unwrap()
+        .replace(&format!("{stem}.pgm"), "map.pgm");
+    slamlab_sim::io::archive::write_zip(
+        "hand-in",
+        &[
+            ("map.yaml".to_owned(), yaml.into_bytes()),
+            (
+                "map.pgm".to_owned(),
+                file(p, &format!("answers/{stem}.pgm")),
+            ),
+        ],
+    )
+    .unwrap()
+}
+
+#[test]
+fn an_all_free_map_fails_grid_mapping_and_the_known_poses_map_passes() {
+    use slamlab_sim::io::map_archive::read_map_zip;
+    let a = builtin("grid-mapping").unwrap();
+    for student in &STUDENTS[..3] {
+        let p = prepare(&a, student).unwrap();
+        let reference = p.grade("reference.zip", &map_zip(&p, "reference")).unwrap();
+        assert!(
+            reference.pass && reference.score == 100.0,
+            "{student}: {reference:#?}"
+        );
+        // Its values are the references' beside it.
+        assert_eq!(
+            reference.criteria[0].references[0].value,
+            reference.criteria[0].value
+        );
+        // The true map agrees with itself everywhere and covers everything.
+        let truth = p.grade("true.zip", &map_zip(&p, "true_map")).unwrap();
+        assert_eq!(truth.criteria[0].value, Some(1.0));
+        assert_eq!(truth.criteria[1].value, Some(1.0));
+        // Every cell free: full coverage, the walls wrong.
+        let (map, _) = read_map_zip("true.zip", &map_zip(&p, "true_map")).unwrap();
+        let cells = vec![slamlab_core::grid::Cell::Free; map.width() * map.height()];
+        let free = slamlab_core::grid::OccupancyGrid::new(
+            map.width(),
+            map.height(),
+            map.resolution(),
+            map.origin(),
+            cells,
+        )
+        .unwrap();
+        let (yaml, pgm) = slamlab_sim::io::ros_map::export_map(
+            &free,
+            "map.pgm",
+            slamlab_sim::io::ros_map::ImageFormat::Pgm,
+        )
+        .unwrap();
+        let zip = slamlab_sim::io::archive::write_zip(
+            "x",
+            &[
+                ("map.yaml".to_owned(), yaml.into_bytes()),
+                ("map.pgm".to_owned(), pgm),
+            ],
+        )
+        .unwrap();
+        let naive = p.grade("free.zip", &zip).unwrap();
+        assert!(
+            !naive.pass && !naive.criteria[0].pass,
+            "{student}: {naive:#?}"
+        );
+        assert_eq!(naive.criteria[1].value, Some(1.0));
+        assert_eq!(
+            naive.criteria[0].references[1].value,
+            naive.criteria[0].value
+        );
+    }
+    // A YAML alone, or text, is refused with the file's name.
+    let p = prepare(&a, "ada@uni.edu").unwrap();
+    let err = p
+        .grade("map.yaml", &file(&p, "answers/reference.yaml"))
+        .unwrap_err();
+    assert!(err.to_string().contains("map.yaml"), "{err}");
+}
+
+#[test]
+#[ignore = "a measurement for the docs (60 students)"]
+fn measure_the_grid_mapping_references_over_sixty_students() {
+    let a = builtin("grid-mapping").unwrap();
+    let mut rows = Vec::new();
+    for k in 0..60 {
+        let p = prepare(&a, &format!("student{k}@uni.edu")).unwrap();
+        let g = p.grade("ref.zip", &map_zip(&p, "reference")).unwrap();
+        let free = &g.criteria[0].references[1];
+        rows.push([
+            g.criteria[0].value.unwrap(),
+            g.criteria[1].value.unwrap(),
+            free.value.unwrap(),
+            f64::from(u8::from(g.pass)),
+        ]);
+    }
+    let sorted = |column: usize| {
+        let mut v: Vec<f64> = rows.iter().map(|r| r[column]).collect();
+        v.sort_by(f64::total_cmp);
+        (v[0], v[v.len() / 2], v[v.len() - 1])
+    };
+    eprintln!(
+        "grid-mapping: reference agreement min/median/max {:.4?}, coverage {:.4?}, passes {}/60; all free agreement {:.4?}",
+        sorted(0),
+        sorted(1),
+        rows.iter().filter(|r| r[3] > 0.0).count(),
+        sorted(2),
+    );
+}
+
+/// The relative pose of a reference (`icp`, `identity`) as a file.
+fn relative_pose_file(p: &Prepared, name: &str) -> Vec<u8> {
+    use slamlab_sim::mapping::icp_assignment::relative_pose_of;
+    let (_, t) = p
+        .references()
+        .unwrap()
+        .iter()
+        .find(|(n, _)| n == name)
+        .unwrap();
+    slamlab_sim::io::relative_pose::write_relative_pose(&relative_pose_of(&t.poses()[1]))
+        .into_bytes()
+}
+
+#[test]
+fn the_odometry_fails_icp_and_the_reference_icp_passes() {
+    let a = builtin("icp").unwrap();
+    for student in &STUDENTS[..4] {
+        let p = prepare(&a, student).unwrap();
+        let truth = p
+            .grade("truth.txt", &file(&p, "answers/relative_pose.txt"))
+            .unwrap();
+        assert!(truth.pass, "{student}: {truth:#?}");
+        assert!(truth.criteria[0].value.unwrap() < 1e-5);
+        assert!(truth.criteria[1].value.unwrap() < 1e-9);
+        let icp = p.grade("icp.txt", &relative_pose_file(&p, "icp")).unwrap();
+        assert!(icp.pass, "{student}: {icp:#?}");
+        // The reference's value beside the student's: the same pose, written
+        // and read back (17 digits).
+        let (mine, reference) = (
+            icp.criteria[1].value.unwrap(),
+            icp.criteria[1].references[0].value.unwrap(),
+        );
+        assert!((mine - reference).abs() < 1e-9, "{mine} {reference}");
+        let none = p
+            .grade("none.txt", &relative_pose_file(&p, "odometry"))
+            .unwrap();
+        assert!(!none.pass, "{student}: {none:#?}");
+    }
+    let p = prepare(&a, "ada@uni.edu").unwrap();
+    let err = p.grade("bad.txt", b"1 2 3\n").unwrap_err().to_string();
+    assert!(err.starts_with("bad.txt"), "{err}");
+}
+
+#[test]
+#[ignore = "a measurement for the docs (60 students)"]
+fn measure_the_icp_references_over_sixty_students() {
+    let a = builtin("icp").unwrap();
+    let mut rows = Vec::new();
+    for k in 0..60 {
+        let p = prepare(&a, &format!("student{k}@uni.edu")).unwrap();
+        let g = p.grade("icp.txt", &relative_pose_file(&p, "icp")).unwrap();
+        let n = p
+            .grade("none.txt", &relative_pose_file(&p, "odometry"))
+            .unwrap();
+        rows.push([
+            g.criteria[0].value.unwrap(),
+            g.criteria[1].value.unwrap(),
+            n.criteria[0].value.unwrap(),
+            n.criteria[1].value.unwrap(),
+            f64::from(u8::from(g.pass)),
+            f64::from(u8::from(n.pass)),
+        ]);
+    }
+    let sorted = |column: usize| {
+        let mut v: Vec<f64> = rows.iter().map(|r| r[column]).collect();
+        v.sort_by(f64::total_cmp);
+        (v[0], v[v.len() / 2], v[v.len() - 1])
+    };
+    let passes = |column: usize| rows.iter().filter(|r| r[column] > 0.0).count();
+    eprintln!(
+        "icp: reference rotation error min/median/max {:.4?} deg, translation {:.4?} m, passes {}/60; odometry: rotation {:.3?} deg, translation {:.3?} m, passes {}/60",
+        sorted(0),
+        sorted(1),
+        passes(4),
+        sorted(2),
+        sorted(3),
+        passes(5)
+    );
 }

@@ -508,7 +508,7 @@ impl AssignmentDesk {
             self.picker.ui(
                 ui,
                 "Open your estimate…",
-                ".tum,.txt,.csv,text/plain,text/csv",
+                ".tum,.txt,.csv,.g2o,.zip,.yaml,.pgm,.png,text/plain,text/csv",
                 slamlab_sim::io::trajectory::MAX_TRAJECTORY_BYTES as usize,
                 "path/to/estimate.tum",
             );
@@ -520,8 +520,9 @@ impl AssignmentDesk {
             }
         }
         ui.weak(format!(
-            "Or drop your {} (TUM or CSV) on the page.",
-            a.output.file
+            "Or drop your {} ({}) on the page.",
+            a.output.file,
+            a.output.format.name()
         ));
         if let Some(m) = &self.message {
             ui.colored_label(palette::VERMILLION, m);

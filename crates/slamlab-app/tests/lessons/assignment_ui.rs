@@ -459,3 +459,30 @@ fn the_grade_report_names_the_variant_and_the_file() {
     }
     let _ = std::fs::remove_dir_all(&dir);
 }
+
+/// Every built-in assignment's link opens its lesson on the variant, without a
+/// notice (the panel uses only the generic `Prepared` API, so new kinds of
+/// assignment open as the first two do).
+#[test]
+fn every_built_in_assignment_opens_its_lesson() {
+    for name in slamlab_sim::assignments::builtin_names() {
+        let mut h = harness(
+            &format!("assignment={name}&student=alice@example.edu"),
+            egui::vec2(1280.0, 800.0),
+        );
+        h.run();
+        let st = state(&h);
+        let prepared = slamlab_sim::assignments::builtin(name)
+            .and_then(|a| slamlab_sim::assignments::prepare(&a, "alice@example.edu"))
+            .unwrap_or_else(|e| panic!("{name}: {e}"));
+        assert_eq!(
+            st["assignment"]["stage"], "ready",
+            "{name}: {}",
+            st["assignment"]
+        );
+        assert_eq!(st["lesson"], prepared.assignment.lesson.as_str(), "{name}");
+        assert_eq!(st["assignment"]["seed"], prepared.variant.seed, "{name}");
+        assert_eq!(h.state().notices(), Vec::<String>::new(), "{name}");
+        assert!(label_visible(&h, "Download inputs"), "{name}");
+    }
+}

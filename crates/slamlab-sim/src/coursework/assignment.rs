@@ -51,14 +51,22 @@ pub enum TaskKind {
     /// Least-squares optimization of a pose graph; the output is the optimized
     /// graph.
     PoseGraph,
+    /// Occupancy-grid mapping with known poses; the output is the map (ROS
+    /// map_server's YAML and PGM).
+    GridMapping,
+    /// Scan matching (ICP) of two laser scans; the output is their relative
+    /// pose.
+    Icp,
 }
 
 impl TaskKind {
     /// Every task kind.
-    pub const ALL: [TaskKind; 3] = [
+    pub const ALL: [TaskKind; 5] = [
         TaskKind::LandmarkSlam,
         TaskKind::Localization,
         TaskKind::PoseGraph,
+        TaskKind::GridMapping,
+        TaskKind::Icp,
     ];
 
     /// The name in an assignment file.
@@ -67,6 +75,8 @@ impl TaskKind {
             TaskKind::LandmarkSlam => "landmark-slam",
             TaskKind::Localization => "localization",
             TaskKind::PoseGraph => "pose-graph",
+            TaskKind::GridMapping => "grid-mapping",
+            TaskKind::Icp => "icp",
         }
     }
 
@@ -76,6 +86,7 @@ impl TaskKind {
             TaskKind::LandmarkSlam => "landmark-slam",
             TaskKind::Localization => "kidnap",
             TaskKind::PoseGraph => "pose-graph",
+            TaskKind::GridMapping | TaskKind::Icp => "mapping",
         }
     }
 
@@ -90,6 +101,8 @@ impl TaskKind {
             TaskKind::LandmarkSlam => &[InputFormat::Freiburg, InputFormat::VelocityCsv],
             TaskKind::Localization => &[InputFormat::RosMap, InputFormat::CarmenLog],
             TaskKind::PoseGraph => &[InputFormat::G2o],
+            TaskKind::GridMapping => &[InputFormat::CarmenLog],
+            TaskKind::Icp => &[InputFormat::ScanCsv],
         }
     }
 
@@ -98,6 +111,8 @@ impl TaskKind {
         match self {
             TaskKind::LandmarkSlam | TaskKind::Localization => OutputFormat::Trajectory,
             TaskKind::PoseGraph => OutputFormat::G2o,
+            TaskKind::GridMapping => OutputFormat::RosMap,
+            TaskKind::Icp => OutputFormat::RelativePose,
         }
     }
 
@@ -112,6 +127,12 @@ impl TaskKind {
                 Metric::RpeRotationRmseDeg,
             ],
             TaskKind::PoseGraph => &[Metric::CostRatio, Metric::AteRmse, Metric::AteMax],
+            TaskKind::GridMapping => &[Metric::MapAgreement, Metric::MapCoverage],
+            TaskKind::Icp => &[
+                Metric::RotationErrorDeg,
+                Metric::TranslationErrorM,
+                Metric::TranslationDirectionErrorDeg,
+            ],
         }
     }
 }
@@ -133,6 +154,8 @@ pub enum InputFormat {
     CarmenLog,
     /// A g2o file (`VERTEX_SE2`, `EDGE_SE2`).
     G2o,
+    /// Laser scans as CSV: `x,y`, one end point a line, in the sensor's frame.
+    ScanCsv,
 }
 
 impl InputFormat {
@@ -144,6 +167,7 @@ impl InputFormat {
             InputFormat::RosMap => "ros-map",
             InputFormat::CarmenLog => "carmen-log",
             InputFormat::G2o => "g2o",
+            InputFormat::ScanCsv => "scan-csv",
         }
     }
 }
@@ -156,6 +180,12 @@ pub enum OutputFormat {
     Trajectory,
     /// An optimized pose graph in g2o format.
     G2o,
+    /// An occupancy map: ROS map_server's YAML and the PGM (or PNG) it names,
+    /// handed in together (a zip, or the YAML with its image beside it).
+    RosMap,
+    /// A relative pose: `R` (9 numbers) and `t` (3), or `t` and a quaternion
+    /// (`io::relative_pose`).
+    RelativePose,
 }
 
 impl OutputFormat {
@@ -164,6 +194,8 @@ impl OutputFormat {
         match self {
             OutputFormat::Trajectory => "trajectory",
             OutputFormat::G2o => "g2o",
+            OutputFormat::RosMap => "ros-map",
+            OutputFormat::RelativePose => "relative-pose",
         }
     }
 }
@@ -213,17 +245,37 @@ pub enum Metric {
     /// The optimized graph's cost divided by the reference solver's cost on the
     /// same graph (1 is as good as the reference).
     CostRatio,
+    /// The share of the true map's free and occupied cells a map classifies
+    /// the same, over the cells it knows (`grid::occupancy_agreement`, the
+    /// mapping lesson's map agreement).
+    MapAgreement,
+    /// The share of the true map's free and occupied cells a map knows
+    /// (`grid::occupancy_coverage`).
+    MapCoverage,
+    /// The angle of `R_trueᵀ R` of a relative pose, degrees
+    /// (`metrics::relative_pose_error`).
+    RotationErrorDeg,
+    /// `‖t − t_true‖` of a relative pose, metres.
+    TranslationErrorM,
+    /// The angle between the estimated and the true direction of translation,
+    /// degrees (`metrics::relative_pose_error`).
+    TranslationDirectionErrorDeg,
 }
 
 impl Metric {
     /// Every metric.
-    pub const ALL: [Metric; 6] = [
+    pub const ALL: [Metric; 11] = [
         Metric::AteRmse,
         Metric::AteMax,
         Metric::FinalPositionError,
         Metric::RpeTranslationRmse,
         Metric::RpeRotationRmseDeg,
         Metric::CostRatio,
+        Metric::MapAgreement,
+        Metric::MapCoverage,
+        Metric::RotationErrorDeg,
+        Metric::TranslationErrorM,
+        Metric::TranslationDirectionErrorDeg,
     ];
 
     /// The name in an assignment file.
@@ -235,6 +287,11 @@ impl Metric {
             Metric::RpeTranslationRmse => "rpe_translation_rmse",
             Metric::RpeRotationRmseDeg => "rpe_rotation_rmse_deg",
             Metric::CostRatio => "cost_ratio",
+            Metric::MapAgreement => "map_agreement",
+            Metric::MapCoverage => "map_coverage",
+            Metric::RotationErrorDeg => "rotation_error_deg",
+            Metric::TranslationErrorM => "translation_error_m",
+            Metric::TranslationDirectionErrorDeg => "translation_direction_error_deg",
         }
     }
 
@@ -247,6 +304,11 @@ impl Metric {
             Metric::RpeTranslationRmse => "RPE translation RMSE (1 step)",
             Metric::RpeRotationRmseDeg => "RPE rotation RMSE (1 step)",
             Metric::CostRatio => "final cost / reference cost",
+            Metric::MapAgreement => "map agreement with the true map",
+            Metric::MapCoverage => "share of the true map covered",
+            Metric::RotationErrorDeg => "rotation error",
+            Metric::TranslationErrorM => "translation error",
+            Metric::TranslationDirectionErrorDeg => "translation direction error",
         }
     }
 
@@ -257,15 +319,21 @@ impl Metric {
             | Metric::AteMax
             | Metric::FinalPositionError
             | Metric::RpeTranslationRmse => "m",
-            Metric::RpeRotationRmseDeg => "deg",
-            Metric::CostRatio => "",
+            Metric::RpeRotationRmseDeg
+            | Metric::RotationErrorDeg
+            | Metric::TranslationDirectionErrorDeg => "deg",
+            Metric::TranslationErrorM => "m",
+            Metric::CostRatio | Metric::MapAgreement | Metric::MapCoverage => "",
         }
     }
 
-    /// Which side of a threshold is good: every metric here is an error or a
-    /// cost, smaller is better.
+    /// Which side of a threshold is good: an error or a cost passes at or
+    /// below it, an agreement or a coverage at or above.
     pub fn direction(self) -> Direction {
-        Direction::AtMost
+        match self {
+            Metric::MapAgreement | Metric::MapCoverage => Direction::AtLeast,
+            _ => Direction::AtMost,
+        }
     }
 }
 
@@ -325,7 +393,8 @@ pub struct OutputSpec {
 pub struct Assignment {
     /// A short name (letters, digits, `-` and `_`), part of every student's seed.
     pub id: String,
-    /// The lesson the assignment opens in (`landmark-slam`, `kidnap`, `pose-graph`).
+    /// The lesson the assignment opens in (`landmark-slam`, `kidnap`, `pose-graph`,
+    /// `mapping`).
     pub lesson: String,
     /// The task's kind; the lesson's when left out.
     #[serde(default, skip_serializing_if = "Option::is_none")]

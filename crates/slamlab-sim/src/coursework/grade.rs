@@ -196,7 +196,7 @@ pub fn trajectory_metric(metric: Metric, e: &Evaluation) -> Option<f64> {
         Metric::FinalPositionError => e.ape.translation_m.last().copied(),
         Metric::RpeTranslationRmse => e.rpe.as_ref().map(|r| r.translation.rmse),
         Metric::RpeRotationRmseDeg => e.rpe.as_ref().map(|r| r.rotation.rmse),
-        Metric::CostRatio => None,
+        _ => None,
     }
 }
 

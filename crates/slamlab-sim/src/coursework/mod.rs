@@ -85,6 +85,9 @@ impl CourseworkError {
 pub const BUILTIN: &[(&str, &str)] = &[
     ("ekf-slam", include_str!("builtin/ekf-slam.json")),
     ("mcl", include_str!("builtin/mcl.json")),
+    ("pose-graph", include_str!("builtin/pose-graph.json")),
+    ("grid-mapping", include_str!("builtin/grid-mapping.json")),
+    ("icp", include_str!("builtin/icp.json")),
 ];
 
 /// One variant's run of a task, made by the lesson that runs that kind of task:
@@ -105,6 +108,31 @@ pub trait TaskRun: std::fmt::Debug + Send + Sync {
     /// seed to replay this run (`init=tracking`).
     fn lesson_pairs(&self) -> Vec<(String, String)> {
         Vec::new()
+    }
+    /// Grades a handed-in file, `references` being [`Self::references`]. The
+    /// default grades a trajectory against [`Self::truth`]; a task whose output
+    /// is no trajectory (an optimized graph, a map) grades its own.
+    fn grade(
+        &self,
+        assignment: &Assignment,
+        variant: &Variant,
+        references: &[(String, Trajectory)],
+        file_name: &str,
+        bytes: &[u8],
+    ) -> Result<Grade, CourseworkError> {
+        grade::grade_trajectory(
+            assignment,
+            variant,
+            &self.truth(),
+            references,
+            file_name,
+            bytes,
+        )
+    }
+    /// What the README says under "What to hand in"; `None`: the trajectory
+    /// text every trajectory task shares.
+    fn hand_in_text(&self, _assignment: &Assignment, _variant: &Variant) -> Option<String> {
+        None
     }
 }
 
@@ -243,10 +271,9 @@ impl Prepared {
     /// Grades a handed-in file.
     pub fn grade(&self, file_name: &str, bytes: &[u8]) -> Result<Grade, CourseworkError> {
         let references = self.references()?;
-        grade::grade_trajectory(
+        self.run.grade(
             &self.assignment,
             &self.variant,
-            &self.truth(),
             references,
             file_name,
             bytes,
@@ -307,24 +334,28 @@ impl Prepared {
             let _ = writeln!(out, "{}\n", wrap(paragraph, 78));
         }
         let _ = writeln!(out, "What to hand in\n---------------");
-        let _ = writeln!(
-            out,
-            "{}: one pose per step, for t = 0 and every step's time (the times of the\n\
+        if let Some(text) = self.run.hand_in_text(a, &self.variant) {
+            let _ = writeln!(out, "{text}");
+        } else {
+            let _ = writeln!(
+                out,
+                "{}: one pose per step, for t = 0 and every step's time (the times of the\n\
              inputs), as TUM ('t x y z qx qy qz qw', z = 0 and a rotation about z:\n\
              qz = sin(theta/2), qw = cos(theta/2)) or CSV ('t,x,y,theta'). Check it with\n\
              slamlab grade {} --student '{}' --estimate {}\n",
-            a.output.file, a.id, self.variant.student, a.output.file
-        );
-        let _ = writeln!(
-            out,
-            "It is scored against the true trajectory{}\n(poses paired by time within \
+                a.output.file, a.id, self.variant.student, a.output.file
+            );
+            let _ = writeln!(
+                out,
+                "It is scored against the true trajectory{}\n(poses paired by time within \
              0.01 s):",
-            match a.alignment() {
-                crate::metrics::Alignment::None => ", in the map's frame, without alignment",
-                crate::metrics::Alignment::Se2 => " after a rigid (SE(2)) alignment",
-                crate::metrics::Alignment::Sim2 => " after a similarity (Sim(2)) alignment",
-            }
-        );
+                match a.alignment() {
+                    crate::metrics::Alignment::None => ", in the map's frame, without alignment",
+                    crate::metrics::Alignment::Se2 => " after a rigid (SE(2)) alignment",
+                    crate::metrics::Alignment::Sim2 => " after a similarity (Sim(2)) alignment",
+                }
+            );
+        }
         for c in &a.criteria {
             let _ = writeln!(
                 out,

@@ -20,5 +20,8 @@ pub use laser_file::{BagTopics, LaserFile, LaserFileError};
 pub use lidar::Lidar;
 pub use reference::{LogReference, TrajectoryScore};
 pub use robot::{GridRobot, OdometrySensor};
-pub use scans::{InputScan, MappingInput, builtin_map, log_input, map_agreement, trajectory_rmse};
+pub use scans::{
+    InputScan, MappingInput, builtin_map, log_input, map_agreement, occupancy_agreement,
+    occupancy_coverage, trajectory_rmse,
+};
 pub use simulated_log::{SimLogError, SimulatedLogConfig, simulate_log};

@@ -128,7 +128,49 @@ pub fn trajectory_rmse(poses: &[Pose2], truth: Option<&[Pose2]>) -> Option<f64> 
 /// cells the built map knows (looked up at each true cell's centre). `None`
 /// when the built map knows none of them.
 pub fn map_agreement(built: &ProbabilityGrid, truth: &OccupancyGrid) -> Option<f64> {
-    let (mut known, mut same) = (0usize, 0usize);
+    agreement_by(truth, |x, y| {
+        let (i, j) = built.cell_of(x, y);
+        built
+            .log_odds_at(i, j)
+            .filter(|l| *l != 0.0)
+            .map(|l| l > 0.0)
+    })
+    .0
+}
+
+/// [`map_agreement`] of a three-state map (a ROS map a student handed in or
+/// dropped): the share of the true map's free and occupied cells that `built`
+/// classifies the same, over the cells `built` knows (free or occupied at the
+/// true cell's centre). The same definition, the same cells.
+pub fn occupancy_agreement(built: &OccupancyGrid, truth: &OccupancyGrid) -> Option<f64> {
+    agreement_by(truth, |x, y| occupied_at(built, x, y)).0
+}
+
+/// The share of the true map's free and occupied cells that `built` knows at
+/// all (free or occupied): what [`occupancy_agreement`] is computed over. A map
+/// that knows one cell right agrees fully and covers nothing; a grade needs
+/// both.
+pub fn occupancy_coverage(built: &OccupancyGrid, truth: &OccupancyGrid) -> Option<f64> {
+    agreement_by(truth, |x, y| occupied_at(built, x, y)).1
+}
+
+/// Occupied (`true`), free (`false`) or unknown (`None`) at a world point.
+fn occupied_at(grid: &OccupancyGrid, x: f64, y: f64) -> Option<bool> {
+    let (i, j) = grid.world_to_cell(x, y);
+    match grid.get(i, j)? {
+        Cell::Occupied => Some(true),
+        Cell::Free => Some(false),
+        Cell::Unknown => None,
+    }
+}
+
+/// Over the true map's free and occupied cells: (the share of those `built`
+/// knows that it classifies the same, the share it knows).
+fn agreement_by(
+    truth: &OccupancyGrid,
+    built: impl Fn(f64, f64) -> Option<bool>,
+) -> (Option<f64>, Option<f64>) {
+    let (mut cells, mut known, mut same) = (0usize, 0usize, 0usize);
     for j in 0..truth.height() as i64 {
         for i in 0..truth.width() as i64 {
             let Some(cell) = truth.get(i, j) else {
@@ -137,19 +179,19 @@ pub fn map_agreement(built: &ProbabilityGrid, truth: &OccupancyGrid) -> Option<f
             if cell == Cell::Unknown {
                 continue;
             }
+            cells += 1;
             let (x, y) = truth.cell_center(i, j);
-            let (bi, bj) = built.cell_of(x, y);
-            let Some(l) = built.log_odds_at(bi, bj) else {
+            let Some(occupied) = built(x, y) else {
                 continue;
             };
-            if l == 0.0 {
-                continue;
-            }
             known += 1;
-            same += usize::from((l > 0.0) == (cell == Cell::Occupied));
+            same += usize::from(occupied == (cell == Cell::Occupied));
         }
     }
-    (known > 0).then(|| same as f64 / known as f64)
+    (
+        (known > 0).then(|| same as f64 / known as f64),
+        (cells > 0).then(|| known as f64 / cells as f64),
+    )
 }
 
 #[cfg(test)]

@@ -697,3 +697,173 @@ pub fn write_g2o(graph: &PoseGraph) -> Result<String, GraphFileError> {
     }
     Ok(out)
 }
+
+#[cfg(test)]
+mod score_tests {
+    //! `metrics::graph` on graphs written to g2o and read back.
+    use super::{read_graph, write_g2o};
+    use crate::metrics::graph::*;
+    use nalgebra::Matrix3;
+    use slamlab_core::graph::SolverKind;
+    use slamlab_core::graph::{EdgeKind, OptimizerSettings, PoseGraph, RobustKernel, graph_cost};
+    use slamlab_core::{Pose2, math};
+
+    /// 120 poses twice around a circle of radius 5 m, odometry with a
+    /// deterministic "noise" of phase `phase`, loop closures between the laps.
+    fn noisy_circle(phase: f64) -> PoseGraph {
+        let n = 120;
+        let truth: Vec<Pose2> = (0..n)
+            .map(|k| {
+                let a = k as f64 * std::f64::consts::TAU / 60.0;
+                let (s, c) = math::sin_cos(a);
+                Pose2::new(5.0 * s, 5.0 * (1.0 - c), a)
+            })
+            .collect();
+        let noise = |k: usize, scale: f64| {
+            let k = k as f64 + phase;
+            Pose2::new(
+                scale * math::sin(1.7 * k),
+                scale * math::cos(2.3 * k),
+                0.5 * scale * math::sin(3.1 * k),
+            )
+        };
+        let information = Matrix3::from_diagonal(&nalgebra::Vector3::new(400.0, 400.0, 1000.0));
+        let mut graph = PoseGraph::new();
+        let mut guess = truth[0];
+        let mut edges = Vec::new();
+        for k in 0..n {
+            if k > 0 {
+                let z = truth[k - 1].between(&truth[k]).compose(&noise(k, 0.1));
+                guess = guess.compose(&z);
+                edges.push((k - 1, k, z));
+            }
+            graph.add_pose(k as u64, guess).expect("a new id");
+        }
+        for j in (0..60).step_by(7) {
+            let z = truth[j]
+                .between(&truth[j + 60])
+                .compose(&noise(j + 500, 0.05));
+            edges.push((j, j + 60, z));
+        }
+        for (from, to, measurement) in edges {
+            graph
+                .add_edge(EdgeKind::PosePose {
+                    from,
+                    to,
+                    measurement,
+                    information,
+                })
+                .expect("known vertices");
+        }
+        graph.set_fixed(0, true).expect("vertex 0");
+        graph
+    }
+
+    fn problem() -> PoseGraph {
+        noisy_circle(0.0)
+    }
+
+    fn gn() -> OptimizerSettings {
+        OptimizerSettings {
+            solver: SolverKind::GaussNewton,
+            ..OptimizerSettings::default()
+        }
+    }
+
+    fn round_trip(graph: &PoseGraph) -> PoseGraph {
+        let text = write_g2o(graph).unwrap_or_default();
+        read_graph(&text).unwrap_or_default()
+    }
+
+    #[test]
+    fn the_solvers_own_result_read_back_scores_its_own_final_cost() {
+        let problem = problem();
+        let solution = reference_solution(&problem, gn(), 100).expect("solves");
+        assert!(solution.converged);
+        assert!(solution.cost < 0.5 * solution.initial_cost);
+        let score = score_graph(&problem, &round_trip(&solution.graph), solution.cost)
+            .expect("the same graph");
+        assert!((score.cost - solution.cost).abs() <= 1e-9 * solution.cost);
+        assert!((score.cost_ratio.unwrap_or(0.0) - 1.0).abs() <= 1e-9);
+        assert!(score.cost_difference.abs() <= 1e-9 * solution.cost);
+        assert_eq!(score.initial_cost, solution.initial_cost);
+    }
+
+    #[test]
+    fn the_unoptimized_problem_scores_its_initial_cost() {
+        let problem = problem();
+        let solution = reference_solution(&problem, gn(), 100).expect("solves");
+        let score = score_graph(&problem, &round_trip(&problem), solution.cost).expect("same");
+        assert_eq!(score.cost, score.initial_cost);
+        assert_eq!(score.cost, graph_cost(&problem, &RobustKernel::None));
+        assert!(score.cost_ratio.unwrap_or(0.0) > 3.0, "{score:?}");
+    }
+
+    #[test]
+    fn another_graph_is_refused_with_what_differs() {
+        let problem = problem();
+        let text = write_g2o(&problem).unwrap_or_default();
+        // A vertex left out (and its edges).
+        let without: String = text
+            .lines()
+            .filter(|l| {
+                let f: Vec<&str> = l.split_whitespace().collect();
+                !(f.first() == Some(&"VERTEX_SE2") && f.get(1) == Some(&"57"))
+                    && !(f.first() == Some(&"EDGE_SE2")
+                        && (f.get(1) == Some(&"57") || f.get(2) == Some(&"57")))
+            })
+            .map(|l| format!("{l}\n"))
+            .collect();
+        let file = read_graph(&without).expect("reads");
+        let why = score_graph(&problem, &file, 1.0).unwrap_err();
+        assert!(why.contains("vertex 57 of the problem is missing"), "{why}");
+        // Another student's noise: every vertex there, a measurement moved.
+        let other = noisy_circle(0.4);
+        let why = score_graph(&problem, &other, 1.0).unwrap_err();
+        assert!(why.contains("another graph"), "{why}");
+        // An edge dropped.
+        let mut lines: Vec<&str> = text.lines().collect();
+        let last_edge = lines.iter().rposition(|l| l.starts_with("EDGE_SE2"));
+        if let Some(k) = last_edge {
+            lines.remove(k);
+        }
+        let file = read_graph(&lines.join("\n")).expect("reads");
+        let why = score_graph(&problem, &file, 1.0).unwrap_err();
+        assert!(why.contains("edges, the problem"), "{why}");
+    }
+
+    #[test]
+    fn rounded_measurements_and_reordered_edges_are_the_same_graph() {
+        let problem = problem();
+        let text = write_g2o(&problem).unwrap_or_default();
+        // Every number to six decimals, the edges in reverse order.
+        let rounded: Vec<String> = text
+            .lines()
+            .map(|l| {
+                l.split_whitespace()
+                    .map(|w| match w.parse::<f64>() {
+                        Ok(v) if w.contains('.') || w.contains('e') => format!("{v:.6}"),
+                        _ => w.to_owned(),
+                    })
+                    .collect::<Vec<_>>()
+                    .join(" ")
+            })
+            .collect();
+        let (mut edges, others): (Vec<String>, Vec<String>) =
+            rounded.into_iter().partition(|l| l.starts_with("EDGE"));
+        edges.reverse();
+        let file = read_graph(&[others, edges].concat().join("\n")).expect("reads");
+        let score = score_graph(&problem, &file, 1.0).expect("the same graph");
+        // Six decimals move the states by at most 5e-7: the cost barely.
+        assert!((score.cost - score.initial_cost).abs() < 1e-3 * score.initial_cost);
+    }
+
+    #[test]
+    fn graph_poses_are_stamped_with_their_ids() {
+        let problem = problem();
+        let t = graph_poses(&problem);
+        assert_eq!(t.len(), 120);
+        assert_eq!(t.stamps()[0], 0.0);
+        assert_eq!(t.stamps()[119], 119.0);
+    }
+}

@@ -11,6 +11,7 @@ pub mod graph;
 pub mod landmark_data;
 pub mod laser_log;
 pub mod laser_reference;
+pub mod map_archive;
 pub mod relative_pose;
 pub mod ros2_bag;
 pub mod ros_map;

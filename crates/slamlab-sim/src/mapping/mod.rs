@@ -9,8 +9,10 @@
 //! - [`MappingSession`]: the lesson's face on a [`Stepper`], opened from a
 //!   scenario and an input.
 
+pub mod assignment;
 pub mod export;
 pub mod grid_fastslam;
+pub mod icp_assignment;
 pub mod run;
 pub mod scenario;
 #[cfg(test)]

@@ -592,15 +592,9 @@ impl Scenario for MappingScenario {
     }
 }
 
-/// The simulated input of a scenario: the explorer drives the robot through
-/// `map` for `scenario.steps` scans (0.1 s apart) with the scenario's lidar and
-/// odometry noise. The true poses and the map travel beside the scans for the
-/// metrics.
-pub fn simulated_input(
-    scenario: &MappingScenario,
-    map: Arc<OccupancyGrid>,
-    map_name: &str,
-) -> Result<MappingInput, String> {
+/// How the scenario's simulated robot records its log: its lidar and its
+/// odometry noise (the default's alphas times `odometry-noise`).
+pub fn simulated_log_config(scenario: &MappingScenario) -> SimulatedLogConfig {
     let mut config = SimulatedLogConfig::default();
     config.lidar.beams = scenario.beams;
     config.lidar.max_range = scenario.lidar_range;
@@ -610,6 +604,19 @@ pub fn simulated_input(
     config.odom_noise.alpha2 *= k;
     config.odom_noise.alpha3 *= k;
     config.odom_noise.alpha4 *= k;
+    config
+}
+
+/// The simulated input of a scenario: the explorer drives the robot through
+/// `map` for `scenario.steps` scans (0.1 s apart) with the scenario's lidar and
+/// odometry noise. The true poses and the map travel beside the scans for the
+/// metrics.
+pub fn simulated_input(
+    scenario: &MappingScenario,
+    map: Arc<OccupancyGrid>,
+    map_name: &str,
+) -> Result<MappingInput, String> {
+    let config = simulated_log_config(scenario);
     let (log, truth) =
         simulate_log(&map, scenario.steps, scenario.seed, &config).map_err(|e| e.to_string())?;
     let mut input = log_input(

@@ -21,13 +21,15 @@
 //! prints them. `docs/metrics.md` has the equations and the evo options they
 //! correspond to; a test runs evo itself on the same files. Beside trajectories:
 //! landmark errors after the same alignment ([`landmark_errors`]), the error of
-//! a relative pose ([`relative_pose_error`]), and map agreement
-//! ([`crate::grid::map_agreement`], the mapping lesson's metric).
+//! a relative pose ([`relative_pose_error`]), the final cost of an optimized
+//! pose graph against the reference solver's ([`graph::score_graph`]), and map
+//! agreement ([`crate::grid::map_agreement`], the mapping lesson's metric).
 
 pub mod alignment;
 pub mod association;
 pub mod errors;
 pub mod evaluation;
+pub mod graph;
 pub mod trajectory;
 
 pub use alignment::{Alignment, Similarity, umeyama};

@@ -4,28 +4,12 @@
 //! trajectories and `slamlab graph optimize --trajectory-out DIR` write them.
 
 use crate::io::trajectory::LandmarkRow;
-use crate::metrics::{NamedTrajectory, Trajectory, TrajectoryRole};
+use crate::metrics::{NamedTrajectory, TrajectoryRole};
 use slamlab_core::graph::{PoseGraph, VertexState};
 
 /// The graph's pose vertices in id order, stamped with their ids, named `name`.
 pub fn pose_trajectory(graph: &PoseGraph, name: &str, role: TrajectoryRole) -> NamedTrajectory {
-    let mut poses: Vec<(u64, slamlab_core::Pose2)> = graph
-        .vertices()
-        .iter()
-        .filter_map(|v| match v.state {
-            VertexState::Pose(p) => Some((v.id, p)),
-            VertexState::Point(_) => None,
-        })
-        .collect();
-    poses.sort_by_key(|(id, _)| *id);
-    NamedTrajectory::new(
-        name,
-        role,
-        Trajectory::new(
-            poses.iter().map(|(id, _)| *id as f64).collect(),
-            poses.iter().map(|(_, p)| *p).collect(),
-        ),
-    )
+    NamedTrajectory::new(name, role, crate::metrics::graph::graph_poses(graph))
 }
 
 /// The graph's point vertices as landmarks (`id,x,y`).

@@ -354,20 +354,7 @@ pub struct PoseGraphSession {
     dragging: bool,
 }
 
-/// Holds the first vertex fixed unless a vertex is fixed or a prior holds the
-/// graph already (as the CLI does). Returns what was done.
-pub fn fix_gauge(graph: &mut PoseGraph) -> Option<String> {
-    let anchored =
-        graph.vertices().iter().any(|v| v.fixed) || graph.edges().iter().any(EdgeKind::is_prior);
-    if anchored {
-        return None;
-    }
-    let first = graph.vertices().first()?.id;
-    graph.set_fixed(first, true).ok()?;
-    Some(format!(
-        "vertex {first} (the first in the file) is held fixed to fix the gauge"
-    ))
-}
+pub use crate::metrics::graph::fix_gauge;
 
 impl PoseGraphSession {
     /// The built-in example of `scenario`.
@@ -942,6 +929,38 @@ mod tests {
         );
         assert_eq!(s.kernel_width, 0.01);
         assert_eq!(s.solver, SolverKind::GaussNewton);
+    }
+
+    #[test]
+    fn the_lessons_optimized_graph_written_and_read_back_scores_its_own_final_cost() {
+        use crate::metrics::graph::{reference_solution, score_graph};
+        for example in [Example::Thesis, Example::Manhattan] {
+            let mut session = PoseGraphSession::from_scenario(PoseGraphScenario {
+                example,
+                manhattan_poses: 200,
+                ..PoseGraphScenario::default()
+            })
+            .unwrap();
+            let problem = session.start_graph().clone();
+            let initial = session.cost();
+            while !session.is_converged() && session.iterations() < 50 {
+                session.step().unwrap();
+            }
+            let text = io::graph::write_g2o(session.graph()).unwrap();
+            let file = io::graph::read_graph(&text).unwrap();
+            let score = score_graph(&problem, &file, session.cost()).unwrap();
+            let cost = session.cost();
+            assert!(
+                (score.cost - cost).abs() <= 1e-9 * cost,
+                "{example:?}: {score:?}"
+            );
+            assert!((score.cost_ratio.unwrap() - 1.0).abs() <= 1e-9);
+            assert_eq!(score.initial_cost, initial);
+            // The metric's reference solver is the lesson's solver.
+            let reference =
+                reference_solution(&problem, session.scenario().settings(), 50).unwrap();
+            assert_eq!(reference.cost, cost, "{example:?}");
+        }
     }
 
     #[test]
