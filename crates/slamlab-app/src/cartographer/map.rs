@@ -382,9 +382,12 @@ pub fn shown_submap(sim: &CartographerSim) -> Option<usize> {
 
 /// The window of Fig. 5.7: the precomputed grids of heights 0, 2, 4 and 6
 /// (boxes of 1, 4, 16, 64 cells) of one finished submap, darker where the
-/// box's largest probability is higher.
+/// box's largest probability is higher. It opens at the top left of `area` (the
+/// map's, under the lesson's actions) and stays inside it, off the menu, the time
+/// bar and its own button.
 pub fn max_grids_window(
     ctx: &egui::Context,
+    area: egui::Rect,
     sim: &CartographerSim,
     cache: &mut MaxGridTextures,
     open: &mut bool,
@@ -420,7 +423,9 @@ pub fn max_grids_window(
     }
     egui::Window::new("Precomputed max grids (Fig. 5.7)")
         .open(open)
-        .default_width(520.0)
+        .constrain_to(area)
+        .default_pos(area.left_top() + egui::vec2(8.0, 8.0))
+        .default_width(520.0_f32.min(area.width() - 16.0))
         .resizable(true)
         .vscroll(true)
         .show(ctx, |ui| {

@@ -963,6 +963,8 @@ impl crate::widgets::layout::LessonPanels for CartographerLesson {
             let mut open = true;
             map::max_grids_window(
                 ui.ctx(),
+                // Under the lesson's actions: the Max grids button stays in view.
+                ui.available_rect_before_wrap(),
                 self.stepper.sim().sim(),
                 &mut self.grids,
                 &mut open,

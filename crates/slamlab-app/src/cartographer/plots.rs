@@ -171,16 +171,12 @@ fn plotted(sim: &CartographerSim, scan_ms: &[f64]) -> Vec<Styled> {
                 ),
                 (None, None) => ("no match above min_score".to_owned(), f64::NAN, Mark::Solid),
             };
-            let points = if value.is_finite() {
-                vec![[0.0, value], [end, value]]
-            } else {
-                Vec::new()
-            };
+            let (points, mark, width) = no_match_level(value, min, end, mark);
             out.push(Styled::new(
                 PlotSeries::new(SEARCH, "candidates scored", "score", name, points),
                 palette::VERMILLION,
                 mark,
-                1.6,
+                width,
             ));
         }
         out.push(Styled::new(
@@ -272,7 +268,8 @@ pub fn plots_ui(
                      whose bound (Eq. 5.14) is not above the best are pruned; the explanation \
                      panel counts them per height beside what exhaustive search would score. \
                      With no match the red line is the best leaf scored (or, when no branch \
-                     reached a leaf, the highest bound), under the dashed min score.",
+                     reached a leaf, the highest bound), under the dashed min score (red dots \
+                     over the dashes when the two are nearly equal).",
                     "score",
                 ),
                 |h, y| {
@@ -337,4 +334,52 @@ pub fn series(
         all.extend(reference_series(track, [None, None], loop_closures));
     }
     series_data(all)
+}
+
+/// How far apart (score, on the plot's 0..1 axis) the no-match level and the
+/// dashed min score must be to show as two lines (about 3 points apart on a
+/// 150-point plot).
+const SEPARATE_LEVELS: f64 = 0.02;
+
+/// The points, mark and width of the level a search without a match reached
+/// (`value`, the best leaf or the highest bound), drawn across `0..end` against
+/// the dashed min score `min`: a line in `mark`, or, nearer the min score than
+/// [`SEPARATE_LEVELS`] (a bound 0.001 under it), a row of dots drawn over the
+/// dashes, so that both stay in view; nothing for a level that is not a number.
+fn no_match_level(value: f64, min: f64, end: f64, mark: Mark) -> (Vec<[f64; 2]>, Mark, f32) {
+    if !value.is_finite() {
+        return (Vec::new(), mark, 1.6);
+    }
+    if (value - min).abs() >= SEPARATE_LEVELS || !min.is_finite() {
+        return (vec![[0.0, value], [end, value]], mark, 1.6);
+    }
+    let dots = 12;
+    let points = (0..=dots)
+        .map(|k| [end * f64::from(k) / f64::from(dots), value])
+        .collect();
+    (points, Mark::Dots, 2.5)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn a_level_beside_the_min_score_is_dots_over_its_dashes() {
+        // Far apart: a line of two points in its own mark.
+        let (points, mark, _) = no_match_level(0.42, 0.55, 100.0, Mark::Dotted);
+        assert_eq!(points, vec![[0.0, 0.42], [100.0, 0.42]]);
+        assert_eq!(mark, Mark::Dotted);
+        // 0.001 apart: dots along the whole width, drawn after (over) the dashes.
+        let (points, mark, _) = no_match_level(0.549, 0.55, 100.0, Mark::Dotted);
+        assert_eq!(mark, Mark::Dots);
+        assert_eq!(points.len(), 13);
+        assert_eq!(points.first(), Some(&[0.0, 0.549]));
+        assert_eq!(points.last(), Some(&[100.0, 0.549]));
+        assert!(
+            no_match_level(f64::NAN, 0.55, 100.0, Mark::Solid)
+                .0
+                .is_empty()
+        );
+    }
 }

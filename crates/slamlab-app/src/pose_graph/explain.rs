@@ -83,12 +83,7 @@ pub fn explanation_ui(
             if let Some(r) = session.last_report() {
                 row(ui, "cost before", format!("{:.6e}", r.cost_before));
                 row(ui, "cost after", format!("{:.6e}", r.cost));
-                let change = if r.cost_before > 0.0 {
-                    100.0 * (r.cost - r.cost_before) / r.cost_before
-                } else {
-                    0.0
-                };
-                row(ui, "change", format!("{change:+.3} %"));
+                row(ui, "change", cost_change(r.cost_before, r.cost));
                 row(ui, "|Δx| tried", format!("{:.4e}", r.step_norm));
                 if let Some(l) = r.lambda {
                     row(ui, "λ", format!("{l:.3e}"));
@@ -179,5 +174,38 @@ pub fn explanation_ui(
              is the broad orange band, the result with the kernel the reddish-purple line; where \
              they agree the line runs inside the band.",
         );
+    }
+}
+
+/// The relative change of the cost from `before` to `after`, in per cent: three
+/// decimals with its sign ("-12.345 %"); a change too small for three decimals in
+/// two significant digits ("-2.3e-5 %", never "-0.000 %"); no change "0 %".
+fn cost_change(before: f64, after: f64) -> String {
+    let change = if before > 0.0 && after.is_finite() {
+        100.0 * (after - before) / before
+    } else {
+        0.0
+    };
+    if change == 0.0 {
+        "0 %".to_owned()
+    } else if change.abs() < 0.0005 {
+        format!("{change:+.1e} %")
+    } else {
+        format!("{change:+.3} %")
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::cost_change;
+
+    #[test]
+    fn a_cost_change_reads_as_a_number_never_minus_zero() {
+        assert_eq!(cost_change(200.0, 150.0), "-25.000 %");
+        assert_eq!(cost_change(1.0e6, 1.0e6 - 0.23), "-2.3e-5 %");
+        assert_eq!(cost_change(1.0e6, 1.0e6 + 0.23), "+2.3e-5 %");
+        assert_eq!(cost_change(5.0, 5.0), "0 %");
+        assert_eq!(cost_change(0.0, 1.0), "0 %");
+        assert_eq!(cost_change(1.0, f64::NAN), "0 %");
     }
 }

@@ -438,37 +438,127 @@ pub fn key_ui(ui: &mut egui::Ui, entries: &[KeyEntry]) -> egui::Rect {
     if entries.is_empty() {
         return egui::Rect::NOTHING;
     }
-    let response = ui
-        .horizontal_wrapped(|ui| {
-            ui.spacing_mut().item_spacing.x = 4.0;
-            let row_width = ui.max_rect().width();
-            for (k, entry) in entries.iter().enumerate() {
-                // A sample and its name start a new line together when they do not
-                // fit on this one; the gap between entries never runs past the edge.
-                let width = 18.0 + 4.0 + text_width(ui, &entry.name, egui::TextStyle::Small);
-                let left = ui.available_size_before_wrap().x;
-                if k > 0 && width + 10.0 > left && left < row_width - 1.0 {
-                    ui.end_row();
-                } else if k > 0 {
-                    ui.add_space(6.0);
-                }
-                mark_sample_ui(ui, entry.color, entry.mark);
-                ui.label(egui::RichText::new(&entry.name).small());
-            }
-        })
-        .response;
+    let rect = key_lines_ui(ui, entries);
+    record_key(ui.ctx(), rect);
+    rect
+}
+
+fn record_key(ctx: &egui::Context, rect: egui::Rect) {
     record(
-        ui.ctx(),
+        ctx,
         FigureRecord {
             title: String::new(),
             data: None,
-            key: Some(response.rect),
+            key: Some(rect),
             map: None,
             image: None,
         },
     );
+}
+
+/// The gap [`key_lines_ui`] puts between a name and the next entry's sample, points.
+const KEY_ENTRY_GAP: f32 = 6.0;
+/// The space between a sample and its name, points.
+const KEY_ITEM_SPACING: f32 = 4.0;
+/// The width of an entry's sample, points.
+const KEY_SAMPLE_WIDTH: f32 = 18.0;
+
+/// Draws `entries` on lines (wrapped when needed), without recording them. Where
+/// the lines break is [`key_line_count`]'s rule, so that a figure can know the
+/// key's height before it draws it.
+fn key_lines_ui(ui: &mut egui::Ui, entries: &[KeyEntry]) -> egui::Rect {
+    ui.horizontal_wrapped(|ui| {
+        ui.spacing_mut().item_spacing.x = KEY_ITEM_SPACING;
+        let row_width = ui.max_rect().width();
+        for (k, entry) in entries.iter().enumerate() {
+            // A sample and its name start a new line together when they do not
+            // fit on this one; the gap between entries never runs past the edge.
+            let left = ui.available_size_before_wrap().x;
+            if k > 0 && key_entry_breaks(key_entry_width(ui, entry), left, row_width) {
+                ui.end_row();
+            } else if k > 0 {
+                ui.add_space(KEY_ENTRY_GAP);
+            }
+            mark_sample_ui(ui, entry.color, entry.mark);
+            ui.label(egui::RichText::new(&entry.name).small());
+        }
+    })
+    .response
+    .rect
+}
+
+/// The width of an entry's sample and name, points.
+fn key_entry_width(ui: &egui::Ui, entry: &KeyEntry) -> f32 {
+    KEY_SAMPLE_WIDTH + KEY_ITEM_SPACING + text_width(ui, &entry.name, egui::TextStyle::Small)
+}
+
+/// Whether an entry `width` points wide starts a new line where `left` points are
+/// left of a line `row_width` wide (never on a line of its own already).
+fn key_entry_breaks(width: f32, left: f32, row_width: f32) -> bool {
+    width + KEY_ENTRY_GAP + KEY_ITEM_SPACING > left && left < row_width - 1.0
+}
+
+/// How many lines [`key_ui`] draws `entries` on in a line `row_width` points wide,
+/// and how many of its entries are wider than the line (their names wrap): after
+/// each entry the cursor has moved by its width and the spacing, before the next by
+/// the gap, and an entry that does not fit starts a new line.
+fn key_line_count(ui: &egui::Ui, entries: &[KeyEntry], row_width: f32) -> (usize, usize) {
+    let mut lines = 0;
+    let mut wrapped = 0;
+    let mut used = 0.0;
+    for (k, entry) in entries.iter().enumerate() {
+        let width = key_entry_width(ui, entry);
+        if k == 0 || key_entry_breaks(width, row_width - used, row_width) {
+            lines += 1;
+            used = 0.0;
+        } else {
+            used += KEY_ENTRY_GAP;
+        }
+        used += width + KEY_ITEM_SPACING;
+        if width > row_width {
+            // Each further line of its name; rounded up, as the name breaks at words.
+            wrapped += (width / row_width.max(1.0)).ceil() as usize;
+        }
+    }
+    (lines, wrapped)
+}
+
+/// The height [`key_ui`] takes for `entries` in a line `row_width` points wide:
+/// the first line as tall as a row of buttons (`interact_size.y`, egui's wrapped
+/// layouts start there), each further line a line of small text and the spacing;
+/// names wider than the line add lines of their own (overestimated, never under).
+pub fn key_height(ui: &egui::Ui, entries: &[KeyEntry], row_width: f32) -> f32 {
+    let (lines, wrapped) = key_line_count(ui, entries, row_width);
+    if lines == 0 {
+        return 0.0;
+    }
+    let spacing = ui.spacing();
+    let small = ui.text_style_height(&egui::TextStyle::Small);
+    let further = (lines - 1 + wrapped) as f32;
+    spacing.interact_size.y.max(small) + further * (small + spacing.item_spacing.y)
+}
+
+/// A key that does not fit above its plot, folded into one word on the title's
+/// line: "key", whose hover (or tap) shows every entry. Returns its rectangle.
+fn folded_key_ui(ui: &mut egui::Ui, entries: &[KeyEntry]) -> egui::Rect {
+    if entries.is_empty() {
+        return egui::Rect::NOTHING;
+    }
+    let response = ui
+        .add(
+            egui::Label::new(egui::RichText::new(FOLDED_KEY_TEXT).small().underline())
+                .sense(egui::Sense::click()),
+        )
+        .on_hover_ui(|ui| {
+            ui.set_max_width(320.0);
+            key_lines_ui(ui, entries);
+        });
+    record_key(ui.ctx(), response.rect);
     response.rect
 }
+
+/// The word a folded key shows on its plot's title line.
+pub const FOLDED_KEY_TEXT: &str = "key";
 
 /// A small sample of a series' look: a line, dashes or a marker.
 fn mark_sample_ui(ui: &mut egui::Ui, color: Color32, mark: Mark) {
@@ -552,6 +642,10 @@ pub struct Figure<'s> {
 
 /// The least height of a plot's data area that still holds two labelled y values.
 pub const MIN_PLOT_HEIGHT: f32 = 60.0;
+
+/// The height a plot's x axis (its values and its name) takes below the data,
+/// points: a [`MIN_PLOT_HEIGHT`] plot has a 34-point data area.
+const X_AXIS_POINTS: f32 = 26.0;
 
 /// Draws `figure`: its title (with the y axis's name when the plot is too short to
 /// write it beside the axis), its key on a line, then `plot` (made from the height
@@ -745,20 +839,38 @@ fn figure_scaled_ui<'a, R>(
     let estimated_plot = figure.height - 2.0 * ui.text_style_height(&egui::TextStyle::Body) - 34.0;
     let fits = y_label_fits(ui, figure.y_label, estimated_plot);
     let title = match unit_of(figure.y_label).filter(|_| !fits) {
+        // A title ending in a number (the corridor's "K = ... = 0.308") would seem
+        // to give that number the axis's unit: it names the axis instead.
+        Some(_) if figure.title.ends_with(|c: char| c.is_ascii_digit()) => {
+            format!("{}; y: {}", figure.title, figure.y_label)
+        }
         // Too short to name the axis beside it: the title carries the unit.
         Some(unit) => format!("{} ({unit})", figure.title),
         None => figure.title.to_owned(),
     };
-    // The key beside the title when both fit on one line, else on a line of its own.
+    // The key beside the title when both fit on one line, else on lines of its own
+    // when the plot under them stays at least as tall as they are, else folded
+    // into a "key" on the title's line that shows the entries on hover.
     let title_width = text_width(ui, &title, egui::TextStyle::Body) + 12.0;
+    let title_height = ui.spacing().interact_size.y + ui.spacing().item_spacing.y;
+    let stacked_key = key_height(ui, &figure.key, ui.available_width());
+    let plot_left =
+        (figure.height - title_height - stacked_key).max(MIN_PLOT_HEIGHT) - X_AXIS_POINTS;
     if title_width + key_width(ui, &figure.key) <= ui.available_width() {
         ui.horizontal(|ui| {
             title_ui(ui, &title, figure.hover);
             key_ui(ui, &figure.key);
         });
-    } else {
+    } else if stacked_key <= plot_left {
         title_ui(ui, &title, figure.hover);
         key_ui(ui, &figure.key);
+    } else {
+        // Wrapped: a long title breaks onto a second line with "key" after it,
+        // within the plot's width.
+        ui.horizontal_wrapped(|ui| {
+            title_ui(ui, &title, figure.hover);
+            folded_key_ui(ui, &figure.key);
+        });
     }
     let used = ui.cursor().top() - top;
     let height = (figure.height - used).max(MIN_PLOT_HEIGHT);
@@ -1224,6 +1336,71 @@ mod tests {
                 KeyEntry::new("bound", Color32::RED, Mark::Dashed),
             ]
         );
+    }
+
+    /// Draws `entries` with [`key_ui`] in a line `width` points wide and returns
+    /// (the height [`key_height`] expects, the height drawn).
+    fn key_heights(entries: &[KeyEntry], width: f32) -> (f32, f32) {
+        let ctx = egui::Context::default();
+        crate::fonts::install(&ctx);
+        let mut heights = (f32::NAN, f32::NAN);
+        let input = || egui::RawInput {
+            screen_rect: Some(egui::Rect::from_min_size(
+                egui::Pos2::ZERO,
+                egui::vec2(width + 16.0, 600.0),
+            )),
+            ..Default::default()
+        };
+        // The second pass has the fonts the first one loaded.
+        for _ in 0..2 {
+            let mut output = ctx.run_ui(input(), |ui| {
+                let expected = key_height(ui, entries, ui.available_width());
+                let drawn = key_ui(ui, entries).height();
+                heights = (expected, drawn);
+            });
+            output.textures_delta.clear();
+        }
+        heights
+    }
+
+    #[test]
+    fn a_keys_height_is_known_before_it_is_drawn() {
+        let names = [
+            "truth",
+            "wheel odometry",
+            "VO scaled by wheel speeds",
+            "VO, unit steps",
+            "this step",
+            "docking station",
+        ];
+        let entries: Vec<KeyEntry> = names
+            .iter()
+            .map(|n| KeyEntry::new(*n, Color32::RED, Mark::Solid))
+            .collect();
+        let mut lines_seen = Vec::new();
+        for width in [60.0, 100.0, 150.0, 240.0, 300.0, 420.0, 530.0, 640.0, 900.0] {
+            for count in 1..=entries.len() {
+                let (expected, drawn) = key_heights(&entries[..count], width);
+                let what = format!(
+                    "{count} entries in {width} points: {expected} expected, {drawn} drawn"
+                );
+                if width >= 150.0 {
+                    // Every name fits on a line: the height is known to the point.
+                    assert!((expected - drawn).abs() <= 1.0, "{what}");
+                } else {
+                    // Names wrap inside their entries: never less than drawn.
+                    assert!(expected >= drawn - 1.0, "{what}");
+                }
+                lines_seen.push(drawn);
+            }
+        }
+        lines_seen.sort_by(f32::total_cmp);
+        lines_seen.dedup_by(|a, b| (*a - *b).abs() < 1.0);
+        assert!(
+            lines_seen.len() >= 4,
+            "one, two, three lines and more: {lines_seen:?}"
+        );
+        assert_eq!(key_heights(&[], 300.0).0, 0.0, "no key, no height");
     }
 
     #[test]

@@ -328,6 +328,98 @@ fn steady_screen_shots() {
     }
 }
 
+/// At 800 x 500 no plot's key takes more height than the plot under it, in any
+/// lesson and in the visual-odometry lesson's views (its top view had a 47-point key
+/// over a 34-point plot); and the landmark map keeps more than a third of the
+/// window's height.
+#[test]
+fn at_800_by_500_keys_are_never_taller_than_their_plots() {
+    use slamlab_app::widgets::plots::figure_records;
+    let size = egui::vec2(800.0, 500.0);
+    let mut problems = Vec::new();
+    let queries = LESSONS
+        .iter()
+        .map(|entry| format!("lesson={}&seed=5&tick=12", entry.id))
+        .chain(["lesson=visual-odometry&seed=5&tick=40".to_owned()]);
+    for query in queries {
+        let mut h = harness(&query, size);
+        h.run();
+        let records = figure_records(&h.ctx);
+        for key in records.iter().filter_map(|r| r.key) {
+            // The plot right under the key, overlapping it side to side.
+            let below = records
+                .iter()
+                .filter_map(|r| r.data)
+                .filter(|d| d.top() >= key.bottom() - 2.0)
+                .filter(|d| d.left() < key.right() && key.left() < d.right())
+                .min_by(|a, b| a.top().total_cmp(&b.top()));
+            if let Some(plot) = below
+                && key.height() > plot.height()
+            {
+                problems.push(format!(
+                    "{query}: a key {:.0} points tall over a plot {:.0} tall",
+                    key.height(),
+                    plot.height()
+                ));
+            }
+        }
+        if query.starts_with("lesson=landmark-slam&") {
+            let map = records
+                .iter()
+                .find_map(|r| r.map)
+                .unwrap_or(egui::Rect::NOTHING);
+            assert!(
+                map.height() > size.y / 3.0,
+                "the landmark map is {:.0} points tall",
+                map.height()
+            );
+        }
+    }
+    assert!(problems.is_empty(), "{}", problems.join("\n"));
+}
+
+/// A key folded for want of height is still the plot's key: at 800 x 500 the
+/// visual-odometry lesson's RANSAC plot shows "key" beside its title, and pointing
+/// at it shows every entry.
+#[test]
+fn a_folded_key_shows_its_entries_on_hover() {
+    use super::common::text_drawn;
+    use slamlab_app::widgets::plots::FOLDED_KEY_TEXT;
+    let mut h = harness(
+        "lesson=visual-odometry&seed=5&tick=12",
+        egui::vec2(800.0, 500.0),
+    );
+    h.run();
+    assert!(!text_drawn(&h, "bound N, as log10(N)"), "folded");
+    let folded = h.query_all_by_label(FOLDED_KEY_TEXT).count();
+    assert!(folded >= 1, "a folded key at 800 x 500");
+    // The RANSAC plot is the rightmost: its "key" too.
+    let rightmost = h
+        .query_all_by_label(FOLDED_KEY_TEXT)
+        .max_by(|a, b| a.rect().left().total_cmp(&b.rect().left()))
+        .map(|n| n.rect().center());
+    if let Some(at) = rightmost {
+        h.hover_at(at);
+    }
+    h.run();
+    if let Some(dir) = std::env::var_os("SLAMLAB_UI_SHOTS")
+        && let Some(image) = super::common::render_or_skip(&mut h)
+    {
+        let _ = image.save(std::path::Path::new(&dir).join("folded-key-800x500.png"));
+    }
+    for entry in ["bound N, as log10(N) / 4", "best inlier share"] {
+        assert!(text_drawn(&h, entry), "{entry} shown on hover");
+    }
+    // At 1280 x 800 nothing is folded.
+    let mut h = harness(
+        "lesson=visual-odometry&seed=5&tick=12",
+        egui::vec2(1280.0, 800.0),
+    );
+    h.run();
+    assert_eq!(h.query_all_by_label(FOLDED_KEY_TEXT).count(), 0);
+    assert!(text_drawn(&h, "bound N, as log10(N) / 4"));
+}
+
 /// The fusion lesson's x, y and yaw error plots are scaled to the errors, not to
 /// the differential filter's 2σ band (metres, beyond ±π in yaw): each plot's y
 /// range reaches at least its largest error and at most `ERROR_HEADROOM` (1.25)
@@ -395,4 +487,68 @@ fn the_visual_odometry_keys_name_every_mark() {
         text_drawn(&h, "inlier of the final E") || text_drawn(&h, "inlier of the best E so far"),
         "whose inliers"
     );
+}
+
+/// The Cartographer lesson's *Max grids* window opens over the map, below the
+/// menu and the time bar (it covered the menu bar), at 1280 x 800 and 800 x 500.
+#[test]
+fn the_max_grids_window_stays_off_the_menu_and_the_time_bar() {
+    const TITLE: &str = "Precomputed max grids (Fig. 5.7)";
+    for size in [egui::vec2(1280.0, 800.0), egui::vec2(800.0, 500.0)] {
+        let mut h = harness("lesson=cartographer&seed=5&tick=12", size);
+        h.run();
+        assert!(h.query_by_label(TITLE).is_none());
+        h.get_by_label("Max grids").click();
+        h.run();
+        let window = h.get_by_label(TITLE).rect();
+        let button = h.get_by_label("Max grids").rect();
+        assert!(
+            window.intersect(button).area() <= 0.0,
+            "the window {window:?} leaves its button {button:?} in view"
+        );
+        let bar = h.state().time_bar_rect().unwrap_or(egui::Rect::NOTHING);
+        assert!(bar.is_positive(), "a time bar");
+        assert!(
+            window.top() >= bar.bottom(),
+            "at {size:?} the window's title {window:?} is under the time bar {bar:?}"
+        );
+        assert!(window.bottom() <= size.y && window.right() <= size.x);
+        if let Some(dir) = std::env::var_os("SLAMLAB_UI_SHOTS")
+            && let Some(image) = super::common::render_or_skip(&mut h)
+        {
+            let name = format!("max-grids-{}x{}.png", size.x, size.y);
+            let _ = image.save(std::path::Path::new(&dir).join(name));
+        }
+    }
+}
+
+/// The corridor's Kalman gain is a ratio of variances (m² / m²) and has no unit:
+/// where the gain plot is too short to name its y axis (density, 1/m) beside it,
+/// the title does not append "(1/m)" to the gain's value but names the axis.
+#[test]
+fn the_corridor_gain_has_no_unit_in_its_title() {
+    let mut h = harness(
+        "lesson=filters&seed=5&view=corridor&tick=60",
+        egui::vec2(800.0, 500.0),
+    );
+    h.run();
+    let titles: Vec<String> = super::common::drawn_texts(&h)
+        .into_iter()
+        .map(|(text, _, _)| text)
+        .filter(|t| t.starts_with("Kalman gain at step"))
+        .collect();
+    if let Some(dir) = std::env::var_os("SLAMLAB_UI_SHOTS")
+        && let Some(image) = super::common::render_or_skip(&mut h)
+    {
+        let _ = image.save(std::path::Path::new(&dir).join("corridor-gain-800x500.png"));
+    }
+    assert!(!titles.is_empty(), "the gain plot is drawn after a door");
+    for title in titles {
+        // Not "K = ... = 0.295 (1/m)".
+        let unit_on_value = title
+            .strip_suffix(" (1/m)")
+            .is_some_and(|before| before.ends_with(|c: char| c.is_ascii_digit()));
+        assert!(!unit_on_value, "{title}");
+        assert!(title.ends_with("; y: density (1/m)"), "{title}");
+    }
 }
