@@ -174,12 +174,16 @@ pub fn world_ui(ui: &mut egui::Ui, lesson: &mut LandmarkSlamLesson) {
                 world.duration()
             ));
             if world.truth.is_none() {
-                ui.label(match world.kind {
-                    DataSetKind::VictoriaPark => {
-                        "No true path: the GPS (drawn in grey, aligned to the estimate) is the                          only independent reference, so the error plots stay empty."
-                    }
-                    _ => "No true path in these files, so the error plots stay empty.",
+                ui.label(if world.reference.is_empty() {
+                    "No true path in these files, so the robot-error and NEES plots stay empty."
+                } else {
+                    "No true path: the GPS is the only independent reference, and it is no \
+                     truth (metres off under the trees, with dropouts), so the error plots stay \
+                     empty."
                 });
+            }
+            if !world.reference.is_empty() {
+                ui.label(gps_text(super::gps_fit_now(&lesson.session).as_ref()));
             }
         }
     }
@@ -232,6 +236,19 @@ pub fn world_ui(ui: &mut egui::Ui, lesson: &mut LandmarkSlamLesson) {
     );
     if world.is_some() && ui.button("Simulated world").clicked() {
         lesson.open_simulated_world();
+    }
+}
+
+/// What the World box says of the GPS fit: the offset of the GPS's frame
+/// and how far the path stays from the fixes once aligned.
+pub fn gps_text(fit: Option<&slamlab_sim::landmark_slam::real_data::GpsFit>) -> String {
+    match fit {
+        None => "GPS: drawn once two fixes pair with the path.".to_owned(),
+        Some(f) => format!(
+            "GPS (grey dots) aligned to the path: the path turned {:.1}° and moved by \
+             ({:.1}, {:.1}) m lies on the GPS's frame, {:.2} m RMS from the {} fixes so far.",
+            f.rotation_deg, f.translation_m[0], f.translation_m[1], f.rmse, f.pairs
+        ),
     }
 }
 

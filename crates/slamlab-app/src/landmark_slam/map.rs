@@ -54,17 +54,12 @@ pub fn map_ui(
             filter_label(names[other].kind.name()),
         )
     });
-    // A recorded world's square holds its landmarks and truth; Victoria Park has
-    // neither, so its GPS sets the extent.
-    let half = session
+    // A recorded world is fitted to what it holds (MRCLAM's room is 15 m x 8 m off
+    // the origin); the simulated one is the square around the origin.
+    let half = 0.5 * session.world().size;
+    let bounds = session
         .recorded_world()
-        .map_or(0.5 * session.world().size, |w| {
-            w.reference
-                .iter()
-                .fold(0.5 * session.world().size, |h, (_, p)| {
-                    h.max(p[0].abs()).max(p[1].abs())
-                })
-        });
+        .map_or([-half, -half, half, half], |w| recorded_bounds(w));
     if opts.legend {
         // The key on a line above the map, never over the world.
         let colors = CanvasColors::of(ui);
@@ -77,8 +72,7 @@ pub fn map_ui(
     }
     let truth = session.truth();
     let mut follow = opts.follow_robot.then_some([truth.x, truth.y]);
-    let (response, t) =
-        map_canvas::canvas_ui(ui, view, [-half, -half, half, half], 0.0, &mut follow, true);
+    let (response, t) = map_canvas::canvas_ui(ui, view, bounds, 0.0, &mut follow, true);
     opts.follow_robot = follow.is_some();
     let rect = t.rect;
     let colors = CanvasColors::of(ui);
@@ -92,6 +86,7 @@ pub fn map_ui(
         draw_truth_robot(&painter, &t, truth, colors.truth, colors.background);
     }
     let sigma_points_shown = draw_filters(&painter, &t, session, opts, &colors);
+    draw_gps(&painter, &t, session);
     ui.data_mut(|d| d.insert_temp(sigma_points_id(), sigma_points_shown));
     draw_scale_and_axes(&painter, &t, &colors);
     if opts.magnifier {
@@ -479,10 +474,55 @@ fn draw_world(
     }
 }
 
+/// What a recorded world's map is fitted to (`[x_min, y_min, x_max, y_max]`,
+/// metres): its landmarks and every robot's Vicon path (MRCLAM, the Freiburg
+/// files' landmarks), with a margin; Victoria Park has neither, so its GPS
+/// fixes, moved so that the first is on the start.
+pub fn recorded_bounds(world: &RecordedWorld) -> [f64; 4] {
+    let mut b = [
+        f64::INFINITY,
+        f64::INFINITY,
+        f64::NEG_INFINITY,
+        f64::NEG_INFINITY,
+    ];
+    let mut grow = |x: f64, y: f64| {
+        if x.is_finite() && y.is_finite() {
+            b = [b[0].min(x), b[1].min(y), b[2].max(x), b[3].max(y)];
+        }
+    };
+    grow(world.start.x, world.start.y);
+    for (l, _) in &world.landmarks {
+        grow(l.position[0], l.position[1]);
+    }
+    let tracks = world
+        .truth
+        .iter()
+        .chain(world.others.iter().map(|o| &o.truth));
+    for track in tracks {
+        for (_, p) in &track.samples {
+            grow(p.x, p.y);
+        }
+    }
+    // The GPS's extent with its first fix on the start: its frame is turned a
+    // few degrees from the estimate's at most (2.3° for EKF-SLAM's whole run).
+    if let Some((_, first)) = world.reference.first() {
+        for (_, p) in &world.reference {
+            grow(
+                world.start.x + p[0] - first[0],
+                world.start.y + p[1] - first[1],
+            );
+        }
+    }
+    // Without a true path (the Freiburg files) the robot drives around the
+    // landmarks: a wider margin keeps its path on the map.
+    let share = if world.truth.is_some() { 0.08 } else { 0.25 };
+    let margin = (share * (b[2] - b[0]).max(b[3] - b[1])).max(1.0);
+    [b[0] - margin, b[1] - margin, b[2] + margin, b[3] + margin]
+}
+
 /// A recorded world's references: its true path (MRCLAM's Vicon) up to now,
 /// split at its gaps (a gap is drawn as a gap, not bridged); the other robots
-/// where Vicon puts them now, greyed; the GPS fixes up to now (Victoria Park),
-/// in their own frame, as grey dots.
+/// where Vicon puts them now, greyed.
 fn draw_recorded_references(
     painter: &egui::Painter,
     t: &MapTransform,
@@ -531,12 +571,26 @@ fn draw_recorded_references(
             colors.weak_text,
         );
     }
+}
+
+/// The GPS fixes up to now (Victoria Park) as grey dots over the estimates,
+/// carried into the estimate's frame by the fit of the first filter's path
+/// (none before it can be fitted).
+fn draw_gps(painter: &egui::Painter, t: &MapTransform, session: &LandmarkSession) {
+    let Some(world) = session.recorded_world() else {
+        return;
+    };
+    let Some(gps) = super::gps_fit_now(session) else {
+        return;
+    };
+    let grey = palette::faded(palette::DEAD_RECKONING, 0.9);
+    let now = session.time();
     let end = world.reference.partition_point(|(time, _)| *time <= now);
     let stride = end / MAX_PATH_POINTS + 1;
     for (_, fix) in world.reference[..end].iter().step_by(stride) {
-        let p = t.v(fix);
+        let p = t.v(&Vector2::from(gps.to_estimate_frame([fix[0], fix[1]])));
         if finite(p) && t.rect.contains(p) {
-            painter.circle_filled(p, 1.5, grey);
+            painter.circle_filled(p, 1.8, grey);
         }
     }
 }
@@ -1088,23 +1142,60 @@ fn legend_entries(
     opts: &ViewOptions,
     sigma_points_shown: bool,
 ) -> Vec<LegendEntry> {
-    let mut entries = vec![
-        LegendEntry::new(
+    // A recorded world names its references by what they are, and leaves out
+    // what the data does not have.
+    let world = session.recorded_world();
+    let (truth, landmarks) = match world {
+        None => (Some("true robot and path"), Some("true landmark (id)")),
+        Some(w) => (
+            w.truth
+                .as_ref()
+                .map(|_| "Vicon robot and path (broken at its gaps)"),
+            (!w.landmarks.is_empty()).then_some(match w.kind {
+                slamlab_sim::io::landmark_data::DataSetKind::Freiburg => "world.dat landmark (id)",
+                _ => "surveyed landmark (id)",
+            }),
+        ),
+    };
+    let mut entries = Vec::new();
+    if let Some(text) = truth {
+        entries.push(LegendEntry::new(
             vec![
                 (Symbol::TruthRobot, colors.truth),
                 (Symbol::Line { dashed: false }, colors.truth),
             ],
-            "true robot and path",
-        ),
-        LegendEntry::new(
-            vec![(Symbol::Line { dashed: true }, palette::DEAD_RECKONING)],
-            "dead reckoning",
-        ),
-        LegendEntry::new(
+            text,
+        ));
+    }
+    entries.push(LegendEntry::new(
+        vec![(Symbol::Line { dashed: true }, palette::DEAD_RECKONING)],
+        "dead reckoning",
+    ));
+    if let Some(text) = landmarks {
+        entries.push(LegendEntry::new(
             vec![(Symbol::TrueLandmark, colors.truth)],
-            "true landmark (id)",
-        ),
-    ];
+            text,
+        ));
+    }
+    let grey = palette::faded(palette::DEAD_RECKONING, 0.8);
+    if world.is_some_and(|w| !w.others.is_empty()) {
+        entries.push(LegendEntry::new(
+            vec![(Symbol::TruthRobot, grey), (Symbol::Ray, grey)],
+            "other robots (Vicon) and sightings of them: not used",
+        ));
+    }
+    if world.is_some_and(|w| !w.reference.is_empty()) {
+        entries.push(LegendEntry::new(
+            vec![(Symbol::SigmaPoints, grey)],
+            format!(
+                "GPS fixes, aligned to the {} path",
+                session
+                    .filters()
+                    .first()
+                    .map_or("estimated".to_owned(), |r| filter_label(r.kind.name()))
+            ),
+        ));
+    }
     for (index, run) in session.filters().iter().enumerate() {
         let secondary = index > 0;
         let color = palette::estimator_color(run.kind.name());

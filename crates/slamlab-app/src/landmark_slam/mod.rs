@@ -87,6 +87,27 @@ impl Default for ViewOptions {
     }
 }
 
+/// The first filter's path so far carried onto the data's GPS (Victoria Park):
+/// the rigid transform between the GPS's frame and the estimate's, and the RMS
+/// distance that remains ([`slamlab_sim::landmark_slam::real_data::gps_fit`], as
+/// `slamlab experiment real-data` reports it for the whole run). `None` without
+/// a GPS or before two fixes pair with the path.
+pub fn gps_fit_now(
+    session: &LandmarkSession,
+) -> Option<slamlab_sim::landmark_slam::real_data::GpsFit> {
+    let world = session.recorded_world()?;
+    if world.reference.is_empty() {
+        return None;
+    }
+    let filters = session.filters();
+    let run = filters.first()?;
+    let path = slamlab_sim::metrics::Trajectory::new(
+        session.tick_times().to_vec(),
+        run.records().path.clone(),
+    );
+    slamlab_sim::landmark_slam::real_data::gps_fit(world, &path)
+}
+
 /// The robot's sigma points if the filter is sigma-point based (UKF), else none.
 pub fn robot_sigma_points(filter: &dyn LandmarkSlam) -> Vec<Pose2> {
     filter.robot_sigma_points()
@@ -766,6 +787,7 @@ impl Lesson for LandmarkSlamLesson {
                 "steps": steps,
                 "finished": session.is_finished(),
                 "truth_known": session.true_pose().is_some(),
+                "gps": gps_fit_now(session),
             })
         });
         // The latest robot position error (m) against the truth, per filter, and

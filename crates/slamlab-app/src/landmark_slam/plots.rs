@@ -11,6 +11,7 @@ pub(super) use crate::widgets::plots::{line_width, thin, time_plot};
 use egui_plot::{HLine, LineStyle, Plot, Span};
 use slamlab_core::stats::chi2_quantile;
 use slamlab_sim::LandmarkSession;
+use slamlab_sim::world::recorded::MAX_TRUTH_GAP;
 
 /// The 95% two-sided chi-square band of one sample with `dof` degrees of freedom.
 pub fn band_95(dof: f64) -> (f64, f64) {
@@ -116,7 +117,8 @@ pub fn truth_note(session: &LandmarkSession) -> Option<String> {
             if world.reference.is_empty() {
                 ""
             } else {
-                " The GPS (grey dots, in its own frame) is the only independent reference."
+                " The GPS (grey dots, aligned to the path) is the only independent reference; \
+                 the World box gives the fit."
             }
         )),
         Some(track) => {
@@ -155,7 +157,12 @@ pub fn plots_ui(ui: &mut egui::Ui, session: &LandmarkSession) {
         "· solid: error, NEES, NIS; dashed: the filter's own 2σ bound; green: the 95% band \
          of a consistent filter",
     );
-    let all = plotted(session);
+    let all = split_at_gaps(plotted(session), session);
+    // Inside a plot the data cannot fill: why it is empty.
+    let no_truth = session
+        .recorded_world()
+        .is_some_and(|w| w.truth.is_none())
+        .then_some("no true path in the data");
     let height = ui.available_height().max(80.0);
     let figure = |title: &'static str, hover: &'static str, y_label: &'static str| Figure {
         title,
@@ -176,7 +183,10 @@ pub fn plots_ui(ui: &mut egui::Ui, session: &LandmarkSession) {
                     "error (m)",
                 ),
                 |h, y| plot("plot_robot_error", y, h),
-                |plot_ui| draw_series(plot_ui, &all, ROBOT_ERROR),
+                |plot_ui| {
+                    draw_series(plot_ui, &all, ROBOT_ERROR);
+                    empty_note(plot_ui, no_truth);
+                },
             );
         }
         // 2. Landmark RMS error.
@@ -189,7 +199,10 @@ pub fn plots_ui(ui: &mut egui::Ui, session: &LandmarkSession) {
                     "RMS error (m)",
                 ),
                 |h, y| plot("plot_landmark_rmse", y, h),
-                |plot_ui| draw_series(plot_ui, &all, LANDMARK_ERROR),
+                |plot_ui| {
+                    draw_series(plot_ui, &all, LANDMARK_ERROR);
+                    empty_note(plot_ui, no_truth);
+                },
             );
         }
         // 3. Robot-pose NEES with the 3-dof band.
@@ -207,6 +220,7 @@ pub fn plots_ui(ui: &mut egui::Ui, session: &LandmarkSession) {
                 |plot_ui| {
                     band_ui(plot_ui, lo, hi);
                     draw_series(plot_ui, &all, NEES);
+                    empty_note(plot_ui, no_truth);
                 },
             );
         }
@@ -231,6 +245,51 @@ pub fn plots_ui(ui: &mut egui::Ui, session: &LandmarkSession) {
     });
 }
 
+/// Writes `note` in the middle of a plot that has no data for want of it (in
+/// place of the shared "press Run" text: running will not fill it).
+fn empty_note(plot_ui: &mut egui_plot::PlotUi<'_>, note: Option<&str>) {
+    if let Some(note) = note {
+        crate::widgets::plots::note_drawn(plot_ui.ctx(), true);
+        let b = plot_ui.plot_bounds();
+        let centre = egui_plot::PlotPoint::new(
+            0.5 * (b.min()[0] + b.max()[0]),
+            0.5 * (b.min()[1] + b.max()[1]),
+        );
+        plot_ui.text(
+            egui_plot::Text::new("", centre, note)
+                .color(palette::faded(palette::DEAD_RECKONING, 0.9)),
+        );
+    }
+}
+
+/// The series over time split where a recorded world's truth has a gap (no
+/// sample for longer than [`MAX_TRUTH_GAP`]), so that a gap is drawn as a gap
+/// and not bridged by a straight line. The NIS (points) and the export are
+/// not split.
+fn split_at_gaps(all: Vec<Styled>, session: &LandmarkSession) -> Vec<Styled> {
+    if session.recorded_world().is_none_or(|w| w.truth.is_none()) {
+        return all;
+    }
+    let mut out = Vec::with_capacity(all.len());
+    for styled in all {
+        if styled.data.plot == NIS || styled.data.points.len() < 2 {
+            out.push(styled);
+            continue;
+        }
+        let points = &styled.data.points;
+        let mut start = 0;
+        for i in 1..=points.len() {
+            if i == points.len() || points[i][0] - points[i - 1][0] > MAX_TRUTH_GAP {
+                let mut piece = styled.clone();
+                piece.data.points = points[start..i].to_vec();
+                out.push(piece);
+                start = i;
+            }
+        }
+    }
+    out
+}
+
 const ROBOT_ERROR: &str = "Robot position error";
 const LANDMARK_ERROR: &str = "Mean landmark error";
 const NEES: &str = "Robot pose NEES (3 dof)";
@@ -241,6 +300,14 @@ const NIS: &str = "Update NIS (2 dof)";
 /// plots).
 fn plotted(session: &LandmarkSession) -> Vec<Styled> {
     let dt = session.scenario().dt;
+    let times = session.tick_times();
+    let recorded = session.recorded_world().is_some();
+    // An update's time: its tick's (a recorded world's steps are not `dt` apart).
+    let nis_time = |tick: u64| match times.get(tick as usize) {
+        Some(&time) if recorded => time,
+        _ if recorded => session.time(),
+        _ => tick as f64 * dt,
+    };
     let mut out = Vec::new();
     for (index, run) in session.filters().iter().enumerate() {
         let name = run.kind.name().to_uppercase();
@@ -296,10 +363,7 @@ fn plotted(session: &LandmarkSession) -> Vec<Styled> {
             NIS,
             "NIS",
             "NIS",
-            run.nis
-                .iter()
-                .map(|s| [s.tick as f64 * dt, s.nis])
-                .collect(),
+            run.nis.iter().map(|s| [nis_time(s.tick), s.nis]).collect(),
             Mark::Dots,
             1.4,
         );

@@ -10,6 +10,7 @@ use egui_kittest::kittest::Queryable as _;
 use slamlab_app::SlamLabApp;
 use slamlab_app::landmark_slam::LandmarkSlamLesson;
 use slamlab_app::lesson::Lesson as _;
+use slamlab_app::widgets::file_picker::PickedFile;
 use slamlab_sim::LandmarkSession;
 use slamlab_sim::io::landmark_data::read_path;
 use slamlab_sim::world::recorded::RecordedWorld;
@@ -54,7 +55,6 @@ fn state(h: &Harness<'_, SlamLabApp>) -> serde_json::Value {
 }
 
 #[test]
-#[ignore = "compiled and clippy-clean, not yet run (the shared VM was too loaded to build the test binary on 2026-11-28): run with --ignored and SLAMLAB_SHARED_DATA"]
 fn mrclam_opens_by_url_and_its_error_against_vicon_is_the_headless_runs() {
     let Some(zip) = mrclam_zip() else {
         return;
@@ -98,6 +98,12 @@ fn mrclam_opens_by_url_and_its_error_against_vicon_is_the_headless_runs() {
     let expected = (errors.iter().map(|e| e * e).sum::<f64>() / errors.len() as f64).sqrt();
     assert_eq!(samples as usize, errors.len());
     assert_eq!(rmse.to_bits(), expected.to_bits(), "{rmse} vs {expected}");
+    // The number the browser check (web/tests/browser.test.mjs) must meet to the bit.
+    assert_eq!(
+        rmse.to_bits(),
+        0.110_770_039_556_145_62_f64.to_bits(),
+        "{rmse}"
+    );
     // One error sample per tick where Vicon knows the pose (none in its gaps).
     assert!(
         samples > TICKS as u64 / 2 && samples <= TICKS as u64,
@@ -189,24 +195,56 @@ fn a_file_that_is_no_data_set_leaves_the_simulated_world_open() {
     assert!(note.contains("absent.zip"), "{note}");
 }
 
+/// The files of a data set under `../shared/data/landmarks/<folder>` as a drop
+/// hands them over, or `None` with a message when they are absent.
+fn dropped(folder: &str, names: &[&str]) -> Option<Vec<PickedFile>> {
+    let Some(data) = slamlab_fuzz::shared_data() else {
+        println!("skipped: ../shared/data is absent (or set SLAMLAB_SHARED_DATA)");
+        return None;
+    };
+    let mut files = Vec::new();
+    for name in names {
+        let path = data.join("landmarks").join(folder).join(name);
+        match std::fs::read(&path) {
+            Ok(bytes) => files.push(((*name).to_owned(), Ok(bytes))),
+            Err(e) => {
+                println!("skipped: {} is absent ({e})", path.display());
+                return None;
+            }
+        }
+    }
+    Some(files)
+}
+
+/// Saves a screenshot into `SLAMLAB_UI_SHOTS` when it names a folder, else into
+/// the tests' scratch folder.
+fn save_shot(image: &image::RgbaImage, name: &str) {
+    let path = match std::env::var_os("SLAMLAB_UI_SHOTS") {
+        Some(dir) => std::path::Path::new(&dir).join(format!("{name}.png")),
+        None => shot(name),
+    };
+    image
+        .save(&path)
+        .unwrap_or_else(|e| eprintln!("could not save the screenshot {}: {e}", path.display()));
+}
+
+/// The three sizes every data set is looked at in: a lecture's 800 x 500 embed,
+/// the app at 800 x 500, and at 1280 x 800.
+const SHOT_SIZES: [(f32, f32, bool, &str); 3] = [
+    (800.0, 500.0, true, "lecture_800x500"),
+    (800.0, 500.0, false, "800x500"),
+    (1280.0, 800.0, false, "1280x800"),
+];
+
 #[test]
-#[ignore = "compiled and clippy-clean, not yet run (the shared VM was too loaded to build the test binary on 2026-11-28): run with --ignored and SLAMLAB_SHARED_DATA"]
 fn mrclam_renders_at_800_by_500_in_a_lecture_and_full_size() {
     let Some(zip) = mrclam_zip() else {
         return;
     };
-    for (size, embed, name) in [
-        (
-            egui::vec2(800.0, 500.0),
-            true,
-            "landmark_mrclam_lecture_800x500",
-        ),
-        (egui::vec2(800.0, 500.0), false, "landmark_mrclam_800x500"),
-        (egui::vec2(1400.0, 900.0), false, "landmark_mrclam_full"),
-    ] {
+    for (w, h_, embed, size) in SHOT_SIZES {
         let embed = if embed { "&embed=1" } else { "" };
         let query = format!("lesson=landmark-slam&data={zip}&estimator=ekf{embed}");
-        let mut h = harness_sized(&query, size);
+        let mut h = harness_sized(&query, egui::vec2(w, h_));
         wait_for_data(&mut h);
         for _ in 0..20_000 {
             lesson_of_mut::<LandmarkSlamLesson>(&mut h).step_tick();
@@ -215,8 +253,55 @@ fn mrclam_renders_at_800_by_500_in_a_lecture_and_full_size() {
         let Some(image) = render_or_skip(&mut h) else {
             return;
         };
-        image
-            .save(shot(name))
-            .unwrap_or_else(|e| eprintln!("could not save the screenshot: {e}"));
+        save_shot(&image, &format!("landmark_mrclam_{size}"));
+    }
+}
+
+#[test]
+fn freiburg_and_victoria_park_render_with_their_notes() {
+    let sets: [(&str, &[&str], usize, &str); 2] = [
+        (
+            "freiburg",
+            &["world.dat", "sensor_data.dat"],
+            200,
+            "freiburg",
+        ),
+        (
+            "victoria_park",
+            &["inputs.dat", "measurements.dat", "gps.dat"],
+            3_000,
+            "victoria_park",
+        ),
+    ];
+    for (folder, names, ticks, label) in sets {
+        let Some(files) = dropped(folder, names) else {
+            return;
+        };
+        for (w, h_, embed, size) in SHOT_SIZES {
+            let embed = if embed { "&embed=1" } else { "" };
+            let mut h = harness_sized(&format!("lesson=landmark-slam{embed}"), egui::vec2(w, h_));
+            h.run();
+            lesson_of_mut::<LandmarkSlamLesson>(&mut h).open_files(files.clone());
+            for _ in 0..ticks {
+                lesson_of_mut::<LandmarkSlamLesson>(&mut h).step_tick();
+            }
+            h.run();
+            let s = state(&h);
+            assert_eq!(s["data"]["played"], ticks, "{s}");
+            assert_eq!(s["data"]["truth_known"], false, "{s}");
+            if label == "victoria_park" {
+                // The GPS is fitted to the EKF's path so far and drawn in its frame.
+                let gps = &s["data"]["gps"];
+                let rmse = gps["rmse"].as_f64().unwrap_or(f64::NAN);
+                assert!(gps["pairs"].as_u64().unwrap_or(0) > 100, "{gps}");
+                assert!(rmse.is_finite() && rmse < 20.0, "{gps}");
+            } else {
+                assert!(s["data"]["gps"].is_null(), "{s}");
+            }
+            let Some(image) = render_or_skip(&mut h) else {
+                return;
+            };
+            save_shot(&image, &format!("landmark_{label}_{size}"));
+        }
     }
 }

@@ -13,8 +13,9 @@ use anyhow::{Result, bail};
 use clap::{Arg, ArgMatches, Command};
 use rayon::prelude::*;
 use slamlab_sim::io::landmark_data::LandmarkData;
-use slamlab_sim::landmark_slam::real_data::{RealDataRow, RealEstimator, run_robot};
-use slamlab_sim::landmark_slam::summary::parameters_json;
+use slamlab_sim::landmark_slam::real_data::{
+    RealDataRow, RealEstimator, parameters_used, run_robot,
+};
 use slamlab_sim::world::landmark_scenario::MapMode;
 use slamlab_sim::world::recorded::data_source;
 use std::fmt::Write as _;
@@ -33,7 +34,7 @@ impl Experiment for RealData {
     }
 
     fn about(&self) -> &'static str {
-        "The landmark filters on a recorded data set (MRCLAM with Vicon truth): trajectory RMSE, landmark RMSE, ANEES and time in band per robot, estimator and mode"
+        "The landmark filters on a recorded data set (MRCLAM with Vicon truth): trajectory RMSE, landmark RMSE, ANEES and time in band per robot, estimator and mode; on Victoria Park the GPS alignment RMSE"
     }
 
     fn command(&self) -> Command {
@@ -124,6 +125,9 @@ impl Experiment for RealData {
             rows.extend(result.map_err(|e| anyhow::anyhow!(e))?);
         }
         let source = data_source(data.kind());
+        // What the rows ran with: the data set's noise and the lists run, not
+        // the base scenario's simulated world.
+        let parameters = parameters_used(&base, data.kind(), &estimators, &modes, &robots);
         out.write_csv("real-data.csv", || csv(&rows))?;
         let report = serde_json::json!({
             "experiment": "real-data",
@@ -132,7 +136,7 @@ impl Experiment for RealData {
                 "source": source.source,
                 "citation": source.citation,
             },
-            "parameters": parameters_json(&base),
+            "parameters": parameters,
             "results": rows,
         });
         if out.print_json(&report)? {
@@ -141,7 +145,7 @@ impl Experiment for RealData {
         writeln!(out, "SLAM Lab experiment real-data: {}", source.title)?;
         writeln!(out, "cite: {}", source.citation)?;
         writeln!(out)?;
-        out.parameters(&parameters_json(&base), 24)?;
+        out.parameters(&parameters, 24)?;
         writeln!(out)?;
         let fmt = |v: Option<f64>, digits: usize| match v {
             None => "-".to_owned(),
@@ -176,6 +180,30 @@ impl Experiment for RealData {
                     .as_ref()
                     .map_or(String::new(), |e| format!("  (last error: {e})"))
             )?;
+        }
+        if rows.iter().any(|r| r.gps.is_some()) {
+            writeln!(out)?;
+            writeln!(
+                out,
+                "Against the GPS (no truth: metres of its own error, dropouts), each path \
+                 aligned to the fixes by the rigid transform that fits them best:"
+            )?;
+            for r in &rows {
+                if let Some(g) = &r.gps {
+                    writeln!(
+                        out,
+                        "  {:<15} GPS alignment RMSE {:.2} m over {} of {} fixes; the path turned \
+                         {:.2}° and moved ({:.2}, {:.2}) m",
+                        r.estimator,
+                        g.rmse,
+                        g.pairs,
+                        g.fixes,
+                        g.rotation_deg,
+                        g.translation_m[0],
+                        g.translation_m[1]
+                    )?;
+                }
+            }
         }
         writeln!(out)?;
         writeln!(
@@ -241,13 +269,13 @@ fn robots(matches: &ArgMatches, data: &LandmarkData) -> Result<Vec<u32>> {
 /// The rows as CSV.
 fn csv(rows: &[RealDataRow]) -> String {
     let mut text = String::from(
-        "robot,estimator,mode,trajectory_rmse_m,landmark_rmse_m,anees,in_band,pairs,coverage,landmarks\n",
+        "robot,estimator,mode,trajectory_rmse_m,landmark_rmse_m,anees,in_band,pairs,coverage,landmarks,gps_rmse_m,gps_pairs\n",
     );
     let opt = |v: Option<f64>| v.map_or(String::new(), |v| v.to_string());
     for r in rows {
         let _ = writeln!(
             text,
-            "{},{},{},{},{},{},{},{},{},{}",
+            "{},{},{},{},{},{},{},{},{},{},{},{}",
             r.robot,
             r.estimator,
             r.mode,
@@ -257,7 +285,9 @@ fn csv(rows: &[RealDataRow]) -> String {
             opt(r.in_band),
             r.pairs,
             r.coverage,
-            r.landmarks
+            r.landmarks,
+            opt(r.gps.map(|g| g.rmse)),
+            r.gps.map_or(String::new(), |g| g.pairs.to_string())
         );
     }
     text

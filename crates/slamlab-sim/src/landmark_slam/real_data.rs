@@ -75,6 +75,11 @@ pub struct RealDataRow {
     pub coverage: f64,
     /// Landmarks in the final map.
     pub landmarks: usize,
+    /// The path against the data's GPS (Victoria Park), after the rigid
+    /// alignment that carries it onto the fixes: not an error against a truth
+    /// (the GPS has metres of its own error and gaps) but how well the path's
+    /// shape agrees with an independent sensor. `None` without a GPS.
+    pub gps: Option<GpsFit>,
     /// The filter's last error, if a phase failed.
     pub error: Option<String>,
 }
@@ -249,26 +254,186 @@ fn score(
         pairs: evaluation.as_ref().map_or(0, |e| e.pairing.pairs),
         coverage: evaluation.as_ref().map_or(0.0, |e| e.pairing.coverage),
         landmarks: map.map_or(0, <[_]>::len),
+        gps: gps_fit(world, estimate),
         error,
     }
+}
+
+/// The scenario's parameters that do not reach a replay of any data set: the
+/// simulated world's (its landmarks, layout and size), the scripted robot's
+/// (controller, speed, turn rate, tick length: the data has its own steps) and
+/// the simulated car's wheel base (Victoria Park's car is the data's).
+const SIMULATION_ONLY: [&str; 8] = [
+    "controller",
+    "v",
+    "w-deg",
+    "dt",
+    "landmarks",
+    "layout",
+    "world-size",
+    "wheel-base",
+];
+
+/// The parameters a run of `slamlab experiment real-data` used, as
+/// [`crate::landmark_slam::summary::parameters_json`] prints them, but only
+/// those that reach the replay of `kind`: the data set's motion noise (MRCLAM's
+/// `(v, ω)` noise and velocity model, the Freiburg odometry's `(δrot1, δtrans,
+/// δrot2)` noise, Victoria Park's speed and steering noise), the camera's or
+/// laser's noise and reach, the association and its gates, and the filters'
+/// own settings for the filters that ran. `estimator`, `mode` and `robot` are
+/// the lists the experiment ran, not the base scenario's single values.
+pub fn parameters_used(
+    base: &LandmarkScenario,
+    kind: crate::io::landmark_data::DataSetKind,
+    estimators: &[RealEstimator],
+    modes: &[MapMode],
+    robots: &[u32],
+) -> serde_json::Map<String, serde_json::Value> {
+    use crate::io::landmark_data::DataSetKind;
+    use crate::world::landmark_scenario::Association;
+    let motion: &[&str] = match kind {
+        DataSetKind::Mrclam => &["v-std", "w-std-deg", "motion"],
+        DataSetKind::Freiburg => &["odometry-rot-std", "odometry-trans-std"],
+        DataSetKind::VictoriaPark => &["v-std", "steering-std-deg"],
+    };
+    let other_motion = [
+        "v-std",
+        "w-std-deg",
+        "motion",
+        "odometry-rot-std",
+        "odometry-trans-std",
+        "steering-std-deg",
+    ];
+    let runs = |f: fn(EstimatorKind) -> bool| {
+        estimators
+            .iter()
+            .any(|e| matches!(e, RealEstimator::Filter(k) if f(*k)))
+    };
+    let ukf = runs(|k| k == EstimatorKind::Ukf);
+    let particles = runs(|k| matches!(k, EstimatorKind::FastSlam1 | EstimatorKind::FastSlam2));
+    let unknown = base.association == Association::Unknown;
+    let mut used = crate::landmark_slam::summary::parameters_json(base);
+    used.retain(|name, _| {
+        let name = name.as_str();
+        !SIMULATION_ONLY.contains(&name)
+            && (motion.contains(&name) || !other_motion.contains(&name))
+            && (ukf || !name.starts_with("ukf-"))
+            && (particles
+                || !matches!(
+                    name,
+                    "particles" | "fastslam-resampler" | "resample-threshold" | "seed"
+                ))
+            && (unknown || !matches!(name, "gate" | "new-landmark-threshold"))
+    });
+    let list = |items: Vec<String>| serde_json::Value::String(items.join(","));
+    used.insert(
+        "estimator".to_owned(),
+        list(estimators.iter().map(|e| e.name().to_owned()).collect()),
+    );
+    used.insert(
+        "mode".to_owned(),
+        list(modes.iter().map(|m| m.name().to_owned()).collect()),
+    );
+    match kind {
+        DataSetKind::Mrclam => {
+            used.insert(
+                "robot".to_owned(),
+                list(robots.iter().map(u32::to_string).collect()),
+            );
+        }
+        DataSetKind::Freiburg | DataSetKind::VictoriaPark => {
+            used.remove("robot");
+        }
+    }
+    used
+}
+
+/// How far apart two paired times of the path and the GPS may be, seconds:
+/// Victoria Park's steps come at about 40 Hz (inputs) with laser scans between,
+/// so every fix inside the run has a step within about 13 ms.
+pub const GPS_MAX_DIFF: f64 = 0.05;
+
+/// An estimated path carried onto a data set's GPS fixes (Victoria Park) by
+/// the rigid transform that fits them best (Umeyama's method over the fixes
+/// paired with the path's poses in time, [`crate::metrics::umeyama`]), and the
+/// distance that remains: the GPS alignment RMSE
+/// `sqrt(1/N Σ |g_i - (R p_i + t)|²)` over the `N` pairs.
+///
+/// The GPS is no truth: its fixes are off by metres under the trees and it
+/// drops out, so the RMSE bounds how well the path's shape agrees with an
+/// independent sensor (and includes the GPS's own error), and the transform is
+/// where the GPS's frame sits against the estimate's (for EKF-SLAM's whole
+/// Victoria Park run: 2.3° and (-1.6, -0.6) m, `docs/real-landmark-data.md`).
+#[derive(Clone, Copy, Debug, PartialEq, Serialize)]
+pub struct GpsFit {
+    /// The RMS distance between the fixes and the aligned path, metres.
+    pub rmse: f64,
+    /// The fixes paired with a pose of the path (within [`GPS_MAX_DIFF`]).
+    pub pairs: usize,
+    /// The fixes the data has.
+    pub fixes: usize,
+    /// The rotation that carries the path into the GPS's frame, degrees.
+    pub rotation_deg: f64,
+    /// The translation that carries the path into the GPS's frame, metres.
+    pub translation_m: [f64; 2],
+    /// The transform itself (estimate to GPS).
+    #[serde(skip)]
+    pub similarity: Similarity,
+}
+
+impl GpsFit {
+    /// A GPS fix in the estimate's frame (the alignment undone:
+    /// `Rᵀ (g - t)`), for drawing it over the estimate.
+    pub fn to_estimate_frame(&self, fix: [f64; 2]) -> [f64; 2] {
+        let (s, c) = slamlab_core::math::sin_cos(self.similarity.rotation);
+        let [tx, ty] = self.similarity.translation;
+        let (dx, dy) = (fix[0] - tx, fix[1] - ty);
+        let k = 1.0 / self.similarity.scale;
+        [k * (c * dx + s * dy), k * (-s * dx + c * dy)]
+    }
+}
+
+/// The path `estimate` against the GPS of `world` ([`GpsFit`]); `None`
+/// without a GPS or with fewer than two distinct paired positions.
+pub fn gps_fit(world: &RecordedWorld, estimate: &Trajectory) -> Option<GpsFit> {
+    let evaluation = reference_alignment(world, estimate, GPS_MAX_DIFF)?;
+    Some(GpsFit {
+        rmse: evaluation.ape.translation.rmse,
+        pairs: evaluation.pairing.pairs,
+        fixes: world.reference.len(),
+        rotation_deg: evaluation.alignment.rotation_deg,
+        translation_m: evaluation.alignment.translation_m,
+        similarity: evaluation.similarity,
+    })
 }
 
 /// The estimated path against a recorded world's reference (Victoria Park's GPS,
 /// in a frame of its own): the rigid transform that best carries the path onto
 /// the fixes (Umeyama's method over the pairs within `max_diff` seconds) and the
-/// RMS distance that remains. `None` without a reference or a pair.
+/// RMS distance that remains, over the fixes within the path's time span. `None`
+/// without a reference or a pair.
 pub fn reference_alignment(
     world: &RecordedWorld,
     estimate: &Trajectory,
     max_diff: f64,
 ) -> Option<crate::metrics::Evaluation> {
-    if world.reference.is_empty() {
+    // Only the fixes within the path's time span: a path still being driven
+    // (the lesson's) is then the longer of the two, and each fix finds its step
+    // (evo pairs from the shorter trajectory, which would otherwise be the path,
+    // pairing one fix with every step near it).
+    let start = estimate.stamps().first()? - max_diff;
+    let end = estimate.stamps().last()? + max_diff;
+    let fixes: Vec<&(f64, nalgebra::Vector2<f64>)> = world
+        .reference
+        .iter()
+        .filter(|(t, _)| (start..=end).contains(t))
+        .collect();
+    if fixes.is_empty() {
         return None;
     }
     let reference = Trajectory::new(
-        world.reference.iter().map(|(t, _)| *t).collect(),
-        world
-            .reference
+        fixes.iter().map(|(t, _)| *t).collect(),
+        fixes
             .iter()
             .map(|(_, p)| slamlab_core::Pose2::new(p[0], p[1], 0.0))
             .collect(),

@@ -304,3 +304,131 @@ fn freiburg_ekf_slam_places_all_nine_landmarks_near_world_dat() {
     );
     assert!(aligned_worst < 0.05, "{aligned_worst}");
 }
+
+#[test]
+fn the_parameters_printed_are_the_data_sets_noise_and_the_lists_that_ran() {
+    use crate::io::landmark_data::DataSetKind;
+    let ekf = RealEstimator::Filter(EstimatorKind::Ekf);
+    let both = [MapMode::Slam, MapMode::Localization];
+    // MRCLAM: the noise measured against Vicon (presets::MRCLAM_NOISE), the
+    // robots, estimators and modes of the run.
+    let mrclam = presets::scenario("mrclam", 1).unwrap();
+    let p = parameters_used(
+        &mrclam,
+        DataSetKind::Mrclam,
+        &[RealEstimator::DeadReckoning, ekf],
+        &both,
+        &[1, 3],
+    );
+    assert_eq!(p["v-std"], 0.062);
+    assert_eq!(p["w-std-deg"], 7.2);
+    assert_eq!(p["range-std"], 0.13);
+    assert_eq!(p["bearing-std-deg"], 0.48);
+    assert_eq!(p["estimator"], "dead-reckoning,ekf");
+    assert_eq!(p["mode"], "slam,localization");
+    assert_eq!(p["robot"], "1,3");
+    for absent in [
+        "odometry-rot-std",
+        "steering-std-deg",
+        "landmarks",
+        "controller",
+        "v",
+        "world-size",
+        "dt",
+        "ukf-alpha",
+        "particles",
+        "gate",
+    ] {
+        assert!(!p.contains_key(absent), "{absent} in {p:?}");
+    }
+    // The Freiburg files: the course's odometry noise, no robot to choose.
+    let freiburg = presets::scenario("freiburg", 1).unwrap();
+    let p = parameters_used(
+        &freiburg,
+        DataSetKind::Freiburg,
+        &[ekf, RealEstimator::Filter(EstimatorKind::Ukf)],
+        &[MapMode::Slam],
+        &[0],
+    );
+    assert_eq!(p["odometry-rot-std"], 0.005);
+    assert_eq!(p["odometry-trans-std"], 0.01);
+    assert_eq!(p["range-std"], 0.1);
+    assert_eq!(p["ukf-alpha"], 1.0);
+    for absent in ["v-std", "w-std-deg", "robot", "motion", "seed"] {
+        assert!(!p.contains_key(absent), "{absent} in {p:?}");
+    }
+    // Victoria Park: speed and steering noise, unknown association and its
+    // gates, FastSLAM's particles and seed.
+    let park = presets::scenario("victoria-park", 1).unwrap();
+    let p = parameters_used(
+        &park,
+        DataSetKind::VictoriaPark,
+        &[ekf, RealEstimator::Filter(EstimatorKind::FastSlam2)],
+        &[MapMode::Slam],
+        &[0],
+    );
+    assert_eq!(p["v-std"], 0.5);
+    assert_eq!(p["steering-std-deg"], 3.0);
+    assert_eq!(p["association"], "unknown");
+    assert!(p.contains_key("gate") && p.contains_key("particles") && p.contains_key("seed"));
+    for absent in ["w-std-deg", "odometry-rot-std", "robot", "wheel-base"] {
+        assert!(!p.contains_key(absent), "{absent} in {p:?}");
+    }
+}
+
+#[test]
+fn victoria_park_ekf_path_fits_the_gps_better_than_dead_reckoning() {
+    let Some(data) = shared("victoria_park") else {
+        return;
+    };
+    let world = Arc::new(RecordedWorld::from_data(&data, 0).unwrap());
+    let scenario = LandmarkScenario {
+        estimators: vec![EstimatorKind::Ekf],
+        ..presets::scenario("victoria-park", 1).unwrap()
+    };
+    // The first 6,000 steps (about 135 s of driving): the whole run is the
+    // experiment's (docs/real-landmark-data.md), a minute of CPU.
+    let mut session = LandmarkSession::recorded(scenario, world.clone());
+    session.run_ticks(6000);
+    let times = session.tick_times().to_vec();
+    let ekf = gps_fit(
+        &world,
+        &Trajectory::new(times.clone(), session.filters()[0].records().path.clone()),
+    )
+    .unwrap();
+    let dead = gps_fit(
+        &world,
+        &Trajectory::new(times, session.dead_reckoning_path().to_vec()),
+    )
+    .unwrap();
+    let landmarks = session.filters()[0].filter().landmarks().len();
+    println!(
+        "to {:.1} s: EKF {ekf:?} with {landmarks} landmarks; dead reckoning {dead:?}",
+        session.time()
+    );
+    // Every fix of the span pairs with a step (about 2.9 fixes a second).
+    assert_eq!((ekf.pairs, dead.pairs, ekf.fixes), (384, 384, 4466));
+    assert!(ekf.rmse < 0.2 * dead.rmse, "{ekf:?} {dead:?}");
+    // The numbers docs/real-landmark-data.md reports for this span.
+    assert!((ekf.rmse - 1.034_874_020_235_089_2).abs() < 1e-9, "{ekf:?}");
+    assert!(
+        (dead.rmse - 12.008_116_334_252_158).abs() < 1e-9,
+        "{dead:?}"
+    );
+    assert_eq!(landmarks, 113);
+    // Half-way (as the lesson fits the path so far): each fix from the start
+    // until then pairs once, none of the later ones (nor the first fix, 0.85 s
+    // before the data's first step).
+    let half = Trajectory::new(
+        session.tick_times()[..3001].to_vec(),
+        session.filters()[0].records().path[..3001].to_vec(),
+    );
+    let end = session.tick_times()[3000];
+    let so_far = world
+        .reference
+        .iter()
+        .filter(|(t, _)| (0.0..=end).contains(t))
+        .count();
+    let fit = gps_fit(&world, &half).unwrap();
+    assert_eq!((fit.pairs, so_far), (236, 236), "{fit:?}");
+}
