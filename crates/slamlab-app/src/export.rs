@@ -136,20 +136,27 @@ pub enum ExportKind {
     ScenarioJson,
     /// Every trajectory of the run (TUM and CSV) and the landmarks, zipped.
     TrajectoriesZip,
+    /// Homework: the report of the grade shown in the Assignment panel (JSON).
+    GradeJson,
+    /// Homework: a picture of the window with the lesson, the student's
+    /// estimate and the grade (PNG).
+    GradePng,
 }
 
 impl ExportKind {
     /// Every kind, with its name in the browser test hook.
-    pub const ALL: [(Self, &'static str); 5] = [
+    pub const ALL: [(Self, &'static str); 7] = [
         (Self::MapPng, "map-png"),
         (Self::WindowPng, "window-png"),
         (Self::PlotsCsv, "plots-csv"),
         (Self::ScenarioJson, "scenario-json"),
         (Self::TrajectoriesZip, "trajectories-zip"),
+        (Self::GradeJson, "grade-json"),
+        (Self::GradePng, "grade-png"),
     ];
 
     /// The kind called `name` (`map-png`, `window-png`, `plots-csv`, `scenario-json`,
-    /// `trajectories-zip`).
+    /// `trajectories-zip`, `grade-json`, `grade-png`).
     pub fn from_name(name: &str) -> Option<Self> {
         Self::ALL.iter().find(|(_, n)| *n == name).map(|(k, _)| *k)
     }

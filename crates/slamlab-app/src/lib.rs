@@ -144,6 +144,11 @@ pub struct SlamLabApp {
     estimate_drops: widgets::dropped_files::DropInbox,
     /// `estimate=` files named in the URL, while they are read.
     estimate_fetches: Vec<(String, Option<widgets::fetch::Fetch>)>,
+    /// Homework (`assignment=`, `student=`): the Assignment window.
+    assignment: Option<widgets::assignment::AssignmentDesk>,
+    /// The link's lesson pairs, for opening an assignment's lesson once its
+    /// variant is ready (the file arrived, the student typed their id).
+    link_pairs: Vec<(String, String)>,
     /// The settings loaded at start, with each lesson's entry updated when the user
     /// leaves it. An embedded page saves these back unchanged (except the theme), so
     /// a lecture figure never rewrites the student's own setup.
@@ -172,7 +177,38 @@ impl SlamLabApp {
     pub fn with_settings(query: &str, settings: Option<Settings>) -> Self {
         let parsed = query::Query::parse(query);
         let mut notices: Vec<String> = parsed.issues.clone();
-        let entry = match parsed.lesson.as_deref() {
+        let assignment = parsed.figure.assignment.as_deref().map(|source| {
+            widgets::assignment::AssignmentDesk::new(source, parsed.figure.student.as_deref())
+        });
+        if parsed.figure.assignment.is_none() && parsed.figure.student.is_some() {
+            notices.push(
+                "student = … is for homework: give the assignment too (assignment=ekf-slam); it is ignored"
+                    .to_owned(),
+            );
+        }
+        if let Some(why) = assignment.as_ref().and_then(|d| d.problem()) {
+            notices.push(why.to_owned());
+        }
+        // A variant ready now (a built-in assignment) opens its lesson with its
+        // seed and parameters; an assignment file opens it when it arrives.
+        let (lesson_id, lesson_pairs) = match assignment.as_ref().and_then(|d| d.prepared()) {
+            Some(prepared) => {
+                let (pairs, refused) =
+                    widgets::assignment::variant_pairs(&prepared.lesson_pairs(), &parsed.pairs);
+                notices.extend(refused);
+                if let Some(asked) = parsed.lesson.as_deref()
+                    && asked != prepared.assignment.lesson
+                {
+                    notices.push(format!(
+                        "lesson = {asked}: the assignment {} is done in the {} lesson, which opens",
+                        prepared.assignment.id, prepared.assignment.lesson
+                    ));
+                }
+                (Some(prepared.assignment.lesson.clone()), pairs)
+            }
+            None => (parsed.lesson.clone(), parsed.pairs.clone()),
+        };
+        let entry = match lesson_id.as_deref() {
             None => registry::default_lesson(),
             Some(id) => registry::find(id).unwrap_or_else(|| {
                 let default = registry::default_lesson();
@@ -194,7 +230,7 @@ impl SlamLabApp {
         let mut lesson = registry::open(
             entry,
             &LessonStart {
-                pairs: &parsed.pairs,
+                pairs: &lesson_pairs,
                 embed: parsed.embed,
                 stored,
                 many_runs: parsed.many_runs,
@@ -249,7 +285,88 @@ impl SlamLabApp {
             estimate_picker: widgets::file_picker::FilePicker::multiple(),
             estimate_drops: widgets::dropped_files::DropInbox::default(),
             estimate_fetches,
+            assignment,
+            link_pairs: parsed.pairs,
             stored: settings,
+        }
+    }
+
+    /// The homework of the page (`assignment=`), if there is any.
+    pub fn assignment(&self) -> Option<&widgets::assignment::AssignmentDesk> {
+        self.assignment.as_ref()
+    }
+
+    /// The homework of the page, to hand files in (tests).
+    pub fn assignment_mut(&mut self) -> Option<&mut widgets::assignment::AssignmentDesk> {
+        self.assignment.as_mut()
+    }
+
+    /// Opens the assignment's lesson on the student's variant (its seed and
+    /// parameters, then the link's other pairs and figure keys), keeping the
+    /// student's estimates: when the assignment file arrived or the student
+    /// typed their id.
+    fn open_assignment_lesson(&mut self) {
+        let Some(prepared) = self.assignment.as_ref().and_then(|d| d.prepared()) else {
+            return;
+        };
+        let Some(entry) = registry::find(&prepared.assignment.lesson) else {
+            self.app_notices.push(format!(
+                "the assignment {} is done in the lesson '{}', which this SLAM Lab does not have",
+                prepared.assignment.id, prepared.assignment.lesson
+            ));
+            return;
+        };
+        let (pairs, refused) =
+            widgets::assignment::variant_pairs(&prepared.lesson_pairs(), &self.link_pairs);
+        self.figure.student = Some(prepared.variant.student.clone());
+        if !self.embed {
+            self.stored
+                .lessons
+                .insert(self.lesson.id().to_owned(), self.lesson.stored_settings());
+        }
+        let estimates = std::mem::take(self.lesson.frame_mut().estimates_mut());
+        self.lesson = registry::open(
+            entry,
+            &LessonStart {
+                pairs: &pairs,
+                embed: self.embed,
+                stored: None,
+                many_runs: None,
+            },
+        );
+        *self.lesson.frame_mut().estimates_mut() = estimates;
+        self.app_notices.extend(refused);
+        let figure = self.figure.clone();
+        apply_figure(&mut *self.lesson, &figure, &mut self.app_notices);
+    }
+
+    /// The Assignment panel (beside the lesson, before its panels are laid
+    /// out), and what it asks for.
+    fn assignment_ui(&mut self, ui: &mut egui::Ui) {
+        let ctx = ui.ctx().clone();
+        let ctx = &ctx;
+        let Some(desk) = self.assignment.as_mut() else {
+            return;
+        };
+        if desk.poll(ctx) {
+            self.open_assignment_lesson();
+        } else if let Some(why) = desk.problem()
+            && !self.app_notices.iter().any(|n| n == why)
+        {
+            self.app_notices.push(why.to_owned());
+        }
+        let Some(desk) = self.assignment.as_mut() else {
+            return;
+        };
+        for action in desk.panel_ui(ui) {
+            use widgets::assignment::DeskAction;
+            match action {
+                DeskAction::Save(file) => self.exporter.save(file),
+                DeskAction::Report => self.export(ctx, export::ExportKind::GradeJson),
+                DeskAction::Picture => self.export(ctx, export::ExportKind::GradePng),
+                DeskAction::OpenVariant => self.open_assignment_lesson(),
+                DeskAction::HandIn(files) => self.take_estimates(files),
+            }
         }
     }
 
@@ -439,6 +556,7 @@ impl SlamLabApp {
             "screen": [self.screen.x, self.screen.y],
             "map_rect": self.map_rect.map(|r| [r.left(), r.top(), r.width(), r.height()]),
             "estimates": self.lesson.frame().estimates().last_scores(),
+            "assignment": self.assignment.as_ref().map(widgets::assignment::AssignmentDesk::test_state),
             "panels": {
                 "parameters": self.panels().parameters,
                 "explanation": self.panels().explanation,
@@ -630,6 +748,7 @@ impl SlamLabApp {
         if self.ctx.is_none() {
             self.ctx = Some(ctx.clone());
         }
+        self.assignment_ui(ui);
         let panels = if self.narrow {
             &mut self.narrow_panels
         } else {
@@ -681,6 +800,7 @@ impl SlamLabApp {
 
     /// The panel toggles of the embed header and of a narrow window's menu bar.
     fn panel_toggles_ui(&mut self, ui: &mut egui::Ui) {
+        self.assignment_toggle_ui(ui);
         let panels = self.panels_mut();
         ui.toggle_value(&mut panels.plots, "Plots")
             .on_hover_text("Show or hide the plots");
@@ -688,6 +808,14 @@ impl SlamLabApp {
             .on_hover_text("Show or hide the explanation");
         ui.toggle_value(&mut panels.parameters, "Parameters")
             .on_hover_text("Show or hide the parameters");
+    }
+
+    /// The switch of the Assignment panel, when the page has homework.
+    fn assignment_toggle_ui(&mut self, ui: &mut egui::Ui) {
+        if let Some(desk) = self.assignment.as_mut() {
+            ui.toggle_value(&mut desk.open, "Assignment")
+                .on_hover_text("Show or hide the homework: the task, your inputs, your grade");
+        }
     }
 
     /// The header of an embedded figure: the title, the panel toggles, how to
@@ -765,6 +893,9 @@ impl SlamLabApp {
                 widgets::sources::open_sources(ui.ctx(), None);
             }
             ui.menu_button("Keys", |ui| self.keys_ui(ui));
+            if !self.narrow {
+                self.assignment_toggle_ui(ui);
+            }
             // The title and the export status change (a pose source chosen, a file
             // saved): they take the room the row has left, cut to one line, so the
             // bar never changes height under the cursor.
@@ -974,6 +1105,30 @@ impl SlamLabApp {
                     }
                 }
             }
+            ExportKind::GradeJson | ExportKind::GradePng => {
+                let link = self.share_query(false);
+                let grade = self.assignment.as_ref().and_then(|d| d.selected_grade());
+                match (kind, grade) {
+                    (_, None) => {
+                        self.exporter.status =
+                            Some("No grade yet: hand in your estimate first".to_owned());
+                    }
+                    (ExportKind::GradeJson, Some(_)) => {
+                        if let Some(file) =
+                            self.assignment.as_ref().and_then(|d| d.report_json(&link))
+                        {
+                            self.exporter.save(file);
+                        }
+                    }
+                    (_, Some(grade)) => {
+                        let name = format!(
+                            "{}.png",
+                            widgets::assignment::AssignmentDesk::report_stem(grade)
+                        );
+                        self.exporter.request_png(ctx, None, name);
+                    }
+                }
+            }
             ExportKind::ScenarioJson => {
                 let file = export::scenario_of_query(&self.share_query(false));
                 self.exporter.save(ExportFile {
@@ -991,9 +1146,19 @@ impl SlamLabApp {
     /// stays the lesson's.
     fn poll_estimates(&mut self, ctx: &egui::Context) {
         let text_is_theirs = self.lesson.id() == "pose-graph";
+        // Homework whose output is no trajectory (a graph, a map, a relative
+        // pose) takes every dropped file but a scenario: it is handed in.
+        let hands_in_anything = self
+            .assignment
+            .as_ref()
+            .and_then(|d| d.prepared())
+            .is_some_and(|p| {
+                p.assignment.output.format != slamlab_sim::coursework::OutputFormat::Trajectory
+            });
         let is_estimate = |file: &egui::DroppedFileHandle| {
             let name = file.path().to_string_lossy().to_ascii_lowercase();
-            name.ends_with(".tum")
+            hands_in_anything
+                || name.ends_with(".tum")
                 || name.ends_with(".csv")
                 || (!text_is_theirs && name.ends_with(".txt"))
         };
@@ -1024,14 +1189,61 @@ impl SlamLabApp {
         }
         self.estimate_fetches
             .retain(|(_, f)| f.as_ref().is_none_or(widgets::fetch::Fetch::is_pending));
+        self.take_estimates(files);
+    }
+
+    /// Takes a student's estimate files into the lesson (drawn and scored in
+    /// *Your estimates*). With homework open, each file is first handed in:
+    /// graded in the Assignment panel by the assignment's own kind (a
+    /// trajectory, a graph, a map, a relative pose), then drawn on the map where
+    /// the lesson's estimates can draw it. A file the grader refuses (made for
+    /// another student's variant, another assignment) is said with the grader's
+    /// reason and not drawn; what was handed in before stays.
+    fn take_estimates(&mut self, files: Vec<(String, Result<Vec<u8>, String>)>) {
         for (name, bytes) in files {
-            let added = bytes
-                .map_err(|why| format!("Could not read {name}: {why}"))
-                .and_then(|b| self.lesson.frame_mut().estimates_mut().add(&name, &b));
-            match added {
-                // Added: said beside the title (the estimates window shows it too);
-                // the notices are for what went wrong or changed the run.
-                Ok(said) => self.exporter.status = Some(said),
+            let bytes = match bytes {
+                Ok(b) => b,
+                Err(why) => {
+                    self.app_notices
+                        .push(format!("Could not read {name}: {why}"));
+                    continue;
+                }
+            };
+            let homework = self.assignment.as_mut().filter(|d| d.prepared().is_some());
+            let Some(desk) = homework else {
+                match self.lesson.frame_mut().estimates_mut().add(&name, &bytes) {
+                    // Added: said beside the title (the estimates window shows it too);
+                    // the notices are for what went wrong or changed the run.
+                    Ok(said) => self.exporter.status = Some(said),
+                    Err(why) => self.app_notices.push(why),
+                }
+                continue;
+            };
+            match desk.hand_in(&name, &bytes) {
+                Ok(grade) => {
+                    let said = format!(
+                        "{name}: {} of {} points, {}",
+                        widgets::assignment::points(grade.score),
+                        widgets::assignment::points(grade.max_score),
+                        if grade.pass { "pass" } else { "fail" }
+                    );
+                    // Drawn where the lesson's estimates can draw it; the grade
+                    // is in the Assignment panel, so the scores window opens
+                    // only if the student had it open.
+                    let estimates = self.lesson.frame_mut().estimates_mut();
+                    let was_open = estimates.open;
+                    let drawn = if widgets::estimates::is_estimate_file(&name, &bytes) {
+                        estimates.add(&name, &bytes).err()
+                    } else {
+                        None
+                    };
+                    estimates.open = was_open;
+                    // Said beside the title, as an estimate added is.
+                    self.exporter.status = Some(match drawn {
+                        None => said,
+                        Some(why) => format!("{said} (not drawn: {why})"),
+                    });
+                }
                 Err(why) => self.app_notices.push(why),
             }
         }

@@ -1,7 +1,8 @@
 //! The page's query string: `?lesson=landmark-slam&seed=7&embed=1&landmarks=30`.
 //!
-//! The app reads `lesson`, `embed`, `many-runs` and the figure keys (`tick`, `run`,
-//! `legend`, `panels`, `zoom`, `follow`: how a lecture figure opens) itself; every
+//! The app reads `lesson`, `embed`, `many-runs`, the figure keys (`tick`, `run`,
+//! `legend`, `panels`, `zoom`, `follow`: how a lecture figure opens), a student's
+//! `estimate=` files and homework (`assignment=`, `student=`) itself; every
 //! other pair belongs to the lesson,
 //! whose parameters use the same names as the command line. Nothing here panics:
 //! malformed text becomes a notice and the default is used.
@@ -27,9 +28,11 @@ pub struct Query {
 pub const MAX_ESTIMATES: usize = 8;
 
 /// The keys the app reads itself; lessons never see them.
-pub const APP_KEYS: [&str; 11] = [
+pub const APP_KEYS: [&str; 13] = [
     "lesson",
     "estimate",
+    "assignment",
+    "student",
     "embed",
     "many-runs",
     "tick",
@@ -72,7 +75,16 @@ pub struct FigureOptions {
     /// `estimate=FILE` (repeatable): a student's estimate beside the page, scored
     /// in the lesson.
     pub estimates: Vec<String>,
+    /// `assignment=ekf-slam` (a built-in assignment) or `assignment=hw3.json` (an
+    /// assignment file beside the page): homework, opened in its lesson.
+    pub assignment: Option<String>,
+    /// `student=ada@uni.edu`: whose variant of the assignment (any text; it
+    /// derives the seed).
+    pub student: Option<String>,
 }
+
+/// The longest `student=` text read (an e-mail address or a name fits many times).
+pub const MAX_STUDENT_CHARS: usize = 200;
 
 /// The clock's speed a link asks for (`speed=`).
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -127,6 +139,12 @@ impl FigureOptions {
         for location in &self.estimates {
             pairs.push(("estimate".to_owned(), location.clone()));
         }
+        if let Some(assignment) = &self.assignment {
+            pairs.push(("assignment".to_owned(), assignment.clone()));
+        }
+        if let Some(student) = &self.student {
+            pairs.push(("student".to_owned(), student.clone()));
+        }
         pairs
     }
 }
@@ -175,7 +193,8 @@ impl Query {
                         MANY_RUNS_RANGE.end()
                     )),
                 },
-                "tick" | "run" | "legend" | "panels" | "zoom" | "follow" | "estimate" | "speed" => {
+                "tick" | "run" | "legend" | "panels" | "zoom" | "follow" | "estimate" | "speed"
+                | "assignment" | "student" => {
                     parsed.parse_figure_key(&key, &value);
                 }
                 _ => parsed.pairs.push((key, value)),
@@ -188,6 +207,36 @@ impl Query {
     fn parse_figure_key(&mut self, key: &str, value: &str) {
         let figure = &mut self.figure;
         match key {
+            "assignment" => {
+                // A built-in name, or an assignment file beside the page.
+                let source = value.trim();
+                if source.is_empty()
+                    || source.len() > 1024
+                    || source.contains("://")
+                    || source.chars().any(char::is_control)
+                {
+                    self.issues.push(format!(
+                        "assignment = '{}' is neither a built-in assignment (such as ekf-slam) nor an assignment file beside the page (such as hw3.json); the lesson opens without homework",
+                        short(source)
+                    ));
+                } else {
+                    figure.assignment = Some(source.to_owned());
+                }
+            }
+            "student" => {
+                let student = value.trim();
+                if student.is_empty()
+                    || student.chars().count() > MAX_STUDENT_CHARS
+                    || student.chars().any(char::is_control)
+                {
+                    self.issues.push(format!(
+                        "student = '{}' is not a student's id (1 to {MAX_STUDENT_CHARS} characters, such as an e-mail address); type yours in the Assignment window",
+                        short(student)
+                    ));
+                } else {
+                    figure.student = Some(student.to_owned());
+                }
+            }
             "estimate" => {
                 // A file beside the page (or a path on the desktop), as map= names one.
                 let location = value.trim();
@@ -292,6 +341,15 @@ impl Query {
             },
         }
     }
+}
+
+/// At most 80 characters of `text`, for a notice that quotes it.
+fn short(text: &str) -> String {
+    let mut out: String = text.chars().filter(|c| !c.is_control()).take(80).collect();
+    if text.chars().count() > 80 {
+        out.push('…');
+    }
+    out
 }
 
 /// The `key=value` pairs of a query string (`application/x-www-form-urlencoded`,
@@ -452,6 +510,36 @@ mod tests {
             (q.figure.legend, q.figure.run, q.figure.follow),
             (None, false, None)
         );
+    }
+
+    #[test]
+    fn homework_keys_are_read_and_bad_ones_refused_by_name() {
+        let q = Query::parse("assignment=ekf-slam&student=Ada%40Uni.edu&seed=3");
+        assert!(q.issues.is_empty(), "{:?}", q.issues);
+        assert_eq!(q.figure.assignment.as_deref(), Some("ekf-slam"));
+        assert_eq!(q.figure.student.as_deref(), Some("Ada@Uni.edu"));
+        assert_eq!(q.pairs, vec![("seed".to_owned(), "3".to_owned())]);
+        let again = Query::parse(&build("landmark-slam", &q.figure.pairs(0), false));
+        assert_eq!(again.figure, q.figure);
+        let q = Query::parse("assignment=homework%2Fhw3.json");
+        assert_eq!(q.figure.assignment.as_deref(), Some("homework/hw3.json"));
+        let long = "x".repeat(MAX_STUDENT_CHARS + 1);
+        for (bad, starts) in [
+            ("assignment=", "assignment = ''"),
+            (
+                "assignment=https://elsewhere.example/hw.json",
+                "assignment = 'https://elsewhere.example/hw.json'",
+            ),
+            ("student=", "student = ''"),
+            ("student=a%0Ab", "student = 'ab'"),
+            (&format!("student={long}"), "student = 'xxxxxxxx"),
+        ] {
+            let q = Query::parse(bad);
+            assert_eq!(q.issues.len(), 1, "{bad}");
+            assert!(q.issues[0].starts_with(starts), "{bad}: {:?}", q.issues);
+            assert_eq!(q.figure, FigureOptions::default(), "{bad}");
+            assert!(q.pairs.is_empty(), "{bad}");
+        }
     }
 
     #[test]

@@ -147,7 +147,8 @@ pub fn slamlab_test_headless_files(
 }
 
 /// Starts an export as the File menu would (`map-png`, `window-png`, `plots-csv`,
-/// `scenario-json`); the browser downloads the file a frame or two later. False for
+/// `scenario-json`, `trajectories-zip`; with homework, `grade-json` and
+/// `grade-png` as the Assignment panel's buttons); the browser downloads the file a frame or two later. False for
 /// an unknown kind or when the app is not running.
 #[wasm_bindgen]
 pub fn slamlab_test_export(kind: &str) -> bool {

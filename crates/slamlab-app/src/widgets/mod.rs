@@ -1,8 +1,10 @@
 //! Widgets every lesson shares: the map canvas (pan, zoom, follow, grid, scale
 //! bar), the parameter panel built from a scenario's parameter table, plot helpers,
 //! particle clouds as one mesh, the drive pad, file picking and drops, the laser file
-//! (CARMEN log or ROS 2 bag) of the lidar lessons, the share link and the Sources window.
+//! (CARMEN log or ROS 2 bag) of the lidar lessons, the share link, the Sources window,
+//! a student's estimates and the Assignment window.
 
+pub mod assignment;
 pub mod drive;
 pub mod dropped_files;
 pub mod estimates;

@@ -7,6 +7,7 @@
 
 mod common;
 
+mod assignment_ui;
 mod cartographer_ui;
 mod estimates_ui;
 mod exports_ui;

@@ -317,6 +317,11 @@ impl TaskRun for LocalizationRun {
     }
 
     fn lesson_pairs(&self) -> Vec<(String, String)> {
-        vec![("init".to_owned(), "tracking".to_owned())]
+        // The run starts where the student is told and is never kidnapped
+        // (named, so that a link's `kidnap-at=` cannot change the run).
+        vec![
+            ("init".to_owned(), "tracking".to_owned()),
+            ("kidnap-at".to_owned(), "none".to_owned()),
+        ]
     }
 }
