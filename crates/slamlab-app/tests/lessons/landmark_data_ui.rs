@@ -314,7 +314,6 @@ fn freiburg_and_victoria_park_render_with_their_notes() {
 /// bit differently, so the JSON is compared as text, as the page writes it.)
 #[test]
 fn freiburg_replays_to_the_same_bits_as_the_browser_check_pins() {
-    use slamlab_core::belief::{LandmarkBelief as _, PoseBelief as _};
     let Some(files) = dropped("freiburg", &["world.dat", "sensor_data.dat"]) else {
         return;
     };
