@@ -610,7 +610,8 @@ impl SlamLabApp {
     /// Opens a landmark data set of several files (the Freiburg course's `world.dat`
     /// and `sensor_data.dat`, Victoria Park's three files) in the landmark lesson of
     /// `query`, as if they had been dropped together, runs up to `ticks` whole ticks
-    /// (stopping at the end of the data) and returns
+    /// (stopping at the end of the data) with the filters `estimator=` in the query
+    /// names (else the data set's preset's) and returns
     /// [`test_state_json`](Self::test_state_json) with `estimates` added: per filter,
     /// the final robot pose `[x, y, θ]` and the landmarks `[id, x, y]`. The browser
     /// test replays the data this way in wasm and compares the bits with the native
@@ -622,6 +623,17 @@ impl SlamLabApp {
             return r#"{"error":"the query does not open the landmark lesson"}"#.to_owned();
         };
         lesson.open_files(files.into_iter().map(|(n, b)| (n, Ok(b))).collect());
+        // A drop opens the data set's preset (EKF beside UKF or FastSLAM); the
+        // query's `estimator=` then chooses the filters, as it does for `data=`.
+        if let Some((_, estimators)) = query
+            .split('&')
+            .filter_map(|pair| pair.split_once('='))
+            .find(|(key, _)| *key == "estimator")
+        {
+            if lesson.set_param("estimator", estimators).is_none() {
+                lesson.reset();
+            }
+        }
         for _ in 0..ticks.min(200_000) {
             if lesson.session().is_finished() {
                 break;
