@@ -629,10 +629,9 @@ impl SlamLabApp {
             .split('&')
             .filter_map(|pair| pair.split_once('='))
             .find(|(key, _)| *key == "estimator")
+            && lesson.set_param("estimator", estimators).is_none()
         {
-            if lesson.set_param("estimator", estimators).is_none() {
-                lesson.reset();
-            }
+            lesson.reset();
         }
         for _ in 0..ticks.min(200_000) {
             if lesson.session().is_finished() {
