@@ -9,6 +9,13 @@
 //! - **Corridor**: a histogram Bayes filter and a Kalman filter on the same
 //!   robot, motions and door sightings, stepped with the time bar (predict,
 //!   update, step back), with the Kalman gain's plot.
+//!
+//! Only the corridor has time. The time bar acts on what is shown: Run, a step
+//! or a step key pressed while the One step view is on screen opens the Corridor
+//! view and acts there, and leaving the Corridor view pauses the run, so the
+//! corridor never moves unseen. A link's `tick=` and `run=` are applied before
+//! the first frame: `tick=` steps the corridor and keeps the view the link names
+//! (so that a shared link reopens as shared), `run=1` shows the corridor it runs.
 
 mod corridor;
 mod explain;
@@ -106,6 +113,10 @@ pub struct FiltersLesson {
     last_compute_ms: f64,
     /// One-step computations so far (a frame whose prior did not change runs none).
     computations: u64,
+    /// Was the One step view drawn in the last frame (the student sees it)?
+    one_step_on_screen: bool,
+    /// Did the prior move during the drag under way? Its release refits the output.
+    moved_by_drag: bool,
 }
 
 /// Opens the lesson from the URL's pairs, with what it stored last time.
@@ -162,6 +173,8 @@ impl FiltersLesson {
             marginal: (Vec::new(), [0.0, 1.0]),
             last_compute_ms: 0.0,
             computations: 0,
+            one_step_on_screen: false,
+            moved_by_drag: false,
         };
         lesson.recompute();
         if lesson.result.is_none() {
@@ -211,6 +224,11 @@ impl FiltersLesson {
         self.output_view.scale()
     }
 
+    /// Where the output canvas looks (for the tests of its refit after a drag).
+    pub fn output_view(&self) -> &MapView {
+        &self.output_view
+    }
+
     /// The view in the centre.
     pub fn tab(&self) -> Tab {
         self.frame.view.tab
@@ -221,9 +239,17 @@ impl FiltersLesson {
         self.corridor.sim()
     }
 
-    /// Shows a view.
+    /// Shows a view (leaving the Corridor view pauses its run).
     pub fn set_tab(&mut self, tab: Tab) {
         self.frame.view.tab = tab;
+        self.pause_unless_corridor();
+    }
+
+    /// The corridor runs only where it is seen: any other view pauses it.
+    fn pause_unless_corridor(&mut self) {
+        if self.frame.view.tab != Tab::Corridor {
+            self.frame.time.running = false;
+        }
     }
 
     /// Sets a parameter from text, as the panel does, and applies it.
@@ -334,6 +360,7 @@ impl FiltersLesson {
         };
         let compact = first.height() < 280.0 || first.width() < 330.0;
         let mut change = None;
+        let grabbing = self.drag.grab.is_some();
         ui.scope_builder(egui::UiBuilder::new().max_rect(first), |ui| {
             ui.set_clip_rect(first.intersect(ui.clip_rect()));
             change = one_step::input_ui(
@@ -360,7 +387,16 @@ impl FiltersLesson {
             }
         });
         if let Some((mean, std, rho)) = change {
+            self.moved_by_drag = true;
             self.set_prior(mean, std, rho);
+        }
+        // The output keeps its view while the prior is dragged (the picture does
+        // not jump under the hand); on release it fits what the function made of
+        // the new prior, so that no ellipse is left cut at the canvas's edge.
+        if grabbing && self.drag.grab.is_none() && std::mem::take(&mut self.moved_by_drag) {
+            self.output_view.refit();
+            self.density_stale = true;
+            ui.ctx().request_repaint();
         }
     }
 
@@ -373,9 +409,11 @@ impl FiltersLesson {
     fn parameters_panel_ui(&mut self, ui: &mut egui::Ui) {
         ui.heading("Filters: from Bayes to particles");
         ui.horizontal(|ui| {
-            ui.selectable_value(&mut self.frame.view.tab, Tab::OneStep, "One step");
+            ui.selectable_value(&mut self.frame.view.tab, Tab::OneStep, "One step")
+                .on_hover_text("Leaving the Corridor view pauses its run");
             ui.selectable_value(&mut self.frame.view.tab, Tab::Corridor, "Corridor");
         });
+        self.pause_unless_corridor();
         ui.separator();
         let names = match self.frame.view.tab {
             Tab::OneStep => {
@@ -500,6 +538,7 @@ impl crate::widgets::layout::LessonPanels for FiltersLesson {
     }
 
     fn map_ui(&mut self, ui: &mut egui::Ui) {
+        self.one_step_on_screen = self.frame.view.tab == Tab::OneStep;
         match self.frame.view.tab {
             Tab::OneStep => self.one_step_map_ui(ui),
             Tab::Corridor => {
@@ -537,12 +576,25 @@ impl Lesson for FiltersLesson {
                 .corridor
                 .last_phase()
                 .map(|p| format!("corridor {}", p.name())),
-            next_phase: format!("corridor {}", sim.next_phase().name()),
+            // The One step view has no time: the bar says where its steps act.
+            next_phase: match self.frame.view.tab {
+                Tab::Corridor => format!("corridor {}", sim.next_phase().name()),
+                Tab::OneStep => format!(
+                    "corridor {} (Run and the steps open the Corridor view)",
+                    sim.next_phase().name()
+                ),
+            },
             can_step_back: self.corridor.phases_run() > 0,
         }
     }
 
     fn on_time_action(&mut self, action: TimeAction) {
+        // What the student asks while looking at the One step view acts on the
+        // corridor, so the corridor is shown. A link's `tick=` comes before the
+        // first frame and keeps the link's view.
+        if self.one_step_on_screen && self.frame.view.tab == Tab::OneStep {
+            self.frame.view.tab = Tab::Corridor;
+        }
         match action {
             TimeAction::ToggleRun => {}
             TimeAction::StepPhase => {
@@ -559,6 +611,11 @@ impl Lesson for FiltersLesson {
     }
 
     fn advance(&mut self, dt: f64) {
+        // A running clock shows what it runs (a link's `run=1` on the One step
+        // view): the student leaving the Corridor view has paused it.
+        if self.frame.time.running {
+            self.frame.view.tab = Tab::Corridor;
+        }
         let corridor = &mut self.corridor;
         lesson::advance_within_budget(&mut self.frame.time, dt, || {
             corridor.step_phase();

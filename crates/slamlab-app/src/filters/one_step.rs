@@ -174,8 +174,42 @@ pub fn diamond(painter: &egui::Painter, at: Pos2, color: Color32, filled: bool) 
     painter.add(shape);
 }
 
-/// The canvas's title, its axes' names and its key, on lines above it (never over
-/// the data); `compact`: the title alone on one line, the axes and the key on hover.
+/// The canvas's axes named with their units on the canvas itself, as every map
+/// does: the horizontal one at the bottom right (above the grid's values), the
+/// vertical one at the top left (where the grid writes no value), each on a
+/// patch of the background so that the density image does not hide it.
+pub fn draw_axis_names(
+    painter: &egui::Painter,
+    t: &MapTransform,
+    axes: [&str; 2],
+    colors: &CanvasColors,
+) {
+    let font = egui::FontId::proportional(12.0);
+    let place = [
+        (
+            t.rect.right_bottom() + egui::vec2(-6.0, -16.0),
+            egui::Align2::RIGHT_BOTTOM,
+        ),
+        (
+            t.rect.left_top() + egui::vec2(6.0, 4.0),
+            egui::Align2::LEFT_TOP,
+        ),
+    ];
+    for (name, (at, align)) in axes.iter().zip(place) {
+        let galley = painter.layout_no_wrap((*name).to_owned(), font.clone(), colors.weak_text);
+        let rect = align.anchor_size(at, galley.size());
+        painter.rect_filled(
+            rect.expand(2.0),
+            2.0,
+            palette::faded(colors.background, 0.85),
+        );
+        painter.galley(rect.min, galley, colors.weak_text);
+    }
+}
+
+/// The canvas's title and its key, on lines above it (never over the data; the
+/// axes are named on the canvas, [`draw_axis_names`]); `compact`: the title alone
+/// on one line, the axes and the key on hover.
 pub fn heading_ui(
     ui: &mut egui::Ui,
     title: &str,
@@ -206,9 +240,9 @@ pub fn heading_ui(
     }
     ui.horizontal(|ui| {
         reset(ui, view);
-        ui.add(egui::Label::new(egui::RichText::new(title).strong()).truncate());
+        ui.add(egui::Label::new(egui::RichText::new(title).strong()).truncate())
+            .on_hover_text(axes);
     });
-    ui.label(egui::RichText::new(axes).small());
     key_ui(ui, key);
 }
 
@@ -305,6 +339,7 @@ pub fn input_ui(
     painter.rect_filled(t.rect, 0.0, colors.background);
     map_canvas::draw_grid(&painter, &t, &colors);
     ellipse(&painter, &t, prior, Stroke::new(2.0, colors.truth));
+    draw_axis_names(&painter, &t, axes, &colors);
     let mut change = None;
     drag.on_screen = None;
     if let Some(h) = handles(prior) {
@@ -422,4 +457,5 @@ pub fn output_ui(
     for (i, p) in result.ukf.sigma_out.iter().enumerate() {
         diamond(&painter, t.v(p), palette::ORANGE, i == 0);
     }
+    draw_axis_names(&painter, &t, axes, &colors);
 }

@@ -444,3 +444,191 @@ fn reset_view_undoes_a_zoom_of_the_output() {
         "{fitted} -> {zoomed} -> {back}"
     );
 }
+
+/// Only the corridor has time, and the time bar acts on what is shown: a step, a
+/// step key or Run pressed in the One step view opens the Corridor view and acts
+/// there; leaving the Corridor view pauses it, so it never moves unseen. A link's
+/// `tick=` still steps the corridor and keeps the link's view; `run=1` shows the
+/// corridor it runs.
+#[test]
+fn run_and_the_steps_act_on_the_view_shown() {
+    use super::common::harness_sized;
+    let size = egui::vec2(800.0, 500.0);
+    let tick = |h: &Harness<'_, SlamLabApp>| h.state().lesson().time_info().tick;
+    let mut h = harness_sized("lesson=filters&seed=5&samples=5000&tick=3", size);
+    h.run();
+    assert_eq!(tick(&h), 3, "the link's tick= steps the corridor");
+    assert_eq!(lesson(&h).tab(), Tab::OneStep, "and keeps the link's view");
+    assert!(lesson(&h).handles_on_screen().is_some());
+    assert!(
+        lesson(&h)
+            .time_info()
+            .next_phase
+            .contains("open the Corridor view"),
+        "the bar says where the steps act: {}",
+        lesson(&h).time_info().next_phase
+    );
+    if let Some(image) = render_or_skip(&mut h) {
+        image
+            .save(shot("filters_800x500_one_step_bar"))
+            .unwrap_or_else(|e| eprintln!("could not save the screenshot: {e}"));
+    }
+    // The button: the corridor it steps is what the centre shows now.
+    h.get_by_label("Step phase").click();
+    h.run();
+    assert_eq!(lesson(&h).tab(), Tab::Corridor);
+    assert!(
+        lesson(&h).handles_on_screen().is_none(),
+        "the corridor drawn"
+    );
+    assert_eq!(
+        lesson(&h).time_info().last_phase.as_deref(),
+        Some("corridor predict")
+    );
+    if let Some(image) = render_or_skip(&mut h) {
+        image
+            .save(shot("filters_800x500_stepped_from_one_step"))
+            .unwrap_or_else(|e| eprintln!("could not save the screenshot: {e}"));
+    }
+    // The key: the same (in a window wide enough for the panel's view buttons).
+    let mut h = harness_sized(
+        "lesson=filters&seed=5&samples=5000&tick=3",
+        egui::vec2(1280.0, 800.0),
+    );
+    h.run();
+    assert_eq!(lesson(&h).tab(), Tab::OneStep);
+    h.key_press(egui::Key::Period);
+    h.run();
+    assert_eq!(lesson(&h).tab(), Tab::Corridor);
+    assert_eq!(
+        lesson(&h).time_info().last_phase.as_deref(),
+        Some("corridor predict")
+    );
+    h.get_by_label("Step phase").click();
+    h.run();
+    assert_eq!(
+        tick(&h),
+        4,
+        "the corridor's fourth tick, predict and update"
+    );
+    // Run from the One step view runs the corridor in sight; leaving it pauses.
+    h.get_by_label("One step").click();
+    h.run();
+    h.get_by_label("Run").click();
+    for _ in 0..3 {
+        h.step();
+    }
+    assert_eq!(lesson(&h).tab(), Tab::Corridor);
+    assert!(h.state().is_running());
+    h.get_by_label("One step").click();
+    h.step();
+    assert!(!h.state().is_running(), "leaving the corridor pauses it");
+    let held = tick(&h);
+    for _ in 0..8 {
+        h.step();
+    }
+    assert_eq!(tick(&h), held, "the hidden corridor stays where it was");
+    assert_eq!(lesson(&h).tab(), Tab::OneStep);
+    // A link that runs shows what it runs.
+    let mut h = harness_sized("lesson=filters&seed=5&samples=5000&run=1", size);
+    h.step();
+    h.step();
+    assert!(h.state().is_running());
+    assert_eq!(lesson(&h).tab(), Tab::Corridor);
+}
+
+/// The screen rectangles of the canvases (input, output) in the last frame.
+fn canvases(h: &Harness<'_, SlamLabApp>) -> [egui::Rect; 2] {
+    let maps: Vec<egui::Rect> = slamlab_app::widgets::plots::figure_records(&h.ctx)
+        .iter()
+        .filter_map(|r| r.map)
+        .collect();
+    match maps[..] {
+        [input, output] => [input, output],
+        _ => panic!("two canvases expected: {maps:?}"),
+    }
+}
+
+/// `[x_min, y_min, x_max, y_max]` of the output's four 95% ellipses.
+fn ellipses_bounds(h: &Harness<'_, SlamLabApp>) -> [f64; 4] {
+    let Some(r) = lesson(h).result() else {
+        panic!("no valid comparison");
+    };
+    let mut b = [
+        f64::INFINITY,
+        f64::INFINITY,
+        f64::NEG_INFINITY,
+        f64::NEG_INFINITY,
+    ];
+    for g in [
+        &r.truth.moments,
+        &r.ekf.gaussian,
+        &r.ukf.gaussian,
+        &r.particles.moments,
+    ] {
+        for p in g.ellipse_95().boundary(72) {
+            b = [
+                b[0].min(p[0]),
+                b[1].min(p[1]),
+                b[2].max(p[0]),
+                b[3].max(p[1]),
+            ];
+        }
+    }
+    b
+}
+
+/// The output keeps its view while the prior is dragged (nothing jumps under
+/// the hand) and fits the new ellipses when the drag ends: none is left cut at
+/// the edge. Both canvases name their axes, with units, on the canvas, also in a
+/// short window where the heading keeps only the title.
+#[test]
+fn the_output_refits_after_a_drag_and_the_canvases_name_their_axes() {
+    use super::common::{drawn_texts, harness_sized};
+    let size = egui::vec2(800.0, 500.0);
+    let mut h = harness_sized("lesson=filters&function=linear&samples=20000&seed=2", size);
+    h.run();
+    let [input, output] = canvases(&h);
+    assert!(lesson(&h).output_view().shows(output, ellipses_bounds(&h)));
+    let before = lesson(&h).output_view().clone();
+    let [mean, ..] = handles(&h);
+    let to = mean + egui::vec2(0.4 * input.width(), -0.4 * input.height());
+    drag(&mut h, mean, to);
+    assert!(lesson(&h).note().is_none(), "{:?}", lesson(&h).note());
+    let moved = ellipses_bounds(&h);
+    assert!(
+        !before.shows(output, moved),
+        "the drag moves the ellipses out of the old view: {moved:?}"
+    );
+    let [_, output] = canvases(&h);
+    assert!(
+        lesson(&h).output_view().shows(output, moved),
+        "after the drag the output shows every ellipse: {moved:?}"
+    );
+    // The axes, inside their canvases: linear y = A x, then the polar banana.
+    let named = |h: &Harness<'_, SlamLabApp>, name: &str, canvas: egui::Rect| {
+        drawn_texts(h)
+            .iter()
+            .any(|(text, rect, _)| text == name && canvas.contains_rect(*rect))
+    };
+    let [input, output] = canvases(&h);
+    for (name, canvas) in [("x₁", input), ("x₂", input), ("y₁", output), ("y₂", output)] {
+        assert!(named(&h, name, canvas), "{name} not on its canvas");
+    }
+    if let Some(image) = render_or_skip(&mut h) {
+        image
+            .save(shot("filters_800x500_after_drag"))
+            .unwrap_or_else(|e| eprintln!("could not save the screenshot: {e}"));
+    }
+    let mut h = harness_sized("lesson=filters&samples=5000&seed=1", size);
+    h.run();
+    let [input, output] = canvases(&h);
+    for (name, canvas) in [
+        ("range r (m)", input),
+        ("bearing b (rad)", input),
+        ("x (m)", output),
+        ("y (m)", output),
+    ] {
+        assert!(named(&h, name, canvas), "{name} not on its canvas");
+    }
+}
