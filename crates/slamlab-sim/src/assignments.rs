@@ -18,10 +18,11 @@ pub const RUNNERS: &[TaskRunner] = &[
     crate::pose_graph::assignment::RUNNER,
     crate::mapping::assignment::RUNNER,
     crate::mapping::icp_assignment::RUNNER,
+    crate::visual_odometry::assignment::RUNNER,
 ];
 
 /// The built-in assignment `name` (`ekf-slam`, `mcl`, `pose-graph`,
-/// `grid-mapping`, `icp`).
+/// `grid-mapping`, `icp`, `two-view`).
 pub fn builtin(name: &str) -> Result<Assignment, CourseworkError> {
     coursework::builtin(name, RUNNERS)
 }

@@ -48,7 +48,14 @@ fn reference_tum(p: &Prepared, name: &str) -> Vec<u8> {
 fn the_built_in_assignments_read_and_name_their_lessons() {
     assert_eq!(
         assignments::builtin_names(),
-        ["ekf-slam", "mcl", "pose-graph", "grid-mapping", "icp"]
+        [
+            "ekf-slam",
+            "mcl",
+            "pose-graph",
+            "grid-mapping",
+            "icp",
+            "two-view"
+        ]
     );
     let ekf = builtin("ekf-slam").unwrap();
     assert_eq!(

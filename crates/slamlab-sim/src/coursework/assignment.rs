@@ -57,16 +57,20 @@ pub enum TaskKind {
     /// Scan matching (ICP) of two laser scans; the output is their relative
     /// pose.
     Icp,
+    /// Two-view geometry: the essential matrix with RANSAC from pixel matches
+    /// and the intrinsics; the output is the relative pose of the two views.
+    TwoView,
 }
 
 impl TaskKind {
     /// Every task kind.
-    pub const ALL: [TaskKind; 5] = [
+    pub const ALL: [TaskKind; 6] = [
         TaskKind::LandmarkSlam,
         TaskKind::Localization,
         TaskKind::PoseGraph,
         TaskKind::GridMapping,
         TaskKind::Icp,
+        TaskKind::TwoView,
     ];
 
     /// The name in an assignment file.
@@ -77,6 +81,7 @@ impl TaskKind {
             TaskKind::PoseGraph => "pose-graph",
             TaskKind::GridMapping => "grid-mapping",
             TaskKind::Icp => "icp",
+            TaskKind::TwoView => "two-view",
         }
     }
 
@@ -87,6 +92,7 @@ impl TaskKind {
             TaskKind::Localization => "kidnap",
             TaskKind::PoseGraph => "pose-graph",
             TaskKind::GridMapping | TaskKind::Icp => "mapping",
+            TaskKind::TwoView => "visual-odometry",
         }
     }
 
@@ -103,6 +109,7 @@ impl TaskKind {
             TaskKind::PoseGraph => &[InputFormat::G2o],
             TaskKind::GridMapping => &[InputFormat::CarmenLog],
             TaskKind::Icp => &[InputFormat::ScanCsv],
+            TaskKind::TwoView => &[InputFormat::MatchesCsv],
         }
     }
 
@@ -112,7 +119,7 @@ impl TaskKind {
             TaskKind::LandmarkSlam | TaskKind::Localization => OutputFormat::Trajectory,
             TaskKind::PoseGraph => OutputFormat::G2o,
             TaskKind::GridMapping => OutputFormat::RosMap,
-            TaskKind::Icp => OutputFormat::RelativePose,
+            TaskKind::Icp | TaskKind::TwoView => OutputFormat::RelativePose,
         }
     }
 
@@ -131,6 +138,11 @@ impl TaskKind {
             TaskKind::Icp => &[
                 Metric::RotationErrorDeg,
                 Metric::TranslationErrorM,
+                Metric::TranslationDirectionErrorDeg,
+            ],
+            // A monocular t has no length: its direction alone is scored.
+            TaskKind::TwoView => &[
+                Metric::RotationErrorDeg,
                 Metric::TranslationDirectionErrorDeg,
             ],
         }
@@ -156,6 +168,9 @@ pub enum InputFormat {
     G2o,
     /// Laser scans as CSV: `x,y`, one end point a line, in the sensor's frame.
     ScanCsv,
+    /// Two views as `K.txt` (the 3x3 intrinsics) and `matches.csv`
+    /// (`u1,v1,u2,v2`, pixels).
+    MatchesCsv,
 }
 
 impl InputFormat {
@@ -168,6 +183,7 @@ impl InputFormat {
             InputFormat::CarmenLog => "carmen-log",
             InputFormat::G2o => "g2o",
             InputFormat::ScanCsv => "scan-csv",
+            InputFormat::MatchesCsv => "matches-csv",
         }
     }
 }

@@ -88,6 +88,7 @@ pub const BUILTIN: &[(&str, &str)] = &[
     ("pose-graph", include_str!("builtin/pose-graph.json")),
     ("grid-mapping", include_str!("builtin/grid-mapping.json")),
     ("icp", include_str!("builtin/icp.json")),
+    ("two-view", include_str!("builtin/two-view.json")),
 ];
 
 /// One variant's run of a task, made by the lesson that runs that kind of task:

@@ -9,6 +9,7 @@
 //! Only this module holds the truth; the estimators in
 //! `slamlab_core::vision` see pixel matches and the intrinsics.
 
+pub mod assignment;
 pub mod experiment;
 pub mod export;
 pub mod odometry;
