@@ -624,6 +624,144 @@ async function main() {
       }
     });
 
+    // --- Landmark SLAM on the Freiburg course's files (world.dat and sensor_data.dat,
+    // dropped together on the page as a student would): the page opens them and plays
+    // them; the page's wasm then replays all 331 steps without drawing, and EKF-SLAM's
+    // final pose and nine landmarks must be the native run's to the bit
+    // (crates/slamlab-app/tests/lessons/landmark_data_ui.rs pins the same literals).
+    await check("landmark SLAM replays the Freiburg files to the native bits", async () => {
+      const dir = path.join(sharedDataDir, "landmarks/freiburg");
+      const names = ["world.dat", "sensor_data.dat"];
+      const found = await Promise.all(names.map((n) => stat(path.join(dir, n)).then(() => true, () => false)));
+      if (found.includes(false)) return `skipped: ${dir}/{world,sensor_data}.dat are absent (the shared data sets are not beside the repository; SLAMLAB_SHARED_DATA names them)`;
+      const NATIVE_POSE = [5.157982773800305, 4.841744721973463, 1.5354577017929945];
+      const NATIVE_LANDMARKS = [
+        [1, 1.960805942593951, 0.9585871281360637],
+        [2, 0.046256843531036027, 4.0004427708171555],
+        [8, 5.018295033038587, 2.8848847836228595],
+        [7, 5.085780314984741, 4.89648360518319],
+        [3, 2.1632290788768174, 6.946397425475357],
+        [9, 5.1776412299858725, 8.896267504909765],
+        [6, 9.17332474863098, 7.748333547697875],
+        [5, 10.104516500632393, 4.741022022157567],
+        [4, 9.006923754450272, 1.7611825006196329],
+      ];
+      const { context, page: p, log } = await openPage(browser, baseUrl, "index.html?lesson=landmark-slam&estimator=ekf", "landmark-freiburg");
+      try {
+        await waitRunning(p);
+        // Dropped on the canvas (the path of a drag from the desktop).
+        await p.evaluate(async (list) => {
+          const dt = new DataTransfer();
+          for (const name of list) {
+            const bytes = new Uint8Array(await (await fetch(`shared-data/landmarks/freiburg/${name}`)).arrayBuffer());
+            dt.items.add(new File([bytes], name, { type: "text/plain" }));
+          }
+          const canvas = document.getElementById("the_canvas_id");
+          for (const type of ["dragenter", "dragover", "drop"]) {
+            canvas.dispatchEvent(new DragEvent(type, { dataTransfer: dt, bubbles: true, cancelable: true }));
+          }
+        }, names);
+        const s0 = await waitState(p, (st) => st.data && st.data.kind === "Freiburg Robot Mapping course", "the Freiburg files opened by a drop", 30_000);
+        assert(s0.data.steps === 331 && s0.data.truth_known === false, `opened ${JSON.stringify(s0.data)}`);
+        await p.mouse.click(VIEWPORT.width / 2, VIEWPORT.height / 2);
+        await p.keyboard.press("Space");
+        const live = await waitState(p, (st) => st.data.played >= 120, "120 Freiburg steps played live", 60_000);
+        await p.keyboard.press("Space");
+        await sleep(300);
+        const { stats } = await waitNotBlank(p, "landmark-freiburg.png");
+        assertNotBlank(stats, "landmark-freiburg.png");
+        // Headless in this page's wasm: the same two files to their end.
+        const headless = JSON.parse(await p.evaluate(async (list) => {
+          const parts = [];
+          for (const name of list) parts.push(new Uint8Array(await (await fetch(`shared-data/landmarks/freiburg/${name}`)).arrayBuffer()));
+          const bytes = new Uint8Array(parts.reduce((n, b) => n + b.length, 0));
+          let at = 0;
+          for (const b of parts) {
+            bytes.set(b, at);
+            at += b.length;
+          }
+          const lengths = new Uint32Array(parts.map((b) => b.length));
+          return window.slamlab.slamlab_test_headless_files("lesson=landmark-slam&estimator=ekf", list.join("\n"), bytes, lengths, 100000);
+        }, names));
+        assert(headless.data?.played === 331 && headless.data?.finished === true, `the headless replay: ${JSON.stringify(headless).slice(0, 300)}`);
+        const ekf = headless.estimates?.ekf;
+        assert(ekf && ekf.pose.every((v, i) => v === NATIVE_POSE[i]), `final pose ${JSON.stringify(ekf?.pose)} in the browser, ${JSON.stringify(NATIVE_POSE)} natively`);
+        assert(
+          ekf.landmarks.length === 9 && ekf.landmarks.every((l, i) => l.every((v, j) => v === NATIVE_LANDMARKS[i][j])),
+          `final landmarks ${JSON.stringify(ekf.landmarks)} in the browser, ${JSON.stringify(NATIVE_LANDMARKS)} natively`,
+        );
+        await assertNoPanic(p);
+        assert(log.problems.length === 0, log.problems.join("; "));
+        return `live: ${live.data.played} steps played; headless 331 steps: pose (${ekf.pose.map((v) => v.toFixed(3)).join(", ")}) and 9 landmarks bit-identical to native`;
+      } finally {
+        await context.close();
+      }
+    });
+
+    // --- Victoria Park to the end of its data with EKF-SLAM in this page's wasm (the
+    // three files dropped together, then replayed headless and timed): the issue asks
+    // for the speed the docs state (docs/real-landmark-data.md records the measured
+    // seconds and real-time factor). Minutes on a loaded machine, so it runs only when
+    // SLAMLAB_LONG=1.
+    await check("landmark SLAM plays Victoria Park to its end with EKF-SLAM (SLAMLAB_LONG=1)", async () => {
+      if (process.env.SLAMLAB_LONG !== "1") return "skipped: set SLAMLAB_LONG=1 to run it (minutes)";
+      const dir = path.join(sharedDataDir, "landmarks/victoria_park");
+      const names = ["inputs.dat", "measurements.dat", "gps.dat"];
+      const found = await Promise.all(names.map((n) => stat(path.join(dir, n)).then(() => true, () => false)));
+      if (found.includes(false)) return `skipped: ${dir}/{inputs,measurements,gps}.dat are absent (the shared data sets are not beside the repository)`;
+      const { context, page: p, log } = await openPage(browser, baseUrl, "index.html?lesson=landmark-slam&estimator=ekf", "landmark-victoria-park");
+      try {
+        await waitRunning(p);
+        await p.evaluate(async (list) => {
+          const dt = new DataTransfer();
+          for (const name of list) {
+            const bytes = new Uint8Array(await (await fetch(`shared-data/landmarks/victoria_park/${name}`)).arrayBuffer());
+            dt.items.add(new File([bytes], name, { type: "text/plain" }));
+          }
+          const canvas = document.getElementById("the_canvas_id");
+          for (const type of ["dragenter", "dragover", "drop"]) {
+            canvas.dispatchEvent(new DragEvent(type, { dataTransfer: dt, bubbles: true, cancelable: true }));
+          }
+        }, names);
+        const s0 = await waitState(p, (st) => st.data && st.data.kind === "Victoria Park", "Victoria Park opened by a drop", 60_000);
+        await p.mouse.click(VIEWPORT.width / 2, VIEWPORT.height / 2);
+        await p.keyboard.press("Space");
+        await waitState(p, (st) => st.data.played >= 1500, "1500 Victoria Park steps played live", 120_000);
+        await p.keyboard.press("Space");
+        await sleep(300);
+        const { stats } = await waitNotBlank(p, "landmark-victoria-park.png");
+        assertNotBlank(stats, "landmark-victoria-park.png");
+        const took = await p.evaluate(async (list) => {
+          const parts = [];
+          for (const name of list) parts.push(new Uint8Array(await (await fetch(`shared-data/landmarks/victoria_park/${name}`)).arrayBuffer()));
+          const bytes = new Uint8Array(parts.reduce((n, b) => n + b.length, 0));
+          let at = 0;
+          for (const b of parts) {
+            bytes.set(b, at);
+            at += b.length;
+          }
+          const lengths = new Uint32Array(parts.map((b) => b.length));
+          const started = performance.now();
+          const state = window.slamlab.slamlab_test_headless_files("lesson=landmark-slam&estimator=ekf", list.join("\n"), bytes, lengths, 200000);
+          return { state, ms: performance.now() - started };
+        }, names);
+        const headless = JSON.parse(took.state);
+        const seconds = took.ms / 1000;
+        const dataSeconds = headless.time;
+        const factor = dataSeconds / seconds;
+        const landmarks = headless.estimates?.ekf?.landmarks?.length;
+        metrics.victoria_park_ekf_s = Number(seconds.toFixed(1));
+        metrics.victoria_park_ekf_real_time_factor = Number(factor.toFixed(2));
+        metrics.victoria_park_ekf_counts = { steps: headless.data?.played, data_seconds: dataSeconds, landmarks, gps_rmse_m: headless.data?.gps?.rmse ?? null };
+        assert(headless.data?.finished === true && headless.data.played === s0.data.steps, `the headless replay stopped at ${headless.data?.played} of ${s0.data.steps} steps: ${took.state.slice(0, 300)}`);
+        await assertNoPanic(p);
+        assert(log.problems.length === 0, log.problems.join("; "));
+        return `${headless.data.played} steps (${dataSeconds.toFixed(0)} s of data) in ${seconds.toFixed(1)} s = ${factor.toFixed(2)}x real time; ${landmarks} landmarks at the end`;
+      } finally {
+        await context.close();
+      }
+    });
+
     // --- Monte Carlo localization by URL: the lesson runs on the maze, and a seeded
     // global localization run in this page's wasm converges with exactly the native bits
     // (crates/slamlab-app/tests/lessons/kidnap_ui.rs pins the same numbers).

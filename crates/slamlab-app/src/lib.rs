@@ -607,6 +607,64 @@ impl SlamLabApp {
         app.test_state_json()
     }
 
+    /// Opens a landmark data set of several files (the Freiburg course's `world.dat`
+    /// and `sensor_data.dat`, Victoria Park's three files) in the landmark lesson of
+    /// `query`, as if they had been dropped together, runs up to `ticks` whole ticks
+    /// (stopping at the end of the data) with the filters `estimator=` in the query
+    /// names (else the data set's preset's) and returns
+    /// [`test_state_json`](Self::test_state_json) with `estimates` added: per filter,
+    /// the final robot pose `[x, y, θ]` and the landmarks `[id, x, y]`. The browser
+    /// test replays the data this way in wasm and compares the bits with the native
+    /// run. Another lesson gives an error; files that are no data set give the state
+    /// with the lesson's note saying why.
+    pub fn headless_files_state(query: &str, files: Vec<(String, Vec<u8>)>, ticks: u64) -> String {
+        let mut app = Self::from_query(query);
+        let Some(lesson) = app.lesson_as_mut::<LandmarkSlamLesson>() else {
+            return r#"{"error":"the query does not open the landmark lesson"}"#.to_owned();
+        };
+        lesson.open_files(files.into_iter().map(|(n, b)| (n, Ok(b))).collect());
+        // A drop opens the data set's preset (EKF beside UKF or FastSLAM); the
+        // query's `estimator=` then chooses the filters, as it does for `data=`.
+        if let Some((_, estimators)) = query
+            .split('&')
+            .filter_map(|pair| pair.split_once('='))
+            .find(|(key, _)| *key == "estimator")
+            && lesson.set_param("estimator", estimators).is_none()
+        {
+            lesson.reset();
+        }
+        for _ in 0..ticks.min(200_000) {
+            if lesson.session().is_finished() {
+                break;
+            }
+            lesson.step_tick();
+        }
+        let estimates: BTreeMap<&str, serde_json::Value> = lesson
+            .session()
+            .filters()
+            .iter()
+            .map(|run| {
+                let filter = run.filter();
+                let pose = filter.robot_pose();
+                let landmarks: Vec<(usize, f64, f64)> = filter
+                    .landmarks()
+                    .iter()
+                    .map(|l| (l.id, l.mean[0], l.mean[1]))
+                    .collect();
+                (
+                    run.kind.name(),
+                    serde_json::json!({ "pose": [pose.x, pose.y, pose.theta], "landmarks": landmarks }),
+                )
+            })
+            .collect();
+        let mut state: serde_json::Value =
+            serde_json::from_str(&app.test_state_json()).unwrap_or_default();
+        if let Some(object) = state.as_object_mut() {
+            object.insert("estimates".to_owned(), serde_json::json!(estimates));
+        }
+        state.to_string()
+    }
+
     fn apply_theme(&self, ctx: &egui::Context) {
         match self.dark_mode {
             Some(true) => ctx.set_theme(egui::Theme::Dark),

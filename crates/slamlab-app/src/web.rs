@@ -120,6 +120,32 @@ pub fn slamlab_test_headless_log(query: &str, name: &str, bytes: &[u8], ticks: u
     SlamLabApp::headless_log_state(query, name, bytes, u64::from(ticks))
 }
 
+/// Opens a landmark data set of several files headless in the landmark lesson of
+/// `query` and replays up to `ticks` ticks (see `SlamLabApp::headless_files_state`):
+/// `names` holds the files' names one a line, `bytes` their contents one after the
+/// other and `lengths` each one's length in bytes. Lengths that do not add up give an
+/// error.
+#[wasm_bindgen]
+pub fn slamlab_test_headless_files(
+    query: &str,
+    names: &str,
+    bytes: &[u8],
+    lengths: &[u32],
+    ticks: u32,
+) -> String {
+    let mut files = Vec::new();
+    let mut at = 0usize;
+    for (name, &length) in names.lines().zip(lengths) {
+        let end = at.saturating_add(length as usize);
+        let Some(contents) = bytes.get(at..end) else {
+            return r#"{"error":"the lengths run past the bytes"}"#.to_owned();
+        };
+        files.push((name.to_owned(), contents.to_vec()));
+        at = end;
+    }
+    SlamLabApp::headless_files_state(query, files, u64::from(ticks))
+}
+
 /// Starts an export as the File menu would (`map-png`, `window-png`, `plots-csv`,
 /// `scenario-json`, `trajectories-zip`; with homework, `grade-json` and
 /// `grade-png` as the Assignment panel's buttons); the browser downloads the file a frame or two later. False for

@@ -305,3 +305,94 @@ fn freiburg_and_victoria_park_render_with_their_notes() {
         }
     }
 }
+
+/// The final EKF-SLAM state on the Freiburg course's files, bit for bit: the pose
+/// and the nine landmarks after all 331 steps. The browser check in
+/// `web/tests/browser.test.mjs` replays the same two files in wasm through the
+/// page's headless entry and must meet these literals to the bit. (They are read
+/// from the filter itself: serde_json's default float parser may round the last
+/// bit differently, so the JSON is compared as text, as the page writes it.)
+#[test]
+fn freiburg_replays_to_the_same_bits_as_the_browser_check_pins() {
+    let Some(files) = dropped("freiburg", &["world.dat", "sensor_data.dat"]) else {
+        return;
+    };
+    let query = "lesson=landmark-slam&estimator=ekf";
+    let mut app = SlamLabApp::from_query(query);
+    let lesson = app.lesson_as_mut::<LandmarkSlamLesson>().unwrap();
+    lesson.open_files(files.clone());
+    while !lesson.session().is_finished() {
+        lesson.step_tick();
+    }
+    let session = lesson.session();
+    assert_eq!(session.recorded_progress(), Some((331, 331)));
+    // The EKF's run (a drop opens the data set's preset, which runs the UKF
+    // beside it; the two filters share nothing).
+    let filters = session.filters();
+    let run = filters.iter().find(|r| r.kind.name() == "ekf").unwrap();
+    let filter = run.filter();
+    let pose = filter.robot_pose();
+    let pose = [pose.x, pose.y, pose.theta];
+    let landmarks: Vec<(usize, f64, f64)> = filter
+        .landmarks()
+        .iter()
+        .map(|l| (l.id, l.mean[0], l.mean[1]))
+        .collect();
+    println!("pose {pose:?} landmarks {landmarks:?}");
+    // The pins: the browser check holds the same literals.
+    const POSE: [f64; 3] = [5.157982773800305, 4.841744721973463, 1.5354577017929945];
+    const LANDMARKS: [(usize, f64, f64); 9] = [
+        (1, 1.960805942593951, 0.958_587_128_136_063_7),
+        (2, 0.046256843531036027, 4.0004427708171555),
+        (8, 5.018295033038587, 2.8848847836228595),
+        (7, 5.085780314984741, 4.89648360518319),
+        (3, 2.163_229_078_876_817_4, 6.946397425475357),
+        (9, 5.1776412299858725, 8.896267504909765),
+        (6, 9.17332474863098, 7.748333547697875),
+        (5, 10.104516500632393, 4.741022022157567),
+        (4, 9.006923754450272, 1.7611825006196329),
+    ];
+    let bits = |v: &[f64]| v.iter().map(|x| x.to_bits()).collect::<Vec<_>>();
+    assert_eq!(bits(&pose), bits(&POSE), "{pose:?}");
+    assert_eq!(landmarks.len(), LANDMARKS.len(), "{landmarks:?}");
+    for (got, pinned) in landmarks.iter().zip(&LANDMARKS) {
+        assert_eq!(got.0, pinned.0, "{landmarks:?}");
+        assert_eq!(
+            bits(&[got.1, got.2]),
+            bits(&[pinned.1, pinned.2]),
+            "{got:?}"
+        );
+    }
+
+    // The page's headless entry writes the same numbers (the text the browser
+    // check parses), with the data set's end reached.
+    let files: Vec<(String, Vec<u8>)> = files
+        .into_iter()
+        .map(|(name, bytes)| (name, bytes.unwrap()))
+        .collect();
+    let json = SlamLabApp::headless_files_state(query, files, 100_000);
+    let expected = serde_json::json!({ "pose": pose, "landmarks": landmarks }).to_string();
+    assert!(
+        json.contains(&format!(r#""estimates":{{"ekf":{expected}"#)),
+        "{json}"
+    );
+    let s: serde_json::Value = serde_json::from_str(&json).unwrap();
+    assert_eq!(s["data"]["kind"], "Freiburg Robot Mapping course", "{s}");
+    assert_eq!(s["data"]["played"], 331, "{s}");
+    assert_eq!(s["data"]["finished"], true, "{s}");
+
+    // The lesson's replay is the simulation crate's Freiburg run: its worst
+    // landmark lies as far from world.dat as that test pins
+    // (slamlab-sim, real_data/tests.rs: freiburg_ekf_slam_places_all_nine_...).
+    let data = slamlab_fuzz::shared_data().unwrap();
+    let data = read_path(&data.join("landmarks/freiburg/sensor_data.dat")).unwrap();
+    let world = RecordedWorld::from_data(&data, 0).unwrap();
+    let worst = landmarks
+        .iter()
+        .map(|&(id, x, y)| {
+            let (truth, _) = world.landmarks.iter().find(|(t, _)| t.id == id).unwrap();
+            ((x - truth.position[0]).powi(2) + (y - truth.position[1]).powi(2)).sqrt()
+        })
+        .fold(0.0, f64::max);
+    assert!((worst - 0.305_577_276_155_034_44).abs() < 1e-12, "{worst}");
+}
