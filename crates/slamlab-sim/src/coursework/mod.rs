@@ -326,8 +326,10 @@ impl Prepared {
         );
         let intro = format!(
             "Assignment {}, variant {} (student {:?}, seed {}). SLAM Lab made these \
-             inputs for this student alone: another student's files have other noise and \
-             another length, and an estimate made from them is refused.",
+             inputs for this student alone: another student's files have other noise, so \
+             an answer made from them is wrong for these; where the hand-in shows it (a \
+             trajectory's length and times, a graph's edges) it is refused as another \
+             variant's.",
             a.id, self.variant.code, self.variant.student, self.variant.seed
         );
         let _ = writeln!(out, "{}\n", wrap(&intro, 78));
