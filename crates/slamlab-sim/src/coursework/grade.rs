@@ -362,3 +362,43 @@ pub fn assemble(
         notices,
     }
 }
+
+/// Grades a hand-in whose every criterion is read off one score of type `E` by
+/// `value`: the student's score `mine` beside each reference estimator's
+/// `theirs`, by name; then [`assemble`].
+#[allow(clippy::too_many_arguments)]
+pub fn assemble_scores<E>(
+    assignment: &Assignment,
+    variant: &Variant,
+    file_name: &str,
+    bytes: &[u8],
+    mine: &E,
+    theirs: &[(String, E)],
+    value: impl Fn(Metric, &E) -> Option<f64>,
+    notices: Vec<String>,
+) -> Grade {
+    let values: Vec<Option<f64>> = assignment
+        .criteria
+        .iter()
+        .map(|c| value(c.metric, mine))
+        .collect();
+    let reference_values: Vec<Vec<(String, Option<f64>)>> = assignment
+        .criteria
+        .iter()
+        .map(|c| {
+            theirs
+                .iter()
+                .map(|(name, e)| (name.clone(), value(c.metric, e)))
+                .collect()
+        })
+        .collect();
+    assemble(
+        assignment,
+        variant,
+        file_name,
+        bytes,
+        &values,
+        &reference_values,
+        notices,
+    )
+}

@@ -29,7 +29,7 @@
 use super::VoScenario;
 use super::experiment::random_two_view_scene;
 use crate::coursework::files::{InputFiles, number};
-use crate::coursework::grade::assemble;
+use crate::coursework::grade::assemble_scores;
 use crate::coursework::{
     Assignment, CourseworkError, Grade, InputFormat, Metric, TaskKind, TaskRun, TaskRunner,
     Variant, apply_params,
@@ -386,34 +386,13 @@ impl TaskRun for TwoViewRun {
                 Some((name.clone(), errors(pose, &self.truth)))
             })
             .collect();
-        let values: Vec<Option<f64>> = assignment
-            .criteria
-            .iter()
-            .map(|c| value(c.metric, &mine))
-            .collect();
-        let reference_values: Vec<Vec<(String, Option<f64>)>> = assignment
-            .criteria
-            .iter()
-            .map(|c| {
-                theirs
-                    .iter()
-                    .map(|(name, e)| (name.clone(), value(c.metric, e)))
-                    .collect()
-            })
-            .collect();
         let notices = file
             .notices
             .iter()
             .map(|n| format!("{file_name}: {n}"))
             .collect();
-        Ok(assemble(
-            assignment,
-            variant,
-            file_name,
-            bytes,
-            &values,
-            &reference_values,
-            notices,
+        Ok(assemble_scores(
+            assignment, variant, file_name, bytes, &mine, &theirs, value, notices,
         ))
     }
 }
