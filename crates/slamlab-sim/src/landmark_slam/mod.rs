@@ -8,6 +8,7 @@
 //! - [`experiment`], [`consistency`], [`fastslam`]: the sources' experiments
 //!   (thesis Table 3.1, NEES over many runs, FastSLAM 1.0 against 2.0).
 //! - [`real_data`]: the filters on recorded data sets, scored against the truth.
+//! - [`reference_map`]: Victoria Park's pose graph solved as the reference map.
 //!
 //! [`LandmarkScenario`]: crate::world::landmark_scenario::LandmarkScenario
 
@@ -17,5 +18,6 @@ pub mod export;
 pub mod fastslam;
 pub mod presets;
 pub mod real_data;
+pub mod reference_map;
 pub mod scenario;
 pub mod summary;
