@@ -31,6 +31,9 @@ pub struct LoadedData {
     pub name: String,
     /// Where `data=` read it from (kept for share links); `None` for a drop or a pick.
     pub location: Option<String>,
+    /// A reference pose graph given with the files (Victoria Park's
+    /// `victoria_park.txt`): its name and text.
+    pub reference: Option<(String, String)>,
 }
 
 /// A data set being read from `data=`.
@@ -67,6 +70,8 @@ pub enum Arrival {
     Data(LoadedData),
     /// Files that could not be read or are no data set: the message says which and why.
     Refused(String),
+    /// A reference pose graph alone (for the data set already open): its name and text.
+    Reference(String, String),
 }
 
 impl DataInput {
@@ -111,11 +116,21 @@ impl DataInput {
 /// Reads the files of one pick, drop or request as one data set.
 pub fn read(batch: Vec<PickedFile>, location: Option<String>) -> Arrival {
     let mut files = Vec::new();
+    let mut reference = None;
     for (name, bytes) in batch {
         match bytes {
+            Ok(bytes) if super::reference::is_reference_graph(&name, &bytes) => {
+                let base = name.rsplit(['/', '\\']).next().unwrap_or(&name).to_owned();
+                reference = Some((base, String::from_utf8_lossy(&bytes).into_owned()));
+            }
             Ok(bytes) => files.push(DataFile::new(name, bytes)),
             Err(why) => return Arrival::Refused(format!("Could not read {name}: {why}")),
         }
+    }
+    if files.is_empty()
+        && let Some((name, text)) = reference
+    {
+        return Arrival::Reference(name, text);
     }
     let name = match files.as_slice() {
         [] => return Arrival::Refused("No file was given".to_owned()),
@@ -127,6 +142,7 @@ pub fn read(batch: Vec<PickedFile>, location: Option<String>) -> Arrival {
             data: Arc::new(data),
             name,
             location,
+            reference,
         }),
         Err(why) => Arrival::Refused(format!("Could not open {name}: {why}")),
     }
@@ -185,6 +201,22 @@ pub fn world_ui(ui: &mut egui::Ui, lesson: &mut LandmarkSlamLesson) {
             if !world.reference.is_empty() {
                 ui.label(gps_text(super::gps_fit_now(&lesson.session).as_ref()));
             }
+            if world.kind == DataSetKind::VictoriaPark {
+                let version = lesson.version;
+                let lines = lesson.reference.lines(&lesson.session, version);
+                if lines.is_empty() {
+                    ui.label(
+                        egui::RichText::new(
+                            "Drop victoria_park.txt (gtsam's pose graph of this drive) to lay \
+                             its solved trees over the filters as the reference map.",
+                        )
+                        .small(),
+                    );
+                }
+                for line in lines {
+                    ui.label(line);
+                }
+            }
         }
     }
     if let Some(LandmarkData::Mrclam(data)) = lesson.data.as_ref().map(|d| d.data.as_ref()) {
@@ -230,7 +262,7 @@ pub fn world_ui(ui: &mut egui::Ui, lesson: &mut LandmarkSlamLesson) {
         egui::RichText::new(
             "Or drop on the window: the MRCLAM zip (or its .dat files together), the Freiburg \
              course's world.dat with sensor_data.dat, or Victoria Park's inputs.dat, \
-             measurements.dat and gps.dat.",
+             measurements.dat and gps.dat (with victoria_park.txt for the reference map).",
         )
         .small(),
     );
@@ -264,7 +296,7 @@ mod tests {
                 assert!(why.starts_with("Could not open notes.txt:"), "{why}");
                 assert!(why.contains("Freiburg"), "{why}");
             }
-            Arrival::Data(_) => panic!("a text file is no data set"),
+            Arrival::Data(_) | Arrival::Reference(..) => panic!("a text file is no data set"),
         }
     }
 
@@ -282,8 +314,56 @@ mod tests {
         );
         match arrival {
             Arrival::Refused(why) => assert!(why.contains("world.dat, line 2"), "{why}"),
-            Arrival::Data(_) => panic!("world.dat's second line lacks its y"),
+            Arrival::Data(_) | Arrival::Reference(..) => {
+                panic!("world.dat's second line lacks its y")
+            }
         }
+    }
+
+    #[test]
+    fn an_isam_pose_graph_is_taken_as_the_reference_map() {
+        let graph = b"ODOMETRY 0 1 1 0 0 0.01 0 0 0.01 0 0.001\nLANDMARK 1 0 2 2 0.01 0 0.01\n";
+        match read(
+            vec![("dir/victoria_park.txt".to_owned(), Ok(graph.to_vec()))],
+            None,
+        ) {
+            Arrival::Reference(name, text) => {
+                assert_eq!(name, "victoria_park.txt");
+                assert!(text.starts_with("ODOMETRY 0 1"));
+            }
+            other => panic!("{other:?}"),
+        }
+        // Beside the Freiburg files it is no data file either (and the reading
+        // of the data set goes on without it).
+        let arrival = read(
+            vec![
+                ("world.dat".to_owned(), Ok(b"1 2.0 1.0\n".to_vec())),
+                (
+                    "sensor_data.dat".to_owned(),
+                    Ok(b"ODOMETRY 0.1 0.2 0.0\nSENSOR 1 1.0 0.1\n".to_vec()),
+                ),
+                ("victoria_park.txt".to_owned(), Ok(graph.to_vec())),
+            ],
+            None,
+        );
+        match arrival {
+            Arrival::Data(loaded) => {
+                assert_eq!(
+                    loaded.reference.map(|r| r.0).as_deref(),
+                    Some("victoria_park.txt")
+                );
+            }
+            other => panic!("{other:?}"),
+        }
+        // A .txt of another kind is not taken for a graph.
+        assert!(!super::super::reference::is_reference_graph(
+            "notes.txt",
+            b"hello"
+        ));
+        assert!(!super::super::reference::is_reference_graph(
+            "graph.g2o",
+            graph
+        ));
     }
 
     #[test]

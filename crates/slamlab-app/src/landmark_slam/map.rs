@@ -33,6 +33,7 @@ const WEDGE_RADIUS: f32 = 34.0;
 pub fn map_ui(
     ui: &mut egui::Ui,
     session: &LandmarkSession,
+    reference: Option<&super::reference::Overlay>,
     view: &mut MapView,
     opts: &mut ViewOptions,
     drive: &mut DriveState,
@@ -67,7 +68,32 @@ pub fn map_ui(
         let sigma_points_shown = ui
             .data(|d| d.get_temp::<bool>(sigma_points_id()))
             .unwrap_or(false);
-        let entries = legend_entries(session, &colors, opts, sigma_points_shown);
+        let mut entries = legend_entries(session, &colors, opts, sigma_points_shown);
+        if let Some(fit) = reference.and_then(|r| r.fits.first())
+            && fit.fit.is_some()
+        {
+            // After the references (truth, GPS), before the filters.
+            let at = entries
+                .iter()
+                .position(|e| e.text.ends_with("path, landmarks"))
+                .unwrap_or(entries.len());
+            entries.insert(
+                at,
+                LegendEntry::new(
+                    vec![
+                        (Symbol::ReferenceTree, colors.truth),
+                        (
+                            Symbol::Line { dashed: false },
+                            palette::faded(colors.truth, 0.45),
+                        ),
+                    ],
+                    format!(
+                        "reference map (pose graph solved): trees, path; aligned to {}",
+                        filter_label(&fit.filter)
+                    ),
+                ),
+            );
+        }
         map_key_ui(ui, &entries, colors.background);
     }
     let truth = session.truth();
@@ -80,6 +106,9 @@ pub fn map_ui(
     painter.rect_filled(rect, 4.0, colors.background);
     draw_grid(&painter, &t, &colors);
     draw_world(&painter, &t, session, opts, &colors);
+    if let Some(overlay) = reference {
+        draw_reference(&painter, &t, overlay, &colors);
+    }
     // The truth first: the estimates' ellipses and wedges are drawn over its marker.
     // A recorded world shows it only where the data knows it.
     if let Some(truth) = session.true_pose() {
@@ -595,6 +624,53 @@ fn draw_gps(painter: &egui::Painter, t: &MapTransform, session: &LandmarkSession
     }
 }
 
+/// Victoria Park's reference map (the solved pose graph) in the first filter's
+/// frame, as far as the car has driven: the path as a thin line under the
+/// estimates, each tree as a hollow square in the truth's colour.
+fn draw_reference(
+    painter: &egui::Painter,
+    t: &MapTransform,
+    overlay: &super::reference::Overlay,
+    colors: &CanvasColors,
+) {
+    let Some(fit) = overlay.fits.first().and_then(|f| f.fit) else {
+        return;
+    };
+    let map = &overlay.map;
+    let upto = (fit.last_paired + 1).min(map.path.len());
+    let stride = upto / MAX_PATH_POINTS + 1;
+    let points: Vec<Pos2> = map.path[..upto]
+        .iter()
+        .step_by(stride)
+        .map(|p| t.v(&fit.apply(&Vector2::new(p.x, p.y))))
+        .filter(|p| finite(*p))
+        .collect();
+    painter.add(Shape::line(
+        points,
+        Stroke::new(1.0, palette::faded(colors.truth, 0.45)),
+    ));
+    for tree in map
+        .trees
+        .iter()
+        .filter(|tr| tr.first_seen <= fit.last_paired)
+    {
+        let p = t.v(&fit.apply(&tree.position));
+        if finite(p) && t.rect.contains(p) {
+            reference_tree(painter, p, colors.truth);
+        }
+    }
+}
+
+/// A reference tree's mark: a hollow square.
+fn reference_tree(painter: &egui::Painter, p: Pos2, color: Color32) {
+    painter.rect_stroke(
+        Rect::from_center_size(p, vec2(7.0, 7.0)),
+        0.0,
+        Stroke::new(1.4, color),
+        egui::StrokeKind::Middle,
+    );
+}
+
 /// Draws every filter's landmarks, path and robot. Returns whether sigma points were drawn.
 fn draw_filters(
     painter: &egui::Painter,
@@ -1018,6 +1094,7 @@ enum Symbol {
     FieldOfView,
     Highlight,
     SigmaPoints,
+    ReferenceTree,
 }
 
 fn draw_symbol(
@@ -1101,6 +1178,7 @@ fn draw_symbol(
         Symbol::Highlight => {
             painter.circle_stroke(c, 6.5, Stroke::new(2.2, palette::VERMILLION));
         }
+        Symbol::ReferenceTree => reference_tree(painter, c, color),
         Symbol::SigmaPoints => {
             for dx in [-7.0, 0.0, 7.0] {
                 painter.circle_filled(c + vec2(dx, 0.0), 2.2, color);

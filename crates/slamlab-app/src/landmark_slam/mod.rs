@@ -10,7 +10,9 @@
 //! robot of five, with Vicon truth), the Freiburg course's files or Victoria
 //! Park, opened by the file picker, a drop or `data=`. A data set opens with its
 //! preset (the noise measured from the data); the robot and the mode (SLAM or
-//! localization with the map given) are parameters like the others.
+//! localization with the map given) are parameters like the others. Victoria
+//! Park takes gtsam's pose graph of the same drive as its reference map
+//! ([`reference`]), solved one step per frame and drawn over the filters.
 
 pub mod data;
 pub mod drive;
@@ -20,6 +22,7 @@ pub mod many_runs;
 mod map;
 mod params_panel;
 mod plots;
+pub mod reference;
 
 use crate::lesson::{self, Lesson, LessonFrame, LessonStart, PanelVisibility, StoredSettings};
 use crate::time_control::{TimeAction, TimeInfo};
@@ -147,6 +150,8 @@ pub struct LandmarkSlamLesson {
     /// The URL's parameter pairs, applied again over a data set's preset when
     /// `data=` arrives (so `robot=3&mode=localization` hold).
     link_pairs: Vec<(String, String)>,
+    /// Victoria Park's reference map (gtsam's pose graph, solved here).
+    reference: reference::ReferenceState,
 }
 
 /// Opens the lesson from the URL's pairs, with what it stored last time (the
@@ -154,10 +159,16 @@ pub struct LandmarkSlamLesson {
 pub fn open(start: &LessonStart<'_>) -> Box<dyn Lesson> {
     let stored = StoredSettings::<ViewOptions>::from_start(start);
     let location = data::location(start.pairs);
+    let reference_location = start
+        .pairs
+        .iter()
+        .rev()
+        .find(|(k, v)| k == reference::REFERENCE_KEY && !v.trim().is_empty())
+        .map(|(_, v)| v.clone());
     let pairs: Vec<(String, String)> = start
         .pairs
         .iter()
-        .filter(|(k, _)| k != data::DATA_KEY)
+        .filter(|(k, _)| k != data::DATA_KEY && k != reference::REFERENCE_KEY)
         .cloned()
         .collect();
     let start = &LessonStart {
@@ -175,6 +186,9 @@ pub fn open(start: &LessonStart<'_>) -> Box<dyn Lesson> {
         lesson.frame.note = Some(format!("Loading the data set {location}…"));
         lesson.link_pairs = pairs.clone();
         lesson.data_input.fetch(location);
+    }
+    if let Some(location) = reference_location {
+        lesson.reference.fetch(location);
     }
     // A lecture figure looks the same for every student: the view a student left
     // in the full app (an open heatmap, say) stays there.
@@ -208,6 +222,7 @@ impl LandmarkSlamLesson {
             data: None,
             data_input: data::DataInput::default(),
             link_pairs: Vec::new(),
+            reference: reference::ReferenceState::default(),
         }
     }
 
@@ -252,6 +267,7 @@ impl LandmarkSlamLesson {
                 .notices
                 .extend(issues.iter().map(ToString::to_string));
         }
+        let given = loaded.reference.clone();
         let previous = self.data.replace(loaded);
         match self.start_session(scenario) {
             Ok(session) => {
@@ -269,6 +285,15 @@ impl LandmarkSlamLesson {
                     }
                 };
                 self.frame.note = Some(format!("Opened {name} ({})", kind.name()));
+                match given {
+                    Some((file, text)) if kind == DataSetKind::VictoriaPark => {
+                        self.reference.open(file, None, &text);
+                    }
+                    // A reference named by the link stays for Victoria Park.
+                    _ if kind == DataSetKind::VictoriaPark && self.reference.location.is_some() => {
+                    }
+                    _ => self.reference = reference::ReferenceState::default(),
+                }
             }
             Err(why) => {
                 let name = self.data.as_ref().map(|d| d.name.clone());
@@ -290,6 +315,7 @@ impl LandmarkSlamLesson {
     /// Leaves the data set for the simulated world, with the lesson's parameters.
     pub fn open_simulated_world(&mut self) {
         self.data = None;
+        self.reference = reference::ReferenceState::default();
         let seed = self.pending.seed;
         self.pending = default_scenario();
         self.pending.seed = seed;
@@ -315,12 +341,35 @@ impl LandmarkSlamLesson {
         if let Some(arrival) = self.data_input.poll(ctx) {
             self.arrived(arrival);
         }
+        // One solver step a frame: Victoria Park's graph solves in about 150.
+        self.reference.poll(ctx);
+    }
+
+    /// Victoria Park's reference map, read, being solved, or refused.
+    pub fn reference(&self) -> &reference::ReferenceState {
+        &self.reference
+    }
+
+    /// Solves the reference graph to the end at once (tests).
+    pub fn finish_reference(&mut self) {
+        self.reference.finish();
     }
 
     /// Opens what arrived, or says why it cannot be opened.
     fn arrived(&mut self, arrival: data::Arrival) {
         match arrival {
             data::Arrival::Data(loaded) => self.open_data(loaded),
+            data::Arrival::Reference(name, text) => {
+                if self.data_kind() == Some(DataSetKind::VictoriaPark) {
+                    self.reference.open(name.clone(), None, &text);
+                    self.frame.note = Some(format!("Solving {name} as the reference map"));
+                } else {
+                    self.frame.note = Some(format!(
+                        "{name} is a pose graph of Victoria Park: open Victoria Park's inputs.dat, \
+                         measurements.dat and gps.dat first (or drop the four files together)"
+                    ));
+                }
+            }
             data::Arrival::Refused(why) => {
                 let world = if self.data.is_some() {
                     "the data set stays open"
@@ -532,6 +581,7 @@ impl LandmarkSlamLesson {
         self.frame.time.running
             || self.drive.is_active()
             || (self.frame.view.many_runs && self.many_runs.is_running())
+            || self.reference.is_busy()
     }
 
     /// Reads the drive keys (arrows, WASD) while driving by hand. Starting to drive
@@ -650,9 +700,15 @@ impl crate::widgets::layout::LessonPanels for LandmarkSlamLesson {
     }
 
     fn map_ui(&mut self, ui: &mut egui::Ui) {
+        let overlay = if self.data_kind() == Some(DataSetKind::VictoriaPark) {
+            self.reference.overlay(&self.session, self.version).cloned()
+        } else {
+            None
+        };
         map::map_ui(
             ui,
             &self.session,
+            overlay.as_ref(),
             &mut self.frame.map,
             &mut self.frame.view,
             &mut self.drive,
@@ -695,6 +751,9 @@ impl Lesson for LandmarkSlamLesson {
             self.session.scenario().seed,
         );
         if let Some(location) = self.data.as_ref().and_then(|d| d.location.clone()) {
+            if let Some(reference) = self.reference.location.clone() {
+                pairs.insert(0, (reference::REFERENCE_KEY.to_owned(), reference));
+            }
             pairs.insert(0, (data::DATA_KEY.to_owned(), location));
         }
         pairs
@@ -819,6 +878,7 @@ impl Lesson for LandmarkSlamLesson {
             "many_runs": many_runs,
             "data": data,
             "loading_data": self.data_input.is_fetching(),
+            "reference": self.reference.is_given().then(|| self.reference.test_state(session)),
             "position_error": errors,
         })
     }
