@@ -212,7 +212,7 @@ fn victoria_park_reference_map_lies_over_ekf_slams_first_minutes() {
     // the scans, the lesson integrates every input).
     let dead = session.dead_reckoning_path();
     let chained_fit = align(&chained, dead, dead).unwrap();
-    assert!((chained_fit.rmse - 0.102).abs() < 1e-3, "{chained_fit:?}");
+    println!("the chained graph against the dead reckoning: {chained_fit:?}");
     println!(
         "to {:.1} s ({:.1} m driven; reference {:.1} m): {fit:?} {score:?}",
         session.time(),
@@ -222,6 +222,7 @@ fn victoria_park_reference_map_lies_over_ekf_slams_first_minutes() {
     if steps != 6000 {
         return;
     }
+    assert!((chained_fit.rmse - 0.102).abs() < 1e-3, "{chained_fit:?}");
     // The numbers docs/real-landmark-data.md reports for this span: 590 of the
     // graph's poses lie within the 327.6 m driven, and the solved path lies
     // 0.52 m RMS from EKF-SLAM's once turned by 4.9°; every one of the 41
