@@ -618,6 +618,7 @@ pub fn advance_within_ms(
     if due == TicksDue::Count(0) {
         return 0;
     }
+    let budget_ms = time.budget_ms(budget_ms);
     let start = web_time::Instant::now();
     let mut done = 0_u64;
     loop {
