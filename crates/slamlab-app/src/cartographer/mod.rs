@@ -172,7 +172,8 @@ pub fn open(start: &LessonStart<'_>) -> Box<dyn Lesson> {
     let stored = StoredSettings::<CartographerView>::from_start(start);
     let location = start.last_value("log");
     let reference = start.last_value("reference");
-    let (laser, pairs) = LaserFileState::from_start(start, |k, _| k == "log" || k == "reference");
+    let (laser, pairs) =
+        LaserFileState::from_link(start.pairs, |k, _| k == "log" || k == "reference");
     let start = &LessonStart {
         pairs: &pairs,
         ..*start

@@ -194,7 +194,7 @@ pub fn open(start: &LessonStart<'_>) -> Box<dyn Lesson> {
         .find(|(k, v)| k == "map" && is_map_location(v))
         .map(|(_, v)| v.clone());
     let log_location = start.last_value("log");
-    let (laser, pairs) = LaserFileState::from_start(start, |k, v| {
+    let (laser, pairs) = LaserFileState::from_link(start.pairs, |k, v| {
         (k == "map" && is_map_location(v)) || k == "log"
     });
     let start = &LessonStart {

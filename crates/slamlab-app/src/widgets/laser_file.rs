@@ -35,16 +35,15 @@ pub struct LaserFileState {
 }
 
 impl LaserFileState {
-    /// The state for a lesson opened with `start`, and the link's pairs left
-    /// for its parameters: the pairs for which `read_later` holds (files the
+    /// The state for a lesson opened with the link's `pairs`, and the pairs
+    /// left for its parameters: those for which `read_later` holds (files the
     /// lesson reads after the first frame: `log=`, `reference=`, a map file)
     /// are set aside, and the laser file's own are read here.
-    pub fn from_start(
-        start: &crate::lesson::LessonStart<'_>,
+    pub fn from_link(
+        pairs: &[(String, String)],
         read_later: impl Fn(&str, &str) -> bool,
     ) -> (Self, Vec<(String, String)>) {
-        let pairs: Vec<(String, String)> = start
-            .pairs
+        let pairs: Vec<(String, String)> = pairs
             .iter()
             .filter(|(k, v)| !read_later(k, v))
             .cloned()
