@@ -89,6 +89,15 @@ pub fn link_sets_up(parsed: &query::Query) -> bool {
         || parsed.figure != query::FigureOptions::default()
 }
 
+/// A file named by `estimate=`, while it is read; a map's image carries the
+/// YAML that named it (name, bytes), to be delivered together.
+#[derive(Debug)]
+struct LinkedEstimate {
+    location: String,
+    fetch: Option<widgets::fetch::Fetch>,
+    yaml: Option<(String, Vec<u8>)>,
+}
+
 /// The SLAM Lab application.
 #[derive(Debug)]
 pub struct SlamLabApp {
@@ -143,7 +152,7 @@ pub struct SlamLabApp {
     estimate_picker: widgets::file_picker::FilePicker,
     estimate_drops: widgets::dropped_files::DropInbox,
     /// `estimate=` files named in the URL, while they are read.
-    estimate_fetches: Vec<(String, Option<widgets::fetch::Fetch>)>,
+    estimate_fetches: Vec<LinkedEstimate>,
     /// Homework (`assignment=`, `student=`): the Assignment window.
     assignment: Option<widgets::assignment::AssignmentDesk>,
     /// The link's lesson pairs, for opening an assignment's lesson once its
@@ -252,7 +261,11 @@ impl SlamLabApp {
             .figure
             .estimates
             .iter()
-            .map(|location| (location.clone(), None))
+            .map(|location| LinkedEstimate {
+                location: location.clone(),
+                fetch: None,
+                yaml: None,
+            })
             .collect();
         Self {
             query: query.trim_start_matches('?').to_owned(),
@@ -1166,12 +1179,16 @@ impl SlamLabApp {
             .is_some_and(|p| {
                 p.assignment.output.format != slamlab_sim::coursework::OutputFormat::Trajectory
             });
+        // A ROS map is the student's map where the run has a true one to score
+        // it against (else it stays the lesson's: a world to explore).
+        let maps_are_estimates = self.lesson.scores_maps();
         let is_estimate = |file: &egui::DroppedFileHandle| {
             let name = file.path().to_string_lossy().to_ascii_lowercase();
             hands_in_anything
                 || name.ends_with(".tum")
                 || name.ends_with(".csv")
                 || (!text_is_theirs && name.ends_with(".txt"))
+                || (maps_are_estimates && widgets::estimates::is_map_file(&name))
         };
         let taken = ctx.input_mut(|i| {
             let (mine, rest): (Vec<_>, Vec<_>) = std::mem::take(&mut i.raw.dropped_files)
@@ -1187,20 +1204,67 @@ impl SlamLabApp {
         if let Some(batch) = self.estimate_picker.poll_all() {
             files.extend(batch);
         }
-        for (location, fetch) in &mut self.estimate_fetches {
-            match fetch {
-                None => *fetch = Some(widgets::fetch::Fetch::start(location, ctx)),
+        let mut images = Vec::new();
+        for linked in &mut self.estimate_fetches {
+            match &mut linked.fetch {
+                None => linked.fetch = Some(widgets::fetch::Fetch::start(&linked.location, ctx)),
                 Some(f) => {
                     if let Some(result) = f.poll() {
+                        let location = &linked.location;
                         let name = location.rsplit('/').next().unwrap_or(location).to_owned();
-                        files.push((name, result));
+                        match (linked.yaml.take(), result) {
+                            // A map's image: delivered with its YAML.
+                            (Some(yaml), Ok(bytes)) => {
+                                files.push((yaml.0, Ok(yaml.1)));
+                                files.push((name, Ok(bytes)));
+                            }
+                            (Some(yaml), Err(why)) => files.push((
+                                yaml.0.clone(),
+                                Err(format!("the image it names, {location}: {why}")),
+                            )),
+                            // A map's YAML: read its image beside it first.
+                            (None, Ok(bytes))
+                                if widgets::estimates::is_map_file(&name) && {
+                                    let lower = name.to_ascii_lowercase();
+                                    lower.ends_with(".yaml") || lower.ends_with(".yml")
+                                } =>
+                            {
+                                match std::str::from_utf8(&bytes)
+                                    .ok()
+                                    .and_then(|t| slamlab_sim::io::ros_map::parse_map_yaml(t).ok())
+                                {
+                                    Some(parsed) => images.push(LinkedEstimate {
+                                        location: widgets::fetch::relative_to(
+                                            location,
+                                            &parsed.image,
+                                        ),
+                                        fetch: None,
+                                        yaml: Some((name, bytes)),
+                                    }),
+                                    // Read as it is: the refusal says why.
+                                    None => files.push((name, Ok(bytes))),
+                                }
+                            }
+                            (None, result) => files.push((name, result)),
+                        }
                     }
                 }
             }
         }
-        self.estimate_fetches
-            .retain(|(_, f)| f.as_ref().is_none_or(widgets::fetch::Fetch::is_pending));
+        self.estimate_fetches.retain(|l| {
+            l.fetch
+                .as_ref()
+                .is_none_or(widgets::fetch::Fetch::is_pending)
+        });
+        self.estimate_fetches.extend(images);
         self.take_estimates(files);
+    }
+
+    /// Takes files as if the student had dropped them on the window together
+    /// (a ROS map's YAML with its image): into the lesson's estimates, or handed
+    /// in with homework open. Tests and the browser hook use it.
+    pub fn open_estimate_files(&mut self, files: Vec<(String, Vec<u8>)>) {
+        self.take_estimates(files.into_iter().map(|(n, b)| (n, Ok(b))).collect());
     }
 
     /// Takes a student's estimate files into the lesson (drawn and scored in
@@ -1211,6 +1275,17 @@ impl SlamLabApp {
     /// another student's variant, another assignment) is said with the grader's
     /// reason and not drawn; what was handed in before stays.
     fn take_estimates(&mut self, files: Vec<(String, Result<Vec<u8>, String>)>) {
+        // Outside homework, a ROS map's files come together: the YAML and its image.
+        let homework = self
+            .assignment
+            .as_ref()
+            .is_some_and(|d| d.prepared().is_some());
+        let (map_files, files): (Vec<_>, Vec<_>) = files
+            .into_iter()
+            .partition(|(name, _)| !homework && widgets::estimates::is_map_file(name));
+        if !map_files.is_empty() {
+            self.take_map(map_files);
+        }
         for (name, bytes) in files {
             let bytes = match bytes {
                 Ok(b) => b,
@@ -1260,13 +1335,41 @@ impl SlamLabApp {
         }
     }
 
+    /// Takes a student's ROS map (its YAML and image) into the lesson's
+    /// estimates, scored against the true map; says which it did, or why not.
+    fn take_map(&mut self, files: Vec<(String, Result<Vec<u8>, String>)>) {
+        let mut read = Vec::new();
+        for (name, bytes) in files {
+            match bytes {
+                Ok(b) => read.push((name, b)),
+                Err(why) => {
+                    self.app_notices
+                        .push(format!("Could not read {name}: {why}"));
+                    return;
+                }
+            }
+        }
+        if !self.lesson.scores_maps() {
+            let names: Vec<&str> = read.iter().map(|(n, _)| n.as_str()).collect();
+            self.app_notices.push(format!(
+                "{}: this run has no true occupancy map to score a map against (the mapping lesson on a simulated robot has one)",
+                names.join(", ")
+            ));
+            return;
+        }
+        match self.lesson.frame_mut().estimates_mut().add_map(&read) {
+            Ok(said) => self.exporter.status = Some(said),
+            Err(why) => self.app_notices.push(why),
+        }
+    }
+
     /// The student's estimates on the map and in their window.
     fn estimates_ui(&mut self, ctx: &egui::Context) {
         if self.lesson.frame().estimates().is_empty() && !self.lesson.frame().estimates().open {
             return;
         }
         let now = self.lesson.estimate_clock().unwrap_or(f64::INFINITY);
-        widgets::estimates::map_overlay(ctx, self.lesson.frame().estimates(), now);
+        widgets::estimates::map_overlay(ctx, self.lesson.frame_mut().estimates_mut(), now);
         if self.lesson.frame().estimates().open {
             self.score_estimates();
             let has_truth = self
@@ -1291,6 +1394,7 @@ impl SlamLabApp {
             trajectories: self.lesson.trajectories(),
             landmarks: self.lesson.landmark_maps(),
             relative_poses: self.lesson.relative_poses(),
+            maps: self.lesson.occupancy_maps(),
         };
         self.lesson
             .frame_mut()
