@@ -98,6 +98,24 @@ struct LinkedEstimate {
     yaml: Option<(String, Vec<u8>)>,
 }
 
+/// The largest file named `name` that lesson `lesson_id` reads, bytes: the
+/// mapping and Cartographer lessons read laser logs and ROS 2 bags (by their
+/// extension) up to `grid::laser_file::MAX_LASER_FILE_BYTES` (1 GiB); every
+/// other file and lesson stops at 64 MiB ([`widgets::fetch::MAX_FETCH_BYTES`]).
+/// In the browser a drop holding a larger file is refused from its size before
+/// any of it is read (`web.rs`).
+pub fn file_cap(name: &str, lesson_id: &str) -> u64 {
+    let lower = name.to_ascii_lowercase();
+    let laser = [".clf", ".log", ".gz", ".bz2", ".mcap", ".bag", ".db3"]
+        .iter()
+        .any(|e| lower.ends_with(e));
+    if laser && matches!(lesson_id, "mapping" | "cartographer") {
+        slamlab_sim::grid::laser_file::MAX_LASER_FILE_BYTES
+    } else {
+        widgets::fetch::MAX_FETCH_BYTES as u64
+    }
+}
+
 /// The SLAM Lab application.
 #[derive(Debug)]
 pub struct SlamLabApp {
@@ -559,6 +577,7 @@ impl SlamLabApp {
             "lesson": self.lesson.id(),
             "embed": self.embed,
             "notices": self.notices().len(),
+            "notice_list": self.notices(),
             "frame_timing": self.frame_stats.summary(),
             "narrow": self.narrow,
             "export_status": self.exporter.status,
@@ -1260,6 +1279,42 @@ impl SlamLabApp {
         self.take_estimates(files);
     }
 
+    /// The lesson's own result as the files a student would hand in, for the
+    /// browser check that drops them back: the mapping lesson's map as *Export
+    /// map* writes it (YAML and PGM), the pose-graph lesson's graph as g2o.
+    /// Empty for the other lessons (their trajectories come from File →
+    /// Export trajectories).
+    pub fn own_result_files(&self) -> Vec<(String, Vec<u8>)> {
+        if let Some(lesson) = self.lesson_as::<mapping::MappingLesson>() {
+            return lesson
+                .map_files()
+                .map(|files| files.into_iter().map(|f| (f.name, f.bytes)).collect())
+                .unwrap_or_default();
+        }
+        if let Some(lesson) = self.lesson_as::<pose_graph::PoseGraphLesson>() {
+            return slamlab_sim::io::graph::write_g2o(lesson.session().graph())
+                .map(|text| vec![("optimized.g2o".to_owned(), text.into_bytes())])
+                .unwrap_or_default();
+        }
+        Vec::new()
+    }
+
+    /// The largest file named `name` a drop on this lesson may hold, bytes
+    /// ([`file_cap`]).
+    pub fn drop_cap_for(&self, name: &str) -> u64 {
+        file_cap(name, self.lesson.id())
+    }
+
+    /// A file of a drop refused from its size before it was read (the browser's
+    /// drop guard): a notice naming it and its size. Nothing of the drop is
+    /// taken; the lesson and what was dropped before stay.
+    pub fn refuse_dropped(&mut self, name: &str, size: u64) {
+        self.app_notices.push(format!(
+            "{}: nothing of that drop was read, and the lesson goes on",
+            widgets::fetch::too_large(name, size, self.drop_cap_for(name))
+        ));
+    }
+
     /// Takes files as if the student had dropped them on the window together
     /// (a ROS map's YAML with its image): into the lesson's estimates, or handed
     /// in with homework open. Tests and the browser hook use it.
@@ -1729,6 +1784,30 @@ mod tests {
         // The full app does.
         let app = SlamLabApp::with_settings("", Some(stored.clone()));
         assert!(app.landmark_lesson().is_some_and(|l| l.frame.view.heatmap));
+    }
+
+    /// A drop refused from its size (the browser's guard) is a notice naming
+    /// the file and its size; what was dropped before stays. The mapping lesson
+    /// takes laser files up to 1 GiB, any other file 64 MiB.
+    #[test]
+    fn a_refused_drop_is_said_and_keeps_what_was_there() {
+        let mut app = SlamLabApp::from_query("lesson=landmark-slam&seed=2&tick=10");
+        let tum = "0 0 0 0 0 0 0 1\n0.1 0.1 0 0 0 0 0 1\n";
+        app.open_estimate_files(vec![("mine.tum".to_owned(), tum.as_bytes().to_vec())]);
+        assert_eq!(app.lesson().frame().estimates().items().len(), 1);
+        assert_eq!(app.drop_cap_for("big.tum"), 64 << 20);
+        assert_eq!(app.drop_cap_for("intel.clf"), 64 << 20);
+        app.refuse_dropped("big.tum", 65 << 20);
+        assert_eq!(
+            app.notices().last().map(String::as_str),
+            Some(
+                "big.tum has 68157440 bytes, more than the 67108864 bytes SLAM Lab reads: nothing of that drop was read, and the lesson goes on"
+            )
+        );
+        assert_eq!(app.lesson().frame().estimates().items().len(), 1);
+        let mapping = SlamLabApp::from_query("lesson=mapping");
+        assert_eq!(mapping.drop_cap_for("intel.clf.bz2"), 1 << 30);
+        assert_eq!(mapping.drop_cap_for("big.tum"), 64 << 20);
     }
 
     #[test]
