@@ -319,4 +319,23 @@ fn a_dropped_map_scores_as_the_mapping_lessons_own() {
         score(&st, "fine.yaml")["map_agreement"].as_f64(),
         Some(agreement)
     );
+    // Named in the URL (`estimate=` the YAML; its image is read beside it).
+    let dir = std::env::temp_dir().join(format!("slamlab-map-estimate-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    for (name, bytes) in &files {
+        std::fs::write(dir.join(name), bytes).unwrap();
+    }
+    let query = format!(
+        "lesson=mapping&map=maze&seed=3&steps=200&estimate={}",
+        dir.join("slamlab-map.yaml").display()
+    );
+    let mut linked = harness(&query, egui::vec2(800.0, 500.0));
+    linked.run();
+    let st = state(&linked);
+    let _ = std::fs::remove_dir_all(&dir);
+    assert_eq!(
+        score(&st, "slamlab-map.yaml")["map_agreement"].as_f64(),
+        Some(agreement),
+        "{st}"
+    );
 }
