@@ -486,3 +486,83 @@ fn every_built_in_assignment_opens_its_lesson() {
         assert!(label_visible(&h, "Download inputs"), "{name}");
     }
 }
+
+/// `assignment=fusion`: the fusion lesson opens on the student's drive (the
+/// seed, the drive's length, the reference's mode first), its true path is the
+/// one `answers/truth.tum` holds, and the reference EKF's trajectory dropped on
+/// the window passes with every point while dead reckoning (the starter's)
+/// fails, each with the library's grade.
+#[test]
+fn the_fusion_link_opens_the_variants_drive_and_grades_a_dropped_estimate() {
+    let mut h = harness(
+        "assignment=fusion&student=alice@example.edu&tick=30",
+        egui::vec2(1280.0, 800.0),
+    );
+    h.run();
+    let st = state(&h);
+    let prepared = slamlab_sim::assignments::builtin("fusion")
+        .and_then(|a| slamlab_sim::assignments::prepare(&a, "alice@example.edu"))
+        .unwrap_or_else(|e| panic!("{e}"));
+    assert_eq!(st["lesson"], "fusion");
+    assert_eq!(st["seed"], prepared.variant.seed);
+    assert_eq!(st["assignment"]["stage"], "ready");
+    assert_eq!(st["notices"], 0, "{}", h.state().notices().join("; "));
+    assert_eq!(st["runs"][0]["mode"], "absolute", "{}", st["runs"]);
+    // The lesson's truth (sampled at 30 Hz) is the variant's at every 0.1 s.
+    let expected = prepared.truth();
+    let lesson = h.state().lesson().trajectories();
+    let truth = &lesson
+        .iter()
+        .find(|t| t.role == TrajectoryRole::Truth)
+        .unwrap()
+        .trajectory;
+    let mut compared = 0;
+    for (t, pose) in truth.stamps().iter().zip(truth.poses()) {
+        if let Some(k) = expected.stamps().iter().position(|s| (s - t).abs() < 1e-9) {
+            let e = expected.poses()[k];
+            assert!(
+                (pose.x - e.x).abs() < 1e-9 && (pose.y - e.y).abs() < 1e-9,
+                "t = {t}: {pose:?} vs {e:?}"
+            );
+            compared += 1;
+        }
+    }
+    assert!(compared >= 290, "{compared} poses compared");
+    let references = prepared.references().unwrap();
+    let tum = |name: &str| {
+        references
+            .iter()
+            .find(|(n, _)| n == name)
+            .map(|(_, t)| write_tum(t).into_bytes())
+            .unwrap()
+    };
+    let (ekf, dead_reckoning) = (tum("ekf-absolute"), tum("dead-reckoning"));
+    drop_file(&mut h, "ekf.tum", ekf.clone());
+    drop_file(&mut h, "dead-reckoning.tum", dead_reckoning.clone());
+    let st = state(&h);
+    let graded = st["assignment"]["graded"].as_array().unwrap();
+    assert_eq!(graded.len(), 2, "{}", st["assignment"]);
+    let expected_ekf = prepared.grade("ekf.tum", &ekf).unwrap();
+    let expected_dr = prepared
+        .grade("dead-reckoning.tum", &dead_reckoning)
+        .unwrap();
+    assert_eq!(graded[0]["score"], 100.0);
+    assert_eq!(graded[0]["pass"], true);
+    assert_eq!(
+        graded[0]["criteria"][0]["value"].as_f64(),
+        expected_ekf.criteria[0].value
+    );
+    assert_eq!(graded[1]["pass"], false);
+    assert_eq!(graded[1]["score"], expected_dr.score);
+    assert_eq!(
+        graded[1]["criteria"][0]["value"].as_f64(),
+        expected_dr.criteria[0].value
+    );
+    // Both are drawn on the room as the lesson's estimates.
+    assert_eq!(h.state().lesson().frame().estimates().items().len(), 2);
+    if let Some(image) = render_or_skip(&mut h)
+        && let Some(dir) = std::env::var_os("SLAMLAB_UI_SHOTS")
+    {
+        let _ = image.save(Path::new(&dir).join("assignment-fusion-1280x800.png"));
+    }
+}
