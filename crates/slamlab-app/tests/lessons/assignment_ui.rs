@@ -574,6 +574,7 @@ fn the_fusion_link_opens_the_variants_drive_and_grades_a_dropped_estimate() {
 /// only (`grid-mapping`); the reference ICP's relative pose and the odometry's
 /// (`icp`); the eight-point RANSAC's relative pose and "no rotation, straight
 /// ahead" (`two-view`).
+#[allow(clippy::unwrap_used)] // a test's fixture: a failure stops the test
 fn reference_and_naive(name: &str, p: &Prepared) -> [(&'static str, Vec<u8>); 2] {
     let file = |path: &str| {
         p.input_files(true)
@@ -654,7 +655,7 @@ fn reference_and_naive(name: &str, p: &Prepared) -> [(&'static str, Vec<u8>); 2]
                 .references
                 .iter()
                 .find(|(n, _)| n == "eight-point")
-                .and_then(|(_, pose)| pose.clone())
+                .and_then(|(_, pose)| *pose)
                 .unwrap();
             let write =
                 |pose| slamlab_sim::io::relative_pose::write_relative_pose(pose).into_bytes();
