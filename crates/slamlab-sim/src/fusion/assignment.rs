@@ -245,7 +245,7 @@ impl FusionRun {
                  \x20              sideways accelerations (m/s^2, gravity removed; white noise\n\
                  \x20              std {} m/s^2).",
                 number(i.rate),
-                number(i.gyro_noise_std),
+                format!("{:.3e}", i.gyro_noise_std),
                 number(i.gyro_bias_std),
                 number(i.gyro_bias_walk),
                 number(i.accel_noise_std),
