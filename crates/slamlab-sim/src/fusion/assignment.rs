@@ -240,12 +240,12 @@ impl FusionRun {
                 out,
                 "imu.csv        t_s,gyro_z_rad_per_s,accel_x_m_per_s2,accel_y_m_per_s2: the\n\
                  \x20              IMU at {} Hz, in the robot's frame: the yaw rate (rad/s; white\n\
-                 \x20              noise std {} rad/s plus a bias: std {} rad/s at the start, a\n\
+                 \x20              noise std {:.3e} rad/s plus a bias: std {} rad/s at the start, a\n\
                  \x20              random walk of {} rad/s per sqrt(s)) and the forward and\n\
                  \x20              sideways accelerations (m/s^2, gravity removed; white noise\n\
                  \x20              std {} m/s^2).",
                 number(i.rate),
-                format!("{:.3e}", i.gyro_noise_std),
+                i.gyro_noise_std,
                 number(i.gyro_bias_std),
                 number(i.gyro_bias_walk),
                 number(i.accel_noise_std),
