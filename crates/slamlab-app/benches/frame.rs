@@ -24,7 +24,9 @@ fn input() -> egui::RawInput {
 
 /// One frame: the app's UI code, then tessellation; returns the triangle count.
 fn frame(ctx: &egui::Context, app: &mut SlamLabApp) -> usize {
-    let output = ctx.run_ui(input(), |ui| app.app_ui(ui));
+    let mut output = ctx.run_ui(input(), |ui| app.app_ui(ui));
+    // No GPU here to upload the textures to (the grid lessons' map tiles).
+    output.textures_delta.clear();
     let meshes = ctx.tessellate(output.shapes, output.pixels_per_point);
     meshes
         .iter()
@@ -68,5 +70,41 @@ fn kidnap_frame_5000_particles(bencher: divan::Bencher, estimators: &str) {
     for _ in 0..5 {
         frame(&ctx, &mut app);
     }
+    bencher.bench_local(|| frame(&ctx, &mut app));
+}
+
+/// One frame of the Cartographer lesson on the Intel log (`../shared/data/laser/
+/// intel.clf.bz2`, or `$SLAMLAB_SHARED/data/laser`) after `SCANS` scans: the map
+/// with every submap, node and constraint so far, and the plots. What the page
+/// draws between its simulation slices when the log plays at maximum speed; its
+/// growth with the scans is what limits the on-screen pace (docs/cartographer.md).
+/// Skipped with a message when the log is absent.
+#[divan::bench(consts = [3000, 10000])]
+fn cartographer_intel_frame<const SCANS: usize>(bencher: divan::Bencher) {
+    let dir = std::env::var_os("SLAMLAB_SHARED")
+        .map_or_else(
+            || std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../../../shared"),
+            std::path::PathBuf::from,
+        )
+        .join("data/laser");
+    let Ok(log) = std::fs::read(dir.join("intel.clf.bz2")) else {
+        eprintln!("skipped: the Intel log is not in {}", dir.display());
+        return;
+    };
+    let ctx = egui::Context::default();
+    let mut app = SlamLabApp::from_query("lesson=cartographer");
+    let Some(lesson) = app.lesson_as_mut::<slamlab_app::cartographer::CartographerLesson>() else {
+        eprintln!("skipped: the Cartographer lesson did not open");
+        return;
+    };
+    lesson.load_log("intel.clf.bz2", &log, None);
+    lesson.run_to(SCANS);
+    for _ in 0..5 {
+        frame(&ctx, &mut app);
+    }
+    let mut output = ctx.run_ui(input(), |ui| app.app_ui(ui));
+    output.textures_delta.clear();
+    let meshes = ctx.tessellate(output.shapes, output.pixels_per_point);
+    eprintln!("{SCANS} scans: {} meshes", meshes.len());
     bencher.bench_local(|| frame(&ctx, &mut app));
 }

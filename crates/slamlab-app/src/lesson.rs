@@ -28,6 +28,17 @@ pub struct LessonStart<'a> {
     pub many_runs: Option<usize>,
 }
 
+impl LessonStart<'_> {
+    /// The value of the last `key=` pair in the link, if any.
+    pub fn last_value(&self, key: &str) -> Option<String> {
+        self.pairs
+            .iter()
+            .rev()
+            .find(|(k, _)| k == key)
+            .map(|(_, v)| v.clone())
+    }
+}
+
 /// What a lesson remembers between visits: its view options, its clock's speed,
 /// and the user's parameters that differ from the lesson's start.
 #[derive(Clone, Debug, Default, PartialEq, serde::Serialize, serde::Deserialize)]
@@ -618,6 +629,7 @@ pub fn advance_within_ms(
     if due == TicksDue::Count(0) {
         return 0;
     }
+    let budget_ms = time.budget_ms(budget_ms);
     let start = web_time::Instant::now();
     let mut done = 0_u64;
     loop {

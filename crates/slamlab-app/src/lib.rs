@@ -99,6 +99,10 @@ pub struct SlamLabApp {
     frame_stats: frame_stats::FrameStats,
     /// eframe's CPU time of the previous frame, milliseconds (none in tests).
     last_cpu_ms: Option<f32>,
+    /// What the last frame spent simulating, milliseconds (with `last_cpu_ms`, how
+    /// much of the frame's interval the thread sat idle: the clock's budget at
+    /// maximum speed).
+    last_sim_ms: f32,
     show_frame_timing: bool,
     lesson: Box<dyn Lesson>,
     embed: bool,
@@ -259,6 +263,7 @@ impl SlamLabApp {
             frames: 0,
             frame_stats: frame_stats::FrameStats::default(),
             last_cpu_ms: None,
+            last_sim_ms: 0.0,
             show_frame_timing: false,
             lesson,
             embed: parsed.embed,
@@ -707,9 +712,15 @@ impl SlamLabApp {
             let figure = self.figure.clone();
             apply_figure(&mut *self.lesson, &figure, &mut self.app_notices);
         }
+        let interval_ms = ctx.input(|i| i.unstable_dt) * 1000.0;
+        self.lesson.time_mut().note_frame(
+            f64::from(self.last_sim_ms),
+            self.last_cpu_ms.map(f64::from),
+            f64::from(interval_ms),
+        );
         self.lesson.advance(dt);
         let sim_ms = sim_start.elapsed().as_secs_f32() * 1000.0;
-        let interval_ms = ctx.input(|i| i.unstable_dt) * 1000.0;
+        self.last_sim_ms = sim_ms;
         let update = self.lesson.last_advance_updated();
         self.frame_stats
             .record_frame(self.last_cpu_ms, sim_ms, interval_ms, update);

@@ -10,6 +10,14 @@ pub const SPEED_RANGE: std::ops::RangeInclusive<f64> = 1.0..=200.0;
 /// falls behind real time instead of freezing the page.
 pub const FRAME_BUDGET_MS: u128 = 25;
 
+/// The most one frame may spend simulating at maximum speed, milliseconds: the page
+/// still answers a click within a quarter of a second.
+pub const MAX_SPEED_BUDGET_MS: f64 = 250.0;
+
+/// What a frame at maximum speed leaves idle on purpose, milliseconds, so that input
+/// and the browser's own work still find the thread free.
+const IDLE_MARGIN_MS: f64 = 5.0;
+
 /// What the user asked the clock to do this frame.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum TimeAction {
@@ -39,6 +47,10 @@ pub struct TimeControl {
     /// Fractional ticks owed by the clock.
     #[serde(skip)]
     accumulator: f64,
+    /// At maximum speed, how long the next frame may simulate beyond the lesson's
+    /// own budget, milliseconds (see [`TimeControl::note_frame`]).
+    #[serde(skip)]
+    spare_ms: f64,
 }
 
 impl Default for TimeControl {
@@ -48,6 +60,7 @@ impl Default for TimeControl {
             speed_tps: 10.0,
             max_speed: false,
             accumulator: 0.0,
+            spare_ms: 0.0,
         }
     }
 }
@@ -95,6 +108,35 @@ impl TimeControl {
         self.accumulator = (self.accumulator - done as f64).clamp(0.0, 1.0);
     }
 
+    /// Records how the last frame went, so that at maximum speed the next one can
+    /// also use the time the page's thread would sit idle: `sim_ms` is what the last
+    /// frame spent simulating, `cpu_ms` the whole frame's CPU time (eframe's
+    /// measurement, `None` where it gives none), `interval_ms` the time from that
+    /// frame's start to this one's.
+    ///
+    /// Where the display is slow (software rendering in a headless browser draws a
+    /// large map in a few hundred milliseconds on another thread, and the next frame
+    /// waits for it), a frame's CPU time is a small part of the interval: the rest is
+    /// idle. The spare time then grows by half the idle time each frame, less a small
+    /// margin, and settles where the simulation fills the wait; where frames come as
+    /// fast as the display's refresh, nothing is idle and the lesson's own budget
+    /// holds. Capped at [`MAX_SPEED_BUDGET_MS`]; only maximum speed uses it, so a
+    /// lesson run at a set speed paces exactly as before.
+    pub fn note_frame(&mut self, sim_ms: f64, cpu_ms: Option<f64>, interval_ms: f64) {
+        self.spare_ms = spare_budget_ms(sim_ms, cpu_ms, interval_ms);
+    }
+
+    /// How long this frame may simulate, milliseconds: the lesson's own `budget_ms`,
+    /// or at maximum speed more where the last frame left the thread idle (see
+    /// [`TimeControl::note_frame`]).
+    pub fn budget_ms(&self, budget_ms: u128) -> u128 {
+        if !(self.running && self.max_speed) {
+            return budget_ms;
+        }
+        // `spare_ms` is finite and within 0..=MAX_SPEED_BUDGET_MS by construction.
+        budget_ms.max(self.spare_ms as u128)
+    }
+
     /// Applies one action's effect on the clock itself (the lesson does the stepping).
     /// Stepping pauses, so the student sees exactly the one step.
     pub fn apply(&mut self, action: TimeAction) {
@@ -109,6 +151,21 @@ impl TimeControl {
         }
         self.accumulator = 0.0;
     }
+}
+
+/// The simulation time a frame at maximum speed may use (see
+/// [`TimeControl::note_frame`]): what the last frame simulated plus half of what it
+/// left idle beyond [`IDLE_MARGIN_MS`], within `0..=MAX_SPEED_BUDGET_MS`; 0 where a
+/// measurement is missing or not finite.
+pub fn spare_budget_ms(sim_ms: f64, cpu_ms: Option<f64>, interval_ms: f64) -> f64 {
+    let Some(cpu_ms) = cpu_ms else {
+        return 0.0;
+    };
+    if !(sim_ms.is_finite() && cpu_ms.is_finite() && interval_ms.is_finite()) {
+        return 0.0;
+    }
+    let idle = interval_ms - cpu_ms;
+    (sim_ms + 0.5 * (idle - IDLE_MARGIN_MS)).clamp(0.0, MAX_SPEED_BUDGET_MS)
 }
 
 /// What the time bar shows about the lesson's clock.
@@ -488,6 +545,67 @@ fn text_width(ui: &egui::Ui, text: &str) -> f32 {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// A page whose display takes `display_ms` per frame (software rendering on
+    /// another thread) and whose frame spends `other_ms` besides simulating: the
+    /// interval is the longer of the display's time and the frame's CPU time.
+    fn settle(display_ms: f64, other_ms: f64, base: u128, frames: usize) -> (u128, f64) {
+        let mut time = TimeControl {
+            running: true,
+            max_speed: true,
+            ..TimeControl::default()
+        };
+        let (mut sim, mut interval) = (0.0, display_ms);
+        for _ in 0..frames {
+            time.note_frame(sim, Some(sim + other_ms), interval);
+            let budget = time.budget_ms(base);
+            sim = budget as f64;
+            interval = display_ms.max(sim + other_ms);
+        }
+        (time.budget_ms(base), sim / interval)
+    }
+
+    #[test]
+    fn at_max_speed_the_simulation_fills_the_time_a_slow_display_leaves_idle() {
+        // A 300 ms display and 20 ms of UI: the budget climbs from 25 ms to fill
+        // the wait, less the margin (300 - 20 - 5 = 275, capped at 250).
+        let (budget, share) = settle(300.0, 20.0, 25, 40);
+        assert_eq!(budget, 250);
+        assert!((share - 250.0 / 300.0).abs() < 1e-9, "{share}");
+        // A 120 ms display: 120 - 20 - 5 = 95 ms, within a millisecond.
+        let (budget, _) = settle(120.0, 20.0, 25, 60);
+        assert!((94..=95).contains(&budget), "{budget}");
+        // A 60 Hz display with nothing idle keeps the lesson's own budget.
+        assert_eq!(settle(16.7, 4.0, 25, 60).0, 25);
+        assert_eq!(settle(16.7, 4.0, 12, 60).0, 12);
+    }
+
+    #[test]
+    fn the_extra_budget_needs_max_speed_and_sound_measurements() {
+        let mut time = TimeControl {
+            running: true,
+            ..TimeControl::default()
+        };
+        time.note_frame(10.0, Some(30.0), 300.0);
+        assert_eq!(time.budget_ms(25), 25, "a set speed paces as before");
+        time.max_speed = true;
+        assert_eq!(time.budget_ms(25), 142, "10 + (270 - 5) / 2");
+        time.running = false;
+        assert_eq!(time.budget_ms(25), 25);
+        time.running = true;
+        for (sim, cpu, interval) in [
+            (10.0, None, 300.0),
+            (f64::NAN, Some(30.0), 300.0),
+            (10.0, Some(f64::INFINITY), 300.0),
+            (10.0, Some(30.0), f64::NAN),
+        ] {
+            time.note_frame(sim, cpu, interval);
+            assert_eq!(time.budget_ms(25), 25, "{sim} {cpu:?} {interval}");
+        }
+        // A stalled page (a background tab) is capped.
+        time.note_frame(10.0, Some(30.0), 60_000.0);
+        assert_eq!(time.budget_ms(25), MAX_SPEED_BUDGET_MS as u128);
+    }
 
     #[test]
     fn the_keys_name_the_lessons_own_step() {

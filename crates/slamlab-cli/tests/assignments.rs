@@ -6,21 +6,13 @@
 //! graded as the page grades it.
 #![allow(clippy::panic, clippy::unwrap_used, clippy::expect_used)] // a failing test stops
 
+mod common;
+
+use common::{python_venv, slamlab};
+
 use slamlab_sim::assignments::{builtin, prepare};
 use std::path::{Path, PathBuf};
 use std::process::Command;
-
-fn slamlab(args: &[&str]) -> (bool, String, String) {
-    let out = Command::new(env!("CARGO_BIN_EXE_slamlab"))
-        .args(args)
-        .output()
-        .unwrap();
-    (
-        out.status.success(),
-        String::from_utf8_lossy(&out.stdout).into_owned(),
-        String::from_utf8_lossy(&out.stderr).into_owned(),
-    )
-}
 
 fn scratch(name: &str) -> PathBuf {
     let dir = std::env::temp_dir().join(format!("slamlab-assign-{name}-{}", std::process::id()));
@@ -245,22 +237,8 @@ fn python_with_numpy(dir: &Path) -> Option<PathBuf> {
     if has_numpy(Path::new("python3")) {
         return Some(PathBuf::from("python3"));
     }
-    let venv = dir.join("venv");
-    let made = Command::new("python3")
-        .args(["-m", "venv"])
-        .arg(&venv)
-        .status()
-        .is_ok_and(|s| s.success());
-    if !made {
-        eprintln!("skipped: no python3 with numpy, and `python3 -m venv` failed");
-        return None;
-    }
-    let python = venv.join("bin/python");
-    let installed = Command::new(&python)
-        .args(["-m", "pip", "install", "--quiet", "numpy"])
-        .status()
-        .is_ok_and(|s| s.success());
-    if !installed || !has_numpy(&python) {
+    let python = python_venv(dir, &["numpy"], "(no python3 with numpy)")?.join("python");
+    if !has_numpy(&python) {
         eprintln!("skipped: numpy could not be installed from PyPI");
         return None;
     }

@@ -3,27 +3,13 @@
 
 #![allow(clippy::panic, clippy::unwrap_used, clippy::expect_used)] // a failing test stops
 
-use std::process::Command;
+mod common;
 
-fn slamlab(args: &[&str]) -> std::process::Output {
-    Command::new(env!("CARGO_BIN_EXE_slamlab"))
-        .args(args)
-        .output()
-        .unwrap()
-}
-
-fn json(out: &std::process::Output) -> serde_json::Value {
-    assert!(
-        out.status.success(),
-        "{}",
-        String::from_utf8_lossy(&out.stderr)
-    );
-    serde_json::from_slice(&out.stdout).unwrap()
-}
+use common::{json, slamlab_output};
 
 #[test]
 fn experiment_krp_prints_detection_recovery_and_agreement_with_detection_on_and_off() {
-    let out = slamlab(&[
+    let out = slamlab_output(&[
         "experiment",
         "krp",
         "--map",
@@ -70,14 +56,14 @@ fn experiment_krp_prints_detection_recovery_and_agreement_with_detection_on_and_
     assert_eq!(off["recovered"], 0);
     assert!(off["detection_delay"]["median"].is_null());
     // Bad input: a kidnap past the last scan is refused with a message.
-    let out = slamlab(&["experiment", "krp", "--steps", "100", "--kidnap-at", "152"]);
+    let out = slamlab_output(&["experiment", "krp", "--steps", "100", "--kidnap-at", "152"]);
     assert!(!out.status.success());
     assert!(String::from_utf8_lossy(&out.stderr).contains("--kidnap-at 152"));
 }
 
 #[test]
 fn run_cartographer_prints_the_issue_json_and_counts_scans() {
-    let out = slamlab(&[
+    let out = slamlab_output(&[
         "run",
         "cartographer",
         "--map",
@@ -119,7 +105,7 @@ fn run_cartographer_prints_the_issue_json_and_counts_scans() {
 #[test]
 fn run_cartographer_with_loop_closures_off_searches_nothing() {
     let run = |closures: &str| {
-        json(&slamlab(&[
+        json(&slamlab_output(&[
             "run",
             "cartographer",
             "--map",
@@ -163,7 +149,7 @@ fn run_cartographer_maps_the_intel_log() {
         eprintln!("skipped: the Intel log (../shared/data/laser/intel.clf.bz2) is absent");
         return;
     };
-    let out = slamlab(&["run", "cartographer", "--log", path, "--json"]);
+    let out = slamlab_output(&["run", "cartographer", "--log", path, "--json"]);
     let v = json(&out);
     assert!(v["scans"].as_u64().unwrap() > 10_000, "{v}");
     assert!(v["trajectory_rmse"].is_null());

@@ -9,6 +9,10 @@
 //! Python that already has evo.
 #![allow(clippy::panic, clippy::unwrap_used, clippy::expect_used)] // a failing test stops
 
+mod common;
+
+use common::python_venv;
+
 use slamlab_core::{Pose2, math};
 use slamlab_sim::io::trajectory::write_tum;
 use slamlab_sim::metrics::{Similarity, Trajectory};
@@ -47,27 +51,7 @@ fn evo(dir: &Path) -> Option<Evo> {
             script,
         });
     }
-    let venv = dir.join("venv");
-    let made = Command::new("python3")
-        .args(["-m", "venv"])
-        .arg(&venv)
-        .status()
-        .is_ok_and(|s| s.success());
-    if !made {
-        eprintln!("skipped: `python3 -m venv` failed, so evo cannot be installed");
-        return None;
-    }
-    let bin = venv.join("bin");
-    let installed = Command::new(bin.join("pip"))
-        .args(["install", "-q", "--disable-pip-version-check", EVO])
-        .status()
-        .is_ok_and(|s| s.success());
-    if !installed {
-        eprintln!(
-            "skipped: `pip install {EVO}` failed (no network?), so there is no evo to compare with"
-        );
-        return None;
-    }
+    let bin = python_venv(dir, &[EVO], "(no evo to compare with)")?;
     Some(Evo {
         python: bin.join("python"),
         bin,

@@ -2,19 +2,9 @@
 
 #![allow(clippy::panic, clippy::unwrap_used, clippy::expect_used)] // a failing test stops
 
-use std::process::Command;
+mod common;
 
-fn slamlab(args: &[&str]) -> (bool, String, String) {
-    let out = Command::new(env!("CARGO_BIN_EXE_slamlab"))
-        .args(args)
-        .output()
-        .unwrap_or_else(|e| panic!("running slamlab: {e}"));
-    (
-        out.status.success(),
-        String::from_utf8_lossy(&out.stdout).into_owned(),
-        String::from_utf8_lossy(&out.stderr).into_owned(),
-    )
-}
+use common::slamlab;
 
 #[test]
 fn the_issues_command_prints_table_5_3s_json() {

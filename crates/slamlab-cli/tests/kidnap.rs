@@ -3,18 +3,13 @@
 
 #![allow(clippy::panic, clippy::unwrap_used, clippy::expect_used)] // a failing test stops
 
-use std::process::Command;
+mod common;
 
-fn slamlab(args: &[&str]) -> std::process::Output {
-    Command::new(env!("CARGO_BIN_EXE_slamlab"))
-        .args(args)
-        .output()
-        .unwrap()
-}
+use common::slamlab_output;
 
 #[test]
 fn run_kidnap_prints_the_issue_json() {
-    let out = slamlab(&[
+    let out = slamlab_output(&[
         "run",
         "kidnap",
         "--map",
@@ -55,7 +50,7 @@ fn run_kidnap_prints_the_issue_json() {
     assert!(f["heading_error_final"].as_f64().unwrap() < 0.3);
     assert!(f["position_rmse_converged"].as_f64().unwrap() < 0.3);
     // Same seed, same numbers.
-    let again = slamlab(&[
+    let again = slamlab_output(&[
         "run",
         "kidnap",
         "--map",
@@ -77,15 +72,15 @@ fn run_kidnap_prints_the_issue_json() {
 
 #[test]
 fn bad_input_is_refused_or_clamped_with_a_message() {
-    let out = slamlab(&["run", "kidnap", "--particles", "0", "--steps", "3"]);
+    let out = slamlab_output(&["run", "kidnap", "--particles", "0", "--steps", "3"]);
     assert!(out.status.success());
     assert!(
         String::from_utf8_lossy(&out.stderr).contains("particles = 0 is out of range; using 1")
     );
-    let out = slamlab(&["run", "kidnap", "--laser-sigma-hit", "nan"]);
+    let out = slamlab_output(&["run", "kidnap", "--laser-sigma-hit", "nan"]);
     assert!(!out.status.success());
     assert!(String::from_utf8_lossy(&out.stderr).contains("--laser-sigma-hit"));
-    let out = slamlab(&["run", "kidnap", "--estimator", "ekf"]);
+    let out = slamlab_output(&["run", "kidnap", "--estimator", "ekf"]);
     assert!(String::from_utf8_lossy(&out.stderr).contains("not a comma-separated list of mcl"));
     let dir = std::env::temp_dir().join(format!("slamlab-kidnap-{}", std::process::id()));
     std::fs::create_dir_all(&dir).unwrap();
@@ -95,14 +90,14 @@ fn bad_input_is_refused_or_clamped_with_a_message() {
         "image: missing.png\nresolution: 0.05\norigin: [0, 0, 0]\n",
     )
     .unwrap();
-    let out = slamlab(&["map", "info", yaml.to_str().unwrap()]);
+    let out = slamlab_output(&["map", "info", yaml.to_str().unwrap()]);
     let err = String::from_utf8_lossy(&out.stderr);
     assert!(
         !out.status.success() && err.contains("missing.png"),
         "{err}"
     );
     std::fs::write(&yaml, "image: m.pgm\nresolution: -1\norigin: [0, 0, 0]\n").unwrap();
-    let out = slamlab(&["map", "info", yaml.to_str().unwrap()]);
+    let out = slamlab_output(&["map", "info", yaml.to_str().unwrap()]);
     let err = String::from_utf8_lossy(&out.stderr);
     assert!(err.contains("resolution -1"), "{err}");
     std::fs::remove_dir_all(&dir).ok();
@@ -113,7 +108,7 @@ fn map_convert_and_info_round_trip() {
     let dir = std::env::temp_dir().join(format!("slamlab-map-{}", std::process::id()));
     std::fs::create_dir_all(&dir).unwrap();
     let pgm_yaml = dir.join("maze-pgm.yaml");
-    let out = slamlab(&[
+    let out = slamlab_output(&[
         "map",
         "convert",
         "maze",
@@ -128,15 +123,15 @@ fn map_convert_and_info_round_trip() {
     );
     assert!(dir.join("maze-pgm.pgm").is_file());
     let png_yaml = dir.join("back.yaml");
-    let out = slamlab(&[
+    let out = slamlab_output(&[
         "map",
         "convert",
         pgm_yaml.to_str().unwrap(),
         png_yaml.to_str().unwrap(),
     ]);
     assert!(out.status.success());
-    let a = slamlab(&["map", "info", "maze"]);
-    let b = slamlab(&["map", "info", png_yaml.to_str().unwrap()]);
+    let a = slamlab_output(&["map", "info", "maze"]);
+    let b = slamlab_output(&["map", "info", png_yaml.to_str().unwrap()]);
     let tail = |o: &std::process::Output| {
         String::from_utf8_lossy(&o.stdout)
             .lines()
@@ -152,7 +147,7 @@ fn map_convert_and_info_round_trip() {
 #[test]
 fn experiment_kidnap_prints_its_json_and_csv() {
     let dir = std::env::temp_dir().join(format!("slamlab-kidnap-exp-{}", std::process::id()));
-    let out = slamlab(&[
+    let out = slamlab_output(&[
         "experiment",
         "kidnap",
         "--map",

@@ -3,26 +3,9 @@
 
 #![allow(clippy::panic, clippy::unwrap_used, clippy::expect_used)] // a failing test stops
 
-use std::process::Command;
+mod common;
 
-fn slamlab(args: &[&str]) -> (bool, String, String) {
-    let out = Command::new(env!("CARGO_BIN_EXE_slamlab"))
-        .args(args)
-        .output()
-        .unwrap_or_else(|e| panic!("running slamlab: {e}"));
-    (
-        out.status.success(),
-        String::from_utf8_lossy(&out.stdout).into_owned(),
-        String::from_utf8_lossy(&out.stderr).into_owned(),
-    )
-}
-
-fn run_json(args: &[&str]) -> serde_json::Value {
-    let (ok, stdout, stderr) = slamlab(args);
-    assert!(ok, "slamlab {args:?} failed: {stderr}");
-    assert_eq!(stdout.lines().count(), 1, "one JSON object on one line");
-    serde_json::from_str(&stdout).unwrap_or_else(|e| panic!("not JSON ({e}): {stdout}"))
-}
+use common::{run_json, slamlab};
 
 #[test]
 fn fastslam_reports_one_entry_per_particle_count() {

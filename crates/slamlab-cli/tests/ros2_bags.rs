@@ -7,6 +7,10 @@
 
 #![allow(clippy::panic, clippy::unwrap_used, clippy::expect_used)] // a failing test stops
 
+mod common;
+
+use common::{python_venv, slamlab_stdout};
+
 use slamlab_core::Pose2;
 use slamlab_sim::grid::{LaserFile, MappingInput, log_input};
 use slamlab_sim::io::laser_log::LaserLog;
@@ -40,42 +44,7 @@ impl Drop for TempDir {
 /// A virtual environment with `rosbags`, or `None` (and a message) when it
 /// cannot be made.
 fn rosbags_venv(dir: &Path) -> Option<PathBuf> {
-    let venv = dir.join("venv");
-    let made = Command::new("python3")
-        .args(["-m", "venv"])
-        .arg(&venv)
-        .output();
-    match made {
-        Ok(o) if o.status.success() => {}
-        Ok(o) => {
-            eprintln!(
-                "skipped: `python3 -m venv` failed (install python3-venv): {}",
-                String::from_utf8_lossy(&o.stderr).trim()
-            );
-            return None;
-        }
-        Err(e) => {
-            eprintln!("skipped: python3 is not installed ({e})");
-            return None;
-        }
-    }
-    let pip = Command::new(venv.join("bin/pip"))
-        .args(["install", "-q", "--disable-pip-version-check", ROSBAGS])
-        .output();
-    match pip {
-        Ok(o) if o.status.success() => Some(venv.join("bin/python")),
-        Ok(o) => {
-            eprintln!(
-                "skipped: `pip install {ROSBAGS}` failed (no package registry?): {}",
-                String::from_utf8_lossy(&o.stderr).trim()
-            );
-            None
-        }
-        Err(e) => {
-            eprintln!("skipped: pip did not run ({e})");
-            None
-        }
-    }
+    python_venv(dir, &[ROSBAGS], "(no rosbags)").map(|bin| bin.join("python"))
 }
 
 fn script(name: &str) -> PathBuf {
@@ -103,19 +72,6 @@ fn num(v: &serde_json::Value) -> f64 {
         .unwrap_or_else(|| panic!("not a number string: {v}"))
 }
 
-fn slamlab(args: &[&str]) -> String {
-    let out = Command::new(env!("CARGO_BIN_EXE_slamlab"))
-        .args(args)
-        .output()
-        .unwrap();
-    assert!(
-        out.status.success(),
-        "slamlab {args:?} failed: {}",
-        String::from_utf8_lossy(&out.stderr)
-    );
-    String::from_utf8_lossy(&out.stdout).into_owned()
-}
-
 fn intel_log() -> Option<PathBuf> {
     let mut candidates = Vec::new();
     if let Ok(shared) = std::env::var("SLAMLAB_SHARED") {
@@ -138,7 +94,7 @@ fn intel_log() -> Option<PathBuf> {
 fn rosbags_reads_the_bag_that_log_record_writes() {
     let dir = TempDir::new("record-bag");
     let bag = dir.0.join("run.mcap");
-    let wrote = slamlab(&[
+    let wrote = slamlab_stdout(&[
         "log",
         "record",
         "--map",
@@ -155,8 +111,13 @@ fn rosbags_reads_the_bag_that_log_record_writes() {
     let file = LaserFile::read_file(&bag, &TopicChoice::default()).unwrap();
     assert_eq!(file.input.scans.len(), 200);
     assert_eq!(file.input.truth.as_ref().map(Vec::len), Some(200));
-    let info: serde_json::Value =
-        serde_json::from_str(&slamlab(&["log", "info", bag.to_str().unwrap(), "--json"])).unwrap();
+    let info: serde_json::Value = serde_json::from_str(&slamlab_stdout(&[
+        "log",
+        "info",
+        bag.to_str().unwrap(),
+        "--json",
+    ]))
+    .unwrap();
     assert_eq!(info["lesson_input"]["scans"], 200);
     assert_eq!(info["lesson_input"]["truth"], true);
 

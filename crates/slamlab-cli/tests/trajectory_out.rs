@@ -4,22 +4,12 @@
 
 #![allow(clippy::panic, clippy::unwrap_used, clippy::expect_used)] // a failing test stops
 
+mod common;
+
+use common::slamlab_stdout;
+
 use slamlab_sim::io::trajectory::{read_landmarks, read_trajectory};
 use std::path::{Path, PathBuf};
-use std::process::Command;
-
-fn slamlab(args: &[&str]) -> String {
-    let out = Command::new(env!("CARGO_BIN_EXE_slamlab"))
-        .args(args)
-        .output()
-        .unwrap();
-    assert!(
-        out.status.success(),
-        "slamlab {args:?}: {}",
-        String::from_utf8_lossy(&out.stderr)
-    );
-    String::from_utf8_lossy(&out.stdout).into_owned()
-}
 
 fn temp(name: &str) -> PathBuf {
     let dir = std::env::temp_dir().join(format!("slamlab-trajout-{}-{name}", std::process::id()));
@@ -45,7 +35,7 @@ fn trajectory(dir: &Path, name: &str) -> slamlab_sim::metrics::Trajectory {
 fn landmark_runs_write_their_paths_and_maps() {
     let dir = temp("landmark");
     let d = dir.to_str().unwrap();
-    let summary: serde_json::Value = serde_json::from_str(&slamlab(&[
+    let summary: serde_json::Value = serde_json::from_str(&slamlab_stdout(&[
         "run",
         "landmark-slam",
         "--estimator",
@@ -88,7 +78,7 @@ fn landmark_runs_write_their_paths_and_maps() {
     );
     // The run's mean NEES is the evaluation's ANEES of the exported file (the start,
     // with its zero covariance, has none in either).
-    let evaluation: serde_json::Value = serde_json::from_str(&slamlab(&[
+    let evaluation: serde_json::Value = serde_json::from_str(&slamlab_stdout(&[
         "evaluate",
         "--estimate",
         &format!("{d}/ekf.csv"),
@@ -144,7 +134,7 @@ fn laser_and_camera_runs_write_their_paths() {
         let dir = temp(args[1]);
         let mut all = args.to_vec();
         all.extend(["--trajectory-out", dir.to_str().unwrap()]);
-        slamlab(&all);
+        slamlab_stdout(&all);
         let files = names(&dir);
         for name in expected {
             assert!(
@@ -174,7 +164,7 @@ fn graph_optimize_writes_the_optimized_poses() {
          EDGE_SE2 2 3 1 0 1.5708 100 0 0 100 0 1000\nEDGE_SE2 3 0 1 0 1.5708 100 0 0 100 0 1000\n",
     )
     .unwrap();
-    slamlab(&[
+    slamlab_stdout(&[
         "graph",
         "optimize",
         graph.to_str().unwrap(),

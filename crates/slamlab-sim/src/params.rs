@@ -172,24 +172,58 @@ impl<S> Param<S> {
     }
 }
 
-/// A real-valued parameter read and written straight from a field (or a field of
-/// a field) of scenario type `$s`, in the parameter's own unit.
+/// A real-valued parameter read and written straight from a field (a field of a
+/// field, an element of an array field) of scenario type `$s`, in the
+/// parameter's own unit.
 macro_rules! number_field {
-    ($s:ty, $name:literal, $unit:literal, $help:literal, $range:expr, $($field:ident).+) => {
+    // The table's type gives the scenario's: `number_field!("dt", "s", "time step", (0.01, 1.0), dt)`.
+    ($name:literal, $unit:literal, $help:literal, $range:expr, $($field:tt)+) => {
         $crate::params::Param::number(
             $name,
             $unit,
             $help,
             $range,
-            |s: &$s| Some(s.$($field).+),
+            |s| Some(s.$($field)+),
+            |s, v| {
+                s.$($field)+ = v;
+                Ok(())
+            },
+        )
+    };
+    ($s:ty, $name:literal, $unit:literal, $help:literal, $range:expr, $($field:tt)+) => {
+        $crate::params::Param::number(
+            $name,
+            $unit,
+            $help,
+            $range,
+            |s: &$s| Some(s.$($field)+),
             |s: &mut $s, v| {
-                s.$($field).+ = v;
+                s.$($field)+ = v;
                 Ok(())
             },
         )
     };
 }
 pub(crate) use number_field;
+
+/// A whole-number parameter read and written straight from a field (or a field of
+/// a field) of the table's scenario type: a `u64` or a `usize` (a seed, a count of scans
+/// or particles). Counts have no unit. The range keeps every value within what
+/// the field holds on every target (wasm's `usize` is 32 bits); a value it could
+/// not hold would leave the field as it was.
+macro_rules! count_field {
+    ($name:literal, $help:literal, $range:expr, $($field:tt)+) => {
+        $crate::params::Param::count(
+            $name,
+            "",
+            $help,
+            $range,
+            |s| u64::try_from(s.$($field)+).ok(),
+            |s, v| s.$($field)+ = v.try_into().unwrap_or(s.$($field)+),
+        )
+    };
+}
+pub(crate) use count_field;
 
 /// A named scenario: what a source shows ("thesis Experiment 2") or a lesson's key
 /// comparison. A preset sets every parameter but the seed; parameters given beside

@@ -6,8 +6,9 @@
 
 use super::CartographerView;
 use crate::palette;
-use crate::widgets::grid_tiles::{GridTiles, draw_scan_and_robot};
+use crate::widgets::grid_tiles::{GridAtlas, draw_scan_and_robot};
 use crate::widgets::map_canvas::{self, CanvasColors, MapView, draw_grid, draw_scale_and_axes};
+use crate::widgets::particles::ParticleMesh;
 use crate::widgets::reference_track::ReferenceTrack;
 use egui::{Color32, Stroke};
 use slamlab_core::Pose2;
@@ -42,18 +43,8 @@ pub fn submap_tint(s: usize) -> Color32 {
 /// The loop closures' colour (thesis Fig. 5.12).
 pub const LOOP_CLOSURE: Color32 = palette::GREEN;
 
-/// Textures of every submap's tiles.
-#[derive(Debug, Default)]
-pub struct SubmapTiles {
-    submaps: Vec<GridTiles>,
-}
-
-impl SubmapTiles {
-    /// Forgets every texture (a new run).
-    pub fn clear(&mut self) {
-        self.submaps.clear();
-    }
-}
+/// Textures of every submap's tiles, packed into a few pages.
+pub type SubmapTiles = GridAtlas;
 
 /// The world bounds to fit: the true map's, or the submaps' known cells.
 fn bounds(sim: &CartographerSim) -> [f64; 4] {
@@ -202,15 +193,20 @@ pub fn map_ui(
     painter.rect_filled(t.rect, 4.0, colors.background);
     draw_grid(&painter, &t, &colors);
     // The submaps, oldest first: a newer one covers the overlap.
-    tiles
-        .submaps
-        .resize_with(sim.submaps.len(), GridTiles::default);
-    for (s, submap) in sim.submaps.iter().enumerate() {
-        let frame = world_from_grid(sim, s);
-        tiles.submaps[s].draw(ui.ctx(), &painter, &t, &submap.grid, &frame, submap_tint(s));
-    }
-    // Constraints: intra-submap thin grey, loop closures green.
-    let intra = Stroke::new(0.5, Color32::from_rgba_unmultiplied(0x8C, 0x8C, 0x8C, 110));
+    tiles.draw(
+        ui.ctx(),
+        &painter,
+        &t,
+        sim.submaps
+            .iter()
+            .enumerate()
+            .map(|(s, submap)| (&submap.grid, world_from_grid(sim, s), submap_tint(s))),
+    );
+    // Constraints: intra-submap thin grey, loop closures green. The Intel log has
+    // some 16,000 of them: one mesh of plain quads, not 16,000 anti-aliased
+    // strokes for egui to tessellate every frame.
+    let intra = Color32::from_rgba_unmultiplied(0x8C, 0x8C, 0x8C, 110);
+    let mut lines = ParticleMesh::with_capacity(0);
     for c in &sim.constraints {
         let (Some(submap), Some(node)) = (sim.submaps.get(c.submap), sim.nodes.get(c.node)) else {
             continue;
@@ -220,18 +216,13 @@ pub fn map_ui(
             t.xy(node.global_pose.x, node.global_pose.y),
         );
         match c.kind {
-            ConstraintKind::IntraSubmap if view.intra => {
-                painter.line_segment([a, b], intra);
-            }
+            ConstraintKind::IntraSubmap if view.intra => lines.segment(a, b, 0.5, intra),
             ConstraintKind::IntraSubmap => {}
-            ConstraintKind::LoopClosure => {
-                painter.line_segment([a, b], Stroke::new(1.4, LOOP_CLOSURE));
-            }
-            ConstraintKind::InterTrajectory => {
-                painter.line_segment([a, b], Stroke::new(2.6, LOOP_CLOSURE));
-            }
+            ConstraintKind::LoopClosure => lines.segment(a, b, 1.4, LOOP_CLOSURE),
+            ConstraintKind::InterTrajectory => lines.segment(a, b, 2.6, LOOP_CLOSURE),
         }
     }
+    lines.paint(&painter);
     // Submap origins: squares in their trajectory's colour.
     for submap in &sim.submaps {
         let p = t.xy(submap.global_pose.x, submap.global_pose.y);
@@ -246,14 +237,16 @@ pub fn map_ui(
     if has_reference && view.reference {
         track.draw_path(&painter, &t, colors.truth, colors.background);
     }
-    // Nodes: dots in their trajectory's colour.
+    // Nodes: dots in their trajectory's colour, one mesh (6,837 on the Intel log).
+    let mut dots = ParticleMesh::with_capacity(0);
     for node in &sim.nodes {
-        painter.circle_filled(
+        dots.dot(
             t.xy(node.global_pose.x, node.global_pose.y),
-            2.0,
+            1.8,
             trajectory_color(node.trajectory),
         );
     }
+    dots.paint(&painter);
     // The key moments: where the kidnap was detected and where the maps merged,
     // on the nodes (they move with the optimization).
     for (d, scan) in moment_marks(sim) {

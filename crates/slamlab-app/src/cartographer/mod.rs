@@ -23,7 +23,7 @@ mod plots;
 use crate::lesson::{self, Lesson, LessonFrame, LessonStart, StoredSettings};
 use crate::time_control::{StepControls, TimeAction, TimeInfo};
 use crate::widgets::dropped_files::DropInbox;
-use crate::widgets::fetch::Fetch;
+use crate::widgets::fetch::{self, LinkedFile};
 use crate::widgets::file_picker::{FilePicker, PickedFile};
 use crate::widgets::laser_file::{LASER_FILE_TYPES, LaserFileState, loaded_note};
 use crate::widgets::map_canvas::MapView;
@@ -108,14 +108,6 @@ impl Default for CartographerView {
     }
 }
 
-/// A log being read from `log=`.
-#[derive(Debug)]
-struct LogFetch {
-    location: String,
-    started: bool,
-    fetch: Fetch,
-}
-
 /// Where the scans come from.
 #[derive(Clone, Debug)]
 enum Source {
@@ -148,9 +140,9 @@ pub struct CartographerLesson {
     grids: map::MaxGridTextures,
     inbox: DropInbox,
     picker: FilePicker,
-    log_fetch: Option<LogFetch>,
+    log_fetch: Option<LinkedFile>,
     /// The reference being read from `reference=`.
-    reference_fetch: Option<LogFetch>,
+    reference_fetch: Option<LinkedFile>,
     /// A reference (name, bytes, location) waiting for its log.
     pending_reference: Option<(String, Vec<u8>, Option<String>)>,
     /// Where the reference came from (`reference=`), for the share link.
@@ -178,25 +170,10 @@ pub fn default_scenario() -> CartographerScenario {
 /// Opens the lesson from the URL's pairs, with what it stored last time.
 pub fn open(start: &LessonStart<'_>) -> Box<dyn Lesson> {
     let stored = StoredSettings::<CartographerView>::from_start(start);
-    let location = start
-        .pairs
-        .iter()
-        .rev()
-        .find(|(k, _)| k == "log")
-        .map(|(_, v)| v.clone());
-    let reference = start
-        .pairs
-        .iter()
-        .rev()
-        .find(|(k, _)| k == "reference")
-        .map(|(_, v)| v.clone());
-    let pairs: Vec<(String, String)> = start
-        .pairs
-        .iter()
-        .filter(|(k, _)| k != "log" && k != "reference")
-        .cloned()
-        .collect();
-    let (laser, pairs) = LaserFileState::from_pairs(&pairs);
+    let location = start.last_value("log");
+    let reference = start.last_value("reference");
+    let (laser, pairs) =
+        LaserFileState::from_link(start.pairs, |k, _| k == "log" || k == "reference");
     let start = &LessonStart {
         pairs: &pairs,
         ..*start
@@ -217,19 +194,9 @@ pub fn open(start: &LessonStart<'_>) -> Box<dyn Lesson> {
     lesson.laser = laser;
     if let Some(location) = location {
         lesson.frame.note = Some(format!("Loading the log {location}…"));
-        lesson.log_fetch = Some(LogFetch {
-            location,
-            started: false,
-            fetch: Fetch::default(),
-        });
+        lesson.log_fetch = Some(LinkedFile::new(location));
     }
-    if let Some(location) = reference {
-        lesson.reference_fetch = Some(LogFetch {
-            location,
-            started: false,
-            fetch: Fetch::default(),
-        });
-    }
+    lesson.reference_fetch = reference.map(LinkedFile::new);
     Box::new(lesson)
 }
 
@@ -566,20 +533,10 @@ impl CartographerLesson {
     }
 
     fn poll_reference_fetch(&mut self, ctx: &egui::Context) {
-        let Some(state) = self.reference_fetch.as_mut() else {
+        let Some((location, result)) = LinkedFile::poll(&mut self.reference_fetch, ctx) else {
             return;
         };
-        if !state.started {
-            state.started = true;
-            state.fetch = Fetch::start(&state.location, ctx);
-            return;
-        }
-        let Some(result) = state.fetch.poll() else {
-            return;
-        };
-        let location = state.location.clone();
-        self.reference_fetch = None;
-        let name = location.rsplit('/').next().unwrap_or(&location).to_owned();
+        let name = fetch::file_name(&location).to_owned();
         match result {
             Ok(bytes) => self.load_reference(&name, bytes, Some(location)),
             Err(why) => {
@@ -591,22 +548,12 @@ impl CartographerLesson {
     }
 
     fn poll_log_fetch(&mut self, ctx: &egui::Context) {
-        let Some(state) = self.log_fetch.as_mut() else {
+        let Some((location, result)) = LinkedFile::poll(&mut self.log_fetch, ctx) else {
             return;
         };
-        if !state.started {
-            state.started = true;
-            state.fetch = Fetch::start(&state.location, ctx);
-            return;
-        }
-        let Some(result) = state.fetch.poll() else {
-            return;
-        };
-        let location = state.location.clone();
-        self.log_fetch = None;
         match result {
             Ok(bytes) => {
-                let name = location.rsplit('/').next().unwrap_or(&location).to_owned();
+                let name = fetch::file_name(&location).to_owned();
                 self.load_log(&name, &bytes, Some(location));
                 if matches!(&self.source, Source::Log(n, _) if *n == name) {
                     // The link's figure keys (`run=1`, `tick=`) hold for the log.

@@ -19,7 +19,7 @@ use crate::palette;
 use crate::time_control::{TimeAction, TimeInfo};
 use crate::widgets::drive::{self, PadDirection};
 use crate::widgets::dropped_files::DropInbox;
-use crate::widgets::fetch::{self, Fetch};
+use crate::widgets::fetch::{self, Fetch, LinkedFile};
 use crate::widgets::file_picker::{FilePicker, PickedFile};
 use crate::widgets::laser_file::{LASER_FILE_TYPES, LaserFileState, loaded_note};
 use crate::widgets::map_canvas::MapView;
@@ -155,18 +155,9 @@ pub struct KidnapLesson {
     /// The log or bag open: a bag's topics and what the reader assumed.
     laser: LaserFileState,
     /// `log=` named a log or bag: where it is, read after the first frame.
-    log_fetch: Option<LogFetch>,
+    log_fetch: Option<LinkedFile>,
     /// The location of a log read from `log=` (kept for share links).
     log_location: Option<String>,
-}
-
-/// A log being read from `log=` (a location beside the site, a path on the
-/// desktop).
-#[derive(Debug)]
-struct LogFetch {
-    location: String,
-    started: bool,
-    fetch: Fetch,
 }
 
 /// A ROS map read from a location named in the URL: first its YAML, then the
@@ -202,19 +193,10 @@ pub fn open(start: &LessonStart<'_>) -> Box<dyn Lesson> {
         .rev()
         .find(|(k, v)| k == "map" && is_map_location(v))
         .map(|(_, v)| v.clone());
-    let log_location = start
-        .pairs
-        .iter()
-        .rev()
-        .find(|(k, _)| k == "log")
-        .map(|(_, v)| v.clone());
-    let pairs: Vec<(String, String)> = start
-        .pairs
-        .iter()
-        .filter(|(k, v)| !(k == "map" && is_map_location(v)) && k != "log")
-        .cloned()
-        .collect();
-    let (laser, pairs) = LaserFileState::from_pairs(&pairs);
+    let log_location = start.last_value("log");
+    let (laser, pairs) = LaserFileState::from_link(start.pairs, |k, v| {
+        (k == "map" && is_map_location(v)) || k == "log"
+    });
     let start = &LessonStart {
         pairs: &pairs,
         ..*start
@@ -245,11 +227,7 @@ pub fn open(start: &LessonStart<'_>) -> Box<dyn Lesson> {
     lesson.laser = laser;
     if let Some(location) = log_location {
         lesson.frame.note = Some(format!("Loading the log {location}…"));
-        lesson.log_fetch = Some(LogFetch {
-            location,
-            started: false,
-            fetch: Fetch::default(),
-        });
+        lesson.log_fetch = Some(LinkedFile::new(location));
     }
     if let Some(location) = location {
         lesson.frame.note = Some(format!("Loading the map {location}…"));
@@ -424,26 +402,16 @@ impl KidnapLesson {
 
     /// Reads the log named by `log=`.
     fn poll_log_fetch(&mut self, ctx: &egui::Context) {
-        let Some(state) = self.log_fetch.as_mut() else {
-            return;
-        };
         // The map named by `map=` first, so that the log replays in it.
         if self.map_location.as_ref().is_some_and(|m| !m.loaded) {
             return;
         }
-        if !state.started {
-            state.started = true;
-            state.fetch = Fetch::start(&state.location, ctx);
-            return;
-        }
-        let Some(result) = state.fetch.poll() else {
+        let Some((location, result)) = LinkedFile::poll(&mut self.log_fetch, ctx) else {
             return;
         };
-        let location = state.location.clone();
-        self.log_fetch = None;
         match result {
             Ok(bytes) => {
-                let name = location.rsplit('/').next().unwrap_or(&location).to_owned();
+                let name = fetch::file_name(&location).to_owned();
                 self.load_log(&name, &bytes);
                 if self.log_name() == Some(name.as_str()) {
                     self.log_location = Some(location);
@@ -598,7 +566,7 @@ impl KidnapLesson {
             Ok(bytes) => bytes,
             Err(why) => return fail(self, why),
         };
-        let yaml_name = location.rsplit('/').next().unwrap_or(&location).to_owned();
+        let yaml_name = fetch::file_name(&location).to_owned();
         match state.yaml.take() {
             None => {
                 // The YAML: find the image it names and read that next.
@@ -621,7 +589,7 @@ impl KidnapLesson {
                 let image_name = {
                     let text = String::from_utf8_lossy(&yaml);
                     slamlab_sim::io::ros_map::parse_map_yaml(&text)
-                        .map(|p| p.image.rsplit('/').next().unwrap_or(&p.image).to_owned())
+                        .map(|p| fetch::file_name(&p.image).to_owned())
                         .unwrap_or_default()
                 };
                 self.load_dropped(&[(yaml_name, yaml), (image_name, bytes)]);

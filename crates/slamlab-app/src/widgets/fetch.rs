@@ -77,6 +77,48 @@ impl Fetch {
     }
 }
 
+/// A file named in a lesson's link (`log=`, `reference=`), read after the first
+/// frame (the one that has the context): its location, and the read once it has
+/// started.
+#[derive(Debug)]
+pub struct LinkedFile {
+    location: String,
+    fetch: Option<Fetch>,
+}
+
+impl LinkedFile {
+    /// A file at `location`, not read yet.
+    pub fn new(location: String) -> Self {
+        Self {
+            location,
+            fetch: None,
+        }
+    }
+
+    /// Where the file is, as the link gave it.
+    pub fn location(&self) -> &str {
+        &self.location
+    }
+
+    /// Moves the read of `slot`'s file along: the first call starts it, later
+    /// calls poll it. Once the bytes (or why there are none) have arrived, the
+    /// slot is emptied and the location comes back with them.
+    pub fn poll(slot: &mut Option<LinkedFile>, ctx: &egui::Context) -> Option<(String, Fetched)> {
+        let file = slot.as_mut()?;
+        let Some(fetch) = file.fetch.as_mut() else {
+            file.fetch = Some(Fetch::start(&file.location, ctx));
+            return None;
+        };
+        let result = fetch.poll()?;
+        slot.take().map(|file| (file.location, result))
+    }
+}
+
+/// A location's file name: what follows its last `/`.
+pub fn file_name(location: &str) -> &str {
+    location.rsplit('/').next().unwrap_or(location)
+}
+
 /// `location` resolved against the directory of `base` (`maps/lab.yaml` and
 /// `lab.pgm` give `maps/lab.pgm`); an absolute URL or path stays as it is.
 pub fn relative_to(base: &str, location: &str) -> String {
@@ -151,6 +193,26 @@ mod tests {
             relative_to("maps/lab.yaml", "https://example.org/lab.pgm"),
             "https://example.org/lab.pgm"
         );
+    }
+
+    #[test]
+    fn a_linked_file_starts_then_arrives_once_and_empties_its_slot() {
+        let ctx = egui::Context::default();
+        let mut slot = Some(LinkedFile::new("no/such/log.clf".to_owned()));
+        assert!(LinkedFile::poll(&mut slot, &ctx).is_none(), "started");
+        assert_eq!(
+            slot.as_ref().map(LinkedFile::location),
+            Some("no/such/log.clf")
+        );
+        let arrived = LinkedFile::poll(&mut slot, &ctx);
+        assert!(
+            matches!(&arrived, Some((at, Err(m))) if at == "no/such/log.clf" && m.contains(at)),
+            "{arrived:?}"
+        );
+        assert!(slot.is_none());
+        assert!(LinkedFile::poll(&mut slot, &ctx).is_none());
+        assert_eq!(file_name("logs/intel.clf"), "intel.clf");
+        assert_eq!(file_name("intel.clf"), "intel.clf");
     }
 
     #[test]

@@ -35,6 +35,22 @@ pub struct LaserFileState {
 }
 
 impl LaserFileState {
+    /// The state for a lesson opened with the link's `pairs`, and the pairs
+    /// left for its parameters: those for which `read_later` holds (files the
+    /// lesson reads after the first frame: `log=`, `reference=`, a map file)
+    /// are set aside, and the laser file's own are read here.
+    pub fn from_link(
+        pairs: &[(String, String)],
+        read_later: impl Fn(&str, &str) -> bool,
+    ) -> (Self, Vec<(String, String)>) {
+        let pairs: Vec<(String, String)> = pairs
+            .iter()
+            .filter(|(k, v)| !read_later(k, v))
+            .cloned()
+            .collect();
+        Self::from_pairs(&pairs)
+    }
+
     /// The state for a lesson opened with `pairs`: the topics asked for, and
     /// the pairs left for the lesson's parameters.
     pub fn from_pairs(pairs: &[(String, String)]) -> (Self, Vec<(String, String)>) {

@@ -1,11 +1,12 @@
-//! Particle clouds drawn as one mesh.
+//! Particle clouds (and a pose graph's thousands of nodes and edges) drawn as one mesh.
 //!
 //! A cloud of 5,000 particles drawn as 5,000 line segments and 5,000 circles
 //! is 10,000 shapes for egui to tessellate every frame, each anti-aliased
 //! with feathered edges. A particle is a few pixels across, so a plain
 //! triangle says as much: [`ParticleMesh`] collects one dart per particle (and
 //! a small square per landmark mean) into a single [`egui::Mesh`], which egui
-//! hands to the GPU as it is.
+//! hands to the GPU as it is. The Cartographer lesson draws its nodes and
+//! constraints the same way ([`ParticleMesh::segment`]).
 
 use super::map_canvas::finite;
 use egui::{Color32, Mesh, Pos2, Vec2, vec2};
@@ -53,6 +54,33 @@ impl ParticleMesh {
             vec2(-half, half),
         ] {
             self.mesh.colored_vertex(at + corner, color);
+        }
+        self.mesh.add_triangle(base, base + 1, base + 2);
+        self.mesh.add_triangle(base, base + 2, base + 3);
+    }
+
+    /// A straight line from `a` to `b`, `width` points wide, as one quad without
+    /// anti-aliased edges (a graph's thousands of edges). A line thinner than a
+    /// point is drawn one point wide and as much fainter, which looks the same.
+    /// Skipped when an end is not finite or the two coincide.
+    pub fn segment(&mut self, a: Pos2, b: Pos2, width: f32, color: Color32) {
+        if !finite(a) || !finite(b) || !width.is_finite() {
+            return;
+        }
+        let along = b - a;
+        let length = along.length();
+        if length <= f32::EPSILON {
+            return;
+        }
+        let (width, color) = if width < 1.0 {
+            (1.0, color.gamma_multiply(width.max(0.0)))
+        } else {
+            (width, color)
+        };
+        let side = vec2(-along.y, along.x) * (0.5 * width / length);
+        let base = self.mesh.vertices.len() as u32;
+        for p in [a + side, b + side, b - side, a - side] {
+            self.mesh.colored_vertex(p, color);
         }
         self.mesh.add_triangle(base, base + 1, base + 2);
         self.mesh.add_triangle(base, base + 2, base + 3);

@@ -5,7 +5,7 @@
 //! x 500; the rendered map has its submaps, walls and green loop closures.
 
 use super::common::{
-    count_pixels, harness, harness_sized, lesson_of, lesson_of_mut, render_or_skip,
+    assert_notices, count_pixels, harness, harness_sized, lesson_accessors, render_or_skip,
 };
 use egui_kittest::Harness;
 use egui_kittest::kittest::Queryable as _;
@@ -13,13 +13,7 @@ use slamlab_app::SlamLabApp;
 use slamlab_app::cartographer::CartographerLesson;
 use slamlab_app::lesson::Lesson as _;
 
-fn lesson<'h>(h: &'h Harness<'_, SlamLabApp>) -> &'h CartographerLesson {
-    lesson_of(h)
-}
-
-fn lesson_mut<'h>(h: &'h mut Harness<'_, SlamLabApp>) -> &'h mut CartographerLesson {
-    lesson_of_mut(h)
-}
+lesson_accessors!(CartographerLesson);
 
 #[test]
 fn the_lesson_opens_by_url_and_bad_values_get_a_message() {
@@ -30,8 +24,7 @@ fn the_lesson_opens_by_url_and_bad_values_get_a_message() {
     assert_eq!(lesson(&h).sim().input().scans.len(), 600);
     assert!(h.state().notices().is_empty(), "{:?}", h.state().notices());
     let h = harness("lesson=cartographer&num_range_data=0&min_score=NaN&detection=maybe");
-    let notices = h.state().notices();
-    assert_eq!(notices.len(), 3, "{notices:?}");
+    assert_notices(&h, 3, &[]);
     assert_eq!(lesson(&h).scenario().num_range_data, 1);
     assert!(lesson(&h).scenario().detection);
 }

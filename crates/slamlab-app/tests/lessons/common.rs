@@ -64,6 +64,37 @@ pub fn lesson_of_mut<'h, L: 'static>(h: &'h mut Harness<'_, SlamLabApp>) -> &'h 
     }
 }
 
+/// `lesson(&h)` and `lesson_mut(&mut h)`: the open lesson as type `$lesson`, the
+/// one lesson a test module is about (the test fails when another is open).
+macro_rules! lesson_accessors {
+    ($lesson:ty) => {
+        fn lesson<'h>(h: &'h egui_kittest::Harness<'_, slamlab_app::SlamLabApp>) -> &'h $lesson {
+            $crate::common::lesson_of(h)
+        }
+
+        fn lesson_mut<'h>(
+            h: &'h mut egui_kittest::Harness<'_, slamlab_app::SlamLabApp>,
+        ) -> &'h mut $lesson {
+            $crate::common::lesson_of_mut(h)
+        }
+    };
+}
+pub(crate) use lesson_accessors;
+
+/// Checks the notices of the open lesson: `count` of them, and for each entry
+/// of `words` one notice that contains all of its words (the parameter and
+/// what was used or expected).
+pub fn assert_notices(h: &Harness<'_, SlamLabApp>, count: usize, words: &[&[&str]]) {
+    let notices = h.state().notices();
+    assert_eq!(notices.len(), count, "{notices:?}");
+    for words in words {
+        assert!(
+            notices.iter().any(|n| words.iter().all(|w| n.contains(w))),
+            "no notice has all of {words:?}: {notices:?}"
+        );
+    }
+}
+
 /// Pixels whose every channel is within `tolerance` of `rgb`.
 pub fn count_pixels(rgba: &[u8], rgb: [u8; 3], tolerance: i32) -> usize {
     rgba.chunks_exact(4)

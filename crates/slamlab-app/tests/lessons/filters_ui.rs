@@ -3,7 +3,7 @@
 //! time bar steps the corridor and steps back exactly, and the rendered views
 //! show the samples, the EKF's blue, the UKF's orange and the particles' purple.
 
-use super::common::{count_pixels, harness, lesson_of, lesson_of_mut, render_or_skip};
+use super::common::{count_pixels, harness, lesson_accessors, render_or_skip};
 use egui_kittest::Harness;
 use egui_kittest::kittest::Queryable as _;
 use slamlab_app::SlamLabApp;
@@ -17,13 +17,7 @@ fn shot(name: &str) -> std::path::PathBuf {
     std::path::Path::new(env!("CARGO_TARGET_TMPDIR")).join(format!("{name}.png"))
 }
 
-fn lesson<'h>(h: &'h Harness<'_, SlamLabApp>) -> &'h FiltersLesson {
-    lesson_of(h)
-}
-
-fn lesson_mut<'h>(h: &'h mut Harness<'_, SlamLabApp>) -> &'h mut FiltersLesson {
-    lesson_of_mut(h)
-}
+lesson_accessors!(FiltersLesson);
 
 #[test]
 fn the_polar_banana_opens_by_url_and_the_ukf_beats_the_ekf() {

@@ -3,7 +3,9 @@
 //! numbers of a headless seeded run, bad readings are skipped and counted, and
 //! the rendered map shows each mode's colour.
 
-use super::common::{count_pixels, harness_sized, lesson_of, lesson_of_mut, render_or_skip};
+use super::common::{
+    assert_notices, count_pixels, harness_sized, lesson_accessors, render_or_skip,
+};
 use egui_kittest::Harness;
 use egui_kittest::kittest::Queryable as _;
 use slamlab_app::SlamLabApp;
@@ -18,13 +20,7 @@ fn harness(query: &str) -> Harness<'static, SlamLabApp> {
     harness_sized(query, SIZE)
 }
 
-fn lesson<'h>(h: &'h Harness<'_, SlamLabApp>) -> &'h FusionLesson {
-    lesson_of(h)
-}
-
-fn lesson_mut<'h>(h: &'h mut Harness<'_, SlamLabApp>) -> &'h mut FusionLesson {
-    lesson_of_mut(h)
-}
+lesson_accessors!(FusionLesson);
 
 #[test]
 fn the_lesson_opens_by_url_and_bad_values_get_messages() {
@@ -40,17 +36,13 @@ fn the_lesson_opens_by_url_and_bad_values_get_messages() {
     assert!(h.state().notices().is_empty(), "{:?}", h.state().notices());
     // A rate of 0 and a noise of 0: clamped to the minimum with a message.
     let h = harness("lesson=fusion&imu-rate=0&slam-position-noise=0&modes=kalman");
-    let notices = h.state().notices();
-    assert_eq!(notices.len(), 3, "{notices:?}");
-    assert!(
-        notices
-            .iter()
-            .any(|n| n.contains("imu-rate = 0 is out of range"))
-    );
-    assert!(
-        notices
-            .iter()
-            .any(|n| n.contains("slam-position-noise = 0 is out of range"))
+    assert_notices(
+        &h,
+        3,
+        &[
+            &["imu-rate = 0 is out of range"],
+            &["slam-position-noise = 0 is out of range"],
+        ],
     );
     assert_eq!(lesson(&h).sim().setup().scenario.imu.rate, 0.5);
     assert_eq!(lesson(&h).sim().runs().len(), 2, "the default modes");

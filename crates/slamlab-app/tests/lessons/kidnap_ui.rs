@@ -3,20 +3,14 @@
 //! back replays, and the rendered map shows the grid, the particles and the truth.
 
 use super::common::{
-    SIZE, count_pixels, harness, harness_themed, lesson_of, lesson_of_mut, render_or_skip,
+    SIZE, assert_notices, count_pixels, harness, harness_themed, lesson_accessors, render_or_skip,
 };
 use egui_kittest::Harness;
 use egui_kittest::kittest::Queryable as _;
 use slamlab_app::SlamLabApp;
 use slamlab_app::kidnap::KidnapLesson;
 
-fn lesson<'h>(h: &'h Harness<'_, SlamLabApp>) -> &'h KidnapLesson {
-    lesson_of(h)
-}
-
-fn lesson_mut<'h>(h: &'h mut Harness<'_, SlamLabApp>) -> &'h mut KidnapLesson {
-    lesson_of_mut(h)
-}
+lesson_accessors!(KidnapLesson);
 
 #[test]
 fn the_lesson_opens_by_url_with_its_parameters() {
@@ -28,17 +22,10 @@ fn the_lesson_opens_by_url_with_its_parameters() {
     assert!(h.state().notices().is_empty(), "{:?}", h.state().notices());
     // Bad values: a message and a safe value.
     let h = harness("lesson=kidnap&particles=10000000&map=atlantis");
-    let notices = h.state().notices();
-    assert_eq!(notices.len(), 2, "{notices:?}");
-    assert!(
-        notices
-            .iter()
-            .any(|n| n.contains("particles") && n.contains("out of range"))
-    );
-    assert!(
-        notices
-            .iter()
-            .any(|n| n.contains("map") && n.contains("maze, office"))
+    assert_notices(
+        &h,
+        2,
+        &[&["particles", "out of range"], &["map", "maze, office"]],
     );
     assert_eq!(lesson(&h).sim().run().scenario().map, "maze");
 }

@@ -4,7 +4,7 @@
 //! lesson, and the rendered map shows occupied cells and the scan.
 
 use super::common::{
-    count_pixels, harness, harness_sized, lesson_of, lesson_of_mut, render_or_skip,
+    assert_notices, count_pixels, harness, harness_sized, lesson_accessors, render_or_skip,
 };
 use egui_kittest::Harness;
 use egui_kittest::kittest::Queryable as _;
@@ -13,13 +13,7 @@ use slamlab_app::lesson::Lesson as _;
 use slamlab_app::mapping::MappingLesson;
 use slamlab_sim::mapping::PoseSource;
 
-fn lesson<'h>(h: &'h Harness<'_, SlamLabApp>) -> &'h MappingLesson {
-    lesson_of(h)
-}
-
-fn lesson_mut<'h>(h: &'h mut Harness<'_, SlamLabApp>) -> &'h mut MappingLesson {
-    lesson_of_mut(h)
-}
+lesson_accessors!(MappingLesson);
 
 #[test]
 fn the_lesson_opens_by_url_and_bad_values_get_a_message() {
@@ -31,8 +25,7 @@ fn the_lesson_opens_by_url_and_bad_values_get_a_message() {
     assert_eq!(session.sim().source(), PoseSource::Odometry);
     assert!(h.state().notices().is_empty(), "{:?}", h.state().notices());
     let h = harness("lesson=mapping&steps=999999999&poses=teleport&resolution=NaN");
-    let notices = h.state().notices();
-    assert_eq!(notices.len(), 3, "{notices:?}");
+    assert_notices(&h, 3, &[]);
     assert_eq!(lesson(&h).session().scenario().poses, PoseSource::ScanToMap);
 }
 

@@ -5,7 +5,7 @@
 //! odometry, the vermillion loop closures and the sparsity images.
 
 use super::common::{
-    SIZE, count_pixels, harness, harness_themed, lesson_of, lesson_of_mut, render_or_skip,
+    SIZE, assert_notices, count_pixels, harness, harness_themed, lesson_accessors, render_or_skip,
 };
 use egui_kittest::Harness;
 use egui_kittest::kittest::{NodeT as _, Queryable as _};
@@ -13,13 +13,7 @@ use slamlab_app::SlamLabApp;
 use slamlab_app::pose_graph::PoseGraphLesson;
 use slamlab_sim::pose_graph::session::KernelChoice;
 
-fn lesson<'h>(h: &'h Harness<'_, SlamLabApp>) -> &'h PoseGraphLesson {
-    lesson_of(h)
-}
-
-fn lesson_mut<'h>(h: &'h mut Harness<'_, SlamLabApp>) -> &'h mut PoseGraphLesson {
-    lesson_of_mut(h)
-}
+lesson_accessors!(PoseGraphLesson);
 
 #[test]
 fn the_lesson_opens_by_url_and_one_iteration_lowers_the_cost() {
@@ -59,13 +53,7 @@ fn the_lesson_opens_by_url_and_one_iteration_lowers_the_cost() {
     assert_eq!(h_blocks, 201 + 2 * 200 + 2 * 10);
     // Bad link values: a message and a safe value.
     let h = harness("lesson=pose-graph&solver=newton&kernel-width=-3");
-    let notices = h.state().notices();
-    assert_eq!(notices.len(), 2, "{notices:?}");
-    assert!(
-        notices
-            .iter()
-            .any(|n| n.contains("solver") && n.contains("gn, lm, gd"))
-    );
+    assert_notices(&h, 2, &[&["solver", "gn, lm, gd"]]);
     assert_eq!(lesson(&h).session().scenario().kernel_width, 0.01);
 }
 

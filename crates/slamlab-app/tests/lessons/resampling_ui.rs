@@ -3,22 +3,15 @@
 //! get a note and a safe value, and the rendered row shows every method's copies.
 
 use super::common::{
-    SIZE, count_pixels, harness, harness_themed, lesson_of, lesson_of_mut, render_or_skip,
+    SIZE, assert_notices, count_pixels, harness, harness_themed, lesson_accessors, render_or_skip,
 };
-use egui_kittest::Harness;
 use egui_kittest::kittest::Queryable as _;
 use slamlab_app::SlamLabApp;
 use slamlab_app::lesson::Lesson as _;
 use slamlab_app::resampling::ResamplingLesson;
 use slamlab_core::particle::Resampler;
 
-fn lesson<'h>(h: &'h Harness<'_, SlamLabApp>) -> &'h ResamplingLesson {
-    lesson_of(h)
-}
-
-fn lesson_mut<'h>(h: &'h mut Harness<'_, SlamLabApp>) -> &'h mut ResamplingLesson {
-    lesson_of_mut(h)
-}
+lesson_accessors!(ResamplingLesson);
 
 #[test]
 fn the_lab_opens_by_url_and_bad_values_get_a_message_and_a_safe_value() {
@@ -33,17 +26,10 @@ fn the_lab_opens_by_url_and_bad_values_get_a_message_and_a_safe_value() {
     assert!(h.state().notices().is_empty(), "{:?}", h.state().notices());
 
     let h = harness("lesson=resampling&weights=heavy&particles=0");
-    let notices = h.state().notices();
-    assert_eq!(notices.len(), 2, "{notices:?}");
-    assert!(
-        notices
-            .iter()
-            .any(|n| n.contains("weights") && n.contains("two-modes"))
-    );
-    assert!(
-        notices
-            .iter()
-            .any(|n| n.contains("particles") && n.contains("out of range"))
+    assert_notices(
+        &h,
+        2,
+        &[&["weights", "two-modes"], &["particles", "out of range"]],
     );
     assert_eq!(lesson(&h).run().particles(), 1);
 

@@ -6,23 +6,16 @@
 //! the rendered images show inliers, outliers and the sample drawn.
 
 use super::common::{
-    SIZE, count_pixels, harness, harness_sized, harness_themed, label_visible, lesson_of,
-    lesson_of_mut, render_or_skip,
+    SIZE, assert_notices, count_pixels, harness, harness_sized, harness_themed, label_visible,
+    lesson_accessors, render_or_skip,
 };
-use egui_kittest::Harness;
 use egui_kittest::kittest::Queryable as _;
 use slamlab_app::SlamLabApp;
 use slamlab_app::lesson::Lesson as _;
 use slamlab_app::visual_odometry::VisualOdometryLesson;
 use slamlab_core::vision::{Method, Ransac};
 
-fn lesson<'h>(h: &'h Harness<'_, SlamLabApp>) -> &'h VisualOdometryLesson {
-    lesson_of(h)
-}
-
-fn lesson_mut<'h>(h: &'h mut Harness<'_, SlamLabApp>) -> &'h mut VisualOdometryLesson {
-    lesson_of_mut(h)
-}
+lesson_accessors!(VisualOdometryLesson);
 
 /// What a step back must restore: every report, the bound, the best inliers,
 /// the inlier mask and the best F to the bit.
@@ -168,24 +161,16 @@ fn the_chosen_decomposition_has_the_most_points_in_front() {
 #[test]
 fn bad_url_values_fall_back_with_a_notice() {
     let h = harness("lesson=visual-odometry&outliers=abc&method=nine-point&noise-px=99&pair=500");
-    let notices = h.state().notices();
-    assert_eq!(notices.len(), 4, "{notices:?}");
-    assert!(
-        notices
-            .iter()
-            .any(|n| n.contains("outliers") && n.contains("0.3"))
+    assert_notices(
+        &h,
+        4,
+        &[
+            &["outliers", "0.3"],
+            &["method", "five-point"],
+            &["noise-px", "out of range"],
+            &["past the last VO step"],
+        ],
     );
-    assert!(
-        notices
-            .iter()
-            .any(|n| n.contains("method") && n.contains("five-point"))
-    );
-    assert!(
-        notices
-            .iter()
-            .any(|n| n.contains("noise-px") && n.contains("out of range"))
-    );
-    assert!(notices.iter().any(|n| n.contains("past the last VO step")));
     let l = lesson(&h);
     assert_eq!(l.run().settings.outliers, 0.3);
     assert_eq!(l.run().settings.method, Method::FivePoint);

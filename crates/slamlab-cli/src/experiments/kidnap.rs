@@ -4,6 +4,7 @@
 //! slamlab experiment kidnap --map maze --particles 500,1000 --estimator amcl,acmcl --trials 20 --seed 1 --json
 //! ```
 
+use super::first_seed_arg;
 use crate::command::Experiment;
 use crate::flags;
 use crate::map::{map_arg, read_map, resolution_arg};
@@ -54,13 +55,7 @@ impl Experiment for Kidnap {
                     .default_value("20")
                     .help("trials per (estimator, particle count); trial i uses seed + i"),
             )
-            .arg(
-                Arg::new("seed")
-                    .long("seed")
-                    .value_parser(clap::value_parser!(u64))
-                    .default_value("1")
-                    .help("first seed"),
-            )
+            .arg(first_seed_arg())
             .arg(
                 Arg::new("limit")
                     .long("limit")

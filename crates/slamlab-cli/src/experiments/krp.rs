@@ -7,6 +7,7 @@
 //! slamlab experiment krp --map office --trials 10 --kidnap-at 152 --seed 1 --json
 //! ```
 
+use super::first_seed_arg;
 use crate::command::Experiment;
 use crate::map::{map_arg, read_map};
 use crate::output::{Output, trials_bar, trials_progress};
@@ -115,13 +116,7 @@ impl Experiment for Krp {
                     .default_value("10")
                     .help("seeds; trial i uses seed + i (each runs four times: kidnapped or not, detection on or off)"),
             )
-            .arg(
-                Arg::new("seed")
-                    .long("seed")
-                    .value_parser(clap::value_parser!(u64))
-                    .default_value("1")
-                    .help("first seed"),
-            )
+            .arg(first_seed_arg())
             .arg(
                 Arg::new("steps")
                     .long("steps")

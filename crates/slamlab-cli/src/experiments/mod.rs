@@ -27,6 +27,15 @@ fn trials_arg(default: &'static str) -> Arg {
         .help("Monte Carlo trials; trial i uses seed + i")
 }
 
+/// `--seed N`: the first trial's seed (trial i uses seed + i).
+fn first_seed_arg() -> Arg {
+    Arg::new("seed")
+        .long("seed")
+        .value_parser(clap::value_parser!(u64))
+        .default_value("1")
+        .help("first seed")
+}
+
 /// `--steps N`: ticks per trial.
 fn steps_arg() -> Arg {
     Arg::new("steps")

@@ -6,6 +6,7 @@
 //! slamlab experiment two-view --outliers 0.5 --points 500 --sprt
 //! ```
 
+use super::first_seed_arg;
 use crate::command::Experiment;
 use crate::output::{Output, progress_bar};
 use anyhow::{Result, bail};
@@ -96,13 +97,7 @@ impl Experiment for TwoView {
                     .default_value("200")
                     .help("trials per method and share; trial i uses seed + i"),
             )
-            .arg(
-                Arg::new("seed")
-                    .long("seed")
-                    .value_parser(clap::value_parser!(u64))
-                    .default_value("1")
-                    .help("first seed"),
-            )
+            .arg(first_seed_arg())
             .arg(
                 Arg::new("early-rejection")
                     .long("early-rejection")

@@ -14,7 +14,9 @@ use crate::cartographer::input::{KidnapPlace, kidnap_input_to};
 use crate::cartographer::{CartographerParams, CartographerPhase, CartographerSim};
 use crate::grid::MappingInput;
 use crate::grid::SimulatedLogConfig;
-use crate::params::{Param, Scenario, choose};
+use crate::grid::SimulatedRun;
+use crate::grid::run_params::{map_param, seed_param, steps_param};
+use crate::params::{Param, Scenario, choose, count_field, number_field};
 use crate::stepper::Simulation;
 use serde::{Deserialize, Serialize};
 use slamlab_core::Pose2;
@@ -164,49 +166,15 @@ impl CartographerScenario {
     }
 }
 
-/// A real-valued field in the parameter's unit.
-macro_rules! field {
-    ($($args:tt)*) => {
-        crate::params::number_field!(CartographerScenario, $($args)*)
-    };
-}
-
 const ON_OFF: &[&str] = &["on", "off"];
 
 /// Every parameter of the lesson, in the order `slamlab params --lesson
 /// cartographer` lists them: Cartographer's names and the thesis's `T` and
 /// `f_size`, as `slamlab run cartographer` takes them.
 pub static PARAMS: &[Param<CartographerScenario>] = &[
-    Param::count(
-        "seed",
-        "",
-        "seed of every random stream",
-        (0, u64::MAX),
-        |s| Some(s.seed),
-        |s, v| s.seed = v,
-    ),
-    Param::words(
-        "map",
-        "built-in map the simulated robot explores (or drop a ROS map or a laser log on the app's window)",
-        &["maze", "office"],
-        |s| Some(s.map.clone()),
-        |s, v| {
-            if v.ends_with(".yaml") || v.ends_with(".yml") {
-                s.map = v.to_owned();
-                Ok(())
-            } else {
-                choose(&["maze", "office"], v).map(|i| s.map = ["maze", "office"][i].to_owned())
-            }
-        },
-    ),
-    Param::count(
-        "steps",
-        "",
-        "scans the simulated robot records (0.1 s apart)",
-        (1, 20_000),
-        |s| Some(s.steps as u64),
-        |s, v| s.steps = usize::try_from(v).unwrap_or(20_000),
-    ),
+    seed_param(),
+    map_param(),
+    steps_param(),
     Param::count(
         "kidnap-at",
         "",
@@ -261,116 +229,117 @@ pub static PARAMS: &[Param<CartographerScenario>] = &[
         |s| Some(ON_OFF[usize::from(!s.loop_closures)].to_owned()),
         |s, v| choose(ON_OFF, v).map(|i| s.loop_closures = i == 0),
     ),
-    Param::count(
+    count_field!(
         "num_range_data",
-        "",
         "scans per submap before the next starts (each takes twice as many)",
         (1, 10_000),
-        |s| Some(s.num_range_data as u64),
-        |s, v| s.num_range_data = usize::try_from(v).unwrap_or(10_000),
+        num_range_data
     ),
-    field!(
+    number_field!(
         "resolution",
         "m",
         "submap cell size",
         (0.02, 0.5),
         resolution
     ),
-    field!(
+    number_field!(
         "hit_probability",
         "",
         "probability of a hit cell (Xiang's thesis Eq. 5.4)",
         (0.501, 0.999),
         hit_probability
     ),
-    field!(
+    number_field!(
         "miss_probability",
         "",
         "probability of a missed cell (Xiang's thesis Eq. 5.4)",
         (0.001, 0.499),
         miss_probability
     ),
-    field!(
+    number_field!(
         "linear_search_window",
         "m",
         "loop-closure search half-width in x and y",
         (0.0, 50.0),
         linear_search_window
     ),
-    field!(
+    number_field!(
         "angular_search_window",
         "°",
         "loop-closure search half-width in heading",
         (0.0, 180.0),
         angular_search_window
     ),
-    field!(
+    number_field!(
         "max_constraint_distance",
         "m",
         "search only submaps whose origin is this near a node",
         (0.0, 1000.0),
         max_constraint_distance
     ),
-    field!(
+    number_field!(
         "sampling_ratio",
         "",
         "share of node-submap pairs searched for loop closures, sampled per submap (Cartographer's sampling_ratio)",
         (0.0, 1.0),
         sampling_ratio
     ),
-    Param::count(
+    count_field!(
         "max_closures_per_submap_pair",
-        "",
         "loop closures tying a node's submap to another before their node-submap pairs are searched no more (0: no limit)",
         (0, 10_000),
-        |s| Some(s.max_closures_per_submap_pair as u64),
-        |s, v| s.max_closures_per_submap_pair = usize::try_from(v).unwrap_or(10_000),
+        max_closures_per_submap_pair
     ),
-    field!(
+    number_field!(
         "min_score",
         "",
         "a loop closure must score above this",
         (0.0, 1.0),
         min_score
     ),
-    field!(
+    number_field!(
         "global_min_score",
         "",
         "a match between maps (after a kidnap) must score above this",
         (0.0, 1.0),
         global_min_score
     ),
-    Param::count(
+    count_field!(
         "optimize_every_n_nodes",
-        "",
         "solve the pose graph every n nodes",
         (1, 10_000),
-        |s| Some(s.optimize_every_n_nodes as u64),
-        |s, v| s.optimize_every_n_nodes = usize::try_from(v).unwrap_or(10_000),
+        optimize_every_n_nodes
     ),
-    field!(
+    number_field!(
         "huber_scale",
         "",
         "Huber kernel's scale on a constraint's weighted error (Xiang's thesis Eq. 5.9)",
         (0.001, 1e6),
         huber_scale
     ),
-    field!(
+    number_field!(
         "T",
         "",
         "kidnap trigger: the filtered cost exceeds T times its previous value (Xiang's thesis Algorithm 13)",
         (1.0, 100.0),
         t
     ),
-    Param::count(
+    count_field!(
         "f_size",
-        "",
         "kidnap average filter size, scans (Xiang's thesis Algorithm 13)",
         (1, 1000),
-        |s| Some(s.f_size as u64),
-        |s, v| s.f_size = usize::try_from(v).unwrap_or(1000),
+        f_size
     ),
 ];
+
+impl SimulatedRun for CartographerScenario {
+    fn run(&self) -> (&str, usize) {
+        (&self.map, self.steps)
+    }
+    fn run_mut(&mut self) -> (&mut u64, &mut String, &mut usize) {
+        (&mut self.seed, &mut self.map, &mut self.steps)
+    }
+}
 
 impl Scenario for CartographerScenario {
     const LESSON: &'static str = LESSON;

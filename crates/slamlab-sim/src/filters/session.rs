@@ -11,7 +11,7 @@
 //!
 //! [`FiltersScenario`] is the lesson's one parameter table.
 
-use crate::params::{Param, ParamIssue, Scenario, choose};
+use crate::params::{Param, ParamIssue, Scenario, choose, count_field, number_field};
 use crate::stepper::Simulation;
 use nalgebra::{Matrix2, Vector2};
 use rand::SeedableRng;
@@ -196,13 +196,11 @@ pub const MAX_SAMPLES: u64 = 1_000_000;
 
 /// The lesson's parameter table.
 pub static PARAMS: &[Param<FiltersScenario>] = &[
-    Param::count(
+    count_field!(
         "seed",
-        "",
         "seed of the samples, the particles and the corridor's noise",
         (0, u64::MAX),
-        |s| Some(s.seed),
-        |s, v| s.seed = v,
+        seed
     ),
     Param::words(
         "function",
@@ -218,71 +216,47 @@ pub static PARAMS: &[Param<FiltersScenario>] = &[
             Ok(())
         },
     ),
-    Param::number(
+    number_field!(
         "coefficient",
         "",
         "c of the typed forms: linear [[1, c], [0, 1]] x, quadratic (x₁, x₂ + c x₁²), exp (x₁, e^(c x₂))",
         (-100.0, 100.0),
-        |s| Some(s.coefficient),
-        |s, v| {
-            s.coefficient = v;
-            Ok(())
-        },
+        coefficient
     ),
-    Param::number(
+    number_field!(
         "dt",
         "s",
         "time step of the motion function",
         (0.01, 10.0),
-        |s| Some(s.dt),
-        |s, v| {
-            s.dt = v;
-            Ok(())
-        },
+        dt
     ),
-    Param::number(
+    number_field!(
         "mean-1",
         "",
         "prior mean, first input (range m, x m, speed m/s, x₁)",
         (-1e6, 1e6),
-        |s| Some(s.mean[0]),
-        |s, v| {
-            s.mean[0] = v;
-            Ok(())
-        },
+        mean[0]
     ),
-    Param::number(
+    number_field!(
         "mean-2",
         "",
         "prior mean, second input (bearing rad, y m, turn rate rad/s, x₂)",
         (-1e6, 1e6),
-        |s| Some(s.mean[1]),
-        |s, v| {
-            s.mean[1] = v;
-            Ok(())
-        },
+        mean[1]
     ),
-    Param::number(
+    number_field!(
         "std-1",
         "",
         "prior standard deviation, first input (0 is refused by the lesson with a note)",
         (0.0, 1e6),
-        |s| Some(s.std[0]),
-        |s, v| {
-            s.std[0] = v;
-            Ok(())
-        },
+        std[0]
     ),
-    Param::number(
+    number_field!(
         "std-2",
         "",
         "prior standard deviation, second input",
         (0.0, 1e6),
-        |s| Some(s.std[1]),
-        |s, v| {
-            s.std[1] = v;
-            Ok(())
-        },
+        std[1]
     ),
     // Polar's own names for its deviations (write-only: links carry std-1, std-2).
     Param::number(
@@ -307,142 +281,94 @@ pub static PARAMS: &[Param<FiltersScenario>] = &[
             Ok(())
         },
     ),
-    Param::number(
+    number_field!(
         "rho",
         "",
         "prior correlation coefficient (±1 is singular: refused with a note)",
         (-1.0, 1.0),
-        |s| Some(s.rho),
-        |s, v| {
-            s.rho = v;
-            Ok(())
-        },
+        rho
     ),
-    Param::number(
+    number_field!(
         "alpha",
         "",
         "unscented α: spread of the sigma points",
         (1e-4, 10.0),
-        |s| Some(s.alpha),
-        |s, v| {
-            s.alpha = v;
-            Ok(())
-        },
+        alpha
     ),
-    Param::number(
+    number_field!(
         "beta",
         "",
         "unscented β: 2 is optimal for a Gaussian prior",
         (-10.0, 10.0),
-        |s| Some(s.beta),
-        |s, v| {
-            s.beta = v;
-            Ok(())
-        },
+        beta
     ),
-    Param::number(
+    number_field!(
         "kappa",
         "",
         "unscented κ: secondary scaling; α²(2 + κ) must stay positive",
         (-10.0, 10.0),
-        |s| Some(s.kappa),
-        |s, v| {
-            s.kappa = v;
-            Ok(())
-        },
+        kappa
     ),
-    Param::count(
+    count_field!(
         "samples",
-        "",
         "samples of the true transformed distribution",
         (2, MAX_SAMPLES),
-        |s| Some(s.samples as u64),
-        |s, v| s.samples = v as usize,
+        samples
     ),
-    Param::count(
+    count_field!(
         "particles",
-        "",
         "particles of the particle approximation (0 is refused with a note)",
         (0, 100_000),
-        |s| Some(s.particles as u64),
-        |s, v| s.particles = v as usize,
+        particles
     ),
-    Param::number(
+    number_field!(
         "step",
         "m",
         "corridor: distance the robot moves per step",
         (-5.0, 5.0),
-        |s| Some(s.step),
-        |s, v| {
-            s.step = v;
-            Ok(())
-        },
+        step
     ),
-    Param::number(
+    number_field!(
         "motion-std",
         "m",
         "corridor: standard deviation of each step's motion (Q = motion-std²)",
         (0.0, 5.0),
-        |s| Some(s.motion_std),
-        |s, v| {
-            s.motion_std = v;
-            Ok(())
-        },
+        motion_std
     ),
-    Param::number(
+    number_field!(
         "start",
         "m",
         "corridor: where the robot really starts (the filters do not know)",
         (0.0, 20.0),
-        |s| Some(s.start),
-        |s, v| {
-            s.start = v;
-            Ok(())
-        },
+        start
     ),
-    Param::number(
+    number_field!(
         "p-hit",
         "",
         "corridor: probability the sensor says door in front of a door",
         (0.0, 1.0),
-        |s| Some(s.p_hit),
-        |s, v| {
-            s.p_hit = v;
-            Ok(())
-        },
+        p_hit
     ),
-    Param::number(
+    number_field!(
         "p-false",
         "",
         "corridor: probability the sensor says door in front of a wall",
         (0.0, 1.0),
-        |s| Some(s.p_false),
-        |s, v| {
-            s.p_false = v;
-            Ok(())
-        },
+        p_false
     ),
-    Param::number(
+    number_field!(
         "measurement-std",
         "m",
         "corridor: the Kalman filter's measurement deviation for a door sighting (R = std²)",
         (0.0, 10.0),
-        |s| Some(s.measurement_std),
-        |s, v| {
-            s.measurement_std = v;
-            Ok(())
-        },
+        measurement_std
     ),
-    Param::number(
+    number_field!(
         "cell",
         "m",
         "corridor: the histogram's cell width",
         (0.01, 1.0),
-        |s| Some(s.cell),
-        |s, v| {
-            s.cell = v;
-            Ok(())
-        },
+        cell
     ),
 ];
 

@@ -11,6 +11,7 @@ pub mod laser_file;
 pub mod lidar;
 pub mod reference;
 pub mod robot;
+pub mod run_params;
 pub mod scans;
 pub mod simulated_log;
 
@@ -20,6 +21,7 @@ pub use laser_file::{BagTopics, LaserFile, LaserFileError};
 pub use lidar::Lidar;
 pub use reference::{LogReference, TrajectoryScore};
 pub use robot::{GridRobot, OdometrySensor};
+pub use run_params::SimulatedRun;
 pub use scans::{
     InputScan, MappingInput, builtin_map, log_input, map_agreement, occupancy_agreement,
     occupancy_coverage, trajectory_rmse,

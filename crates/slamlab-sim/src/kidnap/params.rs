@@ -4,7 +4,9 @@
 //! kidnap` and the app's panel read it through [`crate::params`].
 
 use super::scenario::{InitMode, LaserModelType, LocalizationEstimator, MclScenario};
-use crate::params::{Param, ParamIssue, Preset, Scenario, choose, choose_list};
+use crate::params::{
+    Param, ParamIssue, Preset, Scenario, choose, choose_list, count_field, number_field,
+};
 use slamlab_core::odometry::OdometryModel;
 use slamlab_core::particle::{Resampler, ScanAggregation};
 
@@ -17,27 +19,6 @@ const SWITCH: &[&str] = &["0", "1"];
 const AGGREGATIONS: &[&str] = &["product", "amcl"];
 const ODOM_MODELS: &[&str] = &["diff-corrected", "diff"];
 
-/// A real-valued field in the parameter's unit.
-macro_rules! field {
-    ($($args:tt)*) => {
-        crate::params::number_field!(MclScenario, $($args)*)
-    };
-}
-
-/// A whole-number field.
-macro_rules! count {
-    ($name:literal, $help:literal, $range:expr, $ty:ty, $($field:ident).+) => {
-        Param::count(
-            $name,
-            "",
-            $help,
-            $range,
-            |s: &MclScenario| Some(s.$($field).+ as u64),
-            |s: &mut MclScenario, v| s.$($field).+ = <$ty>::try_from(v).unwrap_or(<$ty>::MAX),
-        )
-    };
-}
-
 /// Every parameter of the lesson, in the order `slamlab params --lesson kidnap` lists them.
 pub static PARAMS: &[Param<MclScenario>] = &[
     Param::words(
@@ -47,14 +28,7 @@ pub static PARAMS: &[Param<MclScenario>] = &[
         |_| None,
         crate::params::apply_preset::<MclScenario>,
     ),
-    Param::count(
-        "seed",
-        "",
-        "seed of every random stream",
-        (0, u64::MAX),
-        |s| Some(s.seed),
-        |s, v| s.seed = v,
-    ),
+    count_field!("seed", "seed of every random stream", (0, u64::MAX), seed),
     Param::words(
         "map",
         "built-in map (or drop a ROS map on the app's window)",
@@ -84,18 +58,16 @@ pub static PARAMS: &[Param<MclScenario>] = &[
             })
         },
     ),
-    count!(
+    count_field!(
         "particles",
         "particles per filter (amcl max_particles)",
         (1, 200_000),
-        usize,
         max_particles
     ),
-    count!(
+    count_field!(
         "min-particles",
         "fewest particles with KLD-sampling (amcl min_particles)",
         (1, 200_000),
-        usize,
         min_particles
     ),
     Param::words(
@@ -105,14 +77,14 @@ pub static PARAMS: &[Param<MclScenario>] = &[
         |s| Some(SWITCH[usize::from(s.kld_sampling)].to_owned()),
         |s, v| choose(SWITCH, v).map(|i| s.kld_sampling = i == 1),
     ),
-    field!(
+    number_field!(
         "kld-err",
         "",
         "KLD-sampling error bound (amcl kld_err)",
         (1e-4, 0.5),
         kld_err
     ),
-    field!(
+    number_field!(
         "kld-z",
         "",
         "KLD-sampling quantile (amcl kld_z)",
@@ -126,7 +98,7 @@ pub static PARAMS: &[Param<MclScenario>] = &[
         |s| Some(s.init.name().to_owned()),
         |s, v| choose(INITS, v).map(|i| s.init = [InitMode::Global, InitMode::Tracking][i]),
     ),
-    field!("dt", "s", "simulation time step", (0.01, 1.0), dt),
+    number_field!("dt", "s", "simulation time step", (0.01, 1.0), dt),
     Param::words(
         "laser-model-type",
         "measurement model: likelihood field (amcl's default) or beam model (Xiang's thesis §3.5.1)",
@@ -146,56 +118,55 @@ pub static PARAMS: &[Param<MclScenario>] = &[
             })
         },
     ),
-    count!(
+    count_field!(
         "laser-max-beams",
         "beams used per update",
         (1, 2000),
-        usize,
         laser_max_beams
     ),
-    field!(
+    number_field!(
         "laser-z-hit",
         "",
         "weight of the hit Gaussian",
         (0.0, 1.0),
         laser_z_hit
     ),
-    field!(
+    number_field!(
         "laser-z-short",
         "",
         "weight of short readings (beam model)",
         (0.0, 1.0),
         laser_z_short
     ),
-    field!(
+    number_field!(
         "laser-z-max",
         "",
         "weight of max-range readings (beam model)",
         (0.0, 1.0),
         laser_z_max
     ),
-    field!(
+    number_field!(
         "laser-z-rand",
         "",
         "weight of uniform noise",
         (0.0, 1.0),
         laser_z_rand
     ),
-    field!(
+    number_field!(
         "laser-sigma-hit",
         "m",
         "hit Gaussian standard deviation",
         (0.005, 5.0),
         laser_sigma_hit
     ),
-    field!(
+    number_field!(
         "laser-lambda-short",
         "1/m",
         "rate of short readings (beam model)",
         (0.001, 100.0),
         laser_lambda_short
     ),
-    field!(
+    number_field!(
         "laser-likelihood-max-dist",
         "m",
         "distance field cap (likelihood field)",
@@ -214,7 +185,7 @@ pub static PARAMS: &[Param<MclScenario>] = &[
             })
         },
     ),
-    field!(
+    number_field!(
         "laser-likelihood-exponent",
         "",
         "exponent on each scan's likelihood (1: the plain product over beams; the amcl aggregation ignores it)",
@@ -231,35 +202,35 @@ pub static PARAMS: &[Param<MclScenario>] = &[
                 .map(|i| s.odom_model_type = [OdometryModel::DiffCorrected, OdometryModel::Diff][i])
         },
     ),
-    field!(
+    number_field!(
         "odom-alpha1",
         "",
         "rotation noise from rotation",
         (0.0, 5.0),
         odom_alpha1
     ),
-    field!(
+    number_field!(
         "odom-alpha2",
         "",
         "rotation noise from translation",
         (0.0, 5.0),
         odom_alpha2
     ),
-    field!(
+    number_field!(
         "odom-alpha3",
         "",
         "translation noise from translation",
         (0.0, 5.0),
         odom_alpha3
     ),
-    field!(
+    number_field!(
         "odom-alpha4",
         "",
         "translation noise from rotation",
         (0.0, 5.0),
         odom_alpha4
     ),
-    field!(
+    number_field!(
         "update-min-d",
         "m",
         "translation that triggers a filter update",
@@ -290,28 +261,27 @@ pub static PARAMS: &[Param<MclScenario>] = &[
             })
         },
     ),
-    count!(
+    count_field!(
         "resample-interval",
         "resample every this many updates",
         (1, 100),
-        u32,
         resample_interval
     ),
-    field!(
+    number_field!(
         "recovery-alpha-slow",
         "",
         "Augmented MCL's long-term averaging rate (amcl recovery_alpha_slow)",
         (0.0, 1.0),
         recovery_alpha_slow
     ),
-    field!(
+    number_field!(
         "recovery-alpha-fast",
         "",
         "Augmented MCL's short-term averaging rate (amcl recovery_alpha_fast)",
         (0.0, 1.0),
         recovery_alpha_fast
     ),
-    field!(
+    number_field!(
         "kidnap-distance",
         "m",
         "a kidnap moves the robot at least this far",
@@ -339,18 +309,17 @@ pub static PARAMS: &[Param<MclScenario>] = &[
                 .map_err(|_| "a tick number (a whole number) or none".to_owned()),
         },
     ),
-    field!(
+    number_field!(
         "robot-radius",
         "m",
         "robot radius (it cannot drive closer to a wall)",
         (0.01, 2.0),
         robot_radius
     ),
-    count!(
+    count_field!(
         "lidar-beams",
         "lidar beams per scan",
         (1, 3600),
-        usize,
         lidar.beams
     ),
     Param::number(
@@ -364,21 +333,21 @@ pub static PARAMS: &[Param<MclScenario>] = &[
             Ok(())
         },
     ),
-    field!(
+    number_field!(
         "lidar-max-range",
         "m",
         "lidar maximum range",
         (0.1, 100.0),
         lidar.max_range
     ),
-    field!(
+    number_field!(
         "lidar-range-std",
         "m",
         "lidar range noise",
         (0.0, 5.0),
         lidar.range_std
     ),
-    field!(
+    number_field!(
         "lidar-outlier-prob",
         "",
         "probability of a random lidar reading",

@@ -2,8 +2,10 @@
 //! where the scans come from (a simulated robot in a built-in or loaded map,
 //! or a laser log), which poses build the map, and how scans change it.
 
+use crate::grid::SimulatedRun;
+use crate::grid::run_params::{map_param, seed_param, steps_param};
 use crate::grid::{MappingInput, SimulatedLogConfig, log_input, simulate_log};
-use crate::params::{Param, Scenario, choose};
+use crate::params::{Param, Scenario, choose, count_field, number_field};
 use serde::{Deserialize, Serialize};
 use slamlab_core::grid::{InsertParams, OccupancyGrid, UpdateRule};
 use slamlab_core::particle::MAX_GRID_PARTICLES;
@@ -292,46 +294,12 @@ impl MappingScenario {
     }
 }
 
-/// A real-valued field in the parameter's unit.
-macro_rules! field {
-    ($($args:tt)*) => {
-        crate::params::number_field!(MappingScenario, $($args)*)
-    };
-}
-
 /// Every parameter of the lesson, in the order `slamlab params --lesson
 /// mapping` lists them. Cartographer's names where it has one.
 pub static PARAMS: &[Param<MappingScenario>] = &[
-    Param::count(
-        "seed",
-        "",
-        "seed of every random stream",
-        (0, u64::MAX),
-        |s| Some(s.seed),
-        |s, v| s.seed = v,
-    ),
-    Param::words(
-        "map",
-        "built-in map the simulated robot explores (or drop a ROS map or a laser log on the app's window)",
-        &["maze", "office"],
-        |s| Some(s.map.clone()),
-        |s, v| {
-            if v.ends_with(".yaml") || v.ends_with(".yml") {
-                s.map = v.to_owned();
-                Ok(())
-            } else {
-                choose(&["maze", "office"], v).map(|i| s.map = ["maze", "office"][i].to_owned())
-            }
-        },
-    ),
-    Param::count(
-        "steps",
-        "",
-        "scans the simulated robot records (0.1 s apart)",
-        (1, 20_000),
-        |s| Some(s.steps as u64),
-        |s, v| s.steps = usize::try_from(v).unwrap_or(20_000),
-    ),
+    seed_param(),
+    map_param(),
+    steps_param(),
     Param::words(
         "poses",
         "where each scan's pose comes from",
@@ -346,142 +314,138 @@ pub static PARAMS: &[Param<MappingScenario>] = &[
         |s| Some(RULES[s.rule as usize].to_owned()),
         |s, v| choose(RULES, v).map(|i| s.rule = [RuleKind::LogOdds, RuleKind::Odds][i]),
     ),
-    field!(
+    number_field!(
         "resolution",
         "m",
         "grid cell size (gmapping's delta)",
         (0.01, 0.5),
         resolution
     ),
-    field!(
+    number_field!(
         "max-range-free",
         "m",
         "free space marked along a beam that returned nothing (missing_data_ray_length)",
         (0.0, 100.0),
         max_range_free
     ),
-    field!(
+    number_field!(
         "l-occ",
         "",
         "log-odds rule: added to a hit cell",
         (0.01, 10.0),
         l_occ
     ),
-    field!(
+    number_field!(
         "l-free",
         "",
         "log-odds rule: added to a crossed cell",
         (-10.0, -0.01),
         l_free
     ),
-    field!(
+    number_field!(
         "l-min",
         "",
         "log-odds rule: lower clamp",
         (-40.0, -0.01),
         l_min
     ),
-    field!(
+    number_field!(
         "l-max",
         "",
         "log-odds rule: upper clamp",
         (0.01, 40.0),
         l_max
     ),
-    field!(
+    number_field!(
         "hit-probability",
         "",
         "odds rule: p_hit",
         (0.501, 0.999),
         hit_probability
     ),
-    field!(
+    number_field!(
         "miss-probability",
         "",
         "odds rule: p_miss",
         (0.001, 0.499),
         miss_probability
     ),
-    field!("p-min", "", "odds rule: lower clamp", (0.001, 0.499), p_min),
-    field!("p-max", "", "odds rule: upper clamp", (0.501, 0.999), p_max),
-    field!(
+    number_field!("p-min", "", "odds rule: lower clamp", (0.001, 0.499), p_min),
+    number_field!("p-max", "", "odds rule: upper clamp", (0.501, 0.999), p_max),
+    number_field!(
         "linear-search-window",
         "m",
         "scan-to-map: correlative search half-width in x and y",
         (0.0, 2.0),
         linear_search_window
     ),
-    field!(
+    number_field!(
         "angular-search-window-deg",
         "°",
         "scan-to-map: correlative search half-width in heading",
         (0.0, 90.0),
         angular_search_window_deg
     ),
-    field!(
+    number_field!(
         "translation-weight",
         "",
         "scan-to-map: pull towards the correlative search's position",
         (0.0, 1000.0),
         translation_weight
     ),
-    field!(
+    number_field!(
         "rotation-weight",
         "",
         "scan-to-map: pull towards the correlative search's heading",
         (0.0, 1000.0),
         rotation_weight
     ),
-    field!(
+    number_field!(
         "icp-max-distance",
         "m",
         "ICP: correspondences farther apart are rejected",
         (0.01, 10.0),
         icp_max_distance
     ),
-    field!(
+    number_field!(
         "icp-trim",
         "",
         "ICP: share of the closest correspondences kept",
         (0.1, 1.0),
         icp_trim
     ),
-    Param::count(
+    count_field!(
         "beams",
-        "",
         "simulated lidar: beams over 360°",
         (8, 2048),
-        |s| Some(s.beams as u64),
-        |s, v| s.beams = usize::try_from(v).unwrap_or(2048),
+        beams
     ),
-    field!(
+    number_field!(
         "lidar-range",
         "m",
         "simulated lidar: maximum range",
         (1.0, 80.0),
         lidar_range
     ),
-    field!(
+    number_field!(
         "range-std",
         "m",
         "simulated lidar: range noise",
         (0.0, 1.0),
         range_std
     ),
-    field!(
+    number_field!(
         "odometry-noise",
         "",
         "simulated odometry noise, times the Monte Carlo lesson's α values",
         (0.0, 20.0),
         odometry_noise
     ),
-    Param::count(
+    count_field!(
         "particles",
-        "",
         "grid FastSLAM: particles, each with its own map",
         (1, MAX_GRID_PARTICLES as u64),
-        |s| Some(s.particles as u64),
-        |s, v| s.particles = usize::try_from(v).unwrap_or(MAX_GRID_PARTICLES),
+        particles
     ),
     Param::words(
         "proposal",
@@ -490,85 +454,83 @@ pub static PARAMS: &[Param<MappingScenario>] = &[
         |s| Some(s.proposal.name().to_owned()),
         |s, v| choose(PROPOSALS, v).map(|i| s.proposal = Proposal::ALL[i]),
     ),
-    field!(
+    number_field!(
         "resample-threshold",
         "",
         "grid FastSLAM: resample when N_eff falls below this share of the particles",
         (0.0, 1.0),
         resample_threshold
     ),
-    field!(
+    number_field!(
         "srr",
         "",
         "grid FastSLAM: translation noise per metre of translation",
         (0.0, 2.0),
         srr
     ),
-    field!(
+    number_field!(
         "srt",
         "",
         "grid FastSLAM: rotation noise per metre of translation (rad/m)",
         (0.0, 2.0),
         srt
     ),
-    field!(
+    number_field!(
         "str",
         "",
         "grid FastSLAM: translation noise per radian of rotation (m/rad)",
         (0.0, 2.0),
         str
     ),
-    field!(
+    number_field!(
         "stt",
         "",
         "grid FastSLAM: rotation noise per radian of rotation",
         (0.0, 2.0),
         stt
     ),
-    field!(
+    number_field!(
         "lstep",
         "m",
         "grid FastSLAM: the scan matcher's search half-width in x and y",
         (0.0, 2.0),
         lstep
     ),
-    field!(
+    number_field!(
         "astep",
         "rad",
         "grid FastSLAM: the scan matcher's search half-width in heading",
         (0.0, 1.5),
         astep
     ),
-    Param::count(
+    count_field!(
         "iterations",
-        "",
         "grid FastSLAM: the scan matcher's refinement iterations",
         (1, 100),
-        |s| Some(s.iterations as u64),
-        |s, v| s.iterations = usize::try_from(v).unwrap_or(100),
+        iterations
     ),
-    field!(
+    number_field!(
         "lsigma",
         "",
         "grid FastSLAM: the scan likelihood's spread",
         (0.001, 10.0),
         lsigma
     ),
-    field!(
+    number_field!(
         "ogain",
         "",
         "grid FastSLAM: weight smoothing gain (weights exp(Δℓ / (ogain · M)))",
         (0.1, 1000.0),
         ogain
     ),
-    field!(
+    number_field!(
         "linear-update",
         "m",
         "grid FastSLAM: update after this much translation",
         (0.0, 20.0),
         linear_update
     ),
-    field!(
+    number_field!(
         "angular-update",
         "rad",
         "grid FastSLAM: update after this much rotation",
@@ -579,6 +541,15 @@ pub static PARAMS: &[Param<MappingScenario>] = &[
 
 /// The proposals' names, in [`Proposal`] order.
 const PROPOSALS: &[&str] = &["odometry", "scan-match"];
+
+impl SimulatedRun for MappingScenario {
+    fn run(&self) -> (&str, usize) {
+        (&self.map, self.steps)
+    }
+    fn run_mut(&mut self) -> (&mut u64, &mut String, &mut usize) {
+        (&mut self.seed, &mut self.map, &mut self.steps)
+    }
+}
 
 impl Scenario for MappingScenario {
     const LESSON: &'static str = "mapping";

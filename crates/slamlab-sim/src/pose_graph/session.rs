@@ -13,7 +13,7 @@
 //! one iteration or one edit exactly, within a bounded memory.
 
 use crate::io;
-use crate::params::{Param, Scenario, choose};
+use crate::params::{Param, Scenario, choose, count_field, number_field};
 use crate::pose_graph::experiment::{PoseGraphExperimentConfig, manhattan_graph, thesis_graph};
 use rand::{Rng as _, SeedableRng as _};
 use rand_chacha::ChaCha8Rng;
@@ -123,13 +123,11 @@ pub fn kernel_name(choice: KernelChoice) -> &'static str {
 
 /// Every parameter of the lesson, in the order `slamlab params --lesson pose-graph` lists them.
 pub static PARAMS: &[Param<PoseGraphScenario>] = &[
-    Param::count(
+    count_field!(
         "seed",
-        "",
         "seed of the simulation, the Manhattan walk and the wrong loop closures",
         (0, u64::MAX),
-        |s| Some(s.seed),
-        |s, v| s.seed = v,
+        seed
     ),
     Param::words(
         "example",
@@ -164,53 +162,43 @@ pub static PARAMS: &[Param<PoseGraphScenario>] = &[
             })
         },
     ),
-    crate::params::number_field!(
-        PoseGraphScenario,
+    number_field!(
         "kernel-width",
         "",
         "Huber's δ or Cauchy's c on the Mahalanobis distance √(eᵀΩe)",
         (0.01, 100.0),
         kernel_width
     ),
-    Param::count(
+    count_field!(
         "loop-closures",
-        "",
         "thesis example: loop closures from pose 0 to random poses",
         (0, 100),
-        |s| Some(s.loop_closures),
-        |s, v| s.loop_closures = v,
+        loop_closures
     ),
-    crate::params::number_field!(
-        PoseGraphScenario,
+    number_field!(
         "noise-scale",
         "",
         "thesis example: multiplies control, measurement and loop-closure noise (2 is Experiment 2 of Xiang's thesis, §4.2)",
         (0.1, 10.0),
         noise_scale
     ),
-    Param::count(
+    count_field!(
         "manhattan-poses",
-        "",
         "manhattan example: poses of the walk",
         (10, 5000),
-        |s| Some(s.manhattan_poses),
-        |s, v| s.manhattan_poses = v,
+        manhattan_poses
     ),
-    Param::count(
+    count_field!(
         "manhattan-side",
-        "",
         "manhattan example: side of the square of 1 m cells",
         (2, 100),
-        |s| Some(s.manhattan_side),
-        |s, v| s.manhattan_side = v,
+        manhattan_side
     ),
-    Param::count(
+    count_field!(
         "max-iterations",
-        "",
         "most iterations one Optimize runs",
         (1, 10_000),
-        |s| Some(s.max_iterations),
-        |s, v| s.max_iterations = v,
+        max_iterations
     ),
 ];
 

@@ -7,7 +7,7 @@
 //! [`LabScenario`] is the lesson's parameter table; [`LabRun`] is the lab with
 //! the list of presses, so that a seed replays them and a step back is exact.
 
-use crate::params::{self, Param, Scenario};
+use crate::params::{self, Param, Scenario, count_field};
 use serde::{Deserialize, Serialize};
 use slamlab_core::particle::lab::{MAX_LAB_PARTICLES, MAX_PRESSES};
 use slamlab_core::particle::{Resampler, ResamplingLab, WeightPreset};
@@ -91,13 +91,11 @@ fn weights_text(weights: &LabWeights) -> String {
 
 /// The lab's parameter table.
 pub static PARAMS: &[Param<LabScenario>] = &[
-    Param::count(
+    count_field!(
         "seed",
-        "",
         "seed of the lab's random generator (the same seed replays the same presses)",
         (0, u64::MAX),
-        |s| Some(s.seed),
-        |s, v| s.seed = v,
+        seed
     ),
     Param::words(
         "weights",
@@ -136,13 +134,11 @@ pub static PARAMS: &[Param<LabScenario>] = &[
             Ok(())
         },
     ),
-    Param::count(
+    count_field!(
         "presses",
-        "",
         "resamplings per press of \"Resample ×N\"",
         (1, MAX_PRESSES as u64),
-        |s| Some(s.presses as u64),
-        |s, v| s.presses = v as usize,
+        presses
     ),
     Param::count(
         "focus",

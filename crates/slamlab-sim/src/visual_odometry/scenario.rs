@@ -6,7 +6,7 @@ use serde::{Deserialize, Serialize};
 use slamlab_core::vision::{EarlyRejection, Method};
 
 use super::odometry::VoSettings;
-use crate::params::{self, Param, Scenario};
+use crate::params::{self, Param, Scenario, count_field, number_field};
 
 /// The lesson's parameters: the run's settings and the VO step shown in the
 /// two images.
@@ -46,13 +46,11 @@ fn read_on_off(value: &str) -> Result<bool, String> {
 
 /// The lesson's parameter table.
 pub static PARAMS: &[Param<VoScenario>] = &[
-    Param::count(
+    count_field!(
         "seed",
-        "",
         "seed of the world, the pixel noise, the wrong matches, the wheels and RANSAC",
         (0, u64::MAX),
-        |s| Some(s.settings.seed),
-        |s, v| s.settings.seed = v,
+        settings.seed
     ),
     Param::words(
         "method",
@@ -90,27 +88,19 @@ pub static PARAMS: &[Param<VoScenario>] = &[
             Ok(())
         },
     ),
-    Param::number(
+    number_field!(
         "outliers",
         "",
         "share of wrong matches (a random pixel in the second image)",
         (0.0, 1.0),
-        |s| Some(s.settings.outliers),
-        |s, v| {
-            s.settings.outliers = v;
-            Ok(())
-        },
+        settings.outliers
     ),
-    Param::number(
+    number_field!(
         "noise-px",
         "px",
         "pixel noise, standard deviation on each axis of both images",
         (0.0, 20.0),
-        |s| Some(s.settings.noise_px),
-        |s, v| {
-            s.settings.noise_px = v;
-            Ok(())
-        },
+        settings.noise_px
     ),
     Param::words(
         "pure-rotation",
@@ -126,29 +116,23 @@ pub static PARAMS: &[Param<VoScenario>] = &[
         |s| Some(on_off(s.settings.planar_segment)),
         |s, v| read_on_off(v).map(|on| s.settings.planar_segment = on),
     ),
-    Param::count(
+    count_field!(
         "frames",
-        "",
         "frames of the docking approach, 0.1 s each",
         (10, 2000),
-        |s| Some(s.settings.frames as u64),
-        |s, v| s.settings.frames = v as usize,
+        settings.frames
     ),
-    Param::count(
+    count_field!(
         "stride",
-        "",
         "frames between the two images of a VO step",
         (1, 50),
-        |s| Some(s.settings.stride as u64),
-        |s, v| s.settings.stride = v as usize,
+        settings.stride
     ),
-    Param::count(
+    count_field!(
         "pair",
-        "",
         "the VO step shown in the two images (0 = the first); beyond the last, the last",
         (0, 2000),
-        |s| Some(s.pair as u64),
-        |s, v| s.pair = v as usize,
+        pair
     ),
 ];
 
