@@ -811,7 +811,7 @@ pub fn window_ui(ctx: &egui::Context, estimates: &mut Estimates, has_truth: bool
                         ui.label("");
                     } else if s.rotation_error_deg.is_some() || s.direction_error_deg.is_some() {
                         ui.label(format!("R {}°", fmt(s.rotation_error_deg, 3)))
-                            .on_hover_text("The rotation error: the angle of R_trueᵀ R");
+                            .on_hover_text("The rotation error: the angle of R_true^T R");
                         ui.label(format!("t {}°", fmt(s.direction_error_deg, 2)))
                             .on_hover_text("The angle between the estimated and the true direction of translation (a monocular t has no length)");
                         ui.label("");
