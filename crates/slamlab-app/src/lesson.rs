@@ -577,6 +577,18 @@ pub trait Lesson: crate::widgets::layout::LessonPanels + AsAny + std::fmt::Debug
     fn relative_poses(&self) -> Vec<(String, slamlab_core::vision::RelativePose)> {
         Vec::new()
     }
+    /// Does the run have a true occupancy map to score a student's map against?
+    /// Then a ROS map dropped on the window is the student's map (an estimate),
+    /// not a world for the lesson to open.
+    fn scores_maps(&self) -> bool {
+        false
+    }
+    /// The occupancy maps now, as ROS maps (three states): the true one (named
+    /// `truth`) and each estimator's; a student's dropped map is scored against
+    /// the true one with the same metric.
+    fn occupancy_maps(&self) -> Vec<(String, std::sync::Arc<slamlab_core::grid::OccupancyGrid>)> {
+        Vec::new()
+    }
     /// Every plot's data, unthinned, for "Export plot data as CSV".
     fn plot_series(&self) -> Vec<crate::export::PlotSeries> {
         Vec::new()

@@ -89,6 +89,33 @@ pub fn link_sets_up(parsed: &query::Query) -> bool {
         || parsed.figure != query::FigureOptions::default()
 }
 
+/// A file named by `estimate=`, while it is read; a map's image carries the
+/// YAML that named it (name, bytes), to be delivered together.
+#[derive(Debug)]
+struct LinkedEstimate {
+    location: String,
+    fetch: Option<widgets::fetch::Fetch>,
+    yaml: Option<(String, Vec<u8>)>,
+}
+
+/// The largest file named `name` that lesson `lesson_id` reads, bytes: the
+/// mapping and Cartographer lessons read laser logs and ROS 2 bags (by their
+/// extension) up to `grid::laser_file::MAX_LASER_FILE_BYTES` (1 GiB); every
+/// other file and lesson stops at 64 MiB ([`widgets::fetch::MAX_FETCH_BYTES`]).
+/// In the browser a drop holding a larger file is refused from its size before
+/// any of it is read (`web.rs`).
+pub fn file_cap(name: &str, lesson_id: &str) -> u64 {
+    let lower = name.to_ascii_lowercase();
+    let laser = [".clf", ".log", ".gz", ".bz2", ".mcap", ".bag", ".db3"]
+        .iter()
+        .any(|e| lower.ends_with(e));
+    if laser && matches!(lesson_id, "mapping" | "cartographer") {
+        slamlab_sim::grid::laser_file::MAX_LASER_FILE_BYTES
+    } else {
+        widgets::fetch::MAX_FETCH_BYTES as u64
+    }
+}
+
 /// The SLAM Lab application.
 #[derive(Debug)]
 pub struct SlamLabApp {
@@ -147,7 +174,7 @@ pub struct SlamLabApp {
     estimate_picker: widgets::file_picker::FilePicker,
     estimate_drops: widgets::dropped_files::DropInbox,
     /// `estimate=` files named in the URL, while they are read.
-    estimate_fetches: Vec<(String, Option<widgets::fetch::Fetch>)>,
+    estimate_fetches: Vec<LinkedEstimate>,
     /// Homework (`assignment=`, `student=`): the Assignment window.
     assignment: Option<widgets::assignment::AssignmentDesk>,
     /// The link's lesson pairs, for opening an assignment's lesson once its
@@ -256,7 +283,11 @@ impl SlamLabApp {
             .figure
             .estimates
             .iter()
-            .map(|location| (location.clone(), None))
+            .map(|location| LinkedEstimate {
+                location: location.clone(),
+                fetch: None,
+                yaml: None,
+            })
             .collect();
         Self {
             query: query.trim_start_matches('?').to_owned(),
@@ -551,6 +582,7 @@ impl SlamLabApp {
             "lesson": self.lesson.id(),
             "embed": self.embed,
             "notices": self.notices().len(),
+            "notice_list": self.notices(),
             "frame_timing": self.frame_stats.summary(),
             "narrow": self.narrow,
             "export_status": self.exporter.status,
@@ -1177,12 +1209,16 @@ impl SlamLabApp {
             .is_some_and(|p| {
                 p.assignment.output.format != slamlab_sim::coursework::OutputFormat::Trajectory
             });
+        // A ROS map is the student's map where the run has a true one to score
+        // it against (else it stays the lesson's: a world to explore).
+        let maps_are_estimates = self.lesson.scores_maps();
         let is_estimate = |file: &egui::DroppedFileHandle| {
             let name = file.path().to_string_lossy().to_ascii_lowercase();
             hands_in_anything
                 || name.ends_with(".tum")
                 || name.ends_with(".csv")
                 || (!text_is_theirs && name.ends_with(".txt"))
+                || (maps_are_estimates && widgets::estimates::is_map_file(&name))
         };
         let taken = ctx.input_mut(|i| {
             let (mine, rest): (Vec<_>, Vec<_>) = std::mem::take(&mut i.raw.dropped_files)
@@ -1198,20 +1234,103 @@ impl SlamLabApp {
         if let Some(batch) = self.estimate_picker.poll_all() {
             files.extend(batch);
         }
-        for (location, fetch) in &mut self.estimate_fetches {
-            match fetch {
-                None => *fetch = Some(widgets::fetch::Fetch::start(location, ctx)),
+        let mut images = Vec::new();
+        for linked in &mut self.estimate_fetches {
+            match &mut linked.fetch {
+                None => linked.fetch = Some(widgets::fetch::Fetch::start(&linked.location, ctx)),
                 Some(f) => {
                     if let Some(result) = f.poll() {
+                        let location = &linked.location;
                         let name = location.rsplit('/').next().unwrap_or(location).to_owned();
-                        files.push((name, result));
+                        match (linked.yaml.take(), result) {
+                            // A map's image: delivered with its YAML.
+                            (Some(yaml), Ok(bytes)) => {
+                                files.push((yaml.0, Ok(yaml.1)));
+                                files.push((name, Ok(bytes)));
+                            }
+                            (Some(yaml), Err(why)) => files.push((
+                                yaml.0.clone(),
+                                Err(format!("the image it names, {location}: {why}")),
+                            )),
+                            // A map's YAML: read its image beside it first.
+                            (None, Ok(bytes))
+                                if widgets::estimates::is_map_file(&name) && {
+                                    let lower = name.to_ascii_lowercase();
+                                    lower.ends_with(".yaml") || lower.ends_with(".yml")
+                                } =>
+                            {
+                                match std::str::from_utf8(&bytes)
+                                    .ok()
+                                    .and_then(|t| slamlab_sim::io::ros_map::parse_map_yaml(t).ok())
+                                {
+                                    Some(parsed) => images.push(LinkedEstimate {
+                                        location: widgets::fetch::relative_to(
+                                            location,
+                                            &parsed.image,
+                                        ),
+                                        fetch: None,
+                                        yaml: Some((name, bytes)),
+                                    }),
+                                    // Read as it is: the refusal says why.
+                                    None => files.push((name, Ok(bytes))),
+                                }
+                            }
+                            (None, result) => files.push((name, result)),
+                        }
                     }
                 }
             }
         }
-        self.estimate_fetches
-            .retain(|(_, f)| f.as_ref().is_none_or(widgets::fetch::Fetch::is_pending));
+        self.estimate_fetches.retain(|l| {
+            l.fetch
+                .as_ref()
+                .is_none_or(widgets::fetch::Fetch::is_pending)
+        });
+        self.estimate_fetches.extend(images);
         self.take_estimates(files);
+    }
+
+    /// The lesson's own result as the files a student would hand in, for the
+    /// browser check that drops them back: the mapping lesson's map as *Export
+    /// map* writes it (YAML and PGM), the pose-graph lesson's graph as g2o.
+    /// Empty for the other lessons (their trajectories come from File →
+    /// Export trajectories).
+    pub fn own_result_files(&self) -> Vec<(String, Vec<u8>)> {
+        if let Some(lesson) = self.lesson_as::<mapping::MappingLesson>() {
+            return lesson
+                .map_files()
+                .map(|files| files.into_iter().map(|f| (f.name, f.bytes)).collect())
+                .unwrap_or_default();
+        }
+        if let Some(lesson) = self.lesson_as::<pose_graph::PoseGraphLesson>() {
+            return slamlab_sim::io::graph::write_g2o(lesson.session().graph())
+                .map(|text| vec![("optimized.g2o".to_owned(), text.into_bytes())])
+                .unwrap_or_default();
+        }
+        Vec::new()
+    }
+
+    /// The largest file named `name` a drop on this lesson may hold, bytes
+    /// ([`file_cap`]).
+    pub fn drop_cap_for(&self, name: &str) -> u64 {
+        file_cap(name, self.lesson.id())
+    }
+
+    /// A file of a drop refused from its size before it was read (the browser's
+    /// drop guard): a notice naming it and its size. Nothing of the drop is
+    /// taken; the lesson and what was dropped before stay.
+    pub fn refuse_dropped(&mut self, name: &str, size: u64) {
+        self.app_notices.push(format!(
+            "{}: nothing of that drop was read, and the lesson goes on",
+            widgets::fetch::too_large(name, size, self.drop_cap_for(name))
+        ));
+    }
+
+    /// Takes files as if the student had dropped them on the window together
+    /// (a ROS map's YAML with its image): into the lesson's estimates, or handed
+    /// in with homework open. Tests and the browser hook use it.
+    pub fn open_estimate_files(&mut self, files: Vec<(String, Vec<u8>)>) {
+        self.take_estimates(files.into_iter().map(|(n, b)| (n, Ok(b))).collect());
     }
 
     /// Takes a student's estimate files into the lesson (drawn and scored in
@@ -1222,6 +1341,17 @@ impl SlamLabApp {
     /// another student's variant, another assignment) is said with the grader's
     /// reason and not drawn; what was handed in before stays.
     fn take_estimates(&mut self, files: Vec<(String, Result<Vec<u8>, String>)>) {
+        // Outside homework, a ROS map's files come together: the YAML and its image.
+        let homework = self
+            .assignment
+            .as_ref()
+            .is_some_and(|d| d.prepared().is_some());
+        let (map_files, files): (Vec<_>, Vec<_>) = files
+            .into_iter()
+            .partition(|(name, _)| !homework && widgets::estimates::is_map_file(name));
+        if !map_files.is_empty() {
+            self.take_map(map_files);
+        }
         for (name, bytes) in files {
             let bytes = match bytes {
                 Ok(b) => b,
@@ -1271,13 +1401,41 @@ impl SlamLabApp {
         }
     }
 
+    /// Takes a student's ROS map (its YAML and image) into the lesson's
+    /// estimates, scored against the true map; says which it did, or why not.
+    fn take_map(&mut self, files: Vec<(String, Result<Vec<u8>, String>)>) {
+        let mut read = Vec::new();
+        for (name, bytes) in files {
+            match bytes {
+                Ok(b) => read.push((name, b)),
+                Err(why) => {
+                    self.app_notices
+                        .push(format!("Could not read {name}: {why}"));
+                    return;
+                }
+            }
+        }
+        if !self.lesson.scores_maps() {
+            let names: Vec<&str> = read.iter().map(|(n, _)| n.as_str()).collect();
+            self.app_notices.push(format!(
+                "{}: this run has no true occupancy map to score a map against (the mapping lesson on a simulated robot has one)",
+                names.join(", ")
+            ));
+            return;
+        }
+        match self.lesson.frame_mut().estimates_mut().add_map(&read) {
+            Ok(said) => self.exporter.status = Some(said),
+            Err(why) => self.app_notices.push(why),
+        }
+    }
+
     /// The student's estimates on the map and in their window.
     fn estimates_ui(&mut self, ctx: &egui::Context) {
         if self.lesson.frame().estimates().is_empty() && !self.lesson.frame().estimates().open {
             return;
         }
         let now = self.lesson.estimate_clock().unwrap_or(f64::INFINITY);
-        widgets::estimates::map_overlay(ctx, self.lesson.frame().estimates(), now);
+        widgets::estimates::map_overlay(ctx, self.lesson.frame_mut().estimates_mut(), now);
         if self.lesson.frame().estimates().open {
             self.score_estimates();
             let has_truth = self
@@ -1302,6 +1460,7 @@ impl SlamLabApp {
             trajectories: self.lesson.trajectories(),
             landmarks: self.lesson.landmark_maps(),
             relative_poses: self.lesson.relative_poses(),
+            maps: self.lesson.occupancy_maps(),
         };
         self.lesson
             .frame_mut()
@@ -1636,6 +1795,30 @@ mod tests {
         // The full app does.
         let app = SlamLabApp::with_settings("", Some(stored.clone()));
         assert!(app.landmark_lesson().is_some_and(|l| l.frame.view.heatmap));
+    }
+
+    /// A drop refused from its size (the browser's guard) is a notice naming
+    /// the file and its size; what was dropped before stays. The mapping lesson
+    /// takes laser files up to 1 GiB, any other file 64 MiB.
+    #[test]
+    fn a_refused_drop_is_said_and_keeps_what_was_there() {
+        let mut app = SlamLabApp::from_query("lesson=landmark-slam&seed=2&tick=10");
+        let tum = "0 0 0 0 0 0 0 1\n0.1 0.1 0 0 0 0 0 1\n";
+        app.open_estimate_files(vec![("mine.tum".to_owned(), tum.as_bytes().to_vec())]);
+        assert_eq!(app.lesson().frame().estimates().items().len(), 1);
+        assert_eq!(app.drop_cap_for("big.tum"), 64 << 20);
+        assert_eq!(app.drop_cap_for("intel.clf"), 64 << 20);
+        app.refuse_dropped("big.tum", 65 << 20);
+        assert_eq!(
+            app.notices().last().map(String::as_str),
+            Some(
+                "big.tum has 68157440 bytes, more than the 67108864 bytes SLAM Lab reads: nothing of that drop was read, and the lesson goes on"
+            )
+        );
+        assert_eq!(app.lesson().frame().estimates().items().len(), 1);
+        let mapping = SlamLabApp::from_query("lesson=mapping");
+        assert_eq!(mapping.drop_cap_for("intel.clf.bz2"), 1 << 30);
+        assert_eq!(mapping.drop_cap_for("big.tum"), 64 << 20);
     }
 
     #[test]

@@ -9,7 +9,11 @@
 //! 2. pipes `log` messages to the browser console ([`eframe::WebLogger`]);
 //! 3. reads the page's query string (`?lesson=landmark-slam&seed=7&embed=1`) and starts
 //!    [`SlamLabApp`] on `<canvas id="the_canvas_id">`;
-//! 4. writes `running` or `error: ...` into `#status` (`panicked` after a panic).
+//! 4. writes `running` or `error: ...` into `#status` (`panicked` after a panic);
+//! 5. guards drops: a capture-phase `drop` listener on the page reads each dropped
+//!    `File`'s size before eframe reads its bytes, and refuses the whole drop when a
+//!    file is over its cap ([`crate::file_cap`]): the app then shows
+//!    a notice naming the file and its size, and the lesson goes on.
 //!
 //! The browser tests (`web/tests/`) read the app's state through
 //! [`slamlab_test_state`], [`slamlab_panicked`] and [`slamlab_panic_message`], start
@@ -30,6 +34,55 @@ const CANVAS_ID: &str = "the_canvas_id";
 thread_local! {
     /// The running app, kept so that the exported test functions can reach it.
     static RUNNER: RefCell<Option<eframe::WebRunner>> = const { RefCell::new(None) };
+    /// The open lesson's id (set every frame from the app), for the drop caps.
+    static LESSON_ID: RefCell<String> = const { RefCell::new(String::new()) };
+    /// Files of refused drops (name, size), for the app to say on its next frame.
+    static REFUSED: RefCell<Vec<(String, u64)>> = const { RefCell::new(Vec::new()) };
+    /// The app's context, to ask for a frame after a refused drop.
+    static CONTEXT: RefCell<Option<egui::Context>> = const { RefCell::new(None) };
+}
+
+/// Listens for drops on the page before eframe does (capture phase): a drop
+/// with a file over the cap is stopped there, unread, and remembered in
+/// [`REFUSED`] for the app's notice.
+fn install_drop_guard() -> Result<(), String> {
+    let document = web_sys::window()
+        .and_then(|w| w.document())
+        .ok_or("no document")?;
+    let on_drop = Closure::<dyn FnMut(web_sys::DragEvent)>::new(|event: web_sys::DragEvent| {
+        let Some(files) = event.data_transfer().and_then(|d| d.files()) else {
+            return;
+        };
+        let lesson = LESSON_ID.with(|l| l.borrow().clone());
+        let too_large: Vec<(String, u64)> = (0..files.length())
+            .filter_map(|i| files.get(i))
+            .filter(|f| f.size() > crate::file_cap(&f.name(), &lesson) as f64)
+            .map(|f| (f.name(), f.size() as u64))
+            .collect();
+        if too_large.is_empty() {
+            return;
+        }
+        event.prevent_default();
+        event.stop_immediate_propagation();
+        REFUSED.with(|r| r.borrow_mut().extend(too_large));
+        CONTEXT.with(|c| {
+            if let Some(ctx) = c.borrow().as_ref() {
+                ctx.request_repaint();
+            }
+        });
+    });
+    let options = web_sys::AddEventListenerOptions::new();
+    options.set_capture(true);
+    document
+        .add_event_listener_with_callback_and_add_event_listener_options(
+            "drop",
+            on_drop.as_ref().unchecked_ref(),
+            &options,
+        )
+        .map_err(|e| js_to_string(&e))?;
+    // Listens as long as the page lives.
+    on_drop.forget();
+    Ok(())
 }
 
 /// Runs once when the wasm module is instantiated (wasm-bindgen's `start`).
@@ -45,6 +98,9 @@ pub fn start() {
 
     RUNNER.with(|cell| *cell.borrow_mut() = Some(runner.clone()));
     set_status("starting", "starting");
+    if let Err(why) = install_drop_guard() {
+        log::warn!("drops are not guarded by size: {why}");
+    }
     wasm_bindgen_futures::spawn_local(async move {
         match start_app(&runner).await {
             Ok(()) => set_status("running", "running"),
@@ -75,6 +131,7 @@ async fn start_app(runner: &eframe::WebRunner) -> Result<(), String> {
             canvas,
             eframe::WebOptions::default(),
             Box::new(move |cc| {
+                CONTEXT.with(|c| *c.borrow_mut() = Some(cc.egui_ctx.clone()));
                 Ok(Box::new(WebApp {
                     inner: SlamLabApp::new(cc, &query),
                 }))
@@ -166,6 +223,31 @@ pub fn slamlab_test_export(kind: &str) -> bool {
                 true
             }
             None => false,
+        }
+    })
+}
+
+/// The lesson's own result as files, JSON `[{"name": …, "bytes": [..]}]`
+/// (`SlamLabApp::own_result_files`: the mapping lesson's map as YAML and PGM,
+/// the pose-graph lesson's graph as g2o), for the browser check that drops them
+/// back on the page; `[]` when the app is not running.
+#[wasm_bindgen]
+pub fn slamlab_test_own_files() -> String {
+    RUNNER.with(|cell| {
+        let runner = cell.borrow();
+        let Some(runner) = runner.as_ref().filter(|r| !r.has_panicked()) else {
+            return "[]".to_owned();
+        };
+        match runner.app_mut::<WebApp>() {
+            Some(app) => serde_json::Value::Array(
+                app.inner
+                    .own_result_files()
+                    .into_iter()
+                    .map(|(name, bytes)| serde_json::json!({ "name": name, "bytes": bytes }))
+                    .collect(),
+            )
+            .to_string(),
+            None => "[]".to_owned(),
         }
     })
 }
@@ -289,6 +371,15 @@ impl eframe::App for WebApp {
     }
 
     fn ui(&mut self, ui: &mut egui::Ui, frame: &mut eframe::Frame) {
+        LESSON_ID.with(|l| {
+            let id = self.inner.lesson_id();
+            if *l.borrow() != id {
+                *l.borrow_mut() = id.to_owned();
+            }
+        });
+        for (name, size) in REFUSED.with(|r| std::mem::take(&mut *r.borrow_mut())) {
+            self.inner.refuse_dropped(&name, size);
+        }
         self.inner.ui(ui, frame);
         if let Some(query) = self.inner.take_address_change() {
             replace_address(&query);

@@ -17,7 +17,7 @@ fn assignment_arg() -> Arg {
     Arg::new("assignment")
         .required(true)
         .value_name("ASSIGNMENT")
-        .help("a built-in assignment (ekf-slam, mcl, pose-graph, grid-mapping, icp, two-view) or an assignment JSON file")
+        .help("a built-in assignment (ekf-slam, mcl, pose-graph, grid-mapping, icp, two-view, fusion) or an assignment JSON file")
 }
 
 /// The `export-inputs` subcommand.

@@ -247,8 +247,9 @@ fn python_with_numpy(dir: &Path) -> Option<PathBuf> {
 
 /// The starter code of the built-in assignments runs, writes an estimate
 /// `slamlab grade` reads, and scores exactly what the library (the page's grader)
-/// computes: dead reckoning, raw odometry, a graph's initial guess and a
-/// two-view pose without rotation, straight ahead, failing.
+/// computes: dead reckoning, raw odometry, a graph's initial guess, a
+/// two-view pose without rotation, straight ahead, and the fusion drive's
+/// dead reckoning failing.
 #[test]
 fn the_starter_code_writes_an_estimate_that_grades_as_in_the_page() {
     let dir = scratch("starter");
@@ -269,6 +270,7 @@ fn the_starter_code_writes_an_estimate_that_grades_as_in_the_page() {
         ("grid-mapping", "all free", None, "map.yaml"),
         ("icp", "odometry", None, "pose.txt"),
         ("two-view", "naive", None, "pose.txt"),
+        ("fusion", "dead-reckoning", None, "estimate.tum"),
     ] {
         let out = dir.join(format!("{name}-{}-{file}", extra.is_some()));
         let (ok, _, stderr) = slamlab(&[

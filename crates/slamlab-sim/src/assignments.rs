@@ -11,7 +11,8 @@ use crate::coursework::{self, Assignment, CourseworkError, Prepared, TaskRunner}
 /// The runners of every kind of task that has one: landmark SLAM (the landmark
 /// world), localization (the kidnap lesson's Monte Carlo localization),
 /// pose-graph optimization (the pose-graph lesson), grid mapping with known
-/// poses and scan matching (the mapping lesson).
+/// poses and scan matching (the mapping lesson), two-view geometry (the
+/// visual-odometry lesson), sensor fusion (the fusion lesson).
 pub const RUNNERS: &[TaskRunner] = &[
     coursework::landmarks::RUNNER,
     crate::kidnap::assignment::RUNNER,
@@ -19,10 +20,11 @@ pub const RUNNERS: &[TaskRunner] = &[
     crate::mapping::assignment::RUNNER,
     crate::mapping::icp_assignment::RUNNER,
     crate::visual_odometry::assignment::RUNNER,
+    crate::fusion::assignment::RUNNER,
 ];
 
 /// The built-in assignment `name` (`ekf-slam`, `mcl`, `pose-graph`,
-/// `grid-mapping`, `icp`, `two-view`).
+/// `grid-mapping`, `icp`, `two-view`, `fusion`).
 pub fn builtin(name: &str) -> Result<Assignment, CourseworkError> {
     coursework::builtin(name, RUNNERS)
 }

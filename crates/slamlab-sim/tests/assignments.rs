@@ -54,7 +54,8 @@ fn the_built_in_assignments_read_and_name_their_lessons() {
             "pose-graph",
             "grid-mapping",
             "icp",
-            "two-view"
+            "two-view",
+            "fusion"
         ]
     );
     let ekf = builtin("ekf-slam").unwrap();
@@ -109,7 +110,14 @@ fn raw_odometry_fails_mcl_and_the_reference_mcl_passes() {
 
 #[test]
 fn a_student_always_gets_the_same_bytes_and_two_students_different_ones() {
-    for name in ["ekf-slam", "mcl", "pose-graph", "grid-mapping", "icp"] {
+    for name in [
+        "ekf-slam",
+        "mcl",
+        "pose-graph",
+        "grid-mapping",
+        "icp",
+        "fusion",
+    ] {
         let a = builtin(name).unwrap();
         let ada = prepare(&a, "ada@uni.edu").unwrap();
         let again = prepare(&a, " ADA@uni.edu").unwrap();
@@ -351,7 +359,7 @@ fn assignment_files_are_refused_with_what_to_fix() {
         ),
         (
             r#""lesson": "landmark-slam""#,
-            r#""lesson": "fusion""#,
+            r#""lesson": "cartographer""#,
             "has no assignments",
         ),
         (r#""id": "ekf-slam""#, r#""id": "hw 3""#, "id"),
@@ -761,4 +769,277 @@ fn measure_the_icp_references_over_sixty_students() {
         sorted(3),
         passes(5)
     );
+}
+
+/// A fusion variant's reference `name`, written as a TUM file.
+fn fusion_reference(p: &Prepared, name: &str) -> Vec<u8> {
+    reference_tum(p, name)
+}
+
+/// The numbers docs/assignments.md gives for `fusion`: the reference EKF's and
+/// dead reckoning's ATE RMSE and largest error over 60 students, and every
+/// fusion mode's (the reference's mode is the assignment's first, absolute).
+/// `cargo test -p slamlab-sim --release --test assignments -- --ignored
+/// --nocapture measure_the_fusion`.
+#[test]
+#[ignore = "a measurement for the docs (60 students)"]
+fn measure_the_fusion_references_over_sixty_students() {
+    use slamlab_sim::fusion::assignment::FusionRun;
+    use slamlab_sim::fusion::{FusionMode, ModeRun};
+    use slamlab_sim::metrics::evaluate;
+    let a = builtin("fusion").unwrap();
+    let mut rows = Vec::new();
+    let mut modes: Vec<[f64; 4]> = Vec::new();
+    let mut slam_held: Vec<[f64; 2]> = Vec::new();
+    for k in 0..60 {
+        let p = prepare(&a, &format!("student{k}@uni.edu")).unwrap();
+        let g = p
+            .grade("ref.tum", &fusion_reference(&p, "ekf-absolute"))
+            .unwrap();
+        let n = p
+            .grade("naive.tum", &fusion_reference(&p, "dead-reckoning"))
+            .unwrap();
+        rows.push([
+            g.criteria[0].value.unwrap(),
+            g.criteria[1].value.unwrap(),
+            n.criteria[0].value.unwrap(),
+            n.criteria[1].value.unwrap(),
+            f64::from(u8::from(g.pass)),
+            f64::from(u8::from(n.pass)),
+        ]);
+        // Every mode's ATE RMSE on the same drive.
+        let (lesson, _) = apply_params::<slamlab_sim::fusion::params::FusionLessonScenario>(&a);
+        let mut lesson = lesson;
+        lesson.scenario.seed = p.variant.seed;
+        let run = FusionRun::simulate(&lesson, p.steps).unwrap();
+        let mut row = [0.0; 4];
+        for (i, mode) in FusionMode::ALL.into_iter().enumerate() {
+            let mut scenario = run.lesson.scenario.clone();
+            scenario.output_rate = 10.0;
+            let mut r = ModeRun::new(&scenario, mode).unwrap();
+            r.run_to_end(&run.log);
+            let mut t = slamlab_sim::metrics::Trajectory::default();
+            for s in r.samples() {
+                t.push(s.t, s.estimate, None);
+            }
+            row[i] = evaluate(
+                &run.truth,
+                &t,
+                &slamlab_sim::coursework::grade::trajectory_settings(&a),
+            )
+            .unwrap()
+            .ape
+            .translation
+            .rmse;
+        }
+        // The SLAM poses alone, each held until the next.
+        let slam = run.slam_rows();
+        let mut held = slamlab_sim::metrics::Trajectory::default();
+        for &t in run.truth.stamps() {
+            let k = slam.partition_point(|(s, _)| *s <= t + 1e-9).max(1) - 1;
+            let v = &slam[k].1;
+            held.push(t, Pose2::new(v[0], v[1], v[2]), None);
+        }
+        let e = evaluate(
+            &run.truth,
+            &held,
+            &slamlab_sim::coursework::grade::trajectory_settings(&a),
+        )
+        .unwrap();
+        slam_held.push([e.ape.translation.rmse, e.ape.translation.max]);
+        modes.push(row);
+    }
+    let sorted = |v: Vec<f64>| {
+        let mut v = v;
+        v.sort_by(f64::total_cmp);
+        (v[0], v[v.len() / 2], v[v.len() - 1])
+    };
+    let col = |c: usize| sorted(rows.iter().map(|r| r[c]).collect());
+    let passes = |c: usize| rows.iter().filter(|r| r[c] > 0.0).count();
+    eprintln!(
+        "fusion: ekf-absolute ATE RMSE {:.4?} m, max {:.4?} m, passes {}/60; dead reckoning ATE RMSE {:.3?} m, max {:.3?} m, passes {}/60",
+        col(0),
+        col(1),
+        passes(4),
+        col(2),
+        col(3),
+        passes(5)
+    );
+    eprintln!(
+        "  the SLAM poses held: ATE RMSE {:.4?} m, max {:.4?} m",
+        sorted(slam_held.iter().map(|r| r[0]).collect()),
+        sorted(slam_held.iter().map(|r| r[1]).collect())
+    );
+    for (i, mode) in FusionMode::ALL.into_iter().enumerate() {
+        eprintln!(
+            "  mode {}: ATE RMSE {:.4?} m",
+            mode.name(),
+            sorted(modes.iter().map(|r| r[i]).collect())
+        );
+    }
+}
+
+/// Every fusion student's drive, graded: the reference EKF (the lesson's,
+/// `_differential`) passes with every point, dead reckoning (what the starter
+/// writes) fails, and the references' values are the numbers beside the grade.
+#[test]
+fn dead_reckoning_fails_fusion_and_the_reference_ekf_passes() {
+    let a = builtin("fusion").unwrap();
+    assert_eq!((a.lesson.as_str(), a.pass_score()), ("fusion", 70.0));
+    for student in STUDENTS {
+        let p = prepare(&a, student).unwrap();
+        let ekf = p
+            .grade("ekf.tum", &reference_tum(&p, "ekf-absolute"))
+            .unwrap();
+        let dr = p
+            .grade("dr.tum", &reference_tum(&p, "dead-reckoning"))
+            .unwrap();
+        assert!(ekf.pass && ekf.score == 100.0, "{student}: {ekf:#?}");
+        assert!(!dr.pass && !dr.criteria[0].pass, "{student}: {dr:#?}");
+        assert_eq!(
+            ekf.criteria[0].references[0].value, ekf.criteria[0].value,
+            "{student}"
+        );
+        assert_eq!(ekf.criteria[0].references[0].name, "ekf-absolute");
+        assert_eq!(dr.criteria[0].references[1].value, dr.criteria[0].value);
+        // One pose every 0.1 s from 0 to the end of the drive.
+        let truth = p.truth();
+        assert_eq!(truth.len() as u64, p.steps + 1, "{student}");
+        assert_eq!(truth.span(), Some((0.0, p.steps as f64 / 10.0)));
+        // The answers' truth scores zero.
+        let files = p.input_files(true);
+        let graded = p
+            .grade("truth.tum", files.get("answers/truth.tum").unwrap())
+            .unwrap();
+        assert!(graded.criteria[0].value.unwrap() < 1e-6, "{graded:#?}");
+    }
+}
+
+/// The fusion CSVs read back to the very readings the reference filter fused,
+/// bit for bit, with the header naming the time first and every unit.
+#[test]
+fn the_fusion_files_read_back_to_the_drives_readings() {
+    use slamlab_core::kalman::fusion::Reading;
+    use slamlab_sim::fusion::{IMU, ODOMETRY, SLAM};
+    let a = builtin("fusion").unwrap();
+    let p = prepare(&a, "ada@uni.edu").unwrap();
+    let (lesson, _) = apply_params::<slamlab_sim::fusion::params::FusionLessonScenario>(&a);
+    let mut lesson = lesson;
+    lesson.scenario.seed = p.variant.seed;
+    let run = slamlab_sim::fusion::assignment::FusionRun::simulate(&lesson, p.steps).unwrap();
+    assert_eq!(run.truth.poses(), p.truth().poses());
+    for (file, header, sensor) in [
+        ("odometry.csv", "t_s,v_m_per_s,w_rad_per_s", ODOMETRY),
+        (
+            "imu.csv",
+            "t_s,gyro_z_rad_per_s,accel_x_m_per_s2,accel_y_m_per_s2",
+            IMU,
+        ),
+        ("slam_pose.csv", "t_s,x_m,y_m,theta_rad", SLAM),
+    ] {
+        let text = text(&p, file);
+        let mut lines = text.lines();
+        assert_eq!(lines.next(), Some(header), "{file}");
+        let rows: Vec<Vec<f64>> = lines.map(|l| numbers(l, ',')).collect();
+        let readings: Vec<Vec<f64>> = run
+            .log
+            .measurements
+            .iter()
+            .filter(|m| m.measurement.sensor == sensor)
+            .map(|m| {
+                let mut row = vec![m.measurement.stamp];
+                match m.measurement.reading {
+                    Reading::Twist { twist, .. } => row.extend([twist[0], twist[2]]),
+                    Reading::Imu { values, .. } => row.extend(values.iter()),
+                    Reading::Pose { pose, .. } => row.extend([pose.x, pose.y, pose.theta]),
+                }
+                row
+            })
+            .collect();
+        assert_eq!(rows.len(), readings.len(), "{file}");
+        let bits = |r: &[Vec<f64>]| -> Vec<Vec<u64>> {
+            r.iter()
+                .map(|v| v.iter().map(|x| x.to_bits()).collect())
+                .collect()
+        };
+        assert_eq!(bits(&rows), bits(&readings), "{file}");
+    }
+    // 50 Hz odometry, 100 Hz IMU, 1 Hz SLAM over the drive.
+    let seconds = p.steps as f64 / 10.0;
+    for (file, rate) in [
+        ("odometry.csv", 50.0),
+        ("imu.csv", 100.0),
+        ("slam_pose.csv", 1.0),
+    ] {
+        let rows = text(&p, file).lines().count() - 1;
+        let expected = (seconds * rate + 1e-6).floor() + 1.0;
+        assert!(
+            (rows as f64 - expected).abs() <= 1.0,
+            "{file}: {rows} rows, {expected} expected"
+        );
+    }
+    let readme = text(&p, "README.txt");
+    for needle in [
+        "odometry.csv",
+        "imu.csv",
+        "slam_pose.csv",
+        "world frame",
+        "rad/s",
+    ] {
+        assert!(readme.contains(needle), "{needle}: {readme}");
+    }
+    // The dead reckoning the grade shows is the odometry integrated from the file.
+    let odo: Vec<(f64, Vec<f64>)> = text(&p, "odometry.csv")
+        .lines()
+        .skip(1)
+        .map(|l| {
+            let v = numbers(l, ',');
+            (v[0], v[1..].to_vec())
+        })
+        .collect();
+    let dr = slamlab_sim::fusion::assignment::dead_reckoning(&odo, p.truth().stamps());
+    assert_eq!(
+        write_tum(&dr).into_bytes(),
+        reference_tum(&p, "dead-reckoning")
+    );
+}
+
+/// A fusion assignment's parameters the drive cannot honour are refused with
+/// the reason.
+#[test]
+fn fusion_assignment_files_are_refused_with_what_to_fix() {
+    let base = coursework_json("fusion");
+    for (params, steps, needle) in [
+        (r#"{"duration": 100}"#, 2400, "duration"),
+        (r#"{"odom": 0}"#, 2400, "odom"),
+        (r#"{"slam-latency": 0.5}"#, 2400, "slam-latency"),
+        (r#"{"slam-source": "landmark-ekf"}"#, 2400, "slam-source"),
+        (r#"{"imu-rate": "fast"}"#, 2400, "imu-rate"),
+        ("{}", 50, "scenario.steps"),
+    ] {
+        let text = base
+            .replace(
+                r#""params": {
+      "modes": "absolute,differential"
+    }"#,
+                &format!(r#""params": {params}"#),
+            )
+            .replace(r#""steps": 2400"#, &format!(r#""steps": {steps}"#));
+        let err = assignments::read("hw.json", text.as_bytes())
+            .unwrap_err()
+            .to_string();
+        assert!(
+            err.contains(needle) && err.contains("hw.json"),
+            "{params}: {err}"
+        );
+    }
+    // The lesson's own parameters are taken: a faster, noisier drive.
+    let text = base.replace(
+        r#""modes": "absolute,differential""#,
+        r#""max-speed": 0.2, "slam-position-noise": 0.1, "imu": 0"#,
+    );
+    let a = assignments::read("hw.json", text.as_bytes()).unwrap();
+    let p = prepare(&a, "ada@uni.edu").unwrap();
+    let files = p.input_files(false);
+    assert!(files.get("imu.csv").is_none() && files.get("slam_pose.csv").is_some());
 }

@@ -26,6 +26,47 @@ use slamlab_sim::fusion::{FusionMode, IMU, ODOMETRY, SLAM};
 use slamlab_sim::params;
 use slamlab_sim::stepper::{CheckpointPolicy, Simulation, Stepper};
 
+/// The truth and each mode's estimate at the output times the runs have
+/// sampled, and the dead-reckoned odometry up to the run's time.
+fn trajectories(sim: &FusionSim) -> Vec<slamlab_sim::metrics::NamedTrajectory> {
+    use slamlab_sim::metrics::{NamedTrajectory, Trajectory, TrajectoryRole};
+    let mut out = Vec::new();
+    if let Some(first) = sim.runs().first() {
+        let mut truth = Trajectory::default();
+        for s in first.samples() {
+            truth.push(s.t, s.truth, None);
+        }
+        out.push(NamedTrajectory::new("truth", TrajectoryRole::Truth, truth));
+    }
+    let now = sim.now();
+    let mut odometry = Trajectory::default();
+    for (t, pose) in sim
+        .log()
+        .odometry_path
+        .iter()
+        .take_while(|(t, _)| *t <= now + 1e-9)
+    {
+        odometry.push(*t, *pose, None);
+    }
+    out.push(NamedTrajectory::new(
+        "odometry",
+        TrajectoryRole::Odometry,
+        odometry,
+    ));
+    for run in sim.runs() {
+        let mut estimate = Trajectory::default();
+        for s in run.samples() {
+            estimate.push(s.t, s.estimate, None);
+        }
+        out.push(NamedTrajectory::new(
+            run.mode().name(),
+            TrajectoryRole::Estimate,
+            estimate,
+        ));
+    }
+    out
+}
+
 /// The lesson's id in URLs and the menu.
 pub const LESSON_ID: &str = "fusion";
 
@@ -470,6 +511,14 @@ impl Lesson for FusionLesson {
 
     fn plot_series(&self) -> Vec<crate::export::PlotSeries> {
         plots::series(self.stepper.sim())
+    }
+
+    /// The truth and each mode's fused pose at the output times so far, and
+    /// the raw odometry integrated alone up to now: what File → Export
+    /// trajectories writes and a dropped estimate (a fusion assignment's
+    /// hand-in) is scored beside.
+    fn trajectories(&self) -> Vec<slamlab_sim::metrics::NamedTrajectory> {
+        trajectories(self.sim())
     }
 
     fn subtitle(&self) -> String {

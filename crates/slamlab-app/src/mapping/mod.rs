@@ -35,6 +35,13 @@ use std::sync::Arc;
 /// The lesson's id in URLs and the menu.
 pub const LESSON_ID: &str = "mapping";
 
+/// A cell of the built map is occupied in its ROS map above this probability
+/// (map_server's `occupied_thresh`).
+const ROS_OCCUPIED_ABOVE: f64 = 0.65;
+/// A cell of the built map is free in its ROS map below this probability
+/// (map_server's `free_thresh`).
+const ROS_FREE_BELOW: f64 = 0.196;
+
 /// The parameters the panel shows, in order (the rest are in the URL and CLI).
 const PANEL_PARAMS: &[&str] = &[
     "seed",
@@ -609,38 +616,53 @@ impl MappingLesson {
             .timed(&mut self.session, |s| s.stepper_mut().step_tick());
     }
 
-    /// The built map as a ROS map (YAML and PGM), for download.
-    fn export_map(&mut self) {
-        let Some(grid) = self.session.sim().grid().to_occupancy_grid(0.65, 0.196) else {
-            self.frame.note = Some("The map is empty: nothing to export yet".to_owned());
-            return;
-        };
-        match slamlab_sim::io::ros_map::export_map(
+    /// The built map as a ROS map: three states, occupied above 0.65 and free
+    /// below 0.196 (map_server's thresholds); `None` while it is empty. What
+    /// "Export map" writes and what a student's map is scored beside.
+    pub fn built_ros_map(&self) -> Option<slamlab_core::grid::OccupancyGrid> {
+        self.session
+            .sim()
+            .grid()
+            .to_occupancy_grid(ROS_OCCUPIED_ABOVE, ROS_FREE_BELOW)
+    }
+
+    /// The built map as ROS map files (`slamlab-map.yaml` and `slamlab-map.pgm`),
+    /// as "Export map" saves them.
+    pub fn map_files(&self) -> Result<Vec<crate::export::ExportFile>, String> {
+        let grid = self
+            .built_ros_map()
+            .ok_or("The map is empty: nothing to export yet")?;
+        let (yaml, image) = slamlab_sim::io::ros_map::export_map(
             &grid,
             "slamlab-map.pgm",
             slamlab_sim::io::ros_map::ImageFormat::Pgm,
-        ) {
-            Ok((yaml, image)) => {
-                self.frame.request = Some(LessonRequest::Save(vec![
-                    crate::export::ExportFile {
-                        name: "slamlab-map.yaml".to_owned(),
-                        mime: "text/yaml",
-                        bytes: yaml.into_bytes(),
-                    },
-                    crate::export::ExportFile {
-                        name: "slamlab-map.pgm".to_owned(),
-                        mime: "image/x-portable-graymap",
-                        bytes: image,
-                    },
-                ]));
-            }
-            Err(why) => self.frame.note = Some(format!("Could not export the map: {why}")),
+        )
+        .map_err(|why| format!("Could not export the map: {why}"))?;
+        Ok(vec![
+            crate::export::ExportFile {
+                name: "slamlab-map.yaml".to_owned(),
+                mime: "text/yaml",
+                bytes: yaml.into_bytes(),
+            },
+            crate::export::ExportFile {
+                name: "slamlab-map.pgm".to_owned(),
+                mime: "image/x-portable-graymap",
+                bytes: image,
+            },
+        ])
+    }
+
+    /// The built map as a ROS map (YAML and PGM), for download.
+    fn export_map(&mut self) {
+        match self.map_files() {
+            Ok(files) => self.frame.request = Some(LessonRequest::Save(files)),
+            Err(why) => self.frame.note = Some(why),
         }
     }
 
     /// Opens the Monte Carlo localization lesson on the map built so far.
     fn localize_in_map(&mut self) {
-        let Some(grid) = self.session.sim().grid().to_occupancy_grid(0.65, 0.196) else {
+        let Some(grid) = self.built_ros_map() else {
             self.frame.note = Some("The map is empty: map some scans first".to_owned());
             return;
         };
@@ -917,6 +939,25 @@ impl Lesson for MappingLesson {
 
     fn trajectories(&self) -> Vec<slamlab_sim::metrics::NamedTrajectory> {
         slamlab_sim::mapping::export::trajectories(&self.session)
+    }
+
+    fn scores_maps(&self) -> bool {
+        self.input.true_map.is_some()
+    }
+
+    fn occupancy_maps(&self) -> Vec<(String, Arc<slamlab_core::grid::OccupancyGrid>)> {
+        let Some(truth) = &self.input.true_map else {
+            return Vec::new();
+        };
+        let mut maps = vec![("truth".to_owned(), truth.clone())];
+        if let Some(built) = self.built_ros_map() {
+            // Beside its path's row, which has the estimator's name.
+            maps.push((
+                format!("{} (map)", self.session.sim().source().name()),
+                Arc::new(built),
+            ));
+        }
+        maps
     }
 
     fn share_pairs(&self) -> Vec<(String, String)> {

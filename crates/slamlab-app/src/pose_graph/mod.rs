@@ -8,6 +8,7 @@
 mod explain;
 mod map;
 mod plots;
+pub mod solutions;
 
 use crate::lesson::{self, Lesson, LessonFrame, LessonStart, StoredSettings};
 use crate::time_control::{FRAME_BUDGET_MS, StepControls, TimeAction, TimeControl, TimeInfo};
@@ -145,6 +146,8 @@ pub struct PoseGraphLesson {
     comparison: Option<[KernelRun; 2]>,
     inbox: DropInbox,
     picker: FilePicker,
+    /// Students' optimized graphs of the problem on screen.
+    solutions: solutions::Solutions,
 }
 
 /// Opens the lesson from the URL's pairs, with what it stored last time.
@@ -208,6 +211,7 @@ impl PoseGraphLesson {
             comparison: None,
             inbox: DropInbox::default(),
             picker: FilePicker::default(),
+            solutions: solutions::Solutions::default(),
         })
     }
 
@@ -305,6 +309,52 @@ impl PoseGraphLesson {
     pub fn open_example(&mut self) {
         self.loaded = None;
         self.reset();
+    }
+
+    /// Students' optimized graphs of the problem on screen.
+    pub fn solutions(&self) -> &solutions::Solutions {
+        &self.solutions
+    }
+
+    /// Students' optimized graphs, to show, hide or remove them.
+    pub fn solutions_mut(&mut self) -> &mut solutions::Solutions {
+        &mut self.solutions
+    }
+
+    /// A graph file dropped or opened: a student's solution when its vertices
+    /// and edges are the graph on screen's (scored in "Your solutions"),
+    /// otherwise a new problem (opened and optimized, as before). The note says
+    /// which it did and why.
+    pub fn open_graph_file(&mut self, name: &str, bytes: Vec<u8>) {
+        let parsed = std::str::from_utf8(&bytes)
+            .ok()
+            .filter(|_| bytes.len() <= MAX_FILE_BYTES)
+            .and_then(|text| slamlab_sim::io::graph::read_graph(text).ok());
+        let why_not = match parsed {
+            Some(file) => match self.solutions.try_add(&self.session, name, &file) {
+                Ok(said) => {
+                    self.frame.note = Some(said);
+                    return;
+                }
+                Err(why) => why,
+            },
+            // Unreadable: opening it says why, with its line.
+            None => String::new(),
+        };
+        let was = self.session.source().to_owned();
+        self.load_file(name, bytes);
+        if self.session.source() == name && !why_not.is_empty() {
+            let dropped = self.solutions.clear();
+            let note = self.frame.note.take().unwrap_or_default();
+            self.frame.note = Some(format!(
+                "{note}. Opened as a new problem, not scored as a solution of {was}: {why_not}{}",
+                if dropped > 0 {
+                    format!(" ({dropped} solution(s) of {was} set aside)")
+                } else {
+                    String::new()
+                }
+            ));
+        }
     }
 
     /// Opens a pose-graph file's bytes and starts optimizing it. On any problem the
@@ -496,7 +546,7 @@ impl PoseGraphLesson {
         }
         if let Some((name, bytes)) = picked {
             match bytes {
-                Ok(bytes) => self.load_file(&name, bytes),
+                Ok(bytes) => self.open_graph_file(&name, bytes),
                 Err(why) => {
                     self.frame.note = Some(format!(
                         "Could not read {name}: {why}; the graph on screen stays"
@@ -631,6 +681,8 @@ impl crate::widgets::layout::LessonPanels for PoseGraphLesson {
             Some(map::MapRequest::Drop(i)) => self.finish_drag(i),
             None => {}
         }
+        self.solutions.draw(ui.ctx());
+        self.solutions.window_ui(ui.ctx(), &self.session);
     }
 }
 
@@ -710,6 +762,7 @@ impl Lesson for PoseGraphLesson {
 
     fn read_input(&mut self, ctx: &egui::Context) {
         self.read_files(ctx);
+        self.solutions.refresh(&self.session);
     }
 
     fn advance(&mut self, dt: f64) {
@@ -780,6 +833,7 @@ impl Lesson for PoseGraphLesson {
             "can_step_back": self.session.can_step_back(),
             "h_blocks": self.patterns.h_blocks,
             "step_back_undoes": self.session.step_back_undoes(),
+            "solutions": self.solutions.state(),
         })
     }
 }

@@ -1,13 +1,16 @@
 //! A student's own estimates, brought into any lesson: a TUM or CSV trajectory
-//! (with or without covariances), a landmark CSV or (in the two-view lesson) a
-//! relative pose of two views, dropped on the page, opened
+//! (with or without covariances), a landmark CSV, (in the two-view lesson) a
+//! relative pose of two views or (in a lesson with a true occupancy map) a ROS
+//! map, its YAML with its PGM or PNG image, dropped on the page, opened
 //! from the File menu or named by `estimate=` in the URL. Each becomes one more
 //! estimator of the lesson, drawn on its map in a colour of its own up to the time
 //! bar's time, and scored against the lesson's truth with the same metrics as
 //! the lesson's own estimators (`slamlab_sim::metrics`, equal to evo), in the
 //! "Your estimates" window: ATE and RPE, NEES where covariances were given, and
 //! the position error over time beside the built-in estimators'; for a relative
-//! pose, the rotation error and the angle between the translation directions.
+//! pose, the rotation error and the angle between the translation directions;
+//! for a map, the mapping lesson's agreement and coverage against the true map
+//! (`grid::occupancy_agreement`, `grid::occupancy_coverage`).
 //!
 //! Written once for every lesson: a lesson only says what its trajectories are
 //! ([`crate::lesson::Lesson::trajectories`]); the frame holds the estimates, the
@@ -16,12 +19,14 @@
 use crate::palette;
 use egui::{Color32, Pos2, Stroke};
 use slamlab_core::Pose2;
+use slamlab_core::grid::{Cell, OccupancyGrid};
 use slamlab_core::vision::RelativePose;
 use slamlab_sim::io::relative_pose;
 use slamlab_sim::io::trajectory::{self, LandmarkRow, TrajectoryFormat};
 use slamlab_sim::metrics::{
     Alignment, EvaluationSettings, NamedTrajectory, Trajectory, TrajectoryRole, evaluate,
 };
+use std::sync::Arc;
 
 pub use crate::query::MAX_ESTIMATES;
 
@@ -44,6 +49,8 @@ pub enum EstimateContent {
     Landmarks(Vec<LandmarkRow>),
     /// A relative pose of two views (`X_b = R X_a + t`).
     RelativePose(RelativePose),
+    /// An occupancy map (a ROS map: YAML and image).
+    Map(Arc<OccupancyGrid>),
 }
 
 /// One estimate a student brought in.
@@ -87,6 +94,12 @@ pub struct EstimateScore {
     /// For a relative pose: the angle between the estimated and the true
     /// direction of translation, degrees.
     pub direction_error_deg: Option<f64>,
+    /// For a map: the share of the true map's known cells it classifies as
+    /// the truth does, over the cells it knows (`grid::occupancy_agreement`).
+    pub map_agreement: Option<f64>,
+    /// For a map: the share of the true map's known cells it knows
+    /// (`grid::occupancy_coverage`, as the grid-mapping assignment grades it).
+    pub map_coverage: Option<f64>,
     /// Why there is no score, or what to know about it.
     pub note: Option<String>,
     /// Position error over time `[t, e]`, for the plot.
@@ -108,6 +121,71 @@ pub struct Estimates {
     pub align: bool,
     scores: Vec<EstimateScore>,
     scored: Option<(u64, u64, bool)>,
+    /// The maps' overlays on the GPU, by estimate name and version.
+    textures: MapTextures,
+}
+
+/// The maps' overlays on the GPU: (estimate name, estimates version, texture).
+#[derive(Default)]
+struct MapTextures(Vec<(String, u64, egui::TextureHandle)>);
+
+impl std::fmt::Debug for MapTextures {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.debug_list()
+            .entries(self.0.iter().map(|(name, v, _)| (name, v)))
+            .finish()
+    }
+}
+
+/// Is this file part of a ROS map (its YAML or its PGM or PNG image)?
+pub fn is_map_file(name: &str) -> bool {
+    let lower = name.to_ascii_lowercase();
+    [".yaml", ".yml", ".pgm", ".png"]
+        .iter()
+        .any(|e| lower.ends_with(e))
+}
+
+/// Reads a ROS map from the files dropped or opened together: the YAML and the
+/// image it names (`image:`, matched by file name). Returns the YAML's name and
+/// the grid; a refusal names the file and why.
+pub fn read_map_files(files: &[(String, Vec<u8>)]) -> Result<(String, OccupancyGrid), String> {
+    use slamlab_sim::io::ros_map::{MAX_YAML_BYTES, load_map, parse_map_yaml};
+    let lower = |n: &str| n.to_ascii_lowercase();
+    let yaml = files
+        .iter()
+        .find(|(n, _)| lower(n).ends_with(".yaml") || lower(n).ends_with(".yml"));
+    let Some((yaml_name, yaml_bytes)) = yaml else {
+        let names: Vec<&str> = files.iter().map(|(n, _)| n.as_str()).collect();
+        return Err(format!(
+            "{}: a map needs its YAML (resolution, origin) with the image: drop or open both together",
+            names.join(", ")
+        ));
+    };
+    if yaml_bytes.len() > MAX_YAML_BYTES {
+        return Err(format!(
+            "{yaml_name} has {} bytes, more than the {MAX_YAML_BYTES} bytes a map's YAML may have",
+            yaml_bytes.len()
+        ));
+    }
+    let text = std::str::from_utf8(yaml_bytes).map_err(|e| {
+        format!(
+            "{yaml_name} is not text (byte {} is not UTF-8)",
+            e.valid_up_to()
+        )
+    })?;
+    let parsed = parse_map_yaml(text).map_err(|e| format!("{yaml_name}: {e}"))?;
+    let wanted = parsed.image.rsplit('/').next().unwrap_or(&parsed.image);
+    let (_, image) = files
+        .iter()
+        .find(|(n, _)| n.rsplit('/').next() == Some(wanted))
+        .ok_or_else(|| {
+            format!(
+                "{yaml_name} names the image '{}': drop or open it together with the YAML",
+                parsed.image
+            )
+        })?;
+    let (grid, _) = load_map(text, image).map_err(|e| format!("{yaml_name}: {e}"))?;
+    Ok((yaml_name.clone(), grid))
 }
 
 /// Is this file a student's estimate rather than a lesson's input (a map, a log,
@@ -164,12 +242,7 @@ impl Estimates {
                 trajectory::read_trajectory(name, bytes).map_err(|e| format!("{name}: {e}"))?;
             (EstimateContent::Trajectory(file.trajectory), file.notices)
         };
-        let used: Vec<Color32> = self.items.iter().map(|e| e.color).collect();
-        let color = COLORS
-            .iter()
-            .copied()
-            .find(|c| !used.contains(c))
-            .unwrap_or(COLORS[self.items.len() % COLORS.len()]);
+        let color = self.free_color();
         let what = match &content {
             EstimateContent::Trajectory(t) => format!(
                 "{} poses{}",
@@ -182,6 +255,7 @@ impl Estimates {
             ),
             EstimateContent::Landmarks(rows) => format!("{} landmarks", rows.len()),
             EstimateContent::RelativePose(_) => "a relative pose of two views".to_owned(),
+            EstimateContent::Map(_) => "a map".to_owned(),
         };
         self.items.push(Estimate {
             name: name.to_owned(),
@@ -197,6 +271,53 @@ impl Estimates {
             message.push_str(&n);
         }
         Ok(message)
+    }
+
+    /// Reads a ROS map (its YAML and image, dropped or opened together) as one
+    /// more estimate, named after its YAML; returns what to tell the student.
+    /// Any resolution, origin and size is taken: it is scored where it covers
+    /// the true map, each true cell looked up at its centre (see
+    /// `grid::occupancy_agreement`). Drawn once asked for (*draw* in the window).
+    pub fn add_map(&mut self, files: &[(String, Vec<u8>)]) -> Result<String, String> {
+        for (name, bytes) in files {
+            trajectory::check_size(bytes.len() as u64).map_err(|e| format!("{name}: {e}"))?;
+        }
+        let (name, grid) = read_map_files(files)?;
+        if self.items.len() >= MAX_ESTIMATES {
+            return Err(format!(
+                "{name}: the lesson holds {MAX_ESTIMATES} estimates at most; remove one first"
+            ));
+        }
+        let (w, h, r) = (grid.width(), grid.height(), grid.resolution());
+        let color = self.free_color();
+        self.items.push(Estimate {
+            name: name.clone(),
+            color,
+            content: EstimateContent::Map(Arc::new(grid)),
+            visible: false,
+        });
+        self.version += 1;
+        self.open = true;
+        Ok(format!(
+            "Your map {name}: {w} x {h} cells of {r} m, scored against the true map (draw it from \"Your estimates\")"
+        ))
+    }
+
+    /// The first colour no estimate has.
+    fn free_color(&self) -> Color32 {
+        let used: Vec<Color32> = self.items.iter().map(|e| e.color).collect();
+        COLORS
+            .iter()
+            .copied()
+            .find(|c| !used.contains(c))
+            .unwrap_or(COLORS[self.items.len() % COLORS.len()])
+    }
+
+    /// Draws estimate `index` on the map or not.
+    pub fn set_visible(&mut self, index: usize, visible: bool) {
+        if let Some(e) = self.items.get_mut(index) {
+            e.visible = visible;
+        }
     }
 
     /// Removes estimate `index`.
@@ -238,6 +359,9 @@ pub struct LessonOutput {
     /// The true relative pose of the two views shown (`truth`) and the lesson's
     /// estimate of it.
     pub relative_poses: Vec<(String, RelativePose)>,
+    /// The true occupancy map (`truth`) and each estimator's map as a ROS map
+    /// (three states, as File → Export map writes it).
+    pub maps: Vec<(String, Arc<OccupancyGrid>)>,
 }
 
 /// A score with nothing in it yet.
@@ -254,6 +378,8 @@ fn empty_score(name: &str, dropped: bool, color: Color32) -> EstimateScore {
         landmark_rmse: None,
         rotation_error_deg: None,
         direction_error_deg: None,
+        map_agreement: None,
+        map_coverage: None,
         note: None,
         errors: Vec::new(),
         color,
@@ -285,6 +411,37 @@ fn score_relative_pose(
         None => {
             score.note =
                 Some("this lesson shows no pair of views with a true relative pose".to_owned());
+        }
+    }
+    score
+}
+
+/// A map scored against the true map with the mapping lesson's metric: the
+/// agreement over the cells it knows and the share of the true map it knows,
+/// each true free or occupied cell looked up at its centre in `map` (so a map
+/// of another resolution, origin or size is compared where it covers the
+/// truth; cells outside it are unknown).
+fn score_map(
+    name: &str,
+    dropped: bool,
+    color: Color32,
+    map: &OccupancyGrid,
+    truth: Option<&OccupancyGrid>,
+) -> EstimateScore {
+    let mut score = empty_score(name, dropped, color);
+    match truth {
+        Some(truth) => {
+            score.map_agreement = slamlab_sim::grid::occupancy_agreement(map, truth);
+            score.map_coverage = slamlab_sim::grid::occupancy_coverage(map, truth);
+            if score.map_agreement.is_none() {
+                score.note = Some(
+                    "the map knows none of the true map's cells (another place, or another origin?)"
+                        .to_owned(),
+                );
+            }
+        }
+        None => {
+            score.note = Some("this run has no true map to score a map against".to_owned());
         }
     }
     score
@@ -379,6 +536,27 @@ fn score_all(items: &[Estimate], lesson: &LessonOutput, align: bool) -> Vec<Esti
                 )
             }),
     );
+    let true_map = lesson
+        .maps
+        .iter()
+        .find(|(name, _)| name == "truth")
+        .map(|(_, m)| m.as_ref());
+    all.extend(
+        lesson
+            .maps
+            .iter()
+            .filter(|(name, _)| name != "truth")
+            .map(|(name, m)| {
+                let estimator = name.trim_end_matches(" (map)");
+                score_map(
+                    name,
+                    false,
+                    palette::estimator_color(estimator),
+                    m,
+                    true_map,
+                )
+            }),
+    );
     let true_landmarks = lesson.landmarks.iter().find(|(name, _)| name == "truth");
     for item in items {
         match &item.content {
@@ -394,6 +572,9 @@ fn score_all(items: &[Estimate], lesson: &LessonOutput, align: bool) -> Vec<Esti
             EstimateContent::RelativePose(p) => all.push(score_relative_pose(
                 &item.name, true, item.color, p, true_pose,
             )),
+            EstimateContent::Map(m) => {
+                all.push(score_map(&item.name, true, item.color, m, true_map));
+            }
             EstimateContent::Landmarks(rows) => {
                 let (rmse, note) = match true_landmarks {
                     Some((_, truth)) => {
@@ -435,17 +616,94 @@ fn up_to(t: &Trajectory, now: f64) -> usize {
     t.stamps().partition_point(|&s| s <= now + 1e-9)
 }
 
-/// Draws the visible trajectory estimates on the lesson's map, up to `now`:
-/// the path, the current pose with its 95 % ellipse and heading wedge when the
-/// file gave covariances; landmarks as crosses.
-pub fn map_overlay(ctx: &egui::Context, estimates: &Estimates, now: f64) {
+/// The image of a map's overlay: its occupied cells in `color`, its free cells
+/// a faint tint of it, unknown cells clear (row 0 at the top: the highest `j`).
+fn map_image(grid: &OccupancyGrid, color: Color32) -> egui::ColorImage {
+    let (w, h) = (grid.width(), grid.height());
+    let [r, g, b, _] = color.to_array();
+    let occupied = Color32::from_rgba_unmultiplied(r, g, b, 230);
+    let free = Color32::from_rgba_unmultiplied(r, g, b, 28);
+    let mut pixels = vec![Color32::TRANSPARENT; w * h];
+    for (k, cell) in grid.cells().iter().enumerate() {
+        let (i, j) = (k % w, k / w);
+        pixels[(h - 1 - j) * w + i] = match cell {
+            Cell::Occupied => occupied,
+            Cell::Free => free,
+            Cell::Unknown => Color32::TRANSPARENT,
+        };
+    }
+    egui::ColorImage::new([w, h], pixels)
+}
+
+/// Draws a map over the lesson's as a textured quad (its origin may be turned).
+fn draw_map(
+    painter: &egui::Painter,
+    t: &crate::widgets::map_canvas::MapTransform,
+    grid: &OccupancyGrid,
+    texture: egui::TextureId,
+) {
+    let (gw, gh) = grid.size_m();
+    let corner = |gx: f64, gy: f64| {
+        let (x, y) = grid.grid_frame_to_world(gx, gy);
+        t.xy(x, y)
+    };
+    let corners = [
+        (corner(0.0, gh), egui::pos2(0.0, 0.0)),
+        (corner(gw, gh), egui::pos2(1.0, 0.0)),
+        (corner(gw, 0.0), egui::pos2(1.0, 1.0)),
+        (corner(0.0, 0.0), egui::pos2(0.0, 1.0)),
+    ];
+    if corners
+        .iter()
+        .any(|(p, _)| !crate::widgets::map_canvas::finite(*p))
+    {
+        return;
+    }
+    let mut mesh = egui::Mesh::with_texture(texture);
+    for (pos, uv) in corners {
+        mesh.vertices.push(egui::epaint::Vertex {
+            pos,
+            uv,
+            color: Color32::WHITE,
+        });
+    }
+    mesh.indices.extend_from_slice(&[0, 1, 2, 0, 2, 3]);
+    painter.add(egui::Shape::mesh(mesh));
+}
+
+/// Draws the visible estimates on the lesson's map, up to `now`: a
+/// trajectory's path, the current pose with its 95 % ellipse and heading wedge
+/// when the file gave covariances; landmarks as crosses; a map's occupied
+/// cells in its colour (free cells faintly) over the lesson's map.
+pub fn map_overlay(ctx: &egui::Context, estimates: &mut Estimates, now: f64) {
     let Some(p) = crate::widgets::map_canvas::placement(ctx) else {
         return;
     };
     let painter = egui::Painter::new(ctx.clone(), p.layer, p.rect);
     let t = &p.transform;
+    let version = estimates.version;
+    estimates
+        .textures
+        .0
+        .retain(|(name, v, _)| *v == version && estimates.items.iter().any(|e| &e.name == name));
     for e in estimates.items.iter().filter(|e| e.visible) {
         match &e.content {
+            EstimateContent::Map(grid) => {
+                let texture = match estimates.textures.0.iter().find(|(n, _, _)| n == &e.name) {
+                    Some((_, _, handle)) => handle.id(),
+                    None => {
+                        let handle = ctx.load_texture(
+                            format!("estimate-map-{}", e.name),
+                            map_image(grid, e.color),
+                            egui::TextureOptions::NEAREST,
+                        );
+                        let id = handle.id();
+                        estimates.textures.0.push((e.name.clone(), version, handle));
+                        id
+                    }
+                };
+                draw_map(&painter, t, grid, texture);
+            }
             EstimateContent::Trajectory(traj) => {
                 let n = up_to(traj, now);
                 if n == 0 {
@@ -512,6 +770,7 @@ pub fn window_ui(ctx: &egui::Context, estimates: &mut Estimates, has_truth: bool
             .min(screen.height() - 40.0),
     );
     let mut remove = None;
+    let mut toggled = None;
     egui::Window::new("Your estimates")
         .open(&mut open)
         .default_size(size)
@@ -536,14 +795,23 @@ pub fn window_ui(ctx: &egui::Context, estimates: &mut Estimates, has_truth: bool
                     if let Some(note) = &s.note {
                         label.on_hover_text(note);
                     }
-                    if s.landmark_rmse.is_some() {
+                    if s.map_agreement.is_some() || s.map_coverage.is_some() {
+                        ui.label(format!("agree {}", fmt(s.map_agreement, 3))).on_hover_text(
+                            "The share of the true map's free and occupied cells this map classifies the same, over the cells it knows (the mapping lesson's map agreement, as a ROS map: occupied above 0.65, free below 0.196)",
+                        );
+                        ui.label(format!("cover {}", fmt(s.map_coverage, 3))).on_hover_text(
+                            "The share of the true map's free and occupied cells this map knows at all (as the grid-mapping assignment grades it)",
+                        );
+                        ui.label("");
+                        ui.label("");
+                    } else if s.landmark_rmse.is_some() {
                         ui.label(format!("landmarks {}", fmt(s.landmark_rmse, 3)));
                         ui.label("");
                         ui.label("");
                         ui.label("");
                     } else if s.rotation_error_deg.is_some() || s.direction_error_deg.is_some() {
                         ui.label(format!("R {}°", fmt(s.rotation_error_deg, 3)))
-                            .on_hover_text("The rotation error: the angle of R_trueᵀ R");
+                            .on_hover_text("The rotation error: the angle of R_true^T R");
                         ui.label(format!("t {}°", fmt(s.direction_error_deg, 2)))
                             .on_hover_text("The angle between the estimated and the true direction of translation (a monocular t has no length)");
                         ui.label("");
@@ -555,10 +823,18 @@ pub fn window_ui(ctx: &egui::Context, estimates: &mut Estimates, has_truth: bool
                         ui.label(fmt(s.anees, 2));
                     }
                     if s.dropped {
-                        if let Some(k) = estimates.items.iter().position(|e| e.name == s.name)
-                            && ui.small_button("Remove").on_hover_text("Remove this estimate").clicked()
-                        {
-                            remove = Some(k);
+                        if let Some(k) = estimates.items.iter().position(|e| e.name == s.name) {
+                            ui.horizontal(|ui| {
+                                let mut shown = estimates.items[k].visible;
+                                if ui.checkbox(&mut shown, "draw").on_hover_text("Draw this estimate on the lesson's map").changed() {
+                                    toggled = Some((k, shown));
+                                }
+                                if ui.small_button("Remove").on_hover_text("Remove this estimate").clicked() {
+                                    remove = Some(k);
+                                }
+                            });
+                        } else {
+                            ui.label("");
                         }
                     } else {
                         ui.label("");
@@ -567,7 +843,7 @@ pub fn window_ui(ctx: &egui::Context, estimates: &mut Estimates, has_truth: bool
                 }
             });
             if estimates.items.is_empty() {
-                ui.weak("Drop a trajectory (TUM t x y z qx qy qz qw, or CSV t,x,y,theta[,covariance]), a landmark CSV (id,x,y) or, in the two-view lesson, a relative pose (.txt: R row by row then t, or tx ty tz qx qy qz qw) on the page, or use File → Open your estimate. File → Export trajectories gives the lesson's own in these formats.");
+                ui.weak("Drop a trajectory (TUM t x y z qx qy qz qw, or CSV t,x,y,theta[,covariance]), a landmark CSV (id,x,y), in the two-view lesson a relative pose (.txt: R row by row then t, or tx ty tz qx qy qz qw), or in the mapping lesson a ROS map (its YAML with its image) on the page, or use File → Open your estimate. File → Export trajectories gives the lesson's own in these formats.");
             }
             let series: Vec<(String, Color32, Vec<[f64; 2]>)> = estimates
                 .scores
@@ -591,6 +867,9 @@ pub fn window_ui(ctx: &egui::Context, estimates: &mut Estimates, has_truth: bool
                     });
             }
         });
+    if let Some((k, shown)) = toggled {
+        estimates.set_visible(k, shown);
+    }
     if let Some(k) = remove {
         estimates.remove(k);
     }

@@ -19,6 +19,12 @@ pub struct Fetch {
 /// Largest file read, bytes (a map's image of 50 million cells fits).
 pub const MAX_FETCH_BYTES: usize = 64 << 20;
 
+/// Why a file of `size` bytes is refused unread: the one message of every
+/// size cap (a drop, the file picker, a file named in the URL).
+pub fn too_large(name: &str, size: u64, max_bytes: u64) -> String {
+    format!("{name} has {size} bytes, more than the {max_bytes} bytes SLAM Lab reads")
+}
+
 impl Fetch {
     /// Starts reading `location` (a URL relative to the page in the browser, a
     /// path on the desktop).
@@ -31,11 +37,7 @@ impl Fetch {
                 .map_err(|e| format!("cannot read {location}: {e}"))
                 .and_then(|meta| {
                     if meta.len() > MAX_FETCH_BYTES as u64 {
-                        Err(format!(
-                            "{location} is {} MB, more than the {} MB a map may have",
-                            meta.len() >> 20,
-                            MAX_FETCH_BYTES >> 20
-                        ))
+                        Err(too_large(location, meta.len(), MAX_FETCH_BYTES as u64))
                     } else {
                         std::fs::read(location).map_err(|e| format!("cannot read {location}: {e}"))
                     }
@@ -159,6 +161,18 @@ async fn fetch_web(location: &str) -> Fetched {
             response.status_text()
         ));
     }
+    // Refused before the body is read when the server says how long it is
+    // (else after, below).
+    if let Some(length) = response
+        .headers()
+        .get("content-length")
+        .ok()
+        .flatten()
+        .and_then(|l| l.trim().parse::<u64>().ok())
+        && length > MAX_FETCH_BYTES as u64
+    {
+        return Err(too_large(location, length, MAX_FETCH_BYTES as u64));
+    }
     let buffer = response
         .array_buffer()
         .map_err(|e| format!("{location}: {}", describe(e)))?;
@@ -167,10 +181,10 @@ async fn fetch_web(location: &str) -> Fetched {
         .map_err(|e| format!("{location}: {}", describe(e)))?;
     let bytes = js_sys::Uint8Array::new(&buffer);
     if bytes.length() as usize > MAX_FETCH_BYTES {
-        return Err(format!(
-            "{location} is {} MB, more than the {} MB a map may have",
-            bytes.length() >> 20,
-            MAX_FETCH_BYTES >> 20
+        return Err(too_large(
+            location,
+            u64::from(bytes.length()),
+            MAX_FETCH_BYTES as u64,
         ));
     }
     Ok(bytes.to_vec())
@@ -192,6 +206,25 @@ mod tests {
         assert_eq!(
             relative_to("maps/lab.yaml", "https://example.org/lab.pgm"),
             "https://example.org/lab.pgm"
+        );
+    }
+
+    /// A file over the cap is refused from its size (a sparse file: nothing
+    /// is read), with the message every cap gives.
+    #[test]
+    fn a_file_over_the_cap_is_refused_unread() {
+        let path = std::env::temp_dir().join(format!("slamlab-big-{}.tum", std::process::id()));
+        let file = std::fs::File::create(&path).unwrap();
+        file.set_len(65 << 20).unwrap();
+        let location = path.to_string_lossy().into_owned();
+        let mut fetch = Fetch::start(&location, &egui::Context::default());
+        let result = fetch.poll();
+        let _ = std::fs::remove_file(&path);
+        assert_eq!(
+            result,
+            Some(Err(format!(
+                "{location} has 68157440 bytes, more than the 67108864 bytes SLAM Lab reads"
+            )))
         );
     }
 

@@ -128,10 +128,7 @@ fn read_native(path: &str, max_bytes: usize) -> PickedFile {
         .map_err(|e| format!("cannot read {path}: {e}"))
         .and_then(|m| {
             if m.len() > max_bytes as u64 {
-                Err(format!(
-                    "{name} has {} bytes, more than the {max_bytes} bytes SLAM Lab reads",
-                    m.len()
-                ))
+                Err(super::fetch::too_large(&name, m.len(), max_bytes as u64))
             } else {
                 std::fs::read(path).map_err(|e| format!("cannot read {path}: {e}"))
             }
@@ -180,10 +177,10 @@ mod web {
                 for file in files {
                     let name = file.name();
                     let size = file.size();
+                    // Refused from its size, before a byte is read.
                     if size > max_bytes as f64 {
-                        let why = format!(
-                            "{name} has {size} bytes, more than the {max_bytes} bytes SLAM Lab reads"
-                        );
+                        let why =
+                            crate::widgets::fetch::too_large(&name, size as u64, max_bytes as u64);
                         batch.push((name, Err(why)));
                         continue;
                     }

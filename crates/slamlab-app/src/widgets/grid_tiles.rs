@@ -89,15 +89,10 @@ impl GridTiles {
             Pos2::new(1.0, 0.0),
             Pos2::new(0.0, 0.0),
         ];
-        for (texture, [x0, y0, x1, y1]) in self.update(ctx, grid) {
-            let corners = [(x0, y0), (x1, y0), (x1, y1), (x0, y1)].map(|(x, y)| {
-                let w = world_from_grid.transform_point(&nalgebra::Vector2::new(x, y));
-                t.xy(w.x, w.y)
-            });
-            let bounds = egui::Rect::from_points(&corners);
-            if !bounds.intersects(t.rect) || !corners.iter().all(|p| map_canvas::finite(*p)) {
+        for (texture, square) in self.update(ctx, grid) {
+            let Some(corners) = screen_corners(t, world_from_grid, square) else {
                 continue;
-            }
+            };
             let mut mesh = egui::Mesh::with_texture(texture);
             for (p, uv) in corners.iter().zip(uv) {
                 mesh.vertices.push(egui::epaint::Vertex {
@@ -111,6 +106,22 @@ impl GridTiles {
             painter.add(egui::Shape::mesh(mesh));
         }
     }
+}
+
+/// The screen corners of the square `[x0, y0, x1, y1]` of a grid whose frame is
+/// at `world_from_grid` (counter-clockwise from the lower left in the grid), or
+/// `None` when it is off the canvas or not finite.
+fn screen_corners(
+    t: &MapTransform,
+    world_from_grid: &Pose2,
+    [x0, y0, x1, y1]: [f64; 4],
+) -> Option<[Pos2; 4]> {
+    let corners = [(x0, y0), (x1, y0), (x1, y1), (x0, y1)].map(|(x, y)| {
+        let w = world_from_grid.transform_point(&nalgebra::Vector2::new(x, y));
+        t.xy(w.x, w.y)
+    });
+    let bounds = egui::Rect::from_points(&corners);
+    (bounds.intersects(t.rect) && corners.iter().all(|p| map_canvas::finite(*p))).then_some(corners)
 }
 
 /// Tiles a texture page holds along each side: 32 tiles of 32 cells, 1,024
@@ -268,15 +279,10 @@ impl GridAtlas {
         let uv_side = 1.0 / PAGE_TILES as f32;
         for (index, (grid, world_from_grid, tint)) in grids.enumerate() {
             count = index + 1;
-            for (slot, [x0, y0, x1, y1]) in self.update(ctx, index, grid) {
-                let corners = [(x0, y0), (x1, y0), (x1, y1), (x0, y1)].map(|(x, y)| {
-                    let w = world_from_grid.transform_point(&nalgebra::Vector2::new(x, y));
-                    t.xy(w.x, w.y)
-                });
-                let bounds = egui::Rect::from_points(&corners);
-                if !bounds.intersects(t.rect) || !corners.iter().all(|p| map_canvas::finite(*p)) {
+            for (slot, square) in self.update(ctx, index, grid) {
+                let Some(corners) = screen_corners(t, &world_from_grid, square) else {
                     continue;
-                }
+                };
                 let Some(page) = self.pages.get(slot.page) else {
                     continue;
                 };

@@ -486,3 +486,242 @@ fn every_built_in_assignment_opens_its_lesson() {
         assert!(label_visible(&h, "Download inputs"), "{name}");
     }
 }
+
+/// `assignment=fusion`: the fusion lesson opens on the student's drive (the
+/// seed, the drive's length, the reference's mode first), its true path is the
+/// one `answers/truth.tum` holds, and the reference EKF's trajectory dropped on
+/// the window passes with every point while dead reckoning (the starter's)
+/// fails, each with the library's grade.
+#[test]
+fn the_fusion_link_opens_the_variants_drive_and_grades_a_dropped_estimate() {
+    let mut h = harness(
+        "assignment=fusion&student=alice@example.edu&tick=30",
+        egui::vec2(1280.0, 800.0),
+    );
+    h.run();
+    let st = state(&h);
+    let prepared = slamlab_sim::assignments::builtin("fusion")
+        .and_then(|a| slamlab_sim::assignments::prepare(&a, "alice@example.edu"))
+        .unwrap_or_else(|e| panic!("{e}"));
+    assert_eq!(st["lesson"], "fusion");
+    assert_eq!(st["seed"], prepared.variant.seed);
+    assert_eq!(st["assignment"]["stage"], "ready");
+    assert_eq!(st["notices"], 0, "{}", h.state().notices().join("; "));
+    assert_eq!(st["runs"][0]["mode"], "absolute", "{}", st["runs"]);
+    // The lesson's truth (sampled at 30 Hz) is the variant's at every 0.1 s.
+    let expected = prepared.truth();
+    let lesson = h.state().lesson().trajectories();
+    let truth = &lesson
+        .iter()
+        .find(|t| t.role == TrajectoryRole::Truth)
+        .unwrap()
+        .trajectory;
+    let mut compared = 0;
+    for (t, pose) in truth.stamps().iter().zip(truth.poses()) {
+        if let Some(k) = expected.stamps().iter().position(|s| (s - t).abs() < 1e-9) {
+            let e = expected.poses()[k];
+            assert!(
+                (pose.x - e.x).abs() < 1e-9 && (pose.y - e.y).abs() < 1e-9,
+                "t = {t}: {pose:?} vs {e:?}"
+            );
+            compared += 1;
+        }
+    }
+    assert!(compared >= 290, "{compared} poses compared");
+    let references = prepared.references().unwrap();
+    let tum = |name: &str| {
+        references
+            .iter()
+            .find(|(n, _)| n == name)
+            .map(|(_, t)| write_tum(t).into_bytes())
+            .unwrap()
+    };
+    let (ekf, dead_reckoning) = (tum("ekf-absolute"), tum("dead-reckoning"));
+    drop_file(&mut h, "ekf.tum", ekf.clone());
+    drop_file(&mut h, "dead-reckoning.tum", dead_reckoning.clone());
+    let st = state(&h);
+    let graded = st["assignment"]["graded"].as_array().unwrap();
+    assert_eq!(graded.len(), 2, "{}", st["assignment"]);
+    let expected_ekf = prepared.grade("ekf.tum", &ekf).unwrap();
+    let expected_dr = prepared
+        .grade("dead-reckoning.tum", &dead_reckoning)
+        .unwrap();
+    assert_eq!(graded[0]["score"], 100.0);
+    assert_eq!(graded[0]["pass"], true);
+    assert_eq!(
+        graded[0]["criteria"][0]["value"].as_f64(),
+        expected_ekf.criteria[0].value
+    );
+    assert_eq!(graded[1]["pass"], false);
+    assert_eq!(graded[1]["score"], expected_dr.score);
+    assert_eq!(
+        graded[1]["criteria"][0]["value"].as_f64(),
+        expected_dr.criteria[0].value
+    );
+    // Both are drawn on the room as the lesson's estimates.
+    assert_eq!(h.state().lesson().frame().estimates().items().len(), 2);
+    if let Some(image) = render_or_skip(&mut h)
+        && let Some(dir) = std::env::var_os("SLAMLAB_UI_SHOTS")
+    {
+        let _ = image.save(Path::new(&dir).join("assignment-fusion-1280x800.png"));
+    }
+}
+
+/// The answer a reference estimator writes for each of the four hand-ins that
+/// are no trajectory, and a naive one, as files a student drops: the
+/// reference solver's optimized graph and the problem's initial guess
+/// (`pose-graph`); the map made with the true poses and a map of free cells
+/// only (`grid-mapping`); the reference ICP's relative pose and the odometry's
+/// (`icp`); the eight-point RANSAC's relative pose and "no rotation, straight
+/// ahead" (`two-view`).
+#[allow(clippy::unwrap_used)] // a test's fixture: a failure stops the test
+fn reference_and_naive(name: &str, p: &Prepared) -> [(&'static str, Vec<u8>); 2] {
+    let file = |path: &str| {
+        p.input_files(true)
+            .get(path)
+            .unwrap_or_else(|| panic!("{name}: no {path}"))
+            .to_vec()
+    };
+    let zip = |yaml: String, pgm: Vec<u8>| {
+        slamlab_sim::io::archive::write_zip(
+            "hand-in",
+            &[
+                ("map.yaml".to_owned(), yaml.into_bytes()),
+                ("map.pgm".to_owned(), pgm),
+            ],
+        )
+        .unwrap()
+    };
+    let pose_of = |reference: &str| {
+        let (_, t) = p
+            .references()
+            .unwrap()
+            .iter()
+            .find(|(n, _)| n == reference)
+            .unwrap();
+        slamlab_sim::io::relative_pose::write_relative_pose(
+            &slamlab_sim::mapping::icp_assignment::relative_pose_of(&t.poses()[1]),
+        )
+        .into_bytes()
+    };
+    match name {
+        "pose-graph" => [
+            ("reference.g2o", file("answers/reference.g2o")),
+            ("estimate.g2o", file("problem.g2o")),
+        ],
+        "grid-mapping" => {
+            let yaml = String::from_utf8(file("answers/reference.yaml"))
+                .unwrap()
+                .replace("reference.pgm", "map.pgm");
+            let reference = zip(yaml, file("answers/reference.pgm"));
+            let (truth, _) = slamlab_sim::io::map_archive::read_map_zip(
+                "true.zip",
+                &zip(
+                    String::from_utf8(file("answers/true_map.yaml"))
+                        .unwrap()
+                        .replace("true_map.pgm", "map.pgm"),
+                    file("answers/true_map.pgm"),
+                ),
+            )
+            .unwrap();
+            let free = slamlab_core::grid::OccupancyGrid::new(
+                truth.width(),
+                truth.height(),
+                truth.resolution(),
+                truth.origin(),
+                vec![slamlab_core::grid::Cell::Free; truth.width() * truth.height()],
+            )
+            .unwrap();
+            let (yaml, pgm) = slamlab_sim::io::ros_map::export_map(
+                &free,
+                "map.pgm",
+                slamlab_sim::io::ros_map::ImageFormat::Pgm,
+            )
+            .unwrap();
+            [("reference.zip", reference), ("map.zip", zip(yaml, pgm))]
+        }
+        "icp" => [
+            ("icp.txt", pose_of("icp")),
+            ("pose.txt", pose_of("odometry")),
+        ],
+        "two-view" => {
+            use slamlab_sim::visual_odometry::assignment::{TwoViewRun, naive_pose};
+            let (mut scenario, _) = slamlab_sim::coursework::apply_params::<
+                slamlab_sim::visual_odometry::VoScenario,
+            >(&p.assignment);
+            scenario.settings.seed = p.variant.seed;
+            let run = TwoViewRun::simulate(&scenario, p.steps as usize);
+            let eight = run
+                .references
+                .iter()
+                .find(|(n, _)| n == "eight-point")
+                .and_then(|(_, pose)| *pose)
+                .unwrap();
+            let write =
+                |pose| slamlab_sim::io::relative_pose::write_relative_pose(pose).into_bytes();
+            [
+                ("eight-point.txt", write(&eight)),
+                ("pose.txt", write(&naive_pose())),
+            ]
+        }
+        _ => panic!("no hand-in for {name}"),
+    }
+}
+
+/// In-page grading of the hand-ins that are no trajectory: the link
+/// `assignment=pose-graph|grid-mapping|icp|two-view&student=alice` opens the
+/// lesson, the reference's answer file dropped on the window scores what
+/// `slamlab grade` gives (every point, pass) and a naive answer fails with the
+/// library's values, read from the Assignment panel's state.
+#[test]
+fn the_four_other_hand_ins_are_graded_in_the_page() {
+    for name in ["pose-graph", "grid-mapping", "icp", "two-view"] {
+        let mut h = harness(
+            &format!("assignment={name}&student=alice"),
+            egui::vec2(1280.0, 800.0),
+        );
+        h.run();
+        assert_eq!(state(&h)["assignment"]["stage"], "ready", "{name}");
+        let prepared = slamlab_sim::assignments::builtin(name)
+            .and_then(|a| slamlab_sim::assignments::prepare(&a, "alice"))
+            .unwrap_or_else(|e| panic!("{name}: {e}"));
+        let [reference, naive] = reference_and_naive(name, &prepared);
+        drop_file(&mut h, reference.0, reference.1.clone());
+        drop_file(&mut h, naive.0, naive.1.clone());
+        let st = state(&h);
+        let graded = st["assignment"]["graded"].as_array().unwrap();
+        assert_eq!(graded.len(), 2, "{name}: {}", st["assignment"]);
+        for (k, (file, bytes)) in [reference, naive].iter().enumerate() {
+            let expected = prepared.grade(file, bytes).unwrap();
+            assert_eq!(graded[k]["file"], *file, "{name}");
+            assert_eq!(graded[k]["score"], expected.score, "{name} {file}");
+            assert_eq!(graded[k]["pass"], expected.pass, "{name} {file}");
+            assert_eq!(
+                graded[k]["sha256"],
+                expected.estimate_sha256.as_str(),
+                "{name} {file}"
+            );
+            // The page's state is JSON text read back: equal to an ulp
+            // (serde_json's default float parsing may be one ulp off).
+            for (c, criterion) in expected.criteria.iter().enumerate() {
+                let page = graded[k]["criteria"][c]["value"].as_f64().unwrap();
+                let library = criterion.value.unwrap();
+                assert!(
+                    (page - library).abs() <= 1e-12 * library.abs().max(1.0),
+                    "{name} {file} {}: {page} vs {library}",
+                    criterion.metric
+                );
+            }
+        }
+        assert_eq!(graded[0]["score"], 100.0, "{name}");
+        assert_eq!(graded[0]["pass"], true, "{name}");
+        assert_eq!(graded[1]["pass"], false, "{name}");
+        assert!(graded[1]["score"].as_f64() < Some(prepared.assignment.pass_score()));
+        assert_eq!(h.state().notices(), Vec::<String>::new(), "{name}");
+        if let Some(image) = render_or_skip(&mut h)
+            && let Some(dir) = std::env::var_os("SLAMLAB_UI_SHOTS")
+        {
+            let _ = image.save(Path::new(&dir).join(format!("assignment-{name}-1280x800.png")));
+        }
+    }
+}

@@ -475,3 +475,75 @@ fn the_cost_plot_reads_at_every_iteration_and_size() {
         }
     }
 }
+
+/// The lesson's own optimized graph written as g2o and dropped back is a
+/// solution of the problem on screen: scored with the same cost as the lesson's
+/// graph (a ratio of 1 to 1e-9) and the same RMSE against the truth; a graph
+/// of another problem (another seed) opens as a new problem with a note saying
+/// why; a solution is drawn in its colour and removed again.
+#[test]
+fn a_dropped_optimized_graph_is_scored_as_a_solution_or_opens_as_a_problem() {
+    use slamlab_app::widgets::estimates::COLORS;
+    use slamlab_sim::io::graph::write_g2o;
+    let mut h = super::common::harness_sized(
+        "lesson=pose-graph&example=thesis&solver=gn&seed=1",
+        egui::vec2(800.0, 500.0),
+    );
+    h.run();
+    let start = write_g2o(lesson(&h).session().start_graph()).unwrap();
+    lesson_mut(&mut h).start_optimize();
+    lesson_mut(&mut h).advance_optimize(None);
+    assert!(lesson(&h).session().is_converged());
+    let optimized = write_g2o(lesson(&h).session().graph()).unwrap();
+    lesson_mut(&mut h).open_graph_file("mine.g2o", optimized.into_bytes());
+    // The problem itself, unoptimized: a solution too, far worse.
+    lesson_mut(&mut h).open_graph_file("start.g2o", start.into_bytes());
+    h.run();
+    let state: serde_json::Value = serde_json::from_str(&h.state().test_state_json()).unwrap();
+    let solutions = state["solutions"].as_array().unwrap().clone();
+    assert_eq!(solutions.len(), 2, "{state}");
+    let mine = &solutions[0];
+    assert_eq!(mine["name"], "mine.g2o");
+    let ratio = mine["cost_ratio"].as_f64().unwrap();
+    assert!((ratio - 1.0).abs() <= 1e-9, "cost ratio {ratio}");
+    assert_eq!(mine["ate"].as_f64(), lesson(&h).session().rmse());
+    let worse = solutions[1]["cost_ratio"].as_f64().unwrap();
+    assert!(worse > 10.0, "the unoptimized graph's ratio {worse}");
+    assert!(
+        lesson(&h)
+            .note()
+            .unwrap()
+            .contains("start.g2o has the vertices and edges of the graph on screen"),
+        "{:?}",
+        lesson(&h).note()
+    );
+    // Drawn over the lesson's graph in its colour.
+    if let Some(image) = render_or_skip(&mut h) {
+        if let Some(dir) = std::env::var_os("SLAMLAB_UI_SHOTS") {
+            let _ = image.save(std::path::Path::new(&dir).join("graph-solution-800x500.png"));
+        }
+        let [r, g, b, _] = COLORS[1].to_array();
+        let drawn = count_pixels(image.as_raw(), [r, g, b], 24);
+        assert!(drawn > 100, "the solution's colour covers {drawn} pixels");
+    }
+    lesson_mut(&mut h).solutions_mut().remove(1);
+    assert_eq!(lesson(&h).solutions().items().len(), 1);
+    // Another seed: another problem, opened as one; its solutions set aside.
+    let other = slamlab_sim::pose_graph::session::PoseGraphSession::from_scenario(
+        slamlab_sim::pose_graph::session::PoseGraphScenario {
+            seed: 2,
+            ..lesson(&h).session().scenario().clone()
+        },
+    )
+    .unwrap();
+    let other = write_g2o(other.start_graph()).unwrap();
+    lesson_mut(&mut h).open_graph_file("other.g2o", other.into_bytes());
+    let note = lesson(&h).note().unwrap().to_owned();
+    assert_eq!(lesson(&h).session().source(), "other.g2o");
+    assert!(
+        note.contains("Opened as a new problem, not scored as a solution of thesis")
+            && note.contains("this is another graph"),
+        "{note}"
+    );
+    assert!(lesson(&h).solutions().items().is_empty());
+}

@@ -60,17 +60,21 @@ pub enum TaskKind {
     /// Two-view geometry: the essential matrix with RANSAC from pixel matches
     /// and the intrinsics; the output is the relative pose of the two views.
     TwoView,
+    /// Sensor fusion: wheel odometry, an IMU and a SLAM pose, one CSV per
+    /// sensor; the output is the robot's trajectory.
+    Fusion,
 }
 
 impl TaskKind {
     /// Every task kind.
-    pub const ALL: [TaskKind; 6] = [
+    pub const ALL: [TaskKind; 7] = [
         TaskKind::LandmarkSlam,
         TaskKind::Localization,
         TaskKind::PoseGraph,
         TaskKind::GridMapping,
         TaskKind::Icp,
         TaskKind::TwoView,
+        TaskKind::Fusion,
     ];
 
     /// The name in an assignment file.
@@ -82,6 +86,7 @@ impl TaskKind {
             TaskKind::GridMapping => "grid-mapping",
             TaskKind::Icp => "icp",
             TaskKind::TwoView => "two-view",
+            TaskKind::Fusion => "fusion",
         }
     }
 
@@ -93,6 +98,7 @@ impl TaskKind {
             TaskKind::PoseGraph => "pose-graph",
             TaskKind::GridMapping | TaskKind::Icp => "mapping",
             TaskKind::TwoView => "visual-odometry",
+            TaskKind::Fusion => "fusion",
         }
     }
 
@@ -110,13 +116,16 @@ impl TaskKind {
             TaskKind::GridMapping => &[InputFormat::CarmenLog],
             TaskKind::Icp => &[InputFormat::ScanCsv],
             TaskKind::TwoView => &[InputFormat::MatchesCsv],
+            TaskKind::Fusion => &[InputFormat::SensorCsv],
         }
     }
 
     /// What the student hands in.
     pub fn output_format(self) -> OutputFormat {
         match self {
-            TaskKind::LandmarkSlam | TaskKind::Localization => OutputFormat::Trajectory,
+            TaskKind::LandmarkSlam | TaskKind::Localization | TaskKind::Fusion => {
+                OutputFormat::Trajectory
+            }
             TaskKind::PoseGraph => OutputFormat::G2o,
             TaskKind::GridMapping => OutputFormat::RosMap,
             TaskKind::Icp | TaskKind::TwoView => OutputFormat::RelativePose,
@@ -126,7 +135,7 @@ impl TaskKind {
     /// The metrics an output of this kind can be scored by.
     pub fn metrics(self) -> &'static [Metric] {
         match self {
-            TaskKind::LandmarkSlam | TaskKind::Localization => &[
+            TaskKind::LandmarkSlam | TaskKind::Localization | TaskKind::Fusion => &[
                 Metric::AteRmse,
                 Metric::AteMax,
                 Metric::FinalPositionError,
@@ -171,6 +180,9 @@ pub enum InputFormat {
     /// Two views as `K.txt` (the 3x3 intrinsics) and `matches.csv`
     /// (`u1,v1,u2,v2`, pixels).
     MatchesCsv,
+    /// One CSV per sensor (`odometry.csv`, `imu.csv`, `slam_pose.csv`), the
+    /// time `t_s` first and each column's unit in its name.
+    SensorCsv,
 }
 
 impl InputFormat {
@@ -184,6 +196,7 @@ impl InputFormat {
             InputFormat::G2o => "g2o",
             InputFormat::ScanCsv => "scan-csv",
             InputFormat::MatchesCsv => "matches-csv",
+            InputFormat::SensorCsv => "sensor-csv",
         }
     }
 }

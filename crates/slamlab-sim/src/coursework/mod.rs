@@ -89,6 +89,7 @@ pub const BUILTIN: &[(&str, &str)] = &[
     ("grid-mapping", include_str!("builtin/grid-mapping.json")),
     ("icp", include_str!("builtin/icp.json")),
     ("two-view", include_str!("builtin/two-view.json")),
+    ("fusion", include_str!("builtin/fusion.json")),
 ];
 
 /// One variant's run of a task, made by the lesson that runs that kind of task:

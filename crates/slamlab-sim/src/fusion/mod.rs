@@ -15,6 +15,7 @@
 //! assert!(run.rmse().x.is_finite());
 //! ```
 
+pub mod assignment;
 mod experiment;
 mod landmark_pose;
 mod log;

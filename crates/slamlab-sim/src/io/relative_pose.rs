@@ -50,7 +50,7 @@ pub enum RelativePoseFileError {
     Count(usize),
     /// Twelve numbers whose first nine are no rotation.
     #[error(
-        "R is not a rotation: RᵀR differs from the identity by {deviation:.2e} and det R = {determinant:.4} (a rotation has 0 and 1)"
+        "R is not a rotation: R^T R differs from the identity by {deviation:.2e} and det R = {determinant:.4} (a rotation has 0 and 1)"
     )]
     NotARotation {
         /// The largest entry of `RᵀR − I`.

@@ -332,7 +332,7 @@ impl TaskRun for PoseGraphRun {
             })
             .collect();
         let notices = vec![format!(
-            "cost {:.6e} (initial guess {:.6e}, reference {:.6e}; Σ eᵀΩe over problem.g2o's edges)",
+            "cost {:.6e} (initial guess {:.6e}, reference {:.6e}; Σ e^T Ω e over problem.g2o's edges)",
             score.cost, score.initial_cost, score.reference_cost
         )];
         Ok(assemble(

@@ -165,7 +165,7 @@ pub static PARAMS: &[Param<PoseGraphScenario>] = &[
     number_field!(
         "kernel-width",
         "",
-        "Huber's δ or Cauchy's c on the Mahalanobis distance √(eᵀΩe)",
+        "Huber's δ or Cauchy's c on the Mahalanobis distance √(e^T Ω e)",
         (0.01, 100.0),
         kernel_width
     ),
