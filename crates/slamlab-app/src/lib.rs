@@ -734,6 +734,7 @@ impl SlamLabApp {
         let dt = f64::from(ctx.input(|i| i.stable_dt));
         // Scenario files and estimates dropped on the window are the shell's, not
         // the lesson's (which reads maps, logs and graphs).
+        self.refuse_oversized_drops(&ctx);
         self.poll_scenario_files(&ctx);
         self.poll_estimates(&ctx);
         let sim_start = web_time::Instant::now();
@@ -1326,6 +1327,27 @@ impl SlamLabApp {
         ));
     }
 
+    /// On the desktop, a drop with a file over its cap is refused from the file's
+    /// size before anything is read, as the browser's drop guard does: the whole
+    /// drop is taken out of the frame's input and a notice names the file.
+    fn refuse_oversized_drops(&mut self, ctx: &egui::Context) {
+        let oversized = ctx.input(|i| {
+            i.raw.dropped_files.iter().find_map(|file| {
+                let path = file.path();
+                let name = path.file_name()?.to_string_lossy().into_owned();
+                let size = path
+                    .is_absolute()
+                    .then(|| std::fs::metadata(path).ok())??
+                    .len();
+                (size > self.drop_cap_for(&name)).then_some((name, size))
+            })
+        });
+        if let Some((name, size)) = oversized {
+            ctx.input_mut(|i| i.raw.dropped_files.clear());
+            self.refuse_dropped(&name, size);
+        }
+    }
+
     /// Takes files as if the student had dropped them on the window together
     /// (a ROS map's YAML with its image): into the lesson's estimates, or handed
     /// in with homework open. Tests and the browser hook use it.
@@ -1363,6 +1385,15 @@ impl SlamLabApp {
             };
             let homework = self.assignment.as_mut().filter(|d| d.prepared().is_some());
             let Some(desk) = homework else {
+                // A graph named by `estimate=` in the pose-graph lesson is what a
+                // dropped one is there: a solution of the graph on screen, or a new
+                // problem.
+                if name.to_ascii_lowercase().ends_with(".g2o")
+                    && let Some(lesson) = self.lesson_as_mut::<pose_graph::PoseGraphLesson>()
+                {
+                    lesson.open_graph_file(&name, bytes);
+                    continue;
+                }
                 match self.lesson.frame_mut().estimates_mut().add(&name, &bytes) {
                     // Added: said beside the title (the estimates window shows it too);
                     // the notices are for what went wrong or changed the run.

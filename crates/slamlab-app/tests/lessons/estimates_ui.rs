@@ -339,3 +339,67 @@ fn a_dropped_map_scores_as_the_mapping_lessons_own() {
         "{st}"
     );
 }
+
+/// A file dropped on the window, as the desktop's window system hands it over:
+/// its path, read only when asked.
+#[derive(Debug)]
+struct DroppedPath(std::path::PathBuf);
+
+impl egui::DroppedFile for DroppedPath {
+    fn path(&self) -> &std::path::Path {
+        &self.0
+    }
+    fn bytes(&self) -> Result<Vec<u8>, String> {
+        std::fs::read(&self.0).map_err(|e| e.to_string())
+    }
+}
+
+/// On the desktop a drop with a file over the cap is refused from the file's size
+/// (a 65 MiB sparse file: nothing of it is read), with the browser's notice, and
+/// the estimate dropped before it stays; a small file of the same drop is not
+/// taken either.
+#[test]
+fn an_oversized_file_dropped_on_the_desktop_is_refused_unread() {
+    let dir = std::env::temp_dir().join(format!("slamlab-big-drop-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap_or_else(|e| panic!("{e}"));
+    let big = dir.join("big.tum");
+    let file = std::fs::File::create(&big).unwrap_or_else(|e| panic!("{e}"));
+    file.set_len(65 << 20).unwrap_or_else(|e| panic!("{e}"));
+    let mut h = harness("lesson=landmark-slam&seed=1", egui::vec2(1280.0, 800.0));
+    for _ in 0..40 {
+        h.state_mut()
+            .apply_time_action(slamlab_app::time_control::TimeAction::StepTick);
+    }
+    let files = exported(&h);
+    let (name, bytes) = files
+        .iter()
+        .find(|(n, _)| n.ends_with(".tum"))
+        .unwrap_or_else(|| {
+            panic!(
+                "no TUM file among {:?}",
+                files.iter().map(|f| &f.0).collect::<Vec<_>>()
+            )
+        });
+    assert!(add(&mut h, name, bytes).is_ok());
+    let small = dir.join("small.tum");
+    std::fs::write(&small, bytes).unwrap_or_else(|e| panic!("{e}"));
+    for path in [small, big] {
+        h.input_mut()
+            .dropped_files
+            .push(std::sync::Arc::new(DroppedPath(path)));
+    }
+    h.run();
+    let s = state(&h);
+    let notices = s["notice_list"].to_string();
+    assert!(
+        notices.contains("big.tum has 68157440 bytes, more than the 67108864 bytes SLAM Lab reads: nothing of that drop was read"),
+        "{notices}"
+    );
+    let names: Vec<&str> = s["estimates"]
+        .as_array()
+        .map(|a| a.iter().filter_map(|e| e["name"].as_str()).collect())
+        .unwrap_or_default();
+    assert!(names.contains(&name.as_str()), "{names:?}");
+    assert!(!names.contains(&"small.tum"), "{names:?}");
+    let _ = std::fs::remove_dir_all(&dir);
+}

@@ -547,3 +547,37 @@ fn a_dropped_optimized_graph_is_scored_as_a_solution_or_opens_as_a_problem() {
     );
     assert!(lesson(&h).solutions().items().is_empty());
 }
+
+/// A graph named by `estimate=` is taken as a dropped one is: the lesson's own
+/// optimized graph, written to a file and named in the link, is scored as a
+/// solution of the problem the link opens (a ratio of 1 to 1e-9).
+#[test]
+fn an_optimized_graph_named_by_estimate_is_scored_as_a_solution() {
+    use slamlab_sim::io::graph::write_g2o;
+    let query = "lesson=pose-graph&example=thesis&solver=gn&seed=1";
+    let mut h = super::common::harness_sized(query, egui::vec2(800.0, 500.0));
+    h.run();
+    lesson_mut(&mut h).start_optimize();
+    lesson_mut(&mut h).advance_optimize(None);
+    let optimized = write_g2o(lesson(&h).session().graph()).unwrap();
+    let dir = std::env::temp_dir().join(format!("slamlab-estimate-g2o-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let file = dir.join("mine.g2o");
+    std::fs::write(&file, optimized).unwrap();
+    let mut h = super::common::harness_sized(
+        &format!("{query}&estimate={}", file.display()),
+        egui::vec2(800.0, 500.0),
+    );
+    for _ in 0..4 {
+        h.run();
+    }
+    let state: serde_json::Value = serde_json::from_str(&h.state().test_state_json()).unwrap();
+    let solutions = state["solutions"].as_array().cloned().unwrap_or_default();
+    assert_eq!(solutions.len(), 1, "{state}");
+    assert_eq!(solutions[0]["name"], "mine.g2o");
+    let ratio = solutions[0]["cost_ratio"].as_f64().unwrap();
+    // Against the lesson's graph as it is now (unoptimized): far below 1.
+    assert!(ratio < 0.1, "cost ratio {ratio}");
+    assert_eq!(lesson(&h).session().source(), "thesis");
+    let _ = std::fs::remove_dir_all(&dir);
+}
