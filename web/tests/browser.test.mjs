@@ -315,17 +315,18 @@ async function main() {
 
   // --- The download's budget once binaryen's wasm-opt has shrunk it (web/build.sh's
   // default; a SLAMLAB_WASM_OPT=0 build keeps its function names, the "name" section, and
-  // is not held to it): at most 6.8 MB and 2.8 MB gzipped. The targets (6 MB, 2 MB
+  // is not held to it): at most 6.9 MB and 2.85 MB gzipped. The targets (6 MB, 2 MB
   // gzipped) are not met since ROS 2 bags, zip archives and the real landmark data sets
   // came in (6,400,679 bytes, 2,624,595 gzipped on 2026-11-28), and homework in the page
   // (the assignments' inputs and graders: 6,675,148 bytes, 2,739,113 gzipped (Node, level 9) with the
-  // pose-graph, grid-mapping and icp assignments); the bound
+  // pose-graph, grid-mapping and icp assignments; 6,810,899 and 2,800,868 with the fusion
+  // assignment, the map and graph drop-in and Victoria Park's reference map); the bound
   // keeps the download from growing unnoticed. docs/web-build.md says what the bytes are.
-  await check("the wasm download is at most 6.8 MB (2.8 MB gzipped)", async () => {
+  await check("the wasm download is at most 6.9 MB (2.85 MB gzipped)", async () => {
     const sizes = `${metrics.wasm_bytes} bytes, ${metrics.wasm_gzip_bytes} gzip -9`;
     if (customSectionNames(wasm).includes("name")) return `${sizes}; not checked: built without wasm-opt`;
-    assert(metrics.wasm_bytes <= 6_800_000, `${sizes}: over the 6,800,000-byte budget`);
-    assert(metrics.wasm_gzip_bytes <= 2_800_000, `${sizes}: over the 2,800,000-byte gzip budget`);
+    assert(metrics.wasm_bytes <= 6_900_000, `${sizes}: over the 6,900,000-byte budget`);
+    assert(metrics.wasm_gzip_bytes <= 2_850_000, `${sizes}: over the 2,850,000-byte gzip budget`);
     return sizes;
   });
 

@@ -1213,12 +1213,26 @@ impl SlamLabApp {
         // A ROS map is the student's map where the run has a true one to score
         // it against (else it stays the lesson's: a world to explore).
         let maps_are_estimates = self.lesson.scores_maps();
+        // In the landmark lesson a `.txt` dropped with a data set's `.dat` files, or
+        // named as gtsam names Victoria Park's pose graph, is the lesson's: the
+        // reference map's graph, not a trajectory.
+        let landmark = self.lesson.id() == "landmark-slam";
+        let with_data_set = ctx.input(|i| {
+            i.raw.dropped_files.iter().any(|f| {
+                f.path()
+                    .to_string_lossy()
+                    .to_ascii_lowercase()
+                    .ends_with(".dat")
+            })
+        });
         let is_estimate = |file: &egui::DroppedFileHandle| {
             let name = file.path().to_string_lossy().to_ascii_lowercase();
+            let text_is_lessons = text_is_theirs
+                || (landmark && (with_data_set || name.ends_with("victoria_park.txt")));
             hands_in_anything
                 || name.ends_with(".tum")
                 || name.ends_with(".csv")
-                || (!text_is_theirs && name.ends_with(".txt"))
+                || (!text_is_lessons && name.ends_with(".txt"))
                 || (maps_are_estimates && widgets::estimates::is_map_file(&name))
         };
         let taken = ctx.input_mut(|i| {

@@ -519,3 +519,63 @@ fn victoria_park_reference_map_is_solved_in_frames_and_laid_over_the_filters() {
         save_shot(&image, &format!("landmark_victoria_park_reference_{size}"));
     }
 }
+
+/// A file dropped on the window, as the desktop's window system hands it over.
+#[derive(Debug)]
+struct DroppedBytes(std::path::PathBuf, Vec<u8>);
+
+impl egui::DroppedFile for DroppedBytes {
+    fn path(&self) -> &std::path::Path {
+        &self.0
+    }
+    fn bytes(&self) -> Result<Vec<u8>, String> {
+        Ok(self.1.clone())
+    }
+}
+
+/// Dropped on the window (not handed to the lesson), Victoria Park's three
+/// files with `victoria_park.txt` open the data set with its reference graph:
+/// the window's estimate drop-in leaves a `.txt` beside `.dat` files to the
+/// lesson; and the graph alone, once the data set is open, too.
+#[test]
+fn victoria_parks_graph_dropped_on_the_window_is_the_reference_not_an_estimate() {
+    let (Some(files), Some(graph)) = (
+        dropped(
+            "victoria_park",
+            &["inputs.dat", "measurements.dat", "gps.dat"],
+        ),
+        reference_graph(),
+    ) else {
+        return;
+    };
+    let drop = |h: &mut Harness<'_, SlamLabApp>, files: &[PickedFile]| {
+        for (name, bytes) in files {
+            let bytes = bytes.clone().unwrap_or_default();
+            h.input_mut()
+                .dropped_files
+                .push(Arc::new(DroppedBytes(name.into(), bytes)));
+        }
+        for _ in 0..3 {
+            h.step();
+        }
+    };
+    for alone in [false, true] {
+        let mut h = harness_sized("lesson=landmark-slam", egui::vec2(1280.0, 800.0));
+        h.run();
+        if alone {
+            drop(&mut h, &files);
+            drop(&mut h, std::slice::from_ref(&graph));
+        } else {
+            let mut four = files.clone();
+            four.push(graph.clone());
+            drop(&mut h, &four);
+        }
+        let s = state(&h);
+        assert_eq!(s["data"]["kind"], "Victoria Park", "{s}");
+        assert!(s["reference"].is_object(), "alone {alone}: {s}");
+        assert!(
+            s["estimates"].as_array().is_none_or(|a| a.is_empty()),
+            "alone {alone}: {s}"
+        );
+    }
+}
