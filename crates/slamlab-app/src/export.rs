@@ -229,6 +229,11 @@ impl Exporter {
         ctx.request_repaint();
     }
 
+    /// Is a picture asked for and not yet arrived?
+    pub fn is_taking_picture(&self) -> bool {
+        self.shot.is_some()
+    }
+
     /// The path the desktop's save window will write to, while it is open.
     #[cfg(not(target_arch = "wasm32"))]
     pub fn save_path_mut(&mut self) -> Option<&mut String> {

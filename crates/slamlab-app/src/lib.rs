@@ -130,6 +130,9 @@ pub struct SlamLabApp {
     /// much of the frame's interval the thread sat idle: the clock's budget at
     /// maximum speed).
     last_sim_ms: f32,
+    /// The grade report's picture is being taken: the student's estimate is drawn
+    /// whole until it arrives.
+    report_picture: bool,
     show_frame_timing: bool,
     lesson: Box<dyn Lesson>,
     embed: bool,
@@ -295,6 +298,7 @@ impl SlamLabApp {
             frame_stats: frame_stats::FrameStats::default(),
             last_cpu_ms: None,
             last_sim_ms: 0.0,
+            report_picture: false,
             show_frame_timing: false,
             lesson,
             embed: parsed.embed,
@@ -1181,6 +1185,7 @@ impl SlamLabApp {
                             widgets::assignment::AssignmentDesk::report_stem(grade)
                         );
                         self.exporter.request_png(ctx, None, name);
+                        self.report_picture = true;
                     }
                 }
             }
@@ -1479,7 +1484,16 @@ impl SlamLabApp {
         if self.lesson.frame().estimates().is_empty() && !self.lesson.frame().estimates().open {
             return;
         }
-        let now = self.lesson.estimate_clock().unwrap_or(f64::INFINITY);
+        // The report's picture shows the student's whole estimate, not the part
+        // up to the time bar's time, until the picture has arrived.
+        if !self.exporter.is_taking_picture() {
+            self.report_picture = false;
+        }
+        let now = if self.report_picture {
+            f64::INFINITY
+        } else {
+            self.lesson.estimate_clock().unwrap_or(f64::INFINITY)
+        };
         widgets::estimates::map_overlay(ctx, self.lesson.frame_mut().estimates_mut(), now);
         if self.lesson.frame().estimates().open {
             self.score_estimates();

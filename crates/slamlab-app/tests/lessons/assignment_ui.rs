@@ -456,6 +456,22 @@ fn the_grade_report_names_the_variant_and_the_file() {
         if let Some(shots) = std::env::var_os("SLAMLAB_UI_SHOTS") {
             let _ = std::fs::write(Path::new(&shots).join("grade-report.png"), &png);
         }
+        // The picture shows the whole estimate (1,108 steps), the window the part
+        // up to the time bar's tick 200: far more of the estimate's colour.
+        let [r, g, b, _] = slamlab_app::widgets::estimates::COLORS[0].to_array();
+        let decoder = png::Decoder::new(std::io::Cursor::new(&png));
+        let mut reader = decoder.read_info().unwrap();
+        let mut pixels = vec![0; reader.output_buffer_size().unwrap()];
+        let info = reader.next_frame(&mut pixels).unwrap();
+        assert_eq!(info.color_type, png::ColorType::Rgba);
+        let in_picture = super::common::count_pixels(&pixels[..info.buffer_size()], [r, g, b], 24);
+        if let Some(image) = render_or_skip(&mut h) {
+            let on_screen = super::common::count_pixels(&image, [r, g, b], 24);
+            assert!(
+                in_picture > 2 * on_screen.max(50),
+                "the estimate's colour covers {in_picture} pixels in the picture, {on_screen} on screen"
+            );
+        }
     }
     let _ = std::fs::remove_dir_all(&dir);
 }
