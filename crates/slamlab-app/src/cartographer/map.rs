@@ -206,7 +206,7 @@ pub fn map_ui(
     // some 16,000 of them: one mesh of plain quads, not 16,000 anti-aliased
     // strokes for egui to tessellate every frame.
     let intra = Color32::from_rgba_unmultiplied(0x8C, 0x8C, 0x8C, 110);
-    let mut lines = ParticleMesh::with_capacity(0);
+    let mut lines = ParticleMesh::default();
     for c in &sim.constraints {
         let (Some(submap), Some(node)) = (sim.submaps.get(c.submap), sim.nodes.get(c.node)) else {
             continue;
@@ -238,7 +238,7 @@ pub fn map_ui(
         track.draw_path(&painter, &t, colors.truth, colors.background);
     }
     // Nodes: dots in their trajectory's colour, one mesh (6,837 on the Intel log).
-    let mut dots = ParticleMesh::with_capacity(0);
+    let mut dots = ParticleMesh::default();
     for node in &sim.nodes {
         dots.dot(
             t.xy(node.global_pose.x, node.global_pose.y),

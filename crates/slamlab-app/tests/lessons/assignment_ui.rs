@@ -45,6 +45,17 @@ fn drop_file(h: &mut Harness<'_, SlamLabApp>, name: &str, bytes: Vec<u8>) {
     h.run();
 }
 
+/// The reference estimator `name` of `prepared`'s variant as a TUM file, the
+/// way a student's program would hand it in.
+fn reference_tum(prepared: &Prepared, name: &str) -> Vec<u8> {
+    let references = prepared.references().unwrap_or_else(|e| panic!("{e}"));
+    references
+        .iter()
+        .find(|(n, _)| n == name)
+        .map(|(_, t)| write_tum(t).into_bytes())
+        .unwrap_or_else(|| panic!("no reference {name}"))
+}
+
 /// Alice's variant as the command line makes it (`slamlab export-inputs` and
 /// `slamlab grade` call the same library).
 fn alices() -> Prepared {
@@ -112,14 +123,7 @@ fn dropped_estimates_are_graded_and_another_variant_is_refused() {
     let mut h = harness(LINK, egui::vec2(1280.0, 800.0));
     h.run();
     let prepared = alices();
-    let references = prepared.references().unwrap();
-    let tum = |name: &str| {
-        references
-            .iter()
-            .find(|(n, _)| n == name)
-            .map(|(_, t)| write_tum(t).into_bytes())
-            .unwrap()
-    };
+    let tum = |name: &str| reference_tum(&prepared, name);
     let (ekf, dead_reckoning) = (tum("ekf"), tum("dead-reckoning"));
     drop_file(&mut h, "ekf.tum", ekf.clone());
     drop_file(&mut h, "dead-reckoning.tum", dead_reckoning.clone());
@@ -544,14 +548,7 @@ fn the_fusion_link_opens_the_variants_drive_and_grades_a_dropped_estimate() {
         }
     }
     assert!(compared >= 290, "{compared} poses compared");
-    let references = prepared.references().unwrap();
-    let tum = |name: &str| {
-        references
-            .iter()
-            .find(|(n, _)| n == name)
-            .map(|(_, t)| write_tum(t).into_bytes())
-            .unwrap()
-    };
+    let tum = |name: &str| reference_tum(&prepared, name);
     let (ekf, dead_reckoning) = (tum("ekf-absolute"), tum("dead-reckoning"));
     drop_file(&mut h, "ekf.tum", ekf.clone());
     drop_file(&mut h, "dead-reckoning.tum", dead_reckoning.clone());
