@@ -231,6 +231,23 @@ async function testState(frame) {
   return state;
 }
 
+/** Drops files on the app's canvas as a drag from the desktop would: each `[url, name]`
+ * is fetched by the page from this server (e.g. `shared-data/...`) and handed over as
+ * one drop. */
+async function dropFetched(frame, files) {
+  await frame.evaluate(async (list) => {
+    const dt = new DataTransfer();
+    for (const [url, name] of list) {
+      const bytes = new Uint8Array(await (await fetch(url)).arrayBuffer());
+      dt.items.add(new File([bytes], name, { type: "text/plain" }));
+    }
+    const canvas = document.getElementById("the_canvas_id");
+    for (const type of ["dragenter", "dragover", "drop"]) {
+      canvas.dispatchEvent(new DragEvent(type, { dataTransfer: dt, bubbles: true, cancelable: true }));
+    }
+  }, files);
+}
+
 /** Polls the app's state until `done(state)` holds; throws after `timeoutMs`. */
 async function waitState(frame, done, what, timeoutMs = 15_000) {
   const deadline = Date.now() + timeoutMs;
@@ -651,17 +668,7 @@ async function main() {
       try {
         await waitRunning(p);
         // Dropped on the canvas (the path of a drag from the desktop).
-        await p.evaluate(async (list) => {
-          const dt = new DataTransfer();
-          for (const name of list) {
-            const bytes = new Uint8Array(await (await fetch(`shared-data/landmarks/freiburg/${name}`)).arrayBuffer());
-            dt.items.add(new File([bytes], name, { type: "text/plain" }));
-          }
-          const canvas = document.getElementById("the_canvas_id");
-          for (const type of ["dragenter", "dragover", "drop"]) {
-            canvas.dispatchEvent(new DragEvent(type, { dataTransfer: dt, bubbles: true, cancelable: true }));
-          }
-        }, names);
+        await dropFetched(p, names.map((n) => [`shared-data/landmarks/freiburg/${n}`, n]));
         const s0 = await waitState(p, (st) => st.data && st.data.kind === "Freiburg Robot Mapping course", "the Freiburg files opened by a drop", 30_000);
         assert(s0.data.steps === 331 && s0.data.truth_known === false, `opened ${JSON.stringify(s0.data)}`);
         await p.mouse.click(VIEWPORT.width / 2, VIEWPORT.height / 2);
@@ -713,17 +720,7 @@ async function main() {
       const { context, page: p, log } = await openPage(browser, baseUrl, "index.html?lesson=landmark-slam&estimator=ekf", "landmark-victoria-park");
       try {
         await waitRunning(p);
-        await p.evaluate(async (list) => {
-          const dt = new DataTransfer();
-          for (const name of list) {
-            const bytes = new Uint8Array(await (await fetch(`shared-data/landmarks/victoria_park/${name}`)).arrayBuffer());
-            dt.items.add(new File([bytes], name, { type: "text/plain" }));
-          }
-          const canvas = document.getElementById("the_canvas_id");
-          for (const type of ["dragenter", "dragover", "drop"]) {
-            canvas.dispatchEvent(new DragEvent(type, { dataTransfer: dt, bubbles: true, cancelable: true }));
-          }
-        }, names);
+        await dropFetched(p, names.map((n) => [`shared-data/landmarks/victoria_park/${n}`, n]));
         const s0 = await waitState(p, (st) => st.data && st.data.kind === "Victoria Park", "Victoria Park opened by a drop", 60_000);
         await p.mouse.click(VIEWPORT.width / 2, VIEWPORT.height / 2);
         await p.keyboard.press("Space");
