@@ -215,9 +215,7 @@ impl GridAtlas {
         }
         let side = TILE as f64 * grid.resolution();
         let mut out = Vec::new();
-        let mut live = std::collections::HashSet::new();
         for (ti, tj, revision) in grid.tile_revisions() {
-            live.insert((ti, tj));
             let known = self.grids[index].get(&(ti, tj)).copied();
             if known.is_none_or(|(_, rev)| rev != revision)
                 && let Some(cells) = grid.tile_cells(ti, tj)
@@ -241,16 +239,20 @@ impl GridAtlas {
                 out.push((*slot, [x0, y0, x0 + side, y0 + side]));
             }
         }
-        // After a step back or a restart some tiles are gone: their slots are free.
-        let gone: Vec<(i64, i64)> = self.grids[index]
-            .keys()
-            .filter(|k| !live.contains(k))
-            .copied()
-            .collect();
-        for key in gone {
-            if let Some((slot, _)) = self.grids[index].remove(&key) {
-                self.free.push(slot);
-            }
+        // After a step back or a restart some tiles are gone (more slots than
+        // tiles drawn): their slots are free. Tiles only come otherwise, so the
+        // set of live tiles is built only then, not every frame.
+        if self.grids[index].len() > out.len() {
+            let live: std::collections::HashSet<(i64, i64)> =
+                grid.tile_revisions().map(|(ti, tj, _)| (ti, tj)).collect();
+            let free = &mut self.free;
+            self.grids[index].retain(|key, (slot, _)| {
+                let keep = live.contains(key);
+                if !keep {
+                    free.push(*slot);
+                }
+                keep
+            });
         }
         // A grid's tiles do not overlap: drawn page by page they need fewer meshes.
         out.sort_by_key(|(slot, _)| slot.page);
@@ -506,6 +508,12 @@ mod tests {
         assert!(
             written > 0 && written <= changed[2].tile_revisions().count(),
             "{written}"
+        );
+        // The tiles the changed grid no longer has gave their slots back.
+        let now: usize = changed.iter().map(|g| g.tile_revisions().count()).sum();
+        assert_eq!(
+            format!("{atlas:?}"),
+            format!("GridAtlas(6 grids, {now} tiles on 1 pages)")
         );
         // Fewer grids: the others' slots are freed and reused, no new page.
         let (meshes, _) = frame(&ctx, &mut atlas, &grids[..2]);
