@@ -587,6 +587,17 @@ fn variant(
     (p, run)
 }
 
+/// Alice's `matches.csv` (`slamlab export-inputs two-view --student
+/// alice@example.edu`): its number of matches and first line, which the
+/// browser check finds in wasm too.
+const ALICE_MATCHES: usize = 215;
+const ALICE_FIRST_MATCH: [f64; 4] = [
+    71.88514417534088,
+    248.99848867567,
+    145.40899940678563,
+    266.8309973367838,
+];
+
 /// `matches.csv` as `slamlab export-inputs two-view` writes it, read back.
 fn exported_matches(p: &slamlab_sim::coursework::Prepared) -> Vec<[f64; 4]> {
     let files = p.input_files(false);
@@ -665,7 +676,12 @@ fn a_two_view_assignment_shows_the_variants_two_views() {
     let st = app_state(&h);
     assert_eq!(st["lesson"], "visual-odometry", "{st}");
     let two_view = &lesson(&h).test_state()["two_view"];
-    assert_scene_is(two_view, &run, &exported_matches(&alice));
+    let exported = exported_matches(&alice);
+    assert_scene_is(two_view, &run, &exported);
+    // What the browser check pins for Alice (web/tests/browser.test.mjs): the
+    // same inputs in wasm as here and in the command line.
+    assert_eq!(exported.len(), ALICE_MATCHES);
+    assert_eq!(exported[0], ALICE_FIRST_MATCH);
     // To the bit, through the lesson itself.
     let scene = lesson(&h).scene().map(|s| &s.run);
     assert_eq!(scene.map(|s| &s.matches), Some(&run.matches));
