@@ -752,7 +752,7 @@ fn a_two_view_assignment_shows_the_variants_two_views() {
         assert!((shown - v).abs() < 1e-12, "{mine} vs {expected:?}");
     }
     assert!(
-        (expected.x - b.x).hypot(expected.y - b.y) < 0.1,
+        slamlab_core::math::hypot(expected.x - b.x, expected.y - b.y) < 0.1,
         "{expected:?} {b:?}"
     );
     assert_eq!(two_view["wrong_shown"], true);
