@@ -401,6 +401,9 @@ impl VisualOdometryLesson {
 
 impl crate::widgets::layout::LessonPanels for VisualOdometryLesson {
     fn plots_ui(&mut self, ui: &mut egui::Ui) {
+        if self.showing_scene() {
+            scene::docking_note(ui);
+        }
         plots::plots_ui(ui, &self.run, self.pair, self.session.as_ref());
     }
 
@@ -409,6 +412,9 @@ impl crate::widgets::layout::LessonPanels for VisualOdometryLesson {
     }
 
     fn explanation_ui(&mut self, ui: &mut egui::Ui) {
+        if self.showing_scene() {
+            scene::docking_note(ui);
+        }
         explain::explanation_ui(ui, &self.run, self.pair, self.session.as_ref());
     }
 

@@ -311,7 +311,7 @@ impl TwoViewScene {
             if let Some(pose) = pose {
                 out.push((
                     format!("b by {name}"),
-                    palette::estimator_color(name),
+                    reference_color(name),
                     self.run.top_view_of(pose),
                 ));
             }
@@ -333,11 +333,14 @@ impl TwoViewScene {
         let cameras = self.top_view(estimates, truth);
         let text = ui.visuals().text_color();
         let mut key = vec![KeyEntry::new("camera a (origin)", text, Mark::Dots)];
-        key.extend(
-            cameras
-                .iter()
-                .map(|(name, colour, _)| KeyEntry::new(name.clone(), *colour, Mark::Dots)),
-        );
+        key.extend(cameras.iter().enumerate().map(|(k, (name, colour, _))| {
+            let name = if k == 0 {
+                format!("{name} (ring)")
+            } else {
+                name.clone()
+            };
+            KeyEntry::new(name, *colour, Mark::Dots)
+        }));
         let baseline = self.run.truth.translation.norm();
         figure_ui(
             ui,
@@ -379,7 +382,12 @@ impl TwoViewScene {
                         .color(text)
                         .radius(4.0),
                 );
-                for (name, colour, pose) in &cameras {
+                // The references, then the answers over them, the truth
+                // last: a ring around its place, so that an answer on it
+                // stays visible inside.
+                let order = (1..cameras.len()).chain(std::iter::once(0));
+                for (k, (name, colour, pose)) in order.filter_map(|k| Some((k, cameras.get(k)?))) {
+                    let truth = k == 0;
                     plot_ui.line(
                         Line::new(
                             name.clone(),
@@ -391,12 +399,13 @@ impl TwoViewScene {
                     plot_ui.line(
                         Line::new(name.clone(), PlotPoints::new(tick(pose)))
                             .color(*colour)
-                            .width(2.0),
+                            .width(if truth { 1.2 } else { 2.0 }),
                     );
                     plot_ui.points(
                         Points::new(name.clone(), PlotPoints::new(vec![[pose.x, pose.y]]))
                             .color(*colour)
-                            .radius(4.0),
+                            .filled(!truth)
+                            .radius(if truth { 8.0 } else { 4.0 }),
                     );
                 }
             },
@@ -436,6 +445,30 @@ impl TwoViewScene {
             "top_view": top,
         })
     }
+}
+
+/// The colour of a reference's camera b: the solution's blue, the five-point
+/// sky blue, the starter's naive answer dead reckoning's grey.
+fn reference_color(name: &str) -> Color32 {
+    match name {
+        REFERENCE => palette::BLUE,
+        "five-point" => palette::SKY_BLUE,
+        "naive" => palette::DEAD_RECKONING,
+        _ => palette::PURPLE,
+    }
+}
+
+/// The note over the explanation and the plots while the two views show:
+/// they are the docking run's.
+pub fn docking_note(ui: &mut egui::Ui) {
+    ui.label(
+        egui::RichText::new(
+            "These are the docking run's (the centre shows the two views): untick \"Show the \
+             two views\" in the parameters panel to see it.",
+        )
+        .small()
+        .weak(),
+    );
 }
 
 /// The dropped relative poses (the student's answers), drawn ones only.
