@@ -2166,7 +2166,7 @@ async function main() {
         assert(st.lesson === "visual-odometry" && tv.seed === st.assignment.seed, `seed ${tv.seed}, variant ${st.assignment.seed}`);
         assert(tv.matches === 215 && tv.matches === st.assignment.steps && tv.pixels.length === 215, `${tv.matches} matches, ${st.assignment.steps} steps`);
         assert(JSON.stringify(tv.pixels[0]) === JSON.stringify(ALICE_FIRST_MATCH), `first match ${JSON.stringify(tv.pixels[0])}`);
-        assert(tv.inliers > 140 && tv.inliers < 215 && tv.wrong === 62, `${tv.inliers} inliers, ${tv.wrong} wrong`);
+        assert(tv.inliers === 148 && tv.wrong === 62, `${tv.inliers} inliers, ${tv.wrong} wrong`);
         assert(tv.top_view[0].name === "true b", JSON.stringify(tv.top_view[0]));
         return tv;
       };

@@ -478,3 +478,40 @@ fn answers(estimates: &[Estimate]) -> Vec<&Estimate> {
         .filter(|e| e.visible && matches!(e.content, EstimateContent::RelativePose(_)))
         .collect()
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn pairs(list: &[(&str, &str)]) -> Vec<(String, String)> {
+        list.iter()
+            .map(|(k, v)| ((*k).to_owned(), (*v).to_owned()))
+            .collect()
+    }
+
+    /// The scene's keys are taken out of the lesson's pairs; a bad value is
+    /// a notice naming it, and the docking run opens.
+    #[test]
+    fn the_links_scene_keys_are_read_and_bad_values_said() {
+        let (link, rest) = SceneLink::from_pairs(&pairs(&[
+            ("seed", "3"),
+            ("two-view", "215"),
+            ("two-view-answers", "on"),
+            ("outliers", "0.3"),
+        ]));
+        assert_eq!((link.matches, link.answers), (Some(215), true));
+        assert!(link.notices.is_empty());
+        assert_eq!(rest, pairs(&[("seed", "3"), ("outliers", "0.3")]));
+        for (value, answers) in [("3", "maybe"), ("x", "2"), ("5001", "yes"), ("-1", "")] {
+            let (link, rest) = SceneLink::from_pairs(&pairs(&[
+                ("two-view", value),
+                ("two-view-answers", answers),
+            ]));
+            assert_eq!((link.matches, link.answers), (None, false), "{value}");
+            assert_eq!(link.notices.len(), 2, "{:?}", link.notices);
+            assert!(link.notices[0].contains(&format!("two-view = {value}")));
+            assert!(link.notices[0].contains("16 to 5000"));
+            assert!(rest.is_empty());
+        }
+    }
+}

@@ -689,7 +689,9 @@ fn a_two_view_assignment_shows_the_variants_two_views() {
     assert_eq!(two_view["seed"], alice.variant.seed);
     let inliers = run.inliers[0].1.iter().filter(|i| **i).count();
     assert_eq!(two_view["inliers"], inliers);
-    assert!(inliers > run.matches.len() / 2, "{inliers}");
+    // The eight-point reference keeps 148 of Alice's 215 matches (62 of them
+    // wrong): the browser check finds 148 in wasm too.
+    assert_eq!(inliers, 148);
     assert_eq!(two_view["wrong_shown"], false, "not before a grade");
     assert!(
         h.state()
