@@ -22,7 +22,7 @@
 //! Landmark ids are written from 1 (the course's Octave code indexes with them).
 
 use super::files::{InputFiles, number};
-use super::{CourseworkError, InputFormat, Task, TaskKind, TaskRun, TaskRunner};
+use super::{CourseworkError, InputFormat, Task, TaskKind, TaskRun};
 use crate::metrics::Trajectory;
 use crate::world::landmark_scenario::LandmarkScenario;
 use crate::world::landmark_session::LandmarkSession;
@@ -313,11 +313,9 @@ impl LandmarkRun {
     }
 }
 
-/// The runner of landmark-SLAM tasks: the lesson's parameter table checks the
-/// assignment's parameters, and a variant is the landmark world run with the
-/// student's seed.
-pub const RUNNER: TaskRunner = TaskRunner::of::<LandmarkRun>();
-
+/// Landmark-SLAM tasks: the lesson's parameter table checks the assignment's
+/// parameters, and a variant is the landmark world run with the student's
+/// seed.
 impl Task for LandmarkRun {
     const KIND: TaskKind = TaskKind::LandmarkSlam;
     type Scenario = LandmarkScenario;

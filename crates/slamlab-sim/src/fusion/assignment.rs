@@ -1,4 +1,4 @@
-//! Sensor-fusion assignments (`crate::coursework`'s [`RUNNER`] of `fusion`
+//! Sensor-fusion assignments (`crate::coursework`'s [`Task`] of `fusion`
 //! tasks): one student's drive of the fusion lesson's robot, handed out as one
 //! CSV per sensor, and the lesson's fusion EKF replayed on the same readings.
 //!
@@ -24,8 +24,7 @@ use super::scenario::SlamSource;
 use super::sensors::simulate;
 use crate::coursework::files::{InputFiles, number};
 use crate::coursework::{
-    Assignment, CourseworkError, InputFormat, Task, TaskKind, TaskRun, TaskRunner, Variant,
-    steps_refusal,
+    Assignment, CourseworkError, InputFormat, Task, TaskKind, TaskRun, Variant, steps_refusal,
 };
 use crate::io::trajectory::write_tum;
 use crate::metrics::Trajectory;
@@ -232,9 +231,8 @@ pub fn dead_reckoning(odometry: &Rows, times: &[f64]) -> Trajectory {
 /// The starter code of fusion assignments.
 pub const FUSION_STARTER: &str = include_str!("assignment_starter.py");
 
-/// The runner of fusion tasks.
-pub const RUNNER: TaskRunner = TaskRunner::of::<FusionRun>();
-
+/// Fusion tasks: the lesson's parameter table checks the assignment's
+/// parameters, and a variant is the lesson's drive with the student's seed.
 impl Task for FusionRun {
     const KIND: TaskKind = TaskKind::Fusion;
     type Scenario = FusionLessonScenario;

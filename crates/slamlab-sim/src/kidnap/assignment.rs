@@ -1,4 +1,4 @@
-//! Localization assignments (`crate::coursework`'s [`RUNNER`] of localization
+//! Localization assignments (`crate::coursework`'s [`Task`] of localization
 //! tasks): one student's run of the Monte Carlo localization
 //! lesson's robot, handed out as a ROS map and a CARMEN log, and the reference
 //! MCL replayed on exactly what was handed out.
@@ -13,8 +13,8 @@
 use super::{InitMode, LocalizationEstimator, MclRun, MclScenario};
 use crate::coursework::files::{InputFiles, number};
 use crate::coursework::{
-    Assignment, CourseworkError, InputFormat, Task, TaskKind, TaskRun, TaskRunner,
-    builtin_map_refusal, load_builtin_map,
+    Assignment, CourseworkError, InputFormat, Task, TaskKind, TaskRun, builtin_map_refusal,
+    load_builtin_map,
 };
 use crate::io::laser_log::{LaserKind, LaserLog, LogOdometry, LogScan, write_carmen};
 use crate::io::ros_map::{ImageFormat, export_map, load_map};
@@ -192,11 +192,9 @@ pub fn reference_mcl(
 /// The starter code of localization assignments.
 pub const LOCALIZATION_STARTER: &str = include_str!("assignment_starter.py");
 
-/// The runner of localization tasks: the lesson's parameter table checks the
-/// assignment's parameters (the map must be a built-in one), and a variant is
-/// the lesson's robot run with the student's seed.
-pub const RUNNER: TaskRunner = TaskRunner::of::<LocalizationRun>();
-
+/// Localization tasks: the lesson's parameter table checks the assignment's
+/// parameters (the map must be a built-in one), and a variant is the lesson's
+/// robot run with the student's seed.
 impl Task for LocalizationRun {
     const KIND: TaskKind = TaskKind::Localization;
     type Scenario = MclScenario;

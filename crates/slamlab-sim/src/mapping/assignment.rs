@@ -1,4 +1,4 @@
-//! Grid-mapping assignments (`crate::coursework`'s [`RUNNER`] of grid-mapping
+//! Grid-mapping assignments (`crate::coursework`'s [`Task`] of grid-mapping
 //! tasks): occupancy-grid mapping with known poses. One student's run of the
 //! mapping lesson's simulated robot is handed out as a CARMEN log whose scans
 //! carry their true poses (and the same poses as CSV) with the true map's size
@@ -16,8 +16,8 @@ use super::scenario::simulated_log_config;
 use crate::coursework::files::{InputFiles, number};
 use crate::coursework::grade::assemble_scores;
 use crate::coursework::{
-    Assignment, CourseworkError, Grade, InputFormat, Metric, Task, TaskKind, TaskRun, TaskRunner,
-    Variant, builtin_map_refusal, load_builtin_map, steps_refusal,
+    Assignment, CourseworkError, Grade, InputFormat, Metric, Task, TaskKind, TaskRun, Variant,
+    builtin_map_refusal, load_builtin_map, steps_refusal,
 };
 use crate::grid::{occupancy_agreement, occupancy_coverage, simulate_log};
 use crate::io::laser_log::{LaserLog, write_carmen};
@@ -146,9 +146,9 @@ pub fn reference_map(
 /// The starter code of grid-mapping assignments.
 pub const GRID_MAPPING_STARTER: &str = include_str!("assignment_starter.py");
 
-/// The runner of grid-mapping tasks.
-pub const RUNNER: TaskRunner = TaskRunner::of::<GridMappingRun>();
-
+/// Grid-mapping tasks: the mapping lesson's parameter table checks the
+/// assignment's parameters (the map must be a built-in one), and a variant is
+/// the lesson's robot run with the student's seed, mapped with the true poses.
 impl Task for GridMappingRun {
     const KIND: TaskKind = TaskKind::GridMapping;
     type Scenario = MappingScenario;

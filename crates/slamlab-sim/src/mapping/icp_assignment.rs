@@ -1,4 +1,4 @@
-//! ICP assignments (`crate::coursework`'s [`RUNNER`] of scan-matching tasks):
+//! ICP assignments (`crate::coursework`'s [`Task`] of scan-matching tasks):
 //! two laser scans of the mapping lesson's simulated robot, taken a variant's
 //! number of steps apart, handed out as CSV points in each scan's own frame;
 //! the student hands back their relative pose, scored as the two-view lesson
@@ -18,8 +18,8 @@ use super::scenario::simulated_log_config;
 use crate::coursework::files::{InputFiles, number};
 use crate::coursework::grade::assemble_scores;
 use crate::coursework::{
-    Assignment, CourseworkError, Grade, InputFormat, Metric, Task, TaskKind, TaskRun, TaskRunner,
-    Variant, builtin_map_refusal, load_builtin_map, steps_refusal,
+    Assignment, CourseworkError, Grade, InputFormat, Metric, Task, TaskKind, TaskRun, Variant,
+    builtin_map_refusal, load_builtin_map, steps_refusal,
 };
 use crate::grid::simulate_log;
 use crate::io::relative_pose::{read_relative_pose, write_relative_pose};
@@ -156,9 +156,9 @@ impl IcpRun {
 /// The starter code of ICP assignments.
 pub const ICP_STARTER: &str = include_str!("icp_assignment_starter.py");
 
-/// The runner of ICP tasks.
-pub const RUNNER: TaskRunner = TaskRunner::of::<IcpRun>();
-
+/// ICP tasks: the mapping lesson's parameter table checks the assignment's
+/// parameters (the map must be a built-in one), and a variant is a pair of
+/// the lesson's scans with the student's seed.
 impl Task for IcpRun {
     const KIND: TaskKind = TaskKind::Icp;
     type Scenario = MappingScenario;

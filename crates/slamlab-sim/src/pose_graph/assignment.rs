@@ -1,4 +1,4 @@
-//! Pose-graph assignments (`crate::coursework`'s [`RUNNER`] of pose-graph
+//! Pose-graph assignments (`crate::coursework`'s [`Task`] of pose-graph
 //! tasks): one student's Manhattan-world graph, handed out as g2o, and the
 //! optimized graph they hand back scored by the lesson's least-squares cost
 //! against the reference solver's, and by its poses against the truth.
@@ -15,8 +15,8 @@ use super::session::{Example, KernelChoice, PoseGraphScenario};
 use crate::coursework::files::InputFiles;
 use crate::coursework::grade::{assemble_scores, trajectory_metric, trajectory_settings};
 use crate::coursework::{
-    Assignment, CourseworkError, Grade, InputFormat, Metric, Task, TaskKind, TaskRun, TaskRunner,
-    Variant, steps_refusal,
+    Assignment, CourseworkError, Grade, InputFormat, Metric, Task, TaskKind, TaskRun, Variant,
+    steps_refusal,
 };
 use crate::io::graph::{MAX_FILE_BYTES, read_graph, write_g2o};
 use crate::io::trajectory::write_tum;
@@ -96,9 +96,8 @@ impl PoseGraphRun {
 /// The starter code of pose-graph assignments.
 pub const POSE_GRAPH_STARTER: &str = include_str!("assignment_starter.py");
 
-/// The runner of pose-graph tasks.
-pub const RUNNER: TaskRunner = TaskRunner::of::<PoseGraphRun>();
-
+/// Pose-graph tasks: the lesson's parameter table checks the assignment's
+/// parameters, and a variant is the Manhattan graph with the student's seed.
 impl Task for PoseGraphRun {
     const KIND: TaskKind = TaskKind::PoseGraph;
     type Scenario = PoseGraphScenario;
