@@ -231,21 +231,51 @@ async function testState(frame) {
   return state;
 }
 
-/** Drops files on the app's canvas as a drag from the desktop would: each `[url, name]`
- * is fetched by the page from this server (e.g. `shared-data/...`) and handed over as
- * one drop. */
-async function dropFetched(frame, files) {
+/** Drops files on the app's canvas as a drag from the desktop would, all in one drop.
+ * Each file is `{ name, type }` (the MIME type, text/plain when none is given) and one of
+ * `text` (a string), `bytes` (an array of bytes), `b64` (bytes in base64, compact for
+ * photos), `url` (fetched by the page from this server, e.g. `shared-data/...`) or `zeros`
+ * (that many zero bytes, made in the page so that a huge file never crosses over). */
+async function dropFiles(frame, files) {
   await frame.evaluate(async (list) => {
     const dt = new DataTransfer();
-    for (const [url, name] of list) {
-      const bytes = new Uint8Array(await (await fetch(url)).arrayBuffer());
-      dt.items.add(new File([bytes], name, { type: "text/plain" }));
+    for (const f of list) {
+      let body = f.text;
+      if (f.bytes !== undefined) body = new Uint8Array(f.bytes);
+      if (f.b64 !== undefined) body = Uint8Array.from(atob(f.b64), (c) => c.charCodeAt(0));
+      if (f.url !== undefined) body = new Uint8Array(await (await fetch(f.url)).arrayBuffer());
+      if (f.zeros !== undefined) body = new Uint8Array(f.zeros);
+      dt.items.add(new File([body], f.name, { type: f.type || "text/plain" }));
     }
     const canvas = document.getElementById("the_canvas_id");
     for (const type of ["dragenter", "dragover", "drop"]) {
       canvas.dispatchEvent(new DragEvent(type, { dataTransfer: dt, bubbles: true, cancelable: true }));
     }
   }, files);
+}
+
+/** Drops files fetched by the page from this server: each `[url, name]`. */
+async function dropFetched(frame, files) {
+  await dropFiles(frame, files.map(([url, name]) => ({ url, name })));
+}
+
+/** The files of a zip as the app's exports write it: its local file headers
+ * (PK\x03\x04), each deflated (method 8) or stored (0), by name. */
+function unzip(bytes) {
+  const files = {};
+  let at = 0;
+  while (at + 30 <= bytes.length && bytes.readUInt32LE(at) === 0x04034b50) {
+    const method = bytes.readUInt16LE(at + 8);
+    const size = bytes.readUInt32LE(at + 18);
+    const nameLength = bytes.readUInt16LE(at + 26);
+    const extra = bytes.readUInt16LE(at + 28);
+    const name = bytes.subarray(at + 30, at + 30 + nameLength).toString("utf8");
+    const start = at + 30 + nameLength + extra;
+    const data = bytes.subarray(start, start + size);
+    files[name] = method === 8 ? inflateRawSync(data) : Buffer.from(data);
+    at = start + size;
+  }
+  return files;
 }
 
 /** Polls the app's state until `done(state)` holds; throws after `timeoutMs`. */
@@ -1416,18 +1446,6 @@ async function main() {
     {
       const pair = photoPair();
       const asFile = (name, bytes, type) => ({ name, type, b64: Buffer.from(bytes).toString("base64") });
-      const dropFiles = (frame, files) =>
-        frame.evaluate((list) => {
-          const dt = new DataTransfer();
-          for (const f of list) {
-            const bytes = Uint8Array.from(atob(f.b64), (c) => c.charCodeAt(0));
-            dt.items.add(new File([bytes], f.name, { type: f.type }));
-          }
-          const canvas = document.getElementById("the_canvas_id");
-          for (const type of ["dragenter", "dragover", "drop"]) {
-            canvas.dispatchEvent(new DragEvent(type, { dataTransfer: dt, bubbles: true, cancelable: true }));
-          }
-        }, files);
       const photoFiles = [asFile("left.png", pair.left, "image/png"), asFile("right.png", pair.right, "image/png")];
       const checkPhotos = (photos, where) => {
         assert(photos.showing === true && photos.left === "left.png" && photos.right === "right.png", `${where}: ${JSON.stringify(photos)}`);
@@ -1765,14 +1783,7 @@ async function main() {
           console.log(`  (skipping the M3500 timing: ${file} is absent)`);
         }
         if (text !== null) {
-          await p.evaluate((t) => {
-            const dt = new DataTransfer();
-            dt.items.add(new File([t], "M3500.g2o", { type: "text/plain" }));
-            const canvas = document.getElementById("the_canvas_id");
-            for (const type of ["dragenter", "dragover", "drop"]) {
-              canvas.dispatchEvent(new DragEvent(type, { dataTransfer: dt, bubbles: true, cancelable: true }));
-            }
-          }, text);
+          await dropFiles(p, [{ name: "M3500.g2o", text }]);
           const done = await waitState(
             p,
             (st) => st.source === "M3500.g2o" && !st.optimizing && st.optimize !== null,
@@ -1845,14 +1856,7 @@ async function main() {
         try {
           await waitRunning(other);
           await waitState(other, (st) => st.lesson === "fusion" && st.frames >= 2, "the fusion lesson");
-          await other.evaluate((text) => {
-            const dt = new DataTransfer();
-            dt.items.add(new File([text], "scenario.json", { type: "application/json" }));
-            const canvas = document.getElementById("the_canvas_id");
-            for (const type of ["dragenter", "dragover", "drop"]) {
-              canvas.dispatchEvent(new DragEvent(type, { dataTransfer: dt, bubbles: true, cancelable: true }));
-            }
-          }, json.bytes.toString("utf8"));
+          await dropFiles(other, [{ name: "scenario.json", type: "application/json", text: json.bytes.toString("utf8") }]);
           const reopened = await waitState(other, (st) => st.lesson === "landmark-slam", "the dropped scenario", 20_000);
           assert(reopened.tick === 30 && reopened.seed === 7 && reopened.filters.join(",") === "ekf,ukf", JSON.stringify(reopened));
           assert(reopened.notices === 0, `notices after the drop: ${reopened.notices}`);
@@ -1874,23 +1878,6 @@ async function main() {
     // more estimator, scored in wasm exactly as the lesson scores its own EKF; it is drawn
     // on the map, at 1280 x 800 and at 800 x 500.
     await check("estimates: the exported EKF dropped back as a student's estimate scores as the lesson's own", async () => {
-      const unzip = (bytes) => {
-        // Local file headers (PK\x03\x04), each deflated (method 8) or stored (0).
-        const files = {};
-        let at = 0;
-        while (at + 30 <= bytes.length && bytes.readUInt32LE(at) === 0x04034b50) {
-          const method = bytes.readUInt16LE(at + 8);
-          const size = bytes.readUInt32LE(at + 18);
-          const nameLength = bytes.readUInt16LE(at + 26);
-          const extra = bytes.readUInt16LE(at + 28);
-          const name = bytes.subarray(at + 30, at + 30 + nameLength).toString("utf8");
-          const start = at + 30 + nameLength + extra;
-          const data = bytes.subarray(start, start + size);
-          files[name] = method === 8 ? inflateRawSync(data) : Buffer.from(data);
-          at = start + size;
-        }
-        return files;
-      };
       const results = [];
       for (const [w, h] of [[1280, 800], [800, 500]]) {
         const url = "index.html?lesson=landmark-slam&seed=7&estimator=ekf,ukf&tick=60";
@@ -1912,14 +1899,7 @@ async function main() {
           }
           const ekf = files[folder + "ekf.tum"].toString("utf8");
           assert(ekf.trim().split("\n").length === 62, `ekf.tum has ${ekf.trim().split("\n").length} lines`);
-          await p.evaluate((text) => {
-            const dt = new DataTransfer();
-            dt.items.add(new File([text], "mine.tum", { type: "text/plain" }));
-            const canvas = document.getElementById("the_canvas_id");
-            for (const type of ["dragenter", "dragover", "drop"]) {
-              canvas.dispatchEvent(new DragEvent(type, { dataTransfer: dt, bubbles: true, cancelable: true }));
-            }
-          }, ekf);
+          await dropFiles(p, [{ name: "mine.tum", text: ekf }]);
           const st = await waitState(p, (s) => Array.isArray(s.estimates) && s.estimates.some((e) => e.name === "mine.tum" && e.ate_rmse !== null), "the dropped estimate's score", 20_000);
           const mine = st.estimates.find((e) => e.name === "mine.tum");
           const own = st.estimates.find((e) => e.name === "ekf");
@@ -1948,14 +1928,7 @@ async function main() {
     // it, a notice names it and its size, the lesson keeps running, and the estimate
     // dropped before stays. Screenshots at 800 x 500 and 1280 x 800.
     await check("estimates: a dropped map and optimized graph score as the lesson's own; a 65 MiB drop is refused unread", async () => {
-      const drop = (p, files) => p.evaluate((files) => {
-        const dt = new DataTransfer();
-        for (const f of files) dt.items.add(new File([new Uint8Array(f.bytes)], f.name, { type: "application/octet-stream" }));
-        const canvas = document.getElementById("the_canvas_id");
-        for (const type of ["dragenter", "dragover", "drop"]) {
-          canvas.dispatchEvent(new DragEvent(type, { dataTransfer: dt, bubbles: true, cancelable: true }));
-        }
-      }, files);
+      const drop = (p, files) => dropFiles(p, files.map((f) => ({ name: f.name, type: "application/octet-stream", bytes: f.bytes })));
       const results = [];
       for (const [w, h] of [[800, 500], [1280, 800]]) {
         // The mapping lesson: 120 scans of the maze with scan-to-map matching.
@@ -1977,14 +1950,7 @@ async function main() {
             await screenshot(p, `map-estimate-${w}x${h}.png`);
             // A 65 MiB file made in the page: refused before it is read.
             const before = st.notices;
-            await p.evaluate(() => {
-              const dt = new DataTransfer();
-              dt.items.add(new File([new Uint8Array(65 * 1024 * 1024)], "big.tum", { type: "text/plain" }));
-              const canvas = document.getElementById("the_canvas_id");
-              for (const type of ["dragenter", "dragover", "drop"]) {
-                canvas.dispatchEvent(new DragEvent(type, { dataTransfer: dt, bubbles: true, cancelable: true }));
-              }
-            });
+            await dropFiles(p, [{ name: "big.tum", zeros: 65 * 1024 * 1024 }]);
             const refused = await waitState(p, (s) => s.notices > before, "the refusal's notice", 20_000);
             assert(refused.notice_list.some((n) => n.startsWith("big.tum has 68157440 bytes, more than the 67108864 bytes SLAM Lab reads")), JSON.stringify(refused.notice_list));
             assert(refused.estimates.some((e) => e.name === "slamlab-map.yaml"), "the map dropped before stays");
@@ -2037,32 +2003,6 @@ async function main() {
     // panel beside the map at 1280 x 800 and 800 x 500.
     await check("assignment: a homework link grades a dropped estimate in the page", async () => {
       const { createHash } = await import("node:crypto");
-      const unzip = (bytes) => {
-        const files = {};
-        let at = 0;
-        while (at + 30 <= bytes.length && bytes.readUInt32LE(at) === 0x04034b50) {
-          const method = bytes.readUInt16LE(at + 8);
-          const size = bytes.readUInt32LE(at + 18);
-          const nameLength = bytes.readUInt16LE(at + 26);
-          const extra = bytes.readUInt16LE(at + 28);
-          const name = bytes.subarray(at + 30, at + 30 + nameLength).toString("utf8");
-          const start = at + 30 + nameLength + extra;
-          const data = bytes.subarray(start, start + size);
-          files[name] = method === 8 ? inflateRawSync(data) : Buffer.from(data);
-          at = start + size;
-        }
-        return files;
-      };
-      const dropOn = async (frame, name, text) => {
-        await frame.evaluate(([n, t]) => {
-          const dt = new DataTransfer();
-          dt.items.add(new File([t], n, { type: "text/plain" }));
-          const canvas = document.getElementById("the_canvas_id");
-          for (const type of ["dragenter", "dragover", "drop"]) {
-            canvas.dispatchEvent(new DragEvent(type, { dataTransfer: dt, bubbles: true, cancelable: true }));
-          }
-        }, [name, text]);
-      };
       const notes = [];
       const { context, page: lecture, log } = await openPage(browser, baseUrl, "lecture.html", "lecture (homework)");
       let estimates;
@@ -2097,9 +2037,9 @@ async function main() {
         const folder = zip.suggestedFilename().replace(/\.zip$/, "/");
         estimates = { ekf: files[folder + "ekf.tum"].toString("utf8"), dr: files[folder + "dead-reckoning.tum"].toString("utf8") };
         assert(estimates.ekf.trim().split("\n").length === steps + 2, `ekf.tum has ${estimates.ekf.trim().split("\n").length} lines`);
-        await dropOn(frame, "estimate.tum", estimates.ekf);
+        await dropFiles(frame, [{ name: "estimate.tum", text: estimates.ekf }]);
         await waitState(frame, (st) => st.assignment.graded.length === 1, "the first grade", 60_000);
-        await dropOn(frame, "dead-reckoning.tum", estimates.dr);
+        await dropFiles(frame, [{ name: "dead-reckoning.tum", text: estimates.dr }]);
         const st = await waitState(frame, (s) => s.assignment.graded.length === 2, "the second grade", 60_000);
         const [ekf, dr] = st.assignment.graded;
         assert(ekf.file === "estimate.tum" && ekf.score === 100 && ekf.max_score === 100 && ekf.pass === true, JSON.stringify(ekf));
@@ -2133,7 +2073,7 @@ async function main() {
         try {
           await waitRunning(p);
           const s0 = await waitState(p, (st) => st.frames >= 2 && Array.isArray(st.map_rect) && st.assignment && st.assignment.stage === "ready", "the assignment", 60_000);
-          await dropOn(p, "dead-reckoning.tum", estimates.dr);
+          await dropFiles(p, [{ name: "dead-reckoning.tum", text: estimates.dr }]);
           const st = await waitState(p, (s) => s.assignment.graded.length === 1, "the grade", 60_000);
           const [mx, , mw, mh] = st.map_rect;
           assert(mx + mw <= w * 0.7 && mw >= w * 0.35 && mh >= h * 0.3, `the map ${JSON.stringify(st.map_rect)} in ${w} x ${h}`);
