@@ -31,8 +31,8 @@ use super::experiment::random_two_view_scene;
 use crate::coursework::files::{InputFiles, number};
 use crate::coursework::grade::assemble_scores;
 use crate::coursework::{
-    Assignment, CourseworkError, Grade, InputFormat, Metric, TaskKind, TaskRun, TaskRunner,
-    Variant, apply_params,
+    Assignment, CourseworkError, Grade, InputFormat, Metric, Task, TaskKind, TaskRun, TaskRunner,
+    Variant, apply_params, steps_refusal,
 };
 use crate::io::relative_pose::{read_relative_pose, write_relative_pose};
 use crate::metrics::{Trajectory, relative_pose_error};
@@ -240,12 +240,18 @@ impl TwoViewRun {
     /// scenario with the assignment's parameters and the variant's seed, as
     /// `slamlab export-inputs` and `slamlab grade` run it.
     pub fn for_variant(assignment: &Assignment, variant: &Variant, steps: u64) -> TwoViewRun {
-        let (mut scenario, _) = apply_params::<VoScenario>(assignment);
-        scenario.settings.seed = variant.seed;
-        let matches = usize::try_from(steps.clamp(MIN_MATCHES, MAX_MATCHES)).unwrap_or(200);
-        let mut run = TwoViewRun::simulate(&scenario, matches);
+        let (scenario, _) = apply_params::<VoScenario>(assignment);
+        let mut run = TwoViewRun::of_seed(scenario, variant.seed, steps);
         run.answers_included = assignment.answers_included;
         run
+    }
+
+    /// The scene of `scenario` with its seed set to `seed` and `steps` matches
+    /// (clamped to [`MIN_MATCHES`]..=[`MAX_MATCHES`]).
+    fn of_seed(mut scenario: VoScenario, seed: u64, steps: u64) -> TwoViewRun {
+        scenario.settings.seed = seed;
+        let matches = usize::try_from(steps.clamp(MIN_MATCHES, MAX_MATCHES)).unwrap_or(200);
+        TwoViewRun::simulate(&scenario, matches)
     }
 
     /// Camera b's top view ([`top_view`]) of `pose`, its translation scaled to
@@ -318,30 +324,38 @@ impl TwoViewRun {
 /// The starter code of two-view assignments.
 pub const TWO_VIEW_STARTER: &str = include_str!("assignment_starter.py");
 
-/// The runner of two-view tasks.
+/// The runner of two-view tasks: the lesson's parameter table checks the
+/// assignment's parameters ([`Task::refusals`] adds the ones the scene does not
+/// use and the matches' range); a variant is [`TwoViewRun::for_variant`], which
+/// also carries the assignment's answers switch into the lesson's link.
 pub const RUNNER: TaskRunner = TaskRunner {
-    kind: TaskKind::TwoView,
-    check_params,
     simulate: simulate_variant,
+    ..TaskRunner::of::<TwoViewRun>()
 };
 
-fn check_params(assignment: &Assignment) -> Vec<String> {
-    let (_, mut refused) = apply_params::<VoScenario>(assignment);
-    for (name, _) in assignment.param_pairs() {
-        if name != "seed" && name != "preset" && !USED_PARAMS.contains(&name.as_str()) {
-            refused.push(format!(
-                "{name}: a two-view assignment's scene is the two-view experiment's, set by {}",
-                USED_PARAMS.join(", ")
-            ));
+impl Task for TwoViewRun {
+    const KIND: TaskKind = TaskKind::TwoView;
+    type Scenario = VoScenario;
+
+    fn refusals(assignment: &Assignment, _scenario: &VoScenario) -> Vec<String> {
+        let mut refused = Vec::new();
+        for (name, _) in assignment.param_pairs() {
+            if name != "seed" && name != "preset" && !USED_PARAMS.contains(&name.as_str()) {
+                refused.push(format!(
+                    "{name}: a two-view assignment's scene is the two-view experiment's, set by {}",
+                    USED_PARAMS.join(", ")
+                ));
+            }
         }
+        let limit =
+            format!("a two-view assignment hands out {MIN_MATCHES} to {MAX_MATCHES} matches");
+        refused.extend(steps_refusal(assignment, MIN_MATCHES, MAX_MATCHES, &limit));
+        refused
     }
-    let (steps, spread) = (assignment.scenario.steps, assignment.scenario.steps_spread);
-    if steps < MIN_MATCHES || steps.saturating_add(spread) > MAX_MATCHES {
-        refused.push(format!(
-            "scenario.steps {steps} with steps_spread {spread}: a two-view assignment hands out {MIN_MATCHES} to {MAX_MATCHES} matches"
-        ));
+
+    fn run(scenario: VoScenario, seed: u64, steps: u64) -> Result<TwoViewRun, CourseworkError> {
+        Ok(TwoViewRun::of_seed(scenario, seed, steps))
     }
-    refused
 }
 
 fn simulate_variant(
