@@ -32,12 +32,8 @@ pub struct TwoViewSettings {
     #[serde(default)]
     pub early_rejection: EarlyRejection,
     /// Levenberg-Marquardt refinement of `(R, t)` after RANSAC.
-    #[serde(default = "refine_by_default")]
+    #[serde(default = "super::odometry::refine_by_default")]
     pub refine: bool,
-}
-
-fn refine_by_default() -> bool {
-    true
 }
 
 /// Median and 90th percentile.

@@ -45,7 +45,9 @@ pub struct VoSettings {
     pub refine: bool,
 }
 
-fn refine_by_default() -> bool {
+/// Levenberg-Marquardt refinement is on where a stored run or experiment
+/// predates the switch (the lesson's step and the two-view experiment alike).
+pub(super) fn refine_by_default() -> bool {
     true
 }
 
