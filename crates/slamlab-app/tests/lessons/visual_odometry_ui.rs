@@ -17,6 +17,20 @@ use slamlab_core::vision::{Method, Ransac};
 
 lesson_accessors!(VisualOdometryLesson);
 
+/// The frame rendered and saved as `name` in the temporary folder, for looking
+/// at (`None` where this machine cannot render: the caller skips its pixel
+/// checks).
+fn render_and_save(
+    h: &mut egui_kittest::Harness<'_, SlamLabApp>,
+    name: &str,
+) -> Option<image::RgbaImage> {
+    let image = render_or_skip(h)?;
+    let path = std::env::temp_dir().join(name);
+    let _ = image.save(&path);
+    eprintln!("saved {}", path.display());
+    Some(image)
+}
+
 /// What a step back must restore: every report, the bound, the best inliers,
 /// the inlier mask and the best F to the bit.
 fn snapshot(l: &VisualOdometryLesson) -> (String, usize, usize, Vec<bool>, Vec<u64>) {
@@ -212,12 +226,9 @@ fn the_rendered_images_show_inliers_outliers_and_the_sample() {
         }
         lesson_mut(&mut h).frame.view.true_outliers = true;
         h.run();
-        let Some(image) = render_or_skip(&mut h) else {
+        let Some(image) = render_and_save(&mut h, name) else {
             return;
         };
-        let path = std::env::temp_dir().join(name);
-        let _ = image.save(&path);
-        eprintln!("saved {}", path.display());
         if size == SIZE {
             let green = count_pixels(image.as_raw(), [0x00, 0x9E, 0x73], 30);
             let red = count_pixels(image.as_raw(), [0xD5, 0x5E, 0x00], 30);
@@ -257,11 +268,7 @@ fn the_rendered_images_show_inliers_outliers_and_the_sample() {
             // Its local optimization, as the explanation tells it.
             assert!(label_visible(&h, "then E refined by Levenberg-Marquardt"));
         }
-        if let Some(image) = render_or_skip(&mut h) {
-            let path = std::env::temp_dir().join(name);
-            let _ = image.save(&path);
-            eprintln!("saved {}", path.display());
-        }
+        let _ = render_and_save(&mut h, name);
     }
 }
 
@@ -337,12 +344,9 @@ fn two_photos_are_matched_and_drawn() {
             "{photos}"
         );
         assert_eq!(photos["showing"], true, "{photos}");
-        let Some(image) = render_or_skip(&mut h) else {
+        let Some(image) = render_and_save(&mut h, name) else {
             return;
         };
-        let path = std::env::temp_dir().join(name);
-        let _ = image.save(&path);
-        eprintln!("saved {}", path.display());
         let green = count_pixels(image.as_raw(), [0x00, 0x9E, 0x73], 30);
         assert!(green > 800, "inlier pixels {green}");
     }
@@ -405,11 +409,7 @@ fn the_sprt_switch_shows_each_early_rejection() {
     assert!(rejected_seen, "six samples without an early rejection");
     let state = lesson(&h).test_state();
     assert_eq!(state["early_rejection"], "sprt", "{state}");
-    if let Some(image) = render_or_skip(&mut h) {
-        let path = std::env::temp_dir().join("visual_odometry_sprt_1280x800.png");
-        let _ = image.save(&path);
-        eprintln!("saved {}", path.display());
-    }
+    let _ = render_and_save(&mut h, "visual_odometry_sprt_1280x800.png");
     // Run to the end: the bound is reached with the SPRT as well.
     lesson_mut(&mut h).run_ransac_to_end();
     h.run();
@@ -446,12 +446,9 @@ fn the_sprt_rows_render_small_and_embedded() {
             lesson_mut(&mut h).step_sample();
         }
         h.run();
-        let Some(image) = render_or_skip(&mut h) else {
+        if render_and_save(&mut h, name).is_none() {
             return;
-        };
-        let path = std::env::temp_dir().join(name);
-        let _ = image.save(&path);
-        eprintln!("saved {}", path.display());
+        }
     }
 }
 
@@ -489,11 +486,7 @@ fn identical_and_unrelated_photos_get_a_message() {
         before,
         "the simulated step is untouched"
     );
-    if let Some(image) = render_or_skip(&mut h) {
-        let path = std::env::temp_dir().join("visual_odometry_photos_identical_1280x800.png");
-        let _ = image.save(&path);
-        eprintln!("saved {}", path.display());
-    }
+    let _ = render_and_save(&mut h, "visual_odometry_photos_identical_1280x800.png");
 
     // Two unrelated textures: too few matches, a message and no estimate.
     let noise = |seed: u64| {
