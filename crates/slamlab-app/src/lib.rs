@@ -1454,16 +1454,10 @@ impl SlamLabApp {
     /// Takes a student's ROS map (its YAML and image) into the lesson's
     /// estimates, scored against the true map; says which it did, or why not.
     fn take_map(&mut self, files: Vec<(String, Result<Vec<u8>, String>)>) {
-        let mut read = Vec::new();
-        for (name, bytes) in files {
-            match bytes {
-                Ok(b) => read.push((name, b)),
-                Err(why) => {
-                    self.app_notices
-                        .push(format!("Could not read {name}: {why}"));
-                    return;
-                }
-            }
+        let (read, refused) = widgets::dropped_files::sort_read(files);
+        if let Some(why) = refused.into_iter().next() {
+            self.app_notices.push(why);
+            return;
         }
         if !self.lesson.scores_maps() {
             let names: Vec<&str> = read.iter().map(|(n, _)| n.as_str()).collect();

@@ -1161,26 +1161,16 @@ impl Lesson for KidnapLesson {
             .poll_all()
             .map(|batch| self.with_named_image(batch));
         if let Some(batch) = self.inbox.poll(ctx).or(picked) {
-            let mut files = Vec::new();
-            for (name, bytes) in batch {
-                match bytes {
-                    Ok(bytes) => files.push((name, bytes)),
-                    Err(why) => {
-                        self.frame.note = Some(format!("Could not read {name}: {why}"));
-                        return;
-                    }
-                }
+            let (files, refused) = crate::widgets::dropped_files::sort_read(batch);
+            if let Some(why) = refused.into_iter().next() {
+                self.frame.note = Some(why);
+                return;
             }
             // A map (YAML, PGM, PNG) loads as a map; anything else is read as a
             // laser file, a CARMEN log or a bag told apart by its bytes.
-            let is_map_file = |name: &str| {
-                let lower = name.to_ascii_lowercase();
-                [".yaml", ".yml", ".pgm", ".png"]
-                    .iter()
-                    .any(|e| lower.ends_with(e))
-            };
-            let (maps, logs): (Vec<_>, Vec<_>) =
-                files.into_iter().partition(|(name, _)| is_map_file(name));
+            let (maps, logs): (Vec<_>, Vec<_>) = files
+                .into_iter()
+                .partition(|(name, _)| crate::widgets::laser_inputs::is_map_file(name));
             if !maps.is_empty() {
                 self.load_dropped(&maps);
             }

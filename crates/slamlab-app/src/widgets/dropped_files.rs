@@ -8,6 +8,20 @@ use std::rc::Rc;
 /// One dropped file: its name and its bytes, or why it could not be read.
 pub type DroppedBytes = (String, Result<Vec<u8>, String>);
 
+/// A batch's files that could be read (name and bytes, in order), and for each
+/// one that could not, the note that says so.
+pub fn sort_read(batch: Vec<DroppedBytes>) -> (Vec<(String, Vec<u8>)>, Vec<String>) {
+    let mut read = Vec::new();
+    let mut refused = Vec::new();
+    for (name, bytes) in batch {
+        match bytes {
+            Ok(bytes) => read.push((name, bytes)),
+            Err(why) => refused.push(format!("Could not read {name}: {why}")),
+        }
+    }
+    (read, refused)
+}
+
 /// Collects the files of one drop until all are read.
 #[derive(Debug, Default)]
 pub struct DropInbox {
