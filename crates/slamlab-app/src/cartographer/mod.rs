@@ -20,7 +20,7 @@ mod explain;
 mod map;
 mod plots;
 
-use crate::lesson::{self, Lesson, LessonFrame, LessonStart, StoredSettings};
+use crate::lesson::{self, Lesson, LessonFrame, LessonStart};
 use crate::time_control::{StepControls, TimeAction, TimeInfo};
 use crate::widgets::laser_file::{LaserFileState, loaded_note};
 use crate::widgets::laser_inputs::{LaserInput, LaserInputs};
@@ -163,7 +163,6 @@ pub fn default_scenario() -> CartographerScenario {
 
 /// Opens the lesson from the URL's pairs, with what it stored last time.
 pub fn open(start: &LessonStart<'_>) -> Box<dyn Lesson> {
-    let stored = StoredSettings::<CartographerView>::from_start(start);
     let location = start.last_value("log");
     let reference = start.last_value("reference");
     let (laser, pairs) =
@@ -172,19 +171,15 @@ pub fn open(start: &LessonStart<'_>) -> Box<dyn Lesson> {
         pairs: &pairs,
         ..*start
     };
-    let (scenario, link_notices) = lesson::scenario_from_start(
-        start,
-        default_scenario(),
-        stored.as_ref().map(|s| s.params.as_slice()),
-    );
-    let mut lesson = match CartographerLesson::new(scenario) {
+    let opened = lesson::open_lesson(start, default_scenario(), CartographerLesson::new, |l| {
+        &mut l.frame
+    });
+    let mut lesson = match opened {
         Ok(lesson) => lesson,
         Err(why) => {
             return lesson::open_instead(start, format!("Cartographer could not open: {why}"));
         }
     };
-    lesson.frame.notices.splice(0..0, link_notices);
-    lesson.frame = lesson.frame.restored(stored.as_ref());
     lesson.laser = laser;
     if let Some(location) = &location {
         lesson.frame.note = Some(format!("Loading the log {location}…"));

@@ -14,7 +14,7 @@ mod explain;
 mod map;
 mod plots;
 
-use crate::lesson::{self, Lesson, LessonFrame, LessonStart, StoredSettings};
+use crate::lesson::{self, Lesson, LessonFrame, LessonStart};
 use crate::palette;
 use crate::time_control::{TimeAction, TimeInfo};
 use crate::widgets::drive::{self, PadDirection};
@@ -184,7 +184,6 @@ pub fn is_map_location(value: &str) -> bool {
 
 /// Opens the lesson from the URL's pairs, with what it stored last time.
 pub fn open(start: &LessonStart<'_>) -> Box<dyn Lesson> {
-    let stored = StoredSettings::<KidnapView>::from_start(start);
     // `map=maps/lab.yaml`: a ROS map beside the site, read after the first frame;
     // the lesson opens on the default map meanwhile.
     let location = start
@@ -201,12 +200,10 @@ pub fn open(start: &LessonStart<'_>) -> Box<dyn Lesson> {
         pairs: &pairs,
         ..*start
     };
-    let (scenario, link_notices) = lesson::scenario_from_start(
-        start,
-        default_scenario(),
-        stored.as_ref().map(|s| s.params.as_slice()),
-    );
-    let mut lesson = match KidnapLesson::new(scenario) {
+    let opened = lesson::open_lesson(start, default_scenario(), KidnapLesson::new, |l| {
+        &mut l.frame
+    });
+    let mut lesson = match opened {
         Ok(lesson) => lesson,
         // Only a broken build could get here (the built-in maze is tested); the
         // landmark lesson opens instead, saying why.
@@ -217,8 +214,6 @@ pub fn open(start: &LessonStart<'_>) -> Box<dyn Lesson> {
             );
         }
     };
-    lesson.frame.notices.splice(0..0, link_notices);
-    lesson.frame = lesson.frame.restored(stored.as_ref());
     // An embed keeps the legend on: without it a lecture figure's particle clouds,
     // rays and ellipses are unexplained (`legend=0` hides it).
     if start.embed {

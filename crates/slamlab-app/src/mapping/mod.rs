@@ -13,7 +13,7 @@ mod plots;
 
 pub use particles::ShownMap;
 
-use crate::lesson::{self, Lesson, LessonFrame, LessonRequest, LessonStart, StoredSettings};
+use crate::lesson::{self, Lesson, LessonFrame, LessonRequest, LessonStart};
 use crate::time_control::{TimeAction, TimeInfo};
 use crate::widgets::laser_file::{LaserFileState, loaded_note};
 use crate::widgets::laser_inputs::{LaserInput, LaserInputs};
@@ -204,7 +204,6 @@ pub fn default_scenario() -> MappingScenario {
 
 /// Opens the lesson from the URL's pairs, with what it stored last time.
 pub fn open(start: &LessonStart<'_>) -> Box<dyn Lesson> {
-    let stored = StoredSettings::<MappingView>::from_start(start);
     let location = start.last_value("log");
     let reference = start.last_value("reference");
     let (laser, pairs) =
@@ -213,17 +212,13 @@ pub fn open(start: &LessonStart<'_>) -> Box<dyn Lesson> {
         pairs: &pairs,
         ..*start
     };
-    let (scenario, link_notices) = lesson::scenario_from_start(
-        start,
-        default_scenario(),
-        stored.as_ref().map(|s| s.params.as_slice()),
-    );
-    let mut lesson = match MappingLesson::new(scenario) {
+    let opened = lesson::open_lesson(start, default_scenario(), MappingLesson::new, |l| {
+        &mut l.frame
+    });
+    let mut lesson = match opened {
         Ok(lesson) => lesson,
         Err(why) => return lesson::open_instead(start, format!("Mapping could not open: {why}")),
     };
-    lesson.frame.notices.splice(0..0, link_notices);
-    lesson.frame = lesson.frame.restored(stored.as_ref());
     lesson.laser = laser;
     if let Some(location) = &location {
         lesson.frame.note = Some(format!("Loading the log {location}…"));
