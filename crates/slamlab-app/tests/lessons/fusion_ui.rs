@@ -4,7 +4,7 @@
 //! the rendered map shows each mode's colour.
 
 use super::common::{
-    assert_notices, count_pixels, harness_sized, lesson_accessors, render_or_skip,
+    assert_notices, count_pixels, harness_sized, lesson_accessors, render_or_skip, snapshot,
 };
 use egui_kittest::Harness;
 use egui_kittest::kittest::Queryable as _;
@@ -208,11 +208,7 @@ fn rendered_lesson_shows_every_mode_in_its_colour() {
     assert!(purple > 800, "absolute-purple pixels {purple}");
     assert!(vermillion > 150, "SLAM-dot pixels {vermillion}");
     assert!(grey > 200, "raw-odometry grey pixels {grey}");
-    let _ = egui_kittest::try_image_snapshot_options(
-        &image,
-        "fusion_lesson",
-        &egui_kittest::SnapshotOptions::new().threshold(2.0),
-    );
+    snapshot(&image, "fusion_lesson");
 }
 
 #[test]
