@@ -819,24 +819,15 @@ impl CartographerLesson {
         let running = self.scenario.clone();
         params_panel::params_ui(ui, &mut self.pending, &running, PANEL_PARAMS);
         ui.separator();
-        let changed = params::to_pairs(&self.pending.scenario) != params::to_pairs(&running);
-        if ui
-            .add_enabled(
-                changed || self.builtin_chosen,
-                egui::Button::new("Apply & reset"),
-            )
-            .on_hover_text("Start over with these parameters (same seed: same scans)")
-            .clicked()
-        {
-            self.reset();
-        }
-        ui.separator();
-        crate::widgets::share::share_ui(
+        if params_panel::apply_and_share_ui(
             ui,
+            self.pending.differs_from(&running) || self.builtin_chosen,
+            "Start over with these parameters (same seed: same scans)",
             |embed| lesson::Lesson::share_query(self, embed),
             "index.html?… with these pairs opens exactly this run",
-            None,
-        );
+        ) {
+            self.reset();
+        }
     }
 }
 

@@ -850,21 +850,15 @@ impl KidnapLesson {
         let running = self.sim().run().scenario().clone();
         params_panel::params_ui(ui, &mut self.pending, &running, PANEL_PARAMS);
         ui.separator();
-        let changed = params::to_pairs(&self.pending.scenario) != params::to_pairs(&running);
-        if ui
-            .add_enabled(changed, egui::Button::new("Apply & reset"))
-            .on_hover_text("Start over with these parameters (same seed: same run)")
-            .clicked()
-        {
-            self.reset();
-        }
-        ui.separator();
-        crate::widgets::share::share_ui(
+        if params_panel::apply_and_share_ui(
             ui,
+            self.pending.differs_from(&running),
+            "Start over with these parameters (same seed: same run)",
             |embed| lesson::Lesson::share_query(self, embed),
             "index.html?… with these pairs opens exactly this run",
-            None,
-        );
+        ) {
+            self.reset();
+        }
     }
 }
 

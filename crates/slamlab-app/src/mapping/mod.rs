@@ -700,26 +700,18 @@ impl MappingLesson {
         };
         params_panel::params_ui(ui, &mut self.pending, &running, shown_params);
         ui.separator();
-        let changed = params::to_pairs(&self.pending.scenario) != params::to_pairs(&running);
-        if ui
-            .add_enabled(
-                changed
-                    || self.builtin_chosen
-                    || self.log_name.is_some() && self.pending.scenario.map != running.map,
-                egui::Button::new("Apply & reset"),
-            )
-            .on_hover_text("Start over with these parameters (same seed: same scans)")
-            .clicked()
-        {
-            self.reset();
-        }
-        ui.separator();
-        crate::widgets::share::share_ui(
+        let changed = self.pending.differs_from(&running)
+            || self.builtin_chosen
+            || self.log_name.is_some() && self.pending.scenario.map != running.map;
+        if params_panel::apply_and_share_ui(
             ui,
+            changed,
+            "Start over with these parameters (same seed: same scans)",
             |embed| lesson::Lesson::share_query(self, embed),
             "index.html?… with these pairs opens exactly this run",
-            None,
-        );
+        ) {
+            self.reset();
+        }
     }
 
     /// Grid FastSLAM's numbers for the browser checks: the particles, the

@@ -615,21 +615,20 @@ impl PoseGraphLesson {
             "{} apply at once; the others on \"Apply & reset\".",
             LIVE_PARAMS.join(", ")
         ));
-        let changed = params::to_pairs(&self.pending.scenario) != params::to_pairs(&running);
-        if ui
-            .add_enabled(changed, egui::Button::new("Apply & reset"))
-            .on_hover_text("Build the graph again with these parameters (same seed: same graph)")
-            .clicked()
-        {
-            self.reset();
-        }
-        ui.separator();
         let hover = if self.loaded.is_some() {
             "An opened file cannot travel in a link: the link opens the built-in example with these settings"
         } else {
             "index.html?… with these pairs opens exactly this graph"
         };
-        crate::widgets::share::share_ui(ui, |embed| Lesson::share_query(self, embed), hover, None);
+        if params_panel::apply_and_share_ui(
+            ui,
+            self.pending.differs_from(&running),
+            "Build the graph again with these parameters (same seed: same graph)",
+            |embed| Lesson::share_query(self, embed),
+            hover,
+        ) {
+            self.reset();
+        }
     }
 }
 
