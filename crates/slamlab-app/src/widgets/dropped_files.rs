@@ -22,6 +22,22 @@ pub fn sort_read(batch: Vec<DroppedBytes>) -> (Vec<(String, Vec<u8>)>, Vec<Strin
     (read, refused)
 }
 
+/// Takes the files dropped this frame for which `mine` holds out of the
+/// frame's input (the rest stay there for the lesson), to read with
+/// [`DropInbox::read`].
+pub fn take_dropped(
+    ctx: &egui::Context,
+    mine: impl FnMut(&egui::DroppedFileHandle) -> bool,
+) -> Vec<egui::DroppedFileHandle> {
+    ctx.input_mut(|i| {
+        let (taken, rest): (Vec<_>, Vec<_>) = std::mem::take(&mut i.raw.dropped_files)
+            .into_iter()
+            .partition(mine);
+        i.raw.dropped_files = rest;
+        taken
+    })
+}
+
 /// Collects the files of one drop until all are read.
 #[derive(Debug, Default)]
 pub struct DropInbox {
