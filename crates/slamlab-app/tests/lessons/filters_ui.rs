@@ -115,26 +115,22 @@ fn the_time_bar_steps_the_corridor_and_steps_back_exactly() {
 
 /// Presses the left button at `from`, moves to `to` in a few frames, releases.
 fn drag(h: &mut Harness<'_, SlamLabApp>, from: egui::Pos2, to: egui::Pos2) {
+    let button = |pos, pressed| egui::Event::PointerButton {
+        pos,
+        button: egui::PointerButton::Primary,
+        pressed,
+        modifiers: egui::Modifiers::NONE,
+    };
     h.event(egui::Event::PointerMoved(from));
     h.step();
-    h.event(egui::Event::PointerButton {
-        pos: from,
-        button: egui::PointerButton::Primary,
-        pressed: true,
-        modifiers: egui::Modifiers::NONE,
-    });
+    h.event(button(from, true));
     h.step();
     for k in 1..=8 {
         let p = from + (to - from) * (k as f32 / 8.0);
         h.event(egui::Event::PointerMoved(p));
         h.step();
     }
-    h.event(egui::Event::PointerButton {
-        pos: to,
-        button: egui::PointerButton::Primary,
-        pressed: false,
-        modifiers: egui::Modifiers::NONE,
-    });
+    h.event(button(to, false));
     h.step();
     h.run();
 }

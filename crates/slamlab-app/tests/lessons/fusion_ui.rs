@@ -71,22 +71,20 @@ fn a_step_names_its_sensor_and_step_back_replays() {
         label.starts_with("SLAM pose (differential)") && label.ends_with("at 5.00 s"),
         "{label}"
     );
-    let before: Vec<_> = lesson(&h)
-        .sim()
-        .runs()
-        .iter()
-        .map(|r| *r.filter().mean())
-        .collect();
+    let means = |h: &Harness<'_, SlamLabApp>| -> Vec<_> {
+        lesson(h)
+            .sim()
+            .runs()
+            .iter()
+            .map(|r| *r.filter().mean())
+            .collect()
+    };
+    let before = means(&h);
     h.get_by_label("Step phase").click();
     h.run();
     h.get_by_label("Step back").click();
     h.run();
-    let after: Vec<_> = lesson(&h)
-        .sim()
-        .runs()
-        .iter()
-        .map(|r| *r.filter().mean())
-        .collect();
+    let after = means(&h);
     assert_eq!(before, after);
     // Bad readings by button: skipped, named and counted in both modes.
     h.get_by_label("NaN IMU reading").click();

@@ -266,12 +266,7 @@ fn the_intel_log_mapped_through_the_lesson_ends_at_the_pose_the_browser_must_mat
     ))
     .unwrap();
     assert_eq!(state["scans"], 13_631, "{}", state["note"]);
-    let pose: Vec<f64> = state["pose"]
-        .as_array()
-        .unwrap()
-        .iter()
-        .map(|v| v.as_f64().unwrap())
-        .collect();
+    let pose = numbers(&state["pose"]);
     eprintln!(
         "pose {pose:?}, {} s of data, {} known cells",
         state["input_seconds"], state["known_cells"]
@@ -632,12 +627,7 @@ fn a_rosbags_bag_mapped_through_the_lesson_ends_at_the_pose_the_browser_must_mat
     .unwrap();
     assert_eq!(state["scans"], 300, "{state}");
     assert_eq!(state["topics"], serde_json::json!(["/scan", "/odom"]));
-    let pose: Vec<f64> = state["pose"]
-        .as_array()
-        .unwrap()
-        .iter()
-        .map(|v| v.as_f64().unwrap())
-        .collect();
+    let pose = numbers(&state["pose"]);
     eprintln!("pose {pose:?}");
     assert_eq!(pose, ROSBAGS_END_POSE);
 }
