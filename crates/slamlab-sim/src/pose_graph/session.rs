@@ -919,16 +919,21 @@ mod tests {
         assert_eq!(s.solver, SolverKind::GaussNewton);
     }
 
+    /// The lesson on `example`, the Manhattan graph cut to its first 200 poses.
+    fn small_session(example: Example) -> PoseGraphSession {
+        PoseGraphSession::from_scenario(PoseGraphScenario {
+            example,
+            manhattan_poses: 200,
+            ..PoseGraphScenario::default()
+        })
+        .unwrap()
+    }
+
     #[test]
     fn the_lessons_optimized_graph_written_and_read_back_scores_its_own_final_cost() {
         use crate::metrics::graph::{reference_solution, score_graph};
         for example in [Example::Thesis, Example::Manhattan] {
-            let mut session = PoseGraphSession::from_scenario(PoseGraphScenario {
-                example,
-                manhattan_poses: 200,
-                ..PoseGraphScenario::default()
-            })
-            .unwrap();
+            let mut session = small_session(example);
             let problem = session.start_graph().clone();
             let initial = session.cost();
             while !session.is_converged() && session.iterations() < 50 {
@@ -954,12 +959,7 @@ mod tests {
     #[test]
     fn one_gauss_newton_iteration_lowers_the_cost_of_both_examples() {
         for example in [Example::Thesis, Example::Manhattan] {
-            let mut session = PoseGraphSession::from_scenario(PoseGraphScenario {
-                example,
-                manhattan_poses: 200,
-                ..PoseGraphScenario::default()
-            })
-            .unwrap();
+            let mut session = small_session(example);
             let before = session.cost();
             let report = session.step().unwrap();
             assert!(
