@@ -557,6 +557,11 @@ pub fn sanitize<S: Scenario>(scenario: &mut S) -> Vec<ParamIssue> {
     issues
 }
 
+/// [`sanitize`], its issues as the notices a lesson shows when it opens.
+pub fn sanitize_notices<S: Scenario>(scenario: &mut S) -> Vec<String> {
+    sanitize(scenario).iter().map(ToString::to_string).collect()
+}
+
 /// The parameters of `scenario` that differ from `reference`, in table order.
 pub fn changed_pairs<S: Scenario>(scenario: &S, reference: &S) -> Vec<(String, String)> {
     let defaults = to_pairs(reference);

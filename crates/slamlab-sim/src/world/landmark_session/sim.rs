@@ -19,7 +19,7 @@
 use super::records::{LandmarkRecords, NeffSample, NisSample, TickMetrics};
 use super::records::{nearest_landmark_rmse, tick_metrics};
 use crate::noise::{Stream, gaussian, stream_rng};
-use crate::params::{self, ParamIssue};
+use crate::params;
 use crate::stepper::Simulation;
 use crate::world::landmark_scenario::{
     Association, ControllerKind, EstimatorKind, LandmarkScenario, MapMode,
@@ -311,20 +311,12 @@ pub struct OtherSighting {
     pub measured_point: Vector2<f64>,
 }
 
-/// Checks the scenario: what had to be changed, as notices.
-fn sanitized(scenario: &mut LandmarkScenario) -> Vec<String> {
-    params::sanitize(scenario)
-        .iter()
-        .map(ParamIssue::to_string)
-        .collect()
-}
-
 impl LandmarkSim {
     /// The run at its start. The scenario is checked first; whatever had to be
     /// changed, and every estimator that could not start, is listed in the notices
     /// returned.
     pub fn start(mut scenario: LandmarkScenario) -> (Self, Vec<String>) {
-        let mut notices = sanitized(&mut scenario);
+        let mut notices = params::sanitize_notices(&mut scenario);
         let world = scenario.world();
         let start = scenario.start_pose();
         let map: Vec<(usize, Vector2<f64>, Matrix2<f64>)> = match scenario.mode {
@@ -359,7 +351,7 @@ impl LandmarkSim {
         mut scenario: LandmarkScenario,
         recorded: Arc<RecordedWorld>,
     ) -> (Self, Vec<String>) {
-        let mut notices = sanitized(&mut scenario);
+        let mut notices = params::sanitize_notices(&mut scenario);
         notices.extend(recorded.notices.iter().cloned());
         if !recorded.known_association && scenario.association == Association::Known {
             scenario.association = Association::Unknown;
