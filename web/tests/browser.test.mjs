@@ -2149,6 +2149,71 @@ async function main() {
       return notes.join("; ");
     });
 
+    // --- A two-view assignment's link shows the variant's two views
+    // (crates/slamlab-app/src/visual_odometry/scene.rs): Alice's 215 matches, the very
+    // numbers `slamlab export-inputs two-view --student alice@example.edu` writes (its first
+    // line pinned, as the native UI test pins it), the reference RANSAC's inliers, the wrong
+    // matches hidden until a pose is graded; the starter's naive pose dropped is graded (fail)
+    // and drawn in the top view where the naive reference is. Full page at 1280 x 800 and
+    // 800 x 500, and in lecture.html's homework figure.
+    await check("assignment: a two-view link shows the variant's two views", async () => {
+      const ALICE_FIRST_MATCH = [71.88514417534088, 248.99848867567, 145.40899940678563, 266.8309973367838];
+      const naive = "1 0 0\n0 1 0\n0 0 1\n0 0 -1\n";
+      const query = "assignment=two-view&student=alice%40example.edu";
+      const checkScene = (st) => {
+        const tv = st.two_view;
+        assert(tv && tv.showing === true, `no two-view scene: ${JSON.stringify(st.two_view)}`);
+        assert(st.lesson === "visual-odometry" && tv.seed === st.assignment.seed, `seed ${tv.seed}, variant ${st.assignment.seed}`);
+        assert(tv.matches === 215 && tv.matches === st.assignment.steps && tv.pixels.length === 215, `${tv.matches} matches, ${st.assignment.steps} steps`);
+        assert(JSON.stringify(tv.pixels[0]) === JSON.stringify(ALICE_FIRST_MATCH), `first match ${JSON.stringify(tv.pixels[0])}`);
+        assert(tv.inliers === 148 && tv.wrong === 62, `${tv.inliers} inliers, ${tv.wrong} wrong`);
+        assert(tv.top_view[0].name === "true b", JSON.stringify(tv.top_view[0]));
+        return tv;
+      };
+      const notes = [];
+      for (const [w, h] of [[1280, 800], [800, 500]]) {
+        const { context: c, page: p, log: l } = await openPage(browser, baseUrl, `index.html?${query}`, `two-view ${w}x${h}`, { width: w, height: h });
+        try {
+          await waitRunning(p);
+          const s0 = await waitState(p, (st) => st.frames >= 2 && st.assignment && st.assignment.stage === "ready" && st.two_view, "the two views", 60_000);
+          const tv0 = checkScene(s0);
+          assert(tv0.wrong_shown === false && s0.notices === 0, `wrong shown ${tv0.wrong_shown}, ${s0.notices} notices`);
+          assertNotBlank(imageStats(await screenshot(p, `assignment-two-view-${w}x${h}.png`)), `the two views at ${w}x${h}`);
+          await dropFetched(p, [[`data:text/plain,${encodeURIComponent(naive)}`, "pose.txt"]]);
+          const st = await waitState(p, (s) => s.assignment.graded.length === 1 && s.two_view.top_view.length === 5, "the grade", 60_000);
+          const tv = checkScene(st);
+          const mine = tv.top_view.find((b) => b.name === "b by pose.txt");
+          const ref = tv.top_view.find((b) => b.name === "b by naive");
+          assert(mine && ref && mine.pose.every((v, k) => v === ref.pose[k]), `pose.txt at ${JSON.stringify(mine)}, the naive reference at ${JSON.stringify(ref)}`);
+          assert(st.assignment.graded[0].pass === false && tv.wrong_shown === true, JSON.stringify(st.assignment.graded[0]).slice(0, 200));
+          assertNotBlank(imageStats(await screenshot(p, `assignment-two-view-graded-${w}x${h}.png`)), `the graded two views at ${w}x${h}`);
+          await assertNoPanic(p);
+          assert(l.problems.length === 0, l.problems.join("; "));
+          notes.push(`${w}x${h}: ${tv.inliers} inliers of ${tv.matches}`);
+        } finally {
+          await c.close();
+        }
+      }
+      const { context, page: lecture, log } = await openPage(browser, baseUrl, "lecture.html", "lecture (two-view homework)");
+      try {
+        const element = lecture.locator("iframe.slamlab-homework");
+        await element.scrollIntoViewIfNeeded();
+        await element.evaluate((el, src) => { el.src = src; }, `index.html?${query}&embed=1`);
+        const frame = await (await element.elementHandle()).contentFrame();
+        await frame.waitForURL((u) => u.href.endsWith("embed=1"), { waitUntil: "load", timeout: 30_000 });
+        await waitRunning(frame);
+        const st = await waitState(frame, (s) => s.frames >= 2 && s.assignment && s.assignment.stage === "ready" && s.two_view, "the two views in the lecture", 60_000);
+        checkScene(st);
+        await sleep(300);
+        assertNotBlank(imageStats(await screenshot(element, "assignment-two-view-lecture.png")), "the two views in lecture.html");
+        await assertNoPanic(frame);
+        assert(log.problems.length === 0, log.problems.join("; "));
+      } finally {
+        await context.close();
+      }
+      return notes.join("; ");
+    });
+
     // --- The pictures of the README and the lesson documents (web/tests/screenshots.mjs,
     // which scripts/screenshots.sh runs for every picture): one lesson's in every run, so
     // that the script cannot stop working unnoticed. SLAMLAB_SCREENSHOTS=DIR makes them all

@@ -174,16 +174,21 @@ fn prepare(assignment: &Assignment, student: &str) -> Result<Prepared> {
     assignments::prepare(assignment, student).map_err(|e| anyhow!("{e}"))
 }
 
-/// Runs `slamlab export-inputs`.
-pub fn run_export(m: &ArgMatches, out: &mut dyn Write) -> Result<()> {
-    let assignment = load_assignment(m)?;
+/// The variant of `--student`.
+fn prepare_student(m: &ArgMatches, assignment: &Assignment) -> Result<Prepared> {
     let student = m
         .get_one::<String>("student")
         .ok_or_else(|| anyhow!("--student is required"))?;
+    prepare(assignment, student)
+}
+
+/// Runs `slamlab export-inputs`.
+pub fn run_export(m: &ArgMatches, out: &mut dyn Write) -> Result<()> {
+    let assignment = load_assignment(m)?;
+    let prepared = prepare_student(m, &assignment)?;
     let dir = m
         .get_one::<PathBuf>("out")
         .ok_or_else(|| anyhow!("--out is required"))?;
-    let prepared = prepare(&assignment, student)?;
     let files = prepared.input_files(m.get_flag("answers"));
     if !m.get_flag("force") {
         let existing: Vec<&str> = files
@@ -277,13 +282,10 @@ pub fn run_grade(m: &ArgMatches, out: &mut dyn Write) -> Result<()> {
             None => Ok(write!(out, "{csv}")?),
         };
     }
-    let student = m
-        .get_one::<String>("student")
-        .ok_or_else(|| anyhow!("--student is required"))?;
+    let prepared = prepare_student(m, &assignment)?;
     let estimate = m
         .get_one::<PathBuf>("estimate")
         .ok_or_else(|| anyhow!("--estimate is required"))?;
-    let prepared = prepare(&assignment, student)?;
     let grade = grade_file(&prepared, estimate)?;
     if let Some(path) = m.get_one::<PathBuf>("gradescope") {
         let text = serde_json::to_string_pretty(&grade.gradescope())?;
@@ -313,20 +315,7 @@ pub fn grade_text(g: &Grade) -> String {
     );
     for c in &g.criteria {
         let _ = writeln!(s, "  {}", c.summary());
-        let refs: Vec<String> = c
-            .references
-            .iter()
-            .map(|r| {
-                format!(
-                    "{} {}",
-                    r.name,
-                    r.value.map_or("-".to_owned(), |v| {
-                        slamlab_sim::coursework::grade::format_value(v, &c.unit)
-                    })
-                )
-            })
-            .collect();
-        let _ = writeln!(s, "      on your variant: {}", refs.join(", "));
+        let _ = writeln!(s, "      on your variant: {}", c.references_summary());
     }
     for n in &g.notices {
         let _ = writeln!(s, "  note: {n}");

@@ -9,6 +9,7 @@ use serde_json::json;
 use slamlab_sim::grid::{LaserFile, SimulatedLogConfig, simulate_log};
 use slamlab_sim::io::laser_log::{LaserLog, TruePose, write_carmen, write_truth};
 use slamlab_sim::io::ros2_bag::{BagKind, BagWriteOptions, Ros2Bag, TopicChoice, write_bag};
+use std::collections::BTreeMap;
 use std::io::Write;
 use std::path::{Path, PathBuf};
 
@@ -24,6 +25,14 @@ pub fn topic_args() -> [Arg; 2] {
             .value_name("TOPIC")
             .help("with a ROS 2 bag: the nav_msgs/msg/Odometry topic, or `tf` for odom -> base on /tf (default /odom, else the busiest, else tf)"),
     ]
+}
+
+/// `--log FILE`: the laser log a mapping lesson maps instead of its simulated
+/// robot's scans (read by [`read_laser_file`]).
+pub fn laser_log_arg() -> Arg {
+    Arg::new("log").long("log").value_name("FILE").help(
+        "map a CARMEN laser log (plain, .gz or .bz2) or a ROS 2 bag (.mcap) instead of a simulated robot",
+    )
 }
 
 /// The topics given by `--scan-topic` and `--odom-topic`.
@@ -272,20 +281,7 @@ fn info(path: &Path, as_json: bool, out: &mut impl Write) -> Result<()> {
     }
     let params: Vec<String> = log.params.iter().map(|(k, v)| format!("{k}={v}")).collect();
     writeln!(out, "params:      {}", params.join(" "))?;
-    let skipped: Vec<String> = log
-        .skipped
-        .iter()
-        .map(|(k, v)| format!("{v} {k}"))
-        .collect();
-    writeln!(
-        out,
-        "skipped:     {}",
-        if skipped.is_empty() {
-            "none".to_string()
-        } else {
-            skipped.join(", ")
-        }
-    )?;
+    write_skipped(out, &log.skipped)?;
     writeln!(out, "comments:    {}", log.comments)?;
     writeln!(
         out,
@@ -296,6 +292,18 @@ fn info(path: &Path, as_json: bool, out: &mut impl Write) -> Result<()> {
 }
 
 /// Does `path` name a bag to write (`.mcap`)?
+/// `skipped:` and what a reader passed over, `N kind` each (`none`).
+fn write_skipped(out: &mut impl Write, skipped: &BTreeMap<String, usize>) -> Result<()> {
+    let skipped: Vec<String> = skipped.iter().map(|(k, v)| format!("{v} {k}")).collect();
+    let text = if skipped.is_empty() {
+        "none".to_owned()
+    } else {
+        skipped.join(", ")
+    };
+    writeln!(out, "skipped:     {text}")?;
+    Ok(())
+}
+
 fn wants_bag(path: &Path) -> bool {
     path.extension()
         .is_some_and(|e| e.eq_ignore_ascii_case("mcap"))
@@ -441,20 +449,7 @@ fn bag_info(path: &Path, m: &ArgMatches, out: &mut impl Write) -> Result<()> {
             t.topic, t.type_name, t.messages
         )?;
     }
-    let skipped: Vec<String> = bag
-        .skipped
-        .iter()
-        .map(|(k, v)| format!("{v} {k}"))
-        .collect();
-    writeln!(
-        out,
-        "skipped:     {}",
-        if skipped.is_empty() {
-            "none".to_owned()
-        } else {
-            skipped.join(", ")
-        }
-    )?;
+    write_skipped(out, &bag.skipped)?;
     match read {
         Ok(r) => {
             let span = r.log.time_span().map_or(0.0, |(a, b)| b - a);

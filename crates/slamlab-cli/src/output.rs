@@ -95,6 +95,19 @@ impl<'a> Output<'a> {
         )
     }
 
+    /// [`Self::parameters`] as a paragraph of the experiments' reports: a
+    /// blank line before and after.
+    pub fn parameter_paragraph(
+        &mut self,
+        parameters: &Map<String, Value>,
+        width: usize,
+    ) -> Result<()> {
+        writeln!(self.out)?;
+        self.parameters(parameters, width)?;
+        writeln!(self.out)?;
+        Ok(())
+    }
+
     /// Settings that are not parameters: one line each, `  name value`, names
     /// padded to `width`.
     pub fn settings(&mut self, values: &Map<String, Value>, width: usize) -> Result<()> {

@@ -14,13 +14,13 @@ use crate::coursework::{self, Assignment, CourseworkError, Prepared, TaskRunner}
 /// poses and scan matching (the mapping lesson), two-view geometry (the
 /// visual-odometry lesson), sensor fusion (the fusion lesson).
 pub const RUNNERS: &[TaskRunner] = &[
-    coursework::landmarks::RUNNER,
-    crate::kidnap::assignment::RUNNER,
-    crate::pose_graph::assignment::RUNNER,
-    crate::mapping::assignment::RUNNER,
-    crate::mapping::icp_assignment::RUNNER,
+    TaskRunner::of::<coursework::landmarks::LandmarkRun>(),
+    TaskRunner::of::<crate::kidnap::assignment::LocalizationRun>(),
+    TaskRunner::of::<crate::pose_graph::assignment::PoseGraphRun>(),
+    TaskRunner::of::<crate::mapping::assignment::GridMappingRun>(),
+    TaskRunner::of::<crate::mapping::icp_assignment::IcpRun>(),
     crate::visual_odometry::assignment::RUNNER,
-    crate::fusion::assignment::RUNNER,
+    TaskRunner::of::<crate::fusion::assignment::FusionRun>(),
 ];
 
 /// The built-in assignment `name` (`ekf-slam`, `mcl`, `pose-graph`,

@@ -10,7 +10,7 @@ use slamlab_core::range_bearing::RangeBearing;
 use slamlab_core::{Control, Pose2};
 use slamlab_sim::assignments::{self, builtin, prepare};
 use slamlab_sim::coursework::landmarks::LandmarkRun;
-use slamlab_sim::coursework::{CourseworkError, Prepared, Variant, apply_params};
+use slamlab_sim::coursework::{CourseworkError, Grade, Prepared, Variant, apply_params};
 use slamlab_sim::io::laser_log::LaserLog;
 use slamlab_sim::io::ros_map::load_map;
 use slamlab_sim::io::trajectory::{read_trajectory, write_tum};
@@ -444,35 +444,41 @@ fn measure_the_references_over_sixty_students() {
         ("ekf-slam", "ekf", "dead-reckoning"),
         ("mcl", "mcl", "odometry"),
     ] {
-        let a = builtin(name).unwrap();
-        let mut rows = Vec::new();
-        for k in 0..60 {
-            let p = prepare(&a, &format!("student{k}@uni.edu")).unwrap();
-            let g = p.grade("ref.tum", &reference_tum(&p, good)).unwrap();
-            let n = p.grade("naive.tum", &reference_tum(&p, naive)).unwrap();
-            rows.push((
-                g.criteria[0].value.unwrap(),
-                g.pass,
-                n.criteria[0].value.unwrap(),
-                n.pass,
-            ));
-        }
-        let sorted = |column: usize| {
-            let mut v: Vec<f64> = rows
-                .iter()
-                .map(|r| if column == 0 { r.0 } else { r.2 })
-                .collect();
-            v.sort_by(f64::total_cmp);
-            (v[0], v[v.len() / 2], v[v.len() - 1])
-        };
+        let rows = over_sixty_students(name, |p| {
+            (
+                p.grade("ref.tum", &reference_tum(p, good)).unwrap(),
+                p.grade("naive.tum", &reference_tum(p, naive)).unwrap(),
+            )
+        });
         eprintln!(
             "{name}: {good} ATE RMSE min/median/max {:.3?}, passes {}/60; {naive} {:.3?}, passes {}/60",
-            sorted(0),
-            rows.iter().filter(|r| r.1).count(),
-            sorted(2),
-            rows.iter().filter(|r| r.3).count(),
+            spread(rows.iter().map(|(g, _)| value(g, 0))),
+            rows.iter().filter(|(g, _)| g.pass).count(),
+            spread(rows.iter().map(|(_, n)| value(n, 0))),
+            rows.iter().filter(|(_, n)| n.pass).count(),
         );
     }
+}
+
+/// Sixty students' variants of the built-in assignment `name`, each with what
+/// `measure` makes of it: the measurements docs/assignments.md gives.
+fn over_sixty_students<T>(name: &str, measure: impl Fn(&Prepared) -> T) -> Vec<T> {
+    let a = builtin(name).unwrap();
+    (0..60)
+        .map(|k| measure(&prepare(&a, &format!("student{k}@uni.edu")).unwrap()))
+        .collect()
+}
+
+/// The student's value of a grade's criterion `k`.
+fn value(grade: &Grade, k: usize) -> f64 {
+    grade.criteria[k].value.unwrap()
+}
+
+/// The smallest, the median and the largest of `values`.
+fn spread(values: impl IntoIterator<Item = f64>) -> (f64, f64, f64) {
+    let mut v: Vec<f64> = values.into_iter().collect();
+    v.sort_by(f64::total_cmp);
+    (v[0], v[v.len() / 2], v[v.len() - 1])
 }
 
 /// A pose-graph variant's file by its path in the download.
@@ -546,35 +552,20 @@ fn another_students_graph_is_refused_and_a_broken_one_named() {
 #[test]
 #[ignore = "a measurement for the docs (60 students)"]
 fn measure_the_pose_graph_references_over_sixty_students() {
-    let a = builtin("pose-graph").unwrap();
-    let mut rows = Vec::new();
-    for k in 0..60 {
-        let p = prepare(&a, &format!("student{k}@uni.edu")).unwrap();
-        let g = p
-            .grade("ref.g2o", &file(&p, "answers/reference.g2o"))
-            .unwrap();
-        let n = p.grade("naive.g2o", &file(&p, "problem.g2o")).unwrap();
-        rows.push([
-            g.criteria[1].value.unwrap(),
-            n.criteria[0].value.unwrap(),
-            n.criteria[1].value.unwrap(),
-            f64::from(u8::from(g.pass)),
-            f64::from(u8::from(n.pass)),
-        ]);
-    }
-    let sorted = |column: usize| {
-        let mut v: Vec<f64> = rows.iter().map(|r| r[column]).collect();
-        v.sort_by(f64::total_cmp);
-        (v[0], v[v.len() / 2], v[v.len() - 1])
-    };
-    let passes = |column: usize| rows.iter().filter(|r| r[column] > 0.0).count();
+    let rows = over_sixty_students("pose-graph", |p| {
+        (
+            p.grade("ref.g2o", &file(p, "answers/reference.g2o"))
+                .unwrap(),
+            p.grade("naive.g2o", &file(p, "problem.g2o")).unwrap(),
+        )
+    });
     eprintln!(
         "pose-graph: reference ATE RMSE min/median/max {:.3?}, passes {}/60; initial guess cost ratio {:.3?}, ATE {:.3?}, passes {}/60",
-        sorted(0),
-        passes(3),
-        sorted(1),
-        sorted(2),
-        passes(4)
+        spread(rows.iter().map(|(g, _)| value(g, 1))),
+        rows.iter().filter(|(g, _)| g.pass).count(),
+        spread(rows.iter().map(|(_, n)| value(n, 0))),
+        spread(rows.iter().map(|(_, n)| value(n, 1))),
+        rows.iter().filter(|(_, n)| n.pass).count(),
     );
 }
 
@@ -664,30 +655,18 @@ fn an_all_free_map_fails_grid_mapping_and_the_known_poses_map_passes() {
 #[test]
 #[ignore = "a measurement for the docs (60 students)"]
 fn measure_the_grid_mapping_references_over_sixty_students() {
-    let a = builtin("grid-mapping").unwrap();
-    let mut rows = Vec::new();
-    for k in 0..60 {
-        let p = prepare(&a, &format!("student{k}@uni.edu")).unwrap();
-        let g = p.grade("ref.zip", &map_zip(&p, "reference")).unwrap();
-        let free = &g.criteria[0].references[1];
-        rows.push([
-            g.criteria[0].value.unwrap(),
-            g.criteria[1].value.unwrap(),
-            free.value.unwrap(),
-            f64::from(u8::from(g.pass)),
-        ]);
-    }
-    let sorted = |column: usize| {
-        let mut v: Vec<f64> = rows.iter().map(|r| r[column]).collect();
-        v.sort_by(f64::total_cmp);
-        (v[0], v[v.len() / 2], v[v.len() - 1])
-    };
+    let rows = over_sixty_students("grid-mapping", |p| {
+        p.grade("ref.zip", &map_zip(p, "reference")).unwrap()
+    });
     eprintln!(
         "grid-mapping: reference agreement min/median/max {:.4?}, coverage {:.4?}, passes {}/60; all free agreement {:.4?}",
-        sorted(0),
-        sorted(1),
-        rows.iter().filter(|r| r[3] > 0.0).count(),
-        sorted(2),
+        spread(rows.iter().map(|g| value(g, 0))),
+        spread(rows.iter().map(|g| value(g, 1))),
+        rows.iter().filter(|g| g.pass).count(),
+        spread(
+            rows.iter()
+                .map(|g| g.criteria[0].references[1].value.unwrap())
+        ),
     );
 }
 
@@ -737,37 +716,21 @@ fn the_odometry_fails_icp_and_the_reference_icp_passes() {
 #[test]
 #[ignore = "a measurement for the docs (60 students)"]
 fn measure_the_icp_references_over_sixty_students() {
-    let a = builtin("icp").unwrap();
-    let mut rows = Vec::new();
-    for k in 0..60 {
-        let p = prepare(&a, &format!("student{k}@uni.edu")).unwrap();
-        let g = p.grade("icp.txt", &relative_pose_file(&p, "icp")).unwrap();
-        let n = p
-            .grade("none.txt", &relative_pose_file(&p, "odometry"))
-            .unwrap();
-        rows.push([
-            g.criteria[0].value.unwrap(),
-            g.criteria[1].value.unwrap(),
-            n.criteria[0].value.unwrap(),
-            n.criteria[1].value.unwrap(),
-            f64::from(u8::from(g.pass)),
-            f64::from(u8::from(n.pass)),
-        ]);
-    }
-    let sorted = |column: usize| {
-        let mut v: Vec<f64> = rows.iter().map(|r| r[column]).collect();
-        v.sort_by(f64::total_cmp);
-        (v[0], v[v.len() / 2], v[v.len() - 1])
-    };
-    let passes = |column: usize| rows.iter().filter(|r| r[column] > 0.0).count();
+    let rows = over_sixty_students("icp", |p| {
+        (
+            p.grade("icp.txt", &relative_pose_file(p, "icp")).unwrap(),
+            p.grade("none.txt", &relative_pose_file(p, "odometry"))
+                .unwrap(),
+        )
+    });
     eprintln!(
         "icp: reference rotation error min/median/max {:.4?} deg, translation {:.4?} m, passes {}/60; odometry: rotation {:.3?} deg, translation {:.3?} m, passes {}/60",
-        sorted(0),
-        sorted(1),
-        passes(4),
-        sorted(2),
-        sorted(3),
-        passes(5)
+        spread(rows.iter().map(|(g, _)| value(g, 0))),
+        spread(rows.iter().map(|(g, _)| value(g, 1))),
+        rows.iter().filter(|(g, _)| g.pass).count(),
+        spread(rows.iter().map(|(_, n)| value(n, 0))),
+        spread(rows.iter().map(|(_, n)| value(n, 1))),
+        rows.iter().filter(|(_, n)| n.pass).count(),
     );
 }
 
@@ -788,31 +751,20 @@ fn measure_the_fusion_references_over_sixty_students() {
     use slamlab_sim::fusion::{FusionMode, ModeRun};
     use slamlab_sim::metrics::evaluate;
     let a = builtin("fusion").unwrap();
-    let mut rows = Vec::new();
-    let mut modes: Vec<[f64; 4]> = Vec::new();
-    let mut slam_held: Vec<[f64; 2]> = Vec::new();
-    for k in 0..60 {
-        let p = prepare(&a, &format!("student{k}@uni.edu")).unwrap();
+    let settings = slamlab_sim::coursework::grade::trajectory_settings(&a);
+    let rows = over_sixty_students("fusion", |p| {
         let g = p
-            .grade("ref.tum", &fusion_reference(&p, "ekf-absolute"))
+            .grade("ref.tum", &fusion_reference(p, "ekf-absolute"))
             .unwrap();
         let n = p
-            .grade("naive.tum", &fusion_reference(&p, "dead-reckoning"))
+            .grade("naive.tum", &fusion_reference(p, "dead-reckoning"))
             .unwrap();
-        rows.push([
-            g.criteria[0].value.unwrap(),
-            g.criteria[1].value.unwrap(),
-            n.criteria[0].value.unwrap(),
-            n.criteria[1].value.unwrap(),
-            f64::from(u8::from(g.pass)),
-            f64::from(u8::from(n.pass)),
-        ]);
         // Every mode's ATE RMSE on the same drive.
         let (lesson, _) = apply_params::<slamlab_sim::fusion::params::FusionLessonScenario>(&a);
         let mut lesson = lesson;
         lesson.scenario.seed = p.variant.seed;
         let run = FusionRun::simulate(&lesson, p.steps).unwrap();
-        let mut row = [0.0; 4];
+        let mut modes = [0.0; 4];
         for (i, mode) in FusionMode::ALL.into_iter().enumerate() {
             let mut scenario = run.lesson.scenario.clone();
             scenario.output_rate = 10.0;
@@ -822,15 +774,11 @@ fn measure_the_fusion_references_over_sixty_students() {
             for s in r.samples() {
                 t.push(s.t, s.estimate, None);
             }
-            row[i] = evaluate(
-                &run.truth,
-                &t,
-                &slamlab_sim::coursework::grade::trajectory_settings(&a),
-            )
-            .unwrap()
-            .ape
-            .translation
-            .rmse;
+            modes[i] = evaluate(&run.truth, &t, &settings)
+                .unwrap()
+                .ape
+                .translation
+                .rmse;
         }
         // The SLAM poses alone, each held until the next.
         let slam = run.slam_rows();
@@ -840,41 +788,28 @@ fn measure_the_fusion_references_over_sixty_students() {
             let v = &slam[k].1;
             held.push(t, Pose2::new(v[0], v[1], v[2]), None);
         }
-        let e = evaluate(
-            &run.truth,
-            &held,
-            &slamlab_sim::coursework::grade::trajectory_settings(&a),
-        )
-        .unwrap();
-        slam_held.push([e.ape.translation.rmse, e.ape.translation.max]);
-        modes.push(row);
-    }
-    let sorted = |v: Vec<f64>| {
-        let mut v = v;
-        v.sort_by(f64::total_cmp);
-        (v[0], v[v.len() / 2], v[v.len() - 1])
-    };
-    let col = |c: usize| sorted(rows.iter().map(|r| r[c]).collect());
-    let passes = |c: usize| rows.iter().filter(|r| r[c] > 0.0).count();
+        let e = evaluate(&run.truth, &held, &settings).unwrap();
+        (g, n, modes, [e.ape.translation.rmse, e.ape.translation.max])
+    });
     eprintln!(
         "fusion: ekf-absolute ATE RMSE {:.4?} m, max {:.4?} m, passes {}/60; dead reckoning ATE RMSE {:.3?} m, max {:.3?} m, passes {}/60",
-        col(0),
-        col(1),
-        passes(4),
-        col(2),
-        col(3),
-        passes(5)
+        spread(rows.iter().map(|(g, ..)| value(g, 0))),
+        spread(rows.iter().map(|(g, ..)| value(g, 1))),
+        rows.iter().filter(|(g, ..)| g.pass).count(),
+        spread(rows.iter().map(|(_, n, ..)| value(n, 0))),
+        spread(rows.iter().map(|(_, n, ..)| value(n, 1))),
+        rows.iter().filter(|(_, n, ..)| n.pass).count(),
     );
     eprintln!(
         "  the SLAM poses held: ATE RMSE {:.4?} m, max {:.4?} m",
-        sorted(slam_held.iter().map(|r| r[0]).collect()),
-        sorted(slam_held.iter().map(|r| r[1]).collect())
+        spread(rows.iter().map(|r| r.3[0])),
+        spread(rows.iter().map(|r| r.3[1]))
     );
     for (i, mode) in FusionMode::ALL.into_iter().enumerate() {
         eprintln!(
             "  mode {}: ATE RMSE {:.4?} m",
             mode.name(),
-            sorted(modes.iter().map(|r| r[i]).collect())
+            spread(rows.iter().map(|r| r.2[i]))
         );
     }
 }

@@ -11,7 +11,7 @@ use crate::widgets::plots::{Figure, KeyEntry, Mark, figure_plot, figure_ui, key_
 use egui::{Color32, Pos2, Rect, Sense, Stroke, pos2, vec2};
 use egui_plot::{Line, LineStyle, PlotPoints, Points};
 use nalgebra::{Matrix3, Vector2, Vector3};
-use slamlab_core::vision::{Intrinsics, epipolar_line, sampson_squared};
+use slamlab_core::vision::{Correspondence, Intrinsics, epipolar_line, sampson_squared};
 use slamlab_sim::visual_odometry::{TwoViewSession, VoRun};
 
 /// Colour of a match RANSAC keeps.
@@ -31,7 +31,7 @@ pub const VO_UNIT: Color32 = palette::ORANGE;
 
 /// Pixels to screen: an image of `camera`'s size drawn in `rect`.
 #[derive(Clone, Copy, Debug)]
-struct ImageFrame {
+pub(super) struct ImageFrame {
     rect: Rect,
     scale: f32,
 }
@@ -42,12 +42,12 @@ impl ImageFrame {
         Self { rect, scale }
     }
 
-    fn to_screen(self, pixel: &Vector2<f64>) -> Pos2 {
+    pub(super) fn to_screen(self, pixel: &Vector2<f64>) -> Pos2 {
         self.rect.min + vec2(pixel.x as f32, pixel.y as f32) * self.scale
     }
 
     /// The part of the line `a u + b v + c = 0` inside the image, on screen.
-    fn clip(self, line: &Vector3<f64>, camera: &Intrinsics) -> Option<[Pos2; 2]> {
+    pub(super) fn clip(self, line: &Vector3<f64>, camera: &Intrinsics) -> Option<[Pos2; 2]> {
         let (w, h) = (camera.width, camera.height);
         let mut ends: Vec<Vector2<f64>> = Vec::with_capacity(4);
         if line.y.abs() > 1e-12 {
@@ -85,23 +85,15 @@ pub fn centre_ui(
     view: &VoView,
     hovered: Option<(bool, usize)>,
 ) -> Option<(bool, usize)> {
-    let available = ui.available_size();
+    // The images take at most 45% of the height, and never more than half the
+    // width each; the top view the rest.
+    let max_height = 0.45 * ui.available_height();
     let Some(session) = session else {
         ui.label("This run has no VO step: give it more frames.");
         return None;
     };
     let camera = *session.camera();
-    let gap = 12.0;
-    let widest = ((available.x - gap) / 2.0).max(40.0);
-    let aspect = (camera.height / camera.width) as f32;
-    // The images take at most 45% of the height, and never more than half the
-    // width each; the top view the rest.
-    let image_height = (widest * aspect).min(0.45 * available.y).max(30.0);
-    let image_width = (image_height / aspect).min(widest);
-    let image_height = image_width * aspect;
-    let dark = ui.visuals().dark_mode;
-    let text = ui.visuals().text_color();
-    let truth = palette::truth_color(dark);
+    let truth = palette::truth_color(ui.visuals().dark_mode);
 
     let key = match_key(session, view);
     let step = run.steps.get(pair);
@@ -118,33 +110,13 @@ pub fn centre_ui(
         );
     }
     key_ui(ui, &key);
-    let total_width = 2.0 * image_width + gap;
-    let (area, response) = ui.allocate_exact_size(
-        vec2(available.x.max(total_width), image_height + 4.0),
-        Sense::hover(),
-    );
-    let left_rect = Rect::from_min_size(
-        pos2(area.center().x - total_width / 2.0, area.top()),
-        vec2(image_width, image_height),
-    );
-    let right_rect = left_rect.translate(vec2(image_width + gap, 0.0));
-    let left = ImageFrame::new(left_rect, &camera);
-    let right = ImageFrame::new(right_rect, &camera);
+    let Panels {
+        area,
+        response,
+        left,
+        right,
+    } = panels(ui, &camera, max_height);
     let painter = ui.painter_at(area);
-    let background = if dark {
-        Color32::from_gray(34)
-    } else {
-        Color32::from_gray(250)
-    };
-    for rect in [left_rect, right_rect] {
-        painter.rect_filled(rect, 0.0, background);
-        painter.rect_stroke(
-            rect,
-            0.0,
-            Stroke::new(1.0, text.gamma_multiply(0.5)),
-            egui::StrokeKind::Inside,
-        );
-    }
 
     let matches = session.matches();
     let wrong = session.wrong();
@@ -159,42 +131,14 @@ pub fn centre_ui(
             OUTLIER
         }
     };
-
-    // Lines across the images (Fig. 4.14), faint, under everything.
-    if view.match_lines {
-        for (i, m) in matches.iter().enumerate() {
-            painter.line_segment(
-                [left.to_screen(&m.left), right.to_screen(&m.right)],
-                Stroke::new(0.6, colour_of(i).gamma_multiply(0.35)),
-            );
-        }
-    }
-    // In the right image, each match's flow: from where the feature was in
-    // the left image to where it is now.
-    // A rejected match's flow crosses the image: drawn faint, so that the
-    // inliers' short, consistent flow stays readable.
-    for (i, m) in matches.iter().enumerate() {
-        let c = colour_of(i);
-        let alpha = if c == OUTLIER { 0.15 } else { 0.6 };
-        painter.line_segment(
-            [right.to_screen(&m.left), right.to_screen(&m.right)],
-            Stroke::new(0.8, c.gamma_multiply(alpha)),
-        );
-    }
-    for (i, m) in matches.iter().enumerate() {
-        let c = colour_of(i);
-        painter.circle_filled(left.to_screen(&m.left), 2.0, c);
-        painter.circle_filled(right.to_screen(&m.right), 2.0, c);
-    }
-    if view.true_outliers {
-        for (i, m) in matches.iter().enumerate() {
-            if wrong.get(i).copied().unwrap_or(false) {
-                for p in [left.to_screen(&m.left), right.to_screen(&m.right)] {
-                    painter.circle_stroke(p, 4.5, Stroke::new(1.0, truth));
-                }
-            }
-        }
-    }
+    draw_matches(
+        &painter,
+        (left, right),
+        matches,
+        colour_of,
+        view.match_lines,
+        view.true_outliers.then_some((wrong, truth)),
+    );
     // The sample drawn last.
     if let Some(report) = session
         .last_report()
@@ -211,28 +155,9 @@ pub fn centre_ui(
     }
 
     // The feature under the pointer and its epipolar line.
-    let mut now_hovered = None;
-    if let Some(pointer) = response.hover_pos() {
-        let nearest = |frame: ImageFrame, right_side: bool| {
-            matches
-                .iter()
-                .enumerate()
-                .map(|(i, m)| {
-                    let p = frame.to_screen(if right_side { &m.right } else { &m.left });
-                    (i, p.distance(pointer))
-                })
-                .min_by(|a, b| a.1.total_cmp(&b.1))
-        };
-        if left_rect.expand(6.0).contains(pointer) {
-            now_hovered = nearest(left, false)
-                .filter(|(_, d)| *d < 10.0)
-                .map(|(i, _)| (false, i));
-        } else if right_rect.expand(6.0).contains(pointer) {
-            now_hovered = nearest(right, true)
-                .filter(|(_, d)| *d < 10.0)
-                .map(|(i, _)| (true, i));
-        }
-    }
+    let now_hovered = response
+        .hover_pos()
+        .and_then(|pointer| nearest_match((left, right), matches, pointer));
     let shown = now_hovered.or(hovered.filter(|_| response.hover_pos().is_some()));
     if let Some((right_side, i)) = shown
         && let Some(m) = matches.get(i)
@@ -282,6 +207,140 @@ pub fn centre_ui(
     ui.add_space(4.0);
     top_view_ui(ui, run, pair, truth);
     now_hovered
+}
+
+/// Two image panels placed and painted: where they are on screen and the
+/// hover response over them.
+pub(super) struct Panels {
+    /// Both panels and the room around them.
+    pub area: Rect,
+    /// The pointer over the area.
+    pub response: egui::Response,
+    /// The first image.
+    pub left: ImageFrame,
+    /// The second image.
+    pub right: ImageFrame,
+}
+
+/// Allocates two images of `camera`'s size side by side, centred, each at
+/// most half the width and `max_height` points high, and paints their
+/// backgrounds and borders.
+pub(super) fn panels(ui: &mut egui::Ui, camera: &Intrinsics, max_height: f32) -> Panels {
+    let available = ui.available_size();
+    let gap = 12.0;
+    let widest = ((available.x - gap) / 2.0).max(40.0);
+    let aspect = (camera.height / camera.width) as f32;
+    let image_height = (widest * aspect).min(max_height).max(30.0);
+    let image_width = (image_height / aspect).min(widest);
+    let image_height = image_width * aspect;
+    let total_width = 2.0 * image_width + gap;
+    let (area, response) = ui.allocate_exact_size(
+        vec2(available.x.max(total_width), image_height + 4.0),
+        Sense::hover(),
+    );
+    let left_rect = Rect::from_min_size(
+        pos2(area.center().x - total_width / 2.0, area.top()),
+        vec2(image_width, image_height),
+    );
+    let right_rect = left_rect.translate(vec2(image_width + gap, 0.0));
+    let painter = ui.painter_at(area);
+    let text = ui.visuals().text_color();
+    let background = if ui.visuals().dark_mode {
+        Color32::from_gray(34)
+    } else {
+        Color32::from_gray(250)
+    };
+    for rect in [left_rect, right_rect] {
+        painter.rect_filled(rect, 0.0, background);
+        painter.rect_stroke(
+            rect,
+            0.0,
+            Stroke::new(1.0, text.gamma_multiply(0.5)),
+            egui::StrokeKind::Inside,
+        );
+    }
+    Panels {
+        area,
+        response,
+        left: ImageFrame::new(left_rect, camera),
+        right: ImageFrame::new(right_rect, camera),
+    }
+}
+
+/// The matches on the two images: with `match_lines` a faint line across
+/// the images for each (Fig. 4.14); in the right image each match's flow
+/// (from where the feature was in the left image), a rejected match's faint;
+/// a dot in both images in its colour; and, with `rings`, a ring in the given
+/// colour around each match flagged wrong.
+pub(super) fn draw_matches(
+    painter: &egui::Painter,
+    (left, right): (ImageFrame, ImageFrame),
+    matches: &[Correspondence],
+    colour_of: impl Fn(usize) -> Color32,
+    match_lines: bool,
+    rings: Option<(&[bool], Color32)>,
+) {
+    // Lines across the images (Fig. 4.14), faint, under everything.
+    if match_lines {
+        for (i, m) in matches.iter().enumerate() {
+            painter.line_segment(
+                [left.to_screen(&m.left), right.to_screen(&m.right)],
+                Stroke::new(0.6, colour_of(i).gamma_multiply(0.35)),
+            );
+        }
+    }
+    // A rejected match's flow crosses the image: drawn faint, so that the
+    // inliers' short, consistent flow stays readable.
+    for (i, m) in matches.iter().enumerate() {
+        let c = colour_of(i);
+        let alpha = if c == OUTLIER { 0.15 } else { 0.6 };
+        painter.line_segment(
+            [right.to_screen(&m.left), right.to_screen(&m.right)],
+            Stroke::new(0.8, c.gamma_multiply(alpha)),
+        );
+    }
+    for (i, m) in matches.iter().enumerate() {
+        let c = colour_of(i);
+        painter.circle_filled(left.to_screen(&m.left), 2.0, c);
+        painter.circle_filled(right.to_screen(&m.right), 2.0, c);
+    }
+    if let Some((wrong, colour)) = rings {
+        for (i, m) in matches.iter().enumerate() {
+            if wrong.get(i).copied().unwrap_or(false) {
+                for p in [left.to_screen(&m.left), right.to_screen(&m.right)] {
+                    painter.circle_stroke(p, 4.5, Stroke::new(1.0, colour));
+                }
+            }
+        }
+    }
+}
+
+/// The match whose feature is under `pointer` (within 10 points), as (right
+/// image?, index).
+pub(super) fn nearest_match(
+    (left, right): (ImageFrame, ImageFrame),
+    matches: &[Correspondence],
+    pointer: Pos2,
+) -> Option<(bool, usize)> {
+    let nearest = |frame: ImageFrame, right_side: bool| {
+        matches
+            .iter()
+            .enumerate()
+            .map(|(i, m)| {
+                let p = frame.to_screen(if right_side { &m.right } else { &m.left });
+                (i, p.distance(pointer))
+            })
+            .min_by(|a, b| a.1.total_cmp(&b.1))
+            .filter(|(_, d)| *d < 10.0)
+            .map(|(i, _)| (right_side, i))
+    };
+    if left.rect.expand(6.0).contains(pointer) {
+        nearest(left, false)
+    } else if right.rect.expand(6.0).contains(pointer) {
+        nearest(right, true)
+    } else {
+        None
+    }
 }
 
 /// Whose inliers the colours show: nothing yet, the best hypothesis so far (not

@@ -12,11 +12,16 @@
 //! hypotheses' inliers, the best so far and the adaptive bound. The explanation
 //! panel has the four decompositions of E with their cheirality counts and E
 //! with its singular values; the plots, every step's errors and inlier ratio.
+//!
+//! `two-view=N` (what a `two-view` assignment's link gives) shows a two-view
+//! scene instead, the very one handed out ([`scene`]); the docking run stays a
+//! checkbox away.
 
 mod explain;
 mod images;
 mod photos;
 mod plots;
+pub mod scene;
 
 use crate::lesson::{self, Lesson, LessonFrame, LessonStart, LessonView, StoredSettings};
 use crate::time_control::{StepControls, TimeAction, TimeControl, TimeInfo};
@@ -75,11 +80,18 @@ pub struct VisualOdometryLesson {
     hovered: Option<(bool, usize)>,
     /// The student's own photos.
     photos: photos::PhotoPair,
+    /// The two-view scene the link asked for (`two-view=N`).
+    scene: Option<scene::TwoViewScene>,
 }
 
 /// Opens the lesson from the URL's pairs, with what it stored last time.
 pub fn open(start: &LessonStart<'_>) -> Box<dyn Lesson> {
     let stored = StoredSettings::<VoView>::from_start(start);
+    let (link, pairs) = scene::SceneLink::from_pairs(start.pairs);
+    let start = &LessonStart {
+        pairs: &pairs,
+        ..*start
+    };
     let (scenario, notices) = lesson::scenario_from_start(
         start,
         VoScenario::default(),
@@ -87,6 +99,14 @@ pub fn open(start: &LessonStart<'_>) -> Box<dyn Lesson> {
     );
     let mut lesson = VisualOdometryLesson::new(scenario);
     lesson.frame.notices.extend(notices);
+    lesson.frame.notices.extend(link.notices);
+    if let Some(matches) = link.matches {
+        lesson.scene = Some(scene::TwoViewScene::new(
+            &lesson.scenario,
+            matches,
+            link.answers,
+        ));
+    }
     lesson.frame = lesson.frame.restored(stored.as_ref());
     Box::new(lesson)
 }
@@ -118,6 +138,7 @@ impl VisualOdometryLesson {
             frame: LessonFrame::new(LESSON_ID, VoView::default()).with_time(time),
             hovered: None,
             photos: photos::PhotoPair::default(),
+            scene: None,
         };
         let wanted = lesson.scenario.pair;
         lesson.show_pair(wanted);
@@ -138,6 +159,21 @@ impl VisualOdometryLesson {
     /// The parameters the run was made with.
     pub fn scenario(&self) -> &VoScenario {
         &self.scenario
+    }
+
+    /// The two-view scene the link asked for (`two-view=N`), if any.
+    pub fn scene(&self) -> Option<&scene::TwoViewScene> {
+        self.scene.as_ref()
+    }
+
+    /// The two-view scene, to switch what it shows.
+    pub fn scene_mut(&mut self) -> Option<&mut scene::TwoViewScene> {
+        self.scene.as_mut()
+    }
+
+    /// Whether the centre shows the two-view scene (not the docking run).
+    fn showing_scene(&self) -> bool {
+        !self.photos.showing() && self.scene.as_ref().is_some_and(|s| s.show)
     }
 
     /// The VO step shown in the images.
@@ -188,6 +224,9 @@ impl VisualOdometryLesson {
         if wanted != self.scenario {
             self.run = make_run(&wanted);
             self.scenario = wanted;
+            if let Some(scene) = &mut self.scene {
+                scene.follow(&self.scenario);
+            }
         }
         self.show_pair(pair);
     }
@@ -224,12 +263,23 @@ impl VisualOdometryLesson {
 
     fn lesson_parameters_ui(&mut self, ui: &mut egui::Ui) {
         ui.heading("Visual odometry");
+        if let Some(scene) = &mut self.scene {
+            scene.controls_ui(ui, self.frame.estimates.items());
+            ui.checkbox(
+                &mut self.frame.view.match_lines,
+                "Lines across the images (Fig. 4.14)",
+            );
+            ui.separator();
+            ui.strong("The docking run");
+        }
         ui.label(
             "Two images of one VO step: RANSAC draws samples of matches, fits E to each, \
              and keeps the hypothesis most matches agree with.",
         );
         ui.horizontal_wrapped(|ui| {
-            let done = self.session.as_ref().is_none_or(TwoViewSession::is_done);
+            // The two views' RANSAC has run; these step the docking run's.
+            let done =
+                self.showing_scene() || self.session.as_ref().is_none_or(TwoViewSession::is_done);
             if ui
                 .add_enabled(!done, egui::Button::new("Step one sample"))
                 .on_hover_text("Draw one RANSAC sample (the time bar's step: . or n)")
@@ -351,6 +401,9 @@ impl VisualOdometryLesson {
 
 impl crate::widgets::layout::LessonPanels for VisualOdometryLesson {
     fn plots_ui(&mut self, ui: &mut egui::Ui) {
+        if self.showing_scene() {
+            scene::docking_note(ui);
+        }
         plots::plots_ui(ui, &self.run, self.pair, self.session.as_ref());
     }
 
@@ -359,6 +412,9 @@ impl crate::widgets::layout::LessonPanels for VisualOdometryLesson {
     }
 
     fn explanation_ui(&mut self, ui: &mut egui::Ui) {
+        if self.showing_scene() {
+            scene::docking_note(ui);
+        }
         explain::explanation_ui(ui, &self.run, self.pair, self.session.as_ref());
     }
 
@@ -369,6 +425,17 @@ impl crate::widgets::layout::LessonPanels for VisualOdometryLesson {
                 .id_salt("vo_photos_scroll")
                 .auto_shrink([false, false])
                 .show(ui, |ui| self.photos.centre_ui(ui));
+            return;
+        }
+        if self.showing_scene()
+            && let Some(scene) = &mut self.scene
+        {
+            let estimates = self.frame.estimates.items();
+            let lines = self.frame.view.match_lines;
+            egui::ScrollArea::vertical()
+                .id_salt("vo_scene_scroll")
+                .auto_shrink([false, false])
+                .show(ui, |ui| scene.centre_ui(ui, estimates, lines));
             return;
         }
         // In a small window the images, the top view and their keys may need more
@@ -406,6 +473,11 @@ impl Lesson for VisualOdometryLesson {
         if self.photos.showing() {
             return Vec::new();
         }
+        if self.showing_scene()
+            && let Some(scene) = &self.scene
+        {
+            return scene.relative_poses();
+        }
         let mut poses: Vec<(String, slamlab_core::vision::RelativePose)> = self
             .run
             .pairs
@@ -437,6 +509,11 @@ impl Lesson for VisualOdometryLesson {
         if let Some(photos) = self.photos.subtitle() {
             return photos;
         }
+        if self.showing_scene()
+            && let Some(scene) = &self.scene
+        {
+            return scene.subtitle();
+        }
         let s = &self.run.settings;
         format!(
             "{}, {:.0}% wrong matches, {} px noise, step {}",
@@ -463,6 +540,16 @@ impl Lesson for VisualOdometryLesson {
             return TimeInfo {
                 time_s: f64::NAN,
                 next_phase: phase,
+                ..TimeInfo::default()
+            };
+        }
+        if self.showing_scene() {
+            return TimeInfo {
+                time_s: f64::NAN,
+                next_phase: format!(
+                    "the two views' RANSAC ran to its bound (at most {} samples); the docking run's steps one sample at a time",
+                    slamlab_sim::visual_odometry::assignment::MAX_SAMPLES
+                ),
                 ..TimeInfo::default()
             };
         }
@@ -502,6 +589,10 @@ impl Lesson for VisualOdometryLesson {
     }
 
     fn on_time_action(&mut self, action: TimeAction) {
+        if self.showing_scene() && action != TimeAction::Reset {
+            self.frame.time.running = false;
+            return;
+        }
         match action {
             TimeAction::ToggleRun => {
                 if self.session.as_ref().is_none_or(TwoViewSession::is_done) {
@@ -521,6 +612,10 @@ impl Lesson for VisualOdometryLesson {
     }
 
     fn advance(&mut self, dt: f64) {
+        if self.showing_scene() {
+            self.frame.time.running = false;
+            return;
+        }
         let Some(session) = &mut self.session else {
             self.frame.time.running = false;
             return;
@@ -544,7 +639,11 @@ impl Lesson for VisualOdometryLesson {
     }
 
     fn share_pairs(&self) -> Vec<(String, String)> {
-        lesson::with_seed(self.changed_params(), self.scenario.settings.seed)
+        let mut pairs = lesson::with_seed(self.changed_params(), self.scenario.settings.seed);
+        if let Some(scene) = &self.scene {
+            pairs.extend(scene.share_pairs());
+        }
+        pairs
     }
 
     fn test_state(&self) -> serde_json::Value {
@@ -603,6 +702,10 @@ impl Lesson for VisualOdometryLesson {
             "estimate": estimate,
             "vo_steps": self.run.steps.len(),
             "photos": self.photos.test_state(),
+            "two_view": self
+                .scene
+                .as_ref()
+                .map(|s| s.test_state(self.frame.estimates.items())),
             "trajectory_rmse": {
                 "wheel_odometry": r.wheel_odometry,
                 "visual_odometry": r.visual_odometry,

@@ -547,3 +547,303 @@ fn seeded_sprt_samples_give_these_exact_counts() {
 // refinement of each step (0.7262349495763661 m without).
 const SPRT_BEST: u64 = 467;
 const SPRT_BOUND: u64 = 46;
+
+/// A file dropped on the window, as the desktop's window system hands it over.
+#[derive(Debug)]
+struct Dropped {
+    path: std::path::PathBuf,
+    bytes: Vec<u8>,
+}
+
+impl egui::DroppedFile for Dropped {
+    fn path(&self) -> &std::path::Path {
+        &self.path
+    }
+    fn bytes(&self) -> Result<Vec<u8>, String> {
+        Ok(self.bytes.clone())
+    }
+}
+
+fn app_state(h: &egui_kittest::Harness<'_, SlamLabApp>) -> serde_json::Value {
+    serde_json::from_str(&h.state().test_state_json()).unwrap_or_default()
+}
+
+/// `student`'s variant of `assignment` as `slamlab export-inputs` makes it, and
+/// its scene run again as the runner runs it.
+fn variant(
+    assignment: &slamlab_sim::coursework::Assignment,
+    student: &str,
+) -> (
+    slamlab_sim::coursework::Prepared,
+    slamlab_sim::visual_odometry::assignment::TwoViewRun,
+) {
+    let p =
+        slamlab_sim::assignments::prepare(assignment, student).unwrap_or_else(|e| panic!("{e}"));
+    let run = slamlab_sim::visual_odometry::assignment::TwoViewRun::for_variant(
+        &p.assignment,
+        &p.variant,
+        p.steps,
+    );
+    (p, run)
+}
+
+/// Alice's `matches.csv` (`slamlab export-inputs two-view --student
+/// alice@example.edu`): its number of matches and first line, which the
+/// browser check finds in wasm too.
+const ALICE_MATCHES: usize = 215;
+const ALICE_FIRST_MATCH: [f64; 4] = [
+    71.88514417534088,
+    248.99848867567,
+    145.40899940678563,
+    266.8309973367838,
+];
+
+/// `matches.csv` as `slamlab export-inputs two-view` writes it, read back.
+fn exported_matches(p: &slamlab_sim::coursework::Prepared) -> Vec<[f64; 4]> {
+    let files = p.input_files(false);
+    let text = std::str::from_utf8(files.get("matches.csv").unwrap_or_default())
+        .unwrap_or_default()
+        .to_owned();
+    text.lines()
+        .skip(1)
+        .map(|line| {
+            let n: Vec<f64> = line
+                .split(',')
+                .map(|v| v.parse().unwrap_or(f64::NAN))
+                .collect();
+            [n[0], n[1], n[2], n[3]]
+        })
+        .collect()
+}
+
+/// The scene of the lesson's state is `run` and its pixels are `exported`.
+fn assert_scene_is(
+    two_view: &serde_json::Value,
+    run: &slamlab_sim::visual_odometry::assignment::TwoViewRun,
+    exported: &[[f64; 4]],
+) {
+    // JSON text may read a number back one ulp off: 1e-12 relative.
+    let close = |a: &serde_json::Value, b: f64| {
+        let a = a.as_f64().unwrap_or(f64::NAN);
+        (a - b).abs() <= 1e-12 * b.abs().max(1.0)
+    };
+    assert_eq!(two_view["showing"], true, "{two_view}");
+    assert_eq!(two_view["matches"], run.matches.len());
+    assert_eq!(exported.len(), run.matches.len());
+    let pixels = two_view["pixels"].as_array().cloned().unwrap_or_default();
+    assert_eq!(pixels.len(), exported.len());
+    for (shown, written) in pixels.iter().zip(exported) {
+        for k in 0..4 {
+            assert!(close(&shown[k], written[k]), "{shown} vs {written:?}");
+        }
+    }
+    let r = &run.truth.rotation;
+    for row in 0..3 {
+        for col in 0..3 {
+            assert!(close(
+                &two_view["truth"]["rotation"][3 * row + col],
+                r[(row, col)]
+            ));
+        }
+    }
+    for k in 0..3 {
+        assert!(close(
+            &two_view["truth"]["translation"][k],
+            run.truth.translation[k]
+        ));
+    }
+}
+
+/// `assignment=two-view&student=…` shows the variant's two views: the very
+/// matches `export-inputs` writes, the true relative pose, the reference
+/// RANSAC's inliers; the wrong matches only once an answer is graded; the
+/// dropped answer's camera b in the top view where the grade put it; the
+/// docking run a checkbox away; another student's id (typed in the window) a
+/// different scene; an assignment file with its answers marks the wrong ones
+/// from the start.
+#[test]
+fn a_two_view_assignment_shows_the_variants_two_views() {
+    use slamlab_sim::io::relative_pose::{read_relative_pose, write_relative_pose};
+    let assignment =
+        slamlab_sim::assignments::builtin("two-view").unwrap_or_else(|e| panic!("{e}"));
+    let (alice, run) = variant(&assignment, "alice@example.edu");
+    let mut h = harness_sized(
+        "assignment=two-view&student=alice%40example.edu",
+        egui::vec2(1280.0, 800.0),
+    );
+    h.run();
+    assert!(h.state().notices().is_empty(), "{:?}", h.state().notices());
+    let st = app_state(&h);
+    assert_eq!(st["lesson"], "visual-odometry", "{st}");
+    let two_view = &lesson(&h).test_state()["two_view"];
+    let exported = exported_matches(&alice);
+    assert_scene_is(two_view, &run, &exported);
+    // What the browser check pins for Alice (web/tests/browser.test.mjs): the
+    // same inputs in wasm as here and in the command line.
+    assert_eq!(exported.len(), ALICE_MATCHES);
+    assert_eq!(exported[0], ALICE_FIRST_MATCH);
+    // To the bit, through the lesson itself.
+    let scene = lesson(&h).scene().map(|s| &s.run);
+    assert_eq!(scene.map(|s| &s.matches), Some(&run.matches));
+    assert_eq!(scene.map(|s| s.truth), Some(run.truth));
+    assert_eq!(two_view["seed"], alice.variant.seed);
+    let inliers = run.inliers[0].1.iter().filter(|i| **i).count();
+    assert_eq!(two_view["inliers"], inliers);
+    // The eight-point reference keeps 148 of Alice's 215 matches (62 of them
+    // wrong): the browser check finds 148 in wasm too.
+    assert_eq!(inliers, 148);
+    assert_eq!(two_view["wrong_shown"], false, "not before a grade");
+    assert!(
+        h.state()
+            .lesson()
+            .subtitle()
+            .contains(&format!("{} matches", run.matches.len()))
+    );
+    // The top view: the true camera b first, the references after it.
+    let top = two_view["top_view"].as_array().cloned().unwrap_or_default();
+    let names: Vec<&str> = top.iter().filter_map(|c| c["name"].as_str()).collect();
+    assert_eq!(
+        names,
+        [
+            "true b",
+            "b by eight-point",
+            "b by five-point",
+            "b by naive"
+        ]
+    );
+    let b = run.top_view_of(&run.truth);
+    for (k, v) in [b.x, b.y, b.theta].into_iter().enumerate() {
+        let shown = top[0]["pose"][k].as_f64().unwrap_or(f64::NAN);
+        assert!((shown - v).abs() < 1e-12, "{} vs {b:?}", top[0]);
+    }
+
+    // The eight-point reference's answer, dropped: graded, drawn in the top
+    // view at the pose the grade read, and the wrong matches now ringed.
+    let eight = run
+        .reference("eight-point")
+        .copied()
+        .unwrap_or_else(|| panic!("no pose"));
+    let bytes = write_relative_pose(&eight).into_bytes();
+    h.input_mut()
+        .dropped_files
+        .push(std::sync::Arc::new(Dropped {
+            path: "pose.txt".into(),
+            bytes: bytes.clone(),
+        }));
+    h.run();
+    let st = app_state(&h);
+    assert_eq!(
+        st["assignment"]["graded"][0]["pass"], true,
+        "{}",
+        st["assignment"]
+    );
+    let graded = read_relative_pose(&bytes)
+        .unwrap_or_else(|e| panic!("{e}"))
+        .pose;
+    let expected = run.top_view_of(&graded);
+    let two_view = &lesson(&h).test_state()["two_view"];
+    let mine = two_view["top_view"]
+        .as_array()
+        .and_then(|t| t.iter().find(|c| c["name"] == "b by pose.txt").cloned())
+        .unwrap_or_else(|| panic!("{two_view}"));
+    for (k, v) in [expected.x, expected.y, expected.theta]
+        .into_iter()
+        .enumerate()
+    {
+        let shown = mine["pose"][k].as_f64().unwrap_or(f64::NAN);
+        assert!((shown - v).abs() < 1e-12, "{mine} vs {expected:?}");
+    }
+    assert!(
+        slamlab_core::math::hypot(expected.x - b.x, expected.y - b.y) < 0.1,
+        "{expected:?} {b:?}"
+    );
+    assert_eq!(two_view["wrong_shown"], true);
+    assert_eq!(two_view["wrong"], run.wrong.iter().filter(|w| **w).count());
+    // The docking run, a checkbox away, and back.
+    h.get_by_label("Show the two views (not the docking run)")
+        .click();
+    h.run();
+    assert!(lesson(&h).scene().is_some_and(|s| !s.show));
+    assert!(h.state().lesson().subtitle().contains("step"));
+    h.get_by_label("Show the two views (not the docking run)")
+        .click();
+    h.run();
+    assert!(lesson(&h).scene().is_some_and(|s| s.show));
+
+    // Bob types his id in the window: his scene, not Alice's.
+    let (bob, bobs_run) = variant(&assignment, "bob@example.edu");
+    let mut h = harness_sized("assignment=two-view", egui::vec2(1280.0, 800.0));
+    h.run();
+    assert!(
+        h.state()
+            .lesson_as::<VisualOdometryLesson>()
+            .and_then(VisualOdometryLesson::scene)
+            .is_none(),
+        "no scene until the id is known"
+    );
+    h.get_by_role_and_label(egui::accesskit::Role::TextInput, "id")
+        .focus();
+    h.run();
+    h.get_by_role_and_label(egui::accesskit::Role::TextInput, "id")
+        .type_text("bob@example.edu");
+    h.run();
+    h.get_by_label("Open my variant").click();
+    h.run();
+    let two_view = &lesson(&h).test_state()["two_view"];
+    assert_scene_is(two_view, &bobs_run, &exported_matches(&bob));
+    assert_ne!(bobs_run.matches, run.matches);
+    assert_ne!(bob.variant.seed, alice.variant.seed);
+
+    // An assignment file of the two-view kind that includes its answers: the
+    // wrong matches are ringed from the start.
+    let dir = std::env::temp_dir().join(format!("slamlab-vo-two-view-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap_or_else(|e| panic!("{e}"));
+    let file = dir.join("hw5.json");
+    let text = slamlab_sim::coursework::BUILTIN
+        .iter()
+        .find(|(n, _)| *n == "two-view")
+        .map(|(_, t)| *t)
+        .unwrap_or_default()
+        .replace("\"id\": \"two-view\"", "\"id\": \"hw5\"")
+        .replace("\"answers_included\": false", "\"answers_included\": true")
+        .replace("\"outliers\": 0.3", "\"outliers\": 0.4");
+    std::fs::write(&file, &text).unwrap_or_else(|e| panic!("{e}"));
+    let hw5 = slamlab_sim::assignments::read("hw5.json", text.as_bytes())
+        .unwrap_or_else(|e| panic!("{e}"));
+    let (ada, adas_run) = variant(&hw5, "ada");
+    let mut h = harness_sized(
+        &format!("assignment={}&student=ada", file.display()),
+        egui::vec2(1280.0, 800.0),
+    );
+    h.run();
+    let st = app_state(&h);
+    assert_eq!(st["assignment"]["id"], "hw5", "{}", st["assignment"]);
+    let two_view = &lesson(&h).test_state()["two_view"];
+    assert_scene_is(two_view, &adas_run, &exported_matches(&ada));
+    assert_eq!(two_view["answers_included"], true);
+    assert_eq!(two_view["wrong_shown"], true);
+    assert!(h.state().share_query(false).contains("two-view-answers=on"));
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
+/// At 800 x 500 the two views, their key and the top view sit beside the
+/// Assignment panel: nothing of them under it, and they are drawn (pixels of
+/// the inlier colour in the images).
+#[test]
+fn the_two_views_fit_beside_the_assignment_panel_at_800_by_500() {
+    let mut h = harness_sized(
+        "assignment=two-view&student=alice%40example.edu",
+        egui::vec2(800.0, 500.0),
+    );
+    h.run();
+    assert!(label_visible(&h, "Download inputs"));
+    assert!(label_visible(&h, "Top view of the two cameras"));
+    let panel = h.get_by_label("Download inputs").rect();
+    let top = h.get_by_label("Top view of the two cameras").rect();
+    assert!(top.right() < panel.left(), "{top:?} {panel:?}");
+    if let Some(image) = render_or_skip(&mut h) {
+        let c = slamlab_app::palette::GREEN;
+        let green = count_pixels(image.as_raw(), [c.r(), c.g(), c.b()], 8);
+        assert!(green > 300, "{green} inlier pixels");
+    }
+}

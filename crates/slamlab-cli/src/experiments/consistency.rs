@@ -74,9 +74,7 @@ impl Experiment for Consistency {
             steps as f64 * scenario.dt,
             scenario.seed
         )?;
-        writeln!(out)?;
-        out.parameters(&result.parameters, 32)?;
-        writeln!(out)?;
+        out.parameter_paragraph(&result.parameters, 32)?;
         // Diverged runs can make averages astronomically large: those go in e-notation.
         let fmt = |v: Option<f64>| match v {
             None => "-".to_owned(),

@@ -88,9 +88,7 @@ impl Experiment for EkfVsUkf {
             out,
             "SLAM Lab experiment ekf-vs-ukf (thesis 000 Sec. 3.4.3), control noise x{noise_scale}, {trials} trials from seed {seed}"
         )?;
-        writeln!(out)?;
-        out.parameters(&result.parameters, 32)?;
-        writeln!(out)?;
+        out.parameter_paragraph(&result.parameters, 32)?;
         writeln!(
             out,
             "{:<6} {:>20} {:>20} {:>20} {:>20} {:>10} {:>9} {:>14}",

@@ -86,9 +86,7 @@ impl Experiment for Fusion {
             "SLAM Lab experiment fusion (thesis 002 Table 5.3): {trials} seeded drives of {} s from seed {seed}",
             template.drive.duration
         )?;
-        writeln!(out)?;
-        out.parameters(&result.parameters, 32)?;
-        writeln!(out)?;
+        out.parameter_paragraph(&result.parameters, 32)?;
         writeln!(
             out,
             "{:<8} {:>6}  {:<14} {:>9} {:>9} {:>11}",

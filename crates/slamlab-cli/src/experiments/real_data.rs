@@ -144,9 +144,7 @@ impl Experiment for RealData {
         }
         writeln!(out, "SLAM Lab experiment real-data: {}", source.title)?;
         writeln!(out, "cite: {}", source.citation)?;
-        writeln!(out)?;
-        out.parameters(&parameters, 24)?;
-        writeln!(out)?;
+        out.parameter_paragraph(&parameters, 24)?;
         let fmt = |v: Option<f64>, digits: usize| match v {
             None => "-".to_owned(),
             Some(v) if v.abs() >= 1e5 => format!("{v:.2e}"),

@@ -9,7 +9,7 @@
 //! ```
 
 use crate::command::RunLesson;
-use crate::log_cmd::{read_laser_file, topic_args};
+use crate::log_cmd::{laser_log_arg, read_laser_file, topic_args};
 use crate::map::{map_arg, read_map};
 use crate::output::{Output, units_bar, units_progress};
 use anyhow::{Result, bail};
@@ -53,11 +53,7 @@ impl RunLesson for Cartographer {
     fn command(&self) -> Command {
         Command::new(self.id())
             .arg(map_arg())
-            .arg(
-                Arg::new("log").long("log").value_name("FILE").help(
-                    "map a CARMEN laser log (plain, .gz or .bz2) or a ROS 2 bag (.mcap) instead of a simulated robot",
-                ),
-            )
+            .arg(laser_log_arg())
             .arg(Arg::new("reference").long("reference").value_name("FILE").help(
                 "with --log: its corrected log (e.g. intel-corrected.log.gz); the trajectory is scored against it (ATE, relative errors)",
             ))

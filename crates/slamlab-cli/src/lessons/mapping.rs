@@ -9,7 +9,7 @@
 
 use crate::command::RunLesson;
 use crate::flags;
-use crate::log_cmd::{read_laser_file, topic_args};
+use crate::log_cmd::{laser_log_arg, read_laser_file, topic_args};
 use crate::map::{map_arg, read_map};
 use crate::output::{Output, progress_bar};
 use anyhow::{Context, Result, bail};
@@ -37,11 +37,7 @@ impl RunLesson for Mapping {
     fn command(&self) -> Command {
         Command::new(self.id())
             .arg(map_arg())
-            .arg(
-                Arg::new("log").long("log").value_name("FILE").help(
-                    "map a CARMEN laser log (plain, .gz or .bz2) or a ROS 2 bag (.mcap) instead of a simulated robot",
-                ),
-            )
+            .arg(laser_log_arg())
             .args(topic_args())
             .arg(
                 Arg::new("map-out")

@@ -1,6 +1,7 @@
 //! The files of an assignment's download, in memory: one list for the CLI's
 //! folder and the browser's zip, so both hold the same bytes.
 
+use slamlab_core::Pose2;
 use std::fmt::Write as _;
 
 /// The files handed out, by their path inside the download (`answers/` for the
@@ -12,6 +13,27 @@ pub struct InputFiles {
 }
 
 impl InputFiles {
+    /// A download that opens with its `README.txt`.
+    pub fn with_readme(readme: &str) -> InputFiles {
+        let mut files = InputFiles::default();
+        files.add("README.txt", readme);
+        files
+    }
+
+    /// Adds `start_pose.txt`: the true start pose, `x y theta` (metres,
+    /// radians) on one line.
+    pub fn add_start_pose(&mut self, start: &Pose2) {
+        self.add(
+            "start_pose.txt",
+            format!(
+                "{} {} {}\n",
+                number(start.x),
+                number(start.y),
+                number(start.theta)
+            ),
+        );
+    }
+
     /// Adds a file.
     pub fn add(&mut self, path: &str, bytes: impl AsRef<[u8]>) {
         self.files.push((path.to_owned(), bytes.as_ref().to_vec()));

@@ -66,6 +66,22 @@ impl CriterionGrade {
             trim_number(self.points)
         )
     }
+
+    /// The reference estimators' values on the student's variant, for a
+    /// student: `ekf 0.2130 m, dead-reckoning 1.204 m` (`-` where one has none).
+    pub fn references_summary(&self) -> String {
+        let values: Vec<String> = self
+            .references
+            .iter()
+            .map(|r| {
+                let value = r
+                    .value
+                    .map_or("-".to_owned(), |v| format_value(v, &self.unit));
+                format!("{} {value}", r.name)
+            })
+            .collect();
+        values.join(", ")
+    }
 }
 
 /// A value with its unit, four significant figures.
@@ -141,24 +157,12 @@ impl Grade {
             .criteria
             .iter()
             .map(|c| {
-                let references: Vec<String> = c
-                    .references
-                    .iter()
-                    .map(|r| {
-                        format!(
-                            "{} {}",
-                            r.name,
-                            r.value
-                                .map_or("-".to_owned(), |v| format_value(v, &c.unit))
-                        )
-                    })
-                    .collect();
                 serde_json::json!({
                     "name": format!("{} ({})", c.label, c.metric),
                     "score": c.earned,
                     "max_score": c.points,
                     "status": if c.pass { "passed" } else { "failed" },
-                    "output": format!("{}\nReferences on your variant: {}.", c.summary(), references.join(", ")),
+                    "output": format!("{}\nReferences on your variant: {}.", c.summary(), c.references_summary()),
                 })
             })
             .collect();
@@ -260,37 +264,21 @@ pub fn grade_trajectory(
     let evaluation = evaluate(truth, &file.trajectory, &settings)
         .map_err(|e| CourseworkError::BadEstimate(format!("{file_name}: {e}")))?;
     notices.extend(evaluation.notices.iter().cloned());
-    let reference_evaluations: Vec<(&str, Option<Evaluation>)> = references
+    let theirs: Vec<(String, Option<Evaluation>)> = references
         .iter()
-        .map(|(name, t)| (name.as_str(), evaluate(truth, t, &settings).ok()))
+        .map(|(name, t)| (name.clone(), evaluate(truth, t, &settings).ok()))
         .collect();
-    let values: Vec<Option<f64>> = assignment
-        .criteria
-        .iter()
-        .map(|c| trajectory_metric(c.metric, &evaluation))
-        .collect();
-    let reference_values: Vec<Vec<(String, Option<f64>)>> = assignment
-        .criteria
-        .iter()
-        .map(|c| {
-            reference_evaluations
-                .iter()
-                .map(|(name, e)| {
-                    (
-                        (*name).to_owned(),
-                        e.as_ref().and_then(|e| trajectory_metric(c.metric, e)),
-                    )
-                })
-                .collect()
-        })
-        .collect();
-    Ok(assemble(
+    let value = |metric: Metric, e: &Option<Evaluation>| {
+        e.as_ref().and_then(|e| trajectory_metric(metric, e))
+    };
+    Ok(assemble_scores(
         assignment,
         variant,
         file_name,
         bytes,
-        &values,
-        &reference_values,
+        &Some(evaluation),
+        &theirs,
+        value,
         notices,
     ))
 }

@@ -22,9 +22,7 @@
 //! Landmark ids are written from 1 (the course's Octave code indexes with them).
 
 use super::files::{InputFiles, number};
-use super::{
-    Assignment, CourseworkError, InputFormat, TaskKind, TaskRun, TaskRunner, Variant, apply_params,
-};
+use super::{CourseworkError, InputFormat, Task, TaskKind, TaskRun};
 use crate::metrics::Trajectory;
 use crate::world::landmark_scenario::LandmarkScenario;
 use crate::world::landmark_session::LandmarkSession;
@@ -225,13 +223,8 @@ impl LandmarkRun {
     /// and the starter code; with `answers`, `answers/truth.tum` and
     /// `answers/landmarks.csv`.
     pub fn files(&self, freiburg: bool, velocity: bool, readme: &str, answers: bool) -> InputFiles {
-        let mut files = InputFiles::default();
-        files.add("README.txt", readme);
-        let s = self.start;
-        files.add(
-            "start_pose.txt",
-            format!("{} {} {}\n", number(s.x), number(s.y), number(s.theta)),
-        );
+        let mut files = InputFiles::with_readme(readme);
+        files.add_start_pose(&self.start);
         files.add(
             "run.txt",
             format!("dt {}\nsteps {}\n", number(self.dt()), self.controls.len()),
@@ -320,23 +313,17 @@ impl LandmarkRun {
     }
 }
 
-/// The runner of landmark-SLAM tasks: the lesson's parameter table checks the
-/// assignment's parameters, and a variant is the landmark world run with the
-/// student's seed.
-pub const RUNNER: TaskRunner = TaskRunner {
-    kind: TaskKind::LandmarkSlam,
-    check_params: |assignment| apply_params::<LandmarkScenario>(assignment).1,
-    simulate: simulate_variant,
-};
+/// Landmark-SLAM tasks: the lesson's parameter table checks the assignment's
+/// parameters, and a variant is the landmark world run with the student's
+/// seed.
+impl Task for LandmarkRun {
+    const KIND: TaskKind = TaskKind::LandmarkSlam;
+    type Scenario = LandmarkScenario;
 
-fn simulate_variant(
-    assignment: &Assignment,
-    variant: &Variant,
-    steps: u64,
-) -> Result<Box<dyn TaskRun>, CourseworkError> {
-    let (mut scenario, _) = apply_params::<LandmarkScenario>(assignment);
-    scenario.seed = variant.seed;
-    Ok(Box::new(LandmarkRun::simulate(&scenario, steps)))
+    fn run(mut scenario: LandmarkScenario, seed: u64, steps: u64) -> Result<Self, CourseworkError> {
+        scenario.seed = seed;
+        Ok(LandmarkRun::simulate(&scenario, steps))
+    }
 }
 
 impl TaskRun for LandmarkRun {

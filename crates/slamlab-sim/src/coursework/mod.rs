@@ -34,8 +34,10 @@ pub use files::InputFiles;
 pub use grade::{CriterionGrade, Grade, ReferenceValue};
 pub use variant::{Variant, sha256_hex};
 
+use crate::grid::BuiltinMap;
 use crate::metrics::Trajectory;
 use crate::params::{self, ParamIssue, Scenario};
+use slamlab_core::grid::OccupancyGrid;
 use std::fmt::Write as _;
 use std::sync::OnceLock;
 use thiserror::Error;
@@ -154,6 +156,78 @@ pub struct TaskRunner {
     pub check_params: fn(&Assignment) -> Vec<String>,
     /// Runs a variant for the given steps.
     pub simulate: SimulateVariant,
+}
+
+impl TaskRunner {
+    /// The runner of the task `T`: an assignment's parameters are checked by
+    /// [`apply_params`] on `T`'s scenario and then by [`Task::refusals`]; a
+    /// variant is [`Task::run`] from the same scenario.
+    pub const fn of<T: Task>() -> TaskRunner {
+        TaskRunner {
+            kind: T::KIND,
+            check_params: check_task::<T>,
+            simulate: simulate_task::<T>,
+        }
+    }
+}
+
+/// A lesson's kind of task, written as what is particular to it: the scenario
+/// whose parameter table takes the assignment's parameters, what else the
+/// lesson refuses, and how it runs a student's variant. [`TaskRunner::of`]
+/// makes its runner, so every lesson checks and applies the parameters alike.
+pub trait Task: TaskRun + Sized + 'static {
+    /// The kind of task.
+    const KIND: TaskKind;
+    /// The lesson's scenario: its table takes the assignment's parameters.
+    type Scenario: Scenario;
+    /// What the lesson refuses beyond its table, `scenario` being the
+    /// assignment's parameters applied to the default (none by default).
+    fn refusals(_assignment: &Assignment, _scenario: &Self::Scenario) -> Vec<String> {
+        Vec::new()
+    }
+    /// Runs a variant for `steps`: `scenario` holds the assignment's
+    /// parameters, the lesson sets the variant's `seed` in it.
+    fn run(scenario: Self::Scenario, seed: u64, steps: u64) -> Result<Self, CourseworkError>;
+}
+
+fn check_task<T: Task>(assignment: &Assignment) -> Vec<String> {
+    let (scenario, mut refused) = apply_params::<T::Scenario>(assignment);
+    refused.extend(T::refusals(assignment, &scenario));
+    refused
+}
+
+fn simulate_task<T: Task>(
+    assignment: &Assignment,
+    variant: &Variant,
+    steps: u64,
+) -> Result<Box<dyn TaskRun>, CourseworkError> {
+    let (scenario, _) = apply_params::<T::Scenario>(assignment);
+    Ok(Box::new(T::run(scenario, variant.seed, steps)?))
+}
+
+/// The refusal of a map that is not built in (an assignment's run is made
+/// again from the map's name, so it must be one of SLAM Lab's own).
+pub fn builtin_map_refusal(name: &str) -> Option<String> {
+    BuiltinMap::from_name(name)
+        .is_none()
+        .then(|| format!("map {name:?}: an assignment runs on a built-in map (maze, office)"))
+}
+
+/// The built-in map `name`, loaded for a variant's run.
+pub fn load_builtin_map(name: &str) -> Result<OccupancyGrid, CourseworkError> {
+    BuiltinMap::from_name(name)
+        .ok_or_else(|| CourseworkError::Generate(format!("no built-in map {name:?}")))?
+        .load()
+        .map_err(|e| CourseworkError::Generate(format!("the map: {e}")))
+}
+
+/// The refusal of an assignment whose variants' steps (`scenario.steps` up to
+/// `steps + steps_spread`) leave `min..=max`; `limit` says what the lesson
+/// allows.
+pub fn steps_refusal(assignment: &Assignment, min: u64, max: u64, limit: &str) -> Option<String> {
+    let (steps, spread) = (assignment.scenario.steps, assignment.scenario.steps_spread);
+    (steps < min || steps.saturating_add(spread) > max)
+        .then(|| format!("scenario.steps {steps} with steps_spread {spread}: {limit}"))
 }
 
 fn runner_for(kind: TaskKind, runners: &[TaskRunner]) -> Option<&TaskRunner> {

@@ -1,4 +1,4 @@
-//! Sensor-fusion assignments (`crate::coursework`'s [`RUNNER`] of `fusion`
+//! Sensor-fusion assignments (`crate::coursework`'s [`Task`] of `fusion`
 //! tasks): one student's drive of the fusion lesson's robot, handed out as one
 //! CSV per sensor, and the lesson's fusion EKF replayed on the same readings.
 //!
@@ -24,7 +24,7 @@ use super::scenario::SlamSource;
 use super::sensors::simulate;
 use crate::coursework::files::{InputFiles, number};
 use crate::coursework::{
-    Assignment, CourseworkError, InputFormat, TaskKind, TaskRun, TaskRunner, Variant, apply_params,
+    Assignment, CourseworkError, InputFormat, Task, TaskKind, TaskRun, Variant, steps_refusal,
 };
 use crate::io::trajectory::write_tum;
 use crate::metrics::Trajectory;
@@ -170,41 +170,126 @@ impl FusionRun {
     pub fn dead_reckoning(&self) -> Trajectory {
         dead_reckoning(&self.odometry_rows(), self.truth.stamps())
     }
+}
 
-    /// The files handed out: one CSV per sensor in use, the README and the
-    /// starter code; with `answers`, `answers/truth.tum`.
-    pub fn files(&self, readme: &str, answers: bool) -> InputFiles {
-        let s = &self.lesson.scenario;
-        let mut files = InputFiles::default();
-        files.add("README.txt", readme);
-        files.add(
-            "odometry.csv",
-            csv("t_s,v_m_per_s,w_rad_per_s", &self.odometry_rows()),
-        );
-        if s.imu.enabled {
-            files.add(
-                "imu.csv",
-                csv(
-                    "t_s,gyro_z_rad_per_s,accel_x_m_per_s2,accel_y_m_per_s2",
-                    &self.imu_rows(),
-                ),
+/// The drive's length for `steps` poses of 0.1 s, seconds.
+pub fn duration_of(steps: u64) -> f64 {
+    steps as f64 / POSES_PER_SECOND
+}
+
+/// The hand-in's times: `k / 10` s for `k = 0 ..= steps`.
+pub fn sample_times(steps: u64) -> Vec<f64> {
+    (0..=steps).map(|k| k as f64 / POSES_PER_SECOND).collect()
+}
+
+/// A CSV file: the header, then each row's time and values.
+fn csv(header: &str, rows: &Rows) -> String {
+    let mut out = String::with_capacity(rows.len() * 48);
+    out.push_str(header);
+    out.push('\n');
+    for (t, values) in rows {
+        out.push_str(&number(*t));
+        for v in values {
+            out.push(',');
+            out.push_str(&number(*v));
+        }
+        out.push('\n');
+    }
+    out
+}
+
+/// Dead reckoning: the odometry's twists `(t, [v, w])` integrated along exact
+/// arcs (thesis Eq. 2.70), each held until the next reading, from the origin;
+/// the pose at each of `times` (what `starter.py` writes).
+pub fn dead_reckoning(odometry: &Rows, times: &[f64]) -> Trajectory {
+    let mut pose = Pose2::IDENTITY;
+    let mut held: Option<(f64, Control)> = None;
+    let mut next = 0;
+    let mut path = Trajectory::default();
+    for &t in times {
+        while let Some((stamp, values)) = odometry.get(next) {
+            if *stamp > t {
+                break;
+            }
+            if let Some((since, control)) = held {
+                pose = MotionModel::ExactArc.predict(&pose, &control, stamp - since);
+            }
+            let v = values.first().copied().unwrap_or(0.0);
+            let w = values.get(1).copied().unwrap_or(0.0);
+            held = Some((*stamp, Control::new(v, w)));
+            next += 1;
+        }
+        let now = match held {
+            Some((since, control)) => MotionModel::ExactArc.predict(&pose, &control, t - since),
+            None => pose,
+        };
+        path.push(t, now, None);
+    }
+    path
+}
+
+/// The starter code of fusion assignments.
+pub const FUSION_STARTER: &str = include_str!("assignment_starter.py");
+
+/// Fusion tasks: the lesson's parameter table checks the assignment's
+/// parameters, and a variant is the lesson's drive with the student's seed.
+impl Task for FusionRun {
+    const KIND: TaskKind = TaskKind::Fusion;
+    type Scenario = FusionLessonScenario;
+
+    fn refusals(assignment: &Assignment, lesson: &FusionLessonScenario) -> Vec<String> {
+        let mut refused = Vec::new();
+        for (name, _) in assignment.param_pairs() {
+            if let Some((_, why)) = REFUSED.iter().find(|(n, _)| *n == name) {
+                refused.push(format!("{name}: {why}"));
+            }
+        }
+        let s = &lesson.scenario;
+        if !s.odometry.enabled {
+            refused.push(
+                "odom: a fusion assignment hands out the wheel odometry (the starter's dead reckoning)"
+                    .to_owned(),
             );
         }
-        if s.slam.enabled {
-            files.add(
-                "slam_pose.csv",
-                csv("t_s,x_m,y_m,theta_rad", &self.slam_rows()),
+        if s.slam.source != SlamSource::Simulated {
+            refused.push(
+                "slam-source: an assignment's SLAM poses are the simulated ones (slam-source=simulated)"
+                    .to_owned(),
             );
         }
-        files.add("starter.py", FUSION_STARTER);
-        if answers {
-            files.add("answers/truth.tum", write_tum(&self.truth));
-        }
-        files
+        let limit =
+            format!("a fusion assignment's drive has {MIN_STEPS} to {MAX_STEPS} poses of 0.1 s");
+        refused.extend(steps_refusal(assignment, MIN_STEPS, MAX_STEPS, &limit));
+        refused
+    }
+
+    fn run(
+        mut lesson: FusionLessonScenario,
+        seed: u64,
+        steps: u64,
+    ) -> Result<Self, CourseworkError> {
+        lesson.scenario.seed = seed;
+        FusionRun::simulate(&lesson, steps.clamp(MIN_STEPS, MAX_STEPS))
+    }
+}
+
+impl TaskRun for FusionRun {
+    fn truth(&self) -> Trajectory {
+        self.truth.clone()
+    }
+
+    fn references(&self) -> Result<Vec<(String, Trajectory)>, CourseworkError> {
+        Ok(vec![
+            (
+                format!("ekf-{}", self.reference_mode().name()),
+                self.reference_ekf()?,
+            ),
+            ("dead-reckoning".to_owned(), self.dead_reckoning()),
+        ])
     }
 
     /// What the README says about the files: formats, units, frames, noise.
-    pub fn readme_body(&self) -> String {
+    fn readme_body(&self, _inputs: &[InputFormat]) -> String {
         let s = &self.lesson.scenario;
         let (o, i, p) = (&s.odometry, &s.imu, &s.slam);
         let mut out = String::new();
@@ -286,137 +371,36 @@ impl FusionRun {
         );
         out
     }
-}
 
-/// The drive's length for `steps` poses of 0.1 s, seconds.
-pub fn duration_of(steps: u64) -> f64 {
-    steps as f64 / POSES_PER_SECOND
-}
-
-/// The hand-in's times: `k / 10` s for `k = 0 ..= steps`.
-pub fn sample_times(steps: u64) -> Vec<f64> {
-    (0..=steps).map(|k| k as f64 / POSES_PER_SECOND).collect()
-}
-
-/// A CSV file: the header, then each row's time and values.
-fn csv(header: &str, rows: &Rows) -> String {
-    let mut out = String::with_capacity(rows.len() * 48);
-    out.push_str(header);
-    out.push('\n');
-    for (t, values) in rows {
-        out.push_str(&number(*t));
-        for v in values {
-            out.push(',');
-            out.push_str(&number(*v));
-        }
-        out.push('\n');
-    }
-    out
-}
-
-/// Dead reckoning: the odometry's twists `(t, [v, w])` integrated along exact
-/// arcs (thesis Eq. 2.70), each held until the next reading, from the origin;
-/// the pose at each of `times` (what `starter.py` writes).
-pub fn dead_reckoning(odometry: &Rows, times: &[f64]) -> Trajectory {
-    let mut pose = Pose2::IDENTITY;
-    let mut held: Option<(f64, Control)> = None;
-    let mut next = 0;
-    let mut path = Trajectory::default();
-    for &t in times {
-        while let Some((stamp, values)) = odometry.get(next) {
-            if *stamp > t {
-                break;
-            }
-            if let Some((since, control)) = held {
-                pose = MotionModel::ExactArc.predict(&pose, &control, stamp - since);
-            }
-            let v = values.first().copied().unwrap_or(0.0);
-            let w = values.get(1).copied().unwrap_or(0.0);
-            held = Some((*stamp, Control::new(v, w)));
-            next += 1;
-        }
-        let now = match held {
-            Some((since, control)) => MotionModel::ExactArc.predict(&pose, &control, t - since),
-            None => pose,
-        };
-        path.push(t, now, None);
-    }
-    path
-}
-
-/// The starter code of fusion assignments.
-pub const FUSION_STARTER: &str = include_str!("assignment_starter.py");
-
-/// The runner of fusion tasks.
-pub const RUNNER: TaskRunner = TaskRunner {
-    kind: TaskKind::Fusion,
-    check_params,
-    simulate: simulate_variant,
-};
-
-fn check_params(assignment: &Assignment) -> Vec<String> {
-    let (lesson, mut refused) = apply_params::<FusionLessonScenario>(assignment);
-    for (name, _) in assignment.param_pairs() {
-        if let Some((_, why)) = REFUSED.iter().find(|(n, _)| *n == name) {
-            refused.push(format!("{name}: {why}"));
-        }
-    }
-    let s = &lesson.scenario;
-    if !s.odometry.enabled {
-        refused.push(
-            "odom: a fusion assignment hands out the wheel odometry (the starter's dead reckoning)"
-                .to_owned(),
-        );
-    }
-    if s.slam.source != SlamSource::Simulated {
-        refused.push(
-            "slam-source: an assignment's SLAM poses are the simulated ones (slam-source=simulated)"
-                .to_owned(),
-        );
-    }
-    let (steps, spread) = (assignment.scenario.steps, assignment.scenario.steps_spread);
-    if steps < MIN_STEPS || steps.saturating_add(spread) > MAX_STEPS {
-        refused.push(format!(
-            "scenario.steps {steps} with steps_spread {spread}: a fusion assignment's drive has {MIN_STEPS} to {MAX_STEPS} poses of 0.1 s"
-        ));
-    }
-    refused
-}
-
-fn simulate_variant(
-    assignment: &Assignment,
-    variant: &Variant,
-    steps: u64,
-) -> Result<Box<dyn TaskRun>, CourseworkError> {
-    let (mut lesson, _) = apply_params::<FusionLessonScenario>(assignment);
-    lesson.scenario.seed = variant.seed;
-    Ok(Box::new(FusionRun::simulate(
-        &lesson,
-        steps.clamp(MIN_STEPS, MAX_STEPS),
-    )?))
-}
-
-impl TaskRun for FusionRun {
-    fn truth(&self) -> Trajectory {
-        self.truth.clone()
-    }
-
-    fn references(&self) -> Result<Vec<(String, Trajectory)>, CourseworkError> {
-        Ok(vec![
-            (
-                format!("ekf-{}", self.reference_mode().name()),
-                self.reference_ekf()?,
-            ),
-            ("dead-reckoning".to_owned(), self.dead_reckoning()),
-        ])
-    }
-
-    fn readme_body(&self, _inputs: &[InputFormat]) -> String {
-        FusionRun::readme_body(self)
-    }
-
+    /// The files handed out: one CSV per sensor in use, the README and the
+    /// starter code; with `answers`, `answers/truth.tum`.
     fn files(&self, _inputs: &[InputFormat], readme: &str, answers: bool) -> InputFiles {
-        FusionRun::files(self, readme, answers)
+        let s = &self.lesson.scenario;
+        let mut files = InputFiles::with_readme(readme);
+        files.add(
+            "odometry.csv",
+            csv("t_s,v_m_per_s,w_rad_per_s", &self.odometry_rows()),
+        );
+        if s.imu.enabled {
+            files.add(
+                "imu.csv",
+                csv(
+                    "t_s,gyro_z_rad_per_s,accel_x_m_per_s2,accel_y_m_per_s2",
+                    &self.imu_rows(),
+                ),
+            );
+        }
+        if s.slam.enabled {
+            files.add(
+                "slam_pose.csv",
+                csv("t_s,x_m,y_m,theta_rad", &self.slam_rows()),
+            );
+        }
+        files.add("starter.py", FUSION_STARTER);
+        if answers {
+            files.add("answers/truth.tum", write_tum(&self.truth));
+        }
+        files
     }
 
     /// The drive's length (the seed is added by the caller).

@@ -1,4 +1,4 @@
-//! Localization assignments (`crate::coursework`'s [`RUNNER`] of localization
+//! Localization assignments (`crate::coursework`'s [`Task`] of localization
 //! tasks): one student's run of the Monte Carlo localization
 //! lesson's robot, handed out as a ROS map and a CARMEN log, and the reference
 //! MCL replayed on exactly what was handed out.
@@ -13,9 +13,9 @@
 use super::{InitMode, LocalizationEstimator, MclRun, MclScenario};
 use crate::coursework::files::{InputFiles, number};
 use crate::coursework::{
-    Assignment, CourseworkError, InputFormat, TaskKind, TaskRun, TaskRunner, Variant, apply_params,
+    Assignment, CourseworkError, InputFormat, Task, TaskKind, TaskRun, builtin_map_refusal,
+    load_builtin_map,
 };
-use crate::grid::BuiltinMap;
 use crate::io::laser_log::{LaserKind, LaserLog, LogOdometry, LogScan, write_carmen};
 use crate::io::ros_map::{ImageFormat, export_map, load_map};
 use crate::io::trajectory::write_tum;
@@ -135,75 +135,6 @@ impl LocalizationRun {
     pub fn reference_mcl(&self) -> Result<Trajectory, CourseworkError> {
         reference_mcl(&self.scenario, self.grid.clone(), &self.log, self.start)
     }
-
-    /// The files handed out: `map.yaml`, `map.pgm`, `robot.log`,
-    /// `start_pose.txt`, the README and the starter code; with `answers`,
-    /// `answers/truth.tum`.
-    pub fn files(&self, readme: &str, answers: bool) -> InputFiles {
-        let mut files = InputFiles::default();
-        files.add("README.txt", readme);
-        let s = self.start;
-        files.add(
-            "start_pose.txt",
-            format!("{} {} {}\n", number(s.x), number(s.y), number(s.theta)),
-        );
-        files.add("map.yaml", &self.map_yaml);
-        files.add("map.pgm", &self.map_pgm);
-        files.add("robot.log", &self.log_text);
-        files.add("starter.py", LOCALIZATION_STARTER);
-        if answers {
-            files.add("answers/truth.tum", write_tum(&self.truth));
-        }
-        files
-    }
-
-    /// What the README says about the files.
-    pub fn readme_body(&self) -> String {
-        let s = &self.scenario;
-        let beams = self.log.beams().unwrap_or(0);
-        let sd = |v: f64| if v > 0.0 { v.sqrt() } else { 0.0 };
-        let mut out = String::new();
-        let _ = writeln!(
-            out,
-            "The run: {} steps of dt = {} s; a round robot of radius {} m explores the map.\n\
-             Frames: ROS REP-103 (x forward, y left, angles counter-clockwise), metres,\n\
-             radians, seconds; the map's frame is the world's.\n\
-             \n\
-             map.yaml, map.pgm  a ROS map_server map (resolution {} m per pixel, origin\n\
-             \x20             in map.yaml; black occupied, white free, grey unknown).\n\
-             robot.log     a CARMEN log. 'ODOM x y theta tv rv accel ts host ts': the wheel\n\
-             \x20             odometry's pose, which drifts; it starts at the true start pose,\n\
-             \x20             so its frame is the map's at the start. 'FLASER n r1 .. rn x y\n\
-             \x20             theta odom_x odom_y odom_theta ts host ts': a scan of n = {}\n\
-             \x20             ranges (metres, printed to 1 mm), the first beam at -fov/2 and\n\
-             \x20             the others the resolution apart (the PARAM lines give\n\
-             \x20             laser_front_laser_fov and _resolution in degrees, and\n\
-             \x20             robot_front_laser_max in metres: a reading at the maximum is no\n\
-             \x20             return), taken at the robot's centre at the odometry pose\n\
-             \x20             printed on the line. One ODOM and one FLASER per step, at\n\
-             \x20             t = k*dt.\n\
-             start_pose.txt  x y theta: the robot's true pose at t = 0. The reference MCL\n\
-             \x20             starts with {} particles spread around it (std {} m in x and\n\
-             \x20             y, {} rad in theta).\n\
-             \n\
-             Noise: range std {} m; the odometry's increments are perturbed as in\n\
-             Probabilistic Robotics' odometry motion model with alpha = {}, {}, {}, {}.\n",
-            self.truth.len(),
-            number(s.dt),
-            number(s.robot_radius),
-            number(self.grid.resolution()),
-            beams,
-            s.max_particles,
-            number(sd(s.initial_cov_xx)),
-            number(sd(s.initial_cov_aa)),
-            number(s.lidar.range_std),
-            number(s.odom_noise.alpha1),
-            number(s.odom_noise.alpha2),
-            number(s.odom_noise.alpha3),
-            number(s.odom_noise.alpha4),
-        );
-        out
-    }
 }
 
 /// Monte Carlo localization on a map and a log, as the lesson runs it (see
@@ -261,39 +192,22 @@ pub fn reference_mcl(
 /// The starter code of localization assignments.
 pub const LOCALIZATION_STARTER: &str = include_str!("assignment_starter.py");
 
-/// The runner of localization tasks: the lesson's parameter table checks the
-/// assignment's parameters (the map must be a built-in one), and a variant is
-/// the lesson's robot run with the student's seed.
-pub const RUNNER: TaskRunner = TaskRunner {
-    kind: TaskKind::Localization,
-    check_params,
-    simulate: simulate_variant,
-};
+/// Localization tasks: the lesson's parameter table checks the assignment's
+/// parameters (the map must be a built-in one), and a variant is the lesson's
+/// robot run with the student's seed.
+impl Task for LocalizationRun {
+    const KIND: TaskKind = TaskKind::Localization;
+    type Scenario = MclScenario;
 
-fn check_params(assignment: &Assignment) -> Vec<String> {
-    let (scenario, mut refused) = apply_params::<MclScenario>(assignment);
-    if BuiltinMap::from_name(&scenario.map).is_none() {
-        refused.push(format!(
-            "map {:?}: an assignment runs on a built-in map (maze, office)",
-            scenario.map
-        ));
+    fn refusals(_assignment: &Assignment, scenario: &MclScenario) -> Vec<String> {
+        builtin_map_refusal(&scenario.map).into_iter().collect()
     }
-    refused
-}
 
-fn simulate_variant(
-    assignment: &Assignment,
-    variant: &Variant,
-    steps: u64,
-) -> Result<Box<dyn TaskRun>, CourseworkError> {
-    let (mut scenario, _) = apply_params::<MclScenario>(assignment);
-    scenario.seed = variant.seed;
-    let map = BuiltinMap::from_name(&scenario.map)
-        .ok_or_else(|| CourseworkError::Generate(format!("no built-in map {:?}", scenario.map)))?;
-    let grid = map
-        .load()
-        .map_err(|e| CourseworkError::Generate(format!("the map: {e}")))?;
-    Ok(Box::new(LocalizationRun::simulate(&scenario, grid, steps)?))
+    fn run(mut scenario: MclScenario, seed: u64, steps: u64) -> Result<Self, CourseworkError> {
+        scenario.seed = seed;
+        let grid = load_builtin_map(&scenario.map)?;
+        LocalizationRun::simulate(&scenario, grid, steps)
+    }
 }
 
 impl TaskRun for LocalizationRun {
@@ -308,12 +222,68 @@ impl TaskRun for LocalizationRun {
         ])
     }
 
+    /// What the README says about the files.
     fn readme_body(&self, _inputs: &[InputFormat]) -> String {
-        LocalizationRun::readme_body(self)
+        let s = &self.scenario;
+        let beams = self.log.beams().unwrap_or(0);
+        let sd = |v: f64| if v > 0.0 { v.sqrt() } else { 0.0 };
+        let mut out = String::new();
+        let _ = writeln!(
+            out,
+            "The run: {} steps of dt = {} s; a round robot of radius {} m explores the map.\n\
+             Frames: ROS REP-103 (x forward, y left, angles counter-clockwise), metres,\n\
+             radians, seconds; the map's frame is the world's.\n\
+             \n\
+             map.yaml, map.pgm  a ROS map_server map (resolution {} m per pixel, origin\n\
+             \x20             in map.yaml; black occupied, white free, grey unknown).\n\
+             robot.log     a CARMEN log. 'ODOM x y theta tv rv accel ts host ts': the wheel\n\
+             \x20             odometry's pose, which drifts; it starts at the true start pose,\n\
+             \x20             so its frame is the map's at the start. 'FLASER n r1 .. rn x y\n\
+             \x20             theta odom_x odom_y odom_theta ts host ts': a scan of n = {}\n\
+             \x20             ranges (metres, printed to 1 mm), the first beam at -fov/2 and\n\
+             \x20             the others the resolution apart (the PARAM lines give\n\
+             \x20             laser_front_laser_fov and _resolution in degrees, and\n\
+             \x20             robot_front_laser_max in metres: a reading at the maximum is no\n\
+             \x20             return), taken at the robot's centre at the odometry pose\n\
+             \x20             printed on the line. One ODOM and one FLASER per step, at\n\
+             \x20             t = k*dt.\n\
+             start_pose.txt  x y theta: the robot's true pose at t = 0. The reference MCL\n\
+             \x20             starts with {} particles spread around it (std {} m in x and\n\
+             \x20             y, {} rad in theta).\n\
+             \n\
+             Noise: range std {} m; the odometry's increments are perturbed as in\n\
+             Probabilistic Robotics' odometry motion model with alpha = {}, {}, {}, {}.\n",
+            self.truth.len(),
+            number(s.dt),
+            number(s.robot_radius),
+            number(self.grid.resolution()),
+            beams,
+            s.max_particles,
+            number(sd(s.initial_cov_xx)),
+            number(sd(s.initial_cov_aa)),
+            number(s.lidar.range_std),
+            number(s.odom_noise.alpha1),
+            number(s.odom_noise.alpha2),
+            number(s.odom_noise.alpha3),
+            number(s.odom_noise.alpha4),
+        );
+        out
     }
 
+    /// The files handed out: `map.yaml`, `map.pgm`, `robot.log`,
+    /// `start_pose.txt`, the README and the starter code; with `answers`,
+    /// `answers/truth.tum`.
     fn files(&self, _inputs: &[InputFormat], readme: &str, answers: bool) -> InputFiles {
-        LocalizationRun::files(self, readme, answers)
+        let mut files = InputFiles::with_readme(readme);
+        files.add_start_pose(&self.start);
+        files.add("map.yaml", &self.map_yaml);
+        files.add("map.pgm", &self.map_pgm);
+        files.add("robot.log", &self.log_text);
+        files.add("starter.py", LOCALIZATION_STARTER);
+        if answers {
+            files.add("answers/truth.tum", write_tum(&self.truth));
+        }
+        files
     }
 
     fn lesson_pairs(&self) -> Vec<(String, String)> {

@@ -1,4 +1,4 @@
-//! Grid-mapping assignments (`crate::coursework`'s [`RUNNER`] of grid-mapping
+//! Grid-mapping assignments (`crate::coursework`'s [`Task`] of grid-mapping
 //! tasks): occupancy-grid mapping with known poses. One student's run of the
 //! mapping lesson's simulated robot is handed out as a CARMEN log whose scans
 //! carry their true poses (and the same poses as CSV) with the true map's size
@@ -14,12 +14,12 @@
 use super::MappingScenario;
 use super::scenario::simulated_log_config;
 use crate::coursework::files::{InputFiles, number};
-use crate::coursework::grade::assemble;
+use crate::coursework::grade::assemble_scores;
 use crate::coursework::{
-    Assignment, CourseworkError, Grade, InputFormat, Metric, TaskKind, TaskRun, TaskRunner,
-    Variant, apply_params,
+    Assignment, CourseworkError, Grade, InputFormat, Metric, Task, TaskKind, TaskRun, Variant,
+    builtin_map_refusal, load_builtin_map, steps_refusal,
 };
-use crate::grid::{BuiltinMap, occupancy_agreement, occupancy_coverage, simulate_log};
+use crate::grid::{occupancy_agreement, occupancy_coverage, simulate_log};
 use crate::io::laser_log::{LaserLog, write_carmen};
 use crate::io::map_archive::read_map_zip;
 use crate::io::ros_map::{ImageFormat, export_map};
@@ -111,13 +111,128 @@ impl GridMappingRun {
             occupancy_coverage(map, &self.true_map),
         )
     }
+}
+
+/// The lesson's occupancy mapping with known poses: every scan of `log` at its
+/// laser pose (the true one) into a probability grid of the true map's
+/// resolution with the scenario's update rule, read out at the true map's cells:
+/// occupied above probability 0.5, free below, unknown where never observed.
+pub fn reference_map(
+    scenario: &MappingScenario,
+    log: &LaserLog,
+    true_map: &OccupancyGrid,
+) -> Result<OccupancyGrid, CourseworkError> {
+    let mut grid = ProbabilityGrid::new(true_map.resolution());
+    let params = scenario.insert_params();
+    for s in &log.scans {
+        grid.insert_scan(&s.laser_pose(), &s.scan, &params)
+            .map_err(|e| CourseworkError::Generate(format!("the reference map: {e}")))?;
+    }
+    let (w, h) = (true_map.width(), true_map.height());
+    let mut cells = vec![Cell::Unknown; w * h];
+    for j in 0..h {
+        for i in 0..w {
+            let (x, y) = true_map.cell_center(i as i64, j as i64);
+            let (bi, bj) = grid.cell_of(x, y);
+            if let Some(l) = grid.log_odds_at(bi, bj).filter(|l| *l != 0.0) {
+                cells[j * w + i] = if l > 0.0 { Cell::Occupied } else { Cell::Free };
+            }
+        }
+    }
+    OccupancyGrid::new(w, h, true_map.resolution(), true_map.origin(), cells)
+        .map_err(|e| CourseworkError::Generate(format!("the reference map: {e}")))
+}
+
+/// The starter code of grid-mapping assignments.
+pub const GRID_MAPPING_STARTER: &str = include_str!("assignment_starter.py");
+
+/// Grid-mapping tasks: the mapping lesson's parameter table checks the
+/// assignment's parameters (the map must be a built-in one), and a variant is
+/// the lesson's robot run with the student's seed, mapped with the true poses.
+impl Task for GridMappingRun {
+    const KIND: TaskKind = TaskKind::GridMapping;
+    type Scenario = MappingScenario;
+
+    fn refusals(assignment: &Assignment, scenario: &MappingScenario) -> Vec<String> {
+        let mut refused: Vec<String> = builtin_map_refusal(&scenario.map).into_iter().collect();
+        let pairs = assignment.param_pairs();
+        for name in ["steps", "poses"] {
+            if pairs.iter().any(|(k, _)| k == name) {
+                refused.push(format!(
+                    "{name}: an assignment's scans are its scenario.steps, with the true poses"
+                ));
+            }
+        }
+        refused.extend(steps_refusal(
+            assignment,
+            0,
+            MAX_MAPPING_STEPS,
+            &format!("a grid-mapping assignment has at most {MAX_MAPPING_STEPS} scans"),
+        ));
+        refused
+    }
+
+    fn run(mut scenario: MappingScenario, seed: u64, steps: u64) -> Result<Self, CourseworkError> {
+        scenario.seed = seed;
+        let map = load_builtin_map(&scenario.map)?;
+        GridMappingRun::simulate(&scenario, map, steps)
+    }
+}
+
+impl TaskRun for GridMappingRun {
+    fn truth(&self) -> Trajectory {
+        self.truth.clone()
+    }
+
+    /// The poses the maps were made from (a mapping task has no estimated
+    /// trajectory): the true ones.
+    fn references(&self) -> Result<Vec<(String, Trajectory)>, CourseworkError> {
+        Ok(vec![("known-poses".to_owned(), self.truth.clone())])
+    }
+
+    /// What the README says about the files.
+    fn readme_body(&self, _inputs: &[InputFormat]) -> String {
+        let s = &self.scenario;
+        let m = &self.true_map;
+        let mut out = String::new();
+        let _ = writeln!(
+            out,
+            "The run: {} scans, dt = 0.1 s; a round robot explores the map. Frames: ROS\n\
+             REP-103 (x forward, y left, angles counter-clockwise), metres, radians,\n\
+             seconds; the map's frame is the world's.\n\
+             \n\
+             robot.log     a CARMEN log. 'FLASER n r1 .. rn x y theta odom_x odom_y\n\
+             \x20             odom_theta ts host ts': a scan of n = {} ranges (metres, printed\n\
+             \x20             to 1 mm) over the full circle, the first beam at -fov/2 and the\n\
+             \x20             others the resolution apart (the PARAM lines give\n\
+             \x20             laser_front_laser_fov and _resolution in degrees and\n\
+             \x20             robot_front_laser_max in metres: a reading at {} m or more is no\n\
+             \x20             return, free space along it but no hit), taken at the robot's\n\
+             \x20             centre. x y theta is the robot's TRUE pose at the scan (known\n\
+             \x20             poses); odom_* is the drifting wheel odometry (not needed).\n\
+             poses.csv     t,x,y,theta: the same true poses, one line per scan.\n\
+             map_spec.txt  the true map's resolution ({} m), width and height ({} x {}\n\
+             \x20             cells) and origin (the world position of cell (0, 0)'s corner).\n\
+             \x20             Write your map on this grid (any grid is read: each true cell\n\
+             \x20             is looked up in your map at its centre).\n\
+             \n\
+             Noise: range std {} m.\n",
+            self.truth.len(),
+            self.log.beams().unwrap_or(0),
+            number(s.lidar_range),
+            number(m.resolution()),
+            m.width(),
+            m.height(),
+            number(s.range_std),
+        );
+        out
+    }
 
     /// The files handed out: `robot.log`, `poses.csv`, `map_spec.txt`, the
     /// README and the starter code; with `answers`, `answers/truth.tum`, the
     /// true map and the reference map (each `.yaml` with its `.pgm`).
-    pub fn files(&self, readme: &str, answers: bool) -> InputFiles {
-        let mut files = InputFiles::default();
-        files.add("README.txt", readme);
+    fn files(&self, _inputs: &[InputFormat], readme: &str, answers: bool) -> InputFiles {
+        let mut files = InputFiles::with_readme(readme);
         files.add("robot.log", &self.log_text);
         files.add("poses.csv", write_csv(&self.truth));
         let m = &self.true_map;
@@ -154,143 +269,6 @@ impl GridMappingRun {
         files
     }
 
-    /// What the README says about the files.
-    pub fn readme_body(&self) -> String {
-        let s = &self.scenario;
-        let m = &self.true_map;
-        let mut out = String::new();
-        let _ = writeln!(
-            out,
-            "The run: {} scans, dt = 0.1 s; a round robot explores the map. Frames: ROS\n\
-             REP-103 (x forward, y left, angles counter-clockwise), metres, radians,\n\
-             seconds; the map's frame is the world's.\n\
-             \n\
-             robot.log     a CARMEN log. 'FLASER n r1 .. rn x y theta odom_x odom_y\n\
-             \x20             odom_theta ts host ts': a scan of n = {} ranges (metres, printed\n\
-             \x20             to 1 mm) over the full circle, the first beam at -fov/2 and the\n\
-             \x20             others the resolution apart (the PARAM lines give\n\
-             \x20             laser_front_laser_fov and _resolution in degrees and\n\
-             \x20             robot_front_laser_max in metres: a reading at {} m or more is no\n\
-             \x20             return, free space along it but no hit), taken at the robot's\n\
-             \x20             centre. x y theta is the robot's TRUE pose at the scan (known\n\
-             \x20             poses); odom_* is the drifting wheel odometry (not needed).\n\
-             poses.csv     t,x,y,theta: the same true poses, one line per scan.\n\
-             map_spec.txt  the true map's resolution ({} m), width and height ({} x {}\n\
-             \x20             cells) and origin (the world position of cell (0, 0)'s corner).\n\
-             \x20             Write your map on this grid (any grid is read: each true cell\n\
-             \x20             is looked up in your map at its centre).\n\
-             \n\
-             Noise: range std {} m.\n",
-            self.truth.len(),
-            self.log.beams().unwrap_or(0),
-            number(s.lidar_range),
-            number(m.resolution()),
-            m.width(),
-            m.height(),
-            number(s.range_std),
-        );
-        out
-    }
-}
-
-/// The lesson's occupancy mapping with known poses: every scan of `log` at its
-/// laser pose (the true one) into a probability grid of the true map's
-/// resolution with the scenario's update rule, read out at the true map's cells:
-/// occupied above probability 0.5, free below, unknown where never observed.
-pub fn reference_map(
-    scenario: &MappingScenario,
-    log: &LaserLog,
-    true_map: &OccupancyGrid,
-) -> Result<OccupancyGrid, CourseworkError> {
-    let mut grid = ProbabilityGrid::new(true_map.resolution());
-    let params = scenario.insert_params();
-    for s in &log.scans {
-        grid.insert_scan(&s.laser_pose(), &s.scan, &params)
-            .map_err(|e| CourseworkError::Generate(format!("the reference map: {e}")))?;
-    }
-    let (w, h) = (true_map.width(), true_map.height());
-    let mut cells = vec![Cell::Unknown; w * h];
-    for j in 0..h {
-        for i in 0..w {
-            let (x, y) = true_map.cell_center(i as i64, j as i64);
-            let (bi, bj) = grid.cell_of(x, y);
-            if let Some(l) = grid.log_odds_at(bi, bj).filter(|l| *l != 0.0) {
-                cells[j * w + i] = if l > 0.0 { Cell::Occupied } else { Cell::Free };
-            }
-        }
-    }
-    OccupancyGrid::new(w, h, true_map.resolution(), true_map.origin(), cells)
-        .map_err(|e| CourseworkError::Generate(format!("the reference map: {e}")))
-}
-
-/// The starter code of grid-mapping assignments.
-pub const GRID_MAPPING_STARTER: &str = include_str!("assignment_starter.py");
-
-/// The runner of grid-mapping tasks.
-pub const RUNNER: TaskRunner = TaskRunner {
-    kind: TaskKind::GridMapping,
-    check_params,
-    simulate: simulate_variant,
-};
-
-fn check_params(assignment: &Assignment) -> Vec<String> {
-    let (scenario, mut refused) = apply_params::<MappingScenario>(assignment);
-    if BuiltinMap::from_name(&scenario.map).is_none() {
-        refused.push(format!(
-            "map {:?}: an assignment runs on a built-in map (maze, office)",
-            scenario.map
-        ));
-    }
-    let pairs = assignment.param_pairs();
-    for name in ["steps", "poses"] {
-        if pairs.iter().any(|(k, _)| k == name) {
-            refused.push(format!(
-                "{name}: an assignment's scans are its scenario.steps, with the true poses"
-            ));
-        }
-    }
-    let (steps, spread) = (assignment.scenario.steps, assignment.scenario.steps_spread);
-    if steps.saturating_add(spread) > MAX_MAPPING_STEPS {
-        refused.push(format!(
-            "scenario.steps {steps} with steps_spread {spread}: a grid-mapping assignment has at most {MAX_MAPPING_STEPS} scans"
-        ));
-    }
-    refused
-}
-
-fn simulate_variant(
-    assignment: &Assignment,
-    variant: &Variant,
-    steps: u64,
-) -> Result<Box<dyn TaskRun>, CourseworkError> {
-    let (mut scenario, _) = apply_params::<MappingScenario>(assignment);
-    scenario.seed = variant.seed;
-    let map = BuiltinMap::from_name(&scenario.map)
-        .ok_or_else(|| CourseworkError::Generate(format!("no built-in map {:?}", scenario.map)))?
-        .load()
-        .map_err(|e| CourseworkError::Generate(format!("the map: {e}")))?;
-    Ok(Box::new(GridMappingRun::simulate(&scenario, map, steps)?))
-}
-
-impl TaskRun for GridMappingRun {
-    fn truth(&self) -> Trajectory {
-        self.truth.clone()
-    }
-
-    /// The poses the maps were made from (a mapping task has no estimated
-    /// trajectory): the true ones.
-    fn references(&self) -> Result<Vec<(String, Trajectory)>, CourseworkError> {
-        Ok(vec![("known-poses".to_owned(), self.truth.clone())])
-    }
-
-    fn readme_body(&self, _inputs: &[InputFormat]) -> String {
-        GridMappingRun::readme_body(self)
-    }
-
-    fn files(&self, _inputs: &[InputFormat], readme: &str, answers: bool) -> InputFiles {
-        GridMappingRun::files(self, readme, answers)
-    }
-
     fn lesson_pairs(&self) -> Vec<(String, String)> {
         vec![
             ("poses".to_owned(), "truth".to_owned()),
@@ -324,45 +302,34 @@ impl TaskRun for GridMappingRun {
         bytes: &[u8],
     ) -> Result<Grade, CourseworkError> {
         let (map, _) = read_map_zip(file_name, bytes).map_err(CourseworkError::BadEstimate)?;
-        let value = |metric: Metric, (agreement, coverage): (Option<f64>, Option<f64>)| match metric
-        {
-            Metric::MapAgreement => agreement,
-            Metric::MapCoverage => coverage,
-            _ => None,
-        };
+        let value =
+            |metric: Metric, &(agreement, coverage): &(Option<f64>, Option<f64>)| match metric {
+                Metric::MapAgreement => agreement,
+                Metric::MapCoverage => coverage,
+                _ => None,
+            };
         let mine = self.score(&map);
         let references = [
-            ("known-poses mapping", self.score(&self.reference_map)),
-            ("all free", self.score(&self.all_free_map())),
+            (
+                "known-poses mapping".to_owned(),
+                self.score(&self.reference_map),
+            ),
+            ("all free".to_owned(), self.score(&self.all_free_map())),
         ];
-        let values: Vec<Option<f64>> = assignment
-            .criteria
-            .iter()
-            .map(|c| value(c.metric, mine))
-            .collect();
-        let reference_values: Vec<Vec<(String, Option<f64>)>> = assignment
-            .criteria
-            .iter()
-            .map(|c| {
-                references
-                    .iter()
-                    .map(|(name, s)| ((*name).to_owned(), value(c.metric, *s)))
-                    .collect()
-            })
-            .collect();
         let notices = vec![format!(
             "{file_name}: a map of {} x {} cells of {} m",
             map.width(),
             map.height(),
             map.resolution()
         )];
-        Ok(assemble(
+        Ok(assemble_scores(
             assignment,
             variant,
             file_name,
             bytes,
-            &values,
-            &reference_values,
+            &mine,
+            &references,
+            value,
             notices,
         ))
     }
@@ -371,7 +338,7 @@ impl TaskRun for GridMappingRun {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::grid::map_agreement;
+    use crate::grid::{BuiltinMap, map_agreement};
 
     #[test]
     fn the_reference_map_scores_the_lessons_map_agreement() {

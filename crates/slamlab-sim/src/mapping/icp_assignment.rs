@@ -1,4 +1,4 @@
-//! ICP assignments (`crate::coursework`'s [`RUNNER`] of scan-matching tasks):
+//! ICP assignments (`crate::coursework`'s [`Task`] of scan-matching tasks):
 //! two laser scans of the mapping lesson's simulated robot, taken a variant's
 //! number of steps apart, handed out as CSV points in each scan's own frame;
 //! the student hands back their relative pose, scored as the two-view lesson
@@ -18,10 +18,10 @@ use super::scenario::simulated_log_config;
 use crate::coursework::files::{InputFiles, number};
 use crate::coursework::grade::assemble_scores;
 use crate::coursework::{
-    Assignment, CourseworkError, Grade, InputFormat, Metric, TaskKind, TaskRun, TaskRunner,
-    Variant, apply_params,
+    Assignment, CourseworkError, Grade, InputFormat, Metric, Task, TaskKind, TaskRun, Variant,
+    builtin_map_refusal, load_builtin_map, steps_refusal,
 };
-use crate::grid::{BuiltinMap, simulate_log};
+use crate::grid::simulate_log;
 use crate::io::relative_pose::{read_relative_pose, write_relative_pose};
 use crate::metrics::{Trajectory, relative_pose_error};
 use nalgebra::{Matrix3, Vector3};
@@ -151,97 +151,31 @@ impl IcpRun {
             gap: gap as u64,
         })
     }
-
-    /// The files handed out: `scan_a.csv`, `scan_b.csv`, the README and the
-    /// odometry, the starter code; with `answers`, `answers/relative_pose.txt`.
-    pub fn files(&self, readme: &str, answers: bool) -> InputFiles {
-        let mut files = InputFiles::default();
-        files.add("README.txt", readme);
-        files.add("scan_a.csv", points_csv(&self.scan_a));
-        files.add("scan_b.csv", points_csv(&self.scan_b));
-        let o = self.odometry;
-        files.add(
-            "odometry.txt",
-            format!(
-                "# x y theta (m, m, rad): scan B's pose in scan A's frame by the wheel odometry\n{} {} {}\n",
-                number(o.x),
-                number(o.y),
-                number(o.theta)
-            ),
-        );
-        files.add("starter.py", ICP_STARTER);
-        if answers {
-            files.add(
-                "answers/relative_pose.txt",
-                write_relative_pose(&relative_pose_of(&self.a_from_b)),
-            );
-        }
-        files
-    }
-
-    /// What the README says about the files.
-    pub fn readme_body(&self) -> String {
-        let s = &self.scenario;
-        format!(
-            "scan_a.csv, scan_b.csv  'x,y': the end points of one laser scan each (metres),\n\
-             \x20 in that scan's own frame (the robot's: x forward, y left), one line per\n\
-             \x20 beam that returned ({} beams over the full circle, range std {} m, no\n\
-             \x20 return beyond {} m). Scan B was taken {} steps of 0.1 s after scan A by\n\
-             \x20 the robot exploring a maze.\n\
-             odometry.txt  'x y theta': scan B's pose in scan A's frame by the wheel\n\
-             \x20 odometry (it drifts: a start for ICP, not the answer).\n\
-             \n\
-             Hand in R and t with X_b = R X_a + t: a point of scan A's frame in scan\n\
-             B's frame (OpenCV's recoverPose convention; 3D, a rotation about z and\n\
-             t = (x, y, 0)). If ICP gives you the pose (x, y, theta) of B's frame in\n\
-             A's, R is the rotation by -theta and t = -R (x, y, 0).\n",
-            s.beams,
-            number(s.range_std),
-            number(s.lidar_range),
-            self.gap
-        )
-    }
 }
 
 /// The starter code of ICP assignments.
 pub const ICP_STARTER: &str = include_str!("icp_assignment_starter.py");
 
-/// The runner of ICP tasks.
-pub const RUNNER: TaskRunner = TaskRunner {
-    kind: TaskKind::Icp,
-    check_params,
-    simulate: simulate_variant,
-};
+/// ICP tasks: the mapping lesson's parameter table checks the assignment's
+/// parameters (the map must be a built-in one), and a variant is a pair of
+/// the lesson's scans with the student's seed.
+impl Task for IcpRun {
+    const KIND: TaskKind = TaskKind::Icp;
+    type Scenario = MappingScenario;
 
-fn check_params(assignment: &Assignment) -> Vec<String> {
-    let (scenario, mut refused) = apply_params::<MappingScenario>(assignment);
-    if BuiltinMap::from_name(&scenario.map).is_none() {
-        refused.push(format!(
-            "map {:?}: an assignment runs on a built-in map (maze, office)",
-            scenario.map
-        ));
+    fn refusals(assignment: &Assignment, scenario: &MappingScenario) -> Vec<String> {
+        let limit = format!("an ICP assignment's scans are at most {MAX_GAP} steps apart");
+        builtin_map_refusal(&scenario.map)
+            .into_iter()
+            .chain(steps_refusal(assignment, 0, MAX_GAP, &limit))
+            .collect()
     }
-    let (steps, spread) = (assignment.scenario.steps, assignment.scenario.steps_spread);
-    if steps.saturating_add(spread) > MAX_GAP {
-        refused.push(format!(
-            "scenario.steps {steps} with steps_spread {spread}: an ICP assignment's scans are at most {MAX_GAP} steps apart"
-        ));
-    }
-    refused
-}
 
-fn simulate_variant(
-    assignment: &Assignment,
-    variant: &Variant,
-    steps: u64,
-) -> Result<Box<dyn TaskRun>, CourseworkError> {
-    let (mut scenario, _) = apply_params::<MappingScenario>(assignment);
-    scenario.seed = variant.seed;
-    let map = BuiltinMap::from_name(&scenario.map)
-        .ok_or_else(|| CourseworkError::Generate(format!("no built-in map {:?}", scenario.map)))?
-        .load()
-        .map_err(|e| CourseworkError::Generate(format!("the map: {e}")))?;
-    Ok(Box::new(IcpRun::simulate(&scenario, &map, steps)?))
+    fn run(mut scenario: MappingScenario, seed: u64, steps: u64) -> Result<Self, CourseworkError> {
+        scenario.seed = seed;
+        let map = load_builtin_map(&scenario.map)?;
+        IcpRun::simulate(&scenario, &map, steps)
+    }
 }
 
 impl TaskRun for IcpRun {
@@ -265,12 +199,53 @@ impl TaskRun for IcpRun {
         Ok(out)
     }
 
+    /// What the README says about the files.
     fn readme_body(&self, _inputs: &[InputFormat]) -> String {
-        IcpRun::readme_body(self)
+        let s = &self.scenario;
+        format!(
+            "scan_a.csv, scan_b.csv  'x,y': the end points of one laser scan each (metres),\n\
+             \x20 in that scan's own frame (the robot's: x forward, y left), one line per\n\
+             \x20 beam that returned ({} beams over the full circle, range std {} m, no\n\
+             \x20 return beyond {} m). Scan B was taken {} steps of 0.1 s after scan A by\n\
+             \x20 the robot exploring a maze.\n\
+             odometry.txt  'x y theta': scan B's pose in scan A's frame by the wheel\n\
+             \x20 odometry (it drifts: a start for ICP, not the answer).\n\
+             \n\
+             Hand in R and t with X_b = R X_a + t: a point of scan A's frame in scan\n\
+             B's frame (OpenCV's recoverPose convention; 3D, a rotation about z and\n\
+             t = (x, y, 0)). If ICP gives you the pose (x, y, theta) of B's frame in\n\
+             A's, R is the rotation by -theta and t = -R (x, y, 0).\n",
+            s.beams,
+            number(s.range_std),
+            number(s.lidar_range),
+            self.gap
+        )
     }
 
+    /// The files handed out: `scan_a.csv`, `scan_b.csv`, the README and the
+    /// odometry, the starter code; with `answers`, `answers/relative_pose.txt`.
     fn files(&self, _inputs: &[InputFormat], readme: &str, answers: bool) -> InputFiles {
-        IcpRun::files(self, readme, answers)
+        let mut files = InputFiles::with_readme(readme);
+        files.add("scan_a.csv", points_csv(&self.scan_a));
+        files.add("scan_b.csv", points_csv(&self.scan_b));
+        let o = self.odometry;
+        files.add(
+            "odometry.txt",
+            format!(
+                "# x y theta (m, m, rad): scan B's pose in scan A's frame by the wheel odometry\n{} {} {}\n",
+                number(o.x),
+                number(o.y),
+                number(o.theta)
+            ),
+        );
+        files.add("starter.py", ICP_STARTER);
+        if answers {
+            files.add(
+                "answers/relative_pose.txt",
+                write_relative_pose(&relative_pose_of(&self.a_from_b)),
+            );
+        }
+        files
     }
 
     fn lesson_pairs(&self) -> Vec<(String, String)> {

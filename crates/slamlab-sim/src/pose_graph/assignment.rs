@@ -1,4 +1,4 @@
-//! Pose-graph assignments (`crate::coursework`'s [`RUNNER`] of pose-graph
+//! Pose-graph assignments (`crate::coursework`'s [`Task`] of pose-graph
 //! tasks): one student's Manhattan-world graph, handed out as g2o, and the
 //! optimized graph they hand back scored by the lesson's least-squares cost
 //! against the reference solver's, and by its poses against the truth.
@@ -13,10 +13,10 @@
 use super::experiment::manhattan_graph;
 use super::session::{Example, KernelChoice, PoseGraphScenario};
 use crate::coursework::files::InputFiles;
-use crate::coursework::grade::{assemble, trajectory_metric, trajectory_settings};
+use crate::coursework::grade::{assemble_scores, trajectory_metric, trajectory_settings};
 use crate::coursework::{
-    Assignment, CourseworkError, Grade, InputFormat, Metric, TaskKind, TaskRun, TaskRunner,
-    Variant, apply_params,
+    Assignment, CourseworkError, Grade, InputFormat, Metric, Task, TaskKind, TaskRun, Variant,
+    steps_refusal,
 };
 use crate::io::graph::{MAX_FILE_BYTES, read_graph, write_g2o};
 use crate::io::trajectory::write_tum;
@@ -88,62 +88,6 @@ impl PoseGraphRun {
         })
     }
 
-    /// The files handed out: `problem.g2o`, the README and the starter code;
-    /// with `answers`, `answers/truth.tum` and the reference solver's
-    /// `answers/reference.g2o`.
-    pub fn files(&self, readme: &str, answers: bool) -> InputFiles {
-        let mut files = InputFiles::default();
-        files.add("README.txt", readme);
-        files.add("problem.g2o", &self.problem_text);
-        files.add("starter.py", POSE_GRAPH_STARTER);
-        if answers {
-            files.add("answers/truth.tum", write_tum(&self.truth));
-            files.add(
-                "answers/reference.g2o",
-                write_g2o(&self.solution).unwrap_or_default(),
-            );
-        }
-        files
-    }
-
-    /// What the README says about the files.
-    pub fn readme_body(&self) -> String {
-        let s = &self.scenario;
-        let mut out = String::new();
-        let _ = writeln!(
-            out,
-            "problem.g2o  a pose graph in g2o's 2D format: {} poses, {} edges.\n\
-             \x20 VERTEX_SE2 id x y theta   a pose (metres, radians): the initial guess,\n\
-             \x20                          the noisy odometry chained from pose 0.\n\
-             \x20 FIX 0                     pose 0 is held where it is (it fixes the gauge;\n\
-             \x20                          it is the true start pose, the origin).\n\
-             \x20 EDGE_SE2 i j dx dy dtheta I11 I12 I13 I22 I23 I33\n\
-             \x20                          pose j measured from pose i, z = x_i^-1 x_j (in\n\
-             \x20                          pose i's frame), with the upper triangle of its\n\
-             \x20                          3x3 information matrix row by row.\n\
-             Between consecutive poses the edges are odometry; the others are loop\n\
-             closures (the robot back on a cell it visited more than 10 poses before).\n\
-             \n\
-             The world: a robot walks a grid of 1 m cells inside a square of {} x {}\n\
-             cells, straight on with probability 0.7, else turning 90 degrees. Every\n\
-             measurement has Gaussian noise of std 0.05 m in x and y and 1 degree in\n\
-             theta (the information matrices say so: diag(400, 400, 3282.8)).\n\
-             \n\
-             The cost: F(x) = sum over edges of e^T Omega e with e = t2v(z^-1 (x_i^-1 x_j))\n\
-             (the angle wrapped to (-pi, pi]), Grisetti et al., A tutorial on graph-based\n\
-             SLAM, Eq. 4.2 of Xiang's thesis. The initial guess costs {:.6e}.\n",
-            self.problem.pose_count(),
-            self.problem.edges().len(),
-            s.manhattan_side,
-            s.manhattan_side,
-            slamlab_core::graph::graph_cost(
-                &self.problem,
-                &slamlab_core::graph::RobustKernel::None
-            ),
-        );
-        out
-    }
-
     fn score(&self, file: &PoseGraph) -> Result<GraphScore, String> {
         score_graph(&self.problem, file, self.reference_cost)
     }
@@ -152,56 +96,51 @@ impl PoseGraphRun {
 /// The starter code of pose-graph assignments.
 pub const POSE_GRAPH_STARTER: &str = include_str!("assignment_starter.py");
 
-/// The runner of pose-graph tasks.
-pub const RUNNER: TaskRunner = TaskRunner {
-    kind: TaskKind::PoseGraph,
-    check_params,
-    simulate: simulate_variant,
-};
+/// Pose-graph tasks: the lesson's parameter table checks the assignment's
+/// parameters, and a variant is the Manhattan graph with the student's seed.
+impl Task for PoseGraphRun {
+    const KIND: TaskKind = TaskKind::PoseGraph;
+    type Scenario = PoseGraphScenario;
 
-fn check_params(assignment: &Assignment) -> Vec<String> {
-    let (scenario, mut refused) = apply_params::<PoseGraphScenario>(assignment);
-    let pairs = assignment.param_pairs();
-    let given = |name: &str| pairs.iter().any(|(k, _)| k == name);
-    if given("example") && scenario.example != Example::Manhattan {
-        refused.push(
-            "example: an assignment's graph is the manhattan example (each student's own walk)"
-                .to_owned(),
-        );
+    fn refusals(assignment: &Assignment, scenario: &PoseGraphScenario) -> Vec<String> {
+        let mut refused = Vec::new();
+        let pairs = assignment.param_pairs();
+        let given = |name: &str| pairs.iter().any(|(k, _)| k == name);
+        if given("example") && scenario.example != Example::Manhattan {
+            refused.push(
+                "example: an assignment's graph is the manhattan example (each student's own walk)"
+                    .to_owned(),
+            );
+        }
+        if given("manhattan-poses") {
+            refused.push(
+                "manhattan-poses: an assignment's poses are its scenario.steps (and steps_spread)"
+                    .to_owned(),
+            );
+        }
+        if scenario.kernel != KernelChoice::None {
+            refused.push(
+                "kernel: an assignment is graded by the plain least-squares cost; leave the kernel out"
+                    .to_owned(),
+            );
+        }
+        if scenario.solver == SolverKind::GradientDescent {
+            refused.push("solver gd: the reference solver must converge; use gn or lm".to_owned());
+        }
+        let (min, max) = POSES;
+        let limit = format!("a pose-graph assignment has {min} to {max} poses");
+        refused.extend(steps_refusal(assignment, min, max, &limit));
+        refused
     }
-    if given("manhattan-poses") {
-        refused.push(
-            "manhattan-poses: an assignment's poses are its scenario.steps (and steps_spread)"
-                .to_owned(),
-        );
-    }
-    if scenario.kernel != KernelChoice::None {
-        refused.push(
-            "kernel: an assignment is graded by the plain least-squares cost; leave the kernel out"
-                .to_owned(),
-        );
-    }
-    if scenario.solver == SolverKind::GradientDescent {
-        refused.push("solver gd: the reference solver must converge; use gn or lm".to_owned());
-    }
-    let (steps, spread) = (assignment.scenario.steps, assignment.scenario.steps_spread);
-    if steps < POSES.0 || steps.saturating_add(spread) > POSES.1 {
-        refused.push(format!(
-            "scenario.steps {steps} with steps_spread {spread}: a pose-graph assignment has {} to {} poses",
-            POSES.0, POSES.1
-        ));
-    }
-    refused
-}
 
-fn simulate_variant(
-    assignment: &Assignment,
-    variant: &Variant,
-    steps: u64,
-) -> Result<Box<dyn TaskRun>, CourseworkError> {
-    let (mut scenario, _) = apply_params::<PoseGraphScenario>(assignment);
-    scenario.seed = variant.seed;
-    Ok(Box::new(PoseGraphRun::simulate(&scenario, steps)?))
+    fn run(
+        mut scenario: PoseGraphScenario,
+        seed: u64,
+        steps: u64,
+    ) -> Result<Self, CourseworkError> {
+        scenario.seed = seed;
+        PoseGraphRun::simulate(&scenario, steps)
+    }
 }
 
 /// Reads a handed-in graph file (refused over the readers' size limit, not
@@ -244,12 +183,59 @@ impl TaskRun for PoseGraphRun {
         ])
     }
 
+    /// What the README says about the files.
     fn readme_body(&self, _inputs: &[InputFormat]) -> String {
-        PoseGraphRun::readme_body(self)
+        let s = &self.scenario;
+        let mut out = String::new();
+        let _ = writeln!(
+            out,
+            "problem.g2o  a pose graph in g2o's 2D format: {} poses, {} edges.\n\
+             \x20 VERTEX_SE2 id x y theta   a pose (metres, radians): the initial guess,\n\
+             \x20                          the noisy odometry chained from pose 0.\n\
+             \x20 FIX 0                     pose 0 is held where it is (it fixes the gauge;\n\
+             \x20                          it is the true start pose, the origin).\n\
+             \x20 EDGE_SE2 i j dx dy dtheta I11 I12 I13 I22 I23 I33\n\
+             \x20                          pose j measured from pose i, z = x_i^-1 x_j (in\n\
+             \x20                          pose i's frame), with the upper triangle of its\n\
+             \x20                          3x3 information matrix row by row.\n\
+             Between consecutive poses the edges are odometry; the others are loop\n\
+             closures (the robot back on a cell it visited more than 10 poses before).\n\
+             \n\
+             The world: a robot walks a grid of 1 m cells inside a square of {} x {}\n\
+             cells, straight on with probability 0.7, else turning 90 degrees. Every\n\
+             measurement has Gaussian noise of std 0.05 m in x and y and 1 degree in\n\
+             theta (the information matrices say so: diag(400, 400, 3282.8)).\n\
+             \n\
+             The cost: F(x) = sum over edges of e^T Omega e with e = t2v(z^-1 (x_i^-1 x_j))\n\
+             (the angle wrapped to (-pi, pi]), Grisetti et al., A tutorial on graph-based\n\
+             SLAM, Eq. 4.2 of Xiang's thesis. The initial guess costs {:.6e}.\n",
+            self.problem.pose_count(),
+            self.problem.edges().len(),
+            s.manhattan_side,
+            s.manhattan_side,
+            slamlab_core::graph::graph_cost(
+                &self.problem,
+                &slamlab_core::graph::RobustKernel::None
+            ),
+        );
+        out
     }
 
+    /// The files handed out: `problem.g2o`, the README and the starter code;
+    /// with `answers`, `answers/truth.tum` and the reference solver's
+    /// `answers/reference.g2o`.
     fn files(&self, _inputs: &[InputFormat], readme: &str, answers: bool) -> InputFiles {
-        PoseGraphRun::files(self, readme, answers)
+        let mut files = InputFiles::with_readme(readme);
+        files.add("problem.g2o", &self.problem_text);
+        files.add("starter.py", POSE_GRAPH_STARTER);
+        if answers {
+            files.add("answers/truth.tum", write_tum(&self.truth));
+            files.add(
+                "answers/reference.g2o",
+                write_g2o(&self.solution).unwrap_or_default(),
+            );
+        }
+        files
     }
 
     fn lesson_pairs(&self) -> Vec<(String, String)> {
@@ -297,52 +283,34 @@ impl TaskRun for PoseGraphRun {
         let settings = trajectory_settings(assignment);
         let evaluation = evaluate(&self.truth, &graph_poses(&file), &settings)
             .map_err(|e| CourseworkError::BadEstimate(format!("{file_name}: {e}")))?;
-        let value = |metric: Metric, cost_ratio: Option<f64>, e: Option<&Evaluation>| match metric {
-            Metric::CostRatio => cost_ratio,
-            other => e.and_then(|e| trajectory_metric(other, e)),
+        // A graph's score: its cost ratio and its poses' evaluation.
+        type Score = (Option<f64>, Option<Evaluation>);
+        let value = |metric: Metric, (cost_ratio, e): &Score| match metric {
+            Metric::CostRatio => *cost_ratio,
+            other => e.as_ref().and_then(|e| trajectory_metric(other, e)),
         };
-        let values: Vec<Option<f64>> = assignment
-            .criteria
-            .iter()
-            .map(|c| value(c.metric, score.cost_ratio, Some(&evaluation)))
-            .collect();
-        let reference_ratios: Vec<Option<f64>> = vec![
+        let mine = (score.cost_ratio, Some(evaluation));
+        let reference_ratios = [
             Some(1.0).filter(|_| self.reference_cost > 0.0),
             (self.reference_cost > 0.0).then(|| score_ratio_of(&self.problem, self)),
         ];
-        let reference_evaluations: Vec<(String, Option<Evaluation>, Option<f64>)> = references
+        let theirs: Vec<(String, Score)> = references
             .iter()
             .enumerate()
             .map(|(k, (name, t))| {
+                let ratio = reference_ratios.get(k).copied().flatten();
                 (
                     name.clone(),
-                    evaluate(&self.truth, t, &settings).ok(),
-                    reference_ratios.get(k).copied().flatten(),
+                    (ratio, evaluate(&self.truth, t, &settings).ok()),
                 )
-            })
-            .collect();
-        let reference_values: Vec<Vec<(String, Option<f64>)>> = assignment
-            .criteria
-            .iter()
-            .map(|c| {
-                reference_evaluations
-                    .iter()
-                    .map(|(name, e, ratio)| (name.clone(), value(c.metric, *ratio, e.as_ref())))
-                    .collect()
             })
             .collect();
         let notices = vec![format!(
             "cost {:.6e} (initial guess {:.6e}, reference {:.6e}; Σ e^T Ω e over problem.g2o's edges)",
             score.cost, score.initial_cost, score.reference_cost
         )];
-        Ok(assemble(
-            assignment,
-            variant,
-            file_name,
-            bytes,
-            &values,
-            &reference_values,
-            notices,
+        Ok(assemble_scores(
+            assignment, variant, file_name, bytes, &mine, &theirs, value, notices,
         ))
     }
 }

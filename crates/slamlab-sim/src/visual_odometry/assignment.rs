@@ -67,6 +67,16 @@ pub const USED_PARAMS: &[&str] = &[
 /// The most RANSAC samples the references draw (the experiment's cap).
 pub const MAX_SAMPLES: usize = 5_000;
 
+/// The lesson's link key that shows a two-view scene instead of the docking
+/// run: `two-view=N` draws the scene of the link's `seed` and parameters with
+/// `N` matches ([`TwoViewRun::simulate`]), as an assignment's variant does
+/// ([`TwoViewRun::lesson_pairs`](TaskRun::lesson_pairs) gives it).
+pub const SCENE_KEY: &str = "two-view";
+
+/// The lesson's link key that marks the scene's wrong matches from the start
+/// (`two-view-answers=on`): an assignment that includes its answers.
+pub const ANSWERS_KEY: &str = "two-view-answers";
+
 /// The naive answer: no rotation, the camera moved straight ahead along its
 /// optical axis (`t = (0, 0, -1)`: b's centre at `-Rᵀ t = (0, 0, 1)` in a's
 /// frame). What the starter code writes.
@@ -92,6 +102,12 @@ pub struct TwoViewRun {
     pub truth: RelativePose,
     /// The references' relative poses by name (`None`: RANSAC found none).
     pub references: Vec<(String, Option<RelativePose>)>,
+    /// The RANSAC references' inliers by name, one flag per match (empty:
+    /// RANSAC found no pose).
+    pub inliers: Vec<(String, Vec<bool>)>,
+    /// The assignment includes its answers (the instructor's switch): the
+    /// lesson may mark the wrong matches before anything is graded.
+    pub answers_included: bool,
 }
 
 /// The rotation error (degrees) and the translation-direction error (degrees;
@@ -187,17 +203,26 @@ impl TwoViewRun {
             estimate_two_view(&drawn, &camera, config, &mut rng)
                 .ok()
                 .and_then(|e| {
-                    e.translation.map(|t| RelativePose {
-                        rotation: e.rotation,
-                        translation: t,
+                    e.translation.map(|t| {
+                        let pose = RelativePose {
+                            rotation: e.rotation,
+                            translation: t,
+                        };
+                        (pose, e.inliers)
                     })
                 })
         };
-        let references = vec![
-            ("eight-point".to_owned(), ransac(Method::EightPoint, 1)),
-            ("five-point".to_owned(), ransac(Method::FivePoint, 2)),
-            ("naive".to_owned(), Some(naive_pose())),
-        ];
+        let mut references = Vec::new();
+        let mut inliers = Vec::new();
+        for (name, method, stream) in [
+            ("eight-point", Method::EightPoint, 1),
+            ("five-point", Method::FivePoint, 2),
+        ] {
+            let found = ransac(method, stream);
+            references.push((name.to_owned(), found.as_ref().map(|(p, _)| *p)));
+            inliers.push((name.to_owned(), found.map(|(_, i)| i).unwrap_or_default()));
+        }
+        references.push(("naive".to_owned(), Some(naive_pose())));
         TwoViewRun {
             scenario: scenario.clone(),
             camera,
@@ -205,7 +230,28 @@ impl TwoViewRun {
             wrong,
             truth,
             references,
+            inliers,
+            answers_included: false,
         }
+    }
+
+    /// The run of `variant` of a two-view `assignment` with `steps` matches
+    /// (clamped to [`MIN_MATCHES`]..=[`MAX_MATCHES`]): the lesson's default
+    /// scenario with the assignment's parameters and the variant's seed, as
+    /// `slamlab export-inputs` and `slamlab grade` run it.
+    pub fn for_variant(assignment: &Assignment, variant: &Variant, steps: u64) -> TwoViewRun {
+        let (mut scenario, _) = apply_params::<VoScenario>(assignment);
+        scenario.settings.seed = variant.seed;
+        let matches = usize::try_from(steps.clamp(MIN_MATCHES, MAX_MATCHES)).unwrap_or(200);
+        let mut run = TwoViewRun::simulate(&scenario, matches);
+        run.answers_included = assignment.answers_included;
+        run
+    }
+
+    /// Camera b's top view ([`top_view`]) of `pose`, its translation scaled to
+    /// the true baseline (what the lesson draws for each relative pose).
+    pub fn top_view_of(&self, pose: &RelativePose) -> Pose2 {
+        top_view(pose, self.truth.translation.norm())
     }
 
     /// The files handed out: `K.txt`, `matches.csv`, the README, the starter
@@ -260,7 +306,8 @@ impl TwoViewRun {
         )
     }
 
-    fn reference(&self, name: &str) -> Option<&RelativePose> {
+    /// The reference `name`'s relative pose, if it found one.
+    pub fn reference(&self, name: &str) -> Option<&RelativePose> {
         self.references
             .iter()
             .find(|(n, _)| n == name)
@@ -302,26 +349,34 @@ fn simulate_variant(
     variant: &Variant,
     steps: u64,
 ) -> Result<Box<dyn TaskRun>, CourseworkError> {
-    let (mut scenario, _) = apply_params::<VoScenario>(assignment);
-    scenario.settings.seed = variant.seed;
-    let matches = usize::try_from(steps.clamp(MIN_MATCHES, MAX_MATCHES)).unwrap_or(200);
-    Ok(Box::new(TwoViewRun::simulate(&scenario, matches)))
+    Ok(Box::new(TwoViewRun::for_variant(
+        assignment, variant, steps,
+    )))
 }
 
 impl TaskRun for TwoViewRun {
+    /// `two-view=N` ([`SCENE_KEY`]): the lesson shows this scene (its seed and
+    /// parameters are the variant's pairs), and `two-view-answers=on`
+    /// ([`ANSWERS_KEY`]) when the assignment includes its answers.
+    fn lesson_pairs(&self) -> Vec<(String, String)> {
+        let mut pairs = vec![(SCENE_KEY.to_owned(), self.matches.len().to_string())];
+        if self.answers_included {
+            pairs.push((ANSWERS_KEY.to_owned(), "on".to_owned()));
+        }
+        pairs
+    }
+
     /// Camera a at 0 and camera b's top view in its frame at 1 (for drawing;
     /// the grade uses the 3D poses).
     fn truth(&self) -> Trajectory {
-        let baseline = self.truth.translation.norm();
         Trajectory::new(
             vec![0.0, 1.0],
-            vec![Pose2::IDENTITY, top_view(&self.truth, baseline)],
+            vec![Pose2::IDENTITY, self.top_view_of(&self.truth)],
         )
     }
 
     /// The references' top views, each `t` scaled to the true baseline.
     fn references(&self) -> Result<Vec<(String, Trajectory)>, CourseworkError> {
-        let baseline = self.truth.translation.norm();
         Ok(self
             .references
             .iter()
@@ -331,7 +386,7 @@ impl TaskRun for TwoViewRun {
                     name.clone(),
                     Trajectory::new(
                         vec![0.0, 1.0],
-                        vec![Pose2::IDENTITY, top_view(pose, baseline)],
+                        vec![Pose2::IDENTITY, self.top_view_of(pose)],
                     ),
                 ))
             })

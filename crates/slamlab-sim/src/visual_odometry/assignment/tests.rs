@@ -283,3 +283,71 @@ fn an_assignment_with_parameters_the_scene_has_not_is_refused() {
     let err = read("hw.json", metres.as_bytes()).unwrap_err().to_string();
     assert!(err.contains("translation_error_m"), "{err}");
 }
+
+/// The lesson is told the scene by its link pairs (`two-view=N`, the variant's
+/// seed and parameters): the scene they draw is the variant's, to the bit; the
+/// RANSAC references' inliers are kept, the eight-point one's agreeing with
+/// the truth's wrong matches; answers on adds `two-view-answers=on`.
+#[test]
+fn the_lesson_pairs_draw_the_variants_scene() {
+    let a = builtin("two-view");
+    let p = prepare(&a, "ada@uni.edu").unwrap();
+    let pairs = p.lesson_pairs();
+    assert!(pairs.contains(&(SCENE_KEY.to_owned(), p.steps.to_string())));
+    assert!(!pairs.iter().any(|(k, _)| k == ANSWERS_KEY));
+    let mut scenario = VoScenario::default();
+    let params: Vec<(&str, &str)> = pairs
+        .iter()
+        .filter(|(k, _)| k != SCENE_KEY)
+        .map(|(k, v)| (k.as_str(), v.as_str()))
+        .collect();
+    assert!(crate::params::apply_pairs(&mut scenario, params, &[]).is_empty());
+    let from_link = TwoViewRun::simulate(&scenario, p.steps as usize);
+    let variant = TwoViewRun::for_variant(&p.assignment, &p.variant, p.steps);
+    assert_eq!(from_link.matches, variant.matches);
+    assert_eq!(from_link.truth, variant.truth);
+    assert_eq!(from_link.references, variant.references);
+    assert_eq!(from_link.inliers, variant.inliers);
+    let (name, inliers) = &variant.inliers[0];
+    assert_eq!(name, "eight-point");
+    assert_eq!(inliers.len(), variant.matches.len());
+    // RANSAC keeps the right matches and drops the wrong ones, nearly all.
+    let count = |inlier: bool, wrong: bool| {
+        inliers
+            .iter()
+            .zip(&variant.wrong)
+            .filter(|(i, w)| **i == inlier && **w == wrong)
+            .count()
+    };
+    println!(
+        "{} matches: right kept {}, right dropped {}, wrong kept {}, wrong dropped {}",
+        variant.matches.len(),
+        count(true, false),
+        count(false, false),
+        count(true, true),
+        count(false, true)
+    );
+    // No wrong match is kept (a random pixel seldom lands within the
+    // threshold of its epipolar line); Ada's variant: 10 of 163 right ones are
+    // dropped, their 1 px noise (on each axis of both images) putting them
+    // past the threshold.
+    assert_eq!(count(true, true), 0);
+    assert_eq!(
+        count(false, true),
+        variant.wrong.iter().filter(|w| **w).count()
+    );
+    assert_eq!((count(true, false), count(false, false)), (153, 10));
+    // The top view of the truth: camera b's centre -Rᵀt (2 m from a) seen
+    // from above, forward (z) and left (-x).
+    let b = variant.top_view_of(&variant.truth);
+    let centre = -(variant.truth.rotation.transpose() * variant.truth.translation);
+    assert!((centre.norm() - 2.0).abs() < 1e-12);
+    assert!((b.x - centre.z).abs() < 1e-12 && (b.y + centre.x).abs() < 1e-12);
+    let mut with_answers = a.clone();
+    with_answers.answers_included = true;
+    let p = coursework::prepare(&with_answers, "ada@uni.edu", &[RUNNER]).unwrap();
+    assert!(
+        p.lesson_pairs()
+            .contains(&(ANSWERS_KEY.to_owned(), "on".to_owned()))
+    );
+}
