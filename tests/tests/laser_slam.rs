@@ -95,25 +95,37 @@ fn near(value: f64, measured: f64) -> bool {
     (value - measured).abs() <= 0.1 * measured
 }
 
+/// On the first `scans` scans of the Intel log (skipped when it is absent):
+/// loop closure ends below scan-to-map, odometry and local SLAM alone, and
+/// each ATE (odometry, scan-to-map, local SLAM, loop closure) is within 10 %
+/// of `measured`.
+fn assert_loop_closure_wins(scans: usize, measured: [f64; 4]) {
+    let Some(input) = intel(scans) else {
+        return;
+    };
+    let ate = ates(&input);
+    let [odometry, scan_to_map, local, closed] = ate;
+    assert!(
+        closed < scan_to_map && closed < odometry,
+        "{closed} {scan_to_map} {odometry}"
+    );
+    assert!(closed < local, "{closed} {local}");
+    let names = ["odometry", "scan-to-map", "local SLAM", "loop closure"];
+    for ((name, value), measured) in names.iter().zip(ate).zip(measured) {
+        assert!(
+            near(value, measured),
+            "{name}: {value} (measured {measured})"
+        );
+    }
+}
+
 /// The first 2,000 scans (396 s of the log, 133 reference scans): loop
 /// closure already below scan-to-map and far below odometry. Measured
 /// 2026-11-28: odometry 10.475 m, scan-to-map 0.086 m, local SLAM alone
 /// 0.144 m, with loop closures 0.073 m.
 #[test]
 fn loop_closure_beats_scan_to_map_and_odometry_on_the_first_2000_intel_scans() {
-    let Some(input) = intel(2000) else {
-        return;
-    };
-    let [odometry, scan_to_map, local, closed] = ates(&input);
-    assert!(
-        closed < scan_to_map && closed < odometry,
-        "{closed} {scan_to_map} {odometry}"
-    );
-    assert!(closed < local, "{closed} {local}");
-    assert!(near(odometry, 10.475), "{odometry}");
-    assert!(near(scan_to_map, 0.086), "{scan_to_map}");
-    assert!(near(local, 0.144), "{local}");
-    assert!(near(closed, 0.073), "{closed}");
+    assert_loop_closure_wins(2000, [10.475, 0.086, 0.144, 0.073]);
 }
 
 /// The whole log (13,631 scans, 44.9 minutes): loop closure 0.077 m,
@@ -123,17 +135,5 @@ fn loop_closure_beats_scan_to_map_and_odometry_on_the_first_2000_intel_scans() {
 #[test]
 #[ignore = "the whole Intel log four times: minutes in the test profile"]
 fn loop_closure_beats_scan_to_map_and_odometry_on_the_whole_intel_log() {
-    let Some(input) = intel(usize::MAX) else {
-        return;
-    };
-    let [odometry, scan_to_map, local, closed] = ates(&input);
-    assert!(
-        closed < scan_to_map && closed < odometry,
-        "{closed} {scan_to_map} {odometry}"
-    );
-    assert!(closed < local, "{closed} {local}");
-    assert!(near(odometry, 24.018), "{odometry}");
-    assert!(near(scan_to_map, 1.324), "{scan_to_map}");
-    assert!(near(local, 1.231), "{local}");
-    assert!(near(closed, 0.077), "{closed}");
+    assert_loop_closure_wins(usize::MAX, [24.018, 1.324, 1.231, 0.077]);
 }

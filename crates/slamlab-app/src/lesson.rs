@@ -99,6 +99,34 @@ pub fn scenario_from_start<S: slamlab_sim::params::Scenario>(
     (scenario, notices)
 }
 
+/// Opens lesson `L` the way every lesson opens: its scenario is the lesson's
+/// `default`, then the parameters it stored last time when the link gives none,
+/// then the link's `start.pairs` ([`scenario_from_start`]); `new` builds the
+/// lesson on it, and `frame` reaches the lesson's [`LessonFrame`], which gets the
+/// link's problems as notices (before the lesson's own) and the stored view and
+/// clock speed. `Err` is why `new` refused (a lesson whose `new` cannot fail
+/// says so with [`std::convert::Infallible`]): the lesson then opens
+/// [`open_instead`], saying so in its own words.
+pub fn open_lesson<S, V, L, E>(
+    start: &LessonStart<'_>,
+    default: S,
+    new: impl FnOnce(S) -> Result<L, E>,
+    frame: impl FnOnce(&mut L) -> &mut LessonFrame<V>,
+) -> Result<L, E>
+where
+    S: slamlab_sim::params::Scenario,
+    V: LessonView,
+{
+    let stored = StoredSettings::<V>::from_start(start);
+    let (scenario, link_notices) =
+        scenario_from_start(start, default, stored.as_ref().map(|s| s.params.as_slice()));
+    let mut lesson = new(scenario)?;
+    let settled = frame(&mut lesson);
+    settled.notices.splice(0..0, link_notices);
+    settled.restore(stored.as_ref());
+    Ok(lesson)
+}
+
 /// `frame` and `frame_mut` for a lesson whose [`LessonFrame`] is its field `frame`:
 /// write `frame_accessors!();` in its `impl Lesson`.
 macro_rules! frame_accessors {
@@ -289,11 +317,16 @@ impl<V: LessonView> LessonFrame<V> {
 
     /// The same frame with the stored clock speed and view, when there are any.
     pub fn restored(mut self, stored: Option<&StoredSettings<V>>) -> Self {
+        self.restore(stored);
+        self
+    }
+
+    /// Gives the frame the stored clock speed and view, when there are any.
+    pub fn restore(&mut self, stored: Option<&StoredSettings<V>>) {
         if let Some(stored) = stored {
             stored.restore_clock(&mut self.time);
             self.view = stored.view.clone();
         }
-        self
     }
 
     /// The same frame with this clock (a lesson's own speed).

@@ -1054,49 +1054,46 @@ impl SlamLabApp {
         );
         ui.separator();
         let ctx = ui.ctx().clone();
-        if ui
-            .button("Export map as PNG")
-            .on_hover_text("The map panel as it is on screen")
-            .clicked()
-        {
-            self.export(&ctx, export::ExportKind::MapPng);
-            ui.close();
-        }
-        if ui
-            .button("Export trajectories (zip)")
-            .on_hover_text(
-                "The truth and every estimator's trajectory so far as TUM and CSV files (with \
-                 covariances where the estimator has them), and the landmarks: score them with \
-                 `slamlab evaluate` or evo",
-            )
-            .clicked()
-        {
-            self.export(&ctx, export::ExportKind::TrajectoriesZip);
-            ui.close();
-        }
-        if ui.button("Export window as PNG").clicked() {
-            self.export(&ctx, export::ExportKind::WindowPng);
-            ui.close();
-        }
-        if ui
-            .button("Export plot data as CSV")
-            .on_hover_text("Every plot's series, every point: plot, axes, series, x, y")
-            .clicked()
-        {
-            self.export(&ctx, export::ExportKind::PlotsCsv);
-            ui.close();
-        }
-        if ui
-            .button("Export scenario as JSON")
-            .on_hover_text(
-                "The lesson, its parameters and the view at this tick: open it again here \
-                 (File → Open scenario, or drop it on the window) or run it with \
-                 `slamlab run --scenario FILE`",
-            )
-            .clicked()
-        {
-            self.export(&ctx, export::ExportKind::ScenarioJson);
-            ui.close();
+        let exports = [
+            (
+                "Export map as PNG",
+                Some("The map panel as it is on screen"),
+                export::ExportKind::MapPng,
+            ),
+            (
+                "Export trajectories (zip)",
+                Some(
+                    "The truth and every estimator's trajectory so far as TUM and CSV files \
+                     (with covariances where the estimator has them), and the landmarks: score \
+                     them with `slamlab evaluate` or evo",
+                ),
+                export::ExportKind::TrajectoriesZip,
+            ),
+            ("Export window as PNG", None, export::ExportKind::WindowPng),
+            (
+                "Export plot data as CSV",
+                Some("Every plot's series, every point: plot, axes, series, x, y"),
+                export::ExportKind::PlotsCsv,
+            ),
+            (
+                "Export scenario as JSON",
+                Some(
+                    "The lesson, its parameters and the view at this tick: open it again here \
+                     (File → Open scenario, or drop it on the window) or run it with \
+                     `slamlab run --scenario FILE`",
+                ),
+                export::ExportKind::ScenarioJson,
+            ),
+        ];
+        for (label, hover, kind) in exports {
+            let mut button = ui.button(label);
+            if let Some(hover) = hover {
+                button = button.on_hover_text(hover);
+            }
+            if button.clicked() {
+                self.export(&ctx, kind);
+                ui.close();
+            }
         }
     }
 
@@ -1240,20 +1237,9 @@ impl SlamLabApp {
                 || (!text_is_lessons && name.ends_with(".txt"))
                 || (maps_are_estimates && widgets::estimates::is_map_file(&name))
         };
-        let taken = ctx.input_mut(|i| {
-            let (mine, rest): (Vec<_>, Vec<_>) = std::mem::take(&mut i.raw.dropped_files)
-                .into_iter()
-                .partition(is_estimate);
-            i.raw.dropped_files = rest;
-            mine
-        });
-        let mut files: Vec<(String, Result<Vec<u8>, String>)> = Vec::new();
-        if let Some(batch) = self.estimate_drops.read(ctx, taken) {
-            files.extend(batch);
-        }
-        if let Some(batch) = self.estimate_picker.poll_all() {
-            files.extend(batch);
-        }
+        let taken = widgets::dropped_files::take_dropped(ctx, is_estimate);
+        let mut files = self.estimate_drops.read(ctx, taken).unwrap_or_default();
+        files.extend(self.estimate_picker.poll_all().unwrap_or_default());
         let mut images = Vec::new();
         for linked in &mut self.estimate_fetches {
             match &mut linked.fetch {
@@ -1454,16 +1440,10 @@ impl SlamLabApp {
     /// Takes a student's ROS map (its YAML and image) into the lesson's
     /// estimates, scored against the true map; says which it did, or why not.
     fn take_map(&mut self, files: Vec<(String, Result<Vec<u8>, String>)>) {
-        let mut read = Vec::new();
-        for (name, bytes) in files {
-            match bytes {
-                Ok(b) => read.push((name, b)),
-                Err(why) => {
-                    self.app_notices
-                        .push(format!("Could not read {name}: {why}"));
-                    return;
-                }
-            }
+        let (read, refused) = widgets::dropped_files::sort_read(files);
+        if let Some(why) = refused.into_iter().next() {
+            self.app_notices.push(why);
+            return;
         }
         if !self.lesson.scores_maps() {
             let names: Vec<&str> = read.iter().map(|(n, _)| n.as_str()).collect();
@@ -1536,20 +1516,9 @@ impl SlamLabApp {
                 .extension()
                 .is_some_and(|e| e.eq_ignore_ascii_case("json"))
         };
-        let taken = ctx.input_mut(|i| {
-            let (json, rest): (Vec<_>, Vec<_>) = std::mem::take(&mut i.raw.dropped_files)
-                .into_iter()
-                .partition(is_json);
-            i.raw.dropped_files = rest;
-            json
-        });
-        let mut files: Vec<(String, Result<Vec<u8>, String>)> = Vec::new();
-        if let Some(batch) = self.scenario_drops.read(ctx, taken) {
-            files.extend(batch);
-        }
-        if let Some(picked) = self.scenario_picker.poll() {
-            files.push(picked);
-        }
+        let taken = widgets::dropped_files::take_dropped(ctx, is_json);
+        let mut files = self.scenario_drops.read(ctx, taken).unwrap_or_default();
+        files.extend(self.scenario_picker.poll());
         for (name, bytes) in files {
             let opened = bytes
                 .and_then(|b| String::from_utf8(b).map_err(|_| "it is not text".to_owned()))
@@ -1680,27 +1649,11 @@ impl SlamLabApp {
                         dismiss.extend(notices.iter().cloned());
                     }
                     if let Some(notice) = notices.first().filter(|_| single) {
-                        if ui
-                            .small_button("Dismiss")
-                            .on_hover_text("Hide this notice")
-                            .clicked()
-                        {
-                            dismiss.push(notice.clone());
-                        }
-                        ui.label(notice);
+                        notice_ui(ui, notice, &mut dismiss);
                     }
                 });
                 for notice in notices.iter().take(8).filter(|_| !single) {
-                    ui.horizontal_wrapped(|ui| {
-                        if ui
-                            .small_button("Dismiss")
-                            .on_hover_text("Hide this notice")
-                            .clicked()
-                        {
-                            dismiss.push(notice.clone());
-                        }
-                        ui.label(notice);
-                    });
+                    ui.horizontal_wrapped(|ui| notice_ui(ui, notice, &mut dismiss));
                 }
                 if notices.len() > 8 {
                     ui.label(format!("… and {} more", notices.len() - 8));
@@ -1714,6 +1667,18 @@ impl SlamLabApp {
         }
         self.dismissed.extend(dismiss);
     }
+}
+
+/// One notice with its Dismiss button (which adds it to `dismiss`).
+fn notice_ui(ui: &mut egui::Ui, notice: &str, dismiss: &mut Vec<String>) {
+    if ui
+        .small_button("Dismiss")
+        .on_hover_text("Hide this notice")
+        .clicked()
+    {
+        dismiss.push(notice.to_owned());
+    }
+    ui.label(notice);
 }
 
 /// Opens the figure the way the URL asks: runs `tick=` ticks, sets the legend,

@@ -8,6 +8,7 @@
 
 use slamlab_core::Pose2;
 use slamlab_core::grid::{InsertParams, ProbabilityGrid, UpdateRule};
+use slamlab_core::laser::test_room::{Segment, ray_cast, rectangle};
 use slamlab_core::math;
 use slamlab_core::scan::branch_and_bound::{
     BranchAndBoundParams, PrecomputedGrids, SearchWindow, branch_and_bound, exhaustive_search,
@@ -36,13 +37,9 @@ fn main() {
     divan::main();
 }
 
-fn walls() -> Vec<[f64; 4]> {
-    let mut w = vec![
-        [-8.0, -6.0, 8.0, -6.0],
-        [8.0, -6.0, 8.0, 6.0],
-        [8.0, 6.0, -8.0, 6.0],
-        [-8.0, 6.0, -8.0, -6.0],
-    ];
+/// A 16 m × 12 m room with five boxes.
+fn walls() -> Vec<Segment> {
+    let mut w = rectangle(-8.0, -6.0, 8.0, 6.0);
     for (x, y, s) in [
         (-5.0, -3.0, 1.0),
         (2.0, 2.5, 0.8),
@@ -50,46 +47,14 @@ fn walls() -> Vec<[f64; 4]> {
         (-3.0, 3.0, 0.6),
         (0.5, -4.0, 0.7),
     ] {
-        w.push([x, y, x + s, y]);
-        w.push([x + s, y, x + s, y + s]);
-        w.push([x + s, y + s, x, y + s]);
-        w.push([x, y + s, x, y]);
+        w.extend(rectangle(x, y, x + s, y + s));
     }
     w
 }
 
-fn scan_at(walls: &[[f64; 4]], pose: &Pose2) -> Scan {
-    let n = 360;
-    let angles: Vec<f64> = (0..n)
-        .map(|k| -PI + 2.0 * PI * k as f64 / n as f64)
-        .collect();
-    let ranges = angles
-        .iter()
-        .map(|a| {
-            let (s, c) = math::sin_cos(pose.theta + a);
-            let mut best = 12.0;
-            for w in walls {
-                let (ex, ey) = (w[2] - w[0], w[3] - w[1]);
-                let den = c * ey - s * ex;
-                if den.abs() < 1e-12 {
-                    continue;
-                }
-                let (qx, qy) = (w[0] - pose.x, w[1] - pose.y);
-                let t = (qx * ey - qy * ex) / den;
-                let u = (qx * s - qy * c) / den;
-                if t > 0.0 && (0.0..=1.0).contains(&u) && t < best {
-                    best = t;
-                }
-            }
-            best
-        })
-        .collect();
-    Scan {
-        angles,
-        ranges,
-        range_min: 0.0,
-        range_max: 12.0,
-    }
+/// 360 beams over 360°, exact ranges up to 12 m.
+fn scan_at(walls: &[Segment], pose: &Pose2) -> Scan {
+    ray_cast(walls, *pose, 360, 12.0, None)
 }
 
 fn setup() -> (ProbabilityGrid, Vec<Point2>) {

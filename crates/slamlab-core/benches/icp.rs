@@ -7,11 +7,9 @@
 use rand::SeedableRng;
 use rand_chacha::ChaCha8Rng;
 use slamlab_core::Pose2;
-use slamlab_core::math;
-use slamlab_core::random::gaussian;
+use slamlab_core::laser::test_room::{self, Segment, rectangle};
 use slamlab_core::scan::icp::{IcpConfig, IcpState, IcpVariant, align};
 use slamlab_core::scan::{Point2, Scan};
-use std::f64::consts::PI;
 
 fn main() {
     // Print what is being timed once, so the numbers can be read with it.
@@ -63,17 +61,6 @@ fn cpu_times(reference: &[Point2], scan: &[Point2]) {
     }
 }
 
-type Segment = (Point2, Point2);
-
-fn rectangle(x0: f64, y0: f64, x1: f64, y1: f64) -> [Segment; 4] {
-    [
-        ([x0, y0], [x1, y0]),
-        ([x1, y0], [x1, y1]),
-        ([x1, y1], [x0, y1]),
-        ([x0, y1], [x0, y0]),
-    ]
-}
-
 /// An 8 m × 6 m room with a table, a cupboard and a pillar.
 fn room() -> Vec<Segment> {
     let mut walls = Vec::new();
@@ -86,39 +73,7 @@ fn room() -> Vec<Segment> {
 
 /// 360 beams over 360°, 10 m range, 1 cm Gaussian range noise.
 fn ray_cast(walls: &[Segment], pose: Pose2, rng: &mut ChaCha8Rng) -> Scan {
-    let beams = 360;
-    let range_max = 10.0;
-    let mut angles = Vec::with_capacity(beams);
-    let mut ranges = Vec::with_capacity(beams);
-    for k in 0..beams {
-        let angle = -PI + 2.0 * PI * k as f64 / beams as f64;
-        let (s, c) = math::sin_cos(pose.theta + angle);
-        let mut best = range_max;
-        for &(a, b) in walls {
-            let (ex, ey) = (b[0] - a[0], b[1] - a[1]);
-            let den = c * ey - s * ex;
-            if den.abs() < 1e-12 {
-                continue;
-            }
-            let (wx, wy) = (a[0] - pose.x, a[1] - pose.y);
-            let r = (wx * ey - wy * ex) / den;
-            let u = (wx * s - wy * c) / den;
-            if r > 1e-9 && (0.0..=1.0).contains(&u) && r < best {
-                best = r;
-            }
-        }
-        if best < range_max {
-            best += gaussian(rng, 0.01);
-        }
-        angles.push(angle);
-        ranges.push(best);
-    }
-    Scan {
-        angles,
-        ranges,
-        range_min: 0.0,
-        range_max,
-    }
+    test_room::ray_cast(walls, pose, 360, 10.0, Some((0.01, rng)))
 }
 
 fn room_scans() -> (Vec<Point2>, Vec<Point2>) {

@@ -125,10 +125,9 @@ impl PointTransform {
     }
 }
 
-/// A room of line segments and a lidar in it, for the tests of everything that
-/// reads scans (matchers, grids, grid FastSLAM).
-#[cfg(test)]
-pub(crate) mod test_room {
+/// A room of line segments and a lidar in it, for the tests and benchmarks of
+/// everything that reads scans (matchers, grids, grid FastSLAM).
+pub mod test_room {
     use super::{Point2, Scan};
     use crate::geometry::Pose2;
     use crate::math;
@@ -136,11 +135,12 @@ pub(crate) mod test_room {
     use rand_chacha::ChaCha8Rng;
     use std::f64::consts::PI;
 
-    pub(crate) type Segment = (Point2, Point2);
+    /// A wall from one end to the other.
+    pub type Segment = (Point2, Point2);
 
     /// A lidar on line segments: `beams` beams over 360° from `pose`, exact ranges
     /// (plus Gaussian noise of `noise` m if given), `range_max` where nothing is hit.
-    pub(crate) fn ray_cast(
+    pub fn ray_cast(
         walls: &[Segment],
         pose: Pose2,
         beams: usize,
@@ -184,7 +184,8 @@ pub(crate) mod test_room {
         }
     }
 
-    pub(crate) fn rectangle(x0: f64, y0: f64, x1: f64, y1: f64) -> Vec<Segment> {
+    /// The four walls of the rectangle `[x0, x1] × [y0, y1]`, counter-clockwise.
+    pub fn rectangle(x0: f64, y0: f64, x1: f64, y1: f64) -> Vec<Segment> {
         vec![
             ([x0, y0], [x1, y0]),
             ([x1, y0], [x1, y1]),
@@ -194,7 +195,7 @@ pub(crate) mod test_room {
     }
 
     /// A 6 m × 4 m room with a cupboard and a pillar.
-    pub(crate) fn room() -> Vec<Segment> {
+    pub fn room() -> Vec<Segment> {
         let mut walls = rectangle(-3.0, -2.0, 3.0, 2.0);
         walls.extend(rectangle(1.8, 1.2, 2.6, 2.0));
         walls.extend(rectangle(-1.2, -0.9, -0.8, -0.5));

@@ -8,7 +8,8 @@ use slamlab_core::association::AssociationMode;
 use slamlab_core::particle::{FastSlam, FastSlamVersion, LandmarkObservation};
 use slamlab_sim::LandmarkScenario;
 use slamlab_sim::landmark_slam::fastslam::{FastSlamSettings, LandmarkTruth, fastslam_config};
-use slamlab_sim::world::landmarks::LandmarkLayout;
+
+mod common;
 
 fn main() {
     divan::main();
@@ -23,20 +24,7 @@ fn warmed_up(
     association: AssociationMode,
     stress: bool,
 ) -> (LandmarkScenario, LandmarkTruth, FastSlam) {
-    let lesson = LandmarkScenario {
-        landmarks,
-        layout: LandmarkLayout::Random,
-        ..Default::default()
-    };
-    let scenario = if stress {
-        LandmarkScenario {
-            fov: std::f64::consts::TAU,
-            max_range: 6.0,
-            ..lesson
-        }
-    } else {
-        lesson
-    };
+    let scenario = common::random_landmarks(landmarks, stress);
     let settings = FastSlamSettings {
         version,
         particles,

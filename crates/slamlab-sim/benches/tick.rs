@@ -4,8 +4,9 @@
 //! Targets (docs/landmark-slam.md, "Speed"): EKF-SLAM with 100 landmarks ≤ 1 ms; UKF-SLAM with
 //! 50 landmarks ≤ 5 ms.
 
-use slamlab_sim::world::landmarks::LandmarkLayout;
 use slamlab_sim::{EstimatorKind, LandmarkScenario, LandmarkSession};
+
+mod common;
 
 fn main() {
     divan::main();
@@ -15,20 +16,9 @@ fn main() {
 /// lesson's sensor (120°, 4 m; about 6 landmarks in view at 100 landmarks), or a
 /// stress sensor that sees all around to 6 m (about 40 in view).
 fn warmed_up(estimator: EstimatorKind, landmarks: usize, stress: bool) -> LandmarkSession {
-    let lesson = LandmarkScenario {
-        landmarks,
-        layout: LandmarkLayout::Random,
+    let scenario = LandmarkScenario {
         estimators: vec![estimator],
-        ..Default::default()
-    };
-    let scenario = if stress {
-        LandmarkScenario {
-            fov: std::f64::consts::TAU,
-            max_range: 6.0,
-            ..lesson
-        }
-    } else {
-        lesson
+        ..common::random_landmarks(landmarks, stress)
     };
     let mut session = LandmarkSession::new(scenario);
     session.run_ticks(200);

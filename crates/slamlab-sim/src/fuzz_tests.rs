@@ -502,26 +502,23 @@ fn bag_seeds() -> Vec<Vec<u8>> {
         ..msgs::Odometry::default()
     };
     let channels = vec![
-        TestChannel {
-            topic: "/scan",
-            type_name: msgs::LASER_SCAN,
-            encoding: "cdr",
-            messages: vec![(15, scan(15).encode()), (25, scan(25).encode())],
-        },
-        TestChannel {
-            topic: "/odom",
-            type_name: msgs::ODOMETRY,
-            encoding: "cdr",
-            messages: (1..4)
+        TestChannel::cdr(
+            "/scan",
+            msgs::LASER_SCAN,
+            vec![(15, scan(15).encode()), (25, scan(25).encode())],
+        ),
+        TestChannel::cdr(
+            "/odom",
+            msgs::ODOMETRY,
+            (1..4)
                 .map(|k| (k * 10, odom(k as i64 * 10, k as f64).encode()))
                 .collect(),
-        },
-        TestChannel {
-            topic: "/image",
-            type_name: "sensor_msgs/msg/Image",
-            encoding: "cdr",
-            messages: vec![(20, vec![0, 1, 0, 0, 7])],
-        },
+        ),
+        TestChannel::cdr(
+            "/image",
+            "sensor_msgs/msg/Image",
+            vec![(20, vec![0, 1, 0, 0, 7])],
+        ),
     ];
     for (layout, summary) in [
         (Layout::Unchunked, false),

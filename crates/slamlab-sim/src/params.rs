@@ -475,6 +475,25 @@ pub fn choose_list(words: &[&'static str], value: &str) -> Result<Vec<&'static s
     Ok(list)
 }
 
+/// The text of a list parameter: the names of its items, comma separated (what
+/// [`choose_items`] reads back).
+pub fn list_text<T>(items: &[T], name: impl Fn(&T) -> &'static str) -> String {
+    items.iter().map(name).collect::<Vec<_>>().join(",")
+}
+
+/// Parses a comma-separated list of `words` ([`choose_list`]) into the items
+/// `from_name` makes of them: the setter of a list parameter.
+pub fn choose_items<T>(
+    words: &[&'static str],
+    value: &str,
+    from_name: impl Fn(&str) -> Option<T>,
+) -> Result<Vec<T>, String> {
+    Ok(choose_list(words, value)?
+        .into_iter()
+        .filter_map(from_name)
+        .collect())
+}
+
 /// Replaces `scenario` with preset `id` built with the scenario's seed: the setter
 /// of every lesson's `preset` parameter.
 pub fn apply_preset<S: Scenario>(scenario: &mut S, id: &str) -> Result<(), String> {
@@ -538,6 +557,11 @@ pub fn sanitize<S: Scenario>(scenario: &mut S) -> Vec<ParamIssue> {
     issues
 }
 
+/// [`sanitize`], its issues as the notices a lesson shows when it opens.
+pub fn sanitize_notices<S: Scenario>(scenario: &mut S) -> Vec<String> {
+    sanitize(scenario).iter().map(ToString::to_string).collect()
+}
+
 /// The parameters of `scenario` that differ from `reference`, in table order.
 pub fn changed_pairs<S: Scenario>(scenario: &S, reference: &S) -> Vec<(String, String)> {
     let defaults = to_pairs(reference);
@@ -566,8 +590,47 @@ pub fn describe<S: Scenario>() -> Vec<[String; 5]> {
         .collect()
 }
 
+/// Assertions the parameter tables' tests share.
+#[cfg(test)]
+pub(crate) mod checks {
+    use super::{ParamIssue, Scenario, apply_pairs, get, set};
+
+    /// Sets each `(name, text)` and asserts it is taken without an issue.
+    pub(crate) fn assert_accepted<S: Scenario>(scenario: &mut S, pairs: &[(&str, &str)]) {
+        for &(k, v) in pairs {
+            assert_eq!(set(scenario, k, v), None, "{k}={v}");
+        }
+    }
+
+    /// [`assert_accepted`], and each reads back as the same text.
+    pub(crate) fn assert_round_trip<S: Scenario>(scenario: &mut S, pairs: &[(&str, &str)]) {
+        for &(k, v) in pairs {
+            assert_eq!(set(scenario, k, v), None, "{k}={v}");
+            assert_eq!(get(scenario, k).as_deref(), Some(v), "{k}");
+        }
+    }
+
+    /// Asserts each `(name, text)` is refused as unreadable.
+    pub(crate) fn assert_unreadable<S: Scenario>(scenario: &mut S, pairs: &[(&str, &str)]) {
+        for &(k, v) in pairs {
+            let issue = set(scenario, k, v);
+            assert!(
+                matches!(issue, Some(ParamIssue::Unreadable { .. })),
+                "{k}={v}: {issue:?}"
+            );
+        }
+    }
+
+    /// Applies pairs as [`super::to_pairs`] gives them and asserts no issue.
+    pub(crate) fn assert_applies<S: Scenario>(scenario: &mut S, pairs: &[(&str, String)]) {
+        let issues = apply_pairs(scenario, pairs.iter().map(|(k, v)| (*k, v.as_str())), &[]);
+        assert!(issues.is_empty(), "{issues:?}");
+    }
+}
+
 #[cfg(test)]
 mod tests {
+    use super::checks::*;
     use super::*;
 
     /// A tiny scenario to test the machinery by itself.
@@ -690,15 +753,16 @@ mod tests {
     #[test]
     fn text_round_trips_in_the_parameters_units() {
         let mut t = Toy::default();
-        for (k, v) in [
-            ("speed", "1.25"),
-            ("angle-deg", "90"),
-            ("colour", "green"),
-            ("tools", "drill,saw,drill"),
-            ("seed", "7"),
-        ] {
-            assert_eq!(set(&mut t, k, v), None, "{k}");
-        }
+        assert_accepted(
+            &mut t,
+            &[
+                ("speed", "1.25"),
+                ("angle-deg", "90"),
+                ("colour", "green"),
+                ("tools", "drill,saw,drill"),
+                ("seed", "7"),
+            ],
+        );
         assert!((t.angle - std::f64::consts::FRAC_PI_2).abs() < 1e-15);
         assert_eq!(t.tools, vec!["drill", "saw"]);
         let pairs = to_pairs(&t);
@@ -713,9 +777,7 @@ mod tests {
             ]
         );
         let mut copy = Toy::default();
-        assert!(
-            apply_pairs(&mut copy, pairs.iter().map(|(k, v)| (*k, v.as_str())), &[]).is_empty()
-        );
+        assert_applies(&mut copy, &pairs);
         assert_eq!(copy, t);
         assert_eq!(changed_pairs(&t, &copy), Vec::<(String, String)>::new());
         assert_eq!(changed_pairs(&t, &Toy::default()).len(), 5);
@@ -730,22 +792,19 @@ mod tests {
             set(&mut t, "nope", "1"),
             Some(ParamIssue::Unknown { .. })
         ));
-        for (k, v) in [
-            ("speed", "NaN"),
-            ("speed", "inf"),
-            ("speed", "fast"),
-            ("seed", "-1"),
-            ("colour", "blue"),
-            ("tools", ""),
-            ("tools", "saw,hammer"),
-            ("preset", "slow"),
-        ] {
-            let issue = set(&mut t, k, v);
-            assert!(
-                matches!(issue, Some(ParamIssue::Unreadable { .. })),
-                "{k}={v}: {issue:?}"
-            );
-        }
+        assert_unreadable(
+            &mut t,
+            &[
+                ("speed", "NaN"),
+                ("speed", "inf"),
+                ("speed", "fast"),
+                ("seed", "-1"),
+                ("colour", "blue"),
+                ("tools", ""),
+                ("tools", "saw,hammer"),
+                ("preset", "slow"),
+            ],
+        );
         assert_eq!(t, before);
         let text = set(&mut t, "colour", "blue")
             .map(|i| i.to_string())

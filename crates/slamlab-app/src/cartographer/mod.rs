@@ -20,12 +20,10 @@ mod explain;
 mod map;
 mod plots;
 
-use crate::lesson::{self, Lesson, LessonFrame, LessonStart, StoredSettings};
+use crate::lesson::{self, Lesson, LessonFrame, LessonStart};
 use crate::time_control::{StepControls, TimeAction, TimeInfo};
-use crate::widgets::dropped_files::DropInbox;
-use crate::widgets::fetch::{self, LinkedFile};
-use crate::widgets::file_picker::{FilePicker, PickedFile};
-use crate::widgets::laser_file::{LASER_FILE_TYPES, LaserFileState, loaded_note};
+use crate::widgets::laser_file::{LaserFileState, loaded_note};
+use crate::widgets::laser_inputs::{LaserInput, LaserInputs};
 use crate::widgets::map_canvas::MapView;
 use crate::widgets::params_panel::{self, PendingParams};
 use crate::widgets::reference_track::ReferenceTrack;
@@ -36,7 +34,6 @@ use slamlab_sim::cartographer::session::{
     CartographerEvent, CartographerRun, CartographerScenario,
 };
 use slamlab_sim::cartographer::{CartographerPhase, CartographerSim, NextPhase};
-use slamlab_sim::grid::laser_file::MAX_LASER_FILE_BYTES;
 use slamlab_sim::grid::{LaserFile, MappingInput, builtin_map};
 use slamlab_sim::params;
 use slamlab_sim::stepper::{CheckpointPolicy, Stepper};
@@ -138,11 +135,8 @@ pub struct CartographerLesson {
     pub frame: LessonFrame<CartographerView>,
     tiles: map::SubmapTiles,
     grids: map::MaxGridTextures,
-    inbox: DropInbox,
-    picker: FilePicker,
-    log_fetch: Option<LinkedFile>,
-    /// The reference being read from `reference=`.
-    reference_fetch: Option<LinkedFile>,
+    /// The files dropped, picked or named by the link (`log=`, `reference=`).
+    inputs: LaserInputs,
     /// A reference (name, bytes, location) waiting for its log.
     pending_reference: Option<(String, Vec<u8>, Option<String>)>,
     /// Where the reference came from (`reference=`), for the share link.
@@ -169,7 +163,6 @@ pub fn default_scenario() -> CartographerScenario {
 
 /// Opens the lesson from the URL's pairs, with what it stored last time.
 pub fn open(start: &LessonStart<'_>) -> Box<dyn Lesson> {
-    let stored = StoredSettings::<CartographerView>::from_start(start);
     let location = start.last_value("log");
     let reference = start.last_value("reference");
     let (laser, pairs) =
@@ -178,25 +171,20 @@ pub fn open(start: &LessonStart<'_>) -> Box<dyn Lesson> {
         pairs: &pairs,
         ..*start
     };
-    let (scenario, link_notices) = lesson::scenario_from_start(
-        start,
-        default_scenario(),
-        stored.as_ref().map(|s| s.params.as_slice()),
-    );
-    let mut lesson = match CartographerLesson::new(scenario) {
+    let opened = lesson::open_lesson(start, default_scenario(), CartographerLesson::new, |l| {
+        &mut l.frame
+    });
+    let mut lesson = match opened {
         Ok(lesson) => lesson,
         Err(why) => {
             return lesson::open_instead(start, format!("Cartographer could not open: {why}"));
         }
     };
-    lesson.frame.notices.splice(0..0, link_notices);
-    lesson.frame = lesson.frame.restored(stored.as_ref());
     lesson.laser = laser;
-    if let Some(location) = location {
+    if let Some(location) = &location {
         lesson.frame.note = Some(format!("Loading the log {location}…"));
-        lesson.log_fetch = Some(LinkedFile::new(location));
     }
-    lesson.reference_fetch = reference.map(LinkedFile::new);
+    lesson.inputs.link(location, reference);
     Box::new(lesson)
 }
 
@@ -233,10 +221,7 @@ impl CartographerLesson {
                 .with_notices(notices),
             tiles: map::SubmapTiles::default(),
             grids: map::MaxGridTextures::default(),
-            inbox: DropInbox::default(),
-            picker: FilePicker::multiple(),
-            log_fetch: None,
-            reference_fetch: None,
+            inputs: LaserInputs::default(),
             pending_reference: None,
             reference_location: None,
             track: ReferenceTrack::default(),
@@ -532,39 +517,12 @@ impl CartographerLesson {
         }
     }
 
-    fn poll_reference_fetch(&mut self, ctx: &egui::Context) {
-        let Some((location, result)) = LinkedFile::poll(&mut self.reference_fetch, ctx) else {
-            return;
-        };
-        let name = fetch::file_name(&location).to_owned();
-        match result {
-            Ok(bytes) => self.load_reference(&name, bytes, Some(location)),
-            Err(why) => {
-                self.frame.note = Some(format!(
-                    "Could not load the reference {location}: {why}; the mapping goes on without a score"
-                ));
-            }
-        }
-    }
-
-    fn poll_log_fetch(&mut self, ctx: &egui::Context) {
-        let Some((location, result)) = LinkedFile::poll(&mut self.log_fetch, ctx) else {
-            return;
-        };
-        match result {
-            Ok(bytes) => {
-                let name = fetch::file_name(&location).to_owned();
-                self.load_log(&name, &bytes, Some(location));
-                if matches!(&self.source, Source::Log(n, _) if *n == name) {
-                    // The link's figure keys (`run=1`, `tick=`) hold for the log.
-                    self.frame.restarted_from_link = true;
-                }
-            }
-            Err(why) => {
-                self.frame.note = Some(format!(
-                    "Could not load the log {location}: {why}; the simulated robot maps instead"
-                ));
-            }
+    /// Maps the log named by `log=`, which arrived as `name`.
+    fn load_linked_log(&mut self, name: &str, bytes: &[u8], location: String) {
+        self.load_log(name, bytes, Some(location));
+        if matches!(&self.source, Source::Log(n, _) if n == name) {
+            // The link's figure keys (`run=1`, `tick=`) hold for the log.
+            self.frame.restarted_from_link = true;
         }
     }
 
@@ -857,34 +815,19 @@ impl CartographerLesson {
             "Or open a CARMEN laser log (.clf, .gz, .bz2), a ROS 2 bag (.mcap) or a ROS map (its \
              YAML with the image); or drop either on the window:",
         );
-        self.picker.ui(
-            ui,
-            "Open log, bag or map…",
-            LASER_FILE_TYPES,
-            MAX_LASER_FILE_BYTES as usize,
-            "path/to/intel.clf.bz2",
-        );
+        self.inputs.picker_ui(ui);
         let running = self.scenario.clone();
         params_panel::params_ui(ui, &mut self.pending, &running, PANEL_PARAMS);
         ui.separator();
-        let changed = params::to_pairs(&self.pending.scenario) != params::to_pairs(&running);
-        if ui
-            .add_enabled(
-                changed || self.builtin_chosen,
-                egui::Button::new("Apply & reset"),
-            )
-            .on_hover_text("Start over with these parameters (same seed: same scans)")
-            .clicked()
-        {
-            self.reset();
-        }
-        ui.separator();
-        crate::widgets::share::share_ui(
+        if params_panel::apply_and_share_ui(
             ui,
+            self.pending.differs_from(&running) || self.builtin_chosen,
+            "Start over with these parameters (same seed: same scans)",
             |embed| lesson::Lesson::share_query(self, embed),
             "index.html?… with these pairs opens exactly this run",
-            None,
-        );
+        ) {
+            self.reset();
+        }
     }
 }
 
@@ -1027,40 +970,21 @@ impl Lesson for CartographerLesson {
     }
 
     fn read_input(&mut self, ctx: &egui::Context) {
-        self.poll_log_fetch(ctx);
-        if self.log_fetch.is_none() {
-            self.poll_reference_fetch(ctx);
-        }
-        let picked = self.picker.poll_all();
-        if let Some(batch) = self.inbox.poll(ctx).or(picked) {
-            let batch: Vec<PickedFile> = batch;
-            let is_map_file = |name: &str| {
-                let lower = name.to_ascii_lowercase();
-                [".yaml", ".yml", ".pgm", ".png"]
-                    .iter()
-                    .any(|e| lower.ends_with(e))
-            };
-            let mut files = Vec::new();
-            for (name, bytes) in batch {
-                match bytes {
-                    Ok(bytes) => files.push((name, bytes)),
-                    Err(why) => self.frame.note = Some(format!("Could not read {name}: {why}")),
-                }
-            }
-            if files.iter().any(|(name, _)| is_map_file(name)) {
-                self.load_map_files(&files);
-            } else {
-                // A corrected log (by its name) is the reference of the log
-                // dropped with it, or of the log being mapped.
-                let (references, logs): (Vec<_>, Vec<_>) = files
-                    .into_iter()
-                    .partition(|(name, _)| is_reference_name(name));
-                if let Some((name, bytes)) = logs.first() {
-                    self.load_log(name, bytes, None);
-                }
-                if let Some((name, bytes)) = references.into_iter().next() {
-                    self.load_reference(&name, bytes, None);
-                }
+        for input in self.inputs.poll(ctx) {
+            match input {
+                LaserInput::Log {
+                    name,
+                    bytes,
+                    location: Some(location),
+                } => self.load_linked_log(&name, &bytes, location),
+                LaserInput::Log { name, bytes, .. } => self.load_log(&name, &bytes, None),
+                LaserInput::Reference {
+                    name,
+                    bytes,
+                    location,
+                } => self.load_reference(&name, bytes, location),
+                LaserInput::Map(files) => self.load_map_files(&files),
+                LaserInput::Refused(why) => self.frame.note = Some(why),
             }
         }
     }
@@ -1113,10 +1037,7 @@ impl Lesson for CartographerLesson {
     }
 
     fn wants_repaint(&self) -> bool {
-        self.frame.time.running
-            || self.catch_up.is_some()
-            || self.log_fetch.is_some()
-            || self.reference_fetch.is_some()
+        self.frame.time.running || self.catch_up.is_some() || self.inputs.is_fetching()
     }
 
     fn view_menu_ui(&mut self, ui: &mut egui::Ui) {
@@ -1223,11 +1144,6 @@ impl Lesson for CartographerLesson {
             })),
         })
     }
-}
-
-/// Whether a dropped file's name says it is a corrected log (a reference).
-fn is_reference_name(name: &str) -> bool {
-    name.to_ascii_lowercase().contains("corrected")
 }
 
 /// A phase as the time bar names it ("scan 153: search in submap 4").

@@ -9,7 +9,7 @@ use crate::widgets::map_canvas::{
     draw_scale_and_axes, finite, screen_dir,
 };
 use crate::widgets::plots::{KeyEntry, Mark, key_ui};
-use egui::{Color32, Pos2, Shape, Stroke, pos2};
+use egui::{Color32, Shape, Stroke, pos2};
 use slamlab_core::Pose2;
 use slamlab_sim::fusion::session::FusionSim;
 
@@ -193,14 +193,7 @@ fn polyline(
     stroke: Stroke,
     dashed: bool,
 ) {
-    let stride = path.len() / MAX_POINTS + 1;
-    let points: Vec<Pos2> = path
-        .iter()
-        .step_by(stride)
-        .chain(path.last())
-        .map(|p| t.pose(p))
-        .filter(|p| finite(*p))
-        .collect();
+    let points = t.path(path, MAX_POINTS);
     if points.len() < 2 {
         return;
     }

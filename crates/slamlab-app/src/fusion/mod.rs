@@ -13,7 +13,7 @@ mod plots;
 pub use explain::rmse_text;
 pub use plots::ERROR_HEADROOM;
 
-use crate::lesson::{self, Lesson, LessonFrame, LessonStart, StoredSettings};
+use crate::lesson::{self, Lesson, LessonFrame, LessonStart};
 use crate::palette;
 use crate::time_control::{TimeAction, TimeInfo};
 use crate::widgets::map_canvas::MapView;
@@ -150,36 +150,27 @@ pub struct FusionLesson {
 
 /// Opens the lesson from the URL's pairs, with what it stored last time.
 pub fn open(start: &LessonStart<'_>) -> Box<dyn Lesson> {
-    let stored = StoredSettings::<FusionView>::from_start(start);
-    let (setup, link_notices) = lesson::scenario_from_start(
-        start,
-        FusionLessonScenario::default(),
-        stored.as_ref().map(|s| s.params.as_slice()),
-    );
-    let mut lesson = match FusionLesson::new(setup) {
+    // The table's ranges keep every scenario valid; should one still fail, the
+    // defaults open, saying why.
+    let new = |setup| -> Result<FusionLesson, String> {
+        FusionLesson::new(setup).or_else(|why| {
+            let mut lesson = FusionLesson::new(FusionLessonScenario::default())?;
+            lesson
+                .frame
+                .notices
+                .push(format!("{why}; the default drive opens instead"));
+            Ok(lesson)
+        })
+    };
+    let opened = lesson::open_lesson(start, FusionLessonScenario::default(), new, |l| {
+        &mut l.frame
+    });
+    let mut lesson = match opened {
         Ok(lesson) => lesson,
         Err(why) => {
-            // The table's ranges keep every scenario valid; should one still fail,
-            // the defaults open, saying why.
-            match FusionLesson::new(FusionLessonScenario::default()) {
-                Ok(mut lesson) => {
-                    lesson
-                        .frame
-                        .notices
-                        .push(format!("{why}; the default drive opens instead"));
-                    lesson
-                }
-                Err(why) => {
-                    return lesson::open_instead(
-                        start,
-                        format!("Sensor fusion could not open: {why}"),
-                    );
-                }
-            }
+            return lesson::open_instead(start, format!("Sensor fusion could not open: {why}"));
         }
     };
-    lesson.frame.notices.splice(0..0, link_notices);
-    lesson.frame = lesson.frame.restored(stored.as_ref());
     if start.embed {
         lesson.frame.view.legend = false;
     }
@@ -457,21 +448,15 @@ impl FusionLesson {
         let running = self.sim().setup().clone();
         params_panel::params_ui(ui, &mut self.pending, &running, PANEL_PARAMS);
         ui.separator();
-        let changed = params::to_pairs(&self.pending.scenario) != params::to_pairs(&running);
-        if ui
-            .add_enabled(changed, egui::Button::new("Apply & reset"))
-            .on_hover_text("Start over with these parameters (same seed: same drive)")
-            .clicked()
-        {
-            self.reset();
-        }
-        ui.separator();
-        crate::widgets::share::share_ui(
+        if params_panel::apply_and_share_ui(
             ui,
+            self.pending.differs_from(&running),
+            "Start over with these parameters (same seed: same drive)",
             |embed| lesson::Lesson::share_query(self, embed),
             "index.html?… with these pairs opens exactly this drive",
-            None,
-        );
+        ) {
+            self.reset();
+        }
     }
 }
 

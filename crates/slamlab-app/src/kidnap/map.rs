@@ -11,7 +11,7 @@ use crate::widgets::map_canvas::{
 };
 use crate::widgets::particles::ParticleMesh;
 use crate::widgets::plots::{KeyEntry, Mark, key_ui};
-use egui::{Color32, Pos2, Shape, Stroke, pos2};
+use egui::{Color32, Shape, Stroke, pos2};
 use slamlab_core::grid::{Cell, Costmap, OccupancyGrid};
 use slamlab_core::particle::ParticleFlag;
 use slamlab_core::{Pose2, math};
@@ -350,14 +350,7 @@ fn draw_grid_image(
 }
 
 fn draw_path(painter: &egui::Painter, t: &MapTransform, path: &[Pose2], color: Color32) {
-    let stride = path.len() / 3000 + 1;
-    let points: Vec<Pos2> = path
-        .iter()
-        .step_by(stride)
-        .chain(path.last())
-        .map(|p| t.pose(p))
-        .filter(|p| finite(*p))
-        .collect();
+    let points = t.path(path, 3000);
     if points.len() >= 2 {
         painter.add(Shape::line(
             points,

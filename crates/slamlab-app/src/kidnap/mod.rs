@@ -14,7 +14,7 @@ mod explain;
 mod map;
 mod plots;
 
-use crate::lesson::{self, Lesson, LessonFrame, LessonStart, StoredSettings};
+use crate::lesson::{self, Lesson, LessonFrame, LessonStart};
 use crate::palette;
 use crate::time_control::{TimeAction, TimeInfo};
 use crate::widgets::drive::{self, PadDirection};
@@ -184,7 +184,6 @@ pub fn is_map_location(value: &str) -> bool {
 
 /// Opens the lesson from the URL's pairs, with what it stored last time.
 pub fn open(start: &LessonStart<'_>) -> Box<dyn Lesson> {
-    let stored = StoredSettings::<KidnapView>::from_start(start);
     // `map=maps/lab.yaml`: a ROS map beside the site, read after the first frame;
     // the lesson opens on the default map meanwhile.
     let location = start
@@ -201,12 +200,10 @@ pub fn open(start: &LessonStart<'_>) -> Box<dyn Lesson> {
         pairs: &pairs,
         ..*start
     };
-    let (scenario, link_notices) = lesson::scenario_from_start(
-        start,
-        default_scenario(),
-        stored.as_ref().map(|s| s.params.as_slice()),
-    );
-    let mut lesson = match KidnapLesson::new(scenario) {
+    let opened = lesson::open_lesson(start, default_scenario(), KidnapLesson::new, |l| {
+        &mut l.frame
+    });
+    let mut lesson = match opened {
         Ok(lesson) => lesson,
         // Only a broken build could get here (the built-in maze is tested); the
         // landmark lesson opens instead, saying why.
@@ -217,8 +214,6 @@ pub fn open(start: &LessonStart<'_>) -> Box<dyn Lesson> {
             );
         }
     };
-    lesson.frame.notices.splice(0..0, link_notices);
-    lesson.frame = lesson.frame.restored(stored.as_ref());
     // An embed keeps the legend on: without it a lecture figure's particle clouds,
     // rays and ellipses are unexplained (`legend=0` hides it).
     if start.embed {
@@ -855,21 +850,15 @@ impl KidnapLesson {
         let running = self.sim().run().scenario().clone();
         params_panel::params_ui(ui, &mut self.pending, &running, PANEL_PARAMS);
         ui.separator();
-        let changed = params::to_pairs(&self.pending.scenario) != params::to_pairs(&running);
-        if ui
-            .add_enabled(changed, egui::Button::new("Apply & reset"))
-            .on_hover_text("Start over with these parameters (same seed: same run)")
-            .clicked()
-        {
-            self.reset();
-        }
-        ui.separator();
-        crate::widgets::share::share_ui(
+        if params_panel::apply_and_share_ui(
             ui,
+            self.pending.differs_from(&running),
+            "Start over with these parameters (same seed: same run)",
             |embed| lesson::Lesson::share_query(self, embed),
             "index.html?… with these pairs opens exactly this run",
-            None,
-        );
+        ) {
+            self.reset();
+        }
     }
 }
 
@@ -1161,26 +1150,16 @@ impl Lesson for KidnapLesson {
             .poll_all()
             .map(|batch| self.with_named_image(batch));
         if let Some(batch) = self.inbox.poll(ctx).or(picked) {
-            let mut files = Vec::new();
-            for (name, bytes) in batch {
-                match bytes {
-                    Ok(bytes) => files.push((name, bytes)),
-                    Err(why) => {
-                        self.frame.note = Some(format!("Could not read {name}: {why}"));
-                        return;
-                    }
-                }
+            let (files, refused) = crate::widgets::dropped_files::sort_read(batch);
+            if let Some(why) = refused.into_iter().next() {
+                self.frame.note = Some(why);
+                return;
             }
             // A map (YAML, PGM, PNG) loads as a map; anything else is read as a
             // laser file, a CARMEN log or a bag told apart by its bytes.
-            let is_map_file = |name: &str| {
-                let lower = name.to_ascii_lowercase();
-                [".yaml", ".yml", ".pgm", ".png"]
-                    .iter()
-                    .any(|e| lower.ends_with(e))
-            };
-            let (maps, logs): (Vec<_>, Vec<_>) =
-                files.into_iter().partition(|(name, _)| is_map_file(name));
+            let (maps, logs): (Vec<_>, Vec<_>) = files
+                .into_iter()
+                .partition(|(name, _)| crate::widgets::laser_inputs::is_map_file(name));
             if !maps.is_empty() {
                 self.load_dropped(&maps);
             }

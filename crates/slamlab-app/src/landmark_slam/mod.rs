@@ -24,7 +24,7 @@ mod params_panel;
 mod plots;
 pub mod reference;
 
-use crate::lesson::{self, Lesson, LessonFrame, LessonStart, PanelVisibility, StoredSettings};
+use crate::lesson::{self, Lesson, LessonFrame, LessonStart, PanelVisibility};
 use crate::time_control::{TimeAction, TimeInfo};
 use serde::{Deserialize, Serialize};
 use slamlab_core::Pose2;
@@ -36,6 +36,7 @@ use slamlab_sim::world::landmark_scenario::ControllerKind;
 use slamlab_sim::world::recorded::RecordedWorld;
 use slamlab_sim::{LandmarkScenario, LandmarkSession};
 use std::collections::BTreeMap;
+use std::convert::Infallible;
 use std::sync::Arc;
 
 /// The lesson's id in URLs and the menu.
@@ -157,7 +158,6 @@ pub struct LandmarkSlamLesson {
 /// Opens the lesson from the URL's pairs, with what it stored last time (the
 /// stored parameters only when the URL gives none).
 pub fn open(start: &LessonStart<'_>) -> Box<dyn Lesson> {
-    let stored = StoredSettings::<ViewOptions>::from_start(start);
     let location = data::location(start.pairs);
     let reference_location = start
         .pairs
@@ -175,13 +175,10 @@ pub fn open(start: &LessonStart<'_>) -> Box<dyn Lesson> {
         pairs: &pairs,
         ..*start
     };
-    let (scenario, link_notices) = lesson::scenario_from_start(
-        start,
-        default_scenario(),
-        stored.as_ref().map(|s| s.params.as_slice()),
-    );
-    let mut lesson = LandmarkSlamLesson::new(scenario);
-    lesson.frame.notices = link_notices;
+    // A lecture figure looks the same for every student: the view a student left
+    // in the full app (an open heatmap, say) stays there.
+    let new = |scenario| Ok::<_, Infallible>(LandmarkSlamLesson::new(scenario));
+    let Ok(mut lesson) = lesson::open_lesson(start, default_scenario(), new, |l| &mut l.frame);
     if let Some(location) = location {
         lesson.frame.note = Some(format!("Loading the data set {location}…"));
         lesson.link_pairs = pairs.clone();
@@ -190,9 +187,6 @@ pub fn open(start: &LessonStart<'_>) -> Box<dyn Lesson> {
     if let Some(location) = reference_location {
         lesson.reference.fetch(location);
     }
-    // A lecture figure looks the same for every student: the view a student left
-    // in the full app (an open heatmap, say) stays there.
-    lesson.frame = lesson.frame.restored(stored.as_ref());
     if let Some(trials) = start.many_runs {
         lesson.start_many_runs(trials);
     }

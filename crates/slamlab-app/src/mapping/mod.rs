@@ -13,17 +13,14 @@ mod plots;
 
 pub use particles::ShownMap;
 
-use crate::lesson::{self, Lesson, LessonFrame, LessonRequest, LessonStart, StoredSettings};
+use crate::lesson::{self, Lesson, LessonFrame, LessonRequest, LessonStart};
 use crate::time_control::{TimeAction, TimeInfo};
-use crate::widgets::dropped_files::DropInbox;
-use crate::widgets::fetch::Fetch;
-use crate::widgets::file_picker::{FilePicker, PickedFile};
-use crate::widgets::laser_file::{LASER_FILE_TYPES, LaserFileState, loaded_note};
+use crate::widgets::laser_file::{LaserFileState, loaded_note};
+use crate::widgets::laser_inputs::{LaserInput, LaserInputs};
 use crate::widgets::map_canvas::MapView;
 use crate::widgets::params_panel::{self, PendingParams};
 use crate::widgets::reference_track::ReferenceTrack;
 use serde::{Deserialize, Serialize};
-use slamlab_sim::grid::laser_file::MAX_LASER_FILE_BYTES;
 use slamlab_sim::grid::{LaserFile, MappingInput, builtin_map};
 use slamlab_sim::mapping::{
     MappingEvent, MappingPhase, MappingScenario, MappingSession, PoseSource, simulated_input,
@@ -129,15 +126,6 @@ impl Default for MappingView {
     }
 }
 
-/// A log being read from `log=` (a location beside the site, a path on the
-/// desktop).
-#[derive(Debug)]
-struct LogFetch {
-    location: String,
-    started: bool,
-    fetch: Fetch,
-}
-
 /// The mapping lesson.
 #[derive(Debug)]
 pub struct MappingLesson {
@@ -156,11 +144,8 @@ pub struct MappingLesson {
     /// The clock, the view, the map view, the notices and the requests.
     pub frame: LessonFrame<MappingView>,
     tiles: map::GridTiles,
-    inbox: DropInbox,
-    log_picker: FilePicker,
-    log_fetch: Option<LogFetch>,
-    /// The reference being read from `reference=`.
-    reference_fetch: Option<LogFetch>,
+    /// The files dropped, picked or named by the link (`log=`, `reference=`).
+    inputs: LaserInputs,
     /// A reference (name, bytes, location) waiting for its log.
     pending_reference: Option<(String, Vec<u8>, Option<String>)>,
     /// Where the reference came from (`reference=`), for the share link.
@@ -217,63 +202,28 @@ pub fn default_scenario() -> MappingScenario {
     MappingScenario::default()
 }
 
-/// Does a `log=` value look like a log location?
-fn log_location(pairs: &[(String, String)]) -> Option<String> {
-    pairs
-        .iter()
-        .rev()
-        .find(|(k, _)| k == "log")
-        .map(|(_, v)| v.clone())
-}
-
 /// Opens the lesson from the URL's pairs, with what it stored last time.
 pub fn open(start: &LessonStart<'_>) -> Box<dyn Lesson> {
-    let stored = StoredSettings::<MappingView>::from_start(start);
-    let location = log_location(start.pairs);
-    let reference = start
-        .pairs
-        .iter()
-        .rev()
-        .find(|(k, _)| k == "reference")
-        .map(|(_, v)| v.clone());
-    let pairs: Vec<(String, String)> = start
-        .pairs
-        .iter()
-        .filter(|(k, _)| k != "log" && k != "reference")
-        .cloned()
-        .collect();
-    let (laser, pairs) = LaserFileState::from_pairs(&pairs);
+    let location = start.last_value("log");
+    let reference = start.last_value("reference");
+    let (laser, pairs) =
+        LaserFileState::from_link(start.pairs, |k, _| k == "log" || k == "reference");
     let start = &LessonStart {
         pairs: &pairs,
         ..*start
     };
-    let (scenario, link_notices) = lesson::scenario_from_start(
-        start,
-        default_scenario(),
-        stored.as_ref().map(|s| s.params.as_slice()),
-    );
-    let mut lesson = match MappingLesson::new(scenario) {
+    let opened = lesson::open_lesson(start, default_scenario(), MappingLesson::new, |l| {
+        &mut l.frame
+    });
+    let mut lesson = match opened {
         Ok(lesson) => lesson,
         Err(why) => return lesson::open_instead(start, format!("Mapping could not open: {why}")),
     };
-    lesson.frame.notices.splice(0..0, link_notices);
-    lesson.frame = lesson.frame.restored(stored.as_ref());
     lesson.laser = laser;
-    if let Some(location) = location {
+    if let Some(location) = &location {
         lesson.frame.note = Some(format!("Loading the log {location}…"));
-        lesson.log_fetch = Some(LogFetch {
-            location,
-            started: false,
-            fetch: Fetch::default(),
-        });
     }
-    if let Some(location) = reference {
-        lesson.reference_fetch = Some(LogFetch {
-            location,
-            started: false,
-            fetch: Fetch::default(),
-        });
-    }
+    lesson.inputs.link(location, reference);
     Box::new(lesson)
 }
 
@@ -295,10 +245,7 @@ impl MappingLesson {
                 .with_map(MapView::growing())
                 .with_notices(notices),
             tiles: map::GridTiles::default(),
-            inbox: DropInbox::default(),
-            log_picker: FilePicker::multiple(),
-            log_fetch: None,
-            reference_fetch: None,
+            inputs: LaserInputs::default(),
             pending_reference: None,
             reference_location: None,
             track: ReferenceTrack::default(),
@@ -544,62 +491,13 @@ impl MappingLesson {
             .update(reference.as_deref(), done, || session.scan_poses());
     }
 
-    /// Reads the reference named by `reference=` (after the log).
-    fn poll_reference_fetch(&mut self, ctx: &egui::Context) {
-        let Some(state) = self.reference_fetch.as_mut() else {
-            return;
-        };
-        if !state.started {
-            state.started = true;
-            state.fetch = Fetch::start(&state.location, ctx);
-            return;
-        }
-        let Some(result) = state.fetch.poll() else {
-            return;
-        };
-        let location = state.location.clone();
-        self.reference_fetch = None;
-        let name = location.rsplit('/').next().unwrap_or(&location).to_owned();
-        match result {
-            Ok(bytes) => self.load_reference(&name, bytes, Some(location)),
-            Err(why) => {
-                self.frame.note = Some(format!(
-                    "Could not load the reference {location}: {why}; the mapping goes on without a score"
-                ));
-            }
-        }
-    }
-
-    /// Reads the log named by `log=`.
-    fn poll_log_fetch(&mut self, ctx: &egui::Context) {
-        let Some(state) = self.log_fetch.as_mut() else {
-            return;
-        };
-        if !state.started {
-            state.started = true;
-            state.fetch = Fetch::start(&state.location, ctx);
-            return;
-        }
-        let Some(result) = state.fetch.poll() else {
-            return;
-        };
-        let location = state.location.clone();
-        self.log_fetch = None;
-        match result {
-            Ok(bytes) => {
-                let name = location.rsplit('/').next().unwrap_or(&location).to_owned();
-                self.load_log(&name, &bytes);
-                if self.log_name.as_deref() == Some(name.as_str()) {
-                    self.log_location = Some(location);
-                    // The link's figure keys (`run=1`, `tick=`) hold for the log.
-                    self.frame.restarted_from_link = true;
-                }
-            }
-            Err(why) => {
-                self.frame.note = Some(format!(
-                    "Could not load the log {location}: {why}; the simulated robot maps instead"
-                ));
-            }
+    /// Maps the log named by `log=`, which arrived as `name`.
+    fn load_linked_log(&mut self, name: &str, bytes: &[u8], location: String) {
+        self.load_log(name, bytes);
+        if self.log_name.as_deref() == Some(name) {
+            self.log_location = Some(location);
+            // The link's figure keys (`run=1`, `tick=`) hold for the log.
+            self.frame.restarted_from_link = true;
         }
     }
 
@@ -793,13 +691,7 @@ impl MappingLesson {
             "Or open a CARMEN laser log (.clf, .log, .gz, .bz2), a ROS 2 bag (.mcap), or a ROS \
              map (its YAML with the image) for the robot to explore; or drop either on the window:",
         );
-        self.log_picker.ui(
-            ui,
-            "Open log, bag or map…",
-            LASER_FILE_TYPES,
-            MAX_LASER_FILE_BYTES as usize,
-            "path/to/intel.clf.bz2",
-        );
+        self.inputs.picker_ui(ui);
         let running = self.session.scenario().clone();
         let shown_params = if self.pending.scenario.poses == PoseSource::GridFastSlam {
             GRID_FASTSLAM_PARAMS
@@ -808,26 +700,18 @@ impl MappingLesson {
         };
         params_panel::params_ui(ui, &mut self.pending, &running, shown_params);
         ui.separator();
-        let changed = params::to_pairs(&self.pending.scenario) != params::to_pairs(&running);
-        if ui
-            .add_enabled(
-                changed
-                    || self.builtin_chosen
-                    || self.log_name.is_some() && self.pending.scenario.map != running.map,
-                egui::Button::new("Apply & reset"),
-            )
-            .on_hover_text("Start over with these parameters (same seed: same scans)")
-            .clicked()
-        {
-            self.reset();
-        }
-        ui.separator();
-        crate::widgets::share::share_ui(
+        let changed = self.pending.differs_from(&running)
+            || self.builtin_chosen
+            || self.log_name.is_some() && self.pending.scenario.map != running.map;
+        if params_panel::apply_and_share_ui(
             ui,
+            changed,
+            "Start over with these parameters (same seed: same scans)",
             |embed| lesson::Lesson::share_query(self, embed),
             "index.html?… with these pairs opens exactly this run",
-            None,
-        );
+        ) {
+            self.reset();
+        }
     }
 
     /// Grid FastSLAM's numbers for the browser checks: the particles, the
@@ -1026,40 +910,21 @@ impl Lesson for MappingLesson {
     }
 
     fn read_input(&mut self, ctx: &egui::Context) {
-        self.poll_log_fetch(ctx);
-        if self.log_fetch.is_none() {
-            self.poll_reference_fetch(ctx);
-        }
-        let picked = self.log_picker.poll_all();
-        if let Some(batch) = self.inbox.poll(ctx).or(picked) {
-            let batch: Vec<PickedFile> = batch;
-            let is_map_file = |name: &str| {
-                let lower = name.to_ascii_lowercase();
-                [".yaml", ".yml", ".pgm", ".png"]
-                    .iter()
-                    .any(|e| lower.ends_with(e))
-            };
-            let mut files = Vec::new();
-            for (name, bytes) in batch {
-                match bytes {
-                    Ok(bytes) => files.push((name, bytes)),
-                    Err(why) => self.frame.note = Some(format!("Could not read {name}: {why}")),
-                }
-            }
-            if files.iter().any(|(name, _)| is_map_file(name)) {
-                self.load_map_files(&files);
-            } else {
-                // A corrected log (by its name) is the reference of the log
-                // dropped with it, or of the log being mapped.
-                let (references, logs): (Vec<_>, Vec<_>) = files
-                    .into_iter()
-                    .partition(|(name, _)| name.to_ascii_lowercase().contains("corrected"));
-                if let Some((name, bytes)) = logs.first() {
-                    self.load_log(name, bytes);
-                }
-                if let Some((name, bytes)) = references.into_iter().next() {
-                    self.load_reference(&name, bytes, None);
-                }
+        for input in self.inputs.poll(ctx) {
+            match input {
+                LaserInput::Log {
+                    name,
+                    bytes,
+                    location: Some(location),
+                } => self.load_linked_log(&name, &bytes, location),
+                LaserInput::Log { name, bytes, .. } => self.load_log(&name, &bytes),
+                LaserInput::Reference {
+                    name,
+                    bytes,
+                    location,
+                } => self.load_reference(&name, bytes, location),
+                LaserInput::Map(files) => self.load_map_files(&files),
+                LaserInput::Refused(why) => self.frame.note = Some(why),
             }
         }
     }
@@ -1103,10 +968,7 @@ impl Lesson for MappingLesson {
     }
 
     fn wants_repaint(&self) -> bool {
-        self.frame.time.running
-            || self.catch_up.is_some()
-            || self.log_fetch.is_some()
-            || self.reference_fetch.is_some()
+        self.frame.time.running || self.catch_up.is_some() || self.inputs.is_fetching()
     }
 
     fn view_menu_ui(&mut self, ui: &mut egui::Ui) {

@@ -10,7 +10,7 @@ mod map;
 mod plots;
 pub mod solutions;
 
-use crate::lesson::{self, Lesson, LessonFrame, LessonStart, StoredSettings};
+use crate::lesson::{self, Lesson, LessonFrame, LessonStart};
 use crate::time_control::{FRAME_BUDGET_MS, StepControls, TimeAction, TimeControl, TimeInfo};
 use crate::widgets::dropped_files::DropInbox;
 use crate::widgets::file_picker::FilePicker;
@@ -152,33 +152,26 @@ pub struct PoseGraphLesson {
 
 /// Opens the lesson from the URL's pairs, with what it stored last time.
 pub fn open(start: &LessonStart<'_>) -> Box<dyn Lesson> {
-    let stored = StoredSettings::<PoseGraphView>::from_start(start);
-    let (scenario, link_notices) = lesson::scenario_from_start(
-        start,
-        default_scenario(),
-        stored.as_ref().map(|s| s.params.as_slice()),
-    );
-    let mut lesson = match PoseGraphLesson::new(scenario) {
-        Ok(lesson) => lesson,
-        Err(why) => {
-            // The defaults are tested; a scenario they refuse falls back to them.
-            let mut lesson = match PoseGraphLesson::new(default_scenario()) {
-                Ok(lesson) => lesson,
-                Err(again) => {
-                    return lesson::open_instead(
-                        start,
-                        format!("The pose-graph lesson could not open: {again}"),
-                    );
-                }
-            };
+    // The defaults are tested; a scenario they refuse falls back to them.
+    let new = |scenario| -> Result<PoseGraphLesson, String> {
+        PoseGraphLesson::new(scenario).or_else(|why| {
+            let mut lesson = PoseGraphLesson::new(default_scenario())?;
             lesson.frame.notices.push(format!(
                 "the link's graph could not be built ({why}); showing the default"
             ));
-            lesson
+            Ok(lesson)
+        })
+    };
+    let opened = lesson::open_lesson(start, default_scenario(), new, |l| &mut l.frame);
+    let mut lesson = match opened {
+        Ok(lesson) => lesson,
+        Err(again) => {
+            return lesson::open_instead(
+                start,
+                format!("The pose-graph lesson could not open: {again}"),
+            );
         }
     };
-    lesson.frame.notices.splice(0..0, link_notices);
-    lesson.frame = lesson.frame.restored(stored.as_ref());
     if start.embed {
         lesson.frame.view.legend = false;
     }
@@ -622,21 +615,20 @@ impl PoseGraphLesson {
             "{} apply at once; the others on \"Apply & reset\".",
             LIVE_PARAMS.join(", ")
         ));
-        let changed = params::to_pairs(&self.pending.scenario) != params::to_pairs(&running);
-        if ui
-            .add_enabled(changed, egui::Button::new("Apply & reset"))
-            .on_hover_text("Build the graph again with these parameters (same seed: same graph)")
-            .clicked()
-        {
-            self.reset();
-        }
-        ui.separator();
         let hover = if self.loaded.is_some() {
             "An opened file cannot travel in a link: the link opens the built-in example with these settings"
         } else {
             "index.html?… with these pairs opens exactly this graph"
         };
-        crate::widgets::share::share_ui(ui, |embed| Lesson::share_query(self, embed), hover, None);
+        if params_panel::apply_and_share_ui(
+            ui,
+            self.pending.differs_from(&running),
+            "Build the graph again with these parameters (same seed: same graph)",
+            |embed| Lesson::share_query(self, embed),
+            hover,
+        ) {
+            self.reset();
+        }
     }
 }
 

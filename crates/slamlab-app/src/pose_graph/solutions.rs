@@ -216,17 +216,7 @@ impl Solutions {
         let mut open = self.open;
         let mut remove = None;
         let screen = ctx.content_rect();
-        let size = egui::vec2(
-            (0.42 * screen.width())
-                .clamp(300.0, 470.0)
-                .min(screen.width() - 16.0),
-            160.0_f32.min(screen.height() - 40.0),
-        );
-        egui::Window::new("Your solutions")
-            .open(&mut open)
-            .default_size(size)
-            .default_pos(screen.right_bottom() - size - egui::vec2(8.0, 8.0))
-            .constrain(true)
+        crate::widgets::estimates::corner_window("Your solutions", &mut open, screen, 160.0)
             .show(ctx, |ui| {
                 ui.label(format!(
                     "F = Σ e^T Ω e over the problem's edges at each graph's vertices, against the lesson's graph now ({} iteration{}{}), as `slamlab graph evaluate` scores it.",

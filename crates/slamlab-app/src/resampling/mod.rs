@@ -13,7 +13,7 @@ mod explain;
 mod plots;
 mod row;
 
-use crate::lesson::{self, Lesson, LessonFrame, LessonStart, LessonView, StoredSettings};
+use crate::lesson::{self, Lesson, LessonFrame, LessonStart, LessonView};
 use crate::palette;
 use crate::time_control::{TimeAction, TimeControl, TimeInfo};
 use crate::widgets::params_panel::{self, PendingParams};
@@ -22,6 +22,7 @@ use serde::{Deserialize, Serialize};
 use slamlab_core::particle::Resampler;
 use slamlab_sim::params;
 use slamlab_sim::resampling::session::{LabRun, LabScenario, LabWeights};
+use std::convert::Infallible;
 
 /// The lesson's id in URLs and the menu.
 pub const LESSON_ID: &str = "resampling";
@@ -61,15 +62,8 @@ impl LessonView for LabView {}
 
 /// Opens the lab from the URL's pairs, with what it stored last time.
 pub fn open(start: &LessonStart<'_>) -> Box<dyn Lesson> {
-    let stored = StoredSettings::<LabView>::from_start(start);
-    let (scenario, notices) = lesson::scenario_from_start(
-        start,
-        LabScenario::default(),
-        stored.as_ref().map(|s| s.params.as_slice()),
-    );
-    let mut lesson = ResamplingLesson::new(scenario);
-    lesson.frame.notices = notices;
-    lesson.frame = lesson.frame.restored(stored.as_ref());
+    let new = |scenario| Ok::<_, Infallible>(ResamplingLesson::new(scenario));
+    let Ok(lesson) = lesson::open_lesson(start, LabScenario::default(), new, |l| &mut l.frame);
     Box::new(lesson)
 }
 

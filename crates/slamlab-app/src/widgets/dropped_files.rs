@@ -8,6 +8,36 @@ use std::rc::Rc;
 /// One dropped file: its name and its bytes, or why it could not be read.
 pub type DroppedBytes = (String, Result<Vec<u8>, String>);
 
+/// A batch's files that could be read (name and bytes, in order), and for each
+/// one that could not, the note that says so.
+pub fn sort_read(batch: Vec<DroppedBytes>) -> (Vec<(String, Vec<u8>)>, Vec<String>) {
+    let mut read = Vec::new();
+    let mut refused = Vec::new();
+    for (name, bytes) in batch {
+        match bytes {
+            Ok(bytes) => read.push((name, bytes)),
+            Err(why) => refused.push(format!("Could not read {name}: {why}")),
+        }
+    }
+    (read, refused)
+}
+
+/// Takes the files dropped this frame for which `mine` holds out of the
+/// frame's input (the rest stay there for the lesson), to read with
+/// [`DropInbox::read`].
+pub fn take_dropped(
+    ctx: &egui::Context,
+    mine: impl FnMut(&egui::DroppedFileHandle) -> bool,
+) -> Vec<egui::DroppedFileHandle> {
+    ctx.input_mut(|i| {
+        let (taken, rest): (Vec<_>, Vec<_>) = std::mem::take(&mut i.raw.dropped_files)
+            .into_iter()
+            .partition(mine);
+        i.raw.dropped_files = rest;
+        taken
+    })
+}
+
 /// Collects the files of one drop until all are read.
 #[derive(Debug, Default)]
 pub struct DropInbox {

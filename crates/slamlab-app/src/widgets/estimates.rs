@@ -753,29 +753,41 @@ pub fn map_overlay(ctx: &egui::Context, estimates: &mut Estimates, now: f64) {
     }
 }
 
+/// A window of a student's own results in the bottom right corner of the
+/// screen, beside the map rather than over all of it: about 40 % of the
+/// window's width (300 to 470 points) and `height` points high, kept on
+/// screen. Shared by "Your estimates" and the pose-graph lesson's "Your
+/// solutions".
+pub fn corner_window<'a>(
+    title: &'a str,
+    open: &'a mut bool,
+    screen: egui::Rect,
+    height: f32,
+) -> egui::Window<'a> {
+    let size = egui::vec2(
+        (0.42 * screen.width())
+            .clamp(300.0, 470.0)
+            .min(screen.width() - 16.0),
+        height.min(screen.height() - 40.0),
+    );
+    egui::Window::new(title)
+        .open(open)
+        .default_size(size)
+        .default_pos(screen.right_bottom() - size - egui::vec2(8.0, 8.0))
+        .constrain(true)
+}
+
 /// The "Your estimates" window: each estimator's score (the lesson's and the
 /// student's), a plot of the position error over time, the alignment switch,
 /// and a button to remove each dropped estimate.
 pub fn window_ui(ctx: &egui::Context, estimates: &mut Estimates, has_truth: bool) {
     let mut open = estimates.open;
     let screen = ctx.content_rect();
-    // Beside the map, not over all of it: at most about 40 % of the window's
-    // width and half its height, in the bottom right corner.
-    let size = egui::vec2(
-        (0.42 * screen.width())
-            .clamp(300.0, 470.0)
-            .min(screen.width() - 16.0),
-        (0.5 * screen.height())
-            .clamp(180.0, 380.0)
-            .min(screen.height() - 40.0),
-    );
+    // At most half the window's height.
+    let height = (0.5 * screen.height()).clamp(180.0, 380.0);
     let mut remove = None;
     let mut toggled = None;
-    egui::Window::new("Your estimates")
-        .open(&mut open)
-        .default_size(size)
-        .default_pos(screen.right_bottom() - size - egui::vec2(8.0, 8.0))
-        .constrain(true)
+    corner_window("Your estimates", &mut open, screen, height)
         .show(ctx, |ui| {
             ui.label(format!(
                 "Scored against {} up to the time bar's time, as `slamlab evaluate` and evo score them.",

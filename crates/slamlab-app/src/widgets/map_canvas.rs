@@ -182,6 +182,19 @@ impl MapTransform {
         self.xy(v[0], v[1])
     }
 
+    /// The screen points of `path` for one line: every k-th pose and the
+    /// last, about `max_points` in all (a long path stays cheap to draw),
+    /// without the non-finite ones.
+    pub fn path(&self, path: &[Pose2], max_points: usize) -> Vec<Pos2> {
+        let stride = path.len() / max_points.max(1) + 1;
+        path.iter()
+            .step_by(stride)
+            .chain(path.last())
+            .map(|p| self.pose(p))
+            .filter(|p| finite(*p))
+            .collect()
+    }
+
     /// The screen point of a pose's position.
     pub fn pose(&self, p: &Pose2) -> Pos2 {
         self.xy(p.x, p.y)

@@ -12,6 +12,7 @@ pub mod fetch;
 pub mod file_picker;
 pub mod grid_tiles;
 pub mod laser_file;
+pub mod laser_inputs;
 pub mod layout;
 pub mod map_canvas;
 pub mod params_panel;

@@ -39,6 +39,32 @@ impl<S: Scenario> PendingParams<S> {
         }
         issue
     }
+
+    /// Does the pending scenario differ from `running` in any parameter?
+    pub fn differs_from(&self, running: &S) -> bool {
+        params::to_pairs(&self.scenario) != params::to_pairs(running)
+    }
+}
+
+/// The foot of a lesson's parameter panel: the "Apply & reset" button, enabled
+/// when `changed` (the pending parameters differ, or the lesson has its own
+/// reason to start over), with `apply_hover` on it, then the share link, whose
+/// `query(embed)` is the lesson's own (`Lesson::share_query`) and whose
+/// `share_hover` says what the link opens. True when the button was pressed.
+pub fn apply_and_share_ui(
+    ui: &mut egui::Ui,
+    changed: bool,
+    apply_hover: &str,
+    query: impl Fn(bool) -> String,
+    share_hover: &str,
+) -> bool {
+    let pressed = ui
+        .add_enabled(changed, egui::Button::new("Apply & reset"))
+        .on_hover_text(apply_hover)
+        .clicked();
+    ui.separator();
+    crate::widgets::share::share_ui(ui, query, share_hover, None);
+    pressed
 }
 
 /// One row per parameter in `names` (all of the table's when empty, but the

@@ -8,7 +8,7 @@ use super::common::{harness_sized as harness, label_visible, render_or_skip};
 use egui_kittest::Harness;
 use egui_kittest::kittest::Queryable as _;
 use slamlab_app::SlamLabApp;
-use slamlab_sim::coursework::Prepared;
+use slamlab_sim::coursework::{Grade, Prepared};
 use slamlab_sim::io::trajectory::{read_trajectory, write_tum};
 use slamlab_sim::metrics::TrajectoryRole;
 use std::path::{Path, PathBuf};
@@ -54,6 +54,39 @@ fn reference_tum(prepared: &Prepared, name: &str) -> Vec<u8> {
         .find(|(n, _)| n == name)
         .map(|(_, t)| write_tum(t).into_bytes())
         .unwrap_or_else(|| panic!("no reference {name}"))
+}
+
+/// Drops the variant's reference estimator `ekf` as `ekf.tum` and its dead
+/// reckoning as `dead-reckoning.tum`: the two grades the lesson lists (the
+/// test fails unless there are two), with the library's grades of the same
+/// files.
+fn drop_ekf_and_dead_reckoning(
+    h: &mut Harness<'_, SlamLabApp>,
+    prepared: &Prepared,
+    ekf: &str,
+) -> (Vec<serde_json::Value>, Grade, Grade) {
+    let (ekf, dead_reckoning) = (
+        reference_tum(prepared, ekf),
+        reference_tum(prepared, "dead-reckoning"),
+    );
+    drop_file(h, "ekf.tum", ekf.clone());
+    drop_file(h, "dead-reckoning.tum", dead_reckoning.clone());
+    let st = state(h);
+    let graded = st["assignment"]["graded"]
+        .as_array()
+        .cloned()
+        .unwrap_or_default();
+    assert_eq!(graded.len(), 2, "{}", st["assignment"]);
+    let grade = |name: &str, bytes: &[u8]| {
+        prepared
+            .grade(name, bytes)
+            .unwrap_or_else(|e| panic!("{name}: {e}"))
+    };
+    (
+        graded,
+        grade("ekf.tum", &ekf),
+        grade("dead-reckoning.tum", &dead_reckoning),
+    )
 }
 
 /// Alice's variant as the command line makes it (`slamlab export-inputs` and
@@ -123,17 +156,7 @@ fn dropped_estimates_are_graded_and_another_variant_is_refused() {
     let mut h = harness(LINK, egui::vec2(1280.0, 800.0));
     h.run();
     let prepared = alices();
-    let tum = |name: &str| reference_tum(&prepared, name);
-    let (ekf, dead_reckoning) = (tum("ekf"), tum("dead-reckoning"));
-    drop_file(&mut h, "ekf.tum", ekf.clone());
-    drop_file(&mut h, "dead-reckoning.tum", dead_reckoning.clone());
-    let st = state(&h);
-    let graded = st["assignment"]["graded"].as_array().unwrap();
-    assert_eq!(graded.len(), 2, "{}", st["assignment"]);
-    let expected_ekf = prepared.grade("ekf.tum", &ekf).unwrap();
-    let expected_dr = prepared
-        .grade("dead-reckoning.tum", &dead_reckoning)
-        .unwrap();
+    let (graded, expected_ekf, expected_dr) = drop_ekf_and_dead_reckoning(&mut h, &prepared, "ekf");
     assert_eq!(graded[0]["file"], "ekf.tum");
     assert_eq!(graded[0]["score"], 100.0);
     assert_eq!(graded[0]["pass"], true);
@@ -548,17 +571,8 @@ fn the_fusion_link_opens_the_variants_drive_and_grades_a_dropped_estimate() {
         }
     }
     assert!(compared >= 290, "{compared} poses compared");
-    let tum = |name: &str| reference_tum(&prepared, name);
-    let (ekf, dead_reckoning) = (tum("ekf-absolute"), tum("dead-reckoning"));
-    drop_file(&mut h, "ekf.tum", ekf.clone());
-    drop_file(&mut h, "dead-reckoning.tum", dead_reckoning.clone());
-    let st = state(&h);
-    let graded = st["assignment"]["graded"].as_array().unwrap();
-    assert_eq!(graded.len(), 2, "{}", st["assignment"]);
-    let expected_ekf = prepared.grade("ekf.tum", &ekf).unwrap();
-    let expected_dr = prepared
-        .grade("dead-reckoning.tum", &dead_reckoning)
-        .unwrap();
+    let (graded, expected_ekf, expected_dr) =
+        drop_ekf_and_dead_reckoning(&mut h, &prepared, "ekf-absolute");
     assert_eq!(graded[0]["score"], 100.0);
     assert_eq!(graded[0]["pass"], true);
     assert_eq!(

@@ -5,7 +5,8 @@
 //! x 500; the rendered map has its submaps, walls and green loop closures.
 
 use super::common::{
-    assert_notices, count_pixels, harness, harness_sized, lesson_accessors, render_or_skip,
+    assert_notices, count_pixels, harness, harness_sized, intel_log_and_reference,
+    lesson_accessors, render_or_skip,
 };
 use egui_kittest::Harness;
 use egui_kittest::kittest::Queryable as _;
@@ -371,20 +372,7 @@ fn the_detection_and_the_merge_are_marked_and_said_when_they_have_happened() {
 /// Skipped with a message when `../shared` is absent.
 #[test]
 fn the_intel_log_with_its_reference_scores_loop_closures_on_and_off() {
-    let dir = std::env::var_os("SLAMLAB_SHARED")
-        .map_or_else(
-            || std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../../../shared"),
-            std::path::PathBuf::from,
-        )
-        .join("data/laser");
-    let (Ok(log), Ok(reference)) = (
-        std::fs::read(dir.join("intel.clf.bz2")),
-        std::fs::read(dir.join("intel-corrected.log.gz")),
-    ) else {
-        eprintln!(
-            "skipped: the Intel log and its reference are not in {}",
-            dir.display()
-        );
+    let Some((log, reference)) = intel_log_and_reference() else {
         return;
     };
     let mut h = harness_sized("lesson=cartographer", egui::vec2(800.0, 500.0));

@@ -120,26 +120,35 @@ pub fn label_visible(h: &Harness<'_, SlamLabApp>, text: &str) -> bool {
     h.query_all_by_label_contains(text).next().is_some()
 }
 
-/// Every text drawn in the last frame (labels and painted text alike), with its
-/// rectangle on screen and its clip.
-pub fn drawn_texts(h: &Harness<'_, SlamLabApp>) -> Vec<(String, egui::Rect, egui::Rect)> {
+/// Calls `visit` with every text shape of the last frame (labels and painted
+/// text alike) and its clip rectangle, in drawing order.
+pub fn visit_texts(
+    h: &Harness<'_, SlamLabApp>,
+    mut visit: impl FnMut(&egui::epaint::TextShape, egui::Rect),
+) {
     fn walk(
         shape: &egui::Shape,
         clip: egui::Rect,
-        out: &mut Vec<(String, egui::Rect, egui::Rect)>,
+        visit: &mut dyn FnMut(&egui::epaint::TextShape, egui::Rect),
     ) {
         match shape {
-            egui::Shape::Text(t) => {
-                out.push((t.galley.text().to_owned(), t.visual_bounding_rect(), clip));
-            }
-            egui::Shape::Vec(shapes) => shapes.iter().for_each(|s| walk(s, clip, out)),
+            egui::Shape::Text(t) => visit(t, clip),
+            egui::Shape::Vec(shapes) => shapes.iter().for_each(|s| walk(s, clip, visit)),
             _ => {}
         }
     }
-    let mut out = Vec::new();
     for clipped in &h.output().shapes {
-        walk(&clipped.shape, clipped.clip_rect, &mut out);
+        walk(&clipped.shape, clipped.clip_rect, &mut visit);
     }
+}
+
+/// Every text drawn in the last frame (labels and painted text alike), with its
+/// rectangle on screen and its clip.
+pub fn drawn_texts(h: &Harness<'_, SlamLabApp>) -> Vec<(String, egui::Rect, egui::Rect)> {
+    let mut out = Vec::new();
+    visit_texts(h, |t, clip| {
+        out.push((t.galley.text().to_owned(), t.visual_bounding_rect(), clip));
+    });
     out
 }
 
@@ -151,4 +160,62 @@ pub fn text_drawn(h: &Harness<'_, SlamLabApp>, needle: &str) -> bool {
         let shown = rect.intersect(*clip).intersect(screen);
         text.contains(needle) && shown.width() > 1.0 && shown.height() > 1.0
     })
+}
+
+/// Saves `image` as the snapshot `name` for review (`egui_kittest`'s compared
+/// snapshots, threshold 2). A differing snapshot is not a failure here: the
+/// tests assert the colours they need, and the GPU's small differences vary.
+pub fn snapshot(image: &image::RgbaImage, name: &str) {
+    let _ = egui_kittest::try_image_snapshot_options(
+        image,
+        name,
+        &egui_kittest::SnapshotOptions::new().threshold(2.0),
+    );
+}
+
+/// The test state of `query` after `ticks` headless steps, as JSON text and
+/// parsed.
+pub fn headless(query: &str, ticks: u64) -> (String, serde_json::Value) {
+    let json = SlamLabApp::headless_state(query, ticks);
+    let state = match serde_json::from_str(&json) {
+        Ok(state) => state,
+        Err(err) => panic!("the test state of {query} is not JSON ({err}): {json}"),
+    };
+    (json, state)
+}
+
+/// A JSON array of numbers as numbers (the test fails on anything else).
+pub fn numbers(value: &serde_json::Value) -> Vec<f64> {
+    let Some(items) = value.as_array() else {
+        panic!("not an array: {value}");
+    };
+    items
+        .iter()
+        .map(|v| v.as_f64().unwrap_or_else(|| panic!("not a number: {v}")))
+        .collect()
+}
+
+/// The Intel lab's log and its corrected reference from the shared data
+/// (`$SLAMLAB_SHARED/data/laser`, else `../shared` beside the repository), or
+/// `None` with a note when they are not there.
+pub fn intel_log_and_reference() -> Option<(Vec<u8>, Vec<u8>)> {
+    let dir = std::env::var_os("SLAMLAB_SHARED")
+        .map_or_else(
+            || std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../../../shared"),
+            std::path::PathBuf::from,
+        )
+        .join("data/laser");
+    match (
+        std::fs::read(dir.join("intel.clf.bz2")),
+        std::fs::read(dir.join("intel-corrected.log.gz")),
+    ) {
+        (Ok(log), Ok(reference)) => Some((log, reference)),
+        _ => {
+            eprintln!(
+                "skipped: the Intel log and its reference are not in {}",
+                dir.display()
+            );
+            None
+        }
+    }
 }

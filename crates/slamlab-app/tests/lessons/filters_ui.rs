@@ -3,7 +3,7 @@
 //! time bar steps the corridor and steps back exactly, and the rendered views
 //! show the samples, the EKF's blue, the UKF's orange and the particles' purple.
 
-use super::common::{count_pixels, harness, lesson_accessors, render_or_skip};
+use super::common::{count_pixels, harness, headless, lesson_accessors, render_or_skip};
 use egui_kittest::Harness;
 use egui_kittest::kittest::Queryable as _;
 use slamlab_app::SlamLabApp;
@@ -115,26 +115,22 @@ fn the_time_bar_steps_the_corridor_and_steps_back_exactly() {
 
 /// Presses the left button at `from`, moves to `to` in a few frames, releases.
 fn drag(h: &mut Harness<'_, SlamLabApp>, from: egui::Pos2, to: egui::Pos2) {
+    let button = |pos, pressed| egui::Event::PointerButton {
+        pos,
+        button: egui::PointerButton::Primary,
+        pressed,
+        modifiers: egui::Modifiers::NONE,
+    };
     h.event(egui::Event::PointerMoved(from));
     h.step();
-    h.event(egui::Event::PointerButton {
-        pos: from,
-        button: egui::PointerButton::Primary,
-        pressed: true,
-        modifiers: egui::Modifiers::NONE,
-    });
+    h.event(button(from, true));
     h.step();
     for k in 1..=8 {
         let p = from + (to - from) * (k as f32 / 8.0);
         h.event(egui::Event::PointerMoved(p));
         h.step();
     }
-    h.event(egui::Event::PointerButton {
-        pos: to,
-        button: egui::PointerButton::Primary,
-        pressed: false,
-        modifiers: egui::Modifiers::NONE,
-    });
+    h.event(button(to, false));
     h.step();
     h.run();
 }
@@ -381,8 +377,7 @@ fn the_lesson_renders_readably_at_800_by_500_and_full_size() {
 /// `FILTERS_NATIVE`): the same bits natively and in the browser.
 #[test]
 fn the_seeded_table_has_these_exact_numbers() {
-    let json = SlamLabApp::headless_state("lesson=filters&samples=20000&seed=1", 0);
-    let state: serde_json::Value = serde_json::from_str(&json).unwrap();
+    let (json, state) = headless("lesson=filters&samples=20000&seed=1", 0);
     let table: Vec<String> = state["results"]
         .as_array()
         .unwrap()

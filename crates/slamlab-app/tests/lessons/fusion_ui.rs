@@ -4,7 +4,7 @@
 //! the rendered map shows each mode's colour.
 
 use super::common::{
-    assert_notices, count_pixels, harness_sized, lesson_accessors, render_or_skip,
+    assert_notices, count_pixels, harness_sized, lesson_accessors, render_or_skip, snapshot,
 };
 use egui_kittest::Harness;
 use egui_kittest::kittest::Queryable as _;
@@ -71,22 +71,20 @@ fn a_step_names_its_sensor_and_step_back_replays() {
         label.starts_with("SLAM pose (differential)") && label.ends_with("at 5.00 s"),
         "{label}"
     );
-    let before: Vec<_> = lesson(&h)
-        .sim()
-        .runs()
-        .iter()
-        .map(|r| *r.filter().mean())
-        .collect();
+    let means = |h: &Harness<'_, SlamLabApp>| -> Vec<_> {
+        lesson(h)
+            .sim()
+            .runs()
+            .iter()
+            .map(|r| *r.filter().mean())
+            .collect()
+    };
+    let before = means(&h);
     h.get_by_label("Step phase").click();
     h.run();
     h.get_by_label("Step back").click();
     h.run();
-    let after: Vec<_> = lesson(&h)
-        .sim()
-        .runs()
-        .iter()
-        .map(|r| *r.filter().mean())
-        .collect();
+    let after = means(&h);
     assert_eq!(before, after);
     // Bad readings by button: skipped, named and counted in both modes.
     h.get_by_label("NaN IMU reading").click();
@@ -208,11 +206,7 @@ fn rendered_lesson_shows_every_mode_in_its_colour() {
     assert!(purple > 800, "absolute-purple pixels {purple}");
     assert!(vermillion > 150, "SLAM-dot pixels {vermillion}");
     assert!(grey > 200, "raw-odometry grey pixels {grey}");
-    let _ = egui_kittest::try_image_snapshot_options(
-        &image,
-        "fusion_lesson",
-        &egui_kittest::SnapshotOptions::new().threshold(2.0),
-    );
+    snapshot(&image, "fusion_lesson");
 }
 
 #[test]

@@ -3,7 +3,8 @@
 //! back replays, and the rendered map shows the grid, the particles and the truth.
 
 use super::common::{
-    SIZE, assert_notices, count_pixels, harness, harness_themed, lesson_accessors, render_or_skip,
+    SIZE, assert_notices, count_pixels, harness, harness_themed, headless, lesson_accessors,
+    render_or_skip, snapshot,
 };
 use egui_kittest::Harness;
 use egui_kittest::kittest::Queryable as _;
@@ -94,19 +95,14 @@ fn rendered_lesson_shows_the_map_the_particles_and_the_truth() {
     assert!(walls > 500, "wall pixels {walls}");
     assert!(free > 50_000, "free-space pixels {free}");
     assert!(rays > 30, "lidar hit pixels {rays}");
-    let _ = egui_kittest::try_image_snapshot_options(
-        &image,
-        "kidnap_lesson",
-        &egui_kittest::SnapshotOptions::new().threshold(2.0),
-    );
+    snapshot(&image, "kidnap_lesson");
 }
 
 /// The seeded run the browser test repeats in wasm (`web/tests/browser.test.mjs`):
 /// global localization on the built-in maze converges, and these are its exact bits.
 #[test]
 fn a_seeded_global_localization_converges_with_these_exact_numbers() {
-    let json = SlamLabApp::headless_state("lesson=kidnap&map=maze&seed=3&particles=1000", 300);
-    let state: serde_json::Value = serde_json::from_str(&json).unwrap();
+    let (json, state) = headless("lesson=kidnap&map=maze&seed=3&particles=1000", 300);
     let filter = &state["filters"][0];
     let error = filter["position_error"].as_f64().unwrap();
     assert!(error < 0.5, "{json}");
@@ -212,11 +208,7 @@ fn rendered_side_by_side_with_the_costmap_after_a_kidnap() {
         green > 100 && purple > 100,
         "ACMCL green {green}, AMCL purple {purple}"
     );
-    let _ = egui_kittest::try_image_snapshot_options(
-        &image,
-        "kidnap_side_by_side",
-        &egui_kittest::SnapshotOptions::new().threshold(2.0),
-    );
+    snapshot(&image, "kidnap_side_by_side");
 }
 
 #[test]

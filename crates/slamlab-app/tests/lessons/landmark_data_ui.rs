@@ -414,6 +414,16 @@ fn reference_graph() -> Option<PickedFile> {
     }
 }
 
+/// Victoria Park's three files and its pose graph (as dropped files), or
+/// `None` with a message.
+fn victoria_park_with_its_graph() -> Option<(Vec<PickedFile>, PickedFile)> {
+    let files = dropped(
+        "victoria_park",
+        &["inputs.dat", "measurements.dat", "gps.dat"],
+    )?;
+    Some((files, reference_graph()?))
+}
+
 /// Victoria Park with gtsam's pose graph of the drive dropped beside its three
 /// files: the graph is solved one step per frame (the page keeps drawing), then
 /// its trees are laid over EKF-SLAM's as the reference map, and the numbers
@@ -421,13 +431,7 @@ fn reference_graph() -> Option<PickedFile> {
 /// (`reference_map::tests::victoria_park_reference_map_lies_over_ekf_slams_first_minutes`).
 #[test]
 fn victoria_park_reference_map_is_solved_in_frames_and_laid_over_the_filters() {
-    let (Some(files), Some(graph)) = (
-        dropped(
-            "victoria_park",
-            &["inputs.dat", "measurements.dat", "gps.dat"],
-        ),
-        reference_graph(),
-    ) else {
+    let Some((files, graph)) = victoria_park_with_its_graph() else {
         return;
     };
     for (w, h_, embed, size) in SHOT_SIZES {
@@ -539,13 +543,7 @@ impl egui::DroppedFile for DroppedBytes {
 /// lesson; and the graph alone, once the data set is open, too.
 #[test]
 fn victoria_parks_graph_dropped_on_the_window_is_the_reference_not_an_estimate() {
-    let (Some(files), Some(graph)) = (
-        dropped(
-            "victoria_park",
-            &["inputs.dat", "measurements.dat", "gps.dat"],
-        ),
-        reference_graph(),
-    ) else {
+    let Some((files, graph)) = victoria_park_with_its_graph() else {
         return;
     };
     let drop = |h: &mut Harness<'_, SlamLabApp>, files: &[PickedFile]| {

@@ -2,7 +2,7 @@
 //! drawn, the wrong-association button reaches the sensor, and the new parameters
 //! survive a share link.
 
-use super::common::{count_pixels_near as count_pixels, harness};
+use super::common::{count_pixels_near as count_pixels, harness, render_or_skip};
 use egui_kittest::Harness;
 use egui_kittest::kittest::{NodeT as _, Queryable as _};
 use slamlab_app::SlamLabApp;
@@ -28,13 +28,7 @@ fn purple_pixels(query: &str, snapshot: Option<&str>) -> Option<usize> {
         }
     }
     h.run();
-    let image = match h.render() {
-        Ok(image) => image,
-        Err(err) => {
-            eprintln!("skipping the rendered checks: no GPU adapter ({err})");
-            return None;
-        }
-    };
+    let image = render_or_skip(&mut h)?;
     if let Some(name) = snapshot
         && let Err(err) = egui_kittest::try_image_snapshot_options(
             &image,

@@ -637,13 +637,7 @@ fn the_magnifier_shows_the_robot_ellipse_magnified() {
             lesson.step_phase();
         }
         h.run();
-        let image = match h.render() {
-            Ok(image) => image,
-            Err(err) => {
-                eprintln!("skipping the rendered checks: no GPU adapter ({err})");
-                return None;
-            }
-        };
+        let image = render_or_skip(&mut h)?;
         if let Ok(dir) = std::env::var("SLAMLAB_SCREENSHOTS") {
             let _ = image.save(format!("{dir}/magnifier-{magnifier}.png"));
         }

@@ -4,7 +4,8 @@
 //! lesson, and the rendered map shows occupied cells and the scan.
 
 use super::common::{
-    assert_notices, count_pixels, harness, harness_sized, lesson_accessors, render_or_skip,
+    assert_notices, count_pixels, harness, harness_sized, headless, intel_log_and_reference,
+    lesson_accessors, numbers, render_or_skip,
 };
 use egui_kittest::Harness;
 use egui_kittest::kittest::Queryable as _;
@@ -230,15 +231,9 @@ const HEADLESS_OFFICE_POSE: [f64; 3] = [19.29859043482542, 47.94699415441172, -1
 
 #[test]
 fn a_headless_office_run_ends_at_the_pose_the_browser_must_match() {
-    let state: serde_json::Value =
-        serde_json::from_str(&SlamLabApp::headless_state(HEADLESS_OFFICE, 600)).unwrap();
+    let (_, state) = headless(HEADLESS_OFFICE, 600);
     assert_eq!(state["scans"], 600);
-    let pose: Vec<f64> = state["pose"]
-        .as_array()
-        .unwrap()
-        .iter()
-        .map(|v| v.as_f64().unwrap())
-        .collect();
+    let pose = numbers(&state["pose"]);
     eprintln!("pose {pose:?}, agreement {}", state["map_agreement"]);
     assert_eq!(pose, HEADLESS_OFFICE_POSE);
 }
@@ -271,12 +266,7 @@ fn the_intel_log_mapped_through_the_lesson_ends_at_the_pose_the_browser_must_mat
     ))
     .unwrap();
     assert_eq!(state["scans"], 13_631, "{}", state["note"]);
-    let pose: Vec<f64> = state["pose"]
-        .as_array()
-        .unwrap()
-        .iter()
-        .map(|v| v.as_f64().unwrap())
-        .collect();
+    let pose = numbers(&state["pose"]);
     eprintln!(
         "pose {pose:?}, {} s of data, {} known cells",
         state["input_seconds"], state["known_cells"]
@@ -366,16 +356,10 @@ const HEADLESS_GRID_BEST: [f64; 3] = [2.2339493485723514, 5.709111183307648, 3.0
 
 #[test]
 fn a_headless_grid_fastslam_run_ends_at_the_pose_the_browser_must_match() {
-    let state: serde_json::Value =
-        serde_json::from_str(&SlamLabApp::headless_state(HEADLESS_GRID, 300)).unwrap();
+    let (_, state) = headless(HEADLESS_GRID, 300);
     assert_eq!(state["scans"], 300);
     let g = &state["grid_fastslam"];
-    let best: Vec<f64> = g["best"]
-        .as_array()
-        .unwrap()
-        .iter()
-        .map(|v| v.as_f64().unwrap())
-        .collect();
+    let best = numbers(&g["best"]);
     eprintln!("best {best:?}, {g}, rmse {}", state["trajectory_rmse"]);
     assert_eq!(best, HEADLESS_GRID_BEST);
 }
@@ -430,20 +414,7 @@ fn one_particles_proposal_is_drawn_and_explained_at_800_by_500() {
 /// absent.
 #[test]
 fn the_intel_log_with_its_reference_plots_the_error_against_it() {
-    let dir = std::env::var_os("SLAMLAB_SHARED")
-        .map_or_else(
-            || std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../../../shared"),
-            std::path::PathBuf::from,
-        )
-        .join("data/laser");
-    let (Ok(log), Ok(reference)) = (
-        std::fs::read(dir.join("intel.clf.bz2")),
-        std::fs::read(dir.join("intel-corrected.log.gz")),
-    ) else {
-        eprintln!(
-            "skipped: the Intel log and its reference are not in {}",
-            dir.display()
-        );
+    let Some((log, reference)) = intel_log_and_reference() else {
         return;
     };
     let mut h = harness_sized("lesson=mapping", egui::vec2(800.0, 500.0));
@@ -656,12 +627,7 @@ fn a_rosbags_bag_mapped_through_the_lesson_ends_at_the_pose_the_browser_must_mat
     .unwrap();
     assert_eq!(state["scans"], 300, "{state}");
     assert_eq!(state["topics"], serde_json::json!(["/scan", "/odom"]));
-    let pose: Vec<f64> = state["pose"]
-        .as_array()
-        .unwrap()
-        .iter()
-        .map(|v| v.as_f64().unwrap())
-        .collect();
+    let pose = numbers(&state["pose"]);
     eprintln!("pose {pose:?}");
     assert_eq!(pose, ROSBAGS_END_POSE);
 }

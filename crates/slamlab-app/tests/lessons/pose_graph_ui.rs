@@ -6,6 +6,7 @@
 
 use super::common::{
     SIZE, assert_notices, count_pixels, harness, harness_themed, lesson_accessors, render_or_skip,
+    snapshot,
 };
 use egui_kittest::Harness;
 use egui_kittest::kittest::{NodeT as _, Queryable as _};
@@ -148,11 +149,7 @@ fn rendered_lesson_shows_poses_odometry_loop_closures_and_the_sparsity_images() 
         vermillion > 800,
         "vermillion (loop closures, fill-in) pixels {vermillion}"
     );
-    let _ = egui_kittest::try_image_snapshot_options(
-        &image,
-        "pose_graph_lesson",
-        &egui_kittest::SnapshotOptions::new().threshold(2.0),
-    );
+    snapshot(&image, "pose_graph_lesson");
 }
 
 /// What the lesson draws, as bits: every vertex state, the cost history (the cost

@@ -3,10 +3,10 @@
 //! get a note and a safe value, and the rendered row shows every method's copies.
 
 use super::common::{
-    SIZE, assert_notices, count_pixels, harness, harness_themed, lesson_accessors, render_or_skip,
+    SIZE, assert_notices, count_pixels, harness, harness_themed, headless, lesson_accessors,
+    render_or_skip, snapshot,
 };
 use egui_kittest::kittest::Queryable as _;
-use slamlab_app::SlamLabApp;
 use slamlab_app::lesson::Lesson as _;
 use slamlab_app::resampling::ResamplingLesson;
 use slamlab_core::particle::Resampler;
@@ -124,18 +124,13 @@ fn the_rendered_lab_shows_every_methods_copies() {
     }
     let weights_grey = count_pixels(image.as_raw(), [0x8C, 0x8C, 0x8C], 6);
     assert!(weights_grey > 1500, "weight-bar pixels {weights_grey}");
-    let _ = egui_kittest::try_image_snapshot_options(
-        &image,
-        "resampling_lab",
-        &egui_kittest::SnapshotOptions::new().threshold(2.0),
-    );
+    snapshot(&image, "resampling_lab");
 }
 
 /// The seeded presses the browser test repeats in wasm (`web/tests/browser.test.mjs`).
 #[test]
 fn seeded_presses_give_these_exact_copies() {
-    let json = SlamLabApp::headless_state("lesson=resampling&weights=5,1,1,3&seed=3", 5);
-    let state: serde_json::Value = serde_json::from_str(&json).unwrap();
+    let (json, state) = headless("lesson=resampling&weights=5,1,1,3&seed=3", 5);
     assert_eq!(state["resamplings"], 5, "{json}");
     let copies: Vec<String> = state["methods"]
         .as_array()

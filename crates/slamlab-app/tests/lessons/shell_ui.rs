@@ -4,7 +4,8 @@
 //! `follow=`) with their bad values.
 
 use super::common::{
-    count_pixels, harness_sized as harness, harness_themed, label_visible, render_or_skip,
+    count_pixels, drawn_texts, harness_sized as harness, harness_themed, label_visible,
+    render_or_skip, snapshot, visit_texts,
 };
 use egui_kittest::Harness;
 use egui_kittest::kittest::Queryable as _;
@@ -252,11 +253,7 @@ fn rendered_narrow_figure_at_tick_120_shows_map_and_plots() {
         blue_plots > 100,
         "EKF-blue pixels in the plots: {blue_plots}"
     );
-    let _ = egui_kittest::try_image_snapshot_options(
-        &image,
-        "shell_embed_800x500_tick120",
-        &egui_kittest::SnapshotOptions::new().threshold(2.0),
-    );
+    snapshot(&image, "shell_embed_800x500_tick120");
     // The smallest window: the full app at 360 x 480.
     let mut h = harness_themed(
         "lesson=kidnap&seed=3&tick=20",
@@ -267,11 +264,7 @@ fn rendered_narrow_figure_at_tick_120_shows_map_and_plots() {
     if let Ok(image) = h.render() {
         let purple = count_pixels(image.as_raw(), [0xCC, 0x79, 0xA7], 50);
         assert!(purple > 100, "particle-purple pixels {purple}");
-        let _ = egui_kittest::try_image_snapshot_options(
-            &image,
-            "shell_kidnap_360x480",
-            &egui_kittest::SnapshotOptions::new().threshold(2.0),
-        );
+        snapshot(&image, "shell_kidnap_360x480");
     }
 }
 
@@ -534,67 +527,35 @@ fn a_link_opens_as_shared_over_stored_windows() {
 
 /// Every text drawn in the last frame with its rectangle.
 fn texts(h: &Harness<'_, SlamLabApp>) -> Vec<(String, egui::Rect)> {
-    fn walk(shape: &egui::Shape, out: &mut Vec<(String, egui::Rect)>) {
-        match shape {
-            egui::Shape::Text(t) => {
-                out.push((t.galley.text().to_owned(), t.visual_bounding_rect()))
-            }
-            egui::Shape::Vec(shapes) => shapes.iter().for_each(|s| walk(s, out)),
-            _ => {}
-        }
-    }
     let mut out = Vec::new();
-    for clipped in &h.output().shapes {
-        walk(&clipped.shape, &mut out);
-    }
+    visit_texts(h, |t, _| {
+        out.push((t.galley.text().to_owned(), t.visual_bounding_rect()));
+    });
     out
 }
 
 /// Every text of the last frame laid out justified over two rows or more (its
 /// words spread apart to fill the width, as egui does in a justified column).
 fn justified_texts(h: &Harness<'_, SlamLabApp>) -> Vec<String> {
-    fn walk(shape: &egui::Shape, out: &mut Vec<String>) {
-        match shape {
-            egui::Shape::Text(t) if t.galley.job.justify && t.galley.rows.len() > 1 => {
-                out.push(t.galley.text().to_owned());
-            }
-            egui::Shape::Vec(shapes) => shapes.iter().for_each(|s| walk(s, out)),
-            _ => {}
-        }
-    }
     let mut out = Vec::new();
-    for clipped in &h.output().shapes {
-        walk(&clipped.shape, &mut out);
-    }
+    visit_texts(h, |t, _| {
+        if t.galley.job.justify && t.galley.rows.len() > 1 {
+            out.push(t.galley.text().to_owned());
+        }
+    });
     out
 }
 
 /// Every text of the last frame that its clip rectangle cuts at the left or right
 /// (a line running past a panel's edge), with its rectangle and its clip.
 fn texts_cut_sideways(h: &Harness<'_, SlamLabApp>) -> Vec<(String, egui::Rect, egui::Rect)> {
-    fn walk(
-        shape: &egui::Shape,
-        clip: egui::Rect,
-        out: &mut Vec<(String, egui::Rect, egui::Rect)>,
-    ) {
-        match shape {
-            egui::Shape::Text(t) => {
-                let rect = t.visual_bounding_rect();
-                let visible = rect.intersect(clip);
-                // Shown in part: cut at a side, not scrolled out of view.
-                let shown = visible.width() > 0.5 && visible.height() > 0.5;
-                if shown && (rect.right() > clip.right() + 1.5 || rect.left() < clip.left() - 1.5) {
-                    out.push((t.galley.text().to_owned(), rect, clip));
-                }
-            }
-            egui::Shape::Vec(shapes) => shapes.iter().for_each(|s| walk(s, clip, out)),
-            _ => {}
-        }
-    }
-    let mut out = Vec::new();
-    for clipped in &h.output().shapes {
-        walk(&clipped.shape, clipped.clip_rect, &mut out);
-    }
+    let mut out = drawn_texts(h);
+    out.retain(|(_, rect, clip)| {
+        let visible = rect.intersect(*clip);
+        // Shown in part: cut at a side, not scrolled out of view.
+        let shown = visible.width() > 0.5 && visible.height() > 0.5;
+        shown && (rect.right() > clip.right() + 1.5 || rect.left() < clip.left() - 1.5)
+    });
     out
 }
 

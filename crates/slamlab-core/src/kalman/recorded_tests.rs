@@ -3,42 +3,10 @@
 
 #![allow(clippy::unwrap_used, clippy::expect_used, clippy::panic)] // a failing test stops
 
+use super::ukf_slam::tests::config;
 use super::*;
-use crate::motion::{CarGeometry, CarStep, OdometryStep};
+use crate::motion::recorded::tests::{car, odometry};
 use nalgebra::{Matrix3, Vector3};
-
-fn config() -> FilterConfig {
-    FilterConfig {
-        motion_model: MotionModel::ExactArc,
-        noise: FilterNoise {
-            v_std: 0.1,
-            w_std: 0.05,
-            range_std: 0.2,
-            bearing_std: 0.02,
-        },
-    }
-}
-
-fn odometry(rot1: f64, trans: f64, rot2: f64) -> RecordedMotion {
-    RecordedMotion::Odometry(OdometryStep {
-        rot1,
-        trans,
-        rot2,
-        rot_std: 0.01,
-        trans_std: 0.02,
-    })
-}
-
-fn car(speed: f64, steering: f64) -> RecordedMotion {
-    RecordedMotion::Car(CarStep {
-        speed,
-        steering,
-        dt: 0.025,
-        car: CarGeometry::VICTORIA_PARK,
-        speed_std: 0.5,
-        steering_std: 0.05,
-    })
-}
 
 /// An EKF that has seen a landmark and moved, so its covariance has cross terms.
 fn warmed_up<F: LandmarkSlam>(mut filter: F) -> F {

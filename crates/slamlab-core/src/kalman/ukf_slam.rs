@@ -340,12 +340,13 @@ impl LandmarkBelief for UkfSlam {
 }
 
 #[cfg(test)]
-mod tests {
+pub(crate) mod tests {
     use super::*;
     use crate::kalman::{EkfSlam, FilterNoise};
     use crate::motion::MotionModel;
 
-    fn config() -> FilterConfig {
+    /// Exact-arc motion; 0.1 m/s, 0.05 rad/s, 0.2 m and 0.02 rad of noise.
+    pub(crate) fn config() -> FilterConfig {
         FilterConfig {
             motion_model: MotionModel::ExactArc,
             noise: FilterNoise {

@@ -357,11 +357,12 @@ fn car_velocity(
 }
 
 #[cfg(test)]
-mod tests {
+pub(crate) mod tests {
     use super::*;
     use crate::motion::{Control, MotionModel};
 
-    fn odometry(rot1: f64, trans: f64, rot2: f64) -> RecordedMotion {
+    /// An odometry reading with 0.01 rad and 0.02 m of noise.
+    pub(crate) fn odometry(rot1: f64, trans: f64, rot2: f64) -> RecordedMotion {
         RecordedMotion::Odometry(OdometryStep {
             rot1,
             trans,
@@ -371,7 +372,8 @@ mod tests {
         })
     }
 
-    fn car(speed: f64, steering: f64) -> RecordedMotion {
+    /// A Victoria Park car input of 25 ms, 0.5 m/s and 0.05 rad of noise.
+    pub(crate) fn car(speed: f64, steering: f64) -> RecordedMotion {
         RecordedMotion::Car(CarStep {
             speed,
             steering,

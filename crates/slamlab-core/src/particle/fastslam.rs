@@ -538,30 +538,13 @@ impl FastSlam {
                     } else {
                         Matrix3::zeros()
                     };
-                    let noise = Vector3::new(
-                        normal(&mut self.rng),
-                        normal(&mut self.rng),
-                        normal(&mut self.rng),
-                    );
-                    let proposal = Proposal {
-                        mean: step.pose.to_vector(),
-                        covariance,
-                        noise,
-                        replays: Vec::new(),
-                    };
+                    let proposal = Proposal::new(step.pose.to_vector(), covariance, &mut self.rng);
                     p.pose = proposal.draw();
                     p.proposal = Some(proposal);
                 }
             }
         }
-        let mean = self.mean_pose();
-        let spread = (self
-            .particles
-            .iter()
-            .zip(&self.weights)
-            .map(|(p, w)| w * (p.pose.translation() - mean.translation()).norm_squared())
-            .sum::<f64>())
-        .sqrt();
+        let spread = self.spread();
         Ok(ParticlePredictReport {
             control: *control,
             spread,
@@ -604,30 +587,14 @@ impl FastSlam {
                         .step(&p.pose)
                         .map_err(|e| FastSlamError::InvalidMotion(e.to_string()))?;
                     let g = step.jacobian_input;
-                    let noise = Vector3::new(
-                        normal(&mut self.rng),
-                        normal(&mut self.rng),
-                        normal(&mut self.rng),
-                    );
-                    let proposal = Proposal {
-                        mean: step.pose.to_vector(),
-                        covariance: g * step.input_covariance * g.transpose(),
-                        noise,
-                        replays: Vec::new(),
-                    };
+                    let covariance = g * step.input_covariance * g.transpose();
+                    let proposal = Proposal::new(step.pose.to_vector(), covariance, &mut self.rng);
                     p.pose = proposal.draw();
                     p.proposal = Some(proposal);
                 }
             }
         }
-        let mean = self.mean_pose();
-        let spread = (self
-            .particles
-            .iter()
-            .zip(&self.weights)
-            .map(|(p, w)| w * (p.pose.translation() - mean.translation()).norm_squared())
-            .sum::<f64>())
-        .sqrt();
+        let spread = self.spread();
         Ok(ParticlePredictReport {
             control: motion.velocity().unwrap_or_default(),
             spread,
@@ -903,6 +870,19 @@ impl FastSlam {
             .map_or(Pose2::IDENTITY, |p| p.pose)
     }
 
+    /// The particles' weighted RMS distance from their mean position, metres:
+    /// `√(Σ wᵢ ‖pᵢ − p̄‖²)` (what a prediction report calls the spread).
+    fn spread(&self) -> f64 {
+        let mean = self.mean_pose();
+        (self
+            .particles
+            .iter()
+            .zip(&self.weights)
+            .map(|(p, w)| w * (p.pose.translation() - mean.translation()).norm_squared())
+            .sum::<f64>())
+        .sqrt()
+    }
+
     /// The weighted mean pose (circular mean of the headings).
     pub fn mean_pose(&self) -> Pose2 {
         let (mut x, mut y, mut s, mut c) = (0.0, 0.0, 0.0, 0.0);
@@ -959,6 +939,18 @@ fn normal(rng: &mut ChaCha8Rng) -> f64 {
 }
 
 impl Proposal {
+    /// The Gaussian `N(mean, covariance)` with this step's standard-normal draw
+    /// `ε` from `rng`.
+    fn new(mean: Vector3<f64>, covariance: Matrix3<f64>, rng: &mut ChaCha8Rng) -> Self {
+        let noise = Vector3::new(normal(rng), normal(rng), normal(rng));
+        Proposal {
+            mean,
+            covariance,
+            noise,
+            replays: Vec::new(),
+        }
+    }
+
     /// `μ + L ε` with `L Lᵀ = Σ`.
     fn draw(&self) -> Pose2 {
         let x = self.mean + psd_cholesky3(&self.covariance) * self.noise;

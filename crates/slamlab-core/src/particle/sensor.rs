@@ -606,20 +606,36 @@ mod tests {
         (g, field, scan)
     }
 
+    /// The default likelihood field model, prepared on `field` up to `z_max`.
+    fn default_field(
+        aggregation: ScanAggregation,
+        field: &DistanceField,
+        z_max: f64,
+    ) -> (LikelihoodFieldModel, PreparedModel) {
+        let lf = LikelihoodFieldModel::default();
+        let model = PreparedModel::new(
+            MeasurementModel::LikelihoodField(lf),
+            aggregation,
+            field,
+            z_max,
+        );
+        (lf, model)
+    }
+
+    /// Every beam of `scan` and the end points of those that hit.
+    fn every_beam(scan: &Scan) -> (Vec<usize>, Vec<(f64, f64)>) {
+        let beams = scan.subsample(0);
+        let ends = beam_end_points(scan, &beams);
+        (beams, ends)
+    }
+
     #[test]
     fn amcl_aggregation_is_one_plus_the_sum_of_cubes() {
         // amcl_laser.cpp LikelihoodFieldModel: p = 1 + Σ (z_hit e^{−d²/2σ²} +
         // z_rand/z_max)³ over the hits; max-range readings skipped.
         let (g, field, scan) = wall_and_three_beams();
-        let lf = LikelihoodFieldModel::default();
-        let model = PreparedModel::new(
-            MeasurementModel::LikelihoodField(lf),
-            ScanAggregation::AmclCubes,
-            &field,
-            5.0,
-        );
-        let beams = scan.subsample(0);
-        let ends = beam_end_points(&scan, &beams);
+        let (_, model) = default_field(ScanAggregation::AmclCubes, &field, 5.0);
+        let (beams, ends) = every_beam(&scan);
         let pose = Pose2::new(1.05, 2.05, 0.0);
         let ll = model.scan_log_likelihood(&g, &field, &pose, &scan, &beams, &ends);
         // Distances 0 and 0.3 m; σ = 0.2: e^{−0.09/0.08}.
@@ -641,16 +657,9 @@ mod tests {
     #[test]
     fn likelihood_field_scores_end_points_and_skips_max_range() {
         let (g, field, scan) = wall_and_three_beams();
-        let lf = LikelihoodFieldModel::default();
-        let model = PreparedModel::new(
-            MeasurementModel::LikelihoodField(lf),
-            ScanAggregation::Product,
-            &field,
-            5.0,
-        );
+        let (lf, model) = default_field(ScanAggregation::Product, &field, 5.0);
         // From (1.05, 2.05) facing +x the wall's cell centres are at x = 3.05.
-        let beams = scan.subsample(0);
-        let ends = beam_end_points(&scan, &beams);
+        let (beams, ends) = every_beam(&scan);
         assert_eq!(ends.len(), 2);
         let pose = Pose2::new(1.05, 2.05, 0.0);
         let ll = model.scan_log_likelihood(&g, &field, &pose, &scan, &beams, &ends);
@@ -681,13 +690,7 @@ mod tests {
         }
         g.set(12, 9, Cell::Occupied);
         let field = DistanceField::new(&g, 0.7);
-        let lf = LikelihoodFieldModel::default();
-        let model = PreparedModel::new(
-            MeasurementModel::LikelihoodField(lf),
-            ScanAggregation::Product,
-            &field,
-            6.0,
-        );
+        let (lf, model) = default_field(ScanAggregation::Product, &field, 6.0);
         let table = lf.table(&field, 6.0);
         let scan = Scan {
             angles: (0..36).map(|k| k as f64 * 0.17).collect(),
@@ -695,8 +698,7 @@ mod tests {
             range_min: 0.0,
             range_max: 6.0,
         };
-        let beams = scan.subsample(0);
-        let ends = beam_end_points(&scan, &beams);
+        let (beams, ends) = every_beam(&scan);
         // Poses inside, on the edge of and outside the map, and not a number.
         for pose in [
             Pose2::new(0.3, 1.4, 0.2),

@@ -812,6 +812,7 @@ pub fn exhaustive_search(
 mod tests {
     use super::*;
     use crate::grid::{InsertParams, UpdateRule};
+    use crate::laser::test_room::{Segment, ray_cast};
     use crate::scan::Scan;
     use rand::{Rng, SeedableRng};
     use rand_chacha::ChaCha8Rng;
@@ -832,39 +833,8 @@ mod tests {
             let l = rng.random_range(0.5..2.0);
             walls.push([x, y, x + l * math::cos(a), y + l * math::sin(a)]);
         }
-        let scan_at = move |pose: &Pose2| {
-            let n = 180;
-            let angles: Vec<f64> = (0..n)
-                .map(|k| -std::f64::consts::PI + std::f64::consts::TAU * k as f64 / n as f64)
-                .collect();
-            let ranges = angles
-                .iter()
-                .map(|a| {
-                    let (s, c) = math::sin_cos(pose.theta + a);
-                    let mut best = 12.0;
-                    for w in &walls {
-                        let (ex, ey) = (w[2] - w[0], w[3] - w[1]);
-                        let den = c * ey - s * ex;
-                        if den.abs() < 1e-12 {
-                            continue;
-                        }
-                        let (qx, qy) = (w[0] - pose.x, w[1] - pose.y);
-                        let t = (qx * ey - qy * ex) / den;
-                        let u = (qx * s - qy * c) / den;
-                        if t > 0.0 && (0.0..=1.0).contains(&u) && t < best {
-                            best = t;
-                        }
-                    }
-                    best
-                })
-                .collect();
-            Scan {
-                angles,
-                ranges,
-                range_min: 0.0,
-                range_max: 12.0,
-            }
-        };
+        let walls: Vec<Segment> = walls.iter().map(|w| ([w[0], w[1]], [w[2], w[3]])).collect();
+        let scan_at = move |pose: &Pose2| ray_cast(&walls, *pose, 180, 12.0, None);
         let mut grid = ProbabilityGrid::new(0.1);
         let params = InsertParams {
             rule: UpdateRule::CARTOGRAPHER,

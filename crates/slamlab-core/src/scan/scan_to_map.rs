@@ -531,6 +531,7 @@ impl Problem<'_> {
 mod tests {
     use super::*;
     use crate::grid::{InsertParams, UpdateRule};
+    use crate::laser::test_room::{Segment, ray_cast};
 
     /// A probability grid of a closed room with a few boxes, built from
     /// noise-free scans taken from known poses (ray cast against the shapes).
@@ -546,40 +547,8 @@ mod tests {
             [-2.5, -1.0, -1.5, -2.0],
             [3.0, -2.0, 3.5, -1.0],
         ];
-        let scan_at = move |pose: &Pose2| {
-            let n = 360;
-            let angles: Vec<f64> = (0..n)
-                .map(|k| -std::f64::consts::PI + std::f64::consts::TAU * k as f64 / n as f64)
-                .collect();
-            let ranges = angles
-                .iter()
-                .map(|a| {
-                    let (s, c) = math::sin_cos(pose.theta + a);
-                    let mut best = 12.0;
-                    for w in &walls {
-                        // Ray-segment intersection.
-                        let (ex, ey) = (w[2] - w[0], w[3] - w[1]);
-                        let den = c * ey - s * ex;
-                        if den.abs() < 1e-12 {
-                            continue;
-                        }
-                        let (qx, qy) = (w[0] - pose.x, w[1] - pose.y);
-                        let t = (qx * ey - qy * ex) / den;
-                        let u = (qx * s - qy * c) / den;
-                        if t > 0.0 && (0.0..=1.0).contains(&u) && t < best {
-                            best = t;
-                        }
-                    }
-                    best
-                })
-                .collect();
-            Scan {
-                angles,
-                ranges,
-                range_min: 0.0,
-                range_max: 12.0,
-            }
-        };
+        let walls: Vec<Segment> = walls.iter().map(|w| ([w[0], w[1]], [w[2], w[3]])).collect();
+        let scan_at = move |pose: &Pose2| ray_cast(&walls, *pose, 360, 12.0, None);
         let mut grid = ProbabilityGrid::new(0.05);
         let params = InsertParams {
             rule: UpdateRule::CARTOGRAPHER,

@@ -16,39 +16,12 @@ pub fn trajectories(sim: &CartographerSim) -> Vec<NamedTrajectory> {
         sim.nodes.iter().map(|n| (n.scan, n.global_pose)).collect();
     nodes.sort_by_key(|(scan, _)| *scan);
     nodes.dedup_by_key(|(scan, _)| *scan);
-    let time = |scan: usize| input.scans.get(scan).map_or(f64::NAN, |s| s.time);
-    let mut all = Vec::new();
-    if let Some(truth) = &input.truth {
-        all.push(NamedTrajectory::new(
-            "truth",
-            TrajectoryRole::Truth,
-            Trajectory::new(
-                nodes.iter().map(|(s, _)| time(*s)).collect(),
-                nodes
-                    .iter()
-                    .filter_map(|(s, _)| truth.get(*s).copied())
-                    .collect(),
-            ),
-        ));
-    }
-    all.push(NamedTrajectory::new(
-        "odometry",
-        TrajectoryRole::Odometry,
-        Trajectory::new(
-            nodes.iter().map(|(s, _)| time(*s)).collect(),
-            nodes
-                .iter()
-                .filter_map(|(s, _)| input.scans.get(*s).map(|i| i.odometry))
-                .collect(),
-        ),
-    ));
+    let scans: Vec<usize> = nodes.iter().map(|(s, _)| *s).collect();
+    let (stamps, mut all) = input.truth_and_odometry(&scans);
     all.push(NamedTrajectory::new(
         "cartographer",
         TrajectoryRole::Estimate,
-        Trajectory::new(
-            nodes.iter().map(|(s, _)| time(*s)).collect(),
-            nodes.iter().map(|(_, p)| *p).collect(),
-        ),
+        Trajectory::new(stamps, nodes.iter().map(|(_, p)| *p).collect()),
     ));
     all
 }

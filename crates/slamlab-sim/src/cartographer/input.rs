@@ -9,8 +9,7 @@
 //! wheels), so the log looks like a robot that drove on.
 
 use crate::grid::SimulatedLogConfig;
-use crate::grid::explorer::Explorer;
-use crate::grid::robot::{GridRobot, OdometrySensor};
+use crate::grid::simulated_log::ExploringRobot;
 use crate::grid::{InputScan, MappingInput};
 use crate::noise::stream_seed;
 use rand::{Rng, SeedableRng};
@@ -111,51 +110,32 @@ pub fn kidnap_input_to(
             p.x, p.y
         ));
     }
-    let roomy = Costmap::inflate(&map, radius + 0.1).valid_cells();
-    let cells = if roomy.is_empty() {
-        collision.valid_cells()
-    } else {
-        roomy
-    };
-    let mut start_rng = ChaCha8Rng::seed_from_u64(stream_seed(seed, 1));
-    let start = cells
-        .sample(&mut start_rng)
+    let mut drive = ExploringRobot::place(&map, collision, radius, config, seed)
         .ok_or_else(|| format!("the robot (radius {radius} m) fits nowhere in the map"))?;
     let mut lidar_rng = ChaCha8Rng::seed_from_u64(stream_seed(seed, 2));
-    let mut odom_rng = ChaCha8Rng::seed_from_u64(stream_seed(seed, 3));
     let mut kidnap_rng = ChaCha8Rng::seed_from_u64(stream_seed(seed, 5));
-    let mut explorer = Explorer::new(&map, radius, config.explorer, stream_seed(seed, 4));
-    let mut robot = GridRobot {
-        pose: start,
-        radius,
-    };
-    let mut odometry = OdometrySensor::new(start, config.odom_noise);
     let mut scans = Vec::with_capacity(steps);
     let mut truth = Vec::with_capacity(steps);
     for k in 0..steps {
-        let (v, w) = explorer.command(&robot.pose);
-        let before = robot.pose;
-        if robot.drive(&collision, v, w, config.dt).is_some() {
-            explorer.replan();
-        }
-        let after = robot.pose;
-        odometry.record(&before, &after, &mut odom_rng);
+        drive.step(config.dt);
+        let after = drive.robot.pose;
         if kidnap_at == Some(k) {
-            robot.pose = match place {
+            let cells = &drive.cells;
+            let to = match place {
                 KidnapPlace::At(p) => p,
                 KidnapPlace::Mapped => on_path(&truth, &after, &mut kidnap_rng)
-                    .unwrap_or_else(|| anywhere(&cells, &after, &mut kidnap_rng)),
-                KidnapPlace::Anywhere => anywhere(&cells, &after, &mut kidnap_rng),
+                    .unwrap_or_else(|| anywhere(cells, &after, &mut kidnap_rng)),
+                KidnapPlace::Anywhere => anywhere(cells, &after, &mut kidnap_rng),
             };
-            explorer.replan();
+            drive.carry_to(to);
         }
-        let scan = config.lidar.scan(&map, &robot.pose, &mut lidar_rng);
+        let scan = config.lidar.scan(&map, &drive.robot.pose, &mut lidar_rng);
         scans.push(InputScan {
             time: (k + 1) as f64 * config.dt,
             scan,
-            odometry: odometry.pose,
+            odometry: drive.odometry.pose,
         });
-        truth.push(robot.pose);
+        truth.push(drive.robot.pose);
     }
     let kidnap = kidnap.map_or(String::new(), |(k, place)| match place {
         KidnapPlace::Anywhere => format!(", kidnapped at scan {k} to anywhere"),

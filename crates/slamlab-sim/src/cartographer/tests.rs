@@ -10,21 +10,28 @@ fn run_with(
     kidnap_at: Option<usize>,
     params: CartographerParams,
 ) -> (CartographerSim, CartographerSummary) {
-    let grid = Arc::new(builtin_map(map).unwrap());
-    let input = kidnap_input(
-        grid,
-        map,
-        steps,
-        seed,
-        kidnap_at,
-        &SimulatedLogConfig::default(),
-    )
-    .unwrap();
-    let (mut sim, notes) = CartographerSim::new(Arc::new(input), params);
+    let kidnap = kidnap_at.map(|k| (k, KidnapPlace::Mapped));
+    let (sim, summary, notes) = run_simulated(map, steps, seed, kidnap, params);
     assert!(notes.is_empty(), "{notes:?}");
-    sim.run_to_end();
-    let summary = sim.summary(kidnap_at, 0.0);
     (sim, summary)
+}
+
+/// Runs `map` for `steps` scans of seed `seed`, kidnapped at `(scan, place)`
+/// if given, to the end: the run, its summary and the notes it opened with.
+fn run_simulated(
+    map: &str,
+    steps: usize,
+    seed: u64,
+    kidnap: Option<(usize, KidnapPlace)>,
+    params: CartographerParams,
+) -> (CartographerSim, CartographerSummary, Vec<String>) {
+    let grid = Arc::new(builtin_map(map).unwrap());
+    let config = SimulatedLogConfig::default();
+    let input = kidnap_input_to(grid, map, steps, seed, kidnap, &config).unwrap();
+    let (mut sim, notes) = CartographerSim::new(Arc::new(input), params);
+    sim.run_to_end();
+    let summary = sim.summary(kidnap.map(|(k, _)| k), 0.0);
+    (sim, summary, notes)
 }
 
 #[test]
@@ -171,19 +178,8 @@ fn run_kidnapped_to(
     seed: u64,
     place: KidnapPlace,
 ) -> (CartographerSim, CartographerSummary) {
-    let grid = Arc::new(builtin_map(map).unwrap());
-    let input = kidnap_input_to(
-        grid,
-        map,
-        600,
-        seed,
-        Some((152, place)),
-        &SimulatedLogConfig::default(),
-    )
-    .unwrap();
-    let (mut sim, _) = CartographerSim::new(Arc::new(input), CartographerParams::default());
-    sim.run_to_end();
-    let summary = sim.summary(Some(152), 0.0);
+    let params = CartographerParams::default();
+    let (sim, summary, _) = run_simulated(map, 600, seed, Some((152, place)), params);
     (sim, summary)
 }
 

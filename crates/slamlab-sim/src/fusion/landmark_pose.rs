@@ -7,7 +7,7 @@ use crate::world::landmark_session::LandmarkSession;
 use crate::world::landmarks::LandmarkLayout;
 use nalgebra::Matrix3;
 use slamlab_core::geometry::Pose2;
-use slamlab_core::kalman::fusion::{Measurement, Reading};
+use slamlab_core::kalman::fusion::Reading;
 use slamlab_core::math;
 use slamlab_core::motion::Control;
 
@@ -82,17 +82,11 @@ pub(crate) fn replace_slam_with_landmark_ekf(
             cov[(i, i)] = cov[(i, i)].max(POSE_STD_FLOOR[i].powi(2));
         }
         poses.push((t, reported));
-        arrivals.push(Arrival {
-            arrival: t + latency,
-            measurement: Measurement {
-                sensor: SLAM,
-                stamp: t,
-                reading: Reading::Pose {
-                    pose: Pose2::new(reported.x, reported.y, reported.theta),
-                    covariance: cov,
-                },
-            },
-        });
+        let reading = Reading::Pose {
+            pose: Pose2::new(reported.x, reported.y, reported.theta),
+            covariance: cov,
+        };
+        arrivals.push(Arrival::new(SLAM, t, t + latency, reading));
     }
     log.measurements.retain(|a| a.measurement.sensor != SLAM);
     log.measurements.extend(arrivals);

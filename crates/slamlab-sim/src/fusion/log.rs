@@ -2,7 +2,7 @@
 //! ([`SensorLog`]), so that every fusion mode runs on exactly the same data.
 
 use slamlab_core::geometry::{Pose2, wrap_angle};
-use slamlab_core::kalman::fusion::Measurement;
+use slamlab_core::kalman::fusion::{Measurement, Reading};
 
 /// The wheel odometry's sensor index in every fusion filter.
 pub const ODOMETRY: usize = 0;
@@ -31,6 +31,20 @@ pub struct Arrival {
     pub arrival: f64,
     /// The stamped reading.
     pub measurement: Measurement,
+}
+
+impl Arrival {
+    /// `reading` of `sensor`, taken at `stamp` and received at `arrival`.
+    pub fn new(sensor: usize, stamp: f64, arrival: f64, reading: Reading) -> Self {
+        Arrival {
+            arrival,
+            measurement: Measurement {
+                sensor,
+                stamp,
+                reading,
+            },
+        }
+    }
 }
 
 /// The truth and every sensor reading of one drive.

@@ -10,7 +10,7 @@
 
 use super::runner::FusionMode;
 use super::scenario::{FusionScenario, SlamSource};
-use crate::params::{Param, ParamIssue, Scenario, choose, choose_list};
+use crate::params::{Param, ParamIssue, Scenario, choose, choose_items, list_text};
 
 /// The modes the lesson can run, as the URL spells them.
 pub const MODE_NAMES: &[&str] = &["differential", "relative", "absolute", "odometry"];
@@ -98,19 +98,8 @@ pub static PARAMS: &[Param<FusionLessonScenario>] = &[
         "modes",
         "how the SLAM pose is fused, runs side by side, comma separated (odometry: without it)",
         MODE_NAMES,
-        |s| {
-            Some(
-                s.modes
-                    .iter()
-                    .map(|m| m.name())
-                    .collect::<Vec<_>>()
-                    .join(","),
-            )
-        },
-        |s, v| {
-            choose_list(MODE_NAMES, v)
-                .map(|list| s.modes = list.into_iter().filter_map(mode_from_name).collect())
-        },
+        |s| Some(list_text(&s.modes, |m| m.name())),
+        |s, v| choose_items(MODE_NAMES, v, mode_from_name).map(|list| s.modes = list),
     ),
     field!(
         "duration",
@@ -331,7 +320,8 @@ impl Scenario for FusionLessonScenario {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::params::{apply_pairs, describe, get, sanitize, set, to_pairs};
+    use crate::params::checks::*;
+    use crate::params::{apply_pairs, describe, get, sanitize, to_pairs};
 
     #[test]
     fn every_parameter_round_trips_and_the_defaults_are_in_range() {
@@ -345,23 +335,21 @@ mod tests {
         };
         copy.scenario.seed = 99;
         copy.scenario.imu.gyro_noise_std = 1.0;
-        assert!(
-            apply_pairs(&mut copy, pairs.iter().map(|(k, v)| (*k, v.as_str())), &[]).is_empty()
-        );
+        assert_applies(&mut copy, &pairs);
         assert_eq!(to_pairs(&copy), pairs);
         assert_eq!(copy.modes, s.modes);
         // Degrees in, radians inside: 0.1 °/s is the scenario's default.
         assert_eq!(get(&s, "imu-gyro-noise-deg").as_deref(), Some("0.1"));
-        for (k, v) in [
-            ("modes", "absolute,odometry"),
-            ("slam-rejection", "3"),
-            ("slam-source", "landmark-ekf"),
-            ("odom", "0"),
-            ("slam-yaw-noise-deg", "5"),
-        ] {
-            assert_eq!(set(&mut s, k, v), None, "{k}");
-            assert_eq!(get(&s, k).as_deref(), Some(v), "{k}");
-        }
+        assert_round_trip(
+            &mut s,
+            &[
+                ("modes", "absolute,odometry"),
+                ("slam-rejection", "3"),
+                ("slam-source", "landmark-ekf"),
+                ("odom", "0"),
+                ("slam-yaw-noise-deg", "5"),
+            ],
+        );
         assert_eq!(s.modes, vec![FusionMode::Absolute, FusionMode::Odometry]);
         assert_eq!(s.scenario.slam.rejection_threshold, Some(3.0));
         assert!(!s.scenario.odometry.enabled);

@@ -7,7 +7,7 @@ use nalgebra::{Matrix3, Vector3};
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
 use slamlab_core::geometry::{Pose2, wrap_angle};
-use slamlab_core::kalman::fusion::{Measurement, Reading};
+use slamlab_core::kalman::fusion::Reading;
 use slamlab_core::math;
 use slamlab_core::motion::{Control, MotionModel};
 
@@ -116,21 +116,11 @@ pub fn simulate(scenario: &FusionScenario) -> Result<SensorLog, ScenarioError> {
             }
             last_odometry = Some((t, Control::new(v_o, w_o)));
             log.odometry_path.push((t, dead_reckoning));
-            log.measurements.push(Arrival {
-                arrival: t,
-                measurement: Measurement {
-                    sensor: ODOMETRY,
-                    stamp: t,
-                    reading: Reading::Twist {
-                        twist: Vector3::new(v_o, 0.0, w_o),
-                        covariance: Matrix3::from_diagonal(&Vector3::new(
-                            o.speed_noise_std.powi(2),
-                            o.lateral_std.powi(2),
-                            o.turn_noise_std.powi(2),
-                        )),
-                    },
-                },
-            });
+            let reading = Reading::Twist {
+                twist: Vector3::new(v_o, 0.0, w_o),
+                covariance: variances(o.speed_noise_std, o.lateral_std, o.turn_noise_std),
+            };
+            log.measurements.push(Arrival::new(ODOMETRY, t, t, reading));
         }
         if imu_clock.due(t) {
             bias += imu.gyro_bias_walk * (t - last_imu_t).sqrt() * normal(&mut imu_rng);
@@ -139,21 +129,11 @@ pub fn simulate(scenario: &FusionScenario) -> Result<SensorLog, ScenarioError> {
             let a_x = accel + imu.accel_noise_std * normal(&mut imu_rng);
             let a_y = v * w + imu.accel_noise_std * normal(&mut imu_rng);
             log.gyro_bias.push((t, bias));
-            log.measurements.push(Arrival {
-                arrival: t,
-                measurement: Measurement {
-                    sensor: IMU,
-                    stamp: t,
-                    reading: Reading::Imu {
-                        values: Vector3::new(yaw_rate, a_x, a_y),
-                        covariance: Matrix3::from_diagonal(&Vector3::new(
-                            imu.gyro_noise_std.powi(2),
-                            imu.accel_noise_std.powi(2),
-                            imu.accel_noise_std.powi(2),
-                        )),
-                    },
-                },
-            });
+            let reading = Reading::Imu {
+                values: Vector3::new(yaw_rate, a_x, a_y),
+                covariance: variances(imu.gyro_noise_std, imu.accel_noise_std, imu.accel_noise_std),
+            };
+            log.measurements.push(Arrival::new(IMU, t, t, reading));
         }
         if slam_clock.due(t) {
             let gap = t - last_slam_t;
@@ -184,21 +164,12 @@ pub fn simulate(scenario: &FusionScenario) -> Result<SensorLog, ScenarioError> {
             }
             let reported = Pose2::new(pose.x + error[0], pose.y + error[1], pose.theta + error[2]);
             log.slam_poses.push((t, reported));
-            log.measurements.push(Arrival {
-                arrival: t + s.latency,
-                measurement: Measurement {
-                    sensor: SLAM,
-                    stamp: t,
-                    reading: Reading::Pose {
-                        pose: reported,
-                        covariance: Matrix3::from_diagonal(&Vector3::new(
-                            s.position_noise_std.powi(2),
-                            s.position_noise_std.powi(2),
-                            s.yaw_noise_std.powi(2),
-                        )),
-                    },
-                },
-            });
+            let reading = Reading::Pose {
+                pose: reported,
+                covariance: variances(s.position_noise_std, s.position_noise_std, s.yaw_noise_std),
+            };
+            log.measurements
+                .push(Arrival::new(SLAM, t, t + s.latency, reading));
         }
 
         // The next tick's controls.
@@ -264,4 +235,9 @@ fn next_waypoint(rng: &mut ChaCha8Rng, pose: &Pose2, room: [f64; 2]) -> nalgebra
         }
     }
     candidate
+}
+
+/// The covariance of independent errors: `diag(σ₁², σ₂², σ₃²)`.
+fn variances(s1: f64, s2: f64, s3: f64) -> Matrix3<f64> {
+    Matrix3::from_diagonal(&Vector3::new(s1.powi(2), s2.powi(2), s3.powi(2)))
 }

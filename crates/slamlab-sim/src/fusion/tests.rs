@@ -140,6 +140,15 @@ fn relative_stays_bounded_while_odometry_drifts() {
     assert!(odo > 3.0 * rel, "odometry {odo} vs relative {rel}");
 }
 
+/// Every reading but the SLAM poses.
+fn not_slam(log: &SensorLog) -> Vec<Arrival> {
+    log.measurements
+        .iter()
+        .filter(|m| m.measurement.sensor != SLAM)
+        .copied()
+        .collect()
+}
+
 #[test]
 fn every_mode_sees_the_same_data_and_sensors_have_their_own_streams() {
     let a = simulate(&short(4, 20.0)).unwrap();
@@ -149,13 +158,6 @@ fn every_mode_sees_the_same_data_and_sensors_have_their_own_streams() {
     let mut noisy = short(4, 20.0);
     noisy.slam.position_noise_std = 0.5;
     let c = simulate(&noisy).unwrap();
-    let not_slam = |log: &SensorLog| -> Vec<_> {
-        log.measurements
-            .iter()
-            .filter(|m| m.measurement.sensor != SLAM)
-            .copied()
-            .collect()
-    };
     assert_eq!(not_slam(&a), not_slam(&c));
     assert_ne!(a.slam_poses, c.slam_poses);
     // Rates: 50, 100 and 1 Hz over 20 s (both ends included).
@@ -264,13 +266,6 @@ fn the_slam_pose_can_come_from_the_landmark_lessons_ekf_slam() {
     assert_eq!(log.slam_poses.len(), 121);
     // The odometry and IMU are the same as with the simulated SLAM pose.
     let plain = simulate(&short(1, 120.0)).unwrap();
-    let not_slam = |log: &SensorLog| -> Vec<_> {
-        log.measurements
-            .iter()
-            .filter(|m| m.measurement.sensor != SLAM)
-            .copied()
-            .collect()
-    };
     assert_eq!(not_slam(&log), not_slam(&plain));
     let slam_error = log
         .slam_poses

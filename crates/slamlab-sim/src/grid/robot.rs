@@ -64,6 +64,16 @@ impl GridRobot {
     }
 }
 
+/// The wheel odometry noise of the simulated laser robot (the localization and
+/// mapping lessons' default): α₁ = α₃ = 0.05, α₂ = α₄ = 0.01 (Probabilistic
+/// Robotics Table 5.6's parameters).
+pub const ROBOT_ODOMETRY_NOISE: OdometryNoise = OdometryNoise {
+    alpha1: 0.05,
+    alpha2: 0.01,
+    alpha3: 0.05,
+    alpha4: 0.01,
+};
+
 /// Wheel odometry: integrates each true motion increment with noise drawn from
 /// the odometry motion model (Probabilistic Robotics Table 5.6), so the odometry
 /// frame drifts from the map frame as real wheel odometry does.

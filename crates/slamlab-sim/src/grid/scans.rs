@@ -5,6 +5,7 @@
 
 use crate::grid::builtin::BuiltinMap;
 use crate::io::laser_log::LaserLog;
+use crate::metrics::{NamedTrajectory, Trajectory, TrajectoryRole};
 use slamlab_core::Pose2;
 use slamlab_core::grid::{Cell, OccupancyGrid, ProbabilityGrid};
 use slamlab_core::scan::Scan;
@@ -64,6 +65,34 @@ impl MappingInput {
             &reference,
             &association,
         ))
+    }
+
+    /// The times of `scans` (indices into [`MappingInput::scans`]; NaN for one
+    /// past the end) and, at them, the truth (when the input has one) and the
+    /// odometry: what the laser lessons export beside their estimate.
+    pub fn truth_and_odometry(&self, scans: &[usize]) -> (Vec<f64>, Vec<NamedTrajectory>) {
+        let stamps: Vec<f64> = scans
+            .iter()
+            .map(|&k| self.scans.get(k).map_or(f64::NAN, |s| s.time))
+            .collect();
+        let mut all = Vec::new();
+        if let Some(truth) = &self.truth {
+            let poses = scans.iter().filter_map(|&k| truth.get(k).copied());
+            all.push(NamedTrajectory::new(
+                "truth",
+                TrajectoryRole::Truth,
+                Trajectory::new(stamps.clone(), poses.collect()),
+            ));
+        }
+        let odometry = scans
+            .iter()
+            .filter_map(|&k| self.scans.get(k).map(|s| s.odometry));
+        all.push(NamedTrajectory::new(
+            "odometry",
+            TrajectoryRole::Odometry,
+            Trajectory::new(stamps.clone(), odometry.collect()),
+        ));
+        (stamps, all)
     }
 
     /// Seconds from the first scan to the last.

@@ -10,12 +10,13 @@
 
 use crate::grid::explorer::{Explorer, ExplorerConfig};
 use crate::grid::lidar::Lidar;
-use crate::grid::robot::{GridRobot, OdometrySensor};
+use crate::grid::robot::{GridRobot, OdometrySensor, ROBOT_ODOMETRY_NOISE};
 use crate::io::laser_log::{LaserKind, LaserLog, LogOdometry, LogScan, TruePose};
 use crate::noise::stream_seed;
 use rand::SeedableRng;
 use rand_chacha::ChaCha8Rng;
-use slamlab_core::grid::{Costmap, OccupancyGrid};
+use slamlab_core::Pose2;
+use slamlab_core::grid::{Costmap, FreeCells, OccupancyGrid};
 use slamlab_core::odometry::OdometryNoise;
 use std::f64::consts::TAU;
 
@@ -51,12 +52,7 @@ impl Default for SimulatedLogConfig {
                 range_std: 0.03,
                 outlier_prob: 0.0,
             },
-            odom_noise: OdometryNoise {
-                alpha1: 0.05,
-                alpha2: 0.01,
-                alpha3: 0.05,
-                alpha4: 0.01,
-            },
+            odom_noise: ROBOT_ODOMETRY_NOISE,
             explorer: ExplorerConfig::default(),
             robot_radius: 0.2,
         }
@@ -119,25 +115,9 @@ pub fn simulate_log(
             config.robot_radius
         )));
     };
-    let collision = Costmap::inflate(map, radius);
-    let roomy = Costmap::inflate(map, radius + 0.1).valid_cells();
-    let start_cells = if roomy.is_empty() {
-        collision.valid_cells()
-    } else {
-        roomy
-    };
-    let mut start_rng = ChaCha8Rng::seed_from_u64(stream_seed(seed, 1));
-    let start = start_cells
-        .sample(&mut start_rng)
+    let mut drive = ExploringRobot::place(map, Costmap::inflate(map, radius), radius, config, seed)
         .ok_or(SimLogError::RobotDoesNotFit(radius))?;
     let mut lidar_rng = ChaCha8Rng::seed_from_u64(stream_seed(seed, 2));
-    let mut odom_rng = ChaCha8Rng::seed_from_u64(stream_seed(seed, 3));
-    let mut explorer = Explorer::new(map, radius, config.explorer, stream_seed(seed, 4));
-    let mut robot = GridRobot {
-        pose: start,
-        radius,
-    };
-    let mut odometry = OdometrySensor::new(start, config.odom_noise);
 
     let mut log = LaserLog::default();
     log.scans.reserve(steps);
@@ -148,18 +128,13 @@ pub fn simulate_log(
     log.params
         .insert("slamlab_dt".to_string(), config.dt.to_string());
     for k in 1..=steps {
-        let (v, w) = explorer.command(&robot.pose);
-        let before = robot.pose;
-        if robot.drive(&collision, v, w, config.dt).is_some() {
-            explorer.replan();
-        }
-        let after = robot.pose;
-        odometry.record(&before, &after, &mut odom_rng);
+        let (v, w) = drive.step(config.dt);
+        let after = drive.robot.pose;
         let scan = lidar.scan(map, &after, &mut lidar_rng);
         let timestamp = k as f64 * config.dt;
         log.odometry.push(LogOdometry {
             timestamp,
-            pose: odometry.pose,
+            pose: drive.odometry.pose,
             tv: v,
             rv: w,
         });
@@ -167,7 +142,7 @@ pub fn simulate_log(
             timestamp,
             kind: LaserKind::Front,
             scan,
-            odometry: odometry.pose,
+            odometry: drive.odometry.pose,
             laser_pose: None,
             line: 0,
         });
@@ -177,6 +152,74 @@ pub fn simulate_log(
         });
     }
     Ok((log, truth))
+}
+
+/// The round robot driven by the explorer, with its wheel odometry: what a
+/// simulated log (and the kidnap run of `cartographer::input`) drives.
+pub(crate) struct ExploringRobot {
+    /// Where the robot truly is.
+    pub robot: GridRobot,
+    /// What its wheels say.
+    pub odometry: OdometrySensor,
+    /// Where it may start (and be carried to): the free cells with 10 cm to
+    /// spare, or all those it fits in when none has.
+    pub cells: FreeCells,
+    /// The robot inflated by its radius: where it may stand.
+    collision: Costmap,
+    explorer: Explorer,
+    odom_rng: ChaCha8Rng,
+}
+
+impl ExploringRobot {
+    /// The robot at a random start (stream 1 of `seed`), the explorer's goals
+    /// from stream 4 and the odometry noise from stream 3; None when it fits
+    /// nowhere.
+    pub(crate) fn place(
+        map: &OccupancyGrid,
+        collision: Costmap,
+        radius: f64,
+        config: &SimulatedLogConfig,
+        seed: u64,
+    ) -> Option<Self> {
+        let roomy = Costmap::inflate(map, radius + 0.1).valid_cells();
+        let cells = if roomy.is_empty() {
+            collision.valid_cells()
+        } else {
+            roomy
+        };
+        let mut start_rng = ChaCha8Rng::seed_from_u64(stream_seed(seed, 1));
+        let start = cells.sample(&mut start_rng)?;
+        Some(Self {
+            robot: GridRobot {
+                pose: start,
+                radius,
+            },
+            odometry: OdometrySensor::new(start, config.odom_noise),
+            cells,
+            collision,
+            explorer: Explorer::new(map, radius, config.explorer, stream_seed(seed, 4)),
+            odom_rng: ChaCha8Rng::seed_from_u64(stream_seed(seed, 3)),
+        })
+    }
+
+    /// One step of `dt` seconds: the explorer's command `(v, w)`, driven (a
+    /// new plan after a bump) and read by the odometry.
+    pub(crate) fn step(&mut self, dt: f64) -> (f64, f64) {
+        let (v, w) = self.explorer.command(&self.robot.pose);
+        let before = self.robot.pose;
+        if self.robot.drive(&self.collision, v, w, dt).is_some() {
+            self.explorer.replan();
+        }
+        self.odometry
+            .record(&before, &self.robot.pose, &mut self.odom_rng);
+        (v, w)
+    }
+
+    /// Carries the robot to `pose` (the odometry does not see it) and plans anew.
+    pub(crate) fn carry_to(&mut self, pose: Pose2) {
+        self.robot.pose = pose;
+        self.explorer.replan();
+    }
 }
 
 #[cfg(test)]

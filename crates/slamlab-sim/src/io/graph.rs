@@ -149,6 +149,41 @@ impl Fields<'_> {
     fn nums(&self, from: usize, count: usize) -> Result<Vec<f64>, GraphFileError> {
         (from..from + count).map(|k| self.num(k)).collect()
     }
+
+    /// Adds the pose vertex of a `VERTEX_SE2`/`VERTEX2` line: `id x y θ`.
+    fn add_pose_to(&self, graph: &mut PoseGraph) -> Result<(), GraphFileError> {
+        self.expect_len(4, "id x y theta")?;
+        let v = self.nums(1, 3)?;
+        graph
+            .add_pose(self.id(0)?, file_pose(v[0], v[1], v[2]))
+            .map(|_| ())
+            .map_err(|e| line_error(self.line, e.to_string()))
+    }
+
+    /// The pose-pose edge of an `EDGE_SE2`/`EDGE2` line: `i j dx dy dθ` and six
+    /// numbers of information, in the order `information` reads (`info_layout`).
+    fn between(
+        &self,
+        info_layout: &str,
+        information: impl Fn(&[f64]) -> Matrix3<f64>,
+    ) -> Result<(usize, PendingEdge), GraphFileError> {
+        self.expect_len(11, &format!("i j dx dy dtheta {info_layout}"))?;
+        let v = self.nums(2, 9)?;
+        let z = file_pose(v[0], v[1], v[2]);
+        let edge = PendingEdge::Between(self.id(0)?, self.id(1)?, z, information(&v[3..]));
+        Ok((self.line, edge))
+    }
+
+    /// The refusal of a tag the format does not have (`format` as "a g2o 2D").
+    fn unknown_tag(&self, format: &str, known: &str) -> GraphFileError {
+        line_error(
+            self.line,
+            format!(
+                "'{}' is not {format} entry SLAM Lab reads ({known})",
+                self.tag
+            ),
+        )
+    }
 }
 
 /// Splits the text into (line number, tag, numbers), skipping blank lines and
@@ -245,7 +280,18 @@ enum PendingEdge {
     Prior(VertexId, Pose2, Matrix3<f64>),
 }
 
+/// Adds the edges read from a file, in file order, once every vertex is known.
 fn add_pending(
+    graph: &mut PoseGraph,
+    pending: Vec<(usize, PendingEdge)>,
+) -> Result<(), GraphFileError> {
+    for (line, edge) in pending {
+        add_pending_edge(graph, line, edge)?;
+    }
+    Ok(())
+}
+
+fn add_pending_edge(
     graph: &mut PoseGraph,
     line: usize,
     edge: PendingEdge,
@@ -291,13 +337,7 @@ pub fn read_g2o(text: &str) -> Result<PoseGraph, GraphFileError> {
     let mut fixed = Vec::new();
     for f in lines(text) {
         match f.tag {
-            "VERTEX_SE2" => {
-                f.expect_len(4, "id x y theta")?;
-                let v = f.nums(1, 3)?;
-                graph
-                    .add_pose(f.id(0)?, file_pose(v[0], v[1], v[2]))
-                    .map_err(|e| line_error(f.line, e.to_string()))?;
-            }
+            "VERTEX_SE2" => f.add_pose_to(&mut graph)?,
             "VERTEX_XY" => {
                 f.expect_len(3, "id x y")?;
                 let v = f.nums(1, 2)?;
@@ -305,19 +345,7 @@ pub fn read_g2o(text: &str) -> Result<PoseGraph, GraphFileError> {
                     .add_point(f.id(0)?, Vector2::new(v[0], v[1]))
                     .map_err(|e| line_error(f.line, e.to_string()))?;
             }
-            "EDGE_SE2" => {
-                f.expect_len(11, "i j dx dy dtheta I11 I12 I13 I22 I23 I33")?;
-                let v = f.nums(2, 9)?;
-                pending.push((
-                    f.line,
-                    PendingEdge::Between(
-                        f.id(0)?,
-                        f.id(1)?,
-                        file_pose(v[0], v[1], v[2]),
-                        upper3(&v[3..]),
-                    ),
-                ));
-            }
+            "EDGE_SE2" => pending.push(f.between("I11 I12 I13 I22 I23 I33", upper3)?),
             "EDGE_SE2_XY" => {
                 f.expect_len(7, "i j x y I11 I12 I22")?;
                 let v = f.nums(2, 5)?;
@@ -347,19 +375,15 @@ pub fn read_g2o(text: &str) -> Result<PoseGraph, GraphFileError> {
                     fixed.push((f.line, f.id(k)?));
                 }
             }
-            other => {
-                return Err(line_error(
-                    f.line,
-                    format!(
-                        "'{other}' is not a g2o 2D entry SLAM Lab reads (VERTEX_SE2, VERTEX_XY, EDGE_SE2, EDGE_SE2_XY, EDGE_PRIOR_SE2, FIX)"
-                    ),
+            _ => {
+                return Err(f.unknown_tag(
+                    "a g2o 2D",
+                    "VERTEX_SE2, VERTEX_XY, EDGE_SE2, EDGE_SE2_XY, EDGE_PRIOR_SE2, FIX",
                 ));
             }
         }
     }
-    for (line, edge) in pending {
-        add_pending(&mut graph, line, edge)?;
-    }
+    add_pending(&mut graph, pending)?;
     for (line, id) in fixed {
         graph.set_fixed(id, true).map_err(|_| {
             line_error(
@@ -379,33 +403,14 @@ pub fn read_toro(text: &str) -> Result<PoseGraph, GraphFileError> {
     let mut pending = Vec::new();
     for f in lines(text) {
         match f.tag {
-            "VERTEX2" => {
-                f.expect_len(4, "id x y theta")?;
-                let v = f.nums(1, 3)?;
-                graph
-                    .add_pose(f.id(0)?, file_pose(v[0], v[1], v[2]))
-                    .map_err(|e| line_error(f.line, e.to_string()))?;
-            }
-            "EDGE2" => {
-                f.expect_len(11, "i j dx dy dtheta Ixx Ixy Iyy Itt Ixt Iyt")?;
-                let v = f.nums(2, 9)?;
-                let info = toro_information(&[v[3], v[4], v[5], v[6], v[7], v[8]]);
-                pending.push((
-                    f.line,
-                    PendingEdge::Between(f.id(0)?, f.id(1)?, file_pose(v[0], v[1], v[2]), info),
-                ));
-            }
-            other => {
-                return Err(line_error(
-                    f.line,
-                    format!("'{other}' is not a TORO 2D entry SLAM Lab reads (VERTEX2, EDGE2)"),
-                ));
-            }
+            "VERTEX2" => f.add_pose_to(&mut graph)?,
+            "EDGE2" => pending.push(f.between("Ixx Ixy Iyy Itt Ixt Iyt", |v| {
+                toro_information(&[v[0], v[1], v[2], v[3], v[4], v[5]])
+            })?),
+            _ => return Err(f.unknown_tag("a TORO 2D", "VERTEX2, EDGE2")),
         }
     }
-    for (line, edge) in pending {
-        add_pending(&mut graph, line, edge)?;
-    }
+    add_pending(&mut graph, pending)?;
     refuse_small(&graph)?;
     Ok(graph)
 }
@@ -481,12 +486,7 @@ pub fn read_isam(text: &str) -> Result<PoseGraph, GraphFileError> {
                     v: [v[2], v[3], v[4]],
                 });
             }
-            other => {
-                return Err(line_error(
-                    f.line,
-                    format!("'{other}' is not an iSAM entry SLAM Lab reads (ODOMETRY, LANDMARK)"),
-                ));
-            }
+            _ => return Err(f.unknown_tag("an iSAM", "ODOMETRY, LANDMARK")),
         }
     }
     let mut graph = PoseGraph::new();
@@ -599,6 +599,24 @@ fn file_pose(x: f64, y: f64, theta: f64) -> Pose2 {
     }
 }
 
+/// `x y θ` of a pose, as [`write_g2o`] writes it.
+fn pose_text(p: &Pose2) -> String {
+    format!("{} {} {}", num(p.x), num(p.y), num(p.theta))
+}
+
+/// The upper triangle of a 3x3 information matrix, row by row (g2o's order).
+fn upper3_text(m: &Matrix3<f64>) -> String {
+    format!(
+        "{} {} {} {} {} {}",
+        num(m[(0, 0)]),
+        num(m[(0, 1)]),
+        num(m[(0, 2)]),
+        num(m[(1, 1)]),
+        num(m[(1, 2)]),
+        num(m[(2, 2)])
+    )
+}
+
 /// Writes a graph as g2o 2D text. Numbers are written in Rust's shortest form that
 /// reads back to the same `f64`, so write-then-read gives the same graph. Range-
 /// bearing edges and point priors have no g2o 2D tag and are refused.
@@ -608,14 +626,7 @@ pub fn write_g2o(graph: &PoseGraph) -> Result<String, GraphFileError> {
     for vertex in v {
         match vertex.state {
             VertexState::Pose(p) => {
-                let _ = writeln!(
-                    out,
-                    "VERTEX_SE2 {} {} {} {}",
-                    vertex.id,
-                    num(p.x),
-                    num(p.y),
-                    num(p.theta)
-                );
+                let _ = writeln!(out, "VERTEX_SE2 {} {}", vertex.id, pose_text(&p));
             }
             VertexState::Point(p) => {
                 let _ = writeln!(out, "VERTEX_XY {} {} {}", vertex.id, num(p[0]), num(p[1]));
@@ -635,18 +646,11 @@ pub fn write_g2o(graph: &PoseGraph) -> Result<String, GraphFileError> {
             } => {
                 let _ = writeln!(
                     out,
-                    "EDGE_SE2 {} {} {} {} {} {} {} {} {} {} {}",
+                    "EDGE_SE2 {} {} {} {}",
                     v[from].id,
                     v[to].id,
-                    num(z.x),
-                    num(z.y),
-                    num(z.theta),
-                    num(m[(0, 0)]),
-                    num(m[(0, 1)]),
-                    num(m[(0, 2)]),
-                    num(m[(1, 1)]),
-                    num(m[(1, 2)]),
-                    num(m[(2, 2)])
+                    pose_text(&z),
+                    upper3_text(&m)
                 );
             }
             EdgeKind::PosePoint {
@@ -674,17 +678,10 @@ pub fn write_g2o(graph: &PoseGraph) -> Result<String, GraphFileError> {
             } => {
                 let _ = writeln!(
                     out,
-                    "EDGE_PRIOR_SE2 {} {} {} {} {} {} {} {} {} {}",
+                    "EDGE_PRIOR_SE2 {} {} {}",
                     v[pose].id,
-                    num(z.x),
-                    num(z.y),
-                    num(z.theta),
-                    num(m[(0, 0)]),
-                    num(m[(0, 1)]),
-                    num(m[(0, 2)]),
-                    num(m[(1, 1)]),
-                    num(m[(1, 2)]),
-                    num(m[(2, 2)])
+                    pose_text(&z),
+                    upper3_text(&m)
                 );
             }
             EdgeKind::RangeBearing { .. } | EdgeKind::PointPrior { .. } => {

@@ -5,7 +5,7 @@
 
 use super::scenario::{InitMode, LaserModelType, LocalizationEstimator, MclScenario};
 use crate::params::{
-    Param, ParamIssue, Preset, Scenario, choose, choose_list, count_field, number_field,
+    Param, ParamIssue, Preset, Scenario, choose, choose_items, count_field, list_text, number_field,
 };
 use slamlab_core::odometry::OdometryModel;
 use slamlab_core::particle::{Resampler, ScanAggregation};
@@ -40,22 +40,10 @@ pub static PARAMS: &[Param<MclScenario>] = &[
         "estimator",
         "filters to run side by side, comma separated",
         ESTIMATORS,
-        |s| {
-            Some(
-                s.estimators
-                    .iter()
-                    .map(|e| e.name())
-                    .collect::<Vec<_>>()
-                    .join(","),
-            )
-        },
+        |s| Some(list_text(&s.estimators, |e| e.name())),
         |s, v| {
-            choose_list(ESTIMATORS, v).map(|list| {
-                s.estimators = list
-                    .into_iter()
-                    .filter_map(LocalizationEstimator::from_name)
-                    .collect();
-            })
+            choose_items(ESTIMATORS, v, LocalizationEstimator::from_name)
+                .map(|list| s.estimators = list)
         },
     ),
     count_field!(
@@ -434,6 +422,7 @@ impl Scenario for MclScenario {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::params::checks::*;
     use slamlab_core::odometry::OdometryModel;
     use slamlab_core::particle::ScanAggregation;
 
@@ -460,7 +449,7 @@ mod tests {
         assert_eq!(nav2.odom_model_type, OdometryModel::DiffCorrected);
     }
 
-    use crate::params::{apply_pairs, get, sanitize, set, to_pairs};
+    use crate::params::{apply_pairs, sanitize, set, to_pairs};
 
     #[test]
     fn every_parameter_round_trips_and_the_defaults_are_in_range() {
@@ -477,24 +466,22 @@ mod tests {
             max_particles: 7,
             ..MclScenario::default()
         };
-        assert!(
-            apply_pairs(&mut copy, pairs.iter().map(|(k, v)| (*k, v.as_str())), &[]).is_empty()
-        );
+        assert_applies(&mut copy, &pairs);
         assert_eq!(to_pairs(&copy), pairs);
         assert_eq!((copy.seed, copy.max_particles), (s.seed, s.max_particles));
         assert!((copy.update_min_a - s.update_min_a).abs() < 1e-12);
-        for (k, v) in [
-            ("estimator", "amcl,acmcl"),
-            ("kidnap-at", "120"),
-            ("resampler", "stratified"),
-            ("lidar-fov-deg", "270"),
-            ("kld", "1"),
-            ("laser-likelihood-aggregation", "amcl"),
-            ("odom-model-type", "diff"),
-        ] {
-            assert_eq!(set(&mut s, k, v), None, "{k}");
-            assert_eq!(get(&s, k).as_deref(), Some(v), "{k}");
-        }
+        assert_round_trip(
+            &mut s,
+            &[
+                ("estimator", "amcl,acmcl"),
+                ("kidnap-at", "120"),
+                ("resampler", "stratified"),
+                ("lidar-fov-deg", "270"),
+                ("kld", "1"),
+                ("laser-likelihood-aggregation", "amcl"),
+                ("odom-model-type", "diff"),
+            ],
+        );
         assert_eq!(
             s.estimators,
             vec![LocalizationEstimator::Amcl, LocalizationEstimator::Acmcl]
@@ -512,17 +499,15 @@ mod tests {
             );
         }
         assert_eq!(s.max_particles, 200_000);
-        for (k, v) in [
-            ("map", "atlantis"),
-            ("estimator", "ekf"),
-            ("kidnap-at", "soon"),
-            ("laser-sigma-hit", "NaN"),
-        ] {
-            assert!(
-                matches!(set(&mut s, k, v), Some(ParamIssue::Unreadable { .. })),
-                "{k}={v}"
-            );
-        }
+        assert_unreadable(
+            &mut s,
+            &[
+                ("map", "atlantis"),
+                ("estimator", "ekf"),
+                ("kidnap-at", "soon"),
+                ("laser-sigma-hit", "NaN"),
+            ],
+        );
         let mut s = MclScenario {
             min_particles: 5000,
             max_particles: 100,

@@ -3,6 +3,7 @@
 
 use crate::grid::explorer::ExplorerConfig;
 use crate::grid::lidar::Lidar;
+use crate::grid::robot::ROBOT_ODOMETRY_NOISE;
 use serde::{Deserialize, Serialize};
 use slamlab_core::odometry::{OdometryModel, OdometryNoise};
 use slamlab_core::particle::{
@@ -237,12 +238,7 @@ impl Default for MclScenario {
             kidnap_distance: 3.0,
             robot_radius: 0.2,
             lidar: Lidar::default(),
-            odom_noise: OdometryNoise {
-                alpha1: 0.05,
-                alpha2: 0.01,
-                alpha3: 0.05,
-                alpha4: 0.01,
-            },
+            odom_noise: ROBOT_ODOMETRY_NOISE,
             explorer: ExplorerConfig::default(),
         }
     }

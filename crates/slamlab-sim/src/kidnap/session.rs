@@ -76,10 +76,7 @@ impl KidnapSim {
         mut scenario: MclScenario,
         grid: Option<OccupancyGrid>,
     ) -> Result<(Self, Vec<String>), String> {
-        let mut notices: Vec<String> = params::sanitize(&mut scenario)
-            .iter()
-            .map(ToString::to_string)
-            .collect();
+        let mut notices = params::sanitize_notices(&mut scenario);
         let grid = match grid {
             Some(grid) => Ok(grid),
             None => BuiltinMap::from_name(&scenario.map)
@@ -114,10 +111,7 @@ impl KidnapSim {
         grid: Option<OccupancyGrid>,
         input: MappingInput,
     ) -> Result<(Self, Vec<String>), String> {
-        let mut notices: Vec<String> = params::sanitize(&mut scenario)
-            .iter()
-            .map(ToString::to_string)
-            .collect();
+        let mut notices = params::sanitize_notices(&mut scenario);
         let grid = match grid {
             Some(grid) => grid,
             None => BuiltinMap::from_name(&scenario.map)
@@ -307,6 +301,23 @@ mod tests {
         (run.robot().pose, particles, run.tick_count())
     }
 
+    /// Steps back to tick `tick`, then forward phase by phase to where the
+    /// run was, and asserts it is the same run; returns the robot's pose at
+    /// `tick`.
+    fn back_and_forth(s: &mut Stepper<KidnapSim>, tick: u64) -> Pose2 {
+        let end = fingerprint(s);
+        let phases = s.phases_run();
+        while s.sim().run().tick_count() > tick {
+            assert!(s.step_back());
+        }
+        let back = s.sim().run().robot().pose;
+        while s.phases_run() < phases {
+            s.step_phase();
+        }
+        assert_eq!(fingerprint(s), end, "the run replays from tick {tick}");
+        back
+    }
+
     #[test]
     fn stepping_back_over_a_kidnap_and_a_scatter_replays_exactly() {
         let mut s = lesson_run(3);
@@ -316,17 +327,9 @@ mod tests {
         s.run_ticks(5);
         s.apply(KidnapEvent::GlobalLocalization);
         s.run_ticks(10);
-        let end = fingerprint(&s);
-        let phases = s.phases_run();
         // Back to before the kidnap, then forward again: the same run.
-        while s.sim().run().tick_count() > 25 {
-            assert!(s.step_back());
-        }
-        assert_ne!(s.sim().run().robot().pose, kidnapped);
-        while s.phases_run() < phases {
-            s.step_phase();
-        }
-        assert_eq!(fingerprint(&s), end);
+        let back = back_and_forth(&mut s, 25);
+        assert_ne!(back, kidnapped);
     }
 
     #[test]
@@ -352,15 +355,8 @@ mod tests {
         assert_eq!(s.sim().run().notes().len(), wall_notes);
         s.apply(KidnapEvent::Explore);
         s.run_ticks(20);
-        let end = fingerprint(&s);
-        let phases = s.phases_run();
-        while s.sim().run().tick_count() > 4 {
-            assert!(s.step_back());
-        }
-        while s.phases_run() < phases {
-            s.step_phase();
-        }
-        assert_eq!(fingerprint(&s), end, "the drive commands replay");
+        // The drive commands replay.
+        back_and_forth(&mut s, 4);
         // NaN commands count as zero.
         s.apply(KidnapEvent::Drive(f64::NAN, f64::INFINITY));
         assert_eq!(s.sim().run().manual(), Some((0.0, 0.0)));

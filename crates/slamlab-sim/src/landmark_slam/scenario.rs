@@ -3,7 +3,7 @@
 //! `slamlab params` and the app's panel all read it through [`crate::params`].
 
 use crate::landmark_slam::presets;
-use crate::params::{self, Param, ParamIssue, Preset, Scenario, choose, choose_list};
+use crate::params::{self, Param, ParamIssue, Preset, Scenario, choose, choose_items, list_text};
 use crate::world::landmark_scenario::{
     Association, ControllerKind, EstimatorKind, LandmarkScenario, MapMode,
 };
@@ -211,22 +211,9 @@ pub static PARAMS: &[Param<LandmarkScenario>] = &[
         "estimator",
         "estimators to run, comma separated",
         ESTIMATORS,
-        |s| {
-            Some(
-                s.estimators
-                    .iter()
-                    .map(|e| e.name())
-                    .collect::<Vec<_>>()
-                    .join(","),
-            )
-        },
+        |s| Some(list_text(&s.estimators, |e| e.name())),
         |s, v| {
-            choose_list(ESTIMATORS, v).map(|list| {
-                s.estimators = list
-                    .into_iter()
-                    .filter_map(EstimatorKind::from_name)
-                    .collect();
-            })
+            choose_items(ESTIMATORS, v, EstimatorKind::from_name).map(|list| s.estimators = list)
         },
     ),
     field!(
@@ -383,20 +370,22 @@ impl Scenario for LandmarkScenario {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::params::checks::*;
     use crate::params::{apply_pairs, get, sanitize, set, to_pairs};
 
     #[test]
     fn round_trip_through_text() {
         let mut s = LandmarkScenario::default();
-        for (k, v) in [
-            ("landmarks", "33"),
-            ("fov-deg", "90"),
-            ("layout", "random"),
-            ("w-deg", "-20"),
-            ("seed", "99"),
-        ] {
-            assert_eq!(set(&mut s, k, v), None, "{k}");
-        }
+        assert_accepted(
+            &mut s,
+            &[
+                ("landmarks", "33"),
+                ("fov-deg", "90"),
+                ("layout", "random"),
+                ("w-deg", "-20"),
+                ("seed", "99"),
+            ],
+        );
         assert_eq!(s.landmarks, 33);
         assert!((s.fov - std::f64::consts::FRAC_PI_2).abs() < 1e-12);
         let mut copy = LandmarkScenario::default();
@@ -481,10 +470,10 @@ mod tests {
         assert_eq!(set(&mut s, "estimator", "fej-ekf"), None);
         assert_eq!(s.estimators, vec![EstimatorKind::FejEkf]);
         assert_eq!(set(&mut s, "estimator", "ekf,ukf"), None);
-        for (k, v) in [("ukf-alpha", "0.5"), ("ukf-beta", "0"), ("ukf-kappa", "3")] {
-            assert_eq!(set(&mut s, k, v), None, "{k}");
-            assert_eq!(get(&s, k).as_deref(), Some(v), "{k}");
-        }
+        assert_round_trip(
+            &mut s,
+            &[("ukf-alpha", "0.5"), ("ukf-beta", "0"), ("ukf-kappa", "3")],
+        );
         assert!((s.ukf.alpha - 0.5).abs() < 1e-15 && (s.ukf.kappa - 3.0).abs() < 1e-15);
         assert!(matches!(
             set(&mut s, "estimator", "ekf,pf"),
@@ -509,26 +498,16 @@ mod tests {
             set(&mut s, "bogus", "1"),
             Some(ParamIssue::Unknown { .. })
         ));
-        assert!(matches!(
-            set(&mut s, "seed", "abc"),
-            Some(ParamIssue::Unreadable { .. })
-        ));
-        assert!(matches!(
-            set(&mut s, "range-std", "NaN"),
-            Some(ParamIssue::Unreadable { .. })
-        ));
-        assert!(matches!(
-            set(&mut s, "range-std", "inf"),
-            Some(ParamIssue::Unreadable { .. })
-        ));
-        assert!(matches!(
-            set(&mut s, "landmarks", "-3"),
-            Some(ParamIssue::Unreadable { .. })
-        ));
-        assert!(matches!(
-            set(&mut s, "layout", "spiral"),
-            Some(ParamIssue::Unreadable { .. })
-        ));
+        assert_unreadable(
+            &mut s,
+            &[
+                ("seed", "abc"),
+                ("range-std", "NaN"),
+                ("range-std", "inf"),
+                ("landmarks", "-3"),
+                ("layout", "spiral"),
+            ],
+        );
         assert_eq!(s, before);
         let issue = set(&mut s, "range-std", "0");
         assert!(matches!(issue, Some(ParamIssue::Clamped { .. })));
@@ -550,18 +529,18 @@ mod tests {
     #[test]
     fn fastslam_and_association_parameters_round_trip_and_refuse_bad_values() {
         let mut s = LandmarkScenario::default();
-        for (k, v) in [
-            ("estimator", "ekf,fastslam2"),
-            ("particles", "250"),
-            ("fastslam-resampler", "residual"),
-            ("resample-threshold", "0.75"),
-            ("association", "unknown"),
-            ("gate", "9.21"),
-            ("new-landmark-threshold", "20"),
-        ] {
-            assert_eq!(set(&mut s, k, v), None, "{k}");
-            assert_eq!(get(&s, k).as_deref(), Some(v), "{k}");
-        }
+        assert_round_trip(
+            &mut s,
+            &[
+                ("estimator", "ekf,fastslam2"),
+                ("particles", "250"),
+                ("fastslam-resampler", "residual"),
+                ("resample-threshold", "0.75"),
+                ("association", "unknown"),
+                ("gate", "9.21"),
+                ("new-landmark-threshold", "20"),
+            ],
+        );
         assert_eq!(
             s.estimators,
             vec![EstimatorKind::Ekf, EstimatorKind::FastSlam2]
@@ -570,14 +549,7 @@ mod tests {
         assert_eq!(s.fastslam.resampler, Resampler::Residual);
         assert_eq!(s.association, Association::Unknown);
         let mut copy = LandmarkScenario::default();
-        assert!(
-            apply_pairs(
-                &mut copy,
-                to_pairs(&s).iter().map(|(k, v)| (*k, v.as_str())),
-                &[]
-            )
-            .is_empty()
-        );
+        assert_applies(&mut copy, &to_pairs(&s));
         assert_eq!(copy, s);
 
         // Zero particles: a clear message and one particle; a threshold outside
@@ -596,14 +568,10 @@ mod tests {
         assert_eq!(s.fastslam.resample_threshold, 1.0);
         assert!(set(&mut s, "resample-threshold", "-0.2").is_some());
         assert_eq!(s.fastslam.resample_threshold, 0.0);
-        assert!(matches!(
-            set(&mut s, "fastslam-resampler", "roulette"),
-            Some(ParamIssue::Unreadable { .. })
-        ));
-        assert!(matches!(
-            set(&mut s, "association", "guess"),
-            Some(ParamIssue::Unreadable { .. })
-        ));
+        assert_unreadable(
+            &mut s,
+            &[("fastslam-resampler", "roulette"), ("association", "guess")],
+        );
         // A stored scenario with impossible values is repaired the same way.
         let mut stored = LandmarkScenario::default();
         stored.fastslam.particles = 0;

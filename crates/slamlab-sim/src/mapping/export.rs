@@ -12,36 +12,8 @@ pub fn trajectories(session: &MappingSession) -> Vec<NamedTrajectory> {
     let sim = session.stepper().sim();
     let input = sim.input();
     let poses = &session.stepper().records().poses;
-    let stamps: Vec<f64> = input
-        .scans
-        .iter()
-        .take(poses.len())
-        .map(|s| s.time)
-        .collect();
-    let mut all = Vec::new();
-    if let Some(truth) = &input.truth {
-        all.push(NamedTrajectory::new(
-            "truth",
-            TrajectoryRole::Truth,
-            Trajectory::new(
-                stamps.clone(),
-                truth.iter().take(poses.len()).copied().collect(),
-            ),
-        ));
-    }
-    all.push(NamedTrajectory::new(
-        "odometry",
-        TrajectoryRole::Odometry,
-        Trajectory::new(
-            stamps.clone(),
-            input
-                .scans
-                .iter()
-                .take(poses.len())
-                .map(|s| s.odometry)
-                .collect(),
-        ),
-    ));
+    let scans: Vec<usize> = (0..poses.len().min(input.scans.len())).collect();
+    let (stamps, mut all) = input.truth_and_odometry(&scans);
     all.push(NamedTrajectory::new(
         sim.source().name(),
         TrajectoryRole::Estimate,

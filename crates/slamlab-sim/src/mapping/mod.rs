@@ -104,10 +104,7 @@ impl MappingSession {
     /// A run of `scenario` over `input` (its pose source, rule and matcher
     /// settings); parameters out of range are clamped, and the notices say so.
     pub fn new(mut scenario: MappingScenario, input: Arc<MappingInput>) -> (Self, Vec<String>) {
-        let mut notices: Vec<String> = params::sanitize(&mut scenario)
-            .iter()
-            .map(ToString::to_string)
-            .collect();
+        let mut notices = params::sanitize_notices(&mut scenario);
         if scenario.poses == PoseSource::Truth && input.truth.is_none() {
             notices.push("a log has no true poses: mapping with raw odometry instead".to_owned());
         }

@@ -10,11 +10,16 @@ fn session(map: &str, steps: usize, seed: u64, poses: PoseSource) -> MappingSess
         poses,
         ..MappingScenario::default()
     };
-    let grid = Arc::new(builtin_map(map).unwrap());
-    let input = Arc::new(simulated_input(&scenario, grid, map).unwrap());
+    let input = Arc::new(simulated_in(map, &scenario));
     let (session, notices) = MappingSession::new(scenario, input);
     assert!(notices.is_empty(), "{notices:?}");
     session
+}
+
+/// The scenario's simulated robot driven in the built-in map `map`.
+fn simulated_in(map: &str, scenario: &MappingScenario) -> MappingInput {
+    let grid = Arc::new(builtin_map(map).unwrap());
+    simulated_input(scenario, grid, map).unwrap()
 }
 
 #[test]
@@ -59,8 +64,7 @@ fn a_log_without_truth_maps_with_odometry_when_truth_is_asked() {
         poses: PoseSource::Truth,
         ..MappingScenario::default()
     };
-    let grid = Arc::new(builtin_map("maze").unwrap());
-    let mut input = simulated_input(&scenario, grid, "maze").unwrap();
+    let mut input = simulated_in("maze", &scenario);
     input.truth = None;
     input.true_map = None;
     let (mut s, notices) = MappingSession::new(scenario, Arc::new(input));
@@ -237,8 +241,7 @@ fn grid_fastslam_phase_by_phase_is_the_experiments_filter_to_the_bit() {
         particles: 8,
         ..MappingScenario::default()
     };
-    let grid = Arc::new(builtin_map("maze").unwrap());
-    let input = Arc::new(simulated_input(&scenario, grid, "maze").unwrap());
+    let input = Arc::new(simulated_in("maze", &scenario));
     let (mut s, notices) = MappingSession::new(scenario.clone(), input.clone());
     assert!(notices.is_empty(), "{notices:?}");
     let mut labels = Vec::new();
@@ -314,8 +317,7 @@ fn grid_fastslam_steps_back_and_replays_the_same_particles() {
         particles: 6,
         ..MappingScenario::default()
     };
-    let grid = Arc::new(builtin_map("maze").unwrap());
-    let input = Arc::new(simulated_input(&scenario, grid, "maze").unwrap());
+    let input = Arc::new(simulated_in("maze", &scenario));
     let (mut s, _) = MappingSession::new(scenario, input);
     for _ in 0..80 {
         s.stepper_mut().step_tick();

@@ -108,6 +108,18 @@ impl PoseGraphScenario {
     }
 }
 
+/// Every vertex's position, `[x, y]`, in the graph's order.
+fn positions(graph: &PoseGraph) -> Vec<[f64; 2]> {
+    graph
+        .vertices()
+        .iter()
+        .map(|v| {
+            let p = v.state.position();
+            [p[0], p[1]]
+        })
+        .collect()
+}
+
 fn kernel_of(choice: KernelChoice, width: f64) -> RobustKernel {
     match choice {
         KernelChoice::None => RobustKernel::None,
@@ -756,16 +768,7 @@ impl PoseGraphSession {
 
     /// Position RMSE of the current estimate against the truth, metres.
     pub fn rmse(&self) -> Option<f64> {
-        let positions: Vec<[f64; 2]> = self
-            .graph()
-            .vertices()
-            .iter()
-            .map(|v| {
-                let p = v.state.position();
-                [p[0], p[1]]
-            })
-            .collect();
-        self.rmse_of(&positions)
+        self.rmse_of(&positions(self.graph()))
     }
 
     fn rmse_of(&self, positions: &[[f64; 2]]) -> Option<f64> {
@@ -793,9 +796,8 @@ impl PoseGraphSession {
         [KernelChoice::None, with].map(|choice| {
             let kernel = kernel_of(choice, self.scenario.kernel_width);
             let settings = OptimizerSettings {
-                solver: self.scenario.solver,
                 kernel,
-                ..OptimizerSettings::default()
+                ..self.scenario.settings()
             };
             let mut run = KernelRun {
                 kernel: kernel_name(choice),
@@ -813,15 +815,7 @@ impl PoseGraphSession {
                 Ok((iterations, opt)) => {
                     run.iterations = iterations;
                     run.cost = opt.cost();
-                    run.positions = opt
-                        .graph()
-                        .vertices()
-                        .iter()
-                        .map(|v| {
-                            let p = v.state.position();
-                            [p[0], p[1]]
-                        })
-                        .collect();
+                    run.positions = positions(opt.graph());
                     run.rmse = self.rmse_of(&run.positions);
                 }
                 Err(e) => run.error = Some(e.to_string()),
@@ -919,16 +913,21 @@ mod tests {
         assert_eq!(s.solver, SolverKind::GaussNewton);
     }
 
+    /// The lesson on `example`, the Manhattan graph cut to its first 200 poses.
+    fn small_session(example: Example) -> PoseGraphSession {
+        PoseGraphSession::from_scenario(PoseGraphScenario {
+            example,
+            manhattan_poses: 200,
+            ..PoseGraphScenario::default()
+        })
+        .unwrap()
+    }
+
     #[test]
     fn the_lessons_optimized_graph_written_and_read_back_scores_its_own_final_cost() {
         use crate::metrics::graph::{reference_solution, score_graph};
         for example in [Example::Thesis, Example::Manhattan] {
-            let mut session = PoseGraphSession::from_scenario(PoseGraphScenario {
-                example,
-                manhattan_poses: 200,
-                ..PoseGraphScenario::default()
-            })
-            .unwrap();
+            let mut session = small_session(example);
             let problem = session.start_graph().clone();
             let initial = session.cost();
             while !session.is_converged() && session.iterations() < 50 {
@@ -954,12 +953,7 @@ mod tests {
     #[test]
     fn one_gauss_newton_iteration_lowers_the_cost_of_both_examples() {
         for example in [Example::Thesis, Example::Manhattan] {
-            let mut session = PoseGraphSession::from_scenario(PoseGraphScenario {
-                example,
-                manhattan_poses: 200,
-                ..PoseGraphScenario::default()
-            })
-            .unwrap();
+            let mut session = small_session(example);
             let before = session.cost();
             let report = session.step().unwrap();
             assert!(

@@ -119,20 +119,8 @@ pub static PARAMS: &[Param<LabScenario>] = &[
         "methods",
         "the resamplers compared, comma separated",
         METHOD_NAMES,
-        |s| {
-            Some(
-                s.methods
-                    .iter()
-                    .map(|m| m.name())
-                    .collect::<Vec<_>>()
-                    .join(","),
-            )
-        },
-        |s, v| {
-            let list = params::choose_list(METHOD_NAMES, v)?;
-            s.methods = list.into_iter().filter_map(Resampler::from_name).collect();
-            Ok(())
-        },
+        |s| Some(params::list_text(&s.methods, |m| m.name())),
+        |s, v| params::choose_items(METHOD_NAMES, v, Resampler::from_name).map(|l| s.methods = l),
     ),
     count_field!(
         "presses",

@@ -126,12 +126,8 @@ impl<'a> CdrReader<'a> {
 
     /// An `int32`.
     pub fn i32(&mut self, field: &'static str) -> Result<i32, CdrError> {
-        let b = self.take::<4>(field)?;
-        Ok(if self.little_endian {
-            i32::from_le_bytes(b)
-        } else {
-            i32::from_be_bytes(b)
-        })
+        // The same four bytes in the same order, read as two's complement.
+        Ok(i32::from_ne_bytes(self.u32(field)?.to_ne_bytes()))
     }
 
     /// A `float32`.

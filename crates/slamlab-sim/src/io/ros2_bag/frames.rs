@@ -738,29 +738,24 @@ impl ScanStats {
                 self.unusable
             ));
         }
-        if self.empty > 0 {
-            notices.push(format!(
-                "{} scans on {topic} have no ranges: skipped",
-                self.empty
-            ));
-        }
-        if self.zero_stamps > 0 {
-            notices.push(format!(
-                "{} scans on {topic} have a zero header.stamp: the recorder's time was used",
-                self.zero_stamps
-            ));
-        }
-        if self.outside_odometry > 0 {
-            notices.push(format!(
-                "{} scans on {topic} lie outside the odometry's time span ({source}): dropped",
-                self.outside_odometry
-            ));
-        }
-        if self.other_frame > 0 {
-            notices.push(format!(
-                "{} scans on {topic} name another frame than the first: the first one's mounting was used",
-                self.other_frame
-            ));
+        for (count, what) in [
+            (self.empty, "have no ranges: skipped".to_owned()),
+            (
+                self.zero_stamps,
+                "have a zero header.stamp: the recorder's time was used".to_owned(),
+            ),
+            (
+                self.outside_odometry,
+                format!("lie outside the odometry's time span ({source}): dropped"),
+            ),
+            (
+                self.other_frame,
+                "name another frame than the first: the first one's mounting was used".to_owned(),
+            ),
+        ] {
+            if count > 0 {
+                notices.push(format!("{count} scans on {topic} {what}"));
+            }
         }
     }
 }

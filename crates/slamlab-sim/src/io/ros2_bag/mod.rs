@@ -220,6 +220,19 @@ pub struct Logged<T> {
     pub message: T,
 }
 
+/// Appends `message`, received at `log_time`, to `topic`'s list.
+fn push_logged<T>(
+    lists: &mut BTreeMap<String, Vec<Logged<T>>>,
+    topic: String,
+    log_time: u64,
+    message: T,
+) {
+    lists
+        .entry(topic)
+        .or_default()
+        .push(Logged { log_time, message });
+}
+
 /// A transform from `/tf` or `/tf_static`.
 #[derive(Clone, Debug, PartialEq)]
 pub struct LoggedTransform {
@@ -384,24 +397,15 @@ impl Ros2Bag {
         match type_name {
             msgs::LASER_SCAN => {
                 let message = LaserScan::decode(data).map_err(error)?;
-                self.scans
-                    .entry(topic)
-                    .or_default()
-                    .push(Logged { log_time, message });
+                push_logged(&mut self.scans, topic, log_time, message);
             }
             msgs::ODOMETRY => {
                 let message = Odometry::decode(data).map_err(error)?;
-                self.odometry
-                    .entry(topic)
-                    .or_default()
-                    .push(Logged { log_time, message });
+                push_logged(&mut self.odometry, topic, log_time, message);
             }
             msgs::POSE_STAMPED => {
                 let message = PoseStamped::decode(data).map_err(error)?;
-                self.poses
-                    .entry(topic)
-                    .or_default()
-                    .push(Logged { log_time, message });
+                push_logged(&mut self.poses, topic, log_time, message);
             }
             _ => {
                 let Some(is_static) = tf_topic(&topic) else {

@@ -31,6 +31,31 @@ pub(crate) struct TestChannel {
     pub messages: Vec<(u64, Vec<u8>)>,
 }
 
+impl TestChannel {
+    /// A channel of CDR-encoded messages.
+    pub fn cdr(
+        topic: &'static str,
+        type_name: &'static str,
+        messages: Vec<(u64, Vec<u8>)>,
+    ) -> Self {
+        TestChannel {
+            topic,
+            type_name,
+            encoding: "cdr",
+            messages,
+        }
+    }
+
+    /// A `LaserScan` channel, each scan logged at its own stamp.
+    fn scans(topic: &'static str, scans: &[LaserScan]) -> Self {
+        let messages = scans
+            .iter()
+            .map(|s| (s.header.stamp.nanos() as u64, s.encode()))
+            .collect();
+        TestChannel::cdr(topic, LASER_SCAN, messages)
+    }
+}
+
 fn put_str(out: &mut Vec<u8>, s: &str) {
     out.extend_from_slice(&(s.len() as u32).to_le_bytes());
     out.extend_from_slice(s.as_bytes());
@@ -412,31 +437,32 @@ fn recording(scans: &[LaserScan], mount: Transform3) -> Vec<TestChannel> {
         })
         .collect();
     vec![
-        TestChannel {
-            topic: "/scan",
-            type_name: LASER_SCAN,
-            encoding: "cdr",
-            messages: scans
-                .iter()
-                .map(|s| (s.header.stamp.nanos() as u64, s.encode()))
-                .collect(),
-        },
-        TestChannel {
-            topic: "/odom",
-            type_name: ODOMETRY,
-            encoding: "cdr",
-            messages: odom,
-        },
-        TestChannel {
-            topic: "/tf_static",
-            type_name: TF_MESSAGE,
-            encoding: "cdr",
-            messages: vec![(
+        TestChannel::scans("/scan", scans),
+        TestChannel::cdr("/odom", ODOMETRY, odom),
+        TestChannel::cdr(
+            "/tf_static",
+            TF_MESSAGE,
+            vec![(
                 SECOND as u64,
                 tf_msg(SECOND, "base_link", "laser", mount).encode(),
             )],
-        },
+        ),
     ]
+}
+
+/// Fails, listing the notices, unless one of them contains `text`.
+fn assert_notice(notices: &[String], text: &str) {
+    assert!(notices.iter().any(|n| n.contains(text)), "{notices:?}");
+}
+
+/// [`recording`] written unchunked, without a summary, and opened.
+fn recorded_bag(scans: &[LaserScan], mount: Transform3) -> Ros2Bag {
+    Ros2Bag::from_bytes(&hand_made_mcap(
+        &recording(scans, mount),
+        Layout::Unchunked,
+        false,
+    ))
+    .unwrap()
 }
 
 fn scans_at_10_hz(frame: &str) -> Vec<LaserScan> {
@@ -467,12 +493,11 @@ fn end_points(log: &LaserLog) -> Vec<(f64, f64)> {
 fn hand_made_files_read_the_same_in_every_layout_and_compression() {
     let channels = {
         let mut c = recording(&scans_at_10_hz("laser"), Transform3::IDENTITY);
-        c.push(TestChannel {
-            topic: "/camera/image_raw",
-            type_name: "sensor_msgs/msg/Image",
-            encoding: "cdr",
-            messages: vec![(SECOND as u64, vec![0, 1, 0, 0, 9, 9]); 3],
-        });
+        c.push(TestChannel::cdr(
+            "/camera/image_raw",
+            "sensor_msgs/msg/Image",
+            vec![(SECOND as u64, vec![0, 1, 0, 0, 9, 9]); 3],
+        ));
         c
     };
     let mut reference: Option<BagLog> = None;
@@ -651,12 +676,7 @@ fn ranges_longer_than_the_angle_range_says_are_refused() {
     let mut scans = scans_at_10_hz("laser");
     // 9 beams say the angles; 11 ranges run two beams past angle_max.
     scans[3].ranges.extend([1.0, 1.0]);
-    let bag = Ros2Bag::from_bytes(&hand_made_mcap(
-        &recording(&scans, Transform3::IDENTITY),
-        Layout::Unchunked,
-        false,
-    ))
-    .unwrap();
+    let bag = recorded_bag(&scans, Transform3::IDENTITY);
     let e = bag.laser_log(&TopicChoice::default()).unwrap_err();
     assert_eq!(
         e.to_string(),
@@ -665,21 +685,10 @@ fn ranges_longer_than_the_angle_range_says_are_refused() {
     // One beam more is a driver's rounding: accepted.
     let mut scans = scans_at_10_hz("laser");
     scans[3].ranges.push(1.0);
-    let bag = Ros2Bag::from_bytes(&hand_made_mcap(
-        &recording(&scans, Transform3::IDENTITY),
-        Layout::Unchunked,
-        false,
-    ))
-    .unwrap();
+    let bag = recorded_bag(&scans, Transform3::IDENTITY);
     let log = bag.laser_log(&TopicChoice::default()).unwrap();
     assert_eq!(log.log.scans[3].scan.ranges.len(), 10);
-    assert!(
-        log.notices
-            .iter()
-            .any(|n| n.contains("changes from scan to scan (9 to 10)")),
-        "{:?}",
-        log.notices
-    );
+    assert_notice(&log.notices, "changes from scan to scan (9 to 10)");
 }
 
 #[test]
@@ -696,12 +705,7 @@ fn rep_117_ranges_nan_and_infinities() {
         2.0,
         2.0,
     ];
-    let bag = Ros2Bag::from_bytes(&hand_made_mcap(
-        &recording(&scans, Transform3::IDENTITY),
-        Layout::Unchunked,
-        false,
-    ))
-    .unwrap();
+    let bag = recorded_bag(&scans, Transform3::IDENTITY);
     let log = bag.laser_log(&TopicChoice::default()).unwrap();
     let r = &log.log.scans[0].scan.ranges;
     // NaN, -inf and 0.05 < range_min are unusable; +inf and 12 > range_max read as no return.
@@ -750,13 +754,7 @@ fn a_laser_upside_down_turned_or_clockwise_sees_the_same_world() {
         .collect();
     let log = read(&clockwise, Transform3::IDENTITY);
     close(&log);
-    assert!(
-        log.notices
-            .iter()
-            .any(|n| n.contains("negative angle_increment")),
-        "{:?}",
-        log.notices
-    );
+    assert_notice(&log.notices, "negative angle_increment");
     // Upside down (rolled by π about x): the laser's beam at b looks at -b.
     let upside_down: Vec<LaserScan> = upright
         .iter()
@@ -857,27 +855,13 @@ fn the_mount_is_read_through_the_tf_chain_and_odometry_from_tf_without_an_odomet
         ],
     };
     let channels = vec![
-        TestChannel {
-            topic: "/scan",
-            type_name: LASER_SCAN,
-            encoding: "cdr",
-            messages: scans
-                .iter()
-                .map(|s| (s.header.stamp.nanos() as u64, s.encode()))
-                .collect(),
-        },
-        TestChannel {
-            topic: "/tf",
-            type_name: TF_MESSAGE,
-            encoding: "cdr",
-            messages: tf,
-        },
-        TestChannel {
-            topic: "/tf_static",
-            type_name: TF_MESSAGE,
-            encoding: "cdr",
-            messages: vec![(SECOND as u64, fixed.encode())],
-        },
+        TestChannel::scans("/scan", &scans),
+        TestChannel::cdr("/tf", TF_MESSAGE, tf),
+        TestChannel::cdr(
+            "/tf_static",
+            TF_MESSAGE,
+            vec![(SECOND as u64, fixed.encode())],
+        ),
     ];
     let bag =
         Ros2Bag::from_bytes(&hand_made_mcap(&channels, Layout::Chunked("lz4"), false)).unwrap();
@@ -893,13 +877,7 @@ fn the_mount_is_read_through_the_tf_chain_and_odometry_from_tf_without_an_odomet
         (log.mount.x, log.mount.y, log.mount.theta),
         (-0.032, 0.0, 0.0)
     );
-    assert!(
-        log.notices
-            .iter()
-            .any(|n| n.contains("(-0.032, 0.000) m from base_footprint")),
-        "{:?}",
-        log.notices
-    );
+    assert_notice(&log.notices, "(-0.032, 0.000) m from base_footprint");
     // Each scan is posed at the laser: odom_from_base ∘ (-0.032, 0, 0).
     for (k, s) in log.log.scans.iter().enumerate() {
         let base = pose_at(SECOND + SECOND / 20 + k as i64 * SECOND / 10);
@@ -934,21 +912,19 @@ fn scans_outside_the_odometry_are_dropped_and_a_choice_is_offered_between_topics
         .messages
         .push((0, wall_scan(3 * SECOND, "laser").encode()));
     // A second laser and a second odometry.
-    channels.push(TestChannel {
-        topic: "/scan_rear",
-        type_name: LASER_SCAN,
-        encoding: "cdr",
-        messages: vec![(SECOND as u64 + 1, wall_scan(SECOND + 1, "laser").encode())],
-    });
-    channels.push(TestChannel {
-        topic: "/odometry/filtered",
-        type_name: ODOMETRY,
-        encoding: "cdr",
-        messages: vec![(
+    channels.push(TestChannel::cdr(
+        "/scan_rear",
+        LASER_SCAN,
+        vec![(SECOND as u64 + 1, wall_scan(SECOND + 1, "laser").encode())],
+    ));
+    channels.push(TestChannel::cdr(
+        "/odometry/filtered",
+        ODOMETRY,
+        vec![(
             SECOND as u64,
             odometry_msg(SECOND, Pose2::IDENTITY, "base_link").encode(),
         )],
-    });
+    ));
     let bag = Ros2Bag::from_bytes(&hand_made_mcap(&channels, Layout::Unchunked, true)).unwrap();
     let log = bag.laser_log(&TopicChoice::default()).unwrap();
     assert_eq!(log.scan_topic, "/scan");
@@ -994,12 +970,7 @@ fn a_tilted_laser_is_refused_and_the_lesson_is_told_why() {
             math::cos(20f64.to_radians()),
         ],
     };
-    let bag = Ros2Bag::from_bytes(&hand_made_mcap(
-        &recording(&scans_at_10_hz("laser"), pitch),
-        Layout::Unchunked,
-        false,
-    ))
-    .unwrap();
+    let bag = recorded_bag(&scans_at_10_hz("laser"), pitch);
     let e = bag.laser_log(&TopicChoice::default()).unwrap_err();
     assert_eq!(
         e.to_string(),

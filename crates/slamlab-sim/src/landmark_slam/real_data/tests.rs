@@ -4,22 +4,8 @@
 #![allow(clippy::unwrap_used, clippy::expect_used, clippy::panic)] // a failing test stops
 
 use super::*;
-use crate::io::landmark_data::read_path;
 use crate::landmark_slam::presets;
-
-/// A data set under `../shared/data/landmarks/`, or `None` with a message.
-fn shared(path: &str) -> Option<LandmarkData> {
-    let Some(data) = slamlab_fuzz::shared_data() else {
-        println!("skipped: ../shared/data is absent (or set SLAMLAB_SHARED_DATA)");
-        return None;
-    };
-    let full = data.join("landmarks").join(path);
-    if !full.exists() {
-        println!("skipped: ../shared/data/landmarks/{path} is absent");
-        return None;
-    }
-    Some(read_path(&full).unwrap())
-}
+use crate::world::recorded::tests::shared;
 
 #[test]
 #[ignore = "diagnosis: prints a robot's error, NIS and rejections over time"]

@@ -19,7 +19,7 @@
 use super::records::{LandmarkRecords, NeffSample, NisSample, TickMetrics};
 use super::records::{nearest_landmark_rmse, tick_metrics};
 use crate::noise::{Stream, gaussian, stream_rng};
-use crate::params::{self, ParamIssue};
+use crate::params;
 use crate::stepper::Simulation;
 use crate::world::landmark_scenario::{
     Association, ControllerKind, EstimatorKind, LandmarkScenario, MapMode,
@@ -316,10 +316,7 @@ impl LandmarkSim {
     /// changed, and every estimator that could not start, is listed in the notices
     /// returned.
     pub fn start(mut scenario: LandmarkScenario) -> (Self, Vec<String>) {
-        let mut notices: Vec<String> = params::sanitize(&mut scenario)
-            .iter()
-            .map(ParamIssue::to_string)
-            .collect();
+        let mut notices = params::sanitize_notices(&mut scenario);
         let world = scenario.world();
         let start = scenario.start_pose();
         let map: Vec<(usize, Vector2<f64>, Matrix2<f64>)> = match scenario.mode {
@@ -338,29 +335,10 @@ impl LandmarkSim {
         {
             notices.push("a landmark sits on the robot's start position; it is not measured while the robot is on it".to_owned());
         }
-        let sim = Self {
-            sensor: scenario.sensor(),
-            control_rng: stream_rng(scenario.seed, Stream::Control),
-            measurement_rng: stream_rng(scenario.seed, Stream::Measurement),
-            truth: start,
-            dead_reckoning: start,
-            tick: 0,
-            controller: scenario.controller,
-            teleop: Control::default(),
-            command: Control::default(),
-            observations: Vec::new(),
-            pending: VecDeque::new(),
-            last_phase: None,
-            filters,
-            world,
-            scenario,
-            next_reach: None,
-            mislabel_tick: None,
-            mislabel: None,
-            seen: BTreeSet::new(),
-            replay: None,
-        };
-        (sim, notices)
+        (
+            Self::at_start(scenario, world, start, filters, None),
+            notices,
+        )
     }
 
     /// The run of a recorded world: its steps instead of the simulated robot and
@@ -373,10 +351,7 @@ impl LandmarkSim {
         mut scenario: LandmarkScenario,
         recorded: Arc<RecordedWorld>,
     ) -> (Self, Vec<String>) {
-        let mut notices: Vec<String> = params::sanitize(&mut scenario)
-            .iter()
-            .map(ParamIssue::to_string)
-            .collect();
+        let mut notices = params::sanitize_notices(&mut scenario);
         notices.extend(recorded.notices.iter().cloned());
         if !recorded.known_association && scenario.association == Association::Known {
             scenario.association = Association::Unknown;
@@ -414,7 +389,32 @@ impl LandmarkSim {
         };
         let start = recorded.start;
         let filters = build_filters(&scenario, start, &map, &mut notices);
-        let sim = Self {
+        let world = recorded.landmark_world();
+        let replay = Replay {
+            truth_known: recorded.truth_at(0.0).is_some(),
+            world: recorded,
+            next: 0,
+            time: 0.0,
+            motion: TickMotion::Velocity {
+                control: Control::default(),
+                dt: 0.0,
+            },
+            other_sightings: Vec::new(),
+        };
+        let sim = Self::at_start(scenario, world, start, filters, Some(replay));
+        (sim, notices)
+    }
+
+    /// A run at tick 0: the robot at `start`, nothing commanded, measured or seen
+    /// yet, the random streams seeded from the scenario.
+    fn at_start(
+        scenario: LandmarkScenario,
+        world: LandmarkWorld,
+        start: Pose2,
+        filters: Vec<FilterState>,
+        replay: Option<Replay>,
+    ) -> Self {
+        Self {
             sensor: scenario.sensor(),
             control_rng: stream_rng(scenario.seed, Stream::Control),
             measurement_rng: stream_rng(scenario.seed, Stream::Measurement),
@@ -428,25 +428,14 @@ impl LandmarkSim {
             pending: VecDeque::new(),
             last_phase: None,
             filters,
-            world: recorded.landmark_world(),
+            world,
             scenario,
             next_reach: None,
             mislabel_tick: None,
             mislabel: None,
             seen: BTreeSet::new(),
-            replay: Some(Replay {
-                truth_known: recorded.truth_at(0.0).is_some(),
-                world: recorded,
-                next: 0,
-                time: 0.0,
-                motion: TickMotion::Velocity {
-                    control: Control::default(),
-                    dt: 0.0,
-                },
-                other_sightings: Vec::new(),
-            }),
-        };
-        (sim, notices)
+            replay,
+        }
     }
 
     /// The recorded world being replayed, if any.
@@ -551,6 +540,12 @@ impl LandmarkSim {
                     _ => o.id,
                 }),
         );
+        self.queue_phases();
+    }
+
+    /// Queues the tick's phases: the prediction, an update for each observation,
+    /// and a resampling when a particle filter runs.
+    fn queue_phases(&mut self) {
         let count = self.observations.len();
         self.pending.push_back(Phase::Predict);
         for (i, o) in self.observations.iter().enumerate() {
@@ -656,18 +651,7 @@ impl LandmarkSim {
                 measured_point: point(&o.measurement),
             });
         }
-        let count = self.observations.len();
-        self.pending.push_back(Phase::Predict);
-        for (i, o) in self.observations.iter().enumerate() {
-            self.pending.push_back(Phase::Update {
-                id: o.id,
-                index: i + 1,
-                count,
-            });
-        }
-        if self.filters.iter().any(|r| r.kind.is_particle_filter()) {
-            self.pending.push_back(Phase::Resample);
-        }
+        self.queue_phases();
     }
 
     /// Gives the first observation of this tick the id of another landmark: of

@@ -195,12 +195,17 @@ fn checkpoints_make_stepping_back_cheap_and_exact() {
     assert_eq!(snapshot(&s), snapshot(&straight));
 }
 
-#[test]
-fn taking_the_wheel_mid_run_keeps_the_run_and_step_back_replays_it() {
-    let scenario = LandmarkScenario {
+/// The default scenario with the EKF alone.
+fn ekf_only() -> LandmarkScenario {
+    LandmarkScenario {
         estimators: vec![EstimatorKind::Ekf],
         ..Default::default()
-    };
+    }
+}
+
+#[test]
+fn taking_the_wheel_mid_run_keeps_the_run_and_step_back_replays_it() {
+    let scenario = ekf_only();
     let mut s = LandmarkSession::new(scenario.clone());
     s.run_ticks(30);
     let landmarks = s.filters()[0].filter().landmark_ids().len();
@@ -378,10 +383,7 @@ fn a_stopped_manual_robot_stays_put() {
 
 #[test]
 fn live_changes_are_recorded_once_and_replay_after_stepping_back() {
-    let scenario = LandmarkScenario {
-        estimators: vec![EstimatorKind::Ekf],
-        ..Default::default()
-    };
+    let scenario = ekf_only();
     let mut s = LandmarkSession::new(scenario.clone());
     s.run_ticks(5);
     s.set_controller(ControllerKind::Manual);

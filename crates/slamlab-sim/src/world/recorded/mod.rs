@@ -19,7 +19,7 @@
 pub mod freiburg;
 pub mod mrclam;
 #[cfg(test)]
-mod tests;
+pub(crate) mod tests;
 pub mod victoria_park;
 
 use crate::io::landmark_data::{DataSetKind, LandmarkData};
