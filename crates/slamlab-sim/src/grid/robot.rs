@@ -65,7 +65,7 @@ impl GridRobot {
 }
 
 /// The wheel odometry noise of the simulated laser robot (the localization and
-/// mapping lessons' default): α₁ = α₃ = 0.05, α₂ = α₄ = 0.01 (Probabilistic
+/// mapping lessons' default): α1 = α3 = 0.05, α2 = α4 = 0.01 (Probabilistic
 /// Robotics Table 5.6's parameters).
 pub const ROBOT_ODOMETRY_NOISE: OdometryNoise = OdometryNoise {
     alpha1: 0.05,
