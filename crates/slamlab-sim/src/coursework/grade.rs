@@ -246,23 +246,17 @@ pub fn check_times(
 
 /// Grades a trajectory file against the variant's truth, beside the references.
 pub fn grade_trajectory(
-    assignment: &Assignment,
-    variant: &Variant,
+    hand_in: &HandIn<'_>,
     truth: &Trajectory,
     references: &[(String, Trajectory)],
-    file_name: &str,
-    bytes: &[u8],
 ) -> Result<Grade, CourseworkError> {
-    check_size(bytes.len() as u64)
-        .map_err(|e| CourseworkError::BadEstimate(format!("{file_name}: {e}")))?;
-    let file = read_trajectory(file_name, bytes)
-        .map_err(|e| CourseworkError::BadEstimate(format!("{file_name}: {e}")))?;
-    let settings = trajectory_settings(assignment);
+    check_size(hand_in.bytes.len() as u64).map_err(|e| hand_in.bad(e))?;
+    let file = read_trajectory(hand_in.file_name, hand_in.bytes).map_err(|e| hand_in.bad(e))?;
+    let settings = trajectory_settings(hand_in.assignment);
     let mut notices = check_times(truth, &file.trajectory, settings.max_diff)
-        .map_err(|e| e.in_file(file_name))?;
-    notices.extend(file.notices.iter().map(|n| format!("{file_name}: {n}")));
-    let evaluation = evaluate(truth, &file.trajectory, &settings)
-        .map_err(|e| CourseworkError::BadEstimate(format!("{file_name}: {e}")))?;
+        .map_err(|e| e.in_file(hand_in.file_name))?;
+    notices.extend(hand_in.notices(&file.notices));
+    let evaluation = evaluate(truth, &file.trajectory, &settings).map_err(|e| hand_in.bad(e))?;
     notices.extend(evaluation.notices.iter().cloned());
     let theirs: Vec<(String, Option<Evaluation>)> = references
         .iter()
@@ -272,10 +266,7 @@ pub fn grade_trajectory(
         e.as_ref().and_then(|e| trajectory_metric(metric, e))
     };
     Ok(assemble_scores(
-        assignment,
-        variant,
-        file_name,
-        bytes,
+        hand_in,
         &Some(evaluation),
         &theirs,
         value,
@@ -283,16 +274,49 @@ pub fn grade_trajectory(
     ))
 }
 
+/// A file a student handed in for one variant of an assignment: what a grade
+/// names besides its scores (the assignment, the variant, the file's name and
+/// the SHA-256 of its bytes).
+#[derive(Clone, Copy, Debug)]
+pub struct HandIn<'a> {
+    /// The assignment it is handed in for.
+    pub assignment: &'a Assignment,
+    /// The student's variant.
+    pub variant: &'a Variant,
+    /// The file's name, as dropped or given (`--estimate`).
+    pub file_name: &'a str,
+    /// The file's bytes.
+    pub bytes: &'a [u8],
+}
+
+impl HandIn<'_> {
+    /// The file cannot be graded: `why`, after the file's name.
+    pub fn bad(&self, why: impl std::fmt::Display) -> CourseworkError {
+        CourseworkError::BadEstimate(format!("{}: {why}", self.file_name))
+    }
+
+    /// A file reader's notices, each after the file's name.
+    pub fn notices(&self, notices: &[String]) -> Vec<String> {
+        notices
+            .iter()
+            .map(|n| format!("{}: {n}", self.file_name))
+            .collect()
+    }
+}
+
 /// A grade from each criterion's value and the references' values.
 pub fn assemble(
-    assignment: &Assignment,
-    variant: &Variant,
-    file_name: &str,
-    bytes: &[u8],
+    hand_in: &HandIn<'_>,
     values: &[Option<f64>],
     reference_values: &[Vec<(String, Option<f64>)>],
     notices: Vec<String>,
 ) -> Grade {
+    let HandIn {
+        assignment,
+        variant,
+        file_name,
+        bytes,
+    } = *hand_in;
     let criteria: Vec<CriterionGrade> = assignment
         .criteria
         .iter()
@@ -354,24 +378,16 @@ pub fn assemble(
 /// Grades a hand-in whose every criterion is read off one score of type `E` by
 /// `value`: the student's score `mine` beside each reference estimator's
 /// `theirs`, by name; then [`assemble`].
-#[allow(clippy::too_many_arguments)]
 pub fn assemble_scores<E>(
-    assignment: &Assignment,
-    variant: &Variant,
-    file_name: &str,
-    bytes: &[u8],
+    hand_in: &HandIn<'_>,
     mine: &E,
     theirs: &[(String, E)],
     value: impl Fn(Metric, &E) -> Option<f64>,
     notices: Vec<String>,
 ) -> Grade {
-    let values: Vec<Option<f64>> = assignment
-        .criteria
-        .iter()
-        .map(|c| value(c.metric, mine))
-        .collect();
-    let reference_values: Vec<Vec<(String, Option<f64>)>> = assignment
-        .criteria
+    let criteria = &hand_in.assignment.criteria;
+    let values: Vec<Option<f64>> = criteria.iter().map(|c| value(c.metric, mine)).collect();
+    let reference_values: Vec<Vec<(String, Option<f64>)>> = criteria
         .iter()
         .map(|c| {
             theirs
@@ -380,13 +396,5 @@ pub fn assemble_scores<E>(
                 .collect()
         })
         .collect();
-    assemble(
-        assignment,
-        variant,
-        file_name,
-        bytes,
-        &values,
-        &reference_values,
-        notices,
-    )
+    assemble(hand_in, &values, &reference_values, notices)
 }

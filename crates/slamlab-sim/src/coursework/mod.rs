@@ -31,7 +31,7 @@ pub use assignment::{
     Assignment, Criterion, Direction, InputFormat, Metric, OutputFormat, TaskKind, read_assignment,
 };
 pub use files::InputFiles;
-pub use grade::{CriterionGrade, Grade, ReferenceValue};
+pub use grade::{CriterionGrade, Grade, HandIn, ReferenceValue};
 pub use variant::{Variant, sha256_hex};
 
 use crate::grid::BuiltinMap;
@@ -118,20 +118,10 @@ pub trait TaskRun: std::fmt::Debug + Send + Sync {
     /// is no trajectory (an optimized graph, a map) grades its own.
     fn grade(
         &self,
-        assignment: &Assignment,
-        variant: &Variant,
+        hand_in: &HandIn<'_>,
         references: &[(String, Trajectory)],
-        file_name: &str,
-        bytes: &[u8],
     ) -> Result<Grade, CourseworkError> {
-        grade::grade_trajectory(
-            assignment,
-            variant,
-            &self.truth(),
-            references,
-            file_name,
-            bytes,
-        )
+        grade::grade_trajectory(hand_in, &self.truth(), references)
     }
     /// What the README says under "What to hand in"; `None`: the trajectory
     /// text every trajectory task shares.
@@ -347,13 +337,13 @@ impl Prepared {
     /// Grades a handed-in file.
     pub fn grade(&self, file_name: &str, bytes: &[u8]) -> Result<Grade, CourseworkError> {
         let references = self.references()?;
-        self.run.grade(
-            &self.assignment,
-            &self.variant,
-            references,
+        let hand_in = HandIn {
+            assignment: &self.assignment,
+            variant: &self.variant,
             file_name,
             bytes,
-        )
+        };
+        self.run.grade(&hand_in, references)
     }
 
     /// The lesson's URL pairs that open this variant's run in the app: the

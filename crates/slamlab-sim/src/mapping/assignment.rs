@@ -16,8 +16,8 @@ use super::scenario::simulated_log_config;
 use crate::coursework::files::{InputFiles, number};
 use crate::coursework::grade::assemble_scores;
 use crate::coursework::{
-    Assignment, CourseworkError, Grade, InputFormat, Metric, Task, TaskKind, TaskRun, Variant,
-    builtin_map_refusal, load_builtin_map, steps_refusal,
+    Assignment, CourseworkError, Grade, HandIn, InputFormat, Metric, Task, TaskKind, TaskRun,
+    Variant, builtin_map_refusal, load_builtin_map, steps_refusal,
 };
 use crate::grid::{occupancy_agreement, occupancy_coverage, simulate_log};
 use crate::io::laser_log::{LaserLog, write_carmen};
@@ -295,13 +295,11 @@ impl TaskRun for GridMappingRun {
 
     fn grade(
         &self,
-        assignment: &Assignment,
-        variant: &Variant,
+        hand_in: &HandIn<'_>,
         _references: &[(String, Trajectory)],
-        file_name: &str,
-        bytes: &[u8],
     ) -> Result<Grade, CourseworkError> {
-        let (map, _) = read_map_zip(file_name, bytes).map_err(CourseworkError::BadEstimate)?;
+        let (map, _) =
+            read_map_zip(hand_in.file_name, hand_in.bytes).map_err(CourseworkError::BadEstimate)?;
         let value =
             |metric: Metric, &(agreement, coverage): &(Option<f64>, Option<f64>)| match metric {
                 Metric::MapAgreement => agreement,
@@ -317,21 +315,13 @@ impl TaskRun for GridMappingRun {
             ("all free".to_owned(), self.score(&self.all_free_map())),
         ];
         let notices = vec![format!(
-            "{file_name}: a map of {} x {} cells of {} m",
+            "{}: a map of {} x {} cells of {} m",
+            hand_in.file_name,
             map.width(),
             map.height(),
             map.resolution()
         )];
-        Ok(assemble_scores(
-            assignment,
-            variant,
-            file_name,
-            bytes,
-            &mine,
-            &references,
-            value,
-            notices,
-        ))
+        Ok(assemble_scores(hand_in, &mine, &references, value, notices))
     }
 }
 

@@ -18,8 +18,8 @@ use super::scenario::simulated_log_config;
 use crate::coursework::files::{InputFiles, number};
 use crate::coursework::grade::assemble_scores;
 use crate::coursework::{
-    Assignment, CourseworkError, Grade, InputFormat, Metric, Task, TaskKind, TaskRun, Variant,
-    builtin_map_refusal, load_builtin_map, steps_refusal,
+    Assignment, CourseworkError, Grade, HandIn, InputFormat, Metric, Task, TaskKind, TaskRun,
+    Variant, builtin_map_refusal, load_builtin_map, steps_refusal,
 };
 use crate::grid::simulate_log;
 use crate::io::relative_pose::{read_relative_pose, write_relative_pose};
@@ -267,14 +267,10 @@ impl TaskRun for IcpRun {
 
     fn grade(
         &self,
-        assignment: &Assignment,
-        variant: &Variant,
+        hand_in: &HandIn<'_>,
         references: &[(String, Trajectory)],
-        file_name: &str,
-        bytes: &[u8],
     ) -> Result<Grade, CourseworkError> {
-        let file = read_relative_pose(bytes)
-            .map_err(|e| CourseworkError::BadEstimate(format!("{file_name}: {e}")))?;
+        let file = read_relative_pose(hand_in.bytes).map_err(|e| hand_in.bad(e))?;
         let truth = relative_pose_of(&self.a_from_b);
         let value = |metric: Metric, e: &[Option<f64>; 3]| match metric {
             Metric::RotationErrorDeg => e[0],
@@ -290,14 +286,8 @@ impl TaskRun for IcpRun {
                 Some((name.clone(), errors(&relative_pose_of(p), &truth)))
             })
             .collect();
-        let notices = file
-            .notices
-            .iter()
-            .map(|n| format!("{file_name}: {n}"))
-            .collect();
-        Ok(assemble_scores(
-            assignment, variant, file_name, bytes, &mine, &theirs, value, notices,
-        ))
+        let notices = hand_in.notices(&file.notices);
+        Ok(assemble_scores(hand_in, &mine, &theirs, value, notices))
     }
 }
 

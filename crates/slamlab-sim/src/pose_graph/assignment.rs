@@ -15,8 +15,8 @@ use super::session::{Example, KernelChoice, PoseGraphScenario};
 use crate::coursework::files::InputFiles;
 use crate::coursework::grade::{assemble_scores, trajectory_metric, trajectory_settings};
 use crate::coursework::{
-    Assignment, CourseworkError, Grade, InputFormat, Metric, Task, TaskKind, TaskRun, Variant,
-    steps_refusal,
+    Assignment, CourseworkError, Grade, HandIn, InputFormat, Metric, Task, TaskKind, TaskRun,
+    Variant, steps_refusal,
 };
 use crate::io::graph::{MAX_FILE_BYTES, read_graph, write_g2o};
 use crate::io::trajectory::write_tum;
@@ -268,21 +268,19 @@ impl TaskRun for PoseGraphRun {
 
     fn grade(
         &self,
-        assignment: &Assignment,
-        variant: &Variant,
+        hand_in: &HandIn<'_>,
         references: &[(String, Trajectory)],
-        file_name: &str,
-        bytes: &[u8],
     ) -> Result<Grade, CourseworkError> {
-        let file = read_handed_in(file_name, bytes)?;
+        let file = read_handed_in(hand_in.file_name, hand_in.bytes)?;
         let score = self.score(&file).map_err(|why| {
             CourseworkError::OtherVariant(format!(
-                "{file_name} is not your problem.g2o's graph: {why}; download your own inputs (student= your id) and hand back every vertex and edge"
+                "{} is not your problem.g2o's graph: {why}; download your own inputs (student= your id) and hand back every vertex and edge",
+                hand_in.file_name
             ))
         })?;
-        let settings = trajectory_settings(assignment);
-        let evaluation = evaluate(&self.truth, &graph_poses(&file), &settings)
-            .map_err(|e| CourseworkError::BadEstimate(format!("{file_name}: {e}")))?;
+        let settings = trajectory_settings(hand_in.assignment);
+        let evaluation =
+            evaluate(&self.truth, &graph_poses(&file), &settings).map_err(|e| hand_in.bad(e))?;
         // A graph's score: its cost ratio and its poses' evaluation.
         type Score = (Option<f64>, Option<Evaluation>);
         let value = |metric: Metric, (cost_ratio, e): &Score| match metric {
@@ -309,9 +307,7 @@ impl TaskRun for PoseGraphRun {
             "cost {:.6e} (initial guess {:.6e}, reference {:.6e}; Σ e^T Ω e over problem.g2o's edges)",
             score.cost, score.initial_cost, score.reference_cost
         )];
-        Ok(assemble_scores(
-            assignment, variant, file_name, bytes, &mine, &theirs, value, notices,
-        ))
+        Ok(assemble_scores(hand_in, &mine, &theirs, value, notices))
     }
 }
 

@@ -31,8 +31,8 @@ use super::experiment::random_two_view_scene;
 use crate::coursework::files::{InputFiles, number};
 use crate::coursework::grade::assemble_scores;
 use crate::coursework::{
-    Assignment, CourseworkError, Grade, InputFormat, Metric, Task, TaskKind, TaskRun, TaskRunner,
-    Variant, apply_params, steps_refusal,
+    Assignment, CourseworkError, Grade, HandIn, InputFormat, Metric, Task, TaskKind, TaskRun,
+    TaskRunner, Variant, apply_params, steps_refusal,
 };
 use crate::io::relative_pose::{read_relative_pose, write_relative_pose};
 use crate::metrics::{Trajectory, relative_pose_error};
@@ -434,14 +434,10 @@ impl TaskRun for TwoViewRun {
     /// third dimension: the run's own poses are scored, by the same names).
     fn grade(
         &self,
-        assignment: &Assignment,
-        variant: &Variant,
+        hand_in: &HandIn<'_>,
         references: &[(String, Trajectory)],
-        file_name: &str,
-        bytes: &[u8],
     ) -> Result<Grade, CourseworkError> {
-        let file = read_relative_pose(bytes)
-            .map_err(|e| CourseworkError::BadEstimate(format!("{file_name}: {e}")))?;
+        let file = read_relative_pose(hand_in.bytes).map_err(|e| hand_in.bad(e))?;
         let value = |metric: Metric, e: &[Option<f64>; 2]| match metric {
             Metric::RotationErrorDeg => e[0],
             Metric::TranslationDirectionErrorDeg => e[1],
@@ -455,14 +451,8 @@ impl TaskRun for TwoViewRun {
                 Some((name.clone(), errors(pose, &self.truth)))
             })
             .collect();
-        let notices = file
-            .notices
-            .iter()
-            .map(|n| format!("{file_name}: {n}"))
-            .collect();
-        Ok(assemble_scores(
-            assignment, variant, file_name, bytes, &mine, &theirs, value, notices,
-        ))
+        let notices = hand_in.notices(&file.notices);
+        Ok(assemble_scores(hand_in, &mine, &theirs, value, notices))
     }
 }
 
