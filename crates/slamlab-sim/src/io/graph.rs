@@ -161,13 +161,14 @@ impl Fields<'_> {
     }
 
     /// The pose-pose edge of an `EDGE_SE2`/`EDGE2` line: `i j dx dy dθ` and six
-    /// numbers of information, in the order `information` reads (`info_layout`).
+    /// numbers of information, in the order `information` reads (`layout`
+    /// names all eleven fields for the message of a short line).
     fn between(
         &self,
-        info_layout: &str,
+        layout: &str,
         information: impl Fn(&[f64]) -> Matrix3<f64>,
     ) -> Result<(usize, PendingEdge), GraphFileError> {
-        self.expect_len(11, &format!("i j dx dy dtheta {info_layout}"))?;
+        self.expect_len(11, layout)?;
         let v = self.nums(2, 9)?;
         let z = file_pose(v[0], v[1], v[2]);
         let edge = PendingEdge::Between(self.id(0)?, self.id(1)?, z, information(&v[3..]));
@@ -345,7 +346,9 @@ pub fn read_g2o(text: &str) -> Result<PoseGraph, GraphFileError> {
                     .add_point(f.id(0)?, Vector2::new(v[0], v[1]))
                     .map_err(|e| line_error(f.line, e.to_string()))?;
             }
-            "EDGE_SE2" => pending.push(f.between("I11 I12 I13 I22 I23 I33", upper3)?),
+            "EDGE_SE2" => {
+                pending.push(f.between("i j dx dy dtheta I11 I12 I13 I22 I23 I33", upper3)?)
+            }
             "EDGE_SE2_XY" => {
                 f.expect_len(7, "i j x y I11 I12 I22")?;
                 let v = f.nums(2, 5)?;
@@ -404,9 +407,11 @@ pub fn read_toro(text: &str) -> Result<PoseGraph, GraphFileError> {
     for f in lines(text) {
         match f.tag {
             "VERTEX2" => f.add_pose_to(&mut graph)?,
-            "EDGE2" => pending.push(f.between("Ixx Ixy Iyy Itt Ixt Iyt", |v| {
-                toro_information(&[v[0], v[1], v[2], v[3], v[4], v[5]])
-            })?),
+            "EDGE2" => {
+                pending.push(f.between("i j dx dy dtheta Ixx Ixy Iyy Itt Ixt Iyt", |v| {
+                    toro_information(&[v[0], v[1], v[2], v[3], v[4], v[5]])
+                })?)
+            }
             _ => return Err(f.unknown_tag("a TORO 2D", "VERTEX2, EDGE2")),
         }
     }

@@ -7,7 +7,7 @@
 //! [`Stepper`]: crate::stepper::Stepper
 
 use crate::grid::builtin::BuiltinMap;
-use crate::grid::scans::MappingInput;
+use crate::grid::scans::{MappingInput, builtin_map};
 use crate::io::ros_map::{load_lone_image, load_map, parse_map_yaml};
 use crate::kidnap::{MclPhase, MclRun, MclScenario};
 use crate::params;
@@ -79,10 +79,7 @@ impl KidnapSim {
         let mut notices = params::sanitize_notices(&mut scenario);
         let grid = match grid {
             Some(grid) => Ok(grid),
-            None => BuiltinMap::from_name(&scenario.map)
-                .unwrap_or(BuiltinMap::Maze)
-                .load()
-                .map_err(|e| e.to_string()),
+            None => builtin_map(&scenario.map),
         };
         let run = grid.and_then(|g| MclRun::new(scenario.clone(), g).map_err(|e| e.to_string()));
         let run = match run {
@@ -114,10 +111,7 @@ impl KidnapSim {
         let mut notices = params::sanitize_notices(&mut scenario);
         let grid = match grid {
             Some(grid) => grid,
-            None => BuiltinMap::from_name(&scenario.map)
-                .unwrap_or(BuiltinMap::Maze)
-                .load()
-                .map_err(|e| e.to_string())?,
+            None => builtin_map(&scenario.map)?,
         };
         let run = MclRun::from_log(scenario, grid, input).map_err(|e| e.to_string())?;
         notices.extend(run.notes().iter().cloned());

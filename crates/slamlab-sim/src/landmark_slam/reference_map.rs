@@ -182,11 +182,6 @@ impl ReferenceSolver {
         self.optimizer.cost()
     }
 
-    /// The graph as solved so far.
-    pub fn graph(&self) -> &PoseGraph {
-        self.optimizer.graph()
-    }
-
     /// The map as solved so far.
     pub fn map(&self) -> ReferenceMap {
         let vertices = self.optimizer.graph().vertices();

@@ -265,8 +265,7 @@ impl TwoViewRun {
     /// the true 2 m length) and `answers/wrong_matches.csv` (1 for each match
     /// that was made wrong, in the order of `matches.csv`).
     pub fn files(&self, readme: &str, answers: bool) -> InputFiles {
-        let mut files = InputFiles::default();
-        files.add("README.txt", readme);
+        let mut files = InputFiles::with_readme(readme);
         files.add("K.txt", k_txt(&self.camera));
         files.add("matches.csv", matches_csv(&self.matches));
         files.add("starter.py", TWO_VIEW_STARTER);
