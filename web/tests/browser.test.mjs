@@ -1955,7 +1955,6 @@ async function main() {
             assert(refused.notice_list.some((n) => n.startsWith("big.tum has 68157440 bytes, more than the 67108864 bytes SLAM Lab reads")), JSON.stringify(refused.notice_list));
             assert(refused.estimates.some((e) => e.name === "slamlab-map.yaml"), "the map dropped before stays");
             const t0 = refused.tick;
-            await p.evaluate(() => window.slamlab.slamlab_test_state());
             await p.keyboard.press("Space");
             await waitState(p, (s) => s.tick > t0, "the lesson running on after the refusal", 20_000);
             await screenshot(p, `big-drop-refused-${w}x${h}.png`);

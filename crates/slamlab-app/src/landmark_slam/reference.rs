@@ -100,11 +100,6 @@ impl ReferenceState {
         self.fetch.is_some() || self.solver.as_ref().is_some_and(|s| !s.is_done())
     }
 
-    /// The solver, once the graph is read.
-    pub fn solver(&self) -> Option<&ReferenceSolver> {
-        self.solver.as_ref()
-    }
-
     /// One frame's work: the fetch's progress, or one Levenberg-Marquardt step
     /// (about 20 ms natively for Victoria Park's 7,120 vertices).
     pub fn poll(&mut self, ctx: &egui::Context) {

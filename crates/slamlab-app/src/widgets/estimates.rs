@@ -138,12 +138,7 @@ impl std::fmt::Debug for MapTextures {
 }
 
 /// Is this file part of a ROS map (its YAML or its PGM or PNG image)?
-pub fn is_map_file(name: &str) -> bool {
-    let lower = name.to_ascii_lowercase();
-    [".yaml", ".yml", ".pgm", ".png"]
-        .iter()
-        .any(|e| lower.ends_with(e))
-}
+pub use super::laser_inputs::is_map_file;
 
 /// Reads a ROS map from the files dropped or opened together: the YAML and the
 /// image it names (`image:`, matched by file name). Returns the YAML's name and
