@@ -204,7 +204,7 @@ impl TwoViewScene {
     pub fn centre_ui(&mut self, ui: &mut egui::Ui, estimates: &[Estimate], match_lines: bool) {
         let max_height = 0.45 * ui.available_height();
         let truth = palette::truth_color(ui.visuals().dark_mode);
-        let inliers = self.inliers().to_vec();
+        let inliers = self.inliers();
         let rings = self.mark_wrong && self.wrong_may_show(estimates);
         ui.add(
             egui::Label::new(
@@ -266,7 +266,6 @@ impl TwoViewScene {
             .hover_pos()
             .and_then(|p| images::nearest_match((left, right), &self.run.matches, p));
         let shown = now.or(self.hovered.filter(|_| response.hover_pos().is_some()));
-        self.hovered = now;
         if let Some((_, i)) = shown
             && let Some(m) = self.run.matches.get(i)
         {
@@ -291,6 +290,7 @@ impl TwoViewScene {
             }
             response.clone().on_hover_text_at_pointer(tip);
         }
+        self.hovered = now;
         ui.add_space(4.0);
         self.top_view_ui(ui, estimates, truth);
     }
