@@ -1605,13 +1605,23 @@ impl SlamLabApp {
     }
 
     /// The notices, in one box over the foot of the map `map`: "Notices (N)", each
-    /// with its Dismiss button (dismissing the lesson's note clears it).
+    /// with its Dismiss button (dismissing the lesson's note clears it). The box
+    /// takes the widest stretch of the map's foot that no corner window ("Your
+    /// estimates", "Your solutions") covers.
     fn notices_ui(&mut self, ctx: &egui::Context, map: egui::Rect, notices: &[String]) {
-        let width = (map.width() - 16.0).clamp(120.0, 720.0);
         let max_height = (0.45 * map.height()).max(60.0);
+        let foot =
+            egui::Rect::from_x_y_ranges(map.x_range(), (map.bottom() - max_height)..=map.bottom());
+        let covered: Vec<egui::Rangef> = widgets::estimates::corner_windows(ctx)
+            .iter()
+            .filter(|w| w.intersects(foot))
+            .map(|w| w.x_range())
+            .collect();
+        let (left, right) = widgets::layout::widest_gap(map.x_range().shrink(8.0), &covered, 120.0);
+        let width = (right - left).clamp(120.0, 720.0);
         egui::Area::new(egui::Id::unique("slamlab_notices"))
             .order(egui::Order::Middle)
-            .fixed_pos(egui::pos2(map.left() + 8.0, map.bottom() - 8.0))
+            .fixed_pos(egui::pos2(left, map.bottom() - 8.0))
             .pivot(egui::Align2::LEFT_BOTTOM)
             .constrain(false)
             .show(ctx, |ui| {

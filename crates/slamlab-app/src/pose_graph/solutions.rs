@@ -14,7 +14,6 @@
 //! a truth, the position RMSE against it (the lesson's own "RMSE", by vertex). It
 //! is drawn over the lesson's graph in its own colour and can be removed.
 
-use crate::widgets::estimates::COLORS;
 use egui::{Color32, Stroke};
 use slamlab_core::graph::{PoseGraph, RobustKernel, VertexState, graph_cost};
 use slamlab_sim::metrics::graph::{GraphScore, score_graph, with_states_of};
@@ -38,6 +37,10 @@ pub struct Solution {
     pub score: Option<GraphScore>,
     /// Position RMSE against the truth, metres (built-in examples).
     pub ate: Option<f64>,
+    /// The pose vertices in id order and the point vertices, as drawn (sorted
+    /// once, when the file came).
+    path: Vec<slamlab_core::Pose2>,
+    points: Vec<[f64; 2]>,
 }
 
 /// The solutions and when they were scored.
@@ -46,6 +49,8 @@ pub struct Solutions {
     items: Vec<Solution>,
     /// (iterations, history length, edges) of the lesson's graph when scored.
     scored: Option<(usize, usize, usize)>,
+    /// The lesson's graph's cost then ([`lesson_cost`]).
+    reference_cost: f64,
     /// The window is open.
     pub open: bool,
 }
@@ -93,13 +98,17 @@ impl Solutions {
                 "{name} solves the graph on screen, but the lesson holds {MAX_SOLUTIONS} solutions at most: remove one first"
             ));
         }
-        let used: Vec<Color32> = self.items.iter().map(|s| s.color).collect();
-        let color = COLORS
-            .iter()
-            .copied()
-            .find(|c| !used.contains(c))
-            .unwrap_or(COLORS[0]);
+        let color = crate::widgets::estimates::free_color(self.items.iter().map(|s| s.color));
         self.items.retain(|s| s.name != name);
+        let mut path: Vec<(u64, slamlab_core::Pose2)> = Vec::new();
+        let mut points = Vec::new();
+        for v in solved.vertices() {
+            match v.state {
+                VertexState::Pose(q) => path.push((v.id, q)),
+                VertexState::Point(q) => points.push([q[0], q[1]]),
+            }
+        }
+        path.sort_by_key(|(id, _)| *id);
         self.items.push(Solution {
             name: name.to_owned(),
             color,
@@ -107,6 +116,8 @@ impl Solutions {
             graph: solved,
             visible: true,
             score: None,
+            path: path.into_iter().map(|(_, q)| q).collect(),
+            points,
         });
         self.scored = None;
         self.open = true;
@@ -147,6 +158,7 @@ impl Solutions {
             s.score = score_graph(session.start_graph(), &s.graph, reference).ok();
         }
         self.scored = Some(key);
+        self.reference_cost = reference;
     }
 
     /// The scores for the test hook.
@@ -177,30 +189,20 @@ impl Solutions {
         let painter = egui::Painter::new(ctx.clone(), p.layer, p.rect);
         let t = &p.transform;
         for s in self.items.iter().filter(|s| s.visible) {
-            let mut poses: Vec<(u64, egui::Pos2)> = s
-                .graph
-                .vertices()
+            let line: Vec<egui::Pos2> = s
+                .path
                 .iter()
-                .filter_map(|v| match v.state {
-                    VertexState::Pose(q) => Some((v.id, t.pose(&q))),
-                    VertexState::Point(_) => None,
-                })
-                .filter(|(_, q)| crate::widgets::map_canvas::finite(*q))
+                .map(|q| t.pose(q))
+                .filter(|q| crate::widgets::map_canvas::finite(*q))
                 .collect();
-            poses.sort_by_key(|(id, _)| *id);
-            let points: Vec<egui::Pos2> = poses.into_iter().map(|(_, q)| q).collect();
-            painter.add(egui::Shape::line(points, Stroke::new(2.0, s.color)));
-            for v in s.graph.vertices() {
-                if let VertexState::Point(q) = v.state {
-                    let c = t.xy(q[0], q[1]);
-                    if crate::widgets::map_canvas::finite(c) {
-                        let d = 4.0;
-                        let stroke = Stroke::new(1.5, s.color);
-                        painter
-                            .line_segment([c + egui::vec2(-d, -d), c + egui::vec2(d, d)], stroke);
-                        painter
-                            .line_segment([c + egui::vec2(-d, d), c + egui::vec2(d, -d)], stroke);
-                    }
+            painter.add(egui::Shape::line(line, Stroke::new(2.0, s.color)));
+            for q in &s.points {
+                let c = t.xy(q[0], q[1]);
+                if crate::widgets::map_canvas::finite(c) {
+                    let d = 4.0;
+                    let stroke = Stroke::new(1.5, s.color);
+                    painter.line_segment([c + egui::vec2(-d, -d), c + egui::vec2(d, d)], stroke);
+                    painter.line_segment([c + egui::vec2(-d, d), c + egui::vec2(d, -d)], stroke);
                 }
             }
         }
@@ -215,60 +217,78 @@ impl Solutions {
         self.refresh(session);
         let mut open = self.open;
         let mut remove = None;
-        let screen = ctx.content_rect();
-        crate::widgets::estimates::corner_window("Your solutions", &mut open, screen, 160.0)
-            .show(ctx, |ui| {
+        crate::widgets::estimates::show_corner_window(
+            ctx,
+            "Your solutions",
+            &mut open,
+            160.0,
+            |ui| {
                 ui.label(format!(
                     "F = Σ e^T Ω e over the problem's edges at each graph's vertices, against the lesson's graph now ({} iteration{}{}), as `slamlab graph evaluate` scores it.",
                     session.iterations(),
                     if session.iterations() == 1 { "" } else { "s" },
                     if session.is_converged() { ", converged" } else { ", not converged: press Optimize" }
                 ));
-                let fmt = |v: Option<f64>, digits: usize| {
-                    v.map_or("–".to_owned(), |v| format!("{v:.digits$}"))
-                };
-                egui::Grid::new("graph_solutions").striped(true).show(ui, |ui| {
-                    for h in ["", "graph", "cost F", "ratio", "RMSE m", ""] {
-                        ui.strong(h);
-                    }
-                    ui.end_row();
-                    let (rect, _) =
-                        ui.allocate_exact_size(egui::vec2(12.0, 12.0), egui::Sense::hover());
-                    ui.painter().rect_filled(rect, 2.0, super::map::VERTEX);
-                    ui.label("the lesson's");
-                    ui.label(format!("{:.6e}", lesson_cost(session)));
-                    ui.label("1");
-                    ui.label(fmt(session.rmse(), 4));
-                    ui.label("");
-                    ui.end_row();
-                    for (k, s) in self.items.iter_mut().enumerate() {
+                let fmt = crate::widgets::estimates::number;
+                // The costs themselves where the window is wide enough; at
+                // 800 points their ratio (and the costs in its tooltip).
+                let costs = ui.available_width() >= 420.0;
+                let cost = |f: Option<f64>| f.map_or("–".to_owned(), |f| format!("{f:.6e}"));
+                // What does not fit the corner scrolls sideways.
+                egui::ScrollArea::horizontal().show(ui, |ui| {
+                    egui::Grid::new("graph_solutions").striped(true).show(ui, |ui| {
+                        ui.label("");
+                        ui.strong("graph");
+                        if costs {
+                            ui.strong("cost F");
+                        }
+                        ui.strong("ratio");
+                        ui.strong("RMSE m");
+                        ui.end_row();
                         let (rect, _) =
                             ui.allocate_exact_size(egui::vec2(12.0, 12.0), egui::Sense::hover());
-                        ui.painter().rect_filled(rect, 2.0, s.color);
-                        ui.label(&s.name);
-                        ui.label(
-                            s.score
-                                .as_ref()
-                                .map_or("–".to_owned(), |g| format!("{:.6e}", g.cost)),
-                        );
-                        ui.label(fmt(s.score.as_ref().and_then(|g| g.cost_ratio), 9))
-                            .on_hover_text("F(yours) / F(the lesson's): 1 is as good as the lesson's solver, above 1 worse");
-                        ui.label(fmt(s.ate, 4));
-                        ui.horizontal(|ui| {
-                            ui.checkbox(&mut s.visible, "draw")
-                                .on_hover_text("Draw this graph over the lesson's");
-                            if ui
-                                .small_button("Remove")
-                                .on_hover_text("Remove this solution")
-                                .clicked()
-                            {
-                                remove = Some(k);
-                            }
-                        });
+                        ui.painter().rect_filled(rect, 2.0, super::map::VERTEX);
+                        ui.label("the lesson's");
+                        if costs {
+                            ui.label(cost(Some(self.reference_cost)));
+                        }
+                        ui.label("1");
+                        ui.label(fmt(session.rmse(), 4));
                         ui.end_row();
-                    }
+                        for (k, s) in self.items.iter_mut().enumerate() {
+                            let (rect, _) =
+                                ui.allocate_exact_size(egui::vec2(12.0, 12.0), egui::Sense::hover());
+                            ui.painter().rect_filled(rect, 2.0, s.color);
+                            ui.label(crate::widgets::estimates::short_name(&s.name))
+                                .on_hover_text(&s.name);
+                            let f = s.score.as_ref().map(|g| g.cost);
+                            if costs {
+                                ui.label(cost(f));
+                            }
+                            ui.label(fmt(s.score.as_ref().and_then(|g| g.cost_ratio), 9))
+                                .on_hover_text(format!(
+                                    "F(yours) / F(the lesson's) = {} / {}: 1 is as good as the lesson's solver, above 1 worse",
+                                    cost(f),
+                                    cost(Some(self.reference_cost))
+                                ));
+                            ui.label(fmt(s.ate, 4));
+                            ui.horizontal(|ui| {
+                                ui.checkbox(&mut s.visible, "")
+                                    .on_hover_text("Draw this graph over the lesson's");
+                                if ui
+                                    .small_button("×")
+                                    .on_hover_text("Remove this solution")
+                                    .clicked()
+                                {
+                                    remove = Some(k);
+                                }
+                            });
+                            ui.end_row();
+                        }
+                    });
                 });
-            });
+            },
+        );
         if let Some(k) = remove {
             self.remove(k);
         }

@@ -40,6 +40,17 @@ pub const COLORS: [Color32; 5] = [
     Color32::from_rgb(0xAA, 0x44, 0x99),
 ];
 
+/// The first of [`COLORS`] not among `used` (the colours a student's files
+/// already have); with every colour taken, the next in turn.
+pub fn free_color(used: impl Iterator<Item = Color32>) -> Color32 {
+    let used: Vec<Color32> = used.collect();
+    COLORS
+        .iter()
+        .copied()
+        .find(|c| !used.contains(c))
+        .unwrap_or(COLORS[used.len() % COLORS.len()])
+}
+
 /// What an estimate file holds.
 #[derive(Clone, Debug, PartialEq)]
 pub enum EstimateContent {
@@ -121,8 +132,61 @@ pub struct Estimates {
     pub align: bool,
     scores: Vec<EstimateScore>,
     scored: Option<(u64, u64, bool)>,
+    /// The maps' scores by the maps they compare.
+    map_scores: MapScores,
     /// The maps' overlays on the GPU, by estimate name and version.
     textures: MapTextures,
+}
+
+/// Map scores by the two maps they compare (the same `Arc`s, the same
+/// score): the run is scored again every tick, but a map is compared with the
+/// true map again only when it is another map (the mapping lesson's built map
+/// is a new one only after its grid changed; a student's never changes).
+#[derive(Debug, Default)]
+struct MapScores {
+    /// The last scoring's: (map, true map, agreement, coverage).
+    last: Vec<MapScore>,
+    /// This scoring's so far.
+    now: Vec<MapScore>,
+    /// Comparisons made, for the tests.
+    compared: usize,
+}
+
+type MapScore = (
+    Arc<OccupancyGrid>,
+    Arc<OccupancyGrid>,
+    Option<f64>,
+    Option<f64>,
+);
+
+impl MapScores {
+    /// The agreement and coverage of `map` against `truth`, from the last
+    /// scoring when it compared the same two.
+    fn of(
+        &mut self,
+        map: &Arc<OccupancyGrid>,
+        truth: &Arc<OccupancyGrid>,
+    ) -> (Option<f64>, Option<f64>) {
+        let same = |(m, t, _, _): &&MapScore| Arc::ptr_eq(m, map) && Arc::ptr_eq(t, truth);
+        let (agreement, coverage) = match self.last.iter().chain(&self.now).find(same) {
+            Some((_, _, a, c)) => (*a, *c),
+            None => {
+                self.compared += 1;
+                (
+                    slamlab_sim::grid::occupancy_agreement(map, truth),
+                    slamlab_sim::grid::occupancy_coverage(map, truth),
+                )
+            }
+        };
+        self.now
+            .push((map.clone(), truth.clone(), agreement, coverage));
+        (agreement, coverage)
+    }
+
+    /// Ends a scoring: what it compared is what the next one looks up.
+    fn finish(&mut self) {
+        self.last = std::mem::take(&mut self.now);
+    }
 }
 
 /// The maps' overlays on the GPU: (estimate name, estimates version, texture).
@@ -141,10 +205,12 @@ impl std::fmt::Debug for MapTextures {
 pub use super::laser_inputs::is_map_file;
 
 /// Reads a ROS map from the files dropped or opened together: the YAML and the
-/// image it names (`image:`, matched by file name). Returns the YAML's name and
-/// the grid; a refusal names the file and why.
+/// image it names (`image:`, matched by file name), as the laser lessons read a
+/// dropped map (`kidnap::session::load_dropped_map`), but never a lone image: a
+/// student's map is scored where it lies, so it needs its YAML's resolution and
+/// origin. Returns the YAML's name and the grid; a refusal names the file and why.
 pub fn read_map_files(files: &[(String, Vec<u8>)]) -> Result<(String, OccupancyGrid), String> {
-    use slamlab_sim::io::ros_map::{MAX_YAML_BYTES, load_map, parse_map_yaml};
+    use slamlab_sim::io::ros_map::MAX_YAML_BYTES;
     let lower = |n: &str| n.to_ascii_lowercase();
     let yaml = files
         .iter()
@@ -162,25 +228,8 @@ pub fn read_map_files(files: &[(String, Vec<u8>)]) -> Result<(String, OccupancyG
             yaml_bytes.len()
         ));
     }
-    let text = std::str::from_utf8(yaml_bytes).map_err(|e| {
-        format!(
-            "{yaml_name} is not text (byte {} is not UTF-8)",
-            e.valid_up_to()
-        )
-    })?;
-    let parsed = parse_map_yaml(text).map_err(|e| format!("{yaml_name}: {e}"))?;
-    let wanted = parsed.image.rsplit('/').next().unwrap_or(&parsed.image);
-    let (_, image) = files
-        .iter()
-        .find(|(n, _)| n.rsplit('/').next() == Some(wanted))
-        .ok_or_else(|| {
-            format!(
-                "{yaml_name} names the image '{}': drop or open it together with the YAML",
-                parsed.image
-            )
-        })?;
-    let (grid, _) = load_map(text, image).map_err(|e| format!("{yaml_name}: {e}"))?;
-    Ok((yaml_name.clone(), grid))
+    let (name, grid, _) = slamlab_sim::kidnap::session::load_dropped_map(files)?;
+    Ok((name, grid))
 }
 
 /// Is this file a student's estimate rather than a lesson's input (a map, a log,
@@ -300,12 +349,7 @@ impl Estimates {
 
     /// The first colour no estimate has.
     fn free_color(&self) -> Color32 {
-        let used: Vec<Color32> = self.items.iter().map(|e| e.color).collect();
-        COLORS
-            .iter()
-            .copied()
-            .find(|c| !used.contains(c))
-            .unwrap_or(COLORS[self.items.len() % COLORS.len()])
+        free_color(self.items.iter().map(|e| e.color))
     }
 
     /// Draws estimate `index` on the map or not.
@@ -332,7 +376,7 @@ impl Estimates {
     /// Scores the lesson's estimators and the student's against the lesson's
     /// truth (or, without one, against its first estimator).
     pub fn score(&mut self, run_version: u64, lesson: &LessonOutput) -> &[EstimateScore] {
-        self.scores = score_all(&self.items, lesson, self.align);
+        self.scores = score_all(&self.items, lesson, self.align, &mut self.map_scores);
         self.scored = Some((run_version, self.version, self.align));
         &self.scores
     }
@@ -420,14 +464,14 @@ fn score_map(
     name: &str,
     dropped: bool,
     color: Color32,
-    map: &OccupancyGrid,
-    truth: Option<&OccupancyGrid>,
+    map: &Arc<OccupancyGrid>,
+    truth: Option<&Arc<OccupancyGrid>>,
+    scores: &mut MapScores,
 ) -> EstimateScore {
     let mut score = empty_score(name, dropped, color);
     match truth {
         Some(truth) => {
-            score.map_agreement = slamlab_sim::grid::occupancy_agreement(map, truth);
-            score.map_coverage = slamlab_sim::grid::occupancy_coverage(map, truth);
+            (score.map_agreement, score.map_coverage) = scores.of(map, truth);
             if score.map_agreement.is_none() {
                 score.note = Some(
                     "the map knows none of the true map's cells (another place, or another origin?)"
@@ -494,7 +538,12 @@ fn score_trajectory(
     score
 }
 
-fn score_all(items: &[Estimate], lesson: &LessonOutput, align: bool) -> Vec<EstimateScore> {
+fn score_all(
+    items: &[Estimate],
+    lesson: &LessonOutput,
+    align: bool,
+    map_scores: &mut MapScores,
+) -> Vec<EstimateScore> {
     let true_pose = lesson
         .relative_poses
         .iter()
@@ -535,23 +584,18 @@ fn score_all(items: &[Estimate], lesson: &LessonOutput, align: bool) -> Vec<Esti
         .maps
         .iter()
         .find(|(name, _)| name == "truth")
-        .map(|(_, m)| m.as_ref());
-    all.extend(
-        lesson
-            .maps
-            .iter()
-            .filter(|(name, _)| name != "truth")
-            .map(|(name, m)| {
-                let estimator = name.trim_end_matches(" (map)");
-                score_map(
-                    name,
-                    false,
-                    palette::estimator_color(estimator),
-                    m,
-                    true_map,
-                )
-            }),
-    );
+        .map(|(_, m)| m);
+    for (name, m) in lesson.maps.iter().filter(|(name, _)| name != "truth") {
+        let estimator = name.trim_end_matches(" (map)");
+        all.push(score_map(
+            name,
+            false,
+            palette::estimator_color(estimator),
+            m,
+            true_map,
+            map_scores,
+        ));
+    }
     let true_landmarks = lesson.landmarks.iter().find(|(name, _)| name == "truth");
     for item in items {
         match &item.content {
@@ -568,7 +612,9 @@ fn score_all(items: &[Estimate], lesson: &LessonOutput, align: bool) -> Vec<Esti
                 &item.name, true, item.color, p, true_pose,
             )),
             EstimateContent::Map(m) => {
-                all.push(score_map(&item.name, true, item.color, m, true_map));
+                all.push(score_map(
+                    &item.name, true, item.color, m, true_map, map_scores,
+                ));
             }
             EstimateContent::Landmarks(rows) => {
                 let (rmse, note) = match true_landmarks {
@@ -603,6 +649,7 @@ fn score_all(items: &[Estimate], lesson: &LessonOutput, align: bool) -> Vec<Esti
             }
         }
     }
+    map_scores.finish();
     all
 }
 
@@ -750,130 +797,300 @@ pub fn map_overlay(ctx: &egui::Context, estimates: &mut Estimates, now: f64) {
 
 /// A window of a student's own results in the bottom right corner of the
 /// screen, beside the map rather than over all of it: about 40 % of the
-/// window's width (300 to 470 points) and `height` points high, kept on
-/// screen. Shared by "Your estimates" and the pose-graph lesson's "Your
-/// solutions".
-pub fn corner_window<'a>(
-    title: &'a str,
-    open: &'a mut bool,
-    screen: egui::Rect,
+/// window's width (300 to 470 points, never wider) and `height` points high, kept on screen. Shared by
+/// "Your estimates" and the pose-graph lesson's "Your solutions"; the notices
+/// box keeps clear of it ([`corner_windows`]).
+pub fn show_corner_window<R>(
+    ctx: &egui::Context,
+    title: &str,
+    open: &mut bool,
     height: f32,
-) -> egui::Window<'a> {
+    add_contents: impl FnOnce(&mut egui::Ui) -> R,
+) -> Option<R> {
+    let screen = ctx.content_rect();
     let size = egui::vec2(
         (0.42 * screen.width())
             .clamp(300.0, 470.0)
             .min(screen.width() - 16.0),
         height.min(screen.height() - 40.0),
     );
-    egui::Window::new(title)
+    let shown = egui::Window::new(title)
         .open(open)
         .default_size(size)
+        .max_width(size.x)
         .default_pos(screen.right_bottom() - size - egui::vec2(8.0, 8.0))
         .constrain(true)
+        .show(ctx, add_contents)?;
+    let pass = ctx.cumulative_pass_nr();
+    let rect = shown.response.rect;
+    ctx.data_mut(|d| {
+        let rects: &mut Vec<(u64, egui::Rect)> = d.get_temp_mut_or_default(corner_windows_id());
+        rects.retain(|(p, _)| *p + 1 >= pass);
+        rects.push((pass, rect));
+    });
+    shown.inner
+}
+
+fn corner_windows_id() -> egui::Id {
+    egui::Id::unique("slamlab_corner_windows")
+}
+
+/// The corner windows shown in this pass or the one before
+/// ([`show_corner_window`]): what the notices box keeps clear of.
+pub fn corner_windows(ctx: &egui::Context) -> Vec<egui::Rect> {
+    let pass = ctx.cumulative_pass_nr();
+    ctx.data(|d| {
+        d.get_temp::<Vec<(u64, egui::Rect)>>(corner_windows_id())
+            .unwrap_or_default()
+            .into_iter()
+            .filter(|(p, _)| *p + 1 >= pass)
+            .map(|(_, r)| r)
+            .collect()
+    })
+}
+
+/// The longest name a score table shows whole; a longer one is cut, whole
+/// in its tooltip.
+const NAME_CHARS: usize = 18;
+
+/// One table of the "Your estimates" window: the scores of one kind (paths,
+/// maps, landmarks, relative poses) under their own headings, each row a
+/// colour, a name (its note in the tooltip), the numbers, and for a
+/// student's estimate a switch to draw it and a button to remove it.
+struct ScoreTable<'a> {
+    id: &'static str,
+    /// The headings of the numbers, each with its tooltip.
+    columns: &'a [(&'a str, &'a str)],
+    /// The rows: a score and its numbers, as shown.
+    rows: Vec<(&'a EstimateScore, Vec<String>)>,
+}
+
+impl ScoreTable<'_> {
+    /// Draws the table; a student's estimate drawn or removed is noted in
+    /// `toggled` or `remove` (its index among `items`).
+    fn ui(
+        self,
+        ui: &mut egui::Ui,
+        items: &[Estimate],
+        toggled: &mut Option<(usize, bool)>,
+        remove: &mut Option<usize>,
+    ) {
+        if self.rows.is_empty() {
+            return;
+        }
+        egui::Grid::new(self.id).striped(true).show(ui, |ui| {
+            ui.label("");
+            ui.strong("estimator");
+            for (heading, hover) in self.columns {
+                ui.strong(*heading).on_hover_text(*hover);
+            }
+            ui.end_row();
+            for (s, numbers) in self.rows {
+                let (rect, _) =
+                    ui.allocate_exact_size(egui::vec2(12.0, 12.0), egui::Sense::hover());
+                ui.painter().rect_filled(rect, 2.0, s.color);
+                let shown = short_name(&s.name);
+                let hover = match &s.note {
+                    Some(note) => format!("{}: {note}", s.name),
+                    None => s.name.clone(),
+                };
+                ui.label(shown).on_hover_text(hover);
+                for n in numbers {
+                    ui.label(n);
+                }
+                match items.iter().position(|e| s.dropped && e.name == s.name) {
+                    Some(k) => {
+                        ui.horizontal(|ui| {
+                            let mut drawn = items[k].visible;
+                            if ui
+                                .checkbox(&mut drawn, "")
+                                .on_hover_text("Draw this estimate on the lesson's map")
+                                .changed()
+                            {
+                                *toggled = Some((k, drawn));
+                            }
+                            if ui
+                                .small_button("×")
+                                .on_hover_text("Remove this estimate")
+                                .clicked()
+                            {
+                                *remove = Some(k);
+                            }
+                        });
+                    }
+                    None => {
+                        ui.label("");
+                    }
+                }
+                ui.end_row();
+            }
+        });
+    }
+}
+
+/// `name` as a narrow table shows it: cut to [`NAME_CHARS`] characters with
+/// an ellipsis (the whole name goes in its tooltip).
+pub fn short_name(name: &str) -> String {
+    if name.chars().count() > NAME_CHARS {
+        let cut: String = name.chars().take(NAME_CHARS - 1).collect();
+        format!("{cut}…")
+    } else {
+        name.to_owned()
+    }
+}
+
+/// A number with `digits` decimals, or a dash for none (the score tables).
+pub fn number(v: Option<f64>, digits: usize) -> String {
+    v.map_or("–".to_owned(), |v| format!("{v:.digits$}"))
 }
 
 /// The "Your estimates" window: each estimator's score (the lesson's and the
-/// student's), a plot of the position error over time, the alignment switch,
-/// and a button to remove each dropped estimate.
+/// student's) in a table of its kind, a plot of the position error over time,
+/// the alignment switch, and for each dropped estimate a switch to draw it and
+/// a button to remove it.
 pub fn window_ui(ctx: &egui::Context, estimates: &mut Estimates, has_truth: bool) {
     let mut open = estimates.open;
-    let screen = ctx.content_rect();
     // At most half the window's height.
-    let height = (0.5 * screen.height()).clamp(180.0, 380.0);
+    let height = (0.5 * ctx.content_rect().height()).clamp(180.0, 380.0);
     let mut remove = None;
     let mut toggled = None;
-    corner_window("Your estimates", &mut open, screen, height)
-        .show(ctx, |ui| {
-            ui.label(format!(
-                "Scored against {} up to the time bar's time, as `slamlab evaluate` and evo score them.",
-                if has_truth { "the truth" } else { "the lesson's first estimator (no truth here)" }
-            ));
-            ui.checkbox(&mut estimates.align, "Align each to the reference first (SE(2), evo's --align)");
-            let fmt = |v: Option<f64>, digits: usize| v.map_or("–".to_owned(), |v| format!("{v:.digits$}"));
-            egui::Grid::new("estimate_scores").striped(true).show(ui, |ui| {
-                for h in ["", "estimator", "ATE m", "max m", "RPE m", "ANEES", ""] {
-                    ui.strong(h);
-                }
-                ui.end_row();
-                for s in &estimates.scores {
-                    let (rect, _) = ui.allocate_exact_size(egui::vec2(12.0, 12.0), egui::Sense::hover());
-                    ui.painter().rect_filled(rect, 2.0, s.color);
-                    let label = ui.label(&s.name);
-                    if let Some(note) = &s.note {
-                        label.on_hover_text(note);
-                    }
-                    if s.map_agreement.is_some() || s.map_coverage.is_some() {
-                        ui.label(format!("agree {}", fmt(s.map_agreement, 3))).on_hover_text(
-                            "The share of the true map's free and occupied cells this map classifies the same, over the cells it knows (the mapping lesson's map agreement, as a ROS map: occupied above 0.65, free below 0.196)",
-                        );
-                        ui.label(format!("cover {}", fmt(s.map_coverage, 3))).on_hover_text(
-                            "The share of the true map's free and occupied cells this map knows at all (as the grid-mapping assignment grades it)",
-                        );
-                        ui.label("");
-                        ui.label("");
-                    } else if s.landmark_rmse.is_some() {
-                        ui.label(format!("landmarks {}", fmt(s.landmark_rmse, 3)));
-                        ui.label("");
-                        ui.label("");
-                        ui.label("");
-                    } else if s.rotation_error_deg.is_some() || s.direction_error_deg.is_some() {
-                        ui.label(format!("R {}°", fmt(s.rotation_error_deg, 3)))
-                            .on_hover_text("The rotation error: the angle of R_true^T R");
-                        ui.label(format!("t {}°", fmt(s.direction_error_deg, 2)))
-                            .on_hover_text("The angle between the estimated and the true direction of translation (a monocular t has no length)");
-                        ui.label("");
-                        ui.label("");
-                    } else {
-                        ui.label(fmt(s.ate_rmse, 3));
-                        ui.label(fmt(s.ate_max, 3));
-                        ui.label(fmt(s.rpe_rmse, 4));
-                        ui.label(fmt(s.anees, 2));
-                    }
-                    if s.dropped {
-                        if let Some(k) = estimates.items.iter().position(|e| e.name == s.name) {
-                            ui.horizontal(|ui| {
-                                let mut shown = estimates.items[k].visible;
-                                if ui.checkbox(&mut shown, "draw").on_hover_text("Draw this estimate on the lesson's map").changed() {
-                                    toggled = Some((k, shown));
-                                }
-                                if ui.small_button("Remove").on_hover_text("Remove this estimate").clicked() {
-                                    remove = Some(k);
-                                }
-                            });
-                        } else {
-                            ui.label("");
+    show_corner_window(ctx, "Your estimates", &mut open, height, |ui| {
+        ui.label(format!(
+            "Scored against {} up to the time bar's time, as `slamlab evaluate` and evo score them.",
+            if has_truth { "the truth" } else { "the lesson's first estimator (no truth here)" }
+        ));
+        ui.checkbox(
+            &mut estimates.align,
+            "Align each to the reference first (SE(2), evo's --align)",
+        );
+        let scores = &estimates.scores;
+        let is_map = |s: &EstimateScore| s.map_agreement.is_some() || s.map_coverage.is_some();
+        let is_pose =
+            |s: &EstimateScore| s.rotation_error_deg.is_some() || s.direction_error_deg.is_some();
+        let is_path = |s: &EstimateScore| !is_map(s) && !is_pose(s) && s.landmark_rmse.is_none();
+        // ANEES only where some path has covariances.
+        let anees = scores.iter().any(|s| is_path(s) && s.anees.is_some());
+        let path_columns: &[(&str, &str)] = &[
+            ("ATE m", "The RMSE of the absolute position error"),
+            ("max m", "The largest position error"),
+            (
+                "RPE m",
+                "The RMSE of the relative translation error over one pose",
+            ),
+            (
+                "ANEES",
+                "The average normalized estimation error squared (covariances only): about 3 when they are right",
+            ),
+        ];
+        let tables = [
+            ScoreTable {
+                id: "estimate_scores",
+                columns: &path_columns[..if anees { 4 } else { 3 }],
+                rows: scores
+                    .iter()
+                    .filter(|s| is_path(s))
+                    .map(|s| {
+                        let mut n = vec![
+                            number(s.ate_rmse, 3),
+                            number(s.ate_max, 3),
+                            number(s.rpe_rmse, 4),
+                        ];
+                        if anees {
+                            n.push(number(s.anees, 2));
                         }
-                    } else {
-                        ui.label("");
-                    }
-                    ui.end_row();
-                }
-            });
-            if estimates.items.is_empty() {
-                ui.weak("Drop a trajectory (TUM t x y z qx qy qz qw, or CSV t,x,y,theta[,covariance]), a landmark CSV (id,x,y), in the two-view lesson a relative pose (.txt: R row by row then t, or tx ty tz qx qy qz qw), or in the mapping lesson a ROS map (its YAML with its image) on the page, or use File → Open your estimate. File → Export trajectories gives the lesson's own in these formats.");
-            }
-            let series: Vec<(String, Color32, Vec<[f64; 2]>)> = estimates
-                .scores
-                .iter()
-                .filter(|s| !s.errors.is_empty())
-                .map(|s| (s.name.clone(), s.color, s.errors.clone()))
-                .collect();
-            if !series.is_empty() {
-                ui.label("Position error (m) over time (s)");
-                egui_plot::Plot::new("estimate_errors")
-                    .height((ui.available_height() - 8.0).clamp(70.0, 160.0))
-                    .allow_scroll(false)
-                    .show(ui, |plot| {
-                        for (name, color, points) in series {
-                            plot.line(
-                                egui_plot::Line::new(name, egui_plot::PlotPoints::from(points))
-                                    .color(color)
-                                    .width(1.5),
-                            );
-                        }
-                    });
+                        (s, n)
+                    })
+                    .collect(),
+            },
+            ScoreTable {
+                id: "estimate_map_scores",
+                columns: &[
+                    (
+                        "agree",
+                        "The share of the true map's free and occupied cells this map classifies the same, over the cells it knows (the mapping lesson's map agreement, as a ROS map: occupied above 0.65, free below 0.196)",
+                    ),
+                    (
+                        "cover",
+                        "The share of the true map's free and occupied cells this map knows at all (as the grid-mapping assignment grades it)",
+                    ),
+                ],
+                rows: scores
+                    .iter()
+                    .filter(|s| is_map(s))
+                    .map(|s| {
+                        (
+                            s,
+                            vec![number(s.map_agreement, 3), number(s.map_coverage, 3)],
+                        )
+                    })
+                    .collect(),
+            },
+            ScoreTable {
+                id: "estimate_landmark_scores",
+                columns: &[(
+                    "landmarks m",
+                    "The RMS distance to the true landmarks of the same id",
+                )],
+                rows: scores
+                    .iter()
+                    .filter(|s| s.landmark_rmse.is_some())
+                    .map(|s| (s, vec![number(s.landmark_rmse, 3)]))
+                    .collect(),
+            },
+            ScoreTable {
+                id: "estimate_pose_scores",
+                columns: &[
+                    ("R °", "The rotation error: the angle of R_true^T R"),
+                    (
+                        "t °",
+                        "The angle between the estimated and the true direction of translation (a monocular t has no length)",
+                    ),
+                ],
+                rows: scores
+                    .iter()
+                    .filter(|s| is_pose(s))
+                    .map(|s| {
+                        (
+                            s,
+                            vec![
+                                number(s.rotation_error_deg, 3),
+                                number(s.direction_error_deg, 2),
+                            ],
+                        )
+                    })
+                    .collect(),
+            },
+        ];
+        // What does not fit the corner scrolls sideways.
+        egui::ScrollArea::horizontal().show(ui, |ui| {
+            for table in tables {
+                table.ui(ui, &estimates.items, &mut toggled, &mut remove);
             }
         });
+        if estimates.items.is_empty() {
+            ui.weak("Drop a trajectory (TUM t x y z qx qy qz qw, or CSV t,x,y,theta[,covariance]), a landmark CSV (id,x,y), in the two-view lesson a relative pose (.txt: R row by row then t, or tx ty tz qx qy qz qw), or in the mapping lesson a ROS map (its YAML with its image) on the page, or use File → Open your estimate. File → Export trajectories gives the lesson's own in these formats.");
+        }
+        let series: Vec<(String, Color32, Vec<[f64; 2]>)> = scores
+            .iter()
+            .filter(|s| !s.errors.is_empty())
+            .map(|s| (s.name.clone(), s.color, s.errors.clone()))
+            .collect();
+        if !series.is_empty() {
+            ui.label("Position error (m) over time (s)");
+            egui_plot::Plot::new("estimate_errors")
+                .height((ui.available_height() - 8.0).clamp(70.0, 160.0))
+                .allow_scroll(false)
+                .show(ui, |plot| {
+                    for (name, color, points) in series {
+                        plot.line(
+                            egui_plot::Line::new(name, egui_plot::PlotPoints::from(points))
+                                .color(color)
+                                .width(1.5),
+                        );
+                    }
+                });
+        }
+    });
     if let Some((k, shown)) = toggled {
         estimates.set_visible(k, shown);
     }
@@ -977,5 +1194,45 @@ mod tests {
                 .unwrap()
                 .contains("no pair of views")
         );
+    }
+
+    /// A map is compared with the true map once while it stays the same map
+    /// (the same `Arc`), however often the run is scored; another map is
+    /// compared anew, and each time gives the same numbers.
+    #[test]
+    fn a_map_is_compared_once_until_it_changes() {
+        let grid = |occupied: usize| {
+            let cells = (0..100)
+                .map(|k| {
+                    if k < occupied {
+                        Cell::Occupied
+                    } else {
+                        Cell::Free
+                    }
+                })
+                .collect();
+            Arc::new(OccupancyGrid::new(10, 10, 0.1, Pose2::new(0.0, 0.0, 0.0), cells).unwrap())
+        };
+        let truth = grid(10);
+        let built = grid(20);
+        let output = |built: &Arc<OccupancyGrid>| LessonOutput {
+            maps: vec![
+                ("truth".to_owned(), truth.clone()),
+                ("scan-to-map (map)".to_owned(), built.clone()),
+            ],
+            ..LessonOutput::default()
+        };
+        let mut estimates = Estimates::default();
+        let first = estimates.score(1, &output(&built)).to_vec();
+        assert_eq!(first[0].map_agreement, Some(0.9));
+        assert_eq!(first[0].map_coverage, Some(1.0));
+        for tick in 2..10 {
+            assert_eq!(estimates.score(tick, &output(&built)), first.as_slice());
+        }
+        assert_eq!(estimates.map_scores.compared, 1);
+        let grown = grid(10);
+        let again = estimates.score(10, &output(&grown)).to_vec();
+        assert_eq!(again[0].map_agreement, Some(1.0));
+        assert_eq!(estimates.map_scores.compared, 2);
     }
 }

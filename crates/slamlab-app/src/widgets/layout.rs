@@ -52,6 +52,29 @@ pub fn map_rect(ctx: &egui::Context) -> Option<egui::Rect> {
     ctx.data(|d| d.get_temp(map_rect_id()))
 }
 
+/// The widest stretch of `span` that none of `covered` covers, as (left,
+/// right); `span` itself when every stretch is narrower than `min_width` (the
+/// box then lies under a window rather than shrink to nothing).
+pub fn widest_gap(span: egui::Rangef, covered: &[egui::Rangef], min_width: f32) -> (f32, f32) {
+    let mut edges: Vec<f32> = vec![span.min, span.max];
+    for c in covered {
+        edges.extend([c.min - 8.0, c.max + 8.0].map(|x| x.clamp(span.min, span.max)));
+    }
+    edges.sort_by(f32::total_cmp);
+    edges
+        .windows(2)
+        .map(|w| (w[0], w[1]))
+        .filter(|(a, b)| {
+            let middle = 0.5 * (a + b);
+            !covered
+                .iter()
+                .any(|c| c.min - 8.0 <= middle && middle <= c.max + 8.0)
+        })
+        .max_by(|x, y| (x.1 - x.0).total_cmp(&(y.1 - y.0)))
+        .filter(|(a, b)| b - a >= min_width)
+        .unwrap_or((span.min, span.max))
+}
+
 /// Lays out `lesson`'s areas; `id` keeps each lesson's panel sizes apart.
 pub fn lesson_panels_ui(
     lesson: &mut (impl LessonPanels + ?Sized),
@@ -273,4 +296,25 @@ fn drawer_ui(
                 });
         });
     close
+}
+
+#[cfg(test)]
+mod tests {
+    use super::widest_gap;
+    use egui::Rangef;
+
+    /// The notices box's stretch: the whole span without windows, the part
+    /// left of a corner window (8 points clear of it), the wider side of a
+    /// window in the middle, and the whole span when no side is wide enough.
+    #[test]
+    fn the_widest_gap_keeps_clear_of_the_windows() {
+        let span = Rangef::new(8.0, 792.0);
+        assert_eq!(widest_gap(span, &[], 120.0), (8.0, 792.0));
+        let corner = Rangef::new(456.0, 800.0);
+        assert_eq!(widest_gap(span, &[corner], 120.0), (8.0, 448.0));
+        let middle = Rangef::new(200.0, 400.0);
+        assert_eq!(widest_gap(span, &[middle], 120.0), (408.0, 792.0));
+        let wide = Rangef::new(60.0, 740.0);
+        assert_eq!(widest_gap(span, &[wide], 120.0), (8.0, 792.0));
+    }
 }

@@ -43,6 +43,16 @@ pub fn render_or_skip(h: &mut Harness<'_, SlamLabApp>) -> Option<image::RgbaImag
     }
 }
 
+/// The rendered window ([`render_or_skip`]), saved as `name` in the folder
+/// `$SLAMLAB_UI_SHOTS` names, when it does, for a look.
+pub fn shot(h: &mut Harness<'_, SlamLabApp>, name: &str) -> Option<image::RgbaImage> {
+    let image = render_or_skip(h)?;
+    if let Some(dir) = std::env::var_os("SLAMLAB_UI_SHOTS") {
+        let _ = image.save(std::path::Path::new(&dir).join(name));
+    }
+    Some(image)
+}
+
 /// The app opened with `query` in a [`SIZE`] window.
 pub fn harness(query: &str) -> Harness<'static, SlamLabApp> {
     harness_sized(query, SIZE)
@@ -93,6 +103,37 @@ pub fn assert_notices(h: &Harness<'_, SlamLabApp>, count: usize, words: &[&[&str
             "no notice has all of {words:?}: {notices:?}"
         );
     }
+}
+
+/// The rectangle of the area `id` in the last frame (a window's is its title).
+pub fn area_rect(h: &Harness<'_, SlamLabApp>, id: egui::Id) -> egui::Rect {
+    h.ctx
+        .memory(|m| m.area_rect(id))
+        .unwrap_or_else(|| panic!("no area {id:?} on screen"))
+}
+
+/// The rectangles of the window titled `title` and of the notices box: the
+/// window no wider than its corner (42 % of the screen's width, its frame
+/// and shadow beside), and the two apart.
+pub fn assert_corner_window_beside_the_notices(
+    h: &Harness<'_, SlamLabApp>,
+    title: &str,
+) -> (egui::Rect, egui::Rect) {
+    let window = area_rect(h, egui::Id::unique(Some(title)));
+    let notices = area_rect(h, egui::Id::unique("slamlab_notices"));
+    let screen = h.ctx.content_rect();
+    let corner = (0.42 * screen.width()).clamp(300.0, 470.0);
+    eprintln!("{title} {window:?}, the notices {notices:?}, the screen {screen:?}");
+    assert!(
+        window.width() <= corner + 20.0,
+        "{title} is {} wide, its corner {corner}",
+        window.width()
+    );
+    assert!(
+        !window.intersects(notices),
+        "the notices {notices:?} lie under {title} {window:?}"
+    );
+    (window, notices)
 }
 
 /// Pixels whose every channel is within `tolerance` of `rgb`.

@@ -2,7 +2,9 @@
 //! back scores exactly as the lesson scores it; files named in the URL, several
 //! estimates and bad files; the estimate drawn on the map.
 
-use super::common::{count_pixels, harness_sized as harness, render_or_skip};
+use super::common::{
+    assert_corner_window_beside_the_notices, count_pixels, harness_sized as harness,
+};
 use egui_kittest::Harness;
 use slamlab_app::SlamLabApp;
 use slamlab_app::widgets::estimates::COLORS;
@@ -23,6 +25,16 @@ fn score<'a>(state: &'a serde_json::Value, name: &str) -> &'a serde_json::Value 
 fn exported(h: &Harness<'_, SlamLabApp>) -> Vec<(String, Vec<u8>)> {
     let lesson = h.state().lesson();
     export_files(lesson.id(), &lesson.trajectories(), &lesson.landmark_maps())
+}
+
+/// The mapping lesson's built map as "Export map" writes it (YAML and image).
+fn built_map_files(h: &Harness<'_, SlamLabApp>) -> Vec<(String, Vec<u8>)> {
+    super::common::lesson_of::<slamlab_app::mapping::MappingLesson>(h)
+        .map_files()
+        .unwrap_or_else(|why| panic!("{why}"))
+        .into_iter()
+        .map(|f| (f.name, f.bytes))
+        .collect()
 }
 
 fn add(h: &mut Harness<'_, SlamLabApp>, name: &str, bytes: &[u8]) -> Result<String, String> {
@@ -170,10 +182,7 @@ fn a_linked_estimate_is_drawn_on_the_map() {
         st["notices"].as_u64().unwrap() >= 1,
         "the link to another host is refused"
     );
-    if let Some(image) = render_or_skip(&mut h) {
-        if let Some(dir) = std::env::var_os("SLAMLAB_UI_SHOTS") {
-            let _ = image.save(std::path::Path::new(&dir).join("estimate-on-landmark-800x500.png"));
-        }
+    if let Some(image) = super::common::shot(&mut h, "estimate-on-landmark-800x500.png") {
         let [r, g, b, _] = COLORS[0].to_array();
         let drawn = count_pixels(&image, [r, g, b], 24);
         assert!(drawn > 150, "the estimate's colour covers {drawn} pixels");
@@ -203,13 +212,8 @@ fn a_dropped_map_scores_as_the_mapping_lessons_own() {
             .unwrap()
             .step_tick();
     }
+    let files = built_map_files(&h);
     let lesson = h.state().lesson_as::<MappingLesson>().unwrap();
-    let files: Vec<(String, Vec<u8>)> = lesson
-        .map_files()
-        .unwrap()
-        .into_iter()
-        .map(|f| (f.name, f.bytes))
-        .collect();
     let built = lesson.built_ros_map().unwrap();
     assert!(h.state().lesson().scores_maps());
     // Half the cell size: every cell split in four, so every true cell's centre
@@ -275,10 +279,7 @@ fn a_dropped_map_scores_as_the_mapping_lessons_own() {
     assert!(agreement > 0.8 && agreement < 0.9, "{agreement}");
     assert!(coverage > 0.05 && coverage < 0.2, "{coverage}");
     let shot = |h: &mut Harness<'_, SlamLabApp>, name: &str| {
-        let image = render_or_skip(h)?;
-        if let Some(dir) = std::env::var_os("SLAMLAB_UI_SHOTS") {
-            let _ = image.save(std::path::Path::new(&dir).join(name));
-        }
+        let image = super::common::shot(h, name)?;
         let [r, g, b, _] = COLORS[0].to_array();
         Some(count_pixels(&image, [r, g, b], 30))
     };
@@ -402,4 +403,39 @@ fn an_oversized_file_dropped_on_the_desktop_is_refused_unread() {
     assert!(names.contains(&name.as_str()), "{names:?}");
     assert!(!names.contains(&"small.tum"), "{names:?}");
     let _ = std::fs::remove_dir_all(&dir);
+}
+
+/// At 800 x 500 and full size "Your estimates" stays in its corner beside
+/// the mapping lesson's map (a map, its own built map and a path scored in
+/// it): no wider than the corner it opens in (the tables are narrow), and the
+/// notices box lies beside it, not under it.
+#[test]
+fn your_estimates_leaves_the_map_visible_at_800x500() {
+    for (size, shot) in [
+        (egui::vec2(800.0, 500.0), "estimates-mapping-800x500.png"),
+        (super::common::SIZE, "estimates-mapping-full.png"),
+    ] {
+        let mut h = harness(
+            "lesson=mapping&map=maze&seed=3&steps=200&poses=scan-to-map&tick=60&bogus=1",
+            size,
+        );
+        h.run();
+        let files = built_map_files(&h);
+        let path = exported(&h)
+            .into_iter()
+            .find(|(n, _)| n.ends_with(".tum"))
+            .unwrap();
+        h.state_mut().open_estimate_files(files);
+        h.state_mut().open_estimate_files(vec![path]);
+        h.run();
+        assert_eq!(h.state().notices().len(), 1);
+        let (window, _) = assert_corner_window_beside_the_notices(&h, "Your estimates");
+        let map = slamlab_app::widgets::layout::map_rect(&h.ctx).unwrap();
+        // More than half of the map's width is not under the window.
+        assert!(
+            window.left() - map.left() > 0.5 * map.width(),
+            "{window:?} over {map:?}"
+        );
+        super::common::shot(&mut h, shot);
+    }
 }

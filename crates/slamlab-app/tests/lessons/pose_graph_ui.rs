@@ -515,10 +515,7 @@ fn a_dropped_optimized_graph_is_scored_as_a_solution_or_opens_as_a_problem() {
         lesson(&h).note()
     );
     // Drawn over the lesson's graph in its colour.
-    if let Some(image) = render_or_skip(&mut h) {
-        if let Some(dir) = std::env::var_os("SLAMLAB_UI_SHOTS") {
-            let _ = image.save(std::path::Path::new(&dir).join("graph-solution-800x500.png"));
-        }
+    if let Some(image) = super::common::shot(&mut h, "graph-solution-800x500.png") {
         let [r, g, b, _] = COLORS[1].to_array();
         let drawn = count_pixels(image.as_raw(), [r, g, b], 24);
         assert!(drawn > 100, "the solution's colour covers {drawn} pixels");
@@ -577,4 +574,33 @@ fn an_optimized_graph_named_by_estimate_is_scored_as_a_solution() {
     assert!(ratio < 0.1, "cost ratio {ratio}");
     assert_eq!(lesson(&h).session().source(), "thesis");
     let _ = std::fs::remove_dir_all(&dir);
+}
+
+/// At 800 x 500 and full size "Your solutions" stays in its corner, no wider
+/// than it, and the notices box (here the note that the file is a solution)
+/// lies beside it, not under it.
+#[test]
+fn your_solutions_and_the_notices_lie_apart() {
+    use slamlab_sim::io::graph::write_g2o;
+    for (size, shot) in [
+        (
+            egui::vec2(800.0, 500.0),
+            "graph-solutions-notices-800x500.png",
+        ),
+        (SIZE, "graph-solutions-notices-full.png"),
+    ] {
+        let mut h =
+            super::common::harness_sized("lesson=pose-graph&example=thesis&solver=gn&seed=1", size);
+        h.run();
+        lesson_mut(&mut h).start_optimize();
+        lesson_mut(&mut h).advance_optimize(None);
+        let optimized = write_g2o(lesson(&h).session().graph()).unwrap();
+        lesson_mut(&mut h)
+            .open_graph_file("a-long-name-of-my-solution.g2o", optimized.into_bytes());
+        h.run();
+        assert_eq!(lesson(&h).solutions().items().len(), 1);
+        assert_eq!(h.state().notices().len(), 1, "{:?}", h.state().notices());
+        super::common::assert_corner_window_beside_the_notices(&h, "Your solutions");
+        super::common::shot(&mut h, shot);
+    }
 }
