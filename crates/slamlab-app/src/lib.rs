@@ -17,6 +17,7 @@ pub mod frame_stats;
 pub mod fusion;
 pub mod kidnap;
 pub mod landmark_slam;
+pub mod laser_lesson;
 pub mod lesson;
 pub mod mapping;
 pub mod palette;

@@ -20,10 +20,11 @@ mod explain;
 mod map;
 mod plots;
 
+use crate::laser_lesson::LaserLesson;
 use crate::lesson::{self, Lesson, LessonFrame, LessonStart};
 use crate::time_control::{StepControls, TimeAction, TimeInfo};
 use crate::widgets::laser_file::{LaserFileState, loaded_note};
-use crate::widgets::laser_inputs::{LaserInput, LaserInputs};
+use crate::widgets::laser_inputs::LaserInputs;
 use crate::widgets::map_canvas::MapView;
 use crate::widgets::params_panel::{self, PendingParams};
 use crate::widgets::reference_track::ReferenceTrack;
@@ -163,29 +164,12 @@ pub fn default_scenario() -> CartographerScenario {
 
 /// Opens the lesson from the URL's pairs, with what it stored last time.
 pub fn open(start: &LessonStart<'_>) -> Box<dyn Lesson> {
-    let location = start.last_value("log");
-    let reference = start.last_value("reference");
-    let (laser, pairs) =
-        LaserFileState::from_link(start.pairs, |k, _| k == "log" || k == "reference");
-    let start = &LessonStart {
-        pairs: &pairs,
-        ..*start
-    };
-    let opened = lesson::open_lesson(start, default_scenario(), CartographerLesson::new, |l| {
-        &mut l.frame
-    });
-    let mut lesson = match opened {
-        Ok(lesson) => lesson,
-        Err(why) => {
-            return lesson::open_instead(start, format!("Cartographer could not open: {why}"));
-        }
-    };
-    lesson.laser = laser;
-    if let Some(location) = &location {
-        lesson.frame.note = Some(format!("Loading the log {location}…"));
-    }
-    lesson.inputs.link(location, reference);
-    Box::new(lesson)
+    crate::laser_lesson::open(
+        start,
+        default_scenario(),
+        CartographerLesson::new,
+        "Cartographer",
+    )
 }
 
 fn policy() -> CheckpointPolicy {
@@ -517,15 +501,6 @@ impl CartographerLesson {
         }
     }
 
-    /// Maps the log named by `log=`, which arrived as `name`.
-    fn load_linked_log(&mut self, name: &str, bytes: &[u8], location: String) {
-        self.load_log(name, bytes, Some(location));
-        if matches!(&self.source, Source::Log(n, _) if n == name) {
-            // The link's figure keys (`run=1`, `tick=`) hold for the log.
-            self.frame.restarted_from_link = true;
-        }
-    }
-
     /// Runs the next phase, timed (its time goes to its scan's).
     fn run_phase(&mut self) -> CartographerPhase {
         let started = web_time::Instant::now();
@@ -831,6 +806,35 @@ impl CartographerLesson {
     }
 }
 
+impl LaserLesson for CartographerLesson {
+    type View = CartographerView;
+    fn laser_frame(&mut self) -> &mut LessonFrame<CartographerView> {
+        &mut self.frame
+    }
+    fn laser_file(&mut self) -> &mut LaserFileState {
+        &mut self.laser
+    }
+    fn laser_inputs(&mut self) -> &mut LaserInputs {
+        &mut self.inputs
+    }
+    fn open_log(&mut self, name: &str, bytes: &[u8]) {
+        self.load_log(name, bytes, None);
+    }
+    fn open_linked_log(&mut self, name: &str, bytes: &[u8], location: String) {
+        self.load_log(name, bytes, Some(location));
+        if matches!(&self.source, Source::Log(n, _) if n == name) {
+            // The link's figure keys (`run=1`, `tick=`) hold for the log.
+            self.frame.restarted_from_link = true;
+        }
+    }
+    fn open_reference(&mut self, name: &str, bytes: Vec<u8>, location: Option<String>) {
+        self.load_reference(name, bytes, location);
+    }
+    fn open_map(&mut self, files: &[(String, Vec<u8>)]) {
+        self.load_map_files(files);
+    }
+}
+
 impl crate::widgets::layout::LessonPanels for CartographerLesson {
     fn plots_ui(&mut self, ui: &mut egui::Ui) {
         self.refresh_reference();
@@ -893,13 +897,15 @@ impl Lesson for CartographerLesson {
             params::changed_pairs(&self.scenario, &default_scenario()),
             self.scenario.seed,
         );
-        if let Source::Log(_, Some(location)) = &self.source {
-            pairs.push(("log".to_owned(), location.clone()));
-            if let Some(reference) = &self.reference_location {
-                pairs.push(("reference".to_owned(), reference.clone()));
-            }
-            pairs.extend(self.laser.share_pairs());
-        }
+        let log = match &self.source {
+            Source::Log(_, location) => location.as_deref(),
+            Source::Simulated(..) => None,
+        };
+        pairs.extend(crate::laser_lesson::share_pairs(
+            log,
+            self.reference_location.as_deref(),
+            &self.laser,
+        ));
         pairs
     }
 
@@ -970,23 +976,7 @@ impl Lesson for CartographerLesson {
     }
 
     fn read_input(&mut self, ctx: &egui::Context) {
-        for input in self.inputs.poll(ctx) {
-            match input {
-                LaserInput::Log {
-                    name,
-                    bytes,
-                    location: Some(location),
-                } => self.load_linked_log(&name, &bytes, location),
-                LaserInput::Log { name, bytes, .. } => self.load_log(&name, &bytes, None),
-                LaserInput::Reference {
-                    name,
-                    bytes,
-                    location,
-                } => self.load_reference(&name, bytes, location),
-                LaserInput::Map(files) => self.load_map_files(&files),
-                LaserInput::Refused(why) => self.frame.note = Some(why),
-            }
-        }
+        self.read_laser_inputs(ctx);
     }
 
     fn advance(&mut self, dt: f64) {

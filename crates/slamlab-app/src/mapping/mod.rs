@@ -13,10 +13,11 @@ mod plots;
 
 pub use particles::ShownMap;
 
+use crate::laser_lesson::LaserLesson;
 use crate::lesson::{self, Lesson, LessonFrame, LessonRequest, LessonStart};
 use crate::time_control::{TimeAction, TimeInfo};
 use crate::widgets::laser_file::{LaserFileState, loaded_note};
-use crate::widgets::laser_inputs::{LaserInput, LaserInputs};
+use crate::widgets::laser_inputs::LaserInputs;
 use crate::widgets::map_canvas::MapView;
 use crate::widgets::params_panel::{self, PendingParams};
 use crate::widgets::reference_track::ReferenceTrack;
@@ -168,7 +169,14 @@ pub struct MappingLesson {
     /// Whether the last advance ran a grid FastSLAM update phase (or a
     /// replay), for the frame timing.
     advanced_an_update: bool,
+    /// The built map as a ROS map, with the revisions of the grid's tiles it
+    /// was made from.
+    ros_map: std::cell::RefCell<Option<(TileRevisions, Arc<slamlab_core::grid::OccupancyGrid>)>>,
 }
+
+/// A grid's tiles and their revisions: equal lists, equal grids (a revision
+/// names one content of one tile, in any grid).
+type TileRevisions = Vec<(i64, i64, u64)>;
 
 /// How long each scan took here: the sum of its phases' times, however they
 /// were stepped (phase by phase, a tick at once, or running).
@@ -204,27 +212,7 @@ pub fn default_scenario() -> MappingScenario {
 
 /// Opens the lesson from the URL's pairs, with what it stored last time.
 pub fn open(start: &LessonStart<'_>) -> Box<dyn Lesson> {
-    let location = start.last_value("log");
-    let reference = start.last_value("reference");
-    let (laser, pairs) =
-        LaserFileState::from_link(start.pairs, |k, _| k == "log" || k == "reference");
-    let start = &LessonStart {
-        pairs: &pairs,
-        ..*start
-    };
-    let opened = lesson::open_lesson(start, default_scenario(), MappingLesson::new, |l| {
-        &mut l.frame
-    });
-    let mut lesson = match opened {
-        Ok(lesson) => lesson,
-        Err(why) => return lesson::open_instead(start, format!("Mapping could not open: {why}")),
-    };
-    lesson.laser = laser;
-    if let Some(location) = &location {
-        lesson.frame.note = Some(format!("Loading the log {location}…"));
-    }
-    lesson.inputs.link(location, reference);
-    Box::new(lesson)
+    crate::laser_lesson::open(start, default_scenario(), MappingLesson::new, "Mapping")
 }
 
 impl MappingLesson {
@@ -256,6 +244,7 @@ impl MappingLesson {
             shown: ShownMap::Best,
             mean_map: particles::MeanMapCache::default(),
             advanced_an_update: false,
+            ros_map: std::cell::RefCell::default(),
         })
     }
 
@@ -491,16 +480,6 @@ impl MappingLesson {
             .update(reference.as_deref(), done, || session.scan_poses());
     }
 
-    /// Maps the log named by `log=`, which arrived as `name`.
-    fn load_linked_log(&mut self, name: &str, bytes: &[u8], location: String) {
-        self.load_log(name, bytes);
-        if self.log_name.as_deref() == Some(name) {
-            self.log_location = Some(location);
-            // The link's figure keys (`run=1`, `tick=`) hold for the log.
-            self.frame.restarted_from_link = true;
-        }
-    }
-
     /// Runs one phase (or catches up after a change of pose source).
     pub fn step_phase(&mut self) {
         self.scan_ms.timed(&mut self.session, |s| {
@@ -522,6 +501,22 @@ impl MappingLesson {
             .sim()
             .grid()
             .to_occupancy_grid(ROS_OCCUPIED_ABOVE, ROS_FREE_BELOW)
+    }
+
+    /// [`Self::built_ros_map`], converted again only after the grid changed:
+    /// the same `Arc` while it has not (so "Your estimates", scoring the run
+    /// every tick, compares the map with the truth once per change).
+    pub fn built_ros_map_shared(&self) -> Option<Arc<slamlab_core::grid::OccupancyGrid>> {
+        let change: TileRevisions = self.session.sim().grid().tile_revisions().collect();
+        let mut cache = self.ros_map.borrow_mut();
+        if let Some((seen, map)) = cache.as_ref()
+            && *seen == change
+        {
+            return Some(map.clone());
+        }
+        let map = Arc::new(self.built_ros_map()?);
+        *cache = Some((change, map.clone()));
+        Some(map)
     }
 
     /// The built map as ROS map files (`slamlab-map.yaml` and `slamlab-map.pgm`),
@@ -751,6 +746,36 @@ impl MappingLesson {
     }
 }
 
+impl LaserLesson for MappingLesson {
+    type View = MappingView;
+    fn laser_frame(&mut self) -> &mut LessonFrame<MappingView> {
+        &mut self.frame
+    }
+    fn laser_file(&mut self) -> &mut LaserFileState {
+        &mut self.laser
+    }
+    fn laser_inputs(&mut self) -> &mut LaserInputs {
+        &mut self.inputs
+    }
+    fn open_log(&mut self, name: &str, bytes: &[u8]) {
+        self.load_log(name, bytes);
+    }
+    fn open_linked_log(&mut self, name: &str, bytes: &[u8], location: String) {
+        self.load_log(name, bytes);
+        if self.log_name.as_deref() == Some(name) {
+            self.log_location = Some(location);
+            // The link's figure keys (`run=1`, `tick=`) hold for the log.
+            self.frame.restarted_from_link = true;
+        }
+    }
+    fn open_reference(&mut self, name: &str, bytes: Vec<u8>, location: Option<String>) {
+        self.load_reference(name, bytes, location);
+    }
+    fn open_map(&mut self, files: &[(String, Vec<u8>)]) {
+        self.load_map_files(files);
+    }
+}
+
 impl crate::widgets::layout::LessonPanels for MappingLesson {
     fn plots_ui(&mut self, ui: &mut egui::Ui) {
         self.refresh_reference();
@@ -834,11 +859,11 @@ impl Lesson for MappingLesson {
             return Vec::new();
         };
         let mut maps = vec![("truth".to_owned(), truth.clone())];
-        if let Some(built) = self.built_ros_map() {
+        if let Some(built) = self.built_ros_map_shared() {
             // Beside its path's row, which has the estimator's name.
             maps.push((
                 format!("{} (map)", self.session.sim().source().name()),
-                Arc::new(built),
+                built,
             ));
         }
         maps
@@ -850,13 +875,11 @@ impl Lesson for MappingLesson {
             params::changed_pairs(scenario, &default_scenario()),
             scenario.seed,
         );
-        if let Some(location) = &self.log_location {
-            pairs.push(("log".to_owned(), location.clone()));
-            if let Some(reference) = &self.reference_location {
-                pairs.push(("reference".to_owned(), reference.clone()));
-            }
-            pairs.extend(self.laser.share_pairs());
-        }
+        pairs.extend(crate::laser_lesson::share_pairs(
+            self.log_location.as_deref(),
+            self.reference_location.as_deref(),
+            &self.laser,
+        ));
         pairs
     }
 
@@ -910,23 +933,7 @@ impl Lesson for MappingLesson {
     }
 
     fn read_input(&mut self, ctx: &egui::Context) {
-        for input in self.inputs.poll(ctx) {
-            match input {
-                LaserInput::Log {
-                    name,
-                    bytes,
-                    location: Some(location),
-                } => self.load_linked_log(&name, &bytes, location),
-                LaserInput::Log { name, bytes, .. } => self.load_log(&name, &bytes),
-                LaserInput::Reference {
-                    name,
-                    bytes,
-                    location,
-                } => self.load_reference(&name, bytes, location),
-                LaserInput::Map(files) => self.load_map_files(&files),
-                LaserInput::Refused(why) => self.frame.note = Some(why),
-            }
-        }
+        self.read_laser_inputs(ctx);
     }
 
     fn advance(&mut self, dt: f64) {

@@ -439,3 +439,34 @@ fn your_estimates_leaves_the_map_visible_at_800x500() {
         super::common::shot(&mut h, shot);
     }
 }
+
+/// The mapping lesson converts its built map for "Your estimates" once per
+/// change of its grid: the same map (the same `Arc`, compared with the truth
+/// once) over frames that change nothing, another after a scan, each equal
+/// to the map "Export map" writes.
+#[test]
+fn the_built_map_is_converted_once_per_change() {
+    use slamlab_app::mapping::MappingLesson;
+    use std::sync::Arc;
+    let mut h = harness(
+        "lesson=mapping&map=maze&seed=3&steps=200&tick=20",
+        egui::vec2(800.0, 500.0),
+    );
+    h.run();
+    let shared = |h: &Harness<'_, SlamLabApp>| {
+        let lesson = h.state().lesson_as::<MappingLesson>().unwrap();
+        let map = lesson.built_ros_map_shared().unwrap();
+        assert_eq!(*map, lesson.built_ros_map().unwrap());
+        map
+    };
+    let first = shared(&h);
+    h.run();
+    assert!(Arc::ptr_eq(&first, &shared(&h)));
+    h.state_mut()
+        .lesson_as_mut::<MappingLesson>()
+        .unwrap()
+        .step_tick();
+    let next = shared(&h);
+    assert!(!Arc::ptr_eq(&first, &next));
+    assert_ne!(*first, *next);
+}
