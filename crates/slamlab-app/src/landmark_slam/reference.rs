@@ -7,6 +7,7 @@
 //! ([`slamlab_sim::landmark_slam::reference_map`]). The World box states the
 //! alignment's RMSE and each filter's landmark error against it.
 
+use crate::widgets::fetch::LinkedFile;
 use slamlab_sim::LandmarkSession;
 use slamlab_sim::io::graph::{GraphFormat, detect_format};
 use slamlab_sim::landmark_slam::reference_map::{
@@ -56,7 +57,7 @@ pub struct ReferenceState {
     /// Where `reference=` read it from (kept for share links).
     pub location: Option<String>,
     solver: Option<ReferenceSolver>,
-    fetch: Option<(bool, crate::widgets::fetch::Fetch)>,
+    fetch: Option<LinkedFile>,
     /// Why the reference could not be read or solved.
     pub error: Option<String>,
     map: Option<Arc<ReferenceMap>>,
@@ -67,9 +68,9 @@ impl ReferenceState {
     /// Reads `location` (a `reference=` link) on the next poll.
     pub fn fetch(&mut self, location: String) {
         *self = Self {
-            name: location.rsplit('/').next().unwrap_or(&location).to_owned(),
+            name: crate::widgets::fetch::file_name(&location).to_owned(),
+            fetch: Some(LinkedFile::new(location.clone())),
             location: Some(location),
-            fetch: Some((false, crate::widgets::fetch::Fetch::default())),
             ..Self::default()
         };
     }
@@ -103,24 +104,16 @@ impl ReferenceState {
     /// One frame's work: the fetch's progress, or one Levenberg-Marquardt step
     /// (about 20 ms natively for Victoria Park's 7,120 vertices).
     pub fn poll(&mut self, ctx: &egui::Context) {
-        if let Some((started, fetch)) = self.fetch.as_mut() {
-            if !*started {
-                *started = true;
-                if let Some(location) = &self.location {
-                    *fetch = crate::widgets::fetch::Fetch::start(location, ctx);
-                }
-            } else if let Some(result) = fetch.poll() {
-                self.fetch = None;
-                let location = self.location.clone();
+        if self.fetch.is_some() {
+            if let Some((location, result)) = LinkedFile::poll(&mut self.fetch, ctx) {
                 let name = self.name.clone();
                 match result.and_then(|bytes| {
                     String::from_utf8(bytes).map_err(|_| "the file is not text (UTF-8)".to_owned())
                 }) {
-                    Ok(text) => self.open(name, location, &text),
+                    Ok(text) => self.open(name, Some(location), &text),
                     Err(why) => {
                         self.error = Some(format!(
-                            "Could not load the reference graph {}: {why}",
-                            location.unwrap_or_default()
+                            "Could not load the reference graph {location}: {why}"
                         ));
                     }
                 }

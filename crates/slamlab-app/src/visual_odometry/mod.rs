@@ -23,7 +23,7 @@ mod photos;
 mod plots;
 pub mod scene;
 
-use crate::lesson::{self, Lesson, LessonFrame, LessonStart, LessonView, StoredSettings};
+use crate::lesson::{self, Lesson, LessonFrame, LessonStart, LessonView};
 use crate::time_control::{StepControls, TimeAction, TimeControl, TimeInfo};
 use crate::widgets::params_panel::{self, PendingParams};
 use serde::{Deserialize, Serialize};
@@ -86,28 +86,24 @@ pub struct VisualOdometryLesson {
 
 /// Opens the lesson from the URL's pairs, with what it stored last time.
 pub fn open(start: &LessonStart<'_>) -> Box<dyn Lesson> {
-    let stored = StoredSettings::<VoView>::from_start(start);
     let (link, pairs) = scene::SceneLink::from_pairs(start.pairs);
     let start = &LessonStart {
         pairs: &pairs,
         ..*start
     };
-    let (scenario, notices) = lesson::scenario_from_start(
-        start,
-        VoScenario::default(),
-        stored.as_ref().map(|s| s.params.as_slice()),
-    );
-    let mut lesson = VisualOdometryLesson::new(scenario);
-    lesson.frame.notices.extend(notices);
-    lesson.frame.notices.extend(link.notices);
-    if let Some(matches) = link.matches {
-        lesson.scene = Some(scene::TwoViewScene::new(
-            &lesson.scenario,
-            matches,
-            link.answers,
-        ));
-    }
-    lesson.frame = lesson.frame.restored(stored.as_ref());
+    let new = |scenario| {
+        let mut lesson = VisualOdometryLesson::new(scenario);
+        lesson.frame.notices.extend(link.notices);
+        if let Some(matches) = link.matches {
+            lesson.scene = Some(scene::TwoViewScene::new(
+                &lesson.scenario,
+                matches,
+                link.answers,
+            ));
+        }
+        Ok::<_, std::convert::Infallible>(lesson)
+    };
+    let Ok(lesson) = lesson::open_lesson(start, VoScenario::default(), new, |l| &mut l.frame);
     Box::new(lesson)
 }
 
