@@ -187,11 +187,7 @@ fn dropped_estimates_are_graded_and_another_variant_is_refused() {
     );
     assert!(h.state().notices().iter().any(|n| n == message));
     assert_eq!(h.state().lesson().frame().estimates().items().len(), 2);
-    if let Some(image) = render_or_skip(&mut h)
-        && let Some(dir) = std::env::var_os("SLAMLAB_UI_SHOTS")
-    {
-        let _ = image.save(Path::new(&dir).join("assignment-1280x800.png"));
-    }
+    super::common::shot(&mut h, "assignment-1280x800.png");
 }
 
 /// Bad links: an unknown assignment, an empty student, a student without an
@@ -340,19 +336,12 @@ fn the_panel_sits_beside_the_map_at_800_by_500() {
         map.right() <= panel_left + 2.0,
         "the map {map:?} reaches under the panel"
     );
-    if let Some(image) = render_or_skip(&mut h)
-        && let Some(dir) = std::env::var_os("SLAMLAB_UI_SHOTS")
-    {
-        let _ = image.save(Path::new(&dir).join("assignment-800x500.png"));
-    }
+    super::common::shot(&mut h, "assignment-800x500.png");
     assert!(
         map.width() >= 400.0 && map.height() >= 150.0,
         "the map {map:?}"
     );
-    if let Some(image) = render_or_skip(&mut h) {
-        if let Some(dir) = std::env::var_os("SLAMLAB_UI_SHOTS") {
-            let _ = image.save(Path::new(&dir).join("assignment-800x500.png"));
-        }
+    if let Some(image) = super::common::shot(&mut h, "assignment-800x500.png") {
         let [r, g, b, _] = slamlab_app::widgets::estimates::COLORS[0].to_array();
         let drawn = super::common::count_pixels(&image, [r, g, b], 24);
         assert!(drawn > 100, "the estimate's colour covers {drawn} pixels");
@@ -587,11 +576,7 @@ fn the_fusion_link_opens_the_variants_drive_and_grades_a_dropped_estimate() {
     );
     // Both are drawn on the room as the lesson's estimates.
     assert_eq!(h.state().lesson().frame().estimates().items().len(), 2);
-    if let Some(image) = render_or_skip(&mut h)
-        && let Some(dir) = std::env::var_os("SLAMLAB_UI_SHOTS")
-    {
-        let _ = image.save(Path::new(&dir).join("assignment-fusion-1280x800.png"));
-    }
+    super::common::shot(&mut h, "assignment-fusion-1280x800.png");
 }
 
 /// The answer a reference estimator writes for each of the four hand-ins that
@@ -745,10 +730,6 @@ fn the_four_other_hand_ins_are_graded_in_the_page() {
         assert_eq!(graded[1]["pass"], false, "{name}");
         assert!(graded[1]["score"].as_f64() < Some(prepared.assignment.pass_score()));
         assert_eq!(h.state().notices(), Vec::<String>::new(), "{name}");
-        if let Some(image) = render_or_skip(&mut h)
-            && let Some(dir) = std::env::var_os("SLAMLAB_UI_SHOTS")
-        {
-            let _ = image.save(Path::new(&dir).join(format!("assignment-{name}-1280x800.png")));
-        }
+        super::common::shot(&mut h, &format!("assignment-{name}-1280x800.png"));
     }
 }

@@ -337,11 +337,7 @@ fn the_detection_and_the_merge_are_marked_and_said_when_they_have_happened() {
         dist(&taken, &node.global_pose) > 1.0,
         "the stale pose is elsewhere"
     );
-    if let Some(image) = render_or_skip(&mut h)
-        && let Some(dir) = std::env::var_os("SLAMLAB_UI_SHOTS")
-    {
-        let _ = image.save(std::path::Path::new(&dir).join("cartographer-merged.png"));
-    }
+    super::common::shot(&mut h, "cartographer-merged.png");
     assert!(lesson(&h).next_phase_text().contains("optimization"));
     lesson_mut(&mut h).step_optimization();
     h.run();
@@ -358,11 +354,7 @@ fn the_detection_and_the_merge_are_marked_and_said_when_they_have_happened() {
         note.contains("scans to reach it: the pose graph is solved every"),
         "{note}"
     );
-    if let Some(image) = render_or_skip(&mut h)
-        && let Some(dir) = std::env::var_os("SLAMLAB_UI_SHOTS")
-    {
-        let _ = image.save(std::path::Path::new(&dir).join("cartographer-moments.png"));
-    }
+    super::common::shot(&mut h, "cartographer-moments.png");
 }
 
 /// The Intel log's first 2,000 scans dropped with its corrected version: the

@@ -581,11 +581,7 @@ fn at_800_by_500_the_status_shows_and_a_hopeless_kidnap_says_who_can_recover() {
         recovery_verdict(lesson(&h).sim().run()),
         Verdict::CannotRecover { .. }
     ));
-    if let Some(image) = render_or_skip(&mut h)
-        && let Some(dir) = std::env::var_os("SLAMLAB_UI_SHOTS")
-    {
-        let _ = image.save(std::path::Path::new(&dir).join("kidnap-hopeless-800x500.png"));
-    }
+    super::common::shot(&mut h, "kidnap-hopeless-800x500.png");
     assert!(text_drawn(&h, "MCL adds no particles"), "said on the map");
     assert!(h.query_by_label("Compare with ACMCL").is_some());
     h.get_by_label("Compare with ACMCL").click();
@@ -606,11 +602,7 @@ fn at_800_by_500_the_status_shows_and_a_hopeless_kidnap_says_who_can_recover() {
     eprintln!("240 ticks later: MCL {mcl}; ACMCL {acmcl}");
     assert!(acmcl.starts_with("recovered after"), "{acmcl}");
     assert!(matches!(recovery_verdict(run), Verdict::Kidnapped(_)));
-    if let Some(image) = render_or_skip(&mut h)
-        && let Some(dir) = std::env::var_os("SLAMLAB_UI_SHOTS")
-    {
-        let _ = image.save(std::path::Path::new(&dir).join("kidnap-compared-800x500.png"));
-    }
+    super::common::shot(&mut h, "kidnap-compared-800x500.png");
 }
 
 /// How often the default MCL finds the robot again by itself: seeds 1-8 of the
