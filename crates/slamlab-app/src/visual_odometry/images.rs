@@ -109,14 +109,12 @@ pub fn centre_ui(
             .wrap(),
         );
     }
-    key_ui(ui, &key);
     let Panels {
-        area,
+        painter,
         response,
         left,
         right,
-    } = panels(ui, &camera, max_height);
-    let painter = ui.painter_at(area);
+    } = panels(ui, &key, &camera, max_height);
 
     let matches = session.matches();
     let wrong = session.wrong();
@@ -209,11 +207,12 @@ pub fn centre_ui(
     now_hovered
 }
 
-/// Two image panels placed and painted: where they are on screen and the
-/// hover response over them.
+/// Two image panels placed and painted: where they are on screen, the
+/// hover response over them and a painter clipped to them.
 pub(super) struct Panels {
-    /// Both panels and the room around them.
-    pub area: Rect,
+    /// A painter clipped to both panels and the room around them, for what
+    /// is drawn on the images.
+    pub painter: egui::Painter,
     /// The pointer over the area.
     pub response: egui::Response,
     /// The first image.
@@ -222,10 +221,17 @@ pub(super) struct Panels {
     pub right: ImageFrame,
 }
 
-/// Allocates two images of `camera`'s size side by side, centred, each at
-/// most half the width and `max_height` points high, and paints their
-/// backgrounds and borders.
-pub(super) fn panels(ui: &mut egui::Ui, camera: &Intrinsics, max_height: f32) -> Panels {
+/// Draws `key` (what the images show), then allocates two images of
+/// `camera`'s size side by side under it, centred, each at most half the
+/// width and `max_height` points high, and paints their backgrounds and
+/// borders.
+pub(super) fn panels(
+    ui: &mut egui::Ui,
+    key: &[KeyEntry],
+    camera: &Intrinsics,
+    max_height: f32,
+) -> Panels {
+    key_ui(ui, key);
     let available = ui.available_size();
     let gap = 12.0;
     let widest = ((available.x - gap) / 2.0).max(40.0);
@@ -260,7 +266,7 @@ pub(super) fn panels(ui: &mut egui::Ui, camera: &Intrinsics, max_height: f32) ->
         );
     }
     Panels {
-        area,
+        painter: ui.painter_at(area),
         response,
         left: ImageFrame::new(left_rect, camera),
         right: ImageFrame::new(right_rect, camera),

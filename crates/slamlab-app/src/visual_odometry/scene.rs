@@ -16,7 +16,7 @@
 use super::images::{self, INLIER, OUTLIER, Panels, UNCLASSIFIED};
 use crate::palette;
 use crate::widgets::estimates::{Estimate, EstimateContent};
-use crate::widgets::plots::{Figure, KeyEntry, Mark, figure_plot, figure_ui, key_ui};
+use crate::widgets::plots::{Figure, KeyEntry, Mark, figure_plot, figure_ui};
 use egui::Color32;
 use egui_plot::{Line, PlotPoints, Points};
 use slamlab_core::vision::{RelativePose, rotation_angle};
@@ -241,14 +241,12 @@ impl TwoViewScene {
         if rings {
             key.push(KeyEntry::new("truly wrong (ring)", truth, Mark::Dots));
         }
-        key_ui(ui, &key);
         let Panels {
-            area,
+            painter,
             response,
             left,
             right,
-        } = images::panels(ui, &self.run.camera, max_height);
-        let painter = ui.painter_at(area);
+        } = images::panels(ui, &key, &self.run.camera, max_height);
         let colour_of = |i: usize| match inliers.get(i) {
             Some(true) => INLIER,
             Some(false) => OUTLIER,
