@@ -121,26 +121,16 @@ fn the_link_opens_the_students_variant_in_its_lesson() {
     let answers = read_trajectory("truth.tum", &truth_file)
         .unwrap()
         .trajectory;
-    let lesson = h.state().lesson().trajectories();
-    let truth = lesson
-        .iter()
-        .find(|t| t.role == TrajectoryRole::Truth)
-        .unwrap();
-    assert_eq!(truth.trajectory.len(), 151);
-    for (k, (a, b)) in truth
-        .trajectory
-        .poses()
-        .iter()
-        .zip(answers.poses())
-        .enumerate()
-    {
+    let truth = lesson_truth(&h);
+    assert_eq!(truth.len(), 151);
+    for (k, (a, b)) in truth.poses().iter().zip(answers.poses()).enumerate() {
         assert_eq!((a.x, a.y), (b.x, b.y), "pose {k}");
         assert!((a.theta - b.theta).abs() < 1e-12, "pose {k}");
-        assert_eq!(truth.trajectory.stamps()[k], answers.stamps()[k]);
+        assert_eq!(truth.stamps()[k], answers.stamps()[k]);
     }
     // The library's own truth, to the bit.
     assert_eq!(
-        truth.trajectory.poses(),
+        truth.poses(),
         &prepared.truth().poses()[..151],
         "the lesson's run is the variant's"
     );
@@ -371,12 +361,7 @@ fn the_mcl_link_opens_the_variants_localization_run() {
     let prepared = slamlab_sim::assignments::prepare(&assignment, "alice@example.edu").unwrap();
     assert_eq!(st["seed"], prepared.variant.seed);
     let expected = prepared.truth();
-    let lesson = h.state().lesson().trajectories();
-    let truth = &lesson
-        .iter()
-        .find(|t| t.role == TrajectoryRole::Truth)
-        .unwrap()
-        .trajectory;
+    let truth = &lesson_truth(&h);
     let mut compared = 0;
     for (t, pose) in truth.stamps().iter().zip(truth.poses()) {
         if let Some(k) = expected.stamps().iter().position(|s| s == t) {
@@ -385,6 +370,17 @@ fn the_mcl_link_opens_the_variants_localization_run() {
         }
     }
     assert!(compared >= 400, "{compared} poses compared");
+}
+
+/// The open lesson's true trajectory (the test fails when it has none).
+fn lesson_truth(h: &Harness<'_, SlamLabApp>) -> slamlab_sim::metrics::Trajectory {
+    h.state()
+        .lesson()
+        .trajectories()
+        .into_iter()
+        .find(|t| t.role == TrajectoryRole::Truth)
+        .map(|t| t.trajectory)
+        .unwrap_or_else(|| panic!("the lesson has no truth"))
 }
 
 /// Saves what the Assignment panel's `button` makes to `path` (the desktop's
@@ -542,12 +538,7 @@ fn the_fusion_link_opens_the_variants_drive_and_grades_a_dropped_estimate() {
     assert_eq!(st["runs"][0]["mode"], "absolute", "{}", st["runs"]);
     // The lesson's truth (sampled at 30 Hz) is the variant's at every 0.1 s.
     let expected = prepared.truth();
-    let lesson = h.state().lesson().trajectories();
-    let truth = &lesson
-        .iter()
-        .find(|t| t.role == TrajectoryRole::Truth)
-        .unwrap()
-        .trajectory;
+    let truth = &lesson_truth(&h);
     let mut compared = 0;
     for (t, pose) in truth.stamps().iter().zip(truth.poses()) {
         if let Some(k) = expected.stamps().iter().position(|s| (s - t).abs() < 1e-9) {
