@@ -10,8 +10,8 @@
 use super::mode_color;
 use crate::export::PlotSeries;
 use crate::widgets::plots::{
-    Figure, KeyEntry, Mark, Styled, draw_series, figure_ui, line_width, plot_row, series_data,
-    series_key_ui, style_entries, time_plot,
+    Figure, KeyEntry, Mark, Styled, draw_series, figure_ui, line_width, plot_row, row_time_plot,
+    runs_key_ui, series_data, style_entries,
 };
 use slamlab_sim::fusion::session::FusionSim;
 
@@ -103,24 +103,10 @@ pub fn plots_ui(ui: &mut egui::Ui, sim: &FusionSim) {
         .iter()
         .map(|run| (run.mode().name().to_owned(), mode_color(run.mode())))
         .collect();
-    // One alone needs no row of colours (the title bar names it): its plots' keys
-    // take its colour.
-    let text = match modes.as_slice() {
-        [(_, color)] => *color,
-        _ => {
-            series_key_ui(ui, &modes, "");
-            ui.visuals().text_color()
-        }
-    };
+    let text = runs_key_ui(ui, &modes);
     let height = ui.available_height().max(80.0);
-    let plot = |id: &'static str| {
-        move |h: f32, y: &str| {
-            time_plot(id, y, h)
-                .link_axis(egui::Id::unique("fusion_time_axis"), [true, false])
-                .include_x(1.0)
-                .include_y(0.0)
-        }
-    };
+    let plot =
+        |id: &'static str| move |h: f32, y: &str| row_time_plot(id, y, h, "fusion_time_axis");
     // An embed shows the first two: the x error and the y error.
     plot_row(ui, ERROR_PLOTS.len() + 1, |k, ui| {
         if let Some((title, axis, id)) = ERROR_PLOTS.get(k).copied() {

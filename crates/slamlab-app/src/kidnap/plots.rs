@@ -6,8 +6,8 @@
 use super::filter_color;
 use crate::export::PlotSeries;
 use crate::widgets::plots::{
-    Figure, Mark, Styled, draw_series, figure_ui, line_width, plot_row, series_data, series_key_ui,
-    style_entries, time_plot, title_ui,
+    Figure, Mark, Styled, draw_series, figure_ui, line_width, plot_row, row_time_plot, runs_key_ui,
+    series_data, style_entries, title_ui,
 };
 use slamlab_sim::kidnap::{MclRun, UpdateRecord};
 
@@ -118,24 +118,10 @@ pub fn plots_ui(ui: &mut egui::Ui, run: &MclRun) {
         .enumerate()
         .map(|(k, f)| (f.name.to_uppercase(), filter_color(k, f.name)))
         .collect();
-    // One alone needs no row of colours (the title bar names it): its plots' keys
-    // take its colour.
-    let text = match filters.as_slice() {
-        [(_, color)] => *color,
-        _ => {
-            series_key_ui(ui, &filters, "");
-            ui.visuals().text_color()
-        }
-    };
+    let text = runs_key_ui(ui, &filters);
     let height = ui.available_height().max(80.0);
-    let plot = |id: &'static str| {
-        move |h: f32, y: &str| {
-            time_plot(id, y, h)
-                .link_axis(egui::Id::unique("kidnap_time_axis"), [true, false])
-                .include_x(1.0)
-                .include_y(0.0)
-        }
-    };
+    let plot =
+        |id: &'static str| move |h: f32, y: &str| row_time_plot(id, y, h, "kidnap_time_axis");
     let figure = |title: &'static str, hover: &'static str, y_label: &'static str| Figure {
         title,
         hover,

@@ -4,8 +4,8 @@
 use crate::export::PlotSeries;
 use crate::palette;
 use crate::widgets::plots::{
-    Figure, Mark, Styled, draw_series, figure_ui, plot_row, plot_values, series_data,
-    series_key_ui, time_plot_without_legend,
+    Figure, Mark, Styled, draw_series, figure_ui, plot_row, plot_values, row_time_plot,
+    series_data, series_key_ui,
 };
 pub(super) use crate::widgets::plots::{line_width, thin, time_plot};
 use egui_plot::{HLine, LineStyle, Plot, Span};
@@ -45,10 +45,7 @@ pub(super) fn band_ui(plot_ui: &mut egui_plot::PlotUi<'_>, lo: f64, hi: f64) {
 
 /// The plots under the map share their time axis and always show the first second.
 fn plot<'a>(id: &str, y_label: &str, height: f32) -> Plot<'a> {
-    time_plot_without_legend(id, y_label, height)
-        .link_axis(egui::Id::unique("slamlab_time_axis"), [true, false])
-        .include_x(1.0)
-        .include_y(0.0)
+    row_time_plot(id, y_label, height, "slamlab_time_axis")
 }
 
 /// Pairs of filters whose plotted series lie on top of each other: the first filter

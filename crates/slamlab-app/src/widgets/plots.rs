@@ -373,9 +373,14 @@ pub fn time_plot<'a>(id: &str, y_label: &str, height: f32) -> Plot<'a> {
         .include_x(0.0)
 }
 
-/// [`time_plot`] (which has no legend either; kept for the lessons that name it).
-pub fn time_plot_without_legend<'a>(id: &str, y_label: &str, height: f32) -> Plot<'a> {
+/// A plot of the row under a lesson's map ([`time_plot`]): the row's plots
+/// share their time axis (`axis` names the row's link) and always show the
+/// first second and zero.
+pub fn row_time_plot<'a>(id: &str, y_label: &str, height: f32, axis: &str) -> Plot<'a> {
     time_plot(id, y_label, height)
+        .link_axis(egui::Id::unique(axis), [true, false])
+        .include_x(1.0)
+        .include_y(0.0)
 }
 
 /// One entry of a plot's key: a name, its colour and how it is drawn.
@@ -592,6 +597,21 @@ fn mark_sample_ui(ui: &mut egui::Ui, color: Color32, mark: Mark) {
         }
         Mark::Dots => {
             painter.circle_filled(rect.center(), 2.5, color);
+        }
+    }
+}
+
+/// The runs' colours above a row of plots, once for the row, each plot's key
+/// then naming only its styles: one run alone needs no row of colours (the
+/// title bar names it) and its plots' keys take its colour; several get the
+/// row ([`series_key_ui`]) and keys in the text colour. Returns the keys'
+/// colour.
+pub fn runs_key_ui(ui: &mut egui::Ui, runs: &[(String, egui::Color32)]) -> egui::Color32 {
+    match runs {
+        [(_, color)] => *color,
+        _ => {
+            series_key_ui(ui, runs, "");
+            ui.visuals().text_color()
         }
     }
 }
