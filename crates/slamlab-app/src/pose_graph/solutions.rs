@@ -259,8 +259,21 @@ impl Solutions {
                             let (rect, _) =
                                 ui.allocate_exact_size(egui::vec2(12.0, 12.0), egui::Sense::hover());
                             ui.painter().rect_filled(rect, 2.0, s.color);
-                            ui.label(crate::widgets::estimates::short_name(&s.name))
-                                .on_hover_text(&s.name);
+                            // The switch and the remove button before the
+                            // name, in reach however narrow the window.
+                            ui.horizontal(|ui| {
+                                ui.checkbox(&mut s.visible, "")
+                                    .on_hover_text("Draw this graph over the lesson's");
+                                if ui
+                                    .small_button("×")
+                                    .on_hover_text("Remove this solution")
+                                    .clicked()
+                                {
+                                    remove = Some(k);
+                                }
+                                ui.label(crate::widgets::estimates::short_name(&s.name))
+                                    .on_hover_text(&s.name);
+                            });
                             let f = s.score.as_ref().map(|g| g.cost);
                             if costs {
                                 ui.label(cost(f));
@@ -272,17 +285,6 @@ impl Solutions {
                                     cost(Some(self.reference_cost))
                                 ));
                             ui.label(fmt(s.ate, 4));
-                            ui.horizontal(|ui| {
-                                ui.checkbox(&mut s.visible, "")
-                                    .on_hover_text("Draw this graph over the lesson's");
-                                if ui
-                                    .small_button("×")
-                                    .on_hover_text("Remove this solution")
-                                    .clicked()
-                                {
-                                    remove = Some(k);
-                                }
-                            });
                             ui.end_row();
                         }
                     });

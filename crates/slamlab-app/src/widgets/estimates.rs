@@ -855,8 +855,8 @@ const NAME_CHARS: usize = 18;
 
 /// One table of the "Your estimates" window: the scores of one kind (paths,
 /// maps, landmarks, relative poses) under their own headings, each row a
-/// colour, a name (its note in the tooltip), the numbers, and for a
-/// student's estimate a switch to draw it and a button to remove it.
+/// colour, for a student's estimate a switch to draw it and a button to
+/// remove it, a name (its note in the tooltip) and the numbers.
 struct ScoreTable<'a> {
     id: &'static str,
     /// The headings of the numbers, each with its tooltip.
@@ -894,33 +894,30 @@ impl ScoreTable<'_> {
                     Some(note) => format!("{}: {note}", s.name),
                     None => s.name.clone(),
                 };
-                ui.label(shown).on_hover_text(hover);
+                // A student's estimate: its switch and its remove button before
+                // its name, in reach however narrow the window.
+                ui.horizontal(|ui| {
+                    if let Some(k) = items.iter().position(|e| s.dropped && e.name == s.name) {
+                        let mut drawn = items[k].visible;
+                        if ui
+                            .checkbox(&mut drawn, "")
+                            .on_hover_text("Draw this estimate on the lesson's map")
+                            .changed()
+                        {
+                            *toggled = Some((k, drawn));
+                        }
+                        if ui
+                            .small_button("×")
+                            .on_hover_text("Remove this estimate")
+                            .clicked()
+                        {
+                            *remove = Some(k);
+                        }
+                    }
+                    ui.label(shown).on_hover_text(hover);
+                });
                 for n in numbers {
                     ui.label(n);
-                }
-                match items.iter().position(|e| s.dropped && e.name == s.name) {
-                    Some(k) => {
-                        ui.horizontal(|ui| {
-                            let mut drawn = items[k].visible;
-                            if ui
-                                .checkbox(&mut drawn, "")
-                                .on_hover_text("Draw this estimate on the lesson's map")
-                                .changed()
-                            {
-                                *toggled = Some((k, drawn));
-                            }
-                            if ui
-                                .small_button("×")
-                                .on_hover_text("Remove this estimate")
-                                .clicked()
-                            {
-                                *remove = Some(k);
-                            }
-                        });
-                    }
-                    None => {
-                        ui.label("");
-                    }
                 }
                 ui.end_row();
             }
