@@ -2,27 +2,21 @@
 //! on one line), `--csv DIR` files, the parameter summary of the readable output,
 //! and the progress bars on stderr.
 
+use crate::args;
 use anyhow::{Context, Result};
-use clap::{Arg, ArgAction, ArgMatches};
+use clap::{Arg, ArgMatches};
 use serde_json::{Map, Value};
 use std::io::{IsTerminal, Write};
 use std::path::PathBuf;
 
 /// `--json`: every lesson and experiment has it (the registry adds it).
 pub fn json_arg() -> Arg {
-    Arg::new("json")
-        .long("json")
-        .action(ArgAction::SetTrue)
-        .help("print one JSON object")
+    args::switch("json", "print one JSON object")
 }
 
 /// `--csv DIR`, for the commands that write files; `help` says what they write.
 pub fn csv_arg(help: &'static str) -> Arg {
-    Arg::new("csv")
-        .long("csv")
-        .value_name("DIR")
-        .value_parser(clap::value_parser!(PathBuf))
-        .help(help)
+    args::path("csv", "DIR", help)
 }
 
 /// Where a command's results go: the readable text or `--json` on stdout, files

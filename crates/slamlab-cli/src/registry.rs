@@ -8,6 +8,7 @@
 //! shared `--json`, `--csv`, progress bars and refusals come from here and from
 //! [`crate::output`].
 
+use crate::args;
 use crate::command::{Experiment, RunLesson};
 use crate::experiments;
 use crate::lessons;
@@ -50,25 +51,23 @@ pub fn lesson(id: &str) -> Option<&'static dyn RunLesson> {
 /// `--scenario FILE` (read before clap parses, by
 /// [`crate::scenario_file::expand_scenario_file`]; the argument is here for `--help`).
 pub fn scenario_file_arg() -> Arg {
-    Arg::new("scenario")
-        .long("scenario")
-        .value_name("FILE")
-        .help("a scenario the app exported (Export → Scenario as JSON): its parameters, under the flags given here")
+    args::file(
+        "scenario",
+        "a scenario the app exported (Export → Scenario as JSON): its parameters, under the flags given here",
+    )
 }
 
 /// A lesson's subcommand as `slamlab run` has it.
 pub fn lesson_command(lesson: &dyn RunLesson) -> Command {
     lesson
         .command()
-        .name(lesson.id())
-        .about(lesson.about())
         .arg(output::json_arg())
         .arg(scenario_file_arg())
 }
 
 /// `slamlab run`, with one subcommand per lesson.
 pub fn run_command() -> Command {
-    let ids: Vec<&str> = LESSONS.iter().map(|l| l.id()).collect();
+    let ids: Vec<String> = LESSONS.iter().map(|l| l.id()).collect();
     Command::new("run")
         .about("Run a lesson's scenario and print its metrics")
         .long_about(format!(
@@ -89,11 +88,7 @@ pub fn run_command() -> Command {
 /// experiment's flag, so that giving one is refused with the reason rather than
 /// a parse error.
 fn experiment_command(experiment: &dyn Experiment) -> Command {
-    let mut command = experiment
-        .command()
-        .name(experiment.name())
-        .about(experiment.about())
-        .arg(output::json_arg());
+    let mut command = experiment.command().arg(output::json_arg());
     for arg in foreign_args(experiment) {
         command = command.arg(arg);
     }
@@ -133,7 +128,7 @@ fn foreign_args(experiment: &dyn Experiment) -> Vec<Arg> {
 }
 
 /// The experiments that have flag `id` as their own.
-fn owners(id: &str) -> Vec<&'static str> {
+fn owners(id: &str) -> Vec<String> {
     EXPERIMENTS
         .iter()
         .filter(|e| {
@@ -146,8 +141,9 @@ fn owners(id: &str) -> Vec<&'static str> {
 }
 
 /// "a", "a and b", "a, b and c".
-fn and_list(words: &[&str]) -> String {
-    match words {
+fn and_list(words: &[impl AsRef<str>]) -> String {
+    let words: Vec<&str> = words.iter().map(AsRef::as_ref).collect();
+    match words.as_slice() {
         [] => String::new(),
         [one] => (*one).to_owned(),
         [rest @ .., last] => format!("{} and {last}", rest.join(", ")),

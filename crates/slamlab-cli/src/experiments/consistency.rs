@@ -19,16 +19,9 @@ use std::io::Write;
 pub struct Consistency;
 
 impl Experiment for Consistency {
-    fn name(&self) -> &'static str {
-        "consistency"
-    }
-
-    fn about(&self) -> &'static str {
-        "The average NEES over many seeded runs of any landmark scenario, against its 95% band"
-    }
-
     fn command(&self) -> Command {
-        Command::new(self.name())
+        Command::new("consistency")
+            .about("The average NEES over many seeded runs of any landmark scenario, against its 95% band")
             .arg(trials_arg("50"))
             .arg(steps_arg())
             .arg(csv_arg(

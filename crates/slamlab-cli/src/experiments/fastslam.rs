@@ -5,11 +5,12 @@
 //! ```
 
 use super::{scenario_args, steps_arg, trials_arg};
+use crate::args;
 use crate::command::Experiment;
 use crate::lessons::landmark::{refuse_manual, scenario_from};
 use crate::output::{Output, csv_arg, progress_bar};
 use anyhow::{Result, bail};
-use clap::{Arg, ArgMatches, Command};
+use clap::{ArgMatches, Command};
 use slamlab_core::particle::FastSlamVersion;
 use slamlab_sim::landmark_slam::fastslam::fastslam_experiment;
 use std::io::Write;
@@ -21,29 +22,20 @@ const MAX_PARTICLES: usize = 10_000;
 pub struct FastSlam;
 
 impl Experiment for FastSlam {
-    fn name(&self) -> &'static str {
-        "fastslam"
-    }
-
-    fn about(&self) -> &'static str {
-        "FastSLAM 1.0 or 2.0 on the landmark world: robot and landmark RMSE and N_eff per particle count"
-    }
-
     fn command(&self) -> Command {
-        Command::new(self.name())
+        Command::new("fastslam")
+            .about("FastSLAM 1.0 or 2.0 on the landmark world: robot and landmark RMSE and N_eff per particle count")
             .arg(
-                Arg::new("version")
-                    .long("version")
-                    .value_parser(["1", "2"])
-                    .default_value("2")
-                    .help("FastSLAM 1.0 (motion-model proposal) or 2.0 (measurement-informed proposal)"),
+                args::choice(
+                    "version",
+                    &["1", "2"],
+                    "FastSLAM 1.0 (motion-model proposal) or 2.0 (measurement-informed proposal)",
+                )
+                .default_value("2"),
             )
             .arg(
-                Arg::new("particles")
-                    .long("particles")
-                    .value_name("LIST")
-                    .default_value("5,10,30,100")
-                    .help("comma-separated particle counts (1 .. 10000)"),
+                args::list("particles", "comma-separated particle counts (1 .. 10000)")
+                    .default_value("5,10,30,100"),
             )
             .arg(trials_arg("20"))
             .arg(steps_arg())

@@ -6,6 +6,7 @@
 //!     --estimator ekf,ukf,fastslam2 --mode slam,localization --json
 //! ```
 
+use crate::args;
 use crate::command::Experiment;
 use crate::lessons::landmark::{data_arg, data_from, scenario_args_where, scenario_for_data};
 use crate::output::{Output, csv_arg, trials_bar, trials_progress};
@@ -29,23 +30,14 @@ pub struct RealData;
 const OWN: [&str; 3] = ["estimator", "mode", "robot"];
 
 impl Experiment for RealData {
-    fn name(&self) -> &'static str {
-        "real-data"
-    }
-
-    fn about(&self) -> &'static str {
-        "The landmark filters on a recorded data set (MRCLAM with Vicon truth): trajectory RMSE, landmark RMSE, ANEES and time in band per robot, estimator and mode; on Victoria Park the GPS alignment RMSE"
-    }
-
     fn command(&self) -> Command {
-        Command::new(self.name())
+        Command::new("real-data")
+            .about("The landmark filters on a recorded data set (MRCLAM with Vicon truth): trajectory RMSE, landmark RMSE, ANEES and time in band per robot, estimator and mode; on Victoria Park the GPS alignment RMSE")
             .arg(data_arg().required(true))
-            .arg(
-                Arg::new("robots")
-                    .long("robots")
-                    .value_name("LIST")
-                    .help("comma-separated robots of an MRCLAM data set [default: every robot in the files]"),
-            )
+            .arg(args::list(
+                "robots",
+                "comma-separated robots of an MRCLAM data set [default: every robot in the files]",
+            ))
             .arg(
                 Arg::new("estimators")
                     .long("estimator")

@@ -8,12 +8,13 @@
 //! slamlab run cartographer --log intel.clf.bz2 --reference intel-corrected.log.gz --loop-closures off
 //! ```
 
+use crate::args;
 use crate::command::RunLesson;
 use crate::log_cmd::{laser_log_arg, read_laser_file, topic_args};
 use crate::map::{map_arg, read_map};
 use crate::output::{Output, units_bar, units_progress};
 use anyhow::{Result, bail};
-use clap::{Arg, ArgMatches, Command};
+use clap::{ArgMatches, Command};
 use cpu_time::ThreadTime;
 use serde_json::json;
 use slamlab_sim::cartographer::input::{KidnapPlace, kidnap_input_to};
@@ -27,102 +28,77 @@ use std::time::Instant;
 /// The Cartographer run.
 pub struct Cartographer;
 
-fn number(name: &'static str, help: &'static str) -> Arg {
-    Arg::new(name)
-        .long(name)
-        .value_parser(clap::value_parser!(f64))
-        .help(help)
-}
-
-fn count(name: &'static str, help: &'static str) -> Arg {
-    Arg::new(name)
-        .long(name)
-        .value_parser(clap::value_parser!(usize))
-        .help(help)
-}
-
 impl RunLesson for Cartographer {
-    fn id(&self) -> &'static str {
-        "cartographer"
-    }
-
-    fn about(&self) -> &'static str {
-        "submaps, branch-and-bound loop closure and the kidnapped robot (Cartographer-style SLAM): local SLAM into submaps, a pose graph with loop closures, kidnap detection by an average filter on the matching cost, recovery by merging a new map"
-    }
-
     fn command(&self) -> Command {
-        Command::new(self.id())
+        Command::new("cartographer")
+            .about("submaps, branch-and-bound loop closure and the kidnapped robot (Cartographer-style SLAM): local SLAM into submaps, a pose graph with loop closures, kidnap detection by an average filter on the matching cost, recovery by merging a new map")
             .arg(map_arg())
             .arg(laser_log_arg())
-            .arg(Arg::new("reference").long("reference").value_name("FILE").help(
+            .arg(args::file(
+                "reference",
                 "with --log: its corrected log (e.g. intel-corrected.log.gz); the trajectory is scored against it (ATE, relative errors)",
             ))
             .args(topic_args())
-            .arg(count(
+            .arg(args::count(
                 "steps",
                 "scans to simulate (default 600); with --log, map only the log's first scans",
             ))
             .arg(
-                Arg::new("seed")
-                    .long("seed")
-                    .value_parser(clap::value_parser!(u64))
-                    .help("the simulation's seed (default 1)"),
+                args::flag("seed", "the simulation's seed (default 1)")
+                    .value_parser(clap::value_parser!(u64)),
             )
-            .arg(count(
+            .arg(args::count(
                 "kidnap-at",
                 "carry the robot elsewhere just before this scan (0-based)",
             ))
-            .arg(
-                Arg::new("kidnap-place")
-                    .long("kidnap-place")
-                    .value_parser(KidnapPlace::NAMES)
-                    .help("where the kidnap carries the robot: mapped (default; a random place on its path so far) or anywhere (any free place)"),
-            )
-            .arg(
-                Arg::new("detection")
-                    .long("detection")
-                    .value_parser(["on", "off"])
-                    .help("kidnap detection (Algorithm 13): on (default) or off, the original behaviour"),
-            )
-            .arg(
-                Arg::new("loop-closures")
-                    .long("loop-closures")
-                    .value_parser(["on", "off"])
-                    .help("loop closures: on (default), or off for local SLAM alone (no branch-and-bound search; the lesson's switch)"),
-            )
-            .arg(count("num_range_data", "scans per submap (default 30)"))
-            .arg(number("resolution", "submap cell size, metres (default 0.05)"))
-            .arg(number("hit_probability", "default 0.55"))
-            .arg(number("miss_probability", "default 0.49"))
-            .arg(number(
+            .arg(args::choice(
+                "kidnap-place",
+                &KidnapPlace::NAMES,
+                "where the kidnap carries the robot: mapped (default; a random place on its path so far) or anywhere (any free place)",
+            ))
+            .arg(args::choice(
+                "detection",
+                &["on", "off"],
+                "kidnap detection (Algorithm 13): on (default) or off, the original behaviour",
+            ))
+            .arg(args::choice(
+                "loop-closures",
+                &["on", "off"],
+                "loop closures: on (default), or off for local SLAM alone (no branch-and-bound search; the lesson's switch)",
+            ))
+            .arg(args::count("num_range_data", "scans per submap (default 30)"))
+            .arg(args::number("resolution", "submap cell size, metres (default 0.05)"))
+            .arg(args::number("hit_probability", "default 0.55"))
+            .arg(args::number("miss_probability", "default 0.49"))
+            .arg(args::number(
                 "linear_search_window",
                 "loop-closure search half-width, metres (default 0.6)",
             ))
-            .arg(number(
+            .arg(args::number(
                 "angular_search_window",
                 "loop-closure search half-width, degrees (default 5)",
             ))
-            .arg(number(
+            .arg(args::number(
                 "max_constraint_distance",
                 "search only submaps whose origin is this near a node, metres (default 15)",
             ))
-            .arg(number(
+            .arg(args::number(
                 "sampling_ratio",
                 "share of node-submap pairs searched for loop closures, sampled per submap (default 0.1)",
             ))
-            .arg(count(
+            .arg(args::count(
                 "max_closures_per_submap_pair",
                 "loop closures tying a node's submap to another before their pairs are searched no more (default 0: no limit)",
             ))
-            .arg(number("min_score", "a loop closure must score above this (default 0.55)"))
-            .arg(number(
+            .arg(args::number("min_score", "a loop closure must score above this (default 0.55)"))
+            .arg(args::number(
                 "global_min_score",
                 "a match between maps must score above this (default 0.6)",
             ))
-            .arg(count("optimize_every_n_nodes", "default 30"))
-            .arg(number("huber_scale", "default 10"))
-            .arg(number("T", "kidnap trigger threshold (default 1.5)"))
-            .arg(count("f_size", "kidnap average filter size (default 4)"))
+            .arg(args::count("optimize_every_n_nodes", "default 30"))
+            .arg(args::number("huber_scale", "default 10"))
+            .arg(args::number("T", "kidnap trigger threshold (default 1.5)"))
+            .arg(args::count("f_size", "kidnap average filter size (default 4)"))
             .arg(crate::trajectory_out::arg())
     }
 
@@ -255,7 +231,7 @@ impl RunLesson for Cartographer {
             .and_then(|r| reference::score(r, &sim.scan_poses()));
         crate::trajectory_out::write(
             m,
-            self.id(),
+            &self.id(),
             &slamlab_sim::cartographer::export::trajectories(&sim),
             &[],
         )?;
