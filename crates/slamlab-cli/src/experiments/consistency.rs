@@ -8,7 +8,7 @@
 use super::{scenario_args, steps_arg, trials_arg};
 use crate::command::{Experiment, Refusal};
 use crate::lessons::landmark::{check_runnable, scenario_from};
-use crate::output::{Output, csv_arg, progress_bar};
+use crate::output::{Output, csv_arg, progress_bar, table_number};
 use anyhow::Result;
 use clap::{ArgMatches, Command};
 use slamlab_sim::landmark_slam::consistency::ConsistencyStudy;
@@ -68,12 +68,7 @@ impl Experiment for Consistency {
             scenario.seed
         )?;
         out.parameter_paragraph(&result.parameters, 32)?;
-        // Diverged runs can make averages astronomically large: those go in e-notation.
-        let fmt = |v: Option<f64>| match v {
-            None => "-".to_owned(),
-            Some(v) if v.abs() >= 1e5 => format!("{v:.3e}"),
-            Some(v) => format!("{v:.3}"),
-        };
+        let fmt = |v: Option<f64>| table_number(v, 3, 3);
         writeln!(
             out,
             "{:<10} {:>10} {:>14} {:>13} {:>13} {:>13} {:>9} {:>9}",

@@ -9,11 +9,11 @@ use crate::args;
 use crate::command::Experiment;
 use crate::flags;
 use crate::map::{map_arg, read_map, resolution_arg};
-use crate::output::{Output, csv_arg, trials_bar, trials_progress};
+use crate::output::{Output, csv_arg, par_trials};
 use anyhow::{Context, Result, bail};
 use clap::{ArgMatches, Command};
 use serde_json::json;
-use slamlab_sim::kidnap::experiment::{KidnapProtocol, KidnapTrial, kidnap_trial, summarize};
+use slamlab_sim::kidnap::experiment::{KidnapProtocol, kidnap_trial, summarize};
 use slamlab_sim::kidnap::{LocalizationEstimator, MclScenario};
 use std::io::Write;
 
@@ -114,22 +114,11 @@ impl Experiment for Kidnap {
                     .flat_map(move |&n| (0..trials).map(move |i| (e, n, i)))
             })
             .collect();
-        let total = jobs.len();
-        let bar = trials_bar("kidnap", total);
-        let done = std::sync::atomic::AtomicUsize::new(0);
-        let outcomes: Vec<Result<KidnapTrial, String>> = {
-            use rayon::prelude::*;
-            jobs.par_iter()
-                .map(|&(est, n, i)| {
-                    let r = kidnap_trial(&base, &grid, est, n, seed.wrapping_add(i), &protocol)
-                        .map_err(|e| e.to_string());
-                    let d = done.fetch_add(1, std::sync::atomic::Ordering::Relaxed) + 1;
-                    trials_progress(&bar, "kidnap", d, total);
-                    r
-                })
-                .collect()
-        };
-        let mut rows = Vec::with_capacity(total);
+        let outcomes = par_trials("kidnap", &jobs, |&(est, n, i)| {
+            kidnap_trial(&base, &grid, est, n, seed.wrapping_add(i), &protocol)
+                .map_err(|e| e.to_string())
+        });
+        let mut rows = Vec::with_capacity(jobs.len());
         for outcome in outcomes {
             match outcome {
                 Ok(t) => rows.push(t),

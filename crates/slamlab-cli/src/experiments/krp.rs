@@ -11,7 +11,7 @@ use super::first_seed_arg;
 use crate::args;
 use crate::command::Experiment;
 use crate::map::{map_arg, read_map};
-use crate::output::{Output, trials_bar, trials_progress};
+use crate::output::{Output, par_trials};
 use anyhow::{Result, bail};
 use clap::{ArgMatches, Command};
 use serde_json::json;
@@ -155,42 +155,32 @@ impl Experiment for Krp {
                     .map(move |(k, d)| (seed.wrapping_add(i), k, d))
             })
             .collect();
-        let total = jobs.len();
-        let bar = trials_bar("krp", total);
-        let done = std::sync::atomic::AtomicUsize::new(0);
-        let outcomes: Vec<Result<Run, String>> = {
-            use rayon::prelude::*;
-            jobs.par_iter()
-                .map(|&(s, kidnapped, detection)| {
-                    let kidnap = kidnapped.then_some(kidnap_at);
-                    let input = kidnap_input_to(
-                        Arc::clone(&grid),
-                        &name,
-                        steps,
-                        s,
-                        kidnap.map(|k| (k, place)),
-                        &SimulatedLogConfig::default(),
-                    )?;
-                    let params = CartographerParams {
-                        detection,
-                        ..CartographerParams::default()
-                    };
-                    let (mut sim, _) = CartographerSim::new(Arc::new(input), params);
-                    let started = std::time::Instant::now();
-                    sim.run_to_end();
-                    let summary = sim.summary(kidnap, started.elapsed().as_secs_f64() * 1e3);
-                    let d = done.fetch_add(1, std::sync::atomic::Ordering::Relaxed) + 1;
-                    trials_progress(&bar, "krp", d, total);
-                    Ok(Run {
-                        seed: s,
-                        kidnapped,
-                        detection,
-                        summary,
-                    })
-                })
-                .collect()
-        };
-        let mut runs = Vec::with_capacity(total);
+        let outcomes = par_trials("krp", &jobs, |&(s, kidnapped, detection)| {
+            let kidnap = kidnapped.then_some(kidnap_at);
+            let input = kidnap_input_to(
+                Arc::clone(&grid),
+                &name,
+                steps,
+                s,
+                kidnap.map(|k| (k, place)),
+                &SimulatedLogConfig::default(),
+            )?;
+            let params = CartographerParams {
+                detection,
+                ..CartographerParams::default()
+            };
+            let (mut sim, _) = CartographerSim::new(Arc::new(input), params);
+            let started = std::time::Instant::now();
+            sim.run_to_end();
+            let summary = sim.summary(kidnap, started.elapsed().as_secs_f64() * 1e3);
+            Ok::<_, String>(Run {
+                seed: s,
+                kidnapped,
+                detection,
+                summary,
+            })
+        });
+        let mut runs = Vec::with_capacity(jobs.len());
         for o in outcomes {
             match o {
                 Ok(r) => runs.push(r),

@@ -9,10 +9,9 @@
 use crate::args;
 use crate::command::Experiment;
 use crate::lessons::landmark::{data_arg, data_from, scenario_args_where, scenario_for_data};
-use crate::output::{Output, csv_arg, trials_bar, trials_progress};
+use crate::output::{Output, csv_arg, par_trials, table_number};
 use anyhow::{Result, bail};
 use clap::{Arg, ArgMatches, Command};
-use rayon::prelude::*;
 use slamlab_sim::io::landmark_data::LandmarkData;
 use slamlab_sim::landmark_slam::real_data::{
     RealDataRow, RealEstimator, parameters_used, run_robot,
@@ -100,18 +99,9 @@ impl Experiment for RealData {
                 (robot, mode, estimators)
             })
             .collect();
-        let bar = trials_bar("real-data", jobs.len());
-        let done = std::sync::atomic::AtomicUsize::new(0);
-        let results: Vec<Result<Vec<RealDataRow>, String>> = jobs
-            .par_iter()
-            .map(|(robot, mode, estimators)| {
-                let rows = run_robot(&data, *robot, *mode, estimators, &base);
-                let n = done.fetch_add(1, std::sync::atomic::Ordering::Relaxed) + 1;
-                trials_progress(&bar, "real-data", n, jobs.len());
-                rows
-            })
-            .collect();
-        bar.finish_and_clear();
+        let results = par_trials("real-data", &jobs, |(robot, mode, estimators)| {
+            run_robot(&data, *robot, *mode, estimators, &base)
+        });
         let mut rows = Vec::new();
         for result in results {
             rows.extend(result.map_err(|e| anyhow::anyhow!(e))?);
@@ -137,11 +127,7 @@ impl Experiment for RealData {
         writeln!(out, "SLAM Lab experiment real-data: {}", source.title)?;
         writeln!(out, "cite: {}", source.citation)?;
         out.parameter_paragraph(&parameters, 24)?;
-        let fmt = |v: Option<f64>, digits: usize| match v {
-            None => "-".to_owned(),
-            Some(v) if v.abs() >= 1e5 => format!("{v:.2e}"),
-            Some(v) => format!("{v:.digits$}"),
-        };
+        let fmt = |v: Option<f64>, digits: usize| table_number(v, digits, 2);
         writeln!(
             out,
             "{:>5} {:<15} {:<13} {:>16} {:>15} {:>10} {:>8} {:>9}",
