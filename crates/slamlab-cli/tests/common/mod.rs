@@ -1,12 +1,17 @@
 //! What the `slamlab` binary's tests share: running the binary as a user does,
-//! reading the JSON it prints, and a throwaway Python virtual environment for
-//! the tests that compare with a Python tool.
+//! reading the JSON it prints, a scratch folder per test, the shared data sets
+//! (skipping without them), and a throwaway Python virtual environment for the
+//! tests that compare with a Python tool.
 
 // Each test binary uses the helpers it needs.
 #![allow(dead_code)]
 
+use std::ops::Deref;
 use std::path::{Path, PathBuf};
 use std::process::{Command, Output};
+
+#[allow(unused_imports)] // as the helpers above: each test binary uses what it needs
+pub use slamlab_tests::shared_data;
 
 /// `slamlab ARGS` as it ran: its exit status and output.
 pub fn slamlab_output(args: &[&str]) -> Output {
@@ -89,4 +94,38 @@ pub fn python_venv(dir: &Path, packages: &[&str], test: &str) -> Option<PathBuf>
         }
     }
     Some(bin)
+}
+
+/// A fresh folder for one test's files, `slamlab-NAME-PID` in the system's
+/// temporary folder (emptied first), removed with all in it when dropped. It
+/// reads as its path (`dir.join("x")`).
+pub struct Scratch(PathBuf);
+
+impl Scratch {
+    /// Makes the folder.
+    pub fn new(name: &str) -> Self {
+        let dir = std::env::temp_dir().join(format!("slamlab-{name}-{}", std::process::id()));
+        let _ = std::fs::remove_dir_all(&dir);
+        std::fs::create_dir_all(&dir).unwrap_or_else(|e| panic!("{}: {e}", dir.display()));
+        Self(dir)
+    }
+}
+
+impl Deref for Scratch {
+    type Target = Path;
+    fn deref(&self) -> &Path {
+        &self.0
+    }
+}
+
+impl AsRef<Path> for Scratch {
+    fn as_ref(&self) -> &Path {
+        &self.0
+    }
+}
+
+impl Drop for Scratch {
+    fn drop(&mut self) {
+        let _ = std::fs::remove_dir_all(&self.0);
+    }
 }
