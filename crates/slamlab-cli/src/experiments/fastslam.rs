@@ -7,6 +7,7 @@
 use super::{scenario_args, steps_arg, trials_arg};
 use crate::args;
 use crate::command::Experiment;
+use crate::flags;
 use crate::lessons::landmark::{refuse_manual, scenario_from};
 use crate::output::{Output, csv_arg, progress_bar};
 use anyhow::{Result, bail};
@@ -134,7 +135,7 @@ impl Experiment for FastSlam {
 /// A comma-separated list of particle counts, each in 1 ..= [`MAX_PARTICLES`].
 pub(super) fn parse_counts(text: &str) -> Result<Vec<usize>> {
     let mut counts = Vec::new();
-    for part in text.split(',').map(str::trim).filter(|p| !p.is_empty()) {
+    for part in flags::items(text) {
         let Ok(n) = part.parse::<usize>() else {
             bail!("--particles: '{part}' is not a whole number");
         };

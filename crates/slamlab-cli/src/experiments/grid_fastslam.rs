@@ -16,6 +16,7 @@
 use super::fastslam::parse_counts;
 use crate::args;
 use crate::command::Experiment;
+use crate::flags;
 use crate::map::{map_arg, read_map};
 use crate::output::{Output, progress_bar};
 use anyhow::{Result, bail};
@@ -81,13 +82,7 @@ impl Experiment for GridFastSlam {
             );
         }
         let mut proposals = Vec::new();
-        for part in m
-            .get_one::<String>("proposal")
-            .map_or("odometry,scan-match", String::as_str)
-            .split(',')
-            .map(str::trim)
-            .filter(|p| !p.is_empty())
-        {
+        for part in flags::list(m, "proposal") {
             let Some(p) = Proposal::from_name(part) else {
                 bail!("--proposal: '{part}' is not a proposal (odometry, scan-match)");
             };

@@ -21,6 +21,7 @@
 
 use crate::args;
 use crate::command::Experiment;
+use crate::flags;
 use crate::output::Output;
 use anyhow::{Context, Result, bail};
 use clap::{ArgMatches, Command};
@@ -129,13 +130,7 @@ impl Experiment for LaserSlam {
     fn run(&self, m: &ArgMatches, out: &mut Output) -> Result<()> {
         let log_path = m.get_one::<String>("log").map_or("", String::as_str);
         let mut sources = Vec::new();
-        for part in m
-            .get_one::<String>("poses")
-            .map_or("", String::as_str)
-            .split(',')
-            .map(str::trim)
-            .filter(|p| !p.is_empty())
-        {
+        for part in flags::list(m, "poses") {
             if !POSES.contains(&part) {
                 bail!(
                     "--poses: '{part}' is not a pose source ({})",

@@ -8,6 +8,7 @@
 
 use crate::args;
 use crate::command::Experiment;
+use crate::flags;
 use crate::lessons::landmark::{data_arg, data_from, scenario_args_where, scenario_for_data};
 use crate::output::{Output, csv_arg, par_trials, table_number};
 use anyhow::{Result, bail};
@@ -199,9 +200,8 @@ fn list<T: PartialEq>(
     id: &str,
     parse: impl Fn(&str) -> std::result::Result<T, String>,
 ) -> Result<Vec<T>> {
-    let text = matches.get_one::<String>(id).map_or("", String::as_str);
     let mut items = Vec::new();
-    for name in text.split(',').map(str::trim).filter(|s| !s.is_empty()) {
+    for name in flags::list(matches, id) {
         let item = parse(name).map_err(|e| anyhow::anyhow!(e))?;
         if !items.contains(&item) {
             items.push(item);

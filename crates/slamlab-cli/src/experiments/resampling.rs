@@ -9,6 +9,7 @@ use super::fastslam::parse_counts;
 use super::{landmark_flags_but_seed, seed_arg, trials_arg};
 use crate::args;
 use crate::command::{Experiment, Refusal};
+use crate::flags;
 use crate::lessons::landmark::scenario_from;
 use crate::output::{Output, progress_bar};
 use anyhow::{Result, bail};
@@ -61,7 +62,7 @@ impl Experiment for Resampling {
             None | Some("all") => Resampler::ALL.to_vec(),
             Some(list) => {
                 let mut methods = Vec::new();
-                for name in list.split(',').map(str::trim).filter(|p| !p.is_empty()) {
+                for name in flags::items(list) {
                     let Some(m) = Resampler::from_name(name) else {
                         bail!(
                             "--method: '{name}' is not a resampler (all, multinomial, low-variance, stratified, residual)"

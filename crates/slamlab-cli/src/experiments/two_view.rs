@@ -9,6 +9,7 @@
 use super::first_seed_arg;
 use crate::args;
 use crate::command::Experiment;
+use crate::flags;
 use crate::output::{Output, progress_bar};
 use anyhow::{Result, bail};
 use clap::{ArgMatches, Command};
@@ -22,7 +23,7 @@ pub struct TwoView;
 /// Parses `--method`.
 fn methods(text: &str) -> Result<Vec<Method>> {
     let mut out = Vec::new();
-    for name in text.split(',').map(str::trim).filter(|p| !p.is_empty()) {
+    for name in flags::items(text) {
         match Method::from_name(name) {
             Some(m) => out.push(m),
             None => bail!("--method: '{name}' is not a method (eight-point, five-point)"),
@@ -37,7 +38,7 @@ fn methods(text: &str) -> Result<Vec<Method>> {
 /// Parses `--outliers`: shares in [0, 0.95].
 fn shares(text: &str) -> Result<Vec<f64>> {
     let mut out = Vec::new();
-    for part in text.split(',').map(str::trim).filter(|p| !p.is_empty()) {
+    for part in flags::items(text) {
         let Ok(v) = part.parse::<f64>() else {
             bail!("--outliers: '{part}' is not a number");
         };
