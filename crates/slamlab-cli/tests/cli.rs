@@ -4,7 +4,7 @@
 
 mod common;
 
-use common::{Scratch, run_json, slamlab};
+use common::{Scratch, record_maze, run_json, slamlab};
 
 const RUN: &[&str] = &[
     "run",
@@ -501,10 +501,7 @@ fn log_record_writes_a_carmen_log_and_its_truth_that_log_info_reads() {
     let dir = Scratch::new("cli-log");
     let log = dir.join("maze.clf");
     let log_s = log.to_str().unwrap();
-    let (ok, stdout, stderr) = slamlab(&[
-        "log", "record", "--map", "maze", "--steps", "40", "--seed", "2", "--out", log_s,
-    ]);
-    assert!(ok, "{stderr}");
+    let stdout = record_maze(&log, 40, 2);
     assert!(stdout.contains("40 scans of 360 beams"), "{stdout}");
     let truth = std::fs::read_to_string(dir.join("maze.clf.truth")).unwrap();
     let lines: Vec<&str> = truth.lines().filter(|l| !l.starts_with('#')).collect();
@@ -553,10 +550,7 @@ fn run_kidnap_localizes_a_recorded_bag_and_its_carmen_copy() {
     let dir = Scratch::new("cli-kidnap-log");
     let bag = dir.join("run.mcap");
     let bag_s = bag.to_str().unwrap();
-    let (ok, _, stderr) = slamlab(&[
-        "log", "record", "--map", "maze", "--steps", "400", "--seed", "3", "--out", bag_s,
-    ]);
-    assert!(ok, "{stderr}");
+    record_maze(&bag, 400, 3);
     let args = [
         "--map",
         "maze",

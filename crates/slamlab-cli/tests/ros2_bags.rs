@@ -9,7 +9,7 @@
 
 mod common;
 
-use common::{Scratch, python_venv, shared_data, slamlab_stdout};
+use common::{Scratch, python_venv, record_maze, shared_data, slamlab_stdout};
 
 use slamlab_core::Pose2;
 use slamlab_sim::grid::{LaserFile, MappingInput, log_input};
@@ -61,18 +61,7 @@ fn num(v: &serde_json::Value) -> f64 {
 fn rosbags_reads_the_bag_that_log_record_writes() {
     let dir = Scratch::new("record-bag");
     let bag = dir.join("run.mcap");
-    let wrote = slamlab_stdout(&[
-        "log",
-        "record",
-        "--map",
-        "maze",
-        "--steps",
-        "200",
-        "--seed",
-        "4",
-        "--out",
-        bag.to_str().unwrap(),
-    ]);
+    let wrote = record_maze(&bag, 200, 4);
     assert!(wrote.contains("200 scans of 360 beams"), "{wrote}");
     // SLAM Lab reads it back: the lesson's input with its truth.
     let file = LaserFile::read_file(&bag, &TopicChoice::default()).unwrap();

@@ -47,6 +47,19 @@ pub fn run_json(args: &[&str]) -> serde_json::Value {
     serde_json::from_str(&stdout).unwrap_or_else(|e| panic!("not JSON ({e}): {stdout}"))
 }
 
+/// A simulated robot's run through the maze, `steps` scans from `seed`, recorded
+/// by `slamlab log record` (which must succeed) to `out` (`.mcap`: a ROS 2 bag,
+/// else a CARMEN log with its truth beside it); what the command printed.
+pub fn record_maze(out: &Path, steps: u32, seed: u64) -> String {
+    let out = out
+        .to_str()
+        .unwrap_or_else(|| panic!("{} is not UTF-8", out.display()));
+    let (steps, seed) = (steps.to_string(), seed.to_string());
+    slamlab_stdout(&[
+        "log", "record", "--map", "maze", "--steps", &steps, "--seed", &seed, "--out", out,
+    ])
+}
+
 /// The JSON a run that succeeded printed (the test fails with its standard
 /// error otherwise).
 pub fn json(out: &Output) -> serde_json::Value {
