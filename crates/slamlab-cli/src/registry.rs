@@ -100,8 +100,12 @@ fn experiment_command(experiment: &dyn Experiment) -> Command {
 fn foreign_args(experiment: &dyn Experiment) -> Vec<Arg> {
     let own = experiment.command().arg(output::json_arg());
     let mut args: Vec<Arg> = Vec::new();
-    for other in EXPERIMENTS.iter().filter(|e| e.name() != experiment.name()) {
-        for arg in other.command().get_arguments() {
+    let others = EXPERIMENTS
+        .iter()
+        .map(|e| e.command())
+        .filter(|c| c.get_name() != own.get_name());
+    for other in others {
+        for arg in other.get_arguments() {
             let id = arg.get_id().as_str();
             // The same flag: the same id, or the same long name under another id
             // (real-data's list `estimators` is `--estimator`, as kidnap's one is).
@@ -131,12 +135,12 @@ fn foreign_args(experiment: &dyn Experiment) -> Vec<Arg> {
 fn owners(id: &str) -> Vec<String> {
     EXPERIMENTS
         .iter()
-        .filter(|e| {
-            e.command()
-                .get_arguments()
+        .map(|e| e.command())
+        .filter(|c| {
+            c.get_arguments()
                 .any(|a| a.get_id() == id || a.get_long() == Some(id))
         })
-        .map(|e| e.name())
+        .map(|c| c.get_name().to_owned())
         .collect()
 }
 
