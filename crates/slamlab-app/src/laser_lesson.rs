@@ -8,27 +8,44 @@
 use crate::lesson::{self, Lesson, LessonFrame, LessonStart, LessonView};
 use crate::widgets::laser_file::LaserFileState;
 use crate::widgets::laser_inputs::{LaserInput, LaserInputs};
+use slamlab_core::grid::OccupancyGrid;
+use std::sync::Arc;
 
-/// A lesson that maps laser logs: where its files and its frame are, and what
-/// each kind of file does to it.
+/// A lesson that maps laser logs: where its files are, and what each kind of
+/// file does to it (its note is its frame's, [`Lesson::frame_mut`]).
 pub trait LaserLesson: Lesson + Sized + 'static {
-    /// The lesson's view options.
-    type View: LessonView;
-    /// The lesson's frame (its note, its notices).
-    fn laser_frame(&mut self) -> &mut LessonFrame<Self::View>;
-    /// The laser file's state (a bag's topics, what the reader assumed).
-    fn laser_file(&mut self) -> &mut LaserFileState;
-    /// The files dropped, picked or named by the link.
-    fn laser_inputs(&mut self) -> &mut LaserInputs;
     /// Maps a log dropped or picked.
     fn open_log(&mut self, name: &str, bytes: &[u8]);
     /// Maps the log `log=` named, read from `location`.
     fn open_linked_log(&mut self, name: &str, bytes: &[u8], location: String);
     /// Scores the run against a corrected log (`location`: where
-    /// `reference=` read it from).
-    fn open_reference(&mut self, name: &str, bytes: Vec<u8>, location: Option<String>);
-    /// Lets the simulated robot explore a ROS map (its YAML and image).
-    fn open_map(&mut self, files: &[(String, Vec<u8>)]);
+    /// `reference=` read it from); before a log, keeps it for the log.
+    fn load_reference(&mut self, name: &str, bytes: Vec<u8>, location: Option<String>);
+    /// Lets the simulated robot explore a ROS map (its YAML and image)
+    /// instead of a built-in one; on any problem the run stays, with a note.
+    fn load_map_files(&mut self, files: &[(String, Vec<u8>)]);
+    /// The laser file's state (a bag's topics, what the reader assumed).
+    fn laser_file(&mut self) -> &mut LaserFileState;
+    /// The files dropped, picked or named by the link.
+    fn laser_inputs(&mut self) -> &mut LaserInputs;
+
+    /// Reads a ROS map dropped or picked (its YAML and image, or a lone image,
+    /// `kidnap::session::load_dropped_map`): its name, grid and notes; on a
+    /// problem the note says what it is and that the run goes on, and there
+    /// is no map.
+    fn read_map(
+        &mut self,
+        files: &[(String, Vec<u8>)],
+    ) -> Option<(String, Arc<OccupancyGrid>, Vec<String>)> {
+        match slamlab_sim::kidnap::session::load_dropped_map(files) {
+            Ok((name, grid, notes)) => Some((name, Arc::new(grid), notes)),
+            Err(why) => {
+                *self.frame_mut().note_mut() =
+                    Some(format!("Could not load the map: {why}; the run goes on"));
+                None
+            }
+        }
+    }
 
     /// Hands each file that arrived this frame to the lesson, in the order
     /// it arrived; a file that could not be read becomes the lesson's note.
@@ -45,9 +62,9 @@ pub trait LaserLesson: Lesson + Sized + 'static {
                     name,
                     bytes,
                     location,
-                } => self.open_reference(&name, bytes, location),
-                LaserInput::Map(files) => self.open_map(&files),
-                LaserInput::Refused(why) => self.laser_frame().note = Some(why),
+                } => self.load_reference(&name, bytes, location),
+                LaserInput::Map(files) => self.load_map_files(&files),
+                LaserInput::Refused(why) => *self.frame_mut().note_mut() = Some(why),
             }
         }
     }
@@ -56,16 +73,19 @@ pub trait LaserLesson: Lesson + Sized + 'static {
 /// Opens a lidar lesson from the URL's pairs, with what it stored last time
 /// ([`lesson::open_lesson`]): `log=` and `reference=` are read after the first
 /// frame (the note says the log is loading), the laser file's own pairs (a
-/// bag's topics) go to its state, the rest are the scenario's. When `new`
-/// refuses, the default lesson opens with "`title` could not open: why".
-pub fn open<S, L>(
+/// bag's topics) go to its state, the rest are the scenario's; `frame` reaches
+/// the lesson's frame. When `new` refuses, the default lesson opens with
+/// "`title` could not open: why".
+pub fn open<S, V, L>(
     start: &LessonStart<'_>,
     default: S,
     new: impl FnOnce(S) -> Result<L, String>,
+    frame: impl FnOnce(&mut L) -> &mut LessonFrame<V>,
     title: &str,
 ) -> Box<dyn Lesson>
 where
     S: slamlab_sim::params::Scenario,
+    V: LessonView,
     L: LaserLesson,
 {
     let location = start.last_value("log");
@@ -76,13 +96,13 @@ where
         pairs: &pairs,
         ..*start
     };
-    let mut lesson = match lesson::open_lesson(start, default, new, L::laser_frame) {
+    let mut lesson = match lesson::open_lesson(start, default, new, frame) {
         Ok(lesson) => lesson,
         Err(why) => return lesson::open_instead(start, format!("{title} could not open: {why}")),
     };
     *lesson.laser_file() = laser;
     if let Some(location) = &location {
-        lesson.laser_frame().note = Some(format!("Loading the log {location}…"));
+        *lesson.frame_mut().note_mut() = Some(format!("Loading the log {location}…"));
     }
     lesson.laser_inputs().link(location, reference);
     Box::new(lesson)

@@ -168,6 +168,7 @@ pub fn open(start: &LessonStart<'_>) -> Box<dyn Lesson> {
         start,
         default_scenario(),
         CartographerLesson::new,
+        |l| &mut l.frame,
         "Cartographer",
     )
 }
@@ -374,36 +375,6 @@ impl CartographerLesson {
         }
     }
 
-    /// Matches a corrected log (`bytes`) to the log being mapped and starts
-    /// over with it as the reference; with no log yet, keeps it for the next.
-    pub fn load_reference(&mut self, name: &str, bytes: Vec<u8>, location: Option<String>) {
-        if !matches!(self.source, Source::Log(..)) {
-            self.pending_reference = Some((name.to_owned(), bytes, location));
-            self.frame.note = Some(format!(
-                "{name} is a reference: it is scored against once its log is loaded"
-            ));
-            return;
-        }
-        let input = self.sim().input().clone();
-        match input.reference_from(&bytes, name) {
-            Ok(reference) => {
-                let description = reference.description.clone();
-                let mut with = (*input).clone();
-                with.reference = Some(Arc::new(reference));
-                self.reference_location = location;
-                self.scores = [None, None];
-                let scenario = self.scenario.clone();
-                self.restart_on(scenario, Arc::new(with), None);
-                self.frame.note = Some(format!("Reference {name}: {description}"));
-            }
-            Err(why) => {
-                self.frame.note = Some(format!(
-                    "Could not use {name} as the reference: {why}; the mapping goes on without a score"
-                ));
-            }
-        }
-    }
-
     /// Carries the simulated robot elsewhere before the next scan: to `to`
     /// (a click), or to a random free place at least 2 m away.
     pub fn kidnap(&mut self, to: Option<Pose2>) {
@@ -469,35 +440,6 @@ impl CartographerLesson {
         self.frame.note = Some(format!("{note}; no kidnap button"));
         if let Some((reference, bytes, location)) = self.pending_reference.take() {
             self.load_reference(&reference, bytes, location);
-        }
-    }
-
-    /// Lets the simulated robot explore a ROS map instead of a built-in one.
-    pub fn load_map_files(&mut self, files: &[(String, Vec<u8>)]) {
-        let (name, grid, notes) = match slamlab_sim::kidnap::session::load_dropped_map(files) {
-            Ok(loaded) => loaded,
-            Err(why) => {
-                self.frame.note = Some(format!("Could not load the map: {why}; the run goes on"));
-                return;
-            }
-        };
-        let grid = Arc::new(grid);
-        let scenario = self.pending.scenario.clone();
-        match scenario.simulate(grid.clone(), &name) {
-            Ok(input) => {
-                self.source = Source::Simulated(name.clone(), grid);
-                self.laser.close();
-                self.restart_on(scenario, Arc::new(input), None);
-                self.frame.note = Some(format!(
-                    "The robot explores {name}{}",
-                    if notes.is_empty() {
-                        String::new()
-                    } else {
-                        format!(" ({})", notes.join("; "))
-                    }
-                ));
-            }
-            Err(why) => self.frame.note = Some(format!("Could not drive in {name}: {why}")),
         }
     }
 
@@ -807,16 +749,6 @@ impl CartographerLesson {
 }
 
 impl LaserLesson for CartographerLesson {
-    type View = CartographerView;
-    fn laser_frame(&mut self) -> &mut LessonFrame<CartographerView> {
-        &mut self.frame
-    }
-    fn laser_file(&mut self) -> &mut LaserFileState {
-        &mut self.laser
-    }
-    fn laser_inputs(&mut self) -> &mut LaserInputs {
-        &mut self.inputs
-    }
     fn open_log(&mut self, name: &str, bytes: &[u8]) {
         self.load_log(name, bytes, None);
     }
@@ -827,11 +759,65 @@ impl LaserLesson for CartographerLesson {
             self.frame.restarted_from_link = true;
         }
     }
-    fn open_reference(&mut self, name: &str, bytes: Vec<u8>, location: Option<String>) {
-        self.load_reference(name, bytes, location);
+    /// Matches a corrected log (`bytes`) to the log being mapped and starts
+    /// over with it as the reference; with no log yet, keeps it for the next.
+    fn load_reference(&mut self, name: &str, bytes: Vec<u8>, location: Option<String>) {
+        if !matches!(self.source, Source::Log(..)) {
+            self.pending_reference = Some((name.to_owned(), bytes, location));
+            self.frame.note = Some(format!(
+                "{name} is a reference: it is scored against once its log is loaded"
+            ));
+            return;
+        }
+        let input = self.sim().input().clone();
+        match input.reference_from(&bytes, name) {
+            Ok(reference) => {
+                let description = reference.description.clone();
+                let mut with = (*input).clone();
+                with.reference = Some(Arc::new(reference));
+                self.reference_location = location;
+                self.scores = [None, None];
+                let scenario = self.scenario.clone();
+                self.restart_on(scenario, Arc::new(with), None);
+                self.frame.note = Some(format!("Reference {name}: {description}"));
+            }
+            Err(why) => {
+                self.frame.note = Some(format!(
+                    "Could not use {name} as the reference: {why}; the mapping goes on without a score"
+                ));
+            }
+        }
     }
-    fn open_map(&mut self, files: &[(String, Vec<u8>)]) {
-        self.load_map_files(files);
+
+    /// Lets the simulated robot explore a ROS map instead of a built-in one.
+    fn load_map_files(&mut self, files: &[(String, Vec<u8>)]) {
+        let Some((name, grid, notes)) = self.read_map(files) else {
+            return;
+        };
+        let scenario = self.pending.scenario.clone();
+        match scenario.simulate(grid.clone(), &name) {
+            Ok(input) => {
+                self.source = Source::Simulated(name.clone(), grid);
+                self.laser.close();
+                self.restart_on(scenario, Arc::new(input), None);
+                self.frame.note = Some(format!(
+                    "The robot explores {name}{}",
+                    if notes.is_empty() {
+                        String::new()
+                    } else {
+                        format!(" ({})", notes.join("; "))
+                    }
+                ));
+            }
+            Err(why) => self.frame.note = Some(format!("Could not drive in {name}: {why}")),
+        }
+    }
+
+    fn laser_file(&mut self) -> &mut LaserFileState {
+        &mut self.laser
+    }
+    fn laser_inputs(&mut self) -> &mut LaserInputs {
+        &mut self.inputs
     }
 }
 

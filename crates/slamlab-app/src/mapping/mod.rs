@@ -212,7 +212,13 @@ pub fn default_scenario() -> MappingScenario {
 
 /// Opens the lesson from the URL's pairs, with what it stored last time.
 pub fn open(start: &LessonStart<'_>) -> Box<dyn Lesson> {
-    crate::laser_lesson::open(start, default_scenario(), MappingLesson::new, "Mapping")
+    crate::laser_lesson::open(
+        start,
+        default_scenario(),
+        MappingLesson::new,
+        |l| &mut l.frame,
+        "Mapping",
+    )
 }
 
 impl MappingLesson {
@@ -264,52 +270,6 @@ impl MappingLesson {
         match &self.loaded_map {
             Some((name, grid)) => simulated_input(scenario, grid.clone(), name),
             None => Self::simulate(scenario),
-        }
-    }
-
-    /// Lets the simulated robot explore a ROS map (map_server YAML with its
-    /// PGM or PNG image) instead of a built-in one. On any problem the current
-    /// run stays, with a note that names it.
-    pub fn load_map_files(&mut self, files: &[(String, Vec<u8>)]) {
-        let (name, grid, notes) = match slamlab_sim::kidnap::session::load_dropped_map(files) {
-            Ok(loaded) => loaded,
-            Err(why) => {
-                self.frame.note = Some(format!("Could not load the map: {why}; the run goes on"));
-                return;
-            }
-        };
-        let grid = Arc::new(grid);
-        let scenario = self.pending.scenario.clone();
-        let scenario = MappingScenario {
-            poses: if scenario.poses == PoseSource::Truth || self.log_name.is_none() {
-                scenario.poses
-            } else {
-                PoseSource::ScanToMap
-            },
-            ..scenario
-        };
-        match simulated_input(&scenario, grid.clone(), &name) {
-            Ok(input) => {
-                let (w, h, r) = (grid.width(), grid.height(), grid.resolution());
-                self.input = Arc::new(input);
-                self.loaded_map = Some((name.clone(), grid));
-                self.log_name = None;
-                self.log_location = None;
-                self.laser.close();
-                self.restart(scenario, None);
-                self.frame.note = Some(format!(
-                    "The robot explores {name}: {w} x {h} cells at {r} m{}",
-                    if notes.is_empty() {
-                        String::new()
-                    } else {
-                        format!(" ({})", notes.join("; "))
-                    }
-                ));
-            }
-            Err(why) => {
-                self.frame.note =
-                    Some(format!("Could not drive in {name}: {why}; the run goes on"));
-            }
         }
     }
 
@@ -439,35 +399,6 @@ impl MappingLesson {
         self.frame.note = Some(note);
         if let Some((reference, bytes, location)) = self.pending_reference.take() {
             self.load_reference(&reference, bytes, location);
-        }
-    }
-
-    /// Matches a corrected log (`bytes`) to the log being mapped and starts
-    /// over with it as the reference; with no log yet, keeps it for the next.
-    pub fn load_reference(&mut self, name: &str, bytes: Vec<u8>, location: Option<String>) {
-        if self.log_name.is_none() {
-            self.pending_reference = Some((name.to_owned(), bytes, location));
-            self.frame.note = Some(format!(
-                "{name} is a reference: it is scored against once its log is loaded"
-            ));
-            return;
-        }
-        match self.input.reference_from(&bytes, name) {
-            Ok(reference) => {
-                let description = reference.description.clone();
-                let mut with = (*self.input).clone();
-                with.reference = Some(Arc::new(reference));
-                self.input = Arc::new(with);
-                self.reference_location = location;
-                let scenario = self.session.scenario().clone();
-                self.restart(scenario, None);
-                self.frame.note = Some(format!("Reference {name}: {description}"));
-            }
-            Err(why) => {
-                self.frame.note = Some(format!(
-                    "Could not use {name} as the reference: {why}; the mapping goes on without a score"
-                ));
-            }
         }
     }
 
@@ -747,16 +678,6 @@ impl MappingLesson {
 }
 
 impl LaserLesson for MappingLesson {
-    type View = MappingView;
-    fn laser_frame(&mut self) -> &mut LessonFrame<MappingView> {
-        &mut self.frame
-    }
-    fn laser_file(&mut self) -> &mut LaserFileState {
-        &mut self.laser
-    }
-    fn laser_inputs(&mut self) -> &mut LaserInputs {
-        &mut self.inputs
-    }
     fn open_log(&mut self, name: &str, bytes: &[u8]) {
         self.load_log(name, bytes);
     }
@@ -768,11 +689,81 @@ impl LaserLesson for MappingLesson {
             self.frame.restarted_from_link = true;
         }
     }
-    fn open_reference(&mut self, name: &str, bytes: Vec<u8>, location: Option<String>) {
-        self.load_reference(name, bytes, location);
+    /// Matches a corrected log (`bytes`) to the log being mapped and starts
+    /// over with it as the reference; with no log yet, keeps it for the next.
+    fn load_reference(&mut self, name: &str, bytes: Vec<u8>, location: Option<String>) {
+        if self.log_name.is_none() {
+            self.pending_reference = Some((name.to_owned(), bytes, location));
+            self.frame.note = Some(format!(
+                "{name} is a reference: it is scored against once its log is loaded"
+            ));
+            return;
+        }
+        match self.input.reference_from(&bytes, name) {
+            Ok(reference) => {
+                let description = reference.description.clone();
+                let mut with = (*self.input).clone();
+                with.reference = Some(Arc::new(reference));
+                self.input = Arc::new(with);
+                self.reference_location = location;
+                let scenario = self.session.scenario().clone();
+                self.restart(scenario, None);
+                self.frame.note = Some(format!("Reference {name}: {description}"));
+            }
+            Err(why) => {
+                self.frame.note = Some(format!(
+                    "Could not use {name} as the reference: {why}; the mapping goes on without a score"
+                ));
+            }
+        }
     }
-    fn open_map(&mut self, files: &[(String, Vec<u8>)]) {
-        self.load_map_files(files);
+
+    /// Lets the simulated robot explore a ROS map (map_server YAML with its
+    /// PGM or PNG image) instead of a built-in one. On any problem the current
+    /// run stays, with a note that names it.
+    fn load_map_files(&mut self, files: &[(String, Vec<u8>)]) {
+        let Some((name, grid, notes)) = self.read_map(files) else {
+            return;
+        };
+        let scenario = self.pending.scenario.clone();
+        let scenario = MappingScenario {
+            poses: if scenario.poses == PoseSource::Truth || self.log_name.is_none() {
+                scenario.poses
+            } else {
+                PoseSource::ScanToMap
+            },
+            ..scenario
+        };
+        match simulated_input(&scenario, grid.clone(), &name) {
+            Ok(input) => {
+                let (w, h, r) = (grid.width(), grid.height(), grid.resolution());
+                self.input = Arc::new(input);
+                self.loaded_map = Some((name.clone(), grid));
+                self.log_name = None;
+                self.log_location = None;
+                self.laser.close();
+                self.restart(scenario, None);
+                self.frame.note = Some(format!(
+                    "The robot explores {name}: {w} x {h} cells at {r} m{}",
+                    if notes.is_empty() {
+                        String::new()
+                    } else {
+                        format!(" ({})", notes.join("; "))
+                    }
+                ));
+            }
+            Err(why) => {
+                self.frame.note =
+                    Some(format!("Could not drive in {name}: {why}; the run goes on"));
+            }
+        }
+    }
+
+    fn laser_file(&mut self) -> &mut LaserFileState {
+        &mut self.laser
+    }
+    fn laser_inputs(&mut self) -> &mut LaserInputs {
+        &mut self.inputs
     }
 }
 

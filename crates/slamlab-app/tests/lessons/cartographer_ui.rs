@@ -12,6 +12,7 @@ use egui_kittest::Harness;
 use egui_kittest::kittest::Queryable as _;
 use slamlab_app::SlamLabApp;
 use slamlab_app::cartographer::CartographerLesson;
+use slamlab_app::laser_lesson::LaserLesson as _;
 use slamlab_app::lesson::Lesson as _;
 
 lesson_accessors!(CartographerLesson);

@@ -10,6 +10,7 @@ use super::common::{
 use egui_kittest::Harness;
 use egui_kittest::kittest::Queryable as _;
 use slamlab_app::SlamLabApp;
+use slamlab_app::laser_lesson::LaserLesson as _;
 use slamlab_app::lesson::Lesson as _;
 use slamlab_app::mapping::MappingLesson;
 use slamlab_sim::mapping::PoseSource;
