@@ -173,14 +173,8 @@ fn at_every_size_the_main_actions_are_in_reach_and_keys_are_off_the_data() {
         let keys: Vec<egui::Rect> = records.iter().filter_map(|r| r.key).collect();
         for r in &records {
             for data in r.data.iter().chain(r.map.iter()) {
-                for key in &keys {
-                    let overlap = key.intersect(*data);
-                    assert!(
-                        !(overlap.width() > 0.5 && overlap.height() > 0.5),
-                        "a key {key:?} lies on '{}' {data:?} ({w}x{hgt})",
-                        r.title
-                    );
-                }
+                let figure = format!("'{}' ({w}x{hgt})", r.title);
+                super::common::assert_keys_off(&keys, *data, &figure);
             }
         }
         if let Some(image) = render_or_skip(&mut h) {

@@ -136,6 +136,19 @@ pub fn assert_corner_window_beside_the_notices(
     (window, notices)
 }
 
+/// No key of `keys` lies on the data rectangle `data` of a figure (they
+/// overlap by half a point at most either way); `figure` names it in the
+/// message (its title, the window's size).
+pub fn assert_keys_off(keys: &[egui::Rect], data: egui::Rect, figure: &str) {
+    for key in keys {
+        let overlap = key.intersect(data);
+        assert!(
+            !(overlap.width() > 0.5 && overlap.height() > 0.5),
+            "{figure}: a key {key:?} lies on the data {data:?}"
+        );
+    }
+}
+
 /// Pixels whose every channel is within `tolerance` of `rgb`.
 pub fn count_pixels(rgba: &[u8], rgb: [u8; 3], tolerance: i32) -> usize {
     rgba.chunks_exact(4)

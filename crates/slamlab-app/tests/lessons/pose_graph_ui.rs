@@ -383,13 +383,7 @@ fn the_comparison_key_stays_off_the_graph_at_800_by_500() {
         keys.iter().any(|k| k.bottom() <= map.top() + 0.5),
         "a key above the map: {keys:?}, map {map:?}"
     );
-    for key in keys {
-        let overlap = key.intersect(map);
-        assert!(
-            !(overlap.width() > 0.5 && overlap.height() > 0.5),
-            "the key {key:?} lies on the map {map:?}"
-        );
-    }
+    super::common::assert_keys_off(&keys, map, "the map");
     assert!(super::common::label_visible(&h, "optimized with no kernel"));
 }
 

@@ -656,13 +656,8 @@ fn every_plot_shows_its_values_and_no_key_sits_on_data() {
                 assert!(!plots.is_empty(), "{query} at {w}x{h_px}: no plot drawn");
                 // No key on a map either (the pose graph's key is a line above it).
                 for map in records.iter().filter_map(|r| r.map) {
-                    for key in &keys {
-                        let overlap = key.intersect(map);
-                        assert!(
-                            !(overlap.width() > 0.5 && overlap.height() > 0.5),
-                            "{query} at {w}x{h_px}: a key {key:?} lies on the map {map:?}"
-                        );
-                    }
+                    let figure = format!("{query} at {w}x{h_px}: the map");
+                    super::common::assert_keys_off(&keys, map, &figure);
                 }
                 // An image figure (the pose graph's sparsity images) is on screen
                 // whole: none of its blocks cut at the panel's foot.
@@ -707,14 +702,8 @@ fn every_plot_shows_its_values_and_no_key_sits_on_data() {
                         "{query} at {w}x{h_px}: '{}' {data:?} has {numbers} y-axis values",
                         record.title
                     );
-                    for key in &keys {
-                        let overlap = key.intersect(*data);
-                        assert!(
-                            !(overlap.width() > 0.5 && overlap.height() > 0.5),
-                            "{query} at {w}x{h_px}: a key {key:?} lies on '{}' {data:?}",
-                            record.title
-                        );
-                    }
+                    let figure = format!("{query} at {w}x{h_px}: '{}'", record.title);
+                    super::common::assert_keys_off(&keys, *data, &figure);
                 }
             }
         }
