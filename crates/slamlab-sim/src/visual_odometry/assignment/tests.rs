@@ -5,10 +5,12 @@
 #![allow(clippy::unwrap_used, clippy::expect_used, clippy::panic)] // a failing test stops
 
 use super::*;
-use crate::coursework::{self, Prepared};
+use crate::coursework::{self, Prepared, TaskRunner};
 
 // The lesson's own runner, as `crate::assignments` lists it (not imported
 // from there: the list imports this lesson).
+const RUNNER: TaskRunner = TaskRunner::of::<TwoViewRun>();
+
 fn builtin(name: &str) -> Assignment {
     coursework::builtin(name, &[RUNNER]).unwrap()
 }
