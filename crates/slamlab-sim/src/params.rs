@@ -225,6 +225,25 @@ macro_rules! count_field {
 }
 pub(crate) use count_field;
 
+/// The words of a switch: on or off.
+pub const ON_OFF: &[&str] = &["on", "off"];
+
+/// A switch read and written straight from a `bool` field (or a field of a
+/// field) of the table's scenario type: `on` or `off` (any other word is
+/// refused with the two it takes).
+macro_rules! switch_field {
+    ($name:literal, $help:literal, $($field:tt)+) => {
+        $crate::params::Param::words(
+            $name,
+            $help,
+            $crate::params::ON_OFF,
+            |s| Some($crate::params::ON_OFF[usize::from(!s.$($field)+)].to_owned()),
+            |s, v| $crate::params::choose($crate::params::ON_OFF, v).map(|i| s.$($field)+ = i == 0),
+        )
+    };
+}
+pub(crate) use switch_field;
+
 /// A named scenario: what a source shows ("thesis Experiment 2") or a lesson's key
 /// comparison. A preset sets every parameter but the seed; parameters given beside
 /// it apply on top, whatever their order.
