@@ -352,6 +352,15 @@ fn named(id: &str, seed: u64) -> MclScenario {
     }
 }
 
+/// The parameters of preset `id` with `seed`, run by AMCL alone (amcl's and
+/// Nav2's defaults).
+fn amcl(id: &str, seed: u64) -> MclScenario {
+    MclScenario {
+        estimators: vec![LocalizationEstimator::Amcl],
+        ..named(id, seed)
+    }
+}
+
 /// The presets: ROS 1 amcl's defaults, Nav2's, and the thesis's Table 5.1 runs
 /// (each with Augmented MCL's recovery rates 0.001 / 0.1, see [`MclScenario::preset`]).
 pub static PRESETS: &[Preset<MclScenario>] = &[
@@ -359,19 +368,13 @@ pub static PRESETS: &[Preset<MclScenario>] = &[
         id: "amcl-ros1",
         title: "ROS 1 amcl defaults (AMCL)",
         summary: "amcl's documented defaults: 100..5000 particles with KLD-sampling, likelihood field with 30 beams scored as amcl does (1 + sum of cubes), the diff odometry model, an update every 0.2 m or 30°, resampling every 2 updates.",
-        build: |seed| MclScenario {
-            estimators: vec![LocalizationEstimator::Amcl],
-            ..named("amcl-ros1", seed)
-        },
+        build: |seed| amcl("amcl-ros1", seed),
     },
     Preset {
         id: "nav2",
         title: "Nav2 amcl defaults (AMCL)",
         summary: "Nav2's defaults: 500..2000 particles with KLD-sampling (kld_err 0.05), likelihood field with 60 beams scored as amcl does (1 + sum of cubes), an update every 0.25 m or 0.2 rad, resampling every update.",
-        build: |seed| MclScenario {
-            estimators: vec![LocalizationEstimator::Amcl],
-            ..named("nav2", seed)
-        },
+        build: |seed| amcl("nav2", seed),
     },
     Preset {
         id: "thesis-table-5-1",
