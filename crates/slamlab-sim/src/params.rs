@@ -244,6 +244,25 @@ macro_rules! switch_field {
 }
 pub(crate) use switch_field;
 
+/// A choice read and written straight from a field (or a field of a field) of
+/// the table's scenario type: `words[i]` names `values[i]` (an enum's words
+/// and its values, in the same order).
+macro_rules! choice_field {
+    ($name:literal, $help:literal, $words:expr, $values:expr, $($field:tt)+) => {
+        $crate::params::Param::words(
+            $name,
+            $help,
+            $words,
+            |s| {
+                let at = $values.iter().position(|v| *v == s.$($field)+)?;
+                $words.get(at).map(|w| (*w).to_owned())
+            },
+            |s, v| $crate::params::choose($words, v).map(|i| s.$($field)+ = $values[i]),
+        )
+    };
+}
+pub(crate) use choice_field;
+
 /// A named scenario: what a source shows ("thesis Experiment 2") or a lesson's key
 /// comparison. A preset sets every parameter but the seed; parameters given beside
 /// it apply on top, whatever their order.

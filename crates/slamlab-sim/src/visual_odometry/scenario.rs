@@ -6,7 +6,7 @@ use serde::{Deserialize, Serialize};
 use slamlab_core::vision::{EarlyRejection, Method};
 
 use super::odometry::VoSettings;
-use crate::params::{self, Param, Scenario, count_field, number_field, switch_field};
+use crate::params::{Param, Scenario, choice_field, count_field, number_field, switch_field};
 
 /// The lesson's parameters: the run's settings and the VO step shown in the
 /// two images.
@@ -43,16 +43,12 @@ pub static PARAMS: &[Param<VoScenario>] = &[
         (0, u64::MAX),
         settings.seed
     ),
-    Param::words(
+    choice_field!(
         "method",
         "the minimal solver inside RANSAC: five-point (calibrated, Eq. 4.22-4.25) or eight-point (Eq. 4.18-4.21)",
         METHODS,
-        |s| Some(s.settings.method.name().to_owned()),
-        |s, v| {
-            params::choose(METHODS, v)?;
-            s.settings.method = Method::from_name(v).unwrap_or(Method::FivePoint);
-            Ok(())
-        },
+        [Method::FivePoint, Method::EightPoint],
+        settings.method
     ),
     switch_field!(
         "normalize",
@@ -64,16 +60,12 @@ pub static PARAMS: &[Param<VoScenario>] = &[
         "Levenberg-Marquardt on (R, t) over the Sampson distances of the inliers, after RANSAC and (eight-point) inside its local optimization (on), or the linear eight-point refits alone (off)",
         settings.refine
     ),
-    Param::words(
+    choice_field!(
         "early-rejection",
         "none: every hypothesis is checked against every match; sprt: Matas and Chum's sequential probability ratio test rejects a bad hypothesis after a few matches",
         EARLY_REJECTION,
-        |s| Some(s.settings.early_rejection.name().to_owned()),
-        |s, v| {
-            params::choose(EARLY_REJECTION, v)?;
-            s.settings.early_rejection = EarlyRejection::from_name(v).unwrap_or_default();
-            Ok(())
-        },
+        [EarlyRejection::None, EarlyRejection::Sprt],
+        settings.early_rejection
     ),
     number_field!(
         "outliers",
@@ -134,6 +126,7 @@ impl Scenario for VoScenario {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::params;
 
     #[test]
     fn the_table_round_trips_and_bad_values_get_messages() {
