@@ -217,18 +217,17 @@ pub static PARAMS: &[Param<MclScenario>] = &[
             Ok(())
         },
     ),
-    Param::words(
+    choice_field!(
         "resampler",
         "resampling method",
         RESAMPLERS,
-        |s| Some(s.resampler.name().to_owned()),
-        |s, v| {
-            choose(RESAMPLERS, v).and_then(|i| {
-                Resampler::from_name(RESAMPLERS[i])
-                    .map(|r| s.resampler = r)
-                    .ok_or_else(|| format!("one of {}", RESAMPLERS.join(", ")))
-            })
-        },
+        [
+            Resampler::LowVariance,
+            Resampler::Multinomial,
+            Resampler::Stratified,
+            Resampler::Residual,
+        ],
+        resampler
     ),
     count_field!(
         "resample-interval",
