@@ -1655,8 +1655,8 @@ async function main() {
         await sleep(300);
         const { stats } = await waitNotBlank(p, "pose-graph-step.png");
         assertNotBlank(stats, "pose-graph-step.png");
-        let m3500 = "M3500 not measured: ../shared/data/posegraphs/M3500.g2o is absent";
-        const file = path.resolve(webDir, "..", "..", "shared", "data", "posegraphs", "M3500.g2o");
+        const file = path.join(sharedDataDir, "posegraphs", "M3500.g2o");
+        let m3500 = `M3500 not measured: ${file} is absent (SLAMLAB_SHARED_DATA names the shared data sets)`;
         let text = null;
         try {
           text = await readFile(file, "utf8");
