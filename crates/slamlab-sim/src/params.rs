@@ -206,6 +206,25 @@ macro_rules! number_field {
 }
 pub(crate) use number_field;
 
+/// An angle (or angular rate) parameter given in degrees and stored in radians
+/// in a field (a field of a field) of scenario type `$s`.
+macro_rules! degrees_field {
+    ($s:ty, $name:literal, $unit:literal, $help:literal, $range:expr, $($field:tt)+) => {
+        $crate::params::Param::number(
+            $name,
+            $unit,
+            $help,
+            $range,
+            |s: &$s| Some(s.$($field)+.to_degrees()),
+            |s: &mut $s, v: f64| {
+                s.$($field)+ = v.to_radians();
+                Ok(())
+            },
+        )
+    };
+}
+pub(crate) use degrees_field;
+
 /// A whole-number parameter read and written straight from a field (or a field of
 /// a field) of the table's scenario type: a `u64` or a `usize` (a seed, a count of scans
 /// or particles). Counts have no unit. The range keeps every value within what
