@@ -17,25 +17,15 @@ use slamlab_sim::grid::reference::{LogReference, score};
 use slamlab_sim::grid::{MappingInput, log_input};
 use slamlab_sim::io::laser_log::LaserLog;
 use slamlab_sim::mapping::{MappingScenario, MappingSession, PoseSource};
-use std::path::PathBuf;
+use slamlab_tests::shared_data;
+use std::path::{Path, PathBuf};
 use std::sync::Arc;
 
+/// The folder of the Intel log and its corrected version.
 fn laser_dir() -> Option<PathBuf> {
-    let dir = std::env::var_os("SLAMLAB_SHARED")
-        .map_or_else(
-            || PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../../shared"),
-            PathBuf::from,
-        )
-        .join("data/laser");
-    if dir.join("intel.clf.bz2").exists() && dir.join("intel-corrected.log.gz").exists() {
-        Some(dir)
-    } else {
-        eprintln!(
-            "skipped: the Intel log and its corrected version are not in {} (the shared data sit beside the repository, or set SLAMLAB_SHARED)",
-            dir.display()
-        );
-        None
-    }
+    shared_data("laser/intel-corrected.log.gz")?;
+    let log = shared_data("laser/intel.clf.bz2")?;
+    log.parent().map(Path::to_path_buf)
 }
 
 /// The Intel log's first `scans` scans with the reference attached.

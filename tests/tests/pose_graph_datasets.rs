@@ -7,16 +7,11 @@
 
 use slamlab_core::graph::{EdgeKind, Optimizer, OptimizerSettings, SolverKind};
 use slamlab_sim::io::graph::read_graph;
+use slamlab_tests::shared_data;
 
 fn load(file: &str) -> Option<slamlab_core::graph::PoseGraph> {
-    let path = format!(
-        "{}/../../shared/data/posegraphs/{file}",
-        env!("CARGO_MANIFEST_DIR")
-    );
-    let Ok(text) = std::fs::read_to_string(&path) else {
-        println!("skipped: ../shared/data/posegraphs/{file} not found");
-        return None;
-    };
+    let path = shared_data(&format!("posegraphs/{file}"))?;
+    let text = std::fs::read_to_string(&path).unwrap_or_else(|e| panic!("{file}: {e}"));
     let mut g = read_graph(&text).unwrap_or_else(|e| panic!("{file}: {e}"));
     // The gauge as in the CLI: the first vertex held fixed (gtsam's reference
     // puts a tight prior there; the optimum is the same).

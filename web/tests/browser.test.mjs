@@ -290,6 +290,45 @@ async function waitState(frame, done, what, timeoutMs = 15_000) {
   return state;
 }
 
+/** The lesson state (JSON) after `steps` ticks of `query` run without drawing in the page's wasm. */
+async function runHeadless(page, query, steps) {
+  return JSON.parse(await page.evaluate(([q, n]) => window.slamlab.slamlab_test_headless(q, n), [query, steps]));
+}
+
+/**
+ * Replays a recorded log in the page's wasm without drawing: `query`'s lesson reads the file
+ * at `url` (same host) under `name` for at most `steps` steps. Returns the lesson state
+ * (JSON) and the seconds the replay took in the page (the download not counted).
+ */
+async function replayLog(page, query, url, name, steps) {
+  const took = await page.evaluate(async ([q, u, file, n]) => {
+    const bytes = new Uint8Array(await (await fetch(u)).arrayBuffer());
+    const started = performance.now();
+    const state = window.slamlab.slamlab_test_headless_log(q, file, bytes, n);
+    return { state, ms: performance.now() - started };
+  }, [query, url, name, steps]);
+  return { headless: JSON.parse(took.state), seconds: took.ms / 1000 };
+}
+
+/** As replayLog, for a data set of several files `names` in the folder `dir` (same host). */
+async function replayFiles(page, query, dir, names, steps) {
+  const took = await page.evaluate(async ([q, d, list, n]) => {
+    const parts = [];
+    for (const name of list) parts.push(new Uint8Array(await (await fetch(`${d}/${name}`)).arrayBuffer()));
+    const bytes = new Uint8Array(parts.reduce((total, b) => total + b.length, 0));
+    let at = 0;
+    for (const b of parts) {
+      bytes.set(b, at);
+      at += b.length;
+    }
+    const lengths = new Uint32Array(parts.map((b) => b.length));
+    const started = performance.now();
+    const state = window.slamlab.slamlab_test_headless_files(q, list.join("\n"), bytes, lengths, n);
+    return { state, ms: performance.now() - started };
+  }, [query, dir, names, steps]);
+  return { headless: JSON.parse(took.state), seconds: took.ms / 1000 };
+}
+
 /** Throws if the app has panicked (the export, or the visible banner). */
 async function assertNoPanic(frame) {
   const p = await frame.evaluate(() => ({
@@ -330,21 +369,34 @@ async function waitNotBlank(page, name) {
   }
 }
 
+/**
+ * What every check of one page does around its own steps: opens `relativeUrl` in a fresh
+ * context (openPage), runs `body({ context, page, log })`, then throws if the app panicked
+ * or the page logged a problem (console error, uncaught exception, failed request), and
+ * closes the context whatever happened. Returns what `body` returns (the check's note).
+ */
+async function withPage(browser, baseUrl, relativeUrl, label, body, viewport = VIEWPORT) {
+  const opened = await openPage(browser, baseUrl, relativeUrl, label, viewport);
+  try {
+    const note = await body(opened);
+    await assertNoPanic(opened.page);
+    assert(opened.log.problems.length === 0, opened.log.problems.join("; "));
+    return note;
+  } finally {
+    await opened.context.close();
+  }
+}
+
 /** Opens a URL and checks that the app starts, draws and does not panic. */
 async function checkStartsAndDraws(browser, baseUrl, relativeUrl, label, shotName) {
-  const { context, page, log } = await openPage(browser, baseUrl, relativeUrl, label);
-  try {
+  return withPage(browser, baseUrl, relativeUrl, label, async ({ page }) => {
     await waitRunning(page);
     const { stats } = await waitNotBlank(page, shotName);
     assertNotBlank(stats, shotName);
     await testState(page);
     await sleep(500); // a few more frames: a panic in the first frames would show up now
-    await assertNoPanic(page);
-    assert(log.problems.length === 0, log.problems.join("; "));
     return `${describe(stats)}; state ${JSON.stringify(await testState(page))}`;
-  } finally {
-    await context.close();
-  }
+  });
 }
 
 // ---------------------------------------------------------------------------------------
@@ -543,8 +595,7 @@ async function main() {
       filters,
       { filtersOf = (fs) => fs.join(","), focusAt = [VIEWPORT.width / 2, VIEWPORT.height / 2] } = {},
     ) => async () => {
-      const { context, page: p, log } = await openPage(browser, baseUrl, url, key);
-      try {
+      return withPage(browser, baseUrl, url, key, async ({ page: p }) => {
         await waitRunning(p);
         const { stats } = await waitNotBlank(p, `${key}-1-start.png`);
         assertNotBlank(stats, `${key}-1-start.png`);
@@ -557,7 +608,6 @@ async function main() {
         const s1 = await testState(p);
         const seconds = (Date.now() - startedAt) / 1000;
         await screenshot(p, `${key}-2-running.png`);
-        await assertNoPanic(p);
         const t = s1.frame_timing;
         assert(t && t.frames > 0 && Number.isFinite(t.cpu_ms_median), `no frame timing: ${JSON.stringify(s1)}`);
         assert(filtersOf(s1.filters) === filters, `filters ${JSON.stringify(s1.filters)}`);
@@ -568,15 +618,12 @@ async function main() {
         metrics[`${key}_sim_ms_p95`] = t.sim_ms_p95;
         metrics[`${key}_frames_per_second`] = Number((1000 / t.interval_ms_median).toFixed(1));
         metrics[`${key}_ticks_per_second`] = Number(((s1.tick - s0.tick) / seconds).toFixed(1));
-        assert(log.problems.length === 0, log.problems.join("; "));
         return (
           `tick ${s0.tick} -> ${s1.tick} in ${seconds.toFixed(1)} s; frame CPU median ${t.cpu_ms_median.toFixed(2)} ms ` +
           `(p95 ${t.cpu_ms_p95?.toFixed(2)}), simulation ${t.sim_ms_median.toFixed(2)} ms, ` +
           `${metrics[`${key}_frames_per_second`]} frames/s`
         );
-      } finally {
-        await context.close();
-      }
+      });
     };
 
     // --- The heaviest landmark setting: 50 landmarks, EKF and UKF side by
@@ -605,8 +652,7 @@ async function main() {
     await check("many-runs=20 averages the NEES over 20 runs, with the native numbers", async () => {
       const url = "index.html?lesson=landmark-slam&seed=7&estimator=ekf,fej-ekf&many-runs=20";
       const NATIVE = { ekf: 3.9292620356909818, "fej-ekf": 3.278394232063156 };
-      const { context, page: p, log } = await openPage(browser, baseUrl, url, "many runs");
-      try {
+      return withPage(browser, baseUrl, url, "many runs", async ({ page: p }) => {
         await waitRunning(p);
         const startedAt = Date.now();
         const s = await waitState(p, (st) => st.many_runs && st.many_runs.done === 20 && !st.many_runs.running, "20 runs", 120_000);
@@ -614,7 +660,6 @@ async function main() {
         await sleep(300);
         const { stats } = await waitNotBlank(p, "many-runs.png");
         assertNotBlank(stats, "many-runs.png");
-        await assertNoPanic(p);
         const notes = [];
         for (const [name, native] of Object.entries(NATIVE)) {
           const got = s.many_runs.nees[name];
@@ -624,11 +669,8 @@ async function main() {
           notes.push(`${name} ${got} (relative difference ${diff.toExponential(1)})`);
         }
         assert(s.tick === 0, `the run on the map moved: tick ${s.tick}`);
-        assert(log.problems.length === 0, log.problems.join("; "));
         return `${notes.join(", ")}; done after ${metrics.many_runs_20_laps_ms} ms`;
-      } finally {
-        await context.close();
-      }
+      });
     });
 
     // --- Landmark SLAM on real data: MRCLAM Dataset 6 (the UTIAS zip as distributed,
@@ -643,8 +685,7 @@ async function main() {
       if (!found) return `skipped: ${file} is absent (the shared data sets are not beside the repository; SLAMLAB_SHARED_DATA names them)`;
       const NATIVE_RMSE_6000 = 0.11077003955614562;
       const url = `index.html?lesson=landmark-slam&estimator=ekf&data=shared-data/${rel}`;
-      const { context, page: p, log } = await openPage(browser, baseUrl, url, "landmark-mrclam");
-      try {
+      return withPage(browser, baseUrl, url, "landmark-mrclam", async ({ page: p }) => {
         await waitRunning(p);
         const s0 = await waitState(p, (st) => st.data && st.data.name === "MRCLAM_Dataset6, robot 1", "MRCLAM loaded by data=", 60_000);
         assert(s0.data.kind === "UTIAS MRCLAM" && s0.data.mode === "slam" && s0.data.steps === 62955, `opened ${JSON.stringify(s0.data)}`);
@@ -657,19 +698,12 @@ async function main() {
         assert(Number.isFinite(liveRmse) && liveRmse < 1, `live EKF RMSE against Vicon ${liveRmse} m after ${live.data.played} steps`);
         await p.keyboard.press("Space");
         // Headless in this page's wasm: 6,000 steps of the same bytes.
-        const headless = JSON.parse(await p.evaluate(async (r) => {
-          const bytes = new Uint8Array(await (await fetch(`shared-data/${r}`)).arrayBuffer());
-          return window.slamlab.slamlab_test_headless_log("lesson=landmark-slam&estimator=ekf", "MRCLAM_Dataset6.zip", bytes, 6000);
-        }, rel));
+        const { headless } = await replayLog(p, "lesson=landmark-slam&estimator=ekf", `shared-data/${rel}`, "MRCLAM_Dataset6.zip", 6000);
         const rmse = headless.position_error?.ekf?.rmse;
         assert(headless.data?.played === 6000, `the headless replay played ${headless.data?.played} steps: ${JSON.stringify(headless).slice(0, 300)}`);
         assert(rmse === NATIVE_RMSE_6000, `EKF RMSE against Vicon after 6000 steps: ${rmse} m in the browser, ${NATIVE_RMSE_6000} m natively`);
-        await assertNoPanic(p);
-        assert(log.problems.length === 0, log.problems.join("; "));
         return `live: ${live.data.played} steps, EKF RMSE ${liveRmse.toFixed(3)} m over ${live.position_error.ekf.samples} Vicon samples; headless 6000 steps: ${rmse} m, bit-identical to native`;
-      } finally {
-        await context.close();
-      }
+      });
     });
 
     // --- Landmark SLAM on the Freiburg course's files (world.dat and sensor_data.dat,
@@ -694,8 +728,7 @@ async function main() {
         [5, 10.104516500632393, 4.741022022157567],
         [4, 9.006923754450272, 1.7611825006196329],
       ];
-      const { context, page: p, log } = await openPage(browser, baseUrl, "index.html?lesson=landmark-slam&estimator=ekf", "landmark-freiburg");
-      try {
+      return withPage(browser, baseUrl, "index.html?lesson=landmark-slam&estimator=ekf", "landmark-freiburg", async ({ page: p }) => {
         await waitRunning(p);
         // Dropped on the canvas (the path of a drag from the desktop).
         await dropFetched(p, names.map((n) => [`shared-data/landmarks/freiburg/${n}`, n]));
@@ -709,18 +742,7 @@ async function main() {
         const { stats } = await waitNotBlank(p, "landmark-freiburg.png");
         assertNotBlank(stats, "landmark-freiburg.png");
         // Headless in this page's wasm: the same two files to their end.
-        const headless = JSON.parse(await p.evaluate(async (list) => {
-          const parts = [];
-          for (const name of list) parts.push(new Uint8Array(await (await fetch(`shared-data/landmarks/freiburg/${name}`)).arrayBuffer()));
-          const bytes = new Uint8Array(parts.reduce((n, b) => n + b.length, 0));
-          let at = 0;
-          for (const b of parts) {
-            bytes.set(b, at);
-            at += b.length;
-          }
-          const lengths = new Uint32Array(parts.map((b) => b.length));
-          return window.slamlab.slamlab_test_headless_files("lesson=landmark-slam&estimator=ekf", list.join("\n"), bytes, lengths, 100000);
-        }, names));
+        const { headless } = await replayFiles(p, "lesson=landmark-slam&estimator=ekf", "shared-data/landmarks/freiburg", names, 100000);
         assert(headless.data?.played === 331 && headless.data?.finished === true, `the headless replay: ${JSON.stringify(headless).slice(0, 300)}`);
         const ekf = headless.estimates?.ekf;
         assert(ekf && ekf.pose.every((v, i) => v === NATIVE_POSE[i]), `final pose ${JSON.stringify(ekf?.pose)} in the browser, ${JSON.stringify(NATIVE_POSE)} natively`);
@@ -728,12 +750,8 @@ async function main() {
           ekf.landmarks.length === 9 && ekf.landmarks.every((l, i) => l.every((v, j) => v === NATIVE_LANDMARKS[i][j])),
           `final landmarks ${JSON.stringify(ekf.landmarks)} in the browser, ${JSON.stringify(NATIVE_LANDMARKS)} natively`,
         );
-        await assertNoPanic(p);
-        assert(log.problems.length === 0, log.problems.join("; "));
         return `live: ${live.data.played} steps played; headless 331 steps: pose (${ekf.pose.map((v) => v.toFixed(3)).join(", ")}) and 9 landmarks bit-identical to native`;
-      } finally {
-        await context.close();
-      }
+      });
     });
 
     // --- Victoria Park to the end of its data with EKF-SLAM in this page's wasm (the
@@ -747,8 +765,7 @@ async function main() {
       const names = ["inputs.dat", "measurements.dat", "gps.dat"];
       const found = await Promise.all(names.map((n) => stat(path.join(dir, n)).then(() => true, () => false)));
       if (found.includes(false)) return `skipped: ${dir}/{inputs,measurements,gps}.dat are absent (the shared data sets are not beside the repository)`;
-      const { context, page: p, log } = await openPage(browser, baseUrl, "index.html?lesson=landmark-slam&estimator=ekf", "landmark-victoria-park");
-      try {
+      return withPage(browser, baseUrl, "index.html?lesson=landmark-slam&estimator=ekf", "landmark-victoria-park", async ({ page: p }) => {
         await waitRunning(p);
         await dropFetched(p, names.map((n) => [`shared-data/landmarks/victoria_park/${n}`, n]));
         const s0 = await waitState(p, (st) => st.data && st.data.kind === "Victoria Park", "Victoria Park opened by a drop", 60_000);
@@ -759,35 +776,16 @@ async function main() {
         await sleep(300);
         const { stats } = await waitNotBlank(p, "landmark-victoria-park.png");
         assertNotBlank(stats, "landmark-victoria-park.png");
-        const took = await p.evaluate(async (list) => {
-          const parts = [];
-          for (const name of list) parts.push(new Uint8Array(await (await fetch(`shared-data/landmarks/victoria_park/${name}`)).arrayBuffer()));
-          const bytes = new Uint8Array(parts.reduce((n, b) => n + b.length, 0));
-          let at = 0;
-          for (const b of parts) {
-            bytes.set(b, at);
-            at += b.length;
-          }
-          const lengths = new Uint32Array(parts.map((b) => b.length));
-          const started = performance.now();
-          const state = window.slamlab.slamlab_test_headless_files("lesson=landmark-slam&estimator=ekf", list.join("\n"), bytes, lengths, 200000);
-          return { state, ms: performance.now() - started };
-        }, names);
-        const headless = JSON.parse(took.state);
-        const seconds = took.ms / 1000;
+        const { headless, seconds } = await replayFiles(p, "lesson=landmark-slam&estimator=ekf", "shared-data/landmarks/victoria_park", names, 200000);
         const dataSeconds = headless.time;
         const factor = dataSeconds / seconds;
         const landmarks = headless.estimates?.ekf?.landmarks?.length;
         metrics.victoria_park_ekf_s = Number(seconds.toFixed(1));
         metrics.victoria_park_ekf_real_time_factor = Number(factor.toFixed(2));
         metrics.victoria_park_ekf_counts = { steps: headless.data?.played, data_seconds: dataSeconds, landmarks, gps_rmse_m: headless.data?.gps?.rmse ?? null };
-        assert(headless.data?.finished === true && headless.data.played === s0.data.steps, `the headless replay stopped at ${headless.data?.played} of ${s0.data.steps} steps: ${took.state.slice(0, 300)}`);
-        await assertNoPanic(p);
-        assert(log.problems.length === 0, log.problems.join("; "));
+        assert(headless.data?.finished === true && headless.data.played === s0.data.steps, `the headless replay stopped at ${headless.data?.played} of ${s0.data.steps} steps: ${JSON.stringify(headless).slice(0, 300)}`);
         return `${headless.data.played} steps (${dataSeconds.toFixed(0)} s of data) in ${seconds.toFixed(1)} s = ${factor.toFixed(2)}x real time; ${landmarks} landmarks at the end`;
-      } finally {
-        await context.close();
-      }
+      });
     });
 
     // --- Monte Carlo localization by URL: the lesson runs on the maze, and a seeded
@@ -795,8 +793,7 @@ async function main() {
     // (crates/slamlab-app/tests/lessons/kidnap_ui.rs pins the same numbers).
     await check("lesson=kidnap runs on the maze and converges with the native numbers", async () => {
       const url = "index.html?lesson=kidnap&map=maze&seed=3&particles=1000";
-      const { context, page: p, log } = await openPage(browser, baseUrl, url, "kidnap");
-      try {
+      return withPage(browser, baseUrl, url, "kidnap", async ({ page: p }) => {
         await waitRunning(p);
         const s0 = await waitState(p, (st) => st.lesson === "kidnap" && st.frames > 2, "the kidnap lesson");
         assert(s0.map === "maze" && s0.seed === 3, `opened ${JSON.stringify(s0)}`);
@@ -807,9 +804,7 @@ async function main() {
         await sleep(300);
         const { stats } = await waitNotBlank(p, "kidnap-running.png");
         assertNotBlank(stats, "kidnap-running.png");
-        const headless = JSON.parse(
-          await p.evaluate((q) => window.slamlab.slamlab_test_headless(q, 300), "lesson=kidnap&map=maze&seed=3&particles=1000"),
-        );
+        const headless = await runHeadless(p, "lesson=kidnap&map=maze&seed=3&particles=1000", 300);
         const f = headless.filters[0];
         assert(f.position_error < 0.5, `the estimate did not converge: ${JSON.stringify(f)}`);
         const NATIVE = [3.6749150412703995, 3.2807691616908534, 1.0349869652703703];
@@ -817,12 +812,8 @@ async function main() {
           f.estimate.every((v, i) => v === NATIVE[i]),
           `estimate ${JSON.stringify(f.estimate)} in the browser, ${JSON.stringify(NATIVE)} natively`,
         );
-        await assertNoPanic(p);
-        assert(log.problems.length === 0, log.problems.join("; "));
         return `ran to tick ${s1.tick}; headless 300 ticks: error ${f.position_error.toFixed(3)} m, estimate bit-identical to native`;
-      } finally {
-        await context.close();
-      }
+      });
     });
 
     // --- The kidnapped robot by URL: AMCL and ACMCL track, the robot is kidnapped at
@@ -830,8 +821,7 @@ async function main() {
     // or recovered.
     await check("a kidnap by URL: the status goes from tracking to lost or recovering", async () => {
       const url = "index.html?lesson=kidnap&estimator=amcl,acmcl&init=tracking&particles=500&kidnap-at=30&seed=4";
-      const { context, page: p, log } = await openPage(browser, baseUrl, url, "kidnap status");
-      try {
+      return withPage(browser, baseUrl, url, "kidnap status", async ({ page: p }) => {
         await waitRunning(p);
         await waitState(p, (st) => st.lesson === "kidnap" && st.frames > 2, "the kidnap lesson");
         await p.mouse.click(VIEWPORT.width / 2, VIEWPORT.height / 2);
@@ -845,12 +835,8 @@ async function main() {
         await sleep(300);
         const { stats } = await waitNotBlank(p, "kidnap-status.png");
         assertNotBlank(stats, "kidnap-status.png");
-        await assertNoPanic(p);
-        assert(log.problems.length === 0, log.problems.join("; "));
         return `before: ${tracking.join(" | ")}; after: ${statuses.join(" | ")}`;
-      } finally {
-        await context.close();
-      }
+      });
     });
 
     // --- map= names a ROS map hosted beside the site (web/build.sh copies the built-in
@@ -858,14 +844,11 @@ async function main() {
     // location that does not exist leaves the maze and a note.
     await check("map=maps/office.yaml loads a hosted ROS map; a missing one keeps the maze", async () => {
       const url = "index.html?lesson=kidnap&map=maps/office.yaml&particles=300&seed=2";
-      const { context, page: p, log } = await openPage(browser, baseUrl, url, "hosted map");
-      try {
+      return withPage(browser, baseUrl, url, "hosted map", async ({ page: p }) => {
         await waitRunning(p);
         const s1 = await waitState(p, (st) => st.lesson === "kidnap" && st.map === "office.yaml", "the hosted office map", 60_000);
         const { stats } = await waitNotBlank(p, "kidnap-hosted-map.png");
         assertNotBlank(stats, "kidnap-hosted-map.png");
-        await assertNoPanic(p);
-        assert(log.problems.length === 0, log.problems.join("; "));
         const missing = await openPage(browser, baseUrl, "index.html?lesson=kidnap&map=maps/nowhere.yaml", "missing hosted map");
         try {
           await waitRunning(missing.page);
@@ -879,9 +862,7 @@ async function main() {
           await missing.context.close();
         }
         return `map ${s1.map} loaded by URL; maps/nowhere.yaml left the maze`;
-      } finally {
-        await context.close();
-      }
+      });
     });
 
     // --- The Monte Carlo lesson at 5,000 particles, one filter (MCL) and two side by side
@@ -912,8 +893,7 @@ async function main() {
     // matching builds the map; its agreement with the true map rises as scans come in.
     await check("lesson=mapping builds the maze map and its agreement with the truth rises", async () => {
       const url = "index.html?lesson=mapping&map=maze&seed=3&steps=300";
-      const { context, page: p, log } = await openPage(browser, baseUrl, url, "mapping");
-      try {
+      return withPage(browser, baseUrl, url, "mapping", async ({ page: p }) => {
         await waitRunning(p);
         const s0 = await waitState(p, (st) => st.lesson === "mapping" && st.frames > 2, "the mapping lesson");
         assert(s0.total_scans === 300 && s0.poses === "scan-to-map" && s0.scans === 0, `opened ${JSON.stringify(s0)}`);
@@ -930,9 +910,7 @@ async function main() {
         // data), timed for the real-time factor (reported, not asserted), and the pose it
         // ends at against the native run (crates/slamlab-app/tests/lessons/mapping_ui.rs).
         const started = Date.now();
-        const headless = JSON.parse(
-          await p.evaluate((q) => window.slamlab.slamlab_test_headless(q, 600), "lesson=mapping&map=office&steps=600&seed=1"),
-        );
+        const headless = await runHeadless(p, "lesson=mapping&map=office&steps=600&seed=1", 600);
         const seconds = (Date.now() - started) / 1000;
         const NATIVE = [19.29859043482542, 47.94699415441172, -1.546091238599251];
         const apart = Math.hypot(headless.pose[0] - NATIVE[0], headless.pose[1] - NATIVE[1]);
@@ -940,12 +918,8 @@ async function main() {
         const same = headless.pose.every((v, i) => v === NATIVE[i]);
         metrics.mapping_office_600_scans_s = Number(seconds.toFixed(2));
         metrics.mapping_real_time_factor = Number((60 / seconds).toFixed(1));
-        await assertNoPanic(p);
-        assert(log.problems.length === 0, log.problems.join("; "));
         return `${s1.scans} scans: map agreement ${s1.map_agreement.toFixed(3)}, trajectory RMSE ${s1.trajectory_rmse.toFixed(3)} m, ${s1.known_cells} known cells; office headless: 600 scans (60 s of data, simulation included) in ${seconds.toFixed(1)} s = ${(60 / seconds).toFixed(1)}x real time, pose ${same ? "bit-identical to native" : `${(apart * 1000).toFixed(2)} mm from native`}`;
-      } finally {
-        await context.close();
-      }
+      });
     });
 
     // --- A real laser log in the browser: the Intel Research Lab log (13,631 scans, about
@@ -960,19 +934,11 @@ async function main() {
       const found = await stat(file).then(() => true, () => false);
       if (!found) return `skipped: ${file} is absent (the shared data sets are not beside the repository)`;
       const url = `index.html?lesson=mapping&log=shared-data/${rel}`;
-      const { context, page: p, log } = await openPage(browser, baseUrl, url, "mapping-intel");
-      try {
+      return withPage(browser, baseUrl, url, "mapping-intel", async ({ page: p, log }) => {
         await waitRunning(p);
         const s0 = await waitState(p, (st) => st.lesson === "mapping" && st.total_scans === 13631, "the Intel log loaded by log=", 120_000);
         assert(s0.poses === "scan-to-map" && s0.log === "intel.clf.bz2", `opened ${JSON.stringify({ poses: s0.poses, log: s0.log, note: s0.note })}`);
-        const took = await p.evaluate(async (r) => {
-          const bytes = new Uint8Array(await (await fetch(`shared-data/${r}`)).arrayBuffer());
-          const started = performance.now();
-          const state = window.slamlab.slamlab_test_headless_log("lesson=mapping", "intel.clf.bz2", bytes, 13631);
-          return { state, ms: performance.now() - started };
-        }, rel);
-        const headless = JSON.parse(took.state);
-        const seconds = took.ms / 1000;
+        const { headless, seconds } = await replayLog(p, "lesson=mapping", `shared-data/${rel}`, "intel.clf.bz2", 13631);
         const factor = headless.input_seconds / seconds;
         const NATIVE = [-2.751285284132404, 1.482646573714355, -0.043476162369528115];
         const same = headless.pose.every((v, i) => v === NATIVE[i]);
@@ -981,12 +947,8 @@ async function main() {
         assert(headless.scans === 13631, `mapped ${headless.scans} scans: ${headless.note}`);
         assert(same, `ended at ${JSON.stringify(headless.pose)}, natively ${JSON.stringify(NATIVE)}`);
         assert(factor >= 20, `${headless.input_seconds.toFixed(0)} s of data in ${seconds.toFixed(1)} s = ${factor.toFixed(1)}x real time`);
-        await assertNoPanic(p);
-        assert(log.problems.length === 0, log.problems.join("; "));
         return `${headless.scans} scans (${headless.input_seconds.toFixed(0)} s of data, decompression and parsing included) in ${seconds.toFixed(1)} s = ${factor.toFixed(1)}x real time, end pose bit-identical to native`;
-      } finally {
-        await context.close();
-      }
+      });
     });
 
     // --- A ROS 2 bag (MCAP with zstd chunks, written by PyPI's rosbags from the Intel
@@ -997,8 +959,7 @@ async function main() {
     await check("a ROS 2 bag opens by log= and maps, ending on the native pose", async () => {
       const rel = "ros2_bags/rosbags-intel-300-scans.mcap";
       const url = `index.html?lesson=mapping&log=repo-data/${rel}&scan-topic=/scan&odom-topic=/odom`;
-      const { context, page: p, log } = await openPage(browser, baseUrl, url, "mapping-ros2-bag");
-      try {
+      return withPage(browser, baseUrl, url, "mapping-ros2-bag", async ({ page: p, log }) => {
         await waitRunning(p);
         const s0 = await waitState(p, (st) => st.lesson === "mapping" && st.total_scans === 300, "the bag loaded by log=", 60_000);
         assert(s0.log === "rosbags-intel-300-scans.mcap", `opened ${JSON.stringify({ log: s0.log, note: s0.note })}`);
@@ -1011,20 +972,13 @@ async function main() {
         const image = await screenshot(p, "mapping-ros2-bag.png");
         const stats = imageStats(image);
         assert(stats.distinctColours > 50, `the page looks blank: ${describe(stats)}`);
-        const headless = JSON.parse(await p.evaluate(async (r) => {
-          const bytes = new Uint8Array(await (await fetch(`repo-data/${r}`)).arrayBuffer());
-          return window.slamlab.slamlab_test_headless_log("lesson=mapping", "rosbags-intel-300-scans.mcap", bytes, 300);
-        }, rel));
+        const { headless } = await replayLog(p, "lesson=mapping", `repo-data/${rel}`, "rosbags-intel-300-scans.mcap", 300);
         const NATIVE = [2.1332476175095056, 0.02236945271272885, -0.11727858044618644];
         const same = headless.pose.every((v, i) => v === NATIVE[i]);
         assert(headless.scans === 300, `mapped ${headless.scans} scans: ${headless.note}`);
         assert(same, `ended at ${JSON.stringify(headless.pose)}, natively ${JSON.stringify(NATIVE)}`);
-        await assertNoPanic(p);
-        assert(log.problems.length === 0, log.problems.join("; "));
         return `300 scans from /scan with /odom; ${s1.scans} mapped live; the whole bag in wasm ends bit-identical to native`;
-      } finally {
-        await context.close();
-      }
+      });
     });
 
     // --- The localization lesson replays a bag by log= in its map. The rosbags bag holds
@@ -1037,8 +991,7 @@ async function main() {
       const notes = [];
       for (const viewport of [VIEWPORT, { width: 800, height: 500 }]) {
         const size = `${viewport.width}x${viewport.height}`;
-        const { context, page: p, log } = await openPage(browser, baseUrl, url, `kidnap-ros2-bag-${size}`, viewport);
-        try {
+        await withPage(browser, baseUrl, url, `kidnap-ros2-bag-${size}`, async ({ page: p, log }) => {
           await waitRunning(p);
           const s0 = await waitState(p, (st) => st.lesson === "kidnap" && st.log === "rosbags-intel-300-scans.mcap", "the bag loaded by log=", 60_000);
           assert(JSON.stringify(s0.topics) === JSON.stringify(["/scan", "/odom"]), `topics ${JSON.stringify(s0.topics)}`);
@@ -1054,12 +1007,8 @@ async function main() {
           const image = await screenshot(p, `kidnap-ros2-bag-${size}.png`);
           const stats = imageStats(image);
           assert(stats.distinctColours > 50, `the page looks blank: ${describe(stats)}`);
-          await assertNoPanic(p);
-          assert(log.problems.length === 0, log.problems.join("; "));
           notes.push(`${size}: ${s1.log_progress[0]} of ${s1.log_progress[1]} scans replayed, "${s1.filters[0].status}"`);
-        } finally {
-          await context.close();
-        }
+        }, viewport);
       }
       return notes.join("; ");
     });
@@ -1074,29 +1023,17 @@ async function main() {
       const file = path.join(sharedDataDir, rel);
       const found = await stat(file).then(() => true, () => false);
       if (!found) return `skipped: ${file} is absent (the shared data sets are not beside the repository)`;
-      const { context, page: p, log } = await openPage(browser, baseUrl, "index.html?lesson=cartographer&steps=10", "cartographer-intel");
-      try {
+      return withPage(browser, baseUrl, "index.html?lesson=cartographer&steps=10", "cartographer-intel", async ({ page: p }) => {
         await waitRunning(p);
-        const took = await p.evaluate(async (r) => {
-          const bytes = new Uint8Array(await (await fetch(`shared-data/${r}`)).arrayBuffer());
-          const started = performance.now();
-          const state = window.slamlab.slamlab_test_headless_log("lesson=cartographer", "intel.clf.bz2", bytes, 13631);
-          return { state, ms: performance.now() - started };
-        }, rel);
-        const headless = JSON.parse(took.state);
-        const seconds = took.ms / 1000;
+        const { headless, seconds } = await replayLog(p, "lesson=cartographer", `shared-data/${rel}`, "intel.clf.bz2", 13631);
         const factor = headless.input_seconds / seconds;
         metrics.cartographer_intel_log_s = Number(seconds.toFixed(1));
         metrics.cartographer_intel_real_time_factor = Number(factor.toFixed(2));
         metrics.cartographer_intel_counts = { nodes: headless.nodes, submaps: headless.submaps, loop_closures: headless.loop_closures, searches: headless.bbs?.searches };
-        assert(headless.scans === 13631, `mapped ${headless.scans} scans: ${took.state.slice(0, 300)}`);
+        assert(headless.scans === 13631, `mapped ${headless.scans} scans: ${JSON.stringify(headless).slice(0, 300)}`);
         assert(factor > 1, `${headless.input_seconds.toFixed(0)} s of data in ${seconds.toFixed(1)} s = ${factor.toFixed(2)}x real time`);
-        await assertNoPanic(p);
-        assert(log.problems.length === 0, log.problems.join("; "));
         return `${headless.scans} scans (${headless.input_seconds.toFixed(0)} s of data) in ${seconds.toFixed(1)} s = ${factor.toFixed(2)}x real time; ${headless.nodes} nodes, ${headless.submaps} submaps, ${headless.loop_closures} loop closures, ${headless.bbs?.searches} searches`;
-      } finally {
-        await context.close();
-      }
+      });
     });
 
     // --- The same log on screen: `log=` with `run=1&speed=max` plays it through the
@@ -1111,8 +1048,7 @@ async function main() {
       const found = await stat(file).then(() => true, () => false);
       if (!found) return `skipped: ${file} is absent (the shared data sets are not beside the repository)`;
       const url = `index.html?lesson=cartographer&log=shared-data/${rel}&run=1&speed=max`;
-      const { context, page: p, log } = await openPage(browser, baseUrl, url, "cartographer-intel-on-screen");
-      try {
+      return withPage(browser, baseUrl, url, "cartographer-intel-on-screen", async ({ page: p, log }) => {
         await waitRunning(p);
         const s0 = await waitState(p, (st) => st.lesson === "cartographer" && st.total_scans === 13631, "the Intel log loaded by log=", 120_000);
         const started = Date.now();
@@ -1138,12 +1074,8 @@ async function main() {
         assertNotBlank(imageStats(image), "cartographer-intel-on-screen.png");
         assert(state.nodes === 6837 && state.loop_closures === 2832, `counts ${JSON.stringify({ nodes: state.nodes, loop_closures: state.loop_closures })}, natively 6837 nodes and 2832 loop closures`);
         assert(factor > 1, `${state.input_seconds.toFixed(0)} s of data in ${seconds.toFixed(1)} s on screen = ${factor.toFixed(2)}x real time`);
-        await assertNoPanic(p);
-        assert(log.problems.length === 0, log.problems.join("; "));
         return `${state.scans} scans (${state.input_seconds.toFixed(0)} s of data) on screen in ${seconds.toFixed(1)} s = ${factor.toFixed(1)}x real time, ${frames} frames drawn (${(frames / seconds).toFixed(1)}/s); ${state.nodes} nodes, ${state.loop_closures} loop closures`;
-      } finally {
-        await context.close();
-      }
+      });
     });
 
     // --- Grid FastSLAM in the mapping lesson. A short seeded run in this page's wasm
@@ -1156,15 +1088,9 @@ async function main() {
     // lesson's own median time per update scan is recorded beside them.
     await check("lesson=mapping with grid FastSLAM: native bits, and 30 particles running live", async () => {
       const url = "index.html?lesson=mapping&map=office&seed=1&steps=3000&poses=grid-fastslam&particles=30";
-      const { context, page: p, log } = await openPage(browser, baseUrl, url, "grid-fastslam");
-      try {
+      return withPage(browser, baseUrl, url, "grid-fastslam", async ({ page: p }) => {
         await waitRunning(p);
-        const headless = JSON.parse(
-          await p.evaluate(
-            (q) => window.slamlab.slamlab_test_headless(q, 300),
-            "lesson=mapping&map=maze&steps=300&seed=2&poses=grid-fastslam&particles=10",
-          ),
-        );
+        const headless = await runHeadless(p, "lesson=mapping&map=maze&steps=300&seed=2&poses=grid-fastslam&particles=10", 300);
         const NATIVE = [2.2339493485723514, 5.709111183307648, 3.0152847451913276];
         const best = headless.grid_fastslam?.best;
         assert(
@@ -1193,17 +1119,13 @@ async function main() {
         metrics.grid_fastslam_update_ms_median = g.update_ms_median;
         metrics.grid_fastslam_update_scans = g.update_scans_timed;
         metrics.grid_fastslam_scans = s2.scans;
-        await assertNoPanic(p);
-        assert(log.problems.length === 0, log.problems.join("; "));
         return (
           `heaviest particle bit-identical to native; 30 particles: ${s2.scans} scans, ${g.updates} updates, ` +
           `${g.resamplings} resamplings; frame CPU median ${t.cpu_ms_median_outside_updates?.toFixed(2)} ms outside updates ` +
           `(${t.frames - t.update_frames} frames), ${t.cpu_ms_median_update_frames?.toFixed(2)} ms in update frames (${t.update_frames}); ` +
           `an update scan takes ${g.update_ms_median?.toFixed(1)} ms (median of ${g.update_scans_timed})`
         );
-      } finally {
-        await context.close();
-      }
+      });
     });
 
     // --- The filters lesson: the polar banana with 100,000 samples. Drag the prior's
@@ -1223,8 +1145,7 @@ async function main() {
     // pose.
     await check("lesson=cartographer detects the kidnap at 152 and merges the maps", async () => {
       const url = "index.html?lesson=cartographer&map=maze&kidnap-at=152&seed=3";
-      const { context, page: p, log } = await openPage(browser, baseUrl, url, "cartographer");
-      try {
+      return withPage(browser, baseUrl, url, "cartographer", async ({ page: p }) => {
         await waitRunning(p);
         const s0 = await waitState(p, (st) => st.lesson === "cartographer" && st.frames > 2, "the cartographer lesson");
         assert(s0.total_scans === 600 && s0.kidnap_at === 152 && s0.scans === 0, `opened ${JSON.stringify(s0)}`);
@@ -1238,9 +1159,7 @@ async function main() {
         const { stats } = await waitNotBlank(p, "cartographer.png");
         assertNotBlank(stats, "cartographer.png");
         const started = Date.now();
-        const headless = JSON.parse(
-          await p.evaluate((q) => window.slamlab.slamlab_test_headless(q, 200), "lesson=cartographer&map=maze&kidnap-at=152&seed=3"),
-        );
+        const headless = await runHeadless(p, "lesson=cartographer&map=maze&kidnap-at=152&seed=3", 200);
         const seconds = (Date.now() - started) / 1000;
         const NATIVE = { submaps: 7, nodes: 163, loop_closures: 15, optimizations: 6, searches: 34, nodes_evaluated: 153183, exhaustive_candidates: 43636618 };
         const got = {
@@ -1257,18 +1176,13 @@ async function main() {
         metrics.cartographer_maze_200_scans_s = Number(seconds.toFixed(2));
         metrics.cartographer_scan_ms_median = s1.scan_ms_median;
         metrics.cartographer_scan_ms_max = s1.scan_ms_max;
-        await assertNoPanic(p);
-        assert(log.problems.length === 0, log.problems.join("; "));
         return `detected at ${s1.kidnap_detected_at}, merged at ${s1.recovered_at} (${s1.submaps} submaps, ${s1.loop_closures} loop closures); scan median ${s1.scan_ms_median?.toFixed(1)} ms, max ${s1.scan_ms_max?.toFixed(1)} ms; headless 200 scans in ${seconds.toFixed(1)} s, counts identical to native`;
-      } finally {
-        await context.close();
-      }
+      });
     });
 
     await check("lesson=filters drags the prior over 100,000 samples and matches native", async () => {
       const url = "index.html?lesson=filters&function=polar&seed=1";
-      const { context, page: p, log } = await openPage(browser, baseUrl, url, "filters");
-      try {
+      return withPage(browser, baseUrl, url, "filters", async ({ page: p }) => {
         await waitRunning(p);
         const s0 = await waitState(p, (st) => st.lesson === "filters" && st.frames > 2 && st.handles_px, "the filters lesson");
         assert(s0.samples === 100000 && s0.results.length === 3 && s0.note === null, `opened ${JSON.stringify(s0)}`);
@@ -1305,14 +1219,10 @@ async function main() {
         metrics.filters_drag_frames = during.frames - s0.frames;
         metrics.filters_drag_computations = during.computations - s0.computations;
         metrics.filters_drag_last_compute_ms = Number(during.compute_ms.toFixed(2));
-        const headless = JSON.parse(
-          await p.evaluate((q) => window.slamlab.slamlab_test_headless(q, 0), "lesson=filters&samples=20000&seed=1"),
-        );
+        const headless = await runHeadless(p, "lesson=filters&samples=20000&seed=1", 0);
         const table = headless.results.map((r) => `${r.method}=${r.mean_error}`);
         const NATIVE = ["ekf=0.12957845707913004", "ukf=0.001541246456905519", "particles=0.021033324669198564"];
         assert(JSON.stringify(table) === JSON.stringify(NATIVE), `${table} in the browser, ${NATIVE} natively`);
-        await assertNoPanic(p);
-        assert(log.problems.length === 0, log.problems.join("; "));
         return (
           `${MOVES} moves in ${seconds.toFixed(1)} s; frame CPU median ${t.cpu_ms_median.toFixed(2)} ms ` +
           `(p95 ${t.cpu_ms_p95?.toFixed(2)}), ` +
@@ -1320,15 +1230,12 @@ async function main() {
           `${metrics.filters_drag_computations} computations (the last ${metrics.filters_drag_last_compute_ms} ms); ` +
           `headless ${table.join(" ")}`
         );
-      } finally {
-        await context.close();
-      }
+      });
     });
 
     await check("lesson=resampling resamples and gives the native copies", async () => {
       const url = "index.html?lesson=resampling&weights=5,1,1,3&seed=3";
-      const { context, page: p, log } = await openPage(browser, baseUrl, url, "resampling");
-      try {
+      return withPage(browser, baseUrl, url, "resampling", async ({ page: p }) => {
         await waitRunning(p);
         const s0 = await waitState(p, (st) => st.lesson === "resampling" && st.frames > 2, "the resampling lab");
         assert(s0.particles === 4 && s0.resamplings === 0, `opened ${JSON.stringify(s0)}`);
@@ -1342,18 +1249,12 @@ async function main() {
         await sleep(300);
         const { stats } = await waitNotBlank(p, "resampling.png");
         assertNotBlank(stats, "resampling.png");
-        const headless = JSON.parse(
-          await p.evaluate((q) => window.slamlab.slamlab_test_headless(q, 5), "lesson=resampling&weights=5,1,1,3&seed=3"),
-        );
+        const headless = await runHeadless(p, "lesson=resampling&weights=5,1,1,3&seed=3", 5);
         const copies = headless.methods.map((m) => `${m.name}=${JSON.stringify(m.last_copies)}`);
         const NATIVE = ["multinomial=[3,0,1,0]", "low-variance=[2,1,0,1]", "stratified=[2,0,1,1]", "residual=[2,1,0,1]"];
         assert(JSON.stringify(copies) === JSON.stringify(NATIVE), `copies ${copies} in the browser, ${NATIVE} natively`);
-        await assertNoPanic(p);
-        assert(log.problems.length === 0, log.problems.join("; "));
         return `one press by key; headless 5 presses: ${copies.join(" ")}`;
-      } finally {
-        await context.close();
-      }
+      });
     });
 
     // --- The visual-odometry lesson by URL: Space runs RANSAC one sample per tick until
@@ -1363,8 +1264,7 @@ async function main() {
     // visual_odometry_ui.rs pins them).
     await check("lesson=visual-odometry runs RANSAC to its bound and matches native", async () => {
       const url = "index.html?lesson=visual-odometry&seed=3";
-      const { context, page: p, log } = await openPage(browser, baseUrl, url, "visual-odometry");
-      try {
+      return withPage(browser, baseUrl, url, "visual-odometry", async ({ page: p }) => {
         await waitRunning(p);
         const s0 = await waitState(p, (st) => st.lesson === "visual-odometry" && st.frames > 2, "the visual-odometry lesson");
         assert(s0.seed === 3 && s0.iteration === 0 && s0.matches > 100 && s0.vo_steps === 39, `opened ${JSON.stringify(s0)}`);
@@ -1382,21 +1282,15 @@ async function main() {
         metrics.visual_odometry_frame_cpu_ms_median = t.cpu_ms_median;
         metrics.visual_odometry_frame_cpu_ms_p95 = t.cpu_ms_p95;
         metrics.visual_odometry_frames_per_second = Number((1000 / t.interval_ms_median).toFixed(1));
-        const headless = JSON.parse(
-          await p.evaluate((q) => window.slamlab.slamlab_test_headless(q, 10), "lesson=visual-odometry&seed=3"),
-        );
+        const headless = await runHeadless(p, "lesson=visual-odometry&seed=3", 10);
         const got = `best_inliers=${headless.best_inliers} bound=${headless.bound} rmse=${headless.trajectory_rmse.visual_odometry}`;
         const NATIVE = "best_inliers=491 bound=35 rmse=0.741133627603435";
         assert(got === NATIVE, `${got} in the browser, ${NATIVE} natively`);
-        await assertNoPanic(p);
-        assert(log.problems.length === 0, log.problems.join("; "));
         return (
           `${s1.iteration} samples to the bound, ${e.inliers} inliers, candidate ${e.chosen} chosen (${e.in_front}); ` +
           `frame CPU median ${t.cpu_ms_median.toFixed(2)} ms (p95 ${t.cpu_ms_p95?.toFixed(2)}); headless ${got}`
         );
-      } finally {
-        await context.close();
-      }
+      });
     });
 
     // --- The visual-odometry lesson with early-rejection=sprt from the URL: the share link
@@ -1404,8 +1298,7 @@ async function main() {
     // headless run in wasm gives the native counts (visual_odometry_ui.rs pins them).
     await check("lesson=visual-odometry&early-rejection=sprt: steps show early rejections and match native", async () => {
       const url = "index.html?lesson=visual-odometry&seed=3&early-rejection=sprt";
-      const { context, page: p, log } = await openPage(browser, baseUrl, url, "visual-odometry sprt");
-      try {
+      return withPage(browser, baseUrl, url, "visual-odometry sprt", async ({ page: p }) => {
         await waitRunning(p);
         const s0 = await waitState(p, (st) => st.lesson === "visual-odometry" && st.frames > 2, "the visual-odometry lesson");
         assert(s0.early_rejection === "sprt" && s0.iteration === 0, `opened ${JSON.stringify(s0)}`);
@@ -1424,18 +1317,12 @@ async function main() {
         await sleep(300);
         const { stats } = await waitNotBlank(p, "visual-odometry-sprt.png");
         assertNotBlank(stats, "visual-odometry-sprt.png");
-        const headless = JSON.parse(
-          await p.evaluate((q) => window.slamlab.slamlab_test_headless(q, 10), "lesson=visual-odometry&seed=3&early-rejection=sprt"),
-        );
+        const headless = await runHeadless(p, "lesson=visual-odometry&seed=3&early-rejection=sprt", 10);
         const got = `best_inliers=${headless.best_inliers} bound=${headless.bound} rmse=${headless.trajectory_rmse.visual_odometry}`;
         const NATIVE = "best_inliers=467 bound=46 rmse=0.7308602394501984";
         assert(got === NATIVE, `${got} in the browser, ${NATIVE} natively`);
-        await assertNoPanic(p);
-        assert(log.problems.length === 0, log.problems.join("; "));
         return `${rejected.length} hypotheses rejected early in 6 samples, after ${rejected.map((c) => c.evaluated).join(", ")} matches; headless ${got}`;
-      } finally {
-        await context.close();
-      }
+      });
     });
 
     // --- The visual-odometry lesson with two photos dropped on the page (the same path as
@@ -1723,8 +1610,7 @@ async function main() {
     // (crates/slamlab-app/tests/lessons/fusion_ui.rs pins the same numbers).
     await check("lesson=fusion runs and its RMSE table has the native numbers", async () => {
       const query = "lesson=fusion&seed=3&duration=40";
-      const { context, page: p, log } = await openPage(browser, baseUrl, `index.html?${query}`, "fusion");
-      try {
+      return withPage(browser, baseUrl, `index.html?${query}`, "fusion", async ({ page: p }) => {
         await waitRunning(p);
         const s0 = await waitState(p, (st) => st.lesson === "fusion" && st.frames > 2, "the fusion lesson");
         assert(s0.seed === 3 && s0.runs.length === 2, `opened ${JSON.stringify(s0)}`);
@@ -1748,13 +1634,9 @@ async function main() {
             `${run.mode}: RMSE ${JSON.stringify(run.rmse)} in the browser, ${JSON.stringify(NATIVE[k])} natively`,
           );
         });
-        await assertNoPanic(p);
-        assert(log.problems.length === 0, log.problems.join("; "));
         const text = headless.runs.map((r) => `${r.mode} x ${r.rmse[0].toFixed(4)} m`).join(", ");
         return `ran to ${s1.time.toFixed(2)} s ("${s1.phase}"); headless 40 s: ${text}, bit-identical to native`;
-      } finally {
-        await context.close();
-      }
+      });
     });
 
     // --- lesson=pose-graph: one solver iteration lowers the cost; then M3500 (from
@@ -1762,8 +1644,7 @@ async function main() {
     // optimized to convergence in the page, frame by frame; its time is reported.
     await check("lesson=pose-graph: one iteration lowers the cost; M3500 dropped on the page optimizes", async () => {
       const url = "index.html?lesson=pose-graph&example=manhattan&seed=1";
-      const { context, page: p, log } = await openPage(browser, baseUrl, url, "pose-graph");
-      try {
+      return withPage(browser, baseUrl, url, "pose-graph", async ({ page: p, log }) => {
         await waitRunning(p);
         const s0 = await waitState(p, (st) => st.lesson === "pose-graph" && st.frames > 2, "the pose-graph lesson");
         assert(s0.source === "manhattan" && s0.iterations === 0, `opened ${JSON.stringify(s0)}`);
@@ -1801,12 +1682,8 @@ async function main() {
           await sleep(300);
           await screenshot(p, "pose-graph-m3500.png");
         }
-        await assertNoPanic(p);
-        assert(log.problems.length === 0, log.problems.join("; "));
         return `cost ${s0.cost.toExponential(4)} -> ${s1.cost.toExponential(4)} after one iteration; ${m3500}`;
-      } finally {
-        await context.close();
-      }
+      });
     });
 
     // --- Exports (File menu; started here through the test hook, as the menu does):
@@ -1814,8 +1691,7 @@ async function main() {
     // download. The JSON, dropped on a page of another lesson, reopens the same setup.
     await check("exports: plot CSV, scenario JSON and map PNG download, and the JSON reopens the setup", async () => {
       const url = "index.html?lesson=landmark-slam&seed=7&estimator=ekf,ukf&tick=30";
-      const { context, page: p, log } = await openPage(browser, baseUrl, url, "exports");
-      try {
+      return withPage(browser, baseUrl, url, "exports", async ({ context, page: p, log }) => {
         await waitRunning(p);
         const s0 = await waitState(p, (st) => st.frames >= 2 && Array.isArray(st.map_rect), "the first frames");
         const download = async (kind) => {
@@ -1865,12 +1741,8 @@ async function main() {
         } finally {
           await c2.close();
         }
-        await assertNoPanic(p);
-        assert(log.problems.length === 0, log.problems.join("; "));
         return `CSV ${rows.length - 1} rows, JSON ${json.bytes.length} bytes, map PNG ${image.width} x ${image.height}; the JSON dropped on another lesson reopened tick 30`;
-      } finally {
-        await context.close();
-      }
+      });
     });
 
     // --- A student's estimate: File > Export trajectories downloads a zip of TUM and CSV
@@ -1881,8 +1753,7 @@ async function main() {
       const results = [];
       for (const [w, h] of [[1280, 800], [800, 500]]) {
         const url = "index.html?lesson=landmark-slam&seed=7&estimator=ekf,ukf&tick=60";
-        const { context, page: p, log } = await openPage(browser, baseUrl, url, `estimates ${w}x${h}`, { width: w, height: h });
-        try {
+        await withPage(browser, baseUrl, url, `estimates ${w}x${h}`, async ({ page: p }) => {
           await waitRunning(p);
           const s0 = await waitState(p, (st) => st.frames >= 2 && Array.isArray(st.map_rect), "the first frames");
           await p.mouse.click(s0.map_rect[0] + s0.map_rect[2] / 2, s0.map_rect[1] + s0.map_rect[3] / 2);
@@ -1909,12 +1780,8 @@ async function main() {
           assert(st.notices === 0, `notices after the drop: ${st.notices}`);
           const shot = await screenshot(p, `estimates-${w}x${h}.png`);
           assertNotBlank(imageStats(shot), `the page with an estimate at ${w}x${h}`);
-          await assertNoPanic(p);
-          assert(log.problems.length === 0, log.problems.join("; "));
           results.push(`${w}x${h}: ATE ${mine.ate_rmse.toFixed(4)} m (the lesson's EKF ${own.ate_rmse.toFixed(4)} m)`);
-        } finally {
-          await context.close();
-        }
+        }, { width: w, height: h });
       }
       return results.join("; ");
     });
@@ -1934,8 +1801,7 @@ async function main() {
         // The mapping lesson: 120 scans of the maze with scan-to-map matching.
         {
           const url = "index.html?lesson=mapping&map=maze&seed=3&steps=200&poses=scan-to-map&tick=120";
-          const { context, page: p, log } = await openPage(browser, baseUrl, url, `map estimate ${w}x${h}`, { width: w, height: h });
-          try {
+          await withPage(browser, baseUrl, url, `map estimate ${w}x${h}`, async ({ page: p }) => {
             await waitRunning(p);
             await waitState(p, (st) => st.frames >= 2 && st.tick >= 120, "120 scans");
             const files = JSON.parse(await p.evaluate(() => window.slamlab.slamlab_test_own_files()));
@@ -1958,18 +1824,13 @@ async function main() {
             await p.keyboard.press("Space");
             await waitState(p, (s) => s.tick > t0, "the lesson running on after the refusal", 20_000);
             await screenshot(p, `big-drop-refused-${w}x${h}.png`);
-            await assertNoPanic(p);
-            assert(log.problems.length === 0, log.problems.join("; "));
             results.push(`${w}x${h}: map agreement ${mine.map_agreement.toFixed(4)} (the lesson's ${own.map_agreement.toFixed(4)}), coverage ${mine.map_coverage.toFixed(4)}`);
-          } finally {
-            await context.close();
-          }
+          }, { width: w, height: h });
         }
         // The pose-graph lesson: the thesis example optimized to convergence.
         {
           const url = "index.html?lesson=pose-graph&example=thesis&solver=gn&seed=1";
-          const { context, page: p, log } = await openPage(browser, baseUrl, url, `graph solution ${w}x${h}`, { width: w, height: h });
-          try {
+          await withPage(browser, baseUrl, url, `graph solution ${w}x${h}`, async ({ page: p }) => {
             await waitRunning(p);
             const s0 = await waitState(p, (st) => st.frames >= 2 && Array.isArray(st.map_rect), "the first frames");
             await p.mouse.click(s0.map_rect[0] + s0.map_rect[2] / 2, s0.map_rect[1] + s0.map_rect[3] / 2);
@@ -1983,12 +1844,8 @@ async function main() {
             assert(Math.abs(ratio - 1) <= 1e-9, `cost ratio ${ratio}`);
             assert(st.solutions[0].ate === st.rmse, `RMSE ${st.solutions[0].ate} against the lesson's ${st.rmse}`);
             await screenshot(p, `graph-solution-${w}x${h}.png`);
-            await assertNoPanic(p);
-            assert(log.problems.length === 0, log.problems.join("; "));
             results.push(`${w}x${h}: cost ratio ${ratio}`);
-          } finally {
-            await context.close();
-          }
+          }, { width: w, height: h });
         }
       }
       return results.join("; ");

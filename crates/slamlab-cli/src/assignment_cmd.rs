@@ -3,8 +3,9 @@
 //! grade of a handed-in estimate (one student, or a class from a roster), as
 //! the page computes it and as Gradescope's autograder reads it.
 
+use crate::args;
 use anyhow::{Context, Result, anyhow, bail};
-use clap::{Arg, ArgAction, ArgMatches, Command};
+use clap::{Arg, ArgMatches, Command};
 use slamlab_sim::assignments;
 use slamlab_sim::coursework::assignment::MAX_ASSIGNMENT_BYTES;
 use slamlab_sim::coursework::{Assignment, Grade, Prepared};
@@ -35,31 +36,16 @@ pub fn export_command() -> Command {
         )
         .arg(assignment_arg())
         .arg(
-            Arg::new("student")
-                .long("student")
-                .required(true)
-                .value_name("ID")
-                .help("the student's id, e.g. an e-mail address"),
+            args::named("student", "ID", "the student's id, e.g. an e-mail address").required(true),
         )
         .arg(
-            Arg::new("out")
-                .long("out")
-                .required(true)
-                .value_name("DIR")
-                .value_parser(clap::value_parser!(PathBuf))
-                .help("the folder to write (made if missing)"),
+            args::path("out", "DIR", "the folder to write (made if missing)").required(true),
         )
         .arg(
-            Arg::new("answers")
-                .long("answers")
-                .action(ArgAction::SetTrue)
-                .help("add answers/: the true trajectory and map (for the instructor)"),
+            args::switch("answers", "add answers/: the true trajectory and map (for the instructor)"),
         )
         .arg(
-            Arg::new("force")
-                .long("force")
-                .action(ArgAction::SetTrue)
-                .help("overwrite files of the same names already in the folder"),
+            args::switch("force", "overwrite files of the same names already in the folder"),
         )
 }
 
@@ -79,58 +65,25 @@ pub fn grade_command() -> Command {
         )
         .arg(assignment_arg())
         .arg(
-            Arg::new("student")
-                .long("student")
-                .value_name("ID")
-                .conflicts_with("students")
-                .requires("estimate")
-                .help("the student's id, as they gave it for their inputs"),
+            args::named("student", "ID", "the student's id, as they gave it for their inputs").conflicts_with("students").requires("estimate"),
         )
         .arg(
-            Arg::new("estimate")
-                .long("estimate")
-                .value_name("FILE")
-                .value_parser(clap::value_parser!(PathBuf))
-                .requires("student")
-                .help("the student's estimate: a TUM or CSV trajectory, or the assignment's output (an optimized g2o graph; a ROS map as a zip, or its YAML with the image beside it; a relative pose)"),
+            args::path("estimate", "FILE", "the student's estimate: a TUM or CSV trajectory, or the assignment's output (an optimized g2o graph; a ROS map as a zip, or its YAML with the image beside it; a relative pose)").requires("student"),
         )
         .arg(
-            Arg::new("json")
-                .long("json")
-                .action(ArgAction::SetTrue)
-                .help("print the grade as JSON"),
+            args::switch("json", "print the grade as JSON"),
         )
         .arg(
-            Arg::new("gradescope")
-                .long("gradescope")
-                .value_name("FILE")
-                .value_parser(clap::value_parser!(PathBuf))
-                .conflicts_with("students")
-                .help("also write Gradescope's results.json to FILE"),
+            args::path("gradescope", "FILE", "also write Gradescope's results.json to FILE").conflicts_with("students"),
         )
         .arg(
-            Arg::new("students")
-                .long("students")
-                .value_name("ROSTER")
-                .value_parser(clap::value_parser!(PathBuf))
-                .requires("estimates")
-                .help("a roster CSV: grade every student in it"),
+            args::path("students", "ROSTER", "a roster CSV: grade every student in it").requires("estimates"),
         )
         .arg(
-            Arg::new("estimates")
-                .long("estimates")
-                .value_name("DIR")
-                .value_parser(clap::value_parser!(PathBuf))
-                .requires("students")
-                .help("the folder of the class's estimates"),
+            args::path("estimates", "DIR", "the folder of the class's estimates").requires("students"),
         )
         .arg(
-            Arg::new("out")
-                .long("out")
-                .value_name("FILE")
-                .value_parser(clap::value_parser!(PathBuf))
-                .requires("students")
-                .help("write the class's CSV to FILE (default: standard output)"),
+            args::path("out", "FILE", "write the class's CSV to FILE (default: standard output)").requires("students"),
         )
         .group(
             clap::ArgGroup::new("who")

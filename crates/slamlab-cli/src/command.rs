@@ -9,13 +9,14 @@ use clap::{ArgMatches, Command};
 
 /// A lesson whose scenario `slamlab run ID` runs headless.
 pub trait RunLesson: Sync {
-    /// The lesson id (the app's `?lesson=ID`).
-    fn id(&self) -> &'static str;
-    /// One line for `slamlab run --help`.
-    fn about(&self) -> &'static str;
-    /// The subcommand with the lesson's flags (`--json` and `--scenario FILE` are
-    /// added by the registry).
+    /// The subcommand: its name (the lesson id, the app's `?lesson=ID`), its one
+    /// line for `slamlab run --help` (`about`) and the lesson's flags (`--json`
+    /// and `--scenario FILE` are added by the registry).
     fn command(&self) -> Command;
+    /// The lesson id: the name of its [`RunLesson::command`].
+    fn id(&self) -> String {
+        self.command().get_name().to_owned()
+    }
     /// Runs it, printing to `out`.
     fn run(&self, matches: &ArgMatches, out: &mut Output) -> Result<()>;
 }
@@ -31,13 +32,14 @@ pub struct Refusal {
 
 /// An experiment `slamlab experiment NAME` reproduces.
 pub trait Experiment: Sync {
-    /// Its name on the command line.
-    fn name(&self) -> &'static str;
-    /// One line for `slamlab experiment --help`.
-    fn about(&self) -> &'static str;
-    /// The subcommand with the experiment's flags (`--json` is added by the
-    /// registry).
+    /// The subcommand: its name on the command line, its one line for
+    /// `slamlab experiment --help` (`about`) and the experiment's flags
+    /// (`--json` is added by the registry).
     fn command(&self) -> Command;
+    /// Its name on the command line: the name of its [`Experiment::command`].
+    fn name(&self) -> String {
+        self.command().get_name().to_owned()
+    }
     /// Other experiments' flags it refuses with its own message, checked in this
     /// order; any other experiment's flag is refused as belonging to that one.
     fn refusals(&self) -> Vec<Refusal> {

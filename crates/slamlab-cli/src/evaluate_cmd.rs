@@ -1,8 +1,9 @@
 //! `slamlab evaluate`: any estimate against any reference, with the metrics the
 //! lessons show (association, alignment, APE, RPE, NEES) and evo's options.
 
+use crate::args;
 use anyhow::{Context, Result, anyhow};
-use clap::{Arg, ArgAction, ArgMatches, Command};
+use clap::{Arg, ArgMatches, Command};
 use slamlab_sim::io::trajectory::{self, TrajectoryFile};
 use slamlab_sim::metrics::{
     Alignment, DEFAULT_MAX_DIFF, DeltaUnit, ErrorStats, Evaluation, EvaluationSettings,
@@ -27,20 +28,10 @@ pub fn command() -> Command {
              statistics; with covariances, NEES and its chi-square bands too. See docs/metrics.md.",
         )
         .arg(
-            Arg::new("estimate")
-                .long("estimate")
-                .required(true)
-                .value_name("FILE")
-                .value_parser(clap::value_parser!(PathBuf))
-                .help("the estimated trajectory (TUM or CSV)"),
+            args::path("estimate", "FILE", "the estimated trajectory (TUM or CSV)").required(true),
         )
         .arg(
-            Arg::new("reference")
-                .long("reference")
-                .required(true)
-                .value_name("FILE")
-                .value_parser(clap::value_parser!(PathBuf))
-                .help("the reference trajectory (TUM or CSV), e.g. the true path"),
+            args::path("reference", "FILE", "the reference trajectory (TUM or CSV), e.g. the true path").required(true),
         )
         .arg(
             Arg::new("align")
@@ -50,44 +41,22 @@ pub fn command() -> Command {
                 .help("none: as it is; se2: best rotation and translation; sim2: and scale"),
         )
         .arg(
-            Arg::new("delta")
-                .long("delta")
-                .value_parser(clap::value_parser!(f64))
-                .default_value("1")
-                .help("the RPE's step, in --delta-unit"),
+            args::number("delta", "the RPE's step, in --delta-unit").default_value("1"),
         )
         .arg(
-            Arg::new("delta-unit")
-                .long("delta-unit")
-                .value_parser(["frames", "m"])
-                .default_value("frames")
-                .help("frames: poses apart; m: metres travelled by the estimate"),
+            args::choice("delta-unit", &["frames", "m"], "frames: poses apart; m: metres travelled by the estimate").default_value("frames"),
         )
         .arg(
-            Arg::new("all-pairs")
-                .long("all-pairs")
-                .action(ArgAction::SetTrue)
-                .help("RPE over every pair --delta apart, not a chain of consecutive ones"),
+            args::switch("all-pairs", "RPE over every pair --delta apart, not a chain of consecutive ones"),
         )
         .arg(
-            Arg::new("max-diff")
-                .long("max-diff")
-                .value_parser(clap::value_parser!(f64))
-                .default_value("0.01")
-                .help("the most two paired times may differ, seconds"),
+            args::number("max-diff", "the most two paired times may differ, seconds").default_value("0.01"),
         )
         .arg(
-            Arg::new("offset")
-                .long("offset")
-                .value_parser(clap::value_parser!(f64))
-                .default_value("0")
-                .help("seconds added to the estimate's times before pairing"),
+            args::number("offset", "seconds added to the estimate's times before pairing").default_value("0"),
         )
         .arg(
-            Arg::new("json")
-                .long("json")
-                .action(ArgAction::SetTrue)
-                .help("print one JSON object"),
+            args::switch("json", "print one JSON object"),
         )
 }
 

@@ -78,6 +78,17 @@ fn apply_table_flags<S: Scenario>(
     Ok(())
 }
 
+/// The items of a comma-separated list (a list flag's text): trimmed, the
+/// empty ones dropped.
+pub fn items(text: &str) -> impl Iterator<Item = &str> {
+    text.split(',').map(str::trim).filter(|p| !p.is_empty())
+}
+
+/// The [`items`] of list flag `id` (none without it).
+pub fn list<'a>(matches: &'a ArgMatches, id: &str) -> impl Iterator<Item = &'a str> {
+    items(value(matches, id).unwrap_or(""))
+}
+
 /// The text of flag `id`, if the command has that flag and it has a value.
 fn value<'a>(matches: &'a ArgMatches, id: &str) -> Option<&'a str> {
     matches

@@ -1,8 +1,9 @@
 //! `slamlab graph optimize|convert|evaluate`: pose-graph files on the command line.
 //! (`slamlab experiment pose-graph` is in `experiments/pose_graph.rs`.)
 
+use crate::args;
 use anyhow::{Context, Result, bail};
-use clap::{Arg, ArgAction, ArgMatches, Command};
+use clap::{Arg, ArgMatches, Command};
 use serde::Serialize;
 use slamlab_core::graph::{
     EdgeKind, OptimizeError, Optimizer, OptimizerSettings, PoseGraph, RobustKernel, SolverKind,
@@ -34,42 +35,23 @@ pub fn command() -> Command {
                 )
                 .arg(Arg::new("file").required(true).value_parser(clap::value_parser!(PathBuf)).help("the graph file (.g2o, TORO .graph, or iSAM .txt); the format is detected from the content"))
                 .arg(
-                    Arg::new("solver")
-                        .long("solver")
-                        .value_parser(["gn", "lm", "gd"])
-                        .default_value("lm")
-                        .help("gn: Gauss-Newton; lm: Levenberg-Marquardt; gd: first-order (block-Jacobi preconditioned gradient descent)"),
+                    args::choice("solver", &["gn", "lm", "gd"], "gn: Gauss-Newton; lm: Levenberg-Marquardt; gd: first-order (block-Jacobi preconditioned gradient descent)").default_value("lm"),
                 )
                 .arg(
-                    Arg::new("max-iterations")
-                        .long("max-iterations")
-                        .value_parser(clap::value_parser!(u64).range(1..=1_000_000))
-                        .default_value("100")
-                        .help("at most this many steps (LM counts rejected steps too)"),
+                    args::whole("max-iterations", 1..=1_000_000, "at most this many steps (LM counts rejected steps too)").default_value("100"),
                 )
                 .arg(
-                    Arg::new("kernel")
-                        .long("kernel")
-                        .value_parser(["none", "huber", "cauchy"])
-                        .default_value("none")
-                        .help("robust kernel on every edge (Huber: thesis 000 Eq. 5.9)"),
+                    args::choice("kernel", &["none", "huber", "cauchy"], "robust kernel on every edge (Huber: thesis 000 Eq. 5.9)").default_value("none"),
                 )
                 .arg(
-                    Arg::new("kernel-width")
-                        .long("kernel-width")
-                        .value_parser(clap::value_parser!(f64))
-                        .default_value("1")
-                        .help("Huber δ or Cauchy c, on the Mahalanobis distance √(eᵀΩe)"),
+                    args::number("kernel-width", "Huber δ or Cauchy c, on the Mahalanobis distance √(eᵀΩe)").default_value("1"),
                 )
                 .arg(
-                    Arg::new("target-cost")
-                        .long("target-cost")
-                        .value_parser(clap::value_parser!(f64))
-                        .help("stop as soon as the cost is at or below this (for timing against another solver)"),
+                    args::number("target-cost", "stop as soon as the cost is at or below this (for timing against another solver)"),
                 )
-                .arg(Arg::new("out").long("out").value_name("FILE").value_parser(clap::value_parser!(PathBuf)).help("write the optimized graph (g2o)"))
+                .arg(args::path("out", "FILE", "write the optimized graph (g2o)"))
                 .arg(crate::trajectory_out::arg().help("write the optimized poses to DIR (TUM and CSV, each pose at the time of its vertex id) and the point vertices as landmarks"))
-                .arg(Arg::new("json").long("json").action(ArgAction::SetTrue).help("print one JSON object")),
+                .arg(args::switch("json", "print one JSON object")),
         )
         .subcommand(
             Command::new("evaluate")
@@ -88,20 +70,12 @@ pub fn command() -> Command {
                 )
                 .arg(Arg::new("problem").required(true).value_parser(clap::value_parser!(PathBuf)).help("the graph to optimize, as handed out (g2o, TORO or iSAM)"))
                 .arg(Arg::new("estimate").required(true).value_parser(clap::value_parser!(PathBuf)).help("the optimized graph (g2o)"))
-                .arg(Arg::new("truth").long("truth").value_name("FILE").value_parser(clap::value_parser!(PathBuf)).help("the true poses (TUM or CSV; time = vertex id)"))
+                .arg(args::path("truth", "FILE", "the true poses (TUM or CSV; time = vertex id)"))
                 .arg(
-                    Arg::new("solver")
-                        .long("solver")
-                        .value_parser(["gn", "lm", "gd"])
-                        .default_value("gn")
-                        .help("the reference solver (gn: the pose-graph lesson's default)"),
+                    args::choice("solver", &["gn", "lm", "gd"], "the reference solver (gn: the pose-graph lesson's default)").default_value("gn"),
                 )
                 .arg(
-                    Arg::new("max-iterations")
-                        .long("max-iterations")
-                        .value_parser(clap::value_parser!(u64).range(1..=1_000_000))
-                        .default_value("100")
-                        .help("the reference solver's most steps"),
+                    args::whole("max-iterations", 1..=1_000_000, "the reference solver's most steps").default_value("100"),
                 )
                 .arg(
                     Arg::new("align")
@@ -110,7 +84,7 @@ pub fn command() -> Command {
                         .default_value("none")
                         .help("the alignment before the ATE (none: the gauge vertex holds the truth's frame)"),
                 )
-                .arg(Arg::new("json").long("json").action(ArgAction::SetTrue).help("print one JSON object")),
+                .arg(args::switch("json", "print one JSON object")),
         )
         .subcommand(
             Command::new("convert")

@@ -2,9 +2,10 @@
 //! as a ROS 2 bag), `slamlab log convert` (a CARMEN log to a bag, or a bag to a
 //! CARMEN log) and `slamlab log info FILE` (what a log or a bag holds).
 
+use crate::args;
 use crate::map::{map_arg, read_map, resolution_arg};
 use anyhow::{Context, Result, bail};
-use clap::{Arg, ArgAction, ArgMatches, Command};
+use clap::{Arg, ArgMatches, Command};
 use serde_json::json;
 use slamlab_sim::grid::{LaserFile, SimulatedLogConfig, simulate_log};
 use slamlab_sim::io::laser_log::{LaserLog, TruePose, write_carmen, write_truth};
@@ -16,21 +17,24 @@ use std::path::{Path, PathBuf};
 /// `--scan-topic` and `--odom-topic`: the topics of a ROS 2 bag given as `--log`.
 pub fn topic_args() -> [Arg; 2] {
     [
-        Arg::new("scan-topic")
-            .long("scan-topic")
-            .value_name("TOPIC")
-            .help("with a ROS 2 bag: the sensor_msgs/msg/LaserScan topic (default /scan, else the busiest)"),
-        Arg::new("odom-topic")
-            .long("odom-topic")
-            .value_name("TOPIC")
-            .help("with a ROS 2 bag: the nav_msgs/msg/Odometry topic, or `tf` for odom -> base on /tf (default /odom, else the busiest, else tf)"),
+        args::named(
+            "scan-topic",
+            "TOPIC",
+            "with a ROS 2 bag: the sensor_msgs/msg/LaserScan topic (default /scan, else the busiest)",
+        ),
+        args::named(
+            "odom-topic",
+            "TOPIC",
+            "with a ROS 2 bag: the nav_msgs/msg/Odometry topic, or `tf` for odom -> base on /tf (default /odom, else the busiest, else tf)",
+        ),
     ]
 }
 
 /// `--log FILE`: the laser log a mapping lesson maps instead of its simulated
 /// robot's scans (read by [`read_laser_file`]).
 pub fn laser_log_arg() -> Arg {
-    Arg::new("log").long("log").value_name("FILE").help(
+    args::file(
+        "log",
         "map a CARMEN laser log (plain, .gz or .bz2) or a ROS 2 bag (.mcap) instead of a simulated robot",
     )
 }
@@ -94,11 +98,7 @@ pub fn command() -> Command {
                     "metres per pixel, for a map given as a lone PGM/PNG",
                 ))
                 .arg(
-                    Arg::new("steps")
-                        .long("steps")
-                        .value_parser(clap::value_parser!(usize))
-                        .default_value("3000")
-                        .help("scans to record (0.1 s apart)"),
+                    args::count("steps", "scans to record (0.1 s apart)").default_value("3000"),
                 )
                 .arg(
                     Arg::new("seed")
@@ -108,10 +108,7 @@ pub fn command() -> Command {
                         .help("random seed (start pose, noise, goals)"),
                 )
                 .arg(
-                    Arg::new("out")
-                        .long("out")
-                        .required(true)
-                        .help("the log to write (.mcap: a ROS 2 bag; anything else: CARMEN, with the truth in the same name + .truth)"),
+                    args::flag("out", "the log to write (.mcap: a ROS 2 bag; anything else: CARMEN, with the truth in the same name + .truth)").required(true),
                 ),
         )
         .subcommand(
@@ -122,10 +119,7 @@ pub fn command() -> Command {
                 )
                 .arg(Arg::new("file").required(true).help("a CARMEN log or a ROS 2 bag (.mcap)"))
                 .arg(
-                    Arg::new("out")
-                        .long("out")
-                        .required(true)
-                        .help("the file to write: .mcap for a ROS 2 bag, else CARMEN text"),
+                    args::flag("out", "the file to write: .mcap for a ROS 2 bag, else CARMEN text").required(true),
                 )
                 .args(topic_args()),
         )
@@ -140,10 +134,7 @@ pub fn command() -> Command {
                         .help("a CARMEN log (plain, gzip or bzip2) or a ROS 2 bag (.mcap)"),
                 )
                 .arg(
-                    Arg::new("json")
-                        .long("json")
-                        .action(ArgAction::SetTrue)
-                        .help("print JSON"),
+                    args::switch("json", "print JSON"),
                 )
                 .args(topic_args()),
         )

@@ -20,6 +20,7 @@
 //! `lessons/` or `experiments/`, implementing a trait of [`command`]) and one entry
 //! there.
 
+mod args;
 mod assignment_cmd;
 mod command;
 mod evaluate_cmd;

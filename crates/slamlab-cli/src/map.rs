@@ -1,6 +1,7 @@
 //! `slamlab map info PATH` and `slamlab map convert IN.yaml OUT.yaml --format png|pgm`:
 //! ROS map_server maps.
 
+use crate::args;
 use anyhow::{Context, Result, bail};
 use clap::{Arg, ArgMatches, Command};
 use slamlab_core::grid::OccupancyGrid;
@@ -13,18 +14,16 @@ use std::path::Path;
 
 /// `--map`, for the commands that run on a grid map.
 pub fn map_arg() -> Arg {
-    Arg::new("map")
-        .long("map")
-        .default_value("maze")
-        .help("maze, office, or a map_server YAML (or a PGM/PNG with --resolution)")
+    args::flag(
+        "map",
+        "maze, office, or a map_server YAML (or a PGM/PNG with --resolution)",
+    )
+    .default_value("maze")
 }
 
 /// `--resolution`, for a map given as a lone image; `help` as the command words it.
 pub fn resolution_arg(help: &'static str) -> Arg {
-    Arg::new("resolution")
-        .long("resolution")
-        .value_parser(clap::value_parser!(f64))
-        .help(help)
+    args::number("resolution", help)
 }
 
 /// The `map` subcommand.
@@ -56,13 +55,7 @@ pub fn command() -> Command {
                         .required(true)
                         .help("the YAML to write; the image gets the same name"),
                 )
-                .arg(
-                    Arg::new("format")
-                        .long("format")
-                        .value_parser(["png", "pgm"])
-                        .default_value("png")
-                        .help("image format"),
-                )
+                .arg(args::choice("format", &["png", "pgm"], "image format").default_value("png"))
                 .arg(resolution),
         )
 }

@@ -2,27 +2,21 @@
 //! on one line), `--csv DIR` files, the parameter summary of the readable output,
 //! and the progress bars on stderr.
 
+use crate::args;
 use anyhow::{Context, Result};
-use clap::{Arg, ArgAction, ArgMatches};
+use clap::{Arg, ArgMatches};
 use serde_json::{Map, Value};
 use std::io::{IsTerminal, Write};
 use std::path::PathBuf;
 
 /// `--json`: every lesson and experiment has it (the registry adds it).
 pub fn json_arg() -> Arg {
-    Arg::new("json")
-        .long("json")
-        .action(ArgAction::SetTrue)
-        .help("print one JSON object")
+    args::switch("json", "print one JSON object")
 }
 
 /// `--csv DIR`, for the commands that write files; `help` says what they write.
 pub fn csv_arg(help: &'static str) -> Arg {
-    Arg::new("csv")
-        .long("csv")
-        .value_name("DIR")
-        .value_parser(clap::value_parser!(PathBuf))
-        .help(help)
+    args::path("csv", "DIR", help)
 }
 
 /// Where a command's results go: the readable text or `--json` on stdout, files
@@ -191,6 +185,39 @@ pub fn units_progress(
     }
 }
 
+/// A number in a table of results: `-` for none, else `digits` decimals, or
+/// `e_digits` in e-notation from 1e5 up (diverged runs can make averages
+/// astronomically large).
+pub fn table_number(v: Option<f64>, digits: usize, e_digits: usize) -> String {
+    match v {
+        None => "-".to_owned(),
+        Some(v) if v.abs() >= 1e5 => format!("{v:.e_digits$e}"),
+        Some(v) => format!("{v:.digits$}"),
+    }
+}
+
+/// `trial(job)` for every job, on all cores (rayon), in the jobs' order, with a
+/// [`trials_bar`] named `label` counting the finished ones. Each trial's numbers
+/// must not depend on the thread that runs it (a trial seeds its own streams).
+pub fn par_trials<J: Sync, T: Send>(
+    label: &'static str,
+    jobs: &[J],
+    trial: impl Fn(&J) -> T + Sync,
+) -> Vec<T> {
+    use rayon::prelude::*;
+    let total = jobs.len();
+    let bar = trials_bar(label, total);
+    let done = std::sync::atomic::AtomicUsize::new(0);
+    jobs.par_iter()
+        .map(|job| {
+            let outcome = trial(job);
+            let d = done.fetch_add(1, std::sync::atomic::Ordering::Relaxed) + 1;
+            trials_progress(&bar, label, d, total);
+            outcome
+        })
+        .collect()
+}
+
 /// A progress callback `(done, total)` for the experiments, drawing
 /// [`trials_bar`].
 pub fn progress_bar(label: &'static str) -> impl FnMut(usize, usize) {
@@ -251,5 +278,21 @@ mod tests {
             String::from_utf8(text).unwrap(),
             "parameters:\n  estimator  ekf \n  range-std  0.5 m\n"
         );
+    }
+
+    #[test]
+    fn table_numbers_switch_to_e_notation_from_1e5() {
+        assert_eq!(table_number(None, 3, 3), "-");
+        assert_eq!(table_number(Some(2.0 / 3.0), 3, 3), "0.667");
+        assert_eq!(table_number(Some(99_999.0), 0, 2), "99999");
+        assert_eq!(table_number(Some(123_456.0), 3, 2), "1.23e5");
+        assert_eq!(table_number(Some(-123_456.0), 3, 3), "-1.235e5");
+    }
+
+    #[test]
+    fn parallel_trials_keep_the_jobs_order() {
+        let jobs: Vec<u64> = (0..100).collect();
+        let squares = par_trials("test", &jobs, |&j| j * j);
+        assert_eq!(squares, jobs.iter().map(|j| j * j).collect::<Vec<_>>());
     }
 }

@@ -8,6 +8,7 @@
 //! shared `--json`, `--csv`, progress bars and refusals come from here and from
 //! [`crate::output`].
 
+use crate::args;
 use crate::command::{Experiment, RunLesson};
 use crate::experiments;
 use crate::lessons;
@@ -50,25 +51,23 @@ pub fn lesson(id: &str) -> Option<&'static dyn RunLesson> {
 /// `--scenario FILE` (read before clap parses, by
 /// [`crate::scenario_file::expand_scenario_file`]; the argument is here for `--help`).
 pub fn scenario_file_arg() -> Arg {
-    Arg::new("scenario")
-        .long("scenario")
-        .value_name("FILE")
-        .help("a scenario the app exported (Export → Scenario as JSON): its parameters, under the flags given here")
+    args::file(
+        "scenario",
+        "a scenario the app exported (Export → Scenario as JSON): its parameters, under the flags given here",
+    )
 }
 
 /// A lesson's subcommand as `slamlab run` has it.
 pub fn lesson_command(lesson: &dyn RunLesson) -> Command {
     lesson
         .command()
-        .name(lesson.id())
-        .about(lesson.about())
         .arg(output::json_arg())
         .arg(scenario_file_arg())
 }
 
 /// `slamlab run`, with one subcommand per lesson.
 pub fn run_command() -> Command {
-    let ids: Vec<&str> = LESSONS.iter().map(|l| l.id()).collect();
+    let ids: Vec<String> = LESSONS.iter().map(|l| l.id()).collect();
     Command::new("run")
         .about("Run a lesson's scenario and print its metrics")
         .long_about(format!(
@@ -89,11 +88,7 @@ pub fn run_command() -> Command {
 /// experiment's flag, so that giving one is refused with the reason rather than
 /// a parse error.
 fn experiment_command(experiment: &dyn Experiment) -> Command {
-    let mut command = experiment
-        .command()
-        .name(experiment.name())
-        .about(experiment.about())
-        .arg(output::json_arg());
+    let mut command = experiment.command().arg(output::json_arg());
     for arg in foreign_args(experiment) {
         command = command.arg(arg);
     }
@@ -105,8 +100,12 @@ fn experiment_command(experiment: &dyn Experiment) -> Command {
 fn foreign_args(experiment: &dyn Experiment) -> Vec<Arg> {
     let own = experiment.command().arg(output::json_arg());
     let mut args: Vec<Arg> = Vec::new();
-    for other in EXPERIMENTS.iter().filter(|e| e.name() != experiment.name()) {
-        for arg in other.command().get_arguments() {
+    let others = EXPERIMENTS
+        .iter()
+        .map(|e| e.command())
+        .filter(|c| c.get_name() != own.get_name());
+    for other in others {
+        for arg in other.get_arguments() {
             let id = arg.get_id().as_str();
             // The same flag: the same id, or the same long name under another id
             // (real-data's list `estimators` is `--estimator`, as kidnap's one is).
@@ -133,21 +132,22 @@ fn foreign_args(experiment: &dyn Experiment) -> Vec<Arg> {
 }
 
 /// The experiments that have flag `id` as their own.
-fn owners(id: &str) -> Vec<&'static str> {
+fn owners(id: &str) -> Vec<String> {
     EXPERIMENTS
         .iter()
-        .filter(|e| {
-            e.command()
-                .get_arguments()
+        .map(|e| e.command())
+        .filter(|c| {
+            c.get_arguments()
                 .any(|a| a.get_id() == id || a.get_long() == Some(id))
         })
-        .map(|e| e.name())
+        .map(|c| c.get_name().to_owned())
         .collect()
 }
 
 /// "a", "a and b", "a, b and c".
-fn and_list(words: &[&str]) -> String {
-    match words {
+fn and_list(words: &[impl AsRef<str>]) -> String {
+    let words: Vec<&str> = words.iter().map(AsRef::as_ref).collect();
+    match words.as_slice() {
         [] => String::new(),
         [one] => (*one).to_owned(),
         [rest @ .., last] => format!("{} and {last}", rest.join(", ")),

@@ -43,7 +43,7 @@ pub fn expand_scenario_file(mut args: Vec<OsString>) -> Result<Vec<OsString>> {
     let file =
         ScenarioFile::parse(&text).map_err(|e| anyhow::anyhow!("{}: {e}", path.display()))?;
     let Some(lesson) = registry::lesson(&file.lesson) else {
-        let ids: Vec<&str> = LESSONS.iter().map(|l| l.id()).collect();
+        let ids: Vec<String> = LESSONS.iter().map(|l| l.id()).collect();
         bail!(
             "{} is a scenario of the {} lesson; `slamlab run` runs {} (the other lessons' \
              experiments: `slamlab experiment --help`)",

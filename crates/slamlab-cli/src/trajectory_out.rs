@@ -3,6 +3,7 @@
 //! estimator and the truth, landmark CSVs, a README), ready for
 //! `slamlab evaluate` and evo.
 
+use crate::args;
 use anyhow::{Context, Result};
 use clap::{Arg, ArgMatches};
 use slamlab_sim::io::trajectory::{LandmarkRow, export_files};
@@ -11,11 +12,11 @@ use std::path::PathBuf;
 
 /// The flag.
 pub fn arg() -> Arg {
-    Arg::new("trajectory-out")
-        .long("trajectory-out")
-        .value_name("DIR")
-        .value_parser(clap::value_parser!(PathBuf))
-        .help("write the trajectories (TUM and CSV, with covariances where the estimator has them) and landmarks to DIR")
+    args::path(
+        "trajectory-out",
+        "DIR",
+        "write the trajectories (TUM and CSV, with covariances where the estimator has them) and landmarks to DIR",
+    )
 }
 
 /// Writes the files when the flag was given; says where on stderr.

@@ -8,18 +8,11 @@
 
 mod common;
 
-use common::{python_venv, slamlab};
+use common::{Scratch, python_venv, slamlab};
 
 use slamlab_sim::assignments::{builtin, prepare};
 use std::path::{Path, PathBuf};
 use std::process::Command;
-
-fn scratch(name: &str) -> PathBuf {
-    let dir = std::env::temp_dir().join(format!("slamlab-assign-{name}-{}", std::process::id()));
-    let _ = std::fs::remove_dir_all(&dir);
-    std::fs::create_dir_all(&dir).unwrap();
-    dir
-}
 
 fn s(p: &Path) -> &str {
     p.to_str().unwrap()
@@ -27,17 +20,13 @@ fn s(p: &Path) -> &str {
 
 #[test]
 fn exported_inputs_are_the_pages_bytes_and_the_answers_grade_perfectly() {
-    let dir = scratch("export");
+    let dir = Scratch::new("assign-export");
     let out = dir.join("ada");
-    let (ok, stdout, stderr) = slamlab(&[
-        "export-inputs",
-        "ekf-slam",
-        "--student",
-        "ada@uni.edu",
-        "--out",
-        s(&out),
-        "--answers",
-    ]);
+    let export = |more: &[&str]| {
+        let args: &[&str] = &["export-inputs", "ekf-slam", "--student", "ada@uni.edu"];
+        slamlab(&[args, &["--out", s(&out)], more].concat())
+    };
+    let (ok, stdout, stderr) = export(&["--answers"]);
     assert!(ok, "{stderr}");
     assert!(
         stdout.contains("variant") && stdout.contains("world.dat"),
@@ -48,14 +37,7 @@ fn exported_inputs_are_the_pages_bytes_and_the_answers_grade_perfectly() {
         assert_eq!(std::fs::read(out.join(&path)).unwrap(), bytes, "{path}");
     }
     // Writing again over the same folder is refused; nothing is lost.
-    let (ok, _, stderr) = slamlab(&[
-        "export-inputs",
-        "ekf-slam",
-        "--student",
-        "ada@uni.edu",
-        "--out",
-        s(&out),
-    ]);
+    let (ok, _, stderr) = export(&[]);
     assert!(
         !ok && stderr.contains("already holds") && stderr.contains("--force"),
         "{stderr}"
@@ -107,12 +89,11 @@ fn exported_inputs_are_the_pages_bytes_and_the_answers_grade_perfectly() {
         s(&truth),
     ]);
     assert!(!ok && stderr.contains("variant"), "{stderr}");
-    let _ = std::fs::remove_dir_all(&dir);
 }
 
 #[test]
 fn bad_assignments_and_students_are_refused_with_a_message() {
-    let dir = scratch("bad");
+    let dir = Scratch::new("assign-bad");
     let (ok, _, stderr) = slamlab(&[
         "export-inputs",
         "ekf_slam",
@@ -151,12 +132,11 @@ fn bad_assignments_and_students_are_refused_with_a_message() {
         s(&dir.join("x")),
     ]);
     assert!(!ok && stderr.contains("--student is empty"), "{stderr}");
-    let _ = std::fs::remove_dir_all(&dir);
 }
 
 #[test]
 fn a_class_is_graded_from_a_roster() {
-    let dir = scratch("class");
+    let dir = Scratch::new("assign-class");
     let estimates = dir.join("estimates");
     std::fs::create_dir_all(estimates.join("grace@uni.edu")).unwrap();
     let a = builtin("ekf-slam").unwrap();
@@ -218,7 +198,6 @@ fn a_class_is_graded_from_a_roster() {
     assert!(rows[2][9].contains("no estimate"), "{csv}");
     assert_eq!((rows[3][0], rows[3][4]), ("grace@uni.edu", "false"));
     assert!(rows[3][5].parse::<f64>().unwrap() > 0.5, "{csv}");
-    let _ = std::fs::remove_dir_all(&dir);
 }
 
 /// A Python with numpy: `$SLAMLAB_NUMPY_PYTHON`, the system's, or a new
@@ -252,7 +231,7 @@ fn python_with_numpy(dir: &Path) -> Option<PathBuf> {
 /// dead reckoning failing.
 #[test]
 fn the_starter_code_writes_an_estimate_that_grades_as_in_the_page() {
-    let dir = scratch("starter");
+    let dir = Scratch::new("assign-starter");
     let Some(python) = python_with_numpy(&dir) else {
         return;
     };
@@ -349,5 +328,4 @@ fn the_starter_code_writes_an_estimate_that_grades_as_in_the_page() {
             "{name} {extra:?}: {value} vs {reference}"
         );
     }
-    let _ = std::fs::remove_dir_all(&dir);
 }

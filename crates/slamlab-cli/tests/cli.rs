@@ -4,7 +4,7 @@
 
 mod common;
 
-use common::{run_json, slamlab};
+use common::{Scratch, record_maze, run_json, slamlab};
 
 const RUN: &[&str] = &[
     "run",
@@ -151,7 +151,7 @@ fn readable_summary_names_every_parameter() {
 
 #[test]
 fn experiment_prints_the_documented_json_and_csv() {
-    let dir = std::env::temp_dir().join(format!("slamlab-cli-test-{}", std::process::id()));
+    let dir = Scratch::new("cli-test");
     let dir_arg = dir.to_string_lossy().into_owned();
     let v = run_json(&[
         "experiment",
@@ -198,7 +198,6 @@ fn experiment_prints_the_documented_json_and_csv() {
     let csv = std::fs::read_to_string(dir.join("ekf-vs-ukf-noise2-seed1-trials4.csv"))
         .unwrap_or_default();
     assert_eq!(csv.lines().count(), 201, "header + 200 steps");
-    let _ = std::fs::remove_dir_all(&dir);
     let (ok, _, stderr) = slamlab(&["experiment", "ekf-vs-ukf", "--noise-scale", "NaN"]);
     assert!(!ok && stderr.contains("noise-scale"), "{stderr}");
 }
@@ -280,7 +279,7 @@ fn a_preset_sets_the_scenario_and_flags_apply_on_top() {
 
 #[test]
 fn consistency_experiment_averages_nees_over_seeded_trials() {
-    let dir = std::env::temp_dir().join(format!("slamlab-cli-consistency-{}", std::process::id()));
+    let dir = Scratch::new("cli-consistency");
     let dir_arg = dir.to_string_lossy().into_owned();
     let args = [
         "experiment",
@@ -348,7 +347,6 @@ fn consistency_experiment_averages_nees_over_seeded_trials() {
         lines[0],
         "step,time_s,band_lo,band_hi,ekf_nees,fej-ekf_nees"
     );
-    let _ = std::fs::remove_dir_all(&dir);
     // Same seed, same numbers.
     assert_eq!(run_json(&args[..args.len() - 2]), v);
 
@@ -397,8 +395,7 @@ fn a_run_that_cannot_go_as_asked_is_refused_with_the_reason() {
 /// line win; a file of another lesson, a bad file and a missing file are refused.
 #[test]
 fn a_scenario_file_runs_like_its_flags() {
-    let dir = std::env::temp_dir().join(format!("slamlab-scenario-{}", std::process::id()));
-    std::fs::create_dir_all(&dir).unwrap();
+    let dir = Scratch::new("scenario");
     let file = dir.join("lesson.json");
     std::fs::write(
         &file,
@@ -497,19 +494,14 @@ fn a_scenario_file_runs_like_its_flags() {
     assert!(stderr.contains("`nope` is not a flag"), "{stderr}");
     let v: serde_json::Value = serde_json::from_str(&stdout).unwrap();
     assert_eq!(v["seed"], 2, "{v}");
-    let _ = std::fs::remove_dir_all(&dir);
 }
 
 #[test]
 fn log_record_writes_a_carmen_log_and_its_truth_that_log_info_reads() {
-    let dir = std::env::temp_dir().join(format!("slamlab-cli-log-{}", std::process::id()));
-    std::fs::create_dir_all(&dir).unwrap();
+    let dir = Scratch::new("cli-log");
     let log = dir.join("maze.clf");
     let log_s = log.to_str().unwrap();
-    let (ok, stdout, stderr) = slamlab(&[
-        "log", "record", "--map", "maze", "--steps", "40", "--seed", "2", "--out", log_s,
-    ]);
-    assert!(ok, "{stderr}");
+    let stdout = record_maze(&log, 40, 2);
     assert!(stdout.contains("40 scans of 360 beams"), "{stdout}");
     let truth = std::fs::read_to_string(dir.join("maze.clf.truth")).unwrap();
     let lines: Vec<&str> = truth.lines().filter(|l| !l.starts_with('#')).collect();
@@ -548,7 +540,6 @@ fn log_record_writes_a_carmen_log_and_its_truth_that_log_info_reads() {
     assert!(!ok && stderr.contains("cannot read"), "{stderr}");
     let (ok, _, stderr) = slamlab(&["log", "record", "--map", "nowhere.yaml", "--out", log_s]);
     assert!(!ok && stderr.contains("nowhere.yaml"), "{stderr}");
-    let _ = std::fs::remove_dir_all(&dir);
 }
 
 /// `slamlab run kidnap --log`: a simulated run recorded as a bag (with its truth)
@@ -556,14 +547,10 @@ fn log_record_writes_a_carmen_log_and_its_truth_that_log_info_reads() {
 /// recorded in.
 #[test]
 fn run_kidnap_localizes_a_recorded_bag_and_its_carmen_copy() {
-    let dir = std::env::temp_dir().join(format!("slamlab-cli-kidnap-log-{}", std::process::id()));
-    std::fs::create_dir_all(&dir).unwrap();
+    let dir = Scratch::new("cli-kidnap-log");
     let bag = dir.join("run.mcap");
     let bag_s = bag.to_str().unwrap();
-    let (ok, _, stderr) = slamlab(&[
-        "log", "record", "--map", "maze", "--steps", "400", "--seed", "3", "--out", bag_s,
-    ]);
-    assert!(ok, "{stderr}");
+    record_maze(&bag, 400, 3);
     let args = [
         "--map",
         "maze",
@@ -619,7 +606,6 @@ fn run_kidnap_localizes_a_recorded_bag_and_its_carmen_copy() {
     // A topic that is not in the bag: the message names it.
     let (ok, _, stderr) = slamlab(&["run", "kidnap", "--log", bag_s, "--scan-topic", "/front"]);
     assert!(!ok && stderr.contains("\"/front\""), "{stderr}");
-    let _ = std::fs::remove_dir_all(&dir);
 }
 
 /// A square of four poses with a loop closure that disagrees a little.
@@ -629,8 +615,7 @@ const SQUARE_G2O: &str = "VERTEX_SE2 0 0 0 0\nVERTEX_SE2 1 1.1 0 1.6\nVERTEX_SE2
 
 #[test]
 fn graph_evaluate_scores_an_optimized_graph_against_the_reference_solver() {
-    let dir = std::env::temp_dir().join(format!("slamlab-graph-evaluate-{}", std::process::id()));
-    std::fs::create_dir_all(&dir).unwrap();
+    let dir = Scratch::new("graph-evaluate");
     let problem = dir.join("square.g2o");
     let optimized = dir.join("optimized.g2o");
     let truth = dir.join("truth.tum");
@@ -685,5 +670,4 @@ fn graph_evaluate_scores_an_optimized_graph_against_the_reference_solver() {
         stderr.contains("vertex 2 of the problem is missing"),
         "{stderr}"
     );
-    let _ = std::fs::remove_dir_all(&dir);
 }

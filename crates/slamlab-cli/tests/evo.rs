@@ -11,7 +11,7 @@
 
 mod common;
 
-use common::python_venv;
+use common::{Scratch, json, python_venv, slamlab_output};
 
 use slamlab_core::{Pose2, math};
 use slamlab_sim::io::trajectory::write_tum;
@@ -79,18 +79,9 @@ impl Evo {
 
 /// `slamlab evaluate --json` with `args`.
 fn slamlab(args: &[&str]) -> serde_json::Value {
-    let output = Command::new(env!("CARGO_BIN_EXE_slamlab"))
-        .arg("evaluate")
-        .args(args)
-        .arg("--json")
-        .output()
-        .unwrap();
-    assert!(
-        output.status.success(),
-        "slamlab evaluate {args:?}: {}",
-        String::from_utf8_lossy(&output.stderr)
-    );
-    serde_json::from_slice(&output.stdout).unwrap()
+    json(&slamlab_output(
+        &[&["evaluate"], args, &["--json"]].concat(),
+    ))
 }
 
 fn close(a: f64, b: f64) -> bool {
@@ -158,10 +149,8 @@ fn write(dir: &Path, name: &str, t: &Trajectory) -> String {
 
 #[test]
 fn slamlab_evaluate_equals_evo() {
-    let dir = std::env::temp_dir().join(format!("slamlab-evo-{}", std::process::id()));
-    std::fs::create_dir_all(&dir).unwrap();
+    let dir = Scratch::new("evo");
     let Some(evo) = evo(&dir) else {
-        let _ = std::fs::remove_dir_all(&dir);
         return;
     };
     let frame = Similarity {
@@ -252,5 +241,4 @@ fn slamlab_evaluate_equals_evo() {
             theirs["rmse"], ours[metric][part]["rmse"], ours["pairing"]["pairs"]
         );
     }
-    let _ = std::fs::remove_dir_all(&dir);
 }

@@ -5,7 +5,7 @@
 
 mod common;
 
-use common::{json, slamlab_output};
+use common::{Scratch, json, slamlab_output};
 
 #[test]
 fn run_kidnap_prints_the_issue_json() {
@@ -63,8 +63,7 @@ fn bad_input_is_refused_or_clamped_with_a_message() {
     assert!(String::from_utf8_lossy(&out.stderr).contains("--laser-sigma-hit"));
     let out = slamlab_output(&["run", "kidnap", "--estimator", "ekf"]);
     assert!(String::from_utf8_lossy(&out.stderr).contains("not a comma-separated list of mcl"));
-    let dir = std::env::temp_dir().join(format!("slamlab-kidnap-{}", std::process::id()));
-    std::fs::create_dir_all(&dir).unwrap();
+    let dir = Scratch::new("kidnap");
     let yaml = dir.join("m.yaml");
     std::fs::write(
         &yaml,
@@ -81,13 +80,11 @@ fn bad_input_is_refused_or_clamped_with_a_message() {
     let out = slamlab_output(&["map", "info", yaml.to_str().unwrap()]);
     let err = String::from_utf8_lossy(&out.stderr);
     assert!(err.contains("resolution -1"), "{err}");
-    std::fs::remove_dir_all(&dir).ok();
 }
 
 #[test]
 fn map_convert_and_info_round_trip() {
-    let dir = std::env::temp_dir().join(format!("slamlab-map-{}", std::process::id()));
-    std::fs::create_dir_all(&dir).unwrap();
+    let dir = Scratch::new("map");
     let pgm_yaml = dir.join("maze-pgm.yaml");
     let out = slamlab_output(&[
         "map",
@@ -122,12 +119,11 @@ fn map_convert_and_info_round_trip() {
     };
     assert_eq!(tail(&a), tail(&b));
     assert!(tail(&a).contains("202 x 202 cells"));
-    std::fs::remove_dir_all(&dir).ok();
 }
 
 #[test]
 fn experiment_kidnap_prints_its_json_and_csv() {
-    let dir = std::env::temp_dir().join(format!("slamlab-kidnap-exp-{}", std::process::id()));
+    let dir = Scratch::new("kidnap-exp");
     let out = slamlab_output(&[
         "experiment",
         "kidnap",
@@ -163,5 +159,4 @@ fn experiment_kidnap_prints_its_json_and_csv() {
     }
     let csv = std::fs::read_to_string(dir.join("kidnap_trials.csv")).unwrap();
     assert_eq!(csv.lines().count(), 1 + 8);
-    std::fs::remove_dir_all(&dir).ok();
 }

@@ -4,51 +4,26 @@
 
 #![allow(clippy::panic, clippy::unwrap_used, clippy::expect_used)] // a failing test stops
 
-use std::path::PathBuf;
-use std::process::Command;
+mod common;
 
-/// `../shared/data/landmarks/<rel>` beside the repository (or under
-/// `SLAMLAB_SHARED_DATA`), if it is there.
-fn shared(rel: &str) -> Option<PathBuf> {
-    let root = std::env::var_os("SLAMLAB_SHARED_DATA").map_or_else(
-        || PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../../../shared/data"),
-        PathBuf::from,
-    );
-    let path = root.join("landmarks").join(rel);
-    if path.exists() {
-        Some(path)
-    } else {
-        eprintln!(
-            "skipped: {} is absent (or set SLAMLAB_SHARED_DATA)",
-            path.display()
-        );
-        None
-    }
-}
+use common::{run_json, shared_data};
 
 #[test]
 fn the_json_parameters_are_the_ones_the_freiburg_run_used() {
-    let Some(data) = shared("freiburg/sensor_data.dat") else {
+    let Some(data) = shared_data("landmarks/freiburg/sensor_data.dat") else {
         return;
     };
-    let out = Command::new(env!("CARGO_BIN_EXE_slamlab"))
-        .args(["experiment", "real-data", "--data"])
-        .arg(&data)
-        .args([
-            "--estimator",
-            "dead-reckoning,ekf",
-            "--mode",
-            "slam",
-            "--json",
-        ])
-        .output()
-        .unwrap();
-    assert!(
-        out.status.success(),
-        "{}",
-        String::from_utf8_lossy(&out.stderr)
-    );
-    let v: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
+    let v = run_json(&[
+        "experiment",
+        "real-data",
+        "--data",
+        data.to_str().unwrap(),
+        "--estimator",
+        "dead-reckoning,ekf",
+        "--mode",
+        "slam",
+        "--json",
+    ]);
     let p = &v["parameters"];
     // The course's noise (the `freiburg` preset), not the simulated world's.
     assert_eq!(p["odometry-rot-std"], 0.005, "{p}");

@@ -9,7 +9,7 @@
 
 mod common;
 
-use common::{python_venv, slamlab_stdout};
+use common::{Scratch, python_venv, record_maze, shared_data, slamlab_stdout};
 
 use slamlab_core::Pose2;
 use slamlab_sim::grid::{LaserFile, MappingInput, log_input};
@@ -22,24 +22,6 @@ use std::process::Command;
 use std::sync::Arc;
 
 const ROSBAGS: &str = "rosbags==0.11.9";
-
-/// A temporary directory, removed when dropped.
-struct TempDir(PathBuf);
-
-impl TempDir {
-    fn new(name: &str) -> Self {
-        let dir = std::env::temp_dir().join(format!("slamlab-{name}-{}", std::process::id()));
-        let _ = std::fs::remove_dir_all(&dir);
-        std::fs::create_dir_all(&dir).unwrap();
-        Self(dir)
-    }
-}
-
-impl Drop for TempDir {
-    fn drop(&mut self) {
-        let _ = std::fs::remove_dir_all(&self.0);
-    }
-}
 
 /// A virtual environment with `rosbags`, or `None` (and a message) when it
 /// cannot be made.
@@ -72,40 +54,14 @@ fn num(v: &serde_json::Value) -> f64 {
         .unwrap_or_else(|| panic!("not a number string: {v}"))
 }
 
-fn intel_log() -> Option<PathBuf> {
-    let mut candidates = Vec::new();
-    if let Ok(shared) = std::env::var("SLAMLAB_SHARED") {
-        candidates.push(PathBuf::from(shared).join("data/laser/intel.clf.bz2"));
-    }
-    candidates.push(
-        Path::new(env!("CARGO_MANIFEST_DIR")).join("../../../shared/data/laser/intel.clf.bz2"),
-    );
-    let found = candidates.into_iter().find(|p| p.exists());
-    if found.is_none() {
-        eprintln!("skipped: the Intel log (../shared/data/laser/intel.clf.bz2) is absent");
-    }
-    found
-}
-
 /// `slamlab log record --out run.mcap` writes a bag that rosbags reads: the
 /// five topics with their types and counts, the messages decoded by rosbags'
 /// typestore equal to what SLAM Lab reads back.
 #[test]
 fn rosbags_reads_the_bag_that_log_record_writes() {
-    let dir = TempDir::new("record-bag");
-    let bag = dir.0.join("run.mcap");
-    let wrote = slamlab_stdout(&[
-        "log",
-        "record",
-        "--map",
-        "maze",
-        "--steps",
-        "200",
-        "--seed",
-        "4",
-        "--out",
-        bag.to_str().unwrap(),
-    ]);
+    let dir = Scratch::new("record-bag");
+    let bag = dir.join("run.mcap");
+    let wrote = record_maze(&bag, 200, 4);
     assert!(wrote.contains("200 scans of 360 beams"), "{wrote}");
     // SLAM Lab reads it back: the lesson's input with its truth.
     let file = LaserFile::read_file(&bag, &TopicChoice::default()).unwrap();
@@ -121,31 +77,20 @@ fn rosbags_reads_the_bag_that_log_record_writes() {
     assert_eq!(info["lesson_input"]["scans"], 200);
     assert_eq!(info["lesson_input"]["truth"], true);
 
-    let Some(python) = rosbags_venv(&dir.0) else {
+    let Some(python) = rosbags_venv(&dir) else {
         return;
     };
     let v = python_json(&python, &[&script("read_bag.py"), &bag]);
     let topics = &v["topics"];
-    assert_eq!(
-        topics["/scan"],
-        serde_json::json!(["sensor_msgs/msg/LaserScan", 200])
-    );
-    assert_eq!(
-        topics["/odom"],
-        serde_json::json!(["nav_msgs/msg/Odometry", 200])
-    );
-    assert_eq!(
-        topics["/tf"],
-        serde_json::json!(["tf2_msgs/msg/TFMessage", 200])
-    );
-    assert_eq!(
-        topics["/tf_static"],
-        serde_json::json!(["tf2_msgs/msg/TFMessage", 1])
-    );
-    assert_eq!(
-        topics["/ground_truth"],
-        serde_json::json!(["geometry_msgs/msg/PoseStamped", 200])
-    );
+    for (topic, kind, count) in [
+        ("/scan", "sensor_msgs/msg/LaserScan", 200),
+        ("/odom", "nav_msgs/msg/Odometry", 200),
+        ("/tf", "tf2_msgs/msg/TFMessage", 200),
+        ("/tf_static", "tf2_msgs/msg/TFMessage", 1),
+        ("/ground_truth", "geometry_msgs/msg/PoseStamped", 200),
+    ] {
+        assert_eq!(topics[topic], serde_json::json!([kind, count]), "{topic}");
+    }
     assert_eq!(v["decoded"]["/scan"], 200);
     // rosbags' decoding agrees with SLAM Lab's, field by field.
     let first = &file.input.scans[0];
@@ -185,14 +130,14 @@ fn end_pose(input: MappingInput) -> Pose2 {
 /// 5.9e-8 rad from the log's end pose, 6e-16 m and 4.5e-16 rad from the run
 /// on the log rounded in Rust (its headings through libm's sine and cosine).
 fn intel_bag_maps_like_the_log(scans: usize) {
-    let Some(intel) = intel_log() else {
+    let Some(intel) = shared_data("laser/intel.clf.bz2") else {
         return;
     };
-    let dir = TempDir::new(&format!("intel-bag-{scans}"));
-    let Some(python) = rosbags_venv(&dir.0) else {
+    let dir = Scratch::new(&format!("intel-bag-{scans}"));
+    let Some(python) = rosbags_venv(&dir) else {
         return;
     };
-    let out_dir = dir.0.join("intel");
+    let out_dir = dir.join("intel");
     let n = scans.to_string();
     let v = python_json(
         &python,

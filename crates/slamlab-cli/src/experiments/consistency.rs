@@ -8,7 +8,7 @@
 use super::{scenario_args, steps_arg, trials_arg};
 use crate::command::{Experiment, Refusal};
 use crate::lessons::landmark::{check_runnable, scenario_from};
-use crate::output::{Output, csv_arg, progress_bar};
+use crate::output::{Output, csv_arg, progress_bar, table_number};
 use anyhow::Result;
 use clap::{ArgMatches, Command};
 use slamlab_sim::landmark_slam::consistency::ConsistencyStudy;
@@ -19,16 +19,9 @@ use std::io::Write;
 pub struct Consistency;
 
 impl Experiment for Consistency {
-    fn name(&self) -> &'static str {
-        "consistency"
-    }
-
-    fn about(&self) -> &'static str {
-        "The average NEES over many seeded runs of any landmark scenario, against its 95% band"
-    }
-
     fn command(&self) -> Command {
-        Command::new(self.name())
+        Command::new("consistency")
+            .about("The average NEES over many seeded runs of any landmark scenario, against its 95% band")
             .arg(trials_arg("50"))
             .arg(steps_arg())
             .arg(csv_arg(
@@ -75,12 +68,7 @@ impl Experiment for Consistency {
             scenario.seed
         )?;
         out.parameter_paragraph(&result.parameters, 32)?;
-        // Diverged runs can make averages astronomically large: those go in e-notation.
-        let fmt = |v: Option<f64>| match v {
-            None => "-".to_owned(),
-            Some(v) if v.abs() >= 1e5 => format!("{v:.3e}"),
-            Some(v) => format!("{v:.3}"),
-        };
+        let fmt = |v: Option<f64>| table_number(v, 3, 3);
         writeln!(
             out,
             "{:<10} {:>10} {:>14} {:>13} {:>13} {:>13} {:>9} {:>9}",

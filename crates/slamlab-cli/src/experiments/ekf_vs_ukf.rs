@@ -17,16 +17,9 @@ use std::io::Write;
 pub struct EkfVsUkf;
 
 impl Experiment for EkfVsUkf {
-    fn name(&self) -> &'static str {
-        "ekf-vs-ukf"
-    }
-
-    fn about(&self) -> &'static str {
-        "EKF against UKF on the thesis's fixed scenario (thesis 000 Sec. 3.4.3, Experiments 1 and 2)"
-    }
-
     fn command(&self) -> Command {
-        Command::new(self.name())
+        Command::new("ekf-vs-ukf")
+            .about("EKF against UKF on the thesis's fixed scenario (thesis 000 Sec. 3.4.3, Experiments 1 and 2)")
             .arg(noise_scale_arg())
             .arg(trials_arg("50"))
             .args(seed_arg())

@@ -5,11 +5,13 @@
 //! ```
 
 use super::{scenario_args, steps_arg, trials_arg};
+use crate::args;
 use crate::command::Experiment;
+use crate::flags;
 use crate::lessons::landmark::{refuse_manual, scenario_from};
 use crate::output::{Output, csv_arg, progress_bar};
 use anyhow::{Result, bail};
-use clap::{Arg, ArgMatches, Command};
+use clap::{ArgMatches, Command};
 use slamlab_core::particle::FastSlamVersion;
 use slamlab_sim::landmark_slam::fastslam::fastslam_experiment;
 use std::io::Write;
@@ -21,29 +23,20 @@ const MAX_PARTICLES: usize = 10_000;
 pub struct FastSlam;
 
 impl Experiment for FastSlam {
-    fn name(&self) -> &'static str {
-        "fastslam"
-    }
-
-    fn about(&self) -> &'static str {
-        "FastSLAM 1.0 or 2.0 on the landmark world: robot and landmark RMSE and N_eff per particle count"
-    }
-
     fn command(&self) -> Command {
-        Command::new(self.name())
+        Command::new("fastslam")
+            .about("FastSLAM 1.0 or 2.0 on the landmark world: robot and landmark RMSE and N_eff per particle count")
             .arg(
-                Arg::new("version")
-                    .long("version")
-                    .value_parser(["1", "2"])
-                    .default_value("2")
-                    .help("FastSLAM 1.0 (motion-model proposal) or 2.0 (measurement-informed proposal)"),
+                args::choice(
+                    "version",
+                    &["1", "2"],
+                    "FastSLAM 1.0 (motion-model proposal) or 2.0 (measurement-informed proposal)",
+                )
+                .default_value("2"),
             )
             .arg(
-                Arg::new("particles")
-                    .long("particles")
-                    .value_name("LIST")
-                    .default_value("5,10,30,100")
-                    .help("comma-separated particle counts (1 .. 10000)"),
+                args::list("particles", "comma-separated particle counts (1 .. 10000)")
+                    .default_value("5,10,30,100"),
             )
             .arg(trials_arg("20"))
             .arg(steps_arg())
@@ -142,7 +135,7 @@ impl Experiment for FastSlam {
 /// A comma-separated list of particle counts, each in 1 ..= [`MAX_PARTICLES`].
 pub(super) fn parse_counts(text: &str) -> Result<Vec<usize>> {
     let mut counts = Vec::new();
-    for part in text.split(',').map(str::trim).filter(|p| !p.is_empty()) {
+    for part in flags::items(text) {
         let Ok(n) = part.parse::<usize>() else {
             bail!("--particles: '{part}' is not a whole number");
         };

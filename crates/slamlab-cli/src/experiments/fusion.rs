@@ -5,10 +5,11 @@
 //! ```
 
 use super::{landmark_flags_but_seed, seed_arg};
+use crate::args;
 use crate::command::{Experiment, Refusal};
 use crate::output::{Output, csv_arg, progress_bar};
 use anyhow::Result;
-use clap::{Arg, ArgMatches, Command};
+use clap::{ArgMatches, Command};
 use slamlab_sim::fusion::{
     FusionMode, FusionScenario, THESIS_TABLE_5_3, fusion_experiment, run_modes, simulate,
 };
@@ -19,23 +20,17 @@ use std::io::Write;
 pub struct Fusion;
 
 impl Experiment for Fusion {
-    fn name(&self) -> &'static str {
-        "fusion"
-    }
-
-    fn about(&self) -> &'static str {
-        "Sensor fusion, differential against relative against odometry only (thesis 002 Table 5.3)"
-    }
-
     fn command(&self) -> Command {
-        Command::new(self.name())
+        Command::new("fusion")
+            .about("Sensor fusion, differential against relative against odometry only (thesis 002 Table 5.3)")
             .args(seed_arg())
             .arg(
-                Arg::new("trials")
-                    .long("trials")
-                    .value_parser(clap::value_parser!(u64).range(1..=100_000))
-                    .default_value("6")
-                    .help("seeded drives (Table 5.3 has six); trial i uses seed + i"),
+                args::whole(
+                    "trials",
+                    1..=100_000,
+                    "seeded drives (Table 5.3 has six); trial i uses seed + i",
+                )
+                .default_value("6"),
             )
             .arg(csv_arg(
                 "write the first drive's error per mode and axis with the filter's 2σ as CSV into DIR",

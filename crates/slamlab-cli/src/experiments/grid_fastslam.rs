@@ -14,11 +14,13 @@
 //! writes the best particle's map of the last run.
 
 use super::fastslam::parse_counts;
+use crate::args;
 use crate::command::Experiment;
+use crate::flags;
 use crate::map::{map_arg, read_map};
 use crate::output::{Output, progress_bar};
 use anyhow::{Result, bail};
-use clap::{Arg, ArgMatches, Command};
+use clap::{ArgMatches, Command};
 use slamlab_core::particle::{GridFastSlamConfig, MAX_GRID_PARTICLES, Proposal};
 use slamlab_sim::mapping::MappingScenario;
 use slamlab_sim::mapping::grid_fastslam::run_grid_fastslam;
@@ -31,64 +33,40 @@ use std::sync::Arc;
 pub struct GridFastSlam;
 
 impl Experiment for GridFastSlam {
-    fn name(&self) -> &'static str {
-        "grid-fastslam"
-    }
-
-    fn about(&self) -> &'static str {
-        "grid FastSLAM (gmapping): trajectory RMSE, map agreement, resamplings, time and memory per particle count and proposal"
-    }
-
     fn command(&self) -> Command {
-        Command::new(self.name())
+        Command::new("grid-fastslam")
+            .about("grid FastSLAM (gmapping): trajectory RMSE, map agreement, resamplings, time and memory per particle count and proposal")
             .arg(map_arg())
             .arg(
-                Arg::new("particles")
-                    .long("particles")
-                    .value_name("LIST")
-                    .default_value("5,30")
-                    .help(
-                        "comma-separated particle counts (1 .. 1000; each particle carries a map)",
-                    ),
+                args::list(
+                    "particles",
+                    "comma-separated particle counts (1 .. 1000; each particle carries a map)",
+                )
+                .default_value("5,30"),
             )
             .arg(
-                Arg::new("proposal")
-                    .long("proposal")
-                    .value_name("LIST")
-                    .default_value("odometry,scan-match")
-                    .help("comma-separated proposals: odometry, scan-match"),
+                args::list("proposal", "comma-separated proposals: odometry, scan-match")
+                    .default_value("odometry,scan-match"),
             )
             .arg(
-                Arg::new("trials")
-                    .long("trials")
-                    .value_parser(clap::value_parser!(u64).range(1..=1000))
-                    .default_value("5")
-                    .help("simulated drives; trial i uses seed + i"),
+                args::whole("trials", 1..=1000, "simulated drives; trial i uses seed + i")
+                    .default_value("5"),
             )
             .arg(
-                Arg::new("steps")
-                    .long("steps")
-                    .value_parser(clap::value_parser!(u64).range(1..=1_000_000))
-                    .default_value("3000")
-                    .help("scans per drive (0.1 s apart)"),
+                args::whole("steps", 1..=1_000_000, "scans per drive (0.1 s apart)")
+                    .default_value("3000"),
             )
-            .arg(Arg::new("log").long("log").value_name("FILE").help(
+            .arg(args::file(
+                "log",
                 "run over a CARMEN laser log (plain, .gz or .bz2) or a ROS 2 bag (.mcap) instead of simulated drives",
             ))
             .args(crate::log_cmd::topic_args())
-            .arg(
-                Arg::new("map-out")
-                    .long("map-out")
-                    .value_name("YAML")
-                    .help("with --log: write the best particle's map as a ROS map (YAML and PGM)"),
-            )
-            .arg(
-                Arg::new("seed")
-                    .long("seed")
-                    .value_parser(clap::value_parser!(u64))
-                    .default_value("1")
-                    .help("the first trial's seed"),
-            )
+            .arg(args::named(
+                "map-out",
+                "YAML",
+                "with --log: write the best particle's map as a ROS map (YAML and PGM)",
+            ))
+            .arg(args::seed("the first trial's seed"))
     }
 
     fn run(&self, m: &ArgMatches, out: &mut Output) -> Result<()> {
@@ -104,13 +82,7 @@ impl Experiment for GridFastSlam {
             );
         }
         let mut proposals = Vec::new();
-        for part in m
-            .get_one::<String>("proposal")
-            .map_or("odometry,scan-match", String::as_str)
-            .split(',')
-            .map(str::trim)
-            .filter(|p| !p.is_empty())
-        {
+        for part in flags::list(m, "proposal") {
             let Some(p) = Proposal::from_name(part) else {
                 bail!("--proposal: '{part}' is not a proposal (odometry, scan-match)");
             };

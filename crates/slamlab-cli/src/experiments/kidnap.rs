@@ -5,14 +5,15 @@
 //! ```
 
 use super::first_seed_arg;
+use crate::args;
 use crate::command::Experiment;
 use crate::flags;
 use crate::map::{map_arg, read_map, resolution_arg};
-use crate::output::{Output, csv_arg, trials_bar, trials_progress};
+use crate::output::{Output, csv_arg, par_trials};
 use anyhow::{Context, Result, bail};
-use clap::{Arg, ArgMatches, Command};
+use clap::{ArgMatches, Command};
 use serde_json::json;
-use slamlab_sim::kidnap::experiment::{KidnapProtocol, KidnapTrial, kidnap_trial, summarize};
+use slamlab_sim::kidnap::experiment::{KidnapProtocol, kidnap_trial, summarize};
 use slamlab_sim::kidnap::{LocalizationEstimator, MclScenario};
 use std::io::Write;
 
@@ -24,44 +25,35 @@ const OWN: &[&str] = &["map", "particles", "estimator", "seed", "init", "kidnap-
 pub struct Kidnap;
 
 impl Experiment for Kidnap {
-    fn name(&self) -> &'static str {
-        "kidnap"
-    }
-
-    fn about(&self) -> &'static str {
-        "The kidnapped robot (thesis 000 Tables 5.1 and 5.2): updates to recover after a kidnap, and the fraction of particles randomized on the way"
-    }
-
     fn command(&self) -> Command {
-        Command::new(self.name())
+        Command::new("kidnap")
+            .about("The kidnapped robot (thesis 000 Tables 5.1 and 5.2): updates to recover after a kidnap, and the fraction of particles randomized on the way")
             .arg(map_arg())
             .arg(resolution_arg("metres per pixel, for a lone image"))
             .arg(
-                Arg::new("particles")
-                    .long("particles")
-                    .default_value("500,1000,1500,2000,2500")
-                    .help("comma-separated particle counts"),
+                args::flag("particles", "comma-separated particle counts")
+                    .default_value("500,1000,1500,2000,2500"),
             )
             .arg(
-                Arg::new("estimator")
-                    .long("estimator")
-                    .default_value("amcl,acmcl")
-                    .help("comma-separated: mcl, amcl, cmcl, acmcl"),
+                args::flag("estimator", "comma-separated: mcl, amcl, cmcl, acmcl")
+                    .default_value("amcl,acmcl"),
             )
             .arg(
-                Arg::new("trials")
-                    .long("trials")
-                    .value_parser(clap::value_parser!(u64).range(1..=10_000))
-                    .default_value("20")
-                    .help("trials per (estimator, particle count); trial i uses seed + i"),
+                args::whole(
+                    "trials",
+                    1..=10_000,
+                    "trials per (estimator, particle count); trial i uses seed + i",
+                )
+                .default_value("20"),
             )
             .arg(first_seed_arg())
             .arg(
-                Arg::new("limit")
-                    .long("limit")
-                    .value_parser(clap::value_parser!(u64).range(10..=100_000))
-                    .default_value("500")
-                    .help("updates after the kidnap before a trial counts as a failure"),
+                args::whole(
+                    "limit",
+                    10..=100_000,
+                    "updates after the kidnap before a trial counts as a failure",
+                )
+                .default_value("500"),
             )
             .arg(csv_arg("write per-trial rows to DIR/kidnap_trials.csv"))
             .args(flags::table_args::<MclScenario>(|name| {
@@ -122,22 +114,11 @@ impl Experiment for Kidnap {
                     .flat_map(move |&n| (0..trials).map(move |i| (e, n, i)))
             })
             .collect();
-        let total = jobs.len();
-        let bar = trials_bar("kidnap", total);
-        let done = std::sync::atomic::AtomicUsize::new(0);
-        let outcomes: Vec<Result<KidnapTrial, String>> = {
-            use rayon::prelude::*;
-            jobs.par_iter()
-                .map(|&(est, n, i)| {
-                    let r = kidnap_trial(&base, &grid, est, n, seed.wrapping_add(i), &protocol)
-                        .map_err(|e| e.to_string());
-                    let d = done.fetch_add(1, std::sync::atomic::Ordering::Relaxed) + 1;
-                    trials_progress(&bar, "kidnap", d, total);
-                    r
-                })
-                .collect()
-        };
-        let mut rows = Vec::with_capacity(total);
+        let outcomes = par_trials("kidnap", &jobs, |&(est, n, i)| {
+            kidnap_trial(&base, &grid, est, n, seed.wrapping_add(i), &protocol)
+                .map_err(|e| e.to_string())
+        });
+        let mut rows = Vec::with_capacity(jobs.len());
         for outcome in outcomes {
             match outcome {
                 Ok(t) => rows.push(t),

@@ -8,11 +8,12 @@
 //! ```
 
 use super::first_seed_arg;
+use crate::args;
 use crate::command::Experiment;
 use crate::map::{map_arg, read_map};
-use crate::output::{Output, trials_bar, trials_progress};
+use crate::output::{Output, par_trials};
 use anyhow::{Result, bail};
-use clap::{Arg, ArgMatches, Command};
+use clap::{ArgMatches, Command};
 use serde_json::json;
 use slamlab_sim::cartographer::input::{KidnapPlace, MAX_STEPS, kidnap_input_to};
 use slamlab_sim::cartographer::{CartographerParams, CartographerSim, CartographerSummary};
@@ -98,45 +99,34 @@ fn summarize(runs: &[Run], detection: bool, kidnap_at: usize) -> serde_json::Val
 }
 
 impl Experiment for Krp {
-    fn name(&self) -> &'static str {
-        "krp"
-    }
-
-    fn about(&self) -> &'static str {
-        "The kidnapped robot during mapping (thesis 000 Sec. 5.2): Cartographer-style SLAM with a kidnap and without, kidnap detection on and off; detection delay, false alarms, recovered (merged) maps and map agreement"
-    }
-
     fn command(&self) -> Command {
-        Command::new(self.name())
+        Command::new("krp")
+            .about("The kidnapped robot during mapping (thesis 000 Sec. 5.2): Cartographer-style SLAM with a kidnap and without, kidnap detection on and off; detection delay, false alarms, recovered (merged) maps and map agreement")
             .arg(map_arg())
             .arg(
-                Arg::new("trials")
-                    .long("trials")
-                    .value_parser(clap::value_parser!(u64).range(1..=1000))
-                    .default_value("10")
-                    .help("seeds; trial i uses seed + i (each runs four times: kidnapped or not, detection on or off)"),
+                args::whole(
+                    "trials",
+                    1..=1000,
+                    "seeds; trial i uses seed + i (each runs four times: kidnapped or not, detection on or off)",
+                )
+                .default_value("10"),
             )
             .arg(first_seed_arg())
+            .arg(args::count("steps", "scans per run").default_value("600"))
             .arg(
-                Arg::new("steps")
-                    .long("steps")
-                    .value_parser(clap::value_parser!(usize))
-                    .default_value("600")
-                    .help("scans per run"),
+                args::count(
+                    "kidnap-at",
+                    "the scan (0-based) before which the robot is carried elsewhere",
+                )
+                .default_value("152"),
             )
             .arg(
-                Arg::new("kidnap-at")
-                    .long("kidnap-at")
-                    .value_parser(clap::value_parser!(usize))
-                    .default_value("152")
-                    .help("the scan (0-based) before which the robot is carried elsewhere"),
-            )
-            .arg(
-                Arg::new("kidnap-place")
-                    .long("kidnap-place")
-                    .value_parser(KidnapPlace::NAMES)
-                    .default_value("mapped")
-                    .help("where the kidnap carries the robot: mapped (a random place on its path so far) or anywhere (any free place)"),
+                args::choice(
+                    "kidnap-place",
+                    &KidnapPlace::NAMES,
+                    "where the kidnap carries the robot: mapped (a random place on its path so far) or anywhere (any free place)",
+                )
+                .default_value("mapped"),
             )
     }
 
@@ -165,42 +155,32 @@ impl Experiment for Krp {
                     .map(move |(k, d)| (seed.wrapping_add(i), k, d))
             })
             .collect();
-        let total = jobs.len();
-        let bar = trials_bar("krp", total);
-        let done = std::sync::atomic::AtomicUsize::new(0);
-        let outcomes: Vec<Result<Run, String>> = {
-            use rayon::prelude::*;
-            jobs.par_iter()
-                .map(|&(s, kidnapped, detection)| {
-                    let kidnap = kidnapped.then_some(kidnap_at);
-                    let input = kidnap_input_to(
-                        Arc::clone(&grid),
-                        &name,
-                        steps,
-                        s,
-                        kidnap.map(|k| (k, place)),
-                        &SimulatedLogConfig::default(),
-                    )?;
-                    let params = CartographerParams {
-                        detection,
-                        ..CartographerParams::default()
-                    };
-                    let (mut sim, _) = CartographerSim::new(Arc::new(input), params);
-                    let started = std::time::Instant::now();
-                    sim.run_to_end();
-                    let summary = sim.summary(kidnap, started.elapsed().as_secs_f64() * 1e3);
-                    let d = done.fetch_add(1, std::sync::atomic::Ordering::Relaxed) + 1;
-                    trials_progress(&bar, "krp", d, total);
-                    Ok(Run {
-                        seed: s,
-                        kidnapped,
-                        detection,
-                        summary,
-                    })
-                })
-                .collect()
-        };
-        let mut runs = Vec::with_capacity(total);
+        let outcomes = par_trials("krp", &jobs, |&(s, kidnapped, detection)| {
+            let kidnap = kidnapped.then_some(kidnap_at);
+            let input = kidnap_input_to(
+                Arc::clone(&grid),
+                &name,
+                steps,
+                s,
+                kidnap.map(|k| (k, place)),
+                &SimulatedLogConfig::default(),
+            )?;
+            let params = CartographerParams {
+                detection,
+                ..CartographerParams::default()
+            };
+            let (mut sim, _) = CartographerSim::new(Arc::new(input), params);
+            let started = std::time::Instant::now();
+            sim.run_to_end();
+            let summary = sim.summary(kidnap, started.elapsed().as_secs_f64() * 1e3);
+            Ok::<_, String>(Run {
+                seed: s,
+                kidnapped,
+                detection,
+                summary,
+            })
+        });
+        let mut runs = Vec::with_capacity(jobs.len());
         for o in outcomes {
             match o {
                 Ok(r) => runs.push(r),

@@ -19,10 +19,12 @@
 //! or matches none of the log's scans is reported in `reference_error`; the
 //! runs go on and print their times without a score.
 
+use crate::args;
 use crate::command::Experiment;
+use crate::flags;
 use crate::output::Output;
 use anyhow::{Context, Result, bail};
-use clap::{Arg, ArgMatches, Command};
+use clap::{ArgMatches, Command};
 use cpu_time::ThreadTime;
 use rayon::prelude::*;
 use serde::Serialize;
@@ -100,63 +102,35 @@ pub fn run_source(
 }
 
 impl Experiment for LaserSlam {
-    fn name(&self) -> &'static str {
-        "laser-slam"
-    }
-
-    fn about(&self) -> &'static str {
-        "laser SLAM scored against a corrected log: ATE and Kümmerle's relative errors per pose source, with CPU time"
-    }
-
     fn command(&self) -> Command {
-        Command::new(self.name())
+        Command::new("laser-slam")
+            .about("laser SLAM scored against a corrected log: ATE and Kümmerle's relative errors per pose source, with CPU time")
             .arg(
-                Arg::new("log")
-                    .long("log")
-                    .value_name("FILE")
-                    .required(true)
-                    .help("the raw CARMEN log (plain, .gz or .bz2), e.g. intel.clf.bz2"),
+                args::file(
+                    "log",
+                    "the raw CARMEN log (plain, .gz or .bz2), e.g. intel.clf.bz2",
+                )
+                .required(true),
             )
+            .arg(args::file(
+                "reference",
+                "its corrected log, e.g. intel-corrected.log.gz (without it: times only)",
+            ))
             .arg(
-                Arg::new("reference")
-                    .long("reference")
-                    .value_name("FILE")
-                    .help("its corrected log, e.g. intel-corrected.log.gz (without it: times only)"),
+                args::list(
+                    "poses",
+                    "comma-separated pose sources: odometry, icp, plicp, scan-to-map, grid-fastslam, cartographer-local (local SLAM alone), cartographer",
+                )
+                .default_value("odometry,icp,plicp,scan-to-map,grid-fastslam,cartographer"),
             )
-            .arg(
-                Arg::new("poses")
-                    .long("poses")
-                    .value_name("LIST")
-                    .default_value("odometry,icp,plicp,scan-to-map,grid-fastslam,cartographer")
-                    .help(
-                        "comma-separated pose sources: odometry, icp, plicp, scan-to-map, grid-fastslam, cartographer-local (local SLAM alone), cartographer",
-                    ),
-            )
-            .arg(
-                Arg::new("steps")
-                    .long("steps")
-                    .value_parser(clap::value_parser!(u64).range(1..))
-                    .help("map only the log's first scans"),
-            )
-            .arg(
-                Arg::new("seed")
-                    .long("seed")
-                    .value_parser(clap::value_parser!(u64))
-                    .default_value("1")
-                    .help("grid FastSLAM's seed"),
-            )
+            .arg(args::whole("steps", 1.., "map only the log's first scans"))
+            .arg(args::seed("grid FastSLAM's seed"))
     }
 
     fn run(&self, m: &ArgMatches, out: &mut Output) -> Result<()> {
         let log_path = m.get_one::<String>("log").map_or("", String::as_str);
         let mut sources = Vec::new();
-        for part in m
-            .get_one::<String>("poses")
-            .map_or("", String::as_str)
-            .split(',')
-            .map(str::trim)
-            .filter(|p| !p.is_empty())
-        {
+        for part in flags::list(m, "poses") {
             if !POSES.contains(&part) {
                 bail!(
                     "--poses: '{part}' is not a pose source ({})",

@@ -15,43 +15,42 @@ pub mod resampling;
 pub mod two_view;
 pub mod unscented;
 
+use crate::args;
 use clap::Arg;
 use slamlab_sim::landmark_slam::scenario::PARAMS;
 
 /// `--trials N` (1 ..= 100000) with the experiment's default.
 fn trials_arg(default: &'static str) -> Arg {
-    Arg::new("trials")
-        .long("trials")
-        .value_parser(clap::value_parser!(u64).range(1..=100_000))
-        .default_value(default)
-        .help("Monte Carlo trials; trial i uses seed + i")
+    args::whole(
+        "trials",
+        1..=100_000,
+        "Monte Carlo trials; trial i uses seed + i",
+    )
+    .default_value(default)
 }
 
 /// `--seed N`: the first trial's seed (trial i uses seed + i).
 fn first_seed_arg() -> Arg {
-    Arg::new("seed")
-        .long("seed")
-        .value_parser(clap::value_parser!(u64))
-        .default_value("1")
-        .help("first seed")
+    args::seed("first seed")
 }
 
 /// `--steps N`: ticks per trial.
 fn steps_arg() -> Arg {
-    Arg::new("steps")
-        .long("steps")
-        .value_parser(clap::value_parser!(u64).range(1..=1_000_000))
-        .default_value("200")
-        .help("ticks per trial (200 ticks of 0.1 s are one lap of the circle)")
+    args::whole(
+        "steps",
+        1..=1_000_000,
+        "ticks per trial (200 ticks of 0.1 s are one lap of the circle)",
+    )
+    .default_value("200")
 }
 
 /// `--noise-scale X`: the control-noise multiplier of the thesis's experiments.
 fn noise_scale_arg() -> Arg {
-    Arg::new("noise-scale")
-        .long("noise-scale")
-        .value_parser(clap::value_parser!(f64))
-        .default_value("1")
-        .help("control-noise multiplier: 1 is thesis Experiment 1, 2 is Experiment 2 (0 .. 20]")
+    args::number(
+        "noise-scale",
+        "control-noise multiplier: 1 is thesis Experiment 1, 2 is Experiment 2 (0 .. 20]",
+    )
+    .default_value("1")
 }
 
 /// The landmark world's `--seed`, for the experiments that fix the rest of it.

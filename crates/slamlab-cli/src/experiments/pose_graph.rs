@@ -6,10 +6,11 @@
 //! ```
 
 use super::{landmark_flags_but_seed, noise_scale_arg, seed_arg};
+use crate::args;
 use crate::command::{Experiment, Refusal};
 use crate::output::Output;
 use anyhow::{Result, bail};
-use clap::{Arg, ArgMatches, Command};
+use clap::{ArgMatches, Command};
 use slamlab_core::graph::SolverKind;
 use slamlab_sim::pose_graph::experiment::{self, PoseGraphExperimentConfig};
 use std::io::Write;
@@ -18,38 +19,30 @@ use std::io::Write;
 pub struct PoseGraph;
 
 impl Experiment for PoseGraph {
-    fn name(&self) -> &'static str {
-        "pose-graph"
-    }
-
-    fn about(&self) -> &'static str {
-        "Pose-graph SLAM on the EKF-SLAM path (thesis 000 Sec. 4.2): loop closures, the optimized graph"
-    }
-
     fn command(&self) -> Command {
-        Command::new(self.name())
+        Command::new("pose-graph")
+            .about("Pose-graph SLAM on the EKF-SLAM path (thesis 000 Sec. 4.2): loop closures, the optimized graph")
             .arg(noise_scale_arg())
             .args(seed_arg())
             .arg(
-                Arg::new("loop-closures")
-                    .long("loop-closures")
-                    .value_parser(clap::value_parser!(u64).range(0..=10_000))
-                    .default_value("10")
-                    .help("loop-closure edges from the first pose to random poses"),
+                args::whole(
+                    "loop-closures",
+                    0..=10_000,
+                    "loop-closure edges from the first pose to random poses",
+                )
+                .default_value("10"),
             )
             .arg(
-                Arg::new("solver")
-                    .long("solver")
-                    .value_parser(["gn", "lm", "gd"])
-                    .default_value("gn")
-                    .help("the solver (the thesis uses Gauss-Newton)"),
+                args::choice(
+                    "solver",
+                    &["gn", "lm", "gd"],
+                    "the solver (the thesis uses Gauss-Newton)",
+                )
+                .default_value("gn"),
             )
             .arg(
-                Arg::new("max-iterations")
-                    .long("max-iterations")
-                    .value_parser(clap::value_parser!(u64).range(1..=100_000))
-                    .default_value("20")
-                    .help("at most this many solver steps"),
+                args::whole("max-iterations", 1..=100_000, "at most this many solver steps")
+                    .default_value("20"),
             )
     }
 

@@ -6,12 +6,13 @@
 //!     --estimator ekf,ukf,fastslam2 --mode slam,localization --json
 //! ```
 
+use crate::args;
 use crate::command::Experiment;
+use crate::flags;
 use crate::lessons::landmark::{data_arg, data_from, scenario_args_where, scenario_for_data};
-use crate::output::{Output, csv_arg, trials_bar, trials_progress};
+use crate::output::{Output, csv_arg, par_trials, table_number};
 use anyhow::{Result, bail};
 use clap::{Arg, ArgMatches, Command};
-use rayon::prelude::*;
 use slamlab_sim::io::landmark_data::LandmarkData;
 use slamlab_sim::landmark_slam::real_data::{
     RealDataRow, RealEstimator, parameters_used, run_robot,
@@ -29,23 +30,14 @@ pub struct RealData;
 const OWN: [&str; 3] = ["estimator", "mode", "robot"];
 
 impl Experiment for RealData {
-    fn name(&self) -> &'static str {
-        "real-data"
-    }
-
-    fn about(&self) -> &'static str {
-        "The landmark filters on a recorded data set (MRCLAM with Vicon truth): trajectory RMSE, landmark RMSE, ANEES and time in band per robot, estimator and mode; on Victoria Park the GPS alignment RMSE"
-    }
-
     fn command(&self) -> Command {
-        Command::new(self.name())
+        Command::new("real-data")
+            .about("The landmark filters on a recorded data set (MRCLAM with Vicon truth): trajectory RMSE, landmark RMSE, ANEES and time in band per robot, estimator and mode; on Victoria Park the GPS alignment RMSE")
             .arg(data_arg().required(true))
-            .arg(
-                Arg::new("robots")
-                    .long("robots")
-                    .value_name("LIST")
-                    .help("comma-separated robots of an MRCLAM data set [default: every robot in the files]"),
-            )
+            .arg(args::list(
+                "robots",
+                "comma-separated robots of an MRCLAM data set [default: every robot in the files]",
+            ))
             .arg(
                 Arg::new("estimators")
                     .long("estimator")
@@ -108,18 +100,9 @@ impl Experiment for RealData {
                 (robot, mode, estimators)
             })
             .collect();
-        let bar = trials_bar("real-data", jobs.len());
-        let done = std::sync::atomic::AtomicUsize::new(0);
-        let results: Vec<Result<Vec<RealDataRow>, String>> = jobs
-            .par_iter()
-            .map(|(robot, mode, estimators)| {
-                let rows = run_robot(&data, *robot, *mode, estimators, &base);
-                let n = done.fetch_add(1, std::sync::atomic::Ordering::Relaxed) + 1;
-                trials_progress(&bar, "real-data", n, jobs.len());
-                rows
-            })
-            .collect();
-        bar.finish_and_clear();
+        let results = par_trials("real-data", &jobs, |(robot, mode, estimators)| {
+            run_robot(&data, *robot, *mode, estimators, &base)
+        });
         let mut rows = Vec::new();
         for result in results {
             rows.extend(result.map_err(|e| anyhow::anyhow!(e))?);
@@ -145,11 +128,7 @@ impl Experiment for RealData {
         writeln!(out, "SLAM Lab experiment real-data: {}", source.title)?;
         writeln!(out, "cite: {}", source.citation)?;
         out.parameter_paragraph(&parameters, 24)?;
-        let fmt = |v: Option<f64>, digits: usize| match v {
-            None => "-".to_owned(),
-            Some(v) if v.abs() >= 1e5 => format!("{v:.2e}"),
-            Some(v) => format!("{v:.digits$}"),
-        };
+        let fmt = |v: Option<f64>, digits: usize| table_number(v, digits, 2);
         writeln!(
             out,
             "{:>5} {:<15} {:<13} {:>16} {:>15} {:>10} {:>8} {:>9}",
@@ -221,9 +200,8 @@ fn list<T: PartialEq>(
     id: &str,
     parse: impl Fn(&str) -> std::result::Result<T, String>,
 ) -> Result<Vec<T>> {
-    let text = matches.get_one::<String>(id).map_or("", String::as_str);
     let mut items = Vec::new();
-    for name in text.split(',').map(str::trim).filter(|s| !s.is_empty()) {
+    for name in flags::list(matches, id) {
         let item = parse(name).map_err(|e| anyhow::anyhow!(e))?;
         if !items.contains(&item) {
             items.push(item);

@@ -7,11 +7,13 @@
 
 use super::fastslam::parse_counts;
 use super::{landmark_flags_but_seed, seed_arg, trials_arg};
+use crate::args;
 use crate::command::{Experiment, Refusal};
+use crate::flags;
 use crate::lessons::landmark::scenario_from;
 use crate::output::{Output, progress_bar};
 use anyhow::{Result, bail};
-use clap::{Arg, ArgMatches, Command};
+use clap::{ArgMatches, Command};
 use slamlab_core::particle::{Resampler, WeightPreset};
 use slamlab_sim::resampling::experiment::{self, resampling_experiment};
 use std::io::Write;
@@ -20,32 +22,24 @@ use std::io::Write;
 pub struct Resampling;
 
 impl Experiment for Resampling {
-    fn name(&self) -> &'static str {
-        "resampling"
-    }
-
-    fn about(&self) -> &'static str {
-        "The resamplers' copy-count variance and bias on four weight sets, against multinomial theory"
-    }
-
     fn command(&self) -> Command {
-        Command::new(self.name())
+        Command::new("resampling")
+            .about("The resamplers' copy-count variance and bias on four weight sets, against multinomial theory")
             .arg(
-                Arg::new("method")
-                    .long("method")
-                    .value_name("LIST")
-                    .default_value("all")
-                    .help("all, or comma-separated methods (multinomial, low-variance, stratified, residual)"),
+                args::list(
+                    "method",
+                    "all, or comma-separated methods (multinomial, low-variance, stratified, residual)",
+                )
+                .default_value("all"),
             )
-            .arg(
-                Arg::new("particles")
-                    .long("particles")
-                    .value_name("COUNT")
-                    .help(format!(
-                        "particles per weight set (1 .. 10000); default {}",
-                        experiment::DEFAULT_PARTICLES
-                    )),
-            )
+            .arg(args::named(
+                "particles",
+                "COUNT",
+                format!(
+                    "particles per weight set (1 .. 10000); default {}",
+                    experiment::DEFAULT_PARTICLES
+                ),
+            ))
             .arg(trials_arg("10000"))
             .args(seed_arg())
     }
@@ -68,7 +62,7 @@ impl Experiment for Resampling {
             None | Some("all") => Resampler::ALL.to_vec(),
             Some(list) => {
                 let mut methods = Vec::new();
-                for name in list.split(',').map(str::trim).filter(|p| !p.is_empty()) {
+                for name in flags::items(list) {
                     let Some(m) = Resampler::from_name(name) else {
                         bail!(
                             "--method: '{name}' is not a resampler (all, multinomial, low-variance, stratified, residual)"

@@ -7,10 +7,12 @@
 //! ```
 
 use super::first_seed_arg;
+use crate::args;
 use crate::command::Experiment;
+use crate::flags;
 use crate::output::{Output, progress_bar};
 use anyhow::{Result, bail};
-use clap::{Arg, ArgAction, ArgMatches, Command};
+use clap::{ArgMatches, Command};
 use slamlab_core::vision::{EarlyRejection, Method};
 use slamlab_sim::visual_odometry::{TwoViewSettings, two_view_experiment};
 use std::io::Write;
@@ -21,7 +23,7 @@ pub struct TwoView;
 /// Parses `--method`.
 fn methods(text: &str) -> Result<Vec<Method>> {
     let mut out = Vec::new();
-    for name in text.split(',').map(str::trim).filter(|p| !p.is_empty()) {
+    for name in flags::items(text) {
         match Method::from_name(name) {
             Some(m) => out.push(m),
             None => bail!("--method: '{name}' is not a method (eight-point, five-point)"),
@@ -36,7 +38,7 @@ fn methods(text: &str) -> Result<Vec<Method>> {
 /// Parses `--outliers`: shares in [0, 0.95].
 fn shares(text: &str) -> Result<Vec<f64>> {
     let mut out = Vec::new();
-    for part in text.split(',').map(str::trim).filter(|p| !p.is_empty()) {
+    for part in flags::items(text) {
         let Ok(v) = part.parse::<f64>() else {
             bail!("--outliers: '{part}' is not a number");
         };
@@ -52,78 +54,49 @@ fn shares(text: &str) -> Result<Vec<f64>> {
 }
 
 impl Experiment for TwoView {
-    fn name(&self) -> &'static str {
-        "two-view"
-    }
-
-    fn about(&self) -> &'static str {
-        "Eight-point and five-point RANSAC on seeded two-view scenes: R and t errors, iterations, inlier precision and recall"
-    }
-
     fn command(&self) -> Command {
-        Command::new(self.name())
+        Command::new("two-view")
+            .about("Eight-point and five-point RANSAC on seeded two-view scenes: R and t errors, iterations, inlier precision and recall")
             .arg(
-                Arg::new("method")
-                    .long("method")
-                    .value_name("LIST")
-                    .default_value("eight-point,five-point")
-                    .help("comma-separated solvers: eight-point, five-point"),
+                args::list("method", "comma-separated solvers: eight-point, five-point")
+                    .default_value("eight-point,five-point"),
             )
             .arg(
-                Arg::new("outliers")
-                    .long("outliers")
-                    .value_name("LIST")
-                    .default_value("0,0.3,0.5")
-                    .help("comma-separated shares of wrong matches, 0 .. 0.95"),
+                args::list("outliers", "comma-separated shares of wrong matches, 0 .. 0.95")
+                    .default_value("0,0.3,0.5"),
             )
             .arg(
-                Arg::new("noise-px")
-                    .long("noise-px")
-                    .value_parser(clap::value_parser!(f64))
-                    .default_value("1")
-                    .help("pixel noise standard deviation, pixels (0 .. 20)"),
+                args::number("noise-px", "pixel noise standard deviation, pixels (0 .. 20)")
+                    .default_value("1"),
             )
+            .arg(args::whole("points", 8..=5000, "matches per trial").default_value("200"))
             .arg(
-                Arg::new("points")
-                    .long("points")
-                    .value_parser(clap::value_parser!(u64).range(8..=5000))
-                    .default_value("200")
-                    .help("matches per trial"),
-            )
-            .arg(
-                Arg::new("trials")
-                    .long("trials")
-                    .value_parser(clap::value_parser!(u64).range(1..=100_000))
-                    .default_value("200")
-                    .help("trials per method and share; trial i uses seed + i"),
+                args::whole(
+                    "trials",
+                    1..=100_000,
+                    "trials per method and share; trial i uses seed + i",
+                )
+                .default_value("200"),
             )
             .arg(first_seed_arg())
             .arg(
-                Arg::new("early-rejection")
-                    .long("early-rejection")
-                    .value_name("none|sprt")
-                    .value_parser(["none", "sprt"])
-                    .default_value("none")
-                    .help("none: every hypothesis checked against every match; sprt: Matas and Chum's sequential probability ratio test rejects bad hypotheses early"),
+                args::choice(
+                    "early-rejection",
+                    &["none", "sprt"],
+                    "none: every hypothesis checked against every match; sprt: Matas and Chum's sequential probability ratio test rejects bad hypotheses early",
+                )
+                .value_name("none|sprt")
+                .default_value("none"),
             )
-            .arg(
-                Arg::new("sprt")
-                    .long("sprt")
-                    .action(ArgAction::SetTrue)
-                    .help("short for --early-rejection sprt"),
-            )
-            .arg(
-                Arg::new("no-normalize")
-                    .long("no-normalize")
-                    .action(ArgAction::SetTrue)
-                    .help("eight-point without Hartley normalization"),
-            )
-            .arg(
-                Arg::new("no-refine")
-                    .long("no-refine")
-                    .action(ArgAction::SetTrue)
-                    .help("end with the linear eight-point refit, without the Levenberg-Marquardt refinement of (R, t) on the Sampson distances"),
-            )
+            .arg(args::switch("sprt", "short for --early-rejection sprt"))
+            .arg(args::switch(
+                "no-normalize",
+                "eight-point without Hartley normalization",
+            ))
+            .arg(args::switch(
+                "no-refine",
+                "end with the linear eight-point refit, without the Levenberg-Marquardt refinement of (R, t) on the Sampson distances",
+            ))
     }
 
     fn run(&self, m: &ArgMatches, out: &mut Output) -> Result<()> {

@@ -39,16 +39,10 @@ const FLAGS: &[&str] = &[
 pub struct Unscented;
 
 impl Experiment for Unscented {
-    fn name(&self) -> &'static str {
-        "unscented"
-    }
-
-    fn about(&self) -> &'static str {
-        "EKF linearization, unscented transform and particles on one nonlinear step, against many samples (thesis 000 Sec. 2.2)"
-    }
-
     fn command(&self) -> Command {
-        Command::new(self.name()).args(
+        Command::new("unscented")
+            .about("EKF linearization, unscented transform and particles on one nonlinear step, against many samples (thesis 000 Sec. 2.2)")
+            .args(
             table_args::<FiltersScenario>(|name| FLAGS.contains(&name))
                 .into_iter()
                 .map(|a| a.help_heading("The one-step comparison (the flags of lesson=filters)")),

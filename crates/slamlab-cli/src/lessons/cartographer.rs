@@ -8,6 +8,7 @@
 //! slamlab run cartographer --log intel.clf.bz2 --reference intel-corrected.log.gz --loop-closures off
 //! ```
 
+use crate::args;
 use crate::command::RunLesson;
 use crate::log_cmd::{laser_log_arg, read_laser_file, topic_args};
 use crate::map::{map_arg, read_map};
@@ -27,153 +28,162 @@ use std::time::Instant;
 /// The Cartographer run.
 pub struct Cartographer;
 
-fn number(name: &'static str, help: &'static str) -> Arg {
-    Arg::new(name)
-        .long(name)
-        .value_parser(clap::value_parser!(f64))
-        .help(help)
+/// A parameter of Cartographer that `slamlab run cartographer` sets by its name
+/// in Cartographer's configuration (`--num_range_data 30`): its help, and the
+/// field of [`CartographerParams`] it sets.
+enum Tuning {
+    /// A real number.
+    Number(&'static str, &'static str, fn(&mut CartographerParams, f64)),
+    /// A count.
+    Count(
+        &'static str,
+        &'static str,
+        fn(&mut CartographerParams, usize),
+    ),
 }
 
-fn count(name: &'static str, help: &'static str) -> Arg {
-    Arg::new(name)
-        .long(name)
-        .value_parser(clap::value_parser!(usize))
-        .help(help)
+/// The parameters, in the order `--help` lists them.
+const TUNINGS: &[Tuning] = &[
+    Tuning::Count("num_range_data", "scans per submap (default 30)", |p, v| {
+        p.num_range_data = v;
+    }),
+    Tuning::Number(
+        "resolution",
+        "submap cell size, metres (default 0.05)",
+        |p, v| {
+            p.resolution = v;
+        },
+    ),
+    Tuning::Number("hit_probability", "default 0.55", |p, v| {
+        p.hit_probability = v;
+    }),
+    Tuning::Number("miss_probability", "default 0.49", |p, v| {
+        p.miss_probability = v;
+    }),
+    Tuning::Number(
+        "linear_search_window",
+        "loop-closure search half-width, metres (default 0.6)",
+        |p, v| p.linear_search_window = v,
+    ),
+    Tuning::Number(
+        "angular_search_window",
+        "loop-closure search half-width, degrees (default 5)",
+        |p, v| p.angular_search_window = v.to_radians(),
+    ),
+    Tuning::Number(
+        "max_constraint_distance",
+        "search only submaps whose origin is this near a node, metres (default 15)",
+        |p, v| p.max_constraint_distance = v,
+    ),
+    Tuning::Number(
+        "sampling_ratio",
+        "share of node-submap pairs searched for loop closures, sampled per submap (default 0.1)",
+        |p, v| p.sampling_ratio = v,
+    ),
+    Tuning::Count(
+        "max_closures_per_submap_pair",
+        "loop closures tying a node's submap to another before their pairs are searched no more (default 0: no limit)",
+        |p, v| p.max_closures_per_submap_pair = v,
+    ),
+    Tuning::Number(
+        "min_score",
+        "a loop closure must score above this (default 0.55)",
+        |p, v| p.min_score = v,
+    ),
+    Tuning::Number(
+        "global_min_score",
+        "a match between maps must score above this (default 0.6)",
+        |p, v| p.global_min_score = v,
+    ),
+    Tuning::Count("optimize_every_n_nodes", "default 30", |p, v| {
+        p.optimize_every_n_nodes = v;
+    }),
+    Tuning::Number("huber_scale", "default 10", |p, v| p.huber_scale = v),
+    Tuning::Number("T", "kidnap trigger threshold (default 1.5)", |p, v| {
+        p.kidnap.threshold = v;
+    }),
+    Tuning::Count(
+        "f_size",
+        "kidnap average filter size (default 4)",
+        |p, v| {
+            p.kidnap.filter_size = v;
+        },
+    ),
+];
+
+impl Tuning {
+    /// Its flag.
+    fn arg(&self) -> Arg {
+        match self {
+            Tuning::Number(name, help, _) => args::number(name, *help),
+            Tuning::Count(name, help, _) => args::count(name, *help),
+        }
+    }
+
+    /// Sets its field of `params` if its flag was given.
+    fn apply(&self, m: &ArgMatches, params: &mut CartographerParams) {
+        match self {
+            Tuning::Number(name, _, set) => {
+                if let Some(&v) = m.get_one::<f64>(name) {
+                    set(params, v);
+                }
+            }
+            Tuning::Count(name, _, set) => {
+                if let Some(&v) = m.get_one::<usize>(name) {
+                    set(params, v);
+                }
+            }
+        }
+    }
 }
 
 impl RunLesson for Cartographer {
-    fn id(&self) -> &'static str {
-        "cartographer"
-    }
-
-    fn about(&self) -> &'static str {
-        "submaps, branch-and-bound loop closure and the kidnapped robot (Cartographer-style SLAM): local SLAM into submaps, a pose graph with loop closures, kidnap detection by an average filter on the matching cost, recovery by merging a new map"
-    }
-
     fn command(&self) -> Command {
-        Command::new(self.id())
+        Command::new("cartographer")
+            .about("submaps, branch-and-bound loop closure and the kidnapped robot (Cartographer-style SLAM): local SLAM into submaps, a pose graph with loop closures, kidnap detection by an average filter on the matching cost, recovery by merging a new map")
             .arg(map_arg())
             .arg(laser_log_arg())
-            .arg(Arg::new("reference").long("reference").value_name("FILE").help(
+            .arg(args::file(
+                "reference",
                 "with --log: its corrected log (e.g. intel-corrected.log.gz); the trajectory is scored against it (ATE, relative errors)",
             ))
             .args(topic_args())
-            .arg(count(
+            .arg(args::count(
                 "steps",
                 "scans to simulate (default 600); with --log, map only the log's first scans",
             ))
             .arg(
-                Arg::new("seed")
-                    .long("seed")
-                    .value_parser(clap::value_parser!(u64))
-                    .help("the simulation's seed (default 1)"),
+                args::flag("seed", "the simulation's seed (default 1)")
+                    .value_parser(clap::value_parser!(u64)),
             )
-            .arg(count(
+            .arg(args::count(
                 "kidnap-at",
                 "carry the robot elsewhere just before this scan (0-based)",
             ))
-            .arg(
-                Arg::new("kidnap-place")
-                    .long("kidnap-place")
-                    .value_parser(KidnapPlace::NAMES)
-                    .help("where the kidnap carries the robot: mapped (default; a random place on its path so far) or anywhere (any free place)"),
-            )
-            .arg(
-                Arg::new("detection")
-                    .long("detection")
-                    .value_parser(["on", "off"])
-                    .help("kidnap detection (Algorithm 13): on (default) or off, the original behaviour"),
-            )
-            .arg(
-                Arg::new("loop-closures")
-                    .long("loop-closures")
-                    .value_parser(["on", "off"])
-                    .help("loop closures: on (default), or off for local SLAM alone (no branch-and-bound search; the lesson's switch)"),
-            )
-            .arg(count("num_range_data", "scans per submap (default 30)"))
-            .arg(number("resolution", "submap cell size, metres (default 0.05)"))
-            .arg(number("hit_probability", "default 0.55"))
-            .arg(number("miss_probability", "default 0.49"))
-            .arg(number(
-                "linear_search_window",
-                "loop-closure search half-width, metres (default 0.6)",
+            .arg(args::choice(
+                "kidnap-place",
+                &KidnapPlace::NAMES,
+                "where the kidnap carries the robot: mapped (default; a random place on its path so far) or anywhere (any free place)",
             ))
-            .arg(number(
-                "angular_search_window",
-                "loop-closure search half-width, degrees (default 5)",
+            .arg(args::choice(
+                "detection",
+                &["on", "off"],
+                "kidnap detection (Algorithm 13): on (default) or off, the original behaviour",
             ))
-            .arg(number(
-                "max_constraint_distance",
-                "search only submaps whose origin is this near a node, metres (default 15)",
+            .arg(args::choice(
+                "loop-closures",
+                &["on", "off"],
+                "loop closures: on (default), or off for local SLAM alone (no branch-and-bound search; the lesson's switch)",
             ))
-            .arg(number(
-                "sampling_ratio",
-                "share of node-submap pairs searched for loop closures, sampled per submap (default 0.1)",
-            ))
-            .arg(count(
-                "max_closures_per_submap_pair",
-                "loop closures tying a node's submap to another before their pairs are searched no more (default 0: no limit)",
-            ))
-            .arg(number("min_score", "a loop closure must score above this (default 0.55)"))
-            .arg(number(
-                "global_min_score",
-                "a match between maps must score above this (default 0.6)",
-            ))
-            .arg(count("optimize_every_n_nodes", "default 30"))
-            .arg(number("huber_scale", "default 10"))
-            .arg(number("T", "kidnap trigger threshold (default 1.5)"))
-            .arg(count("f_size", "kidnap average filter size (default 4)"))
+            .args(TUNINGS.iter().map(Tuning::arg))
             .arg(crate::trajectory_out::arg())
     }
 
     fn run(&self, m: &ArgMatches, out: &mut Output) -> Result<()> {
         let mut params = CartographerParams::default();
-        let f = |name: &str| m.get_one::<f64>(name).copied();
         let n = |name: &str| m.get_one::<usize>(name).copied();
-        if let Some(v) = n("num_range_data") {
-            params.num_range_data = v;
-        }
-        if let Some(v) = f("resolution") {
-            params.resolution = v;
-        }
-        if let Some(v) = f("hit_probability") {
-            params.hit_probability = v;
-        }
-        if let Some(v) = f("miss_probability") {
-            params.miss_probability = v;
-        }
-        if let Some(v) = f("linear_search_window") {
-            params.linear_search_window = v;
-        }
-        if let Some(v) = f("angular_search_window") {
-            params.angular_search_window = v.to_radians();
-        }
-        if let Some(v) = f("max_constraint_distance") {
-            params.max_constraint_distance = v;
-        }
-        if let Some(v) = f("sampling_ratio") {
-            params.sampling_ratio = v;
-        }
-        if let Some(v) = n("max_closures_per_submap_pair") {
-            params.max_closures_per_submap_pair = v;
-        }
-        if let Some(v) = f("min_score") {
-            params.min_score = v;
-        }
-        if let Some(v) = f("global_min_score") {
-            params.global_min_score = v;
-        }
-        if let Some(v) = n("optimize_every_n_nodes") {
-            params.optimize_every_n_nodes = v;
-        }
-        if let Some(v) = f("huber_scale") {
-            params.huber_scale = v;
-        }
-        if let Some(v) = f("T") {
-            params.kidnap.threshold = v;
-        }
-        if let Some(v) = n("f_size") {
-            params.kidnap.filter_size = v;
+        for tuning in TUNINGS {
+            tuning.apply(m, &mut params);
         }
         params.detection = m.get_one::<String>("detection").is_none_or(|d| d == "on");
         if m.get_one::<String>("loop-closures")
@@ -255,7 +265,7 @@ impl RunLesson for Cartographer {
             .and_then(|r| reference::score(r, &sim.scan_poses()));
         crate::trajectory_out::write(
             m,
-            self.id(),
+            &self.id(),
             &slamlab_sim::cartographer::export::trajectories(&sim),
             &[],
         )?;

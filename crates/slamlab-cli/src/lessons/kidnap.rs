@@ -13,13 +13,14 @@
 //! Parameter flags carry ROS amcl's names with dashes (`--laser-sigma-hit`,
 //! `--odom-alpha1`, `--update-min-d`, ...).
 
+use crate::args;
 use crate::command::RunLesson;
 use crate::flags;
 use crate::log_cmd::{read_laser_file, topic_args};
 use crate::map::{map_arg, read_map, resolution_arg};
 use crate::output::Output;
 use anyhow::{Context, Result};
-use clap::{Arg, ArgMatches, Command};
+use clap::{ArgMatches, Command};
 use serde_json::json;
 use slamlab_sim::kidnap::{MclRun, MclScenario};
 use std::io::Write;
@@ -28,28 +29,23 @@ use std::io::Write;
 pub struct Kidnap;
 
 impl RunLesson for Kidnap {
-    fn id(&self) -> &'static str {
-        "kidnap"
-    }
-
-    fn about(&self) -> &'static str {
-        "Monte Carlo localization on a grid map (ROS map_server maps), headless"
-    }
-
     fn command(&self) -> Command {
-        Command::new(self.id())
+        Command::new("kidnap")
+            .about("Monte Carlo localization on a grid map (ROS map_server maps), headless")
             .arg(map_arg())
             .arg(resolution_arg(
                 "metres per pixel, for a lone PGM/PNG image (origin 0, thresholds 0.65/0.196)",
             ))
             .arg(
-                Arg::new("steps")
-                    .long("steps")
-                    .value_parser(clap::value_parser!(u64).range(0..=1_000_000))
-                    .default_value("600")
-                    .help("ticks of 0.1 s (with --log: at most this many scans; default the whole log)"),
+                args::whole(
+                    "steps",
+                    0..=1_000_000,
+                    "ticks of 0.1 s (with --log: at most this many scans; default the whole log)",
+                )
+                .default_value("600"),
             )
-            .arg(Arg::new("log").long("log").value_name("FILE").help(
+            .arg(args::file(
+                "log",
                 "localize a recorded robot: a CARMEN laser log (plain, .gz or .bz2) or a ROS 2 bag (.mcap), in the map given by --map",
             ))
             .args(topic_args())
@@ -86,7 +82,7 @@ impl RunLesson for Kidnap {
         let steps = run.tick_count();
         crate::trajectory_out::write(
             m,
-            self.id(),
+            &self.id(),
             &slamlab_sim::kidnap::export::trajectories(&run),
             &[],
         )?;

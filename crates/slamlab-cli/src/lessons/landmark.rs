@@ -5,6 +5,7 @@
 //! slamlab run landmark-slam --data MRCLAM_Dataset6.zip --robot 1 --mode localization
 //! ```
 
+use crate::args;
 use crate::command::RunLesson;
 use crate::flags;
 use crate::output::Output;
@@ -23,22 +24,12 @@ use std::sync::Arc;
 pub struct LandmarkSlam;
 
 impl RunLesson for LandmarkSlam {
-    fn id(&self) -> &'static str {
-        "landmark-slam"
-    }
-
-    fn about(&self) -> &'static str {
-        "EKF-, UKF- and FastSLAM on the landmark world: errors, NEES and NIS"
-    }
-
     fn command(&self) -> Command {
-        Command::new(self.id())
+        Command::new("landmark-slam")
+            .about("EKF-, UKF- and FastSLAM on the landmark world: errors, NEES and NIS")
             .arg(
-                Arg::new("steps")
-                    .long("steps")
-                    .value_parser(clap::value_parser!(u64).range(0..=1_000_000))
-                    .default_value("200")
-                    .help("number of simulation ticks"),
+                args::whole("steps", 0..=1_000_000, "number of simulation ticks")
+                    .default_value("200"),
             )
             .arg(data_arg())
             .args(scenario_args(&[]))
@@ -63,7 +54,7 @@ impl RunLesson for LandmarkSlam {
         };
         crate::trajectory_out::write(
             matches,
-            self.id(),
+            &self.id(),
             &export::trajectories(&session),
             &export::landmarks(&session),
         )?;
@@ -89,7 +80,9 @@ impl RunLesson for LandmarkSlam {
 
 /// `--data PATH`: a recorded data set instead of the simulated world.
 pub fn data_arg() -> Arg {
-    Arg::new("data").long("data").value_name("PATH").help(
+    args::named(
+        "data",
+        "PATH",
         "replay a data set instead of the simulated world: the UTIAS MRCLAM zip (or a folder \
              or one of its .dat files), the Freiburg course's sensor_data.dat (world.dat beside \
              it), or Victoria Park's folder or inputs.dat; the data set's preset applies first, \

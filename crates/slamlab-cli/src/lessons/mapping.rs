@@ -7,13 +7,14 @@
 //! slamlab run mapping --map office --poses grid-fastslam --particles 30 --proposal scan-match
 //! ```
 
+use crate::args;
 use crate::command::RunLesson;
 use crate::flags;
 use crate::log_cmd::{laser_log_arg, read_laser_file, topic_args};
 use crate::map::{map_arg, read_map};
 use crate::output::{Output, progress_bar};
 use anyhow::{Context, Result, bail};
-use clap::{Arg, ArgMatches, Command};
+use clap::{ArgMatches, Command};
 use serde_json::json;
 use slamlab_sim::io::ros_map::{ImageFormat, export_map};
 use slamlab_sim::mapping::{MappingScenario, MappingSession, simulated_input};
@@ -26,25 +27,17 @@ use std::time::Instant;
 pub struct Mapping;
 
 impl RunLesson for Mapping {
-    fn id(&self) -> &'static str {
-        "mapping"
-    }
-
-    fn about(&self) -> &'static str {
-        "occupancy-grid mapping with a lidar: a simulated robot's scans, a CARMEN log or a ROS 2 bag, posed by truth, odometry, ICP, scan-to-map matching or grid FastSLAM's particles"
-    }
-
     fn command(&self) -> Command {
-        Command::new(self.id())
+        Command::new("mapping")
+            .about("occupancy-grid mapping with a lidar: a simulated robot's scans, a CARMEN log or a ROS 2 bag, posed by truth, odometry, ICP, scan-to-map matching or grid FastSLAM's particles")
             .arg(map_arg())
             .arg(laser_log_arg())
             .args(topic_args())
-            .arg(
-                Arg::new("map-out")
-                    .long("map-out")
-                    .value_name("YAML")
-                    .help("write the built map as a ROS map_server YAML and PGM beside it"),
-            )
+            .arg(args::named(
+                "map-out",
+                "YAML",
+                "write the built map as a ROS map_server YAML and PGM beside it",
+            ))
             .args(flags::table_args::<MappingScenario>(|name| name != "map"))
             .arg(crate::trajectory_out::arg())
     }
@@ -80,7 +73,7 @@ impl RunLesson for Mapping {
         let summary = session.summary();
         crate::trajectory_out::write(
             m,
-            self.id(),
+            &self.id(),
             &slamlab_sim::mapping::export::trajectories(&session),
             &[],
         )?;

@@ -22,18 +22,11 @@ use std::io::Write;
 pub struct VisualOdometry;
 
 impl RunLesson for VisualOdometry {
-    fn id(&self) -> &'static str {
-        "visual-odometry"
-    }
-
-    fn about(&self) -> &'static str {
-        "Monocular visual odometry on a docking approach: RANSAC two-view steps scaled by wheel speeds, headless"
-    }
-
     fn command(&self) -> Command {
         // The lesson's table (the URL's names, ranges and defaults), but the
         // step the app shows in its two images.
-        Command::new(self.id())
+        Command::new("visual-odometry")
+            .about("Monocular visual odometry on a docking approach: RANSAC two-view steps scaled by wheel speeds, headless")
             .args(flags::table_args::<VoScenario>(|name| name != "pair"))
             .arg(crate::trajectory_out::arg())
     }
@@ -47,7 +40,7 @@ impl RunLesson for VisualOdometry {
         let time_ms = start.elapsed().as_secs_f64() * 1000.0;
         crate::trajectory_out::write(
             m,
-            self.id(),
+            &self.id(),
             &slamlab_sim::visual_odometry::export::trajectories(&run),
             &[],
         )?;

@@ -1,12 +1,17 @@
 //! What the `slamlab` binary's tests share: running the binary as a user does,
-//! reading the JSON it prints, and a throwaway Python virtual environment for
-//! the tests that compare with a Python tool.
+//! reading the JSON it prints, a scratch folder per test, the shared data sets
+//! (skipping without them), and a throwaway Python virtual environment for the
+//! tests that compare with a Python tool.
 
 // Each test binary uses the helpers it needs.
 #![allow(dead_code)]
 
+use std::ops::Deref;
 use std::path::{Path, PathBuf};
 use std::process::{Command, Output};
+
+#[allow(unused_imports)] // as the helpers above: each test binary uses what it needs
+pub use slamlab_tests::shared_data;
 
 /// `slamlab ARGS` as it ran: its exit status and output.
 pub fn slamlab_output(args: &[&str]) -> Output {
@@ -40,6 +45,19 @@ pub fn run_json(args: &[&str]) -> serde_json::Value {
     let stdout = slamlab_stdout(args);
     assert_eq!(stdout.lines().count(), 1, "one JSON object on one line");
     serde_json::from_str(&stdout).unwrap_or_else(|e| panic!("not JSON ({e}): {stdout}"))
+}
+
+/// A simulated robot's run through the maze, `steps` scans from `seed`, recorded
+/// by `slamlab log record` (which must succeed) to `out` (`.mcap`: a ROS 2 bag,
+/// else a CARMEN log with its truth beside it); what the command printed.
+pub fn record_maze(out: &Path, steps: u32, seed: u64) -> String {
+    let out = out
+        .to_str()
+        .unwrap_or_else(|| panic!("{} is not UTF-8", out.display()));
+    let (steps, seed) = (steps.to_string(), seed.to_string());
+    slamlab_stdout(&[
+        "log", "record", "--map", "maze", "--steps", &steps, "--seed", &seed, "--out", out,
+    ])
 }
 
 /// The JSON a run that succeeded printed (the test fails with its standard
@@ -89,4 +107,38 @@ pub fn python_venv(dir: &Path, packages: &[&str], test: &str) -> Option<PathBuf>
         }
     }
     Some(bin)
+}
+
+/// A fresh folder for one test's files, `slamlab-NAME-PID` in the system's
+/// temporary folder (emptied first), removed with all in it when dropped. It
+/// reads as its path (`dir.join("x")`).
+pub struct Scratch(PathBuf);
+
+impl Scratch {
+    /// Makes the folder.
+    pub fn new(name: &str) -> Self {
+        let dir = std::env::temp_dir().join(format!("slamlab-{name}-{}", std::process::id()));
+        let _ = std::fs::remove_dir_all(&dir);
+        std::fs::create_dir_all(&dir).unwrap_or_else(|e| panic!("{}: {e}", dir.display()));
+        Self(dir)
+    }
+}
+
+impl Deref for Scratch {
+    type Target = Path;
+    fn deref(&self) -> &Path {
+        &self.0
+    }
+}
+
+impl AsRef<Path> for Scratch {
+    fn as_ref(&self) -> &Path {
+        &self.0
+    }
+}
+
+impl Drop for Scratch {
+    fn drop(&mut self) {
+        let _ = std::fs::remove_dir_all(&self.0);
+    }
 }

@@ -1,0 +1,132 @@
+//! The kinds of flag the commands take, each built one way. A flag's id is its
+//! long name (the experiments' refusals and [`crate::flags::given`] look flags up
+//! by it), so a builder takes the name once; the caller adds what is particular
+//! to the flag (`.default_value(..)`, `.required(true)`, a heading).
+//!
+//! ```text
+//! args::list("particles", "comma-separated particle counts").default_value("5,30")
+//! args::whole("trials", 1..=1000, "simulated drives; trial i uses seed + i")
+//! args::switch("no-refine", "end with the linear refit")
+//! ```
+
+use clap::builder::{IntoResettable, StyledStr};
+use clap::{Arg, ArgAction};
+use std::ops::RangeBounds;
+use std::path::PathBuf;
+
+/// `--NAME VALUE`, any text.
+pub fn flag(name: &'static str, help: impl IntoResettable<StyledStr>) -> Arg {
+    Arg::new(name).long(name).help(help)
+}
+
+/// `--NAME`, alone: on when given.
+pub fn switch(name: &'static str, help: impl IntoResettable<StyledStr>) -> Arg {
+    flag(name, help).action(ArgAction::SetTrue)
+}
+
+/// `--NAME VALUE_NAME`: text shown as `value_name` in `--help` (`FILE`, `LIST`, ...).
+pub fn named(
+    name: &'static str,
+    value_name: &'static str,
+    help: impl IntoResettable<StyledStr>,
+) -> Arg {
+    flag(name, help).value_name(value_name)
+}
+
+/// `--NAME LIST`: comma-separated values.
+pub fn list(name: &'static str, help: impl IntoResettable<StyledStr>) -> Arg {
+    named(name, "LIST", help)
+}
+
+/// `--NAME FILE`: a path.
+pub fn file(name: &'static str, help: impl IntoResettable<StyledStr>) -> Arg {
+    named(name, "FILE", help)
+}
+
+/// `--NAME VALUE_NAME`: a path (`FILE`, `DIR`, ...), read as a `PathBuf`.
+pub fn path(
+    name: &'static str,
+    value_name: &'static str,
+    help: impl IntoResettable<StyledStr>,
+) -> Arg {
+    named(name, value_name, help).value_parser(clap::value_parser!(PathBuf))
+}
+
+/// `--NAME N`: a whole number in `range`.
+pub fn whole(
+    name: &'static str,
+    range: impl RangeBounds<u64> + Send + Sync + 'static,
+    help: impl IntoResettable<StyledStr>,
+) -> Arg {
+    flag(name, help).value_parser(clap::value_parser!(u64).range(range))
+}
+
+/// `--NAME N`: a count (any `usize`).
+pub fn count(name: &'static str, help: impl IntoResettable<StyledStr>) -> Arg {
+    flag(name, help).value_parser(clap::value_parser!(usize))
+}
+
+/// `--NAME X`: a real number.
+pub fn number(name: &'static str, help: impl IntoResettable<StyledStr>) -> Arg {
+    flag(name, help).value_parser(clap::value_parser!(f64))
+}
+
+/// `--NAME A`: one of `choices`.
+pub fn choice(
+    name: &'static str,
+    choices: &'static [&'static str],
+    help: impl IntoResettable<StyledStr>,
+) -> Arg {
+    flag(name, help).value_parser(clap::builder::PossibleValuesParser::new(
+        choices.iter().copied(),
+    ))
+}
+
+/// `--seed N`: any `u64`, default 1; `help` says what it seeds.
+pub fn seed(help: impl IntoResettable<StyledStr>) -> Arg {
+    flag("seed", help)
+        .value_parser(clap::value_parser!(u64))
+        .default_value("1")
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use clap::Command;
+
+    fn parse(arg: Arg, args: &[&str]) -> Result<clap::ArgMatches, clap::Error> {
+        Command::new("t")
+            .no_binary_name(true)
+            .arg(arg)
+            .try_get_matches_from(args)
+    }
+
+    #[test]
+    fn each_kind_reads_its_values_and_refuses_others() {
+        let m = parse(whole("n", 1..=10, "n"), &["--n", "10"]).unwrap_or_else(|e| panic!("{e}"));
+        assert_eq!(m.get_one::<u64>("n"), Some(&10));
+        assert!(parse(whole("n", 1..=10, "n"), &["--n", "11"]).is_err());
+        assert!(parse(whole("n", 1.., "n"), &["--n", "0"]).is_err());
+        let m = parse(number("x", "x"), &["--x", "-2.5"]);
+        assert!(m.is_err(), "a leading '-' reads as a flag unless allowed");
+        let m = parse(number("x", "x"), &["--x", "2.5"]).unwrap_or_else(|e| panic!("{e}"));
+        assert_eq!(m.get_one::<f64>("x"), Some(&2.5));
+        let m = parse(count("k", "k"), &["--k", "7"]).unwrap_or_else(|e| panic!("{e}"));
+        assert_eq!(m.get_one::<usize>("k"), Some(&7));
+        assert!(parse(choice("c", &["on", "off"], "c"), &["--c", "maybe"]).is_err());
+        let m = parse(switch("s", "s"), &["--s"]).unwrap_or_else(|e| panic!("{e}"));
+        assert!(m.get_flag("s"));
+        let m = parse(seed("seed"), &[]).unwrap_or_else(|e| panic!("{e}"));
+        assert_eq!(m.get_one::<u64>("seed"), Some(&1));
+        let a = list("l", "l");
+        assert_eq!(a.get_id().as_str(), "l");
+        assert_eq!(a.get_long(), Some("l"));
+        let names: Vec<&str> = a
+            .get_value_names()
+            .into_iter()
+            .flatten()
+            .map(|s| s.as_str())
+            .collect();
+        assert_eq!(names, ["LIST"]);
+    }
+}
