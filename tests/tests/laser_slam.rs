@@ -5,7 +5,8 @@
 //! Loop closure must beat both: below scan-to-map's ATE and below odometry's.
 //!
 //! The data sit in `../shared/data/laser` beside the repository (or in
-//! `$SLAMLAB_SHARED/data/laser`); without them the tests say so and pass.
+//! `$SLAMLAB_SHARED_DATA/laser` or `$SLAMLAB_SHARED/data/laser`: see
+//! `slamlab_tests::shared_data`); without them the tests say so and pass.
 //! The numbers are seeded and exact for this code (measured 2026-11-28); the
 //! bands around them are a tenth either way.
 

@@ -13,7 +13,8 @@ pub trait RunLesson: Sync {
     /// line for `slamlab run --help` (`about`) and the lesson's flags (`--json`
     /// and `--scenario FILE` are added by the registry).
     fn command(&self) -> Command;
-    /// The lesson id: the name of its [`RunLesson::command`].
+    /// The lesson id: the name of its [`RunLesson::command`] (built for it,
+    /// flags and all).
     fn id(&self) -> String {
         self.command().get_name().to_owned()
     }
@@ -36,7 +37,8 @@ pub trait Experiment: Sync {
     /// `slamlab experiment --help` (`about`) and the experiment's flags
     /// (`--json` is added by the registry).
     fn command(&self) -> Command;
-    /// Its name on the command line: the name of its [`Experiment::command`].
+    /// Its name on the command line: the name of its [`Experiment::command`]
+    /// (built for it, flags and all).
     fn name(&self) -> String {
         self.command().get_name().to_owned()
     }

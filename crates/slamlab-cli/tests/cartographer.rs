@@ -5,7 +5,7 @@
 
 mod common;
 
-use common::{json, slamlab_output};
+use common::{json, shared_data, slamlab_output};
 
 #[test]
 fn experiment_krp_prints_detection_recovery_and_agreement_with_detection_on_and_off() {
@@ -130,25 +130,17 @@ fn run_cartographer_with_loop_closures_off_searches_nothing() {
     assert_eq!(off["submaps"], on["submaps"]);
 }
 
-/// The Intel log (`../shared/data/laser/intel.clf.bz2`); skipped with a
-/// message when the shared data is absent. Slow in a debug build (over
-/// two minutes): `cargo test --release -- --ignored`.
+/// The Intel log (`../shared/data/laser/intel.clf.bz2`, or under
+/// `$SLAMLAB_SHARED_DATA` or `$SLAMLAB_SHARED/data`); skipped with a message
+/// when it is absent. Slow in a debug build (over two minutes):
+/// `cargo test --release -- --ignored`.
 #[test]
 #[ignore = "slow: the whole Intel log with loop closures"]
 fn run_cartographer_maps_the_intel_log() {
-    let path = concat!(
-        env!("CARGO_MANIFEST_DIR"),
-        "/../../../shared/data/laser/intel.clf.bz2"
-    );
-    let alt = "/work/shared/data/laser/intel.clf.bz2";
-    let path = if std::path::Path::new(path).exists() {
-        path
-    } else if std::path::Path::new(alt).exists() {
-        alt
-    } else {
-        eprintln!("skipped: the Intel log (../shared/data/laser/intel.clf.bz2) is absent");
+    let Some(path) = shared_data("laser/intel.clf.bz2") else {
         return;
     };
+    let path = path.to_str().unwrap();
     let out = slamlab_output(&["run", "cartographer", "--log", path, "--json"]);
     let v = json(&out);
     assert!(v["scans"].as_u64().unwrap() > 10_000, "{v}");

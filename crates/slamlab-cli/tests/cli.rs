@@ -151,7 +151,9 @@ fn readable_summary_names_every_parameter() {
 
 #[test]
 fn experiment_prints_the_documented_json_and_csv() {
-    let dir = Scratch::new("cli-test");
+    let scratch = Scratch::new("cli-test");
+    // A folder that is not there yet: `--csv DIR` makes it.
+    let dir = scratch.join("csv");
     let dir_arg = dir.to_string_lossy().into_owned();
     let v = run_json(&[
         "experiment",
@@ -279,7 +281,8 @@ fn a_preset_sets_the_scenario_and_flags_apply_on_top() {
 
 #[test]
 fn consistency_experiment_averages_nees_over_seeded_trials() {
-    let dir = Scratch::new("cli-consistency");
+    let scratch = Scratch::new("cli-consistency");
+    let dir = scratch.join("csv");
     let dir_arg = dir.to_string_lossy().into_owned();
     let args = [
         "experiment",

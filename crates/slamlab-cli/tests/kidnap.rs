@@ -123,7 +123,9 @@ fn map_convert_and_info_round_trip() {
 
 #[test]
 fn experiment_kidnap_prints_its_json_and_csv() {
-    let dir = Scratch::new("kidnap-exp");
+    let scratch = Scratch::new("kidnap-exp");
+    // A folder that is not there yet: `--csv DIR` makes it.
+    let dir = scratch.join("csv");
     let out = slamlab_output(&[
         "experiment",
         "kidnap",

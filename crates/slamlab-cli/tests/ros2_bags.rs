@@ -3,7 +3,8 @@
 //! installed into a throwaway virtual environment that each test makes and
 //! removes. Without python3's venv or the package registry the tests skip
 //! with a message. The Intel log comes from `../shared/data/laser/` (or
-//! `$SLAMLAB_SHARED/data/laser/`); without it that test skips too.
+//! `$SLAMLAB_SHARED_DATA/laser/` or `$SLAMLAB_SHARED/data/laser/`); without it
+//! that test skips too.
 
 #![allow(clippy::panic, clippy::unwrap_used, clippy::expect_used)] // a failing test stops
 

@@ -6,15 +6,18 @@
 
 mod common;
 
-use common::slamlab_stdout;
+use common::{Scratch, slamlab_stdout};
 
 use slamlab_sim::io::trajectory::{read_landmarks, read_trajectory};
 use std::path::{Path, PathBuf};
 
-fn temp(name: &str) -> PathBuf {
-    let dir = std::env::temp_dir().join(format!("slamlab-trajout-{}-{name}", std::process::id()));
-    let _ = std::fs::remove_dir_all(&dir);
-    dir
+/// A scratch folder for one test and the `--trajectory-out` folder inside it,
+/// not there yet (the flag makes it). Keep the scratch folder while the test
+/// runs: dropped, it goes.
+fn out_dir(name: &str) -> (Scratch, PathBuf) {
+    let scratch = Scratch::new(&format!("trajout-{name}"));
+    let dir = scratch.join("out");
+    (scratch, dir)
 }
 
 fn names(dir: &Path) -> Vec<String> {
@@ -33,7 +36,7 @@ fn trajectory(dir: &Path, name: &str) -> slamlab_sim::metrics::Trajectory {
 
 #[test]
 fn landmark_runs_write_their_paths_and_maps() {
-    let dir = temp("landmark");
+    let (_scratch, dir) = out_dir("landmark");
     let d = dir.to_str().unwrap();
     let summary: serde_json::Value = serde_json::from_str(&slamlab_stdout(&[
         "run",
@@ -95,7 +98,6 @@ fn landmark_runs_write_their_paths_and_maps() {
         (run_nees - anees).abs() < 1e-9 * run_nees,
         "{run_nees} against {anees}"
     );
-    let _ = std::fs::remove_dir_all(&dir);
 }
 
 #[test]
@@ -131,7 +133,7 @@ fn laser_and_camera_runs_write_their_paths() {
         ),
     ];
     for (args, expected) in cases {
-        let dir = temp(args[1]);
+        let (_scratch, dir) = out_dir(args[1]);
         let mut all = args.to_vec();
         all.extend(["--trajectory-out", dir.to_str().unwrap()]);
         slamlab_stdout(&all);
@@ -147,15 +149,13 @@ fn laser_and_camera_runs_write_their_paths() {
             let csv = trajectory(&dir, &name.replace(".tum", ".csv"));
             assert_eq!(csv.len(), t.len());
         }
-        let _ = std::fs::remove_dir_all(&dir);
     }
 }
 
 #[test]
 fn graph_optimize_writes_the_optimized_poses() {
-    let dir = temp("graph");
-    let graph = dir.with_extension("g2o");
-    std::fs::create_dir_all(dir.parent().unwrap()).unwrap();
+    let (scratch, dir) = out_dir("graph");
+    let graph = scratch.join("square.g2o");
     // A square of four poses with a loop closure that disagrees a little.
     std::fs::write(
         &graph,
@@ -178,6 +178,4 @@ fn graph_optimize_writes_the_optimized_poses() {
         (p.x - 1.0).abs() < 1e-3 && (p.y - 1.0).abs() < 1e-3,
         "{p:?}"
     );
-    let _ = std::fs::remove_dir_all(&dir);
-    let _ = std::fs::remove_file(&graph);
 }

@@ -29,8 +29,10 @@ use std::time::Instant;
 pub struct Cartographer;
 
 /// A parameter of Cartographer that `slamlab run cartographer` sets by its name
-/// in Cartographer's configuration (`--num_range_data 30`): its help, and the
-/// field of [`CartographerParams`] it sets.
+/// in Cartographer's configuration (`--num_range_data 30`): that name (the
+/// flag's), its help, and the setter of the field of [`CartographerParams`] it
+/// sets. The kind picks the flag's parser and the value [`Tuning::apply`] reads,
+/// so the two cannot disagree.
 enum Tuning {
     /// A real number.
     Number(&'static str, &'static str, fn(&mut CartographerParams, f64)),

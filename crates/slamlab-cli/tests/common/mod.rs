@@ -110,8 +110,11 @@ pub fn python_venv(dir: &Path, packages: &[&str], test: &str) -> Option<PathBuf>
 }
 
 /// A fresh folder for one test's files, `slamlab-NAME-PID` in the system's
-/// temporary folder (emptied first), removed with all in it when dropped. It
-/// reads as its path (`dir.join("x")`).
+/// temporary folder (emptied first). It reads as its path (`dir.join("x")`).
+/// Dropped, it is removed with all in it when the test passed, and kept (its
+/// path on stderr) when the test failed, for a look at what the run wrote.
+/// It exists from the start: a test of a flag that must make its folder
+/// (`--csv DIR`, `--trajectory-out DIR`) names a folder inside it.
 pub struct Scratch(PathBuf);
 
 impl Scratch {
@@ -139,6 +142,10 @@ impl AsRef<Path> for Scratch {
 
 impl Drop for Scratch {
     fn drop(&mut self) {
-        let _ = std::fs::remove_dir_all(&self.0);
+        if std::thread::panicking() {
+            eprintln!("kept for a look: {}", self.0.display());
+        } else {
+            let _ = std::fs::remove_dir_all(&self.0);
+        }
     }
 }
