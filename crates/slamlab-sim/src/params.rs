@@ -176,6 +176,20 @@ impl<S> Param<S> {
 /// field, an element of an array field) of scenario type `$s`, in the
 /// parameter's own unit.
 macro_rules! number_field {
+    // The value shown is `$shown(field)`, the value kept `$kept(value)`.
+    (@in $s:ty, $name:literal, $unit:literal, $help:literal, $range:expr, $shown:expr, $kept:expr, $($field:tt)+) => {
+        $crate::params::Param::number(
+            $name,
+            $unit,
+            $help,
+            $range,
+            |s: &$s| Some(($shown)(s.$($field)+)),
+            |s: &mut $s, v: f64| {
+                s.$($field)+ = ($kept)(v);
+                Ok(())
+            },
+        )
+    };
     // The table's type gives the scenario's: `number_field!("dt", "s", "time step", (0.01, 1.0), dt)`.
     ($name:literal, $unit:literal, $help:literal, $range:expr, $($field:tt)+) => {
         $crate::params::Param::number(
@@ -191,20 +205,23 @@ macro_rules! number_field {
         )
     };
     ($s:ty, $name:literal, $unit:literal, $help:literal, $range:expr, $($field:tt)+) => {
-        $crate::params::Param::number(
-            $name,
-            $unit,
-            $help,
-            $range,
-            |s: &$s| Some(s.$($field)+),
-            |s: &mut $s, v| {
-                s.$($field)+ = v;
-                Ok(())
-            },
+        $crate::params::number_field!(
+            @in $s, $name, $unit, $help, $range, |v: f64| v, |v: f64| v, $($field)+
         )
     };
 }
 pub(crate) use number_field;
+
+/// An angle (or angular rate) parameter given in degrees and stored in radians
+/// in a field (a field of a field) of scenario type `$s`.
+macro_rules! degrees_field {
+    ($s:ty, $name:literal, $unit:literal, $help:literal, $range:expr, $($field:tt)+) => {
+        $crate::params::number_field!(
+            @in $s, $name, $unit, $help, $range, f64::to_degrees, f64::to_radians, $($field)+
+        )
+    };
+}
+pub(crate) use degrees_field;
 
 /// A whole-number parameter read and written straight from a field (or a field of
 /// a field) of the table's scenario type: a `u64` or a `usize` (a seed, a count of scans

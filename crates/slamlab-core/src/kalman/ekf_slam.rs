@@ -1,12 +1,12 @@
 //! EKF-SLAM (thesis `000` Sec. 3.2 and 3.4.1; slides `001` "EKF-SLAM").
 
-use super::state::{SlamState, check_control, check_measurement};
+use super::state::{KeepsSlamState, SlamState, check_control, check_measurement};
 use super::{FilterConfig, FilterError, LandmarkSlam, PredictReport, UpdateReport, symmetrize};
-use crate::belief::{self, JointGaussian, LandmarkBelief, LandmarkEstimate, PoseBelief};
+use crate::belief::{JointGaussian, PoseBelief};
 use crate::geometry::Pose2;
 use crate::motion::{Control, RecordedMotion};
 use crate::range_bearing::{self, RangeBearing};
-use nalgebra::{DMatrix, DVector, Matrix2, Matrix2x3, Matrix3, Vector2};
+use nalgebra::{Matrix2, Matrix2x3, Matrix3, Vector2};
 use serde::{Deserialize, Serialize};
 use std::collections::HashMap;
 
@@ -372,43 +372,20 @@ impl LandmarkSlam for EkfSlam {
     }
 }
 
-impl JointGaussian for EkfSlam {
-    fn mean(&self) -> &DVector<f64> {
-        &self.state.mean
-    }
-
-    fn covariance(&self) -> &DMatrix<f64> {
-        &self.state.covariance
-    }
-}
-
-impl PoseBelief for EkfSlam {
-    fn robot_pose(&self) -> Pose2 {
-        belief::joint_robot_pose(self)
-    }
-
-    fn robot_covariance(&self) -> Matrix3<f64> {
-        belief::joint_robot_covariance(self)
-    }
-}
-
-impl LandmarkBelief for EkfSlam {
-    fn landmark_ids(&self) -> &[usize] {
-        self.state.landmark_ids()
-    }
-
-    fn landmarks(&self) -> Vec<LandmarkEstimate> {
-        belief::joint_landmarks(self, self.state.landmark_ids())
+impl KeepsSlamState for EkfSlam {
+    fn slam_state(&self) -> &SlamState {
+        &self.state
     }
 }
 
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::belief::LandmarkBelief;
     use crate::kalman::FilterNoise;
     use crate::math;
     use crate::motion::MotionModel;
-    use nalgebra::Vector2;
+    use nalgebra::DVector;
 
     fn config() -> FilterConfig {
         FilterConfig {

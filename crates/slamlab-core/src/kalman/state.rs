@@ -1,10 +1,11 @@
 //! The landmark-SLAM state both Kalman filters keep (thesis `000` Eq. 3.1-3.2, 3.9-3.10).
 
 use super::{FilterConfig, FilterError};
+use crate::belief::{self, JointGaussian, LandmarkBelief, LandmarkEstimate, PoseBelief};
 use crate::geometry::Pose2;
 use crate::motion::Control;
 use crate::range_bearing::{MIN_RANGE, MeasurementError, RangeBearing};
-use nalgebra::{DMatrix, DVector, Matrix2, MatrixXx2, MatrixXx3, Vector2};
+use nalgebra::{DMatrix, DVector, Matrix2, Matrix3, MatrixXx2, MatrixXx3, Vector2};
 use std::collections::HashMap;
 
 /// `M = [x, y, θ, L¹x, L¹y, …]`, its covariance `P`, and which landmark id sits in
@@ -15,6 +16,44 @@ pub(crate) struct SlamState {
     pub(crate) covariance: DMatrix<f64>,
     landmark_ids: Vec<usize>,
     slot_of: HashMap<usize, usize>,
+}
+
+/// A Kalman filter whose belief is the [`SlamState`] it keeps (EKF-SLAM and
+/// UKF-SLAM): its joint Gaussian is the state's `(M, P)`, the robot's belief the
+/// first 3x3 block, each landmark's the 2x2 block of its slot.
+pub(crate) trait KeepsSlamState {
+    /// The state the filter keeps.
+    fn slam_state(&self) -> &SlamState;
+}
+
+impl<T: KeepsSlamState> JointGaussian for T {
+    fn mean(&self) -> &DVector<f64> {
+        &self.slam_state().mean
+    }
+
+    fn covariance(&self) -> &DMatrix<f64> {
+        &self.slam_state().covariance
+    }
+}
+
+impl<T: KeepsSlamState> PoseBelief for T {
+    fn robot_pose(&self) -> Pose2 {
+        belief::joint_robot_pose(self)
+    }
+
+    fn robot_covariance(&self) -> Matrix3<f64> {
+        belief::joint_robot_covariance(self)
+    }
+}
+
+impl<T: KeepsSlamState> LandmarkBelief for T {
+    fn landmark_ids(&self) -> &[usize] {
+        self.slam_state().landmark_ids()
+    }
+
+    fn landmarks(&self) -> Vec<LandmarkEstimate> {
+        belief::joint_landmarks(self, self.slam_state().landmark_ids())
+    }
 }
 
 impl SlamState {

@@ -1,14 +1,14 @@
 //! UKF-SLAM (thesis `000` Sec. 3.3, with the errata in the seeds' README).
 
-use super::state::{SlamState, check_control, check_measurement};
-use super::unscented::{UnscentedParams, sigma_points, unscented_transform};
+use super::state::{KeepsSlamState, SlamState, check_control, check_measurement};
+use super::unscented::{UnscentedOutput, UnscentedParams, sigma_points, unscented_transform};
 use super::{FilterConfig, FilterError, LandmarkSlam, PredictReport, UpdateReport, symmetrize};
-use crate::belief::{self, JointGaussian, LandmarkBelief, LandmarkEstimate, PoseBelief};
+use crate::belief::{JointGaussian, PoseBelief};
 use crate::geometry::{Pose2, wrap_angle};
 use crate::linalg::psd_cholesky;
 use crate::motion::{Control, RecordedMotion};
 use crate::range_bearing::{self, MeasurementError, RangeBearing};
-use nalgebra::{DMatrix, DVector, Matrix2, Matrix3, Vector2};
+use nalgebra::{DMatrix, DVector, Dim, Matrix, Matrix2, RawStorage, Vector2};
 
 /// UKF-SLAM with known data association.
 ///
@@ -56,17 +56,55 @@ impl UkfSlam {
         })
     }
 
-    /// The robot's mean and covariance extended by two independent noise
-    /// components with covariance `noise` (zero mean): the augmented state the
-    /// prediction and the landmark initialization draw sigma points from.
-    fn robot_with_noise(&self, noise: &Matrix2<f64>) -> (DVector<f64>, DMatrix<f64>) {
-        let mut mean = DVector::zeros(5);
+    /// The robot's mean and covariance extended by the `k` noise components of
+    /// the `k x k` covariance `noise` (zero mean, independent of the robot): the
+    /// augmented state the predictions (control or recorded-input noise) and the
+    /// landmark initialization (measurement noise) draw sigma points from.
+    fn robot_with_noise<R: Dim, C: Dim, S: RawStorage<f64, R, C>>(
+        &self,
+        noise: &Matrix<f64, R, C, S>,
+    ) -> (DVector<f64>, DMatrix<f64>) {
+        let k = noise.nrows();
+        let mut mean = DVector::zeros(3 + k);
         mean.rows_mut(0, 3).copy_from(&self.state.mean.rows(0, 3));
-        let mut cov = DMatrix::zeros(5, 5);
+        let mut cov = DMatrix::zeros(3 + k, 3 + k);
         cov.view_mut((0, 0), (3, 3))
             .copy_from(&self.state.covariance.view((0, 0), (3, 3)));
-        cov.view_mut((3, 3), (2, 2)).copy_from(noise);
+        for i in 0..k {
+            for j in 0..k {
+                cov[(3 + i, 3 + j)] = noise[(i, j)];
+            }
+        }
         (mean, cov)
+    }
+
+    /// Writes the robot's predicted mean, covariance and its cross-covariance with
+    /// the landmarks (`out`, the unscented transform of the robot block) into the
+    /// state; a prediction that is not finite changes nothing.
+    fn take_robot_prediction(
+        &mut self,
+        out: &UnscentedOutput,
+        control: Control,
+        robot_det_before: f64,
+    ) -> Result<PredictReport, FilterError> {
+        if !out.is_finite() {
+            return Err(FilterError::NonFinite {
+                what: "the predicted robot pose or covariance",
+            });
+        }
+        self.state.mean.rows_mut(0, 3).copy_from(&out.mean);
+        self.state.mean[2] = wrap_angle(self.state.mean[2]);
+        self.state
+            .covariance
+            .view_mut((0, 0), (3, 3))
+            .copy_from(&out.covariance);
+        self.state
+            .set_landmark_robot_covariance(&out.cross_other.fixed_columns::<3>(0).into_owned());
+        Ok(PredictReport {
+            control,
+            robot_det_before,
+            robot_det_after: self.robot_covariance().determinant(),
+        })
     }
 
     /// The unscented-transform parameters.
@@ -197,24 +235,7 @@ impl LandmarkSlam for UkfSlam {
             let p = model.predict(&pose_of(a), &u, dt);
             DVector::from_column_slice(&[p.x, p.y, p.theta])
         })?;
-        if !out.is_finite() {
-            return Err(FilterError::NonFinite {
-                what: "the predicted robot pose or covariance",
-            });
-        }
-        self.state.mean.rows_mut(0, 3).copy_from(&out.mean);
-        self.state.mean[2] = wrap_angle(self.state.mean[2]);
-        self.state
-            .covariance
-            .view_mut((0, 0), (3, 3))
-            .copy_from(&out.covariance);
-        self.state
-            .set_landmark_robot_covariance(&out.cross_other.fixed_columns::<3>(0).into_owned());
-        Ok(PredictReport {
-            control: *control,
-            robot_det_before,
-            robot_det_after: self.robot_covariance().determinant(),
-        })
+        self.take_robot_prediction(&out, *control, robot_det_before)
     }
 
     /// The same prediction with a recorded motion: sigma points over the robot and
@@ -228,14 +249,8 @@ impl LandmarkSlam for UkfSlam {
         let n = self.state.len();
         let k = motion.input_dim();
         let std = motion.input_std();
-        let mut mean_a = DVector::zeros(3 + k);
-        mean_a.rows_mut(0, 3).copy_from(&self.state.mean.rows(0, 3));
-        let mut p_aa = DMatrix::zeros(3 + k, 3 + k);
-        p_aa.view_mut((0, 0), (3, 3))
-            .copy_from(&self.state.covariance.view((0, 0), (3, 3)));
-        for i in 0..k {
-            p_aa[(3 + i, 3 + i)] = std[i] * std[i];
-        }
+        let input_noise = DMatrix::from_fn(k, k, |i, j| if i == j { std[i] * std[i] } else { 0.0 });
+        let (mean_a, p_aa) = self.robot_with_noise(&input_noise);
         let mut p_oa = DMatrix::zeros(n - 3, 3 + k);
         p_oa.view_mut((0, 0), (n - 3, 3))
             .copy_from(&self.state.covariance.view((3, 0), (n - 3, 3)));
@@ -249,24 +264,11 @@ impl LandmarkSlam for UkfSlam {
                 Err(_) => DVector::from_element(3, f64::NAN),
             }
         })?;
-        if !out.is_finite() {
-            return Err(FilterError::NonFinite {
-                what: "the predicted robot pose or covariance",
-            });
-        }
-        self.state.mean.rows_mut(0, 3).copy_from(&out.mean);
-        self.state.mean[2] = wrap_angle(self.state.mean[2]);
-        self.state
-            .covariance
-            .view_mut((0, 0), (3, 3))
-            .copy_from(&out.covariance);
-        self.state
-            .set_landmark_robot_covariance(&out.cross_other.fixed_columns::<3>(0).into_owned());
-        Ok(PredictReport {
-            control: motion.velocity().unwrap_or_default(),
+        self.take_robot_prediction(
+            &out,
+            motion.velocity().unwrap_or_default(),
             robot_det_before,
-            robot_det_after: self.robot_covariance().determinant(),
-        })
+        )
     }
 
     fn insert_landmark(
@@ -309,39 +311,16 @@ impl LandmarkSlam for UkfSlam {
     }
 }
 
-impl JointGaussian for UkfSlam {
-    fn mean(&self) -> &DVector<f64> {
-        &self.state.mean
-    }
-
-    fn covariance(&self) -> &DMatrix<f64> {
-        &self.state.covariance
-    }
-}
-
-impl PoseBelief for UkfSlam {
-    fn robot_pose(&self) -> Pose2 {
-        belief::joint_robot_pose(self)
-    }
-
-    fn robot_covariance(&self) -> Matrix3<f64> {
-        belief::joint_robot_covariance(self)
-    }
-}
-
-impl LandmarkBelief for UkfSlam {
-    fn landmark_ids(&self) -> &[usize] {
-        self.state.landmark_ids()
-    }
-
-    fn landmarks(&self) -> Vec<LandmarkEstimate> {
-        belief::joint_landmarks(self, self.state.landmark_ids())
+impl KeepsSlamState for UkfSlam {
+    fn slam_state(&self) -> &SlamState {
+        &self.state
     }
 }
 
 #[cfg(test)]
 pub(crate) mod tests {
     use super::*;
+    use crate::belief::LandmarkBelief;
     use crate::kalman::{EkfSlam, FilterNoise};
     use crate::motion::MotionModel;
 

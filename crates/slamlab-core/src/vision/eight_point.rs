@@ -1,7 +1,7 @@
 //! The eight-point algorithm (thesis `000` Sec. 4.3, Eq. 4.18-4.21) with
 //! Hartley's normalization ("In defense of the eight-point algorithm", 1997).
 
-use nalgebra::{DMatrix, Matrix3, SMatrix, SVector, Vector2, Vector3};
+use nalgebra::{DMatrix, Matrix3, SVector, Vector2, Vector3};
 
 use super::linear::{null_space, smallest_right_singular_vector3};
 use super::{Correspondence, Intrinsics, VisionError, check_finite};
@@ -61,39 +61,22 @@ pub(crate) fn smallest_right_singular(rows: &[[f64; 9]]) -> Result<Matrix3<f64>,
     if let Ok(minimal) = <&[[f64; 9]; EIGHT]>::try_from(rows) {
         return null_vector_of_eight(minimal);
     }
-    let last_row = if rows.len() <= 9 {
-        // Pad with zero rows to 9x9 so the SVD returns all of V.
-        let mut a = SMatrix::<f64, 9, 9>::zeros();
-        for (i, row) in rows.iter().enumerate() {
-            for (j, v) in row.iter().enumerate() {
-                a[(i, j)] = *v;
-            }
+    // At least 9 rows (zero rows pad a shorter system) so the SVD returns all of V.
+    let mut a = DMatrix::<f64>::zeros(rows.len().max(9), 9);
+    for (i, row) in rows.iter().enumerate() {
+        for (j, v) in row.iter().enumerate() {
+            a[(i, j)] = *v;
         }
-        let svd = a
-            .try_svd(false, true, f64::EPSILON, 500)
-            .ok_or(VisionError::Degenerate("the SVD did not converge"))?;
-        check_rank(svd.singular_values.as_slice())?;
-        let v_t = svd
-            .v_t
-            .ok_or(VisionError::Degenerate("the SVD returned no V"))?;
-        v_t.row(8).transpose().into_owned()
-    } else {
-        let mut a = DMatrix::<f64>::zeros(rows.len(), 9);
-        for (i, row) in rows.iter().enumerate() {
-            for (j, v) in row.iter().enumerate() {
-                a[(i, j)] = *v;
-            }
-        }
-        let svd = a
-            .try_svd(false, true, f64::EPSILON, 500)
-            .ok_or(VisionError::Degenerate("the SVD did not converge"))?;
-        check_rank(svd.singular_values.as_slice())?;
-        let v_t = svd
-            .v_t
-            .ok_or(VisionError::Degenerate("the SVD returned no V"))?;
-        // Sorted descending: the last row of Vᵀ belongs to the smallest value.
-        SVector::<f64, 9>::from_iterator(v_t.row(8).iter().copied())
-    };
+    }
+    let svd = a
+        .try_svd(false, true, f64::EPSILON, 500)
+        .ok_or(VisionError::Degenerate("the SVD did not converge"))?;
+    check_rank(svd.singular_values.as_slice())?;
+    let v_t = svd
+        .v_t
+        .ok_or(VisionError::Degenerate("the SVD returned no V"))?;
+    // Sorted descending: the last row of Vᵀ belongs to the smallest value.
+    let last_row = SVector::<f64, 9>::from_iterator(v_t.row(8).iter().copied());
     as_matrix(&last_row)
 }
 

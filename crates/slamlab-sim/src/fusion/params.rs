@@ -54,16 +54,8 @@ macro_rules! field {
 /// An angle (or angular rate) field stored in radians, shown in degrees.
 macro_rules! degrees {
     ($name:literal, $unit:literal, $help:literal, $range:expr, $($field:ident).+) => {
-        Param::number(
-            $name,
-            $unit,
-            $help,
-            $range,
-            |s: &FusionLessonScenario| Some(s.scenario.$($field).+.to_degrees()),
-            |s: &mut FusionLessonScenario, v| {
-                s.scenario.$($field).+ = v.to_radians();
-                Ok(())
-            },
+        crate::params::degrees_field!(
+            FusionLessonScenario, $name, $unit, $help, $range, scenario.$($field).+
         )
     };
 }

@@ -6,8 +6,8 @@ use nalgebra::{Matrix3, Vector3};
 use serde::Serialize;
 use slamlab_core::geometry::{Pose2, wrap_angle};
 use slamlab_core::kalman::fusion::{
-    FusionConfig, FusionEkf, FusionError, Outcome, PoseMode, SensorConfig, StateIndex, StateMask,
-    StateMatrix, StateVector, StepReport,
+    FusionConfig, FusionEkf, FusionError, Outcome, PoseMode, SensorConfig, StateIndex, StateMatrix,
+    StateVector, StepReport,
 };
 
 /// How a run uses the sensors: the odometry-only baseline (wheel odometry and
@@ -77,24 +77,15 @@ pub fn filter_for(scenario: &FusionScenario, mode: FusionMode) -> Result<FusionE
         slam.push(StateIndex::Yaw);
     }
     let sensors = vec![
-        SensorConfig {
-            name: "wheel odometry".into(),
-            fuse: StateMask::of(&[StateIndex::VX, StateIndex::VY, StateIndex::YawRate]),
-            pose_mode: PoseMode::Absolute,
-            rejection_threshold: None,
-        },
-        SensorConfig {
-            name: "IMU".into(),
-            fuse: StateMask::of(&imu),
-            pose_mode: PoseMode::Absolute,
-            rejection_threshold: None,
-        },
-        SensorConfig {
-            name: "SLAM pose".into(),
-            fuse: StateMask::of(&slam),
-            pose_mode: mode.pose_mode().unwrap_or_default(),
-            rejection_threshold: scenario.slam.rejection_threshold,
-        },
+        SensorConfig::new(
+            "wheel odometry",
+            &[StateIndex::VX, StateIndex::VY, StateIndex::YawRate],
+        ),
+        SensorConfig::new("IMU", &imu),
+        SensorConfig::new("SLAM pose", &slam).with_pose_mode(
+            mode.pose_mode().unwrap_or_default(),
+            scenario.slam.rejection_threshold,
+        ),
     ];
     let config = FusionConfig {
         process_noise: scenario.process_noise,

@@ -32,7 +32,7 @@ use serde::Serialize;
 use slamlab_core::Pose2;
 use slamlab_core::graph::{
     EdgeKind, OptimizeError, Optimizer, OptimizerSettings, PoseGraph, SolverKind, StepReport,
-    VertexState,
+    Vertex, VertexState,
 };
 use slamlab_core::math;
 use slamlab_core::motion::CarGeometry;
@@ -96,20 +96,7 @@ impl ReferenceSolver {
         let pose_index: Vec<usize> = (0..graph.vertices().len())
             .filter(|&i| matches!(graph.vertices()[i].state, VertexState::Pose(_)))
             .collect();
-        let mut arc_length = Vec::with_capacity(pose_index.len());
-        let mut driven = 0.0;
-        let mut previous: Option<Vector2<f64>> = None;
-        for &i in &pose_index {
-            let VertexState::Pose(pose) = graph.vertices()[i].state else {
-                continue;
-            };
-            let p = laser(&pose).translation();
-            if let Some(q) = previous {
-                driven += (p - q).norm();
-            }
-            arc_length.push(driven);
-            previous = Some(p);
-        }
+        let arc_length = distance_driven(&lasers(graph.vertices(), &pose_index));
         let trees = first_sightings(&graph, &pose_index);
         if pose_index.is_empty() || trees.is_empty() {
             return Err(ReferenceError::Empty {
@@ -186,14 +173,7 @@ impl ReferenceSolver {
     pub fn map(&self) -> ReferenceMap {
         let vertices = self.optimizer.graph().vertices();
         ReferenceMap {
-            path: self
-                .pose_index
-                .iter()
-                .filter_map(|&i| match vertices[i].state {
-                    VertexState::Pose(p) => Some(laser(&p)),
-                    VertexState::Point(_) => None,
-                })
-                .collect(),
+            path: lasers(vertices, &self.pose_index),
             arc_length: self.arc_length.clone(),
             trees: self
                 .trees
@@ -216,6 +196,17 @@ impl ReferenceSolver {
 pub fn laser(pose: &Pose2) -> Pose2 {
     let car = CarGeometry::VICTORIA_PARK;
     pose.compose(&Pose2::new(car.laser_ahead, car.laser_left, 0.0))
+}
+
+/// The lasers ([`laser`]) of the pose vertices at `pose_index`, in that order.
+fn lasers(vertices: &[Vertex], pose_index: &[usize]) -> Vec<Pose2> {
+    pose_index
+        .iter()
+        .filter_map(|&i| match vertices[i].state {
+            VertexState::Pose(p) => Some(laser(&p)),
+            VertexState::Point(_) => None,
+        })
+        .collect()
 }
 
 /// For every landmark vertex: its index and the position (in `pose_index`) of the
@@ -291,9 +282,14 @@ pub struct ReferenceFit {
 impl ReferenceFit {
     /// A reference position in the filter's frame.
     pub fn apply(&self, p: &Vector2<f64>) -> Vector2<f64> {
-        let q = self.similarity.apply(&Pose2::new(p[0], p[1], 0.0));
-        Vector2::new(q.x, q.y)
+        carry(&self.similarity, p)
     }
+}
+
+/// The position `p` moved by `similarity` (`R p + t`).
+fn carry(similarity: &Similarity, p: &Vector2<f64>) -> Vector2<f64> {
+    let q = similarity.apply(&Pose2::new(p[0], p[1], 0.0));
+    Vector2::new(q.x, q.y)
 }
 
 /// The positions along `path` at each distance of `at` (ascending), where
@@ -360,24 +356,21 @@ pub fn align(
     }
     let reference: Vec<[f64; 2]> = map.path[..n].iter().map(|p| [p.x, p.y]).collect();
     let similarity = umeyama(&reference, &partners, false).ok()?;
-    let fit = ReferenceFit {
-        rmse: 0.0,
+    let sum: f64 = reference
+        .iter()
+        .zip(&partners)
+        .map(|(r, p)| {
+            (carry(&similarity, &Vector2::new(r[0], r[1])) - Vector2::new(p[0], p[1]))
+                .norm_squared()
+        })
+        .sum();
+    Some(ReferenceFit {
+        rmse: (sum / n as f64).sqrt(),
         pairs: n,
         rotation_deg: similarity.rotation.to_degrees(),
         translation_m: similarity.translation,
         last_paired: n - 1,
         similarity,
-    };
-    let sum: f64 = reference
-        .iter()
-        .zip(&partners)
-        .map(|(r, p)| {
-            (fit.apply(&Vector2::new(r[0], r[1])) - Vector2::new(p[0], p[1])).norm_squared()
-        })
-        .sum();
-    Some(ReferenceFit {
-        rmse: (sum / n as f64).sqrt(),
-        ..fit
     })
 }
 

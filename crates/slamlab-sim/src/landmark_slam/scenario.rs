@@ -39,18 +39,8 @@ macro_rules! field {
 
 /// A field in radians, given in degrees.
 macro_rules! degrees {
-    ($name:literal, $unit:literal, $help:literal, $range:expr, $($field:ident).+) => {
-        Param::number(
-            $name,
-            $unit,
-            $help,
-            $range,
-            |s: &LandmarkScenario| Some(s.$($field).+.to_degrees()),
-            |s: &mut LandmarkScenario, v: f64| {
-                s.$($field).+ = v.to_radians();
-                Ok(())
-            },
-        )
+    ($($args:tt)*) => {
+        crate::params::degrees_field!(LandmarkScenario, $($args)*)
     };
 }
 

@@ -6,6 +6,7 @@
 //! graph is then optimized. The result compares the position RMSE of dead
 //! reckoning, EKF-SLAM and the optimized graph against the truth.
 
+use crate::grid;
 use crate::world::landmark_scenario::ekf_vs_ukf_scenario;
 use crate::world::landmark_scenario::{EstimatorKind, LandmarkScenario};
 use crate::world::landmark_session::LandmarkSession;
@@ -130,17 +131,10 @@ fn run_ekf(scenario: &LandmarkScenario, steps: u64) -> [Vec<Pose2>; 3] {
     ]
 }
 
+/// The RMS position error of `a` against `b` over the poses both have, metres
+/// (NaN when either is empty).
 fn position_rmse(a: &[Pose2], b: &[Pose2]) -> f64 {
-    let n = a.len().min(b.len());
-    if n == 0 {
-        return f64::NAN;
-    }
-    let sum: f64 = a
-        .iter()
-        .zip(b)
-        .map(|(p, q)| (p.x - q.x).powi(2) + (p.y - q.y).powi(2))
-        .sum();
-    (sum / n as f64).sqrt()
+    grid::trajectory_rmse(a, Some(b)).unwrap_or(f64::NAN)
 }
 
 /// The experiment's graph before optimizing, with what it was built from.

@@ -12,6 +12,7 @@
 //! vertex states and the solver's own state, no matrix), so "Step back" goes back
 //! one iteration or one edit exactly, within a bounded memory.
 
+use crate::grid;
 use crate::io;
 use crate::params::{Param, Scenario, choose, count_field, number_field};
 use crate::pose_graph::experiment::{PoseGraphExperimentConfig, manhattan_graph, thesis_graph};
@@ -772,17 +773,11 @@ impl PoseGraphSession {
     }
 
     fn rmse_of(&self, positions: &[[f64; 2]]) -> Option<f64> {
-        let truth = self.truth.as_ref()?;
-        let n = truth.len().min(positions.len());
-        if n == 0 {
-            return None;
-        }
-        let sum: f64 = truth
+        let poses: Vec<Pose2> = positions
             .iter()
-            .zip(positions)
-            .map(|(t, p)| (t.x - p[0]).powi(2) + (t.y - p[1]).powi(2))
-            .sum();
-        Some((sum / n as f64).sqrt())
+            .map(|p| Pose2::new(p[0], p[1], 0.0))
+            .collect();
+        grid::trajectory_rmse(&poses, self.truth.as_deref())
     }
 
     /// Optimizes copies of the graph from its start (with every added edge) to

@@ -107,6 +107,30 @@ pub struct SensorConfig {
     pub rejection_threshold: Option<f64>,
 }
 
+impl SensorConfig {
+    /// A sensor named `name` that fuses the variables `fuse`, its pose readings
+    /// taken as absolute, none rejected.
+    pub fn new(name: &str, fuse: &[StateIndex]) -> Self {
+        Self {
+            name: name.to_owned(),
+            fuse: StateMask::of(fuse),
+            pose_mode: PoseMode::Absolute,
+            rejection_threshold: None,
+        }
+    }
+
+    /// The same sensor with its pose readings taken in `pose_mode`, and those
+    /// `rejection_threshold` standard deviations or more from the prediction
+    /// rejected (`None`: none).
+    pub fn with_pose_mode(self, pose_mode: PoseMode, rejection_threshold: Option<f64>) -> Self {
+        Self {
+            pose_mode,
+            rejection_threshold,
+            ..self
+        }
+    }
+}
+
 /// What a sensor reports. Each kind carries three values and their 3x3 covariance.
 #[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
 pub enum Reading {

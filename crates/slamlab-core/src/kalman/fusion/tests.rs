@@ -9,24 +9,16 @@ const SLAM: usize = 2;
 
 fn sensors(mode: PoseMode, threshold: Option<f64>) -> Vec<SensorConfig> {
     vec![
-        SensorConfig {
-            name: "wheel odometry".into(),
-            fuse: StateMask::of(&[StateIndex::VX, StateIndex::VY, StateIndex::YawRate]),
-            pose_mode: PoseMode::Absolute,
-            rejection_threshold: None,
-        },
-        SensorConfig {
-            name: "IMU".into(),
-            fuse: StateMask::of(&[StateIndex::YawRate, StateIndex::AX]),
-            pose_mode: PoseMode::Absolute,
-            rejection_threshold: None,
-        },
-        SensorConfig {
-            name: "SLAM pose".into(),
-            fuse: StateMask::of(&[StateIndex::X, StateIndex::Y, StateIndex::Yaw]),
-            pose_mode: mode,
-            rejection_threshold: threshold,
-        },
+        SensorConfig::new(
+            "wheel odometry",
+            &[StateIndex::VX, StateIndex::VY, StateIndex::YawRate],
+        ),
+        SensorConfig::new("IMU", &[StateIndex::YawRate, StateIndex::AX]),
+        SensorConfig::new(
+            "SLAM pose",
+            &[StateIndex::X, StateIndex::Y, StateIndex::Yaw],
+        )
+        .with_pose_mode(mode, threshold),
     ]
 }
 

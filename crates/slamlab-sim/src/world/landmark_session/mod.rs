@@ -36,8 +36,8 @@ pub use records::{
     nearest_landmark_rmse, tick_metrics,
 };
 pub use sim::{
-    FilterState, LandmarkEvent, LandmarkSim, LandmarkSlamDebug, Mislabel, Observation,
-    OtherSighting, Phase, Rejection, Replay, TickMotion, fastslam_config,
+    CloneEstimator, FilterState, LandmarkEvent, LandmarkSim, LandmarkSlamDebug, Mislabel,
+    Observation, OtherSighting, Phase, Rejection, Replay, TickMotion, fastslam_config,
 };
 
 use crate::stepper::Stepper;

@@ -124,10 +124,7 @@ pub enum LandmarkEvent {
 
 /// An estimator of the landmark lesson: `LandmarkSlam` plus `Debug` and
 /// cloning, so sessions can be printed and checkpointed, and an ear for the truth.
-pub trait LandmarkSlamDebug: LandmarkSlam + std::fmt::Debug {
-    /// A boxed copy.
-    fn clone_box(&self) -> Box<dyn LandmarkSlamDebug>;
-
+pub trait LandmarkSlamDebug: LandmarkSlam + std::fmt::Debug + CloneEstimator {
     /// The simulator offers every estimator the true state of the tick that is
     /// starting (the robot before and after its move, and every landmark). Real
     /// estimators ignore it (the default); the ideal EKF linearizes at it.
@@ -140,29 +137,26 @@ pub trait LandmarkSlamDebug: LandmarkSlam + std::fmt::Debug {
     }
 }
 
-impl LandmarkSlamDebug for EkfSlam {
+/// A boxed copy of an estimator behind `dyn` ([`LandmarkSlamDebug`]): every
+/// estimator that is `Clone` has one.
+pub trait CloneEstimator {
+    /// A boxed copy.
+    fn clone_box(&self) -> Box<dyn LandmarkSlamDebug>;
+}
+
+impl<T: LandmarkSlamDebug + Clone + 'static> CloneEstimator for T {
     fn clone_box(&self) -> Box<dyn LandmarkSlamDebug> {
         Box::new(self.clone())
     }
 }
 
-impl LandmarkSlamDebug for UkfSlam {
-    fn clone_box(&self) -> Box<dyn LandmarkSlamDebug> {
-        Box::new(self.clone())
-    }
-}
+impl LandmarkSlamDebug for EkfSlam {}
 
-impl LandmarkSlamDebug for FastSlamEstimator {
-    fn clone_box(&self) -> Box<dyn LandmarkSlamDebug> {
-        Box::new(self.clone())
-    }
-}
+impl LandmarkSlamDebug for UkfSlam {}
+
+impl LandmarkSlamDebug for FastSlamEstimator {}
 
 impl LandmarkSlamDebug for IdealEkf {
-    fn clone_box(&self) -> Box<dyn LandmarkSlamDebug> {
-        Box::new(self.clone())
-    }
-
     fn observe_truth(
         &mut self,
         robot_before: Pose2,
@@ -479,6 +473,16 @@ impl LandmarkSim {
         }
     }
 
+    /// Counts the tick that is starting and gives the sensor the reach set
+    /// during the last one.
+    fn count_tick(&mut self) {
+        self.tick += 1;
+        if let Some((fov, max_range)) = self.next_reach.take() {
+            self.sensor.fov = fov;
+            self.sensor.max_range = max_range;
+        }
+    }
+
     /// Starts a tick: the command, the true motion, the measurements, and the
     /// phases the estimators run on them.
     fn begin_tick(&mut self, records: &mut LandmarkRecords) {
@@ -486,11 +490,7 @@ impl LandmarkSim {
             self.begin_recorded_tick(records);
             return;
         }
-        self.tick += 1;
-        if let Some((fov, max_range)) = self.next_reach.take() {
-            self.sensor.fov = fov;
-            self.sensor.max_range = max_range;
-        }
+        self.count_tick();
         let dt = self.scenario.dt;
         self.command = match self.controller {
             ControllerKind::Circle { v, w } => Control::new(v, w),
@@ -564,14 +564,13 @@ impl LandmarkSim {
     /// time, its measurements (other robots apart), and the phases they make.
     /// After the last step a tick stands still.
     fn begin_recorded_tick(&mut self, records: &mut LandmarkRecords) {
+        if self.replay.is_none() {
+            return;
+        }
+        self.count_tick();
         let Some(replay) = self.replay.as_mut() else {
             return;
         };
-        self.tick += 1;
-        if let Some((fov, max_range)) = self.next_reach.take() {
-            self.sensor.fov = fov;
-            self.sensor.max_range = max_range;
-        }
         let max_range = self.sensor.max_range;
         let noise = self.scenario.recorded_noise();
         let step = replay.world.steps.get(replay.next).cloned();

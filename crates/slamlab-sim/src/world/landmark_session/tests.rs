@@ -26,6 +26,16 @@ pub(super) fn shown(f: &dyn LandmarkSlam) -> Shown {
     }
 }
 
+/// Asserts that two sessions have the same truth and the same first filter.
+#[track_caller]
+fn assert_same_truth_and_first_filter(a: &LandmarkSession, b: &LandmarkSession) {
+    assert_eq!(a.truth(), b.truth());
+    assert_eq!(
+        shown(a.filters()[0].filter()),
+        shown(b.filters()[0].filter())
+    );
+}
+
 #[test]
 fn phases_follow_predict_then_each_update() {
     let mut s = LandmarkSession::new(LandmarkScenario::default());
@@ -56,11 +66,7 @@ fn same_seed_same_run_and_the_estimator_does_not_change_the_world() {
     });
     a.run_ticks(50);
     b.run_ticks(50);
-    assert_eq!(a.truth(), b.truth());
-    assert_eq!(
-        shown(a.filters()[0].filter()),
-        shown(b.filters()[0].filter())
-    );
+    assert_same_truth_and_first_filter(&a, &b);
     let mut c = LandmarkSession::new(LandmarkScenario {
         seed: 4,
         estimators: vec![],
@@ -110,11 +116,7 @@ fn one_phase_advances_every_filter_on_the_same_data() {
     let mut ekf_only = LandmarkSession::new(LandmarkScenario::default());
     s.run_ticks(30);
     ekf_only.run_ticks(30);
-    assert_eq!(s.truth(), ekf_only.truth());
-    assert_eq!(
-        shown(s.filters()[0].filter()),
-        shown(ekf_only.filters()[0].filter())
-    );
+    assert_same_truth_and_first_filter(&s, &ekf_only);
 }
 
 #[test]

@@ -29,6 +29,16 @@ pub fn world(data: &VictoriaParkData) -> RecordedWorld {
     let mut last = start_time;
     let mut steps = Vec::with_capacity(data.inputs.len() + data.scans.len());
     let (mut i, mut s) = (0, 0);
+    // The car driven at the held speed and steering until `time`, then `observations`.
+    let car_step = |time: f64, last: f64, speed, steering, observations| RecordedStep {
+        time: time - start_time,
+        motion: StepMotion::Car {
+            speed,
+            steering,
+            dt: time - last,
+        },
+        observations,
+    };
     while i < data.inputs.len() || s < data.scans.len() {
         // At equal times the scan is taken first, then the new input applies.
         let scan = match (data.inputs.get(i), data.scans.get(s)) {
@@ -38,36 +48,21 @@ pub fn world(data: &VictoriaParkData) -> RecordedWorld {
         };
         if scan {
             let scan = &data.scans[s];
-            steps.push(RecordedStep {
-                time: scan.time - start_time,
-                motion: StepMotion::Car {
-                    speed,
-                    steering,
-                    dt: scan.time - last,
-                },
-                observations: scan
-                    .trees
-                    .iter()
-                    .map(|t| RecordedObservation {
-                        sighting: Sighting::Unlabelled,
-                        measurement: RangeBearing::new(t.range, t.bearing - FRAC_PI_2),
-                    })
-                    .collect(),
-            });
+            let trees = scan
+                .trees
+                .iter()
+                .map(|t| RecordedObservation {
+                    sighting: Sighting::Unlabelled,
+                    measurement: RangeBearing::new(t.range, t.bearing - FRAC_PI_2),
+                })
+                .collect();
+            steps.push(car_step(scan.time, last, speed, steering, trees));
             last = scan.time;
             s += 1;
         } else {
             let input = data.inputs[i];
             if input.time > last || steps.is_empty() {
-                steps.push(RecordedStep {
-                    time: input.time - start_time,
-                    motion: StepMotion::Car {
-                        speed,
-                        steering,
-                        dt: input.time - last,
-                    },
-                    observations: Vec::new(),
-                });
+                steps.push(car_step(input.time, last, speed, steering, Vec::new()));
                 last = input.time;
             }
             (speed, steering) = (input.speed, input.steering);
