@@ -66,9 +66,28 @@ pub fn count(name: &'static str, help: impl IntoResettable<StyledStr>) -> Arg {
     flag(name, help).value_parser(clap::value_parser!(usize))
 }
 
-/// `--NAME X`: a real number.
+/// `--NAME X`: a real number, negative ones too in the space form
+/// (`--offset -0.5`, `--offset -.5`, `--offset -1e-3`, as with `=`); the
+/// command's range check refuses those out of range. A flag after it is never
+/// taken for its value in silence: `--offset --json` is refused as "a flag, not
+/// a number", since no flag reads as one.
 pub fn number(name: &'static str, help: impl IntoResettable<StyledStr>) -> Arg {
-    flag(name, help).value_parser(clap::value_parser!(f64))
+    flag(name, help)
+        .allow_hyphen_values(true)
+        .value_parser(real_number)
+}
+
+/// Reads a real number as `f64`'s `FromStr` does (so `--x nan` still reaches
+/// the command's own refusal); says when the "value" is a flag instead, the
+/// value having been left out.
+fn real_number(text: &str) -> Result<f64, String> {
+    text.parse::<f64>().map_err(|e| {
+        if text.starts_with("--") || (text.starts_with('-') && text.len() == 2) {
+            format!("a flag, not a number: the value is missing ({e})")
+        } else {
+            e.to_string()
+        }
+    })
 }
 
 /// `--NAME A`: one of `choices`.
@@ -107,8 +126,35 @@ mod tests {
         assert_eq!(m.get_one::<u64>("n"), Some(&10));
         assert!(parse(whole("n", 1..=10, "n"), &["--n", "11"]).is_err());
         assert!(parse(whole("n", 1.., "n"), &["--n", "0"]).is_err());
-        let m = parse(number("x", "x"), &["--x", "-2.5"]);
-        assert!(m.is_err(), "a leading '-' reads as a flag unless allowed");
+        // A negative number is a value in the space form too, however it is written.
+        for (text, x) in [
+            ("-2.5", -2.5),
+            ("-.5", -0.5),
+            ("-1e-3", -1e-3),
+            ("-7", -7.0),
+        ] {
+            let m = parse(number("x", "x"), &["--x", text]).unwrap_or_else(|e| panic!("{e}"));
+            assert_eq!(m.get_one::<f64>("x"), Some(&x), "{text}");
+        }
+        // A flag after it stays a flag, and one where the value belongs is refused.
+        let two = |args: &[&str]| {
+            Command::new("t")
+                .no_binary_name(true)
+                .arg(number("x", "x"))
+                .arg(switch("json", "json"))
+                .try_get_matches_from(args)
+        };
+        let m = two(&["--x", "-2.5", "--json"]).unwrap_or_else(|e| panic!("{e}"));
+        assert_eq!(m.get_one::<f64>("x"), Some(&-2.5));
+        assert!(m.get_flag("json"));
+        for missing in [&["--x", "--json"][..], &["--x", "-h"][..]] {
+            let e = two(missing).map(|_| ()).unwrap_err().to_string();
+            assert!(e.contains("a flag, not a number"), "{missing:?}: {e}");
+        }
+        let e = parse(number("x", "x"), &["--x", "-abc"])
+            .map(|_| ())
+            .unwrap_err();
+        assert!(e.to_string().contains("invalid float literal"), "{e}");
         let m = parse(number("x", "x"), &["--x", "2.5"]).unwrap_or_else(|e| panic!("{e}"));
         assert_eq!(m.get_one::<f64>("x"), Some(&2.5));
         let m = parse(count("k", "k"), &["--k", "7"]).unwrap_or_else(|e| panic!("{e}"));
