@@ -52,18 +52,23 @@ pub fn path(
     named(name, value_name, help).value_parser(clap::value_parser!(PathBuf))
 }
 
-/// `--NAME N`: a whole number in `range`.
+/// `--NAME N`: a whole number in `range`. A negative one is read as its value
+/// (`--trials -3`) to be refused as out of range, as `--trials=-3` is.
 pub fn whole(
     name: &'static str,
     range: impl RangeBounds<u64> + Send + Sync + 'static,
     help: impl IntoResettable<StyledStr>,
 ) -> Arg {
-    flag(name, help).value_parser(clap::value_parser!(u64).range(range))
+    flag(name, help)
+        .allow_negative_numbers(true)
+        .value_parser(clap::value_parser!(u64).range(range))
 }
 
-/// `--NAME N`: a count (any `usize`).
+/// `--NAME N`: a count (any `usize`); a negative one is refused as with [`whole`].
 pub fn count(name: &'static str, help: impl IntoResettable<StyledStr>) -> Arg {
-    flag(name, help).value_parser(clap::value_parser!(usize))
+    flag(name, help)
+        .allow_negative_numbers(true)
+        .value_parser(clap::value_parser!(usize))
 }
 
 /// `--NAME X`: a real number, negative ones too in the space form
@@ -104,6 +109,7 @@ pub fn choice(
 /// `--seed N`: any `u64`, default 1; `help` says what it seeds.
 pub fn seed(help: impl IntoResettable<StyledStr>) -> Arg {
     flag("seed", help)
+        .allow_negative_numbers(true)
         .value_parser(clap::value_parser!(u64))
         .default_value("1")
 }
@@ -126,6 +132,13 @@ mod tests {
         assert_eq!(m.get_one::<u64>("n"), Some(&10));
         assert!(parse(whole("n", 1..=10, "n"), &["--n", "11"]).is_err());
         assert!(parse(whole("n", 1.., "n"), &["--n", "0"]).is_err());
+        // A negative count is refused by its parser, with a space as with `=`.
+        for args in [&["--n", "-3"][..], &["--n=-3"][..]] {
+            let e = parse(whole("n", 1.., "n"), args).map(|_| ()).unwrap_err();
+            assert!(e.to_string().contains("invalid value '-3'"), "{e}");
+            let e = parse(count("n", "n"), args).map(|_| ()).unwrap_err();
+            assert!(e.to_string().contains("invalid value '-3'"), "{e}");
+        }
         // A negative number is a value in the space form too, however it is written.
         for (text, x) in [
             ("-2.5", -2.5),

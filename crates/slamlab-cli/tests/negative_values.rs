@@ -127,6 +127,22 @@ fn a_missing_value_or_one_out_of_range_is_refused_as_before() {
     );
     let (ok, _, stderr) = slamlab(&["run", "landmark-slam", "--seed", "-3"]);
     assert!(!ok && stderr.contains("--seed '-3'"), "{stderr}");
+    // Whole numbers: refused by their parser, not taken for an unknown flag.
+    for args in [
+        &["experiment", "fastslam", "--trials", "-3"][..],
+        &["experiment", "fastslam", "--trials=-3"][..],
+        &["log", "record", "--out", "never.log", "--seed", "-1"][..],
+        &["run", "cartographer", "--seed", "-1"][..],
+    ] {
+        let (ok, _, stderr) = slamlab(args);
+        let value = args
+            .last()
+            .map_or("", |a| a.trim_start_matches("--trials="));
+        assert!(
+            !ok && stderr.contains(&format!("invalid value '{value}'")),
+            "{args:?}: {stderr}"
+        );
+    }
 }
 
 #[test]
