@@ -87,12 +87,34 @@ pub fn number(name: &'static str, help: impl IntoResettable<StyledStr>) -> Arg {
 /// value having been left out.
 fn real_number(text: &str) -> Result<f64, String> {
     text.parse::<f64>().map_err(|e| {
-        if text.starts_with("--") || (text.starts_with('-') && text.len() == 2) {
+        if is_flag(text) {
             format!("a flag, not a number: the value is missing ({e})")
         } else {
             e.to_string()
         }
     })
+}
+
+/// The value of a flag that takes values starting with '-' (a parameter-table
+/// flag: `--w-deg -10`), as given, but a flag (`--json`, `-h`): the value was
+/// left out, and the flag is not to vanish into it.
+pub fn value_not_flag(text: &str) -> Result<String, String> {
+    if is_flag(text) {
+        Err("a flag, not a value: the value is missing".to_owned())
+    } else {
+        Ok(text.to_owned())
+    }
+}
+
+/// Whether `text` is written as a flag: `--NAME`, or `-h` and the like (not
+/// `-1` nor `-inf`, which are values).
+fn is_flag(text: &str) -> bool {
+    let mut chars = text.chars();
+    match (chars.next(), chars.next(), chars.next()) {
+        (Some('-'), Some('-'), Some(_)) => true,
+        (Some('-'), Some(c), None) => c.is_ascii_alphabetic(),
+        _ => false,
+    }
 }
 
 /// `--NAME A`: one of `choices`.
@@ -164,6 +186,10 @@ mod tests {
             let e = two(missing).map(|_| ()).unwrap_err().to_string();
             assert!(e.contains("a flag, not a number"), "{missing:?}: {e}");
         }
+        assert!(is_flag("--json") && is_flag("-h"));
+        assert!(!is_flag("-1") && !is_flag("-inf") && !is_flag("--") && !is_flag("-"));
+        assert_eq!(value_not_flag("-10"), Ok("-10".to_owned()));
+        assert!(value_not_flag("--json").is_err());
         let e = parse(number("x", "x"), &["--x", "-abc"])
             .map(|_| ())
             .unwrap_err();

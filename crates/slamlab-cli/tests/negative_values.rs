@@ -160,4 +160,22 @@ fn a_lesson_takes_a_negative_turn_rate_with_a_space() {
     ]);
     assert_eq!(v["parameters"]["w-deg"], -10.0, "{}", v["parameters"]);
     assert_eq!(v["steps"], 20);
+    // Any spelling of the number, as in the app's URL.
+    let v = run_json(&[
+        "run",
+        "landmark-slam",
+        "--w-deg",
+        "-.5e1",
+        "--steps",
+        "3",
+        "--json",
+    ]);
+    assert_eq!(v["parameters"]["w-deg"], -5.0, "{}", v["parameters"]);
+    // The value left out: the flag after it is not taken for it.
+    let (ok, stdout, stderr) = slamlab(&["run", "landmark-slam", "--w-deg", "--json"]);
+    assert!(!ok && stdout.is_empty(), "{stdout}");
+    assert!(
+        stderr.contains("'--json'") && stderr.contains("a flag, not a value"),
+        "{stderr}"
+    );
 }
