@@ -73,9 +73,10 @@ pub fn count(name: &'static str, help: impl IntoResettable<StyledStr>) -> Arg {
 
 /// `--NAME X`: a real number, negative ones too in the space form
 /// (`--offset -0.5`, `--offset -.5`, `--offset -1e-3`, as with `=`); the
-/// command's range check refuses those out of range. A flag after it is never
-/// taken for its value in silence: `--offset --json` is refused as "a flag, not
-/// a number", since no flag reads as one.
+/// command's range check refuses those out of range. A flag where the value
+/// belongs is never taken for it in silence: `--offset --json` is refused as "a
+/// flag, not a number" (no flag reads as one); `--offset --max-diff 1` as an
+/// unexpected argument `1` (clap reports that before the value's refusal).
 pub fn number(name: &'static str, help: impl IntoResettable<StyledStr>) -> Arg {
     flag(name, help)
         .allow_hyphen_values(true)
