@@ -19,7 +19,7 @@ pub const RUNNERS: &[TaskRunner] = &[
     TaskRunner::of::<crate::pose_graph::assignment::PoseGraphRun>(),
     TaskRunner::of::<crate::mapping::assignment::GridMappingRun>(),
     TaskRunner::of::<crate::mapping::icp_assignment::IcpRun>(),
-    crate::visual_odometry::assignment::RUNNER,
+    TaskRunner::of::<crate::visual_odometry::assignment::TwoViewRun>(),
     TaskRunner::of::<crate::fusion::assignment::FusionRun>(),
 ];
 

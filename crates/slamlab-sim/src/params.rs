@@ -225,6 +225,44 @@ macro_rules! count_field {
 }
 pub(crate) use count_field;
 
+/// The words of a switch: on or off.
+pub const ON_OFF: &[&str] = &["on", "off"];
+
+/// A switch read and written straight from a `bool` field (or a field of a
+/// field) of the table's scenario type: `on` or `off` (any other word is
+/// refused with the two it takes).
+macro_rules! switch_field {
+    ($name:literal, $help:literal, $($field:tt)+) => {
+        $crate::params::Param::words(
+            $name,
+            $help,
+            $crate::params::ON_OFF,
+            |s| Some($crate::params::ON_OFF[usize::from(!s.$($field)+)].to_owned()),
+            |s, v| $crate::params::choose($crate::params::ON_OFF, v).map(|i| s.$($field)+ = i == 0),
+        )
+    };
+}
+pub(crate) use switch_field;
+
+/// A choice read and written straight from a field (or a field of a field) of
+/// the table's scenario type: `words[i]` names `values[i]` (an enum's words
+/// and its values, in the same order).
+macro_rules! choice_field {
+    ($name:literal, $help:literal, $words:expr, $values:expr, $($field:tt)+) => {
+        $crate::params::Param::words(
+            $name,
+            $help,
+            $words,
+            |s| {
+                let at = $values.iter().position(|v| *v == s.$($field)+)?;
+                $words.get(at).map(|w| (*w).to_owned())
+            },
+            |s, v| $crate::params::choose($words, v).map(|i| s.$($field)+ = $values[i]),
+        )
+    };
+}
+pub(crate) use choice_field;
+
 /// A named scenario: what a source shows ("thesis Experiment 2") or a lesson's key
 /// comparison. A preset sets every parameter but the seed; parameters given beside
 /// it apply on top, whatever their order.

@@ -16,7 +16,7 @@ use crate::grid::MappingInput;
 use crate::grid::SimulatedLogConfig;
 use crate::grid::SimulatedRun;
 use crate::grid::run_params::{map_param, seed_param, steps_param};
-use crate::params::{Param, Scenario, choose, count_field, number_field};
+use crate::params::{Param, Scenario, choose, count_field, number_field, switch_field};
 use crate::stepper::Simulation;
 use serde::{Deserialize, Serialize};
 use slamlab_core::Pose2;
@@ -166,8 +166,6 @@ impl CartographerScenario {
     }
 }
 
-const ON_OFF: &[&str] = &["on", "off"];
-
 /// Every parameter of the lesson, in the order `slamlab params --lesson
 /// cartographer` lists them: Cartographer's names and the thesis's `T` and
 /// `f_size`, as `slamlab run cartographer` takes them.
@@ -215,19 +213,15 @@ pub static PARAMS: &[Param<CartographerScenario>] = &[
                 .map(|i| s.kidnap_place = KidnapPlace::NAMES[i].to_owned())
         },
     ),
-    Param::words(
+    switch_field!(
         "detection",
         "kidnap detection (Xiang's thesis Algorithm 13): on, or off for the original behaviour (one corrupted map)",
-        ON_OFF,
-        |s| Some(ON_OFF[usize::from(!s.detection)].to_owned()),
-        |s, v| choose(ON_OFF, v).map(|i| s.detection = i == 0),
+        detection
     ),
-    Param::words(
+    switch_field!(
         "loop-closures",
         "loop closures: on, or off for local SLAM alone (no branch-and-bound search)",
-        ON_OFF,
-        |s| Some(ON_OFF[usize::from(!s.loop_closures)].to_owned()),
-        |s, v| choose(ON_OFF, v).map(|i| s.loop_closures = i == 0),
+        loop_closures
     ),
     count_field!(
         "num_range_data",

@@ -6,9 +6,11 @@
 use super::CourseworkError;
 use super::assignment::{Assignment, Metric};
 use super::variant::{Variant, sha256_hex};
+use crate::io::relative_pose::read_relative_pose;
 use crate::io::trajectory::{check_size, read_trajectory};
 use crate::metrics::{Evaluation, EvaluationSettings, Trajectory, evaluate};
 use serde::Serialize;
+use slamlab_core::vision::RelativePose;
 
 /// A reference estimator's value of a criterion's metric.
 #[derive(Clone, Debug, PartialEq, Serialize)]
@@ -373,6 +375,56 @@ pub fn assemble(
         pass: score >= pass_score - 1e-9,
         notices,
     }
+}
+
+/// The command that grades `variant`'s hand-in of `assignment`, as a README
+/// gives it: `slamlab grade ID --student 'STUDENT' --estimate FILE`.
+pub fn grade_command(assignment: &Assignment, variant: &Variant) -> String {
+    format!(
+        "slamlab grade {} --student '{}' --estimate {}",
+        assignment.id, variant.student, assignment.output.file
+    )
+}
+
+/// What the README of a relative-pose task says under "What to hand in": the
+/// file of the relative pose of the two `of` (`scans`, `views`) as
+/// [`read_relative_pose`] reads it, the command that checks it, then `scored`
+/// (how it is scored).
+pub fn relative_pose_hand_in(
+    assignment: &Assignment,
+    variant: &Variant,
+    of: &str,
+    scored: &str,
+) -> String {
+    format!(
+        "{file}: the relative pose of the two {of} as text: R row by row (9\n\
+         numbers), then t (3), white space or commas, '#' comments; or 7 numbers\n\
+         'tx ty tz qx qy qz qw'. Check it with\n\
+         \x20 {check}\n\n\
+         {scored}",
+        file = assignment.output.file,
+        check = grade_command(assignment, variant),
+    )
+}
+
+/// Grades a relative pose handed in (as [`read_relative_pose`] reads it):
+/// `score` gives a pose's errors against the truth, for the student's and for
+/// each reference estimator's pose in `theirs` (by name); `value` reads each
+/// criterion's metric off them ([`assemble_scores`]).
+pub fn grade_relative_pose<E>(
+    hand_in: &HandIn<'_>,
+    theirs: impl IntoIterator<Item = (String, RelativePose)>,
+    score: impl Fn(&RelativePose) -> E,
+    value: impl Fn(Metric, &E) -> Option<f64>,
+) -> Result<Grade, CourseworkError> {
+    let file = read_relative_pose(hand_in.bytes).map_err(|e| hand_in.bad(e))?;
+    let mine = score(&file.pose);
+    let theirs: Vec<(String, E)> = theirs
+        .into_iter()
+        .map(|(name, pose)| (name, score(&pose)))
+        .collect();
+    let notices = hand_in.notices(&file.notices);
+    Ok(assemble_scores(hand_in, &mine, &theirs, value, notices))
 }
 
 /// Grades a hand-in whose every criterion is read off one score of type `E` by

@@ -151,7 +151,8 @@ pub struct TaskRunner {
 impl TaskRunner {
     /// The runner of the task `T`: an assignment's parameters are checked by
     /// [`apply_params`] on `T`'s scenario and then by [`Task::refusals`]; a
-    /// variant is [`Task::run`] from the same scenario.
+    /// variant is [`Task::run`] from the same scenario, then
+    /// [`Task::with_assignment`].
     pub const fn of<T: Task>() -> TaskRunner {
         TaskRunner {
             kind: T::KIND,
@@ -178,6 +179,12 @@ pub trait Task: TaskRun + Sized + 'static {
     /// Runs a variant for `steps`: `scenario` holds the assignment's
     /// parameters, the lesson sets the variant's `seed` in it.
     fn run(scenario: Self::Scenario, seed: u64, steps: u64) -> Result<Self, CourseworkError>;
+    /// The run of a variant of `assignment`, given what it takes from the
+    /// assignment beyond its parameters (the two-view scene: the answers
+    /// switch, to mark the wrong matches); by default the run as it is.
+    fn with_assignment(self, _assignment: &Assignment) -> Self {
+        self
+    }
 }
 
 fn check_task<T: Task>(assignment: &Assignment) -> Vec<String> {
@@ -192,7 +199,8 @@ fn simulate_task<T: Task>(
     steps: u64,
 ) -> Result<Box<dyn TaskRun>, CourseworkError> {
     let (scenario, _) = apply_params::<T::Scenario>(assignment);
-    Ok(Box::new(T::run(scenario, variant.seed, steps)?))
+    let run = T::run(scenario, variant.seed, steps)?;
+    Ok(Box::new(run.with_assignment(assignment)))
 }
 
 /// The refusal of a map that is not built in (an assignment's run is made
@@ -410,8 +418,9 @@ impl Prepared {
                 "{}: one pose per step, for t = 0 and every step's time (the times of the\n\
              inputs), as TUM ('t x y z qx qy qz qw', z = 0 and a rotation about z:\n\
              qz = sin(theta/2), qw = cos(theta/2)) or CSV ('t,x,y,theta'). Check it with\n\
-             slamlab grade {} --student '{}' --estimate {}\n",
-                a.output.file, a.id, self.variant.student, a.output.file
+             {}\n",
+                a.output.file,
+                grade::grade_command(a, &self.variant)
             );
             let _ = writeln!(
                 out,

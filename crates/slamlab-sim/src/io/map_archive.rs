@@ -3,7 +3,8 @@
 //! other. The grader and a page's drop read it here; the command line zips a
 //! YAML and its image when it is given the YAML.
 
-use super::ros_map::{MAX_YAML_BYTES, MapYaml, load_map, parse_map_yaml};
+use super::archive::write_zip;
+use super::ros_map::{ImageFormat, MAX_YAML_BYTES, MapYaml, export_map, load_map, parse_map_yaml};
 use slamlab_core::grid::OccupancyGrid;
 use std::io::{Cursor, Read};
 
@@ -24,6 +25,23 @@ pub fn is_zip(bytes: &[u8]) -> bool {
 /// The last part of a path inside an archive or a YAML's `image:`.
 fn base_name(path: &str) -> &str {
     path.rsplit(['/', '\\']).next().unwrap_or(path)
+}
+
+/// A map zipped as a student's program hands it in: `{stem}.yaml` and the
+/// image it names, `{stem}.pgm` or `{stem}.png` (what [`read_map_zip`] reads
+/// back cell for cell).
+pub fn write_map_zip(
+    grid: &OccupancyGrid,
+    stem: &str,
+    format: ImageFormat,
+) -> Result<Vec<u8>, String> {
+    let image = format!("{stem}.{}", format.extension());
+    let (yaml, bytes) = export_map(grid, &image, format).map_err(|e| e.to_string())?;
+    write_zip(
+        "hand-in",
+        &[(format!("{stem}.yaml"), yaml.into_bytes()), (image, bytes)],
+    )
+    .map_err(|e| e.to_string())
 }
 
 /// Reads the map in a zip named `name`: its one `.yaml` (or `.yml`) and the
@@ -109,8 +127,6 @@ pub fn read_map_zip(name: &str, bytes: &[u8]) -> Result<(OccupancyGrid, MapYaml)
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::io::archive::write_zip;
-    use crate::io::ros_map::{ImageFormat, export_map};
     use slamlab_core::Pose2;
     use slamlab_core::grid::Cell;
 
@@ -128,20 +144,7 @@ mod tests {
     #[test]
     fn a_zipped_map_reads_back_cell_for_cell() {
         for format in [ImageFormat::Pgm, ImageFormat::Png] {
-            let image = if format == ImageFormat::Pgm {
-                "m.pgm"
-            } else {
-                "m.png"
-            };
-            let (yaml, bytes) = export_map(&grid(), image, format).unwrap();
-            let zip = write_zip(
-                "hand-in",
-                &[
-                    ("m.yaml".to_owned(), yaml.into_bytes()),
-                    (image.to_owned(), bytes),
-                ],
-            )
-            .unwrap();
+            let zip = write_map_zip(&grid(), "m", format).unwrap();
             let (back, _) = read_map_zip("mine.zip", &zip).unwrap();
             assert_eq!(back, grid());
         }

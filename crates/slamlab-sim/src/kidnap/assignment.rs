@@ -20,9 +20,8 @@ use crate::io::laser_log::{LaserKind, LaserLog, LogOdometry, LogScan, write_carm
 use crate::io::ros_map::{ImageFormat, export_map, load_map};
 use crate::io::trajectory::write_tum;
 use crate::metrics::Trajectory;
-use crate::noise::stream_seed;
 use slamlab_core::grid::{Costmap, OccupancyGrid};
-use slamlab_core::particle::{LocalizationMap, RecoveringMcl};
+use slamlab_core::particle::LocalizationMap;
 use slamlab_core::{Pose2, math, wrap_angle};
 use std::fmt::Write as _;
 use std::sync::Arc;
@@ -151,24 +150,8 @@ pub fn reference_mcl(
         LocalizationMap::new(grid, scenario.laser_likelihood_max_dist)
             .map_err(|e| CourseworkError::Generate(format!("the reference MCL's map: {e}")))?,
     );
-    let estimator = LocalizationEstimator::Mcl;
-    let mut filter = RecoveringMcl::new(
-        estimator.recovery(),
-        scenario.mcl_config(),
-        scenario.recovery_alphas(),
-        map,
-        Some(collision),
-        stream_seed(scenario.seed, 100),
-    );
-    let sd = |v: f64| if v > 0.0 { v.sqrt() } else { 0.0 };
-    filter.mcl_mut().init_tracking(
-        start,
-        [
-            sd(scenario.initial_cov_xx),
-            sd(scenario.initial_cov_yy),
-            sd(scenario.initial_cov_aa),
-        ],
-    );
+    let mut filter = scenario.filter(LocalizationEstimator::Mcl, map, collision, 100);
+    scenario.init_tracking(&mut filter, start);
     let mut path = Trajectory::default();
     for s in &log.scans {
         let odom = s.odometry;

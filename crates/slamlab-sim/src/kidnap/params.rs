@@ -5,7 +5,8 @@
 
 use super::scenario::{InitMode, LaserModelType, LocalizationEstimator, MclScenario};
 use crate::params::{
-    Param, ParamIssue, Preset, Scenario, choose, choose_items, count_field, list_text, number_field,
+    Param, ParamIssue, Preset, Scenario, choice_field, choose, choose_items, count_field,
+    list_text, number_field,
 };
 use slamlab_core::odometry::OdometryModel;
 use slamlab_core::particle::{Resampler, ScanAggregation};
@@ -79,32 +80,20 @@ pub static PARAMS: &[Param<MclScenario>] = &[
         (0.5, 0.9999),
         kld_z
     ),
-    Param::words(
+    choice_field!(
         "init",
         "global: particles everywhere; tracking: around the true start",
         INITS,
-        |s| Some(s.init.name().to_owned()),
-        |s, v| choose(INITS, v).map(|i| s.init = [InitMode::Global, InitMode::Tracking][i]),
+        [InitMode::Global, InitMode::Tracking],
+        init
     ),
     number_field!("dt", "s", "simulation time step", (0.01, 1.0), dt),
-    Param::words(
+    choice_field!(
         "laser-model-type",
         "measurement model: likelihood field (amcl's default) or beam model (Xiang's thesis §3.5.1)",
         LASER_MODELS,
-        |s| {
-            Some(
-                match s.laser_model_type {
-                    LaserModelType::LikelihoodField => "likelihood_field",
-                    LaserModelType::Beam => "beam",
-                }
-                .to_owned(),
-            )
-        },
-        |s, v| {
-            choose(LASER_MODELS, v).map(|i| {
-                s.laser_model_type = [LaserModelType::LikelihoodField, LaserModelType::Beam][i]
-            })
-        },
+        [LaserModelType::LikelihoodField, LaserModelType::Beam],
+        laser_model_type
     ),
     count_field!(
         "laser-max-beams",
@@ -161,17 +150,12 @@ pub static PARAMS: &[Param<MclScenario>] = &[
         (0.05, 20.0),
         laser_likelihood_max_dist
     ),
-    Param::words(
+    choice_field!(
         "laser-likelihood-aggregation",
         "how beams combine: product (Probabilistic Robotics, tempered by the exponent) or amcl (1 + sum of cubes, as ROS amcl)",
         AGGREGATIONS,
-        |s| Some(s.laser_likelihood_aggregation.name().to_owned()),
-        |s, v| {
-            choose(AGGREGATIONS, v).map(|i| {
-                s.laser_likelihood_aggregation =
-                    [ScanAggregation::Product, ScanAggregation::AmclCubes][i]
-            })
-        },
+        [ScanAggregation::Product, ScanAggregation::AmclCubes],
+        laser_likelihood_aggregation
     ),
     number_field!(
         "laser-likelihood-exponent",
@@ -180,15 +164,12 @@ pub static PARAMS: &[Param<MclScenario>] = &[
         (0.001, 1.0),
         laser_likelihood_exponent
     ),
-    Param::words(
+    choice_field!(
         "odom-model-type",
         "odometry noise sums as variances (diff-corrected, Nav2) or standard deviations (diff, ROS 1 amcl's default)",
         ODOM_MODELS,
-        |s| Some(s.odom_model_type.name().to_owned()),
-        |s, v| {
-            choose(ODOM_MODELS, v)
-                .map(|i| s.odom_model_type = [OdometryModel::DiffCorrected, OdometryModel::Diff][i])
-        },
+        [OdometryModel::DiffCorrected, OdometryModel::Diff],
+        odom_model_type
     ),
     number_field!(
         "odom-alpha1",
@@ -236,18 +217,17 @@ pub static PARAMS: &[Param<MclScenario>] = &[
             Ok(())
         },
     ),
-    Param::words(
+    choice_field!(
         "resampler",
         "resampling method",
         RESAMPLERS,
-        |s| Some(s.resampler.name().to_owned()),
-        |s, v| {
-            choose(RESAMPLERS, v).and_then(|i| {
-                Resampler::from_name(RESAMPLERS[i])
-                    .map(|r| s.resampler = r)
-                    .ok_or_else(|| format!("one of {}", RESAMPLERS.join(", ")))
-            })
-        },
+        [
+            Resampler::LowVariance,
+            Resampler::Multinomial,
+            Resampler::Stratified,
+            Resampler::Residual,
+        ],
+        resampler
     ),
     count_field!(
         "resample-interval",
@@ -352,6 +332,15 @@ fn named(id: &str, seed: u64) -> MclScenario {
     }
 }
 
+/// The parameters of preset `id` with `seed`, run by AMCL alone (amcl's and
+/// Nav2's defaults).
+fn amcl(id: &str, seed: u64) -> MclScenario {
+    MclScenario {
+        estimators: vec![LocalizationEstimator::Amcl],
+        ..named(id, seed)
+    }
+}
+
 /// The presets: ROS 1 amcl's defaults, Nav2's, and the thesis's Table 5.1 runs
 /// (each with Augmented MCL's recovery rates 0.001 / 0.1, see [`MclScenario::preset`]).
 pub static PRESETS: &[Preset<MclScenario>] = &[
@@ -359,19 +348,13 @@ pub static PRESETS: &[Preset<MclScenario>] = &[
         id: "amcl-ros1",
         title: "ROS 1 amcl defaults (AMCL)",
         summary: "amcl's documented defaults: 100..5000 particles with KLD-sampling, likelihood field with 30 beams scored as amcl does (1 + sum of cubes), the diff odometry model, an update every 0.2 m or 30°, resampling every 2 updates.",
-        build: |seed| MclScenario {
-            estimators: vec![LocalizationEstimator::Amcl],
-            ..named("amcl-ros1", seed)
-        },
+        build: |seed| amcl("amcl-ros1", seed),
     },
     Preset {
         id: "nav2",
         title: "Nav2 amcl defaults (AMCL)",
         summary: "Nav2's defaults: 500..2000 particles with KLD-sampling (kld_err 0.05), likelihood field with 60 beams scored as amcl does (1 + sum of cubes), an update every 0.25 m or 0.2 rad, resampling every update.",
-        build: |seed| MclScenario {
-            estimators: vec![LocalizationEstimator::Amcl],
-            ..named("nav2", seed)
-        },
+        build: |seed| amcl("nav2", seed),
     },
     Preset {
         id: "thesis-table-5-1",

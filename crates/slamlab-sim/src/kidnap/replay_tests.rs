@@ -19,6 +19,15 @@ fn recorded_run() -> (LaserLog, Vec<TruePose>) {
     simulate_log(&map, STEPS, SEED, &SimulatedLogConfig::default()).unwrap()
 }
 
+/// The recorded run, its truth, and the lesson's input read from the run
+/// written as a ROS 2 bag with its `/ground_truth`.
+fn recorded_bag() -> (LaserLog, Vec<TruePose>, MappingInput) {
+    let (log, truth) = recorded_run();
+    let bag = write_bag(&log, Some(&truth), &BagWriteOptions::default()).unwrap();
+    let file = LaserFile::from_bytes("run.mcap", &bag, &TopicChoice::default()).unwrap();
+    (log, truth, file.input)
+}
+
 fn scenario(init: InitMode) -> MclScenario {
     MclScenario {
         seed: 1,
@@ -62,10 +71,8 @@ fn final_errors(run: &MclRun, truth: Pose2) -> Vec<f64> {
 /// `/ground_truth`.
 #[test]
 fn a_bag_replayed_in_its_map_localizes_against_its_own_truth() {
-    let (log, truth) = recorded_run();
-    let bag = write_bag(&log, Some(&truth), &BagWriteOptions::default()).unwrap();
-    let file = LaserFile::from_bytes("run.mcap", &bag, &TopicChoice::default()).unwrap();
-    let run = replay(file.input, InitMode::Global);
+    let (_, truth, input) = recorded_bag();
+    let run = replay(input.clone(), InitMode::Global);
     assert!(run.has_truth());
     assert!(run.notes().is_empty(), "{:?}", run.notes());
     assert_eq!(run.truth_ticks().len(), STEPS);
@@ -89,8 +96,7 @@ fn a_bag_replayed_in_its_map_localizes_against_its_own_truth() {
     // A replay that reads the laser mirrored (an upside-down mounting missed,
     // or a clockwise scanner's angles taken the wrong way round) does not
     // localize: the bounds above are ones a broken replay fails.
-    let file = LaserFile::from_bytes("run.mcap", &bag, &TopicChoice::default()).unwrap();
-    let mut mirrored = file.input.clone();
+    let mut mirrored = input;
     for s in &mut mirrored.scans {
         for a in &mut s.scan.angles {
             *a = -*a;
@@ -166,10 +172,8 @@ fn a_carmen_log_replays_without_truth_and_reads_what_its_text_says() {
 /// same place, so both track.
 #[test]
 fn tracking_starts_at_the_truth_or_at_the_first_odometry() {
-    let (log, truth) = recorded_run();
-    let bag = write_bag(&log, Some(&truth), &BagWriteOptions::default()).unwrap();
-    let file = LaserFile::from_bytes("run.mcap", &bag, &TopicChoice::default()).unwrap();
-    let run = replay(file.input, InitMode::Tracking);
+    let (log, truth, input) = recorded_bag();
+    let run = replay(input, InitMode::Tracking);
     for f in run.filters() {
         assert_eq!(f.summary().converged_tick, Some(0), "{}", f.name);
     }

@@ -408,25 +408,15 @@ impl MclRun {
             .enumerate()
             .map(|(k, est)| {
                 let name = est.name();
-                let mut filter = RecoveringMcl::new(
-                    est.recovery(),
-                    scenario.mcl_config(),
-                    scenario.recovery_alphas(),
+                let mut filter = scenario.filter(
+                    *est,
                     Arc::clone(&map),
-                    Some(Arc::clone(&collision)),
-                    stream_seed(seed, 100 + k as u64),
+                    Arc::clone(&collision),
+                    100 + k as u64,
                 );
                 notes.extend(filter.notices().iter().map(|n| format!("{name}: {n}")));
                 if scenario.init == InitMode::Tracking {
-                    let sd = |v: f64| if v > 0.0 { v.sqrt() } else { 0.0 };
-                    filter.mcl_mut().init_tracking(
-                        start,
-                        [
-                            sd(scenario.initial_cov_xx),
-                            sd(scenario.initial_cov_yy),
-                            sd(scenario.initial_cov_aa),
-                        ],
-                    );
+                    scenario.init_tracking(&mut filter, start);
                 }
                 FilterRun {
                     name,

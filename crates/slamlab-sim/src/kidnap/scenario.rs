@@ -4,12 +4,16 @@
 use crate::grid::explorer::ExplorerConfig;
 use crate::grid::lidar::Lidar;
 use crate::grid::robot::ROBOT_ODOMETRY_NOISE;
+use crate::noise::stream_seed;
 use serde::{Deserialize, Serialize};
+use slamlab_core::Pose2;
+use slamlab_core::grid::Costmap;
 use slamlab_core::odometry::{OdometryModel, OdometryNoise};
 use slamlab_core::particle::{
-    BeamModel, ClusterBins, KldSampling, LikelihoodFieldModel, MclConfig, MeasurementModel,
-    Recovery, RecoveryAlphas, Resampler, ScanAggregation,
+    BeamModel, ClusterBins, KldSampling, LikelihoodFieldModel, LocalizationMap, MclConfig,
+    MeasurementModel, RecoveringMcl, Recovery, RecoveryAlphas, Resampler, ScanAggregation,
 };
+use std::sync::Arc;
 
 /// How the particles start.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
@@ -272,6 +276,47 @@ impl MclScenario {
             alpha_slow: self.recovery_alpha_slow,
             alpha_fast: self.recovery_alpha_fast,
         }
+    }
+
+    /// The filter of `estimator` with these parameters on `map`, its particles
+    /// kept out of `collision`'s cells, its randomness from stream `stream` of
+    /// the seed.
+    pub fn filter(
+        &self,
+        estimator: LocalizationEstimator,
+        map: Arc<LocalizationMap>,
+        collision: Arc<Costmap>,
+        stream: u64,
+    ) -> RecoveringMcl {
+        RecoveringMcl::new(
+            estimator.recovery(),
+            self.mcl_config(),
+            self.recovery_alphas(),
+            map,
+            Some(collision),
+            stream_seed(self.seed, stream),
+        )
+    }
+
+    /// Starts `filter` tracking: its particles drawn around `start` with the
+    /// initial covariance's standard deviations (`initial_cov_xx`, `_yy`,
+    /// `_aa`; a variance that is not positive and finite: none).
+    pub fn init_tracking(&self, filter: &mut RecoveringMcl, start: Pose2) {
+        let sd = |v: f64| {
+            if v > 0.0 && v.is_finite() {
+                v.sqrt()
+            } else {
+                0.0
+            }
+        };
+        filter.mcl_mut().init_tracking(
+            start,
+            [
+                sd(self.initial_cov_xx),
+                sd(self.initial_cov_yy),
+                sd(self.initial_cov_aa),
+            ],
+        );
     }
 
     /// The configuration of a plain MCL filter.

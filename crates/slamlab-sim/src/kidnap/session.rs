@@ -176,20 +176,8 @@ impl Simulation for KidnapSim {
                     return;
                 };
                 let s = self.run.scenario().clone();
-                let sd = |v: f64| {
-                    if v > 0.0 && v.is_finite() {
-                        v.sqrt()
-                    } else {
-                        0.0
-                    }
-                };
-                let std = [
-                    sd(s.initial_cov_xx),
-                    sd(s.initial_cov_yy),
-                    sd(s.initial_cov_aa),
-                ];
                 for f in self.run.filters_mut() {
-                    f.filter.mcl_mut().init_tracking(truth, std);
+                    s.init_tracking(&mut f.filter, truth);
                 }
             }
             KidnapEvent::Drive(v, w) => self.run.set_manual(Some((v, w))),

@@ -14,7 +14,7 @@
 use super::MappingScenario;
 use super::scenario::simulated_log_config;
 use crate::coursework::files::{InputFiles, number};
-use crate::coursework::grade::assemble_scores;
+use crate::coursework::grade::{assemble_scores, grade_command};
 use crate::coursework::{
     Assignment, CourseworkError, Grade, HandIn, InputFormat, Metric, Task, TaskKind, TaskRun,
     Variant, builtin_map_refusal, load_builtin_map, steps_refusal,
@@ -281,15 +281,14 @@ impl TaskRun for GridMappingRun {
             "{file}: your occupancy map as a ROS map_server map, map.yaml and the map.pgm\n\
              it names ('image: map.pgm', resolution, origin; black occupied, white free,\n\
              grey 205 unknown), the two files zipped together. Check it with\n\
-             \x20 slamlab grade {id} --student '{student}' --estimate {file}\n\
+             \x20 {check}\n\
              (or --estimate map.yaml, with map.pgm beside it).\n\n\
              It is scored against the true map: each of the true map's free and\n\
              occupied cells is looked up in your map at its centre; the agreement is\n\
              the share of those your map knows (free or occupied) that it classifies as\n\
              the true map does, the coverage the share it knows at all:",
             file = assignment.output.file,
-            id = assignment.id,
-            student = variant.student,
+            check = grade_command(assignment, variant),
         ))
     }
 

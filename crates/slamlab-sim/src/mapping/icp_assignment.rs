@@ -16,13 +16,13 @@
 use super::MappingScenario;
 use super::scenario::simulated_log_config;
 use crate::coursework::files::{InputFiles, number};
-use crate::coursework::grade::assemble_scores;
+use crate::coursework::grade::{grade_relative_pose, relative_pose_hand_in};
 use crate::coursework::{
     Assignment, CourseworkError, Grade, HandIn, InputFormat, Metric, Task, TaskKind, TaskRun,
     Variant, builtin_map_refusal, load_builtin_map, steps_refusal,
 };
 use crate::grid::simulate_log;
-use crate::io::relative_pose::{read_relative_pose, write_relative_pose};
+use crate::io::relative_pose::write_relative_pose;
 use crate::metrics::{Trajectory, relative_pose_error};
 use nalgebra::{Matrix3, Vector3};
 use slamlab_core::laser::Point2;
@@ -253,15 +253,11 @@ impl TaskRun for IcpRun {
     }
 
     fn hand_in_text(&self, assignment: &Assignment, variant: &Variant) -> Option<String> {
-        Some(format!(
-            "{file}: the relative pose of the two scans as text: R row by row (9\n\
-             numbers), then t (3), white space or commas, '#' comments; or 7 numbers\n\
-             'tx ty tz qx qy qz qw'. Check it with\n\
-             \x20 slamlab grade {id} --student '{student}' --estimate {file}\n\n\
-             It is scored against the true relative pose of the two scans:",
-            file = assignment.output.file,
-            id = assignment.id,
-            student = variant.student,
+        Some(relative_pose_hand_in(
+            assignment,
+            variant,
+            "scans",
+            "It is scored against the true relative pose of the two scans:",
         ))
     }
 
@@ -270,24 +266,18 @@ impl TaskRun for IcpRun {
         hand_in: &HandIn<'_>,
         references: &[(String, Trajectory)],
     ) -> Result<Grade, CourseworkError> {
-        let file = read_relative_pose(hand_in.bytes).map_err(|e| hand_in.bad(e))?;
         let truth = relative_pose_of(&self.a_from_b);
+        let theirs = references.iter().filter_map(|(name, t)| {
+            let p = t.poses().get(1)?;
+            Some((name.clone(), relative_pose_of(p)))
+        });
         let value = |metric: Metric, e: &[Option<f64>; 3]| match metric {
             Metric::RotationErrorDeg => e[0],
             Metric::TranslationErrorM => e[1],
             Metric::TranslationDirectionErrorDeg => e[2],
             _ => None,
         };
-        let mine = errors(&file.pose, &truth);
-        let theirs: Vec<(String, [Option<f64>; 3])> = references
-            .iter()
-            .filter_map(|(name, t)| {
-                let p = t.poses().get(1)?;
-                Some((name.clone(), errors(&relative_pose_of(p), &truth)))
-            })
-            .collect();
-        let notices = hand_in.notices(&file.notices);
-        Ok(assemble_scores(hand_in, &mine, &theirs, value, notices))
+        grade_relative_pose(hand_in, theirs, |p| errors(p, &truth), value)
     }
 }
 

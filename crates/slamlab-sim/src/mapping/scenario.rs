@@ -5,7 +5,7 @@
 use crate::grid::SimulatedRun;
 use crate::grid::run_params::{map_param, seed_param, steps_param};
 use crate::grid::{MappingInput, SimulatedLogConfig, log_input, simulate_log};
-use crate::params::{Param, Scenario, choose, count_field, number_field};
+use crate::params::{Param, Scenario, choice_field, count_field, number_field};
 use serde::{Deserialize, Serialize};
 use slamlab_core::grid::{InsertParams, OccupancyGrid, UpdateRule};
 use slamlab_core::particle::MAX_GRID_PARTICLES;
@@ -300,19 +300,19 @@ pub static PARAMS: &[Param<MappingScenario>] = &[
     seed_param(),
     map_param(),
     steps_param(),
-    Param::words(
+    choice_field!(
         "poses",
         "where each scan's pose comes from",
         PoseSource::NAMES,
-        |s| Some(s.poses.name().to_owned()),
-        |s, v| choose(PoseSource::NAMES, v).map(|i| s.poses = PoseSource::ALL[i]),
+        PoseSource::ALL,
+        poses
     ),
-    Param::words(
+    choice_field!(
         "rule",
         "map update: log-odds (Probabilistic Robotics Table 9.2) or odds (thesis Eq. 5.4)",
         RULES,
-        |s| Some(RULES[s.rule as usize].to_owned()),
-        |s, v| choose(RULES, v).map(|i| s.rule = [RuleKind::LogOdds, RuleKind::Odds][i]),
+        [RuleKind::LogOdds, RuleKind::Odds],
+        rule
     ),
     number_field!(
         "resolution",
@@ -447,12 +447,12 @@ pub static PARAMS: &[Param<MappingScenario>] = &[
         (1, MAX_GRID_PARTICLES as u64),
         particles
     ),
-    Param::words(
+    choice_field!(
         "proposal",
         "grid FastSLAM: odometry (the motion model) or scan-match (gmapping's improved proposal)",
         PROPOSALS,
-        |s| Some(s.proposal.name().to_owned()),
-        |s, v| choose(PROPOSALS, v).map(|i| s.proposal = Proposal::ALL[i]),
+        Proposal::ALL,
+        proposal
     ),
     number_field!(
         "resample-threshold",

@@ -1,4 +1,4 @@
-//! Two-view assignments (`crate::coursework`'s [`RUNNER`] of `two-view`
+//! Two-view assignments (`crate::coursework`'s [`Task`] of `two-view`
 //! tasks): the essential matrix with RANSAC. A student gets the intrinsics
 //! `K.txt` and pixel matches `matches.csv` (`u1,v1,u2,v2`) of one seeded
 //! two-view scene, a share of them wrong, and hands back the relative pose of
@@ -29,12 +29,12 @@
 use super::VoScenario;
 use super::experiment::random_two_view_scene;
 use crate::coursework::files::{InputFiles, number};
-use crate::coursework::grade::assemble_scores;
+use crate::coursework::grade::{grade_relative_pose, relative_pose_hand_in};
 use crate::coursework::{
     Assignment, CourseworkError, Grade, HandIn, InputFormat, Metric, Task, TaskKind, TaskRun,
-    TaskRunner, Variant, apply_params, steps_refusal,
+    Variant, apply_params, steps_refusal,
 };
-use crate::io::relative_pose::{read_relative_pose, write_relative_pose};
+use crate::io::relative_pose::write_relative_pose;
 use crate::metrics::{Trajectory, relative_pose_error};
 use crate::noise::stream_seed;
 use nalgebra::{Matrix3, Vector3};
@@ -241,9 +241,7 @@ impl TwoViewRun {
     /// `slamlab export-inputs` and `slamlab grade` run it.
     pub fn for_variant(assignment: &Assignment, variant: &Variant, steps: u64) -> TwoViewRun {
         let (scenario, _) = apply_params::<VoScenario>(assignment);
-        let mut run = TwoViewRun::of_seed(scenario, variant.seed, steps);
-        run.answers_included = assignment.answers_included;
-        run
+        TwoViewRun::of_seed(scenario, variant.seed, steps).with_assignment(assignment)
     }
 
     /// The scene of `scenario` with its seed set to `seed` and `steps` matches
@@ -323,15 +321,11 @@ impl TwoViewRun {
 /// The starter code of two-view assignments.
 pub const TWO_VIEW_STARTER: &str = include_str!("assignment_starter.py");
 
-/// The runner of two-view tasks: the lesson's parameter table checks the
-/// assignment's parameters ([`Task::refusals`] adds the ones the scene does not
-/// use and the matches' range); a variant is [`TwoViewRun::for_variant`], which
-/// also carries the assignment's answers switch into the lesson's link.
-pub const RUNNER: TaskRunner = TaskRunner {
-    simulate: simulate_variant,
-    ..TaskRunner::of::<TwoViewRun>()
-};
-
+/// Two-view tasks: the lesson's parameter table checks the assignment's
+/// parameters ([`Task::refusals`] adds the ones the scene does not use and the
+/// matches' range); a variant is the scene of its seed
+/// ([`TwoViewRun::for_variant`]), which also carries the assignment's answers
+/// switch into the lesson's link.
 impl Task for TwoViewRun {
     const KIND: TaskKind = TaskKind::TwoView;
     type Scenario = VoScenario;
@@ -355,16 +349,12 @@ impl Task for TwoViewRun {
     fn run(scenario: VoScenario, seed: u64, steps: u64) -> Result<TwoViewRun, CourseworkError> {
         Ok(TwoViewRun::of_seed(scenario, seed, steps))
     }
-}
 
-fn simulate_variant(
-    assignment: &Assignment,
-    variant: &Variant,
-    steps: u64,
-) -> Result<Box<dyn TaskRun>, CourseworkError> {
-    Ok(Box::new(TwoViewRun::for_variant(
-        assignment, variant, steps,
-    )))
+    /// The answers switch: the lesson marks the wrong matches from the start.
+    fn with_assignment(mut self, assignment: &Assignment) -> TwoViewRun {
+        self.answers_included = assignment.answers_included;
+        self
+    }
 }
 
 impl TaskRun for TwoViewRun {
@@ -415,16 +405,12 @@ impl TaskRun for TwoViewRun {
     }
 
     fn hand_in_text(&self, assignment: &Assignment, variant: &Variant) -> Option<String> {
-        Some(format!(
-            "{file}: the relative pose of the two views as text: R row by row (9\n\
-             numbers), then t (3), white space or commas, '#' comments; or 7 numbers\n\
-             'tx ty tz qx qy qz qw'. Check it with\n\
-             \x20 slamlab grade {id} --student '{student}' --estimate {file}\n\n\
-             It is scored against the true relative pose of the two views (t by its\n\
+        Some(relative_pose_hand_in(
+            assignment,
+            variant,
+            "views",
+            "It is scored against the true relative pose of the two views (t by its\n\
              direction alone):",
-            file = assignment.output.file,
-            id = assignment.id,
-            student = variant.student,
         ))
     }
 
@@ -436,22 +422,15 @@ impl TaskRun for TwoViewRun {
         hand_in: &HandIn<'_>,
         references: &[(String, Trajectory)],
     ) -> Result<Grade, CourseworkError> {
-        let file = read_relative_pose(hand_in.bytes).map_err(|e| hand_in.bad(e))?;
+        let theirs = references
+            .iter()
+            .filter_map(|(name, _)| Some((name.clone(), *self.reference(name)?)));
         let value = |metric: Metric, e: &[Option<f64>; 2]| match metric {
             Metric::RotationErrorDeg => e[0],
             Metric::TranslationDirectionErrorDeg => e[1],
             _ => None,
         };
-        let mine = errors(&file.pose, &self.truth);
-        let theirs: Vec<(String, [Option<f64>; 2])> = references
-            .iter()
-            .filter_map(|(name, _)| {
-                let pose = self.reference(name)?;
-                Some((name.clone(), errors(pose, &self.truth)))
-            })
-            .collect();
-        let notices = hand_in.notices(&file.notices);
-        Ok(assemble_scores(hand_in, &mine, &theirs, value, notices))
+        grade_relative_pose(hand_in, theirs, |p| errors(p, &self.truth), value)
     }
 }
 

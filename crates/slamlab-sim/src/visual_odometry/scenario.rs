@@ -6,7 +6,7 @@ use serde::{Deserialize, Serialize};
 use slamlab_core::vision::{EarlyRejection, Method};
 
 use super::odometry::VoSettings;
-use crate::params::{self, Param, Scenario, count_field, number_field};
+use crate::params::{Param, Scenario, choice_field, count_field, number_field, switch_field};
 
 /// The lesson's parameters: the run's settings and the VO step shown in the
 /// two images.
@@ -33,16 +33,7 @@ impl Default for VoScenario {
 pub const DEFAULT_PAIR: usize = 5;
 
 const METHODS: &[&str] = &["five-point", "eight-point"];
-const ON_OFF: &[&str] = &["on", "off"];
 const EARLY_REJECTION: &[&str] = &["none", "sprt"];
-
-fn on_off(on: bool) -> String {
-    if on { "on" } else { "off" }.to_owned()
-}
-
-fn read_on_off(value: &str) -> Result<bool, String> {
-    params::choose(ON_OFF, value).map(|i| i == 0)
-}
 
 /// The lesson's parameter table.
 pub static PARAMS: &[Param<VoScenario>] = &[
@@ -52,41 +43,29 @@ pub static PARAMS: &[Param<VoScenario>] = &[
         (0, u64::MAX),
         settings.seed
     ),
-    Param::words(
+    choice_field!(
         "method",
         "the minimal solver inside RANSAC: five-point (calibrated, Eq. 4.22-4.25) or eight-point (Eq. 4.18-4.21)",
         METHODS,
-        |s| Some(s.settings.method.name().to_owned()),
-        |s, v| {
-            params::choose(METHODS, v)?;
-            s.settings.method = Method::from_name(v).unwrap_or(Method::FivePoint);
-            Ok(())
-        },
+        [Method::FivePoint, Method::EightPoint],
+        settings.method
     ),
-    Param::words(
+    switch_field!(
         "normalize",
         "Hartley normalization in the eight-point solver (pixels moved to mean 0, mean distance √2)",
-        ON_OFF,
-        |s| Some(on_off(s.settings.normalize)),
-        |s, v| read_on_off(v).map(|on| s.settings.normalize = on),
+        settings.normalize
     ),
-    Param::words(
+    switch_field!(
         "refine",
         "Levenberg-Marquardt on (R, t) over the Sampson distances of the inliers, after RANSAC and (eight-point) inside its local optimization (on), or the linear eight-point refits alone (off)",
-        ON_OFF,
-        |s| Some(on_off(s.settings.refine)),
-        |s, v| read_on_off(v).map(|on| s.settings.refine = on),
+        settings.refine
     ),
-    Param::words(
+    choice_field!(
         "early-rejection",
         "none: every hypothesis is checked against every match; sprt: Matas and Chum's sequential probability ratio test rejects a bad hypothesis after a few matches",
         EARLY_REJECTION,
-        |s| Some(s.settings.early_rejection.name().to_owned()),
-        |s, v| {
-            params::choose(EARLY_REJECTION, v)?;
-            s.settings.early_rejection = EarlyRejection::from_name(v).unwrap_or_default();
-            Ok(())
-        },
+        [EarlyRejection::None, EarlyRejection::Sprt],
+        settings.early_rejection
     ),
     number_field!(
         "outliers",
@@ -102,19 +81,15 @@ pub static PARAMS: &[Param<VoScenario>] = &[
         (0.0, 20.0),
         settings.noise_px
     ),
-    Param::words(
+    switch_field!(
         "pure-rotation",
         "a 20-frame turn on the spot a third of the way (no translation: a degenerate case)",
-        ON_OFF,
-        |s| Some(on_off(s.settings.pure_rotation_segment)),
-        |s, v| read_on_off(v).map(|on| s.settings.pure_rotation_segment = on),
+        settings.pure_rotation_segment
     ),
-    Param::words(
+    switch_field!(
         "planar",
         "the middle third of the run sees only the facade (a planar scene: a degenerate case for the eight-point method)",
-        ON_OFF,
-        |s| Some(on_off(s.settings.planar_segment)),
-        |s, v| read_on_off(v).map(|on| s.settings.planar_segment = on),
+        settings.planar_segment
     ),
     count_field!(
         "frames",
@@ -151,6 +126,7 @@ impl Scenario for VoScenario {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::params;
 
     #[test]
     fn the_table_round_trips_and_bad_values_get_messages() {

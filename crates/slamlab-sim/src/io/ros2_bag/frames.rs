@@ -235,30 +235,19 @@ impl Ros2Bag {
     pub fn laser_log(&self, choice: &TopicChoice) -> Result<BagLog, BagError> {
         let mut notices = Vec::new();
         // The scan topic.
-        let scan_topics: Vec<(&str, usize)> = self
-            .topics_of(msgs::LASER_SCAN)
-            .iter()
-            .map(|t| (t.topic.as_str(), t.messages))
-            .collect();
+        let scan_topics = self.topic_counts(msgs::LASER_SCAN);
         let scan_topic = match &choice.scan {
-            Some(wanted) => scan_topics
-                .iter()
-                .find(|(t, _)| t == wanted)
-                .map(|(t, _)| *t)
-                .ok_or_else(|| BagError::NoSuchTopic {
-                    wanted: wanted.clone(),
-                    type_name: msgs::LASER_SCAN,
-                    available: list(scan_topics.iter().map(|(t, _)| *t)),
-                })?,
+            Some(wanted) => wanted_topic(&scan_topics, wanted, msgs::LASER_SCAN, None)?,
             None => pick(&scan_topics, "/scan").ok_or_else(|| BagError::NoLaserTopic {
                 topics: self.topic_list(),
             })?,
         };
         if scan_topics.len() > 1 && choice.scan.is_none() {
-            notices.push(format!(
-                "{} LaserScan topics ({}): mapping {scan_topic}; choose another with scan-topic=",
-                scan_topics.len(),
-                list(scan_topics.iter().map(|(t, _)| *t))
+            notices.push(several_topics(
+                &scan_topics,
+                "LaserScan",
+                &format!("mapping {scan_topic}"),
+                "scan-topic",
             ));
         }
         let scans: &[Logged<LaserScan>] = self.scans.get(scan_topic).map_or(&[], Vec::as_slice);
@@ -274,11 +263,7 @@ impl Ros2Bag {
         let tf = TfTree::new(self);
 
         // The odometry.
-        let odom_topics: Vec<(&str, usize)> = self
-            .topics_of(msgs::ODOMETRY)
-            .iter()
-            .map(|t| (t.topic.as_str(), t.messages))
-            .collect();
+        let odom_topics = self.topic_counts(msgs::ODOMETRY);
         let tf_edge = odometry_edge(&tf, &laser_frame);
         let mut other_odometry: Vec<String> =
             odom_topics.iter().map(|(t, _)| (*t).to_owned()).collect();
@@ -327,29 +312,22 @@ impl Ros2Bag {
             )
         } else {
             let topic = match &choice.odom {
-                Some(wanted) => odom_topics
-                    .iter()
-                    .find(|(t, _)| t == wanted)
-                    .map(|(t, _)| *t)
-                    .ok_or_else(|| BagError::NoSuchTopic {
-                        wanted: wanted.clone(),
-                        type_name: msgs::ODOMETRY,
-                        available: list(
-                            odom_topics
-                                .iter()
-                                .map(|(t, _)| *t)
-                                .chain(tf_edge.is_some().then_some("tf")),
-                        ),
-                    })?,
+                Some(wanted) => wanted_topic(
+                    &odom_topics,
+                    wanted,
+                    msgs::ODOMETRY,
+                    tf_edge.is_some().then_some("tf"),
+                )?,
                 None => pick(&odom_topics, "/odom").ok_or(BagError::NoOdometry {
                     laser_frame: laser_frame.clone(),
                 })?,
             };
             if odom_topics.len() > 1 && choice.odom.is_none() {
-                notices.push(format!(
-                    "{} Odometry topics ({}): using {topic}; choose another with odom-topic=",
-                    odom_topics.len(),
-                    list(odom_topics.iter().map(|(t, _)| *t))
+                notices.push(several_topics(
+                    &odom_topics,
+                    "Odometry",
+                    &format!("using {topic}"),
+                    "odom-topic",
                 ));
             }
             let messages = self.odometry.get(topic).map_or(&[][..], Vec::as_slice);
@@ -644,6 +622,35 @@ fn stamp_or_log_time(stamp: i64, log_time: u64) -> i64 {
 }
 
 /// `a, b, c`.
+/// The topic `wanted` among `topics` (of type `type_name`), or the error that
+/// lists them (and `also`, another source that could be chosen: `tf`).
+fn wanted_topic<'a>(
+    topics: &[(&'a str, usize)],
+    wanted: &str,
+    type_name: &'static str,
+    also: Option<&'a str>,
+) -> Result<&'a str, BagError> {
+    topics
+        .iter()
+        .find(|(t, _)| *t == wanted)
+        .map(|(t, _)| *t)
+        .ok_or_else(|| BagError::NoSuchTopic {
+            wanted: wanted.to_owned(),
+            type_name,
+            available: list(topics.iter().map(|(t, _)| *t).chain(also)),
+        })
+}
+
+/// The notice that the bag has several `kind` topics (`topics`) and what was
+/// done (`doing`: which one is used), and the link key that chooses another.
+fn several_topics(topics: &[(&str, usize)], kind: &str, doing: &str, key: &str) -> String {
+    format!(
+        "{} {kind} topics ({}): {doing}; choose another with {key}=",
+        topics.len(),
+        list(topics.iter().map(|(t, _)| *t))
+    )
+}
+
 fn list<'a>(names: impl Iterator<Item = &'a str>) -> String {
     let v: Vec<&str> = names.collect();
     if v.is_empty() {

@@ -431,11 +431,12 @@ impl Ros2Bag {
         Ok(())
     }
 
-    /// The topics of one type, by name.
-    pub fn topics_of(&self, type_name: &str) -> Vec<&TopicInfo> {
+    /// The topics of one type, by name, with their message counts.
+    pub fn topic_counts(&self, type_name: &str) -> Vec<(&str, usize)> {
         self.topics
             .iter()
             .filter(|t| t.type_name == type_name)
+            .map(|t| (t.topic.as_str(), t.messages))
             .collect()
     }
 

@@ -956,6 +956,26 @@ fn scans_outside_the_odometry_are_dropped_and_a_choice_is_offered_between_topics
     assert_eq!(log.log.scans.len(), 1);
     let p = pose_at(SECOND + 1);
     assert!((log.log.scans[0].odometry.x - p.x).abs() < 1e-12);
+    // A topic the bag does not have: the error lists the ones of its type.
+    let choose = |scan: Option<&str>, odom: Option<&str>| {
+        bag.laser_log(&TopicChoice {
+            scan: scan.map(str::to_owned),
+            odom: odom.map(str::to_owned),
+        })
+        .unwrap_err()
+    };
+    let e = choose(Some("/front"), None);
+    assert!(
+        matches!(&e, BagError::NoSuchTopic { wanted, available, .. }
+            if wanted == "/front" && available == "/scan, /scan_rear"),
+        "{e}"
+    );
+    let e = choose(None, Some("/wheels"));
+    assert!(
+        matches!(&e, BagError::NoSuchTopic { available, .. }
+            if available.starts_with("/odom, /odometry/filtered")),
+        "{e}"
+    );
 }
 
 #[test]

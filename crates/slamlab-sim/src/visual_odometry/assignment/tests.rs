@@ -5,10 +5,12 @@
 #![allow(clippy::unwrap_used, clippy::expect_used, clippy::panic)] // a failing test stops
 
 use super::*;
-use crate::coursework::{self, Prepared};
+use crate::coursework::{self, Prepared, TaskRunner};
 
 // The lesson's own runner, as `crate::assignments` lists it (not imported
 // from there: the list imports this lesson).
+const RUNNER: TaskRunner = TaskRunner::of::<TwoViewRun>();
+
 fn builtin(name: &str) -> Assignment {
     coursework::builtin(name, &[RUNNER]).unwrap()
 }
@@ -44,13 +46,8 @@ fn the_naive_answer_fails_and_the_eight_point_ransac_passes() {
         ("visual-odometry", 100.0, 100.0)
     );
     for student in ["ada@uni.edu", "alan@uni.edu", "grace@uni.edu", "s0123456"] {
+        // (The truth passes: `tests/assignments.rs`, with ICP's.)
         let p = prepare(&a, student).unwrap();
-        let truth = p
-            .grade("truth.txt", &file(&p, "answers/relative_pose.txt"))
-            .unwrap();
-        assert!(truth.pass, "{student}: {truth:#?}");
-        assert!(truth.criteria[0].value.unwrap() < 1e-5);
-        assert!(truth.criteria[1].value.unwrap() < 1e-5);
         let again = simulate(&p);
         let eight = again.reference("eight-point").unwrap();
         let g = p.grade("eight.txt", &pose_file(eight)).unwrap();
@@ -86,22 +83,14 @@ fn the_naive_answer_fails_and_the_eight_point_ransac_passes() {
     );
 }
 
+/// What every assignment's student gets (the same bytes every time, another
+/// student other ones) is checked for all of them in `tests/assignments.rs`;
+/// here, which of the two-view files are a student's own.
 #[test]
 fn a_student_always_gets_the_same_bytes_and_two_students_different_ones() {
     let a = builtin("two-view");
     let ada = prepare(&a, "ada@uni.edu").unwrap();
-    let again = prepare(&a, " ADA@uni.edu").unwrap();
     let alan = prepare(&a, "alan@uni.edu").unwrap();
-    assert_eq!(ada.variant.seed, again.variant.seed);
-    assert_ne!(ada.variant.seed, alan.variant.seed);
-    let data = |p: &Prepared| {
-        p.input_files(true)
-            .files
-            .into_iter()
-            .filter(|(path, _)| path != "README.txt")
-            .collect::<Vec<_>>()
-    };
-    assert_eq!(data(&ada), data(&again));
     assert_eq!(
         ada.zip(true).unwrap(),
         prepare(&a, "ada@uni.edu").unwrap().zip(true).unwrap()
