@@ -24,6 +24,7 @@ pub fn table_args<S: Scenario>(keep: impl Fn(&str) -> bool) -> Vec<Arg> {
                 .long(p.name)
                 .value_name("VALUE")
                 .allow_hyphen_values(true)
+                .value_parser(crate::args::value_not_flag)
                 .help(format!(
                     "{}{unit} [{}]; default {default}",
                     p.help,

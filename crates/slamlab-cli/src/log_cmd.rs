@@ -100,13 +100,7 @@ pub fn command() -> Command {
                 .arg(
                     args::count("steps", "scans to record (0.1 s apart)").default_value("3000"),
                 )
-                .arg(
-                    Arg::new("seed")
-                        .long("seed")
-                        .value_parser(clap::value_parser!(u64))
-                        .default_value("1")
-                        .help("random seed (start pose, noise, goals)"),
-                )
+                .arg(args::seed("random seed (start pose, noise, goals)"))
                 .arg(
                     args::flag("out", "the log to write (.mcap: a ROS 2 bag; anything else: CARMEN, with the truth in the same name + .truth)").required(true),
                 ),

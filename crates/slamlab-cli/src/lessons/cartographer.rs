@@ -156,6 +156,7 @@ impl RunLesson for Cartographer {
             ))
             .arg(
                 args::flag("seed", "the simulation's seed (default 1)")
+                    .allow_negative_numbers(true)
                     .value_parser(clap::value_parser!(u64)),
             )
             .arg(args::count(
