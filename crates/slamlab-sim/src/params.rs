@@ -173,8 +173,10 @@ impl<S> Param<S> {
 }
 
 /// A real-valued parameter read and written straight from a field (a field of a
-/// field, an element of an array field) of scenario type `$s`, in the
-/// parameter's own unit.
+/// field, an element of an array field) of the table's scenario type, in the
+/// parameter's own unit; the `@in` form (for other macros, such as
+/// `degrees_field!`) shows the field through `$shown` and keeps a value through
+/// `$kept`, for a parameter given in another unit than the field's.
 macro_rules! number_field {
     // The value shown is `$shown(field)`, the value kept `$kept(value)`.
     (@in $s:ty, $name:literal, $unit:literal, $help:literal, $range:expr, $shown:expr, $kept:expr, $($field:tt)+) => {
@@ -263,9 +265,14 @@ pub(crate) use switch_field;
 
 /// A choice read and written straight from a field (or a field of a field) of
 /// the table's scenario type: `words[i]` names `values[i]` (an enum's words
-/// and its values, in the same order).
+/// and its values, in the same order; two lists of different lengths do not
+/// compile).
 macro_rules! choice_field {
-    ($name:literal, $help:literal, $words:expr, $values:expr, $($field:tt)+) => {
+    ($name:literal, $help:literal, $words:expr, $values:expr, $($field:tt)+) => {{
+        const _: () = assert!(
+            $words.len() == $values.len(),
+            "a choice parameter needs one word for each value"
+        );
         $crate::params::Param::words(
             $name,
             $help,
@@ -276,7 +283,7 @@ macro_rules! choice_field {
             },
             |s, v| $crate::params::choose($words, v).map(|i| s.$($field)+ = $values[i]),
         )
-    };
+    }};
 }
 pub(crate) use choice_field;
 

@@ -276,6 +276,7 @@ impl PoseGraphLesson {
         self.marginals = None;
         self.comparison = None;
         self.drag = None;
+        self.solutions.rescore();
         self.frame.map.refit();
     }
 

@@ -127,6 +127,12 @@ impl Solutions {
         ))
     }
 
+    /// Scores every solution again at the next refresh (the lesson's graph was
+    /// replaced: a Reset, a new seed or parameters).
+    pub fn rescore(&mut self) {
+        self.scored = None;
+    }
+
     /// Forgets every solution (another problem opened).
     pub fn clear(&mut self) -> usize {
         let n = self.items.len();

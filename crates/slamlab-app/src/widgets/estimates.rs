@@ -796,10 +796,10 @@ pub fn map_overlay(ctx: &egui::Context, estimates: &mut Estimates, now: f64) {
 }
 
 /// A window of a student's own results in the bottom right corner of the
-/// screen, beside the map rather than over all of it: about 40 % of the
-/// window's width (300 to 470 points, never wider) and `height` points high, kept on screen. Shared by
-/// "Your estimates" and the pose-graph lesson's "Your solutions"; the notices
-/// box keeps clear of it ([`corner_windows`]).
+/// screen, beside the map rather than over all of it: 42 % of the screen's
+/// width, kept between 300 and 470 points (and on screen), and `height` points
+/// high. Shared by "Your estimates" and the pose-graph lesson's "Your
+/// solutions"; the notices box keeps clear of it ([`corner_windows`]).
 pub fn show_corner_window<R>(
     ctx: &egui::Context,
     title: &str,

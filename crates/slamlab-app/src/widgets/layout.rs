@@ -54,11 +54,18 @@ pub fn map_rect(ctx: &egui::Context) -> Option<egui::Rect> {
 
 /// The widest stretch of `span` that none of `covered` covers, as (left,
 /// right); `span` itself when every stretch is narrower than `min_width` (the
-/// box then lies under a window rather than shrink to nothing).
+/// box then lies under a window rather than shrink to nothing). A span that
+/// is itself narrower than `min_width` (a tiny map, or a NaN edge) is returned
+/// as it is.
 pub fn widest_gap(span: egui::Rangef, covered: &[egui::Rangef], min_width: f32) -> (f32, f32) {
+    if !(span.max - span.min >= min_width) {
+        return (span.min, span.max);
+    }
     let mut edges: Vec<f32> = vec![span.min, span.max];
     for c in covered {
-        edges.extend([c.min - 8.0, c.max + 8.0].map(|x| x.clamp(span.min, span.max)));
+        // max/min rather than clamp: a NaN edge stays NaN and sorts away
+        // instead of panicking.
+        edges.extend([c.min - 8.0, c.max + 8.0].map(|x| x.max(span.min).min(span.max)));
     }
     edges.sort_by(f32::total_cmp);
     edges
@@ -316,5 +323,26 @@ mod tests {
         assert_eq!(widest_gap(span, &[middle], 120.0), (408.0, 792.0));
         let wide = Rangef::new(60.0, 740.0);
         assert_eq!(widest_gap(span, &[wide], 120.0), (8.0, 792.0));
+    }
+
+    /// A map narrower than the box (its span shrunk past empty) or with a NaN
+    /// edge gives its span back rather than panic, with a window over it.
+    #[test]
+    fn a_tiny_or_broken_span_is_returned_as_it_is() {
+        let corner = Rangef::new(0.0, 300.0);
+        assert_eq!(
+            widest_gap(Rangef::new(8.0, 4.0), &[corner], 120.0),
+            (8.0, 4.0)
+        );
+        assert_eq!(
+            widest_gap(Rangef::new(8.0, 60.0), &[corner], 120.0),
+            (8.0, 60.0)
+        );
+        let (left, right) = widest_gap(Rangef::new(8.0, f32::NAN), &[corner], 120.0);
+        assert_eq!(left, 8.0);
+        assert!(right.is_nan());
+        let nan_window = Rangef::new(f32::NAN, 300.0);
+        let (left, right) = widest_gap(Rangef::new(8.0, 792.0), &[nan_window], 120.0);
+        assert!(left >= 8.0 && right <= 792.0 && right - left >= 120.0);
     }
 }

@@ -218,8 +218,12 @@ pub fn load_dropped_map(
         .collect();
     match yaml {
         Some((yaml_name, bytes)) => {
-            let text =
-                std::str::from_utf8(bytes).map_err(|_| format!("{yaml_name} is not text"))?;
+            let text = std::str::from_utf8(bytes).map_err(|e| {
+                format!(
+                    "{yaml_name} is not text (byte {} is not UTF-8)",
+                    e.valid_up_to()
+                )
+            })?;
             let parsed = parse_map_yaml(text).map_err(|e| format!("{yaml_name}: {e}"))?;
             let wanted = parsed.image.rsplit('/').next().unwrap_or(&parsed.image);
             let image = images
@@ -227,7 +231,7 @@ pub fn load_dropped_map(
                 .find(|(name, _)| name == wanted || name.rsplit('/').next() == Some(wanted))
                 .ok_or_else(|| {
                     format!(
-                        "{yaml_name} names the image '{}': drop it together with the YAML",
+                        "{yaml_name} names the image '{}': drop or open it together with the YAML",
                         parsed.image
                     )
                 })?;
@@ -387,7 +391,7 @@ mod tests {
             )
         );
         let err = load_dropped_map(&[("maze.yaml".to_owned(), yaml)]).unwrap_err();
-        assert!(err.contains("drop it together"), "{err}");
+        assert!(err.contains("drop or open it together"), "{err}");
         let (_, lone, notes) = load_dropped_map(&[("x.png".to_owned(), image)]).unwrap();
         assert!((lone.resolution() - LONE_IMAGE_RESOLUTION).abs() < 1e-12 && notes.len() == 1);
         let err = load_dropped_map(&[("x.png".to_owned(), vec![1, 2, 3])]).unwrap_err();

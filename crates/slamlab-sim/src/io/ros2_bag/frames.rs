@@ -621,7 +621,6 @@ fn stamp_or_log_time(stamp: i64, log_time: u64) -> i64 {
     }
 }
 
-/// `a, b, c`.
 /// The topic `wanted` among `topics` (of type `type_name`), or the error that
 /// lists them (and `also`, another source that could be chosen: `tf`).
 fn wanted_topic<'a>(
@@ -651,6 +650,7 @@ fn several_topics(topics: &[(&str, usize)], kind: &str, doing: &str, key: &str) 
     )
 }
 
+/// `a, b, c`, or `none`.
 fn list<'a>(names: impl Iterator<Item = &'a str>) -> String {
     let v: Vec<&str> = names.collect();
     if v.is_empty() {
