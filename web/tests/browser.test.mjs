@@ -1984,6 +1984,10 @@ async function main() {
       try {
         const element = lecture.locator("iframe.slamlab-homework");
         await element.scrollIntoViewIfNeeded();
+        // The lazy figure starts loading its own homework once scrolled to: let it
+        // run before pointing it elsewhere, or its download is aborted (a failed
+        // request, which fails the page).
+        await waitRunning(await (await element.elementHandle()).contentFrame());
         await element.evaluate((el, src) => { el.src = src; }, `index.html?${query}&embed=1`);
         const frame = await (await element.elementHandle()).contentFrame();
         await frame.waitForURL((u) => u.href.endsWith("embed=1"), { waitUntil: "load", timeout: 30_000 });
