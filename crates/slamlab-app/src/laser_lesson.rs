@@ -9,7 +9,12 @@ use crate::lesson::{self, Lesson, LessonFrame, LessonStart, LessonView};
 use crate::widgets::laser_file::LaserFileState;
 use crate::widgets::laser_inputs::{LaserInput, LaserInputs};
 use slamlab_core::grid::OccupancyGrid;
+use slamlab_sim::grid::MappingInput;
 use std::sync::Arc;
+
+/// A reference that came before its log: its name, bytes and where
+/// `reference=` read it from.
+pub type PendingReference = (String, Vec<u8>, Option<String>);
 
 /// A lesson that maps laser logs: where its files are, and what each kind of
 /// file does to it (its note is its frame's, [`Lesson::frame_mut`]).
@@ -18,9 +23,14 @@ pub trait LaserLesson: Lesson + Sized + 'static {
     fn open_log(&mut self, name: &str, bytes: &[u8]);
     /// Maps the log `log=` named, read from `location`.
     fn open_linked_log(&mut self, name: &str, bytes: &[u8], location: String);
-    /// Scores the run against a corrected log (`location`: where
-    /// `reference=` read it from); before a log, keeps it for the log.
-    fn load_reference(&mut self, name: &str, bytes: Vec<u8>, location: Option<String>);
+    /// The input being mapped when it was read from a log (a reference is
+    /// matched to a log's scans); `None` for a simulated run.
+    fn logged_input(&self) -> Option<Arc<MappingInput>>;
+    /// Where a reference waits for its log.
+    fn pending_reference(&mut self) -> &mut Option<PendingReference>;
+    /// Starts the run over on `input`, the log with its reference (read from
+    /// `location`).
+    fn restart_with_reference(&mut self, input: Arc<MappingInput>, location: Option<String>);
     /// Lets the simulated robot explore a ROS map (its YAML and image)
     /// instead of a built-in one; on any problem the run stays, with a note.
     fn load_map_files(&mut self, files: &[(String, Vec<u8>)]);
@@ -28,6 +38,31 @@ pub trait LaserLesson: Lesson + Sized + 'static {
     fn laser_file(&mut self) -> &mut LaserFileState;
     /// The files dropped, picked or named by the link.
     fn laser_inputs(&mut self) -> &mut LaserInputs;
+
+    /// Matches a corrected log (`bytes`) to the log being mapped and starts
+    /// over with it as the reference; with no log yet, keeps it for the next.
+    fn load_reference(&mut self, name: &str, bytes: Vec<u8>, location: Option<String>) {
+        let Some(input) = self.logged_input() else {
+            *self.pending_reference() = Some((name.to_owned(), bytes, location));
+            *self.frame_mut().note_mut() = Some(format!(
+                "{name} is a reference: it is scored against once its log is loaded"
+            ));
+            return;
+        };
+        let note = match input.reference_from(&bytes, name) {
+            Ok(reference) => {
+                let description = reference.description.clone();
+                let mut with = (*input).clone();
+                with.reference = Some(Arc::new(reference));
+                self.restart_with_reference(Arc::new(with), location);
+                format!("Reference {name}: {description}")
+            }
+            Err(why) => format!(
+                "Could not use {name} as the reference: {why}; the mapping goes on without a score"
+            ),
+        };
+        *self.frame_mut().note_mut() = Some(note);
+    }
 
     /// Reads a ROS map dropped or picked (its YAML and image, or a lone image,
     /// `kidnap::session::load_dropped_map`): its name, grid and notes; on a

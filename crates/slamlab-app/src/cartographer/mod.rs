@@ -20,7 +20,7 @@ mod explain;
 mod map;
 mod plots;
 
-use crate::laser_lesson::LaserLesson;
+use crate::laser_lesson::{LaserLesson, PendingReference};
 use crate::lesson::{self, Lesson, LessonFrame, LessonStart};
 use crate::time_control::{StepControls, TimeAction, TimeInfo};
 use crate::widgets::laser_file::{LaserFileState, loaded_note};
@@ -139,7 +139,7 @@ pub struct CartographerLesson {
     /// The files dropped, picked or named by the link (`log=`, `reference=`).
     inputs: LaserInputs,
     /// A reference (name, bytes, location) waiting for its log.
-    pending_reference: Option<(String, Vec<u8>, Option<String>)>,
+    pending_reference: Option<PendingReference>,
     /// Where the reference came from (`reference=`), for the share link.
     reference_location: Option<String>,
     /// The trajectory error against the reference as the run goes.
@@ -759,34 +759,17 @@ impl LaserLesson for CartographerLesson {
             self.frame.restarted_from_link = true;
         }
     }
-    /// Matches a corrected log (`bytes`) to the log being mapped and starts
-    /// over with it as the reference; with no log yet, keeps it for the next.
-    fn load_reference(&mut self, name: &str, bytes: Vec<u8>, location: Option<String>) {
-        if !matches!(self.source, Source::Log(..)) {
-            self.pending_reference = Some((name.to_owned(), bytes, location));
-            self.frame.note = Some(format!(
-                "{name} is a reference: it is scored against once its log is loaded"
-            ));
-            return;
-        }
-        let input = self.sim().input().clone();
-        match input.reference_from(&bytes, name) {
-            Ok(reference) => {
-                let description = reference.description.clone();
-                let mut with = (*input).clone();
-                with.reference = Some(Arc::new(reference));
-                self.reference_location = location;
-                self.scores = [None, None];
-                let scenario = self.scenario.clone();
-                self.restart_on(scenario, Arc::new(with), None);
-                self.frame.note = Some(format!("Reference {name}: {description}"));
-            }
-            Err(why) => {
-                self.frame.note = Some(format!(
-                    "Could not use {name} as the reference: {why}; the mapping goes on without a score"
-                ));
-            }
-        }
+    fn logged_input(&self) -> Option<Arc<MappingInput>> {
+        matches!(self.source, Source::Log(..)).then(|| self.sim().input().clone())
+    }
+    fn pending_reference(&mut self) -> &mut Option<PendingReference> {
+        &mut self.pending_reference
+    }
+    fn restart_with_reference(&mut self, input: Arc<MappingInput>, location: Option<String>) {
+        self.reference_location = location;
+        self.scores = [None, None];
+        let scenario = self.scenario.clone();
+        self.restart_on(scenario, input, None);
     }
 
     /// Lets the simulated robot explore a ROS map instead of a built-in one.

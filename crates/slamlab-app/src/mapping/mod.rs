@@ -13,7 +13,7 @@ mod plots;
 
 pub use particles::ShownMap;
 
-use crate::laser_lesson::LaserLesson;
+use crate::laser_lesson::{LaserLesson, PendingReference};
 use crate::lesson::{self, Lesson, LessonFrame, LessonRequest, LessonStart};
 use crate::time_control::{TimeAction, TimeInfo};
 use crate::widgets::laser_file::{LaserFileState, loaded_note};
@@ -148,7 +148,7 @@ pub struct MappingLesson {
     /// The files dropped, picked or named by the link (`log=`, `reference=`).
     inputs: LaserInputs,
     /// A reference (name, bytes, location) waiting for its log.
-    pending_reference: Option<(String, Vec<u8>, Option<String>)>,
+    pending_reference: Option<PendingReference>,
     /// Where the reference came from (`reference=`), for the share link.
     reference_location: Option<String>,
     /// The trajectory error against the reference as the run goes.
@@ -689,33 +689,17 @@ impl LaserLesson for MappingLesson {
             self.frame.restarted_from_link = true;
         }
     }
-    /// Matches a corrected log (`bytes`) to the log being mapped and starts
-    /// over with it as the reference; with no log yet, keeps it for the next.
-    fn load_reference(&mut self, name: &str, bytes: Vec<u8>, location: Option<String>) {
-        if self.log_name.is_none() {
-            self.pending_reference = Some((name.to_owned(), bytes, location));
-            self.frame.note = Some(format!(
-                "{name} is a reference: it is scored against once its log is loaded"
-            ));
-            return;
-        }
-        match self.input.reference_from(&bytes, name) {
-            Ok(reference) => {
-                let description = reference.description.clone();
-                let mut with = (*self.input).clone();
-                with.reference = Some(Arc::new(reference));
-                self.input = Arc::new(with);
-                self.reference_location = location;
-                let scenario = self.session.scenario().clone();
-                self.restart(scenario, None);
-                self.frame.note = Some(format!("Reference {name}: {description}"));
-            }
-            Err(why) => {
-                self.frame.note = Some(format!(
-                    "Could not use {name} as the reference: {why}; the mapping goes on without a score"
-                ));
-            }
-        }
+    fn logged_input(&self) -> Option<Arc<MappingInput>> {
+        self.log_name.as_ref().map(|_| self.input.clone())
+    }
+    fn pending_reference(&mut self) -> &mut Option<PendingReference> {
+        &mut self.pending_reference
+    }
+    fn restart_with_reference(&mut self, input: Arc<MappingInput>, location: Option<String>) {
+        self.input = input;
+        self.reference_location = location;
+        let scenario = self.session.scenario().clone();
+        self.restart(scenario, None);
     }
 
     /// Lets the simulated robot explore a ROS map (map_server YAML with its
